@@ -1,0 +1,246 @@
+// trochomill command-line interface: parses arguments, calls the library, formats output.
+// Exit codes: 0 success, 2 bad input (arguments, job file, NC program), 1 runtime failure.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <iostream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "trochomill/error.hpp"
+#include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/version.hpp"
+
+namespace tmill = trochomill;
+
+namespace {
+
+struct JobArgs {
+  std::string job_file;
+  std::vector<std::string> sets;
+};
+
+void add_job_args(CLI::App* cmd, JobArgs& a) {
+  cmd->add_option("JOB", a.job_file, "job file (TOML)")->required();
+  cmd->add_option("--set", a.sets,
+                  "override a job key: section.key=value (repeatable), e.g. path.step=0.8")
+      ->take_all();
+}
+
+tmill::Job load(const JobArgs& a) {
+  std::vector<tmill::Override> ov;
+  for (const auto& s : a.sets) ov.push_back(tmill::parse_override(s));
+  return tmill::load_job(a.job_file, ov);
+}
+
+// Writes text to a file atomically, or to stdout for "-".
+void emit(const std::string& target, const std::string& text) {
+  if (target == "-") {
+    std::fwrite(text.data(), 1, text.size(), stdout);
+    std::fflush(stdout);
+  } else {
+    tmill::write_file_atomic(target, text);
+  }
+}
+
+std::string samples_csv(const tmill::PathSamples& s, const tmill::ToothTracks& tr) {
+  std::string out = "t_s,s_mm,x_mm,y_mm,z_mm,tx,ty,tz,curvature_per_mm,segment";
+  for (int k = 0; k < tr.teeth; ++k) out += fmt::format(",tooth{0}_x_mm,tooth{0}_y_mm,tooth{0}_z_mm", k);
+  out += '\n';
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    fmt::format_to(std::back_inserter(out), "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{}",
+                   s.t_s[i], s.s_mm[i], s.x_mm[i], s.y_mm[i], s.z_mm[i], s.tx[i], s.ty[i], s.tz[i],
+                   s.curvature_per_mm[i], s.segment[i]);
+    for (int k = 0; k < tr.teeth; ++k) {
+      fmt::format_to(std::back_inserter(out), ",{:.9g},{:.9g},{:.9g}", tr.x_mm[k][i], tr.y_mm[k][i],
+                     tr.z_mm[k][i]);
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+struct Box {
+  tmill::Vec3 lo = tmill::Vec3::Constant(std::numeric_limits<double>::infinity());
+  tmill::Vec3 hi = tmill::Vec3::Constant(-std::numeric_limits<double>::infinity());
+};
+
+// Bounding box: line end points, curves sampled every quarter degree of parameter (for an
+// arc of radius r the error is below r (1 - cos(pi/1440)) = 2.4e-6 r).
+Box bounding_box(const tmill::ToolPath& path) {
+  Box b;
+  auto add = [&](const tmill::Vec3& p) {
+    b.lo = b.lo.cwiseMin(p);
+    b.hi = b.hi.cwiseMax(p);
+  };
+  for (const auto& seg : path.segments()) {
+    add(seg.start());
+    add(seg.end());
+    if (seg.kind() == tmill::Segment::Kind::curve) {
+      const int n = std::max(4, static_cast<int>(std::abs(seg.u1() - seg.u0()) * 720.0 / M_PI));
+      for (int k = 1; k < n; ++k) add(seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n));
+    }
+  }
+  return b;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"trochomill: plan, analyse and simulate trochoidal slot milling"};
+  app.set_version_flag("--version", std::string("trochomill ") + tmill::kVersion);
+  app.require_subcommand(1);
+
+  // plan
+  JobArgs plan_args;
+  std::string plan_out, plan_dialect;
+  double plan_tol = 0;
+  bool plan_chords = false;
+  auto* plan = app.add_subcommand("plan", "write the slot program of a job as G-code");
+  add_job_args(plan, plan_args);
+  plan->add_option("-o,--output", plan_out, "output G-code file (- for stdout)")->required();
+  plan->add_option("--dialect", plan_dialect, "linuxcnc | fanuc | sinumerik | grbl (default: [machine] dialect)");
+  plan->add_option("--tolerance", plan_tol, "max deviation of fitted arcs/chords, mm (default: [machine] arc_tolerance)");
+  plan->add_flag("--chords", plan_chords, "write curves as G1 chords instead of biarcs");
+
+  // path
+  JobArgs path_args;
+  std::string path_csv, path_gcode;
+  std::optional<int> path_spr;
+  std::optional<double> path_dt, path_ds;
+  auto* pathc = app.add_subcommand("path", "sample the tool-centre and tooth-tip trajectories");
+  add_job_args(pathc, path_args);
+  pathc->add_option("--csv", path_csv, "write the samples as CSV (- for stdout)");
+  pathc->add_option("--gcode", path_gcode, "take the path from this NC program instead of planning it");
+  auto* o_spr = pathc->add_option("--steps-per-rev", path_spr, "samples per spindle revolution");
+  auto* o_dt = pathc->add_option("--dt", path_dt, "time step, s");
+  auto* o_ds = pathc->add_option("--ds", path_ds, "path-length step, mm");
+  o_spr->excludes(o_dt)->excludes(o_ds);
+  o_dt->excludes(o_ds);
+
+  // check-gcode
+  std::string cg_file, cg_json;
+  double cg_rapid = 10000, cg_accel = 0;
+  auto* cg = app.add_subcommand("check-gcode", "parse an NC program and report length, time, bounding box");
+  cg->add_option("FILE", cg_file, "G-code file")->required();
+  cg->add_option("--rapid-rate", cg_rapid, "rapid traverse rate, mm/min")->check(CLI::PositiveNumber);
+  cg->add_option("--max-acceleration", cg_accel, "path acceleration limit for the time estimate, mm/s^2")
+      ->check(CLI::NonNegativeNumber);
+  cg->add_option("--json", cg_json, "write the report as JSON (- for stdout)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  }
+
+  if (*plan) {
+    const tmill::Job job = load(plan_args);
+    const tmill::PlannedPath planned = tmill::plan_path(job);
+    tmill::GcodeWriteOptions opt;
+    opt.dialect = plan_dialect.empty() ? job.machine.dialect : tmill::parse_dialect(plan_dialect);
+    opt.arc_output = plan_chords ? tmill::ArcOutput::chords : job.machine.arc_output;
+    opt.tolerance_mm = plan_tol > 0 ? plan_tol : job.machine.arc_tolerance_mm;
+    if (plan->count("--tolerance") && !(plan_tol > 0)) {
+      throw tmill::InputError(fmt::format("--tolerance must be > 0 mm, got {}", plan_tol));
+    }
+    const std::string code = tmill::write_gcode(job, planned.path, opt);
+    emit(plan_out, code);
+    if (plan_out != "-") {
+      fmt::print("{}: {} {} cycles, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} lines -> {}\n",
+                 plan_args.job_file, tmill::to_string(job.path.type), planned.info.cycles,
+                 planned.path.length_mm(), planned.path.duration_s(),
+                 tmill::estimate_time_s(planned.path, job.machine),
+                 std::count(code.begin(), code.end(), '\n'), plan_out);
+    }
+    return 0;
+  }
+
+  if (*pathc) {
+    const tmill::Job job = load(path_args);
+    tmill::ToolPath tp;
+    if (!path_gcode.empty()) {
+      tmill::GcodeReadOptions ro;
+      ro.rapid_rate_mm_per_min = job.machine.rapid_rate_mm_per_min;
+      tp = tmill::read_gcode_file(path_gcode, ro).path;
+    } else {
+      tp = tmill::plan_path(job).path;
+    }
+    tmill::PathSamples s;
+    if (path_dt) {
+      s = tmill::sample_by_time(tp, *path_dt);
+    } else if (path_ds) {
+      s = tmill::sample_by_length(tp, *path_ds);
+    } else {
+      s = tmill::sample_by_spindle_angle(tp, path_spr.value_or(36), job.cutting.spindle_speed_rpm);
+    }
+    const tmill::ToothTracks tr = tmill::tooth_tracks(s, job.tool, job.cutting);
+    if (!path_csv.empty()) emit(path_csv, samples_csv(s, tr));
+    if (path_csv != "-") {
+      fmt::print("{} samples over {:.3f} s, path {:.3f} mm, {} teeth, f_z = {:.4g} mm, n = {:.0f} rpm{}\n",
+                 s.size(), tp.duration_s(), tp.length_mm(), tr.teeth, job.cutting.feed_per_tooth_mm,
+                 job.cutting.spindle_speed_rpm, path_csv.empty() ? "" : " -> " + path_csv);
+    }
+    return 0;
+  }
+
+  if (*cg) {
+    tmill::GcodeReadOptions ro;
+    ro.rapid_rate_mm_per_min = cg_rapid;
+    const tmill::GcodeProgram prog = tmill::read_gcode_file(cg_file, ro);
+    tmill::Machine m;
+    m.rapid_rate_mm_per_min = cg_rapid;
+    m.max_acceleration_mm_per_s2 = cg_accel;
+    const Box b = bounding_box(prog.path);
+    const double t_acc = tmill::estimate_time_s(prog.path, m);
+    nlohmann::json j = {
+        {"file", cg_file},
+        {"lines", prog.info.lines},
+        {"motion_blocks", prog.info.motion_blocks},
+        {"segments", prog.path.segments().size()},
+        {"path_length_mm", prog.path.length_mm()},
+        {"feed_length_mm", prog.path.feed_length_mm()},
+        {"time_s", prog.path.duration_s()},
+        {"time_with_acceleration_s", t_acc},
+        {"bbox_min_mm", {b.lo.x(), b.lo.y(), b.lo.z()}},
+        {"bbox_max_mm", {b.hi.x(), b.hi.y(), b.hi.z()}},
+        {"feed_min_mm_per_min", prog.info.min_feed_mm_per_min},
+        {"feed_max_mm_per_min", prog.info.max_feed_mm_per_min},
+        {"spindle_max_rpm", prog.info.max_spindle_rpm},
+    };
+    if (!cg_json.empty()) emit(cg_json, j.dump(2) + "\n");
+    if (cg_json != "-") {
+      fmt::print("{}: {} lines, {} segments\n", cg_file, prog.info.lines, prog.path.segments().size());
+      fmt::print("  path length   {:.4f} mm ({:.4f} mm at feed)\n", prog.path.length_mm(),
+                 prog.path.feed_length_mm());
+      fmt::print("  time          {:.4f} s at programmed feed", prog.path.duration_s());
+      if (cg_accel > 0) fmt::print(", {:.4f} s with {:g} mm/s^2", t_acc, cg_accel);
+      fmt::print("\n  bounding box  x [{:.4f}, {:.4f}]  y [{:.4f}, {:.4f}]  z [{:.4f}, {:.4f}] mm\n",
+                 b.lo.x(), b.hi.x(), b.lo.y(), b.hi.y(), b.lo.z(), b.hi.z());
+      fmt::print("  feed          {:g} to {:g} mm/min, spindle up to {:g} rpm\n",
+                 prog.info.min_feed_mm_per_min, prog.info.max_feed_mm_per_min, prog.info.max_spindle_rpm);
+    }
+    return 0;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const tmill::InputError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
+}

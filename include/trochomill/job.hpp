@@ -1,0 +1,115 @@
+// The job file: one TOML document describing tool, slot, path, cutting conditions and
+// machine. Every subcommand reads it; `--set section.key=value` overrides any key.
+// All lengths are mm, angles degrees, feeds mm/min, spindle speeds rpm, cutting speed m/min,
+// accelerations mm/s^2 at this interface (docs/user-guide.md lists every key).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace trochomill {
+
+struct Tool {
+  double diameter_mm = 0;            ///< cutter diameter D (mm)
+  int teeth = 0;                     ///< number of teeth Z
+  double helix_angle_deg = 0;        ///< helix angle (degrees)
+  double corner_radius_mm = 0;       ///< corner radius (mm), 0 for a square end mill
+  double edge_radius_mm = 0;         ///< cutting-edge rounding radius r_e (mm)
+  double flute_length_mm = 0;        ///< flute length (mm); 0 = not given
+  double runout_radial_mm = 0;       ///< radial runout: axis offset e (mm)
+  double runout_axial_mm = 0;        ///< axial runout (mm)
+  double runout_phase_deg = 0;       ///< angle of the runout offset relative to tooth 0 (degrees)
+  std::vector<double> tooth_angles_deg;  ///< tooth angular positions (degrees); Z equal pitches
+                                         ///< when empty in the file (filled by load)
+  int tool_number = 1;                   ///< T word for the tool change
+  [[nodiscard]] double radius_mm() const noexcept { return 0.5 * diameter_mm; }
+};
+
+struct Slot {
+  double width_mm = 0;   ///< slot width W along X (mm)
+  double length_mm = 0;  ///< slot length along +Y (mm)
+  double depth_mm = 0;   ///< slot depth a_p below the top face z = 0 (mm)
+};
+
+enum class PathType { linear, trochoidal, circular, elliptical, linear_elliptical };
+enum class Direction { climb, conventional };
+enum class EntryType { helix, ramp, plunge, outside };
+enum class SpindleDirection { cw, ccw };
+enum class Coolant { off, flood, mist };
+enum class Dialect { linuxcnc, fanuc, sinumerik, grbl };
+enum class ArcOutput { arcs, chords };
+
+struct PathSpec {
+  PathType type = PathType::trochoidal;
+  double step_mm = 0;              ///< trochoidal step s (advance per cycle); stepover for linear
+  double aspect_ratio = 1;         ///< r_e = b / a (elliptical families)
+  double linear_distance_mm = 0;   ///< d, the straight wall move of linear-elliptical (mm)
+  Direction direction = Direction::climb;
+  EntryType entry = EntryType::outside;
+  double entry_radius_mm = 0;      ///< helix radius (mm); 0 = automatic
+  double entry_pitch_mm = 1;       ///< helix descent per turn (mm)
+  double entry_angle_deg = 3;      ///< ramp angle (degrees)
+  double entry_feed_mm_per_min = 0;  ///< feed for the entry moves (mm/min); 0 = half the feed
+  double clearance_mm = 1;         ///< distance kept from stock before feeding in (mm)
+};
+
+struct Cutting {
+  double feed_rate_mm_per_min = 0;   ///< f_r, tool-centre feed (mm/min)
+  double spindle_speed_rpm = 0;      ///< n (rpm)
+  double feed_per_tooth_mm = 0;      ///< f_z = f_r / (n Z) (mm)
+  double cutting_speed_m_per_min = 0;  ///< v_c = pi D n / 1000 (m/min)
+  SpindleDirection spindle_direction = SpindleDirection::cw;
+  Coolant coolant = Coolant::off;
+};
+
+struct Machine {
+  Dialect dialect = Dialect::linuxcnc;
+  double safe_z_mm = 5;                 ///< retract height above the top face (mm)
+  double rapid_rate_mm_per_min = 10000; ///< rapid traverse rate (mm/min)
+  double max_acceleration_mm_per_s2 = 0;  ///< path acceleration limit (mm/s^2); 0 = unlimited
+  double junction_deviation_mm = 0.01;  ///< corner blending tolerance for time estimates (mm)
+  double arc_tolerance_mm = 0.001;      ///< max deviation when fitting arcs/chords (mm)
+  ArcOutput arc_output = ArcOutput::arcs;  ///< elliptical arcs as biarcs or as G1 chords
+  int program_number = 1000;            ///< O number (fanuc)
+};
+
+struct Job {
+  std::string source;  ///< file name the job came from (for messages)
+  Tool tool;
+  Slot slot;
+  PathSpec path;
+  Cutting cutting;
+  Machine machine;
+  // The original document, flattened `section.key = value` (TOML syntax), after overrides:
+  // written into the G-code header so a program records the job that produced it.
+  std::vector<std::pair<std::string, std::string>> flat_keys;
+};
+
+/// A `--set section.key=value` override (value in TOML syntax; bare words are strings).
+struct Override {
+  std::string key;    ///< "section.key"
+  std::string value;  ///< "0.8", "true", "elliptical", "[0, 90, 180, 270]"
+};
+
+/// Parses "section.key=value". Throws InputError when there is no '=' or no section.
+[[nodiscard]] Override parse_override(std::string_view text);
+
+/// Loads and validates a job file, applying overrides in order.
+/// Throws InputError listing every problem (file:line:column or key, what is allowed).
+[[nodiscard]] Job load_job(const std::filesystem::path& file,
+                           const std::vector<Override>& overrides = {});
+
+/// Same as load_job, from TOML text; `source_name` is used in messages.
+[[nodiscard]] Job parse_job(std::string_view toml_text, std::string_view source_name,
+                            const std::vector<Override>& overrides = {});
+
+[[nodiscard]] std::string_view to_string(PathType t) noexcept;
+[[nodiscard]] std::string_view to_string(Dialect d) noexcept;
+[[nodiscard]] std::string_view to_string(EntryType e) noexcept;
+[[nodiscard]] std::string_view to_string(Direction d) noexcept;
+/// Parses a dialect name (linuxcnc | fanuc | sinumerik | grbl); InputError otherwise.
+[[nodiscard]] Dialect parse_dialect(std::string_view name);
+
+}  // namespace trochomill

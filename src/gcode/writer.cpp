@@ -1,0 +1,209 @@
+// G-code writer for four dialects. Circular arcs in the XY plane become G2/G3 (split into
+// pieces of less than 180 degrees, which every control accepts, Grbl included); other flat
+// curves become biarcs (or chords on request) within the tolerance; anything else chords.
+#include <cmath>
+#include <fmt/format.h>
+
+#include "trochomill/error.hpp"
+#include "trochomill/gcode.hpp"
+#include "trochomill/units.hpp"
+#include "trochomill/version.hpp"
+
+namespace trochomill {
+namespace {
+
+class Emitter {
+ public:
+  Emitter(const GcodeWriteOptions& opt) : opt_(opt) {}
+
+  std::string& out() { return out_; }
+
+  void comment(std::string_view text) {
+    std::string t(text);
+    if (opt_.dialect == Dialect::sinumerik || opt_.dialect == Dialect::grbl) {
+      for (char& c : t) if (c == '\n') c = ' ';
+      out_ += "; ";
+      out_ += t;
+      out_ += '\n';
+      return;
+    }
+    for (char& c : t) {
+      if (c == '(') c = '[';
+      if (c == ')') c = ']';
+      if (c == '\n') c = ' ';
+    }
+    out_ += '(';
+    out_ += t;
+    out_ += ")\n";
+  }
+  void line(std::string_view text) {
+    out_ += text;
+    out_ += '\n';
+  }
+
+  // Number with fixed decimals, trailing zeros trimmed, no "-0".
+  void num(char letter, double v) {
+    char buf[64];
+    auto r = fmt::format_to_n(buf, sizeof buf - 1, "{:.{}f}", v, opt_.decimals);
+    std::size_t n = r.size;
+    if (std::memchr(buf, '.', n) != nullptr) {
+      while (n > 0 && buf[n - 1] == '0') --n;
+      if (n > 0 && buf[n - 1] == '.') --n;
+    }
+    std::string_view s(buf, n);
+    if (s == "-0") s = "0";
+    out_ += ' ';
+    out_ += letter;
+    out_ += s;
+  }
+
+  // A motion block: code G0/G1/G2/G3, only the axes that change (all on the first move).
+  void move(int g, const Vec3& p, double feed, const double* ij = nullptr) {
+    const bool first = !have_pos_;
+    out_ += fmt::format("G{}", g);
+    const Vec3 q = rounded(p);
+    if (first || q.x() != pos_.x() || g >= 2) num('X', p.x());
+    if (first || q.y() != pos_.y() || g >= 2) num('Y', p.y());
+    if (first || q.z() != pos_.z()) num('Z', p.z());
+    if (ij != nullptr) {
+      num('I', ij[0]);
+      num('J', ij[1]);
+    }
+    if (g != 0 && feed != feed_) {
+      num('F', feed);
+      feed_ = feed;
+    }
+    out_ += '\n';
+    pos_ = q;
+    have_pos_ = true;
+  }
+  void set_position(const Vec3& p) { pos_ = rounded(p); }
+
+ private:
+  [[nodiscard]] Vec3 rounded(const Vec3& p) const {
+    const double k = std::pow(10.0, opt_.decimals);
+    return Vec3(std::round(p.x() * k) / k, std::round(p.y() * k) / k, std::round(p.z() * k) / k);
+  }
+  const GcodeWriteOptions& opt_;
+  std::string out_;
+  Vec3 pos_ = Vec3::Zero();
+  bool have_pos_ = false;
+  double feed_ = -1;
+};
+
+void emit_arc(Emitter& e, const Vec3& start, double cx, double cy, double r, double a0,
+              double sweep, double z0, double z1, double feed) {
+  // Pieces of strictly less than 180 degrees: exact, and unambiguous on every control.
+  const int n = static_cast<int>(std::floor(std::abs(sweep) / kPi)) + 1;
+  const int g = sweep > 0 ? 3 : 2;
+  Vec3 from = start;
+  for (int k = 1; k <= n; ++k) {
+    const double a = a0 + sweep * k / n;
+    const Vec3 to(cx + r * std::cos(a), cy + r * std::sin(a), z0 + (z1 - z0) * k / n);
+    const double ij[2] = {cx - from.x(), cy - from.y()};
+    e.move(g, to, feed, ij);
+    from = to;
+  }
+}
+
+void emit_segment(Emitter& e, const Segment& seg, const GcodeWriteOptions& opt) {
+  const double feed = seg.speed_mm_per_min();
+  if (seg.kind() == Segment::Kind::line) {
+    e.move(seg.motion() == Motion::rapid ? 0 : 1, seg.end(), feed);
+    return;
+  }
+  const bool xy_circle = seg.is_circular() && std::abs(seg.axis_a().z()) <= 1e-12 &&
+                         std::abs(seg.axis_b().z()) <= 1e-12 && std::abs(seg.drift().x()) <= 1e-12 &&
+                         std::abs(seg.drift().y()) <= 1e-12;
+  if (xy_circle) {
+    const Vec3 s = seg.start(), en = seg.end();
+    const double r = seg.axis_a().norm();
+    // Orientation: A x B along +z with u increasing is counter-clockwise.
+    const double orient = seg.axis_a().cross(seg.axis_b()).z() > 0 ? 1.0 : -1.0;
+    const double sweep = orient * (seg.u1() - seg.u0());
+    const double a0 = std::atan2(s.y() - seg.center().y(), s.x() - seg.center().x());
+    emit_arc(e, s, seg.center().x(), seg.center().y(), r, a0, sweep, s.z(), en.z(), feed);
+    return;
+  }
+  if (seg.is_flat_xy() && opt.arc_output == ArcOutput::arcs) {
+    for (const FitArc& arc : fit_biarcs(seg, opt.tolerance_mm)) {
+      if (arc.is_line) {
+        e.move(1, arc.end, feed);
+      } else {
+        const double a0 = std::atan2(arc.start.y() - arc.cy, arc.start.x() - arc.cx);
+        emit_arc(e, arc.start, arc.cx, arc.cy, arc.radius_mm, a0, arc.sweep_rad, arc.start.z(),
+                 arc.end.z(), feed);
+      }
+    }
+    return;
+  }
+  for (const Vec3& p : fit_chords(seg, opt.tolerance_mm)) e.move(1, p, feed);
+}
+
+std::string coolant_code(Coolant c) {
+  switch (c) {
+    case Coolant::flood: return "M8";
+    case Coolant::mist: return "M7";
+    case Coolant::off: return "";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOptions& opt) {
+  if (path.empty()) throw Error("cannot write G-code for an empty path");
+  if (!(opt.tolerance_mm > 0)) throw InputError("G-code tolerance must be > 0 mm");
+  if (opt.decimals < 3 || opt.decimals > 6) throw InputError("G-code decimals must be in [3, 6]");
+  Emitter e(opt);
+  const Dialect d = opt.dialect;
+  if (d == Dialect::linuxcnc || d == Dialect::fanuc) e.line("%");
+  if (d == Dialect::fanuc) e.line(fmt::format("O{:04d}", job.machine.program_number));
+  e.comment(fmt::format("trochomill {}: {} slot {:g} x {:g} x {:g} mm, {} milling", kVersion,
+                        to_string(job.path.type), job.slot.width_mm, job.slot.length_mm,
+                        job.slot.depth_mm, to_string(job.path.direction)));
+  e.comment(fmt::format("job: {}", job.source));
+  e.comment(fmt::format("path length {:.3f} mm, {:.3f} s at programmed feed, {} dialect", path.length_mm(),
+                        path.duration_s(), to_string(d)));
+  if (opt.arc_output == ArcOutput::arcs) {
+    e.comment(fmt::format("curves fitted with biarcs within {:g} mm", opt.tolerance_mm));
+  } else {
+    e.comment(fmt::format("curves as chords within {:g} mm", opt.tolerance_mm));
+  }
+  for (const auto& [k, v] : job.flat_keys) e.comment(fmt::format("{} = {}", k, v));
+
+  switch (d) {
+    case Dialect::linuxcnc:
+      e.line("G21 G17 G90 G94 G40 G49 G80");
+      e.line("G91.1");
+      break;
+    case Dialect::fanuc: e.line("G21 G17 G90 G94 G40 G49 G80"); break;
+    case Dialect::sinumerik: e.line("G71 G17 G90 G94 G40"); break;
+    case Dialect::grbl: e.line("G21 G17 G90 G94"); break;
+  }
+  const int t = job.tool.tool_number;
+  if (d == Dialect::sinumerik) {
+    e.line(fmt::format("T{} D1", t));
+    e.line("M6");
+  } else if (d == Dialect::grbl) {
+    e.comment(fmt::format("tool T{}: D = {:g} mm, Z = {} (change it by hand)", t,
+                          job.tool.diameter_mm, job.tool.teeth));
+  } else {
+    e.line(fmt::format("T{} M6", t));
+  }
+  const std::string spindle = job.cutting.spindle_direction == SpindleDirection::cw ? "M3" : "M4";
+  e.line(fmt::format("S{:.0f} {}", job.cutting.spindle_speed_rpm, spindle));
+  if (const std::string c = coolant_code(job.cutting.coolant); !c.empty()) e.line(c);
+
+  // First position: a rapid to the path start at its height (all three axes).
+  e.move(0, path.segments().front().start(), 0);
+  for (const Segment& seg : path.segments()) emit_segment(e, seg, opt);
+
+  if (job.cutting.coolant != Coolant::off) e.line("M9");
+  e.line("M5");
+  e.line(d == Dialect::linuxcnc || d == Dialect::grbl ? "M2" : "M30");
+  if (d == Dialect::linuxcnc || d == Dialect::fanuc) e.line("%");
+  return std::move(e.out());
+}
+
+}  // namespace trochomill

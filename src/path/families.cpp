@@ -1,0 +1,340 @@
+// The slot planner: the five path families of domain-notes section 2 with entry to depth,
+// cycles until the slot end is cleared, and exit. Everything is built for climb milling with
+// a clockwise spindle and mirrored in x for the other orbit direction.
+//
+// Placement (docs/models.md, "Planning"): with an `outside` entry the slot is open at y = 0:
+// the tool feeds in along the wall line x = -a from outside the stock to the first cycle's
+// start (-a, y0), and y0 is the largest value for which the rear envelope of cycle 0 still
+// reaches y <= 0 at every x the approach does not cover. With helix/ramp/plunge the slot is
+// closed at y = 0 and y0 puts the rearmost tool point of cycle 0 exactly on y = 0. The cycle
+// count is the smallest for which the front envelope of the last cycle reaches y >= L across
+// the width (less the wall scallop bound). Envelopes are evaluated on the sampled cycle-0
+// centre path; sampling under-estimates the front and over-estimates the rear, so both
+// choices err towards cutting the whole slot.
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <limits>
+
+#include "trochomill/error.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+// Builds segments in the climb/cw frame and mirrors x on the way into the path when asked.
+class Builder {
+ public:
+  Builder(ToolPath& path, bool mirror) : path_(path), mirror_(mirror) {}
+
+  [[nodiscard]] Vec3 here() const { return here_; }
+  void start_at(const Vec3& p) { here_ = p; }
+
+  void line_to(const Vec3& p, Motion m, double speed) {
+    path_.append(Segment::line(flip(here_), flip(p), m, speed));
+    here_ = p;
+  }
+  void curve(const Vec3& c, const Vec3& a, const Vec3& b, const Vec3& v, double u0, double u1,
+             double speed) {
+    const Segment seg = Segment::curve(flip(c), flip_vec(a), flip_vec(b), flip_vec(v), u0, u1,
+                                       Motion::feed, speed);
+    here_ = c + a * std::cos(u1) + b * std::sin(u1) + v * u1;
+    path_.append(seg);
+  }
+  void arc_xy(double cx, double cy, double r, double start, double sweep, double z0, double z1,
+              double speed) {
+    const Vec3 c(cx, cy, z0);
+    const Vec3 a(r * std::cos(start), r * std::sin(start), 0);
+    const Vec3 b(-r * std::sin(start), r * std::cos(start), 0);
+    const Vec3 v(0, 0, (z1 - z0) / sweep);
+    curve(c, a, b, v, 0.0, sweep, speed);
+  }
+  void mark_cycle() { path_.mark_cycle(); }
+
+ private:
+  [[nodiscard]] Vec3 flip(const Vec3& p) const { return mirror_ ? Vec3(-p.x(), p.y(), p.z()) : p; }
+  [[nodiscard]] Vec3 flip_vec(const Vec3& v) const { return flip(v); }
+  ToolPath& path_;
+  bool mirror_;
+  Vec3 here_ = Vec3::Zero();
+};
+
+struct Geometry {
+  double R = 0, W = 0, a = 0, b = 0, s = 0, d = 0, L = 0, zf = 0;
+  double feed = 0, entry_feed = 0, rapid = 0, safe_z = 0, clearance = 0;
+  PathType type = PathType::trochoidal;
+};
+
+// One cycle of a trochoidal family starting at (-a, y, zf) in the climb/cw frame.
+void emit_cycle(Builder& bld, const Geometry& g, double y) {
+  const Vec3 ax(-g.a, 0, 0), by(0, g.b, 0), drift(0, g.s / kTwoPi, 0);
+  switch (g.type) {
+    case PathType::trochoidal:
+    case PathType::elliptical:
+      bld.curve(Vec3(0, y, g.zf), ax, by, drift, 0.0, kTwoPi, g.feed);
+      break;
+    case PathType::circular:
+      bld.curve(Vec3(0, y, g.zf), ax, Vec3(0, g.a, 0), Vec3::Zero(), 0.0, kTwoPi, g.feed);
+      bld.line_to(Vec3(-g.a, y + g.s, g.zf), Motion::feed, g.feed);
+      break;
+    case PathType::linear_elliptical:
+      if (g.d > 0) bld.line_to(Vec3(-g.a, y + g.d, g.zf), Motion::feed, g.feed);
+      bld.curve(Vec3(0, y + g.d, g.zf), ax, by, drift, 0.0, kPi, g.feed);
+      if (g.d > 0) bld.line_to(Vec3(g.a, y + 0.5 * g.s, g.zf), Motion::feed, g.feed);
+      bld.curve(Vec3(0, y, g.zf), ax, by, drift, kPi, kTwoPi, g.feed);
+      break;
+    case PathType::linear:
+      throw Error("emit_cycle: the linear family has no cycles");
+  }
+}
+
+struct Envelope {
+  double max_rear = -std::numeric_limits<double>::infinity();  // max_x of rear reach (rel. y)
+  double min_front = std::numeric_limits<double>::infinity();  // min_x of front reach
+  double min_center_y = std::numeric_limits<double>::infinity();
+  double cycle_length = 0;
+};
+
+// Front and rear reach of cycle 0 (relative to its start y = 0), over the slot width less the
+// wall scallop bound delta; the rear only where the wall-line approach does not cover.
+Envelope cycle_envelope(const Geometry& g, double delta) {
+  ToolPath one;
+  Builder bld(one, false);
+  bld.start_at(Vec3(-g.a, 0, g.zf));
+  emit_cycle(bld, g, 0.0);
+  Envelope env;
+  env.cycle_length = one.length_mm();
+  const PathSamples smp = sample_by_length(one, std::min(0.02, env.cycle_length / 720.0));
+  const double x_lo = -0.5 * g.W + delta, x_hi = 0.5 * g.W - delta;
+  const int nx = 400;
+  std::vector<double> front(nx + 1, -std::numeric_limits<double>::infinity());
+  std::vector<double> rear(nx + 1, std::numeric_limits<double>::infinity());
+  const double dx = (x_hi - x_lo) / nx;
+  for (std::size_t i = 0; i < smp.size(); ++i) {
+    const double xc = smp.x_mm[i], yc = smp.y_mm[i];
+    env.min_center_y = std::min(env.min_center_y, yc);
+    const int j0 = std::max(0, static_cast<int>(std::ceil((xc - g.R - x_lo) / dx)));
+    const int j1 = std::min(nx, static_cast<int>(std::floor((xc + g.R - x_lo) / dx)));
+    for (int j = j0; j <= j1; ++j) {
+      const double x = x_lo + dx * j;
+      const double h = std::sqrt(std::max(0.0, g.R * g.R - (x - xc) * (x - xc)));
+      front[j] = std::max(front[j], yc + h);
+      rear[j] = std::min(rear[j], yc - h);
+    }
+  }
+  const double approach_hi = -g.a + g.R;  // the approach along x = -a covers x < -a + R
+  for (int j = 0; j <= nx; ++j) {
+    const double x = x_lo + dx * j;
+    env.min_front = std::min(env.min_front, front[j]);
+    if (x > approach_hi) env.max_rear = std::max(env.max_rear, rear[j]);
+  }
+  return env;
+}
+
+// Entry to depth at the wall point p = (-a or x, y, zf) of the climb/cw frame, arriving with
+// the tool at p. The tool starts at safe z above the entry.
+void emit_entry(Builder& bld, const Geometry& g, const PathSpec& spec, const Vec3& p,
+                bool along_y, double room_mm) {
+  const double z_top = g.clearance;  // start feeding this far above the top face
+  switch (spec.entry) {
+    case EntryType::outside: {
+      const double y_out = -(g.R + g.clearance);
+      bld.start_at(Vec3(p.x(), y_out, g.safe_z));
+      bld.line_to(Vec3(p.x(), y_out, z_top), Motion::rapid, g.rapid);
+      bld.line_to(Vec3(p.x(), y_out, g.zf), Motion::feed, g.entry_feed);
+      bld.line_to(p, Motion::feed, g.feed);
+      return;
+    }
+    case EntryType::plunge:
+      bld.start_at(Vec3(p.x(), p.y(), g.safe_z));
+      bld.line_to(Vec3(p.x(), p.y(), z_top), Motion::rapid, g.rapid);
+      bld.line_to(p, Motion::feed, g.entry_feed);
+      return;
+    case EntryType::ramp: {
+      if (!(room_mm > 1e-6)) {
+        throw InputError(fmt::format("[path] entry = \"ramp\": no room for a ramp beside the "
+                                     "entry point ({:.4g} mm); use entry = \"plunge\" or a wider "
+                                     "slot",
+                                     room_mm));
+      }
+      const double len = room_mm;
+      const double drop = z_top - g.zf;
+      const double max_drop_per_leg = len * std::tan(deg_to_rad(spec.entry_angle_deg));
+      const int legs = std::max(1, static_cast<int>(std::ceil(drop / max_drop_per_leg - 1e-12)));
+      const Vec3 far = along_y ? Vec3(p.x(), p.y() + len, 0) : Vec3(p.x() + len, p.y(), 0);
+      bld.start_at(Vec3(p.x(), p.y(), g.safe_z));
+      bld.line_to(Vec3(p.x(), p.y(), z_top), Motion::rapid, g.rapid);
+      bool at_far = false;
+      for (int k = 1; k <= legs; ++k) {
+        const double z = z_top - drop * k / legs;
+        const Vec3 target = at_far ? Vec3(p.x(), p.y(), z) : Vec3(far.x(), far.y(), z);
+        bld.line_to(target, Motion::feed, g.entry_feed);
+        at_far = !at_far;
+      }
+      // Finish the floor under the last ramp leg at full depth, ending at the entry point.
+      if (!at_far) bld.line_to(Vec3(far.x(), far.y(), g.zf), Motion::feed, g.entry_feed);
+      bld.line_to(p, Motion::feed, g.entry_feed);
+      return;
+    }
+    case EntryType::helix: {
+      const double max_r = 0.5 * room_mm;
+      double r = spec.entry_radius_mm > 0 ? spec.entry_radius_mm : 0.5 * max_r;
+      if (!(max_r > 1e-6)) {
+        throw InputError("[path] entry = \"helix\": the slot leaves no room for a helix beside "
+                         "the entry point; use entry = \"plunge\" or \"ramp\"");
+      }
+      if (r > max_r + 1e-12) {
+        throw InputError(fmt::format("[path] entry_radius: a helix of radius {:g} mm leaves the "
+                                     "slot; at most {:.4g} mm fits here",
+                                     r, max_r));
+      }
+      r = std::min(r, max_r);
+      // Helix centre beside p so the helix passes through p with tangent +y (cw orbit,
+      // climb), the direction the cycles start in.
+      const double cx = p.x() + r, cy = p.y();
+      const double drop = z_top - g.zf;
+      const double turns = drop / spec.entry_pitch_mm;
+      bld.start_at(Vec3(p.x(), p.y(), g.safe_z));
+      bld.line_to(Vec3(p.x(), p.y(), z_top), Motion::rapid, g.rapid);
+      bld.arc_xy(cx, cy, r, kPi, -kTwoPi * turns, z_top, g.zf, g.entry_feed);
+      // One full circle at depth cleans the floor of the bore; the helix may have ended
+      // anywhere on the circle, so continue to the entry point and around once more.
+      const Vec3 h = bld.here();
+      const double ang = std::atan2(h.y() - cy, h.x() - cx);
+      double to_p = std::fmod(ang - kPi, kTwoPi);  // cw sweep from ang back to pi
+      if (to_p < 0) to_p += kTwoPi;
+      bld.arc_xy(cx, cy, r, ang, -(to_p + kTwoPi), g.zf, g.zf, g.entry_feed);
+      return;
+    }
+  }
+}
+
+Geometry make_geometry(const Job& job) {
+  Geometry g;
+  g.type = job.path.type;
+  g.R = job.tool.radius_mm();
+  g.W = job.slot.width_mm;
+  g.a = 0.5 * (g.W - job.tool.diameter_mm);
+  g.s = job.path.step_mm;
+  g.b = (g.type == PathType::elliptical || g.type == PathType::linear_elliptical)
+            ? job.path.aspect_ratio * g.a
+            : g.a;
+  g.d = g.type == PathType::linear_elliptical ? job.path.linear_distance_mm : 0.0;
+  g.L = job.slot.length_mm;
+  g.zf = -job.slot.depth_mm;
+  g.feed = job.cutting.feed_rate_mm_per_min;
+  g.entry_feed = job.path.entry_feed_mm_per_min > 0 ? job.path.entry_feed_mm_per_min : 0.5 * g.feed;
+  g.rapid = job.machine.rapid_rate_mm_per_min;
+  g.safe_z = job.machine.safe_z_mm;
+  g.clearance = std::min(job.path.clearance_mm, job.machine.safe_z_mm);
+  return g;
+}
+
+PlannedPath plan_linear(const Job& job, const Geometry& g, bool mirror) {
+  PlannedPath out;
+  Builder bld(out.path, mirror);
+  const bool closed = job.path.entry != EntryType::outside;
+  if (job.path.entry == EntryType::helix) {
+    throw InputError("[path] entry = \"helix\" is for the trochoidal families; a linear slot "
+                     "enters with \"ramp\", \"plunge\" or \"outside\"");
+  }
+  const int passes = g.a > 0 ? static_cast<int>(std::ceil(2 * g.a / g.s - 1e-12)) + 1 : 1;
+  const double y_start = closed ? g.R : 0.0;
+  const double y_end = g.L + g.R + g.clearance;  // past the open end by the clearance
+  for (int i = 0; i < passes; ++i) {
+    // Climb with a cw spindle feeding +y: new material on the left, so passes go from +a
+    // towards -a (the first pass cuts full width).
+    const double x = passes > 1 ? g.a - 2 * g.a * i / (passes - 1) : 0.0;
+    if (i > 0) {
+      bld.line_to(Vec3(bld.here().x(), bld.here().y(), g.safe_z), Motion::rapid, g.rapid);
+      const double y_next = closed ? y_start : -(g.R + g.clearance);
+      bld.line_to(Vec3(x, y_next, g.safe_z), Motion::rapid, g.rapid);
+    }
+    bld.mark_cycle();
+    const double room = std::max(0.0, std::min(job.tool.diameter_mm, g.L - 2 * g.R));
+    if (i == 0) {
+      emit_entry(bld, g, job.path, Vec3(x, y_start, g.zf), true, room);
+    } else {
+      // Later passes: the start is already open beside them, so feed straight down.
+      const Vec3 p(x, y_start, g.zf);
+      if (job.path.entry == EntryType::outside) {
+        bld.line_to(Vec3(x, bld.here().y(), g.clearance), Motion::rapid, g.rapid);
+        bld.line_to(Vec3(x, bld.here().y(), g.zf), Motion::feed, g.entry_feed);
+        bld.line_to(p, Motion::feed, g.feed);
+      } else {
+        bld.line_to(Vec3(x, y_start, g.clearance), Motion::rapid, g.rapid);
+        bld.line_to(p, Motion::feed, g.entry_feed);
+      }
+    }
+    bld.line_to(Vec3(x, y_end, g.zf), Motion::feed, g.feed);
+  }
+  bld.line_to(Vec3(bld.here().x(), bld.here().y(), g.safe_z), Motion::rapid, g.rapid);
+  out.info.trochoid_radius_mm = g.a;
+  out.info.semi_axis_feed_mm = 0;
+  out.info.first_cycle_y_mm = y_start;
+  out.info.cycles = passes;
+  out.info.cycle_length_mm = y_end - y_start;
+  out.info.closed_start = closed;
+  return out;
+}
+
+}  // namespace
+
+double feed_rate_mm_per_min(const Job& job) { return job.cutting.feed_rate_mm_per_min; }
+double spindle_speed_rpm(const Job& job) { return job.cutting.spindle_speed_rpm; }
+
+PlannedPath plan_path(const Job& job) {
+  const Geometry g = make_geometry(job);
+  if (!(g.feed > 0)) throw InputError("[cutting]: the feed rate must be > 0 mm/min");
+  // Orbit direction: climb with a cw spindle is the clockwise orbit; each of conventional
+  // and a ccw spindle mirrors it.
+  const bool mirror = (job.path.direction == Direction::conventional) !=
+                      (job.cutting.spindle_direction == SpindleDirection::ccw);
+  if (g.type == PathType::linear) return plan_linear(job, g, mirror);
+  if (!(g.a > 0)) {
+    throw InputError(fmt::format("[slot] width: a {} path needs a slot wider than the tool",
+                                 to_string(g.type)));
+  }
+  if (!(g.s > 0) || g.s >= 2 * g.R) {
+    throw InputError(fmt::format("[path] step: must be in (0, {:g}) mm, got {:g}", 2 * g.R, g.s));
+  }
+
+  // Wall scallop bound: circles of radius >= R touching the wall every s (docs/models.md).
+  const double delta = g.R - std::sqrt(g.R * g.R - 0.25 * g.s * g.s);
+  const Envelope env = cycle_envelope(g, delta);
+  const bool closed = job.path.entry != EntryType::outside;
+  double y0;
+  if (closed) {
+    y0 = g.R - env.min_center_y;  // rearmost tool point of cycle 0 on y = 0
+  } else {
+    y0 = std::isfinite(env.max_rear) ? -env.max_rear : 0.0;
+  }
+  const int cycles =
+      std::max(1, static_cast<int>(std::ceil((g.L - y0 - env.min_front) / g.s - 1e-12)) + 1);
+
+  PlannedPath out;
+  Builder bld(out.path, mirror);
+  const Vec3 p0(-g.a, y0, g.zf);
+  // Room beside the entry point: along x for a ramp (the slot's free width) and, for a
+  // helix, the smaller of the free width and the distance to the closed end.
+  const double room_ramp = 2 * g.a;
+  const double room = job.path.entry == EntryType::helix ? std::min(2 * g.a, 2 * (y0 - g.R))
+                                                          : room_ramp;
+  emit_entry(bld, g, job.path, p0, false, room);
+  for (int k = 0; k < cycles; ++k) {
+    bld.mark_cycle();
+    emit_cycle(bld, g, y0 + g.s * k);
+  }
+  bld.line_to(Vec3(bld.here().x(), bld.here().y(), g.safe_z), Motion::rapid, g.rapid);
+
+  out.info.trochoid_radius_mm = g.a;
+  out.info.semi_axis_feed_mm = g.b;
+  out.info.first_cycle_y_mm = y0;
+  out.info.cycles = cycles;
+  out.info.cycle_length_mm = env.cycle_length;
+  out.info.closed_start = closed;
+  return out;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,139 @@
+// Path sampling by time, by length and by spindle angle (one function evaluates every
+// sample: sample_at), and tooth-tip trajectories with radial and axial runout.
+#include <cmath>
+#include <fmt/format.h>
+
+#include "trochomill/error.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+constexpr double kMaxSamples = 2e8;  // ~20 GB of samples: refuse rather than exhaust memory
+
+void reserve(PathSamples& out, std::size_t n) {
+  for (auto* v : {&out.t_s, &out.s_mm, &out.x_mm, &out.y_mm, &out.z_mm, &out.tx, &out.ty, &out.tz,
+                  &out.curvature_per_mm}) {
+    v->reserve(n);
+  }
+  out.segment.reserve(n);
+}
+
+void push_sample(const ToolPath& path, std::size_t seg, double s_in_seg, PathSamples& out) {
+  const Segment& g = path.segments()[seg];
+  const Vec3 p = g.point_at(s_in_seg);
+  const Vec3 t = g.tangent_at(s_in_seg);
+  out.t_s.push_back(path.segment_start_time_s(seg) + s_in_seg / (g.speed_mm_per_min() / 60.0));
+  out.s_mm.push_back(path.segment_start_length_mm(seg) + s_in_seg);
+  out.x_mm.push_back(p.x());
+  out.y_mm.push_back(p.y());
+  out.z_mm.push_back(p.z());
+  out.tx.push_back(t.x());
+  out.ty.push_back(t.y());
+  out.tz.push_back(t.z());
+  out.curvature_per_mm.push_back(g.curvature_at(s_in_seg));
+  out.segment.push_back(seg);
+}
+
+std::size_t sample_count(double total, double step, const char* what) {
+  if (!(step > 0) || !std::isfinite(step)) {
+    throw InputError(fmt::format("sampling {} must be a positive finite number, got {}", what, step));
+  }
+  const double n = std::floor(total / step);
+  if (n > kMaxSamples) {
+    throw InputError(fmt::format("sampling every {:g} {} gives {:.3g} samples (limit {:.0g}): "
+                                 "use a coarser step",
+                                 step, what, n, kMaxSamples));
+  }
+  return static_cast<std::size_t>(n);
+}
+
+}  // namespace
+
+PathSamples sample_by_time(const ToolPath& path, double dt_s) {
+  if (path.empty()) throw Error("cannot sample an empty path");
+  const double total = path.duration_s();
+  const std::size_t n = sample_count(total, dt_s, "time step (s)");
+  PathSamples out;
+  reserve(out, n + 2);
+  std::size_t seg = 0;
+  const std::size_t nseg = path.segments().size();
+  auto emit = [&](double t) {
+    while (seg + 1 < nseg && path.segment_start_time_s(seg + 1) <= t) ++seg;
+    const Segment& g = path.segments()[seg];
+    const double s = (t - path.segment_start_time_s(seg)) * g.speed_mm_per_min() / 60.0;
+    push_sample(path, seg, std::min(s, g.length_mm()), out);
+  };
+  for (std::size_t i = 0; i <= n; ++i) emit(static_cast<double>(i) * dt_s);
+  if (total - out.t_s.back() > 1e-12 * std::max(1.0, total)) emit(total);
+  return out;
+}
+
+PathSamples sample_by_length(const ToolPath& path, double ds_mm) {
+  if (path.empty()) throw Error("cannot sample an empty path");
+  const double total = path.length_mm();
+  const std::size_t n = sample_count(total, ds_mm, "length step (mm)");
+  PathSamples out;
+  reserve(out, n + 2);
+  std::size_t seg = 0;
+  const std::size_t nseg = path.segments().size();
+  auto emit = [&](double s) {
+    while (seg + 1 < nseg && path.segment_start_length_mm(seg + 1) <= s) ++seg;
+    const double local = s - path.segment_start_length_mm(seg);
+    push_sample(path, seg, std::min(local, path.segments()[seg].length_mm()), out);
+  };
+  for (std::size_t i = 0; i <= n; ++i) emit(static_cast<double>(i) * ds_mm);
+  if (total - out.s_mm.back() > 1e-12 * std::max(1.0, total)) emit(total);
+  return out;
+}
+
+PathSamples sample_by_spindle_angle(const ToolPath& path, int steps_per_rev, double spindle_rpm) {
+  if (steps_per_rev < 1) {
+    throw InputError(fmt::format("steps per revolution must be >= 1, got {}", steps_per_rev));
+  }
+  if (!(spindle_rpm > 0) || !std::isfinite(spindle_rpm)) {
+    throw InputError(fmt::format("spindle speed must be > 0 rpm, got {}", spindle_rpm));
+  }
+  return sample_by_time(path, 60.0 / (spindle_rpm * steps_per_rev));
+}
+
+double tooth_radius_mm(const Tool& tool, int k) {
+  const double alpha = deg_to_rad(tool.tooth_angles_deg.at(static_cast<std::size_t>(k)));
+  const double lambda = deg_to_rad(tool.runout_phase_deg);
+  const double e = tool.runout_radial_mm, R = tool.radius_mm();
+  return std::hypot(R * std::cos(alpha) + e * std::cos(lambda),
+                    R * std::sin(alpha) + e * std::sin(lambda));
+}
+
+ToothTracks tooth_tracks(const PathSamples& samples, const Tool& tool, const Cutting& cutting) {
+  if (tool.teeth < 1 || static_cast<int>(tool.tooth_angles_deg.size()) != tool.teeth) {
+    throw InputError(fmt::format("tool needs one tooth angle per tooth ({} teeth, {} angles)",
+                                 tool.teeth, tool.tooth_angles_deg.size()));
+  }
+  const double omega = rpm_to_rad_per_s(cutting.spindle_speed_rpm) *
+                       (cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
+  const double R = tool.radius_mm(), e = tool.runout_radial_mm, eax = tool.runout_axial_mm;
+  const double lambda = deg_to_rad(tool.runout_phase_deg);
+  const std::size_t n = samples.size();
+  ToothTracks tr;
+  tr.teeth = tool.teeth;
+  tr.spindle_angle_rad.resize(n);
+  tr.x_mm.assign(tool.teeth, std::vector<double>(n));
+  tr.y_mm.assign(tool.teeth, std::vector<double>(n));
+  tr.z_mm.assign(tool.teeth, std::vector<double>(n));
+  for (std::size_t i = 0; i < n; ++i) tr.spindle_angle_rad[i] = omega * samples.t_s[i];
+  for (int k = 0; k < tool.teeth; ++k) {
+    const double alpha = deg_to_rad(tool.tooth_angles_deg[k]);
+    const double dz = -eax * std::cos(alpha - lambda);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double phi = tr.spindle_angle_rad[i];
+      tr.x_mm[k][i] = samples.x_mm[i] + e * std::cos(phi + lambda) + R * std::cos(phi + alpha);
+      tr.y_mm[k][i] = samples.y_mm[i] + e * std::sin(phi + lambda) + R * std::sin(phi + alpha);
+      tr.z_mm[k][i] = samples.z_mm[i] + dz;
+    }
+  }
+  return tr;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,72 @@
+// Machining time with an acceleration limit: the path is discretised, each node gets a speed
+// limit (programmed speed, centripetal limit sqrt(a / kappa), junction-deviation limit at
+// tangent discontinuities as Grbl plans corners, zero at start and end), then a forward and
+// a backward pass apply |dv/dt| <= a, and the time of each piece is 2 ds / (v0 + v1), exact
+// for constant acceleration.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "trochomill/path.hpp"
+
+namespace trochomill {
+
+double estimate_time_s(const ToolPath& path, const Machine& machine) {
+  const double amax = machine.max_acceleration_mm_per_s2;
+  if (!(amax > 0) || path.empty()) return path.duration_s();
+  const double inf = std::numeric_limits<double>::infinity();
+  // Node spacing: fine enough for curvature changes, bounded in count.
+  const double total = path.length_mm();
+  const double ds_target = std::max(0.05, total / 2e6);
+
+  std::vector<double> ds;    // length of the piece ending at node j (ds[0] = 0)
+  std::vector<double> vlim;  // speed limit at node j (mm/s)
+  ds.push_back(0);
+  vlim.push_back(0);  // the machine starts at rest
+  const auto& segs = path.segments();
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    const Segment& g = segs[i];
+    const double F = g.speed_mm_per_min() / 60.0;
+    if (i > 0) {
+      // Junction between segment i-1 and i: the node already pushed is the shared point.
+      const Segment& prev = segs[i - 1];
+      const Vec3 t0 = prev.tangent_at(prev.length_mm());
+      const Vec3 t1 = g.tangent_at(0);
+      const double cos_theta = -t0.dot(t1);
+      double vj;
+      if (cos_theta > 0.999999) {
+        vj = 0;  // reversal
+      } else if (cos_theta < -0.999999) {
+        vj = inf;  // straight through
+      } else {
+        const double sin_half = std::sqrt(0.5 * (1.0 - cos_theta));
+        vj = std::sqrt(amax * machine.junction_deviation_mm * sin_half / (1.0 - sin_half));
+      }
+      vlim.back() = std::min({vlim.back(), vj, F});
+    }
+    const int n = std::max(1, static_cast<int>(std::ceil(g.length_mm() / ds_target)));
+    const double h = g.length_mm() / n;
+    for (int k = 1; k <= n; ++k) {
+      const double kappa = g.curvature_at(h * k);
+      double v = F;
+      if (kappa > 0) v = std::min(v, std::sqrt(amax / kappa));
+      ds.push_back(h);
+      vlim.push_back(v);
+    }
+    if (i == 0 && !vlim.empty()) vlim[0] = 0;
+  }
+  vlim.back() = 0;  // and stops at the end
+  const std::size_t m = vlim.size();
+  std::vector<double> v(vlim);
+  for (std::size_t j = 1; j < m; ++j) v[j] = std::min(v[j], std::sqrt(v[j - 1] * v[j - 1] + 2 * amax * ds[j]));
+  for (std::size_t j = m - 1; j-- > 0;) v[j] = std::min(v[j], std::sqrt(v[j + 1] * v[j + 1] + 2 * amax * ds[j + 1]));
+  double t = 0;
+  for (std::size_t j = 1; j < m; ++j) {
+    const double vs = v[j - 1] + v[j];
+    if (vs > 0) t += 2.0 * ds[j] / vs;
+  }
+  return t;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,71 @@
+// ToolPath: an ordered list of segments, continuous in position, with cumulative length and
+// programmed-feed time for lookup by arc length or time.
+#include <algorithm>
+#include <fmt/format.h>
+
+#include "trochomill/error.hpp"
+#include "trochomill/path.hpp"
+
+namespace trochomill {
+
+void ToolPath::append(Segment segment) {
+  if (segment.length_mm() <= 0) return;  // a move to where the tool already is: nothing to do
+  if (!(segment.speed_mm_per_min() > 0)) {
+    throw Error(fmt::format("segment {} has no speed (mm/min)", segments_.size()));
+  }
+  double s0 = 0, t0 = 0;
+  if (!segments_.empty()) {
+    const Segment& last = segments_.back();
+    const double gap = (segment.start() - last.end()).norm();
+    if (gap > 1e-9) {
+      throw Error(fmt::format("path is discontinuous at segment {}: gap {:.3g} mm",
+                              segments_.size(), gap));
+    }
+    s0 = start_length_.back() + last.length_mm();
+    t0 = start_time_.back() + last.length_mm() / (last.speed_mm_per_min() / 60.0);
+  }
+  start_length_.push_back(s0);
+  start_time_.push_back(t0);
+  segments_.push_back(std::move(segment));
+}
+
+void ToolPath::mark_cycle() {
+  cycles_.push_back(CycleMark{segments_.size(), length_mm(), duration_s()});
+}
+
+double ToolPath::length_mm() const noexcept {
+  return segments_.empty() ? 0.0 : start_length_.back() + segments_.back().length_mm();
+}
+
+double ToolPath::feed_length_mm() const noexcept {
+  double s = 0;
+  for (const auto& seg : segments_) {
+    if (seg.motion() == Motion::feed) s += seg.length_mm();
+  }
+  return s;
+}
+
+double ToolPath::duration_s() const noexcept {
+  if (segments_.empty()) return 0.0;
+  const Segment& last = segments_.back();
+  return start_time_.back() + last.length_mm() / (last.speed_mm_per_min() / 60.0);
+}
+
+std::size_t ToolPath::segment_at_length(double s_mm) const {
+  if (segments_.empty()) throw Error("the path is empty");
+  const auto it = std::upper_bound(start_length_.begin(), start_length_.end(), s_mm);
+  return it == start_length_.begin() ? 0 : static_cast<std::size_t>(it - start_length_.begin()) - 1;
+}
+
+std::size_t ToolPath::segment_at_time(double t_s) const {
+  if (segments_.empty()) throw Error("the path is empty");
+  const auto it = std::upper_bound(start_time_.begin(), start_time_.end(), t_s);
+  return it == start_time_.begin() ? 0 : static_cast<std::size_t>(it - start_time_.begin()) - 1;
+}
+
+Vec3 ToolPath::point_at_length(double s_mm) const {
+  const std::size_t i = segment_at_length(s_mm);
+  return segments_[i].point_at(s_mm - start_length_[i]);
+}
+
+}  // namespace trochomill
