@@ -1,8 +1,8 @@
 // trochomill command-line interface: parses arguments, calls the library, formats output.
 // Exit codes: 0 success, 2 bad input (arguments, job file, NC program), 1 runtime failure.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
 #include <limits>
@@ -50,11 +50,13 @@ void emit(const std::string& target, const std::string& text) {
 
 std::string samples_csv(const tmill::PathSamples& s, const tmill::ToothTracks& tr) {
   std::string out = "t_s,s_mm,x_mm,y_mm,z_mm,tx,ty,tz,curvature_per_mm,segment";
-  for (int k = 0; k < tr.teeth; ++k) out += fmt::format(",tooth{0}_x_mm,tooth{0}_y_mm,tooth{0}_z_mm", k);
+  for (int k = 0; k < tr.teeth; ++k)
+    out += fmt::format(",tooth{0}_x_mm,tooth{0}_y_mm,tooth{0}_z_mm", k);
   out += '\n';
   for (std::size_t i = 0; i < s.size(); ++i) {
-    fmt::format_to(std::back_inserter(out), "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{}",
-                   s.t_s[i], s.s_mm[i], s.x_mm[i], s.y_mm[i], s.z_mm[i], s.tx[i], s.ty[i], s.tz[i],
+    fmt::format_to(std::back_inserter(out),
+                   "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{}", s.t_s[i],
+                   s.s_mm[i], s.x_mm[i], s.y_mm[i], s.z_mm[i], s.tx[i], s.ty[i], s.tz[i],
                    s.curvature_per_mm[i], s.segment[i]);
     for (int k = 0; k < tr.teeth; ++k) {
       fmt::format_to(std::back_inserter(out), ",{:.9g},{:.9g},{:.9g}", tr.x_mm[k][i], tr.y_mm[k][i],
@@ -102,8 +104,10 @@ int run(int argc, char** argv) {
   auto* plan = app.add_subcommand("plan", "write the slot program of a job as G-code");
   add_job_args(plan, plan_args);
   plan->add_option("-o,--output", plan_out, "output G-code file (- for stdout)")->required();
-  plan->add_option("--dialect", plan_dialect, "linuxcnc | fanuc | sinumerik | grbl (default: [machine] dialect)");
-  plan->add_option("--tolerance", plan_tol, "max deviation of fitted arcs/chords, mm (default: [machine] arc_tolerance)");
+  plan->add_option("--dialect", plan_dialect,
+                   "linuxcnc | fanuc | sinumerik | grbl (default: [machine] dialect)");
+  plan->add_option("--tolerance", plan_tol,
+                   "max deviation of fitted arcs/chords, mm (default: [machine] arc_tolerance)");
   plan->add_flag("--chords", plan_chords, "write curves as G1 chords instead of biarcs");
 
   // path
@@ -114,7 +118,8 @@ int run(int argc, char** argv) {
   auto* pathc = app.add_subcommand("path", "sample the tool-centre and tooth-tip trajectories");
   add_job_args(pathc, path_args);
   pathc->add_option("--csv", path_csv, "write the samples as CSV (- for stdout)");
-  pathc->add_option("--gcode", path_gcode, "take the path from this NC program instead of planning it");
+  pathc->add_option("--gcode", path_gcode,
+                    "take the path from this NC program instead of planning it");
   auto* o_spr = pathc->add_option("--steps-per-rev", path_spr, "samples per spindle revolution");
   auto* o_dt = pathc->add_option("--dt", path_dt, "time step, s");
   auto* o_ds = pathc->add_option("--ds", path_ds, "path-length step, mm");
@@ -124,10 +129,13 @@ int run(int argc, char** argv) {
   // check-gcode
   std::string cg_file, cg_json;
   double cg_rapid = 10000, cg_accel = 0;
-  auto* cg = app.add_subcommand("check-gcode", "parse an NC program and report length, time, bounding box");
+  auto* cg = app.add_subcommand("check-gcode",
+                                "parse an NC program and report length, time, bounding box");
   cg->add_option("FILE", cg_file, "G-code file")->required();
-  cg->add_option("--rapid-rate", cg_rapid, "rapid traverse rate, mm/min")->check(CLI::PositiveNumber);
-  cg->add_option("--max-acceleration", cg_accel, "path acceleration limit for the time estimate, mm/s^2")
+  cg->add_option("--rapid-rate", cg_rapid, "rapid traverse rate, mm/min")
+      ->check(CLI::PositiveNumber);
+  cg->add_option("--max-acceleration", cg_accel,
+                 "path acceleration limit for the time estimate, mm/s^2")
       ->check(CLI::NonNegativeNumber);
   cg->add_option("--json", cg_json, "write the report as JSON (- for stdout)");
 
@@ -153,11 +161,13 @@ int run(int argc, char** argv) {
     const std::string code = tmill::write_gcode(job, planned.path, opt);
     emit(plan_out, code);
     if (plan_out != "-") {
-      fmt::print("{}: {} {} cycles, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} lines -> {}\n",
-                 plan_args.job_file, tmill::to_string(job.path.type), planned.info.cycles,
-                 planned.path.length_mm(), planned.path.duration_s(),
-                 tmill::estimate_time_s(planned.path, job.machine),
-                 std::count(code.begin(), code.end(), '\n'), plan_out);
+      fmt::print(
+          "{}: {} {} cycles, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} lines "
+          "-> {}\n",
+          plan_args.job_file, tmill::to_string(job.path.type), planned.info.cycles,
+          planned.path.length_mm(), planned.path.duration_s(),
+          tmill::estimate_time_s(planned.path, job.machine),
+          std::count(code.begin(), code.end(), '\n'), plan_out);
     }
     return 0;
   }
@@ -183,9 +193,10 @@ int run(int argc, char** argv) {
     const tmill::ToothTracks tr = tmill::tooth_tracks(s, job.tool, job.cutting);
     if (!path_csv.empty()) emit(path_csv, samples_csv(s, tr));
     if (path_csv != "-") {
-      fmt::print("{} samples over {:.3f} s, path {:.3f} mm, {} teeth, f_z = {:.4g} mm, n = {:.0f} rpm{}\n",
-                 s.size(), tp.duration_s(), tp.length_mm(), tr.teeth, job.cutting.feed_per_tooth_mm,
-                 job.cutting.spindle_speed_rpm, path_csv.empty() ? "" : " -> " + path_csv);
+      fmt::print(
+          "{} samples over {:.3f} s, path {:.3f} mm, {} teeth, f_z = {:.4g} mm, n = {:.0f} rpm{}\n",
+          s.size(), tp.duration_s(), tp.length_mm(), tr.teeth, job.cutting.feed_per_tooth_mm,
+          job.cutting.spindle_speed_rpm, path_csv.empty() ? "" : " -> " + path_csv);
     }
     return 0;
   }
@@ -216,15 +227,18 @@ int run(int argc, char** argv) {
     };
     if (!cg_json.empty()) emit(cg_json, j.dump(2) + "\n");
     if (cg_json != "-") {
-      fmt::print("{}: {} lines, {} segments\n", cg_file, prog.info.lines, prog.path.segments().size());
+      fmt::print("{}: {} lines, {} segments\n", cg_file, prog.info.lines,
+                 prog.path.segments().size());
       fmt::print("  path length   {:.4f} mm ({:.4f} mm at feed)\n", prog.path.length_mm(),
                  prog.path.feed_length_mm());
       fmt::print("  time          {:.4f} s at programmed feed", prog.path.duration_s());
       if (cg_accel > 0) fmt::print(", {:.4f} s with {:g} mm/s^2", t_acc, cg_accel);
-      fmt::print("\n  bounding box  x [{:.4f}, {:.4f}]  y [{:.4f}, {:.4f}]  z [{:.4f}, {:.4f}] mm\n",
-                 b.lo.x(), b.hi.x(), b.lo.y(), b.hi.y(), b.lo.z(), b.hi.z());
+      fmt::print(
+          "\n  bounding box  x [{:.4f}, {:.4f}]  y [{:.4f}, {:.4f}]  z [{:.4f}, {:.4f}] mm\n",
+          b.lo.x(), b.hi.x(), b.lo.y(), b.hi.y(), b.lo.z(), b.hi.z());
       fmt::print("  feed          {:g} to {:g} mm/min, spindle up to {:g} rpm\n",
-                 prog.info.min_feed_mm_per_min, prog.info.max_feed_mm_per_min, prog.info.max_spindle_rpm);
+                 prog.info.min_feed_mm_per_min, prog.info.max_feed_mm_per_min,
+                 prog.info.max_spindle_rpm);
     }
     return 0;
   }

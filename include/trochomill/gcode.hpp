@@ -41,7 +41,7 @@ struct FitArc {
 [[nodiscard]] std::vector<Vec3> fit_chords(const Segment& curve, double tolerance_mm);
 
 struct GcodeReadOptions {
-  double rapid_rate_mm_per_min = 10000;  ///< speed given to G0 moves (mm/min)
+  double rapid_rate_mm_per_min = 10000;    ///< speed given to G0 moves (mm/min)
   double arc_radius_tolerance_mm = 0.002;  ///< allowed start/end radius mismatch of arcs (mm)
 };
 

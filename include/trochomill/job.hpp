@@ -12,15 +12,15 @@
 namespace trochomill {
 
 struct Tool {
-  double diameter_mm = 0;            ///< cutter diameter D (mm)
-  int teeth = 0;                     ///< number of teeth Z
-  double helix_angle_deg = 0;        ///< helix angle (degrees)
-  double corner_radius_mm = 0;       ///< corner radius (mm), 0 for a square end mill
-  double edge_radius_mm = 0;         ///< cutting-edge rounding radius r_e (mm)
-  double flute_length_mm = 0;        ///< flute length (mm); 0 = not given
-  double runout_radial_mm = 0;       ///< radial runout: axis offset e (mm)
-  double runout_axial_mm = 0;        ///< axial runout (mm)
-  double runout_phase_deg = 0;       ///< angle of the runout offset relative to tooth 0 (degrees)
+  double diameter_mm = 0;       ///< cutter diameter D (mm)
+  int teeth = 0;                ///< number of teeth Z
+  double helix_angle_deg = 0;   ///< helix angle (degrees)
+  double corner_radius_mm = 0;  ///< corner radius (mm), 0 for a square end mill
+  double edge_radius_mm = 0;    ///< cutting-edge rounding radius r_e (mm)
+  double flute_length_mm = 0;   ///< flute length (mm); 0 = not given
+  double runout_radial_mm = 0;  ///< radial runout: axis offset e (mm)
+  double runout_axial_mm = 0;   ///< axial runout (mm)
+  double runout_phase_deg = 0;  ///< angle of the runout offset relative to tooth 0 (degrees)
   std::vector<double> tooth_angles_deg;  ///< tooth angular positions (degrees); Z equal pitches
                                          ///< when empty in the file (filled by load)
   int tool_number = 1;                   ///< T word for the tool change
@@ -43,22 +43,22 @@ enum class ArcOutput { arcs, chords };
 
 struct PathSpec {
   PathType type = PathType::trochoidal;
-  double step_mm = 0;              ///< trochoidal step s (advance per cycle); stepover for linear
-  double aspect_ratio = 1;         ///< r_e = b / a (elliptical families)
-  double linear_distance_mm = 0;   ///< d, the straight wall move of linear-elliptical (mm)
+  double step_mm = 0;             ///< trochoidal step s (advance per cycle); stepover for linear
+  double aspect_ratio = 1;        ///< r_e = b / a (elliptical families)
+  double linear_distance_mm = 0;  ///< d, the straight wall move of linear-elliptical (mm)
   Direction direction = Direction::climb;
   EntryType entry = EntryType::outside;
-  double entry_radius_mm = 0;      ///< helix radius (mm); 0 = automatic
-  double entry_pitch_mm = 1;       ///< helix descent per turn (mm)
-  double entry_angle_deg = 3;      ///< ramp angle (degrees)
+  double entry_radius_mm = 0;        ///< helix radius (mm); 0 = automatic
+  double entry_pitch_mm = 1;         ///< helix descent per turn (mm)
+  double entry_angle_deg = 3;        ///< ramp angle (degrees)
   double entry_feed_mm_per_min = 0;  ///< feed for the entry moves (mm/min); 0 = half the feed
-  double clearance_mm = 1;         ///< distance kept from stock before feeding in (mm)
+  double clearance_mm = 1;           ///< distance kept from stock before feeding in (mm)
 };
 
 struct Cutting {
-  double feed_rate_mm_per_min = 0;   ///< f_r, tool-centre feed (mm/min)
-  double spindle_speed_rpm = 0;      ///< n (rpm)
-  double feed_per_tooth_mm = 0;      ///< f_z = f_r / (n Z) (mm)
+  double feed_rate_mm_per_min = 0;     ///< f_r, tool-centre feed (mm/min)
+  double spindle_speed_rpm = 0;        ///< n (rpm)
+  double feed_per_tooth_mm = 0;        ///< f_z = f_r / (n Z) (mm)
   double cutting_speed_m_per_min = 0;  ///< v_c = pi D n / 1000 (m/min)
   SpindleDirection spindle_direction = SpindleDirection::cw;
   Coolant coolant = Coolant::off;
@@ -66,13 +66,13 @@ struct Cutting {
 
 struct Machine {
   Dialect dialect = Dialect::linuxcnc;
-  double safe_z_mm = 5;                 ///< retract height above the top face (mm)
-  double rapid_rate_mm_per_min = 10000; ///< rapid traverse rate (mm/min)
-  double max_acceleration_mm_per_s2 = 0;  ///< path acceleration limit (mm/s^2); 0 = unlimited
-  double junction_deviation_mm = 0.01;  ///< corner blending tolerance for time estimates (mm)
-  double arc_tolerance_mm = 0.001;      ///< max deviation when fitting arcs/chords (mm)
+  double safe_z_mm = 5;                    ///< retract height above the top face (mm)
+  double rapid_rate_mm_per_min = 10000;    ///< rapid traverse rate (mm/min)
+  double max_acceleration_mm_per_s2 = 0;   ///< path acceleration limit (mm/s^2); 0 = unlimited
+  double junction_deviation_mm = 0.01;     ///< corner blending tolerance for time estimates (mm)
+  double arc_tolerance_mm = 0.001;         ///< max deviation when fitting arcs/chords (mm)
   ArcOutput arc_output = ArcOutput::arcs;  ///< elliptical arcs as biarcs or as G1 chords
-  int program_number = 1000;            ///< O number (fanuc)
+  int program_number = 1000;               ///< O number (fanuc)
 };
 
 struct Job {

@@ -50,7 +50,7 @@ class Segment {
   /// Parameter u at arc length s (mm from the segment start), exact to ~1e-12 mm.
   [[nodiscard]] double u_at_length(double s_mm) const;
   [[nodiscard]] Vec3 point_u(double u) const;
-  [[nodiscard]] Vec3 derivative_u(double u) const;       ///< dp/du
+  [[nodiscard]] Vec3 derivative_u(double u) const;         ///< dp/du
   [[nodiscard]] Vec3 second_derivative_u(double u) const;  ///< d2p/du2
   [[nodiscard]] Vec3 point_at(double s_mm) const { return point_u(u_at_length(s_mm)); }
   /// Unit tangent in the direction of motion at arc length s.
@@ -127,8 +127,8 @@ class ToolPath {
 
 /// Samples of a path, structure of arrays (one entry per sample).
 struct PathSamples {
-  std::vector<double> t_s;       ///< programmed-feed time (s)
-  std::vector<double> s_mm;      ///< arc length from the path start (mm)
+  std::vector<double> t_s;   ///< programmed-feed time (s)
+  std::vector<double> s_mm;  ///< arc length from the path start (mm)
   std::vector<double> x_mm, y_mm, z_mm;
   std::vector<double> tx, ty, tz;  ///< unit tangent
   std::vector<double> curvature_per_mm;
@@ -142,7 +142,7 @@ struct PathSamples {
 [[nodiscard]] PathSamples sample_by_length(const ToolPath& path, double ds_mm);
 /// Samples steps_per_rev times per spindle revolution at spindle_rpm.
 [[nodiscard]] PathSamples sample_by_spindle_angle(const ToolPath& path, int steps_per_rev,
-                                                 double spindle_rpm);
+                                                  double spindle_rpm);
 
 /// Tooth-tip trajectories: tooth k at time t sits at
 ///   centre(t) + e (cos(phi_s + lambda), sin(phi_s + lambda)) + R (cos phi_k, sin phi_k),
@@ -151,7 +151,7 @@ struct PathSamples {
 /// (the tooth at the runout phase is the longest). Angles in radians, positions mm.
 struct ToothTracks {
   int teeth = 0;
-  std::vector<double> spindle_angle_rad;  ///< phi_s per sample
+  std::vector<double> spindle_angle_rad;              ///< phi_s per sample
   std::vector<std::vector<double>> x_mm, y_mm, z_mm;  ///< [tooth][sample]
 };
 [[nodiscard]] ToothTracks tooth_tracks(const PathSamples& samples, const Tool& tool,

@@ -11,8 +11,8 @@
 namespace trochomill {
 namespace {
 
-constexpr int kCheckSamples = 24;    // interior samples per piece for the deviation check
-constexpr double kSafety = 0.8;      // accept a piece below 0.8 * tolerance at the samples
+constexpr int kCheckSamples = 24;  // interior samples per piece for the deviation check
+constexpr double kSafety = 0.8;    // accept a piece below 0.8 * tolerance at the samples
 constexpr int kMaxDepth = 30;
 
 double cross2(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
@@ -41,7 +41,8 @@ double distance_to_arc(const FitArc& arc, const Vec3& p) {
   if (arc.is_line) {
     const Vec3 d = arc.end - arc.start;
     const double L2 = d.x() * d.x() + d.y() * d.y();
-    double t = L2 > 0 ? ((p.x() - arc.start.x()) * d.x() + (p.y() - arc.start.y()) * d.y()) / L2 : 0;
+    double t =
+        L2 > 0 ? ((p.x() - arc.start.x()) * d.x() + (p.y() - arc.start.y()) * d.y()) / L2 : 0;
     t = std::clamp(t, 0.0, 1.0);
     return std::hypot(p.x() - arc.start.x() - t * d.x(), p.y() - arc.start.y() - t * d.y());
   }
@@ -100,6 +101,9 @@ void fit_piece(const Segment& c, double ua, double ub, double tol, int depth,
   const Vec3 T0 = unit_tangent(c, ua), T1 = unit_tangent(c, ub);
   FitArc a1, a2;
   bool ok = T0.squaredNorm() > 0 && T1.squaredNorm() > 0 && biarc(P0, T0, P1, T1, a1, a2);
+  // A biarc arc turning 135 degrees or more over a piece this short is a loop, however close
+  // the curve's samples lie to it: halve the piece instead.
+  ok = ok && std::abs(a1.sweep_rad) < 0.75 * M_PI && std::abs(a2.sweep_rad) < 0.75 * M_PI;
   if (ok) {
     for (int k = 1; k < kCheckSamples && ok; ++k) {
       const Vec3 p = c.point_u(ua + (ub - ua) * k / kCheckSamples);
@@ -158,7 +162,8 @@ std::vector<FitArc> fit_biarcs(const Segment& curve, double tolerance_mm) {
   std::vector<FitArc> out;
   const int n = initial_pieces(curve);
   const double u0 = curve.u0(), du = (curve.u1() - curve.u0()) / n;
-  for (int i = 0; i < n; ++i) fit_piece(curve, u0 + du * i, u0 + du * (i + 1), tolerance_mm, 0, out);
+  for (int i = 0; i < n; ++i)
+    fit_piece(curve, u0 + du * i, u0 + du * (i + 1), tolerance_mm, 0, out);
   // Exact end points: the last arc ends where the curve ends.
   return out;
 }
@@ -172,7 +177,8 @@ std::vector<Vec3> fit_chords(const Segment& curve, double tolerance_mm) {
   }
   const int n = initial_pieces(curve);
   const double u0 = curve.u0(), du = (curve.u1() - curve.u0()) / n;
-  for (int i = 0; i < n; ++i) chord_piece(curve, u0 + du * i, u0 + du * (i + 1), tolerance_mm, 0, out);
+  for (int i = 0; i < n; ++i)
+    chord_piece(curve, u0 + du * i, u0 + du * (i + 1), tolerance_mm, 0, out);
   return out;
 }
 

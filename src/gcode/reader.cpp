@@ -3,10 +3,11 @@
 // line numbers, ( ) and ; comments, modal state. Every error is
 // "name:line:column: what is wrong". The parser walks the text once without allocating per
 // line; numbers go through std::from_chars.
+#include <fmt/format.h>
+
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <fmt/format.h>
 #include <optional>
 
 #include "trochomill/error.hpp"
@@ -31,7 +32,7 @@ struct State {
   double unit = 1.0;  // mm per program unit
   bool absolute = true;
   bool arc_absolute = false;  // G90.1
-  double feed = 0;           // mm/min
+  double feed = 0;            // mm/min
   Vec3 pos = Vec3::Zero();
   bool pos_known = false;
   bool ended = false;
@@ -101,7 +102,8 @@ class Reader {
         continue;
       }
       if (!std::isalpha(static_cast<unsigned char>(c))) {
-        fail(i + 1, fmt::format("unexpected character '{}' (expected a word such as G1 or X10)", c));
+        fail(i + 1,
+             fmt::format("unexpected character '{}' (expected a word such as G1 or X10)", c));
       }
       const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
       const std::size_t col = i + 1;
@@ -160,32 +162,78 @@ class Reader {
         case 'G': {
           const int g = code10(w.value);
           switch (g) {
-            case 0: case 10: case 20: case 30:
+            case 0:
+            case 10:
+            case 20:
+            case 30:
               if (new_motion >= 0) fail(w.column, "two motion codes in one block");
               new_motion = g / 10;
               motion_col = w.column;
               break;
-            case 170: st_.plane = Plane::xy; break;
-            case 180: st_.plane = Plane::zx; break;
-            case 190: st_.plane = Plane::yz; break;
-            case 200: case 700: case 7000: st_.unit = 25.4; prog_.info.inch_units_seen = true; break;
-            case 210: case 710: case 7100: st_.unit = 1.0; break;
-            case 900: st_.absolute = true; break;
-            case 910: st_.absolute = false; break;
-            case 901: st_.arc_absolute = true; break;
-            case 911: st_.arc_absolute = false; break;
-            case 40: break;  // dwell: no motion (its time is not modelled)
-            case 400: case 490: case 800: case 940: case 610: case 611: case 640: case 430:
-            case 540: case 550: case 560: case 570: case 580: case 590:
+            case 170:
+              st_.plane = Plane::xy;
+              break;
+            case 180:
+              st_.plane = Plane::zx;
+              break;
+            case 190:
+              st_.plane = Plane::yz;
+              break;
+            case 200:
+            case 700:
+            case 7000:
+              st_.unit = 25.4;
+              prog_.info.inch_units_seen = true;
+              break;
+            case 210:
+            case 710:
+            case 7100:
+              st_.unit = 1.0;
+              break;
+            case 900:
+              st_.absolute = true;
+              break;
+            case 910:
+              st_.absolute = false;
+              break;
+            case 901:
+              st_.arc_absolute = true;
+              break;
+            case 911:
+              st_.arc_absolute = false;
+              break;
+            case 40:
+              break;  // dwell: no motion (its time is not modelled)
+            case 400:
+            case 490:
+            case 800:
+            case 940:
+            case 610:
+            case 611:
+            case 640:
+            case 430:
+            case 540:
+            case 550:
+            case 560:
+            case 570:
+            case 580:
+            case 590:
               break;  // modal settings with no effect on the path
-            case 410: case 420:
-              fail(w.column, "cutter radius compensation (G41/G42) is not supported: the "
-                             "programmed path would not be the tool-centre path");
-            case 280: case 300: case 530:
+            case 410:
+            case 420:
+              fail(w.column,
+                   "cutter radius compensation (G41/G42) is not supported: the "
+                   "programmed path would not be the tool-centre path");
+            case 280:
+            case 300:
+            case 530:
               fail(w.column, fmt::format("G{:g} is not supported: the path would depend on the "
-                                         "machine's home or machine coordinates", w.value));
-            case 930: fail(w.column, "inverse-time feed (G93) is not supported; use G94 (mm/min)");
-            case 950: fail(w.column, "feed per revolution (G95) is not supported; use G94 (mm/min)");
+                                         "machine's home or machine coordinates",
+                                         w.value));
+            case 930:
+              fail(w.column, "inverse-time feed (G93) is not supported; use G94 (mm/min)");
+            case 950:
+              fail(w.column, "feed per revolution (G95) is not supported; use G94 (mm/min)");
             default:
               if (g >= 730 && g <= 890) {
                 fail(w.column, fmt::format("canned cycle G{:g} is not supported", w.value));
@@ -197,24 +245,53 @@ class Reader {
         case 'M': {
           const int m = code10(w.value);
           switch (m) {
-            case 0: case 10: case 20: case 300:
+            case 0:
+            case 10:
+            case 20:
+            case 300:
               end_after_block_ = m == 20 || m == 300;
               break;
-            case 30: case 40: case 50: case 60: case 70: case 80: case 90:
+            case 30:
+            case 40:
+            case 50:
+            case 60:
+            case 70:
+            case 80:
+            case 90:
               break;
             default:
               fail(w.column, fmt::format("unsupported M-code M{:g}", w.value));
           }
           break;
         }
-        case 'X': x = w.value; axis_col = axis_col ? axis_col : w.column; break;
-        case 'Y': y = w.value; axis_col = axis_col ? axis_col : w.column; break;
-        case 'Z': z = w.value; axis_col = axis_col ? axis_col : w.column; break;
-        case 'I': ii = w.value; break;
-        case 'J': jj = w.value; break;
-        case 'K': kk = w.value; break;
-        case 'R': case 'r': r = w.value; break;
-        case 'P': p = w.value; break;
+        case 'X':
+          x = w.value;
+          axis_col = axis_col ? axis_col : w.column;
+          break;
+        case 'Y':
+          y = w.value;
+          axis_col = axis_col ? axis_col : w.column;
+          break;
+        case 'Z':
+          z = w.value;
+          axis_col = axis_col ? axis_col : w.column;
+          break;
+        case 'I':
+          ii = w.value;
+          break;
+        case 'J':
+          jj = w.value;
+          break;
+        case 'K':
+          kk = w.value;
+          break;
+        case 'R':
+        case 'r':
+          r = w.value;
+          break;
+        case 'P':
+          p = w.value;
+          break;
         case 'F':
           if (w.value < 0) fail(w.column, "feed F must be >= 0");
           st_.feed = w.value * st_.unit;
@@ -223,10 +300,16 @@ class Reader {
           if (w.value < 0) fail(w.column, "spindle speed S must be >= 0");
           prog_.info.max_spindle_rpm = std::max(prog_.info.max_spindle_rpm, w.value);
           break;
-        case 'N': case 'T': case 'D': case 'H': break;
-        case 'A': case 'B': case 'C':
-          fail(w.column, fmt::format("rotary axis {} is not supported (3-axis programs only)",
-                                     w.letter));
+        case 'N':
+        case 'T':
+        case 'D':
+        case 'H':
+          break;
+        case 'A':
+        case 'B':
+        case 'C':
+          fail(w.column,
+               fmt::format("rotary axis {} is not supported (3-axis programs only)", w.letter));
         default:
           fail(w.column, fmt::format("unsupported word '{}'", w.letter));
       }
@@ -266,7 +349,8 @@ class Reader {
     if (st_.motion <= 1) {
       if (st_.motion == 1) check_feed(col);
       const double speed = st_.motion == 0 ? opt_.rapid_rate_mm_per_min : st_.feed;
-      append(Segment::line(from, target, st_.motion == 0 ? Motion::rapid : Motion::feed, speed), col);
+      append(Segment::line(from, target, st_.motion == 0 ? Motion::rapid : Motion::feed, speed),
+             col);
       st_.pos = target;
       return;
     }
@@ -275,8 +359,20 @@ class Reader {
     // G18: ZX/Y, G19: YZ/X); positive angles turn from e1 to e2 (G3).
     int i1 = 0, i2 = 1, in = 2;
     std::optional<double> o1 = ii, o2 = jj;
-    if (st_.plane == Plane::zx) { i1 = 2; i2 = 0; in = 1; o1 = kk; o2 = ii; }
-    if (st_.plane == Plane::yz) { i1 = 1; i2 = 2; in = 0; o1 = jj; o2 = kk; }
+    if (st_.plane == Plane::zx) {
+      i1 = 2;
+      i2 = 0;
+      in = 1;
+      o1 = kk;
+      o2 = ii;
+    }
+    if (st_.plane == Plane::yz) {
+      i1 = 1;
+      i2 = 2;
+      in = 0;
+      o1 = jj;
+      o2 = kk;
+    }
     const double s1 = from[i1], s2 = from[i2], t1 = target[i1], t2 = target[i2];
     const bool ccw = st_.motion == 3;
     double c1, c2;
@@ -329,7 +425,8 @@ class Reader {
       if (sweep >= 0) sweep -= kTwoPi;
     }
     if (p) {
-      if (*p < 1 || std::abs(*p - std::round(*p)) > 1e-9) fail(col, "arc turns P must be a whole number >= 1");
+      if (*p < 1 || std::abs(*p - std::round(*p)) > 1e-9)
+        fail(col, "arc turns P must be a whole number >= 1");
       sweep += (ccw ? 1.0 : -1.0) * kTwoPi * (std::round(*p) - 1.0);
     }
     Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero(), nrm = Vec3::Zero();

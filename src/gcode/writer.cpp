@@ -1,8 +1,9 @@
 // G-code writer for four dialects. Circular arcs in the XY plane become G2/G3 (split into
 // pieces of less than 180 degrees, which every control accepts, Grbl included); other flat
 // curves become biarcs (or chords on request) within the tolerance; anything else chords.
-#include <cmath>
 #include <fmt/format.h>
+
+#include <cmath>
 
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
@@ -21,7 +22,8 @@ class Emitter {
   void comment(std::string_view text) {
     std::string t(text);
     if (opt_.dialect == Dialect::sinumerik || opt_.dialect == Dialect::grbl) {
-      for (char& c : t) if (c == '\n') c = ' ';
+      for (char& c : t)
+        if (c == '\n') c = ' ';
       out_ += "; ";
       out_ += t;
       out_ += '\n';
@@ -113,8 +115,8 @@ void emit_segment(Emitter& e, const Segment& seg, const GcodeWriteOptions& opt) 
     return;
   }
   const bool xy_circle = seg.is_circular() && std::abs(seg.axis_a().z()) <= 1e-12 &&
-                         std::abs(seg.axis_b().z()) <= 1e-12 && std::abs(seg.drift().x()) <= 1e-12 &&
-                         std::abs(seg.drift().y()) <= 1e-12;
+                         std::abs(seg.axis_b().z()) <= 1e-12 &&
+                         std::abs(seg.drift().x()) <= 1e-12 && std::abs(seg.drift().y()) <= 1e-12;
   if (xy_circle) {
     const Vec3 s = seg.start(), en = seg.end();
     const double r = seg.axis_a().norm();
@@ -142,9 +144,12 @@ void emit_segment(Emitter& e, const Segment& seg, const GcodeWriteOptions& opt) 
 
 std::string coolant_code(Coolant c) {
   switch (c) {
-    case Coolant::flood: return "M8";
-    case Coolant::mist: return "M7";
-    case Coolant::off: return "";
+    case Coolant::flood:
+      return "M8";
+    case Coolant::mist:
+      return "M7";
+    case Coolant::off:
+      return "";
   }
   return "";
 }
@@ -163,8 +168,8 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
                         to_string(job.path.type), job.slot.width_mm, job.slot.length_mm,
                         job.slot.depth_mm, to_string(job.path.direction)));
   e.comment(fmt::format("job: {}", job.source));
-  e.comment(fmt::format("path length {:.3f} mm, {:.3f} s at programmed feed, {} dialect", path.length_mm(),
-                        path.duration_s(), to_string(d)));
+  e.comment(fmt::format("path length {:.3f} mm, {:.3f} s at programmed feed, {} dialect",
+                        path.length_mm(), path.duration_s(), to_string(d)));
   if (opt.arc_output == ArcOutput::arcs) {
     e.comment(fmt::format("curves fitted with biarcs within {:g} mm", opt.tolerance_mm));
   } else {
@@ -177,9 +182,15 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
       e.line("G21 G17 G90 G94 G40 G49 G80");
       e.line("G91.1");
       break;
-    case Dialect::fanuc: e.line("G21 G17 G90 G94 G40 G49 G80"); break;
-    case Dialect::sinumerik: e.line("G71 G17 G90 G94 G40"); break;
-    case Dialect::grbl: e.line("G21 G17 G90 G94"); break;
+    case Dialect::fanuc:
+      e.line("G21 G17 G90 G94 G40 G49 G80");
+      break;
+    case Dialect::sinumerik:
+      e.line("G71 G17 G90 G94 G40");
+      break;
+    case Dialect::grbl:
+      e.line("G21 G17 G90 G94");
+      break;
   }
   const int t = job.tool.tool_number;
   if (d == Dialect::sinumerik) {

@@ -1,7 +1,10 @@
 // Job file loading and validation (toml++). Every problem becomes one message naming the
 // key with its file:line:column (or the --set override that supplied it) and what is
 // allowed; all problems are collected and thrown together as one InputError.
+#include "trochomill/job.hpp"
+
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,11 +13,9 @@
 #include <optional>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
-#include "trochomill/job.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -43,8 +44,8 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
 // Sections later modules own. They are accepted (not validated here) so one job file can
 // carry everything; each module validates its own section.
 const std::set<std::string>& reserved_sections() {
-  static const std::set<std::string> s = {"material", "measured", "simulation", "stock",
-                                          "mechanism", "monitor", "forces", "analysis"};
+  static const std::set<std::string> s = {"material",  "measured", "simulation", "stock",
+                                          "mechanism", "monitor",  "forces",     "analysis"};
   return s;
 }
 
@@ -140,15 +141,14 @@ class JobReader {
     const toml::node* n = find(section, key);
     if (n == nullptr) {
       if (required) {
-        problems_.push_back(fmt::format("{}: missing required key [{}] {} ({}{})", source_,
-                                        section, key, unit.empty() ? "number" : unit,
-                                        range_hint(range)));
+        problems_.push_back(fmt::format("{}: missing required key [{}] {} ({}{})", source_, section,
+                                        key, unit.empty() ? "number" : unit, range_hint(range)));
       }
       return fallback;
     }
     if (!n->is_number()) {
-      problem(section, key, fmt::format("expected a number ({}), got {}", unit_or(unit),
-                                        type_name(*n)));
+      problem(section, key,
+              fmt::format("expected a number ({}), got {}", unit_or(unit), type_name(*n)));
       return fallback;
     }
     const double v = n->value<double>().value_or(0.0);
@@ -157,7 +157,8 @@ class JobReader {
       return fallback;
     }
     if (!range.contains(v)) {
-      problem(section, key, fmt::format("must be {} {}, got {}", range.describe(), unit, fmt_num(v)));
+      problem(section, key,
+              fmt::format("must be {} {}, got {}", range.describe(), unit, fmt_num(v)));
       return fallback;
     }
     return v;
@@ -174,8 +175,8 @@ class JobReader {
       return fallback;
     }
     if (!n->is_integer()) {
-      problem(section, key, fmt::format("expected an integer in [{}, {}], got {}", lo, hi,
-                                        type_name(*n)));
+      problem(section, key,
+              fmt::format("expected an integer in [{}, {}], got {}", lo, hi, type_name(*n)));
       return fallback;
     }
     const int64_t v = n->value<int64_t>().value_or(0);
@@ -201,8 +202,8 @@ class JobReader {
       return fallback;
     }
     if (!n->is_string()) {
-      problem(section, key, fmt::format("expected one of {} (a string), got {}", allowed,
-                                        type_name(*n)));
+      problem(section, key,
+              fmt::format("expected one of {} (a string), got {}", allowed, type_name(*n)));
       return fallback;
     }
     const std::string v = n->value<std::string>().value_or("");
@@ -212,8 +213,9 @@ class JobReader {
     std::vector<std::string> names;
     for (const auto& [name, value] : options) names.push_back(name);
     const std::string hint = suggestion(v, names);
-    problem(section, key, fmt::format("'{}' is not one of {}{}", v, allowed,
-                                      hint.rfind("; did", 0) == 0 ? hint : std::string()));
+    problem(section, key,
+            fmt::format("'{}' is not one of {}{}", v, allowed,
+                        hint.rfind("; did", 0) == 0 ? hint : std::string()));
     return fallback;
   }
 
@@ -270,11 +272,10 @@ class JobReader {
         const std::string key(kk.str());
         if (std::find(it->second.begin(), it->second.end(), key) == it->second.end()) {
           const std::string full = section + "." + key;
-          const std::string loc =
-              overridden_.count(full)
-                  ? fmt::format("--set {}", full)
-                  : fmt::format("{}:{}:{}", source_, kk.source().begin.line,
-                                kk.source().begin.column);
+          const std::string loc = overridden_.count(full)
+                                      ? fmt::format("--set {}", full)
+                                      : fmt::format("{}:{}:{}", source_, kk.source().begin.line,
+                                                    kk.source().begin.column);
           problems_.push_back(fmt::format("{}: unknown key [{}] {}{}", loc, section, key,
                                           suggestion(key, it->second)));
         }
@@ -290,13 +291,20 @@ class JobReader {
   }
   static std::string type_name(const toml::node& n) {
     switch (n.type()) {
-      case toml::node_type::string: return "a string";
-      case toml::node_type::integer: return "an integer";
-      case toml::node_type::floating_point: return "a number";
-      case toml::node_type::boolean: return "a boolean";
-      case toml::node_type::array: return "an array";
-      case toml::node_type::table: return "a table";
-      default: return "a date/time";
+      case toml::node_type::string:
+        return "a string";
+      case toml::node_type::integer:
+        return "an integer";
+      case toml::node_type::floating_point:
+        return "a number";
+      case toml::node_type::boolean:
+        return "a boolean";
+      case toml::node_type::array:
+        return "an array";
+      case toml::node_type::table:
+        return "a table";
+      default:
+        return "a date/time";
     }
   }
 
@@ -327,23 +335,39 @@ void apply_override(toml::table& root, const Override& o) {
     throw InputError(fmt::format("--set {}: '{}' is not a table", o.key, section));
   }
   if (key.find('.') != std::string::npos) {
-    throw InputError(fmt::format("--set {}: nested keys are not supported (use section.key)",
-                                 o.key));
+    throw InputError(
+        fmt::format("--set {}: nested keys are not supported (use section.key)", o.key));
   }
   t->insert_or_assign(key, *parsed.get("v"));
+}
+
+// A value in TOML syntax; doubles in their shortest round-trip form (0.6, not 0.5999...).
+std::string format_value(const toml::node& v) {
+  if (v.is_floating_point()) {
+    const double d = v.value<double>().value_or(0.0);
+    std::string out = fmt::format("{}", d);
+    if (std::isfinite(d) && out.find_first_of(".e") == std::string::npos) out += ".0";
+    return out;
+  }
+  if (v.is_integer()) return fmt::format("{}", v.value<int64_t>().value_or(0));
+  if (const toml::array* arr = v.as_array()) {
+    std::string out = "[";
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      out += (i ? ", " : "") + format_value(*arr->get(i));
+    }
+    return out + "]";
+  }
+  if (v.is_table()) return "{...}";
+  std::ostringstream ss;
+  ss << toml::toml_formatter(v, toml::format_flags::none);
+  return ss.str();
 }
 
 void flatten(const toml::table& root, std::vector<std::pair<std::string, std::string>>& out) {
   for (auto&& [k, v] : root) {
     if (const toml::table* t = v.as_table()) {
       for (auto&& [kk, vv] : *t) {
-        std::ostringstream ss;
-        if (vv.is_table()) {
-          ss << "{...}";
-        } else {
-          ss << toml::toml_formatter(vv, toml::format_flags::none);
-        }
-        out.emplace_back(std::string(k.str()) + "." + std::string(kk.str()), ss.str());
+        out.emplace_back(std::string(k.str()) + "." + std::string(kk.str()), format_value(vv));
       }
     }
   }
@@ -361,10 +385,12 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
   tool.teeth = r.integer("tool", "teeth", 1, 64, 0, true).value_or(0);
   tool.helix_angle_deg =
       r.number("tool", "helix_angle", "degrees", Range{0, 90, true, false}, 0.0).value_or(0.0);
-  tool.corner_radius_mm = r.number("tool", "corner_radius", "mm", non_negative(), 0.0).value_or(0.0);
+  tool.corner_radius_mm =
+      r.number("tool", "corner_radius", "mm", non_negative(), 0.0).value_or(0.0);
   tool.edge_radius_mm = r.number("tool", "edge_radius", "mm", non_negative(), 0.0).value_or(0.0);
   tool.flute_length_mm = r.number("tool", "flute_length", "mm", non_negative(), 0.0).value_or(0.0);
-  tool.runout_radial_mm = r.number("tool", "runout_radial", "mm", non_negative(), 0.0).value_or(0.0);
+  tool.runout_radial_mm =
+      r.number("tool", "runout_radial", "mm", non_negative(), 0.0).value_or(0.0);
   tool.runout_axial_mm = r.number("tool", "runout_axial", "mm", non_negative(), 0.0).value_or(0.0);
   tool.runout_phase_deg =
       r.number("tool", "runout_phase", "degrees", Range{-360, 360}, 0.0).value_or(0.0);
@@ -417,11 +443,11 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
   path.aspect_ratio = r.number("path", "aspect_ratio", "(b/a)", positive(), 1.0).value_or(1.0);
   path.linear_distance_mm =
       r.number("path", "linear_distance", "mm", non_negative(), 0.0).value_or(0.0);
-  path.direction = r.choice<Direction>("path", "direction",
-                                       {{"climb", Direction::climb},
-                                        {"conventional", Direction::conventional}},
-                                       Direction::climb)
-                       .value_or(Direction::climb);
+  path.direction =
+      r.choice<Direction>("path", "direction",
+                          {{"climb", Direction::climb}, {"conventional", Direction::conventional}},
+                          Direction::climb)
+          .value_or(Direction::climb);
   path.entry = r.choice<EntryType>("path", "entry",
                                    {{"helix", EntryType::helix},
                                     {"ramp", EntryType::ramp},
@@ -430,7 +456,8 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
                                    EntryType::outside)
                    .value_or(EntryType::outside);
   path.entry_radius_mm = r.number("path", "entry_radius", "mm", non_negative(), 0.0).value_or(0.0);
-  path.entry_pitch_mm = r.number("path", "entry_pitch", "mm per turn", positive(), 1.0).value_or(1.0);
+  path.entry_pitch_mm =
+      r.number("path", "entry_pitch", "mm per turn", positive(), 1.0).value_or(1.0);
   path.entry_angle_deg =
       r.number("path", "entry_angle", "degrees", Range{0, 90, false, false}, 3.0).value_or(3.0);
   path.entry_feed_mm_per_min =
@@ -495,17 +522,16 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
       cut.feed_per_tooth_mm = cut.feed_rate_mm_per_min / (tool.teeth * cut.spindle_speed_rpm);
     }
   }
-  cut.spindle_direction = r.choice<SpindleDirection>("cutting", "spindle_direction",
-                                                     {{"cw", SpindleDirection::cw},
-                                                      {"ccw", SpindleDirection::ccw}},
-                                                     SpindleDirection::cw)
-                              .value_or(SpindleDirection::cw);
-  cut.coolant = r.choice<Coolant>("cutting", "coolant",
-                                  {{"off", Coolant::off},
-                                   {"flood", Coolant::flood},
-                                   {"mist", Coolant::mist}},
-                                  Coolant::off)
-                    .value_or(Coolant::off);
+  cut.spindle_direction =
+      r.choice<SpindleDirection>("cutting", "spindle_direction",
+                                 {{"cw", SpindleDirection::cw}, {"ccw", SpindleDirection::ccw}},
+                                 SpindleDirection::cw)
+          .value_or(SpindleDirection::cw);
+  cut.coolant =
+      r.choice<Coolant>("cutting", "coolant",
+                        {{"off", Coolant::off}, {"flood", Coolant::flood}, {"mist", Coolant::mist}},
+                        Coolant::off)
+          .value_or(Coolant::off);
 
   // [machine]
   Machine& m = job.machine;
@@ -516,7 +542,8 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
                                  {"grbl", Dialect::grbl}},
                                 Dialect::linuxcnc)
                   .value_or(Dialect::linuxcnc);
-  m.safe_z_mm = r.number("machine", "safe_z", "mm above the top face", positive(), 5.0).value_or(5.0);
+  m.safe_z_mm =
+      r.number("machine", "safe_z", "mm above the top face", positive(), 5.0).value_or(5.0);
   m.rapid_rate_mm_per_min =
       r.number("machine", "rapid_rate", "mm/min", positive(), 10000.0).value_or(10000.0);
   m.max_acceleration_mm_per_s2 =
@@ -591,29 +618,42 @@ Job load_job(const std::filesystem::path& file, const std::vector<Override>& ove
 
 std::string_view to_string(PathType t) noexcept {
   switch (t) {
-    case PathType::linear: return "linear";
-    case PathType::trochoidal: return "trochoidal";
-    case PathType::circular: return "circular";
-    case PathType::elliptical: return "elliptical";
-    case PathType::linear_elliptical: return "linear-elliptical";
+    case PathType::linear:
+      return "linear";
+    case PathType::trochoidal:
+      return "trochoidal";
+    case PathType::circular:
+      return "circular";
+    case PathType::elliptical:
+      return "elliptical";
+    case PathType::linear_elliptical:
+      return "linear-elliptical";
   }
   return "?";
 }
 std::string_view to_string(Dialect d) noexcept {
   switch (d) {
-    case Dialect::linuxcnc: return "linuxcnc";
-    case Dialect::fanuc: return "fanuc";
-    case Dialect::sinumerik: return "sinumerik";
-    case Dialect::grbl: return "grbl";
+    case Dialect::linuxcnc:
+      return "linuxcnc";
+    case Dialect::fanuc:
+      return "fanuc";
+    case Dialect::sinumerik:
+      return "sinumerik";
+    case Dialect::grbl:
+      return "grbl";
   }
   return "?";
 }
 std::string_view to_string(EntryType e) noexcept {
   switch (e) {
-    case EntryType::helix: return "helix";
-    case EntryType::ramp: return "ramp";
-    case EntryType::plunge: return "plunge";
-    case EntryType::outside: return "outside";
+    case EntryType::helix:
+      return "helix";
+    case EntryType::ramp:
+      return "ramp";
+    case EntryType::plunge:
+      return "plunge";
+    case EntryType::outside:
+      return "outside";
   }
   return "?";
 }

@@ -16,9 +16,8 @@ constexpr double kSpansPerRadian = 16.0;
 // 5-point Gauss-Legendre nodes and weights on [-1, 1].
 constexpr std::array<double, 5> kGlX = {-0.9061798459386640, -0.5384693101056831, 0.0,
                                         0.5384693101056831, 0.9061798459386640};
-constexpr std::array<double, 5> kGlW = {0.2369268850561891, 0.4786286704993665,
-                                        0.5688888888888889, 0.4786286704993665,
-                                        0.2369268850561891};
+constexpr std::array<double, 5> kGlW = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
+                                        0.4786286704993665, 0.2369268850561891};
 
 bool close_rel(double a, double b, double scale) {
   return std::abs(a - b) <= 1e-12 * std::max(scale, 1.0);
@@ -148,7 +147,10 @@ double Segment::u_at_length(double s_mm) const {
     const double u = ua + h * f;
     const double err = length_to(u) - target;
     if (std::abs(err) <= 1e-13 * std::max(1.0, length_mm_)) break;
-    if (err > 0) hi = f; else lo = f;
+    if (err > 0)
+      hi = f;
+    else
+      lo = f;
     const double speed = derivative_u(u).norm() * std::abs(h);
     double next = speed > 0 ? f - err / speed : 0.5 * (lo + hi);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);

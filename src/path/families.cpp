@@ -11,9 +11,10 @@
 // the width (less the wall scallop bound). Envelopes are evaluated on the sampled cycle-0
 // centre path; sampling under-estimates the front and over-estimates the rear, so both
 // choices err towards cutting the whole slot.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 #include <limits>
 
 #include "trochomill/error.hpp"
@@ -37,8 +38,8 @@ class Builder {
   }
   void curve(const Vec3& c, const Vec3& a, const Vec3& b, const Vec3& v, double u0, double u1,
              double speed) {
-    const Segment seg = Segment::curve(flip(c), flip_vec(a), flip_vec(b), flip_vec(v), u0, u1,
-                                       Motion::feed, speed);
+    const Segment seg =
+        Segment::curve(flip(c), flip_vec(a), flip_vec(b), flip_vec(v), u0, u1, Motion::feed, speed);
     here_ = c + a * std::cos(u1) + b * std::sin(u1) + v * u1;
     path_.append(seg);
   }
@@ -111,9 +112,10 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
   std::vector<double> front(nx + 1, -std::numeric_limits<double>::infinity());
   std::vector<double> rear(nx + 1, std::numeric_limits<double>::infinity());
   const double dx = (x_hi - x_lo) / nx;
+  std::size_t i_min = 0;
   for (std::size_t i = 0; i < smp.size(); ++i) {
     const double xc = smp.x_mm[i], yc = smp.y_mm[i];
-    env.min_center_y = std::min(env.min_center_y, yc);
+    if (yc < smp.y_mm[i_min]) i_min = i;
     const int j0 = std::max(0, static_cast<int>(std::ceil((xc - g.R - x_lo) / dx)));
     const int j1 = std::min(nx, static_cast<int>(std::floor((xc + g.R - x_lo) / dx)));
     for (int j = j0; j <= j1; ++j) {
@@ -122,6 +124,21 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
       front[j] = std::max(front[j], yc + h);
       rear[j] = std::min(rear[j], yc - h);
     }
+  }
+  // The rearmost centre point exactly: golden-section search on y(s) around the lowest sample
+  // (a closed start puts the tool's rear exactly on y = 0, so sampling error would cut behind).
+  {
+    double lo = smp.s_mm[i_min > 0 ? i_min - 1 : 0];
+    double hi = smp.s_mm[std::min(i_min + 1, smp.size() - 1)];
+    const double gr = (std::sqrt(5.0) - 1) / 2;
+    for (int it = 0; it < 100; ++it) {
+      const double m1 = hi - gr * (hi - lo), m2 = lo + gr * (hi - lo);
+      if (one.point_at_length(m1).y() < one.point_at_length(m2).y())
+        hi = m2;
+      else
+        lo = m1;
+    }
+    env.min_center_y = std::min(smp.y_mm[i_min], one.point_at_length(0.5 * (lo + hi)).y());
   }
   const double approach_hi = -g.a + g.R;  // the approach along x = -a covers x < -a + R
   for (int j = 0; j <= nx; ++j) {
@@ -134,8 +151,8 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
 
 // Entry to depth at the wall point p = (-a or x, y, zf) of the climb/cw frame, arriving with
 // the tool at p. The tool starts at safe z above the entry.
-void emit_entry(Builder& bld, const Geometry& g, const PathSpec& spec, const Vec3& p,
-                bool along_y, double room_mm) {
+void emit_entry(Builder& bld, const Geometry& g, const PathSpec& spec, const Vec3& p, bool along_y,
+                double room_mm) {
   const double z_top = g.clearance;  // start feeding this far above the top face
   switch (spec.entry) {
     case EntryType::outside: {
@@ -153,10 +170,11 @@ void emit_entry(Builder& bld, const Geometry& g, const PathSpec& spec, const Vec
       return;
     case EntryType::ramp: {
       if (!(room_mm > 1e-6)) {
-        throw InputError(fmt::format("[path] entry = \"ramp\": no room for a ramp beside the "
-                                     "entry point ({:.4g} mm); use entry = \"plunge\" or a wider "
-                                     "slot",
-                                     room_mm));
+        throw InputError(
+            fmt::format("[path] entry = \"ramp\": no room for a ramp beside the "
+                        "entry point ({:.4g} mm); use entry = \"plunge\" or a wider "
+                        "slot",
+                        room_mm));
       }
       const double len = room_mm;
       const double drop = z_top - g.zf;
@@ -181,13 +199,15 @@ void emit_entry(Builder& bld, const Geometry& g, const PathSpec& spec, const Vec
       const double max_r = 0.5 * room_mm;
       double r = spec.entry_radius_mm > 0 ? spec.entry_radius_mm : 0.5 * max_r;
       if (!(max_r > 1e-6)) {
-        throw InputError("[path] entry = \"helix\": the slot leaves no room for a helix beside "
-                         "the entry point; use entry = \"plunge\" or \"ramp\"");
+        throw InputError(
+            "[path] entry = \"helix\": the slot leaves no room for a helix beside "
+            "the entry point; use entry = \"plunge\" or \"ramp\"");
       }
       if (r > max_r + 1e-12) {
-        throw InputError(fmt::format("[path] entry_radius: a helix of radius {:g} mm leaves the "
-                                     "slot; at most {:.4g} mm fits here",
-                                     r, max_r));
+        throw InputError(
+            fmt::format("[path] entry_radius: a helix of radius {:g} mm leaves the "
+                        "slot; at most {:.4g} mm fits here",
+                        r, max_r));
       }
       r = std::min(r, max_r);
       // Helix centre beside p so the helix passes through p with tangent +y (cw orbit,
@@ -236,8 +256,9 @@ PlannedPath plan_linear(const Job& job, const Geometry& g, bool mirror) {
   Builder bld(out.path, mirror);
   const bool closed = job.path.entry != EntryType::outside;
   if (job.path.entry == EntryType::helix) {
-    throw InputError("[path] entry = \"helix\" is for the trochoidal families; a linear slot "
-                     "enters with \"ramp\", \"plunge\" or \"outside\"");
+    throw InputError(
+        "[path] entry = \"helix\" is for the trochoidal families; a linear slot "
+        "enters with \"ramp\", \"plunge\" or \"outside\"");
   }
   const int passes = g.a > 0 ? static_cast<int>(std::ceil(2 * g.a / g.s - 1e-12)) + 1 : 1;
   const double y_start = closed ? g.R : 0.0;
@@ -252,7 +273,8 @@ PlannedPath plan_linear(const Job& job, const Geometry& g, bool mirror) {
       bld.line_to(Vec3(x, y_next, g.safe_z), Motion::rapid, g.rapid);
     }
     bld.mark_cycle();
-    const double room = std::max(0.0, std::min(job.tool.diameter_mm, g.L - 2 * g.R));
+    // The slot end is open, so a ramp along +y may run one diameter from the start.
+    const double room = job.tool.diameter_mm;
     if (i == 0) {
       emit_entry(bld, g, job.path, Vec3(x, y_start, g.zf), true, room);
     } else {
@@ -293,8 +315,8 @@ PlannedPath plan_path(const Job& job) {
                       (job.cutting.spindle_direction == SpindleDirection::ccw);
   if (g.type == PathType::linear) return plan_linear(job, g, mirror);
   if (!(g.a > 0)) {
-    throw InputError(fmt::format("[slot] width: a {} path needs a slot wider than the tool",
-                                 to_string(g.type)));
+    throw InputError(
+        fmt::format("[slot] width: a {} path needs a slot wider than the tool", to_string(g.type)));
   }
   if (!(g.s > 0) || g.s >= 2 * g.R) {
     throw InputError(fmt::format("[path] step: must be in (0, {:g}) mm, got {:g}", 2 * g.R, g.s));
@@ -305,13 +327,16 @@ PlannedPath plan_path(const Job& job) {
   const Envelope env = cycle_envelope(g, delta);
   const bool closed = job.path.entry != EntryType::outside;
   double y0;
+  // Near the walls the envelopes are steep (the tool grazes the wall band), so the sampled
+  // envelopes are trusted only to a margin: start that much earlier and cut that much further.
+  const double margin = 0.02;  // mm
   if (closed) {
     y0 = g.R - env.min_center_y;  // rearmost tool point of cycle 0 on y = 0
   } else {
-    y0 = std::isfinite(env.max_rear) ? -env.max_rear : 0.0;
+    y0 = (std::isfinite(env.max_rear) ? -env.max_rear : 0.0) - margin;
   }
-  const int cycles =
-      std::max(1, static_cast<int>(std::ceil((g.L - y0 - env.min_front) / g.s - 1e-12)) + 1);
+  const int cycles = std::max(
+      1, static_cast<int>(std::ceil((g.L + margin - y0 - env.min_front) / g.s - 1e-12)) + 1);
 
   PlannedPath out;
   Builder bld(out.path, mirror);
@@ -319,8 +344,8 @@ PlannedPath plan_path(const Job& job) {
   // Room beside the entry point: along x for a ramp (the slot's free width) and, for a
   // helix, the smaller of the free width and the distance to the closed end.
   const double room_ramp = 2 * g.a;
-  const double room = job.path.entry == EntryType::helix ? std::min(2 * g.a, 2 * (y0 - g.R))
-                                                          : room_ramp;
+  const double room =
+      job.path.entry == EntryType::helix ? std::min(2 * g.a, 2 * (y0 - g.R)) : room_ramp;
   emit_entry(bld, g, job.path, p0, false, room);
   for (int k = 0; k < cycles; ++k) {
     bld.mark_cycle();

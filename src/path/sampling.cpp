@@ -1,7 +1,8 @@
 // Path sampling by time, by length and by spindle angle (one function evaluates every
 // sample: sample_at), and tooth-tip trajectories with radial and axial runout.
-#include <cmath>
 #include <fmt/format.h>
+
+#include <cmath>
 
 #include "trochomill/error.hpp"
 #include "trochomill/path.hpp"
@@ -38,13 +39,15 @@ void push_sample(const ToolPath& path, std::size_t seg, double s_in_seg, PathSam
 
 std::size_t sample_count(double total, double step, const char* what) {
   if (!(step > 0) || !std::isfinite(step)) {
-    throw InputError(fmt::format("sampling {} must be a positive finite number, got {}", what, step));
+    throw InputError(
+        fmt::format("sampling {} must be a positive finite number, got {}", what, step));
   }
   const double n = std::floor(total / step);
   if (n > kMaxSamples) {
-    throw InputError(fmt::format("sampling every {:g} {} gives {:.3g} samples (limit {:.0g}): "
-                                 "use a coarser step",
-                                 step, what, n, kMaxSamples));
+    throw InputError(
+        fmt::format("sampling every {:g} {} gives {:.3g} samples (limit {:.0g}): "
+                    "use a coarser step",
+                    step, what, n, kMaxSamples));
   }
   return static_cast<std::size_t>(n);
 }

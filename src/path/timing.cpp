@@ -59,8 +59,10 @@ double estimate_time_s(const ToolPath& path, const Machine& machine) {
   vlim.back() = 0;  // and stops at the end
   const std::size_t m = vlim.size();
   std::vector<double> v(vlim);
-  for (std::size_t j = 1; j < m; ++j) v[j] = std::min(v[j], std::sqrt(v[j - 1] * v[j - 1] + 2 * amax * ds[j]));
-  for (std::size_t j = m - 1; j-- > 0;) v[j] = std::min(v[j], std::sqrt(v[j + 1] * v[j + 1] + 2 * amax * ds[j + 1]));
+  for (std::size_t j = 1; j < m; ++j)
+    v[j] = std::min(v[j], std::sqrt(v[j - 1] * v[j - 1] + 2 * amax * ds[j]));
+  for (std::size_t j = m - 1; j-- > 0;)
+    v[j] = std::min(v[j], std::sqrt(v[j + 1] * v[j + 1] + 2 * amax * ds[j + 1]));
   double t = 0;
   for (std::size_t j = 1; j < m; ++j) {
     const double vs = v[j - 1] + v[j];

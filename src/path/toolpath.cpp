@@ -1,7 +1,8 @@
 // ToolPath: an ordered list of segments, continuous in position, with cumulative length and
 // programmed-feed time for lookup by arc length or time.
-#include <algorithm>
 #include <fmt/format.h>
+
+#include <algorithm>
 
 #include "trochomill/error.hpp"
 #include "trochomill/path.hpp"
@@ -18,8 +19,8 @@ void ToolPath::append(Segment segment) {
     const Segment& last = segments_.back();
     const double gap = (segment.start() - last.end()).norm();
     if (gap > 1e-9) {
-      throw Error(fmt::format("path is discontinuous at segment {}: gap {:.3g} mm",
-                              segments_.size(), gap));
+      throw Error(
+          fmt::format("path is discontinuous at segment {}: gap {:.3g} mm", segments_.size(), gap));
     }
     s0 = start_length_.back() + last.length_mm();
     t0 = start_time_.back() + last.length_mm() / (last.speed_mm_per_min() / 60.0);

@@ -1,0 +1,275 @@
+// G-code: biarc and chord fits never deviate more than the tolerance (checked against the
+// curve with an independent nearest-point search), writer -> reader round trips for every
+// dialect and family, the reader's geometry against closed forms, and every malformed
+// program in tests/data/bad_gcode gives the message its first line expects.
+#include "trochomill/gcode.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "test_util.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+// Distance from q to the curve: a dense parameter scan, then golden-section refinement around
+// every local minimum of the scan (a trochoid's branches pass within micrometres of each other,
+// so refining only the best sample can land on the wrong branch). Independent of the fitter.
+double distance_to_curve(const Segment& c, const Vec3& q) {
+  const int n = 4000;
+  const double du = (c.u1() - c.u0()) / n;
+  std::vector<double> d(n + 1);
+  for (int i = 0; i <= n; ++i) d[i] = (c.point_u(c.u0() + du * i) - q).norm();
+  double best = *std::min_element(d.begin(), d.end());
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  for (int i = 0; i <= n; ++i) {
+    const bool local_min = (i == 0 || d[i] <= d[i - 1]) && (i == n || d[i] <= d[i + 1]);
+    if (!local_min) continue;
+    double lo = c.u0() + du * std::max(0, i - 1), hi = c.u0() + du * std::min(n, i + 1);
+    if (lo > hi) std::swap(lo, hi);
+    for (int it = 0; it < 80; ++it) {
+      const double m1 = hi - g * (hi - lo), m2 = lo + g * (hi - lo);
+      if ((c.point_u(m1) - q).norm() < (c.point_u(m2) - q).norm())
+        hi = m2;
+      else
+        lo = m1;
+    }
+    best = std::min(best, (c.point_u(0.5 * (lo + hi)) - q).norm());
+  }
+  return best;
+}
+
+std::vector<Segment> test_curves() {
+  std::vector<Segment> out;
+  for (double ratio : {0.5, 0.8, 1.0, 1.2}) {
+    out.push_back(Segment::curve(Vec3(0, 0, -6), Vec3(-5, 0, 0), Vec3(0, 5 * ratio, 0),
+                                 Vec3(0, 1.0 / kTwoPi, 0), 0, kTwoPi, Motion::feed, 600));
+  }
+  // Half ellipse of linear-elliptical, a strongly eccentric ellipse, a reversed sweep.
+  out.push_back(Segment::curve(Vec3(0, 0, 0), Vec3(-5, 0, 0), Vec3(0, 4, 0),
+                               Vec3(0, 1.0 / kTwoPi, 0), kPi, kTwoPi, Motion::feed, 600));
+  out.push_back(Segment::curve(Vec3(1, 2, 0), Vec3(-17, 0, 0), Vec3(0, 2, 0), Vec3::Zero(), 0,
+                               kTwoPi, Motion::feed, 600));
+  out.push_back(Segment::curve(Vec3(0, 0, 0), Vec3(3, 0, 0), Vec3(0, 2, 0), Vec3(0.1, 0, 0), 1, -4,
+                               Motion::feed, 600));
+  return out;
+}
+
+TEST(Biarc, DeviationNeverAboveTolerance) {
+  for (double tol : {1e-2, 1e-3, 1e-4}) {
+    for (const Segment& c : test_curves()) {
+      const auto arcs = fit_biarcs(c, tol);
+      ASSERT_FALSE(arcs.empty());
+      EXPECT_LE((arcs.front().start - c.start()).norm(), 1e-12);
+      EXPECT_LE((arcs.back().end - c.end()).norm(), 1e-12);
+      double worst = 0;
+      for (std::size_t k = 0; k < arcs.size(); ++k) {
+        const FitArc& a = arcs[k];
+        if (k > 0) {
+          EXPECT_LE((a.start - arcs[k - 1].end).norm(), 1e-12);  // continuous
+        }
+        // 20 points along each arc (arcs -> curve direction).
+        for (int i = 0; i <= 20; ++i) {
+          Vec3 p;
+          if (a.is_line) {
+            p = a.start + (a.end - a.start) * (i / 20.0);
+          } else {
+            const double a0 =
+                std::atan2(a.start.y() - a.cy, a.start.x() - a.cx) + a.sweep_rad * i / 20.0;
+            p = Vec3(a.cx + a.radius_mm * std::cos(a0), a.cy + a.radius_mm * std::sin(a0),
+                     a.start.z());
+          }
+          worst = std::max(worst, distance_to_curve(c, p));
+        }
+      }
+      EXPECT_LE(worst, tol) << "tol " << tol << ", " << arcs.size()
+                            << " arcs, curve a=" << c.axis_a().transpose()
+                            << " b=" << c.axis_b().transpose() << " v=" << c.drift().transpose()
+                            << " u " << c.u0() << ".." << c.u1();
+      // Not absurdly fine either: the worst deviation uses a fair share of the tolerance.
+      EXPECT_GT(worst, 0.05 * tol);
+    }
+  }
+}
+
+TEST(Biarc, ChordsNeverAboveTolerance) {
+  for (double tol : {1e-2, 1e-3}) {
+    for (const Segment& c : test_curves()) {
+      const auto pts = fit_chords(c, tol);
+      Vec3 prev = c.start();
+      double worst = 0;
+      for (const Vec3& p : pts) {
+        for (int i = 0; i <= 10; ++i)
+          worst = std::max(worst, distance_to_curve(c, prev + (p - prev) * (i / 10.0)));
+        prev = p;
+      }
+      EXPECT_LE((pts.back() - c.end()).norm(), 1e-12);
+      EXPECT_LE(worst, tol) << pts.size() << " chords, curve a=" << c.axis_a().transpose()
+                            << " b=" << c.axis_b().transpose() << " v=" << c.drift().transpose();
+    }
+  }
+}
+
+// Writer -> reader: the read path stays within tolerance + coordinate rounding of the
+// planned path in both directions (Hausdorff, via ordered polyline distances on samples
+// 0.01 mm apart, whose chord error is below 0.01^2 / (8 * 4 mm) = 3e-6 mm).
+TEST(Gcode, RoundTripEveryDialectAndFamily) {
+  const double tol = 0.001;
+  const double rounding = 0.5e-4 * std::sqrt(3.0);  // 4 decimals on three axes
+  for (const Dialect d : {Dialect::linuxcnc, Dialect::fanuc, Dialect::sinumerik, Dialect::grbl}) {
+    for (const std::string type :
+         {"trochoidal", "circular", "elliptical", "linear-elliptical", "linear"}) {
+      for (const ArcOutput mode : {ArcOutput::arcs, ArcOutput::chords}) {
+        std::vector<Override> ov = {
+            parse_override("slot.length=6"),
+            parse_override(
+                "path.aspect_ratio=" +
+                std::string(type == "elliptical" || type == "linear-elliptical" ? "0.8" : "1")),
+            parse_override("path.linear_distance=1"),
+            parse_override("path.entry=" + std::string(type == "linear" ? "ramp" : "helix"))};
+        if (type == "trochoidal" || type == "circular" || type == "linear")
+          ov.erase(ov.begin() + 1);
+        const Job job = test::wagih_job(type, ov);
+        const PlannedPath pp = plan_path(job);
+        GcodeWriteOptions wo;
+        wo.dialect = d;
+        wo.arc_output = mode;
+        wo.tolerance_mm = tol;
+        const std::string code = write_gcode(job, pp.path, wo);
+        GcodeReadOptions ro;
+        ro.rapid_rate_mm_per_min = job.machine.rapid_rate_mm_per_min;
+        const GcodeProgram prog = read_gcode(code, "roundtrip.ngc", ro);
+        const std::string label = std::string(to_string(d)) + " " + type +
+                                  (mode == ArcOutput::arcs ? " arcs" : " chords");
+        const PathSamples a = sample_by_length(pp.path, 0.01),
+                          b = sample_by_length(prog.path, 0.01);
+        std::size_t hint = 0;
+        double worst = 0;
+        for (std::size_t i = 0; i < b.size(); ++i) {
+          worst = std::max(worst, test::distance_to_polyline(
+                                      a, Vec3(b.x_mm[i], b.y_mm[i], b.z_mm[i]), hint, 400));
+        }
+        hint = 0;
+        for (std::size_t i = 0; i < a.size(); ++i) {
+          worst = std::max(worst, test::distance_to_polyline(
+                                      b, Vec3(a.x_mm[i], a.y_mm[i], a.z_mm[i]), hint, 400));
+        }
+        EXPECT_LE(worst, tol + rounding + 1e-5) << label;
+        // Length and time agree to the fit: the biarcs' length differs by O(tol) per arc.
+        EXPECT_NEAR(prog.path.length_mm(), pp.path.length_mm(), 1e-4 * pp.path.length_mm())
+            << label;
+        EXPECT_NEAR(prog.path.duration_s(), pp.path.duration_s(), 1e-4 * pp.path.duration_s())
+            << label;
+        EXPECT_EQ(prog.info.max_spindle_rpm, 2000.0) << label;
+        if (d == Dialect::grbl) {
+          for (const auto& seg : prog.path.segments()) {
+            if (seg.kind() == Segment::Kind::curve) {
+              EXPECT_LT(std::abs(seg.u1() - seg.u0()), kPi) << label;
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(Gcode, HeadersFollowTheDialect) {
+  const Job job = test::wagih_job("elliptical", {parse_override("cutting.coolant=flood")});
+  const PlannedPath pp = plan_path(job);
+  auto write = [&](Dialect d) {
+    GcodeWriteOptions o;
+    o.dialect = d;
+    return write_gcode(job, pp.path, o);
+  };
+  const std::string lcnc = write(Dialect::linuxcnc), fanuc = write(Dialect::fanuc),
+                    sin = write(Dialect::sinumerik), grbl = write(Dialect::grbl);
+  EXPECT_NE(lcnc.find("G21 G17 G90 G94"), std::string::npos);
+  EXPECT_NE(lcnc.find("G91.1"), std::string::npos);
+  EXPECT_NE(lcnc.find("\nM2\n%"), std::string::npos);
+  EXPECT_NE(fanuc.find("%\nO1000\n"), std::string::npos);
+  EXPECT_NE(fanuc.find("\nM30\n%"), std::string::npos);
+  EXPECT_NE(sin.find("G71 G17 G90 G94"), std::string::npos);
+  EXPECT_NE(sin.find("; trochomill"), std::string::npos);
+  EXPECT_NE(sin.find("T1 D1\nM6"), std::string::npos);
+  EXPECT_EQ(grbl.find("M6"), std::string::npos);  // Grbl has no tool changer
+  for (const std::string* s : {&lcnc, &fanuc, &sin, &grbl}) {
+    EXPECT_NE(s->find("S2000 M3"), std::string::npos);
+    EXPECT_NE(s->find("M8"), std::string::npos);
+    EXPECT_NE(s->find("F600"), std::string::npos);
+    EXPECT_NE(s->find("path.step = 1.0"), std::string::npos);  // job parameters recorded
+  }
+}
+
+GcodeProgram read(const std::string& text) { return read_gcode(text, "t.ngc"); }
+
+TEST(GcodeReader, ArcFormsAndModes) {
+  // Quarter circle, I/J form, radius 5: length 5 pi / 2.
+  EXPECT_NEAR(read("G0 X0 Y0 Z0\nG3 X-5 Y5 I-5 J0 F100").path.length_mm(), 5 * kPi / 2, 1e-12);
+  // R form: R+5 takes the short way (90 deg), R-5 the long way (270 deg).
+  EXPECT_NEAR(read("G0 X0 Y0 Z0\nG2 X5 Y5 R5 F100").path.length_mm(), 5 * kPi / 2, 1e-12);
+  EXPECT_NEAR(read("G0 X0 Y0 Z0\nG2 X5 Y5 R-5 F100").path.length_mm(), 15 * kPi / 2, 1e-12);
+  // Sinumerik CR= form.
+  EXPECT_NEAR(read("G0 X0 Y0 Z0\nG2 X5 Y5 CR=5 F100").path.length_mm(), 5 * kPi / 2, 1e-12);
+  // Full circle (end = start) and P turns with a helical drop.
+  EXPECT_NEAR(read("G0 X0 Y0 Z0\nG2 X0 Y0 I5 J0 F100").path.length_mm(), 10 * kPi, 1e-12);
+  EXPECT_NEAR(read("G0 X0 Y0 Z0\nG2 X0 Y0 Z-3 I5 J0 P3 F100").path.length_mm(),
+              std::hypot(30 * kPi, 3.0), 1e-12);
+  // Absolute arc centres (G90.1).
+  EXPECT_NEAR(read("G90.1\nG0 X10 Y0 Z0\nG3 X0 Y10 I0 J0 F100").path.length_mm(), 5 * kPi, 1e-12);
+  // G18 (ZX plane) arc of radius 2, a half turn: length 2 pi; it stays in y = 0.
+  const GcodeProgram zx = read("G18\nG0 X0 Y0 Z0\nG2 X4 Z0 I2 K0 F100");
+  EXPECT_NEAR(zx.path.length_mm(), 2 * kPi, 1e-12);
+  EXPECT_NEAR(zx.path.point_at_length(kPi).y(), 0.0, 1e-12);
+  EXPECT_NEAR(std::abs(zx.path.point_at_length(kPi).z()), 2.0, 1e-12);
+  // G19 (YZ plane) quarter arc.
+  EXPECT_NEAR(read("G19\nG0 X0 Y0 Z0\nG3 Y2 Z2 J0 K2 F100").path.length_mm(), kPi, 1e-12);
+}
+
+TEST(GcodeReader, UnitsDistanceModesCommentsAndLineNumbers) {
+  // Inches: G20 with F in inch/min; a 1 inch move at 10 in/min takes 6 s.
+  const GcodeProgram in = read("G20\nG0 X0 Y0 Z0\nG1 X1 F10");
+  EXPECT_NEAR(in.path.length_mm(), 25.4, 1e-12);
+  EXPECT_NEAR(in.path.duration_s(), 6.0, 1e-12);
+  EXPECT_TRUE(in.info.inch_units_seen);
+  // Incremental moves, line numbers, both comment styles, block delete, lower case.
+  const GcodeProgram inc = read(
+      "N10 G21 G90 (set up)\nN20 g0 x0 y0 z0 ; start\n/N30 G91 G1 X3 F600\nN40 Y4\nN50 G90 X0 Y0");
+  EXPECT_NEAR(inc.path.length_mm(), 3 + 4 + 5, 1e-12);
+  EXPECT_NEAR(inc.path.duration_s(), 12.0 / 10.0, 1e-12);
+  // Sinumerik units G71 and tolerated codes; M30 ends the program (later blocks ignored).
+  const GcodeProgram sin =
+      read("G71 G17 G90 G94 G40\nT1 D1\nM6\nS1000 M3\nG0 X0 Y0 Z0\nG1 X10 F100\nM30\nG1 X1000");
+  EXPECT_NEAR(sin.path.length_mm(), 10.0, 1e-12);
+  // Rapids take the rapid rate.
+  GcodeReadOptions ro;
+  ro.rapid_rate_mm_per_min = 6000;
+  EXPECT_NEAR(read_gcode("G0 X0 Y0 Z0\nG0 X100", "r", ro).path.duration_s(), 1.0, 1e-12);
+}
+
+// Data-driven: first line "; expect: LINE:COL: message"; the error must read
+// "<file>:LINE:COL: message".
+TEST(GcodeReader, MalformedProgramsGiveTheExpectedMessage) {
+  const auto files = test::files_in(test::source_dir() / "tests/data/bad_gcode", ".ngc");
+  ASSERT_GE(files.size(), 15u);
+  for (const auto& f : files) {
+    std::string expect = test::first_line(f);
+    expect = expect.substr(std::string("; expect: ").size());
+    try {
+      (void)read_gcode_file(f);
+      ADD_FAILURE() << f << ": read without error, expected: " << expect;
+    } catch (const InputError& e) {
+      const std::string want = std::isdigit(static_cast<unsigned char>(expect[0]))
+                                   ? f.string() + ":" + expect
+                                   : f.string() + ": " + expect;
+      EXPECT_NE(std::string(e.what()).find(want), std::string::npos)
+          << "\n  expected: " << want << "\n  got:      " << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace trochomill

@@ -1,0 +1,134 @@
+// Job files: the shipped examples load with the values the papers give, overrides apply,
+// and every bad job in tests/data/bad_jobs gives the message its first line expects.
+#include "trochomill/job.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_util.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
+
+namespace trochomill {
+namespace {
+
+TEST(Job, WagihExampleLoadsTable1) {
+  const Job j = load_job(test::example("wagih2023/elliptical.toml"));
+  EXPECT_EQ(j.tool.diameter_mm, 10.0);
+  EXPECT_EQ(j.tool.teeth, 4);
+  EXPECT_EQ(j.slot.width_mm, 20.0);
+  EXPECT_EQ(j.path.type, PathType::elliptical);
+  EXPECT_EQ(j.path.aspect_ratio, 0.8);
+  EXPECT_EQ(j.cutting.feed_rate_mm_per_min, 600.0);
+  EXPECT_EQ(j.cutting.spindle_speed_rpm, 2000.0);
+  // f_z = f_r / (n Z) = 600 / 8000: exact in binary to one rounding.
+  EXPECT_NEAR(j.cutting.feed_per_tooth_mm, 0.075, 1e-15);
+  // v_c = pi D n / 1000.
+  EXPECT_NEAR(j.cutting.cutting_speed_m_per_min, M_PI * 10 * 2000 / 1000, 1e-12);
+  ASSERT_EQ(j.tool.tooth_angles_deg.size(), 4u);
+  EXPECT_EQ(j.tool.tooth_angles_deg[1], 90.0);
+}
+
+TEST(Job, PivkinDerivesSpindleAndFeedFromCuttingSpeed) {
+  const Job j = load_job(test::example("pivkin2025/trochoidal.toml"));
+  // n = 1000 v_c / (pi D) = 300000 / (12 pi) = 7957.747 rpm (the paper rounds to 7961).
+  EXPECT_NEAR(j.cutting.spindle_speed_rpm, 300000.0 / (12.0 * M_PI), 1e-9);
+  // f_r = f_z Z n = 0.03 * 4 * 7957.747 = 954.93 mm/min (the paper: 955).
+  EXPECT_NEAR(j.cutting.feed_rate_mm_per_min, 0.12 * 300000.0 / (12.0 * M_PI), 1e-9);
+  EXPECT_NEAR(j.cutting.feed_per_tooth_mm, 0.03, 1e-15);
+}
+
+TEST(Job, EveryExampleLoads) {
+  for (const auto& dir : {"wagih2023", "bergmann2021", "pivkin2025"}) {
+    for (const auto& f : test::files_in(test::example(dir), ".toml")) {
+      EXPECT_NO_THROW((void)load_job(f)) << f;
+    }
+  }
+}
+
+TEST(Job, OverridesReplaceAndAddKeys) {
+  const Job j = load_job(
+      test::example("wagih2023/elliptical.toml"),
+      {parse_override("path.aspect_ratio=0.6"), parse_override("path.type = linear-elliptical"),
+       parse_override("path.linear_distance=0.75"),
+       parse_override("tool.tooth_angles=[0, 80, 180, 260]")});
+  EXPECT_EQ(j.path.aspect_ratio, 0.6);
+  EXPECT_EQ(j.path.type, PathType::linear_elliptical);
+  EXPECT_EQ(j.path.linear_distance_mm, 0.75);
+  EXPECT_EQ(j.tool.tooth_angles_deg[1], 80.0);
+}
+
+TEST(Job, OverrideErrorsNameTheOverride) {
+  try {
+    (void)load_job(test::example("wagih2023/elliptical.toml"), {parse_override("path.step=-1")});
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--set path.step: must be > 0 mm, got -1"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    (void)load_job(test::example("wagih2023/elliptical.toml"), {parse_override("path.stepp=1")});
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--set path.stepp: unknown key [path] stepp; did you "
+                                         "mean 'step'?"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW((void)parse_override("path.step"), InputError);
+  EXPECT_THROW((void)parse_override("step=1"), InputError);
+  EXPECT_THROW((void)parse_override("path.step="), InputError);
+}
+
+TEST(Job, AllProblemsAreReportedTogether) {
+  try {
+    (void)parse_job("[tool]\ndiameter = -1\nteeth = 0\n[slot]\nwidth = 1\n", "multi.toml");
+    FAIL();
+  } catch (const InputError& e) {
+    // diameter, teeth, slot length, slot depth, path type, path step (the default type is
+    // trochoidal, which needs one), feed, speed: 8 problems.
+    EXPECT_EQ(e.problems().size(), 8u) << e.what();
+  }
+}
+
+TEST(Job, MissingFileIsInputError) {
+  EXPECT_THROW((void)load_job("/nonexistent/job.toml"), InputError);
+}
+
+// Data-driven: each file's first line is "# expect: <message>", which must appear in the
+// error (prefixed by the file name, so line:column are checked where given).
+TEST(Job, BadJobFilesGiveTheExpectedMessage) {
+  const auto files = test::files_in(test::source_dir() / "tests/data/bad_jobs", ".toml");
+  ASSERT_GE(files.size(), 15u);
+  for (const auto& f : files) {
+    const std::string expect = test::first_line(f).substr(std::string("# expect: ").size());
+    try {
+      (void)load_job(f);
+      ADD_FAILURE() << f << ": loaded without error, expected: " << expect;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expect), std::string::npos)
+          << f << "\n  expected: " << expect << "\n  got: " << e.what();
+      EXPECT_NE(std::string(e.what()).find(f.string()), std::string::npos)
+          << "message must name the file: " << e.what();
+    }
+  }
+}
+
+TEST(Io, AtomicWriteReplacesAndLeavesNoTemporaries) {
+  const auto dir = std::filesystem::temp_directory_path() / "trochomill_io_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  write_file_atomic(dir / "a.txt", "first");
+  write_file_atomic(dir / "a.txt", "second");
+  EXPECT_EQ(read_file(dir / "a.txt"), "second");
+  int files = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;
+  EXPECT_EQ(files, 1);
+  EXPECT_THROW(write_file_atomic(dir / "missing" / "b.txt", "x"), IoError);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace trochomill

@@ -1,0 +1,89 @@
+// Shared helpers for the trochomill tests: example jobs, inline jobs, directory listings and
+// geometric distance checks used by several test files.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "trochomill/job.hpp"
+#include "trochomill/path.hpp"
+
+namespace trochomill::test {
+
+inline std::filesystem::path source_dir() { return TROCHOMILL_SOURCE_DIR; }
+inline std::filesystem::path example(const std::string& rel) {
+  return source_dir() / "examples" / rel;
+}
+inline std::vector<std::filesystem::path> files_in(const std::filesystem::path& dir,
+                                                   const std::string& ext) {
+  std::vector<std::filesystem::path> out;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().extension() == ext) out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+inline std::string first_line(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+// The Wagih 2023 Table 1 job with a chosen family; extra TOML lines go into [path].
+inline Job wagih_job(const std::string& type, const std::vector<Override>& ov = {}) {
+  const std::string text = R"(
+[tool]
+diameter = 10.0
+teeth = 4
+[slot]
+width = 20.0
+length = 20.0
+depth = 6.0
+[path]
+type = ")" + type + R"("
+step = 1.0
+[cutting]
+feed_rate = 600.0
+spindle_speed = 2000.0
+[machine]
+rapid_rate = 10000.0
+)";
+  return parse_job(text, "wagih.toml", ov);
+}
+
+// Distance from q to the polyline through samples (x, y, z), searching a window of indices
+// from just behind `hint` forward (paths are compared in order; a path may retrace itself
+// exactly, so ties go to the earliest index from the hint on) and updating it.
+inline double distance_to_polyline(const PathSamples& s, const Vec3& q, std::size_t& hint,
+                                   std::size_t window) {
+  const std::size_t n = s.size();
+  const std::size_t lo = hint > 5 ? hint - 5 : 0;
+  const std::size_t hi = std::min(n - 1, hint + window);
+  double best = 1e300;
+  std::size_t best_i = hint;
+  auto consider = [&](std::size_t i) {
+    const Vec3 a(s.x_mm[i], s.y_mm[i], s.z_mm[i]), b(s.x_mm[i + 1], s.y_mm[i + 1], s.z_mm[i + 1]);
+    const Vec3 d = b - a;
+    const double L2 = d.squaredNorm();
+    const double t = L2 > 0 ? std::clamp((q - a).dot(d) / L2, 0.0, 1.0) : 0.0;
+    const double dist = (q - a - t * d).norm();
+    if (dist < best) {
+      best = dist;
+      best_i = i;
+    }
+  };
+  // Forward from the hint first, so an exact tie with an earlier pass over the same place
+  // keeps the path's progress.
+  for (std::size_t i = std::min(hint, hi); i < hi; ++i) consider(i);
+  for (std::size_t i = std::min(hint, hi); i-- > lo;) consider(i);
+  hint = best_i;
+  return best;
+}
+
+}  // namespace trochomill::test
