@@ -3,7 +3,10 @@
 // curves become biarcs (or chords on request) within the tolerance; anything else chords.
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
+#include <cstring>
+#include <map>
 
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
@@ -15,7 +18,10 @@ namespace {
 
 class Emitter {
  public:
-  Emitter(const GcodeWriteOptions& opt) : opt_(opt) {}
+  explicit Emitter(const GcodeWriteOptions& opt) : opt_(opt), scale_(std::pow(10.0, opt.decimals)) {
+    for (int k = 0; k < opt.decimals; ++k) pow10_ *= 10;
+    out_.reserve(1 << 16);
+  }
 
   std::string& out() { return out_; }
 
@@ -43,26 +49,46 @@ class Emitter {
     out_ += '\n';
   }
 
-  // Number with fixed decimals, trailing zeros trimmed, no "-0".
+  // Number with fixed decimals, trailing zeros trimmed, no "-0": the value is rounded to an
+  // integer count of 10^-decimals mm (the same rounding as rounded()) and printed exactly.
   void num(char letter, double v) {
-    char buf[64];
-    auto r = fmt::format_to_n(buf, sizeof buf - 1, "{:.{}f}", v, opt_.decimals);
-    std::size_t n = r.size;
-    if (std::memchr(buf, '.', n) != nullptr) {
-      while (n > 0 && buf[n - 1] == '0') --n;
-      if (n > 0 && buf[n - 1] == '.') --n;
-    }
-    std::string_view s(buf, n);
-    if (s == "-0") s = "0";
+    const double scaled = std::round(v * scale_);
+    if (!(std::abs(scaled) < 9e15)) throw Error(fmt::format("coordinate {} is out of range", v));
+    auto q = static_cast<long long>(scaled);
     out_ += ' ';
     out_ += letter;
-    out_ += s;
+    if (q < 0) {
+      out_ += '-';
+      q = -q;
+    }
+    const long long whole = q / pow10_, frac = q % pow10_;
+    char buf[24];
+    int n = 0;
+    long long w = whole;
+    do {
+      buf[n++] = static_cast<char>('0' + w % 10);
+      w /= 10;
+    } while (w > 0);
+    while (n > 0) out_ += buf[--n];
+    if (frac != 0) {
+      char digits[8];
+      long long f = frac;
+      for (int k = opt_.decimals - 1; k >= 0; --k) {
+        digits[k] = static_cast<char>('0' + f % 10);
+        f /= 10;
+      }
+      int len = opt_.decimals;
+      while (len > 0 && digits[len - 1] == '0') --len;
+      out_ += '.';
+      out_.append(digits, static_cast<std::size_t>(len));
+    }
   }
 
   // A motion block: code G0/G1/G2/G3, only the axes that change (all on the first move).
   void move(int g, const Vec3& p, double feed, const double* ij = nullptr) {
     const bool first = !have_pos_;
-    out_ += fmt::format("G{}", g);
+    out_ += 'G';
+    out_ += static_cast<char>('0' + g);
     const Vec3 q = rounded(p);
     if (first || q.x() != pos_.x() || g >= 2) num('X', p.x());
     if (first || q.y() != pos_.y() || g >= 2) num('Y', p.y());
@@ -83,10 +109,12 @@ class Emitter {
 
  private:
   [[nodiscard]] Vec3 rounded(const Vec3& p) const {
-    const double k = std::pow(10.0, opt_.decimals);
-    return Vec3(std::round(p.x() * k) / k, std::round(p.y() * k) / k, std::round(p.z() * k) / k);
+    return Vec3(std::round(p.x() * scale_) / scale_, std::round(p.y() * scale_) / scale_,
+                std::round(p.z() * scale_) / scale_);
   }
   const GcodeWriteOptions& opt_;
+  double scale_;         ///< 10^decimals
+  long long pow10_ = 1;  ///< 10^decimals
   std::string out_;
   Vec3 pos_ = Vec3::Zero();
   bool have_pos_ = false;
@@ -108,7 +136,46 @@ void emit_arc(Emitter& e, const Vec3& start, double cx, double cy, double r, dou
   }
 }
 
-void emit_segment(Emitter& e, const Segment& seg, const GcodeWriteOptions& opt) {
+// Biarc fits of curves that differ only by translation are the same arcs shifted: the cycles
+// of a planned slot are all one shape, so each shape is fitted once (about 100 times fewer
+// fits for a 100-cycle slot). Arcs are stored relative to the curve's centre.
+struct FitKey {
+  std::array<double, 11> v;
+  bool operator<(const FitKey& o) const { return v < o.v; }
+};
+using FitCache = std::map<FitKey, std::vector<FitArc>>;
+
+const std::vector<FitArc>& cached_biarcs(const Segment& seg, double tol, FitCache& cache,
+                                         std::vector<FitArc>& scratch) {
+  const Vec3& a = seg.axis_a();
+  const Vec3& b = seg.axis_b();
+  const Vec3& v = seg.drift();
+  const FitKey key{
+      {a.x(), a.y(), b.x(), b.y(), v.x(), v.y(), seg.u0(), seg.u1(), tol, seg.center().z(), 0.0}};
+  auto it = cache.find(key);
+  if (it == cache.end()) {
+    // Fit the curve as centred at the origin (in x, y), then keep it.
+    const Segment centred = Segment::curve(Vec3(0, 0, seg.center().z()), a, b, v, seg.u0(),
+                                           seg.u1(), seg.motion(), seg.speed_mm_per_min());
+    it = cache.emplace(key, fit_biarcs(centred, tol)).first;
+  }
+  scratch = it->second;
+  const double cx = seg.center().x(), cy = seg.center().y();
+  for (FitArc& arc : scratch) {
+    arc.start.x() += cx;
+    arc.start.y() += cy;
+    arc.end.x() += cx;
+    arc.end.y() += cy;
+    arc.cx += cx;
+    arc.cy += cy;
+  }
+  // Exact end points: the translated fit meets the path's own end points to rounding.
+  scratch.front().start = seg.start();
+  scratch.back().end = seg.end();
+  return scratch;
+}
+
+void emit_segment(Emitter& e, const Segment& seg, const GcodeWriteOptions& opt, FitCache& cache) {
   const double feed = seg.speed_mm_per_min();
   if (seg.kind() == Segment::Kind::line) {
     e.move(seg.motion() == Motion::rapid ? 0 : 1, seg.end(), feed);
@@ -128,7 +195,8 @@ void emit_segment(Emitter& e, const Segment& seg, const GcodeWriteOptions& opt) 
     return;
   }
   if (seg.is_flat_xy() && opt.arc_output == ArcOutput::arcs) {
-    for (const FitArc& arc : fit_biarcs(seg, opt.tolerance_mm)) {
+    std::vector<FitArc> scratch;
+    for (const FitArc& arc : cached_biarcs(seg, opt.tolerance_mm, cache, scratch)) {
       if (arc.is_line) {
         e.move(1, arc.end, feed);
       } else {
@@ -208,7 +276,8 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
 
   // First position: a rapid to the path start at its height (all three axes).
   e.move(0, path.segments().front().start(), 0);
-  for (const Segment& seg : path.segments()) emit_segment(e, seg, opt);
+  FitCache cache;
+  for (const Segment& seg : path.segments()) emit_segment(e, seg, opt, cache);
 
   if (job.cutting.coolant != Coolant::off) e.line("M9");
   e.line("M5");

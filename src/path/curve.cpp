@@ -1,7 +1,7 @@
 // Exact path primitives: lines and the curve p(u) = c + A cos u + B sin u + V u, with
 // arc-length parametrisation. For circles and helices |p'| is constant (closed form); for
 // other curves the cumulative length is tabulated with 5-point Gauss-Legendre per span of at
-// most 1/16 rad and inverted by safeguarded Newton steps on the same quadrature.
+// most 1/8 rad and inverted by safeguarded Newton steps on the same quadrature.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,7 +12,7 @@
 namespace trochomill {
 namespace {
 
-constexpr double kSpansPerRadian = 16.0;
+constexpr double kSpansPerRadian = 8.0;
 // 5-point Gauss-Legendre nodes and weights on [-1, 1].
 constexpr std::array<double, 5> kGlX = {-0.9061798459386640, -0.5384693101056831, 0.0,
                                         0.5384693101056831, 0.9061798459386640};

@@ -106,16 +106,26 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
   emit_cycle(bld, g, 0.0);
   Envelope env;
   env.cycle_length = one.length_mm();
-  const PathSamples smp = sample_by_length(one, std::min(0.02, env.cycle_length / 720.0));
+  // Centre points every ~0.04 mm (envelope error <= ds^2 / 8R = 4e-5 mm), spaced in each segment's
+  // parameter (no arc-length inversion needed: only the set of positions matters here).
+  std::vector<double> xs, ys;
+  for (const Segment& seg : one.segments()) {
+    const int n = std::max(2, static_cast<int>(std::ceil(seg.length_mm() / 0.04)));
+    for (int k = 0; k <= n; ++k) {
+      const Vec3 p = seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n);
+      xs.push_back(p.x());
+      ys.push_back(p.y());
+    }
+  }
   const double x_lo = -0.5 * g.W + delta, x_hi = 0.5 * g.W - delta;
   const int nx = 400;
   std::vector<double> front(nx + 1, -std::numeric_limits<double>::infinity());
   std::vector<double> rear(nx + 1, std::numeric_limits<double>::infinity());
   const double dx = (x_hi - x_lo) / nx;
   std::size_t i_min = 0;
-  for (std::size_t i = 0; i < smp.size(); ++i) {
-    const double xc = smp.x_mm[i], yc = smp.y_mm[i];
-    if (yc < smp.y_mm[i_min]) i_min = i;
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    const double xc = xs[i], yc = ys[i];
+    if (yc < ys[i_min]) i_min = i;
     const int j0 = std::max(0, static_cast<int>(std::ceil((xc - g.R - x_lo) / dx)));
     const int j1 = std::min(nx, static_cast<int>(std::floor((xc + g.R - x_lo) / dx)));
     for (int j = j0; j <= j1; ++j) {
@@ -125,20 +135,33 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
       rear[j] = std::min(rear[j], yc - h);
     }
   }
-  // The rearmost centre point exactly: golden-section search on y(s) around the lowest sample
-  // (a closed start puts the tool's rear exactly on y = 0, so sampling error would cut behind).
+  // The rearmost centre point exactly: golden-section search on y(u) of the segment holding
+  // the lowest sample (a closed start puts the tool's rear exactly on y = 0, so sampling
+  // error would cut behind it).
   {
-    double lo = smp.s_mm[i_min > 0 ? i_min - 1 : 0];
-    double hi = smp.s_mm[std::min(i_min + 1, smp.size() - 1)];
-    const double gr = (std::sqrt(5.0) - 1) / 2;
-    for (int it = 0; it < 100; ++it) {
-      const double m1 = hi - gr * (hi - lo), m2 = lo + gr * (hi - lo);
-      if (one.point_at_length(m1).y() < one.point_at_length(m2).y())
-        hi = m2;
-      else
-        lo = m1;
+    double best = ys[i_min];
+    for (const Segment& seg : one.segments()) {
+      const int n = 256;
+      int k_min = 0;
+      for (int k = 0; k <= n; ++k) {
+        if (seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n).y() <
+            seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k_min / n).y()) {
+          k_min = k;
+        }
+      }
+      double lo = seg.u0() + (seg.u1() - seg.u0()) * std::max(0, k_min - 1) / n;
+      double hi = seg.u0() + (seg.u1() - seg.u0()) * std::min(n, k_min + 1) / n;
+      const double gr = (std::sqrt(5.0) - 1) / 2;
+      for (int it = 0; it < 100; ++it) {
+        const double m1 = hi - gr * (hi - lo), m2 = lo + gr * (hi - lo);
+        if (seg.point_u(m1).y() < seg.point_u(m2).y())
+          hi = m2;
+        else
+          lo = m1;
+      }
+      best = std::min({best, seg.point_u(0.5 * (lo + hi)).y(), seg.start().y(), seg.end().y()});
     }
-    env.min_center_y = std::min(smp.y_mm[i_min], one.point_at_length(0.5 * (lo + hi)).y());
+    env.min_center_y = best;
   }
   const double approach_hi = -g.a + g.R;  // the approach along x = -a covers x < -a + R
   for (int j = 0; j <= nx; ++j) {
