@@ -27,7 +27,8 @@ test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 $(ASAN_BUILD)/build.ninja: | deps
-	cmake -S . -B $(ASAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTROCHOMILL_WERROR=ON \
+	cmake -S . -B $(ASAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
+	  -DTROCHOMILL_WERROR=ON \
 	  -DTROCHOMILL_SANITIZE=ON -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
 
 test-asan: deps $(ASAN_BUILD)/build.ninja

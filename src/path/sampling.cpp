@@ -52,43 +52,44 @@ std::size_t sample_count(double total, double step, const char* what) {
   return static_cast<std::size_t>(n);
 }
 
-}  // namespace
-
-PathSamples sample_by_time(const ToolPath& path, double dt_s) {
+// Uniform samples along one of the path's two axes, time or length: `start(seg)` is the
+// segment's start on that axis and `rate(seg)` converts a distance on the axis into mm along
+// the segment. The last sample sits at the path's end.
+template <typename Start, typename Rate>
+PathSamples sample_uniform(const ToolPath& path, double step, double total, const char* what,
+                           Start start, Rate rate) {
   if (path.empty()) throw Error("cannot sample an empty path");
-  const double total = path.duration_s();
-  const std::size_t n = sample_count(total, dt_s, "time step (s)");
+  const std::size_t n = sample_count(total, step, what);
   PathSamples out;
   reserve(out, n + 2);
   std::size_t seg = 0;
   const std::size_t nseg = path.segments().size();
-  auto emit = [&](double t) {
-    while (seg + 1 < nseg && path.segment_start_time_s(seg + 1) <= t) ++seg;
-    const Segment& g = path.segments()[seg];
-    const double s = (t - path.segment_start_time_s(seg)) * g.speed_mm_per_min() / 60.0;
-    push_sample(path, seg, std::min(s, g.length_mm()), out);
+  double last = -1;
+  auto emit = [&](double v) {
+    while (seg + 1 < nseg && start(seg + 1) <= v) ++seg;
+    const double local = (v - start(seg)) * rate(seg);
+    push_sample(path, seg, std::min(local, path.segments()[seg].length_mm()), out);
+    last = v;
   };
-  for (std::size_t i = 0; i <= n; ++i) emit(static_cast<double>(i) * dt_s);
-  if (total - out.t_s.back() > 1e-12 * std::max(1.0, total)) emit(total);
+  for (std::size_t i = 0; i <= n; ++i) emit(static_cast<double>(i) * step);
+  if (total - last > 1e-12 * std::max(1.0, total)) emit(total);
   return out;
 }
 
+}  // namespace
+
+PathSamples sample_by_time(const ToolPath& path, double dt_s) {
+  return sample_uniform(
+      path, dt_s, path.duration_s(), "time step (s)",
+      [&](std::size_t i) { return path.segment_start_time_s(i); },
+      [&](std::size_t i) { return path.segments()[i].speed_mm_per_min() / 60.0; });
+}
+
 PathSamples sample_by_length(const ToolPath& path, double ds_mm) {
-  if (path.empty()) throw Error("cannot sample an empty path");
-  const double total = path.length_mm();
-  const std::size_t n = sample_count(total, ds_mm, "length step (mm)");
-  PathSamples out;
-  reserve(out, n + 2);
-  std::size_t seg = 0;
-  const std::size_t nseg = path.segments().size();
-  auto emit = [&](double s) {
-    while (seg + 1 < nseg && path.segment_start_length_mm(seg + 1) <= s) ++seg;
-    const double local = s - path.segment_start_length_mm(seg);
-    push_sample(path, seg, std::min(local, path.segments()[seg].length_mm()), out);
-  };
-  for (std::size_t i = 0; i <= n; ++i) emit(static_cast<double>(i) * ds_mm);
-  if (total - out.s_mm.back() > 1e-12 * std::max(1.0, total)) emit(total);
-  return out;
+  return sample_uniform(
+      path, ds_mm, path.length_mm(), "length step (mm)",
+      [&](std::size_t i) { return path.segment_start_length_mm(i); },
+      [](std::size_t) { return 1.0; });
 }
 
 PathSamples sample_by_spindle_angle(const ToolPath& path, int steps_per_rev, double spindle_rpm) {
