@@ -174,6 +174,12 @@ std::vector<FamilyCase> family_cases() {
     for (const std::string entry : {"outside", "helix", "ramp", "plunge"}) {
       const std::vector<std::string> base = {"path.direction=" + dir, "path.entry=" + entry};
       out.push_back({"trochoidal", base});
+      if (entry != "helix") out.push_back({"linear", base});
+      // A wide slot (a = 17 > R = 8, Bergmann's geometry) exercises the interior of the
+      // closed-start clean-up.
+      auto wide = base;
+      wide.insert(wide.end(), {"tool.diameter=16", "slot.width=50", "slot.length=30"});
+      out.push_back({"trochoidal", wide});
       out.push_back({"circular", base});
       for (const std::string re : {"0.5", "0.8", "1.2"}) {
         auto s = base;
@@ -202,7 +208,9 @@ std::string name(const FamilyCase& c) {
   return n;
 }
 
-bool smooth_family(const std::string&) { return true; }  // all five are G1 within the cycles
+// All five families are tangent-continuous within their cycles; the linear family's passes
+// are joined by retracts.
+bool smooth_family(const std::string& type) { return type != "linear"; }
 
 TEST(Planner, EveryFamilyIsContinuousAndAdvancesOneStepPerCycle) {
   for (const auto& c : family_cases()) {
@@ -214,17 +222,37 @@ TEST(Planner, EveryFamilyIsContinuousAndAdvancesOneStepPerCycle) {
     for (std::size_t i = 1; i < segs.size(); ++i) {
       ASSERT_LE((segs[i].start() - segs[i - 1].end()).norm(), 1e-9) << name(c) << " at " << i;
     }
-    // Tangent continuity inside the cycles (from the first cycle to the final retract).
-    const std::size_t first = pp.path.cycles().front().first_segment;
-    for (std::size_t i = first + 1; i + 1 < segs.size(); ++i) {
+    const auto& cyc = pp.path.cycles();
+    if (c.type == "linear") {
+      // Passes are evenly spaced in x (climb from +a to -a, conventional mirrored).
+      for (std::size_t k = 2; k < cyc.size(); ++k) {
+        const double d1 =
+            segs[cyc[k].first_segment].start().x() - segs[cyc[k - 1].first_segment].start().x();
+        const double d0 =
+            segs[cyc[k - 1].first_segment].start().x() - segs[cyc[k - 2].first_segment].start().x();
+        EXPECT_NEAR(d1, d0, 1e-12) << name(c);
+      }
+      continue;
+    }
+    // Tangent continuity inside the cycles: every cycle has as many segments as the one
+    // before, so the last one ends where that count says.
+    const std::size_t per_cycle = cyc[1].first_segment - cyc[0].first_segment;
+    const std::size_t end = cyc.back().first_segment + per_cycle;
+    ASSERT_LE(end, segs.size());
+    for (std::size_t i = cyc.front().first_segment + 1; i < end; ++i) {
       const Vec3 t0 = segs[i - 1].tangent_at(segs[i - 1].length_mm()), t1 = segs[i].tangent_at(0);
       if (smooth_family(c.type)) {
         EXPECT_LE((t0 - t1).norm(), 1e-9) << name(c) << " tangent jump at segment " << i;
       }
     }
-    // Entry arrives tangent to the first cycle too (all entries end moving +y, or -y/x mirrored).
+    // The entry arrives along the first cycle's start tangent (outside approach, helix).
+    if (job.path.entry == EntryType::outside || job.path.entry == EntryType::helix) {
+      const std::size_t f = cyc.front().first_segment;
+      EXPECT_LE((segs[f - 1].tangent_at(segs[f - 1].length_mm()) - segs[f].tangent_at(0)).norm(),
+                1e-9)
+          << name(c);
+    }
     // Advance per cycle: consecutive cycle starts differ by exactly (0, s, 0).
-    const auto& cyc = pp.path.cycles();
     for (std::size_t k = 1; k < cyc.size(); ++k) {
       const Vec3 d = segs[cyc[k].first_segment].start() - segs[cyc[k - 1].first_segment].start();
       EXPECT_NEAR(d.x(), 0.0, 1e-12) << name(c);
@@ -290,8 +318,8 @@ TEST(Planner, ConventionalMirrorsClimbAndOrbitsTheOtherWay) {
 // The tool never leaves the slot: |x| + R <= W/2 and, with a closed start, y - R >= 0.
 // The whole slot is cut: every point of |x| <= W/2 - delta, y_from <= y <= L lies within R of
 // the tool centre at depth, delta = R - sqrt(R^2 - (s/2)^2) being the wall-scallop bound of
-// tool circles (radius >= R) touching the wall every s. Samples every ds = 0.05 mm: the
-// sampled discs miss at most ds^2 / (8 R) of the continuous sweep, added to the reach.
+// tool circles (radius >= R) touching the wall every s. Samples every ds = 0.05 mm plus every
+// segment end point.
 TEST(Planner, ToolStaysInsideAndCutsTheWholeSlot) {
   for (const auto& c : family_cases()) {
     const Job job = make(c);
@@ -299,9 +327,17 @@ TEST(Planner, ToolStaysInsideAndCutsTheWholeSlot) {
     const double R = job.tool.radius_mm(), W = job.slot.width_mm, L = job.slot.length_mm;
     const double zf = -job.slot.depth_mm, s = job.path.step_mm;
     const double ds = 0.05;
-    const PathSamples smp = sample_by_length(pp.path, ds);
+    PathSamples smp = sample_by_length(pp.path, ds);
+    // Path corners are not on the arc-length grid: add every segment's end points.
+    for (const auto& seg : pp.path.segments()) {
+      for (const Vec3& p : {seg.start(), seg.end()}) {
+        smp.x_mm.push_back(p.x());
+        smp.y_mm.push_back(p.y());
+        smp.z_mm.push_back(p.z());
+      }
+    }
     std::map<long, std::vector<std::size_t>> bins;  // 1 mm bins in y of samples at depth
-    for (std::size_t i = 0; i < smp.size(); ++i) {
+    for (std::size_t i = 0; i < smp.x_mm.size(); ++i) {
       ASSERT_LE(std::abs(smp.x_mm[i]) + R, W / 2 + 1e-9) << name(c) << " leaves the slot in x";
       if (pp.info.closed_start && smp.z_mm[i] < 0) {
         ASSERT_GE(smp.y_mm[i] - R, -1e-9) << name(c) << " cuts behind a closed start";
@@ -309,18 +345,25 @@ TEST(Planner, ToolStaysInsideAndCutsTheWholeSlot) {
       if (smp.z_mm[i] <= zf + 1e-9) bins[static_cast<long>(std::floor(smp.y_mm[i]))].push_back(i);
     }
     const double delta = R - std::sqrt(R * R - s * s / 4);
-    const double reach = R + ds * ds / (8 * R) + 1e-9;
-    // A closed start (helix/ramp/plunge inside the material) is full width only from the
-    // first cycle's start on; behind it the slot end is the rear envelope of cycle 0 with
-    // uncut corner bands (docs/models.md, "Closed start").
-    const double y_from = pp.info.closed_start ? pp.info.first_cycle_y_mm : 0.0;
+    // Sampled discs miss at most ds^2 / 8R of a continuous sweep; twice that keeps points
+    // exactly on a straight sweep's edge (y = 0 under the end clean-up) from flickering.
+    const double reach = R + ds * ds / (4 * R);
+    // A closed start (helix/ramp/plunge inside the material) keeps only the corner fillets
+    // of radius R a round tool cannot cut: points with y < R and |x| > W/2 - R farther than R
+    // from the fillet centre (+-(W/2 - R), R) are not asserted.
+    const double a_f = W / 2 - R;
+    auto in_fillet = [&](double x, double y) {
+      return pp.info.closed_start && y < R && std::abs(x) > a_f &&
+             std::hypot(std::abs(x) - a_f, y - R) > R - 1e-9;
+    };
+    const double y_from = 0.0;
     int uncovered = 0;
     std::string first;
     const int nx = 81;
     for (int ix = 0; ix < nx; ++ix) {
       const double x = -W / 2 + delta + (W - 2 * delta) * ix / (nx - 1);
       for (double y = y_from; y <= L + 1e-9; y += 0.1) {
-        bool hit = false;
+        bool hit = in_fillet(x, y);
         for (long b = static_cast<long>(std::floor(y - R)) - 1;
              b <= static_cast<long>(std::floor(y + R)) && !hit; ++b) {
           const auto it = bins.find(b);

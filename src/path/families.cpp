@@ -91,14 +91,68 @@ void emit_cycle(Builder& bld, const Geometry& g, double y) {
 }
 
 struct Envelope {
-  double max_rear = -std::numeric_limits<double>::infinity();  // max_x of rear reach (rel. y)
-  double min_front = std::numeric_limits<double>::infinity();  // min_x of front reach
+  double max_rear = -std::numeric_limits<double>::infinity();  // max_x of solid rear (rel. y)
+  double min_front = std::numeric_limits<double>::infinity();  // min_x of solid front
   double min_center_y = std::numeric_limits<double>::infinity();
   double cycle_length = 0;
+  std::vector<double> col_x;                                   // x of each column (mm)
+  std::vector<std::vector<std::pair<double, double>>> col_iv;  // merged y intervals of one cycle
+  int span_cycles = 0;  // max over columns of the cycles one cycle's coverage spans (J)
 };
 
-// Front and rear reach of cycle 0 (relative to its start y = 0), over the slot width less the
-// wall scallop bound delta; the rear only where the wall-line approach does not cover.
+using Interval = std::pair<double, double>;
+
+// Sorts and merges intervals in place (touching ones join).
+void merge(std::vector<Interval>& v) {
+  std::sort(v.begin(), v.end());
+  std::size_t k = 0;
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    if (v[i].first <= v[k].second) {
+      v[k].second = std::max(v[k].second, v[i].second);
+    } else {
+      v[++k] = v[i];
+    }
+  }
+  if (!v.empty()) v.resize(k + 1);
+}
+
+// The solid front and rear of the steady-state coverage in one x column. `iv` is the union
+// of y intervals one cycle covers (relative to its start). With cycles every s, the cut
+// region at this x behind the last cycle is C = U_{j>=0} (iv - j s); the solid front is the
+// top of the gap-free part of C that reaches down indefinitely (above it an island of a wide
+// orbit may remain). Symmetrically for the rear with shifts + j s. Returns false when the
+// periodic pattern itself has gaps (the step leaves islands everywhere).
+bool solid_extents(std::vector<Interval> iv, double s, double& front, double& rear, int& span) {
+  merge(iv);
+  const double lo = iv.front().first, hi = iv.back().second;
+  const int J = static_cast<int>(std::ceil((hi - lo) / s)) + 1;
+  span = J;
+  auto solid = [&](double sign, double& out) {
+    std::vector<Interval> all;
+    all.reserve(iv.size() * (J + 2));
+    for (int j = 0; j <= J + 1; ++j) {
+      for (const auto& [a, b] : iv) all.emplace_back(a - sign * j * s, b - sign * j * s);
+    }
+    merge(all);
+    // Levels within one period of ref are reached only by shifts j <= J + 1, so the union
+    // there is exact and equals the periodic steady state: it must be gap-free over a whole
+    // period around ref; the contiguous run through ref then ends at the solid front
+    // (starts at the solid rear).
+    const double ref = sign > 0 ? hi - J * s : lo + J * s;
+    for (const auto& [a, b] : all) {
+      if (a <= ref - s && ref + s <= b) {
+        out = sign > 0 ? b : a;
+        return true;
+      }
+    }
+    return false;
+  };
+  return solid(+1.0, front) && solid(-1.0, rear);
+}
+
+// Solid front and rear coverage of the cycles (relative to a cycle's start y), over the slot
+// width less the wall scallop bound delta; the rear only where the wall-line approach does
+// not cover. Also the exact rearmost centre point.
 Envelope cycle_envelope(const Geometry& g, double delta) {
   ToolPath one;
   Builder bld(one, false);
@@ -106,11 +160,12 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
   emit_cycle(bld, g, 0.0);
   Envelope env;
   env.cycle_length = one.length_mm();
-  // Centre points every ~0.04 mm (envelope error <= ds^2 / 8R = 4e-5 mm), spaced in each segment's
-  // parameter (no arc-length inversion needed: only the set of positions matters here).
+  // Centre points every ~0.1 mm (a disc-union error <= ds^2 / 8R = 1.3e-4 mm for R >= 10 mm,
+  // below the 0.02 mm margin), spaced in each segment's parameter (only the set of
+  // positions matters here), plus every segment's end points.
   std::vector<double> xs, ys;
   for (const Segment& seg : one.segments()) {
-    const int n = std::max(2, static_cast<int>(std::ceil(seg.length_mm() / 0.04)));
+    const int n = std::max(2, static_cast<int>(std::ceil(seg.length_mm() / 0.1)));
     for (int k = 0; k <= n; ++k) {
       const Vec3 p = seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n);
       xs.push_back(p.x());
@@ -119,56 +174,68 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
   }
   const double x_lo = -0.5 * g.W + delta, x_hi = 0.5 * g.W - delta;
   const int nx = 400;
-  std::vector<double> front(nx + 1, -std::numeric_limits<double>::infinity());
-  std::vector<double> rear(nx + 1, std::numeric_limits<double>::infinity());
   const double dx = (x_hi - x_lo) / nx;
-  std::size_t i_min = 0;
+  std::vector<std::vector<Interval>> cols(nx + 1);
   for (std::size_t i = 0; i < xs.size(); ++i) {
     const double xc = xs[i], yc = ys[i];
-    if (yc < ys[i_min]) i_min = i;
     const int j0 = std::max(0, static_cast<int>(std::ceil((xc - g.R - x_lo) / dx)));
     const int j1 = std::min(nx, static_cast<int>(std::floor((xc + g.R - x_lo) / dx)));
     for (int j = j0; j <= j1; ++j) {
       const double x = x_lo + dx * j;
       const double h = std::sqrt(std::max(0.0, g.R * g.R - (x - xc) * (x - xc)));
-      front[j] = std::max(front[j], yc + h);
-      rear[j] = std::min(rear[j], yc - h);
-    }
-  }
-  // The rearmost centre point exactly: golden-section search on y(u) of the segment holding
-  // the lowest sample (a closed start puts the tool's rear exactly on y = 0, so sampling
-  // error would cut behind it).
-  {
-    double best = ys[i_min];
-    for (const Segment& seg : one.segments()) {
-      const int n = 256;
-      int k_min = 0;
-      for (int k = 0; k <= n; ++k) {
-        if (seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n).y() <
-            seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k_min / n).y()) {
-          k_min = k;
-        }
+      // Samples come in path order, so a column's new interval usually overlaps its last
+      // one: extend that in place and keep the columns short.
+      auto& col = cols[j];
+      if (!col.empty() && yc - h <= col.back().second && yc + h >= col.back().first) {
+        col.back().first = std::min(col.back().first, yc - h);
+        col.back().second = std::max(col.back().second, yc + h);
+      } else {
+        col.emplace_back(yc - h, yc + h);
       }
-      double lo = seg.u0() + (seg.u1() - seg.u0()) * std::max(0, k_min - 1) / n;
-      double hi = seg.u0() + (seg.u1() - seg.u0()) * std::min(n, k_min + 1) / n;
-      const double gr = (std::sqrt(5.0) - 1) / 2;
-      for (int it = 0; it < 100; ++it) {
-        const double m1 = hi - gr * (hi - lo), m2 = lo + gr * (hi - lo);
-        if (seg.point_u(m1).y() < seg.point_u(m2).y())
-          hi = m2;
-        else
-          lo = m1;
-      }
-      best = std::min({best, seg.point_u(0.5 * (lo + hi)).y(), seg.start().y(), seg.end().y()});
     }
-    env.min_center_y = best;
   }
   const double approach_hi = -g.a + g.R;  // the approach along x = -a covers x < -a + R
   for (int j = 0; j <= nx; ++j) {
     const double x = x_lo + dx * j;
-    env.min_front = std::min(env.min_front, front[j]);
-    if (x > approach_hi) env.max_rear = std::max(env.max_rear, rear[j]);
+    double front = 0, rear = 0;
+    int span = 0;
+    merge(cols[j]);
+    env.col_x.push_back(x);
+    env.col_iv.push_back(cols[j]);
+    if (cols[j].empty() || !solid_extents(std::move(cols[j]), g.s, front, rear, span)) {
+      throw InputError(fmt::format(
+          "[path] step: the cycles leave uncut islands at x = {:.3f} mm; use a smaller step", x));
+    }
+    env.span_cycles = std::max(env.span_cycles, span);
+    env.min_front = std::min(env.min_front, front);
+    if (x > approach_hi) env.max_rear = std::max(env.max_rear, rear);
   }
+  // The rearmost centre point exactly: golden-section search on y(u) of each segment around
+  // its lowest sample (a closed start puts the tool's rear exactly on y = 0, so sampling
+  // error would cut behind it).
+  double best = std::numeric_limits<double>::infinity();
+  for (const Segment& seg : one.segments()) {
+    const int n = 256;
+    int k_min = 0;
+    for (int k = 0; k <= n; ++k) {
+      if (seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n).y() <
+          seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k_min / n).y()) {
+        k_min = k;
+      }
+    }
+    double lo = seg.u0() + (seg.u1() - seg.u0()) * std::max(0, k_min - 1) / n;
+    double hi = seg.u0() + (seg.u1() - seg.u0()) * std::min(n, k_min + 1) / n;
+    const double gr = (std::sqrt(5.0) - 1) / 2;
+    for (int it = 0; it < 100; ++it) {
+      const double m1 = hi - gr * (hi - lo), m2 = lo + gr * (hi - lo);
+      if (seg.point_u(m1).y() < seg.point_u(m2).y())
+        hi = m2;
+      else
+        lo = m1;
+    }
+    best = std::min({best, seg.point_u(0.5 * (lo + hi)).y(), seg.start().y(), seg.end().y()});
+  }
+  env.min_center_y = best;
   return env;
 }
 
@@ -315,6 +382,17 @@ PlannedPath plan_linear(const Job& job, const Geometry& g, bool mirror) {
     bld.line_to(Vec3(x, y_end, g.zf), Motion::feed, g.feed);
   }
   bld.line_to(Vec3(bld.here().x(), bld.here().y(), g.safe_z), Motion::rapid, g.rapid);
+  if (closed && passes > 1) {
+    // End clean-up: the passes touch the closed end y = 0 only at their own x; one leg
+    // along y = R from wall to wall removes the scallops between them. It starts above the
+    // last pass's start (cut already).
+    const double x_last = bld.here().x();
+    bld.line_to(Vec3(x_last, y_start, g.safe_z), Motion::rapid, g.rapid);
+    bld.line_to(Vec3(x_last, y_start, g.clearance), Motion::rapid, g.rapid);
+    bld.line_to(Vec3(x_last, y_start, g.zf), Motion::feed, g.entry_feed);
+    bld.line_to(Vec3(-x_last, y_start, g.zf), Motion::feed, g.feed);
+    bld.line_to(Vec3(-x_last, y_start, g.safe_z), Motion::rapid, g.rapid);
+  }
   out.info.trochoid_radius_mm = g.a;
   out.info.semi_axis_feed_mm = 0;
   out.info.first_cycle_y_mm = y_start;
@@ -358,8 +436,47 @@ PlannedPath plan_path(const Job& job) {
   } else {
     y0 = (std::isfinite(env.max_rear) ? -env.max_rear : 0.0) - margin;
   }
-  const int cycles = std::max(
+  // The solid front gives a lower bound on the cycle count; the count is then raised until
+  // the finite union of the cycles actually covers every column from y = 0 to L (+margin):
+  // with a wide orbit (a > R) each cycle leaves an island at its centre that only the rear
+  // arcs of later cycles sweep.
+  const int n_front = std::max(
       1, static_cast<int>(std::ceil((g.L + margin - y0 - env.min_front) / g.s - 1e-12)) + 1);
+  const double approach_hi = -g.a + g.R;
+  auto covers = [&](int n) {
+    // With n - 1 >= 2 J + 2 the middle of the finite union is the verified gap-free periodic
+    // pattern and its ends are the solid rear and front already accounted for.
+    if (n - 1 >= 2 * env.span_cycles + 2) return true;
+    std::vector<Interval> u;
+    for (std::size_t j = 0; j < env.col_x.size(); ++j) {
+      const double x = env.col_x[j];
+      u.clear();
+      for (int k = 0; k < n; ++k) {
+        for (const auto& [lo, hi] : env.col_iv[j])
+          u.emplace_back(lo + y0 + k * g.s, hi + y0 + k * g.s);
+      }
+      const double inf = std::numeric_limits<double>::infinity();
+      if (closed) {
+        // The end clean-up: the leg along y = R covers y <= 2R; the wall legs cover their
+        // bands up to where cycle 0 touched the walls.
+        u.emplace_back(-inf, 2 * g.R);
+        if (x <= -g.a + g.R) u.emplace_back(-inf, y0 + g.R);
+        if (x >= g.a - g.R) u.emplace_back(-inf, y0 + 0.5 * g.s + g.R);
+      } else {
+        u.emplace_back(-inf, x < approach_hi ? y0 : 0.0);  // approach; nothing below y = 0
+      }
+      merge(u);
+      if (u.front().second < g.L + margin) return false;
+    }
+    return true;
+  };
+  int cycles = n_front;
+  const int n_max = n_front + static_cast<int>(std::ceil(2 * (g.a + g.b + g.R) / g.s)) + 8;
+  while (!covers(cycles)) {
+    if (++cycles > n_max) {
+      throw Error(fmt::format("planner: {} cycles do not cover the slot; this is a bug", n_max));
+    }
+  }
 
   PlannedPath out;
   Builder bld(out.path, mirror);
@@ -375,6 +492,21 @@ PlannedPath plan_path(const Job& job) {
     emit_cycle(bld, g, y0 + g.s * k);
   }
   bld.line_to(Vec3(bld.here().x(), bld.here().y(), g.safe_z), Motion::rapid, g.rapid);
+  if (closed) {
+    // End clean-up of the closed start: the cycles leave the corners behind the rear
+    // envelope of cycle 0. Back above the first cycle's start (cut already, so the tool
+    // descends into air), then a U at depth: down the left wall to y = R, across the end,
+    // up the right wall to where cycle 0 touched it. Only the R fillets a round tool cannot
+    // cut remain (docs/models.md, "Closed start").
+    const double y_right = y0 + 0.5 * g.s;
+    bld.line_to(Vec3(-g.a, y0, g.safe_z), Motion::rapid, g.rapid);
+    bld.line_to(Vec3(-g.a, y0, g.clearance), Motion::rapid, g.rapid);
+    bld.line_to(Vec3(-g.a, y0, g.zf), Motion::feed, g.entry_feed);
+    bld.line_to(Vec3(-g.a, g.R, g.zf), Motion::feed, g.feed);
+    bld.line_to(Vec3(g.a, g.R, g.zf), Motion::feed, g.feed);
+    bld.line_to(Vec3(g.a, y_right, g.zf), Motion::feed, g.feed);
+    bld.line_to(Vec3(g.a, y_right, g.safe_z), Motion::rapid, g.rapid);
+  }
 
   out.info.trochoid_radius_mm = g.a;
   out.info.semi_axis_feed_mm = g.b;
