@@ -1,0 +1,193 @@
+// Engagement kernel: closed forms for straight full and partial immersion, and a
+// brute-force reference (every earlier disc tested directly, no boundary structure) on
+// trochoidal cases, for the engaged angle and h_max.
+#include "trochomill/engagement.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_util.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+Job straight_job(double width, int teeth = 4) {
+  return parse_job(R"(
+[tool]
+diameter = 10.0
+teeth = )" + std::to_string(teeth) +
+                       R"(
+[slot]
+width = )" + std::to_string(width) +
+                       R"(
+length = 40.0
+depth = 6.0
+[path]
+type = "linear"
+step = 1.0
+[cutting]
+feed_rate = 600.0
+spindle_speed = 2000.0
+)",
+                   "straight.toml");
+}
+
+// Straight full-immersion slot (W = D): the engaged arc is the front half circle plus the
+// slivers the previous disc leaves at the walls, pi + 2 asin(f_z / 2R) in the disc model
+// (the continuous sweep gives pi; the difference is f_z / R), and h_max = f_z exactly
+// (straight ahead the previous circle is f_z behind); the angular search step 0.25 deg
+// costs at most f_z (1 - cos 0.125 deg) = 2e-7 mm.
+TEST(Engagement, StraightFullImmersion) {
+  const Job job = straight_job(10.0);
+  const double fz = job.cutting.feed_per_tooth_mm, R = 5.0;
+  ToolPath p;
+  p.append(Segment::line(Vec3(0, -10, -6), Vec3(0, 30, -6), Motion::feed, 600));
+  const EngagementSeries e = compute_engagement(p, job);
+  ASSERT_GT(e.samples.size(), 400u);
+  int checked = 0;
+  for (std::size_t i = 0; i < e.samples.size(); ++i) {
+    const double y = e.samples.y_mm[i];
+    if (y < 10 || y > 25) continue;  // steady state, away from the slot ends
+    ++checked;
+    EXPECT_NEAR(e.engagement_angle_rad[i], kPi + 2 * std::asin(fz / (2 * R)), 1e-9) << y;
+    EXPECT_NEAR(e.h_max_mm[i], fz, 1e-6) << y;
+    EXPECT_NEAR(e.h_max_angle_rad[i], kPi / 2, deg_to_rad(0.25));
+    ASSERT_EQ(e.arcs[i].size(), 1u);
+  }
+  EXPECT_EQ(checked, 200);  // 15 mm at f_z = 0.075 mm
+  // Teeth in cut: sampled 7 times per tooth pass (28 spindle phases per revolution, 12.86 deg
+  // apart) the mean count over whole revolutions is Z psi / 2 pi to within the phases that
+  // fall on the two arc ends: 2 * Z / 28 = 0.29 for Z = 4.
+  EngagementOptions fine;
+  fine.steps_per_tooth = 7;
+  ToolPath shorter;  // 20 revolutions (6 mm) in steady state after entering the stock
+  shorter.append(Segment::line(Vec3(0, -5.5, -6), Vec3(0, 12.5, -6), Motion::feed, 600));
+  const EngagementSeries f = compute_engagement(shorter, job, fine);
+  double teeth_sum = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < f.samples.size(); ++i) {
+    if (f.samples.y_mm[i] < 6 || n >= 28 * 20) continue;  // 20 whole revolutions
+    teeth_sum += f.teeth_in_cut[i];
+    ++n;
+  }
+  EXPECT_NEAR(teeth_sum / n, 4 * (kPi + 2 * std::asin(fz / (2 * R))) / kTwoPi, 2.0 * 4 / 28);
+  // Entering the stock at y = 0 from outside: no engagement before the tool reaches it.
+  for (std::size_t i = 0; i < e.samples.size(); ++i) {
+    if (e.samples.y_mm[i] < -R - 1e-9) {
+      EXPECT_EQ(e.engagement_angle_rad[i], 0.0);
+    }
+  }
+}
+
+// Straight partial immersion a_e on one side: engagement angle acos(1 - a_e / R) (plus the
+// wall sliver asin(f_z / 2R) of the disc model), h(phi) = f_z sin(phi) to within f_z^2 / R.
+TEST(Engagement, StraightPartialImmersion) {
+  for (const double ae : {0.5, 1.0, 2.5, 5.0}) {
+    const Job job = straight_job(20.0);
+    const double fz = job.cutting.feed_per_tooth_mm, R = 5.0;
+    const double x0 = 10.0 + R - ae;  // the tool overlaps the stock |x| <= 10 by a_e
+    ToolPath p;
+    p.append(Segment::line(Vec3(x0, -10, -6), Vec3(x0, 30, -6), Motion::feed, 600));
+    const EngagementSeries e = compute_engagement(p, job);
+    const double psi = std::acos(1 - ae / R);
+    for (std::size_t i = 0; i < e.samples.size(); ++i) {
+      const double y = e.samples.y_mm[i];
+      if (y < 10 || y > 25) continue;
+      EXPECT_NEAR(e.engagement_angle_rad[i], psi + std::asin(fz / (2 * R)), 1e-9) << ae;
+      // The chip is thickest where the arc starts (phi = pi - psi from +X, the feed-normal
+      // angle psi): f_z sin(psi), with the disc model's second-order term below f_z^2 / R.
+      EXPECT_NEAR(e.h_max_mm[i], fz * std::sin(std::min(psi, kPi / 2)), fz * fz / R) << ae;
+    }
+  }
+}
+
+// Brute force: the circle point at angle th is engaged iff it is in the slot rectangle and
+// farther than R from every earlier centre (up to i - m) in the material. h at th: the ray
+// from the centre leaves the last earlier disc at max(t + sq) below R.
+struct Brute {
+  double angle = 0, hmax = 0;
+};
+Brute brute(const PathSamples& s, std::size_t i, int m, double R, double hw, double L, int npts) {
+  Brute b;
+  const double cx = s.x_mm[i], cy = s.y_mm[i];
+  int in = 0;
+  for (int k = 0; k < npts; ++k) {
+    const double th = kTwoPi * (k + 0.5) / npts;
+    const double px = cx + R * std::cos(th), py = cy + R * std::sin(th);
+    if (std::abs(px) > hw || py < 0 || py > L) continue;
+    bool removed = false;
+    double rho = 0;
+    const double ux = std::cos(th), uy = std::sin(th);
+    for (std::size_t j = 0; j + m <= i; ++j) {
+      if (s.z_mm[j] >= 0) continue;
+      const double ox = s.x_mm[j] - cx, oy = s.y_mm[j] - cy;
+      if (std::hypot(px - s.x_mm[j], py - s.y_mm[j]) <= R) {
+        removed = true;
+        break;
+      }
+      const double t = ox * ux + oy * uy, q = R * R - (ox * ox + oy * oy - t * t);
+      if (q >= 0 && t + std::sqrt(q) < R) rho = std::max(rho, t + std::sqrt(q));
+    }
+    if (!removed) {
+      ++in;
+      b.hmax = std::max(b.hmax, R - rho);
+    }
+  }
+  b.angle = kTwoPi * in / npts;
+  return b;
+}
+
+TEST(Engagement, MatchesBruteForceOnTrochoids) {
+  for (const std::string type : {"trochoidal", "elliptical", "linear-elliptical"}) {
+    for (const int m : {1, 3}) {
+      if (m == 3 && type != "elliptical") continue;  // brute force is O(n^2): keep it short
+      const Job job = test::wagih_job(
+          type, {parse_override("slot.length=4"), parse_override("path.linear_distance=1")});
+      const PlannedPath pp = plan_path(job);
+      EngagementOptions opt;
+      opt.steps_per_tooth = m;
+      const EngagementSeries e = compute_engagement(pp.path, job, opt);
+      const int npts = 3600;  // 0.1 deg per point
+      int compared = 0;
+      for (std::size_t i = 0; i < e.samples.size(); i += 11) {
+        if (e.samples.z_mm[i] >= 0) continue;
+        const Brute b = brute(e.samples, i, m, 5.0, 10.0, 4.0, npts);
+        if (b.angle == 0) {
+          // No brute-force point is engaged: any arc the kernel finds is narrower than two
+          // point spacings, and its chip is a disc-model sliver, below f_z^2 / R.
+          EXPECT_LE(e.engagement_angle_rad[i], 2 * kTwoPi / npts) << type << " sample " << i;
+          EXPECT_LE(e.h_max_mm[i], 0.075 * 0.075 / 5.0) << type << " sample " << i;
+          continue;
+        }
+        // Point sampling resolves each arc end to half a point: 2 ends per arc, a few arcs.
+        EXPECT_NEAR(e.engagement_angle_rad[i], b.angle, 4 * kTwoPi / npts)
+            << type << " m=" << m << " sample " << i;
+        // h_max: the brute force samples every 0.1 deg, the kernel every 0.25 deg; the chip
+        // thickness changes by at most f_z per radian along the arc (h ~ f_z sin phi), so
+        // the two maxima differ by at most f_z * 0.25 deg = 3.3e-4 mm.
+        EXPECT_NEAR(e.h_max_mm[i], b.hmax, 0.075 * deg_to_rad(0.25))
+            << type << " m=" << m << " sample " << i;
+        ++compared;
+      }
+      EXPECT_GT(compared, 30) << type;
+    }
+  }
+}
+
+TEST(Engagement, RejectsBadOptions) {
+  const Job job = straight_job(10.0);
+  ToolPath p;
+  p.append(Segment::line(Vec3(0, -10, -6), Vec3(0, 30, -6), Motion::feed, 600));
+  EngagementOptions o;
+  o.steps_per_tooth = 0;
+  EXPECT_THROW((void)compute_engagement(p, job, o), InputError);
+  o.steps_per_tooth = 1;
+  o.chip_angle_step_deg = 0;
+  EXPECT_THROW((void)compute_engagement(p, job, o), InputError);
+}
+
+}  // namespace
+}  // namespace trochomill
