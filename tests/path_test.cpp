@@ -66,10 +66,9 @@ TEST(Segment, TrochoidLengthMatchesSimpsonAndInverts) {
         Segment::curve(t.center(), t.axis_a(), t.axis_b(), t.drift(), 0, u, Motion::feed, 600);
     EXPECT_NEAR(part.length_mm(), s, 1e-9) << s;
   }
-  // Curvature at u = pi/2 (front vertex, velocity (a, s/2pi)... ) against |p' x p''| / |p'|^3.
+  // Curvature at u = pi/2 (front vertex: p' = (a, s/2pi), p'' = (0, -b)) against |p' x p''| /
+  // |p'|^3.
   const Vec3 d1(5, 1.0 / kTwoPi, 0), d2(0, -4, 0);
-  const double s_half = t.length_mm() / 2;  // not the same point: check via u
-  (void)s_half;
   const double u = kPi / 2;
   const Segment upto =
       Segment::curve(t.center(), t.axis_a(), t.axis_b(), t.drift(), 0, u, Motion::feed, 600);

@@ -136,7 +136,7 @@ class Reader {
     const char* b = line.data() + j;
     const char* e = line.data() + line.size();
     double v = 0;
-    // from_chars does not take a bare ".5"-style leading dot on every library: handle it.
+    // The sign is handled above: from_chars does not accept a leading '+'.
     auto [ptr, ec] = std::from_chars(b, e, v, std::chars_format::fixed);
     if (ec != std::errc() || ptr == b) {
       fail(col, fmt::format("'{}' needs a number after it", word));

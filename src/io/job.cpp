@@ -377,8 +377,6 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
   JobReader r(root, source, overridden);
   Job job;
   job.source = source;
-  const double inf = std::numeric_limits<double>::infinity();
-
   // [tool]
   Tool& tool = job.tool;
   tool.diameter_mm = r.number("tool", "diameter", "mm", positive(), 0.0, true).value_or(0.0);
@@ -557,7 +555,6 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
                                      ArcOutput::arcs)
                      .value_or(ArcOutput::arcs);
   m.program_number = r.integer("machine", "program_number", 1, 9999, 1000).value_or(1000);
-  (void)inf;
 
   r.check_unknown();
   if (!r.problems().empty()) throw InputError(r.problems());

@@ -39,7 +39,7 @@ class Builder {
   void curve(const Vec3& c, const Vec3& a, const Vec3& b, const Vec3& v, double u0, double u1,
              double speed) {
     const Segment seg =
-        Segment::curve(flip(c), flip_vec(a), flip_vec(b), flip_vec(v), u0, u1, Motion::feed, speed);
+        Segment::curve(flip(c), flip(a), flip(b), flip(v), u0, u1, Motion::feed, speed);
     here_ = c + a * std::cos(u1) + b * std::sin(u1) + v * u1;
     path_.append(seg);
   }
@@ -55,7 +55,6 @@ class Builder {
 
  private:
   [[nodiscard]] Vec3 flip(const Vec3& p) const { return mirror_ ? Vec3(-p.x(), p.y(), p.z()) : p; }
-  [[nodiscard]] Vec3 flip_vec(const Vec3& v) const { return flip(v); }
   ToolPath& path_;
   bool mirror_;
   Vec3 here_ = Vec3::Zero();

@@ -54,7 +54,6 @@ double estimate_time_s(const ToolPath& path, const Machine& machine) {
       ds.push_back(h);
       vlim.push_back(v);
     }
-    if (i == 0 && !vlim.empty()) vlim[0] = 0;
   }
   vlim.back() = 0;  // and stops at the end
   const std::size_t m = vlim.size();
