@@ -11,8 +11,11 @@
 // sample spacing ds (1.4e-4 mm at f_z = 0.075 mm, R = 5 mm); no raster anywhere.
 // Algorithm: the boundary of the removed region is kept as the exposed arcs of "alive"
 // discs (arcs not covered by any other disc); a query walks the crossings of the tool
-// circle with the exposed arcs (exact, holes included), and discs whose exposed arcs vanish
-// are dropped, so the work per sample stays proportional to the boundary near the tool.
+// circle with the exposed arcs (exact, holes included; where a crossing falls within 1e-9
+// rad of a boundary vertex, each interval is tested directly instead of by parity), and
+// discs whose exposed arcs vanish are dropped, so the work per sample stays proportional to
+// the boundary near the tool. h_max is exact too: it is evaluated at every angle where the
+// chip thickness can have a local maximum (see ChipQuery in src/engagement/kernel.cpp).
 #pragma once
 
 #include <cstddef>
@@ -32,8 +35,7 @@ struct AngleArc {
 };
 
 struct EngagementOptions {
-  int steps_per_tooth = 1;            ///< samples per tooth pass (>= 1); the chip spans this many
-  double chip_angle_step_deg = 0.25;  ///< angular resolution of the h_max search (degrees)
+  int steps_per_tooth = 1;  ///< samples per tooth pass (>= 1); the chip spans this many
 };
 
 /// Engagement along a path, structure of arrays (one entry per sample).

@@ -10,9 +10,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
+#include <utility>
 
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
@@ -35,6 +36,18 @@ using ArcSet = std::vector<AngleArc>;
 bool contains(const ArcSet& set, double a) {  // half-open [start, end)
   for (const auto& arc : set) {
     if (a >= arc.start_rad && a < arc.end_rad) return true;
+  }
+  return false;
+}
+
+// Is angle a (in [0, 2 pi)) within 1e-9 rad of an end of an arc of the set?
+bool near_end(const ArcSet& set, double a) {
+  constexpr double kTol = 1e-9;
+  for (const auto& arc : set) {
+    for (const double e : {arc.start_rad, arc.end_rad}) {
+      const double d = std::abs(a - e);
+      if (d < kTol || kTwoPi - d < kTol) return true;
+    }
   }
   return false;
 }
@@ -71,16 +84,26 @@ struct Disc {
   ArcSet exposed;
   double bx0 = 0, by0 = 0, bx1 = 0, by1 = 0;  // bounding box of the exposed arcs
   bool alive = true;
+  std::size_t cell = 0;  // grid cell holding the centre
 };
 
 class Removed {
  public:
-  explicit Removed(double radius) : R_(radius), cell_(2 * radius) {}
+  // Discs live in a dense grid of cell size R over the box [x0, x1] x [y0, y1] (mm), which
+  // must hold every centre that will be inserted or queried (the sampled path's box).
+  Removed(double radius, double x0, double y0, double x1, double y1)
+      : R_(radius), cell_(radius), x0_(x0 - 3 * radius), y0_(y0 - 3 * radius) {
+    nx_ = static_cast<long>(std::ceil((x1 - x0_ + 3 * radius) / cell_)) + 1;
+    ny_ = static_cast<long>(std::ceil((y1 - y0_ + 3 * radius) / cell_)) + 1;
+    grid_.resize(static_cast<std::size_t>(nx_ * ny_));
+    all_.resize(grid_.size());
+  }
 
   // The part of the circle (cx, cy, R) outside the removed region, as an ArcSet.
   [[nodiscard]] ArcSet outside(double cx, double cy) const {
-    gather(cx, cy, 2 * R_, true);
+    gather(cx, cy, true);
     std::vector<double> cross;
+    bool degenerate = false;
     for (const int j : near_) {
       const Disc& d = discs_[j];
       const double dx = d.x - cx, dy = d.y - cy, dist = std::hypot(dx, dy);
@@ -90,12 +113,21 @@ class Removed {
       const double alpha = std::atan2(dy, dx), beta = std::acos(dist / (2 * R_));
       for (const double th : {alpha - beta, alpha + beta}) {
         const double px = cx + R_ * std::cos(th), py = cy + R_ * std::sin(th);
-        if (contains(d.exposed, wrap(std::atan2(py - d.y, px - d.x)))) cross.push_back(wrap(th));
+        const double on = wrap(std::atan2(py - d.y, px - d.x));
+        // A crossing within rounding of an arc end (a boundary vertex) may be counted by
+        // neither or both arcs that meet there: parity is then not to be trusted, and the
+        // crossing is kept as a split point for direct tests.
+        if (near_end(d.exposed, on)) {
+          degenerate = true;
+          cross.push_back(wrap(th));
+        } else if (contains(d.exposed, on)) {
+          cross.push_back(wrap(th));
+        }
       }
     }
     std::sort(cross.begin(), cross.end());
     // Reference status: a point of the circle towards the most recent disc's centre lies
-    // inside that disc, so in R; otherwise (a jump, or nothing cut yet) ray parity decides.
+    // inside that disc, so in R; otherwise (a jump, or nothing cut yet) a direct test decides.
     double ref;
     bool ref_in;
     const double lx = last_x_ - cx, ly = last_y_ - cy, ld = std::hypot(lx, ly);
@@ -114,12 +146,38 @@ class Removed {
       ref_in = inside(cx + R_ * std::cos(ref), cy + R_ * std::sin(ref));
     }
     ArcSet out;
-    if (cross.empty()) {
+    if (cross.empty()) {  // (degenerate implies at least one split point)
       if (!ref_in) out.push_back({0.0, kTwoPi});
       return out;
     }
-    // Status just after crossing k alternates; find the interval holding ref.
     const std::size_t n = cross.size();
+    // Crossings closer than 1e-9 rad (the circle through a point where several boundary
+    // arcs meet, e.g. the centre of a circular orbit of radius R that every disc's circle
+    // passes through), crossings at arc ends or an odd count make the parity of rounded
+    // crossings unreliable: then the status of each interval is tested directly at its
+    // midpoint.
+    if (n % 2 == 1) degenerate = true;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double next = k + 1 < n ? cross[k + 1] : cross[0] + kTwoPi;
+      if (next - cross[k] < 1e-9) degenerate = true;
+    }
+    if (degenerate) {
+      for (std::size_t k = 0; k < n; ++k) {
+        const double a = cross[k], b = k + 1 < n ? cross[k + 1] : cross[0] + kTwoPi;
+        if (b - a < 1e-9) continue;
+        const double mid = 0.5 * (a + b);
+        if (inside(cx + R_ * std::cos(mid), cy + R_ * std::sin(mid))) continue;
+        if (b <= kTwoPi) {
+          out.push_back({a, b});
+        } else {
+          out.push_back({a, kTwoPi});
+          out.push_back({0.0, b - kTwoPi});
+        }
+      }
+      normalise(out);
+      return out;
+    }
+    // Status just after crossing k alternates; find the interval holding ref.
     std::size_t k_ref = n - 1;  // the interval [cross[n-1], cross[0] + 2 pi) by default
     for (std::size_t k = 0; k + 1 < n; ++k) {
       if (ref >= cross[k] && ref < cross[k + 1]) k_ref = k;
@@ -140,34 +198,19 @@ class Removed {
     return out;
   }
 
-  // Distance along the ray from (cx, cy) at angle phi to the last boundary crossing before
-  // r_max (mm), or 0 when there is none. Uses the candidates of the last prepare_rays().
-  [[nodiscard]] double last_crossing(double cx, double cy, double phi, double r_max) const {
-    const double ux = std::cos(phi), uy = std::sin(phi);
-    double best = 0;
-    for (const int j : near_) {
-      const Disc& d = discs_[j];
-      const double ox = d.x - cx, oy = d.y - cy;
-      const double t = ox * ux + oy * uy;
-      const double q = R_ * R_ - (ox * ox + oy * oy - t * t);
-      if (q < 0) continue;
-      const double sq = std::sqrt(q);
-      for (const double r : {t - sq, t + sq}) {
-        if (r <= best || r > r_max) continue;
-        const double px = cx + r * ux - d.x, py = cy + r * uy - d.y;
-        if (contains(d.exposed, wrap(std::atan2(py, px)))) best = r;
-      }
-    }
-    return best;
+  // Alive discs whose exposed arcs may meet the disc of radius R around (cx, cy).
+  [[nodiscard]] const std::vector<int>& near_disc(double cx, double cy) const {
+    gather(cx, cy, false);
+    return near_;
   }
-  void prepare_rays(double cx, double cy) const { gather(cx, cy, 2 * R_, false); }
+  [[nodiscard]] const Disc& disc(int j) const { return discs_[j]; }
 
   // Inserts a disc whose circle's part outside R (before it) is `exposed`.
   void insert(double cx, double cy, ArcSet exposed) {
     have_last_ = true;
     last_x_ = cx;
     last_y_ = cy;
-    gather(cx, cy, 2 * R_, false);
+    gather(cx, cy, false);
     // A disc at the centre of an alive one (a pure z move, a revisited point) adds nothing.
     for (const int j : near_) {
       if (std::hypot(discs_[j].x - cx, discs_[j].y - cy) <= 1e-9) return;
@@ -181,8 +224,9 @@ class Removed {
       if (std::hypot(nx - cx, ny - cy) >= R_) continue;
       subtract(d.exposed, std::atan2(dy, dx), dist <= kEps ? kPi : std::acos(dist / (2 * R_)));
       if (d.exposed.empty()) {
-        d.alive = false;
-        ++dead_;
+        d.alive = false;  // its cell forgets it: the candidate sets hold only boundary discs
+        auto& cell = grid_[d.cell];
+        cell.erase(std::find(cell.begin(), cell.end(), j));
       } else {
         bounds(d);
       }
@@ -192,72 +236,63 @@ class Removed {
     d.x = cx;
     d.y = cy;
     d.exposed = std::move(exposed);
+    d.cell = cell_of(cell_x(cx), cell_y(cy));
     bounds(d);
     const int idx = static_cast<int>(discs_.size());
+    grid_[d.cell].push_back(idx);
+    all_[d.cell].push_back(idx);
     discs_.push_back(std::move(d));
-    grid_[key(cell_index(cx), cell_index(cy))].push_back(idx);
-    min_ix_ = std::min(min_ix_, cell_index(cx));
-    max_ix_ = std::max(max_ix_, cell_index(cx));
-    if (dead_ > 4096 && dead_ * 2 > discs_.size()) compact();
   }
 
  private:
-  [[nodiscard]] long cell_index(double v) const { return static_cast<long>(std::floor(v / cell_)); }
-  static long long key(long ix, long iy) {
-    return (static_cast<long long>(ix) << 32) ^ (iy & 0xffffffffLL);
+  [[nodiscard]] long cell_x(double v) const {
+    return std::clamp(static_cast<long>(std::floor((v - x0_) / cell_)), 0L, nx_ - 1);
+  }
+  [[nodiscard]] long cell_y(double v) const {
+    return std::clamp(static_cast<long>(std::floor((v - y0_) / cell_)), 0L, ny_ - 1);
+  }
+  [[nodiscard]] std::size_t cell_of(long ix, long iy) const {
+    return static_cast<std::size_t>(iy * nx_ + ix);
   }
 
   // Alive discs near (cx, cy) whose exposed arcs can meet the circle of radius R around it
   // (circle_only) or anything inside that circle (the disc).
-  void gather(double cx, double cy, double reach, bool circle_only) const {
+  void gather(double cx, double cy, bool circle_only) const {
     near_.clear();
-    const long ix = cell_index(cx), iy = cell_index(cy);
-    const long span = static_cast<long>(std::ceil(reach / cell_));
-    for (long a = ix - span; a <= ix + span; ++a) {
-      for (long b = iy - span; b <= iy + span; ++b) {
-        const auto it = grid_.find(key(a, b));
-        if (it == grid_.end()) continue;
-        for (const int j : it->second) {
+    const double ext = 2 * R_;  // exposed arcs lie within R of their centre
+    const double near2 = (R_ + 1e-9) * (R_ + 1e-9), far2 = (R_ - 1e-9) * (R_ - 1e-9);
+    for (long b = cell_y(cy - ext); b <= cell_y(cy + ext); ++b) {
+      for (long a = cell_x(cx - ext); a <= cell_x(cx + ext); ++a) {
+        for (const int j : grid_[cell_of(a, b)]) {
           const Disc& d = discs_[j];
-          if (!d.alive) continue;
-          if (std::hypot(d.x - cx, d.y - cy) >= reach + R_) continue;
           // The exposed arcs' bounding box must meet the circle of radius R around the
-          // query: nearest box point within R, farthest corner beyond R.
-          const double nx = std::clamp(cx, d.bx0, d.bx1), ny = std::clamp(cy, d.by0, d.by1);
-          const double fx = std::max(std::abs(cx - d.bx0), std::abs(cx - d.bx1));
-          const double fy = std::max(std::abs(cy - d.by0), std::abs(cy - d.by1));
-          if (std::hypot(nx - cx, ny - cy) > R_ + 1e-9) continue;
-          if (circle_only && std::hypot(fx, fy) < R_ - 1e-9) continue;
+          // query: nearest box point within R, farthest corner beyond R (squared distances).
+          const double nx = std::clamp(cx, d.bx0, d.bx1) - cx,
+                       ny = std::clamp(cy, d.by0, d.by1) - cy;
+          if (nx * nx + ny * ny > near2) continue;
+          if (circle_only) {
+            const double fx = std::max(std::abs(cx - d.bx0), std::abs(cx - d.bx1));
+            const double fy = std::max(std::abs(cy - d.by0), std::abs(cy - d.by1));
+            if (fx * fx + fy * fy < far2) continue;
+          }
           near_.push_back(j);
         }
       }
     }
   }
 
-  // Is (px, py) inside the removed region? Ray parity along +x against the exposed arcs
-  // (counted on half-open arcs so boundary vertices count once).
+  // Is (px, py) inside the removed region? Directly: within R of any inserted disc.
   [[nodiscard]] bool inside(double px, double py) const {
-    int count = 0;
-    const long iy = cell_index(py);
-    for (long a = std::min(cell_index(px) - 1, max_ix_); a <= max_ix_; ++a) {
-      for (long b = iy - 1; b <= iy + 1; ++b) {
-        const auto it = grid_.find(key(a, b));
-        if (it == grid_.end()) continue;
-        for (const int j : it->second) {
-          const Disc& d = discs_[j];
-          if (!d.alive || d.by1 < py || d.by0 > py || d.bx1 < px) continue;
-          const double oy = py - d.y;
-          const double q = R_ * R_ - oy * oy;
-          if (q < 0) continue;
-          const double sq = std::sqrt(q);
-          for (const double xx : {d.x - sq, d.x + sq}) {
-            if (xx <= px) continue;
-            if (contains(d.exposed, wrap(std::atan2(oy, xx - d.x)))) ++count;
-          }
+    const double r2 = R_ * R_;
+    for (long b = cell_y(py - R_); b <= cell_y(py + R_); ++b) {
+      for (long a = cell_x(px - R_); a <= cell_x(px + R_); ++a) {
+        for (const int j : all_[cell_of(a, b)]) {
+          const double dx = discs_[j].x - px, dy = discs_[j].y - py;
+          if (dx * dx + dy * dy < r2) return true;
         }
       }
     }
-    return (count % 2) == 1;
+    return false;
   }
 
   void bounds(Disc& d) const {
@@ -295,18 +330,11 @@ class Removed {
     s.swap(out);
   }
 
-  void compact() {
-    for (auto& [k, v] : grid_) {
-      v.erase(std::remove_if(v.begin(), v.end(), [&](int j) { return !discs_[j].alive; }), v.end());
-    }
-    dead_ = 0;
-  }
-
-  double R_, cell_;
+  double R_, cell_, x0_, y0_;
+  long nx_ = 0, ny_ = 0;
   std::vector<Disc> discs_;
-  std::unordered_map<long long, std::vector<int>> grid_;
-  long min_ix_ = std::numeric_limits<long>::max(), max_ix_ = std::numeric_limits<long>::min();
-  std::size_t dead_ = 0;
+  std::vector<std::vector<int>> grid_;  // alive discs per cell
+  std::vector<std::vector<int>> all_;   // every stored disc per cell (for point tests)
   mutable std::vector<int> near_;
   bool have_last_ = false;
   double last_x_ = 0, last_y_ = 0;
@@ -354,16 +382,180 @@ std::vector<AngleArc> join_wrap(ArcSet s) {
   return s;
 }
 
+// The local uncut chip thickness h(phi) = R - rho(phi) at the point of the tool circle at
+// angle phi, rho the distance from the centre to the last point of the ray in the region
+// the earlier tooth passes removed, before the circle (domain notes section 3: the chip
+// between the tool circle and the surface the previous tooth left; the slot's own edges do
+// not cut it short). Exact: the maximum over the engaged arcs is taken over every angle
+// where h can have a local maximum. rho is the largest of the ray's crossings with the
+// exposed arcs; along one arc a crossing distance is smooth, with local minima only towards
+// or away from the disc centre, at a tangent direction or at the arc's ends, so h's local
+// maxima are at those angles, at kinks where two arcs meet (arc ends) and at the engaged
+// arcs' ends. Angles next to a jump or kink are evaluated
+// 1e-9 rad to each side (an error below 1e-9 R in h).
+class ChipQuery {
+ public:
+  explicit ChipQuery(double R) : R_(R) {}
+
+  // Collects the boundary pieces near the tool at (cx, cy) and returns h_max over `eng`
+  // (sorted arcs within [0, 2 pi]) and its angle.
+  std::pair<double, double> h_max(const Removed& removed, double cx, double cy, const ArcSet& eng) {
+    cx_ = cx;
+    cy_ = cy;
+    pieces_.clear();
+    for (auto& b : bins_) b.clear();
+    cand_.clear();
+    for (const int j : removed.near_disc(cx, cy)) {
+      const Disc& d = removed.disc(j);
+      const double ox = d.x - cx, oy = d.y - cy, dist = std::hypot(ox, oy);
+      const double alpha = std::atan2(oy, ox);
+      for (const auto& arc : d.exposed) {
+        // Only arcs reaching into the tool disc can bound a chip: the arc's nearest point
+        // to the centre is the foot towards it (if on the arc) or an end.
+        {
+          auto end_dist2 = [&](double th) {
+            const double ex = ox + R_ * std::cos(th), ey = oy + R_ * std::sin(th);
+            return ex * ex + ey * ey;
+          };
+          const double foot = wrap(alpha + kPi);
+          const bool foot_on =
+              (foot >= arc.start_rad && foot <= arc.end_rad) || foot + kTwoPi <= arc.end_rad;
+          const double mind =
+              foot_on ? std::abs(dist - R_)
+                      : std::sqrt(std::min(end_dist2(arc.start_rad), end_dist2(arc.end_rad)));
+          if (mind > R_ * (1 + 1e-9)) continue;
+        }
+        const int idx = static_cast<int>(pieces_.size());
+        pieces_.push_back({d.x, d.y, arc});
+        // Polar range of the arc seen from the centre, and the candidate angles.
+        auto polar = [&](double th) {
+          return std::atan2(oy + R_ * std::sin(th), ox + R_ * std::cos(th));
+        };
+        const double pa = polar(arc.start_rad), pb = polar(arc.end_rad);
+        cand_.push_back(pa);
+        cand_.push_back(pb);
+        if (dist > 1e-12) {
+          cand_.push_back(alpha);
+          cand_.push_back(alpha + kPi);
+        }
+        double lo, sweep;
+        if (dist < R_) {  // inside the disc the polar angle grows with the arc angle
+          lo = pa;
+          sweep = arc.sweep_rad() >= kTwoPi - 1e-12 ? kTwoPi : wrap(pb - pa);
+        } else {  // outside: within the tangent wedge, extremes at ends or tangent points
+          const double half = std::asin(std::min(1.0, R_ / dist));
+          cand_.push_back(alpha - half);
+          cand_.push_back(alpha + half);
+          double mn = rel(pa - alpha), mx = mn;
+          auto take = [&](double v) {
+            mn = std::min(mn, v);
+            mx = std::max(mx, v);
+          };
+          take(rel(pb - alpha));
+          const double gamma = std::acos(std::min(1.0, R_ / dist));
+          for (const double th : {alpha + kPi - gamma, alpha + kPi + gamma}) {
+            const double w = wrap(th);
+            if ((w >= arc.start_rad && w <= arc.end_rad) ||
+                (w + kTwoPi >= arc.start_rad && w + kTwoPi <= arc.end_rad)) {
+              take(rel(polar(w) - alpha));
+            }
+          }
+          lo = alpha + mn;
+          sweep = mx - mn;
+        }
+        add_to_bins(idx, lo - 1e-7, sweep + 2e-7);
+      }
+    }
+    for (const auto& a : eng) {
+      cand_.push_back(a.start_rad);
+      cand_.push_back(a.end_rad);
+    }
+    double best = -1, best_phi = 0;
+    auto try_at = [&](double phi) {
+      phi = wrap(phi);
+      if (!in_arcs(eng, phi)) return;
+      const double h = R_ - rho(phi);
+      if (h > best) {
+        best = h;
+        best_phi = phi;
+      }
+    };
+    for (const double c : cand_) {
+      try_at(c - 1e-9);
+      try_at(c + 1e-9);
+    }
+    return {std::max(best, 0.0), best_phi};
+  }
+
+ private:
+  struct Piece {
+    double x, y;
+    AngleArc arc;
+  };
+  static constexpr int kBins = 256;
+
+  static double rel(double a) {  // to (-pi, pi]
+    a = std::remainder(a, kTwoPi);
+    return a;
+  }
+  static bool in_arcs(const ArcSet& s, double a) {  // closed arcs, wrap-tolerant
+    for (const auto& arc : s) {
+      if ((a >= arc.start_rad && a <= arc.end_rad) ||
+          (a + kTwoPi >= arc.start_rad && a + kTwoPi <= arc.end_rad)) {
+        return true;
+      }
+    }
+    return false;
+  }
+  static int bin_of(double a) {
+    return std::min(kBins - 1, static_cast<int>(wrap(a) * (kBins / kTwoPi)));
+  }
+  void add_to_bins(int idx, double lo, double sweep) {
+    if (sweep >= kTwoPi) {
+      for (auto& b : bins_) b.push_back(idx);
+      return;
+    }
+    const int b0 = bin_of(lo);
+    const int nb = std::min(kBins, static_cast<int>(std::ceil(sweep * (kBins / kTwoPi))) + 1);
+    for (int k = 0; k < nb; ++k) bins_[static_cast<std::size_t>((b0 + k) % kBins)].push_back(idx);
+  }
+
+  // The last non-stock point of the ray at phi before the circle (0 if none).
+  [[nodiscard]] double rho(double phi) const {
+    const double ux = std::cos(phi), uy = std::sin(phi), r_max = R_ * (1 + 1e-12);
+    double best = 0;
+    for (const int idx : bins_[static_cast<std::size_t>(bin_of(phi))]) {
+      const Piece& p = pieces_[static_cast<std::size_t>(idx)];
+      const double ox = p.x - cx_, oy = p.y - cy_;
+      const double t = ox * ux + oy * uy;
+      const double q = R_ * R_ - (ox * ox + oy * oy - t * t);
+      if (q < 0) continue;
+      const double sq = std::sqrt(q);
+      for (const double r : {t + sq, t - sq}) {
+        if (r <= best || r > r_max) continue;
+        const double a = wrap(std::atan2(cy_ + r * uy - p.y, cx_ + r * ux - p.x));
+        if ((a >= p.arc.start_rad && a < p.arc.end_rad) || a + kTwoPi < p.arc.end_rad) {
+          best = r;
+          break;
+        }
+      }
+    }
+    return best;
+  }
+
+  double R_;
+  double cx_ = 0, cy_ = 0;
+  std::vector<Piece> pieces_;
+  std::array<std::vector<int>, kBins> bins_;
+  std::vector<double> cand_;
+};
+
 }  // namespace
 
 EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
                                     const EngagementOptions& opt) {
   if (opt.steps_per_tooth < 1) {
     throw InputError(fmt::format("steps per tooth must be >= 1, got {}", opt.steps_per_tooth));
-  }
-  if (!(opt.chip_angle_step_deg > 0 && opt.chip_angle_step_deg <= 10)) {
-    throw InputError(
-        fmt::format("chip angle step must be in (0, 10] degrees, got {}", opt.chip_angle_step_deg));
   }
   const double R = job.tool.radius_mm();
   const double hw = 0.5 * job.slot.width_mm, L = job.slot.length_mm;
@@ -383,10 +575,25 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
 
   const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
                        (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
-  Removed removed(R);
+  // The box holding every centre in the material (the kernel's grid).
+  double bx0 = 0, by0 = 0, bx1 = 0, by1 = 0;
+  bool any = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (smp.z_mm[i] >= 0) continue;
+    if (!any) {
+      bx0 = bx1 = smp.x_mm[i];
+      by0 = by1 = smp.y_mm[i];
+      any = true;
+    }
+    bx0 = std::min(bx0, smp.x_mm[i]);
+    bx1 = std::max(bx1, smp.x_mm[i]);
+    by0 = std::min(by0, smp.y_mm[i]);
+    by1 = std::max(by1, smp.y_mm[i]);
+  }
+  Removed removed(R, bx0, by0, bx1, by1);
+  ChipQuery chip(R);
   std::vector<ArcSet> pending(n);  // exposed arcs of discs waiting for insertion (lag m)
   auto cutting = [&](std::size_t i) { return smp.z_mm[i] < 0; };
-  const double dphi = deg_to_rad(opt.chip_angle_step_deg);
 
   for (std::size_t i = 0; i < n; ++i) {
     // The surface the previous tooth left: discs up to i - m.
@@ -406,21 +613,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     for (const auto& a : eng) total += a.sweep_rad();
     out.engagement_angle_rad[i] = total;
     out.radial_engagement_mm[i] = R * (1 - std::cos(std::min(total, kPi)));
-    // h_max: largest R - rho(phi) over the engaged arcs, rho the last boundary crossing of
-    // the ray before the tool circle (0 inside fresh stock: the chip is then capped at R).
-    removed.prepare_rays(cx, cy);
-    double hmax = 0, hang = 0;
-    for (const auto& a : eng) {
-      const int steps = std::max(2, static_cast<int>(std::ceil(a.sweep_rad() / dphi)));
-      for (int k = 0; k <= steps; ++k) {
-        const double phi = a.start_rad + a.sweep_rad() * k / steps;
-        const double h = std::max(0.0, R - removed.last_crossing(cx, cy, phi, R * (1 + 1e-9)));
-        if (h > hmax) {
-          hmax = h;
-          hang = phi;
-        }
-      }
-    }
+    const auto [hmax, hang] = eng.empty() ? std::pair{0.0, 0.0} : chip.h_max(removed, cx, cy, eng);
     out.h_max_mm[i] = hmax;
     out.h_max_angle_rad[i] = wrap(hang);
     int teeth = 0;

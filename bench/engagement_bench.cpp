@@ -1,0 +1,30 @@
+// Benchmarks of the engagement kernel on the Wagih 2023 examples (20 mm slots, one sample
+// per tooth pass, as issue 3's performance aim states).
+#include <benchmark/benchmark.h>
+
+#include <string>
+
+#include "trochomill/engagement.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/path.hpp"
+
+namespace {
+
+void BM_EngagementWagih(benchmark::State& state) {
+  static const char* const kNames[] = {"trochoidal", "circular", "elliptical", "linear-elliptical"};
+  const char* name = kNames[state.range(0)];
+  const trochomill::Job job = trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) +
+                                                   "/examples/wagih2023/" + name + ".toml");
+  const auto planned = trochomill::plan_path(job);
+  std::size_t samples = 0;
+  for (auto _ : state) {
+    const auto e = trochomill::compute_engagement(planned.path, job);
+    samples = e.samples.size();
+    benchmark::DoNotOptimize(e.h_max_mm.data());
+  }
+  state.counters["samples"] = static_cast<double>(samples);
+  state.SetLabel(name);
+}
+BENCHMARK(BM_EngagementWagih)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
+
+}  // namespace
