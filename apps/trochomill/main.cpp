@@ -9,11 +9,13 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "trochomill/analysis.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/report.hpp"
 #include "trochomill/version.hpp"
 
 namespace tmill = trochomill;
@@ -139,6 +141,32 @@ int run(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   cg->add_option("--json", cg_json, "write the report as JSON (- for stdout)");
 
+  // analyze
+  JobArgs an_args;
+  std::string an_gcode, an_json, an_csv;
+  auto* an = app.add_subcommand(
+      "analyze", "engagement, chip thickness, times, MRR, waviness of a slot program");
+  add_job_args(an, an_args);
+  an->add_option("--gcode", an_gcode, "analyse this NC program instead of the planned path");
+  an->add_option("--json", an_json, "write the metrics as JSON (- for stdout)");
+  an->add_option("--csv", an_csv, "write the time series as CSV (- for stdout)");
+
+  // compare
+  JobArgs cmp_args;
+  std::vector<std::string> cmp_vary;
+  std::string cmp_json, cmp_csv;
+  int cmp_threads = 0;
+  auto* cmp = app.add_subcommand("compare", "analyse a grid of job variants in parallel");
+  add_job_args(cmp, cmp_args);
+  cmp->add_option("--vary", cmp_vary,
+                  "section.key=v1,v2,... (repeatable: several give a grid), e.g. "
+                  "path.aspect_ratio=0.8,1.0,1.2")
+      ->required();
+  cmp->add_option("--json", cmp_json, "write the study as JSON (- for stdout)");
+  cmp->add_option("--csv", cmp_csv, "write the study as CSV (- for stdout)");
+  cmp->add_option("--threads", cmp_threads, "worker threads (0: all cores)")
+      ->check(CLI::NonNegativeNumber);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -197,6 +225,62 @@ int run(int argc, char** argv) {
           "{} samples over {:.3f} s, path {:.3f} mm, {} teeth, f_z = {:.4g} mm, n = {:.0f} rpm{}\n",
           s.size(), tp.duration_s(), tp.length_mm(), tr.teeth, job.cutting.feed_per_tooth_mm,
           job.cutting.spindle_speed_rpm, path_csv.empty() ? "" : " -> " + path_csv);
+    }
+    return 0;
+  }
+
+  if (*an) {
+    const tmill::Job job = load(an_args);
+    tmill::ToolPath tp;
+    if (!an_gcode.empty()) {
+      tmill::GcodeReadOptions ro;
+      ro.rapid_rate_mm_per_min = job.machine.rapid_rate_mm_per_min;
+      tp = tmill::read_gcode_file(an_gcode, ro).path;
+    } else {
+      tp = tmill::plan_path(job).path;
+    }
+    const tmill::ProcessMetrics m = tmill::analyze_process(job, tp);
+    if (!an_json.empty()) emit(an_json, tmill::metrics_json(job, m));
+    if (!an_csv.empty()) emit(an_csv, tmill::series_csv(job, m.series));
+    if (an_json != "-" && an_csv != "-") {
+      fmt::print("{}: {}{}\n", an_args.job_file, tmill::to_string(job.path.type),
+                 an_gcode.empty() ? "" : " (from " + an_gcode + ")");
+      fmt::print("  machining time       {:.3f} s ({:.3f} s with acceleration), path {:.2f} mm\n",
+                 m.machining_time_s, m.machining_time_accel_s, m.path_length_mm);
+      fmt::print("  {} cycle        {:.4f} s, {:.3f} mm; cutting {:.4f} s, cooling {:.4f} s\n",
+                 m.periodic ? "steady" : "window", m.cycle_time_s, m.path_length_per_cycle_mm,
+                 m.cutting_time_s, m.cooling_time_s);
+      fmt::print("  MRR                  {:.1f} mm^3/min steady, {:.1f} mm^3/min whole slot\n",
+                 m.mrr_mm3_per_min, m.mrr_total_mm3_per_min);
+      fmt::print(
+          "  h_max                {:.5f} mm at {:.4f} s after cutting starts (f_z {:.4g} mm; "
+          "{:.5f} mm over the program)\n",
+          m.h_max_mm, m.t_h_max_s, m.feed_per_tooth_mm, m.h_max_slot_mm);
+      fmt::print("  engagement max       {:.2f} deg\n", m.engagement_angle_max_deg);
+      fmt::print(
+          "  wall waviness        left {:.5f} mm, right {:.5f} mm (path); "
+          "left {:.5f} mm, right {:.5f} mm (tooth)\n",
+          m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm,
+          m.walls_tooth.left.waviness_mm, m.walls_tooth.right.waviness_mm);
+      if (m.performance_index) fmt::print("  performance index    {:.6g}\n", *m.performance_index);
+    }
+    return 0;
+  }
+
+  if (*cmp) {
+    std::vector<tmill::Override> base;
+    for (const auto& s : cmp_args.sets) base.push_back(tmill::parse_override(s));
+    std::vector<tmill::Vary> varies;
+    for (const auto& v : cmp_vary) varies.push_back(tmill::parse_vary(v));
+    (void)tmill::load_job(cmp_args.job_file, base);  // a bad base job is bad input (exit 2)
+    const auto points = tmill::run_study(cmp_args.job_file, base, varies, cmp_threads);
+    if (!cmp_json.empty()) emit(cmp_json, tmill::study_json(varies, points));
+    if (!cmp_csv.empty()) emit(cmp_csv, tmill::study_csv(varies, points));
+    if (cmp_json != "-" && cmp_csv != "-") fmt::print("{}", tmill::study_table(varies, points));
+    const bool all_failed =
+        std::none_of(points.begin(), points.end(), [](const tmill::StudyPoint& p) { return p.ok; });
+    if (all_failed) {
+      throw tmill::InputError("compare: every point of the grid failed (see the table)");
     }
     return 0;
   }

@@ -50,6 +50,10 @@ struct EngagementSeries {
   std::vector<double> h_max_mm;              ///< local maximum uncut chip thickness
   std::vector<double> h_max_angle_rad;       ///< where on the circle h_max occurs
   std::vector<int> teeth_in_cut;             ///< teeth whose angle lies in an engaged arc
+  /// Plan-view area the tool circle sweeps into stock per second (mm^2/s): the horizontal
+  /// speed v times R times the integral of cos(phi - phi_v) over the engaged arcs where the
+  /// circle advances (cos > 0). Times the axial depth it is the removal rate.
+  std::vector<double> swept_rate_mm2_per_s;
 };
 
 /// Engagement at every sample of `path`, sampled every tooth pass / steps_per_tooth

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -75,6 +76,19 @@ struct Machine {
   int program_number = 1000;               ///< O number (fanuc)
 };
 
+/// `[measured]`: results measured on the machine (or filled by a model); each optional.
+struct Measured {
+  std::optional<double> force_max_n;      ///< maximum resultant cutting force F_R,max (N)
+  std::optional<double> roughness_ra_um;  ///< maximum roughness Ra of the slot (micrometres)
+  std::optional<double> waviness_um;      ///< maximum wall waviness W_max (micrometres)
+};
+
+/// `[analysis]`: resolution of `trochomill analyze`.
+struct AnalysisSettings {
+  int steps_per_tooth = 1;  ///< engagement samples per tooth pass (1..64)
+  int imprint_points = 81;  ///< points across the slot width for the bottom imprint density
+};
+
 struct Job {
   std::string source;  ///< file name the job came from (for messages)
   Tool tool;
@@ -82,6 +96,8 @@ struct Job {
   PathSpec path;
   Cutting cutting;
   Machine machine;
+  Measured measured;
+  AnalysisSettings analysis;
   // The original document, flattened `section.key = value` (TOML syntax), after overrides:
   // written into the G-code header so a program records the job that produced it.
   std::vector<std::pair<std::string, std::string>> flat_keys;

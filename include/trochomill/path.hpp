@@ -57,6 +57,12 @@ class Segment {
   [[nodiscard]] Vec3 tangent_at(double s_mm) const;
   /// Curvature (1/mm) at arc length s: |p' x p''| / |p'|^3.
   [[nodiscard]] double curvature_at(double s_mm) const;
+  /// Point, unit tangent and curvature at arc length s with one length inversion.
+  struct Frame {
+    Vec3 point, tangent;
+    double curvature_per_mm = 0;
+  };
+  [[nodiscard]] Frame frame_at(double s_mm) const;
 
   // Curve data (meaningful for Kind::curve).
   [[nodiscard]] const Vec3& center() const noexcept { return c_; }
@@ -140,6 +146,8 @@ struct PathSamples {
 [[nodiscard]] PathSamples sample_by_time(const ToolPath& path, double dt_s);
 /// Samples every ds_mm of path length (the last sample at the path's end).
 [[nodiscard]] PathSamples sample_by_length(const ToolPath& path, double ds_mm);
+/// Samples at the given programmed times (s, non-decreasing; clamped to the path).
+[[nodiscard]] PathSamples sample_at_times(const ToolPath& path, const std::vector<double>& times_s);
 /// Samples steps_per_rev times per spindle revolution at spindle_rpm.
 [[nodiscard]] PathSamples sample_by_spindle_angle(const ToolPath& path, int steps_per_rev,
                                                   double spindle_rpm);

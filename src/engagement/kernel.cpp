@@ -550,6 +550,32 @@ class ChipQuery {
   std::vector<double> cand_;
 };
 
+// Horizontal speed (mm/s) at sample i from the neighbouring samples' arc length and time.
+double horizontal_speed(const PathSamples& s, std::size_t i) {
+  const std::size_t n = s.size();
+  const std::size_t a = i > 0 ? i - 1 : i, b = i + 1 < n ? i + 1 : i;
+  const double dt = s.t_s[b] - s.t_s[a];
+  if (!(dt > 0)) return 0.0;
+  return (s.s_mm[b] - s.s_mm[a]) / dt * std::hypot(s.tx[i], s.ty[i]);
+}
+
+// v R * integral over the engaged arcs of max(0, cos(phi - phi_v)) (see the header).
+double swept_rate(const PathSamples& s, std::size_t i, double R, const ArcSet& eng) {
+  const double v = horizontal_speed(s, i);
+  if (v <= 0 || eng.empty()) return 0.0;
+  const double pv = std::atan2(s.ty[i], s.tx[i]);
+  double integral = 0;
+  for (const auto& arc : eng) {
+    const double a = arc.start_rad - pv, b = arc.end_rad - pv;
+    for (int k = -2; k <= 2; ++k) {  // the advancing half [-pi/2, pi/2] + 2 pi k
+      const double lo = std::max(a, -0.5 * kPi + k * kTwoPi);
+      const double hi = std::min(b, 0.5 * kPi + k * kTwoPi);
+      if (hi > lo) integral += std::sin(hi) - std::sin(lo);
+    }
+  }
+  return v * R * integral;
+}
+
 }  // namespace
 
 EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
@@ -572,6 +598,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   out.h_max_mm.assign(n, 0.0);
   out.h_max_angle_rad.assign(n, 0.0);
   out.teeth_in_cut.assign(n, 0);
+  out.swept_rate_mm2_per_s.assign(n, 0.0);
 
   const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
                        (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
@@ -621,6 +648,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
       if (contains(eng, wrap(omega * smp.t_s[i] + deg_to_rad(alpha)))) ++teeth;
     }
     out.teeth_in_cut[i] = teeth;
+    out.swept_rate_mm2_per_s[i] = swept_rate(smp, i, R, eng);
     out.arcs[i] = join_wrap(std::move(eng));
   }
   return out;

@@ -37,6 +37,8 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
       {"machine",
        {"dialect", "safe_z", "rapid_rate", "max_acceleration", "junction_deviation",
         "arc_tolerance", "arc_output", "program_number"}},
+      {"measured", {"force_max", "roughness_ra", "waviness"}},
+      {"analysis", {"steps_per_tooth", "imprint_points"}},
   };
   return keys;
 }
@@ -44,8 +46,8 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
 // Sections later modules own. They are accepted (not validated here) so one job file can
 // carry everything; each module validates its own section.
 const std::set<std::string>& reserved_sections() {
-  static const std::set<std::string> s = {"material",  "measured", "simulation", "stock",
-                                          "mechanism", "monitor",  "forces",     "analysis"};
+  static const std::set<std::string> s = {"material", "simulation", "stock",
+                                          "mechanism", "monitor",  "forces"};
   return s;
 }
 
@@ -555,6 +557,14 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
                                      ArcOutput::arcs)
                      .value_or(ArcOutput::arcs);
   m.program_number = r.integer("machine", "program_number", 1, 9999, 1000).value_or(1000);
+
+  // [measured]: process results the user measured (or a later model fills in).
+  job.measured.force_max_n = r.number("measured", "force_max", "N", positive());
+  job.measured.roughness_ra_um = r.number("measured", "roughness_ra", "um", positive());
+  job.measured.waviness_um = r.number("measured", "waviness", "um", positive());
+  // [analysis]
+  job.analysis.steps_per_tooth = r.integer("analysis", "steps_per_tooth", 1, 64, 1).value_or(1);
+  job.analysis.imprint_points = r.integer("analysis", "imprint_points", 3, 10001, 81).value_or(81);
 
   r.check_unknown();
   if (!r.problems().empty()) throw InputError(r.problems());

@@ -159,6 +159,19 @@ double Segment::u_at_length(double s_mm) const {
   return ua + h * f;
 }
 
+Segment::Frame Segment::frame_at(double s_mm) const {
+  const double u = u_at_length(s_mm);
+  Frame f;
+  f.point = point_u(u);
+  const Vec3 d1 = derivative_u(u);
+  const double n = d1.norm();
+  f.tangent = n > 0 ? Vec3(d1 / n * (u1_ >= u0_ ? 1.0 : -1.0)) : Vec3::Zero();
+  if (kind_ == Kind::curve && n > 0) {
+    f.curvature_per_mm = d1.cross(second_derivative_u(u)).norm() / (n * n * n);
+  }
+  return f;
+}
+
 Vec3 Segment::tangent_at(double s_mm) const {
   const Vec3 d = derivative_u(u_at_length(s_mm)) * (u1_ >= u0_ ? 1.0 : -1.0);
   const double n = d.norm();

@@ -2,7 +2,9 @@
 // sample: sample_at), and tooth-tip trajectories with radial and axial runout.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "trochomill/error.hpp"
 #include "trochomill/path.hpp"
@@ -23,8 +25,9 @@ void reserve(PathSamples& out, std::size_t n) {
 
 void push_sample(const ToolPath& path, std::size_t seg, double s_in_seg, PathSamples& out) {
   const Segment& g = path.segments()[seg];
-  const Vec3 p = g.point_at(s_in_seg);
-  const Vec3 t = g.tangent_at(s_in_seg);
+  const Segment::Frame f = g.frame_at(s_in_seg);
+  const Vec3& p = f.point;
+  const Vec3& t = f.tangent;
   out.t_s.push_back(path.segment_start_time_s(seg) + s_in_seg / (g.speed_mm_per_min() / 60.0));
   out.s_mm.push_back(path.segment_start_length_mm(seg) + s_in_seg);
   out.x_mm.push_back(p.x());
@@ -33,7 +36,7 @@ void push_sample(const ToolPath& path, std::size_t seg, double s_in_seg, PathSam
   out.tx.push_back(t.x());
   out.ty.push_back(t.y());
   out.tz.push_back(t.z());
-  out.curvature_per_mm.push_back(g.curvature_at(s_in_seg));
+  out.curvature_per_mm.push_back(f.curvature_per_mm);
   out.segment.push_back(seg);
 }
 
@@ -90,6 +93,26 @@ PathSamples sample_by_length(const ToolPath& path, double ds_mm) {
       path, ds_mm, path.length_mm(), "length step (mm)",
       [&](std::size_t i) { return path.segment_start_length_mm(i); },
       [](std::size_t) { return 1.0; });
+}
+
+PathSamples sample_at_times(const ToolPath& path, const std::vector<double>& times_s) {
+  if (path.empty()) throw Error("cannot sample an empty path");
+  PathSamples out;
+  reserve(out, times_s.size());
+  std::size_t seg = 0;
+  const std::size_t nseg = path.segments().size();
+  double prev = -std::numeric_limits<double>::infinity();
+  for (const double t : times_s) {
+    if (!(t >= prev)) throw Error("sample_at_times: times must be finite and non-decreasing");
+    prev = t;
+    while (seg + 1 < nseg && path.segment_start_time_s(seg + 1) <= t) ++seg;
+    const Segment& g = path.segments()[seg];
+    const double local = std::clamp(
+        (t - path.segment_start_time_s(seg)) * (g.speed_mm_per_min() / 60.0), 0.0, g.length_mm());
+    push_sample(path, seg, local, out);
+    out.t_s.back() = std::clamp(t, 0.0, path.duration_s());
+  }
+  return out;
 }
 
 PathSamples sample_by_spindle_angle(const ToolPath& path, int steps_per_rev, double spindle_rpm) {

@@ -1,0 +1,75 @@
+// Process metrics of a slot program (Wagih 2023 Sections 2-5, domain notes section 3), for
+// any path: planned from the job or read from G-code. Per-cycle quantities describe one
+// steady-state cycle in the middle of the slot; whole-program quantities cover entry, cycles
+// and exit.
+//
+// Steady-state cycle: it starts where the tool starts cutting (the swept rate becomes
+// positive) at or after the middle of the cutting time, and ends where the path passes the
+// same point shifted by the step s along +Y with the same direction (found on the samples
+// and refined along the tangent), so it needs no cycle marks and works on imported G-code.
+// A path without such a period (the linear family, a foreign program) gets the middle
+// third of its cutting time as its window, and `periodic` is false.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "trochomill/engagement.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/surface.hpp"
+
+namespace trochomill {
+
+struct ProcessMetrics {
+  // Whole program.
+  double path_length_mm = 0;          ///< all moves (mm)
+  double feed_length_mm = 0;          ///< feed moves (mm)
+  double machining_time_s = 0;        ///< at programmed feeds and rapid rate (s)
+  double machining_time_accel_s = 0;  ///< with [machine] max_acceleration (s)
+  double slot_volume_mm3 = 0;         ///< W L depth (mm^3)
+  double mrr_total_mm3_per_min = 0;   ///< slot volume / machining time (mm^3/min)
+  double feed_per_tooth_mm = 0;
+  double h_max_slot_mm = 0;                  ///< largest local chip over the program (mm)
+  double t_h_max_slot_s = 0;                 ///< when it occurs (s from program start)
+  double engagement_angle_max_slot_deg = 0;  ///< largest engagement over the program (deg)
+  double cutting_time_total_s = 0;           ///< time with the tool advancing into stock (s)
+
+  // Steady-state cycle (or window).
+  bool periodic = false;
+  double cycle_start_s = 0;             ///< program time where the cycle starts (s)
+  double cycle_time_s = 0;              ///< (s)
+  double path_length_per_cycle_mm = 0;  ///< (mm)
+  double cutting_time_s = 0;            ///< engaged part of the cycle (s)
+  double cooling_time_s = 0;            ///< cycle time - cutting time (s)
+  double h_max_mm = 0;                  ///< largest local chip in the cycle (mm)
+  double t_h_max_s = 0;                 ///< from the cycle's start of cutting to h_max (s)
+  double engagement_angle_max_deg = 0;  ///< (deg)
+  double mrr_mm3_per_min = 0;           ///< W s a_p / cycle time (window: swept rate) (mm^3/min)
+  double mrr_swept_mm3_per_min = 0;     ///< mean of a_p x swept rate over the cycle (mm^3/min)
+  double axial_depth_mm = 0;            ///< a_p in the cycle (mm)
+
+  // Exact chip between adjacent teeth's tip trajectories (with runout) in the cycle.
+  double h_max_tooth_mm = 0;               ///< largest chip of any tooth (mm)
+  std::vector<double> h_max_per_tooth_mm;  ///< per tooth (mm)
+  double chip_translation_error_mm = 0;    ///< max |trajectory chip - circle-translation chip| (mm)
+
+  // Walls (steady state, one period of y) and floor.
+  Walls walls_path;   ///< path level (envelope of tool circles)
+  Walls walls_tooth;  ///< tooth level (envelope of tooth tips)
+  ImprintDensity imprint;
+
+  // Performance index (Wagih Eq. 7) from [measured]; W_max from the job's measurement or, if
+  // absent, the tooth-level waviness. Units: (mm^3/min) / (N um um).
+  std::optional<double> performance_index;
+  std::string performance_index_note;  ///< where its inputs came from, or what is missing
+
+  EngagementSeries series;  ///< the time series (one sample per tooth pass / steps)
+};
+
+/// Analyses `path` for `job` (the job gives tool, slot, cutting conditions, step, [analysis]
+/// and [measured]). Throws InputError when the path never cuts the slot.
+[[nodiscard]] ProcessMetrics analyze_process(const Job& job, const ToolPath& path);
+
+}  // namespace trochomill

@@ -1,0 +1,53 @@
+// Formatting of analysis results (JSON, CSV, tables) and the parameter study `compare`.
+// The library formats; the CLI decides where the text goes.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "trochomill/analysis.hpp"
+#include "trochomill/job.hpp"
+
+namespace trochomill {
+
+/// The analysis as a JSON document (keys carry their units: _mm, _s, _deg, _mm3_per_min).
+[[nodiscard]] std::string metrics_json(const Job& job, const ProcessMetrics& m);
+
+/// The time series as CSV: t_s, x_mm, y_mm, z_mm, engaged angles (deg, "start:end" pairs
+/// separated by ';'), engagement_deg, h_max_mm, teeth_in_cut, mrr_mm3_per_min.
+[[nodiscard]] std::string series_csv(const Job& job, const EngagementSeries& e);
+
+/// One `--vary key=v1,v2,...` of a parameter study.
+struct Vary {
+  std::string key;                  ///< "section.key"
+  std::vector<std::string> values;  ///< TOML values as typed
+};
+/// Parses "section.key=v1,v2,..." (a value may be a TOML array in brackets). Throws
+/// InputError.
+[[nodiscard]] Vary parse_vary(const std::string& text);
+
+/// One grid point of a study: its overrides and its metrics (or the error that stopped it).
+struct StudyPoint {
+  std::vector<Override> overrides;
+  bool ok = false;
+  std::string error;
+  ProcessMetrics metrics;
+};
+
+/// Runs the analysis at every point of the grid (the Cartesian product of the varies, the
+/// first varying slowest) on `threads` threads (0: all cores). Each point loads the job file
+/// with `base` overrides then its own, plans the path and analyses it; results are in grid
+/// order whatever the thread count. A point whose job is invalid is reported, not thrown.
+[[nodiscard]] std::vector<StudyPoint> run_study(const std::string& job_file,
+                                                const std::vector<Override>& base,
+                                                const std::vector<Vary>& varies, int threads);
+
+/// The study as a text table, JSON and CSV (one row per point).
+[[nodiscard]] std::string study_table(const std::vector<Vary>& varies,
+                                      const std::vector<StudyPoint>& points);
+[[nodiscard]] std::string study_json(const std::vector<Vary>& varies,
+                                     const std::vector<StudyPoint>& points);
+[[nodiscard]] std::string study_csv(const std::vector<Vary>& varies,
+                                    const std::vector<StudyPoint>& points);
+
+}  // namespace trochomill

@@ -1,0 +1,443 @@
+// Process metrics of a slot program: see include/trochomill/analysis.hpp.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "trochomill/analysis.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+// The steady-state window [first, last) of the engagement series, with its exact duration.
+struct Window {
+  std::size_t first = 0, last = 0;
+  double t0_s = 0, duration_s = 0, length_mm = 0;
+  bool periodic = false;
+};
+
+Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, double step_mm,
+                   bool trochoidal) {
+  const PathSamples& s = e.samples;
+  const std::size_t n = s.size();
+  std::size_t c0 = n, c1 = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!cutting[i]) continue;
+    c0 = std::min(c0, i);
+    c1 = i;
+  }
+  const double t_mid = 0.5 * (s.t_s[c0] + s.t_s[c1]);
+  std::size_t mid = c0;
+  while (mid < c1 && s.t_s[mid] < t_mid) ++mid;
+  if (trochoidal && step_mm > 0) {
+    // Start of cutting at or after the middle (else the middle sample itself).
+    std::size_t i0 = mid;
+    for (std::size_t i = std::max<std::size_t>(mid, 1); i <= c1; ++i) {
+      if (cutting[i] && !cutting[i - 1]) {
+        i0 = i;
+        break;
+      }
+    }
+    // The same point one step further along +Y, passed in the same direction.
+    const double tx = s.x_mm[i0], ty = s.y_mm[i0] + step_mm;
+    double spacing = 0;
+    for (std::size_t i = i0 + 1; i < std::min(n, i0 + 64); ++i) {
+      spacing = std::max(spacing, std::hypot(s.x_mm[i] - s.x_mm[i - 1], s.y_mm[i] - s.y_mm[i - 1]));
+    }
+    std::size_t best = n;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (std::size_t i = i0 + 1; i < n; ++i) {
+      // A cycle is longer than its advance: skip the first 1.5 s of path, where a straight
+      // move along +Y (a circular family's advance) would reach the shifted point.
+      if (s.s_mm[i] - s.s_mm[i0] < 1.5 * step_mm) continue;
+      const double d = std::hypot(s.x_mm[i] - tx, s.y_mm[i] - ty);
+      const double dir = s.tx[i] * s.tx[i0] + s.ty[i] * s.ty[i0];
+      if (d <= spacing + 1e-9 && dir > 0.9 && d < best_d) {
+        best = i;
+        best_d = d;
+      } else if (best < n && d > 2 * spacing + 1e-9) {
+        break;  // past the nearest approach
+      }
+    }
+    if (best < n && s.z_mm[best] < 0) {
+      // Refine along the tangent: the point is reached at t + (target - p).t / v.
+      const double v = (s.s_mm[best] - s.s_mm[best - 1]) / (s.t_s[best] - s.t_s[best - 1]);
+      const double ds = (tx - s.x_mm[best]) * s.tx[best] + (ty - s.y_mm[best]) * s.ty[best];
+      Window w;
+      w.first = i0;
+      w.last = best;
+      w.t0_s = s.t_s[i0];
+      w.duration_s = s.t_s[best] + ds / v - s.t_s[i0];
+      w.length_mm = s.s_mm[best] + ds - s.s_mm[i0];
+      w.periodic = true;
+      return w;
+    }
+  }
+  // The middle third of the cutting time.
+  Window w;
+  const double span = s.t_s[c1] - s.t_s[c0];
+  std::size_t a = c0, b = c0;
+  while (a < c1 && s.t_s[a] < s.t_s[c0] + span / 3) ++a;
+  b = a;
+  while (b < c1 && s.t_s[b] < s.t_s[c0] + 2 * span / 3) ++b;
+  if (b <= a) b = std::min(n, a + 1);
+  w.first = a;
+  w.last = b;
+  w.t0_s = s.t_s[a];
+  w.duration_s = s.t_s[b < n ? b : n - 1] - s.t_s[a];
+  w.length_mm = s.s_mm[b < n ? b : n - 1] - s.s_mm[a];
+  return w;
+}
+
+// Tool-centre position at time t (s) by linear interpolation in dense samples (uniform in
+// time, step dt starting at t_first).
+struct DenseCentre {
+  PathSamples s;
+  double t_first = 0, dt = 0;
+  [[nodiscard]] std::pair<double, double> at(double t) const {
+    const double u = (t - t_first) / dt;
+    const auto n = static_cast<double>(s.size());
+    const double uc = std::clamp(u, 0.0, n - 1.000001);
+    const auto i = static_cast<std::size_t>(uc);
+    const double f = uc - static_cast<double>(i);
+    return {s.x_mm[i] + f * (s.x_mm[i + 1] - s.x_mm[i]),
+            s.y_mm[i] + f * (s.y_mm[i + 1] - s.y_mm[i])};
+  }
+};
+
+// Chips at angle phi (rad) for tooth k sitting there at time t: between its tip and the tip
+// trajectory of the tooth before it (exact, with radial runout e at phase lambda), and
+// between the tool circle and the circle one tooth period earlier (the translation model).
+struct ToothChip {
+  double trajectory_mm = 0, translation_mm = 0;
+};
+
+ToothChip tooth_chip(const DenseCentre& c, const Tool& tool, double omega, double e, double t,
+                     double phi, int k) {
+  const double R = tool.radius_mm(), lambda = deg_to_rad(tool.runout_phase_deg);
+  const auto alpha = [&](int j) {
+    return deg_to_rad(tool.tooth_angles_deg[static_cast<std::size_t>(j)]);
+  };
+  // The preceding tooth: the one that reached this angle most recently (Z = 1: itself).
+  const int Z = tool.teeth;
+  int prev = k;
+  double delta = kTwoPi / std::abs(omega);
+  for (int j = 0; j < Z; ++j) {
+    if (j == k) continue;
+    double d = omega < 0 ? alpha(k) - alpha(j) : alpha(j) - alpha(k);
+    d = std::fmod(d, kTwoPi);
+    if (d <= 0) d += kTwoPi;
+    if (d / std::abs(omega) < delta) {
+      delta = d / std::abs(omega);
+      prev = j;
+    }
+  }
+  const double psi = phi - alpha(k);  // spindle phase at t
+  const auto [cx, cy] = c.at(t);
+  const double ax = cx + e * std::cos(psi + lambda), ay = cy + e * std::sin(psi + lambda);
+  const double ux = std::cos(phi), uy = std::sin(phi);
+  // Tooth `prev` at time tau, relative to the axis at t; f = its offset across the ray.
+  auto q = [&](double tau) {
+    const auto [px, py] = c.at(tau);
+    const double ps = psi + omega * (tau - t);
+    return std::pair{px + e * std::cos(ps + lambda) + R * std::cos(ps + alpha(prev)) - ax,
+                     py + e * std::sin(ps + lambda) + R * std::sin(ps + alpha(prev)) - ay};
+  };
+  auto f = [&](double tau) {
+    const auto [qx, qy] = q(tau);
+    return ux * qy - uy * qx;
+  };
+  // Regula falsi (Illinois) on a bracket of +-45/Z degrees of spindle rotation, where f
+  // changes sign once; to 1e-13 s (the tip moves < 1e-9 mm in that time).
+  double lo = t - delta - 0.25 * delta, hi = t - delta + 0.25 * delta;
+  double flo = f(lo), fhi = f(hi), root = 0.5 * (lo + hi);
+  int side = 0;
+  for (int it = 0; it < 100 && hi - lo > 1e-13; ++it) {
+    root = (flo * hi - fhi * lo) / (flo - fhi);
+    if (!(root > lo && root < hi)) root = 0.5 * (lo + hi);
+    const double fr = f(root);
+    if (fr == 0) break;
+    if ((fr < 0) == (flo < 0)) {
+      lo = root;
+      flo = fr;
+      if (side == -1) fhi *= 0.5;
+      side = -1;
+    } else {
+      hi = root;
+      fhi = fr;
+      if (side == 1) flo *= 0.5;
+      side = 1;
+    }
+    if (std::abs(fr) < 1e-12) break;
+  }
+  const auto [qx, qy] = q(root);
+  ToothChip out;
+  out.trajectory_mm = R - (qx * ux + qy * uy);
+  // Translation model: ray from the centre at t against the circle (centre at t - delta).
+  const auto [ox0, oy0] = c.at(t - delta);
+  const double ox = ox0 - cx, oy = oy0 - cy, tt = ox * ux + oy * uy;
+  const double disc = R * R - (ox * ox + oy * oy - tt * tt);
+  out.translation_mm = disc >= 0 ? R - (tt + std::sqrt(disc)) : R;
+  return out;
+}
+
+}  // namespace
+
+ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
+  if (path.empty()) throw InputError("analyze: the path is empty");
+  ProcessMetrics m;
+  EngagementOptions opt;
+  opt.steps_per_tooth = job.analysis.steps_per_tooth;
+  m.series = compute_engagement(path, job, opt);
+  const EngagementSeries& e = m.series;
+  const PathSamples& s = e.samples;
+  const std::size_t n = s.size();
+  const double R = job.tool.radius_mm(), W = job.slot.width_mm, depth = job.slot.depth_mm;
+  const double feed = feed_rate_mm_per_min(job) / 60.0;  // mm/s
+
+  // Cutting: the circle advances into stock (slivers on the trailing side do not count).
+  std::vector<char> cutting(n, 0);
+  const double thr = 1e-6 * 2 * R * feed;
+  double dt_sample =
+      n > 1 ? 60.0 / (job.cutting.spindle_speed_rpm * job.tool.teeth) / opt.steps_per_tooth : 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    cutting[i] = e.swept_rate_mm2_per_s[i] > thr ? 1 : 0;
+    if (cutting[i]) m.cutting_time_total_s += dt_sample;
+  }
+  if (std::none_of(cutting.begin(), cutting.end(), [](char c) { return c != 0; })) {
+    throw InputError(
+        fmt::format("analyze: the path never cuts the slot (|x| <= {:g}, 0 <= y <= {:g}, z < 0 mm)",
+                    0.5 * W, job.slot.length_mm));
+  }
+
+  // Whole program.
+  m.path_length_mm = path.length_mm();
+  m.feed_length_mm = path.feed_length_mm();
+  m.machining_time_s = path.duration_s();
+  m.machining_time_accel_s = estimate_time_s(path, job.machine);
+  m.slot_volume_mm3 = W * job.slot.length_mm * depth;
+  m.mrr_total_mm3_per_min = m.slot_volume_mm3 / m.machining_time_s * 60.0;
+  m.feed_per_tooth_mm = job.cutting.feed_per_tooth_mm;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (e.h_max_mm[i] > m.h_max_slot_mm) {
+      m.h_max_slot_mm = e.h_max_mm[i];
+      m.t_h_max_slot_s = s.t_s[i];
+    }
+    m.engagement_angle_max_slot_deg =
+        std::max(m.engagement_angle_max_slot_deg, rad_to_deg(e.engagement_angle_rad[i]));
+  }
+
+  // Steady-state cycle.
+  const bool trochoidal = job.path.type != PathType::linear;
+  const Window w = find_window(e, cutting, job.path.step_mm, trochoidal);
+  m.periodic = w.periodic;
+  m.cycle_start_s = w.t0_s;
+  m.cycle_time_s = w.duration_s;
+  m.path_length_per_cycle_mm = w.length_mm;
+  double swept = 0, ap_sum = 0;
+  int ap_n = 0;
+  std::size_t i_h = w.first;
+  for (std::size_t i = w.first; i < w.last; ++i) {
+    const double ap = std::clamp(-s.z_mm[i], 0.0, depth);
+    swept += ap * e.swept_rate_mm2_per_s[i] * dt_sample;
+    if (cutting[i]) {
+      m.cutting_time_s += dt_sample;
+      ap_sum += ap;
+      ++ap_n;
+    }
+    if (e.h_max_mm[i] > m.h_max_mm) {
+      m.h_max_mm = e.h_max_mm[i];
+      i_h = i;
+    }
+    m.engagement_angle_max_deg =
+        std::max(m.engagement_angle_max_deg, rad_to_deg(e.engagement_angle_rad[i]));
+  }
+  m.cutting_time_s = std::min(m.cutting_time_s, m.cycle_time_s);
+  m.cooling_time_s = m.cycle_time_s - m.cutting_time_s;
+  m.axial_depth_mm = ap_n > 0 ? ap_sum / ap_n : depth;
+  m.t_h_max_s = s.t_s[i_h] - w.t0_s;
+  m.mrr_swept_mm3_per_min = m.cycle_time_s > 0 ? swept / m.cycle_time_s * 60.0 : 0.0;
+  m.mrr_mm3_per_min = w.periodic ? W * job.path.step_mm * m.axial_depth_mm / m.cycle_time_s * 60.0
+                                 : m.mrr_swept_mm3_per_min;
+
+  // Walls over one period of y around the cycle's contact with each wall.
+  const double period =
+      w.periodic ? job.path.step_mm : std::max(1.0, 2 * job.cutting.feed_per_tooth_mm);
+  std::size_t il = w.first, ir = w.first;
+  for (std::size_t i = w.first; i < std::max(w.last, w.first + 1) && i < n; ++i) {
+    if (s.x_mm[i] < s.x_mm[il]) il = i;
+    if (s.x_mm[i] > s.x_mm[ir]) ir = i;
+  }
+  // Dense centre samples (every 0.01 mm, or s / 100) from a cycle and a half before the
+  // window to two and a half after: every circle that reaches either wall's period window.
+  const double ds = std::min(0.01, period / 100);
+  const PathSamples dense = [&] {
+    const double span = std::max(w.duration_s, 1.0 / feed);
+    const double from = std::max(0.0, w.t0_s - 1.5 * span);
+    const double to = std::min(path.duration_s(), w.t0_s + 2.5 * span);
+    std::vector<double> times;
+    for (double t = from; t <= to; t += ds / feed) times.push_back(t);
+    return sample_at_times(path, times);
+  }();
+  constexpr int kWallPoints = 2001;
+  const double yl = s.y_mm[il], yr = s.y_mm[ir];
+  m.walls_path.left =
+      walls_from_circles(dense, R, -1e-9, yl - period / 2, yl + period / 2, kWallPoints).left;
+  m.walls_path.right =
+      walls_from_circles(dense, R, -1e-9, yr - period / 2, yr + period / 2, kWallPoints).right;
+
+  // Tooth level: tooth tips every 0.1 degree of spindle rotation while the centre is near a
+  // wall (within the path-level waviness + runout + 2 f_z of its extreme) in the windows.
+  const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
+                       (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
+  const double dt_tip = deg_to_rad(0.1) / std::abs(omega);
+  {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t i = 0; i < dense.size(); ++i) {
+      if (dense.z_mm[i] >= 0) continue;
+      lo = std::min(lo, dense.x_mm[i]);
+      hi = std::max(hi, dense.x_mm[i]);
+    }
+    const double e_r = job.tool.runout_radial_mm;
+    // The tooth-level wall lies within the path-level waviness plus runout and the tooth
+    // cusps (about f_z^2 / 8R) of the extreme; centres farther than `band` from their extreme
+    // cannot put a tip on it. Checked after the fact: the band doubles until the profile
+    // fits inside it.
+    const double fz = m.feed_per_tooth_mm;
+    const double base = 2 * e_r + fz * fz / R + 0.002;
+    // Centres between dense samples by cubic Hermite interpolation (positions and unit
+    // tangents times the chord length): error O(ds^4 kappa^3), far below a micrometre for
+    // ds = 0.01 mm, and no length inversion per tip sample.
+    auto tips_for = [&](bool left, double yc, double band) {
+      const double band_l = band, band_r = band;
+      std::vector<double> times;
+      PathSamples ts;
+      auto add = [&](std::size_t i, double t) {
+        const double a = dense.t_s[i], b = dense.t_s[i + 1];
+        const double u = b > a ? std::clamp((t - a) / (b - a), 0.0, 1.0) : 0.0;
+        const double h = dense.s_mm[i + 1] - dense.s_mm[i];
+        const double h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;
+        const double h01 = -2 * u * u * u + 3 * u * u, h11 = u * u * u - u * u;
+        ts.t_s.push_back(t);
+        ts.x_mm.push_back(h00 * dense.x_mm[i] + h10 * h * dense.tx[i] + h01 * dense.x_mm[i + 1] +
+                          h11 * h * dense.tx[i + 1]);
+        ts.y_mm.push_back(h00 * dense.y_mm[i] + h10 * h * dense.ty[i] + h01 * dense.y_mm[i + 1] +
+                          h11 * h * dense.ty[i + 1]);
+        ts.z_mm.push_back(h00 * dense.z_mm[i] + h10 * h * dense.tz[i] + h01 * dense.z_mm[i + 1] +
+                          h11 * h * dense.tz[i + 1]);
+        times.push_back(t);
+      };
+      std::vector<std::size_t> breaks;  // sentinel samples between runs
+      double last_end = -1;
+      for (std::size_t i = 0; i + 1 < dense.size(); ++i) {
+        if (dense.z_mm[i] >= 0) continue;
+        const bool near = left ? dense.x_mm[i] <= lo + band_l : dense.x_mm[i] >= hi - band_r;
+        // A tip at the wall is within its extreme's reach of the centre's y: |sin| of the
+        // angle from the extreme below sqrt(2 band / R), so |dy| <= R sqrt(2 band / R).
+        const double reach = R * std::sqrt(2 * (left ? band_l : band_r) / R) + 0.01;
+        if (!near || std::abs(dense.y_mm[i] - yc) > period / 2 + reach) continue;
+        const double a = dense.t_s[i], b = dense.t_s[i + 1];
+        if (!times.empty() && a > last_end + 1.5 * dt_tip) {
+          // A gap: a sentinel sample (lifted below) so no chord joins the two runs.
+          breaks.push_back(times.size());
+          add(i, a);
+        }
+        const double from = times.empty() ? a : std::max(a, last_end + dt_tip);
+        const auto steps = static_cast<long>(std::floor((b - from) / dt_tip));
+        for (long q = 0; q <= steps; ++q) add(i, from + static_cast<double>(q) * dt_tip);
+        if (!times.empty()) last_end = times.back();
+      }
+      if (times.size() < 2) throw Error("analyze: no tooth-tip samples near the wall");
+      ToothTracks tr = tooth_tracks(ts, job.tool, job.cutting);
+      for (const std::size_t b : breaks) {
+        for (auto& z : tr.z_mm) z[b] = std::numeric_limits<double>::infinity();
+      }
+      return walls_from_tips(tr, -1e-9, yc - period / 2, yc + period / 2, kWallPoints);
+    };
+    for (const bool left : {true, false}) {
+      const double wp = left ? m.walls_path.left.waviness_mm : m.walls_path.right.waviness_mm;
+      for (double band = 1.5 * wp + base;; band *= 2) {
+        const Walls tw = tips_for(left, left ? yl : yr, band);
+        const WallProfile& prof = left ? tw.left : tw.right;
+        // Complete when the profile lies within the band of the extreme tip reach: a centre
+        // beyond the band puts its tips (radius <= R + e) beyond the band too.
+        const double extreme = left ? lo - R - e_r : hi + R + e_r;
+        const double worst = left ? *std::max_element(prof.x_mm.begin(), prof.x_mm.end()) - extreme
+                                  : extreme - *std::min_element(prof.x_mm.begin(), prof.x_mm.end());
+        if (worst < band || band > R) {
+          (left ? m.walls_tooth.left : m.walls_tooth.right) = prof;
+          break;
+        }
+      }
+    }
+  }
+
+  // Bottom imprints: one circle per tooth pass at the floor in the window.
+  {
+    std::vector<double> xs;
+    const std::size_t step = static_cast<std::size_t>(opt.steps_per_tooth);
+    for (std::size_t i = w.first; i < w.last; i += step) {
+      if (s.z_mm[i] <= -depth + 1e-6) xs.push_back(s.x_mm[i]);
+    }
+    const double advance =
+        w.periodic ? job.path.step_mm : std::abs(s.y_mm[std::min(w.last, n - 1)] - s.y_mm[w.first]);
+    if (!xs.empty() && advance > 0) {
+      m.imprint = bottom_imprint_density(xs, R, 0.5 * W, advance, job.analysis.imprint_points);
+    }
+  }
+
+  // Exact chip between adjacent teeth's tip trajectories, at the angle of each sample's
+  // h_max where the previous tooth's circle bounds it (elsewhere the older surface does and
+  // the trajectories do not enter).
+  {
+    const double period_tooth = 60.0 / (job.cutting.spindle_speed_rpm * job.tool.teeth);
+    const double t_from = std::max(0.0, w.t0_s - 2.5 * period_tooth * job.tool.teeth);
+    const double t_to = std::min(path.duration_s(), w.t0_s + w.duration_s + period_tooth);
+    DenseCentre dc;
+    dc.t_first = t_from;
+    dc.dt = period_tooth / 16;
+    std::vector<double> times;
+    for (double t = t_from; t <= t_to; t += dc.dt) times.push_back(t);
+    dc.s = sample_at_times(path, times);
+    m.h_max_per_tooth_mm.assign(static_cast<std::size_t>(job.tool.teeth), 0.0);
+    for (std::size_t i = w.first; i < w.last; ++i) {
+      if (!cutting[i] || e.h_max_mm[i] <= 0) continue;
+      const double phi = e.h_max_angle_rad[i], t = s.t_s[i];
+      const ToothChip plain = tooth_chip(dc, job.tool, omega, 0.0, t, phi, 0);
+      if (std::abs(plain.translation_mm - e.h_max_mm[i]) > 1e-7) {
+        // The older surface bounds the chip: the same for every tooth.
+        for (auto& h : m.h_max_per_tooth_mm) h = std::max(h, e.h_max_mm[i]);
+        continue;
+      }
+      m.chip_translation_error_mm = std::max(m.chip_translation_error_mm,
+                                             std::abs(plain.trajectory_mm - plain.translation_mm));
+      for (int k = 0; k < job.tool.teeth; ++k) {
+        const ToothChip c = tooth_chip(dc, job.tool, omega, job.tool.runout_radial_mm, t, phi, k);
+        auto& h = m.h_max_per_tooth_mm[static_cast<std::size_t>(k)];
+        h = std::max(h, c.trajectory_mm);
+      }
+    }
+    m.h_max_tooth_mm = *std::max_element(m.h_max_per_tooth_mm.begin(), m.h_max_per_tooth_mm.end());
+  }
+
+  // Performance index.
+  const double w_max_um = job.measured.waviness_um.value_or(
+      1000.0 * std::max(m.walls_tooth.left.waviness_mm, m.walls_tooth.right.waviness_mm));
+  if (job.measured.force_max_n && job.measured.roughness_ra_um && w_max_um > 0) {
+    m.performance_index =
+        m.mrr_mm3_per_min / (*job.measured.force_max_n * *job.measured.roughness_ra_um * w_max_um);
+    m.performance_index_note = fmt::format(
+        "MRR {:.1f} mm^3/min (model), F_R,max {:g} N, Ra {:g} um (measured), W_max {:.3g} um ({})",
+        m.mrr_mm3_per_min, *job.measured.force_max_n, *job.measured.roughness_ra_um, w_max_um,
+        job.measured.waviness_um ? "measured" : "model, tooth level");
+  } else {
+    m.performance_index_note =
+        "needs [measured] force_max (N) and roughness_ra (um); waviness (um) is optional";
+  }
+  return m;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,312 @@
+// JSON, CSV and table output of the analysis, and the parameter study (see report.hpp).
+#include "trochomill/report.hpp"
+
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <functional>
+#include <iterator>
+#include <nlohmann/json.hpp>
+
+#include "trochomill/error.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+// The scalar metrics every output shares: JSON key (with unit), getter.
+struct Scalar {
+  const char* key;
+  std::function<double(const ProcessMetrics&)> get;
+};
+
+const std::vector<Scalar>& scalars() {
+  static const std::vector<Scalar> s = {
+      {"path_length_mm", [](const ProcessMetrics& m) { return m.path_length_mm; }},
+      {"feed_length_mm", [](const ProcessMetrics& m) { return m.feed_length_mm; }},
+      {"path_length_per_cycle_mm",
+       [](const ProcessMetrics& m) { return m.path_length_per_cycle_mm; }},
+      {"cycle_time_s", [](const ProcessMetrics& m) { return m.cycle_time_s; }},
+      {"cutting_time_s", [](const ProcessMetrics& m) { return m.cutting_time_s; }},
+      {"cooling_time_s", [](const ProcessMetrics& m) { return m.cooling_time_s; }},
+      {"machining_time_s", [](const ProcessMetrics& m) { return m.machining_time_s; }},
+      {"machining_time_with_acceleration_s",
+       [](const ProcessMetrics& m) { return m.machining_time_accel_s; }},
+      {"mrr_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_mm3_per_min; }},
+      {"mrr_swept_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_swept_mm3_per_min; }},
+      {"mrr_total_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_total_mm3_per_min; }},
+      {"feed_per_tooth_mm", [](const ProcessMetrics& m) { return m.feed_per_tooth_mm; }},
+      {"h_max_mm", [](const ProcessMetrics& m) { return m.h_max_mm; }},
+      {"t_h_max_s", [](const ProcessMetrics& m) { return m.t_h_max_s; }},
+      {"h_max_slot_mm", [](const ProcessMetrics& m) { return m.h_max_slot_mm; }},
+      {"t_h_max_slot_s", [](const ProcessMetrics& m) { return m.t_h_max_slot_s; }},
+      {"h_max_tooth_mm", [](const ProcessMetrics& m) { return m.h_max_tooth_mm; }},
+      {"chip_translation_error_mm",
+       [](const ProcessMetrics& m) { return m.chip_translation_error_mm; }},
+      {"engagement_angle_max_deg",
+       [](const ProcessMetrics& m) { return m.engagement_angle_max_deg; }},
+      {"engagement_angle_max_slot_deg",
+       [](const ProcessMetrics& m) { return m.engagement_angle_max_slot_deg; }},
+      {"waviness_left_mm", [](const ProcessMetrics& m) { return m.walls_path.left.waviness_mm; }},
+      {"waviness_right_mm", [](const ProcessMetrics& m) { return m.walls_path.right.waviness_mm; }},
+      {"waviness_left_tooth_mm",
+       [](const ProcessMetrics& m) { return m.walls_tooth.left.waviness_mm; }},
+      {"waviness_right_tooth_mm",
+       [](const ProcessMetrics& m) { return m.walls_tooth.right.waviness_mm; }},
+      {"axial_depth_mm", [](const ProcessMetrics& m) { return m.axial_depth_mm; }},
+      {"cycle_start_s", [](const ProcessMetrics& m) { return m.cycle_start_s; }},
+      {"cutting_time_total_s", [](const ProcessMetrics& m) { return m.cutting_time_total_s; }},
+      {"slot_volume_mm3", [](const ProcessMetrics& m) { return m.slot_volume_mm3; }},
+  };
+  return s;
+}
+
+// The columns of a study's table (a subset, in reading order).
+const std::vector<const char*>& table_columns() {
+  static const std::vector<const char*> c = {"cycle_time_s",
+                                             "cooling_time_s",
+                                             "mrr_mm3_per_min",
+                                             "mrr_total_mm3_per_min",
+                                             "h_max_mm",
+                                             "t_h_max_s",
+                                             "engagement_angle_max_deg",
+                                             "waviness_left_mm",
+                                             "waviness_right_mm",
+                                             "waviness_left_tooth_mm",
+                                             "waviness_right_tooth_mm",
+                                             "machining_time_s"};
+  return c;
+}
+
+double scalar(const ProcessMetrics& m, const std::string& key) {
+  for (const auto& s : scalars()) {
+    if (key == s.key) return s.get(m);
+  }
+  throw Error("unknown metric " + key);
+}
+
+nlohmann::json metrics_object(const ProcessMetrics& m) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& s : scalars()) j[s.key] = s.get(m);
+  j["periodic"] = m.periodic;
+  j["h_max_per_tooth_mm"] = m.h_max_per_tooth_mm;
+  j["bottom_imprint"] = {{"x_mm", m.imprint.x_mm},
+                         {"crossings_per_mm", m.imprint.crossings_per_mm}};
+  j["wall_peak_y_mm"] = {{"left", m.walls_path.left.peak_y_mm},
+                         {"right", m.walls_path.right.peak_y_mm}};
+  j["performance_index"] =
+      m.performance_index ? nlohmann::json(*m.performance_index) : nlohmann::json(nullptr);
+  j["performance_index_note"] = m.performance_index_note;
+  j["samples"] = m.series.samples.size();
+  return j;
+}
+
+std::vector<std::string> split_values(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  int depth = 0;
+  bool quoted = false;
+  for (const char c : text) {
+    if (c == '"') quoted = !quoted;
+    if (!quoted && (c == '[' || c == '{')) ++depth;
+    if (!quoted && (c == ']' || c == '}')) --depth;
+    if (c == ',' && depth == 0 && !quoted) {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  const auto e = s.find_last_not_of(" \t");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+}  // namespace
+
+std::string metrics_json(const Job& job, const ProcessMetrics& m) {
+  nlohmann::json j = metrics_object(m);
+  j["job"] = {{"source", job.source},
+              {"path_type", to_string(job.path.type)},
+              {"step_mm", job.path.step_mm},
+              {"tool_diameter_mm", job.tool.diameter_mm},
+              {"teeth", job.tool.teeth},
+              {"slot_width_mm", job.slot.width_mm},
+              {"slot_length_mm", job.slot.length_mm},
+              {"slot_depth_mm", job.slot.depth_mm},
+              {"feed_rate_mm_per_min", feed_rate_mm_per_min(job)},
+              {"spindle_speed_rpm", spindle_speed_rpm(job)}};
+  return j.dump(2) + "\n";
+}
+
+std::string series_csv(const Job& job, const EngagementSeries& e) {
+  const PathSamples& s = e.samples;
+  std::string out =
+      "t_s,x_mm,y_mm,z_mm,engaged_arcs_deg,engagement_deg,h_max_mm,teeth_in_cut,"
+      "mrr_mm3_per_min\n";
+  out.reserve(s.size() * 96);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    std::string arcs;
+    for (const auto& a : e.arcs[i]) {
+      if (!arcs.empty()) arcs += ';';
+      fmt::format_to(std::back_inserter(arcs), "{:.4f}:{:.4f}", rad_to_deg(a.start_rad),
+                     rad_to_deg(a.end_rad));
+    }
+    const double ap = std::clamp(-s.z_mm[i], 0.0, job.slot.depth_mm);
+    fmt::format_to(std::back_inserter(out),
+                   "{:.6f},{:.6f},{:.6f},{:.6f},{},{:.4f},{:.7f},{},{:.3f}\n", s.t_s[i], s.x_mm[i],
+                   s.y_mm[i], s.z_mm[i], arcs, rad_to_deg(e.engagement_angle_rad[i]), e.h_max_mm[i],
+                   e.teeth_in_cut[i], ap * e.swept_rate_mm2_per_s[i] * 60.0);
+  }
+  return out;
+}
+
+Vary parse_vary(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) {
+    throw InputError(fmt::format("--vary '{}': expected section.key=v1,v2,...", text));
+  }
+  Vary v;
+  v.key = trim(text.substr(0, eq));
+  const auto dot = v.key.find('.');
+  if (dot == std::string::npos || dot == 0 || dot + 1 == v.key.size()) {
+    throw InputError(
+        fmt::format("--vary '{}': the key must be section.key (e.g. path.aspect_ratio)", text));
+  }
+  for (auto& val : split_values(text.substr(eq + 1))) {
+    val = trim(val);
+    if (val.empty()) throw InputError(fmt::format("--vary '{}': empty value in the list", text));
+    v.values.push_back(val);
+  }
+  return v;
+}
+
+std::vector<StudyPoint> run_study(const std::string& job_file, const std::vector<Override>& base,
+                                  const std::vector<Vary>& varies, int threads) {
+  if (varies.empty()) throw InputError("compare: give at least one --vary key=v1,v2,...");
+  std::size_t total = 1;
+  for (const auto& v : varies) total *= v.values.size();
+  if (total > 100000) {
+    throw InputError(fmt::format("compare: the grid has {} points (limit 100000)", total));
+  }
+  std::vector<StudyPoint> points(total);
+  for (std::size_t p = 0; p < total; ++p) {
+    std::size_t rest = p;
+    std::vector<Override> ov = base;
+    std::vector<std::size_t> idx(varies.size());
+    for (std::size_t k = varies.size(); k-- > 0;) {  // the last vary changes fastest
+      idx[k] = rest % varies[k].values.size();
+      rest /= varies[k].values.size();
+    }
+    for (std::size_t k = 0; k < varies.size(); ++k) {
+      ov.push_back(Override{varies[k].key, varies[k].values[idx[k]]});
+    }
+    points[p].overrides = std::move(ov);
+  }
+  auto run_one = [&](std::size_t p) {
+    StudyPoint& sp = points[p];
+    try {
+      const Job job = load_job(job_file, sp.overrides);
+      const PlannedPath planned = plan_path(job);
+      sp.metrics = analyze_process(job, planned.path);
+      sp.metrics.series = EngagementSeries{};  // keep the study small
+      sp.ok = true;
+    } catch (const std::exception& e) {
+      sp.error = e.what();
+    }
+  };
+  const int n_threads = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
+  tbb::task_arena arena(n_threads);
+  arena.execute(
+      [&] { tbb::parallel_for(std::size_t{0}, total, [&](std::size_t p) { run_one(p); }); });
+  return points;
+}
+
+std::string study_table(const std::vector<Vary>& varies, const std::vector<StudyPoint>& points) {
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> head;
+  for (const auto& v : varies) head.push_back(v.key);
+  for (const char* c : table_columns()) head.push_back(c);
+  rows.push_back(head);
+  for (const auto& p : points) {
+    std::vector<std::string> r;
+    for (std::size_t k = 0; k < varies.size(); ++k) {
+      r.push_back(p.overrides[p.overrides.size() - varies.size() + k].value);
+    }
+    for (const char* c : table_columns()) {
+      r.push_back(p.ok ? fmt::format("{:.5g}", scalar(p.metrics, c)) : "-");
+    }
+    rows.push_back(r);
+  }
+  std::vector<std::size_t> width(head.size(), 0);
+  for (const auto& r : rows) {
+    for (std::size_t k = 0; k < r.size(); ++k) width[k] = std::max(width[k], r[k].size());
+  }
+  std::string out;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    for (std::size_t k = 0; k < rows[i].size(); ++k) {
+      out += k == 0 ? fmt::format("{:<{}}", rows[i][k], width[k])
+                    : fmt::format("  {:>{}}", rows[i][k], width[k]);
+    }
+    out += '\n';
+  }
+  for (const auto& p : points) {
+    if (!p.ok) {
+      std::string at;
+      for (const auto& o : p.overrides) at += " " + o.key + "=" + o.value;
+      out += fmt::format("failed at{}: {}\n", at, p.error);
+    }
+  }
+  return out;
+}
+
+std::string study_json(const std::vector<Vary>& varies, const std::vector<StudyPoint>& points) {
+  nlohmann::json j;
+  j["vary"] = nlohmann::json::array();
+  for (const auto& v : varies) j["vary"].push_back({{"key", v.key}, {"values", v.values}});
+  j["points"] = nlohmann::json::array();
+  for (const auto& p : points) {
+    nlohmann::json o;
+    nlohmann::json set = nlohmann::json::object();
+    for (std::size_t k = 0; k < varies.size(); ++k) {
+      set[varies[k].key] = p.overrides[p.overrides.size() - varies.size() + k].value;
+    }
+    o["set"] = set;
+    o["ok"] = p.ok;
+    if (p.ok) {
+      o["metrics"] = metrics_object(p.metrics);
+    } else {
+      o["error"] = p.error;
+    }
+    j["points"].push_back(o);
+  }
+  return j.dump(2) + "\n";
+}
+
+std::string study_csv(const std::vector<Vary>& varies, const std::vector<StudyPoint>& points) {
+  std::string out;
+  for (const auto& v : varies) out += v.key + ",";
+  out += "ok";
+  for (const auto& s : scalars()) out += std::string(",") + s.key;
+  out += '\n';
+  for (const auto& p : points) {
+    for (std::size_t k = 0; k < varies.size(); ++k) {
+      const std::string& val = p.overrides[p.overrides.size() - varies.size() + k].value;
+      out += (val.find(',') != std::string::npos ? "\"" + val + "\"" : val) + ",";
+    }
+    out += p.ok ? "1" : "0";
+    for (const auto& s : scalars()) out += p.ok ? fmt::format(",{:.9g}", s.get(p.metrics)) : ",";
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace trochomill
