@@ -36,6 +36,9 @@ struct AngleArc {
 
 struct EngagementOptions {
   int steps_per_tooth = 1;  ///< samples per tooth pass (>= 1); the chip spans this many
+  /// Stock unbounded along +Y (the slot end ignored): a steady-state cycle as in an endless
+  /// slot, for slots too short to hold one.
+  bool open_ahead = false;
 };
 
 /// Engagement along a path, structure of arrays (one entry per sample).

@@ -234,56 +234,106 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   const bool trochoidal = job.path.type != PathType::linear;
   const Window w = find_window(e, cutting, job.path.step_mm, trochoidal);
   m.periodic = w.periodic;
-  m.cycle_start_s = w.t0_s;
   m.cycle_time_s = w.duration_s;
   m.path_length_per_cycle_mm = w.length_mm;
+  // The cycle's series: for a periodic path, the steady state of an endless slot (a real
+  // slot as long as the tool's reach, like the paper's 20 mm examples, never gets there):
+  // the path from 2.5 cycles before the window to 2 after, with the stock open ahead.
+  // Three cycles of history rebuild the removed region wherever the cycle's tool reaches
+  // (each cycle's swept band overlaps the next), so the engagement is the endless slot's.
+  EngagementSeries steady;
+  std::vector<char> steady_cut;
+  const EngagementSeries* cs = &e;
+  const std::vector<char>* ccut = &cutting;
+  std::size_t cf = w.first, cl = w.last;
+  double t0 = w.t0_s;
+  if (w.periodic) {
+    const double T = w.duration_s;
+    const double from = std::max(0.0, w.t0_s - 2.5 * T);
+    const double to = std::min(path.duration_s(), from + 4.5 * T);
+    std::vector<double> times;
+    for (double t = from; t <= to; t += dt_sample) times.push_back(t);
+    EngagementOptions so = opt;
+    so.open_ahead = true;
+    steady = compute_engagement(sample_at_times(path, times), job, so);
+    steady_cut.assign(steady.samples.size(), 0);
+    for (std::size_t i = 0; i < steady_cut.size(); ++i) {
+      steady_cut[i] = steady.swept_rate_mm2_per_s[i] > thr ? 1 : 0;
+    }
+    std::size_t j0 = 0;
+    for (std::size_t i = 1; i < steady_cut.size(); ++i) {
+      if (steady.samples.t_s[i] >= from + 2 * T && steady_cut[i] && !steady_cut[i - 1]) {
+        j0 = i;
+        break;
+      }
+    }
+    if (j0 == 0) {  // no cooling in the cycle: start two cycles in
+      while (j0 + 1 < steady_cut.size() && steady.samples.t_s[j0] < from + 2 * T) ++j0;
+    }
+    std::size_t j1 = j0;
+    while (j1 < steady_cut.size() && steady.samples.t_s[j1] < steady.samples.t_s[j0] + T - 1e-9) {
+      ++j1;
+    }
+    cs = &steady;
+    ccut = &steady_cut;
+    cf = j0;
+    cl = j1;
+    t0 = steady.samples.t_s[j0];
+  }
+  m.cycle_start_s = t0;
   double swept = 0, ap_sum = 0;
   int ap_n = 0;
-  std::size_t i_h = w.first;
-  for (std::size_t i = w.first; i < w.last; ++i) {
-    const double ap = std::clamp(-s.z_mm[i], 0.0, depth);
-    swept += ap * e.swept_rate_mm2_per_s[i] * dt_sample;
-    if (cutting[i]) {
+  std::size_t i_h = cf;
+  for (std::size_t i = cf; i < cl; ++i) {
+    const EngagementSeries& c = *cs;
+    const double ap = std::clamp(-c.samples.z_mm[i], 0.0, depth);
+    swept += ap * c.swept_rate_mm2_per_s[i] * dt_sample;
+    if ((*ccut)[i]) {
       m.cutting_time_s += dt_sample;
       ap_sum += ap;
       ++ap_n;
     }
-    if (e.h_max_mm[i] > m.h_max_mm) {
-      m.h_max_mm = e.h_max_mm[i];
+    if (c.h_max_mm[i] > m.h_max_mm) {
+      m.h_max_mm = c.h_max_mm[i];
       i_h = i;
     }
     m.engagement_angle_max_deg =
-        std::max(m.engagement_angle_max_deg, rad_to_deg(e.engagement_angle_rad[i]));
+        std::max(m.engagement_angle_max_deg, rad_to_deg(c.engagement_angle_rad[i]));
   }
   m.cutting_time_s = std::min(m.cutting_time_s, m.cycle_time_s);
   m.cooling_time_s = m.cycle_time_s - m.cutting_time_s;
   m.axial_depth_mm = ap_n > 0 ? ap_sum / ap_n : depth;
-  m.t_h_max_s = s.t_s[i_h] - w.t0_s;
+  m.t_h_max_s = cs->samples.t_s[i_h] - t0;
   m.mrr_swept_mm3_per_min = m.cycle_time_s > 0 ? swept / m.cycle_time_s * 60.0 : 0.0;
   m.mrr_mm3_per_min = w.periodic ? W * job.path.step_mm * m.axial_depth_mm / m.cycle_time_s * 60.0
                                  : m.mrr_swept_mm3_per_min;
 
+  const EngagementSeries& ce = *cs;
+  const PathSamples& q = ce.samples;
+  const std::vector<char>& cc = *ccut;
+  const std::size_t qn = q.size();
+
   // Walls over one period of y around the cycle's contact with each wall.
   const double period =
       w.periodic ? job.path.step_mm : std::max(1.0, 2 * job.cutting.feed_per_tooth_mm);
-  std::size_t il = w.first, ir = w.first;
-  for (std::size_t i = w.first; i < std::max(w.last, w.first + 1) && i < n; ++i) {
-    if (s.x_mm[i] < s.x_mm[il]) il = i;
-    if (s.x_mm[i] > s.x_mm[ir]) ir = i;
+  std::size_t il = cf, ir = cf;
+  for (std::size_t i = cf; i < std::max(cl, cf + 1) && i < qn; ++i) {
+    if (q.x_mm[i] < q.x_mm[il]) il = i;
+    if (q.x_mm[i] > q.x_mm[ir]) ir = i;
   }
   // Dense centre samples (every 0.01 mm, or s / 100) from a cycle and a half before the
   // window to two and a half after: every circle that reaches either wall's period window.
   const double ds = std::min(0.01, period / 100);
   const PathSamples dense = [&] {
     const double span = std::max(w.duration_s, 1.0 / feed);
-    const double from = std::max(0.0, w.t0_s - 1.5 * span);
-    const double to = std::min(path.duration_s(), w.t0_s + 2.5 * span);
+    const double from = std::max(0.0, t0 - 1.5 * span);
+    const double to = std::min(path.duration_s(), t0 + 2.5 * span);
     std::vector<double> times;
     for (double t = from; t <= to; t += ds / feed) times.push_back(t);
     return sample_at_times(path, times);
   }();
   constexpr int kWallPoints = 2001;
-  const double yl = s.y_mm[il], yr = s.y_mm[ir];
+  const double yl = q.y_mm[il], yr = q.y_mm[ir];
   m.walls_path.left =
       walls_from_circles(dense, R, -1e-9, yl - period / 2, yl + period / 2, kWallPoints).left;
   m.walls_path.right =
@@ -347,7 +397,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
         }
         const double from = times.empty() ? a : std::max(a, last_end + dt_tip);
         const auto steps = static_cast<long>(std::floor((b - from) / dt_tip));
-        for (long q = 0; q <= steps; ++q) add(i, from + static_cast<double>(q) * dt_tip);
+        for (long k = 0; k <= steps; ++k) add(i, from + static_cast<double>(k) * dt_tip);
         if (!times.empty()) last_end = times.back();
       }
       if (times.size() < 2) throw Error("analyze: no tooth-tip samples near the wall");
@@ -379,11 +429,11 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   {
     std::vector<double> xs;
     const std::size_t step = static_cast<std::size_t>(opt.steps_per_tooth);
-    for (std::size_t i = w.first; i < w.last; i += step) {
-      if (s.z_mm[i] <= -depth + 1e-6) xs.push_back(s.x_mm[i]);
+    for (std::size_t i = cf; i < cl; i += step) {
+      if (q.z_mm[i] <= -depth + 1e-6) xs.push_back(q.x_mm[i]);
     }
     const double advance =
-        w.periodic ? job.path.step_mm : std::abs(s.y_mm[std::min(w.last, n - 1)] - s.y_mm[w.first]);
+        w.periodic ? job.path.step_mm : std::abs(q.y_mm[std::min(cl, qn - 1)] - q.y_mm[cf]);
     if (!xs.empty() && advance > 0) {
       m.imprint = bottom_imprint_density(xs, R, 0.5 * W, advance, job.analysis.imprint_points);
     }
@@ -394,8 +444,8 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   // the trajectories do not enter).
   {
     const double period_tooth = 60.0 / (job.cutting.spindle_speed_rpm * job.tool.teeth);
-    const double t_from = std::max(0.0, w.t0_s - 2.5 * period_tooth * job.tool.teeth);
-    const double t_to = std::min(path.duration_s(), w.t0_s + w.duration_s + period_tooth);
+    const double t_from = std::max(0.0, t0 - 2.5 * period_tooth * job.tool.teeth);
+    const double t_to = std::min(path.duration_s(), t0 + w.duration_s + period_tooth);
     DenseCentre dc;
     dc.t_first = t_from;
     dc.dt = period_tooth / 16;
@@ -403,13 +453,13 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
     for (double t = t_from; t <= t_to; t += dc.dt) times.push_back(t);
     dc.s = sample_at_times(path, times);
     m.h_max_per_tooth_mm.assign(static_cast<std::size_t>(job.tool.teeth), 0.0);
-    for (std::size_t i = w.first; i < w.last; ++i) {
-      if (!cutting[i] || e.h_max_mm[i] <= 0) continue;
-      const double phi = e.h_max_angle_rad[i], t = s.t_s[i];
+    for (std::size_t i = cf; i < cl; ++i) {
+      if (!cc[i] || ce.h_max_mm[i] <= 0) continue;
+      const double phi = ce.h_max_angle_rad[i], t = q.t_s[i];
       const ToothChip plain = tooth_chip(dc, job.tool, omega, 0.0, t, phi, 0);
-      if (std::abs(plain.translation_mm - e.h_max_mm[i]) > 1e-7) {
+      if (std::abs(plain.translation_mm - ce.h_max_mm[i]) > 1e-7) {
         // The older surface bounds the chip: the same for every tooth.
-        for (auto& h : m.h_max_per_tooth_mm) h = std::max(h, e.h_max_mm[i]);
+        for (auto& h : m.h_max_per_tooth_mm) h = std::max(h, ce.h_max_mm[i]);
         continue;
       }
       m.chip_translation_error_mm = std::max(m.chip_translation_error_mm,

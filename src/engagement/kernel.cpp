@@ -635,7 +635,9 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     const double cx = smp.x_mm[i], cy = smp.y_mm[i];
     ArcSet free = removed.outside(cx, cy);
     if (m == 1) pending[i] = free;
-    ArcSet eng = intersect(free, inside_rect(cx, cy, R, hw, 0.0, L));
+    ArcSet eng =
+        intersect(free, inside_rect(cx, cy, R, hw, 0.0,
+                                    opt.open_ahead ? std::numeric_limits<double>::infinity() : L));
     double total = 0;
     for (const auto& a : eng) total += a.sweep_rad();
     out.engagement_angle_rad[i] = total;

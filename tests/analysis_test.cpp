@@ -1,0 +1,260 @@
+// Process metrics (issue 3): closed forms for straight cuts, W s a_p / T_c against the
+// independently integrated swept area, wall waviness against the analytic envelope of the
+// trochoid, convergence with the sampling step, G-code against the job that wrote it.
+#include "trochomill/analysis.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_util.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/gcode.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+Job straight_slot_job(double width) {
+  return parse_job(R"(
+[tool]
+diameter = 10.0
+teeth = 4
+[slot]
+width = )" + std::to_string(width) +
+                       R"(
+length = 30.0
+depth = 6.0
+[path]
+type = "linear"
+step = 1.0
+[cutting]
+feed_rate = 600.0
+spindle_speed = 2000.0
+)",
+                   "straight.toml");
+}
+
+// Full immersion (W = D, one pass): swept removal rate D a_p f_r exactly (the engaged front
+// half circle advances at f_r; the disc model's wall slivers trail and do not count), chip
+// f_z, engagement half a circle (plus the slivers, 2 asin(f_z / 2R)), floor imprints 2 / f_z
+// crossings per mm inside |x| < R.
+TEST(Analysis, StraightFullImmersion) {
+  const Job job = straight_slot_job(10.0);
+  const ProcessMetrics m = analyze_process(job, plan_path(job).path);
+  const double fz = 0.075;
+  EXPECT_FALSE(m.periodic);
+  // Rounding only: the rate is v R (sin(pi/2) - sin(-pi/2)) per sample.
+  EXPECT_NEAR(m.mrr_mm3_per_min, 10.0 * 6.0 * 600.0, 1e-6 * 36000);
+  EXPECT_NEAR(m.h_max_mm, fz, 1e-9);
+  EXPECT_NEAR(m.engagement_angle_max_deg, rad_to_deg(kPi + 2 * std::asin(fz / 10.0)), 1e-7);
+  EXPECT_NEAR(m.feed_per_tooth_mm, fz, 1e-15);
+  // Whole-slot MRR: slot volume over the program's time (definition).
+  EXPECT_NEAR(m.mrr_total_mm3_per_min, 10.0 * 30.0 * 6.0 / m.machining_time_s * 60, 1e-9);
+  ASSERT_EQ(m.imprint.x_mm.size(), 81u);
+  for (std::size_t k = 0; k < m.imprint.x_mm.size(); ++k) {
+    const double x = m.imprint.x_mm[k];
+    // The window holds whole tooth passes: count / advance is 2 / f_z up to one circle in
+    // the window's length (a few mm): 1 %.
+    if (std::abs(x) < 5.0 - 1e-9) {
+      EXPECT_NEAR(m.imprint.crossings_per_mm[k], 2.0 / fz, 0.01 * 2.0 / fz) << x;
+    } else {
+      EXPECT_EQ(m.imprint.crossings_per_mm[k], 0.0) << x;
+    }
+  }
+  // A straight wall is flat at path level, up to the scallops of the 0.01 mm centre samples'
+  // circles, ds^2 / 8R = 2.5e-6 mm.
+  EXPECT_LE(m.walls_path.left.waviness_mm, 0.01 * 0.01 / 40 + 1e-12);
+  // Exact chip between the teeth's trochoidal tips vs circles translated by f_z: the two
+  // differ at second order, below f_z^2 / R (and the straight cut's h_max is at the feed
+  // normal, where they agree to that order).
+  EXPECT_LE(m.chip_translation_error_mm, fz * fz / 5.0);
+  EXPECT_NEAR(m.h_max_tooth_mm, fz, fz * fz / 5.0);
+}
+
+// A straight pass along the left wall: the tooth tips leave cusps f_z^2 / (8 rho), rho the
+// tip path's radius of curvature at the wall, (omega R + v)^2 / (omega^2 R) for a tip moving
+// with the feed there (clockwise spindle, +Y feed at the left wall). The parabola
+// approximation's relative error is of order (f_z / rho)^2: 5 % covers it and the 0.1 degree
+// tip chords (sagitta 2e-6 mm).
+TEST(Analysis, ToothMarksOnAStraightWall) {
+  const Job job = straight_slot_job(20.0);
+  ToolPath p;
+  p.append(Segment::line(Vec3(-5, -8, 5), Vec3(-5, -8, -6), Motion::feed, 600));
+  p.append(Segment::line(Vec3(-5, -8, -6), Vec3(-5, 36, -6), Motion::feed, 600));
+  const ProcessMetrics m = analyze_process(job, p);
+  const double omega = rpm_to_rad_per_s(2000), R = 5, v = 10.0;
+  const double rho = (omega * R + v) * (omega * R + v) / (omega * omega * R);
+  EXPECT_NEAR(m.walls_tooth.left.waviness_mm, 0.075 * 0.075 / (8 * rho),
+              0.05 * 0.075 * 0.075 / (8 * rho));
+  EXPECT_LE(m.walls_path.left.waviness_mm, 0.01 * 0.01 / 40 + 1e-12);  // ds^2 / 8R
+}
+
+// The left wall of the true trochoid, independently: the envelope E(theta) = c(theta) +
+// R m(theta) of the circles along c(theta) = (-a cos theta, a sin theta + s theta / 2 pi)
+// (m the unit normal towards -x), the cusp where cycle k's envelope meets cycle k+1's
+// (solved by Newton in two unknowns), the valley at the envelope's extreme (golden section).
+double trochoid_left_cusp(double a, double s, double R) {
+  auto E = [&](double th) {
+    const double tx = a * std::sin(th), ty = a * std::cos(th) + s / kTwoPi;
+    const double n = std::hypot(tx, ty);
+    return std::pair{-a * std::cos(th) - R * ty / n,
+                     a * std::sin(th) + s * th / kTwoPi + R * tx / n};
+  };
+  // E(ta) = E(tb) + (0, s): ta > 0 (cycle k rising), tb < 0 (cycle k+1 approaching).
+  double ta = 0.1, tb = -0.1;
+  for (int it = 0; it < 50; ++it) {
+    auto F = [&](double x, double y) {
+      const auto [ax, ay] = E(x);
+      const auto [bx, by] = E(y);
+      return std::pair{ax - bx, ay - by - s};
+    };
+    const auto [f1, f2] = F(ta, tb);
+    const double h = 1e-7;
+    const auto [a1, a2] = F(ta + h, tb);
+    const auto [b1, b2] = F(ta, tb + h);
+    const double j11 = (a1 - f1) / h, j12 = (b1 - f1) / h, j21 = (a2 - f2) / h, j22 = (b2 - f2) / h;
+    const double det = j11 * j22 - j12 * j21;
+    ta -= (f1 * j22 - f2 * j12) / det;
+    tb -= (j11 * f2 - j21 * f1) / det;
+  }
+  double lo = -0.5, hi = 0.5;  // the extreme: min over theta of E_x
+  for (int it = 0; it < 200; ++it) {
+    const double m1 = lo + 0.382 * (hi - lo), m2 = lo + 0.618 * (hi - lo);
+    if (E(m1).first < E(m2).first) {
+      hi = m2;
+    } else {
+      lo = m1;
+    }
+  }
+  return E(ta).first - E(0.5 * (lo + hi)).first;
+}
+
+TEST(Analysis, TrochoidWallWavinessMatchesAnalyticEnvelope) {
+  for (const double s : {0.5, 1.0, 2.0}) {
+    const Job job = test::wagih_job("trochoidal", {parse_override("path.step=" + std::to_string(s)),
+                                                   parse_override("slot.length=40")});
+    const ProcessMetrics m = analyze_process(job, plan_path(job).path);
+    const double expected = trochoid_left_cusp(5.0, s, 5.0);
+    // y grid of s / 2000 with the envelope's slope at the cusp below (s/2) / (a + R): the
+    // cusp is resolved to (s / 20) * (s / 4000); the 0.01 mm centre samples (or s/100) add
+    // ds^2 / 8R below 3e-6 mm.
+    EXPECT_NEAR(m.walls_path.left.waviness_mm, expected, s * s / 80000 + 3e-6) << s;
+    EXPECT_TRUE(m.periodic);
+  }
+}
+
+// Steady state of every trochoidal family: the cycle time is the cycle's length over the
+// feed, and W s a_p / T_c (the definition) agrees with the removal rate integrated from
+// the engaged arcs over the cycle (independent: the swept-area formula, one sample per
+// tooth pass) once the wall scallops are subtracted. The Riemann sum's error at one sample
+// per tooth pass is below 2e-4 (see ConvergesWithSamplingStep): 5e-4 covers it.
+TEST(Analysis, SteadyStateMrrEqualsSweptArea) {
+  for (const std::string type : {"trochoidal", "circular", "elliptical", "linear-elliptical"}) {
+    const Job job = test::wagih_job(type, {parse_override("path.linear_distance=1")});
+    const PlannedPath pp = plan_path(job);
+    const ProcessMetrics m = analyze_process(job, pp.path);
+    ASSERT_TRUE(m.periodic) << type;
+    EXPECT_NEAR(m.mrr_mm3_per_min, 20.0 * 1.0 * 6.0 / m.cycle_time_s * 60,
+                1e-9 * m.mrr_mm3_per_min);
+    // What the cycle really removes is the band between the walls minus the scallops the
+    // walls keep: about w s / 3 per wall and cycle (a parabolic cusp of height w over one
+    // step), so swept = W s a_p / T_c * (1 - (w_left + w_right) / 3W).
+    const double scallop =
+        (m.walls_path.left.waviness_mm + m.walls_path.right.waviness_mm) / (3 * 20.0);
+    EXPECT_NEAR(m.mrr_swept_mm3_per_min, m.mrr_mm3_per_min * (1 - scallop),
+                0.0005 * m.mrr_mm3_per_min)
+        << type;
+    // The planner's cycle length, found again by periodicity (tangent refinement: error
+    // below curvature * spacing^2 = 0.2 * 0.075^2).
+    EXPECT_NEAR(m.path_length_per_cycle_mm, pp.info.cycle_length_mm, 2e-3) << type;
+    EXPECT_NEAR(m.cycle_time_s, m.path_length_per_cycle_mm / 10.0, 1e-9) << type;
+    EXPECT_NEAR(m.cutting_time_s + m.cooling_time_s, m.cycle_time_s, 1e-12);
+    EXPECT_GT(m.cooling_time_s, 0.0) << type;
+    EXPECT_LE(m.h_max_mm, m.h_max_slot_mm);
+    EXPECT_GT(m.t_h_max_s, 0.0);
+    EXPECT_LT(m.t_h_max_s, m.cutting_time_s);
+  }
+}
+
+// Convergence with the sampling step, 1, 2, 4, 8 samples per tooth pass: the steady MRR
+// integrated from the swept area approaches W s a_p / T_c less the wall scallops (see
+// SteadyStateMrrEqualsSweptArea), the cutting time and
+// the maximum engagement settle. Printed with the observed orders (issue 3 asks to show
+// them; docs/models.md records them).
+TEST(Analysis, ConvergesWithSamplingStep) {
+  std::vector<double> mrr_err, tc, eng, h;
+  for (const int m : {1, 2, 4, 8}) {
+    const Job job = test::wagih_job(
+        "elliptical", {parse_override("slot.length=6"),
+                       parse_override("analysis.steps_per_tooth=" + std::to_string(m))});
+    const ProcessMetrics r = analyze_process(job, plan_path(job).path);
+    const double scallop =
+        (r.walls_path.left.waviness_mm + r.walls_path.right.waviness_mm) / (3 * 20.0);
+    mrr_err.push_back(std::abs(r.mrr_swept_mm3_per_min / r.mrr_mm3_per_min - (1 - scallop)));
+    tc.push_back(r.cutting_time_s);
+    eng.push_back(r.engagement_angle_max_deg);
+    h.push_back(r.h_max_mm);
+  }
+  auto order = [](double a, double b) { return std::log2(a / b); };
+  std::printf("swept-MRR relative error %.3e %.3e %.3e %.3e (orders %.2f %.2f %.2f)\n", mrr_err[0],
+              mrr_err[1], mrr_err[2], mrr_err[3], order(mrr_err[0], mrr_err[1]),
+              order(mrr_err[1], mrr_err[2]), order(mrr_err[2], mrr_err[3]));
+  std::printf("cutting time %.6f %.6f %.6f %.6f s\n", tc[0], tc[1], tc[2], tc[3]);
+  std::printf("engagement max %.5f %.5f %.5f %.5f deg\n", eng[0], eng[1], eng[2], eng[3]);
+  std::printf("h_max %.8f %.8f %.8f %.8f mm\n", h[0], h[1], h[2], h[3]);
+  EXPECT_LT(mrr_err[1], mrr_err[0]);
+  EXPECT_LT(mrr_err[2], mrr_err[1]);
+  EXPECT_LT(mrr_err[3], mrr_err[2]);
+  // At least first order overall (the observed order is about 1.5).
+  EXPECT_LT(mrr_err[3], mrr_err[0] / 8 * 1.0001);
+  // Cutting time: each end of the cutting part is resolved to a sample (7.5 ms / m).
+  EXPECT_NEAR(tc[3], tc[2], 2 * 0.0075 / 4);
+  // h_max: the largest chip over the cycle, exact at each sample; finer sampling can only
+  // find a larger value between samples, by less than 1 % of f_z here.
+  EXPECT_NEAR(h[3], h[0], 0.01 * 0.075);
+}
+
+// Analyse the G-code the job wrote: the same path up to the writer's fit tolerance (1e-4
+// mm here), so lengths and times agree to about that and the chip and walls to a few times
+// it (a shifted point moves the chip and the envelope by at most its shift, twice when both
+// chip boundaries move).
+TEST(Analysis, GcodeEqualsJob) {
+  const Job job = load_job(test::example("wagih2023/elliptical.toml"));
+  const PlannedPath pp = plan_path(job);
+  GcodeWriteOptions wo;
+  wo.dialect = Dialect::linuxcnc;
+  wo.tolerance_mm = 1e-4;
+  const GcodeProgram prog = read_gcode(write_gcode(job, pp.path, wo), "elliptical.ngc");
+  const ProcessMetrics a = analyze_process(job, pp.path);
+  const ProcessMetrics b = analyze_process(job, prog.path);
+  EXPECT_NEAR(a.path_length_mm, b.path_length_mm, 1e-3);  // biarcs vs curves: length change
+  EXPECT_NEAR(a.machining_time_s, b.machining_time_s, 1e-3 / 10.0 + 1e-4);
+  EXPECT_NEAR(a.cycle_time_s, b.cycle_time_s, 1e-4);
+  EXPECT_NEAR(a.mrr_mm3_per_min, b.mrr_mm3_per_min, 1e-4 * a.mrr_mm3_per_min);
+  EXPECT_NEAR(a.h_max_mm, b.h_max_mm, 2e-4);
+  EXPECT_NEAR(a.walls_path.left.waviness_mm, b.walls_path.left.waviness_mm, 2e-4);
+  EXPECT_NEAR(a.walls_path.right.waviness_mm, b.walls_path.right.waviness_mm, 2e-4);
+  EXPECT_NEAR(a.engagement_angle_max_deg, b.engagement_angle_max_deg, 0.2);
+}
+
+TEST(Analysis, PerformanceIndexFromMeasured) {
+  const Job job = test::wagih_job("trochoidal", {parse_override("measured.force_max=250"),
+                                                 parse_override("measured.roughness_ra=0.8"),
+                                                 parse_override("measured.waviness=12")});
+  const ProcessMetrics m = analyze_process(job, plan_path(job).path);
+  ASSERT_TRUE(m.performance_index.has_value());
+  EXPECT_DOUBLE_EQ(*m.performance_index, m.mrr_mm3_per_min / (250 * 0.8 * 12));
+  const Job no = test::wagih_job("trochoidal");
+  EXPECT_FALSE(analyze_process(no, plan_path(no).path).performance_index.has_value());
+}
+
+TEST(Analysis, RejectsPathsThatNeverCut) {
+  const Job job = straight_slot_job(10.0);
+  ToolPath p;
+  p.append(Segment::line(Vec3(0, -20, 5), Vec3(0, 50, 5), Motion::feed, 600));  // above
+  EXPECT_THROW((void)analyze_process(job, p), InputError);
+}
+
+}  // namespace
+}  // namespace trochomill
