@@ -120,5 +120,95 @@ TEST_F(Cli, VersionAndHelp) {
   EXPECT_NE(r.out.find("--dialect"), std::string::npos);
 }
 
+// analyze: the JSON has every key issue 3 names, consistent with itself; the CSV has one
+// row per sample; --gcode gives the same cycle as the job.
+TEST_F(Cli, AnalyzeJsonAndCsv) {
+  const auto ex = test::example("wagih2023/elliptical.toml").string();
+  const auto csv = (dir_ / "series.csv").string();
+  const CliResult r = run_cli("analyze " + ex + " --json - --csv " + csv);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"path_length_mm", "path_length_per_cycle_mm", "cycle_time_s",
+                          "cutting_time_s", "cooling_time_s", "machining_time_s", "mrr_mm3_per_min",
+                          "mrr_total_mm3_per_min", "feed_per_tooth_mm", "h_max_mm", "t_h_max_s",
+                          "engagement_angle_max_deg", "waviness_left_mm", "waviness_right_mm",
+                          "waviness_left_tooth_mm", "waviness_right_tooth_mm", "h_max_slot_mm"}) {
+    ASSERT_TRUE(j.contains(key)) << key;
+    EXPECT_TRUE(j[key].is_number()) << key;
+  }
+  // Cycle time = cycle length / feed (600 mm/min); MRR = W s a_p / T_c.
+  EXPECT_NEAR(j["cycle_time_s"].get<double>(), j["path_length_per_cycle_mm"].get<double>() / 10.0,
+              1e-9);
+  EXPECT_NEAR(j["mrr_mm3_per_min"].get<double>(),
+              20.0 * 1.0 * 6.0 / j["cycle_time_s"].get<double>() * 60.0, 1e-6);
+  EXPECT_TRUE(j["performance_index"].is_null());
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(
+      line.rfind("t_s,x_mm,y_mm,z_mm,engaged_arcs_deg,engagement_deg,h_max_mm,teeth_in_cut", 0),
+      0u);
+  std::size_t rows = 0;
+  while (std::getline(in, line)) ++rows;
+  EXPECT_EQ(rows, j["samples"].get<std::size_t>());
+
+  const auto ngc = (dir_ / "e.ngc").string();
+  ASSERT_EQ(run_cli("plan " + ex + " -o " + ngc + " --tolerance 0.0001").code, 0);
+  const CliResult g = run_cli("analyze " + ex + " --gcode " + ngc + " --json -");
+  ASSERT_EQ(g.code, 0) << g.out;
+  const auto k = nlohmann::json::parse(g.out);
+  EXPECT_NEAR(k["cycle_time_s"].get<double>(), j["cycle_time_s"].get<double>(), 1e-4);
+}
+
+TEST_F(Cli, AnalyzeBadInput) {
+  const auto ex = test::example("wagih2023/elliptical.toml").string();
+  const auto out = (dir_ / "m.json").string();
+  CliResult r = run_cli("analyze " + ex + " --set measured.force_max=-3 --json " + out);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("force_max"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  r = run_cli("analyze " + ex + " --set analysis.steps_per_tooth=0");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("steps_per_tooth"), std::string::npos) << r.out;
+  r = run_cli("analyze " + ex + " --gcode " + (dir_ / "missing.ngc").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// compare: a grid of 2 x 2 points, the same numbers whatever the thread count, one row
+// per point in the CSV, and a failing point reported without stopping the others.
+TEST_F(Cli, CompareGrid) {
+  const auto ex = test::example("wagih2023/elliptical.toml").string();
+  const auto j1 = (dir_ / "a.json").string(), j2 = (dir_ / "b.json").string();
+  const auto csv = (dir_ / "a.csv").string();
+  const std::string grid =
+      " --vary path.aspect_ratio=0.8,1.2 --vary path.step=0.8,1.0 --set slot.length=8";
+  CliResult r = run_cli("compare " + ex + grid + " --threads 1 --json " + j1 + " --csv " + csv);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("path.aspect_ratio"), std::string::npos) << r.out;
+  r = run_cli("compare " + ex + grid + " --threads 2 --json " + j2);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(read_file(j1), read_file(j2));  // deterministic whatever the thread count
+  const auto j = nlohmann::json::parse(read_file(j1));
+  ASSERT_EQ(j["points"].size(), 4u);
+  EXPECT_EQ(j["points"][1]["set"]["path.aspect_ratio"], "0.8");
+  EXPECT_EQ(j["points"][1]["set"]["path.step"], "1.0");
+  // A longer cycle (r_e 1.2) removes less per minute at the same step.
+  EXPECT_GT(j["points"][0]["metrics"]["mrr_mm3_per_min"].get<double>(),
+            j["points"][2]["metrics"]["mrr_mm3_per_min"].get<double>());
+  std::ifstream in(csv);
+  std::string line;
+  std::size_t rows = 0;
+  while (std::getline(in, line)) ++rows;
+  EXPECT_EQ(rows, 5u);
+  r = run_cli("compare " + ex + " --vary path.step=1.0,-1");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("failed at path.step=-1"), std::string::npos) << r.out;
+  r = run_cli("compare " + ex + " --vary path.step");
+  EXPECT_EQ(r.code, 2) << r.out;
+  r = run_cli("compare " + ex + " --vary path.step=-1,-2");
+  EXPECT_EQ(r.code, 2) << r.out;
+}
+
 }  // namespace
 }  // namespace trochomill
