@@ -8,6 +8,7 @@
 #include "trochomill/engagement.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/report.hpp"
 
 namespace {
 
@@ -47,5 +48,27 @@ void BM_AnalyzeWagih(benchmark::State& state) {
   state.SetLabel(name);
 }
 BENCHMARK(BM_AnalyzeWagih)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+namespace {
+
+// `compare` of eight aspect ratios (the paper's parameter study) on all cores.
+void BM_CompareEightAspectRatios(benchmark::State& state) {
+  const std::string job =
+      std::string(TROCHOMILL_SOURCE_DIR) + "/examples/wagih2023/elliptical.toml";
+  const std::vector<trochomill::Vary> vary = {
+      trochomill::parse_vary("path.aspect_ratio=0.5,0.6,0.7,0.8,0.9,1.0,1.1,1.2")};
+  for (auto _ : state) {
+    const auto pts = trochomill::run_study(job, {}, vary, static_cast<int>(state.range(0)));
+    benchmark::DoNotOptimize(pts.data());
+  }
+  state.SetLabel(state.range(0) == 0 ? "all cores" : "1 thread");
+}
+BENCHMARK(BM_CompareEightAspectRatios)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace

@@ -238,7 +238,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   m.path_length_per_cycle_mm = w.length_mm;
   // The cycle's series: for a periodic path, the steady state of an endless slot (a real
   // slot as long as the tool's reach, like the paper's 20 mm examples, never gets there):
-  // the path from 2.5 cycles before the window to 2 after, with the stock open ahead.
+  // the path from 2.5 cycles before the window to 1.5 after, with the stock open ahead.
   // Three cycles of history rebuild the removed region wherever the cycle's tool reaches
   // (each cycle's swept band overlaps the next), so the engagement is the endless slot's.
   EngagementSeries steady;
@@ -250,7 +250,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   if (w.periodic) {
     const double T = w.duration_s;
     const double from = std::max(0.0, w.t0_s - 2.5 * T);
-    const double to = std::min(path.duration_s(), from + 4.5 * T);
+    const double to = std::min(path.duration_s(), from + 4.05 * T);
     std::vector<double> times;
     for (double t = from; t <= to; t += dt_sample) times.push_back(t);
     EngagementOptions so = opt;

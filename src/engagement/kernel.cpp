@@ -101,7 +101,7 @@ class Removed {
 
   // The part of the circle (cx, cy, R) outside the removed region, as an ArcSet.
   [[nodiscard]] ArcSet outside(double cx, double cy) const {
-    gather(cx, cy, true);
+    gather_cached(cx, cy);
     std::vector<double> cross;
     bool degenerate = false;
     for (const int j : near_) {
@@ -111,9 +111,11 @@ class Removed {
       if (dist <= 1e-9) return {};
       if (dist >= 2 * R_ - kEps || dist <= kEps) continue;
       const double alpha = std::atan2(dy, dx), beta = std::acos(dist / (2 * R_));
-      for (const double th : {alpha - beta, alpha + beta}) {
-        const double px = cx + R_ * std::cos(th), py = cy + R_ * std::sin(th);
-        const double on = wrap(std::atan2(py - d.y, px - d.x));
+      // Equal circles: the crossing at angle alpha -+ beta on this circle sits at
+      // alpha + pi +- beta on the disc's.
+      for (const double sgn : {-1.0, 1.0}) {
+        const double th = alpha + sgn * beta;
+        const double on = wrap(alpha + kPi - sgn * beta);
         // A crossing within rounding of an arc end (a boundary vertex) may be counted by
         // neither or both arcs that meet there: parity is then not to be trusted, and the
         // crossing is kept as a split point for direct tests.
@@ -200,13 +202,14 @@ class Removed {
 
   // Alive discs whose exposed arcs may meet the disc of radius R around (cx, cy).
   [[nodiscard]] const std::vector<int>& near_disc(double cx, double cy) const {
-    gather(cx, cy, false);
+    gather_cached(cx, cy);
     return near_;
   }
   [[nodiscard]] const Disc& disc(int j) const { return discs_[j]; }
 
   // Inserts a disc whose circle's part outside R (before it) is `exposed`.
   void insert(double cx, double cy, ArcSet exposed) {
+    cache_valid_ = false;
     have_last_ = true;
     last_x_ = cx;
     last_y_ = cy;
@@ -253,6 +256,16 @@ class Removed {
   }
   [[nodiscard]] std::size_t cell_of(long ix, long iy) const {
     return static_cast<std::size_t>(iy * nx_ + ix);
+  }
+
+  // gather(cx, cy, false) unless its result for this centre is still valid (no insertion
+  // since): outside() and the chip query at one sample share it.
+  void gather_cached(double cx, double cy) const {
+    if (cache_valid_ && cache_x_ == cx && cache_y_ == cy) return;
+    gather(cx, cy, false);
+    cache_valid_ = true;
+    cache_x_ = cx;
+    cache_y_ = cy;
   }
 
   // Alive discs near (cx, cy) whose exposed arcs can meet the circle of radius R around it
@@ -336,6 +349,8 @@ class Removed {
   std::vector<std::vector<int>> grid_;  // alive discs per cell
   std::vector<std::vector<int>> all_;   // every stored disc per cell (for point tests)
   mutable std::vector<int> near_;
+  mutable bool cache_valid_ = false;
+  mutable double cache_x_ = 0, cache_y_ = 0;
   bool have_last_ = false;
   double last_x_ = 0, last_y_ = 0;
 };
