@@ -15,32 +15,12 @@
 namespace trochomill {
 namespace {
 
-Job straight_slot_job(double width) {
-  return parse_job(R"(
-[tool]
-diameter = 10.0
-teeth = 4
-[slot]
-width = )" + std::to_string(width) +
-                       R"(
-length = 30.0
-depth = 6.0
-[path]
-type = "linear"
-step = 1.0
-[cutting]
-feed_rate = 600.0
-spindle_speed = 2000.0
-)",
-                   "straight.toml");
-}
-
 // Full immersion (W = D, one pass): swept removal rate D a_p f_r exactly (the engaged front
 // half circle advances at f_r; the disc model's wall slivers trail and do not count), chip
 // f_z, engagement half a circle (plus the slivers, 2 asin(f_z / 2R)), floor imprints 2 / f_z
 // crossings per mm inside |x| < R.
 TEST(Analysis, StraightFullImmersion) {
-  const Job job = straight_slot_job(10.0);
+  const Job job = test::straight_job(10.0);
   const ProcessMetrics m = analyze_process(job, plan_path(job).path);
   const double fz = 0.075;
   EXPECT_FALSE(m.periodic);
@@ -50,7 +30,7 @@ TEST(Analysis, StraightFullImmersion) {
   EXPECT_NEAR(m.engagement_angle_max_deg, rad_to_deg(kPi + 2 * std::asin(fz / 10.0)), 1e-7);
   EXPECT_NEAR(m.feed_per_tooth_mm, fz, 1e-15);
   // Whole-slot MRR: slot volume over the program's time (definition).
-  EXPECT_NEAR(m.mrr_total_mm3_per_min, 10.0 * 30.0 * 6.0 / m.machining_time_s * 60, 1e-9);
+  EXPECT_NEAR(m.mrr_total_mm3_per_min, 10.0 * 40.0 * 6.0 / m.machining_time_s * 60, 1e-9);
   ASSERT_EQ(m.imprint.x_mm.size(), 81u);
   for (std::size_t k = 0; k < m.imprint.x_mm.size(); ++k) {
     const double x = m.imprint.x_mm[k];
@@ -78,7 +58,7 @@ TEST(Analysis, StraightFullImmersion) {
 // approximation's relative error is of order (f_z / rho)^2: 5 % covers it and the 0.1 degree
 // tip chords (sagitta 2e-6 mm).
 TEST(Analysis, ToothMarksOnAStraightWall) {
-  const Job job = straight_slot_job(20.0);
+  const Job job = test::straight_job(20.0);
   ToolPath p;
   p.append(Segment::line(Vec3(-5, -8, 5), Vec3(-5, -8, -6), Motion::feed, 600));
   p.append(Segment::line(Vec3(-5, -8, -6), Vec3(-5, 36, -6), Motion::feed, 600));
@@ -250,7 +230,7 @@ TEST(Analysis, PerformanceIndexFromMeasured) {
 }
 
 TEST(Analysis, RejectsPathsThatNeverCut) {
-  const Job job = straight_slot_job(10.0);
+  const Job job = test::straight_job(10.0);
   ToolPath p;
   p.append(Segment::line(Vec3(0, -20, 5), Vec3(0, 50, 5), Motion::feed, 600));  // above
   EXPECT_THROW((void)analyze_process(job, p), InputError);

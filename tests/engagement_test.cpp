@@ -14,34 +14,13 @@
 namespace trochomill {
 namespace {
 
-Job straight_job(double width, int teeth = 4) {
-  return parse_job(R"(
-[tool]
-diameter = 10.0
-teeth = )" + std::to_string(teeth) +
-                       R"(
-[slot]
-width = )" + std::to_string(width) +
-                       R"(
-length = 40.0
-depth = 6.0
-[path]
-type = "linear"
-step = 1.0
-[cutting]
-feed_rate = 600.0
-spindle_speed = 2000.0
-)",
-                   "straight.toml");
-}
-
 // Straight full-immersion slot (W = D): the engaged arc is the front half circle plus the
 // slivers the previous disc leaves at the walls, pi + 2 asin(f_z / 2R) in the disc model
 // (the continuous sweep gives pi; the difference is f_z / R), and h_max = f_z exactly
-// (straight ahead the previous circle is f_z behind); the angular search step 0.25 deg
-// costs at most f_z (1 - cos 0.125 deg) = 2e-7 mm.
+// (straight ahead the previous circle is f_z behind; the kernel's h_max is exact, so only
+// rounding remains).
 TEST(Engagement, StraightFullImmersion) {
-  const Job job = straight_job(10.0);
+  const Job job = test::straight_job(10.0);
   const double fz = job.cutting.feed_per_tooth_mm, R = 5.0;
   ToolPath p;
   p.append(Segment::line(Vec3(0, -10, -6), Vec3(0, 30, -6), Motion::feed, 600));
@@ -53,7 +32,7 @@ TEST(Engagement, StraightFullImmersion) {
     if (y < 10 || y > 25) continue;  // steady state, away from the slot ends
     ++checked;
     EXPECT_NEAR(e.engagement_angle_rad[i], kPi + 2 * std::asin(fz / (2 * R)), 1e-9) << y;
-    EXPECT_NEAR(e.h_max_mm[i], fz, 1e-6) << y;
+    EXPECT_NEAR(e.h_max_mm[i], fz, 1e-12) << y;
     EXPECT_NEAR(e.h_max_angle_rad[i], kPi / 2, deg_to_rad(0.25));
     ASSERT_EQ(e.arcs[i].size(), 1u);
   }
@@ -86,7 +65,7 @@ TEST(Engagement, StraightFullImmersion) {
 // wall sliver asin(f_z / 2R) of the disc model), h(phi) = f_z sin(phi) to within f_z^2 / R.
 TEST(Engagement, StraightPartialImmersion) {
   for (const double ae : {0.5, 1.0, 2.5, 5.0}) {
-    const Job job = straight_job(20.0);
+    const Job job = test::straight_job(20.0);
     const double fz = job.cutting.feed_per_tooth_mm, R = 5.0;
     const double x0 = 10.0 + R - ae;  // the tool overlaps the stock |x| <= 10 by a_e
     ToolPath p;
@@ -181,7 +160,7 @@ TEST(Engagement, MatchesBruteForceOnTrochoids) {
 }
 
 TEST(Engagement, RejectsBadOptions) {
-  const Job job = straight_job(10.0);
+  const Job job = test::straight_job(10.0);
   ToolPath p;
   p.append(Segment::line(Vec3(0, -10, -6), Vec3(0, 30, -6), Motion::feed, 600));
   EngagementOptions o;

@@ -57,6 +57,28 @@ rapid_rate = 10000.0
   return parse_job(text, "wagih.toml", ov);
 }
 
+// A straight slot 40 mm long, 6 deep, D 10 mm, 600 mm/min at 2000 rpm ("linear" family).
+inline Job straight_job(double width, int teeth = 4) {
+  return parse_job(R"(
+[tool]
+diameter = 10.0
+teeth = )" + std::to_string(teeth) +
+                       R"(
+[slot]
+width = )" + std::to_string(width) +
+                       R"(
+length = 40.0
+depth = 6.0
+[path]
+type = "linear"
+step = 1.0
+[cutting]
+feed_rate = 600.0
+spindle_speed = 2000.0
+)",
+                   "straight.toml");
+}
+
 // Distance from q to the polyline through samples (x, y, z), searching a window of indices
 // from just behind `hint` forward (paths are compared in order; a path may retrace itself
 // exactly, so ties go to the earliest index from the hint on) and updating it.

@@ -40,6 +40,14 @@ tmill::Job load(const JobArgs& a) {
   return tmill::load_job(a.job_file, ov);
 }
 
+// The job's planned path, or the NC program's when one is given.
+tmill::ToolPath job_path(const tmill::Job& job, const std::string& gcode_file) {
+  if (gcode_file.empty()) return tmill::plan_path(job).path;
+  tmill::GcodeReadOptions ro;
+  ro.rapid_rate_mm_per_min = job.machine.rapid_rate_mm_per_min;
+  return tmill::read_gcode_file(gcode_file, ro).path;
+}
+
 // Writes text to a file atomically, or to stdout for "-".
 void emit(const std::string& target, const std::string& text) {
   if (target == "-") {
@@ -202,14 +210,7 @@ int run(int argc, char** argv) {
 
   if (*pathc) {
     const tmill::Job job = load(path_args);
-    tmill::ToolPath tp;
-    if (!path_gcode.empty()) {
-      tmill::GcodeReadOptions ro;
-      ro.rapid_rate_mm_per_min = job.machine.rapid_rate_mm_per_min;
-      tp = tmill::read_gcode_file(path_gcode, ro).path;
-    } else {
-      tp = tmill::plan_path(job).path;
-    }
+    const tmill::ToolPath tp = job_path(job, path_gcode);
     tmill::PathSamples s;
     if (path_dt) {
       s = tmill::sample_by_time(tp, *path_dt);
@@ -231,14 +232,7 @@ int run(int argc, char** argv) {
 
   if (*an) {
     const tmill::Job job = load(an_args);
-    tmill::ToolPath tp;
-    if (!an_gcode.empty()) {
-      tmill::GcodeReadOptions ro;
-      ro.rapid_rate_mm_per_min = job.machine.rapid_rate_mm_per_min;
-      tp = tmill::read_gcode_file(an_gcode, ro).path;
-    } else {
-      tp = tmill::plan_path(job).path;
-    }
+    const tmill::ToolPath tp = job_path(job, an_gcode);
     const tmill::ProcessMetrics m = tmill::analyze_process(job, tp);
     if (!an_json.empty()) emit(an_json, tmill::metrics_json(job, m));
     if (!an_csv.empty()) emit(an_csv, tmill::series_csv(job, m.series));

@@ -40,6 +40,16 @@ bool contains(const ArcSet& set, double a) {  // half-open [start, end)
   return false;
 }
 
+// Appends the arc [a, b] (0 <= a < 2 pi, b <= a + 2 pi), split at 2 pi.
+void push_wrapped(ArcSet& out, double a, double b) {
+  if (b <= kTwoPi) {
+    out.push_back({a, b});
+  } else {
+    out.push_back({a, kTwoPi});
+    out.push_back({0.0, b - kTwoPi});
+  }
+}
+
 // Is angle a (in [0, 2 pi)) within 1e-9 rad of an end of an arc of the set?
 bool near_end(const ArcSet& set, double a) {
   constexpr double kTol = 1e-9;
@@ -169,12 +179,7 @@ class Removed {
         if (b - a < 1e-9) continue;
         const double mid = 0.5 * (a + b);
         if (inside(cx + R_ * std::cos(mid), cy + R_ * std::sin(mid))) continue;
-        if (b <= kTwoPi) {
-          out.push_back({a, b});
-        } else {
-          out.push_back({a, kTwoPi});
-          out.push_back({0.0, b - kTwoPi});
-        }
+        push_wrapped(out, a, b);
       }
       normalise(out);
       return out;
@@ -187,14 +192,7 @@ class Removed {
     for (std::size_t k = 0; k < n; ++k) {
       const bool in = ((k + n - k_ref) % 2 == 0) ? ref_in : !ref_in;
       const double a = cross[k], b = k + 1 < n ? cross[k + 1] : cross[0] + kTwoPi;
-      if (!in && b > a) {
-        if (b <= kTwoPi) {
-          out.push_back({a, b});
-        } else {
-          out.push_back({a, kTwoPi});
-          out.push_back({0.0, b - kTwoPi});
-        }
-      }
+      if (!in && b > a) push_wrapped(out, a, b);
     }
     normalise(out);
     return out;
@@ -312,18 +310,19 @@ class Removed {
     d.bx0 = d.by0 = std::numeric_limits<double>::infinity();
     d.bx1 = d.by1 = -std::numeric_limits<double>::infinity();
     for (const auto& arc : d.exposed) {
-      auto add = [&](double th) {
-        const double x = d.x + R_ * std::cos(th), y = d.y + R_ * std::sin(th);
+      auto add = [&](double ux, double uy) {
+        const double x = d.x + R_ * ux, y = d.y + R_ * uy;
         d.bx0 = std::min(d.bx0, x);
         d.bx1 = std::max(d.bx1, x);
         d.by0 = std::min(d.by0, y);
         d.by1 = std::max(d.by1, y);
       };
-      add(arc.start_rad);
-      add(arc.end_rad);
+      add(std::cos(arc.start_rad), std::sin(arc.start_rad));
+      add(std::cos(arc.end_rad), std::sin(arc.end_rad));
+      static constexpr double kAxis[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
       for (int q = 0; q <= 4; ++q) {  // axis extremes inside the arc
         const double th = q * 0.5 * kPi;
-        if (th > arc.start_rad && th < arc.end_rad) add(th);
+        if (th > arc.start_rad && th < arc.end_rad) add(kAxis[q][0], kAxis[q][1]);
       }
     }
   }
@@ -427,17 +426,15 @@ class ChipQuery {
       for (const auto& arc : d.exposed) {
         // Only arcs reaching into the tool disc can bound a chip: the arc's nearest point
         // to the centre is the foot towards it (if on the arc) or an end.
+        // The arc's ends relative to the tool centre.
+        const double ax = ox + R_ * std::cos(arc.start_rad), ay = oy + R_ * std::sin(arc.start_rad);
+        const double bx = ox + R_ * std::cos(arc.end_rad), by = oy + R_ * std::sin(arc.end_rad);
         {
-          auto end_dist2 = [&](double th) {
-            const double ex = ox + R_ * std::cos(th), ey = oy + R_ * std::sin(th);
-            return ex * ex + ey * ey;
-          };
           const double foot = wrap(alpha + kPi);
           const bool foot_on =
               (foot >= arc.start_rad && foot <= arc.end_rad) || foot + kTwoPi <= arc.end_rad;
-          const double mind =
-              foot_on ? std::abs(dist - R_)
-                      : std::sqrt(std::min(end_dist2(arc.start_rad), end_dist2(arc.end_rad)));
+          const double mind = foot_on ? std::abs(dist - R_)
+                                      : std::sqrt(std::min(ax * ax + ay * ay, bx * bx + by * by));
           if (mind > R_ * (1 + 1e-9)) continue;
         }
         const int idx = static_cast<int>(pieces_.size());
@@ -446,7 +443,7 @@ class ChipQuery {
         auto polar = [&](double th) {
           return std::atan2(oy + R_ * std::sin(th), ox + R_ * std::cos(th));
         };
-        const double pa = polar(arc.start_rad), pb = polar(arc.end_rad);
+        const double pa = std::atan2(ay, ax), pb = std::atan2(by, bx);
         cand_.push_back(pa);
         cand_.push_back(pb);
         if (dist > 1e-12) {
