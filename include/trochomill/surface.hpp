@@ -3,6 +3,7 @@
 // the cutting edge's imprints on the floor (domain notes section 3, Wagih 2023 Section 4).
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "trochomill/path.hpp"
@@ -33,9 +34,12 @@ struct Walls {
 
 /// Walls left by the tooth tips (tooth level): the envelope of each tooth's tip polyline
 /// (consecutive samples joined by chords; sample at a fine spindle angle), for tips with
-/// z <= z_max_mm, over the same y grid.
+/// z <= z_max_mm, over the same y grid. With a finite band_mm, only chords with an end within
+/// band_mm of the extreme tip x (per wall) count: a speed-up valid when the profile lies
+/// within the band (the caller checks).
 [[nodiscard]] Walls walls_from_tips(const ToothTracks& tips, double z_max_mm, double y_from_mm,
-                                    double y_to_mm, int points);
+                                    double y_to_mm, int points,
+                                    double band_mm = std::numeric_limits<double>::infinity());
 
 /// Bottom imprint density (Wagih 2023 Figs. 21-22): the floor carries one circle of radius R
 /// per tooth pass, centred on the tool centre; at each of `points` equally spaced x across

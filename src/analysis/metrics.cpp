@@ -324,20 +324,47 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   // Dense centre samples (every 0.01 mm, or s / 100) from a cycle and a half before the
   // window to two and a half after: every circle that reaches either wall's period window.
   const double ds = std::min(0.01, period / 100);
-  const PathSamples dense = [&] {
+  // Dense centre samples (every 0.01 mm, or s / 100) from a cycle and a half before the
+  // window to two and a half after, where the centre is within `wall_reach` of its extreme x
+  // (found on the tooth-pass samples): only circles there can reach a wall's profile
+  // (checked below: the walls must lie well inside it, else every sample is taken).
+  const double wall_reach = 0.5 + 2 * m.feed_per_tooth_mm;
+  const double dt_dense = ds / feed;
+  auto dense_samples = [&](bool all) {
     const double span = std::max(w.duration_s, 1.0 / feed);
     const double from = std::max(0.0, t0 - 1.5 * span);
     const double to = std::min(path.duration_s(), t0 + 2.5 * span);
+    double xlo = std::numeric_limits<double>::infinity(), xhi = -xlo;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (s.z_mm[i] >= 0) continue;
+      xlo = std::min(xlo, s.x_mm[i]);
+      xhi = std::max(xhi, s.x_mm[i]);
+    }
     std::vector<double> times;
-    for (double t = from; t <= to; t += ds / feed) times.push_back(t);
+    double last = -1;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (s.t_s[i] < from - dt_sample || s.t_s[i] > to + dt_sample) continue;
+      if (!all && s.x_mm[i] > xlo + wall_reach && s.x_mm[i] < xhi - wall_reach) continue;
+      const double a = std::max({from, s.t_s[i] - dt_sample, last + dt_dense});
+      const double b = std::min(to, s.t_s[i] + dt_sample);
+      for (double t = a; t <= b; t += dt_dense) times.push_back(last = t);
+    }
     return sample_at_times(path, times);
-  }();
+  };
+  PathSamples dense = dense_samples(false);
   constexpr int kWallPoints = 2001;
   const double yl = q.y_mm[il], yr = q.y_mm[ir];
   m.walls_path.left =
       walls_from_circles(dense, R, -1e-9, yl - period / 2, yl + period / 2, kWallPoints).left;
   m.walls_path.right =
       walls_from_circles(dense, R, -1e-9, yr - period / 2, yr + period / 2, kWallPoints).right;
+  if (std::max(m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm) > 0.5 * wall_reach) {
+    dense = dense_samples(true);
+    m.walls_path.left =
+        walls_from_circles(dense, R, -1e-9, yl - period / 2, yl + period / 2, kWallPoints).left;
+    m.walls_path.right =
+        walls_from_circles(dense, R, -1e-9, yr - period / 2, yr + period / 2, kWallPoints).right;
+  }
 
   // Tooth level: tooth tips every 0.1 degree of spindle rotation while the centre is near a
   // wall (within the path-level waviness + runout + 2 f_z of its extreme) in the windows.
@@ -381,7 +408,20 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
         times.push_back(t);
       };
       std::vector<std::size_t> breaks;  // sentinel samples between runs
-      double last_end = -1;
+      double last_end = -1, grid_next = -std::numeric_limits<double>::infinity();
+      // Only times when some tooth points within delta of the wall's normal can put a tip
+      // within the band of the extreme: R (1 - cos delta) <= band + 2 e, with margin.
+      const double wall_dir = left ? kPi : 0.0;
+      const double delta =
+          1.2 * std::acos(std::max(-1.0, 1.0 - (band + 2 * e_r) / R)) + 2 * deg_to_rad(0.1);
+      auto tooth_near = [&](double t) {
+        for (const double a_deg : job.tool.tooth_angles_deg) {
+          if (std::abs(std::remainder(omega * t + deg_to_rad(a_deg) - wall_dir, kTwoPi)) <= delta) {
+            return true;
+          }
+        }
+        return false;
+      };
       for (std::size_t i = 0; i + 1 < dense.size(); ++i) {
         if (dense.z_mm[i] >= 0) continue;
         const bool near = left ? dense.x_mm[i] <= lo + band_l : dense.x_mm[i] >= hi - band_r;
@@ -390,22 +430,28 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
         const double reach = R * std::sqrt(2 * (left ? band_l : band_r) / R) + 0.01;
         if (!near || std::abs(dense.y_mm[i] - yc) > period / 2 + reach) continue;
         const double a = dense.t_s[i], b = dense.t_s[i + 1];
-        if (!times.empty() && a > last_end + 1.5 * dt_tip) {
-          // A gap: a sentinel sample (lifted below) so no chord joins the two runs.
-          breaks.push_back(times.size());
-          add(i, a);
-        }
-        const double from = times.empty() ? a : std::max(a, last_end + dt_tip);
+        if (b - a > 1.5 * dt_dense) continue;  // a gap between near-wall runs
+        const double from = std::max(a, grid_next);
         const auto steps = static_cast<long>(std::floor((b - from) / dt_tip));
-        for (long k = 0; k <= steps; ++k) add(i, from + static_cast<double>(k) * dt_tip);
-        if (!times.empty()) last_end = times.back();
+        for (long k = 0; k <= steps; ++k) {
+          const double t = from + static_cast<double>(k) * dt_tip;
+          grid_next = t + dt_tip;
+          if (!tooth_near(t)) continue;
+          if (!times.empty() && t > last_end + 1.5 * dt_tip) {
+            // A gap: a sentinel sample (lifted below) so no chord joins the two runs.
+            breaks.push_back(times.size());
+            add(i, t);
+          }
+          add(i, t);
+          last_end = t;
+        }
       }
       if (times.size() < 2) throw Error("analyze: no tooth-tip samples near the wall");
       ToothTracks tr = tooth_tracks(ts, job.tool, job.cutting);
       for (const std::size_t b : breaks) {
         for (auto& z : tr.z_mm) z[b] = std::numeric_limits<double>::infinity();
       }
-      return walls_from_tips(tr, -1e-9, yc - period / 2, yc + period / 2, kWallPoints);
+      return walls_from_tips(tr, -1e-9, yc - period / 2, yc + period / 2, kWallPoints, band);
     };
     for (const bool left : {true, false}) {
       const double wp = left ? m.walls_path.left.waviness_mm : m.walls_path.right.waviness_mm;

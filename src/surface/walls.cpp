@@ -101,8 +101,18 @@ Walls walls_from_circles(const PathSamples& s, double R, double z_max, double y_
           finish(g, std::move(xr), false, "path-level")};
 }
 
-Walls walls_from_tips(const ToothTracks& tr, double z_max, double y_from, double y_to, int points) {
+Walls walls_from_tips(const ToothTracks& tr, double z_max, double y_from, double y_to, int points,
+                      double band) {
   const Grid g = make_grid(y_from, y_to, points);
+  double gmin = kInf, gmax = -kInf;
+  for (int k = 0; k < tr.teeth; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    for (std::size_t i = 0; i < tr.x_mm[kk].size(); ++i) {
+      if (tr.z_mm[kk][i] > z_max) continue;
+      gmin = std::min(gmin, tr.x_mm[kk][i]);
+      gmax = std::max(gmax, tr.x_mm[kk][i]);
+    }
+  }
   std::vector<double> xl(static_cast<std::size_t>(g.n), kInf),
       xr(static_cast<std::size_t>(g.n), -kInf);
   for (int k = 0; k < tr.teeth; ++k) {
@@ -111,6 +121,9 @@ Walls walls_from_tips(const ToothTracks& tr, double z_max, double y_from, double
     const auto& Zt = tr.z_mm[static_cast<std::size_t>(k)];
     for (std::size_t i = 0; i + 1 < X.size(); ++i) {
       if (Zt[i] > z_max || Zt[i + 1] > z_max) continue;
+      const double xa = std::min(X[i], X[i + 1]), xb = std::max(X[i], X[i + 1]);
+      const bool to_left = xa <= gmin + band, to_right = xb >= gmax - band;
+      if (!to_left && !to_right) continue;
       const double ya = Y[i], yb = Y[i + 1];
       const auto [a, b] = g.range(std::min(ya, yb), std::max(ya, yb));
       for (int q = a; q <= b; ++q) {
@@ -118,8 +131,8 @@ Walls walls_from_tips(const ToothTracks& tr, double z_max, double y_from, double
         const double u = yb != ya ? (y - ya) / (yb - ya) : 0.0;
         const double x = X[i] + u * (X[i + 1] - X[i]);
         const auto qq = static_cast<std::size_t>(q);
-        xl[qq] = std::min(xl[qq], x);
-        xr[qq] = std::max(xr[qq], x);
+        if (to_left) xl[qq] = std::min(xl[qq], x);
+        if (to_right) xr[qq] = std::max(xr[qq], x);
       }
     }
   }
