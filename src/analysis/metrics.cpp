@@ -92,19 +92,23 @@ Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, 
   return w;
 }
 
-// Tool-centre position at time t (s) by linear interpolation in dense samples (uniform in
-// time, step dt starting at t_first).
+// Tool-centre position at time t (s) between samples uniform in time (step dt from t_first)
+// by cubic Hermite interpolation on positions and unit tangents times the piece length:
+// exact at the samples, error O(h^4 kappa^3) between them (below 1e-9 mm for h = f_z).
 struct DenseCentre {
-  PathSamples s;
+  const PathSamples* s = nullptr;
   double t_first = 0, dt = 0;
   [[nodiscard]] std::pair<double, double> at(double t) const {
-    const double u = (t - t_first) / dt;
-    const auto n = static_cast<double>(s.size());
-    const double uc = std::clamp(u, 0.0, n - 1.000001);
+    const PathSamples& p = *s;
+    const auto n = static_cast<double>(p.size());
+    const double uc = std::clamp((t - t_first) / dt, 0.0, n - 1.000001);
     const auto i = static_cast<std::size_t>(uc);
     const double f = uc - static_cast<double>(i);
-    return {s.x_mm[i] + f * (s.x_mm[i + 1] - s.x_mm[i]),
-            s.y_mm[i] + f * (s.y_mm[i + 1] - s.y_mm[i])};
+    const double h = p.s_mm[i + 1] - p.s_mm[i];
+    const double h00 = (1 + 2 * f) * (1 - f) * (1 - f), h10 = f * (1 - f) * (1 - f);
+    const double h01 = f * f * (3 - 2 * f), h11 = f * f * (f - 1);
+    return {h00 * p.x_mm[i] + h10 * h * p.tx[i] + h01 * p.x_mm[i + 1] + h11 * h * p.tx[i + 1],
+            h00 * p.y_mm[i] + h10 * h * p.ty[i] + h01 * p.y_mm[i + 1] + h11 * h * p.ty[i + 1]};
   }
 };
 
@@ -489,15 +493,10 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   // h_max where the previous tooth's circle bounds it (elsewhere the older surface does and
   // the trajectories do not enter).
   {
-    const double period_tooth = 60.0 / (job.cutting.spindle_speed_rpm * job.tool.teeth);
-    const double t_from = std::max(0.0, t0 - 2.5 * period_tooth * job.tool.teeth);
-    const double t_to = std::min(path.duration_s(), t0 + w.duration_s + period_tooth);
     DenseCentre dc;
-    dc.t_first = t_from;
-    dc.dt = period_tooth / 16;
-    std::vector<double> times;
-    for (double t = t_from; t <= t_to; t += dc.dt) times.push_back(t);
-    dc.s = sample_at_times(path, times);
+    dc.s = &q;
+    dc.t_first = q.t_s.front();
+    dc.dt = dt_sample;
     m.h_max_per_tooth_mm.assign(static_cast<std::size_t>(job.tool.teeth), 0.0);
     for (std::size_t i = cf; i < cl; ++i) {
       if (!cc[i] || ce.h_max_mm[i] <= 0) continue;

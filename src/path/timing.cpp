@@ -46,13 +46,33 @@ double estimate_time_s(const ToolPath& path, const Machine& machine) {
       vlim.back() = std::min({vlim.back(), vj, F});
     }
     const int n = std::max(1, static_cast<int>(std::ceil(g.length_mm() / ds_target)));
-    const double h = g.length_mm() / n;
+    if (g.kind() == Segment::Kind::line) {
+      for (int k = 1; k <= n; ++k) {
+        ds.push_back(g.length_mm() / n);
+        vlim.push_back(F);
+      }
+      continue;
+    }
+    // Curves: nodes uniform in the parameter (no arc-length inversion), piece lengths by
+    // the midpoint rule scaled so they sum to the exact length (relative error O(du^2)
+    // inside a segment, none in its total).
+    const double du = (g.u1() - g.u0()) / n;
+    const std::size_t first = ds.size();
+    double sum = 0;
     for (int k = 1; k <= n; ++k) {
-      const double kappa = g.curvature_at(h * k);
+      const double u = g.u0() + du * k;
+      const Vec3 d1 = g.derivative_u(u), d2 = g.second_derivative_u(u);
+      const double speed = d1.norm();
+      const double kappa = speed > 0 ? d1.cross(d2).norm() / (speed * speed * speed) : 0.0;
       double v = F;
       if (kappa > 0) v = std::min(v, std::sqrt(amax / kappa));
-      ds.push_back(h);
+      const double piece = g.derivative_u(u - 0.5 * du).norm() * std::abs(du);
+      ds.push_back(piece);
+      sum += piece;
       vlim.push_back(v);
+    }
+    if (sum > 0) {
+      for (std::size_t j = first; j < ds.size(); ++j) ds[j] *= g.length_mm() / sum;
     }
   }
   vlim.back() = 0;  // and stops at the end
