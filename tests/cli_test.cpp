@@ -30,6 +30,13 @@ CliResult run_cli(const std::string& args) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
+std::string first_line_of(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -207,6 +214,31 @@ TEST_F(Cli, CompareGrid) {
   r = run_cli("compare " + ex + " --vary path.step");
   EXPECT_EQ(r.code, 2) << r.out;
   r = run_cli("compare " + ex + " --vary path.step=-1,-2");
+  EXPECT_EQ(r.code, 2) << r.out;
+}
+
+// mechanism and recommend: JSON with the zone shares (summing to 1), min_step_mm, CSV
+// curves; a family the model cannot describe is bad input.
+TEST_F(Cli, MechanismAndRecommend) {
+  const auto ex = test::example("pivkin2025/trochoidal.toml").string();
+  CliResult r = run_cli("mechanism " + ex + " --set mechanism.points=360 --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  auto j = nlohmann::json::parse(r.out);
+  const double sum = j["zone_share"]["CZI"].get<double>() + j["zone_share"]["CZII"].get<double>() +
+                     j["zone_share"]["CZIII"].get<double>();
+  EXPECT_NEAR(sum, 1.0, 1e-12);
+  EXPECT_EQ(j["h_mm"].size(), 360u);
+  const auto csv = (dir_ / "m.csv").string();
+  ASSERT_EQ(run_cli("mechanism " + ex + " --set mechanism.points=360 --csv " + csv).code, 0);
+  EXPECT_EQ(first_line_of(csv).rfind("theta_deg,t_s,h_mm,psi_deg", 0), 0u);
+  r = run_cli("recommend " + ex + " --set mechanism.points=360 --share 0.5 --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["min_step_mm"].get<double>(), 0.0);
+  EXPECT_GE(j["zone_share"]["CZIII"].get<double>(), 0.5);
+  r = run_cli("mechanism " + test::example("wagih2023/circular.toml").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  r = run_cli("recommend " + ex + " --share 1.5");
   EXPECT_EQ(r.code, 2) << r.out;
 }
 

@@ -14,8 +14,10 @@
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/job.hpp"
+#include "trochomill/mechanism.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/report.hpp"
+#include "trochomill/units.hpp"
 #include "trochomill/version.hpp"
 
 namespace tmill = trochomill;
@@ -175,6 +177,35 @@ int run(int argc, char** argv) {
   cmp->add_option("--threads", cmp_threads, "worker threads (0: all cores)")
       ->check(CLI::NonNegativeNumber);
 
+  // mechanism
+  JobArgs mech_args;
+  std::string mech_model, mech_json, mech_csv;
+  std::optional<double> mech_wear;
+  auto* mech = app.add_subcommand(
+      "mechanism", "chip thickness, K_re and cutting-mechanism zones over a trochoid cycle");
+  add_job_args(mech, mech_args);
+  mech->add_option("--model", mech_model, "chip model: exact (default: [mechanism] model)");
+  mech->add_option("--wear", mech_wear, "flank wear VB_B, mm (default: [tool] flank_wear)");
+  mech->add_option("--json", mech_json, "write curves and zone summary as JSON (- for stdout)");
+  mech->add_option("--csv", mech_csv, "write the curves as CSV (- for stdout)");
+
+  // recommend
+  JobArgs rec_args;
+  std::string rec_model, rec_json;
+  std::optional<double> rec_share, rec_wear;
+  bool rec_feed = false;
+  auto* rec = app.add_subcommand("recommend",
+                                 "smallest trochoid step (or feed per tooth) for a CZIII share");
+  add_job_args(rec, rec_args);
+  rec->add_option("--model", rec_model, "chip model: exact (default: [mechanism] model)");
+  rec->add_option("--share", rec_share,
+                  "required CZIII share of the cutting part, 0..1 "
+                  "(default: [mechanism] share = 0.5)");
+  rec->add_option("--wear", rec_wear,
+                  "flank wear VB_B, mm (classify with the wear-corrected K_re)");
+  rec->add_flag("--feed", rec_feed, "recommend the feed per tooth at the job's step instead");
+  rec->add_option("--json", rec_json, "write the recommendation as JSON (- for stdout)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -276,6 +307,104 @@ int run(int argc, char** argv) {
     if (all_failed) {
       throw tmill::InputError("compare: every point of the grid failed (see the table)");
     }
+    return 0;
+  }
+
+  if (mech->parsed() || rec->parsed()) {
+    const bool is_mech = mech->parsed();
+    const tmill::Job job = load(is_mech ? mech_args : rec_args);
+    tmill::MechanismSettings st = tmill::mechanism_settings(job);
+    const std::string& model = is_mech ? mech_model : rec_model;
+    if (!model.empty()) st.model = tmill::parse_chip_model(model);
+    const std::optional<double>& wear = is_mech ? mech_wear : rec_wear;
+    if (wear) {
+      if (!(*wear >= 0))
+        throw tmill::InputError(fmt::format("--wear must be >= 0 mm, got {}", *wear));
+      st.flank_wear_mm = *wear;
+    }
+    const bool use_wear = st.flank_wear_mm > 0;
+    auto zones_json = [](const tmill::ZoneSummary& z) {
+      nlohmann::json j = {{"CZI", z.share[0]}, {"CZII", z.share[1]}, {"CZIII", z.share[2]}};
+      return j;
+    };
+    auto times_json = [](const tmill::ZoneSummary& z) {
+      nlohmann::json j = nlohmann::json::object();
+      const char* names[3] = {"CZI", "CZII", "CZIII"};
+      for (int q = 0; q < 3; ++q) {
+        j[names[q]] = {{"start_s", z.start_s[q]}, {"end_s", z.end_s[q]}};
+      }
+      return j;
+    };
+    if (is_mech) {
+      const tmill::MechanismCurve c = tmill::mechanism_curve(job, st, use_wear);
+      const tmill::ZoneSummary z = tmill::summarize_zones(c, st, use_wear);
+      if (!mech_json.empty()) {
+        nlohmann::json j = {{"model", tmill::to_string(st.model)},
+                            {"edge_radius_mm", job.tool.edge_radius_mm},
+                            {"flank_wear_mm", st.flank_wear_mm},
+                            {"cycle_time_s", c.cycle_time_s},
+                            {"cutting_time_s", z.cutting_time_s},
+                            {"cutting_start_s", z.cutting_start_s},
+                            {"h_max_mm", z.h_max_mm},
+                            {"h_m_mm", z.h_m_mm},
+                            {"transition_s", z.transition_s},
+                            {"zone_share", zones_json(z)},
+                            {"zone_times_s", times_json(z)},
+                            {"thresholds_pct",
+                             {{"czi_max", st.thresholds.czi_max_pct},
+                              {"czii_max", st.thresholds.czii_max_pct},
+                              {"transition", st.thresholds.transition_pct}}},
+                            {"theta_deg", nlohmann::json::array()},
+                            {"h_mm", c.h_mm},
+                            {"k_re_pct", use_wear ? c.k_re_wear_pct : c.k_re_pct},
+                            {"zone", c.zone}};
+        for (const double th : c.theta_rad) j["theta_deg"].push_back(tmill::rad_to_deg(th));
+        emit(mech_json, j.dump(2) + "\n");
+      }
+      if (!mech_csv.empty()) {
+        std::string out =
+            "theta_deg,t_s,h_mm,psi_deg,teeth_in_contact,gamma_k_deg,kappa_deg,k_re_pct,"
+            "k_re_wear_pct,zone\n";
+        for (std::size_t i = 0; i < c.theta_rad.size(); ++i) {
+          fmt::format_to(std::back_inserter(out),
+                         "{:.4f},{:.6f},{:.7f},{:.4f},{:.4f},{:.4f},{:.4f},{:.3f},{:.3f},{}\n",
+                         tmill::rad_to_deg(c.theta_rad[i]), c.t_s[i], c.h_mm[i],
+                         tmill::rad_to_deg(c.psi_rad[i]), c.teeth_in_contact[i],
+                         tmill::rad_to_deg(c.gamma_k_rad[i]), tmill::rad_to_deg(c.kappa_rad[i]),
+                         c.k_re_pct[i], c.k_re_wear_pct[i], c.zone[i]);
+        }
+        emit(mech_csv, out);
+      }
+      if (mech_json != "-" && mech_csv != "-") {
+        fmt::print("{}: {} model, r_e {:g} mm{}\n", mech_args.job_file, tmill::to_string(st.model),
+                   job.tool.edge_radius_mm,
+                   use_wear ? fmt::format(", flank wear {:g} mm", st.flank_wear_mm) : "");
+        fmt::print("  cycle {:.4f} s, cutting {:.4f} s, h_max {:.5f} mm, h_m {:.5f} mm\n",
+                   c.cycle_time_s, z.cutting_time_s, z.h_max_mm, z.h_m_mm);
+        const char* names[3] = {"CZI  ", "CZII ", "CZIII"};
+        for (int q = 0; q < 3; ++q) {
+          fmt::print("  {} {:5.1f} % of the cutting part", names[q], 100 * z.share[q]);
+          if (z.start_s[q] >= 0)
+            fmt::print(", {:.4f} to {:.4f} s after cutting starts", z.start_s[q], z.end_s[q]);
+          fmt::print("\n");
+        }
+      }
+      return 0;
+    }
+    if (rec_share) st.share = *rec_share;
+    const tmill::Recommendation r = tmill::recommend(job, st, use_wear, rec_feed);
+    if (!rec_json.empty()) {
+      nlohmann::json j = {{"found", r.found},
+                          {rec_feed ? "min_feed_per_tooth_mm" : "min_step_mm",
+                           r.found ? nlohmann::json(r.value) : nlohmann::json(nullptr)},
+                          {"share", st.share},
+                          {"model", tmill::to_string(st.model)},
+                          {"flank_wear_mm", st.flank_wear_mm},
+                          {"zone_share", zones_json(r.zones)},
+                          {"explanation", r.explanation}};
+      emit(rec_json, j.dump(2) + "\n");
+    }
+    if (rec_json != "-") fmt::print("{}\n", r.explanation);
     return 0;
   }
 

@@ -25,6 +25,7 @@ struct Tool {
   std::vector<double> tooth_angles_deg;  ///< tooth angular positions (degrees); Z equal pitches
                                          ///< when empty in the file (filled by load)
   int tool_number = 1;                   ///< T word for the tool change
+  double flank_wear_mm = 0;              ///< flank wear land VB_B (mm); 0 = new tool
   [[nodiscard]] double radius_mm() const noexcept { return 0.5 * diameter_mm; }
 };
 
@@ -89,6 +90,17 @@ struct AnalysisSettings {
   int imprint_points = 81;  ///< points across the slot width for the bottom imprint density
 };
 
+/// `[mechanism]` (Pivkin 2025's zones) and `[material] friction_angle`.
+struct MechanismJob {
+  double czi_max_pct = 25;      ///< K_re below this: CZI (percent of r_e)
+  double czii_max_pct = 60;     ///< K_re below this: CZII; above: CZIII
+  double transition_pct = 40;   ///< marker where the acoustic ratio k_f crosses 1
+  double share = 0.5;           ///< required CZIII share of the cutting part for `recommend`
+  std::string model = "exact";  ///< chip model
+  int points = 3600;            ///< theta samples per cycle
+  std::optional<double> friction_angle_deg;  ///< [material] friction_angle theta_m (degrees)
+};
+
 struct Job {
   std::string source;  ///< file name the job came from (for messages)
   Tool tool;
@@ -98,6 +110,7 @@ struct Job {
   Machine machine;
   Measured measured;
   AnalysisSettings analysis;
+  MechanismJob mechanism;
   // The original document, flattened `section.key = value` (TOML syntax), after overrides:
   // written into the G-code header so a program records the job that produced it.
   std::vector<std::pair<std::string, std::string>> flat_keys;

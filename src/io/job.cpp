@@ -26,7 +26,8 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
   static const std::map<std::string, std::vector<std::string>> keys = {
       {"tool",
        {"diameter", "teeth", "helix_angle", "corner_radius", "edge_radius", "flute_length",
-        "runout_radial", "runout_axial", "runout_phase", "tooth_angles", "tool_number"}},
+        "runout_radial", "runout_axial", "runout_phase", "tooth_angles", "tool_number",
+        "flank_wear"}},
       {"slot", {"width", "length", "depth"}},
       {"path",
        {"type", "step", "aspect_ratio", "linear_distance", "direction", "entry", "entry_radius",
@@ -39,6 +40,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
         "arc_tolerance", "arc_output", "program_number"}},
       {"measured", {"force_max", "roughness_ra", "waviness"}},
       {"analysis", {"steps_per_tooth", "imprint_points"}},
+      {"mechanism", {"czi_max", "czii_max", "transition", "share", "model", "points"}},
   };
   return keys;
 }
@@ -47,7 +49,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
 // carry everything; each module validates its own section.
 const std::set<std::string>& reserved_sections() {
   static const std::set<std::string> s = {"material", "simulation", "stock",
-                                          "mechanism", "monitor",  "forces"};
+                                          "monitor", "forces"};
   return s;
 }
 
@@ -562,6 +564,26 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
   job.measured.force_max_n = r.number("measured", "force_max", "N", positive());
   job.measured.roughness_ra_um = r.number("measured", "roughness_ra", "um", positive());
   job.measured.waviness_um = r.number("measured", "waviness", "um", positive());
+  // [tool] flank_wear, [mechanism], [material] friction_angle (the rest of [material]
+  // belongs to the force models)
+  tool.flank_wear_mm = r.number("tool", "flank_wear", "mm", non_negative(), 0.0).value_or(0.0);
+  MechanismJob& mj = job.mechanism;
+  mj.czi_max_pct = r.number("mechanism", "czi_max", "% of r_e", positive(), 25.0).value_or(25.0);
+  mj.czii_max_pct = r.number("mechanism", "czii_max", "% of r_e", positive(), 60.0).value_or(60.0);
+  mj.transition_pct =
+      r.number("mechanism", "transition", "% of r_e", positive(), 40.0).value_or(40.0);
+  mj.share = r.number("mechanism", "share", "fraction", Range{0.0, 1.0, false, true}, 0.5)
+                 .value_or(0.5);
+  mj.model = r.choice<std::string>("mechanism", "model", {{"exact", "exact"}}, "exact")
+                 .value_or("exact");
+  mj.points = r.integer("mechanism", "points", 36, 1000000, 3600).value_or(3600);
+  mj.friction_angle_deg =
+      r.number("material", "friction_angle", "degrees", Range{0.0, 90.0, false, false});
+  if (mj.czii_max_pct <= mj.czi_max_pct) {
+    r.problem("mechanism", "czii_max",
+              fmt::format("must be greater than czi_max ({}), got {}", fmt_num(mj.czi_max_pct),
+                          fmt_num(mj.czii_max_pct)));
+  }
   // [analysis]
   job.analysis.steps_per_tooth = r.integer("analysis", "steps_per_tooth", 1, 64, 1).value_or(1);
   job.analysis.imprint_points = r.integer("analysis", "imprint_points", 3, 10001, 81).value_or(81);

@@ -1,0 +1,100 @@
+// Cutting mechanism over a trochoid cycle (Pivkin 2025, domain notes section 4): the uncut
+// chip thickness h_e(theta) at the contact, the ratio K_re = h_e / r_e that classifies the
+// mechanism (CZI ploughing, CZII mixed shear, CZIII cutting), contact angle, teeth in
+// contact, kinematic rake angle and kinematic angle change, the wear-corrected K_re, and
+// the smallest trochoid step (or feed per tooth) that puts a chosen share of the cutting
+// part of the cycle in CZIII.
+//
+// Frame: ours (the slot along +Y); the cycle is the family's curve
+// c(theta) = (-a cos theta, b sin theta + s theta / 2 pi), theta in [0, 2 pi) from the left
+// wall (Pivkin's frame feeds along +X; the geometry is the same rotated). Steady state of
+// an endless slot: the previous cycle is c(theta) - (0, s).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "trochomill/job.hpp"
+
+namespace trochomill {
+
+enum class ChipModel {
+  exact,  ///< chip between the tool circle, the previous tooth's circle and the previous
+          ///< cycle's envelope (semi-closed form; agrees with `analyze`'s kernel)
+};
+[[nodiscard]] ChipModel parse_chip_model(const std::string& name);  ///< throws InputError
+[[nodiscard]] std::string to_string(ChipModel m);
+
+/// Mechanism thresholds (percent of r_e) and the recommendation's default share.
+struct MechanismThresholds {
+  double czi_max_pct = 25;     ///< K_re below this: CZI (ploughing)
+  double czii_max_pct = 60;    ///< K_re below this (and >= czi_max): CZII; above: CZIII
+  double transition_pct = 40;  ///< marker where the acoustic ratio k_f crosses 1
+};
+
+/// Reads `[mechanism]` (czi_max, czii_max, transition, share, model, points), `[tool]
+/// flank_wear` and `[material] friction_angle` from the job's document. Throws InputError.
+struct MechanismSettings {
+  MechanismThresholds thresholds;
+  double share = 0.5;  ///< required CZIII share of the cutting part (0..1)
+  ChipModel model = ChipModel::exact;
+  int points = 3600;              ///< theta samples per cycle
+  double flank_wear_mm = 0;       ///< VB_B (mm)
+  double friction_angle_deg = 0;  ///< theta_m for h_m = r_e (1 - cos theta_m); 0 = not given
+};
+[[nodiscard]] MechanismSettings mechanism_settings(const Job& job);
+
+/// The curves over one cycle, structure of arrays (one entry per theta sample).
+struct MechanismCurve {
+  ChipModel model = ChipModel::exact;
+  double edge_radius_mm = 0;
+  double cycle_time_s = 0;
+  std::vector<double> theta_rad;         ///< trochoid angle
+  std::vector<double> t_s;               ///< time from the cycle's start (theta = 0)
+  std::vector<double> h_mm;              ///< uncut chip thickness h_e (0 when not cutting)
+  std::vector<double> psi_rad;           ///< contact (engagement) angle
+  std::vector<double> teeth_in_contact;  ///< Z_c = psi Z / 2 pi
+  std::vector<double> gamma_k_rad;       ///< kinematic rake angle (negative below r_e)
+  std::vector<double> kappa_rad;         ///< kinematic angle change
+  std::vector<double> k_re_pct;          ///< 100 h / r_e
+  std::vector<double> k_re_wear_pct;     ///< 100 (h + VB tan kappa) / r_e where kappa > 0
+  std::vector<int> zone;                 ///< 0 not cutting, 1 CZI, 2 CZII, 3 CZIII
+};
+
+/// Zone shares of the cutting part of the cycle (by time; they sum to 1) and where each
+/// zone starts and ends (s from the cycle's start of cutting; -1 when the zone is absent).
+struct ZoneSummary {
+  double share[3] = {0, 0, 0};  ///< CZI, CZII, CZIII
+  double start_s[3] = {-1, -1, -1};
+  double end_s[3] = {-1, -1, -1};
+  double cutting_time_s = 0;
+  double cutting_start_s = 0;  ///< from theta = 0
+  double transition_s = -1;    ///< first time K_re crosses the transition marker
+  double h_max_mm = 0;
+  double h_m_mm = 0;  ///< minimum undeformed chip thickness r_e (1 - cos theta_m)
+};
+
+/// The chip curves for a trochoidal or elliptical job (InputError for other families or
+/// bad settings). `use_wear` classifies zones with the wear-corrected K_re.
+[[nodiscard]] MechanismCurve mechanism_curve(const Job& job, const MechanismSettings& settings,
+                                             bool use_wear = false);
+/// The same curves at given trochoid angles (rad, any order; t_s is the time from theta = 0
+/// along the cycle, by Simpson's rule on the path speed).
+[[nodiscard]] MechanismCurve mechanism_curve_at(const Job& job, const MechanismSettings& settings,
+                                                const std::vector<double>& theta_rad,
+                                                bool use_wear = false);
+[[nodiscard]] ZoneSummary summarize_zones(const MechanismCurve& c,
+                                          const MechanismSettings& settings, bool use_wear);
+
+/// Recommendation: the smallest step (mm) for which at least `share` of the cutting part is
+/// in CZIII (or, with `for_feed`, the smallest feed per tooth at the job's step).
+struct Recommendation {
+  bool found = false;
+  double value = 0;   ///< min_step_mm or min_feed_per_tooth_mm
+  ZoneSummary zones;  ///< at that value
+  std::string explanation;
+};
+[[nodiscard]] Recommendation recommend(const Job& job, const MechanismSettings& settings,
+                                       bool use_wear, bool for_feed);
+
+}  // namespace trochomill

@@ -1,0 +1,348 @@
+// The exact chip model over a trochoid cycle (semi-closed form); see docs/models.md
+// section 9 and include/trochomill/mechanism.hpp.
+//
+// At trochoid angle theta the tool circle (centre c, radius R) cuts the stock left by the
+// previous tooth (the circle about p = c one f_z of path earlier) and by the previous cycle
+// (the region swept along c(theta') - (0, s), bounded ahead of the tool by its envelope
+// E(theta') = c(theta') - (0, s) + R n(theta'), n the outward unit normal). The chip is
+// largest either straight ahead of p (h = |c - p|, where the previous tooth bounds it) or at
+// a kink where the previous tooth's circle meets the envelope (h = R - |Q - c|). The kinks
+// and the engaged arc's ends (tool circle against the envelope) are roots of
+// |E(theta') - centre|^2 = R^2 (a sign scan over theta' in theta +- pi, polished by regula
+// falsi); an arc or a kink counts only if it lies outside every earlier position's disc
+// (nearest-point distance to the past path, coarse samples then Newton).
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "mechanism/internal.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill::mech {
+namespace {
+
+struct V2 {
+  double x = 0, y = 0;
+};
+V2 operator-(V2 a, V2 b) { return {a.x - b.x, a.y - b.y}; }
+V2 operator+(V2 a, V2 b) { return {a.x + b.x, a.y + b.y}; }
+V2 operator*(double k, V2 a) { return {k * a.x, k * a.y}; }
+double dot(V2 a, V2 b) { return a.x * b.x + a.y * b.y; }
+double norm(V2 a) { return std::sqrt(a.x * a.x + a.y * a.y); }
+
+struct Tables;
+
+struct Curve {
+  double a, b, s, R;
+  const Tables* tab = nullptr;
+  [[nodiscard]] V2 c(double t) const {
+    return {-a * std::cos(t), b * std::sin(t) + s * t / kTwoPi};
+  }
+  [[nodiscard]] V2 d1(double t) const { return {a * std::sin(t), b * std::cos(t) + s / kTwoPi}; }
+  // Envelope of the previous cycle and its derivative in theta'.
+  void envelope(double t, V2& e, V2& de) const {
+    const double sn = std::sin(t), cs = std::cos(t);
+    const V2 T{a * sn, b * cs + s / kTwoPi}, T2{a * cs, -b * sn};
+    const double L = norm(T);
+    const V2 n{-T.y / L, T.x / L};  // left of the motion: outward for the clockwise orbit
+    // d/dt (T / L) = (T2 - (T.T2 / L^2) T) / L, rotated like n.
+    const double k = dot(T, T2) / (L * L);
+    const V2 dT{(T2.x - k * T.x) / L, (T2.y - k * T.y) / L};
+    const V2 dn{-dT.y, dT.x};
+    e = {-a * cs + R * n.x, b * sn + s * t / kTwoPi - s + R * n.y};
+    de = {T.x + R * dn.x, T.y + R * dn.y};
+  }
+};
+
+// Envelope and path on fixed grids (built once per model), so the scans below need no
+// trigonometry: the envelope every 2 pi / 96 over [-pi, 3 pi], the path every 2 pi / 144
+// over [-2 pi, 2 pi].
+struct Tables {
+  static constexpr int kEnvPerTurn = 96, kPathPerTurn = 144;
+  static constexpr double env_dt = kTwoPi / kEnvPerTurn, path_dt = kTwoPi / kPathPerTurn;
+  int env_m0, path_m0;
+  const std::vector<double>&ex, &ey, &px, &py;
+  [[nodiscard]] V2 env_at(int m) const {
+    const auto i = static_cast<std::size_t>(m - env_m0);
+    return {ex[i], ey[i]};
+  }
+  [[nodiscard]] V2 path_at(int m) const {
+    const auto i = static_cast<std::size_t>(m - path_m0);
+    return {px[i], py[i]};
+  }
+};
+
+// All roots in (theta - pi, theta + pi): a sign scan (plus the minimum of every dip
+// between samples), each bracket polished by regula falsi.
+std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
+  std::vector<double> out;
+  auto g = [&](double t) {
+    V2 e, de;
+    cv.envelope(t, e, de);
+    const V2 r = e - q;
+    return dot(r, r) - cv.R * cv.R;
+  };
+  // Illinois regula falsi on a bracket with a sign change, to 1e-14 rad.
+  auto solve = [&](double lo, double hi, double glo, double ghi) {
+    double r = 0.5 * (lo + hi);
+    int side = 0;
+    for (int it = 0; it < 100 && hi - lo > 1e-14; ++it) {
+      r = (glo * hi - ghi * lo) / (glo - ghi);
+      if (!(r > lo && r < hi)) r = 0.5 * (lo + hi);
+      const double gr = g(r);
+      if (gr == 0) break;
+      if ((gr < 0) == (glo < 0)) {
+        lo = r;
+        glo = gr;
+        if (side == -1) ghi *= 0.5;
+        side = -1;
+      } else {
+        hi = r;
+        ghi = gr;
+        if (side == 1) glo *= 0.5;
+        side = 1;
+      }
+    }
+    return r;
+  };
+  // Samples on the table's grid within theta +- pi.
+  const Tables& tb = *cv.tab;
+  const int m_lo = static_cast<int>(std::ceil((theta - kPi) / tb.env_dt));
+  const int m_hi = static_cast<int>(std::floor((theta + kPi) / tb.env_dt));
+  const auto nk = static_cast<std::size_t>(m_hi - m_lo + 1);
+  thread_local std::vector<double> ts, gs;
+  ts.resize(nk);
+  gs.resize(nk);
+  for (std::size_t k = 0; k < nk; ++k) {
+    const int m = m_lo + static_cast<int>(k);
+    ts[k] = m * tb.env_dt;
+    const V2 r = tb.env_at(m) - q;
+    gs[k] = dot(r, r) - cv.R * cv.R;
+  }
+  for (std::size_t k = 1; k < nk; ++k) {
+    if ((gs[k - 1] < 0) != (gs[k] < 0)) {
+      out.push_back(solve(ts[k - 1], ts[k], gs[k - 1], gs[k]));
+    } else if (k + 1 < nk && gs[k] >= 0 && gs[k] < gs[k - 1] && gs[k] <= gs[k + 1] &&
+               gs[k] < 0.5 * std::abs(gs[k + 1] - 2 * gs[k] + gs[k - 1])) {
+      // A dip between samples that may cross zero (the envelope grazing the circle, e.g. a
+      // wall cusp; a parabola through the samples dips at most an eighth of the second
+      // difference below them, so a value above half of it cannot hide a crossing): find
+      // its minimum; if negative, it holds two roots.
+      double lo = ts[k - 1], hi = ts[k + 1];
+      for (int it = 0; it < 100 && hi - lo > 1e-14; ++it) {
+        const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+        if (g(m1) < g(m2)) {
+          hi = m2;
+        } else {
+          lo = m1;
+        }
+      }
+      const double tm = 0.5 * (lo + hi), gm = g(tm);
+      if (gm < 0) {
+        out.push_back(solve(ts[k - 1], tm, gs[k - 1], gm));
+        out.push_back(solve(tm, ts[k + 1], gm, gs[k + 1]));
+      }
+    }
+  }
+  return out;
+}
+
+// Distance from x to the path of all earlier positions except the last quarter turn of the
+// current cycle (those are represented by the previous tooth's disc): every past position
+// is c(t) - j (0, s) with t in [theta - 2 pi, theta) and j >= 0 cycles back, and for each t
+// the best j is the one that brings its y nearest x's. Coarse samples over t, then Newton
+// on the nearest with its j fixed.
+double dist_to_past(const Curve& cv, V2 x, double theta) {
+  const Tables& tb = *cv.tab;
+  const double lo = theta - kTwoPi, recent = theta - 0.5 * kPi;
+  const int m_lo = static_cast<int>(std::ceil(lo / tb.path_dt));
+  const int m_hi = static_cast<int>(std::ceil(theta / tb.path_dt)) - 1;
+  double best = 1e300, bt = lo, bj = 1;
+  for (int m = m_lo; m <= m_hi; ++m) {
+    const double t = m * tb.path_dt;
+    const V2 q = tb.path_at(m);
+    double j = std::max(0.0, std::round((q.y - x.y) / cv.s));
+    if (j == 0 && t > recent) j = 1;  // the recent current-cycle positions do not count
+    const V2 r = q - V2{0, j * cv.s} - x;
+    const double dd = dot(r, r);  // squared while scanning
+    if (dd < best) {
+      best = dd;
+      bt = t;
+      bj = j;
+    }
+  }
+  best = std::sqrt(best);
+  double t = bt;
+  for (int it = 0; it < 8; ++it) {  // minimise |c(t) - (0, j s) - x|^2: f = (q - x).c'
+    const V2 q = cv.c(t) - V2{0, bj * cv.s} - x;
+    const V2 d1 = cv.d1(t);
+    const V2 d2{cv.a * std::cos(t), -cv.b * std::sin(t)};
+    const double f = dot(q, d1), df = dot(d1, d1) + dot(q, d2);
+    if (df <= 0) break;
+    const double step = std::clamp(f / df, -0.05, 0.05);
+    t -= step;
+    if (std::abs(step) < 1e-14) break;
+  }
+  if (bj == 0 && t > recent) return best;  // refined into the excluded stretch
+  return std::min(best, norm(cv.c(t) - V2{0, bj * cv.s} - x));
+}
+
+}  // namespace
+
+ExactModel::ExactModel(double a_mm, double b_mm, double step_mm, double radius_mm, double fz_mm,
+                       double feed_mm_per_s, double edge_speed_mm_per_s)
+    : a_(a_mm),
+      b_(b_mm),
+      s_(step_mm),
+      R_(radius_mm),
+      fz_(fz_mm),
+      feed_mm_per_s_(feed_mm_per_s),
+      edge_speed_mm_per_s_(edge_speed_mm_per_s) {
+  const Curve cv{a_, b_, s_, R_};
+  env_m0_ = static_cast<int>(std::floor(-kPi / Tables::env_dt)) - 2;
+  const int env_m1 = static_cast<int>(std::ceil(3 * kPi / Tables::env_dt)) + 2;
+  for (int m = env_m0_; m <= env_m1; ++m) {
+    V2 e, de;
+    cv.envelope(m * Tables::env_dt, e, de);
+    env_x_.push_back(e.x);
+    env_y_.push_back(e.y);
+  }
+  path_m0_ = static_cast<int>(std::floor(-kTwoPi / Tables::path_dt)) - 2;
+  const int path_m1 = static_cast<int>(std::ceil(kTwoPi / Tables::path_dt)) + 2;
+  for (int m = path_m0_; m <= path_m1; ++m) {
+    const V2 q = cv.c(m * Tables::path_dt);
+    path_x_.push_back(q.x);
+    path_y_.push_back(q.y);
+  }
+}
+
+ExactPoint ExactModel::at(double theta) const {
+  // The cycle is periodic in phase: work at theta in [0, 2 pi) (the tables cover it).
+  theta -= kTwoPi * std::floor(theta / kTwoPi);
+  const Tables tb{env_m0_, path_m0_, env_x_, env_y_, path_x_, path_y_};
+  Curve cv{a_, b_, s_, R_};
+  cv.tab = &tb;
+  ExactPoint out;
+  const V2 c = cv.c(theta);
+  const V2 v = cv.d1(theta);
+  // One f_z of path back (midpoint speed: error O(f_z^3 kappa^2)).
+  const double d0 = fz_ / norm(v);
+  const double dth = fz_ / norm(cv.d1(theta - 0.5 * d0));
+  const V2 p = cv.c(theta - dth);
+  const V2 cp = c - p;
+  const double d = norm(cp);
+  const double tol = 1e-9 * R_;
+
+  // Split the tool circle at its crossings with the previous cycle's envelope and with the
+  // previous tooth's circle; an arc is engaged when its midpoint lies outside both the
+  // previous tooth's disc and every earlier position's disc.
+  // Envelopes of the last kEnvelopes cycles (a wall cusp is bounded by two of them): the
+  // j-th is the first shifted by (j - 1) s back, so its roots are the first's for the query
+  // point shifted forward.
+  constexpr int kEnvelopes = 3;
+  struct Root {
+    double t;
+    int j;
+  };
+  auto env_at = [&](const Root& r) {
+    V2 q, dq;
+    cv.envelope(r.t, q, dq);
+    return V2{q.x, q.y - (r.j - 1) * s_};
+  };
+  auto roots_for = [&](V2 q) {
+    std::vector<std::vector<Root>> out_j(kEnvelopes);
+    for (int j = 1; j <= kEnvelopes; ++j) {
+      for (const double t : scan_roots(cv, q + V2{0, (j - 1) * s_}, theta)) {
+        out_j[static_cast<std::size_t>(j - 1)].push_back({t, j});
+      }
+    }
+    return out_j;
+  };
+  std::vector<double> ang;
+  V2 e;
+  const auto tool_roots = roots_for(c);
+  for (const auto& rj : tool_roots) {
+    for (const Root& r : rj) {
+      e = env_at(r);
+      ang.push_back(std::atan2(e.y - c.y, e.x - c.x));
+    }
+  }
+  const double back = std::atan2(-cp.y, -cp.x), beta = std::acos(std::min(1.0, d / (2 * R_)));
+  ang.push_back(back - beta);
+  ang.push_back(back + beta);
+  for (auto& x : ang) x = x - kTwoPi * std::floor(x / kTwoPi);
+  std::sort(ang.begin(), ang.end());
+  for (std::size_t k = 0; k < ang.size(); ++k) {
+    const double a0 = ang[k], a1 = k + 1 < ang.size() ? ang[k + 1] : ang[0] + kTwoPi;
+    if (a1 - a0 < 1e-12) continue;
+    const double mid = 0.5 * (a0 + a1);
+    const V2 m = c + R_ * V2{std::cos(mid), std::sin(mid)};
+    if (norm(m - p) < R_ || dist_to_past(cv, m, theta) < R_) continue;
+    out.psi_rad += a1 - a0;
+  }
+  if (out.psi_rad <= 0) return out;
+
+  // The chip: straight ahead of p where the previous tooth bounds it (h = d), else at the
+  // kinks where the previous tooth's circle meets the earlier positions' boundary.
+  V2 contact{};
+  const V2 ahead = p + R_ * V2{cp.x / d, cp.y / d};
+  if (dist_to_past(cv, ahead, theta) >= R_ - tol) {
+    out.h_mm = d;
+    contact = ahead;
+  } else {
+    for (const auto& rj : roots_for(p)) {
+      for (const Root& r : rj) {
+        e = env_at(r);
+        if (dist_to_past(cv, e, theta) < R_ - 1e-7 * R_) continue;  // buried by another part
+        const double h = R_ - norm(e - c);
+        if (h > out.h_mm) {
+          out.h_mm = h;
+          contact = e;
+        }
+      }
+    }
+  }
+  // Where the earlier surface alone bounds the chip (a wall cusp the previous cycle left):
+  // the envelope point nearest the centre between two crossings with the tool circle.
+  auto ray_tooth = [&](V2 u) {  // far crossing of the ray from c along u with p's circle
+    const V2 o = p - c;
+    const double t = dot(o, u), q = R_ * R_ - (dot(o, o) - t * t);
+    return q >= 0 ? t + std::sqrt(q) : 0.0;
+  };
+  for (const auto& rj : tool_roots) {
+    for (std::size_t k = 0; k + 1 < rj.size(); ++k) {
+      const int j = rj[k].j;
+      double lo = rj[k].t, hi = rj[k + 1].t;
+      auto dist_c = [&](double t) { return norm(env_at({t, j}) - c); };
+      for (int it = 0; it < 80 && hi - lo > 1e-13; ++it) {  // golden section
+        const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+        if (dist_c(m1) < dist_c(m2)) {
+          hi = m2;
+        } else {
+          lo = m1;
+        }
+      }
+      e = env_at({0.5 * (lo + hi), j});
+      const double rho = norm(e - c);
+      if (rho >= R_ || dist_to_past(cv, e, theta) < R_ - 1e-7 * R_) continue;
+      const V2 u{(e.x - c.x) / rho, (e.y - c.y) / rho};
+      const double h = R_ - std::max(rho, ray_tooth(u));
+      if (h > out.h_mm) {
+        out.h_mm = h;
+        contact = e;
+      }
+    }
+  }
+  if (out.h_mm <= 0) {
+    out.h_mm = 0;
+    return out;
+  }
+  // Kinematic angle change at the contact: the feed's radial component over the edge speed.
+  const double cl = norm(contact - c);
+  const V2 u{(contact.x - c.x) / cl, (contact.y - c.y) / cl};
+  const double v_feed = feed_mm_per_s_ / norm(v);  // d1 scaled to the feed speed
+  out.kappa_rad = std::atan2(v_feed * dot(v, u), edge_speed_mm_per_s_);
+  return out;
+}
+
+}  // namespace trochomill::mech

@@ -1,0 +1,269 @@
+// Mechanism curves over a cycle, zone shares and the step / feed recommendation
+// (include/trochomill/mechanism.hpp, docs/models.md section 9).
+#include "trochomill/mechanism.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "mechanism/internal.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+
+ChipModel parse_chip_model(const std::string& name) {
+  if (name == "exact") return ChipModel::exact;
+  throw InputError(fmt::format("unknown chip model '{}': allowed: exact", name));
+}
+
+std::string to_string(ChipModel m) {
+  switch (m) {
+    case ChipModel::exact:
+      return "exact";
+  }
+  return "exact";
+}
+
+MechanismSettings mechanism_settings(const Job& job) {
+  MechanismSettings s;
+  s.thresholds.czi_max_pct = job.mechanism.czi_max_pct;
+  s.thresholds.czii_max_pct = job.mechanism.czii_max_pct;
+  s.thresholds.transition_pct = job.mechanism.transition_pct;
+  s.share = job.mechanism.share;
+  s.model = parse_chip_model(job.mechanism.model);
+  s.points = job.mechanism.points;
+  s.flank_wear_mm = job.tool.flank_wear_mm;
+  s.friction_angle_deg = job.mechanism.friction_angle_deg.value_or(0.0);
+  return s;
+}
+
+namespace {
+
+int zone_of(double k, const MechanismThresholds& t) {
+  if (k < t.czi_max_pct) return 1;
+  if (k < t.czii_max_pct) return 2;
+  return 3;
+}
+
+}  // namespace
+
+namespace {
+
+struct CycleSetup {
+  double a, b, s, R, fz, feed, edge_speed;
+};
+
+CycleSetup setup(const Job& job, const MechanismSettings& st) {
+  if (job.path.type != PathType::trochoidal && job.path.type != PathType::elliptical) {
+    throw InputError(fmt::format(
+        "the mechanism model needs [path] type = \"trochoidal\" or \"elliptical\" (a closed "
+        "trochoid cycle), got \"{}\"",
+        to_string(job.path.type)));
+  }
+  if (!(job.tool.edge_radius_mm > 0)) {
+    throw InputError(
+        "[tool] edge_radius must be > 0 mm for the mechanism model (K_re = h / r_e); "
+        "a ground carbide edge is typically 0.005-0.03 mm");
+  }
+  if (st.points < 36) throw InputError(fmt::format("points must be >= 36, got {}", st.points));
+  CycleSetup c;
+  c.R = job.tool.radius_mm();
+  c.a = 0.5 * (job.slot.width_mm - job.tool.diameter_mm);
+  if (!(c.a > 0)) {
+    throw InputError(fmt::format("the slot ({} mm) must be wider than the tool ({} mm)",
+                                 job.slot.width_mm, job.tool.diameter_mm));
+  }
+  c.b = job.path.type == PathType::elliptical ? job.path.aspect_ratio * c.a : c.a;
+  c.s = job.path.step_mm;
+  c.fz = job.cutting.feed_per_tooth_mm;
+  c.feed = feed_rate_mm_per_min(job) / 60.0;
+  c.edge_speed = rpm_to_rad_per_s(spindle_speed_rpm(job)) * c.R;
+  return c;
+}
+
+double path_speed(const CycleSetup& g, double th) {  // |c'(theta)| (mm/rad)
+  return std::hypot(g.a * std::sin(th), g.b * std::cos(th) + g.s / kTwoPi);
+}
+
+// Evaluates every column at the given angles; t_s left to the caller.
+MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const CycleSetup& g,
+                        const std::vector<double>& thetas, bool use_wear) {
+  const mech::ExactModel model(g.a, g.b, g.s, g.R, g.fz, g.feed, g.edge_speed);
+  MechanismCurve c;
+  c.model = st.model;
+  c.edge_radius_mm = job.tool.edge_radius_mm;
+  const std::size_t n = thetas.size();
+  for (auto* v : {&c.theta_rad, &c.t_s, &c.h_mm, &c.psi_rad, &c.teeth_in_contact, &c.gamma_k_rad,
+                  &c.kappa_rad, &c.k_re_pct, &c.k_re_wear_pct}) {
+    v->resize(n);
+  }
+  c.zone.resize(n);
+  const double re = job.tool.edge_radius_mm, vb = st.flank_wear_mm;
+  for (std::size_t i = 0; i < n; ++i) {
+    const mech::ExactPoint p = model.at(thetas[i]);
+    c.theta_rad[i] = thetas[i];
+    c.h_mm[i] = p.h_mm;
+    c.psi_rad[i] = p.psi_rad;
+    c.teeth_in_contact[i] = p.psi_rad * job.tool.teeth / kTwoPi;
+    c.gamma_k_rad[i] = p.h_mm < re ? -std::asin((re - p.h_mm) / re) : 0.0;
+    c.kappa_rad[i] = p.kappa_rad;
+    c.k_re_pct[i] = 100.0 * p.h_mm / re;
+    c.k_re_wear_pct[i] =
+        100.0 * (p.h_mm + (p.kappa_rad > 0 ? vb * std::tan(p.kappa_rad) : 0.0)) / re;
+    const double k = use_wear ? c.k_re_wear_pct[i] : c.k_re_pct[i];
+    c.zone[i] = p.h_mm > 0 ? zone_of(k, st.thresholds) : 0;
+  }
+  // Cycle time: Simpson's rule on the path speed over one cycle.
+  constexpr int kSimpson = 512;
+  double sum = 0;
+  for (int k = 0; k <= kSimpson; ++k) {
+    const double w = (k == 0 || k == kSimpson) ? 1 : (k % 2 ? 4 : 2);
+    sum += w * path_speed(g, kTwoPi * k / kSimpson);
+  }
+  c.cycle_time_s = sum * (kTwoPi / kSimpson) / 3 / g.feed;
+  return c;
+}
+
+}  // namespace
+
+MechanismCurve mechanism_curve(const Job& job, const MechanismSettings& st, bool use_wear) {
+  const CycleSetup g = setup(job, st);
+  const auto n = static_cast<std::size_t>(st.points);
+  std::vector<double> thetas(n);
+  for (std::size_t i = 0; i < n; ++i)
+    thetas[i] = kTwoPi * static_cast<double>(i) / static_cast<double>(n);
+  MechanismCurve c = evaluate(job, st, g, thetas, use_wear);
+  // Time from theta = 0: trapezoid rule on |c'| / f_r between the samples.
+  for (std::size_t i = 1; i < n; ++i) {
+    c.t_s[i] = c.t_s[i - 1] + 0.5 * (path_speed(g, thetas[i]) + path_speed(g, thetas[i - 1])) *
+                                  (thetas[i] - thetas[i - 1]) / g.feed;
+  }
+  return c;
+}
+
+MechanismCurve mechanism_curve_at(const Job& job, const MechanismSettings& st,
+                                  const std::vector<double>& theta_rad, bool use_wear) {
+  const CycleSetup g = setup(job, st);
+  MechanismCurve c = evaluate(job, st, g, theta_rad, use_wear);
+  for (std::size_t i = 0; i < theta_rad.size(); ++i) {
+    constexpr int kSimpson = 64;
+    double sum = 0;
+    for (int k = 0; k <= kSimpson; ++k) {
+      const double w = (k == 0 || k == kSimpson) ? 1 : (k % 2 ? 4 : 2);
+      sum += w * path_speed(g, theta_rad[i] * k / kSimpson);
+    }
+    c.t_s[i] = sum * (theta_rad[i] / kSimpson) / 3 / g.feed;
+  }
+  return c;
+}
+
+ZoneSummary summarize_zones(const MechanismCurve& c, const MechanismSettings& st, bool use_wear) {
+  ZoneSummary z;
+  const std::size_t n = c.theta_rad.size();
+  if (n == 0) return z;
+  // The cutting part starts where cutting resumes after a pause (cyclically).
+  std::size_t start = 0;
+  bool found = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t prev = (i + n - 1) % n;
+    if (c.zone[i] != 0 && c.zone[prev] == 0) {
+      start = i;
+      found = true;
+      break;
+    }
+  }
+  z.cutting_start_s = found ? c.t_s[start] : 0.0;
+  double dur[3] = {0, 0, 0};
+  double tt = 0;  // time from the start of cutting
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = (start + k) % n, j = (i + 1) % n;
+    const double dt = j == 0 ? c.cycle_time_s - c.t_s[i] : c.t_s[j] - c.t_s[i];
+    const int zone = c.zone[i];
+    if (zone > 0) {
+      dur[zone - 1] += dt;
+      if (z.start_s[zone - 1] < 0) z.start_s[zone - 1] = tt;
+      z.end_s[zone - 1] = tt + dt;
+      z.h_max_mm = std::max(z.h_max_mm, c.h_mm[i]);
+      const double kre = use_wear ? c.k_re_wear_pct[i] : c.k_re_pct[i];
+      if (z.transition_s < 0 && kre >= st.thresholds.transition_pct) z.transition_s = tt;
+    }
+    tt += dt;
+  }
+  z.cutting_time_s = dur[0] + dur[1] + dur[2];
+  for (int q = 0; q < 3; ++q) z.share[q] = z.cutting_time_s > 0 ? dur[q] / z.cutting_time_s : 0;
+  z.h_m_mm = c.edge_radius_mm * (1 - std::cos(deg_to_rad(st.friction_angle_deg)));
+  return z;
+}
+
+Recommendation recommend(const Job& job, const MechanismSettings& st, bool use_wear,
+                         bool for_feed) {
+  if (!(st.share > 0 && st.share <= 1)) {
+    throw InputError(fmt::format("share must be in (0, 1], got {}", st.share));
+  }
+  MechanismSettings coarse = st;
+  coarse.points = std::min(st.points, 720);  // the search; the answer is re-evaluated finely
+  const double R = job.tool.radius_mm();
+  auto eval = [&](double v, const MechanismSettings& s) {
+    Job j = job;
+    if (for_feed) {  // same spindle speed: the feed rate follows f_z
+      j.cutting.feed_per_tooth_mm = v;
+      j.cutting.feed_rate_mm_per_min = v * j.cutting.spindle_speed_rpm * j.tool.teeth;
+    } else {
+      j.path.step_mm = v;
+    }
+    return summarize_zones(mechanism_curve(j, s, use_wear), s, use_wear);
+  };
+  // Scan upwards (steps up to the tool radius, feeds up to 0.5 mm/tooth), then bisect the
+  // first bracket to 0.1 % of the value.
+  const double lo_v = for_feed ? 1e-4 : 1e-3, hi_v = for_feed ? 0.5 : R;
+  constexpr int kScan = 48;
+  double prev = lo_v;
+  Recommendation r;
+  for (int k = 0; k <= kScan; ++k) {
+    const double v = lo_v * std::pow(hi_v / lo_v, static_cast<double>(k) / kScan);
+    if (eval(v, coarse).share[2] >= st.share) {
+      double a = k == 0 ? v : prev, b = v;
+      if (k > 0) {
+        for (int it = 0; it < 30 && (b - a) > 1e-3 * b; ++it) {
+          const double m = 0.5 * (a + b);
+          if (eval(m, coarse).share[2] >= st.share) {
+            b = m;
+          } else {
+            a = m;
+          }
+        }
+      }
+      // The search ran on a coarser theta grid: confirm at the full one, stepping up by
+      // 0.1 % until the share holds there too.
+      r.zones = eval(b, st);
+      for (int it = 0; it < 200 && r.zones.share[2] < st.share && b < hi_v; ++it) {
+        b *= 1.001;
+        r.zones = eval(b, st);
+      }
+      r.found = r.zones.share[2] >= st.share;
+      r.value = b;
+      break;
+    }
+    prev = v;
+  }
+  const char* what = for_feed ? "feed per tooth" : "trochoid step";
+  if (r.found) {
+    r.explanation = fmt::format(
+        "smallest {} {:.4g} mm puts {:.0f} % of the cutting part in CZIII (K_re >= {:g} %, "
+        "r_e {:g} mm{}); CZI {:.0f} %, CZII {:.0f} %",
+        what, r.value, 100 * r.zones.share[2], st.thresholds.czii_max_pct, job.tool.edge_radius_mm,
+        use_wear ? fmt::format(", flank wear {:g} mm", st.flank_wear_mm) : "",
+        100 * r.zones.share[0], 100 * r.zones.share[1]);
+  } else {
+    r.explanation = fmt::format(
+        "no {} up to {:g} mm puts {:.0f} % of the cutting part in CZIII: the chip stays "
+        "below {:g} % of r_e = {:g} mm",
+        what, hi_v, 100 * st.share, st.thresholds.czii_max_pct, job.tool.edge_radius_mm);
+  }
+  return r;
+}
+
+}  // namespace trochomill
