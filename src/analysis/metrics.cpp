@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/roots.hpp"
 #include "trochomill/analysis.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/units.hpp"
@@ -156,27 +157,8 @@ ToothChip tooth_chip(const DenseCentre& c, const Tool& tool, double omega, doubl
   };
   // Regula falsi (Illinois) on a bracket of +-45/Z degrees of spindle rotation, where f
   // changes sign once; to 1e-13 s (the tip moves < 1e-9 mm in that time).
-  double lo = t - delta - 0.25 * delta, hi = t - delta + 0.25 * delta;
-  double flo = f(lo), fhi = f(hi), root = 0.5 * (lo + hi);
-  int side = 0;
-  for (int it = 0; it < 100 && hi - lo > 1e-13; ++it) {
-    root = (flo * hi - fhi * lo) / (flo - fhi);
-    if (!(root > lo && root < hi)) root = 0.5 * (lo + hi);
-    const double fr = f(root);
-    if (fr == 0) break;
-    if ((fr < 0) == (flo < 0)) {
-      lo = root;
-      flo = fr;
-      if (side == -1) fhi *= 0.5;
-      side = -1;
-    } else {
-      hi = root;
-      fhi = fr;
-      if (side == 1) flo *= 0.5;
-      side = 1;
-    }
-    if (std::abs(fr) < 1e-12) break;
-  }
+  const double lo = t - delta - 0.25 * delta, hi = t - delta + 0.25 * delta;
+  const double root = detail::regula_falsi(f, lo, hi, f(lo), f(hi), 1e-13);
   const auto [qx, qy] = q(root);
   ToothChip out;
   out.trajectory_mm = R - (qx * ux + qy * uy);

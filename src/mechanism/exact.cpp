@@ -15,6 +15,7 @@
 #include <cmath>
 #include <vector>
 
+#include "common/roots.hpp"
 #include "mechanism/internal.hpp"
 #include "trochomill/units.hpp"
 
@@ -82,28 +83,8 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
     const V2 r = e - q;
     return dot(r, r) - cv.R * cv.R;
   };
-  // Illinois regula falsi on a bracket with a sign change, to 1e-14 rad.
   auto solve = [&](double lo, double hi, double glo, double ghi) {
-    double r = 0.5 * (lo + hi);
-    int side = 0;
-    for (int it = 0; it < 100 && hi - lo > 1e-14; ++it) {
-      r = (glo * hi - ghi * lo) / (glo - ghi);
-      if (!(r > lo && r < hi)) r = 0.5 * (lo + hi);
-      const double gr = g(r);
-      if (gr == 0) break;
-      if ((gr < 0) == (glo < 0)) {
-        lo = r;
-        glo = gr;
-        if (side == -1) ghi *= 0.5;
-        side = -1;
-      } else {
-        hi = r;
-        ghi = gr;
-        if (side == 1) glo *= 0.5;
-        side = 1;
-      }
-    }
-    return r;
+    return detail::regula_falsi(g, lo, hi, glo, ghi, 1e-14);
   };
   // Samples on the table's grid within theta +- pi.
   const Tables& tb = *cv.tab;
