@@ -379,8 +379,10 @@ int run(int argc, char** argv) {
         fmt::print("{}: {} model, r_e {:g} mm{}\n", mech_args.job_file, tmill::to_string(st.model),
                    job.tool.edge_radius_mm,
                    use_wear ? fmt::format(", flank wear {:g} mm", st.flank_wear_mm) : "");
-        fmt::print("  cycle {:.4f} s, cutting {:.4f} s, h_max {:.5f} mm, h_m {:.5f} mm\n",
-                   c.cycle_time_s, z.cutting_time_s, z.h_max_mm, z.h_m_mm);
+        fmt::print("  cycle {:.4f} s, cutting {:.4f} s, h_max {:.5f} mm, h_m {}\n", c.cycle_time_s,
+                   z.cutting_time_s, z.h_max_mm,
+                   st.friction_angle_deg > 0 ? fmt::format("{:.5f} mm", z.h_m_mm)
+                                             : std::string("n/a (no [material] friction_angle)"));
         const char* names[3] = {"CZI  ", "CZII ", "CZIII"};
         for (int q = 0; q < 3; ++q) {
           fmt::print("  {} {:5.1f} % of the cutting part", names[q], 100 * z.share[q]);
