@@ -1,0 +1,38 @@
+// Benchmarks of the mechanism model (issue 4): one cycle at 3600 points, and the step
+// recommendation, on the Pivkin 2025 example.
+#include <benchmark/benchmark.h>
+
+#include <string>
+
+#include "trochomill/job.hpp"
+#include "trochomill/mechanism.hpp"
+
+namespace {
+
+trochomill::Job pivkin() {
+  return trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) +
+                              "/examples/pivkin2025/trochoidal.toml");
+}
+
+void BM_MechanismCycle3600(benchmark::State& state) {
+  const trochomill::Job job = pivkin();
+  trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  st.points = 3600;
+  for (auto _ : state) {
+    const auto c = trochomill::mechanism_curve(job, st);
+    benchmark::DoNotOptimize(c.h_mm.data());
+  }
+}
+BENCHMARK(BM_MechanismCycle3600)->Unit(benchmark::kMillisecond);
+
+void BM_RecommendStep(benchmark::State& state) {
+  const trochomill::Job job = pivkin();
+  const trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  for (auto _ : state) {
+    const auto r = trochomill::recommend(job, st, false, false);
+    benchmark::DoNotOptimize(r.value);
+  }
+}
+BENCHMARK(BM_RecommendStep)->Unit(benchmark::kMillisecond);
+
+}  // namespace
