@@ -110,7 +110,7 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
       // difference below them, so a value above half of it cannot hide a crossing): find
       // its minimum; if negative, it holds two roots.
       double lo = ts[k - 1], hi = ts[k + 1];
-      for (int it = 0; it < 100 && hi - lo > 1e-14; ++it) {
+      for (int it = 0; it < 60 && hi - lo > 1e-12; ++it) {
         const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
         if (g(m1) < g(m2)) {
           hi = m2;
@@ -135,14 +135,14 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
 // on the nearest with its j fixed.
 double dist_to_past(const Curve& cv, V2 x, double theta) {
   const Tables& tb = *cv.tab;
-  const double lo = theta - kTwoPi, recent = theta - 0.5 * kPi;
+  const double lo = theta - kTwoPi, recent = theta - 0.5 * kPi, inv_s = 1.0 / cv.s;
   const int m_lo = static_cast<int>(std::ceil(lo / tb.path_dt));
   const int m_hi = static_cast<int>(std::ceil(theta / tb.path_dt)) - 1;
   double best = 1e300, bt = lo, bj = 1;
   for (int m = m_lo; m <= m_hi; ++m) {
     const double t = m * tb.path_dt;
     const V2 q = tb.path_at(m);
-    double j = std::max(0.0, std::round((q.y - x.y) / cv.s));
+    double j = std::max(0.0, std::floor((q.y - x.y) * inv_s + 0.5));
     if (j == 0 && t > recent) j = 1;  // the recent current-cycle positions do not count
     const V2 r = q - V2{0, j * cv.s} - x;
     const double dd = dot(r, r);  // squared while scanning
@@ -155,14 +155,14 @@ double dist_to_past(const Curve& cv, V2 x, double theta) {
   best = std::sqrt(best);
   double t = bt;
   for (int it = 0; it < 8; ++it) {  // minimise |c(t) - (0, j s) - x|^2: f = (q - x).c'
-    const V2 q = cv.c(t) - V2{0, bj * cv.s} - x;
-    const V2 d1 = cv.d1(t);
-    const V2 d2{cv.a * std::cos(t), -cv.b * std::sin(t)};
+    const double sn = std::sin(t), cs = std::cos(t);
+    const V2 q{-cv.a * cs - x.x, cv.b * sn + cv.s * t / kTwoPi - bj * cv.s - x.y};
+    const V2 d1{cv.a * sn, cv.b * cs + cv.s / kTwoPi}, d2{cv.a * cs, -cv.b * sn};
     const double f = dot(q, d1), df = dot(d1, d1) + dot(q, d2);
     if (df <= 0) break;
     const double step = std::clamp(f / df, -0.05, 0.05);
     t -= step;
-    if (std::abs(step) < 1e-14) break;
+    if (std::abs(step) < 1e-12) break;
   }
   if (bj == 0 && t > recent) return best;  // refined into the excluded stretch
   return std::min(best, norm(cv.c(t) - V2{0, bj * cv.s} - x));
@@ -284,18 +284,20 @@ ExactPoint ExactModel::at(double theta) const {
     }
   }
   // Where the earlier surface alone bounds the chip (a wall cusp the previous cycle left):
-  // the envelope point nearest the centre between two crossings with the tool circle.
+  // the envelope point nearest the centre between two crossings with the tool circle. Not
+  // needed when the previous tooth bounds the chip straight ahead: no chip exceeds |c - p|.
   auto ray_tooth = [&](V2 u) {  // far crossing of the ray from c along u with p's circle
     const V2 o = p - c;
     const double t = dot(o, u), q = R_ * R_ - (dot(o, o) - t * t);
     return q >= 0 ? t + std::sqrt(q) : 0.0;
   };
+  const bool tooth_bound = out.h_mm == d;
   for (const auto& rj : tool_roots) {
-    for (std::size_t k = 0; k + 1 < rj.size(); ++k) {
+    for (std::size_t k = 0; k + 1 < rj.size() && !tooth_bound; ++k) {
       const int j = rj[k].j;
       double lo = rj[k].t, hi = rj[k + 1].t;
       auto dist_c = [&](double t) { return norm(env_at({t, j}) - c); };
-      for (int it = 0; it < 80 && hi - lo > 1e-13; ++it) {  // golden section
+      for (int it = 0; it < 48 && hi - lo > 1e-12; ++it) {  // golden section
         const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
         if (dist_c(m1) < dist_c(m2)) {
           hi = m2;
