@@ -10,6 +10,7 @@
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/mechanism.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -216,6 +217,23 @@ TEST(Analysis, GcodeEqualsJob) {
   EXPECT_NEAR(a.walls_path.left.waviness_mm, b.walls_path.left.waviness_mm, 2e-4);
   EXPECT_NEAR(a.walls_path.right.waviness_mm, b.walls_path.right.waviness_mm, 2e-4);
   EXPECT_NEAR(a.engagement_angle_max_deg, b.engagement_angle_max_deg, 0.2);
+}
+
+// Two independent models of the steady cycle agree: analyze's kernel run (endless slot)
+// and the mechanism module's exact chip model, on h_max over the cycle, within 2 % of f_z;
+// including a wide orbit (a = 2R) whose central island only older cycles remove.
+TEST(Analysis, SteadyChipMatchesMechanismModel) {
+  for (const double width : {16.0, 30.0}) {
+    const Job job = test::wagih_job(
+        "trochoidal", {parse_override("slot.width=" + std::to_string(width)),
+                       parse_override("slot.length=70"), parse_override("tool.edge_radius=0.01")});
+    const ProcessMetrics m = analyze_process(job, plan_path(job).path);
+    MechanismSettings st = mechanism_settings(job);
+    st.points = 3600;
+    const ZoneSummary z = summarize_zones(mechanism_curve(job, st), st, false);
+    EXPECT_NEAR(m.h_max_mm, z.h_max_mm, 0.02 * 0.075) << width;
+    EXPECT_NEAR(m.cutting_time_s, z.cutting_time_s, 2 * 0.0075) << width;  // a sample each end
+  }
 }
 
 TEST(Analysis, PerformanceIndexFromMeasured) {

@@ -224,9 +224,8 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   m.path_length_per_cycle_mm = w.length_mm;
   // The cycle's series: for a periodic path, the steady state of an endless slot (a real
   // slot as long as the tool's reach, like the paper's 20 mm examples, never gets there):
-  // the path from 2.5 cycles before the window to 1.5 after, with the stock open ahead.
-  // Three cycles of history rebuild the removed region wherever the cycle's tool reaches
-  // (each cycle's swept band overlaps the next), so the engagement is the endless slot's.
+  // the path from 2.5 cycles (or more, see below) before the window to 1.5 after, with the
+  // stock open ahead, so the engagement is the endless slot's.
   EngagementSeries steady;
   std::vector<char> steady_cut;
   const EngagementSeries* cs = &e;
@@ -235,8 +234,18 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   double t0 = w.t0_s;
   if (w.periodic) {
     const double T = w.duration_s;
-    const double from = std::max(0.0, w.t0_s - 2.5 * T);
-    const double to = std::min(path.duration_s(), from + 4.05 * T);
+    // History: 2.5 cycles rebuild the region a cycle's own orbit covers; when the orbit is
+    // wider than the tool (a > R) it leaves an island at its centre that only the cycles
+    // whose orbit passes over it remove, about (b + R) / s cycles back.
+    const double a = 0.5 * (W - job.tool.diameter_mm);
+    const double b =
+        job.path.type == PathType::elliptical || job.path.type == PathType::linear_elliptical
+            ? job.path.aspect_ratio * a
+            : a;
+    const double history =
+        2.5 + (a > R && job.path.step_mm > 0 ? std::ceil((b + R) / job.path.step_mm) : 0.0);
+    const double from = std::max(0.0, w.t0_s - history * T);
+    const double to = std::min(path.duration_s(), w.t0_s + 1.55 * T);
     std::vector<double> times;
     for (double t = from; t <= to; t += dt_sample) times.push_back(t);
     EngagementOptions so = opt;
@@ -248,13 +257,13 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
     }
     std::size_t j0 = 0;
     for (std::size_t i = 1; i < steady_cut.size(); ++i) {
-      if (steady.samples.t_s[i] >= from + 2 * T && steady_cut[i] && !steady_cut[i - 1]) {
+      if (steady.samples.t_s[i] >= w.t0_s - 0.5 * T && steady_cut[i] && !steady_cut[i - 1]) {
         j0 = i;
         break;
       }
     }
-    if (j0 == 0) {  // no cooling in the cycle: start two cycles in
-      while (j0 + 1 < steady_cut.size() && steady.samples.t_s[j0] < from + 2 * T) ++j0;
+    if (j0 == 0) {  // no cooling in the cycle: start where the window does
+      while (j0 + 1 < steady_cut.size() && steady.samples.t_s[j0] < w.t0_s - 0.5 * T) ++j0;
     }
     std::size_t j1 = j0;
     while (j1 < steady_cut.size() && steady.samples.t_s[j1] < steady.samples.t_s[j0] + T - 1e-9) {
