@@ -15,9 +15,10 @@
 namespace trochomill {
 namespace {
 
-Job mech_job(double width, double diameter, double step, double edge_radius = 0.01) {
+Job mech_job(double width, double diameter, double step, double edge_radius = 0.01,
+             const std::string& family = "trochoidal") {
   return load_job(
-      test::example("wagih2023/trochoidal.toml"),
+      test::example("wagih2023/" + family + ".toml"),
       {parse_override("slot.width=" + std::to_string(width)),
        parse_override("tool.diameter=" + std::to_string(diameter)),
        parse_override("path.step=" + std::to_string(step)), parse_override("slot.length=60"),
@@ -27,14 +28,18 @@ Job mech_job(double width, double diameter, double step, double edge_radius = 0.
 // The exact model's h_e(theta) against the kernel's h_max on the planned path's steady state
 // (an endless slot: stock open ahead, eight cycles of history), at every tooth pass of one
 // cycle in the middle: within 2 % of f_z (issue 4), for three steps and two a/R ratios
-// (a/R = 1: W = 20, D = 10; a/R = 1/3: W = 16, D = 12 as in Pivkin's experiment).
+// (a/R = 1: W = 20, D = 10; a/R = 1/3: W = 16, D = 12 as in Pivkin's experiment), and the
+// elliptical family.
 TEST(Mechanism, ExactModelMatchesKernel) {
   struct Case {
     double W, D, s;
+    const char* family;
   };
-  for (const Case cs : {Case{20, 10, 0.5}, Case{20, 10, 1.0}, Case{20, 10, 2.0}, Case{16, 12, 0.6},
-                        Case{16, 12, 1.2}, Case{16, 12, 2.4}}) {
-    const Job job = mech_job(cs.W, cs.D, cs.s);
+  for (const Case cs : {Case{20, 10, 0.5, "trochoidal"}, Case{20, 10, 1.0, "trochoidal"},
+                        Case{20, 10, 2.0, "trochoidal"}, Case{16, 12, 0.6, "trochoidal"},
+                        Case{16, 12, 1.2, "trochoidal"}, Case{16, 12, 2.4, "trochoidal"},
+                        Case{20, 10, 1.0, "elliptical"}}) {  // the example's r_e = 0.8 orbit
+    const Job job = mech_job(cs.W, cs.D, cs.s, 0.01, cs.family);
     const MechanismSettings st = mechanism_settings(job);
     const double a = 0.5 * (cs.W - cs.D), fz = job.cutting.feed_per_tooth_mm;
     const double T = mechanism_curve(job, st).cycle_time_s;
@@ -62,7 +67,7 @@ TEST(Mechanism, ExactModelMatchesKernel) {
       worst = std::max(worst, std::abs(c.h_mm[k] - hk[k]));
       if (hk[k] > 0) ++cutting;
     }
-    EXPECT_LT(worst, 0.02 * fz) << "W " << cs.W << " D " << cs.D << " s " << cs.s;
+    EXPECT_LT(worst, 0.02 * fz) << cs.family << " W " << cs.W << " D " << cs.D << " s " << cs.s;
     EXPECT_GT(cutting, 50) << "W " << cs.W << " s " << cs.s;
   }
 }
