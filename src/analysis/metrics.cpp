@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -208,7 +209,11 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   m.mrr_total_mm3_per_min = m.slot_volume_mm3 / m.machining_time_s * 60.0;
   m.feed_per_tooth_mm = job.cutting.feed_per_tooth_mm;
   for (std::size_t i = 0; i < n; ++i) {
-    if (e.h_max_mm[i] > m.h_max_slot_mm) {
+    // A tool descending into stock no earlier position has touched (a helix, ramp or plunge
+    // start) has no radial chip: the kernel caps it at R, but the chip there is axial. Such
+    // samples do not count towards the program's radial h_max.
+    const bool plunging = i > 0 && s.z_mm[i] < s.z_mm[i - 1] && e.h_max_mm[i] >= R * (1 - 1e-12);
+    if (!plunging && e.h_max_mm[i] > m.h_max_slot_mm) {
       m.h_max_slot_mm = e.h_max_mm[i];
       m.t_h_max_slot_s = s.t_s[i];
     }
@@ -348,17 +353,33 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   };
   PathSamples dense = dense_samples(false);
   constexpr int kWallPoints = 2001;
-  const double yl = q.y_mm[il], yr = q.y_mm[ir];
-  m.walls_path.left =
-      walls_from_circles(dense, R, -1e-9, yl - period / 2, yl + period / 2, kWallPoints).left;
-  m.walls_path.right =
-      walls_from_circles(dense, R, -1e-9, yr - period / 2, yr + period / 2, kWallPoints).right;
+  double yl = q.y_mm[il], yr = q.y_mm[ir];
+  // One period of a wall around y_c. A short slot's end can leave part of the steady
+  // contact's period uncut: then the period before it (or after, or two before) is used,
+  // the profile being periodic.
+  const std::array<double, 5> shifts = {0.0, -1.0, 1.0, -2.0, 2.0};
+  auto path_side = [&](bool left, double yc) {
+    const Walls both =
+        walls_from_circles(dense, R, -1e-9, yc - period / 2, yc + period / 2, kWallPoints);
+    return left ? both.left : both.right;
+  };
+  auto path_wall = [&](bool left, double& yc) {
+    for (std::size_t k = 0;; ++k) {
+      try {
+        WallProfile prof = path_side(left, yc + shifts[k] * period);
+        yc += shifts[k] * period;
+        return prof;
+      } catch (const InputError&) {
+        if (k + 1 == shifts.size()) throw;
+      }
+    }
+  };
+  m.walls_path.left = path_wall(true, yl);
+  m.walls_path.right = path_wall(false, yr);
   if (std::max(m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm) > 0.5 * wall_reach) {
     dense = dense_samples(true);
-    m.walls_path.left =
-        walls_from_circles(dense, R, -1e-9, yl - period / 2, yl + period / 2, kWallPoints).left;
-    m.walls_path.right =
-        walls_from_circles(dense, R, -1e-9, yr - period / 2, yr + period / 2, kWallPoints).right;
+    m.walls_path.left = path_wall(true, yl);
+    m.walls_path.right = path_wall(false, yr);
   }
 
   // Tooth level: tooth tips every 0.1 degree of spindle rotation while the centre is near a
@@ -450,8 +471,21 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
     };
     for (const bool left : {true, false}) {
       const double wp = left ? m.walls_path.left.waviness_mm : m.walls_path.right.waviness_mm;
+      double& yc = left ? yl : yr;
       for (double band = 1.5 * wp + base;; band *= 2) {
-        const Walls tw = tips_for(left, left ? yl : yr, band);
+        Walls tw;
+        for (std::size_t k = 0;; ++k) {  // as for the path level: a period the tips cut
+          try {
+            tw = tips_for(left, yc + shifts[k] * period, band);
+            if (shifts[k] != 0) {
+              yc += shifts[k] * period;
+              (left ? m.walls_path.left : m.walls_path.right) = path_side(left, yc);
+            }
+            break;
+          } catch (const InputError&) {
+            if (k + 1 == shifts.size()) throw;
+          }
+        }
         const WallProfile& prof = left ? tw.left : tw.right;
         // Complete when the profile lies within the band of the extreme tip reach: a centre
         // beyond the band puts its tips (radius <= R + e) beyond the band too.
