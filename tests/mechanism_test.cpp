@@ -3,6 +3,7 @@
 #include "trochomill/mechanism.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
@@ -128,6 +129,22 @@ TEST(Mechanism, RecommendationIsMonotonic) {
   const Recommendation feed = recommend(job, st, false, true);
   ASSERT_TRUE(feed.found);
   EXPECT_GT(feed.value, 0.0);
+}
+
+// The curve is evaluated in parallel: the same numbers on one thread and on all.
+TEST(Mechanism, SameResultWhateverTheThreadCount) {
+  const Job job = mech_job(16, 12, 1.2, 0.01);
+  MechanismSettings st = mechanism_settings(job);
+  st.points = 720;
+  const MechanismCurve all = mechanism_curve(job, st);
+  MechanismCurve one;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = mechanism_curve(job, st);
+  }
+  EXPECT_EQ(all.h_mm, one.h_mm);
+  EXPECT_EQ(all.psi_rad, one.psi_rad);
+  EXPECT_EQ(all.zone, one.zone);
 }
 
 // h_m = r_e (1 - cos theta_m) (Pivkin Eq. 1).

@@ -3,6 +3,7 @@
 #include "trochomill/mechanism.hpp"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -102,7 +103,9 @@ MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const Cycle
   }
   c.zone.resize(n);
   const double re = job.tool.edge_radius_mm, vb = st.flank_wear_mm;
-  for (std::size_t i = 0; i < n; ++i) {
+  // Every theta is independent: evaluated in parallel, each result in its own slot (the
+  // same numbers whatever the thread count).
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     const mech::ExactPoint p = model.at(thetas[i]);
     c.theta_rad[i] = thetas[i];
     c.h_mm[i] = p.h_mm;
@@ -115,7 +118,7 @@ MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const Cycle
         100.0 * (p.h_mm + (p.kappa_rad > 0 ? vb * std::tan(p.kappa_rad) : 0.0)) / re;
     const double k = use_wear ? c.k_re_wear_pct[i] : c.k_re_pct[i];
     c.zone[i] = p.h_mm > 0 ? zone_of(k, st.thresholds) : 0;
-  }
+  });
   // Cycle time: Simpson's rule on the path speed over one cycle.
   constexpr int kSimpson = 512;
   double sum = 0;
