@@ -133,8 +133,11 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
 // is c(t) - j (0, s) with t in [theta - 2 pi, theta) and j >= 0 cycles back, and for each t
 // the best j is the one that brings its y nearest x's. Coarse samples over t, then Newton
 // on the nearest with its j fixed.
-double dist_to_past(const Curve& cv, V2 x, double theta) {
+// Callers only compare the distance with a threshold `below`: a sample under it settles the
+// answer (the true minimum is no larger), so the scan stops there and returns it.
+double dist_to_past(const Curve& cv, V2 x, double theta, double below) {
   const Tables& tb = *cv.tab;
+  const double below2 = below * below;
   const double lo = theta - kTwoPi, recent = theta - 0.5 * kPi, inv_s = 1.0 / cv.s;
   const int m_lo = static_cast<int>(std::ceil(lo / tb.path_dt));
   const int m_hi = static_cast<int>(std::ceil(theta / tb.path_dt)) - 1;
@@ -146,6 +149,7 @@ double dist_to_past(const Curve& cv, V2 x, double theta) {
     if (j == 0 && t > recent) j = 1;  // the recent current-cycle positions do not count
     const V2 r = q - V2{0, j * cv.s} - x;
     const double dd = dot(r, r);  // squared while scanning
+    if (dd < below2) return std::sqrt(dd);
     if (dd < best) {
       best = dd;
       bt = t;
@@ -258,7 +262,7 @@ ExactPoint ExactModel::at(double theta) const {
     if (a1 - a0 < 1e-12) continue;
     const double mid = 0.5 * (a0 + a1);
     const V2 m = c + R_ * V2{std::cos(mid), std::sin(mid)};
-    if (norm(m - p) < R_ || dist_to_past(cv, m, theta) < R_) continue;
+    if (norm(m - p) < R_ || dist_to_past(cv, m, theta, R_) < R_) continue;
     out.psi_rad += a1 - a0;
   }
   if (out.psi_rad <= 0) return out;
@@ -267,14 +271,14 @@ ExactPoint ExactModel::at(double theta) const {
   // kinks where the previous tooth's circle meets the earlier positions' boundary.
   V2 contact{};
   const V2 ahead = p + R_ * V2{cp.x / d, cp.y / d};
-  if (dist_to_past(cv, ahead, theta) >= R_ - tol) {
+  if (dist_to_past(cv, ahead, theta, R_ - tol) >= R_ - tol) {
     out.h_mm = d;
     contact = ahead;
   } else {
     for (const auto& rj : roots_for(p)) {
       for (const Root& r : rj) {
         e = env_at(r);
-        if (dist_to_past(cv, e, theta) < R_ - 1e-7 * R_) continue;  // buried by another part
+        if (dist_to_past(cv, e, theta, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) continue;  // buried
         const double h = R_ - norm(e - c);
         if (h > out.h_mm) {
           out.h_mm = h;
@@ -307,7 +311,7 @@ ExactPoint ExactModel::at(double theta) const {
       }
       e = env_at({0.5 * (lo + hi), j});
       const double rho = norm(e - c);
-      if (rho >= R_ || dist_to_past(cv, e, theta) < R_ - 1e-7 * R_) continue;
+      if (rho >= R_ || dist_to_past(cv, e, theta, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) continue;
       const V2 u{(e.x - c.x) / rho, (e.y - c.y) / rho};
       const double h = R_ - std::max(rho, ray_tooth(u));
       if (h > out.h_mm) {
