@@ -84,7 +84,7 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
     return dot(r, r) - cv.R * cv.R;
   };
   auto solve = [&](double lo, double hi, double glo, double ghi) {
-    return detail::regula_falsi(g, lo, hi, glo, ghi, 1e-14);
+    return detail::regula_falsi(g, lo, hi, glo, ghi, 1e-12);
   };
   // Samples on the table's grid within theta +- pi.
   const Tables& tb = *cv.tab;
@@ -110,7 +110,7 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
       // difference below them, so a value above half of it cannot hide a crossing): find
       // its minimum; if negative, it holds two roots.
       double lo = ts[k - 1], hi = ts[k + 1];
-      for (int it = 0; it < 60 && hi - lo > 1e-12; ++it) {
+      for (int it = 0; it < 60 && hi - lo > 1e-9; ++it) {
         const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
         if (g(m1) < g(m2)) {
           hi = m2;
@@ -301,7 +301,7 @@ ExactPoint ExactModel::at(double theta) const {
       const int j = rj[k].j;
       double lo = rj[k].t, hi = rj[k + 1].t;
       auto dist_c = [&](double t) { return norm(env_at({t, j}) - c); };
-      for (int it = 0; it < 48 && hi - lo > 1e-12; ++it) {  // golden section
+      for (int it = 0; it < 48 && hi - lo > 1e-8; ++it) {  // golden section
         const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
         if (dist_c(m1) < dist_c(m2)) {
           hi = m2;
