@@ -48,8 +48,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
 // Sections later modules own. They are accepted (not validated here) so one job file can
 // carry everything; each module validates its own section.
 const std::set<std::string>& reserved_sections() {
-  static const std::set<std::string> s = {"material", "simulation", "stock",
-                                          "monitor", "forces"};
+  static const std::set<std::string> s = {"material", "simulation", "stock", "monitor", "forces"};
   return s;
 }
 
@@ -572,10 +571,10 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
   mj.czii_max_pct = r.number("mechanism", "czii_max", "% of r_e", positive(), 60.0).value_or(60.0);
   mj.transition_pct =
       r.number("mechanism", "transition", "% of r_e", positive(), 40.0).value_or(40.0);
-  mj.share = r.number("mechanism", "share", "fraction", Range{0.0, 1.0, false, true}, 0.5)
-                 .value_or(0.5);
-  mj.model = r.choice<std::string>("mechanism", "model", {{"exact", "exact"}}, "exact")
-                 .value_or("exact");
+  mj.share =
+      r.number("mechanism", "share", "fraction", Range{0.0, 1.0, false, true}, 0.5).value_or(0.5);
+  mj.model =
+      r.choice<std::string>("mechanism", "model", {{"exact", "exact"}}, "exact").value_or("exact");
   mj.points = r.integer("mechanism", "points", 36, 1000000, 3600).value_or(3600);
   mj.friction_angle_deg =
       r.number("material", "friction_angle", "degrees", Range{0.0, 90.0, false, false});

@@ -6,9 +6,9 @@
 namespace trochomill::mech {
 
 struct ExactPoint {
-  double h_mm = 0;      ///< chip thickness at the contact (0: not cutting)
-  double psi_rad = 0;   ///< engaged (contact) angle
-  double kappa_rad = 0; ///< kinematic angle change at the contact
+  double h_mm = 0;       ///< chip thickness at the contact (0: not cutting)
+  double psi_rad = 0;    ///< engaged (contact) angle
+  double kappa_rad = 0;  ///< kinematic angle change at the contact
 };
 
 /// The exact model at any theta of a steady-state cycle.
