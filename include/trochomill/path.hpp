@@ -164,6 +164,8 @@ struct ToothTracks {
 };
 [[nodiscard]] ToothTracks tooth_tracks(const PathSamples& samples, const Tool& tool,
                                        const Cutting& cutting);
+/// Time between successive teeth passing one angle (s): 60 / (n Z).
+[[nodiscard]] double tooth_period_s(const Tool& tool, const Cutting& cutting);
 /// Effective cutting radius (mm) of tooth k with radial runout: |R u(alpha_k) + e u(lambda)|.
 [[nodiscard]] double tooth_radius_mm(const Tool& tool, int k);
 

@@ -188,8 +188,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
   // Cutting: the circle advances into stock (slivers on the trailing side do not count).
   std::vector<char> cutting(n, 0);
   const double thr = 1e-6 * 2 * R * feed;
-  double dt_sample =
-      n > 1 ? 60.0 / (job.cutting.spindle_speed_rpm * job.tool.teeth) / opt.steps_per_tooth : 0;
+  double dt_sample = n > 1 ? tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth : 0;
   for (std::size_t i = 0; i < n; ++i) {
     cutting[i] = e.swept_rate_mm2_per_s[i] > thr ? 1 : 0;
     if (cutting[i]) m.cutting_time_total_s += dt_sample;
@@ -405,7 +404,6 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
     // tangents times the chord length): error O(ds^4 kappa^3), far below a micrometre for
     // ds = 0.01 mm, and no length inversion per tip sample.
     auto tips_for = [&](bool left, double yc, double band) {
-      const double band_l = band, band_r = band;
       std::vector<double> times;
       PathSamples ts;
       auto add = [&](std::size_t i, double t) {
@@ -440,10 +438,10 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
       };
       for (std::size_t i = 0; i + 1 < dense.size(); ++i) {
         if (dense.z_mm[i] >= 0) continue;
-        const bool near = left ? dense.x_mm[i] <= lo + band_l : dense.x_mm[i] >= hi - band_r;
+        const bool near = left ? dense.x_mm[i] <= lo + band : dense.x_mm[i] >= hi - band;
         // A tip at the wall is within its extreme's reach of the centre's y: |sin| of the
         // angle from the extreme below sqrt(2 band / R), so |dy| <= R sqrt(2 band / R).
-        const double reach = R * std::sqrt(2 * (left ? band_l : band_r) / R) + 0.01;
+        const double reach = R * std::sqrt(2 * band / R) + 0.01;
         if (!near || std::abs(dense.y_mm[i] - yc) > period / 2 + reach) continue;
         const double a = dense.t_s[i], b = dense.t_s[i + 1];
         if (b - a > 1.5 * dt_dense) continue;  // a gap between near-wall runs

@@ -93,8 +93,7 @@ struct Disc {
   double x = 0, y = 0;
   ArcSet exposed;
   double bx0 = 0, by0 = 0, bx1 = 0, by1 = 0;  // bounding box of the exposed arcs
-  bool alive = true;
-  std::size_t cell = 0;  // grid cell holding the centre
+  std::size_t cell = 0;                       // grid cell holding the centre
 };
 
 class Removed {
@@ -225,7 +224,7 @@ class Removed {
       if (std::hypot(nx - cx, ny - cy) >= R_) continue;
       subtract(d.exposed, std::atan2(dy, dx), dist <= kEps ? kPi : std::acos(dist / (2 * R_)));
       if (d.exposed.empty()) {
-        d.alive = false;  // its cell forgets it: the candidate sets hold only boundary discs
+        // A dead disc leaves its cell: the candidate sets hold only boundary discs.
         auto& cell = grid_[d.cell];
         cell.erase(std::find(cell.begin(), cell.end(), j));
       } else {
@@ -673,7 +672,7 @@ EngagementSeries compute_engagement(const ToolPath& path, const Job& job,
   if (options.steps_per_tooth < 1) {
     throw InputError(fmt::format("steps per tooth must be >= 1, got {}", options.steps_per_tooth));
   }
-  const double per_tooth_s = 60.0 / (job.cutting.spindle_speed_rpm * job.tool.teeth);
+  const double per_tooth_s = tooth_period_s(job.tool, job.cutting);
   return compute_engagement(sample_by_time(path, per_tooth_s / options.steps_per_tooth), job,
                             options);
 }

@@ -89,6 +89,17 @@ double path_speed(const CycleSetup& g, double th) {  // |c'(theta)| (mm/rad)
   return std::hypot(g.a * std::sin(th), g.b * std::cos(th) + g.s / kTwoPi);
 }
 
+// Time (s) from theta = 0 to theta along the cycle: Simpson's rule on |c'| / f_r with
+// `n` (even) intervals.
+double time_to(const CycleSetup& g, double theta, int n) {
+  double sum = 0;
+  for (int k = 0; k <= n; ++k) {
+    const double w = (k == 0 || k == n) ? 1 : (k % 2 ? 4 : 2);
+    sum += w * path_speed(g, theta * k / n);
+  }
+  return sum * (theta / n) / 3 / g.feed;
+}
+
 // Evaluates every column at the given angles; t_s left to the caller.
 MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const CycleSetup& g,
                         const std::vector<double>& thetas, bool use_wear) {
@@ -119,14 +130,7 @@ MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const Cycle
     const double k = use_wear ? c.k_re_wear_pct[i] : c.k_re_pct[i];
     c.zone[i] = p.h_mm > 0 ? zone_of(k, st.thresholds) : 0;
   });
-  // Cycle time: Simpson's rule on the path speed over one cycle.
-  constexpr int kSimpson = 512;
-  double sum = 0;
-  for (int k = 0; k <= kSimpson; ++k) {
-    const double w = (k == 0 || k == kSimpson) ? 1 : (k % 2 ? 4 : 2);
-    sum += w * path_speed(g, kTwoPi * k / kSimpson);
-  }
-  c.cycle_time_s = sum * (kTwoPi / kSimpson) / 3 / g.feed;
+  c.cycle_time_s = time_to(g, kTwoPi, 512);
   return c;
 }
 
@@ -152,13 +156,7 @@ MechanismCurve mechanism_curve_at(const Job& job, const MechanismSettings& st,
   const CycleSetup g = setup(job, st);
   MechanismCurve c = evaluate(job, st, g, theta_rad, use_wear);
   for (std::size_t i = 0; i < theta_rad.size(); ++i) {
-    constexpr int kSimpson = 64;
-    double sum = 0;
-    for (int k = 0; k <= kSimpson; ++k) {
-      const double w = (k == 0 || k == kSimpson) ? 1 : (k % 2 ? 4 : 2);
-      sum += w * path_speed(g, theta_rad[i] * k / kSimpson);
-    }
-    c.t_s[i] = sum * (theta_rad[i] / kSimpson) / 3 / g.feed;
+    c.t_s[i] = time_to(g, theta_rad[i], 64);
   }
   return c;
 }

@@ -125,6 +125,10 @@ PathSamples sample_by_spindle_angle(const ToolPath& path, int steps_per_rev, dou
   return sample_by_time(path, 60.0 / (spindle_rpm * steps_per_rev));
 }
 
+double tooth_period_s(const Tool& tool, const Cutting& cutting) {
+  return 60.0 / (cutting.spindle_speed_rpm * tool.teeth);
+}
+
 double tooth_radius_mm(const Tool& tool, int k) {
   const double alpha = deg_to_rad(tool.tooth_angles_deg.at(static_cast<std::size_t>(k)));
   const double lambda = deg_to_rad(tool.runout_phase_deg);
