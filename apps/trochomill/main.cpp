@@ -184,7 +184,8 @@ int run(int argc, char** argv) {
   auto* mech = app.add_subcommand(
       "mechanism", "chip thickness, K_re and cutting-mechanism zones over a trochoid cycle");
   add_job_args(mech, mech_args);
-  mech->add_option("--model", mech_model, "chip model: exact (default: [mechanism] model)");
+  mech->add_option("--model", mech_model,
+                   "chip model: exact or pivkin2025 (default: [mechanism] model)");
   mech->add_option("--wear", mech_wear, "flank wear VB_B, mm (default: [tool] flank_wear)");
   mech->add_option("--json", mech_json, "write curves and zone summary as JSON (- for stdout)");
   mech->add_option("--csv", mech_csv, "write the curves as CSV (- for stdout)");
@@ -197,7 +198,8 @@ int run(int argc, char** argv) {
   auto* rec = app.add_subcommand("recommend",
                                  "smallest trochoid step (or feed per tooth) for a CZIII share");
   add_job_args(rec, rec_args);
-  rec->add_option("--model", rec_model, "chip model: exact (default: [mechanism] model)");
+  rec->add_option("--model", rec_model,
+                  "chip model: exact or pivkin2025 (default: [mechanism] model)");
   rec->add_option("--share", rec_share,
                   "required CZIII share of the cutting part, 0..1 "
                   "(default: [mechanism] share = 0.5)");

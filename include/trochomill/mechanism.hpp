@@ -19,11 +19,70 @@
 namespace trochomill {
 
 enum class ChipModel {
-  exact,  ///< chip between the tool circle, the previous tooth's circle and the previous
-          ///< cycle's envelope (semi-closed form; agrees with `analyze`'s kernel)
+  exact,       ///< chip between the tool circle, the previous tooth's circle and the earlier
+               ///< cycles' envelopes (semi-closed form; agrees with `analyze`'s kernel)
+  pivkin2025,  ///< Pivkin 2025's published model (Eqs. 2-23), class Pivkin2025 below
 };
 [[nodiscard]] ChipModel parse_chip_model(const std::string& name);  ///< throws InputError
 [[nodiscard]] std::string to_string(ChipModel m);
+
+/// Pivkin 2025's published chip model, equation by equation (docs/models.md section 9 gives
+/// our reading of each garbled equation). In the paper's frame: feed along +X, the tool
+/// centre C(theta) = (-(D_t/2) cos theta + a_e theta / 2 pi, (D_t/2) sin theta) on an orbit
+/// of diameter D_t (ours: 2a = W - D) advancing a_e (ours: the step s) per cycle, theta in
+/// radians (theta_P = theta_ours + pi/2); tooth k at C + (D/2)(cos phi, -sin phi), phi =
+/// beta_k + N theta (a clockwise spindle). Lengths in mm, angles in radians.
+class Pivkin2025 {
+ public:
+  struct Xy {
+    double x_mm = 0, y_mm = 0;
+  };
+  /// The model's result at one theta: the chip at the tooth on the engaged arc's far edge.
+  struct Point {
+    bool cutting = false;   ///< the contact faces the feed (theta_P in (pi/2, 3 pi/2))
+    double h_mm = 0;        ///< chip thickness min(h_Sigma, h_e) (Fig. 4: h_e restricts h)
+    double h_sigma_mm = 0;  ///< Eq. 13 at that tooth
+    double h_e_mm = 0;      ///< Eq. 17, the layer between cycles
+    double psi_rad = 0;     ///< Eq. 18
+    double kappa_rad = 0;   ///< Eqs. 21-23 at that tooth
+    double beta2_rad = 0;   ///< tooth 2's initial angle that puts it there at theta
+  };
+  /// Throws InputError unless every argument is positive (and a_e < pi D_t, so the orbit
+  /// loops).
+  Pivkin2025(double orbit_diameter_mm, double step_mm, double tool_diameter_mm,
+             double feed_per_tooth_mm, int teeth);
+
+  [[nodiscard]] double n_spindle() const { return n_; }                  ///< Eq. 6: N (rad per rad)
+  [[nodiscard]] double tooth_angle_rad() const { return theta_tooth_; }  ///< Eq. 11: Theta
+  [[nodiscard]] Xy centre(double theta) const;
+  [[nodiscard]] Xy centre_velocity(double theta) const;              ///< dC/dtheta (mm/rad)
+  [[nodiscard]] Xy tooth(double theta, double beta) const;           ///< Eqs. 2-5
+  [[nodiscard]] Xy tooth_velocity(double theta, double beta) const;  ///< d/dtheta (mm/rad)
+  [[nodiscard]] double a_t(double theta, double beta2) const;        ///< Eq. 8: tangent slope
+  [[nodiscard]] double c_t(double theta, double beta2) const;        ///< Eq. 9: intercept (mm)
+  /// Eq. 10: |F_Z1(theta + Theta) - F_Z2(theta)|, beta2 = beta1 + 2 pi / Z (mm).
+  [[nodiscard]] double h_delta(double theta, double beta1) const;
+  /// Eq. 12: distance from tooth 1 at theta + Theta to the tangent of tooth 2's path at
+  /// theta (beta1 = beta2 - 2 pi / Z), written as |A x - y + C| / sqrt(A^2 + 1) (mm).
+  [[nodiscard]] double h_t(double theta, double beta2) const;
+  /// Eq. 13: h_t - (h_delta(beta2) - h_delta(beta1)) (mm); see docs/models.md on the
+  /// printed trailing factor.
+  [[nodiscard]] double h_sigma(double theta, double beta2) const;
+  [[nodiscard]] Xy envelope(double theta) const;  ///< Eqs. 14-15, the outer side
+  /// Eqs. 16-17: distance from the next cycle's envelope point (theta + 2 pi) to this one's
+  /// tangent: the radial depth of the layer between cycles (mm).
+  [[nodiscard]] double h_e(double theta) const;
+  [[nodiscard]] double psi(double theta) const;  ///< Eq. 18: acos((D/2 - h_e) / (D/2))
+  /// Eqs. 21-23: the angle from the tooth's rotation tangent to its trajectory's tangent,
+  /// positive where the feed drives the edge into the material.
+  [[nodiscard]] double kappa(double theta, double beta2) const;
+  [[nodiscard]] Point at(double theta) const;
+
+ private:
+  double dt_, ae_, d_, fz_;
+  int z_;
+  double n_, theta_tooth_;
+};
 
 /// Mechanism thresholds (percent of r_e) and the recommendation's default share.
 struct MechanismThresholds {

@@ -573,8 +573,9 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
       r.number("mechanism", "transition", "% of r_e", positive(), 40.0).value_or(40.0);
   mj.share =
       r.number("mechanism", "share", "fraction", Range{0.0, 1.0, false, true}, 0.5).value_or(0.5);
-  mj.model =
-      r.choice<std::string>("mechanism", "model", {{"exact", "exact"}}, "exact").value_or("exact");
+  mj.model = r.choice<std::string>("mechanism", "model",
+                                   {{"exact", "exact"}, {"pivkin2025", "pivkin2025"}}, "exact")
+                 .value_or("exact");
   mj.points = r.integer("mechanism", "points", 36, 1000000, 3600).value_or(3600);
   mj.friction_angle_deg =
       r.number("material", "friction_angle", "degrees", Range{0.0, 90.0, false, false});

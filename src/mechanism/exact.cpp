@@ -56,11 +56,11 @@ struct Curve {
 };
 
 // Envelope and path on fixed grids (built once per model), so the scans below need no
-// trigonometry: the envelope every 2 pi / 96 over [-pi, 3 pi], the path every 2 pi / 144
-// over [-2 pi, 2 pi].
+// trigonometry: the envelope over [-pi, 3 pi], the path over [-2 pi, 2 pi], at least 96 and
+// 144 samples per turn and fine enough that neighbours are at most R / 4 and R / 6 apart
+// along the orbit (a wide orbit would otherwise hide crossings between samples).
 struct Tables {
-  static constexpr int kEnvPerTurn = 96, kPathPerTurn = 144;
-  static constexpr double env_dt = kTwoPi / kEnvPerTurn, path_dt = kTwoPi / kPathPerTurn;
+  double env_dt, path_dt;
   int env_m0, path_m0;
   const std::vector<double>&ex, &ey, &px, &py;
   [[nodiscard]] V2 env_at(int m) const {
@@ -83,7 +83,29 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
     const V2 r = e - q;
     return dot(r, r) - cv.R * cv.R;
   };
+  // Newton from the secant point with g' = 2 (E - q) . E' (the envelope gives E'), kept in
+  // the bracket; regula falsi if a step leaves it or it has not converged in 8 steps.
   auto solve = [&](double lo, double hi, double glo, double ghi) {
+    double t = (glo * hi - ghi * lo) / (glo - ghi);
+    for (int it = 0; it < 8; ++it) {
+      V2 e, de;
+      cv.envelope(t, e, de);
+      const V2 r = e - q;
+      const double gt = dot(r, r) - cv.R * cv.R, dg = 2 * dot(r, de);
+      if (gt == 0) return t;
+      if ((gt < 0) == (glo < 0)) {
+        lo = t;
+        glo = gt;
+      } else {
+        hi = t;
+        ghi = gt;
+      }
+      const double step = dg != 0 ? gt / dg : 0.0;
+      const double tn = t - step;
+      if (!(tn > lo && tn < hi)) break;
+      t = tn;
+      if (std::abs(step) < 1e-12) return t;
+    }
     return detail::regula_falsi(g, lo, hi, glo, ghi, 1e-12);
   };
   // Samples on the table's grid within theta +- pi.
@@ -184,30 +206,34 @@ ExactModel::ExactModel(double a_mm, double b_mm, double step_mm, double radius_m
       feed_mm_per_s_(feed_mm_per_s),
       edge_speed_mm_per_s_(edge_speed_mm_per_s) {
   const Curve cv{a_, b_, s_, R_};
-  env_m0_ = static_cast<int>(std::floor(-kPi / Tables::env_dt)) - 2;
-  const int env_m1 = static_cast<int>(std::ceil(3 * kPi / Tables::env_dt)) + 2;
+  // Arc length of one turn of the orbit plus the tool's circumference, over R.
+  const double turn = kTwoPi * (std::max(a_, b_) + R_) / R_;
+  env_dt_ = kTwoPi / std::max(96.0, std::ceil(4 * turn));
+  path_dt_ = kTwoPi / std::max(144.0, std::ceil(6 * turn));
+  env_m0_ = static_cast<int>(std::floor(-kPi / env_dt_)) - 2;
+  const int env_m1 = static_cast<int>(std::ceil(3 * kPi / env_dt_)) + 2;
   for (int m = env_m0_; m <= env_m1; ++m) {
     V2 e, de;
-    cv.envelope(m * Tables::env_dt, e, de);
+    cv.envelope(m * env_dt_, e, de);
     env_x_.push_back(e.x);
     env_y_.push_back(e.y);
   }
-  path_m0_ = static_cast<int>(std::floor(-kTwoPi / Tables::path_dt)) - 2;
-  const int path_m1 = static_cast<int>(std::ceil(kTwoPi / Tables::path_dt)) + 2;
+  path_m0_ = static_cast<int>(std::floor(-kTwoPi / path_dt_)) - 2;
+  const int path_m1 = static_cast<int>(std::ceil(kTwoPi / path_dt_)) + 2;
   for (int m = path_m0_; m <= path_m1; ++m) {
-    const V2 q = cv.c(m * Tables::path_dt);
+    const V2 q = cv.c(m * path_dt_);
     path_x_.push_back(q.x);
     path_y_.push_back(q.y);
   }
 }
 
-ExactPoint ExactModel::at(double theta) const {
+ChipPoint ExactModel::at(double theta) const {
   // The cycle is periodic in phase: work at theta in [0, 2 pi) (the tables cover it).
   theta -= kTwoPi * std::floor(theta / kTwoPi);
-  const Tables tb{env_m0_, path_m0_, env_x_, env_y_, path_x_, path_y_};
+  const Tables tb{env_dt_, path_dt_, env_m0_, path_m0_, env_x_, env_y_, path_x_, path_y_};
   Curve cv{a_, b_, s_, R_};
   cv.tab = &tb;
-  ExactPoint out;
+  ChipPoint out;
   const V2 c = cv.c(theta);
   const V2 v = cv.d1(theta);
   // One f_z of path back (midpoint speed: error O(f_z^3 kappa^2)).
@@ -300,16 +326,32 @@ ExactPoint ExactModel::at(double theta) const {
     for (std::size_t k = 0; k + 1 < rj.size() && !tooth_bound; ++k) {
       const int j = rj[k].j;
       double lo = rj[k].t, hi = rj[k + 1].t;
-      auto dist_c = [&](double t) { return norm(env_at({t, j}) - c); };
-      for (int it = 0; it < 48 && hi - lo > 1e-8; ++it) {  // golden section
-        const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
-        if (dist_c(m1) < dist_c(m2)) {
-          hi = m2;
-        } else {
-          lo = m1;
+      // The nearest point: a root of d/dt |E - c|^2 / 2 = (E - c) . E' (negative at the
+      // first crossing, positive at the second when the dip is a single valley); golden
+      // section where it is not.
+      const V2 shift{0, (j - 1) * s_};
+      auto slope = [&](double t) {
+        V2 q, dq;
+        cv.envelope(t, q, dq);
+        return dot(q - shift - c, dq);
+      };
+      double tm = 0;
+      const double slo = slope(lo), shi = slope(hi);
+      if (slo < 0 && shi > 0) {
+        tm = detail::regula_falsi(slope, lo, hi, slo, shi, 1e-10);
+      } else {
+        auto dist_c = [&](double t) { return norm(env_at({t, j}) - c); };
+        for (int it = 0; it < 48 && hi - lo > 1e-8; ++it) {  // golden section
+          const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+          if (dist_c(m1) < dist_c(m2)) {
+            hi = m2;
+          } else {
+            lo = m1;
+          }
         }
+        tm = 0.5 * (lo + hi);
       }
-      e = env_at({0.5 * (lo + hi), j});
+      e = env_at({tm, j});
       const double rho = norm(e - c);
       if (rho >= R_ || dist_to_past(cv, e, theta, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) continue;
       const V2 u{(e.x - c.x) / rho, (e.y - c.y) / rho};

@@ -17,13 +17,16 @@ namespace trochomill {
 
 ChipModel parse_chip_model(const std::string& name) {
   if (name == "exact") return ChipModel::exact;
-  throw InputError(fmt::format("unknown chip model '{}': allowed: exact", name));
+  if (name == "pivkin2025") return ChipModel::pivkin2025;
+  throw InputError(fmt::format("unknown chip model '{}': allowed: exact, pivkin2025", name));
 }
 
 std::string to_string(ChipModel m) {
   switch (m) {
     case ChipModel::exact:
       return "exact";
+    case ChipModel::pivkin2025:
+      return "pivkin2025";
   }
   return "exact";
 }
@@ -69,6 +72,11 @@ CycleSetup setup(const Job& job, const MechanismSettings& st) {
         "[tool] edge_radius must be > 0 mm for the mechanism model (K_re = h / r_e); "
         "a ground carbide edge is typically 0.005-0.03 mm");
   }
+  if (st.model == ChipModel::pivkin2025 && job.path.type != PathType::trochoidal) {
+    throw InputError(
+        "the pivkin2025 model is published for the circular trochoid: it needs [path] type = "
+        "\"trochoidal\" (use --model exact for the elliptical family)");
+  }
   if (st.points < 36) throw InputError(fmt::format("points must be >= 36, got {}", st.points));
   CycleSetup c;
   c.R = job.tool.radius_mm();
@@ -100,10 +108,102 @@ double time_to(const CycleSetup& g, double theta, int n) {
   return sum * (theta / n) / 3 / g.feed;
 }
 
-// Evaluates every column at the given angles; t_s left to the caller.
-MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const CycleSetup& g,
-                        const std::vector<double>& thetas, bool use_wear) {
+// The exact model on the uniform grid theta_i = 2 pi i / n of a whole cycle, adaptively:
+// direct evaluations on every `stride`-th point (about every 3.2 degrees), then each interval is
+// bisected on the grid until the midpoint's direct value agrees with the interpolation from the
+// interval's ends (h within 1e-3 f_z, psi within 1e-3 rad, kappa within 1e-5 rad) and all three
+// points agree on cutting or not; the points between are then filled by the quadratic through the
+// three. The start and end of cutting are thus resolved to the grid, and the curve agrees with
+// direct evaluation at every point to those tolerances (test Mechanism.AdaptiveCycleMatchesDirect).
+std::vector<mech::ChipPoint> exact_cycle(const mech::ExactModel& model, std::size_t n, double fz) {
+  std::vector<mech::ChipPoint> pts(n);
+  if (n == 0) return pts;
+  auto theta = [n](std::size_t i) {
+    return kTwoPi * static_cast<double>(i) / static_cast<double>(n);
+  };
+  const std::size_t stride = std::max<std::size_t>(1, n / 80);  // ~3.2 degrees
+  const std::size_t nc = (n + stride - 1) / stride;
+  // Coarse points (index nc stands for i = n, the next cycle's theta = 0: the same point).
+  tbb::parallel_for(std::size_t{0}, nc,
+                    [&](std::size_t k) { pts[k * stride] = model.at(theta(k * stride)); });
+  const double tol_h = 1e-3 * fz, tol_psi = 1e-3, tol_kappa = 1e-5;
+  auto at = [&](std::size_t i) -> const mech::ChipPoint& { return pts[i % n]; };
+  // Each coarse interval is refined on its own (its points are written only by it): the
+  // same result whatever the thread count.
+  tbb::parallel_for(std::size_t{0}, nc, [&](std::size_t k) {
+    struct Span {
+      std::size_t i0, i1;
+    };
+    std::vector<Span> todo{{k * stride, std::min(n, (k + 1) * stride)}};
+    while (!todo.empty()) {
+      const Span sp = todo.back();
+      todo.pop_back();
+      if (sp.i1 - sp.i0 <= 1) continue;
+      const std::size_t m = (sp.i0 + sp.i1) / 2;
+      pts[m] = model.at(theta(m));
+      const mech::ChipPoint &p0 = at(sp.i0), &pm = pts[m], &p1 = at(sp.i1);
+      const double w = static_cast<double>(m - sp.i0) / static_cast<double>(sp.i1 - sp.i0);
+      auto lerp = [w](double a, double b) { return a + w * (b - a); };
+      const bool same = (p0.h_mm > 0) == (pm.h_mm > 0) && (pm.h_mm > 0) == (p1.h_mm > 0);
+      if (!same || std::abs(pm.h_mm - lerp(p0.h_mm, p1.h_mm)) > tol_h ||
+          std::abs(pm.psi_rad - lerp(p0.psi_rad, p1.psi_rad)) > tol_psi ||
+          std::abs(pm.kappa_rad - lerp(p0.kappa_rad, p1.kappa_rad)) > tol_kappa) {
+        todo.push_back({sp.i0, m});
+        todo.push_back({m, sp.i1});
+        continue;
+      }
+      // Quadratic (Lagrange) through (i0, m, i1) for the points between.
+      const double x0 = static_cast<double>(sp.i0), xm = static_cast<double>(m),
+                   x1 = static_cast<double>(sp.i1);
+      for (std::size_t i = sp.i0 + 1; i < sp.i1; ++i) {
+        if (i == m) continue;
+        const double x = static_cast<double>(i);
+        const double l0 = (x - xm) * (x - x1) / ((x0 - xm) * (x0 - x1));
+        const double lm = (x - x0) * (x - x1) / ((xm - x0) * (xm - x1));
+        const double l1 = (x - x0) * (x - xm) / ((x1 - x0) * (x1 - xm));
+        auto q = [&](double a, double b, double c) { return l0 * a + lm * b + l1 * c; };
+        mech::ChipPoint& p = pts[i];
+        if (pm.h_mm > 0) {
+          p.h_mm = std::max(0.0, q(p0.h_mm, pm.h_mm, p1.h_mm));
+          p.psi_rad = std::max(0.0, q(p0.psi_rad, pm.psi_rad, p1.psi_rad));
+          p.kappa_rad = q(p0.kappa_rad, pm.kappa_rad, p1.kappa_rad);
+        } else {  // not cutting: psi may still be positive (engaged without a chip)
+          p.psi_rad = std::max(0.0, q(p0.psi_rad, pm.psi_rad, p1.psi_rad));
+        }
+      }
+    }
+  });
+  return pts;
+}
+
+// The chip at the given angles; `uniform_cycle`: they are the uniform grid of a whole cycle
+// (the exact model then samples adaptively, see exact_cycle).
+std::vector<mech::ChipPoint> chip_points(const Job& job, const MechanismSettings& st,
+                                         const CycleSetup& g, const std::vector<double>& thetas,
+                                         bool uniform_cycle) {
+  const std::size_t n = thetas.size();
+  std::vector<mech::ChipPoint> pts(n);
+  if (st.model == ChipModel::pivkin2025) {
+    // Closed form: cheap enough to run serially. Pivkin's theta is ours + pi/2.
+    const Pivkin2025 model(2 * g.a, g.s, 2 * g.R, g.fz, job.tool.teeth);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Pivkin2025::Point p = model.at(thetas[i] + 0.5 * kPi);
+      if (p.cutting) pts[i] = {p.h_mm, p.psi_rad, p.kappa_rad};
+    }
+    return pts;
+  }
   const mech::ExactModel model(g.a, g.b, g.s, g.R, g.fz, g.feed, g.edge_speed);
+  if (uniform_cycle) return exact_cycle(model, n, g.fz);
+  // Every theta is independent: evaluated in parallel, each result in its own slot (the
+  // same numbers whatever the thread count).
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { pts[i] = model.at(thetas[i]); });
+  return pts;
+}
+
+// Every column at the given angles; t_s left to the caller.
+MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const CycleSetup& g,
+                        const std::vector<double>& thetas, bool use_wear, bool uniform_cycle) {
+  const std::vector<mech::ChipPoint> pts = chip_points(job, st, g, thetas, uniform_cycle);
   MechanismCurve c;
   c.model = st.model;
   c.edge_radius_mm = job.tool.edge_radius_mm;
@@ -114,10 +214,8 @@ MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const Cycle
   }
   c.zone.resize(n);
   const double re = job.tool.edge_radius_mm, vb = st.flank_wear_mm;
-  // Every theta is independent: evaluated in parallel, each result in its own slot (the
-  // same numbers whatever the thread count).
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    const mech::ExactPoint p = model.at(thetas[i]);
+  for (std::size_t i = 0; i < n; ++i) {
+    const mech::ChipPoint& p = pts[i];
     c.theta_rad[i] = thetas[i];
     c.h_mm[i] = p.h_mm;
     c.psi_rad[i] = p.psi_rad;
@@ -129,7 +227,7 @@ MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const Cycle
         100.0 * (p.h_mm + (p.kappa_rad > 0 ? vb * std::tan(p.kappa_rad) : 0.0)) / re;
     const double k = use_wear ? c.k_re_wear_pct[i] : c.k_re_pct[i];
     c.zone[i] = p.h_mm > 0 ? zone_of(k, st.thresholds) : 0;
-  });
+  }
   c.cycle_time_s = time_to(g, kTwoPi, 512);
   return c;
 }
@@ -142,7 +240,7 @@ MechanismCurve mechanism_curve(const Job& job, const MechanismSettings& st, bool
   std::vector<double> thetas(n);
   for (std::size_t i = 0; i < n; ++i)
     thetas[i] = kTwoPi * static_cast<double>(i) / static_cast<double>(n);
-  MechanismCurve c = evaluate(job, st, g, thetas, use_wear);
+  MechanismCurve c = evaluate(job, st, g, thetas, use_wear, true);
   // Time from theta = 0: trapezoid rule on |c'| / f_r between the samples.
   for (std::size_t i = 1; i < n; ++i) {
     c.t_s[i] = c.t_s[i - 1] + 0.5 * (path_speed(g, thetas[i]) + path_speed(g, thetas[i - 1])) *
@@ -154,7 +252,7 @@ MechanismCurve mechanism_curve(const Job& job, const MechanismSettings& st, bool
 MechanismCurve mechanism_curve_at(const Job& job, const MechanismSettings& st,
                                   const std::vector<double>& theta_rad, bool use_wear) {
   const CycleSetup g = setup(job, st);
-  MechanismCurve c = evaluate(job, st, g, theta_rad, use_wear);
+  MechanismCurve c = evaluate(job, st, g, theta_rad, use_wear, false);
   for (std::size_t i = 0; i < theta_rad.size(); ++i) {
     c.t_s[i] = time_to(g, theta_rad[i], 64);
   }
