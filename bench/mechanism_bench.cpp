@@ -25,6 +25,18 @@ void BM_MechanismCycle3600(benchmark::State& state) {
 }
 BENCHMARK(BM_MechanismCycle3600)->Unit(benchmark::kMillisecond);
 
+void BM_MechanismCycle3600Pivkin(benchmark::State& state) {
+  const trochomill::Job job = pivkin();
+  trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  st.points = 3600;
+  st.model = trochomill::ChipModel::pivkin2025;
+  for (auto _ : state) {
+    const auto c = trochomill::mechanism_curve(job, st);
+    benchmark::DoNotOptimize(c.h_mm.data());
+  }
+}
+BENCHMARK(BM_MechanismCycle3600Pivkin)->Unit(benchmark::kMillisecond);
+
 void BM_RecommendStep(benchmark::State& state) {
   const trochomill::Job job = pivkin();
   const trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
@@ -34,5 +46,16 @@ void BM_RecommendStep(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_RecommendStep)->Unit(benchmark::kMillisecond);
+
+void BM_RecommendStepPivkin(benchmark::State& state) {
+  const trochomill::Job job = pivkin();
+  trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  st.model = trochomill::ChipModel::pivkin2025;
+  for (auto _ : state) {
+    const auto r = trochomill::recommend(job, st, false, false);
+    benchmark::DoNotOptimize(r.value);
+  }
+}
+BENCHMARK(BM_RecommendStepPivkin)->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -79,6 +79,15 @@ class Pivkin2025 {
   [[nodiscard]] Point at(double theta) const;
 
  private:
+  struct Phase {
+    double c, s;  ///< cos and sin of a tooth's angle phi = beta + N theta
+  };
+  [[nodiscard]] Phase phase(double theta, double beta) const;
+  [[nodiscard]] Xy tooth_at(double theta, Phase ph) const;
+  [[nodiscard]] Xy tooth_velocity_at(double theta, Phase ph) const;
+  [[nodiscard]] double h_t_at(double theta, Phase ph) const;
+  [[nodiscard]] double kappa_at(double theta, Phase ph) const;
+  [[nodiscard]] double psi_of(double h_e_mm) const;
   double dt_, ae_, d_, fz_;
   int z_;
   double n_, theta_tooth_;

@@ -94,7 +94,8 @@ CycleSetup setup(const Job& job, const MechanismSettings& st) {
 }
 
 double path_speed(const CycleSetup& g, double th) {  // |c'(theta)| (mm/rad)
-  return std::hypot(g.a * std::sin(th), g.b * std::cos(th) + g.s / kTwoPi);
+  const double x = g.a * std::sin(th), y = g.b * std::cos(th) + g.s / kTwoPi;
+  return std::sqrt(x * x + y * y);
 }
 
 // Time (s) from theta = 0 to theta along the cycle: Simpson's rule on |c'| / f_r with
@@ -224,7 +225,7 @@ MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const Cycle
     c.kappa_rad[i] = p.kappa_rad;
     c.k_re_pct[i] = 100.0 * p.h_mm / re;
     c.k_re_wear_pct[i] =
-        100.0 * (p.h_mm + (p.kappa_rad > 0 ? vb * std::tan(p.kappa_rad) : 0.0)) / re;
+        100.0 * (p.h_mm + (p.kappa_rad > 0 && vb > 0 ? vb * std::tan(p.kappa_rad) : 0.0)) / re;
     const double k = use_wear ? c.k_re_wear_pct[i] : c.k_re_pct[i];
     c.zone[i] = p.h_mm > 0 ? zone_of(k, st.thresholds) : 0;
   }
@@ -242,9 +243,11 @@ MechanismCurve mechanism_curve(const Job& job, const MechanismSettings& st, bool
     thetas[i] = kTwoPi * static_cast<double>(i) / static_cast<double>(n);
   MechanismCurve c = evaluate(job, st, g, thetas, use_wear, true);
   // Time from theta = 0: trapezoid rule on |c'| / f_r between the samples.
+  double prev = path_speed(g, thetas[0]);
   for (std::size_t i = 1; i < n; ++i) {
-    c.t_s[i] = c.t_s[i - 1] + 0.5 * (path_speed(g, thetas[i]) + path_speed(g, thetas[i - 1])) *
-                                  (thetas[i] - thetas[i - 1]) / g.feed;
+    const double cur = path_speed(g, thetas[i]);
+    c.t_s[i] = c.t_s[i - 1] + 0.5 * (cur + prev) * (thetas[i] - thetas[i - 1]) / g.feed;
+    prev = cur;
   }
   return c;
 }

@@ -51,16 +51,49 @@ Xy Pivkin2025::centre_velocity(double th) const {
   return {0.5 * dt_ * std::sin(th) + ae_ / kTwoPi, 0.5 * dt_ * std::cos(th)};
 }
 
-Xy Pivkin2025::tooth(double th, double beta) const {  // Eqs. 2-5
+// Tooth k's angular position phi = beta_k + N theta enters every equation only through
+// (cos phi, sin phi): the helpers take those (`Phase`), so the model (at) can place a tooth
+// by its direction without computing a large angle N theta and back.
+Xy Pivkin2025::tooth_at(double th, Phase ph) const {  // Eqs. 2-5
   const Xy c = centre(th);
-  const double phi = beta + n_ * th;
-  return {c.x_mm + 0.5 * d_ * std::cos(phi), c.y_mm - 0.5 * d_ * std::sin(phi)};
+  return {c.x_mm + 0.5 * d_ * ph.c, c.y_mm - 0.5 * d_ * ph.s};
 }
 
-Xy Pivkin2025::tooth_velocity(double th, double beta) const {
+Xy Pivkin2025::tooth_velocity_at(double th, Phase ph) const {
   const Xy v = centre_velocity(th);
+  return {v.x_mm - 0.5 * d_ * n_ * ph.s, v.y_mm - 0.5 * d_ * n_ * ph.c};
+}
+
+double Pivkin2025::h_t_at(double th, Phase ph) const {
+  // Eq. 12. |A x1 - y1 + C| / sqrt(A^2 + 1) is the distance from tooth 1's point to the line
+  // through tooth 2's point along its velocity; written with the cross product it stays
+  // finite where the tangent is vertical (A infinite). Tooth 1 at theta + Theta has tooth
+  // 2's phase at theta: beta1 + N (theta + Theta) = beta2 - 2 pi / Z + N theta + 2 pi / Z.
+  const Xy p1 = tooth_at(th + theta_tooth_, ph), p2 = tooth_at(th, ph);
+  const Xy v2 = tooth_velocity_at(th, ph);
+  return std::abs(cross(v2, minus(p1, p2))) / norm(v2);
+}
+
+double Pivkin2025::kappa_at(double th, Phase ph) const {
+  // Eqs. 21-23, our reading: K_c is the tangent of the circle the tooth turns on (the
+  // primary motion), K_t the tangent of its trajectory (Eq. 22, with the orbit's motion);
+  // kappa = K_t - K_c, the resultant cutting speed angle, signed positive where the feed's
+  // radial component drives the edge outwards into the material.
+  const Xy u{ph.c, -ph.s};   // radial, tool centre to tooth
+  const Xy t{-ph.s, -ph.c};  // rotation direction
+  const Xy v = centre_velocity(th);
+  return std::atan2(dot(v, u), 0.5 * d_ * n_ + dot(v, t));
+}
+
+Pivkin2025::Phase Pivkin2025::phase(double th, double beta) const {
   const double phi = beta + n_ * th;
-  return {v.x_mm - 0.5 * d_ * n_ * std::sin(phi), v.y_mm - 0.5 * d_ * n_ * std::cos(phi)};
+  return {std::cos(phi), std::sin(phi)};
+}
+
+Xy Pivkin2025::tooth(double th, double beta) const { return tooth_at(th, phase(th, beta)); }
+
+Xy Pivkin2025::tooth_velocity(double th, double beta) const {
+  return tooth_velocity_at(th, phase(th, beta));
 }
 
 double Pivkin2025::a_t(double th, double beta2) const {  // Eq. 8
@@ -78,61 +111,45 @@ double Pivkin2025::h_delta(double th, double beta1) const {  // Eq. 10
   return norm(minus(tooth(th + theta_tooth_, beta1), tooth(th, beta1 + kTwoPi / z_)));
 }
 
-double Pivkin2025::h_t(double th, double beta2) const {
-  // Eq. 12. |A x1 - y1 + C| / sqrt(A^2 + 1) is the distance from tooth 1's point to the line
-  // through tooth 2's point along its velocity; written with the cross product it stays
-  // finite where the tangent is vertical (A infinite).
-  const Xy p1 = tooth(th + theta_tooth_, beta2 - kTwoPi / z_);
-  const Xy p2 = tooth(th, beta2);
-  const Xy v2 = tooth_velocity(th, beta2);
-  return std::abs(cross(v2, minus(p1, p2))) / norm(v2);
-}
+double Pivkin2025::h_t(double th, double beta2) const { return h_t_at(th, phase(th, beta2)); }
 
 double Pivkin2025::h_sigma(double th, double beta2) const {  // Eq. 13
   const double beta1 = beta2 - kTwoPi / z_;
   return h_t(th, beta2) - (h_delta(th, beta2) - h_delta(th, beta1));
 }
 
+double Pivkin2025::kappa(double th, double beta2) const { return kappa_at(th, phase(th, beta2)); }
+
 Xy Pivkin2025::envelope(double th) const {
   // Eqs. 14-15: C + (D/2)(-sin alpha, cos alpha), alpha the direction of motion. The paper's
-  // atan flips to the inner side where the motion runs backwards (dC_x/dtheta < 0); atan2
-  // keeps the outer side, the one the cycle leaves as the machined surface.
+  // atan flips to the inner side where the motion runs backwards (dC_x/dtheta < 0); we keep
+  // the outer side (alpha = atan2), the one the cycle leaves as the machined surface.
   const Xy c = centre(th), v = centre_velocity(th);
-  const double alpha = std::atan2(v.y_mm, v.x_mm);
-  return {c.x_mm - 0.5 * d_ * std::sin(alpha), c.y_mm + 0.5 * d_ * std::cos(alpha)};
+  const double lv = norm(v);  // (cos alpha, sin alpha) = v / |v|
+  return {c.x_mm - 0.5 * d_ * v.y_mm / lv, c.y_mm + 0.5 * d_ * v.x_mm / lv};
 }
 
 double Pivkin2025::h_e(double th) const {
   // Eq. 16: the envelope's tangent at theta, dF/dtheta = C' + (D/2) dn/dtheta with n =
   // (-sin alpha, cos alpha) and dalpha/dtheta = (C' x C'') / |C'|^2; Eq. 17: the distance
   // from F(theta + 2 pi) to that line (cross-product form of |A_e x - y + C_e| /
-  // sqrt(A_e^2 + 1)).
-  const Xy v = centre_velocity(th);
-  const Xy acc{0.5 * dt_ * std::cos(th), -0.5 * dt_ * std::sin(th)};
-  const double alpha = std::atan2(v.y_mm, v.x_mm);
-  const double dalpha = cross(v, acc) / dot(v, v);
-  Xy de{v.x_mm - 0.5 * d_ * std::cos(alpha) * dalpha, v.y_mm - 0.5 * d_ * std::sin(alpha) * dalpha};
-  if (norm(de) < 1e-12 * norm(v)) de = v;  // a cusp of the envelope: the tangent is C''s
-  const Xy e0 = envelope(th), e1 = envelope(th + kTwoPi);
-  return std::abs(cross(de, minus(e1, e0))) / norm(de);
+  // sqrt(A_e^2 + 1)). F(theta + 2 pi) = F(theta) + (a_e, 0): the orbit repeats a_e ahead.
+  const double sn = std::sin(th), cs = std::cos(th);
+  const Xy v{0.5 * dt_ * sn + ae_ / kTwoPi, 0.5 * dt_ * cs};
+  const Xy acc{0.5 * dt_ * cs, -0.5 * dt_ * sn};
+  const double vv = dot(v, v), lv = std::sqrt(vv);
+  const double dalpha = cross(v, acc) / vv;
+  Xy de{v.x_mm - 0.5 * d_ * (v.x_mm / lv) * dalpha, v.y_mm - 0.5 * d_ * (v.y_mm / lv) * dalpha};
+  if (norm(de) < 1e-12 * lv) de = v;  // a cusp of the envelope: the tangent is C''s
+  return std::abs(cross(de, Xy{ae_, 0})) / norm(de);
 }
 
-double Pivkin2025::psi(double th) const {  // Eq. 18
+double Pivkin2025::psi_of(double h_e_mm) const {  // Eq. 18
   const double r = 0.5 * d_;
-  return std::acos(std::clamp((r - h_e(th)) / r, -1.0, 1.0));
+  return std::acos(std::clamp((r - h_e_mm) / r, -1.0, 1.0));
 }
 
-double Pivkin2025::kappa(double th, double beta2) const {
-  // Eqs. 21-23, our reading: K_c is the tangent of the circle the tooth turns on (the
-  // primary motion), K_t the tangent of its trajectory (Eq. 22, with the orbit's motion);
-  // kappa = K_t - K_c, the resultant cutting speed angle, signed positive where the feed's
-  // radial component drives the edge outwards into the material.
-  const double phi = beta2 + n_ * th;
-  const Xy u{std::cos(phi), -std::sin(phi)};   // radial, tool centre to tooth
-  const Xy t{-std::sin(phi), -std::cos(phi)};  // rotation direction
-  const Xy v = centre_velocity(th);
-  return std::atan2(dot(v, u), 0.5 * d_ * n_ + dot(v, t));
-}
+double Pivkin2025::psi(double th) const { return psi_of(h_e(th)); }
 
 Pivkin2025::Point Pivkin2025::at(double th) const {
   Point p;
@@ -141,19 +158,22 @@ Pivkin2025::Point Pivkin2025::at(double th) const {
   const Xy vh{v.x_mm / lv, v.y_mm / lv};
   const Xy n{-vh.y_mm, vh.x_mm};  // outward normal (left of the clockwise orbit's motion)
   p.h_e_mm = h_e(th);
-  p.psi_rad = psi(th);
+  p.psi_rad = psi_of(p.h_e_mm);
   // Cutting while the contact faces the feed: the front half of the orbit, wall to wall.
   p.cutting = n.x_mm > 0 && p.h_e_mm > 0;
   // The engaged arc runs from the contact point (direction n, where the chip vanishes on
   // the machined surface) by psi towards the motion; its far edge is where the chip is
-  // thickest (f_z sin psi for a straight wall). Tooth 2 is put there at theta, tooth 1 one
-  // tooth period later.
-  const Xy u{std::cos(p.psi_rad) * n.x_mm + std::sin(p.psi_rad) * vh.x_mm,
-             std::cos(p.psi_rad) * n.y_mm + std::sin(p.psi_rad) * vh.y_mm};
-  const double phi = std::atan2(-u.y_mm, u.x_mm);
-  p.beta2_rad = phi - n_ * th;
-  p.h_sigma_mm = h_sigma(th, p.beta2_rad);
-  p.kappa_rad = kappa(th, p.beta2_rad);
+  // thickest (f_z sin psi for a straight wall). Tooth 2 is put there at theta (its phase
+  // from the direction u: (cos phi, -sin phi) = u), tooth 1 one tooth period later.
+  const double cp = std::cos(p.psi_rad), sp = std::sin(p.psi_rad);
+  const Xy u{cp * n.x_mm + sp * vh.x_mm, cp * n.y_mm + sp * vh.y_mm};
+  const Phase ph{u.x_mm, -u.y_mm};
+  p.beta2_rad = std::atan2(ph.s, ph.c) - n_ * th;
+  // Eq. 13 is h_t minus h_delta(beta2) - h_delta(beta1), which vanishes identically for
+  // equal pitch (h_delta is the centre's move over Theta, whatever beta; test
+  // Pivkin2025.EquationsAgainstHandValues): h_Sigma = h_t here.
+  p.h_sigma_mm = h_t_at(th, ph);
+  p.kappa_rad = kappa_at(th, ph);
   if (p.cutting) p.h_mm = std::max(0.0, std::min(p.h_sigma_mm, p.h_e_mm));
   if (p.h_mm <= 0) p.cutting = false;
   return p;
