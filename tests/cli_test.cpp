@@ -240,6 +240,18 @@ TEST_F(Cli, MechanismAndRecommend) {
   EXPECT_EQ(r.code, 2) << r.out;
   r = run_cli("recommend " + ex + " --share 1.5");
   EXPECT_EQ(r.code, 2) << r.out;
+  // The published model: selectable on the command line and in the job; the same keys.
+  r = run_cli("mechanism " + ex + " --model pivkin2025 --set mechanism.points=360 --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["model"], "pivkin2025");
+  EXPECT_GT(j["h_max_mm"].get<double>(), 0.0);
+  r = run_cli("recommend " + ex + " --set mechanism.model=pivkin2025 --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["model"], "pivkin2025");
+  r = run_cli("mechanism " + ex + " --model magic");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("pivkin2025"), std::string::npos) << r.out;  // lists what is allowed
 }
 
 }  // namespace
