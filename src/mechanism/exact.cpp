@@ -150,48 +150,64 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
   return out;
 }
 
-// Distance from x to the path of all earlier positions except the last quarter turn of the
-// current cycle (those are represented by the previous tooth's disc): every past position
-// is c(t) - j (0, s) with t in [theta - 2 pi, theta) and j >= 0 cycles back, and for each t
-// the best j is the one that brings its y nearest x's. Coarse samples over t, then Newton
-// on the nearest with its j fixed.
+// Distance from x to the path of all positions up to the previous tooth pass (parameter
+// `recent`, the centre p): every such position is c(t) - j (0, s) with t in [theta - 2 pi,
+// theta), j >= 0 cycles back (j >= 1 where t > recent), and for each t the best j is the
+// one that brings its y nearest x's. Coarse samples over t, then Newton on the nearest with
+// its j fixed (kept at or before `recent` when j = 0).
 // Callers only compare the distance with a threshold `below`: a sample under it settles the
 // answer (the true minimum is no larger), so the scan stops there and returns it.
-double dist_to_past(const Curve& cv, V2 x, double theta, double below) {
+double dist_to_past(const Curve& cv, V2 x, double theta, double recent, double below) {
   const Tables& tb = *cv.tab;
   const double below2 = below * below;
-  const double lo = theta - kTwoPi, recent = theta - 0.5 * kPi, inv_s = 1.0 / cv.s;
+  const double lo = theta - kTwoPi, inv_s = 1.0 / cv.s;
   const int m_lo = static_cast<int>(std::ceil(lo / tb.path_dt));
   const int m_hi = static_cast<int>(std::ceil(theta / tb.path_dt)) - 1;
-  double best = 1e300, bt = lo, bj = 1;
-  for (int m = m_lo; m <= m_hi; ++m) {
+  thread_local std::vector<double> dds, js;
+  const auto nk = static_cast<std::size_t>(std::max(0, m_hi - m_lo + 1));
+  dds.resize(nk);
+  js.resize(nk);
+  double best = 1e300;
+  for (std::size_t k = 0; k < nk; ++k) {
+    const int m = m_lo + static_cast<int>(k);
     const double t = m * tb.path_dt;
     const V2 q = tb.path_at(m);
     double j = std::max(0.0, std::floor((q.y - x.y) * inv_s + 0.5));
-    if (j == 0 && t > recent) j = 1;  // the recent current-cycle positions do not count
+    if (j == 0 && t > recent) j = 1;  // after the previous tooth pass: not yet
     const V2 r = q - V2{0, j * cv.s} - x;
     const double dd = dot(r, r);  // squared while scanning
     if (dd < below2) return std::sqrt(dd);
-    if (dd < best) {
-      best = dd;
-      bt = t;
-      bj = j;
-    }
+    dds[k] = dd;
+    js[k] = j;
+    best = std::min(best, dd);
   }
   best = std::sqrt(best);
-  double t = bt;
-  for (int it = 0; it < 8; ++it) {  // minimise |c(t) - (0, j s) - x|^2: f = (q - x).c'
-    const double sn = std::sin(t), cs = std::cos(t);
-    const V2 q{-cv.a * cs - x.x, cv.b * sn + cv.s * t / kTwoPi - bj * cv.s - x.y};
-    const V2 d1{cv.a * sn, cv.b * cs + cv.s / kTwoPi}, d2{cv.a * cs, -cv.b * sn};
-    const double f = dot(q, d1), df = dot(d1, d1) + dot(q, d2);
-    if (df <= 0) break;
-    const double step = std::clamp(f / df, -0.05, 0.05);
-    t -= step;
-    if (std::abs(step) < 1e-12) break;
+  // Refine every sampled local minimum that could hide the true nearest point: between
+  // samples L apart along the path a minimum lies at most ~L^2 / (8 rho) below the nearer
+  // sample (rho ~ R here); the margin L^2 / R covers it with room. Newton on |c(t) - (0, j s)
+  // - x|^2 with that sample's j.
+  const double L = tb.path_dt * (std::max(cv.a, cv.b) + cv.s / kTwoPi);
+  const double margin = L * L / cv.R;
+  double result = best;
+  for (std::size_t k = 0; k < nk; ++k) {
+    if (std::sqrt(dds[k]) > best + margin) continue;
+    if ((k > 0 && dds[k - 1] < dds[k]) || (k + 1 < nk && dds[k + 1] < dds[k])) continue;
+    const double bj = js[k];
+    double t = (m_lo + static_cast<int>(k)) * tb.path_dt;
+    for (int it = 0; it < 8; ++it) {  // minimise |c(t) - (0, j s) - x|^2: f = (q - x).c'
+      const double sn = std::sin(t), cs = std::cos(t);
+      const V2 q{-cv.a * cs - x.x, cv.b * sn + cv.s * t / kTwoPi - bj * cv.s - x.y};
+      const V2 d1{cv.a * sn, cv.b * cs + cv.s / kTwoPi}, d2{cv.a * cs, -cv.b * sn};
+      const double f = dot(q, d1), df = dot(d1, d1) + dot(q, d2);
+      if (df <= 0) break;
+      const double step = std::clamp(f / df, -0.05, 0.05);
+      const double tn = bj == 0 ? std::min(t - step, recent) : t - step;
+      if (std::abs(tn - t) < 1e-12) break;
+      t = tn;
+    }
+    result = std::min(result, norm(cv.c(t) - V2{0, bj * cv.s} - x));
   }
-  if (bj == 0 && t > recent) return best;  // refined into the excluded stretch
-  return std::min(best, norm(cv.c(t) - V2{0, bj * cv.s} - x));
+  return result;
 }
 
 }  // namespace
@@ -239,7 +255,8 @@ ChipPoint ExactModel::at(double theta) const {
   // One f_z of path back (midpoint speed: error O(f_z^3 kappa^2)).
   const double d0 = fz_ / norm(v);
   const double dth = fz_ / norm(cv.d1(theta - 0.5 * d0));
-  const V2 p = cv.c(theta - dth);
+  const double th_p = theta - dth;
+  const V2 p = cv.c(th_p);
   const V2 cp = c - p;
   const double d = norm(cp);
   const double tol = 1e-9 * R_;
@@ -283,28 +300,48 @@ ChipPoint ExactModel::at(double theta) const {
   ang.push_back(back + beta);
   for (auto& x : ang) x = x - kTwoPi * std::floor(x / kTwoPi);
   std::sort(ang.begin(), ang.end());
+  struct Arc {
+    double a0, a1;
+  };
+  std::vector<Arc> engaged;
   for (std::size_t k = 0; k < ang.size(); ++k) {
     const double a0 = ang[k], a1 = k + 1 < ang.size() ? ang[k + 1] : ang[0] + kTwoPi;
     if (a1 - a0 < 1e-12) continue;
     const double mid = 0.5 * (a0 + a1);
     const V2 m = c + R_ * V2{std::cos(mid), std::sin(mid)};
-    if (norm(m - p) < R_ || dist_to_past(cv, m, theta, R_) < R_) continue;
+    if (norm(m - p) < R_ || dist_to_past(cv, m, theta, th_p, R_) < R_) continue;
     out.psi_rad += a1 - a0;
+    engaged.push_back({a0, a1});
   }
   if (out.psi_rad <= 0) return out;
+  // A chip candidate counts only on an engaged arc: the tool circle's point in its
+  // direction must be in the stock (else the ray meets removed material first and the
+  // radial distance R - |q - c| overstates the chip there).
+  auto on_engaged_arc = [&](V2 q) {
+    double a = std::atan2(q.y - c.y, q.x - c.x);
+    a -= kTwoPi * std::floor(a / kTwoPi);
+    for (const Arc& arc : engaged) {
+      if ((a >= arc.a0 - 1e-9 && a <= arc.a1 + 1e-9) ||
+          (a + kTwoPi >= arc.a0 - 1e-9 && a + kTwoPi <= arc.a1 + 1e-9)) {
+        return true;
+      }
+    }
+    return false;
+  };
 
   // The chip: straight ahead of p where the previous tooth bounds it (h = d), else at the
   // kinks where the previous tooth's circle meets the earlier positions' boundary.
   V2 contact{};
   const V2 ahead = p + R_ * V2{cp.x / d, cp.y / d};
-  if (dist_to_past(cv, ahead, theta, R_ - tol) >= R_ - tol) {
+  if (dist_to_past(cv, ahead, theta, th_p, R_ - tol) >= R_ - tol) {
     out.h_mm = d;
     contact = ahead;
   } else {
     for (const auto& rj : roots_for(p)) {
       for (const Root& r : rj) {
         e = env_at(r);
-        if (dist_to_past(cv, e, theta, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) continue;  // buried
+        if (!on_engaged_arc(e)) continue;
+        if (dist_to_past(cv, e, theta, th_p, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) continue;  // buried
         const double h = R_ - norm(e - c);
         if (h > out.h_mm) {
           out.h_mm = h;
@@ -353,7 +390,10 @@ ChipPoint ExactModel::at(double theta) const {
       }
       e = env_at({tm, j});
       const double rho = norm(e - c);
-      if (rho >= R_ || dist_to_past(cv, e, theta, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) continue;
+      if (rho >= R_ || !on_engaged_arc(e) ||
+          dist_to_past(cv, e, theta, th_p, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) {
+        continue;
+      }
       const V2 u{(e.x - c.x) / rho, (e.y - c.y) / rho};
       const double h = R_ - std::max(rho, ray_tooth(u));
       if (h > out.h_mm) {
