@@ -25,6 +25,19 @@ void BM_MechanismCycle3600(benchmark::State& state) {
 }
 BENCHMARK(BM_MechanismCycle3600)->Unit(benchmark::kMillisecond);
 
+// The same on Wagih 2023's elliptical example (W 20, D 10: a/R = 1, aspect ratio 0.8).
+void BM_MechanismCycle3600Wagih(benchmark::State& state) {
+  const trochomill::Job job = trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) +
+                                                   "/examples/wagih2023/elliptical.toml");
+  trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  st.points = 3600;
+  for (auto _ : state) {
+    const auto c = trochomill::mechanism_curve(job, st);
+    benchmark::DoNotOptimize(c.h_mm.data());
+  }
+}
+BENCHMARK(BM_MechanismCycle3600Wagih)->Unit(benchmark::kMillisecond);
+
 void BM_MechanismCycle3600Pivkin(benchmark::State& state) {
   const trochomill::Job job = pivkin();
   trochomill::MechanismSettings st = trochomill::mechanism_settings(job);

@@ -73,10 +73,10 @@ TEST(Mechanism, ExactModelMatchesKernel) {
   }
 }
 
-// The whole-cycle curve is sampled adaptively (direct evaluations about every 6 degrees,
+// The whole-cycle curve is sampled adaptively (direct evaluations about every 9 degrees,
 // bisected where the interpolation disagrees with the model): at every one of its 3600
-// points it must match direct evaluation within the refinement's tolerances (1e-3 f_z in h,
-// 1e-3 rad in psi; stated in mechanism.cpp), allowing 2x for the quadratic fill between the
+// points it must match direct evaluation within the refinement's tolerances (2e-3 f_z in h,
+// 3e-3 rad in psi; stated in mechanism.cpp), allowing 2x for the quadratic fill between the
 // checked points, and cut exactly where the direct model cuts.
 TEST(Mechanism, AdaptiveCycleMatchesDirect) {
   struct Case {
@@ -103,8 +103,8 @@ TEST(Mechanism, AdaptiveCycleMatchesDirect) {
     }
     const std::string what =
         std::string(cs.family) + " W " + std::to_string(cs.W) + " s " + std::to_string(cs.s);
-    EXPECT_LT(worst_h, 2e-3 * fz) << what;
-    EXPECT_LT(worst_psi, 2e-3) << what;
+    EXPECT_LT(worst_h, 4e-3 * fz) << what;
+    EXPECT_LT(worst_psi, 6e-3) << what;
     EXPECT_EQ(mismatched, 0) << what;
   }
 }

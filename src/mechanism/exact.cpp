@@ -104,7 +104,7 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
       const double tn = t - step;
       if (!(tn > lo && tn < hi)) break;
       t = tn;
-      if (std::abs(step) < 1e-12) return t;
+      if (std::abs(step) < 1e-10) return t;  // ~1e-9 mm along the envelope
     }
     return detail::regula_falsi(g, lo, hi, glo, ghi, 1e-12);
   };
@@ -131,16 +131,30 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
       // wall cusp; a parabola through the samples dips at most an eighth of the second
       // difference below them, so a value above half of it cannot hide a crossing): find
       // its minimum; if negative, it holds two roots.
+      // The minimum is a root of g' = 2 (E - q) . E' (regula falsi when g' changes sign over
+      // the two intervals, as it does for a single valley; golden section otherwise).
       double lo = ts[k - 1], hi = ts[k + 1];
-      for (int it = 0; it < 60 && hi - lo > 1e-9; ++it) {
-        const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
-        if (g(m1) < g(m2)) {
-          hi = m2;
-        } else {
-          lo = m1;
+      auto dg = [&](double t) {
+        V2 e, de;
+        cv.envelope(t, e, de);
+        return dot(e - q, de);
+      };
+      const double dlo = dg(lo), dhi = dg(hi);
+      double tm = 0;
+      if (dlo < 0 && dhi > 0) {
+        tm = detail::regula_falsi(dg, lo, hi, dlo, dhi, 1e-10);
+      } else {
+        for (int it = 0; it < 60 && hi - lo > 1e-9; ++it) {
+          const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+          if (g(m1) < g(m2)) {
+            hi = m2;
+          } else {
+            lo = m1;
+          }
         }
+        tm = 0.5 * (lo + hi);
       }
-      const double tm = 0.5 * (lo + hi), gm = g(tm);
+      const double gm = g(tm);
       if (gm < 0) {
         out.push_back(solve(ts[k - 1], tm, gs[k - 1], gm));
         out.push_back(solve(tm, ts[k + 1], gm, gs[k + 1]));
@@ -172,7 +186,8 @@ double dist_to_past(const Curve& cv, V2 x, double theta, double recent, double b
     const int m = m_lo + static_cast<int>(k);
     const double t = m * tb.path_dt;
     const V2 q = tb.path_at(m);
-    double j = std::max(0.0, std::floor((q.y - x.y) * inv_s + 0.5));
+    const double jy = (q.y - x.y) * inv_s + 0.5;  // nearest whole number of cycles back
+    double j = jy > 1 ? static_cast<double>(static_cast<long>(jy)) : 0.0;
     if (j == 0 && t > recent) j = 1;  // after the previous tooth pass: not yet
     const V2 r = q - V2{0, j * cv.s} - x;
     const double dd = dot(r, r);  // squared while scanning
@@ -189,8 +204,9 @@ double dist_to_past(const Curve& cv, V2 x, double theta, double recent, double b
   const double L = tb.path_dt * (std::max(cv.a, cv.b) + cv.s / kTwoPi);
   const double margin = L * L / cv.R;
   double result = best;
+  const double limit2 = (best + margin) * (best + margin);
   for (std::size_t k = 0; k < nk; ++k) {
-    if (std::sqrt(dds[k]) > best + margin) continue;
+    if (dds[k] > limit2) continue;
     if ((k > 0 && dds[k - 1] < dds[k]) || (k + 1 < nk && dds[k + 1] < dds[k])) continue;
     const double bj = js[k];
     double t = (m_lo + static_cast<int>(k)) * tb.path_dt;

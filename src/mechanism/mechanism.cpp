@@ -110,24 +110,27 @@ double time_to(const CycleSetup& g, double theta, int n) {
 }
 
 // The exact model on the uniform grid theta_i = 2 pi i / n of a whole cycle, adaptively:
-// direct evaluations on every `stride`-th point (about every 3.2 degrees), then each interval is
+// direct evaluations on every `stride`-th point (about every 9 degrees), then each interval is
 // bisected on the grid until the midpoint's direct value agrees with the interpolation from the
-// interval's ends (h within 1e-3 f_z, psi within 1e-3 rad, kappa within 1e-5 rad) and all three
+// interval's ends (h within 2e-3 f_z, psi within 3e-3 rad, kappa within 1e-4 rad) and all three
 // points agree on cutting or not; the points between are then filled by the quadratic through the
-// three. The start and end of cutting are thus resolved to the grid, and the curve agrees with
-// direct evaluation at every point to those tolerances (test Mechanism.AdaptiveCycleMatchesDirect).
+// three. The start and end of cutting are thus resolved to the grid (a cycle of a closed orbit
+// cuts on one arc: an engagement shorter than ~4.5 degrees between two non-cutting samples could
+// be missed), and the curve agrees with direct evaluation at every point within about those
+// tolerances (test Mechanism.AdaptiveCycleMatchesDirect; measured: h within 3.3e-4 f_z, psi
+// within 2e-3 rad over 18 cases).
 std::vector<mech::ChipPoint> exact_cycle(const mech::ExactModel& model, std::size_t n, double fz) {
   std::vector<mech::ChipPoint> pts(n);
   if (n == 0) return pts;
   auto theta = [n](std::size_t i) {
     return kTwoPi * static_cast<double>(i) / static_cast<double>(n);
   };
-  const std::size_t stride = std::max<std::size_t>(1, n / 80);  // ~3.2 degrees
+  const std::size_t stride = std::max<std::size_t>(1, n / 40);  // ~9 degrees
   const std::size_t nc = (n + stride - 1) / stride;
   // Coarse points (index nc stands for i = n, the next cycle's theta = 0: the same point).
   tbb::parallel_for(std::size_t{0}, nc,
                     [&](std::size_t k) { pts[k * stride] = model.at(theta(k * stride)); });
-  const double tol_h = 1e-3 * fz, tol_psi = 1e-3, tol_kappa = 1e-5;
+  const double tol_h = 2e-3 * fz, tol_psi = 3e-3, tol_kappa = 1e-4;
   auto at = [&](std::size_t i) -> const mech::ChipPoint& { return pts[i % n]; };
   // Each coarse interval is refined on its own (its points are written only by it): the
   // same result whatever the thread count.
