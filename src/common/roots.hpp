@@ -30,4 +30,22 @@ double regula_falsi(F&& f, double lo, double hi, double flo, double fhi, double 
   return r;
 }
 
+/// A minimum of f in [lo, hi] given its derivative df: where df goes from negative to
+/// positive over the bracket (a single valley) a root of df by regula falsi, otherwise a
+/// golden-section search on f; either to a bracket narrower than `tol`.
+template <typename F, typename DF>
+double bracketed_minimum(F&& f, DF&& df, double lo, double hi, double tol) {
+  const double dlo = df(lo), dhi = df(hi);
+  if (dlo < 0 && dhi > 0) return regula_falsi(df, lo, hi, dlo, dhi, tol);
+  for (int it = 0; it < 200 && hi - lo > tol; ++it) {
+    const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+    if (f(m1) < f(m2)) {
+      hi = m2;
+    } else {
+      lo = m1;
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace trochomill::detail

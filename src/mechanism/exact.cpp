@@ -133,28 +133,13 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
       // its minimum; if negative, it holds two roots.
       // The minimum is a root of g' = 2 (E - q) . E' (regula falsi when g' changes sign over
       // the two intervals, as it does for a single valley; golden section otherwise).
-      double lo = ts[k - 1], hi = ts[k + 1];
+      const double lo = ts[k - 1], hi = ts[k + 1];
       auto dg = [&](double t) {
         V2 e, de;
         cv.envelope(t, e, de);
         return dot(e - q, de);
       };
-      const double dlo = dg(lo), dhi = dg(hi);
-      double tm = 0;
-      if (dlo < 0 && dhi > 0) {
-        tm = detail::regula_falsi(dg, lo, hi, dlo, dhi, 1e-10);
-      } else {
-        for (int it = 0; it < 60 && hi - lo > 1e-9; ++it) {
-          const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
-          if (g(m1) < g(m2)) {
-            hi = m2;
-          } else {
-            lo = m1;
-          }
-        }
-        tm = 0.5 * (lo + hi);
-      }
-      const double gm = g(tm);
+      const double tm = detail::bracketed_minimum(g, dg, lo, hi, 1e-10), gm = g(tm);
       if (gm < 0) {
         out.push_back(solve(ts[k - 1], tm, gs[k - 1], gm));
         out.push_back(solve(tm, ts[k + 1], gm, gs[k + 1]));
@@ -378,7 +363,7 @@ ChipPoint ExactModel::at(double theta) const {
   for (const auto& rj : tool_roots) {
     for (std::size_t k = 0; k + 1 < rj.size() && !tooth_bound; ++k) {
       const int j = rj[k].j;
-      double lo = rj[k].t, hi = rj[k + 1].t;
+      const double lo = rj[k].t, hi = rj[k + 1].t;
       // The nearest point: a root of d/dt |E - c|^2 / 2 = (E - c) . E' (negative at the
       // first crossing, positive at the second when the dip is a single valley); golden
       // section where it is not.
@@ -388,22 +373,8 @@ ChipPoint ExactModel::at(double theta) const {
         cv.envelope(t, q, dq);
         return dot(q - shift - c, dq);
       };
-      double tm = 0;
-      const double slo = slope(lo), shi = slope(hi);
-      if (slo < 0 && shi > 0) {
-        tm = detail::regula_falsi(slope, lo, hi, slo, shi, 1e-10);
-      } else {
-        auto dist_c = [&](double t) { return norm(env_at({t, j}) - c); };
-        for (int it = 0; it < 48 && hi - lo > 1e-8; ++it) {  // golden section
-          const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
-          if (dist_c(m1) < dist_c(m2)) {
-            hi = m2;
-          } else {
-            lo = m1;
-          }
-        }
-        tm = 0.5 * (lo + hi);
-      }
+      auto dist_c = [&](double t) { return norm(env_at({t, j}) - c); };
+      const double tm = detail::bracketed_minimum(dist_c, slope, lo, hi, 1e-10);
       e = env_at({tm, j});
       const double rho = norm(e - c);
       if (rho >= R_ || !on_engaged_arc(e) ||
