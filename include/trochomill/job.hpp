@@ -101,6 +101,18 @@ struct MechanismJob {
   std::optional<double> friction_angle_deg;  ///< [material] friction_angle theta_m (degrees)
 };
 
+/// Vibroacoustic monitor settings (`[monitor]`; the CLI's flags override; signal.hpp).
+struct MonitorSettings {
+  double low_min_hz = 2000, low_max_hz = 5000;     ///< low band
+  double high_min_hz = 8000, high_max_hz = 13000;  ///< high band
+  int order = 4;                                   ///< Butterworth order of each band
+  double window_s = 0.005;                         ///< RMS window (and hop)
+  int baseline_cycles = 3;  ///< wear: cycles whose k_f level is the reference
+  double wear_ratio = 1.3;  ///< wear flagged where the k_f level exceeds the reference by this
+  double ploughing_ratio = 1.15;  ///< ploughing flagged where k_f in CZI exceeds CZIII's by this
+  int phase_bins = 50;            ///< k_f profile bins over a cycle
+};
+
 struct Job {
   std::string source;  ///< file name the job came from (for messages)
   Tool tool;
@@ -111,6 +123,7 @@ struct Job {
   Measured measured;
   AnalysisSettings analysis;
   MechanismJob mechanism;
+  MonitorSettings monitor;
   // The original document, flattened `section.key = value` (TOML syntax), after overrides:
   // written into the G-code header so a program records the job that produced it.
   std::vector<std::pair<std::string, std::string>> flat_keys;

@@ -41,6 +41,9 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
       {"measured", {"force_max", "roughness_ra", "waviness"}},
       {"analysis", {"steps_per_tooth", "imprint_points"}},
       {"mechanism", {"czi_max", "czii_max", "transition", "share", "model", "points"}},
+      {"monitor",
+       {"low_min", "low_max", "high_min", "high_max", "order", "window", "baseline_cycles",
+        "wear_ratio", "ploughing_ratio", "phase_bins"}},
   };
   return keys;
 }
@@ -48,7 +51,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
 // Sections later modules own. They are accepted (not validated here) so one job file can
 // carry everything; each module validates its own section.
 const std::set<std::string>& reserved_sections() {
-  static const std::set<std::string> s = {"material", "simulation", "stock", "monitor", "forces"};
+  static const std::set<std::string> s = {"material", "simulation", "stock", "forces"};
   return s;
 }
 
@@ -583,6 +586,31 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
     r.problem("mechanism", "czii_max",
               fmt::format("must be greater than czi_max ({}), got {}", fmt_num(mj.czi_max_pct),
                           fmt_num(mj.czii_max_pct)));
+  }
+  // [monitor]
+  MonitorSettings& mo = job.monitor;
+  mo.low_min_hz = r.number("monitor", "low_min", "Hz", positive(), 2000.0).value_or(2000.0);
+  mo.low_max_hz = r.number("monitor", "low_max", "Hz", positive(), 5000.0).value_or(5000.0);
+  mo.high_min_hz = r.number("monitor", "high_min", "Hz", positive(), 8000.0).value_or(8000.0);
+  mo.high_max_hz = r.number("monitor", "high_max", "Hz", positive(), 13000.0).value_or(13000.0);
+  mo.order = r.integer("monitor", "order", 1, 12, 4).value_or(4);
+  mo.window_s = r.number("monitor", "window", "s", Range{1e-5, 10.0}, 0.005).value_or(0.005);
+  mo.baseline_cycles = r.integer("monitor", "baseline_cycles", 1, 1000, 3).value_or(3);
+  mo.wear_ratio =
+      r.number("monitor", "wear_ratio", "ratio", Range{1.0, 100.0, false, true}, 1.3).value_or(1.3);
+  mo.ploughing_ratio =
+      r.number("monitor", "ploughing_ratio", "ratio", Range{1.0, 100.0, false, true}, 1.15)
+          .value_or(1.15);
+  mo.phase_bins = r.integer("monitor", "phase_bins", 4, 10000, 50).value_or(50);
+  if (mo.low_max_hz <= mo.low_min_hz) {
+    r.problem("monitor", "low_max",
+              fmt::format("must be greater than low_min ({} Hz), got {} Hz", fmt_num(mo.low_min_hz),
+                          fmt_num(mo.low_max_hz)));
+  }
+  if (mo.high_max_hz <= mo.high_min_hz) {
+    r.problem("monitor", "high_max",
+              fmt::format("must be greater than high_min ({} Hz), got {} Hz",
+                          fmt_num(mo.high_min_hz), fmt_num(mo.high_max_hz)));
   }
   // [analysis]
   job.analysis.steps_per_tooth = r.integer("analysis", "steps_per_tooth", 1, 64, 1).value_or(1);

@@ -1,0 +1,197 @@
+// Vibroacoustic monitoring (Pivkin 2025 Sections 2.3, 4.6, 5.4; domain notes section 5): read
+// an accelerometer signal, band-pass it into a low (default 2-5 kHz) and a high (8-13 kHz)
+// band with Butterworth filters in second-order sections, take windowed RMS values and
+// their ratio k_f = RMS_low / RMS_high, cut the signal into trochoid cycles (from the
+// planned path's timing or from the signal's own periodicity), set each cycle's k_f profile
+// beside the mechanism model's K_re and zones, and flag ploughing and wear. Also: spectra
+// and spectrograms for choosing bands, a streaming (causal) monitor, and a synthetic signal
+// generator. Times in s, frequencies in Hz.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "trochomill/job.hpp"
+
+namespace trochomill {
+
+/// One channel of samples at a constant rate.
+struct Signal {
+  double rate_hz = 0;
+  std::vector<double> samples;
+  [[nodiscard]] double duration_s() const {
+    return rate_hz > 0 ? static_cast<double>(samples.size()) / rate_hz : 0.0;
+  }
+};
+
+/// How to read a signal file. Formats: `auto` (by extension: .wav .flac .aiff .aif .ogg
+/// through libsndfile, .csv, .f32 raw float32, .s16 raw int16), or forced.
+enum class SampleFormat { automatic, sndfile, csv, f32, s16 };
+[[nodiscard]] SampleFormat parse_sample_format(const std::string& name);  ///< throws InputError
+
+struct SignalReadOptions {
+  SampleFormat format = SampleFormat::automatic;
+  std::optional<double> rate_hz;  ///< required for raw data and CSV without a time column
+  int channel = 0;                ///< 0-based channel of a multichannel file or CSV column
+};
+
+/// Reads a signal file ("-" is standard input, raw formats only). CSV: one header line
+/// allowed; a column named `t`, `t_s` or `time` gives the time (the rate must be constant
+/// within 1e-6 relative); otherwise `rate_hz` is required; `channel` counts the other
+/// columns. Throws InputError for unreadable, empty, truncated (raw int16 with an odd byte
+/// count, float32 not a multiple of 4) or non-finite data, naming the file and, for CSV,
+/// the line.
+[[nodiscard]] Signal read_signal(const std::string& path, const SignalReadOptions& opt);
+/// Writes a mono float32 WAV (the caller makes it atomic). Throws Error on failure.
+void write_wav(const std::string& path, const Signal& s);
+
+/// A cascade of second-order sections, each {b0, b1, b2, 1, a1, a2} (scipy's layout).
+struct Sos {
+  std::vector<std::array<double, 6>> sections;
+};
+
+/// Butterworth band-pass of the given order (the low-pass prototype's: the filter has
+/// 2 * order poles and `order` sections), band edges in Hz (-3 dB), bilinear transform with
+/// pre-warped edges (as scipy.signal.butter(order, [lo, hi], 'bandpass', fs=rate,
+/// output='sos')). Throws InputError unless 1 <= order <= 12 and 0 < lo < hi < rate / 2.
+[[nodiscard]] Sos butter_bandpass(int order, double lo_hz, double hi_hz, double rate_hz);
+/// |H(e^{i 2 pi f / rate})| of the cascade.
+[[nodiscard]] double sos_gain(const Sos& sos, double f_hz, double rate_hz);
+
+/// Causal filtering, transposed direct form II per section; keeps its state between calls,
+/// so feeding a signal in pieces gives exactly the output of feeding it whole.
+class SosFilter {
+ public:
+  explicit SosFilter(Sos sos);
+  [[nodiscard]] double step(double x);
+  void process(const double* in, double* out, std::size_t n);
+  void reset();
+
+ private:
+  Sos sos_;
+  std::vector<std::array<double, 2>> z_;
+};
+[[nodiscard]] std::vector<double> sosfilt(const Sos& sos, const std::vector<double>& x);
+/// Zero-phase filtering: forward and backward with odd extension of 3 (2 n_sections + 1)
+/// samples at each end and steady-state initial conditions (scipy.signal.sosfiltfilt's
+/// defaults); the magnitude response is |H|^2.
+[[nodiscard]] std::vector<double> sosfiltfilt(const Sos& sos, const std::vector<double>& x);
+
+/// Welch power spectral density (Hann window, 50 % overlap, one-sided, units^2 / Hz).
+struct Spectrum {
+  std::vector<double> f_hz, psd;
+};
+[[nodiscard]] Spectrum welch(const Signal& s, int nfft);
+/// Short-time Fourier transform magnitude in dB (Hann window, hop nfft / 2): frames x bins.
+struct Spectrogram {
+  std::vector<double> t_s, f_hz;
+  std::vector<std::vector<double>> db;  ///< [frame][bin], 20 log10 |X| (amplitude)
+};
+[[nodiscard]] Spectrogram spectrogram(const Signal& s, int nfft);
+
+/// MonitorSettings (job.hpp) are `[monitor]` in the job, validated by load_job; this checks
+/// them against a signal's rate. Throws InputError naming the setting.
+void validate(const MonitorSettings& m, double rate_hz);
+
+/// k_f over time: windows of `window_s` (the last partial window dropped), window k covering
+/// [k w, (k + 1) w) and stamped at its centre.
+struct KfSeries {
+  double window_s = 0;
+  std::vector<double> t_s, rms_low, rms_high, k_f;
+};
+/// Offline (zero_phase: forward-backward filters) or causal.
+[[nodiscard]] KfSeries kf_series(const Signal& s, const MonitorSettings& m, bool zero_phase);
+
+/// Live monitor: causal filters, one result per completed window (latency: one window).
+class KfStream {
+ public:
+  struct Window {
+    double t_s = 0;  ///< window centre from the stream's start
+    double rms_low = 0, rms_high = 0, k_f = 0;
+  };
+  KfStream(double rate_hz, const MonitorSettings& m);
+  /// Feeds samples; calls `on_window` for every window they complete.
+  void push(const double* x, std::size_t n, const std::function<void(const Window&)>& on_window);
+
+ private:
+  double rate_hz_;
+  std::size_t window_n_, filled_ = 0, index_ = 0;
+  SosFilter low_, high_;
+  double sum_low_ = 0, sum_high_ = 0;
+};
+
+/// Where the cycles are: start times and period; from the job or found in the signal.
+struct CycleTiming {
+  std::string source;           ///< "job" or "signal"
+  std::vector<double> start_s;  ///< start of every whole cycle in the signal
+  std::vector<double> end_s;    ///< and its end
+  double period_s = 0;          ///< mean cycle time
+};
+/// From the planned path: cycle k starts at `start_s` + its programmed time (feeds at the
+/// programmed rate; acceleration ignored). Only cycles wholly inside the signal.
+[[nodiscard]] CycleTiming cycles_from_job(const Job& job, double start_s, double duration_s);
+/// From the k_f series alone: the period is the first strong maximum of the broadband RMS
+/// envelope's autocorrelation (between min_period_s and max_period_s; refined by parabolic
+/// interpolation); each cycle starts at the envelope's steepest rise (the cut's onset, which
+/// the mechanism model may put a little before theta = 0) within a quarter period of the
+/// folded estimate; only cycles in which the envelope gets loud count. Throws Error when no
+/// period stands out (autocorrelation peak below 0.3).
+[[nodiscard]] CycleTiming cycles_from_signal(const KfSeries& kf, double min_period_s,
+                                             double max_period_s);
+
+/// The mechanism model beside the signal: zone (0 air, 1-3 CZI-III) and K_re at each of
+/// `phase_bins` phases of a cycle (phase = time since the cycle start / cycle time).
+struct ModelProfile {
+  std::vector<double> k_re_pct;
+  std::vector<int> zone;
+};
+
+struct CycleResult {
+  double start_s = 0, end_s = 0;
+  double k_f_mean = 0;              ///< over the cutting part where the model is known, else all
+  std::vector<double> k_f_profile;  ///< per phase bin (NaN where no window fell)
+  std::optional<double> k_f_czi, k_f_cziii;  ///< mean k_f in the zone's phases (with a job)
+  bool ploughing = false;                    ///< k_f_czi > ploughing_ratio * k_f_cziii
+  bool wear = false;                         ///< k_f_mean > wear_ratio * reference level
+};
+
+struct MonitorReport {
+  KfSeries kf;
+  CycleTiming timing;
+  std::optional<ModelProfile> model;
+  std::vector<CycleResult> cycles;
+  double k_f_mean = 0;       ///< mean over the cycles' k_f_mean (over all windows without cycles)
+  double reference_k_f = 0;  ///< mean k_f level of the first baseline_cycles cycles
+  bool wear_trend = false;   ///< the last baseline_cycles cycles' level > wear_ratio * reference
+  std::vector<std::string> flags;  ///< human-readable, one per finding
+};
+
+/// The whole offline analysis. With `job` the cycles come from its planned path and
+/// `start_s` (s into the recording where the program starts) and the model's zones give the
+/// ploughing flag; without, from the signal's periodicity (period between 0.02 and 20 s).
+[[nodiscard]] MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m,
+                                           const Job* job, double start_s);
+
+/// Synthetic signal for tests and demos: per cycle of the job's steady-state trochoid, noise
+/// bands whose RMS ratio follows k_f(phase) = the zone's value (CZI `kf_czi`, CZII `kf_czii`,
+/// CZIII `kf_cziii`; air: amplitude `idle`), a slow drift multiplying k_f by 1 + wear_drift
+/// times the fraction of the way from the first cycle's start to the last cycle's end, and
+/// white noise. The recording starts `lead_s` before the program (its `--start`).
+struct SynthOptions {
+  double rate_hz = 100000;
+  int cycles = 12;
+  double kf_czi = 1.6, kf_czii = 1.15, kf_cziii = 1.0;
+  double idle = 0.05;     ///< band amplitude in air, relative to cutting
+  double noise = 0.02;    ///< white noise RMS, relative to the cutting band RMS
+  double wear_drift = 0;  ///< k_f x (1 + wear_drift) by the last cycle's end
+  double lead_s = 0.1;    ///< air before the first cycle (the program start)
+  std::uint32_t seed = 1;
+};
+[[nodiscard]] Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o);
+
+}  // namespace trochomill

@@ -1,0 +1,281 @@
+// Reading and writing signals: libsndfile (WAV, FLAC, AIFF, OGG), CSV, raw float32 / int16
+// little-endian (include/trochomill/signal.hpp).
+#include <fmt/format.h>
+#include <sndfile.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <sstream>
+
+#include "trochomill/error.hpp"
+#include "trochomill/signal.hpp"
+
+namespace trochomill {
+
+SampleFormat parse_sample_format(const std::string& name) {
+  if (name == "auto") return SampleFormat::automatic;
+  if (name == "sndfile" || name == "wav" || name == "flac" || name == "aiff") {
+    return SampleFormat::sndfile;
+  }
+  if (name == "csv") return SampleFormat::csv;
+  if (name == "f32") return SampleFormat::f32;
+  if (name == "s16") return SampleFormat::s16;
+  throw InputError(fmt::format(
+      "unknown sample format '{}': allowed: auto, wav (any libsndfile format), csv, f32, s16",
+      name));
+}
+
+namespace {
+
+std::string lower_ext(const std::string& path) {
+  const auto dot = path.rfind('.');
+  if (dot == std::string::npos) return "";
+  std::string e = path.substr(dot + 1);
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+  return e;
+}
+
+void check_finite(const std::string& path, const std::vector<double>& v) {
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) {
+      throw InputError(fmt::format("{}: sample {} is not finite ({})", path, i, v[i]));
+    }
+  }
+}
+
+std::string read_all(const std::string& path) {
+  if (path == "-") {
+    return {std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot open", path));
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+Signal read_raw(const std::string& path, const SignalReadOptions& o, bool f32) {
+  if (!o.rate_hz) {
+    throw InputError(fmt::format("{}: raw samples carry no rate: give --rate (Hz)", path));
+  }
+  const std::string bytes = read_all(path);
+  const std::size_t w = f32 ? 4 : 2;
+  if (bytes.empty()) throw InputError(fmt::format("{}: no samples", path));
+  if (bytes.size() % w != 0) {
+    throw InputError(
+        fmt::format("{}: {} bytes is not a whole number of {}-byte samples "
+                    "(truncated?)",
+                    path, bytes.size(), w));
+  }
+  Signal s;
+  s.rate_hz = *o.rate_hz;
+  const std::size_t n = bytes.size() / w;
+  s.samples.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto* p = reinterpret_cast<const unsigned char*>(bytes.data() + i * w);
+    if (f32) {
+      const std::uint32_t u = std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) |
+                              (std::uint32_t{p[2]} << 16) | (std::uint32_t{p[3]} << 24);
+      s.samples[i] = std::bit_cast<float>(u);
+    } else {
+      const auto u = static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+      s.samples[i] = static_cast<std::int16_t>(u) / 32768.0;
+    }
+  }
+  check_finite(path, s.samples);
+  return s;
+}
+
+Signal read_csv(const std::string& path, const SignalReadOptions& o) {
+  std::istringstream in(read_all(path));
+  std::string line;
+  int line_no = 0, time_col = -1;
+  std::vector<double> t, v;
+  bool first = true;
+  std::size_t ncols = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> cells;
+    std::stringstream ls(line);
+    std::string cell;
+    while (std::getline(ls, cell, ',')) cells.push_back(cell);
+    auto trim = [](std::string x) {
+      const auto b = x.find_first_not_of(" \t"), e = x.find_last_not_of(" \t");
+      return b == std::string::npos ? std::string() : x.substr(b, e - b + 1);
+    };
+    for (auto& c : cells) c = trim(c);
+    if (first) {
+      first = false;
+      char* end = nullptr;
+      const std::string& c0 = cells.empty() ? std::string() : cells[0];
+      (void)std::strtod(c0.c_str(), &end);
+      if (end == c0.c_str() || *end != '\0') {  // a header
+        for (std::size_t k = 0; k < cells.size(); ++k) {
+          if (cells[k] == "t" || cells[k] == "t_s" || cells[k] == "time") {
+            time_col = static_cast<int>(k);
+          }
+        }
+        ncols = cells.size();
+        continue;
+      }
+      ncols = cells.size();
+    }
+    if (cells.size() != ncols) {
+      throw InputError(fmt::format("{}:{}: {} columns, the first row has {}", path, line_no,
+                                   cells.size(), ncols));
+    }
+    std::vector<double> row;
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      char* end = nullptr;
+      const double x = std::strtod(cells[k].c_str(), &end);
+      if (cells[k].empty() || *end != '\0' || !std::isfinite(x)) {
+        throw InputError(
+            fmt::format("{}:{}:{}: '{}' is not a finite number", path, line_no, k + 1, cells[k]));
+      }
+      row.push_back(x);
+    }
+    // Data columns: all but the time column, counted from 0.
+    int data_k = -1;
+    double value = 0;
+    bool found = false;
+    for (std::size_t k = 0; k < row.size(); ++k) {
+      if (static_cast<int>(k) == time_col) continue;
+      if (++data_k == o.channel) {
+        value = row[k];
+        found = true;
+      }
+    }
+    if (!found) {
+      throw InputError(
+          fmt::format("{}:{}: no data column {} (0-based, the time column not "
+                      "counted)",
+                      path, line_no, o.channel));
+    }
+    if (time_col >= 0) t.push_back(row[static_cast<std::size_t>(time_col)]);
+    v.push_back(value);
+  }
+  if (v.empty()) throw InputError(fmt::format("{}: no samples", path));
+  Signal s;
+  if (time_col >= 0) {
+    if (v.size() < 2) throw InputError(fmt::format("{}: need two samples to know the rate", path));
+    const double dt = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+    if (!(dt > 0)) throw InputError(fmt::format("{}: time does not increase", path));
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      if (std::abs(t[i] - t[i - 1] - dt) > 1e-6 * dt + 1e-9 * std::abs(t[i])) {
+        throw InputError(fmt::format(
+            "{}: sample {} is {} s after the previous one, the mean step is {} s: the rate "
+            "must be constant",
+            path, i, t[i] - t[i - 1], dt));
+      }
+    }
+    s.rate_hz = 1.0 / dt;
+    if (o.rate_hz && std::abs(*o.rate_hz - s.rate_hz) > 1e-6 * s.rate_hz) {
+      throw InputError(fmt::format("{}: --rate {} Hz contradicts the time column ({} Hz)", path,
+                                   *o.rate_hz, s.rate_hz));
+    }
+  } else {
+    if (!o.rate_hz) {
+      throw InputError(fmt::format("{}: no time column (t, t_s or time): give --rate (Hz)", path));
+    }
+    s.rate_hz = *o.rate_hz;
+  }
+  s.samples = std::move(v);
+  return s;
+}
+
+Signal read_sndfile(const std::string& path, const SignalReadOptions& o) {
+  SF_INFO info{};
+  SNDFILE* f = sf_open(path.c_str(), SFM_READ, &info);
+  if (f == nullptr) {
+    throw InputError(
+        fmt::format("{}: cannot read as a sound file: {}", path, sf_strerror(nullptr)));
+  }
+  struct Closer {
+    SNDFILE* f;
+    ~Closer() { sf_close(f); }
+  } closer{f};
+  if (info.channels < 1 || info.frames <= 0) throw InputError(fmt::format("{}: no samples", path));
+  if (o.channel < 0 || o.channel >= info.channels) {
+    throw InputError(
+        fmt::format("{}: channel {} does not exist (0..{})", path, o.channel, info.channels - 1));
+  }
+  if (o.rate_hz && std::abs(*o.rate_hz - info.samplerate) > 1e-9) {
+    throw InputError(fmt::format("{}: --rate {} Hz contradicts the file's {} Hz", path, *o.rate_hz,
+                                 info.samplerate));
+  }
+  const auto ch = static_cast<std::size_t>(info.channels);
+  std::vector<double> buf(static_cast<std::size_t>(info.frames) * ch);
+  const sf_count_t got = sf_readf_double(f, buf.data(), info.frames);
+  if (got != info.frames) {
+    throw InputError(
+        fmt::format("{}: truncated: {} of {} frames readable", path, got, info.frames));
+  }
+  Signal s;
+  s.rate_hz = info.samplerate;
+  s.samples.resize(static_cast<std::size_t>(got));
+  for (std::size_t i = 0; i < s.samples.size(); ++i) {
+    s.samples[i] = buf[i * ch + static_cast<std::size_t>(o.channel)];
+  }
+  check_finite(path, s.samples);
+  return s;
+}
+
+}  // namespace
+
+Signal read_signal(const std::string& path, const SignalReadOptions& o) {
+  if (o.rate_hz && !(*o.rate_hz > 0)) {
+    throw InputError(fmt::format("--rate must be > 0 Hz, got {}", *o.rate_hz));
+  }
+  SampleFormat f = o.format;
+  if (f == SampleFormat::automatic) {
+    const std::string e = lower_ext(path);
+    if (e == "csv" || e == "txt") {
+      f = SampleFormat::csv;
+    } else if (e == "f32" || e == "raw") {
+      f = SampleFormat::f32;
+    } else if (e == "s16" || e == "pcm") {
+      f = SampleFormat::s16;
+    } else if (path == "-") {
+      throw InputError("standard input: give --format f32, s16 or csv");
+    } else {
+      f = SampleFormat::sndfile;
+    }
+  }
+  switch (f) {
+    case SampleFormat::csv:
+      return read_csv(path, o);
+    case SampleFormat::f32:
+      return read_raw(path, o, true);
+    case SampleFormat::s16:
+      return read_raw(path, o, false);
+    case SampleFormat::sndfile:
+    case SampleFormat::automatic:
+      if (path == "-") throw InputError("standard input: sound files must be read from a file");
+      return read_sndfile(path, o);
+  }
+  return {};
+}
+
+void write_wav(const std::string& path, const Signal& s) {
+  SF_INFO info{};
+  info.samplerate = static_cast<int>(std::lround(s.rate_hz));
+  info.channels = 1;
+  info.format = SF_FORMAT_WAV | SF_FORMAT_FLOAT;
+  if (std::abs(info.samplerate - s.rate_hz) > 1e-9) {
+    throw InputError(fmt::format("WAV needs a whole-number rate, got {} Hz", s.rate_hz));
+  }
+  SNDFILE* f = sf_open(path.c_str(), SFM_WRITE, &info);
+  if (f == nullptr) throw Error(fmt::format("{}: cannot write: {}", path, sf_strerror(nullptr)));
+  const sf_count_t n = static_cast<sf_count_t>(s.samples.size());
+  const sf_count_t put = sf_writef_double(f, s.samples.data(), n);
+  const int rc = sf_close(f);
+  if (put != n || rc != 0) throw Error(fmt::format("{}: write failed", path));
+}
+
+}  // namespace trochomill

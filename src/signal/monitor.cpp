@@ -1,0 +1,382 @@
+// k_f series (offline and streaming), cycle timing from the job or the signal, per-cycle
+// profiles beside the mechanism model, ploughing and wear flags
+// (include/trochomill/signal.hpp; docs/models.md section 10).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "trochomill/error.hpp"
+#include "trochomill/mechanism.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/signal.hpp"
+
+namespace trochomill {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::size_t window_samples(const MonitorSettings& m, double rate_hz) {
+  return static_cast<std::size_t>(std::llround(m.window_s * rate_hz));
+}
+}  // namespace
+
+void validate(const MonitorSettings& m, double rate_hz) {
+  const double nyq = 0.5 * rate_hz;
+  auto band = [&](const char* name, double lo, double hi) {
+    if (!(lo > 0 && lo < hi && hi < nyq)) {
+      throw InputError(fmt::format(
+          "[monitor] {} band {:g}-{:g} Hz must lie within 0 < low < high < rate / 2 = {:g} Hz "
+          "(the signal's rate is {:g} Hz)",
+          name, lo, hi, nyq, rate_hz));
+    }
+  };
+  band("low", m.low_min_hz, m.low_max_hz);
+  band("high", m.high_min_hz, m.high_max_hz);
+  if (window_samples(m, rate_hz) < 8) {
+    throw InputError(
+        fmt::format("[monitor] window = {:g} s is {} samples at {:g} Hz: need at least 8",
+                    m.window_s, window_samples(m, rate_hz), rate_hz));
+  }
+}
+
+KfSeries kf_series(const Signal& s, const MonitorSettings& m, bool zero_phase) {
+  validate(m, s.rate_hz);
+  const Sos lo = butter_bandpass(m.order, m.low_min_hz, m.low_max_hz, s.rate_hz);
+  const Sos hi = butter_bandpass(m.order, m.high_min_hz, m.high_max_hz, s.rate_hz);
+  const std::vector<double> yl = zero_phase ? sosfiltfilt(lo, s.samples) : sosfilt(lo, s.samples);
+  const std::vector<double> yh = zero_phase ? sosfiltfilt(hi, s.samples) : sosfilt(hi, s.samples);
+  const std::size_t w = window_samples(m, s.rate_hz);
+  KfSeries k;
+  k.window_s = static_cast<double>(w) / s.rate_hz;
+  for (std::size_t start = 0; start + w <= yl.size(); start += w) {
+    // Same accumulation order as KfStream: streaming equals offline causal bit for bit.
+    double sl = 0, sh = 0;
+    for (std::size_t i = start; i < start + w; ++i) {
+      sl += yl[i] * yl[i];
+      sh += yh[i] * yh[i];
+    }
+    const double rl = std::sqrt(sl / static_cast<double>(w)),
+                 rh = std::sqrt(sh / static_cast<double>(w));
+    k.t_s.push_back((static_cast<double>(start) + 0.5 * static_cast<double>(w)) / s.rate_hz);
+    k.rms_low.push_back(rl);
+    k.rms_high.push_back(rh);
+    k.k_f.push_back(rh > 0 ? rl / rh : kNaN);
+  }
+  return k;
+}
+
+KfStream::KfStream(double rate_hz, const MonitorSettings& m)
+    : rate_hz_(rate_hz),
+      window_n_((validate(m, rate_hz), window_samples(m, rate_hz))),
+      low_(butter_bandpass(m.order, m.low_min_hz, m.low_max_hz, rate_hz)),
+      high_(butter_bandpass(m.order, m.high_min_hz, m.high_max_hz, rate_hz)) {}
+
+void KfStream::push(const double* x, std::size_t n,
+                    const std::function<void(const Window&)>& on_window) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const double yl = low_.step(x[i]), yh = high_.step(x[i]);
+    sum_low_ += yl * yl;
+    sum_high_ += yh * yh;
+    if (++filled_ == window_n_) {
+      Window w;
+      const auto wn = static_cast<double>(window_n_);
+      w.t_s = (static_cast<double>(index_) * wn + 0.5 * wn) / rate_hz_;
+      w.rms_low = std::sqrt(sum_low_ / wn);
+      w.rms_high = std::sqrt(sum_high_ / wn);
+      w.k_f = w.rms_high > 0 ? w.rms_low / w.rms_high : kNaN;
+      on_window(w);
+      ++index_;
+      filled_ = 0;
+      sum_low_ = sum_high_ = 0;
+    }
+  }
+}
+
+CycleTiming cycles_from_job(const Job& job, double start_s, double duration_s) {
+  const PlannedPath pp = plan_path(job);
+  const auto& marks = pp.path.cycles();
+  CycleTiming ct;
+  ct.source = "job";
+  if (marks.size() < 2) {
+    throw InputError(
+        fmt::format("{}: the planned path has {} cycle(s); monitoring needs two or "
+                    "more",
+                    job.source, marks.size()));
+  }
+  std::vector<double> starts;
+  for (const auto& mk : marks) starts.push_back(mk.start_time_s);
+  // The last cycle lasts as long as the one before it (steady state).
+  starts.push_back(starts.back() + (starts.back() - starts[starts.size() - 2]));
+  double sum = 0;
+  for (std::size_t k = 0; k + 1 < starts.size(); ++k) {
+    const double a = start_s + starts[k], b = start_s + starts[k + 1];
+    if (a >= 0 && b <= duration_s) {
+      ct.start_s.push_back(a);
+      ct.end_s.push_back(b);
+      sum += b - a;
+    }
+  }
+  if (ct.start_s.empty()) {
+    throw InputError(fmt::format(
+        "no whole cycle of the program (cycles from {:.3f} s to {:.3f} s after its start) lies "
+        "in the signal ({:.3f} s) with --start {:g} s",
+        starts.front(), starts.back(), duration_s, start_s));
+  }
+  ct.period_s = sum / static_cast<double>(ct.start_s.size());
+  return ct;
+}
+
+CycleTiming cycles_from_signal(const KfSeries& kf, double min_period_s, double max_period_s) {
+  const std::size_t n = kf.t_s.size();
+  std::vector<double> env(n);
+  for (std::size_t i = 0; i < n; ++i) env[i] = std::hypot(kf.rms_low[i], kf.rms_high[i]);
+  const double mean = std::accumulate(env.begin(), env.end(), 0.0) / static_cast<double>(n);
+  for (double& v : env) v -= mean;
+  double var = 0;
+  for (const double v : env) var += v * v;
+  const auto lag_lo =
+      static_cast<std::size_t>(std::max(1.0, std::floor(min_period_s / kf.window_s)));
+  const auto lag_hi =
+      std::min(n / 2, static_cast<std::size_t>(std::ceil(max_period_s / kf.window_s)));
+  if (!(var > 0) || lag_hi <= lag_lo + 2) {
+    throw Error(
+        fmt::format("the signal ({} windows) is too short or flat to find a cycle period "
+                    "between {:g} and {:g} s",
+                    n, min_period_s, max_period_s));
+  }
+  std::vector<double> ac(lag_hi + 2, 0.0);
+  for (std::size_t lag = lag_lo - 1; lag <= lag_hi + 1 && lag < n; ++lag) {
+    double s = 0;
+    for (std::size_t i = 0; i + lag < n; ++i) s += env[i] * env[i + lag];
+    ac[lag] = s / var * static_cast<double>(n) / static_cast<double>(n - lag);
+  }
+  // The highest local maximum, then the smallest lag whose local maximum reaches 90 % of it
+  // (a period's multiples correlate almost as well).
+  double best = -1;
+  for (std::size_t lag = lag_lo; lag <= lag_hi; ++lag) {
+    if (ac[lag] >= ac[lag - 1] && ac[lag] >= ac[lag + 1]) best = std::max(best, ac[lag]);
+  }
+  if (best < 0.3) {
+    throw Error(
+        fmt::format("no cycle period stands out in the signal (autocorrelation peak "
+                    "{:.2f} < 0.3 between {:g} and {:g} s): give --job and --start",
+                    best, min_period_s, max_period_s));
+  }
+  std::size_t pk = lag_lo;
+  for (std::size_t lag = lag_lo; lag <= lag_hi; ++lag) {
+    if (ac[lag] >= ac[lag - 1] && ac[lag] >= ac[lag + 1] && ac[lag] >= 0.9 * best) {
+      pk = lag;
+      break;
+    }
+  }
+  const double den = ac[pk - 1] - 2 * ac[pk] + ac[pk + 1];
+  const double shift = den < 0 ? 0.5 * (ac[pk - 1] - ac[pk + 1]) / den : 0.0;
+  CycleTiming ct;
+  ct.source = "signal";
+  ct.period_s = (static_cast<double>(pk) + shift) * kf.window_s;
+  // Phase: fold the envelope over the period and start cycles where it rises most steeply.
+  const int bins = std::max(8, static_cast<int>(std::lround(ct.period_s / kf.window_s)));
+  std::vector<double> fold(static_cast<std::size_t>(bins), 0.0), cnt(fold.size(), 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ph = std::fmod(kf.t_s[i], ct.period_s) / ct.period_s;
+    const auto b = std::min(fold.size() - 1, static_cast<std::size_t>(ph * bins));
+    fold[b] += env[i];
+    cnt[b] += 1;
+  }
+  for (std::size_t b = 0; b < fold.size(); ++b) fold[b] = cnt[b] > 0 ? fold[b] / cnt[b] : 0.0;
+  std::size_t rise = 0;
+  double steepest = -1e300;
+  for (std::size_t b = 0; b < fold.size(); ++b) {
+    const double d = fold[(b + 1) % fold.size()] - fold[b];
+    if (d > steepest) {
+      steepest = d;
+      rise = b;
+    }
+  }
+  // The rise happens between bin `rise` and the next: the cycle starts at their boundary.
+  const double t0 = static_cast<double>(rise + 1) / bins * ct.period_s;
+  // Each cycle's own onset: the steepest rise of the envelope within a quarter period of the
+  // folded estimate (no drift from a slightly wrong period); cycles only where the machine
+  // cuts (the envelope above a quarter of its 95th percentile somewhere in the cycle).
+  std::vector<double> sorted(env);
+  std::sort(sorted.begin(), sorted.end());
+  const double loud =
+      0.25 * (sorted[static_cast<std::size_t>(0.95 * static_cast<double>(n - 1))] + mean) - mean;
+  const auto half_win = static_cast<std::ptrdiff_t>(std::lround(0.25 * ct.period_s / kf.window_s));
+  const double duration = kf.t_s.back() + 0.5 * kf.window_s;
+  auto window_at = [&](double t) {
+    return static_cast<std::ptrdiff_t>(std::floor(t / kf.window_s));
+  };
+  std::vector<double> onsets;
+  for (double t = t0 - ct.period_s; t < duration; t += ct.period_s) {
+    const std::ptrdiff_t c = window_at(t);
+    std::ptrdiff_t best_i = -1;
+    double best_d = -1e300;
+    for (std::ptrdiff_t i = std::max<std::ptrdiff_t>(0, c - half_win);
+         i < std::min<std::ptrdiff_t>(static_cast<std::ptrdiff_t>(n) - 1, c + half_win); ++i) {
+      const double d = env[static_cast<std::size_t>(i) + 1] - env[static_cast<std::size_t>(i)];
+      if (d > best_d) {
+        best_d = d;
+        best_i = i;
+      }
+    }
+    if (best_i >= 0) onsets.push_back(static_cast<double>(best_i + 1) * kf.window_s);
+  }
+  for (std::size_t k = 0; k + 1 < onsets.size(); ++k) {
+    const double a = onsets[k], b = onsets[k + 1];
+    if (a < 0 || b > duration + 1e-12 || b - a < 0.5 * ct.period_s) continue;
+    // Active: some window in the cycle is loud.
+    bool active = false;
+    for (std::ptrdiff_t i = window_at(a); i < window_at(b) && i < static_cast<std::ptrdiff_t>(n);
+         ++i) {
+      if (env[static_cast<std::size_t>(i)] > loud) active = true;
+    }
+    if (!active) continue;
+    ct.start_s.push_back(a);
+    ct.end_s.push_back(b);
+  }
+  if (ct.start_s.empty()) {
+    throw Error("a cycle period was found but no whole active cycle lies in the signal");
+  }
+  double sum = 0;
+  for (std::size_t k = 0; k < ct.start_s.size(); ++k) sum += ct.end_s[k] - ct.start_s[k];
+  ct.period_s = sum / static_cast<double>(ct.start_s.size());
+  return ct;
+}
+
+MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m, const Job* job,
+                             double start_s) {
+  MonitorReport r;
+  r.kf = kf_series(s, m, true);
+  if (r.kf.t_s.size() < 4) {
+    throw InputError(fmt::format("the signal holds {} windows of {:g} s: too short to monitor",
+                                 r.kf.t_s.size(), m.window_s));
+  }
+  const auto bins = static_cast<std::size_t>(m.phase_bins);
+  if (job != nullptr) {
+    r.timing = cycles_from_job(*job, start_s, s.duration_s());
+    // The model beside it: zones and K_re over the steady cycle, by phase.
+    const MechanismSettings st = mechanism_settings(*job);
+    const MechanismCurve c = mechanism_curve(*job, st);
+    ModelProfile mp;
+    for (std::size_t b = 0; b < bins; ++b) {
+      const double t = (static_cast<double>(b) + 0.5) / static_cast<double>(bins) * c.cycle_time_s;
+      const auto it = std::upper_bound(c.t_s.begin(), c.t_s.end(), t);
+      const auto i = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, it - c.t_s.begin() - 1));
+      mp.k_re_pct.push_back(c.k_re_pct[i]);
+      mp.zone.push_back(c.zone[i]);
+    }
+    r.model = mp;
+  } else {
+    r.timing = cycles_from_signal(r.kf, 0.02, 20.0);
+  }
+  // Per cycle: windows whose centre falls in it, by phase bin.
+  std::size_t w = 0;
+  for (std::size_t k = 0; k < r.timing.start_s.size(); ++k) {
+    CycleResult cr;
+    cr.start_s = r.timing.start_s[k];
+    cr.end_s = r.timing.end_s[k];
+    std::vector<double> sum(bins, 0.0), cnt(bins, 0.0);
+    double env_max = 0;
+    std::vector<std::pair<std::size_t, std::size_t>> in;  // (window, bin)
+    while (w < r.kf.t_s.size() && r.kf.t_s[w] < cr.start_s) ++w;
+    for (std::size_t i = w; i < r.kf.t_s.size() && r.kf.t_s[i] < cr.end_s; ++i) {
+      if (!std::isfinite(r.kf.k_f[i])) continue;
+      const double ph = (r.kf.t_s[i] - cr.start_s) / (cr.end_s - cr.start_s);
+      const auto b = std::min(bins - 1, static_cast<std::size_t>(ph * static_cast<double>(bins)));
+      in.emplace_back(i, b);
+      sum[b] += r.kf.k_f[i];
+      cnt[b] += 1;
+      env_max = std::max(env_max, std::hypot(r.kf.rms_low[i], r.kf.rms_high[i]));
+    }
+    for (std::size_t b = 0; b < bins; ++b)
+      cr.k_f_profile.push_back(cnt[b] > 0 ? sum[b] / cnt[b] : kNaN);
+    // The cutting part: the model's zones, or without a model the windows above a quarter of
+    // the cycle's loudest.
+    double s_all = 0, n_all = 0, s1 = 0, n1 = 0, s3 = 0, n3 = 0;
+    for (const auto& [i, b] : in) {
+      const double kf = r.kf.k_f[i];
+      const int zone = r.model ? r.model->zone[b] : -1;
+      const bool cutting =
+          r.model ? zone > 0 : std::hypot(r.kf.rms_low[i], r.kf.rms_high[i]) >= 0.25 * env_max;
+      if (!cutting) continue;
+      s_all += kf;
+      n_all += 1;
+      if (zone == 1) {
+        s1 += kf;
+        n1 += 1;
+      } else if (zone == 3) {
+        s3 += kf;
+        n3 += 1;
+      }
+    }
+    cr.k_f_mean = n_all > 0 ? s_all / n_all : kNaN;
+    if (n1 > 0) cr.k_f_czi = s1 / n1;
+    if (n3 > 0) cr.k_f_cziii = s3 / n3;
+    cr.ploughing = cr.k_f_czi && cr.k_f_cziii && *cr.k_f_czi > m.ploughing_ratio * *cr.k_f_cziii;
+    r.cycles.push_back(std::move(cr));
+  }
+  // Levels: the mean over cycles; wear against the first baseline_cycles.
+  double sum = 0, cnt = 0;
+  for (const auto& c : r.cycles) {
+    if (std::isfinite(c.k_f_mean)) {
+      sum += c.k_f_mean;
+      cnt += 1;
+    }
+  }
+  if (cnt > 0) {
+    r.k_f_mean = sum / cnt;
+  } else {
+    double a = 0, b = 0;
+    for (const double v : r.kf.k_f) {
+      if (std::isfinite(v)) {
+        a += v;
+        b += 1;
+      }
+    }
+    r.k_f_mean = b > 0 ? a / b : kNaN;
+  }
+  const auto nb = static_cast<std::size_t>(m.baseline_cycles);
+  auto level = [&](std::size_t from, std::size_t to) {
+    double a = 0, b = 0;
+    for (std::size_t k = from; k < to; ++k) {
+      if (std::isfinite(r.cycles[k].k_f_mean)) {
+        a += r.cycles[k].k_f_mean;
+        b += 1;
+      }
+    }
+    return b > 0 ? a / b : kNaN;
+  };
+  int ploughing = 0;
+  for (const auto& c : r.cycles) ploughing += c.ploughing ? 1 : 0;
+  if (r.cycles.size() >= nb) {
+    r.reference_k_f = level(0, nb);
+    int worn = 0;
+    for (auto& c : r.cycles) {
+      c.wear = std::isfinite(c.k_f_mean) && c.k_f_mean > m.wear_ratio * r.reference_k_f;
+      worn += c.wear ? 1 : 0;
+    }
+    if (r.cycles.size() >= 2 * nb) {
+      const double last = level(r.cycles.size() - nb, r.cycles.size());
+      r.wear_trend = last > m.wear_ratio * r.reference_k_f;
+      if (r.wear_trend) {
+        r.flags.push_back(fmt::format(
+            "wear trend: the last {} cycles' k_f level {:.3f} is {:.2f} times the first {} "
+            "cycles' {:.3f} (threshold {:g}); {} cycle(s) above it",
+            nb, last, last / r.reference_k_f, nb, r.reference_k_f, m.wear_ratio, worn));
+      }
+    }
+  }
+  if (ploughing > 0) {
+    r.flags.push_back(fmt::format(
+        "ploughing suspected in {} of {} cycles: k_f in the CZI phases exceeds {:g} times its "
+        "CZIII level",
+        ploughing, r.cycles.size(), m.ploughing_ratio));
+  }
+  return r;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,101 @@
+// Synthetic vibroacoustic signal whose band energies follow a chosen k_f profile through each
+// trochoid cycle of the job's planned program (include/trochomill/signal.hpp).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "trochomill/error.hpp"
+#include "trochomill/mechanism.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/signal.hpp"
+
+namespace trochomill {
+
+namespace {
+
+// Unit-RMS band noise: white Gaussian noise through the band filter, after a warm-up the
+// filter's transient needs, scaled to RMS 1.
+std::vector<double> band_noise(std::size_t n, const Sos& sos, double rate_hz, std::mt19937& rng) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  const auto warm = static_cast<std::size_t>(0.05 * rate_hz);
+  std::vector<double> x(n + warm);
+  for (double& v : x) v = g(rng);
+  SosFilter f(sos);
+  f.process(x.data(), x.data(), x.size());
+  x.erase(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(warm));
+  double ss = 0;
+  for (const double v : x) ss += v * v;
+  const double rms = std::sqrt(ss / static_cast<double>(n));
+  for (double& v : x) v /= rms;
+  return x;
+}
+
+}  // namespace
+
+Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o) {
+  if (!(o.rate_hz > 0) || o.cycles < 1 || !(o.lead_s >= 0) || !(o.noise >= 0) || !(o.idle >= 0) ||
+      !(o.kf_czi > 0 && o.kf_czii > 0 && o.kf_cziii > 0) || !(o.wear_drift > -1)) {
+    throw InputError(
+        "synth-signal: need rate > 0 Hz, cycles >= 1, lead >= 0 s, noise >= 0, idle >= 0, "
+        "k_f values > 0 and wear drift > -1");
+  }
+  validate(m, o.rate_hz);
+  const PlannedPath pp = plan_path(job);
+  const auto& marks = pp.path.cycles();
+  if (marks.size() < 2) {
+    throw InputError(fmt::format("{}: the planned path has {} cycle(s); need two or more",
+                                 job.source, marks.size()));
+  }
+  std::vector<double> starts;
+  for (const auto& mk : marks) starts.push_back(mk.start_time_s);
+  starts.push_back(starts.back() + (starts.back() - starts[starts.size() - 2]));
+  const std::size_t ncyc = std::min<std::size_t>(static_cast<std::size_t>(o.cycles), marks.size());
+  const double t_end = o.lead_s + starts[ncyc];
+  const MechanismSettings st = mechanism_settings(job);
+  const MechanismCurve c = mechanism_curve(job, st);
+
+  Signal s;
+  s.rate_hz = o.rate_hz;
+  const auto n = static_cast<std::size_t>(std::ceil(t_end * o.rate_hz));
+  std::mt19937 rng(o.seed);
+  const std::vector<double> nl = band_noise(
+      n, butter_bandpass(m.order, m.low_min_hz, m.low_max_hz, o.rate_hz), o.rate_hz, rng);
+  const std::vector<double> nh = band_noise(
+      n, butter_bandpass(m.order, m.high_min_hz, m.high_max_hz, o.rate_hz), o.rate_hz, rng);
+  std::normal_distribution<double> g(0.0, 1.0);
+  s.samples.resize(n);
+  std::size_t cyc = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / o.rate_hz, tp = t - o.lead_s;
+    while (cyc < ncyc && tp >= starts[cyc + 1]) ++cyc;
+    double amp = o.idle, k = 1.0;
+    if (cyc < ncyc && tp >= starts[cyc]) {
+      // The model's zone at this phase of the cycle.
+      const double ph = (tp - starts[cyc]) / (starts[cyc + 1] - starts[cyc]);
+      const auto it = std::upper_bound(c.t_s.begin(), c.t_s.end(), ph * c.cycle_time_s);
+      const auto j = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, it - c.t_s.begin() - 1));
+      switch (c.zone[j]) {
+        case 1:
+          amp = 1, k = o.kf_czi;
+          break;
+        case 2:
+          amp = 1, k = o.kf_czii;
+          break;
+        case 3:
+          amp = 1, k = o.kf_cziii;
+          break;
+        default:
+          break;
+      }
+    }
+    // Wear: k_f grows linearly from the first cycle's start to the last one's end.
+    const double t0 = o.lead_s + starts[0];
+    k *= 1 + o.wear_drift * std::clamp((t - t0) / (t_end - t0), 0.0, 1.0);
+    s.samples[i] = amp * (k * nl[i] + nh[i]) / std::sqrt(0.5 * (1 + k * k)) + o.noise * g(rng);
+  }
+  return s;
+}
+
+}  // namespace trochomill
