@@ -4,13 +4,16 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "test_util.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/signal.hpp"
 
 namespace trochomill {
 namespace {
@@ -252,6 +255,77 @@ TEST_F(Cli, MechanismAndRecommend) {
   r = run_cli("mechanism " + ex + " --model magic");
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("pivkin2025"), std::string::npos) << r.out;  // lists what is allowed
+}
+
+// 0.1 s at 48 kHz of 3162 Hz and 10198 Hz tones as raw little-endian float32.
+void tmill_signal_file(const std::filesystem::path& p) {
+  std::ofstream f(p, std::ios::binary);
+  for (int i = 0; i < 4800; ++i) {
+    const double t = i / 48000.0;
+    const auto v = static_cast<float>(0.7 * std::sin(2 * M_PI * 3162.3 * t) +
+                                      0.4 * std::sin(2 * M_PI * 10198 * t));
+    f.write(reinterpret_cast<const char*>(&v), sizeof v);  // x86-64 and arm64: little-endian
+  }
+}
+
+// monitor, synth-signal, spectrum: a synthetic recording round trip with the required JSON
+// keys, the live stream (one JSON line per window, equal to the library's causal series),
+// and bad input (exit 2).
+TEST_F(Cli, MonitorSynthAndSpectrum) {
+  const auto ex = test::example("pivkin2025/trochoidal.toml").string();
+  const auto wav = (dir_ / "s.wav").string();
+  CliResult r = run_cli("synth-signal " + ex + " -o " + wav + " --cycles 4 --rate 48000");
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = run_cli("monitor " + wav + " --job " + ex + " --start 0.1 --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["cycles"], 4);
+  EXPECT_EQ(j["k_f_per_cycle"].size(), 4u);
+  EXPECT_GT(j["k_f_mean"].get<double>(), 0.9);
+  EXPECT_LT(j["k_f_mean"].get<double>(), 1.3);
+  EXPECT_TRUE(j["flags"].is_array());
+  EXPECT_EQ(j["cycle_source"], "job");
+  r = run_cli("monitor " + wav + " --json -");  // cycles from the signal alone
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["cycle_source"], "signal");
+  r = run_cli("spectrum " + wav + " --nfft 1024 --csv -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.out.rfind("f_hz,psd_per_hz\n", 0), 0u);
+
+  // Live: raw float32 on stdin, 0.1 s of a tone pair at 48 kHz: 20 windows of 5 ms.
+  tmill_signal_file(dir_ / "x.f32");
+  r = run_cli("monitor --stream --rate 48000 < " + (dir_ / "x.f32").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::vector<nlohmann::json> lines;
+  std::istringstream in(r.out);
+  for (std::string line; std::getline(in, line);) lines.push_back(nlohmann::json::parse(line));
+  ASSERT_EQ(lines.size(), 20u);
+  const Signal sig = read_signal((dir_ / "x.f32").string(), [] {
+    SignalReadOptions o;
+    o.rate_hz = 48000;
+    return o;
+  }());
+  const KfSeries causal = kf_series(sig, MonitorSettings{}, false);
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    EXPECT_NEAR(lines[i]["k_f"].get<double>(), causal.k_f[i], 1e-12 * causal.k_f[i]);
+  }
+
+  // Bad input.
+  EXPECT_EQ(run_cli("monitor " + (dir_ / "x.f32").string()).code, 2);  // no rate
+  EXPECT_EQ(run_cli("monitor " + wav + " --low 5000:2000").code, 2);
+  EXPECT_EQ(run_cli("monitor " + wav + " --high 8000:30000").code, 2);  // above Nyquist
+  EXPECT_EQ(run_cli("monitor " + (dir_ / "none.wav").string()).code, 2);
+  {
+    std::ofstream t(dir_ / "t.f32", std::ios::binary);
+    t.write("abcde", 5);
+  }
+  r = run_cli("monitor --stream --rate 48000 < " + (dir_ / "t.f32").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("truncated"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "bad.wav"));
+  EXPECT_EQ(
+      run_cli("synth-signal " + ex + " -o " + (dir_ / "bad.wav").string() + " --rate -5").code, 2);
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "bad.wav"));
 }
 
 }  // namespace

@@ -1,13 +1,18 @@
 // trochomill command-line interface: parses arguments, calls the library, formats output.
 // Exit codes: 0 success, 2 bad input (arguments, job file, NC program), 1 runtime failure.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <tuple>
 
 #include "trochomill/analysis.hpp"
 #include "trochomill/error.hpp"
@@ -17,6 +22,7 @@
 #include "trochomill/mechanism.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/report.hpp"
+#include "trochomill/signal.hpp"
 #include "trochomill/units.hpp"
 #include "trochomill/version.hpp"
 
@@ -101,6 +107,61 @@ Box bounding_box(const tmill::ToolPath& path) {
     }
   }
   return b;
+}
+
+// Writes a WAV atomically: a temporary file beside the target, then a rename.
+void emit_wav(const std::string& target, const tmill::Signal& sig) {
+  const std::string tmp = fmt::format("{}.tmp{}", target, static_cast<long>(::getpid()));
+  try {
+    tmill::write_wav(tmp, sig);
+    std::filesystem::rename(tmp, target);
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw;
+  }
+}
+
+// "LO:HI" in Hz.
+std::pair<double, double> parse_band(const std::string& opt, const std::string& text) {
+  const auto colon = text.find(':');
+  char* e1 = nullptr;
+  char* e2 = nullptr;
+  const std::string a = text.substr(0, colon),
+                    b = colon == std::string::npos ? "" : text.substr(colon + 1);
+  const double lo = std::strtod(a.c_str(), &e1), hi = std::strtod(b.c_str(), &e2);
+  if (colon == std::string::npos || a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0' ||
+      !(lo > 0 && hi > lo)) {
+    throw tmill::InputError(fmt::format(
+        "{} '{}': expected LOW:HIGH in Hz with 0 < LOW < HIGH, e.g. 2000:5000", opt, text));
+  }
+  return {lo, hi};
+}
+
+// Signal-reading options shared by monitor and spectrum.
+struct SignalArgs {
+  std::string file;
+  std::optional<double> rate;
+  std::string format = "auto";
+  int channel = 0;
+};
+
+void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required) {
+  auto* o = cmd->add_option("SIGNAL", a.file,
+                            "WAV/FLAC/AIFF (libsndfile), CSV, raw .f32/.s16 (- for stdin, raw)");
+  if (required) o->required();
+  cmd->add_option("--rate", a.rate, "sample rate, Hz (raw data, CSV without a time column)");
+  cmd->add_option("--format", a.format, "auto, wav, csv, f32 or s16 (default: by extension)");
+  cmd->add_option("--channel", a.channel, "0-based channel (or CSV data column)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+tmill::Signal read_signal_args(const SignalArgs& a) {
+  tmill::SignalReadOptions o;
+  o.format = tmill::parse_sample_format(a.format);
+  o.rate_hz = a.rate;
+  o.channel = a.channel;
+  return tmill::read_signal(a.file, o);
 }
 
 int run(int argc, char** argv) {
@@ -207,6 +268,59 @@ int run(int argc, char** argv) {
                   "flank wear VB_B, mm (classify with the wear-corrected K_re)");
   rec->add_flag("--feed", rec_feed, "recommend the feed per tooth at the job's step instead");
   rec->add_option("--json", rec_json, "write the recommendation as JSON (- for stdout)");
+
+  // monitor
+  SignalArgs mon_sig;
+  std::string mon_job, mon_json, mon_csv, mon_low, mon_high;
+  std::vector<std::string> mon_sets;
+  double mon_start = 0;
+  std::optional<int> mon_order;
+  std::optional<double> mon_window;
+  bool mon_stream = false;
+  auto* mon = app.add_subcommand(
+      "monitor", "vibroacoustic k_f = RMS(low band) / RMS(high band) per trochoid cycle, flags");
+  add_signal_args(mon, mon_sig, false);
+  mon->add_option("--job", mon_job, "job file: cycle timing, [monitor] settings, model zones");
+  mon->add_option("--set", mon_sets, "override a job key (repeatable)")->take_all();
+  mon->add_option("--start", mon_start, "time in the signal where the program starts, s");
+  mon->add_option("--low", mon_low, "low band LOW:HIGH, Hz (default 2000:5000)");
+  mon->add_option("--high", mon_high, "high band LOW:HIGH, Hz (default 8000:13000)");
+  mon->add_option("--order", mon_order, "Butterworth order per band (default 4)");
+  mon->add_option("--window", mon_window, "RMS window, s (default 0.005)");
+  mon->add_option("--json", mon_json, "write the results as JSON (- for stdout)");
+  mon->add_option("--csv", mon_csv, "write the per-window series as CSV (- for stdout)");
+  mon->add_flag("--stream", mon_stream,
+                "live: read samples from stdin (--format f32, s16 or csv; --rate), one JSON line "
+                "per window");
+
+  // synth-signal
+  JobArgs syn_args;
+  std::string syn_out;
+  tmill::SynthOptions syn;
+  auto* synth = app.add_subcommand(
+      "synth-signal", "synthetic vibroacoustic signal following the model's zones (WAV)");
+  add_job_args(synth, syn_args);
+  synth->add_option("-o,--output", syn_out, "output WAV file")->required();
+  synth->add_option("--rate", syn.rate_hz, "sample rate, Hz (default 100000)");
+  synth->add_option("--cycles", syn.cycles, "trochoid cycles to cover (default 12)");
+  synth->add_option("--kf-czi", syn.kf_czi, "k_f in CZI (default 1.6)");
+  synth->add_option("--kf-czii", syn.kf_czii, "k_f in CZII (default 1.15)");
+  synth->add_option("--kf-cziii", syn.kf_cziii, "k_f in CZIII (default 1.0)");
+  synth->add_option("--wear-drift", syn.wear_drift,
+                    "k_f grows by this fraction from the first cycle to the last (default 0)");
+  synth->add_option("--noise", syn.noise, "white noise RMS relative to cutting (default 0.02)");
+  synth->add_option("--lead", syn.lead_s, "air before the program start, s (default 0.1)");
+  synth->add_option("--seed", syn.seed, "random seed (default 1)");
+
+  // spectrum
+  SignalArgs spec_sig;
+  int spec_nfft = 4096;
+  std::string spec_csv, spec_sg;
+  auto* spec = app.add_subcommand("spectrum", "Welch spectrum and spectrogram, to choose bands");
+  add_signal_args(spec, spec_sig, true);
+  spec->add_option("--nfft", spec_nfft, "FFT length, a power of two (default 4096)");
+  spec->add_option("--csv", spec_csv, "write the PSD as CSV (- for stdout)");
+  spec->add_option("--spectrogram", spec_sg, "write the spectrogram as CSV (t_s, f_hz, db)");
 
   try {
     app.parse(argc, argv);
@@ -409,6 +523,128 @@ int run(int argc, char** argv) {
       emit(rec_json, j.dump(2) + "\n");
     }
     if (rec_json != "-") fmt::print("{}\n", r.explanation);
+    return 0;
+  }
+
+  if (mon->parsed()) {
+    std::optional<tmill::Job> job;
+    if (!mon_job.empty()) {
+      std::vector<tmill::Override> ov;
+      for (const auto& o : mon_sets) ov.push_back(tmill::parse_override(o));
+      job = tmill::load_job(mon_job, ov);
+    } else if (!mon_sets.empty()) {
+      throw tmill::InputError("--set needs --job");
+    }
+    tmill::MonitorSettings m = job ? job->monitor : tmill::MonitorSettings{};
+    if (!mon_low.empty()) std::tie(m.low_min_hz, m.low_max_hz) = parse_band("--low", mon_low);
+    if (!mon_high.empty()) std::tie(m.high_min_hz, m.high_max_hz) = parse_band("--high", mon_high);
+    if (mon_order) {
+      if (*mon_order < 1 || *mon_order > 12)
+        throw tmill::InputError(fmt::format("--order must be 1..12, got {}", *mon_order));
+      m.order = *mon_order;
+    }
+    if (mon_window) m.window_s = *mon_window;
+    if (mon_stream) {
+      if (!mon_sig.file.empty() && mon_sig.file != "-")
+        throw tmill::InputError("--stream reads stdin: give no SIGNAL (or -)");
+      if (!mon_sig.rate) throw tmill::InputError("--stream needs --rate (Hz)");
+      const std::string fmt_name = mon_sig.format == "auto" ? "f32" : mon_sig.format;
+      const tmill::SampleFormat f = tmill::parse_sample_format(fmt_name);
+      if (f != tmill::SampleFormat::f32 && f != tmill::SampleFormat::s16 &&
+          f != tmill::SampleFormat::csv) {
+        throw tmill::InputError("--stream reads --format f32, s16 or csv");
+      }
+      tmill::LiveMonitor live(*mon_sig.rate, m, job ? &*job : nullptr, mon_start);
+      auto out = [](const tmill::LiveWindow& w) {
+        const std::string line = tmill::live_json_line(w);
+        std::fwrite(line.data(), 1, line.size(), stdout);
+        std::fflush(stdout);  // one line per window, as soon as it completes
+      };
+      std::vector<double> x;
+      if (f == tmill::SampleFormat::csv) {
+        std::string line;
+        long line_no = 0;
+        while (std::getline(std::cin, line)) {
+          ++line_no;
+          if (line.empty() || line[0] == '#') continue;
+          char* end = nullptr;
+          const double v = std::strtod(line.c_str(), &end);
+          if (end == line.c_str() || !std::isfinite(v)) {
+            throw tmill::InputError(
+                fmt::format("stdin:{}: '{}' is not a finite number", line_no, line));
+          }
+          live.push(&v, 1, out);
+        }
+        return 0;
+      }
+      const std::size_t w = f == tmill::SampleFormat::f32 ? 4 : 2;
+      std::vector<unsigned char> buf(w * 4096);
+      std::size_t have = 0;
+      long long total = 0;
+      for (;;) {
+        const std::size_t got = std::fread(buf.data() + have, 1, buf.size() - have, stdin);
+        have += got;
+        const std::size_t n = have / w;
+        x.resize(n);
+        tmill::decode_raw(buf.data(), n, f, x.data());
+        for (std::size_t i = 0; i < n; ++i) {
+          if (!std::isfinite(x[i])) {
+            throw tmill::InputError(
+                fmt::format("stdin: sample {} is not finite", total + static_cast<long long>(i)));
+          }
+        }
+        live.push(x.data(), n, out);
+        total += static_cast<long long>(n);
+        std::copy(buf.begin() + static_cast<std::ptrdiff_t>(n * w),
+                  buf.begin() + static_cast<std::ptrdiff_t>(have), buf.begin());
+        have -= n * w;
+        if (got == 0) break;
+      }
+      if (have != 0) {
+        throw tmill::InputError(
+            fmt::format("stdin: {} trailing byte(s) after {} samples: truncated", have, total));
+      }
+      return 0;
+    }
+    if (mon_sig.file.empty()) throw tmill::InputError("monitor: give a SIGNAL file (or --stream)");
+    const tmill::Signal sig = read_signal_args(mon_sig);
+    tmill::validate(m, sig.rate_hz);
+    const tmill::MonitorReport r = tmill::analyze_signal(sig, m, job ? &*job : nullptr, mon_start);
+    if (!mon_json.empty()) emit(mon_json, tmill::monitor_json(r, mon_sig.file, sig, m));
+    if (!mon_csv.empty()) emit(mon_csv, tmill::monitor_csv(r));
+    if (mon_json != "-" && mon_csv != "-")
+      fmt::print("{}", tmill::monitor_table(r, mon_sig.file, sig));
+    return 0;
+  }
+
+  if (synth->parsed()) {
+    const tmill::Job job = load(syn_args);
+    const tmill::Signal sig = tmill::synth_signal(job, job.monitor, syn);
+    emit_wav(syn_out, sig);
+    fmt::print("{}: {:.3f} s at {:g} Hz, {} cycles from the program start at {:g} s -> {}\n",
+               syn_args.job_file, sig.duration_s(), sig.rate_hz, syn.cycles, syn.lead_s, syn_out);
+    return 0;
+  }
+
+  if (spec->parsed()) {
+    const tmill::Signal sig = read_signal_args(spec_sig);
+    const tmill::Spectrum sp = tmill::welch(sig, spec_nfft);
+    if (!spec_csv.empty()) emit(spec_csv, tmill::spectrum_csv(sp));
+    if (!spec_sg.empty()) emit(spec_sg, tmill::spectrogram_csv(tmill::spectrogram(sig, spec_nfft)));
+    if (spec_csv != "-") {
+      // The strongest peaks (local maxima of the PSD), and the power in 1 kHz bands.
+      std::vector<std::size_t> peaks;
+      for (std::size_t k = 1; k + 1 < sp.psd.size(); ++k) {
+        if (sp.psd[k] > sp.psd[k - 1] && sp.psd[k] >= sp.psd[k + 1]) peaks.push_back(k);
+      }
+      std::sort(peaks.begin(), peaks.end(),
+                [&](std::size_t a, std::size_t b) { return sp.psd[a] > sp.psd[b]; });
+      fmt::print("{}: {:.3f} s at {:g} Hz, Welch nfft {} ({:.2f} Hz bins)\n", spec_sig.file,
+                 sig.duration_s(), sig.rate_hz, spec_nfft, sig.rate_hz / spec_nfft);
+      for (std::size_t i = 0; i < std::min<std::size_t>(8, peaks.size()); ++i) {
+        fmt::print("  peak {:10.1f} Hz  {:.3e} /Hz\n", sp.f_hz[peaks[i]], sp.psd[peaks[i]]);
+      }
+    }
     return 0;
   }
 

@@ -47,6 +47,8 @@ struct SignalReadOptions {
 /// count, float32 not a multiple of 4) or non-finite data, naming the file and, for CSV,
 /// the line.
 [[nodiscard]] Signal read_signal(const std::string& path, const SignalReadOptions& opt);
+/// Decodes `count` raw little-endian samples (float32, or int16 scaled to [-1, 1)).
+void decode_raw(const unsigned char* bytes, std::size_t count, SampleFormat f, double* out);
 /// Writes a mono float32 WAV (the caller makes it atomic). Throws Error on failure.
 void write_wav(const std::string& path, const Signal& s);
 
@@ -132,6 +134,10 @@ struct CycleTiming {
   std::vector<double> end_s;    ///< and its end
   double period_s = 0;          ///< mean cycle time
 };
+/// The planned program's cycle boundaries (s from the program start, programmed feeds): n + 1
+/// values for n cycles, the last cycle lasting as long as the one before it. Throws
+/// InputError when the plan has fewer than two cycles.
+[[nodiscard]] std::vector<double> planned_cycle_bounds(const Job& job);
 /// From the planned path: cycle k starts at `start_s` + its programmed time (feeds at the
 /// programmed rate; acceleration ignored). Only cycles wholly inside the signal.
 [[nodiscard]] CycleTiming cycles_from_job(const Job& job, double start_s, double duration_s);
@@ -150,6 +156,9 @@ struct ModelProfile {
   std::vector<double> k_re_pct;
   std::vector<int> zone;
 };
+/// The job's mechanism model (mechanism_settings(job)) at `bins` phases of its steady-state
+/// cycle (bin centres; phase 0 is theta = 0).
+[[nodiscard]] ModelProfile model_profile(const Job& job, int bins);
 
 struct CycleResult {
   double start_s = 0, end_s = 0;
@@ -193,5 +202,33 @@ struct SynthOptions {
   std::uint32_t seed = 1;
 };
 [[nodiscard]] Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o);
+
+/// Live monitoring: a KfStream and, with a job, each window's cycle, phase and zone from the
+/// planned timing (cycle k starts at start_s + its programmed start) with running flags:
+/// "ploughing" when a CZI window's k_f exceeds ploughing_ratio times the running mean of the
+/// CZIII windows so far (after 10 of them), "wear" once the last finished cycle's k_f level
+/// exceeds wear_ratio times the first baseline_cycles cycles' level.
+struct LiveWindow {
+  KfStream::Window window;
+  int cycle = -1;     ///< -1 outside the planned cycles or without a job
+  double phase = -1;  ///< 0..1 within the cycle
+  int zone = -1;      ///< model zone (0 air, 1-3 CZI-III); -1 unknown
+  std::vector<std::string> flags;
+};
+class LiveMonitor {
+ public:
+  LiveMonitor(double rate_hz, const MonitorSettings& m, const Job* job, double start_s);
+  void push(const double* x, std::size_t n, const std::function<void(const LiveWindow&)>& out);
+
+ private:
+  MonitorSettings m_;
+  KfStream stream_;
+  std::vector<double> bounds_;  ///< cycle boundaries in stream time (empty without a job)
+  std::vector<int> zone_;       ///< model zones per phase bin
+  int cycle_ = -1;
+  double cycle_sum_ = 0, cycle_n_ = 0, ref_sum_ = 0, cziii_sum_ = 0, cziii_n_ = 0;
+  int finished_ = 0;
+  double last_level_ = 0;
+};
 
 }  // namespace trochomill

@@ -75,17 +75,8 @@ Signal read_raw(const std::string& path, const SignalReadOptions& o, bool f32) {
   s.rate_hz = *o.rate_hz;
   const std::size_t n = bytes.size() / w;
   s.samples.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto* p = reinterpret_cast<const unsigned char*>(bytes.data() + i * w);
-    if (f32) {
-      const std::uint32_t u = std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) |
-                              (std::uint32_t{p[2]} << 16) | (std::uint32_t{p[3]} << 24);
-      s.samples[i] = std::bit_cast<float>(u);
-    } else {
-      const auto u = static_cast<std::uint16_t>(p[0] | (p[1] << 8));
-      s.samples[i] = static_cast<std::int16_t>(u) / 32768.0;
-    }
-  }
+  decode_raw(reinterpret_cast<const unsigned char*>(bytes.data()), n,
+             f32 ? SampleFormat::f32 : SampleFormat::s16, s.samples.data());
   check_finite(path, s.samples);
   return s;
 }
@@ -227,6 +218,24 @@ Signal read_sndfile(const std::string& path, const SignalReadOptions& o) {
 }
 
 }  // namespace
+
+void decode_raw(const unsigned char* bytes, std::size_t count, SampleFormat f, double* out) {
+  if (f == SampleFormat::f32) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const unsigned char* p = bytes + 4 * i;
+      const std::uint32_t u = std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8) |
+                              (std::uint32_t{p[2]} << 16) | (std::uint32_t{p[3]} << 24);
+      out[i] = std::bit_cast<float>(u);
+    }
+  } else if (f == SampleFormat::s16) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const unsigned char* p = bytes + 2 * i;
+      out[i] = static_cast<std::int16_t>(static_cast<std::uint16_t>(p[0] | (p[1] << 8))) / 32768.0;
+    }
+  } else {
+    throw Error("decode_raw: only f32 and s16 are raw formats");
+  }
+}
 
 Signal read_signal(const std::string& path, const SignalReadOptions& o) {
   if (o.rate_hz && !(*o.rate_hz > 0)) {

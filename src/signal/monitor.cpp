@@ -95,24 +95,42 @@ void KfStream::push(const double* x, std::size_t n,
   }
 }
 
-CycleTiming cycles_from_job(const Job& job, double start_s, double duration_s) {
+std::vector<double> planned_cycle_bounds(const Job& job) {
   const PlannedPath pp = plan_path(job);
   const auto& marks = pp.path.cycles();
-  CycleTiming ct;
-  ct.source = "job";
   if (marks.size() < 2) {
     throw InputError(
         fmt::format("{}: the planned path has {} cycle(s); monitoring needs two or "
                     "more",
                     job.source, marks.size()));
   }
-  std::vector<double> starts;
-  for (const auto& mk : marks) starts.push_back(mk.start_time_s);
-  // The last cycle lasts as long as the one before it (steady state).
-  starts.push_back(starts.back() + (starts.back() - starts[starts.size() - 2]));
+  std::vector<double> b;
+  for (const auto& mk : marks) b.push_back(mk.start_time_s);
+  b.push_back(b.back() + (b.back() - b[b.size() - 2]));
+  return b;
+}
+
+ModelProfile model_profile(const Job& job, int bins) {
+  const MechanismSettings st = mechanism_settings(job);
+  const MechanismCurve c = mechanism_curve(job, st);
+  ModelProfile mp;
+  for (int b = 0; b < bins; ++b) {
+    const double t = (b + 0.5) / bins * c.cycle_time_s;
+    const auto it = std::upper_bound(c.t_s.begin(), c.t_s.end(), t);
+    const auto i = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, it - c.t_s.begin() - 1));
+    mp.k_re_pct.push_back(c.k_re_pct[i]);
+    mp.zone.push_back(c.zone[i]);
+  }
+  return mp;
+}
+
+CycleTiming cycles_from_job(const Job& job, double start_s, double duration_s) {
+  const std::vector<double> bounds = planned_cycle_bounds(job);
+  CycleTiming ct;
+  ct.source = "job";
   double sum = 0;
-  for (std::size_t k = 0; k + 1 < starts.size(); ++k) {
-    const double a = start_s + starts[k], b = start_s + starts[k + 1];
+  for (std::size_t k = 0; k + 1 < bounds.size(); ++k) {
+    const double a = start_s + bounds[k], b = start_s + bounds[k + 1];
     if (a >= 0 && b <= duration_s) {
       ct.start_s.push_back(a);
       ct.end_s.push_back(b);
@@ -123,7 +141,7 @@ CycleTiming cycles_from_job(const Job& job, double start_s, double duration_s) {
     throw InputError(fmt::format(
         "no whole cycle of the program (cycles from {:.3f} s to {:.3f} s after its start) lies "
         "in the signal ({:.3f} s) with --start {:g} s",
-        starts.front(), starts.back(), duration_s, start_s));
+        bounds.front(), bounds.back(), duration_s, start_s));
   }
   ct.period_s = sum / static_cast<double>(ct.start_s.size());
   return ct;
@@ -258,18 +276,7 @@ MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m, const Jo
   const auto bins = static_cast<std::size_t>(m.phase_bins);
   if (job != nullptr) {
     r.timing = cycles_from_job(*job, start_s, s.duration_s());
-    // The model beside it: zones and K_re over the steady cycle, by phase.
-    const MechanismSettings st = mechanism_settings(*job);
-    const MechanismCurve c = mechanism_curve(*job, st);
-    ModelProfile mp;
-    for (std::size_t b = 0; b < bins; ++b) {
-      const double t = (static_cast<double>(b) + 0.5) / static_cast<double>(bins) * c.cycle_time_s;
-      const auto it = std::upper_bound(c.t_s.begin(), c.t_s.end(), t);
-      const auto i = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, it - c.t_s.begin() - 1));
-      mp.k_re_pct.push_back(c.k_re_pct[i]);
-      mp.zone.push_back(c.zone[i]);
-    }
-    r.model = mp;
+    r.model = model_profile(*job, m.phase_bins);
   } else {
     r.timing = cycles_from_signal(r.kf, 0.02, 20.0);
   }
@@ -377,6 +384,62 @@ MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m, const Jo
         ploughing, r.cycles.size(), m.ploughing_ratio));
   }
   return r;
+}
+
+}  // namespace trochomill
+
+namespace trochomill {
+
+LiveMonitor::LiveMonitor(double rate_hz, const MonitorSettings& m, const Job* job, double start_s)
+    : m_(m), stream_(rate_hz, m) {
+  if (job != nullptr) {
+    for (const double b : planned_cycle_bounds(*job)) bounds_.push_back(start_s + b);
+    zone_ = model_profile(*job, m.phase_bins).zone;
+  }
+}
+
+void LiveMonitor::push(const double* x, std::size_t n,
+                       const std::function<void(const LiveWindow&)>& out) {
+  stream_.push(x, n, [&](const KfStream::Window& w) {
+    LiveWindow lw;
+    lw.window = w;
+    if (!bounds_.empty() && w.t_s >= bounds_.front() && w.t_s < bounds_.back()) {
+      const auto it = std::upper_bound(bounds_.begin(), bounds_.end(), w.t_s);
+      const auto k = static_cast<int>(it - bounds_.begin()) - 1;
+      const auto uk = static_cast<std::size_t>(k);
+      lw.cycle = k;
+      lw.phase = (w.t_s - bounds_[uk]) / (bounds_[uk + 1] - bounds_[uk]);
+      const auto bins = zone_.size();
+      lw.zone =
+          zone_[std::min(bins - 1, static_cast<std::size_t>(lw.phase * static_cast<double>(bins)))];
+    }
+    // A cycle finished: its level joins the reference or is compared with it.
+    if (lw.cycle != cycle_) {
+      if (cycle_ >= 0 && cycle_n_ > 0) {
+        last_level_ = cycle_sum_ / cycle_n_;
+        if (finished_ < m_.baseline_cycles) ref_sum_ += last_level_;
+        ++finished_;
+      }
+      cycle_ = lw.cycle;
+      cycle_sum_ = cycle_n_ = 0;
+    }
+    if (lw.zone > 0 && std::isfinite(w.k_f)) {
+      cycle_sum_ += w.k_f;
+      cycle_n_ += 1;
+      if (lw.zone == 3) {
+        cziii_sum_ += w.k_f;
+        cziii_n_ += 1;
+      }
+      if (lw.zone == 1 && cziii_n_ >= 10 && w.k_f > m_.ploughing_ratio * cziii_sum_ / cziii_n_) {
+        lw.flags.emplace_back("ploughing");
+      }
+    }
+    if (finished_ > m_.baseline_cycles &&
+        last_level_ > m_.wear_ratio * ref_sum_ / m_.baseline_cycles) {
+      lw.flags.emplace_back("wear");
+    }
+    out(lw);
+  });
 }
 
 }  // namespace trochomill

@@ -42,16 +42,9 @@ Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions
         "k_f values > 0 and wear drift > -1");
   }
   validate(m, o.rate_hz);
-  const PlannedPath pp = plan_path(job);
-  const auto& marks = pp.path.cycles();
-  if (marks.size() < 2) {
-    throw InputError(fmt::format("{}: the planned path has {} cycle(s); need two or more",
-                                 job.source, marks.size()));
-  }
-  std::vector<double> starts;
-  for (const auto& mk : marks) starts.push_back(mk.start_time_s);
-  starts.push_back(starts.back() + (starts.back() - starts[starts.size() - 2]));
-  const std::size_t ncyc = std::min<std::size_t>(static_cast<std::size_t>(o.cycles), marks.size());
+  const std::vector<double> starts = planned_cycle_bounds(job);
+  const std::size_t ncyc =
+      std::min<std::size_t>(static_cast<std::size_t>(o.cycles), starts.size() - 1);
   const double t_end = o.lead_s + starts[ncyc];
   const MechanismSettings st = mechanism_settings(job);
   const MechanismCurve c = mechanism_curve(job, st);
