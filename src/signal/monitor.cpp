@@ -46,8 +46,12 @@ KfSeries kf_series(const Signal& s, const MonitorSettings& m, bool zero_phase) {
   validate(m, s.rate_hz);
   const Sos lo = butter_bandpass(m.order, m.low_min_hz, m.low_max_hz, s.rate_hz);
   const Sos hi = butter_bandpass(m.order, m.high_min_hz, m.high_max_hz, s.rate_hz);
-  const std::vector<double> yl = zero_phase ? sosfiltfilt(lo, s.samples) : sosfilt(lo, s.samples);
-  const std::vector<double> yh = zero_phase ? sosfiltfilt(hi, s.samples) : sosfilt(hi, s.samples);
+  std::vector<double> yl, yh;
+  if (zero_phase) {
+    sosfiltfilt_pair(lo, hi, s.samples, yl, yh);
+  } else {
+    sosfilt_pair(lo, hi, s.samples, yl, yh);
+  }
   const std::size_t w = window_samples(m, s.rate_hz);
   KfSeries k;
   k.window_s = static_cast<double>(w) / s.rate_hz;
