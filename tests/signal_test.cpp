@@ -256,6 +256,46 @@ TEST(Signal, WearDriftAndPloughingFlags) {
   for (const auto& c : clean.cycles) EXPECT_FALSE(c.ploughing);
 }
 
+// Live monitoring with a job: every window gets the offline analysis' cycle and phase (the
+// same planned timing) and the model's zone; on a drifting recording the wear flag appears
+// only after the baseline cycles, and ploughing only in CZI windows.
+TEST(Signal, LiveMonitorFollowsThePlan) {
+  const Job job = pivkin_job();
+  SynthOptions o;
+  o.cycles = 8;
+  o.wear_drift = 1.0;
+  o.rate_hz = 48000;
+  const Signal s = synth_signal(job, job.monitor, o);
+  const MonitorReport off = analyze_signal(s, job.monitor, &job, o.lead_s);
+  LiveMonitor live(s.rate_hz, job.monitor, &job, o.lead_s);
+  std::vector<LiveWindow> got;
+  for (std::size_t i = 0; i < s.samples.size(); i += 4096) {
+    live.push(s.samples.data() + i, std::min<std::size_t>(4096, s.samples.size() - i),
+              [&](const LiveWindow& w) { got.push_back(w); });
+  }
+  ASSERT_EQ(got.size(), off.kf.t_s.size());
+  int in_cycles = 0, wear_first = -1, ploughing = 0, ploughing_outside_czi = 0;
+  for (const LiveWindow& w : got) {
+    if (w.cycle < 0) continue;
+    ++in_cycles;
+    const auto& c = off.cycles[static_cast<std::size_t>(w.cycle)];
+    EXPECT_GE(w.window.t_s, c.start_s);
+    EXPECT_LT(w.window.t_s, c.end_s);
+    EXPECT_NEAR(w.phase, (w.window.t_s - c.start_s) / (c.end_s - c.start_s), 1e-12);
+    for (const auto& f : w.flags) {
+      if (f == "wear" && wear_first < 0) wear_first = w.cycle;
+      if (f == "ploughing") {
+        ++ploughing;
+        if (w.zone != 1) ++ploughing_outside_czi;
+      }
+    }
+  }
+  EXPECT_GT(in_cycles, 1000);
+  EXPECT_GT(wear_first, job.monitor.baseline_cycles);  // only after the reference is known
+  EXPECT_GT(ploughing, 0);
+  EXPECT_EQ(ploughing_outside_czi, 0);
+}
+
 // Readers: WAV round trip (float32: 1e-7 relative), CSV with a time column, raw float32 and
 // int16; and the errors a user meets.
 TEST(Signal, ReadersAndErrors) {
