@@ -113,6 +113,16 @@ struct MonitorSettings {
   int phase_bins = 50;            ///< k_f profile bins over a cycle
 };
 
+/// Tri-dexel simulation settings (`[simulation]`; sim.hpp).
+struct SimSettings {
+  double resolution_mm = 0.01;      ///< dexel spacing
+  int steps_per_rev = 600;          ///< time steps per spindle revolution
+  double chip_sampling_mm = 0.001;  ///< sampling of removed intervals into points
+  double segment_mm = 0.05;         ///< edge segment length along the edge (kappa)
+  int sub_segments = 5;             ///< sub-segments inward (tau), for wear topography
+  int threads = 0;                  ///< worker threads (0: all cores)
+};
+
 struct Job {
   std::string source;  ///< file name the job came from (for messages)
   Tool tool;
@@ -124,6 +134,7 @@ struct Job {
   AnalysisSettings analysis;
   MechanismJob mechanism;
   MonitorSettings monitor;
+  SimSettings simulation;
   // The original document, flattened `section.key = value` (TOML syntax), after overrides:
   // written into the G-code header so a program records the job that produced it.
   std::vector<std::pair<std::string, std::string>> flat_keys;

@@ -41,6 +41,8 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
       {"measured", {"force_max", "roughness_ra", "waviness"}},
       {"analysis", {"steps_per_tooth", "imprint_points"}},
       {"mechanism", {"czi_max", "czii_max", "transition", "share", "model", "points"}},
+      {"simulation",
+       {"resolution", "steps_per_rev", "chip_sampling", "segment", "sub_segments", "threads"}},
       {"monitor",
        {"low_min", "low_max", "high_min", "high_max", "order", "window", "baseline_cycles",
         "wear_ratio", "ploughing_ratio", "phase_bins"}},
@@ -51,7 +53,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
 // Sections later modules own. They are accepted (not validated here) so one job file can
 // carry everything; each module validates its own section.
 const std::set<std::string>& reserved_sections() {
-  static const std::set<std::string> s = {"material", "simulation", "stock", "forces"};
+  static const std::set<std::string> s = {"material", "stock", "forces"};
   return s;
 }
 
@@ -612,6 +614,16 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
               fmt::format("must be greater than high_min ({} Hz), got {} Hz",
                           fmt_num(mo.high_min_hz), fmt_num(mo.high_max_hz)));
   }
+  // [simulation]
+  SimSettings& si = job.simulation;
+  si.resolution_mm =
+      r.number("simulation", "resolution", "mm", Range{1e-4, 10.0}, 0.01).value_or(0.01);
+  si.steps_per_rev = r.integer("simulation", "steps_per_rev", 8, 100000, 600).value_or(600);
+  si.chip_sampling_mm =
+      r.number("simulation", "chip_sampling", "mm", Range{1e-5, 1.0}, 0.001).value_or(0.001);
+  si.segment_mm = r.number("simulation", "segment", "mm", Range{1e-3, 10.0}, 0.05).value_or(0.05);
+  si.sub_segments = r.integer("simulation", "sub_segments", 1, 100, 5).value_or(5);
+  si.threads = r.integer("simulation", "threads", 0, 1024, 0).value_or(0);
   // [analysis]
   job.analysis.steps_per_tooth = r.integer("analysis", "steps_per_tooth", 1, 64, 1).value_or(1);
   job.analysis.imprint_points = r.integer("analysis", "imprint_points", 3, 10001, 81).value_or(81);

@@ -1,0 +1,133 @@
+// Tri-dexel material-removal simulation (Bergmann 2021 Section 3; domain notes sections 6
+// and 7): the workpiece as three perpendicular boards of dexels (rays holding sorted
+// material intervals), the tool's cutting edges sweeping thin wedges between time steps,
+// the removed intervals assigned to the edge segments that removed them, giving each
+// segment's uncut chip thickness and removed volume. Lengths in mm, times in s, angles in
+// radians inside (degrees at the job interface).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "trochomill/job.hpp"
+#include "trochomill/path.hpp"
+
+namespace trochomill {
+
+/// One material interval along a dexel (mm, lo < hi).
+struct Interval {
+  double lo = 0, hi = 0;
+};
+
+/// A dexel: sorted, disjoint material intervals along one ray.
+class Dexel {
+ public:
+  Dexel() = default;
+  explicit Dexel(Interval full) : iv_{full} {}
+  [[nodiscard]] const std::vector<Interval>& intervals() const noexcept { return iv_; }
+  /// Removes [a, b] and appends the removed pieces to `removed` (in order). Returns the
+  /// removed length (mm).
+  double subtract(double a, double b, std::vector<Interval>& removed);
+  [[nodiscard]] double length() const;
+
+ private:
+  std::vector<Interval> iv_;
+};
+
+/// The stock: an axis-aligned box (mm).
+struct StockBox {
+  std::array<double, 3> lo{}, hi{};
+  [[nodiscard]] double volume_mm3() const {
+    return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+  }
+};
+
+/// One board: rays along `axis` (0 x, 1 y, 2 z) on a square grid of spacing `d` over the
+/// two other axes (u = axis + 1, v = axis + 2, cyclically), ray (i, j) at u = u0 + (i + 1/2) d,
+/// v = v0 + (j + 1/2) d. Sparse: rays live in tiles of 64 x 64 created on first touch;
+/// untouched rays hold the whole stock interval implicitly.
+class DexelBoard {
+ public:
+  DexelBoard(int axis, const StockBox& box, double spacing_mm);
+  [[nodiscard]] int axis() const noexcept { return axis_; }
+  [[nodiscard]] double spacing() const noexcept { return d_; }
+  [[nodiscard]] int count_u() const noexcept { return nu_; }
+  [[nodiscard]] int count_v() const noexcept { return nv_; }
+  [[nodiscard]] double u_of(int i) const noexcept { return u0_ + (i + 0.5) * d_; }
+  [[nodiscard]] double v_of(int j) const noexcept { return v0_ + (j + 0.5) * d_; }
+  /// The ray (i, j), created (as the full stock interval) if untouched.
+  Dexel& ray(int i, int j);
+  /// The ray if it was ever touched, else nullptr (it then holds the full interval).
+  [[nodiscard]] const Dexel* find(int i, int j) const;
+  [[nodiscard]] Interval full() const noexcept { return full_; }
+  /// Material volume represented by the board (mm^3): sum of lengths times d^2.
+  [[nodiscard]] double volume_mm3() const;
+  [[nodiscard]] std::size_t tiles() const noexcept { return tiles_.size(); }
+  [[nodiscard]] std::size_t memory_bytes() const;
+
+ private:
+  static constexpr int kTile = 64;
+  int axis_;
+  double d_, u0_, v0_;
+  int nu_, nv_;
+  Interval full_;
+  std::unordered_map<std::uint64_t, std::unique_ptr<std::vector<Dexel>>> tiles_;
+};
+
+/// The three boards over one stock.
+struct TriDexel {
+  TriDexel(const StockBox& box, double spacing_mm);
+  StockBox box;
+  std::array<DexelBoard, 3> boards;
+};
+
+/// The cutting tool as the simulation sees it: a solid end mill (radius, corner radius,
+/// flute length, teeth at their angles, helix) with runout; each edge split into segments
+/// along the edge (kappa, by height above the tip here: the corner arc and the flank).
+struct SimTool {
+  double radius_mm = 0, corner_radius_mm = 0, flute_length_mm = 0;
+  double helix_rad = 0;
+  std::vector<double> tooth_angle_rad;   ///< at t = 0, height 0
+  std::vector<double> radial_offset_mm;  ///< per tooth, from the runout
+  std::vector<double> axial_offset_mm;   ///< per tooth (tip height)
+  double omega_rad_per_s = 0;            ///< signed: negative for a cw spindle seen from +z
+  double segment_mm = 0.05;
+  /// Profile radius at height h above the tip (corner arc, then the flank).
+  [[nodiscard]] double profile_radius(double h) const;
+  [[nodiscard]] int segments() const;
+};
+[[nodiscard]] SimTool sim_tool(const Job& job, const SimSettings& s);
+
+/// One time step's results.
+struct SimStep {
+  double t_s = 0;
+  std::array<double, 3> tip_mm{};
+  std::vector<double> removed_mm3;  ///< per tooth (Z board)
+  double h_max_mm = 0, h_mean_mm = 0;
+  int engaged_segments = 0;
+};
+
+/// One engaged segment at one step (the chip map, sparse).
+struct ChipEntry {
+  std::uint32_t step = 0;     ///< index into SimResult::steps
+  std::uint32_t segment = 0;  ///< tooth * segments_per_tooth + segment along the edge
+  float h_mm = 0;             ///< uncut chip thickness
+};
+
+struct SimResult {
+  std::vector<SimStep> steps;
+  std::vector<ChipEntry> chip_map;
+  int segments_per_tooth = 0;
+  double removed_mm3 = 0;  ///< Z board
+  std::array<double, 3> removed_by_board_mm3{};
+  std::uint64_t dexel_updates = 0;  ///< ray-interval subtractions that removed material
+};
+
+/// Simulates the path from t0 to t1 (s) on the workpiece (modified in place).
+[[nodiscard]] SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings& s,
+                                 TriDexel& work, double t0_s, double t1_s);
+
+}  // namespace trochomill
