@@ -122,5 +122,85 @@ TEST(Sim, PartialImmersionChipIsFzSinPhi) {
   EXPECT_GT(checked, 50);
 }
 
+// Full slot with four teeth and a 35 degree helix: the chip never exceeds f_z plus the
+// wedge's angular width times f_z plus f_z^2 / 2R, and reaches f_z (the tooth at 90
+// degrees) within that tolerance. (A first version left slivers between consecutive wedges
+// taken about different centres, which the next tooth met with a doubled chip.)
+TEST(Sim, FullSlotChipPeaksAtFz) {
+  const double fz = 0.075, R = 5, d = 0.04;
+  StockBox box{{-6, -10, -1}, {6, -4, 0}};
+  TriDexel work(box, d);
+  SimSettings s;
+  s.steps_per_rev = 120;
+  SimTool tool = end_mill(35, 4, 2000);
+  tool.flute_length_mm = 1.5;
+  const ToolPath p = line_path(0, -16, -8, -0.5, fz * 4 * 2000);
+  const SimResult r = simulate(p, tool, s, work, 0, p.duration_s());
+  const double tol = fz * 2 * kTwoPi / s.steps_per_rev + fz * fz / (2 * R) + 4e-4;
+  double hmax = 0;
+  for (const SimStep& st : r.steps) {
+    if (st.tip_mm[1] < -10) continue;  // steady (the front in the stock since y = -15)
+    EXPECT_LT(st.h_max_mm, fz + tol) << st.t_s;
+    hmax = std::max(hmax, st.h_max_mm);
+  }
+  EXPECT_NEAR(hmax, fz, tol);
+}
+
+// Radial runout e (tooth 0 on the offset's side): tooth 0 cuts at R + e, tooth 1 at R - e,
+// so tooth 0's chip is the feed's f_z sin(a) plus 2e and tooth 1's minus 2e. Compared at
+// the front (a near 90 degrees) in a full slot with two straight teeth: the two teeth's
+// largest chips differ by 4e within 2e-4 mm (the wedges' sampling; both see the same feed).
+TEST(Sim, RadialRunoutSplitsTheChips) {
+  const double fz = 0.1, e = 0.01, d = 0.02;
+  StockBox box{{-6, -10, -0.2}, {6, -4, 0}};
+  TriDexel work(box, d);
+  SimSettings s;
+  s.steps_per_rev = 120;
+  SimTool tool = end_mill(0, 2, 3000);
+  tool.flute_length_mm = 0.5;
+  tool.radial_offset_mm = {e, -e};
+  const ToolPath p = line_path(0, -16, -8, -0.1, fz * 2 * 3000);
+  const SimResult r = simulate(p, tool, s, work, 0, p.duration_s());
+  double h[2] = {0, 0};
+  for (const ChipEntry& c : r.chip_map) {
+    if (r.steps[c.step].tip_mm[1] < -10) continue;
+    const auto k =
+        static_cast<std::size_t>(c.segment) / static_cast<std::size_t>(r.segments_per_tooth);
+    h[k] = std::max(h[k], static_cast<double>(c.h_mm));
+  }
+  EXPECT_NEAR(h[0] - h[1], 4 * e, 2e-4);
+  EXPECT_NEAR(0.5 * (h[0] + h[1]), fz, 0.01 * fz + 2e-4);
+}
+
+// Helix: the edge at height h trails the tip by h tan(helix) / R radians, so a segment at
+// height h first cuts that much later in the spindle's turn. With a 30 degree helix and
+// segments at 0.05 and 0.95 mm, the first steps with a chip differ by the lag (0.9 mm
+// tan 30 / 5 mm = 0.104 rad) to within two steps.
+TEST(Sim, HelixLagsEngagementAlongTheAxis) {
+  const double d = 0.02, rpm = 3000;
+  StockBox box{{4, -1, -1}, {6, 1, 0}};  // a block the stationary tool reaches on its +x side
+  TriDexel work(box, d);
+  SimSettings s;
+  s.steps_per_rev = 360;
+  SimTool tool = end_mill(30, 1, rpm);
+  tool.segment_mm = 0.1;
+  tool.tooth_angle_rad = {0.5 * kPi};  // turning clockwise into the block (|angle| < 37 deg)
+  ToolPath p;
+  p.append(Segment::line(Vec3(0, 0, -1), Vec3(0, 1e-6, -1), Motion::feed, 1e-6));
+  const double rev = 60.0 / rpm;
+  const SimResult r = simulate(p, tool, s, work, 0, rev);
+  auto first_step = [&](int seg) {
+    for (const ChipEntry& c : r.chip_map) {
+      if (static_cast<int>(c.segment) == seg) return static_cast<int>(c.step);
+    }
+    return -1;
+  };
+  const int s0 = first_step(0), s9 = first_step(9);
+  ASSERT_GE(s0, 0);
+  ASSERT_GE(s9, 0);
+  const double lag_steps = 0.9 * std::tan(deg_to_rad(30.0)) / 5.0 / (kTwoPi / s.steps_per_rev);
+  EXPECT_NEAR(s9 - s0, lag_steps, 2.0);
+}
+
 }  // namespace
 }  // namespace trochomill

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "trochomill/path.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/signal.hpp"
+#include "trochomill/sim.hpp"
 #include "trochomill/units.hpp"
 #include "trochomill/version.hpp"
 
@@ -322,6 +324,21 @@ int run(int argc, char** argv) {
   spec->add_option("--csv", spec_csv, "write the PSD as CSV (- for stdout)");
   spec->add_option("--spectrogram", spec_sg, "write the spectrogram as CSV (t_s, f_hz, db)");
 
+  // simulate
+  JobArgs sim_args;
+  std::string sim_gcode, sim_json, sim_out, sim_cycles;
+  std::optional<double> sim_from, sim_to;
+  auto* sim = app.add_subcommand(
+      "simulate", "tri-dexel material removal: per-step chip thickness and removed volume");
+  add_job_args(sim, sim_args);
+  sim->add_option("--gcode", sim_gcode, "simulate this NC program instead of the job's path");
+  sim->add_option("--from", sim_from, "window start, s of programmed time (default 0)");
+  sim->add_option("--to", sim_to, "window end, s (default: the path's end)");
+  sim->add_option("--cycles", sim_cycles,
+                  "A:B: trochoid cycles A (inclusive) to B (exclusive), from 0");
+  sim->add_option("--json", sim_json, "write the summary as JSON (- for stdout)");
+  sim->add_option("--out", sim_out, "directory for series.csv (per step)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -523,6 +540,72 @@ int run(int argc, char** argv) {
       emit(rec_json, j.dump(2) + "\n");
     }
     if (rec_json != "-") fmt::print("{}\n", r.explanation);
+    return 0;
+  }
+
+  if (sim->parsed()) {
+    const tmill::Job job = load(sim_args);
+    const tmill::ToolPath path = job_path(job, sim_gcode);
+    double from = 0, to = path.duration_s();
+    if (!sim_cycles.empty()) {
+      if (sim_from || sim_to) throw tmill::InputError("give --cycles or --from/--to, not both");
+      const auto colon = sim_cycles.find(':');
+      char* e1 = nullptr;
+      char* e2 = nullptr;
+      const std::string a = sim_cycles.substr(0, colon);
+      const std::string b = colon == std::string::npos ? "" : sim_cycles.substr(colon + 1);
+      const long ca = std::strtol(a.c_str(), &e1, 10), cb = std::strtol(b.c_str(), &e2, 10);
+      if (colon == std::string::npos || a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0') {
+        throw tmill::InputError(fmt::format("--cycles '{}': expected A:B, e.g. 3:4", sim_cycles));
+      }
+      std::tie(from, to) = tmill::cycle_window(path, static_cast<int>(ca), static_cast<int>(cb));
+    } else {
+      if (sim_from) from = *sim_from;
+      if (sim_to) to = *sim_to;
+    }
+    const auto t_start = std::chrono::steady_clock::now();
+    const tmill::JobSimulation js = tmill::simulate_job(job, path, from, to);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    const tmill::SimResult& r = js.result;
+    double h_max = 0;
+    for (const auto& st : r.steps) h_max = std::max(h_max, st.h_max_mm);
+    nlohmann::json j = {{"removed_volume_mm3", r.removed_mm3},
+                        {"removed_volume_by_board_mm3", r.removed_by_board_mm3},
+                        {"h_max_mm", h_max},
+                        {"steps", r.steps.size()},
+                        {"dexel_updates", r.dexel_updates},
+                        {"wall_time_s", wall},
+                        {"from_s", from},
+                        {"to_s", to},
+                        {"resolution_mm", job.simulation.resolution_mm},
+                        {"steps_per_rev", job.simulation.steps_per_rev},
+                        {"memory_mb", static_cast<double>(js.memory_bytes) / 1048576.0},
+                        {"complete", true}};
+    if (!sim_out.empty()) {
+      std::filesystem::create_directories(sim_out);
+      std::string csv = "t_s,x_mm,y_mm,z_mm";
+      const std::size_t nt = job.tool.tooth_angles_deg.size();
+      for (std::size_t k = 0; k < nt; ++k) csv += fmt::format(",removed_tooth{}_mm3", k);
+      csv += ",h_max_mm,h_mean_mm,engaged_segments\n";
+      for (const auto& st : r.steps) {
+        fmt::format_to(std::back_inserter(csv), "{:.7f},{:.5f},{:.5f},{:.5f}", st.t_s, st.tip_mm[0],
+                       st.tip_mm[1], st.tip_mm[2]);
+        for (const double v : st.removed_mm3) fmt::format_to(std::back_inserter(csv), ",{:.6g}", v);
+        fmt::format_to(std::back_inserter(csv), ",{:.6f},{:.6f},{}\n", st.h_max_mm, st.h_mean_mm,
+                       st.engaged_segments);
+      }
+      emit((std::filesystem::path(sim_out) / "series.csv").string(), csv);
+    }
+    if (!sim_json.empty()) emit(sim_json, j.dump(2) + "\n");
+    if (sim_json != "-") {
+      fmt::print(
+          "{}: {:.4f} to {:.4f} s, {} steps at {} per rev, {:g} mm dexels: removed "
+          "{:.4f} mm^3, h_max {:.5f} mm, {} dexel updates, {:.2f} s, {:.1f} MB\n",
+          sim_args.job_file, from, to, r.steps.size(), job.simulation.steps_per_rev,
+          job.simulation.resolution_mm, r.removed_mm3, h_max, r.dexel_updates, wall,
+          static_cast<double>(js.memory_bytes) / 1048576.0);
+    }
     return 0;
   }
 

@@ -4,6 +4,7 @@
 // accelerations mm/s^2 at this interface (docs/user-guide.md lists every key).
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -135,6 +136,8 @@ struct Job {
   MechanismJob mechanism;
   MonitorSettings monitor;
   SimSettings simulation;
+  /// `[stock]` min / max corners (mm); absent: the slot region with a 1 mm margin (sim.hpp).
+  std::optional<std::array<double, 3>> stock_min_mm, stock_max_mm;
   // The original document, flattened `section.key = value` (TOML syntax), after overrides:
   // written into the G-code header so a program records the job that produced it.
   std::vector<std::pair<std::string, std::string>> flat_keys;

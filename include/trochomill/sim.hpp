@@ -130,4 +130,22 @@ struct SimResult {
 [[nodiscard]] SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings& s,
                                  TriDexel& work, double t0_s, double t1_s);
 
+/// The job's stock: `[stock]` min / max, or the slot region with a 1 mm margin around it
+/// (x, y) and 0.5 mm below the floor, up to the top face z = 0.
+[[nodiscard]] StockBox job_stock(const Job& job);
+/// The time window (s) of trochoid cycles [a, b) of the path (its cycle marks; b may be the
+/// number of cycles: then to the path's end). Throws InputError for a bad range.
+[[nodiscard]] std::pair<double, double> cycle_window(const ToolPath& path, int a, int b);
+
+/// A job's simulation over [from_s, to_s]: the time before `from_s` is simulated coarsely first
+/// (max(8, steps_per_rev / 25) steps per revolution: the same material removed, coarser feed
+/// marks), so the window starts from the workpiece as the earlier cut left it.
+struct JobSimulation {
+  SimResult result;  ///< the window only
+  double pre_roll_s = 0;
+  std::size_t memory_bytes = 0;
+};
+[[nodiscard]] JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s,
+                                         double to_s);
+
 }  // namespace trochomill

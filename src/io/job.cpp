@@ -41,6 +41,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
       {"measured", {"force_max", "roughness_ra", "waviness"}},
       {"analysis", {"steps_per_tooth", "imprint_points"}},
       {"mechanism", {"czi_max", "czii_max", "transition", "share", "model", "points"}},
+      {"stock", {"min", "max"}},
       {"simulation",
        {"resolution", "steps_per_rev", "chip_sampling", "segment", "sub_segments", "threads"}},
       {"monitor",
@@ -53,7 +54,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
 // Sections later modules own. They are accepted (not validated here) so one job file can
 // carry everything; each module validates its own section.
 const std::set<std::string>& reserved_sections() {
-  static const std::set<std::string> s = {"material", "stock", "forces"};
+  static const std::set<std::string> s = {"material", "forces"};
   return s;
 }
 
@@ -624,6 +625,23 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
   si.segment_mm = r.number("simulation", "segment", "mm", Range{1e-3, 10.0}, 0.05).value_or(0.05);
   si.sub_segments = r.integer("simulation", "sub_segments", 1, 100, 5).value_or(5);
   si.threads = r.integer("simulation", "threads", 0, 1024, 0).value_or(0);
+  // [stock]
+  {
+    const auto lo = r.number_array("stock", "min", Range{});
+    const auto hi = r.number_array("stock", "max", Range{});
+    if (lo.has_value() != hi.has_value()) {
+      r.problem("stock", lo ? "max" : "min", "give both min and max ([x, y, z] in mm)");
+    } else if (lo) {
+      if (lo->size() != 3 || hi->size() != 3) {
+        r.problem("stock", "min", "min and max must each be [x, y, z] in mm");
+      } else if (!((*hi)[0] > (*lo)[0] && (*hi)[1] > (*lo)[1] && (*hi)[2] > (*lo)[2])) {
+        r.problem("stock", "max", "every coordinate of max must exceed min's");
+      } else {
+        job.stock_min_mm = std::array<double, 3>{(*lo)[0], (*lo)[1], (*lo)[2]};
+        job.stock_max_mm = std::array<double, 3>{(*hi)[0], (*hi)[1], (*hi)[2]};
+      }
+    }
+  }
   // [analysis]
   job.analysis.steps_per_tooth = r.integer("analysis", "steps_per_tooth", 1, 64, 1).value_or(1);
   job.analysis.imprint_points = r.integer("analysis", "imprint_points", 3, 10001, 81).value_or(81);

@@ -173,6 +173,18 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       const double pb = tool.tooth_angle_rad[k] + tool.omega_rad_per_s * tb;
       tp.a0 = std::min(pa, pb);
       tp.a1 = std::max(pa, pb);
+      // The wedge is taken about this step's centre; the previous step's was about the
+      // previous centre, so their shared edge is offset by the move delta between steps and
+      // would leave a sliver (width up to delta) that the next tooth finds with a doubled
+      // chip. Extending the wedge backwards over the shared edge by 2 delta / R closes it
+      // for radii above R / 2 (double coverage is harmless: material goes once).
+      const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
+      const double ext = 2 * moved / tool.radius_mm;
+      if (tool.omega_rad_per_s < 0) {
+        tp.a1 += ext;  // turning clockwise: the older edge is the larger angle
+      } else {
+        tp.a0 -= ext;
+      }
       tp.r_off = tool.radial_offset_mm[k];
       const double H = std::min(tool.flute_length_mm, top - tp.tip_z);
       if (!(H > 0)) continue;
@@ -335,6 +347,52 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   }
   res.removed_mm3 = res.removed_by_board_mm3[2];
   return res;
+}
+
+StockBox job_stock(const Job& job) {
+  StockBox b;
+  if (job.stock_min_mm && job.stock_max_mm) {
+    b.lo = *job.stock_min_mm;
+    b.hi = *job.stock_max_mm;
+    return b;
+  }
+  const double m = 1.0;
+  b.lo = {-0.5 * job.slot.width_mm - m, -m, -job.slot.depth_mm - 0.5};
+  b.hi = {0.5 * job.slot.width_mm + m, job.slot.length_mm + m, 0.0};
+  return b;
+}
+
+std::pair<double, double> cycle_window(const ToolPath& path, int a, int b) {
+  const auto& marks = path.cycles();
+  const int n = static_cast<int>(marks.size());
+  if (n == 0) throw InputError("--cycles: the path has no cycle marks (a planned trochoid has)");
+  if (a < 0 || b <= a || b > n) {
+    throw InputError(
+        fmt::format("--cycles {}:{}: need 0 <= A < B <= {} (the path's cycles)", a, b, n));
+  }
+  const double t0 = marks[static_cast<std::size_t>(a)].start_time_s;
+  const double t1 = b < n ? marks[static_cast<std::size_t>(b)].start_time_s : path.duration_s();
+  return {t0, t1};
+}
+
+JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, double to_s) {
+  const SimSettings& s = job.simulation;
+  if (!(from_s >= 0) || !(to_s > from_s)) {
+    throw InputError(
+        fmt::format("simulation window {} to {} s: need 0 <= from < to", from_s, to_s));
+  }
+  TriDexel work(job_stock(job), s.resolution_mm);
+  const SimTool tool = sim_tool(job, s);
+  JobSimulation out;
+  if (from_s > 0) {
+    SimSettings coarse = s;
+    coarse.steps_per_rev = std::max(8, s.steps_per_rev / 25);
+    (void)simulate(path, tool, coarse, work, 0, from_s);
+    out.pre_roll_s = from_s;
+  }
+  out.result = simulate(path, tool, s, work, from_s, to_s);
+  for (const auto& b : work.boards) out.memory_bytes += b.memory_bytes();
+  return out;
 }
 
 }  // namespace trochomill
