@@ -130,8 +130,9 @@ struct SimResult {
 [[nodiscard]] SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings& s,
                                  TriDexel& work, double t0_s, double t1_s);
 
-/// The job's stock: `[stock]` min / max, or the slot region with a 1 mm margin around it
-/// (x, y) and 0.5 mm below the floor, up to the top face z = 0.
+/// The job's stock: `[stock]` min / max, or the slot region (y from 0 to the slot length: the
+/// slot runs through the workpiece) with a 1 mm margin beside the walls (x) and 0.5 mm below
+/// the floor, up to the top face z = 0.
 [[nodiscard]] StockBox job_stock(const Job& job);
 /// The time window (s) of trochoid cycles [a, b) of the path (its cycle marks; b may be the
 /// number of cycles: then to the path's end). Throws InputError for a bad range.

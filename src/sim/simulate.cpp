@@ -2,6 +2,7 @@
 // removed piece assigned to the edge segment that removed it (include/trochomill/sim.hpp,
 // docs/models.md section 11).
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -116,14 +117,19 @@ std::array<double, 4> sector_box(double a0, double a1, double r) {
   return b;
 }
 
+// Whether a ray (nullptr: untouched, the full stock interval `full`) holds material in
+// (lo, hi).
+bool has_material(const Dexel* ray, Interval full, double lo, double hi) {
+  if (ray == nullptr) return full.hi > lo && full.lo < hi;
+  for (const Interval& v : ray->intervals()) {
+    if (v.hi > lo && v.lo < hi) return true;
+    if (v.lo >= hi) break;
+  }
+  return false;
+}
+
 struct ToothPose {
   double cx, cy, tip_z, a0, a1, r_off;  // a0 < a1: the wedge at height 0
-};
-
-struct StepAccumulator {
-  std::vector<double> seg_h;  // teeth x segments
-  std::vector<double> removed;
-  int segs = 0;
 };
 
 }  // namespace
@@ -156,12 +162,19 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
 
   SimResult res;
   res.segments_per_tooth = segs;
-  std::vector<Interval> removed;
-  StepAccumulator acc;
-  acc.segs = segs;
+  // Each board is an independent picture of the workpiece: the three are updated in parallel,
+  // each with its own accumulators, merged in board order (the same numbers whatever the
+  // thread count: maxima, and sums kept per board).
+  struct BoardAcc {
+    std::vector<double> seg_h, removed_tooth;
+    double removed_board = 0;
+    std::uint64_t updates = 0;
+    std::vector<Interval> removed;
+  };
+  std::array<BoardAcc, 3> bacc;
+  std::vector<ToothPose> poses(nz);
+  std::vector<double> heights(nz);
   for (std::size_t n = 1; n < ps.size(); ++n) {
-    acc.seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
-    acc.removed.assign(nz, 0.0);
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
     const double ta = times[n - 1], tb = times[n];
     for (std::size_t k = 0; k < nz; ++k) {
@@ -187,153 +200,195 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       }
       tp.r_off = tool.radial_offset_mm[k];
       const double H = std::min(tool.flute_length_mm, top - tp.tip_z);
-      if (!(H > 0)) continue;
-      const double rmax = tool.radius_mm + std::max(0.0, tp.r_off);
-      auto seg_of = [&](double h) {
-        return std::clamp(static_cast<int>(h / tool.segment_mm), 0, segs - 1);
-      };
-      auto note = [&](double h, double chip) {
-        if (chip <= 0) return;
-        double& v =
-            acc.seg_h[k * static_cast<std::size_t>(segs) + static_cast<std::size_t>(seg_of(h))];
-        v = std::max(v, chip);
-      };
-      // Grid index range covering [lo, hi] along a board axis.
-      auto idx = [&](const DexelBoard& board, bool first, double lo, double hi) {
-        const int ax = first ? (board.axis() + 1) % 3 : (board.axis() + 2) % 3;
-        const double o = work.box.lo[static_cast<std::size_t>(ax)];
-        const int count = first ? board.count_u() : board.count_v();
-        const int i0 = std::max(0, static_cast<int>(std::ceil((lo - o) / d - 0.5)));
-        const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d - 0.5)));
-        return std::pair<int, int>{i0, i1};
-      };
-      auto account = [&](int b, const std::vector<Interval>& pieces) {
-        double v = 0;
-        for (const Interval& p : pieces) v += (p.hi - p.lo) * d2;
-        res.removed_by_board_mm3[static_cast<std::size_t>(b)] += v;
-      };
-      // Z board: columns over the x-extent of the wedge swept over all heights, rows over the
-      // y-extent of that sector on each column's line; then each ray exactly.
-      {
-        DexelBoard& board = work.boards[2];
-        const double span_lo = kappa >= 0 ? tp.a0 : tp.a0 + H * kappa;
-        const double span_hi = kappa >= 0 ? tp.a1 + H * kappa : tp.a1;
-        const bool wide = span_hi - span_lo >= kPi;
-        const auto bx = sector_box(span_lo, span_hi, rmax);
-        const auto [i0, i1] = wide ? idx(board, true, tp.cx - rmax, tp.cx + rmax)
-                                   : idx(board, true, tp.cx + bx[0], tp.cx + bx[1]);
-        for (int i = i0; i <= i1; ++i) {
-          const double x = board.u_of(i), dx = x - tp.cx;
-          double ylo = 0, yhi = 0;
-          if (wide) {
-            if (dx * dx >= rmax * rmax) continue;
-            const double w = std::sqrt(rmax * rmax - dx * dx);
-            ylo = -w, yhi = w;
-          } else {
-            const auto on = sector_on_line(-dx, span_lo - 0.5 * kPi, span_hi - 0.5 * kPi, rmax);
-            if (!on) continue;
-            ylo = on->lo, yhi = on->hi;
-          }
-          const auto [j0, j1] = idx(board, false, tp.cy + ylo, tp.cy + yhi);
-          for (int j = j0; j <= j1; ++j) {
-            const double dy = board.v_of(j) - tp.cy, rho = std::hypot(dx, dy);
-            if (rho > rmax) continue;
-            // Corner: the profile reaches rho only from h_min up.
-            double hmin = 0;
-            const double flat = tool.radius_mm - tool.corner_radius_mm + tp.r_off;
-            if (rho > flat) {
-              const double r = tool.corner_radius_mm, q = rho - flat;
-              if (q > r) continue;
-              hmin = r - std::sqrt(r * r - q * q);
-            }
-            const double th = std::atan2(dy, dx);
-            removed.clear();
-            auto cut_h = [&](double h_lo, double h_hi) {
-              h_lo = std::max(h_lo, hmin);
-              h_hi = std::min(h_hi, H);
-              if (!(h_hi > h_lo)) return;
-              if (board.ray(i, j).subtract(tp.tip_z + h_lo, tp.tip_z + h_hi, removed) > 0) {
-                ++res.dexel_updates;
-              }
-            };
-            if (kappa == 0) {
-              if (contains_angle(tp.a0, tp.a1, th)) cut_h(0, H);
+      poses[k] = tp;
+      heights[k] = H > 0 ? H : 0.0;
+    }
+    tbb::parallel_for(0, 3, [&](int bsel) {
+      BoardAcc& A = bacc[static_cast<std::size_t>(bsel)];
+      A.seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
+      A.removed_tooth.assign(nz, 0.0);
+      A.removed_board = 0;
+      A.updates = 0;
+      std::vector<Interval>& removed = A.removed;
+      for (std::size_t k = 0; k < nz; ++k) {
+        const ToothPose& tp = poses[k];
+        const double H = heights[k];
+        if (!(H > 0)) continue;
+        const double rmax = tool.radius_mm + std::max(0.0, tp.r_off);
+        auto seg_of = [&](double h) {
+          return std::clamp(static_cast<int>(h / tool.segment_mm), 0, segs - 1);
+        };
+        auto note = [&](double h, double chip) {
+          if (chip <= 0) return;
+          double& v =
+              A.seg_h[k * static_cast<std::size_t>(segs) + static_cast<std::size_t>(seg_of(h))];
+          v = std::max(v, chip);
+        };
+        // Grid index range covering [lo, hi] along a board axis.
+        auto idx = [&](const DexelBoard& board, bool first, double lo, double hi) {
+          const int ax = first ? (board.axis() + 1) % 3 : (board.axis() + 2) % 3;
+          const double o = work.box.lo[static_cast<std::size_t>(ax)];
+          const int count = first ? board.count_u() : board.count_v();
+          const int i0 = std::max(0, static_cast<int>(std::ceil((lo - o) / d - 0.5)));
+          const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d - 0.5)));
+          return std::pair<int, int>{i0, i1};
+        };
+        auto account = [&](int, const std::vector<Interval>& pieces) {
+          double v = 0;
+          for (const Interval& p : pieces) v += (p.hi - p.lo) * d2;
+          A.removed_board += v;
+        };
+        // Z board: columns over the x-extent of the wedge swept over all heights, rows over the
+        // y-extent of that sector on each column's line; then each ray exactly.
+        if (bsel == 2) {
+          DexelBoard& board = work.boards[2];
+          const double span_lo = kappa >= 0 ? tp.a0 : tp.a0 + H * kappa;
+          const double span_hi = kappa >= 0 ? tp.a1 + H * kappa : tp.a1;
+          const bool wide = span_hi - span_lo >= kPi;
+          const auto bx = sector_box(span_lo, span_hi, rmax);
+          const auto [i0, i1] = wide ? idx(board, true, tp.cx - rmax, tp.cx + rmax)
+                                     : idx(board, true, tp.cx + bx[0], tp.cx + bx[1]);
+          for (int i = i0; i <= i1; ++i) {
+            const double x = board.u_of(i), dx = x - tp.cx;
+            double ylo = 0, yhi = 0;
+            if (wide) {
+              if (dx * dx >= rmax * rmax) continue;
+              const double w = std::sqrt(rmax * rmax - dx * dx);
+              ylo = -w, yhi = w;
             } else {
-              // th + 2 pi m in [a0 + h kappa, a1 + h kappa]: h in [th' - a1, th' - a0] / kappa.
-              const double m0 = std::ceil((span_lo - th) / kTwoPi);
-              const double m1 = std::floor((span_hi - th) / kTwoPi);
-              for (double m = m0; m <= m1; m += 1) {
-                const double tt = th + kTwoPi * m;
-                const double ha = (tt - tp.a1) / kappa, hb = (tt - tp.a0) / kappa;
-                cut_h(std::min(ha, hb), std::max(ha, hb));
-              }
+              const auto on = sector_on_line(-dx, span_lo - 0.5 * kPi, span_hi - 0.5 * kPi, rmax);
+              if (!on) continue;
+              ylo = on->lo, yhi = on->hi;
             }
-            for (const Interval& p : removed) {
-              const double len = p.hi - p.lo;
-              acc.removed[k] += len * d2;
-              const int np = std::max(2, static_cast<int>(std::ceil(len / s.chip_sampling_mm)) + 1);
-              for (int q = 0; q < np; ++q) {
-                const double h = p.lo + len * q / (np - 1) - tp.tip_z;
-                note(h, tool.profile_radius(h) + tp.r_off - rho);
+            const auto [j0, j1] = idx(board, false, tp.cy + ylo, tp.cy + yhi);
+            for (int j = j0; j <= j1; ++j) {
+              // Most rays the wedge crosses were emptied long ago: skip them first.
+              if (!has_material(board.find(i, j), board.full(), tp.tip_z, tp.tip_z + H)) continue;
+              const double dy = board.v_of(j) - tp.cy, rho = std::hypot(dx, dy);
+              if (rho > rmax) continue;
+              // Corner: the profile reaches rho only from h_min up.
+              double hmin = 0;
+              const double flat = tool.radius_mm - tool.corner_radius_mm + tp.r_off;
+              if (rho > flat) {
+                const double r = tool.corner_radius_mm, q = rho - flat;
+                if (q > r) continue;
+                hmin = r - std::sqrt(r * r - q * q);
               }
+              const double th = std::atan2(dy, dx);
+              removed.clear();
+              auto cut_h = [&](double h_lo, double h_hi) {
+                h_lo = std::max(h_lo, hmin);
+                h_hi = std::min(h_hi, H);
+                if (!(h_hi > h_lo)) return;
+                if (board.ray(i, j).subtract(tp.tip_z + h_lo, tp.tip_z + h_hi, removed) > 0) {
+                  ++A.updates;
+                }
+              };
+              if (kappa == 0) {
+                if (contains_angle(tp.a0, tp.a1, th)) cut_h(0, H);
+              } else {
+                // th + 2 pi m in [a0 + h kappa, a1 + h kappa]: h in [th' - a1, th' - a0] / kappa.
+                const double m0 = std::ceil((span_lo - th) / kTwoPi);
+                const double m1 = std::floor((span_hi - th) / kTwoPi);
+                for (double m = m0; m <= m1; m += 1) {
+                  const double tt = th + kTwoPi * m;
+                  const double ha = (tt - tp.a1) / kappa, hb = (tt - tp.a0) / kappa;
+                  cut_h(std::min(ha, hb), std::max(ha, hb));
+                }
+              }
+              for (const Interval& p : removed) {
+                A.removed_tooth[k] += (p.hi - p.lo) * d2;
+                // Along the corner arc the chip varies with the height: points every
+                // chip_sampling; along the flank (profile radius R) it is R - rho on every
+                // segment the piece spans.
+                const double h_lo = p.lo - tp.tip_z, h_hi = p.hi - tp.tip_z;
+                const double rc = tool.corner_radius_mm;
+                if (h_lo < rc) {
+                  const double c_hi = std::min(h_hi, rc), len = c_hi - h_lo;
+                  const int np =
+                      std::max(2, static_cast<int>(std::ceil(len / s.chip_sampling_mm)) + 1);
+                  for (int q = 0; q < np; ++q) {
+                    const double h = h_lo + len * q / (np - 1);
+                    note(h, tool.profile_radius(h) + tp.r_off - rho);
+                  }
+                }
+                if (h_hi > rc) {
+                  const double chip = tool.radius_mm + tp.r_off - rho;
+                  for (int sg = seg_of(std::max(h_lo, rc)); sg <= seg_of(h_hi); ++sg) {
+                    note((sg + 0.5) * tool.segment_mm, chip);
+                  }
+                }
+              }
+              account(2, removed);
             }
-            account(2, removed);
+          }
+        }
+        // X and Y boards: per height level, the rows within the wedge's extent at that height,
+        // then each ray's interval exactly. Board 0: rays along x at (y, z) = (u, v); board 1:
+        // rays along y at (z, x) = (u, v).
+        if (bsel < 2) {
+          const int b = bsel;
+          DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
+          const bool z_first = b == 1;  // board 1's u is z; board 0's v is z
+          const auto [z0, z1] = idx(board, z_first, tp.tip_z, tp.tip_z + H);
+          for (int zl = z0; zl <= z1; ++zl) {
+            const double z = z_first ? board.u_of(zl) : board.v_of(zl);
+            const double h = z - tp.tip_z;
+            if (h < 0 || h > H) continue;
+            const double R_h = tool.profile_radius(h) + tp.r_off;
+            if (!(R_h > 0)) continue;
+            const double ah0 = tp.a0 + h * kappa, ah1 = tp.a1 + h * kappa;
+            const auto bx = sector_box(ah0, ah1, R_h);
+            // Rows: board 0 over y (its u), board 1 over x (its v).
+            const auto [r0, r1] = b == 0 ? idx(board, true, tp.cy + bx[2], tp.cy + bx[3])
+                                         : idx(board, false, tp.cx + bx[0], tp.cx + bx[1]);
+            for (int r = r0; r <= r1; ++r) {
+              const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
+              const double reach_c = b == 0 ? tp.cx : tp.cy;
+              if (!has_material(board.find(i, j), board.full(), reach_c - R_h, reach_c + R_h)) {
+                continue;
+              }
+              std::optional<Interval> off;
+              double along_c = 0, perp = 0;
+              if (b == 0) {  // line y = u: offsets along x
+                perp = board.u_of(i) - tp.cy;
+                off = sector_on_line(perp, ah0, ah1, R_h);
+                along_c = tp.cx;
+              } else {  // line x = v: rotate by -90 degrees, (x, y) -> (y, -x)
+                perp = board.v_of(j) - tp.cx;
+                off = sector_on_line(-perp, ah0 - 0.5 * kPi, ah1 - 0.5 * kPi, R_h);
+                along_c = tp.cy;
+              }
+              if (!off) continue;
+              removed.clear();
+              if (board.ray(i, j).subtract(along_c + off->lo, along_c + off->hi, removed) > 0) {
+                ++A.updates;
+              }
+              for (const Interval& p : removed) {
+                // The piece's point nearest the centre: the perpendicular's foot, clamped.
+                const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
+                note(h, R_h - std::hypot(perp, t));
+              }
+              account(b, removed);
+            }
           }
         }
       }
-      // X and Y boards: per height level, the rows within the wedge's extent at that height,
-      // then each ray's interval exactly. Board 0: rays along x at (y, z) = (u, v); board 1:
-      // rays along y at (z, x) = (u, v).
-      for (int b = 0; b < 2; ++b) {
-        DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
-        const bool z_first = b == 1;  // board 1's u is z; board 0's v is z
-        const auto [z0, z1] = idx(board, z_first, tp.tip_z, tp.tip_z + H);
-        for (int zl = z0; zl <= z1; ++zl) {
-          const double z = z_first ? board.u_of(zl) : board.v_of(zl);
-          const double h = z - tp.tip_z;
-          if (h < 0 || h > H) continue;
-          const double R_h = tool.profile_radius(h) + tp.r_off;
-          if (!(R_h > 0)) continue;
-          const double ah0 = tp.a0 + h * kappa, ah1 = tp.a1 + h * kappa;
-          const auto bx = sector_box(ah0, ah1, R_h);
-          // Rows: board 0 over y (its u), board 1 over x (its v).
-          const auto [r0, r1] = b == 0 ? idx(board, true, tp.cy + bx[2], tp.cy + bx[3])
-                                       : idx(board, false, tp.cx + bx[0], tp.cx + bx[1]);
-          for (int r = r0; r <= r1; ++r) {
-            const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
-            std::optional<Interval> off;
-            double along_c = 0, perp = 0;
-            if (b == 0) {  // line y = u: offsets along x
-              perp = board.u_of(i) - tp.cy;
-              off = sector_on_line(perp, ah0, ah1, R_h);
-              along_c = tp.cx;
-            } else {  // line x = v: rotate by -90 degrees, (x, y) -> (y, -x)
-              perp = board.v_of(j) - tp.cx;
-              off = sector_on_line(-perp, ah0 - 0.5 * kPi, ah1 - 0.5 * kPi, R_h);
-              along_c = tp.cy;
-            }
-            if (!off) continue;
-            removed.clear();
-            if (board.ray(i, j).subtract(along_c + off->lo, along_c + off->hi, removed) > 0) {
-              ++res.dexel_updates;
-            }
-            for (const Interval& p : removed) {
-              // The piece's point nearest the centre: the perpendicular's foot, clamped.
-              const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
-              note(h, R_h - std::hypot(perp, t));
-            }
-            account(b, removed);
-          }
-        }
-      }
+    });
+    std::vector<double> seg_h(nz * static_cast<std::size_t>(segs), 0.0);
+    for (std::size_t b = 0; b < 3; ++b) {
+      for (std::size_t q = 0; q < seg_h.size(); ++q)
+        seg_h[q] = std::max(seg_h[q], bacc[b].seg_h[q]);
+      res.removed_by_board_mm3[b] += bacc[b].removed_board;
+      res.dexel_updates += bacc[b].updates;
     }
     SimStep st;
     st.t_s = tb;
     st.tip_mm = {ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
-    st.removed_mm3 = acc.removed;
+    st.removed_mm3 = bacc[2].removed_tooth;
     double sum = 0;
-    for (std::size_t q = 0; q < acc.seg_h.size(); ++q) {
-      const double h = acc.seg_h[q];
+    for (std::size_t q = 0; q < seg_h.size(); ++q) {
+      const double h = seg_h[q];
       if (h > 0) {
         st.h_max_mm = std::max(st.h_max_mm, h);
         sum += h;
@@ -356,9 +411,12 @@ StockBox job_stock(const Job& job) {
     b.hi = *job.stock_max_mm;
     return b;
   }
+  // The domain notes' stock (the slot runs through the workpiece from y = 0 to its length)
+  // with a margin beside the walls and below the floor, where the wall and floor profiles are
+  // read.
   const double m = 1.0;
-  b.lo = {-0.5 * job.slot.width_mm - m, -m, -job.slot.depth_mm - 0.5};
-  b.hi = {0.5 * job.slot.width_mm + m, job.slot.length_mm + m, 0.0};
+  b.lo = {-0.5 * job.slot.width_mm - m, 0.0, -job.slot.depth_mm - 0.5};
+  b.hi = {0.5 * job.slot.width_mm + m, job.slot.length_mm, 0.0};
   return b;
 }
 
