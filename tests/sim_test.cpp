@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <optional>
+#include <random>
 
 #include "test_util.hpp"
 #include "trochomill/engagement.hpp"
@@ -32,6 +33,50 @@ TEST(Sim, DexelSubtract) {
   EXPECT_EQ(removed[2].hi, 4);
   EXPECT_DOUBLE_EQ(d.subtract(0, 100, removed), 7.0);
   EXPECT_TRUE(d.intervals().empty());
+}
+
+// Random subtractions against a plain reference (intervals rebuilt in a fresh vector each
+// time): the in-place, inline-first dexel holds exactly the same intervals (the arithmetic is
+// the same min/max on the same doubles: exact equality) and reports the same removed pieces.
+TEST(Sim, DexelMatchesAReferenceUnderRandomCuts) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> pos(-1, 11), len(0, 3);
+  for (int trial = 0; trial < 200; ++trial) {
+    Dexel d({0, 10});
+    std::vector<Interval> ref{{0, 10}};
+    for (int op = 0; op < 12; ++op) {
+      const double a = pos(rng), b = a + len(rng);
+      std::vector<Interval> got, want, next;
+      const double cut = d.subtract(a, b, got);
+      double want_cut = 0;
+      for (const Interval& v : ref) {
+        if (v.hi <= a || v.lo >= b) {
+          next.push_back(v);
+          continue;
+        }
+        const double lo = std::max(v.lo, a), hi = std::min(v.hi, b);
+        want.push_back({lo, hi});
+        want_cut += hi - lo;
+        if (v.lo < lo) next.push_back({v.lo, lo});
+        if (hi < v.hi) next.push_back({hi, v.hi});
+      }
+      ref = next;
+      EXPECT_DOUBLE_EQ(cut, want_cut);
+      ASSERT_EQ(got.size(), want.size());
+      for (std::size_t k = 0; k < got.size(); ++k) {
+        EXPECT_EQ(got[k].lo, want[k].lo);
+        EXPECT_EQ(got[k].hi, want[k].hi);
+      }
+      const auto iv = d.intervals();
+      ASSERT_EQ(iv.size(), ref.size());
+      for (std::size_t k = 0; k < ref.size(); ++k) {
+        EXPECT_EQ(iv[k].lo, ref[k].lo);
+        EXPECT_EQ(iv[k].hi, ref[k].hi);
+      }
+      const Dexel copy = d;  // copies keep the intervals
+      ASSERT_EQ(copy.intervals().size(), ref.size());
+    }
+  }
 }
 
 // A square end mill (R 5 mm, two teeth) along a straight line through a box.

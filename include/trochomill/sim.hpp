@@ -7,9 +7,11 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
-#include <unordered_map>
+#include <span>
 #include <vector>
 
 #include "trochomill/job.hpp"
@@ -22,19 +24,33 @@ struct Interval {
   double lo = 0, hi = 0;
 };
 
-/// A dexel: sorted, disjoint material intervals along one ray.
+/// A dexel: sorted, disjoint material intervals along one ray. One interval (the common
+/// case: a ray through the floor or a wall) is stored inline; more go to the heap.
 class Dexel {
  public:
   Dexel() = default;
-  explicit Dexel(Interval full) : iv_{full} {}
-  [[nodiscard]] const std::vector<Interval>& intervals() const noexcept { return iv_; }
+  explicit Dexel(Interval full) : in_(full), n_(1) {}
+  Dexel(const Dexel& o);
+  Dexel& operator=(const Dexel& o);
+  Dexel(Dexel&&) noexcept = default;
+  Dexel& operator=(Dexel&&) noexcept = default;
+  ~Dexel() = default;
+  [[nodiscard]] std::span<const Interval> intervals() const noexcept {
+    return {heap_ ? heap_.get() : &in_, n_};
+  }
   /// Removes [a, b] and appends the removed pieces to `removed` (in order). Returns the
   /// removed length (mm).
   double subtract(double a, double b, std::vector<Interval>& removed);
   [[nodiscard]] double length() const;
+  /// Heap bytes held (0 for an inline interval).
+  [[nodiscard]] std::size_t heap_bytes() const noexcept {
+    return heap_ ? cap_ * sizeof(Interval) : 0;
+  }
 
  private:
-  std::vector<Interval> iv_;
+  Interval in_{};
+  std::uint32_t n_ = 0, cap_ = 0;
+  std::unique_ptr<Interval[]> heap_;
 };
 
 /// The stock: an axis-aligned box (mm).
@@ -65,16 +81,23 @@ class DexelBoard {
   [[nodiscard]] Interval full() const noexcept { return full_; }
   /// Material volume represented by the board (mm^3): sum of lengths times d^2.
   [[nodiscard]] double volume_mm3() const;
-  [[nodiscard]] std::size_t tiles() const noexcept { return tiles_.size(); }
+  [[nodiscard]] std::size_t tiles() const noexcept { return touched_; }
   [[nodiscard]] std::size_t memory_bytes() const;
+  /// Rays per tile side.
+  static constexpr int kTile = 64;
 
  private:
-  static constexpr int kTile = 64;
+  [[nodiscard]] std::size_t tile_index(int i, int j) const noexcept {
+    return static_cast<std::size_t>(i / kTile) * static_cast<std::size_t>(tv_) +
+           static_cast<std::size_t>(j / kTile);
+  }
   int axis_;
   double d_, u0_, v0_;
-  int nu_, nv_;
+  int nu_, nv_, tu_ = 0, tv_ = 0;
   Interval full_;
-  std::unordered_map<std::uint64_t, std::unique_ptr<std::vector<Dexel>>> tiles_;
+  std::size_t touched_ = 0;
+  // Dense table of tile pointers (null: untouched), tu_ x tv_.
+  std::vector<std::unique_ptr<Dexel[]>> tiles_;
 };
 
 /// The three boards over one stock.
@@ -124,11 +147,22 @@ struct SimResult {
   double removed_mm3 = 0;  ///< Z board
   std::array<double, 3> removed_by_board_mm3{};
   std::uint64_t dexel_updates = 0;  ///< ray-interval subtractions that removed material
+  bool complete = true;             ///< false when cancelled: the steps computed so far
+};
+
+/// Progress and cancellation of a running simulation.
+struct SimControl {
+  /// Called from the calling thread now and then with (steps done, steps in the call).
+  std::function<void(std::size_t, std::size_t)> progress;
+  /// When it turns true (e.g. from a SIGINT handler) the simulation stops after the current
+  /// step and returns what it has, with `complete = false`.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 /// Simulates the path from t0 to t1 (s) on the workpiece (modified in place).
 [[nodiscard]] SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings& s,
-                                 TriDexel& work, double t0_s, double t1_s);
+                                 TriDexel& work, double t0_s, double t1_s,
+                                 const SimControl& control = {});
 
 /// The job's stock: `[stock]` min / max, or the slot region (y from 0 to the slot length: the
 /// slot runs through the workpiece) with a 1 mm margin beside the walls (x) and 0.5 mm below

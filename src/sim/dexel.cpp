@@ -9,29 +9,68 @@
 
 namespace trochomill {
 
+Dexel::Dexel(const Dexel& o) : in_(o.in_), n_(o.n_), cap_(o.cap_) {
+  if (o.heap_) {
+    heap_ = std::make_unique<Interval[]>(cap_);
+    std::copy(o.heap_.get(), o.heap_.get() + n_, heap_.get());
+  }
+}
+
+Dexel& Dexel::operator=(const Dexel& o) {
+  if (this != &o) *this = Dexel(o);
+  return *this;
+}
+
 double Dexel::subtract(double a, double b, std::vector<Interval>& removed) {
-  if (!(b > a) || iv_.empty() || b <= iv_.front().lo || a >= iv_.back().hi) return 0.0;
+  if (!(b > a) || n_ == 0) return 0.0;
+  Interval* v = heap_ ? heap_.get() : &in_;
+  if (b <= v[0].lo || a >= v[n_ - 1].hi) return 0.0;
+  // Intervals [first, last) overlap (a, b); at most the first and the last keep a piece.
+  std::uint32_t first = 0;
+  while (first < n_ && v[first].hi <= a) ++first;
+  std::uint32_t last = first;
+  while (last < n_ && v[last].lo < b) ++last;
+  if (first == last) return 0.0;
   double cut = 0;
-  std::vector<Interval> out;
-  out.reserve(iv_.size() + 1);
-  for (const Interval& v : iv_) {
-    if (v.hi <= a || v.lo >= b) {  // untouched
-      out.push_back(v);
-      continue;
-    }
-    const double lo = std::max(v.lo, a), hi = std::min(v.hi, b);
+  for (std::uint32_t k = first; k < last; ++k) {
+    const double lo = std::max(v[k].lo, a), hi = std::min(v[k].hi, b);
     removed.push_back({lo, hi});
     cut += hi - lo;
-    if (v.lo < lo) out.push_back({v.lo, lo});
-    if (hi < v.hi) out.push_back({hi, v.hi});
   }
-  iv_.swap(out);
+  Interval keep[2];
+  int nk = 0;
+  if (v[first].lo < a) keep[nk++] = {v[first].lo, a};
+  if (v[last - 1].hi > b) keep[nk++] = {b, v[last - 1].hi};
+  const std::uint32_t n_new = n_ - (last - first) + static_cast<std::uint32_t>(nk);
+  if (n_new <= 1 && !heap_) {  // inline stays inline (n_ was 1)
+    if (nk == 1) in_ = keep[0];
+    n_ = n_new;
+    return cut;
+  }
+  if (!heap_ || n_new > cap_) {  // grow into the heap: only a split of the widest case
+    const std::uint32_t cap = std::max<std::uint32_t>(4, 2 * n_new);
+    auto h = std::make_unique<Interval[]>(cap);
+    std::copy(v, v + first, h.get());
+    std::copy(keep, keep + nk, h.get() + first);
+    std::copy(v + last, v + n_, h.get() + first + nk);
+    heap_ = std::move(h);
+    cap_ = cap;
+  } else {  // in place: shift the tail
+    const std::uint32_t to = first + static_cast<std::uint32_t>(nk);
+    if (to <= last) {
+      std::copy(v + last, v + n_, v + to);
+    } else {
+      std::copy_backward(v + last, v + n_, v + n_new);
+    }
+    std::copy(keep, keep + nk, v + first);
+  }
+  n_ = n_new;
   return cut;
 }
 
 double Dexel::length() const {
   double s = 0;
-  for (const Interval& v : iv_) s += v.hi - v.lo;
+  for (const Interval& v : intervals()) s += v.hi - v.lo;
   return s;
 }
 
@@ -45,44 +84,50 @@ DexelBoard::DexelBoard(int axis, const StockBox& box, double spacing_mm)
   v0_ = box.lo[static_cast<std::size_t>(v)];
   const double nu = std::ceil((box.hi[static_cast<std::size_t>(u)] - u0_) / d_ - 1e-9);
   const double nv = std::ceil((box.hi[static_cast<std::size_t>(v)] - v0_) / d_ - 1e-9);
-  if (!(nu >= 1 && nv >= 1) || nu * nv > 4e12) {
+  if (!(nu >= 1 && nv >= 1) || nu * nv > 1e12) {
     throw InputError(fmt::format("stock {} x {} mm at {} mm spacing is not a usable board",
                                  box.hi[static_cast<std::size_t>(u)] - u0_,
                                  box.hi[static_cast<std::size_t>(v)] - v0_, d_));
   }
   nu_ = static_cast<int>(nu);
   nv_ = static_cast<int>(nv);
+  tu_ = (nu_ + kTile - 1) / kTile;
+  tv_ = (nv_ + kTile - 1) / kTile;
+  tiles_.resize(static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_));
   full_ = {box.lo[static_cast<std::size_t>(axis)], box.hi[static_cast<std::size_t>(axis)]};
 }
 
 Dexel& DexelBoard::ray(int i, int j) {
-  const auto key =
-      (static_cast<std::uint64_t>(i / kTile) << 32) | static_cast<std::uint32_t>(j / kTile);
-  auto& tile = tiles_[key];
-  if (!tile) tile = std::make_unique<std::vector<Dexel>>(kTile * kTile, Dexel(full_));
-  return (*tile)[static_cast<std::size_t>((i % kTile) * kTile + (j % kTile))];
+  auto& tile = tiles_[tile_index(i, j)];
+  if (!tile) {
+    tile = std::make_unique<Dexel[]>(kTile * kTile);
+    for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = Dexel(full_);
+    ++touched_;
+  }
+  return tile[static_cast<std::size_t>((i % kTile) * kTile + (j % kTile))];
 }
 
 const Dexel* DexelBoard::find(int i, int j) const {
-  const auto key =
-      (static_cast<std::uint64_t>(i / kTile) << 32) | static_cast<std::uint32_t>(j / kTile);
-  const auto it = tiles_.find(key);
-  if (it == tiles_.end()) return nullptr;
-  return &(*it->second)[static_cast<std::size_t>((i % kTile) * kTile + (j % kTile))];
+  const auto& tile = tiles_[tile_index(i, j)];
+  if (!tile) return nullptr;
+  return &tile[static_cast<std::size_t>((i % kTile) * kTile + (j % kTile))];
 }
 
 double DexelBoard::volume_mm3() const {
   // Untouched rays: the full interval; touched tiles: their rays (tiles past the board's
   // edge hold rays that do not exist: skipped).
   double touched_rays = 0, len = 0;
-  for (const auto& [key, tile] : tiles_) {
-    const int ti = static_cast<int>(key >> 32), tj = static_cast<int>(key & 0xffffffffu);
-    for (int a = 0; a < kTile; ++a) {
-      for (int b = 0; b < kTile; ++b) {
-        const int i = ti * kTile + a, j = tj * kTile + b;
-        if (i >= nu_ || j >= nv_) continue;
-        touched_rays += 1;
-        len += (*tile)[static_cast<std::size_t>(a * kTile + b)].length();
+  for (int ti = 0; ti < tu_; ++ti) {
+    for (int tj = 0; tj < tv_; ++tj) {
+      const auto& tile = tiles_[tile_index(ti * kTile, tj * kTile)];
+      if (!tile) continue;
+      for (int a = 0; a < kTile; ++a) {
+        for (int b = 0; b < kTile; ++b) {
+          const int i = ti * kTile + a, j = tj * kTile + b;
+          if (i >= nu_ || j >= nv_) continue;
+          touched_rays += 1;
+          len += tile[static_cast<std::size_t>(a * kTile + b)].length();
+        }
       }
     }
   }
@@ -91,10 +136,11 @@ double DexelBoard::volume_mm3() const {
 }
 
 std::size_t DexelBoard::memory_bytes() const {
-  std::size_t b = 0;
-  for (const auto& [key, tile] : tiles_) {
-    b += sizeof(Dexel) * tile->size() + 64;
-    for (const Dexel& x : *tile) b += x.intervals().capacity() * sizeof(Interval);
+  std::size_t b = tiles_.size() * sizeof(tiles_[0]);
+  for (const auto& tile : tiles_) {
+    if (!tile) continue;
+    b += sizeof(Dexel) * kTile * kTile;
+    for (int q = 0; q < kTile * kTile; ++q) b += tile[static_cast<std::size_t>(q)].heap_bytes();
   }
   return b;
 }

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
@@ -60,45 +61,63 @@ bool contains_angle(double a0, double a1, double alpha) {
 }
 
 // The offsets x (along the line) of the points of the thin sector {t (cos a, sin a): 0 <= t
-// <= r, a in [a0, a1]} (a1 - a0 < pi) on the line at signed distance dy from the centre,
-// parallel to the first axis. x = dy cot a where sin a has the sign of dy, clipped to the
-// disc's chord.
-std::optional<Interval> sector_on_line(double dy, double a0, double a1, double r) {
-  if (dy * dy >= r * r) return std::nullopt;
-  const double w = std::sqrt(r * r - dy * dy);
-  if (dy == 0) {
+// <= r, a in [a0, a1]} (a1 - a0 < pi) on lines at signed distance dy from the centre, parallel
+// to the first axis: x = dy cot a where sin a has the sign of dy, clipped to the disc's chord.
+// The angles' sines and cosines are taken once per sector, the lines then cost no trigonometry.
+class SectorSlicer {
+ public:
+  SectorSlicer(double a0, double a1)
+      : has0_(contains_angle(a0, a1, 0.0)), has_pi_(contains_angle(a0, a1, kPi)) {
+    // Split at the multiples of pi (sin a = 0); each piece keeps lines on its sine's side.
+    const double cut = (std::floor(a0 / kPi) + 1) * kPi;
+    set(piece_[0], a0, std::min(a1, cut));
+    set(piece_[1], cut, a1);
+  }
+
+  [[nodiscard]] std::optional<Interval> on_line(double dy, double r) const {
+    if (dy * dy >= r * r) return std::nullopt;
+    const double w = std::sqrt(r * r - dy * dy);
     double lo = kInf, hi = -kInf;
-    if (contains_angle(a0, a1, 0.0)) lo = std::min(lo, 0.0), hi = std::max(hi, w);
-    if (contains_angle(a0, a1, kPi)) lo = std::min(lo, -w), hi = std::max(hi, 0.0);
+    if (dy == 0) {
+      if (has0_) lo = std::min(lo, 0.0), hi = std::max(hi, w);
+      if (has_pi_) lo = std::min(lo, -w), hi = std::max(hi, 0.0);
+    } else {
+      for (const Piece& p : piece_) {
+        if (!p.valid || p.s * dy <= 0) continue;
+        for (int e = 0; e < 2; ++e) {
+          const double sa = p.sin[e], ca = p.cos[e];
+          double x = 0;
+          if (std::abs(sa) < 1e-300 || sa * dy <= 0) {  // at a split: the line runs off
+            x = (ca * dy * p.s > 0) ? kInf : -kInf;
+          } else {
+            x = dy * ca / sa;
+          }
+          lo = std::min(lo, x), hi = std::max(hi, x);
+        }
+      }
+    }
+    lo = std::max(lo, -w);
+    hi = std::min(hi, w);
     if (lo < hi) return Interval{lo, hi};
     return std::nullopt;
   }
-  // Split at the multiples of pi (sin a = 0) and keep the part where sin a has dy's sign.
-  const double k = std::floor(a0 / kPi);
-  const double cut = (k + 1) * kPi;
-  double lo = kInf, hi = -kInf;
-  auto piece = [&](double p0, double p1) {
-    if (!(p1 > p0)) return;
-    const double s = std::sin(0.5 * (p0 + p1));
-    if (s * dy <= 0) return;
-    auto x_at = [&](double a) {
-      const double sa = std::sin(a);
-      if (std::abs(sa) < 1e-300 || sa * dy <= 0) {  // at a split: the line runs off to infinity
-        return (std::cos(a) * dy * s > 0) ? kInf : -kInf;
-      }
-      return dy * std::cos(a) / sa;
-    };
-    const double x0 = x_at(p0), x1 = x_at(p1);
-    lo = std::min({lo, x0, x1});
-    hi = std::max({hi, x0, x1});
+
+ private:
+  struct Piece {
+    bool valid = false;
+    double s = 0;  // sine at the piece's middle
+    double sin[2]{}, cos[2]{};
   };
-  piece(a0, std::min(a1, cut));
-  piece(cut, a1);
-  lo = std::max(lo, -w);
-  hi = std::min(hi, w);
-  if (lo < hi) return Interval{lo, hi};
-  return std::nullopt;
-}
+  static void set(Piece& p, double p0, double p1) {
+    p.valid = p1 > p0;
+    if (!p.valid) return;
+    p.s = std::sin(0.5 * (p0 + p1));
+    p.sin[0] = std::sin(p0), p.cos[0] = std::cos(p0);
+    p.sin[1] = std::sin(p1), p.cos[1] = std::cos(p1);
+  }
+  bool has0_, has_pi_;
+  Piece piece_[2];
+};
 
 // Bounding box of the sector {t (cos a, sin a): 0 <= t <= r, a in [a0, a1]} about the
 // origin: {x_lo, x_hi, y_lo, y_hi}.
@@ -117,6 +136,45 @@ std::array<double, 4> sector_box(double a0, double a1, double r) {
   return b;
 }
 
+// Bounding box of the annular sector {t (cos a, sin a): r_in <= t <= r_out, a in [a0, a1]}
+// about the origin: {x_lo, x_hi, y_lo, y_hi}.
+std::array<double, 4> annular_box(double a0, double a1, double r_in, double r_out) {
+  if (!(r_in > 0)) return sector_box(a0, a1, r_out);
+  std::array<double, 4> b{kInf, -kInf, kInf, -kInf};
+  auto add = [&](double a, double r) {
+    const double x = r * std::cos(a), y = r * std::sin(a);
+    b[0] = std::min(b[0], x), b[1] = std::max(b[1], x), b[2] = std::min(b[2], y),
+    b[3] = std::max(b[3], y);
+  };
+  for (const double r : {r_in, r_out}) add(a0, r), add(a1, r);
+  for (int q = 0; q < 4; ++q) {
+    if (a1 - a0 >= kTwoPi || contains_angle(a0, a1, q * 0.5 * kPi)) add(q * 0.5 * kPi, r_out);
+  }
+  return b;
+}
+
+// The parts of [lo, hi] (offsets along a line at distance p from the centre) whose distance
+// from the centre lies in [r_in, r_out]: up to two intervals, returned through `out`.
+int annulus_parts(double p, double lo, double hi, double r_in, double r_out,
+                  std::array<Interval, 2>& out) {
+  const double pp = p * p;
+  if (pp >= r_out * r_out) return 0;
+  const double to = std::sqrt(r_out * r_out - pp);
+  const double ti = pp < r_in * r_in ? std::sqrt(r_in * r_in - pp) : 0.0;
+  int n = 0;
+  auto add = [&](double a, double b) {
+    a = std::max(a, lo), b = std::min(b, hi);
+    if (a < b) out[static_cast<std::size_t>(n++)] = {a, b};
+  };
+  if (ti > 0) {
+    add(-to, -ti);
+    add(ti, to);
+  } else {
+    add(-to, to);
+  }
+  return n;
+}
+
 // Whether a ray (nullptr: untouched, the full stock interval `full`) holds material in
 // (lo, hi).
 bool has_material(const Dexel* ray, Interval full, double lo, double hi) {
@@ -128,14 +186,217 @@ bool has_material(const Dexel* ray, Interval full, double lo, double hi) {
   return false;
 }
 
-struct ToothPose {
-  double cx, cy, tip_z, a0, a1, r_off;  // a0 < a1: the wedge at height 0
+// One tooth's wedge at one step, about one centre.
+struct Wedge {
+  double cx, cy, tip_z, a0, a1;  // a0 < a1: the wedge at height 0
+  double H;                      // cutting height above the tip
+  double r_off;                  // the tooth's radial runout offset
+  double r_in_drop;  // material lies only beyond profile + r_off - r_in_drop (kInf: anywhere)
+};
+
+// Accumulators of one board (merged in board order: the same numbers for any thread count).
+struct BoardAcc {
+  std::vector<double> seg_h, removed_tooth;
+  double removed_board = 0;
+  std::uint64_t updates = 0;
+  std::vector<Interval> removed;
+};
+
+class Stepper {
+ public:
+  Stepper(const SimTool& tool, const SimSettings& s, TriDexel& work)
+      : tool_(tool),
+        s_(s),
+        work_(work),
+        d_(work.boards[0].spacing()),
+        kappa_(std::tan(tool.helix_rad) / tool.radius_mm),
+        segs_(tool.segments()) {}
+
+  // The Z board for one wedge: columns over the x-extent of the wedge swept over all heights
+  // (within the annulus where material can be), rows over that sector on each column's line;
+  // then each ray exactly.
+  void z_board(std::size_t k, const Wedge& w, BoardAcc& A) {
+    DexelBoard& board = work_.boards[2];
+    const double rmax = tool_.radius_mm + std::max(0.0, w.r_off);
+    const double flat = tool_.radius_mm - tool_.corner_radius_mm + w.r_off;
+    // Rays nearer the centre than r_lo hold no material (annulus mode).
+    const double r_lo = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, flat - w.r_in_drop);
+    const double r_hi = rmax;
+    const double span_lo = kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_;
+    const double span_hi = kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1;
+    const bool wide = span_hi - span_lo >= kPi;
+    const auto bx = wide ? std::array<double, 4>{-r_hi, r_hi, -r_hi, r_hi}
+                         : annular_box(span_lo, span_hi, r_lo, r_hi);
+    const auto [i0, i1] = idx(board, true, w.cx + bx[0], w.cx + bx[1]);
+    std::array<Interval, 2> parts{};
+    const SectorSlicer slicer(span_lo - 0.5 * kPi, span_hi - 0.5 * kPi);
+    for (int i = i0; i <= i1; ++i) {
+      const double dx = board.u_of(i) - w.cx;
+      Interval chord{-kInf, kInf};
+      if (!wide) {
+        const auto on = slicer.on_line(-dx, r_hi);
+        if (!on) continue;
+        chord = *on;
+      }
+      const int np = annulus_parts(dx, chord.lo, chord.hi, r_lo, r_hi, parts);
+      for (int q = 0; q < np; ++q) {
+        const auto [j0, j1] = idx(board, false, w.cy + parts[static_cast<std::size_t>(q)].lo,
+                                  w.cy + parts[static_cast<std::size_t>(q)].hi);
+        for (int j = j0; j <= j1; ++j) {
+          // Most rays the wedge crosses were emptied long ago: skip them first.
+          if (!has_material(board.find(i, j), board.full(), w.tip_z, w.tip_z + w.H)) continue;
+          const double dy = board.v_of(j) - w.cy, rho = std::hypot(dx, dy);
+          if (rho > rmax) continue;
+          // Corner: the profile reaches rho only from h_min up.
+          double hmin = 0;
+          if (rho > flat) {
+            const double r = tool_.corner_radius_mm, q2 = rho - flat;
+            if (q2 > r) continue;
+            hmin = r - std::sqrt(r * r - q2 * q2);
+          }
+          const double th = std::atan2(dy, dx);
+          A.removed.clear();
+          auto cut_h = [&](double h_lo, double h_hi) {
+            h_lo = std::max(h_lo, hmin);
+            h_hi = std::min(h_hi, w.H);
+            if (!(h_hi > h_lo)) return;
+            if (board.ray(i, j).subtract(w.tip_z + h_lo, w.tip_z + h_hi, A.removed) > 0) {
+              ++A.updates;
+            }
+          };
+          if (kappa_ == 0) {
+            if (contains_angle(w.a0, w.a1, th)) cut_h(0, w.H);
+          } else {
+            // th + 2 pi m in [a0 + h kappa, a1 + h kappa]: h in [th' - a1, th' - a0] / kappa.
+            const double lo = kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_;
+            const double hi = kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1;
+            const double m0 = std::ceil((lo - th) / kTwoPi), m1 = std::floor((hi - th) / kTwoPi);
+            for (double m = m0; m <= m1; m += 1) {
+              const double tt = th + kTwoPi * m;
+              const double ha = (tt - w.a1) / kappa_, hb = (tt - w.a0) / kappa_;
+              cut_h(std::min(ha, hb), std::max(ha, hb));
+            }
+          }
+          for (const Interval& p : A.removed) {
+            A.removed_tooth[k] += (p.hi - p.lo) * d_ * d_;
+            A.removed_board += (p.hi - p.lo) * d_ * d_;
+            // Along the corner arc the chip varies with the height: points every
+            // chip_sampling; along the flank (profile radius R) it is R - rho on every
+            // segment the piece spans.
+            const double h_lo = p.lo - w.tip_z, h_hi = p.hi - w.tip_z;
+            const double rc = tool_.corner_radius_mm;
+            if (h_lo < rc) {
+              const double c_hi = std::min(h_hi, rc), len = c_hi - h_lo;
+              const int npts =
+                  std::max(2, static_cast<int>(std::ceil(len / s_.chip_sampling_mm)) + 1);
+              for (int q2 = 0; q2 < npts; ++q2) {
+                const double h = h_lo + len * q2 / (npts - 1);
+                note(A, k, h, tool_.profile_radius(h) + w.r_off - rho);
+              }
+            }
+            if (h_hi > rc) {
+              const double chip = tool_.radius_mm + w.r_off - rho;
+              for (int sg = seg_of(std::max(h_lo, rc)); sg <= seg_of(h_hi); ++sg) {
+                note(A, k, (sg + 0.5) * tool_.segment_mm, chip);
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+
+  // The X (b = 0) or Y (b = 1) board for one wedge: per height level, the rows within the
+  // wedge's extent at that height, then each ray's interval exactly. Board 0: rays along x at
+  // (y, z) = (u, v); board 1: rays along y at (z, x) = (u, v).
+  void xy_board(int b, std::size_t k, const Wedge& w, BoardAcc& A) {
+    DexelBoard& board = work_.boards[static_cast<std::size_t>(b)];
+    const bool z_first = b == 1;  // board 1's u is z; board 0's v is z
+    const auto [z0, z1] = idx(board, z_first, w.tip_z, w.tip_z + w.H);
+    std::array<Interval, 2> parts{};
+    for (int zl = z0; zl <= z1; ++zl) {
+      const double z = z_first ? board.u_of(zl) : board.v_of(zl);
+      const double h = z - w.tip_z;
+      if (h < 0 || h > w.H) continue;
+      const double R_h = tool_.profile_radius(h) + w.r_off;
+      if (!(R_h > 0)) continue;
+      const double r_in = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, R_h - w.r_in_drop);
+      const double ah0 = w.a0 + h * kappa_, ah1 = w.a1 + h * kappa_;
+      const auto bx = annular_box(ah0, ah1, r_in, R_h);
+      const SectorSlicer slicer =
+          b == 0 ? SectorSlicer(ah0, ah1) : SectorSlicer(ah0 - 0.5 * kPi, ah1 - 0.5 * kPi);
+      // Rows: board 0 over y (its u), board 1 over x (its v).
+      const auto [r0, r1] = b == 0 ? idx(board, true, w.cy + bx[2], w.cy + bx[3])
+                                   : idx(board, false, w.cx + bx[0], w.cx + bx[1]);
+      for (int r = r0; r <= r1; ++r) {
+        const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
+        std::optional<Interval> off;
+        double along_c = 0, perp = 0;
+        if (b == 0) {  // line y = u: offsets along x
+          perp = board.u_of(i) - w.cy;
+          off = slicer.on_line(perp, R_h);
+          along_c = w.cx;
+        } else {  // line x = v: rotate by -90 degrees, (x, y) -> (y, -x)
+          perp = board.v_of(j) - w.cx;
+          off = slicer.on_line(-perp, R_h);
+          along_c = w.cy;
+        }
+        if (!off) continue;
+        // Material can only be in the annulus part of the chord.
+        const int np = annulus_parts(perp, off->lo, off->hi, r_in, R_h, parts);
+        const Dexel* found = board.find(i, j);
+        bool any = false;
+        for (int q = 0; q < np && !any; ++q) {
+          any = has_material(found, board.full(), along_c + parts[static_cast<std::size_t>(q)].lo,
+                             along_c + parts[static_cast<std::size_t>(q)].hi);
+        }
+        if (!any) continue;
+        A.removed.clear();
+        if (board.ray(i, j).subtract(along_c + off->lo, along_c + off->hi, A.removed) > 0) {
+          ++A.updates;
+        }
+        for (const Interval& p : A.removed) {
+          A.removed_board += (p.hi - p.lo) * d_ * d_;
+          // The piece's point nearest the centre: the perpendicular's foot, clamped.
+          const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
+          note(A, k, h, R_h - std::hypot(perp, t));
+        }
+      }
+    }
+  }
+
+  [[nodiscard]] int segs() const noexcept { return segs_; }
+
+ private:
+  int seg_of(double h) const {
+    return std::clamp(static_cast<int>(h / tool_.segment_mm), 0, segs_ - 1);
+  }
+  void note(BoardAcc& A, std::size_t k, double h, double chip) const {
+    if (chip <= 0) return;
+    double& v = A.seg_h[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(seg_of(h))];
+    v = std::max(v, chip);
+  }
+  // Grid index range covering [lo, hi] along a board axis.
+  std::pair<int, int> idx(const DexelBoard& board, bool first, double lo, double hi) const {
+    const int ax = first ? (board.axis() + 1) % 3 : (board.axis() + 2) % 3;
+    const double o = work_.box.lo[static_cast<std::size_t>(ax)];
+    const int count = first ? board.count_u() : board.count_v();
+    const int i0 = std::max(0, static_cast<int>(std::ceil((lo - o) / d_ - 0.5)));
+    const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d_ - 0.5)));
+    return {i0, i1};
+  }
+
+  const SimTool& tool_;
+  const SimSettings& s_;
+  TriDexel& work_;
+  double d_, kappa_;
+  int segs_;
 };
 
 }  // namespace
 
 SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings& s, TriDexel& work,
-                   double t0_s, double t1_s) {
+                   double t0_s, double t1_s, const SimControl& control) {
   if (s.steps_per_rev < 8) {
     throw InputError(
         fmt::format("[simulation] steps_per_rev must be >= 8, got {}", s.steps_per_rev));
@@ -154,224 +415,103 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   for (double t = t0_s; t <= t1_s + 1e-12; t += dt) times.push_back(t);
   const PathSamples ps = sample_at_times(path, times);
   const std::size_t nz = tool.tooth_angle_rad.size();
-  const int segs = tool.segments();
-  const double kappa = std::tan(tool.helix_rad) / tool.radius_mm;  // edge angle per mm of height
   const double d = work.boards[0].spacing();
-  const double d2 = d * d;
   const double top = work.box.hi[2];
+  Stepper stepper(tool, s, work);
+  const int segs = stepper.segs();
 
   SimResult res;
   res.segments_per_tooth = segs;
-  // Each board is an independent picture of the workpiece: the three are updated in parallel,
-  // each with its own accumulators, merged in board order (the same numbers whatever the
-  // thread count: maxima, and sums kept per board).
-  struct BoardAcc {
-    std::vector<double> seg_h, removed_tooth;
-    double removed_board = 0;
-    std::uint64_t updates = 0;
-    std::vector<Interval> removed;
-  };
   std::array<BoardAcc, 3> bacc;
-  std::vector<ToothPose> poses(nz);
-  std::vector<double> heights(nz);
+  std::vector<Wedge> wedges;  // this step's, per tooth (and centre)
+  std::vector<std::size_t> wedge_tooth;
+  // The last revolution's centres: within it every tooth swept every angle, so (at constant
+  // depth) nothing is left nearer a tooth's centre than its profile less the largest move
+  // since (D) and one spacing; the wedges then only look at that annulus. In the first
+  // revolution of a call, or while the depth changes, the wedge is the whole sector.
+  const auto spr = static_cast<std::size_t>(s.steps_per_rev);
+  std::vector<std::array<double, 3>> ring(spr);
+  const double min_core = 0.5 * tool.radius_mm;
+  const std::size_t every = std::max<std::size_t>(1, ps.size() / 200);
   for (std::size_t n = 1; n < ps.size(); ++n) {
+    if (control.cancel != nullptr && control.cancel->load(std::memory_order_relaxed)) {
+      res.complete = false;
+      break;
+    }
+    if (control.progress && n % every == 0) control.progress(n, ps.size() - 1);
+    const std::array<double, 3> c{ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
+    ring[n % spr] = c;
+    double D = kInf;
+    if (n > spr) {
+      D = 0;
+      for (const auto& q : ring) {
+        if (std::abs(q[2] - c[2]) > 1e-9) {
+          D = kInf;
+          break;
+        }
+        D = std::max(D, std::hypot(q[0] - c[0], q[1] - c[1]));
+      }
+    }
+    const bool annulus = D + d < min_core;
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
     const double ta = times[n - 1], tb = times[n];
+    const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
+    wedges.clear();
+    wedge_tooth.clear();
     for (std::size_t k = 0; k < nz; ++k) {
-      ToothPose tp{};
-      tp.cx = ps.x_mm[n];
-      tp.cy = ps.y_mm[n];
-      tp.tip_z = ps.z_mm[n] + tool.axial_offset_mm[k];
+      Wedge w{};
+      w.tip_z = ps.z_mm[n] + tool.axial_offset_mm[k];
       const double pa = tool.tooth_angle_rad[k] + tool.omega_rad_per_s * ta;
       const double pb = tool.tooth_angle_rad[k] + tool.omega_rad_per_s * tb;
-      tp.a0 = std::min(pa, pb);
-      tp.a1 = std::max(pa, pb);
-      // The wedge is taken about this step's centre; the previous step's was about the
-      // previous centre, so their shared edge is offset by the move delta between steps and
-      // would leave a sliver (width up to delta) that the next tooth finds with a doubled
-      // chip. Extending the wedge backwards over the shared edge by 2 delta / R closes it
-      // for radii above R / 2 (double coverage is harmless: material goes once).
-      const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
-      const double ext = 2 * moved / tool.radius_mm;
-      if (tool.omega_rad_per_s < 0) {
-        tp.a1 += ext;  // turning clockwise: the older edge is the larger angle
+      w.a0 = std::min(pa, pb);
+      w.a1 = std::max(pa, pb);
+      w.r_off = tool.radial_offset_mm[k];
+      const double H = std::min(tool.flute_length_mm, top - w.tip_z);
+      w.H = H > 0 ? H : 0.0;
+      if (!(w.H > 0)) continue;
+      if (annulus) {
+        // The wedge is taken about this step's centre; the previous step's was about the
+        // previous centre, so their shared edge is offset by the move between steps and would
+        // leave a sliver (width up to that move) that the next tooth finds with a doubled
+        // chip. Extending the wedge backwards over the shared edge by 2 move / R closes it
+        // for radii above R / 2, all the annulus (material goes once: overlap is harmless).
+        const double ext = 2 * moved / tool.radius_mm;
+        if (tool.omega_rad_per_s < 0) {
+          w.a1 += ext;  // turning clockwise: the older edge is the larger angle
+        } else {
+          w.a0 -= ext;
+        }
+        w.r_in_drop = D + d;
+        w.cx = c[0], w.cy = c[1];
+        wedges.push_back(w), wedge_tooth.push_back(k);
       } else {
-        tp.a0 -= ext;
+        // The whole sector about both this step's centre and the previous one: consecutive
+        // steps then share their edges exactly (no sliver at any radius).
+        // The current centre first: its chips are the ones measured; the previous centre's
+        // sector only takes the slivers in between.
+        w.r_in_drop = kInf;
+        w.cx = c[0], w.cy = c[1];
+        wedges.push_back(w), wedge_tooth.push_back(k);
+        w.cx = ps.x_mm[n - 1], w.cy = ps.y_mm[n - 1];
+        wedges.push_back(w), wedge_tooth.push_back(k);
       }
-      tp.r_off = tool.radial_offset_mm[k];
-      const double H = std::min(tool.flute_length_mm, top - tp.tip_z);
-      poses[k] = tp;
-      heights[k] = H > 0 ? H : 0.0;
     }
-    tbb::parallel_for(0, 3, [&](int bsel) {
-      BoardAcc& A = bacc[static_cast<std::size_t>(bsel)];
+    for (auto& A : bacc) {
       A.seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
       A.removed_tooth.assign(nz, 0.0);
       A.removed_board = 0;
       A.updates = 0;
-      std::vector<Interval>& removed = A.removed;
-      for (std::size_t k = 0; k < nz; ++k) {
-        const ToothPose& tp = poses[k];
-        const double H = heights[k];
-        if (!(H > 0)) continue;
-        const double rmax = tool.radius_mm + std::max(0.0, tp.r_off);
-        auto seg_of = [&](double h) {
-          return std::clamp(static_cast<int>(h / tool.segment_mm), 0, segs - 1);
-        };
-        auto note = [&](double h, double chip) {
-          if (chip <= 0) return;
-          double& v =
-              A.seg_h[k * static_cast<std::size_t>(segs) + static_cast<std::size_t>(seg_of(h))];
-          v = std::max(v, chip);
-        };
-        // Grid index range covering [lo, hi] along a board axis.
-        auto idx = [&](const DexelBoard& board, bool first, double lo, double hi) {
-          const int ax = first ? (board.axis() + 1) % 3 : (board.axis() + 2) % 3;
-          const double o = work.box.lo[static_cast<std::size_t>(ax)];
-          const int count = first ? board.count_u() : board.count_v();
-          const int i0 = std::max(0, static_cast<int>(std::ceil((lo - o) / d - 0.5)));
-          const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d - 0.5)));
-          return std::pair<int, int>{i0, i1};
-        };
-        auto account = [&](int, const std::vector<Interval>& pieces) {
-          double v = 0;
-          for (const Interval& p : pieces) v += (p.hi - p.lo) * d2;
-          A.removed_board += v;
-        };
-        // Z board: columns over the x-extent of the wedge swept over all heights, rows over the
-        // y-extent of that sector on each column's line; then each ray exactly.
-        if (bsel == 2) {
-          DexelBoard& board = work.boards[2];
-          const double span_lo = kappa >= 0 ? tp.a0 : tp.a0 + H * kappa;
-          const double span_hi = kappa >= 0 ? tp.a1 + H * kappa : tp.a1;
-          const bool wide = span_hi - span_lo >= kPi;
-          const auto bx = sector_box(span_lo, span_hi, rmax);
-          const auto [i0, i1] = wide ? idx(board, true, tp.cx - rmax, tp.cx + rmax)
-                                     : idx(board, true, tp.cx + bx[0], tp.cx + bx[1]);
-          for (int i = i0; i <= i1; ++i) {
-            const double x = board.u_of(i), dx = x - tp.cx;
-            double ylo = 0, yhi = 0;
-            if (wide) {
-              if (dx * dx >= rmax * rmax) continue;
-              const double w = std::sqrt(rmax * rmax - dx * dx);
-              ylo = -w, yhi = w;
-            } else {
-              const auto on = sector_on_line(-dx, span_lo - 0.5 * kPi, span_hi - 0.5 * kPi, rmax);
-              if (!on) continue;
-              ylo = on->lo, yhi = on->hi;
-            }
-            const auto [j0, j1] = idx(board, false, tp.cy + ylo, tp.cy + yhi);
-            for (int j = j0; j <= j1; ++j) {
-              // Most rays the wedge crosses were emptied long ago: skip them first.
-              if (!has_material(board.find(i, j), board.full(), tp.tip_z, tp.tip_z + H)) continue;
-              const double dy = board.v_of(j) - tp.cy, rho = std::hypot(dx, dy);
-              if (rho > rmax) continue;
-              // Corner: the profile reaches rho only from h_min up.
-              double hmin = 0;
-              const double flat = tool.radius_mm - tool.corner_radius_mm + tp.r_off;
-              if (rho > flat) {
-                const double r = tool.corner_radius_mm, q = rho - flat;
-                if (q > r) continue;
-                hmin = r - std::sqrt(r * r - q * q);
-              }
-              const double th = std::atan2(dy, dx);
-              removed.clear();
-              auto cut_h = [&](double h_lo, double h_hi) {
-                h_lo = std::max(h_lo, hmin);
-                h_hi = std::min(h_hi, H);
-                if (!(h_hi > h_lo)) return;
-                if (board.ray(i, j).subtract(tp.tip_z + h_lo, tp.tip_z + h_hi, removed) > 0) {
-                  ++A.updates;
-                }
-              };
-              if (kappa == 0) {
-                if (contains_angle(tp.a0, tp.a1, th)) cut_h(0, H);
-              } else {
-                // th + 2 pi m in [a0 + h kappa, a1 + h kappa]: h in [th' - a1, th' - a0] / kappa.
-                const double m0 = std::ceil((span_lo - th) / kTwoPi);
-                const double m1 = std::floor((span_hi - th) / kTwoPi);
-                for (double m = m0; m <= m1; m += 1) {
-                  const double tt = th + kTwoPi * m;
-                  const double ha = (tt - tp.a1) / kappa, hb = (tt - tp.a0) / kappa;
-                  cut_h(std::min(ha, hb), std::max(ha, hb));
-                }
-              }
-              for (const Interval& p : removed) {
-                A.removed_tooth[k] += (p.hi - p.lo) * d2;
-                // Along the corner arc the chip varies with the height: points every
-                // chip_sampling; along the flank (profile radius R) it is R - rho on every
-                // segment the piece spans.
-                const double h_lo = p.lo - tp.tip_z, h_hi = p.hi - tp.tip_z;
-                const double rc = tool.corner_radius_mm;
-                if (h_lo < rc) {
-                  const double c_hi = std::min(h_hi, rc), len = c_hi - h_lo;
-                  const int np =
-                      std::max(2, static_cast<int>(std::ceil(len / s.chip_sampling_mm)) + 1);
-                  for (int q = 0; q < np; ++q) {
-                    const double h = h_lo + len * q / (np - 1);
-                    note(h, tool.profile_radius(h) + tp.r_off - rho);
-                  }
-                }
-                if (h_hi > rc) {
-                  const double chip = tool.radius_mm + tp.r_off - rho;
-                  for (int sg = seg_of(std::max(h_lo, rc)); sg <= seg_of(h_hi); ++sg) {
-                    note((sg + 0.5) * tool.segment_mm, chip);
-                  }
-                }
-              }
-              account(2, removed);
-            }
-          }
-        }
-        // X and Y boards: per height level, the rows within the wedge's extent at that height,
-        // then each ray's interval exactly. Board 0: rays along x at (y, z) = (u, v); board 1:
-        // rays along y at (z, x) = (u, v).
-        if (bsel < 2) {
-          const int b = bsel;
-          DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
-          const bool z_first = b == 1;  // board 1's u is z; board 0's v is z
-          const auto [z0, z1] = idx(board, z_first, tp.tip_z, tp.tip_z + H);
-          for (int zl = z0; zl <= z1; ++zl) {
-            const double z = z_first ? board.u_of(zl) : board.v_of(zl);
-            const double h = z - tp.tip_z;
-            if (h < 0 || h > H) continue;
-            const double R_h = tool.profile_radius(h) + tp.r_off;
-            if (!(R_h > 0)) continue;
-            const double ah0 = tp.a0 + h * kappa, ah1 = tp.a1 + h * kappa;
-            const auto bx = sector_box(ah0, ah1, R_h);
-            // Rows: board 0 over y (its u), board 1 over x (its v).
-            const auto [r0, r1] = b == 0 ? idx(board, true, tp.cy + bx[2], tp.cy + bx[3])
-                                         : idx(board, false, tp.cx + bx[0], tp.cx + bx[1]);
-            for (int r = r0; r <= r1; ++r) {
-              const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
-              const double reach_c = b == 0 ? tp.cx : tp.cy;
-              if (!has_material(board.find(i, j), board.full(), reach_c - R_h, reach_c + R_h)) {
-                continue;
-              }
-              std::optional<Interval> off;
-              double along_c = 0, perp = 0;
-              if (b == 0) {  // line y = u: offsets along x
-                perp = board.u_of(i) - tp.cy;
-                off = sector_on_line(perp, ah0, ah1, R_h);
-                along_c = tp.cx;
-              } else {  // line x = v: rotate by -90 degrees, (x, y) -> (y, -x)
-                perp = board.v_of(j) - tp.cx;
-                off = sector_on_line(-perp, ah0 - 0.5 * kPi, ah1 - 0.5 * kPi, R_h);
-                along_c = tp.cy;
-              }
-              if (!off) continue;
-              removed.clear();
-              if (board.ray(i, j).subtract(along_c + off->lo, along_c + off->hi, removed) > 0) {
-                ++A.updates;
-              }
-              for (const Interval& p : removed) {
-                // The piece's point nearest the centre: the perpendicular's foot, clamped.
-                const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
-                note(h, R_h - std::hypot(perp, t));
-              }
-              account(b, removed);
-            }
-          }
+    }
+    // The three boards are independent pictures of the workpiece: updated in parallel, each
+    // with its own accumulators (merged in board order: the same numbers for any thread
+    // count).
+    tbb::parallel_for(0, 3, [&](int b) {
+      BoardAcc& A = bacc[static_cast<std::size_t>(b)];
+      for (std::size_t q = 0; q < wedges.size(); ++q) {
+        if (b == 2) {
+          stepper.z_board(wedge_tooth[q], wedges[q], A);
+        } else {
+          stepper.xy_board(b, wedge_tooth[q], wedges[q], A);
         }
       }
     });
@@ -384,7 +524,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     }
     SimStep st;
     st.t_s = tb;
-    st.tip_mm = {ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
+    st.tip_mm = c;
     st.removed_mm3 = bacc[2].removed_tooth;
     double sum = 0;
     for (std::size_t q = 0; q < seg_h.size(); ++q) {
