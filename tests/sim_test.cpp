@@ -135,6 +135,41 @@ TEST(Sim, StraightSlotRemovesTheSweptVolume) {
   }
 }
 
+// The envelope sweep (the fast pre-roll) along a half circle of radius 6 mm from (6, 0) to
+// (-6, 0) (a 5 mm flat end mill, 1 mm deep) in a stock above y = 0: the swept area there is
+// the annular sector from 1 to 11 mm, 60 pi mm^2, times a_p (the end discs' outer halves lie
+// below y = 0). Bound per board: the boundary's length (58 mm) times a_p times d / 2, plus
+// the chords' 1 um over that length. The three boards agree with each other within the same
+// bound, and the time-stepped simulation of the same path (60 steps per revolution, dwelling a
+// revolution at the end; its feed marks f_z^2 / 8R = 1e-3 mm over the 35 mm of outer wall are
+// below the bound) leaves the same volume.
+TEST(Sim, EnvelopeSweepRemovesTheSweptVolume) {
+  const double want = 60 * kPi * 1.0;
+  const double d = 0.05;
+  const double bound = 58 * 1.0 * d / 2 + 58 * 1.0 * 0.001;
+  const StockBox box{{-12, 0, -2}, {12, 12, 0}};
+  ToolPath p;
+  p.append(Segment::arc_xy(0, 0, 6, 0, kPi, -1, -1, Motion::feed, 1200));
+  const SimTool tool = end_mill(0);
+  TriDexel env(box, d);
+  const double v = sweep_envelope(p, tool, env, 0, p.duration_s());
+  EXPECT_NEAR(v, want, bound);
+  double vb[3];
+  for (int b = 0; b < 3; ++b) {
+    vb[b] = box.volume_mm3() - env.boards[static_cast<std::size_t>(b)].volume_mm3();
+    EXPECT_NEAR(vb[b], want, bound) << b;
+  }
+  EXPECT_NEAR(vb[2], v, 1e-9 * want);
+  // The same path time-stepped with the teeth, dwelling a revolution at the end.
+  TriDexel work(box, d);
+  SimSettings s;
+  s.steps_per_rev = 60;
+  const SimResult r = simulate(p, tool, s, work, 0, p.duration_s() + 60.0 / 3000);
+  for (int b = 0; b < 3; ++b) {
+    EXPECT_NEAR(r.removed_by_board_mm3[static_cast<std::size_t>(b)], vb[b], bound) << b;
+  }
+}
+
 // Straight partial immersion (a_e = 1 mm on the right, feed along +y, cw spindle: down
 // milling): while a tooth is engaged its chip at tooth angle a (from +x, the wedge's middle)
 // is f_z sin(a)... measured from the feed direction: h = f_z cos(a - pi/2) = f_z sin(a) for

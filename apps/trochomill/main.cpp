@@ -581,6 +581,8 @@ int run(int argc, char** argv) {
                         {"resolution_mm", job.simulation.resolution_mm},
                         {"steps_per_rev", job.simulation.steps_per_rev},
                         {"memory_mb", static_cast<double>(js.memory_bytes) / 1048576.0},
+                        {"pre_roll_wall_s", js.pre_roll_wall_s},
+                        {"window_wall_s", js.window_wall_s},
                         {"complete", true}};
     if (!sim_out.empty()) {
       std::filesystem::create_directories(sim_out);

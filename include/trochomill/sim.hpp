@@ -164,6 +164,14 @@ struct SimControl {
                                  TriDexel& work, double t0_s, double t1_s,
                                  const SimControl& control = {});
 
+/// Removes the tool's envelope swept along the path from t0 to t1 (s): the solid of revolution
+/// of its profile (radius plus the largest radial runout, tip at the lowest axial runout)
+/// along chords within a quarter spacing of the path and 1 um, without teeth or time steps. Fast:
+/// the workpiece as that part of the cut leaves it, less the feed marks (about f_z^2 / 8R) the
+/// teeth would leave. Returns the volume removed from the Z board (mm^3).
+double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
+                      double t1_s);
+
 /// The job's stock: `[stock]` min / max, or the slot region (y from 0 to the slot length: the
 /// slot runs through the workpiece) with a 1 mm margin beside the walls (x) and 0.5 mm below
 /// the floor, up to the top face z = 0.
@@ -172,15 +180,19 @@ struct SimControl {
 /// number of cycles: then to the path's end). Throws InputError for a bad range.
 [[nodiscard]] std::pair<double, double> cycle_window(const ToolPath& path, int a, int b);
 
-/// A job's simulation over [from_s, to_s]: the time before `from_s` is simulated coarsely first
-/// (max(8, steps_per_rev / 25) steps per revolution: the same material removed, coarser feed
-/// marks), so the window starts from the workpiece as the earlier cut left it.
+/// A job's simulation over [from_s, to_s]. Before `from_s` the tool's envelope is swept
+/// (sweep_envelope) up to one revolution before the window, and that revolution is simulated
+/// with the teeth without being recorded, so the window starts from the workpiece as the
+/// earlier cut left it, feed marks included.
 struct JobSimulation {
-  SimResult result;  ///< the window only
-  double pre_roll_s = 0;
+  SimResult result;            ///< the window only
+  double pre_roll_s = 0;       ///< programmed time before the window (s)
+  double pre_roll_wall_s = 0;  ///< wall time of the pre-roll (s)
+  double window_wall_s = 0;    ///< wall time of the window (s)
   std::size_t memory_bytes = 0;
+  std::unique_ptr<TriDexel> work;  ///< the workpiece after the window
 };
 [[nodiscard]] JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s,
-                                         double to_s);
+                                         double to_s, const SimControl& control = {});
 
 }  // namespace trochomill

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -280,25 +281,14 @@ class Stepper {
           for (const Interval& p : A.removed) {
             A.removed_tooth[k] += (p.hi - p.lo) * d_ * d_;
             A.removed_board += (p.hi - p.lo) * d_ * d_;
-            // Along the corner arc the chip varies with the height: points every
-            // chip_sampling; along the flank (profile radius R) it is R - rho on every
-            // segment the piece spans.
+            // The chip on a vertical ray is the profile radius less rho, which grows with the
+            // height: each segment the piece spans takes it at its highest point there (exact:
+            // no sampling needed).
             const double h_lo = p.lo - w.tip_z, h_hi = p.hi - w.tip_z;
-            const double rc = tool_.corner_radius_mm;
-            if (h_lo < rc) {
-              const double c_hi = std::min(h_hi, rc), len = c_hi - h_lo;
-              const int npts =
-                  std::max(2, static_cast<int>(std::ceil(len / s_.chip_sampling_mm)) + 1);
-              for (int q2 = 0; q2 < npts; ++q2) {
-                const double h = h_lo + len * q2 / (npts - 1);
-                note(A, k, h, tool_.profile_radius(h) + w.r_off - rho);
-              }
-            }
-            if (h_hi > rc) {
-              const double chip = tool_.radius_mm + w.r_off - rho;
-              for (int sg = seg_of(std::max(h_lo, rc)); sg <= seg_of(h_hi); ++sg) {
-                note(A, k, (sg + 0.5) * tool_.segment_mm, chip);
-              }
+            for (int sg = seg_of(h_lo); sg <= seg_of(h_hi); ++sg) {
+              const double h = std::min(h_hi, (sg + 1) * tool_.segment_mm);
+              note(A, k, std::max(h_lo, sg * tool_.segment_mm),
+                   tool_.profile_radius(h) + w.r_off - rho);
             }
           }
         }
@@ -371,8 +361,10 @@ class Stepper {
   int seg_of(double h) const {
     return std::clamp(static_cast<int>(h / tool_.segment_mm), 0, segs_ - 1);
   }
+  // Records a chip (mm) of tooth k at height h above its tip. Chips thinner than
+  // chip_sampling are slivers of the discretisation, not engagement: not recorded.
   void note(BoardAcc& A, std::size_t k, double h, double chip) const {
-    if (chip <= 0) return;
+    if (chip < s_.chip_sampling_mm) return;
     double& v = A.seg_h[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(seg_of(h))];
     v = std::max(v, chip);
   }
@@ -412,7 +404,11 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     throw InputError(fmt::format("simulate: empty window {} to {} s", t0_s, t1_s));
   const double dt = kTwoPi / (std::abs(tool.omega_rad_per_s) * s.steps_per_rev);
   std::vector<double> times;
-  for (double t = t0_s; t <= t1_s + 1e-12; t += dt) times.push_back(t);
+  // Steps of dt from t0; the last one (shorter) ends exactly at t1, so that consecutive calls
+  // (the pre-roll, then the window) sweep every angle once.
+  const auto nsteps = static_cast<std::size_t>(std::ceil((t1_s - t0_s) / dt - 1e-9));
+  for (std::size_t q = 0; q < nsteps; ++q) times.push_back(t0_s + static_cast<double>(q) * dt);
+  times.push_back(t1_s);
   const PathSamples ps = sample_at_times(path, times);
   const std::size_t nz = tool.tooth_angle_rad.size();
   const double d = work.boards[0].spacing();
@@ -425,12 +421,15 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   std::array<BoardAcc, 3> bacc;
   std::vector<Wedge> wedges;  // this step's, per tooth (and centre)
   std::vector<std::size_t> wedge_tooth;
-  // The last revolution's centres: within it every tooth swept every angle, so (at constant
-  // depth) nothing is left nearer a tooth's centre than its profile less the largest move
-  // since (D) and one spacing; the wedges then only look at that annulus. In the first
-  // revolution of a call, or while the depth changes, the wedge is the whole sector.
+  // The last revolution: within it every tooth swept every angle, so (at constant depth)
+  // nothing is left nearer a tooth's centre than its profile less the path length D since
+  // (at least the largest move) and one spacing; the wedges then only look at that annulus.
+  // In the first revolution of a call, or while the depth changes, the wedge is the whole
+  // sector.
   const auto spr = static_cast<std::size_t>(s.steps_per_rev);
-  std::vector<std::array<double, 3>> ring(spr);
+  std::vector<double> ring(spr, 0.0);  // moves of the last revolution's steps
+  double ring_sum = 0;
+  std::size_t level_steps = 0;  // steps since the depth last changed
   const double min_core = 0.5 * tool.radius_mm;
   const std::size_t every = std::max<std::size_t>(1, ps.size() / 200);
   for (std::size_t n = 1; n < ps.size(); ++n) {
@@ -440,22 +439,14 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     }
     if (control.progress && n % every == 0) control.progress(n, ps.size() - 1);
     const std::array<double, 3> c{ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
-    ring[n % spr] = c;
-    double D = kInf;
-    if (n > spr) {
-      D = 0;
-      for (const auto& q : ring) {
-        if (std::abs(q[2] - c[2]) > 1e-9) {
-          D = kInf;
-          break;
-        }
-        D = std::max(D, std::hypot(q[0] - c[0], q[1] - c[1]));
-      }
-    }
+    const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
+    ring_sum += moved - ring[n % spr];
+    ring[n % spr] = moved;
+    level_steps = std::abs(ps.z_mm[n] - ps.z_mm[n - 1]) > 1e-9 ? 0 : level_steps + 1;
+    const double D = n > spr && level_steps >= spr ? std::max(0.0, ring_sum) : kInf;
     const bool annulus = D + d < min_core;
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
     const double ta = times[n - 1], tb = times[n];
-    const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
     wedges.clear();
     wedge_tooth.clear();
     for (std::size_t k = 0; k < nz; ++k) {
@@ -573,7 +564,8 @@ std::pair<double, double> cycle_window(const ToolPath& path, int a, int b) {
   return {t0, t1};
 }
 
-JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, double to_s) {
+JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, double to_s,
+                           const SimControl& control) {
   const SimSettings& s = job.simulation;
   if (!(from_s >= 0) || !(to_s > from_s)) {
     throw InputError(
@@ -582,14 +574,26 @@ JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, 
   TriDexel work(job_stock(job), s.resolution_mm);
   const SimTool tool = sim_tool(job, s);
   JobSimulation out;
+  const auto clock = [] { return std::chrono::steady_clock::now(); };
+  const auto since = [](auto t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   if (from_s > 0) {
-    SimSettings coarse = s;
-    coarse.steps_per_rev = std::max(8, s.steps_per_rev / 25);
-    (void)simulate(path, tool, coarse, work, 0, from_s);
+    // The envelope up to one revolution before the window, then that revolution with the
+    // teeth (not recorded): the window's first teeth meet the feed marks of the ones before.
+    const auto t0 = clock();
+    const double rev = kTwoPi / std::abs(tool.omega_rad_per_s);
+    const double lead_from = std::max(0.0, from_s - rev);
+    if (lead_from > 0) (void)sweep_envelope(path, tool, work, 0, lead_from);
+    (void)simulate(path, tool, s, work, lead_from, from_s);
     out.pre_roll_s = from_s;
+    out.pre_roll_wall_s = since(t0);
   }
-  out.result = simulate(path, tool, s, work, from_s, to_s);
+  const auto t1 = clock();
+  out.result = simulate(path, tool, s, work, from_s, to_s, control);
+  out.window_wall_s = since(t1);
   for (const auto& b : work.boards) out.memory_bytes += b.memory_bytes();
+  out.work = std::make_unique<TriDexel>(std::move(work));
   return out;
 }
 

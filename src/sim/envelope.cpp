@@ -1,0 +1,233 @@
+// The tool's envelope swept along a path, removed from the tri-dexel workpiece without teeth
+// or time steps (include/trochomill/sim.hpp, docs/models.md section 11): the fast way to bring
+// the workpiece to the state the earlier part of a cut leaves.
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "trochomill/error.hpp"
+#include "trochomill/sim.hpp"
+
+namespace trochomill {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A chord of the path in plan view, its tip height the lower of its ends.
+struct Piece {
+  double ax, ay, bx, by, z;
+};
+
+// The offsets along a line of the points within r of the segment A-B (a capsule), in the
+// line's frame: the line is {(t, yl)}, the segment from (ax, ay) to (bx, by). Convex: one
+// interval, the hull of the two end discs' chords and the band's.
+std::optional<Interval> capsule_on_line(double ax, double ay, double bx, double by, double r,
+                                        double yl) {
+  double lo = kInf, hi = -kInf;
+  auto disc = [&](double cx, double cy) {
+    const double dy = yl - cy;
+    if (dy * dy >= r * r) return;
+    const double w = std::sqrt(r * r - dy * dy);
+    lo = std::min(lo, cx - w), hi = std::max(hi, cx + w);
+  };
+  disc(ax, ay);
+  disc(bx, by);
+  const double ux = bx - ax, uy = by - ay, L = std::hypot(ux, uy);
+  if (L > 0) {
+    // 0 <= (X - A).u <= L and |(X - A).n| <= r with X = (t, yl): linear in t.
+    const double ex = ux / L, ey = uy / L;
+    double t0 = -kInf, t1 = kInf;
+    auto band = [&](double coef, double rest, double lo_v, double hi_v) {
+      // lo_v <= coef t + rest <= hi_v
+      if (std::abs(coef) < 1e-15) {
+        if (rest < lo_v || rest > hi_v) t0 = kInf, t1 = -kInf;
+        return;
+      }
+      double a = (lo_v - rest) / coef, b = (hi_v - rest) / coef;
+      if (a > b) std::swap(a, b);
+      t0 = std::max(t0, a), t1 = std::min(t1, b);
+    };
+    band(ex, -ax * ex + (yl - ay) * ey, 0.0, L);
+    band(-ey, ax * ey + (yl - ay) * ex, -r, r);
+    if (t0 < t1) lo = std::min(lo, t0), hi = std::max(hi, t1);
+  }
+  if (lo < hi) return Interval{lo, hi};
+  return std::nullopt;
+}
+
+// [a] minus [b]: up to two intervals into out; returns how many.
+int minus(Interval a, std::optional<Interval> b, Interval out[2]) {
+  if (!b || b->hi <= a.lo || b->lo >= a.hi) {
+    out[0] = a;
+    return 1;
+  }
+  int n = 0;
+  if (a.lo < b->lo) out[n++] = {a.lo, b->lo};
+  if (b->hi < a.hi) out[n++] = {b->hi, a.hi};
+  return n;
+}
+
+double dist_to_segment(double px, double py, const Piece& p) {
+  const double ux = p.bx - p.ax, uy = p.by - p.ay, l2 = ux * ux + uy * uy;
+  double t = l2 > 0 ? ((px - p.ax) * ux + (py - p.ay) * uy) / l2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  return std::hypot(px - p.ax - t * ux, py - p.ay - t * uy);
+}
+
+// Chords of the path between t0 and t1 within `tol` of it (greedy over points `step` apart).
+std::vector<Piece> chords(const ToolPath& path, double t0_s, double t1_s, double step, double tol) {
+  const PathSamples ends = sample_at_times(path, {t0_s, t1_s});
+  const double s0 = ends.s_mm[0], s1 = ends.s_mm[1];
+  std::vector<Vec3> pts;
+  const auto n = static_cast<std::size_t>(std::ceil((s1 - s0) / step));
+  for (std::size_t k = 0; k <= n; ++k) {
+    pts.push_back(path.point_at_length(std::min(s1, s0 + static_cast<double>(k) * step)));
+  }
+  std::vector<Piece> out;
+  std::size_t i = 0;
+  while (i + 1 < pts.size()) {
+    std::size_t j = i + 1;
+    while (j + 1 < pts.size()) {
+      // Would the chord i -> j + 1 stay within tol of every point between (and keep z)?
+      const Vec3& a = pts[i];
+      const Vec3& b = pts[j + 1];
+      bool ok = std::abs(b.z() - a.z()) <= tol;
+      const Piece trial{a.x(), a.y(), b.x(), b.y(), 0};
+      for (std::size_t q = i + 1; ok && q <= j; ++q) {
+        ok = dist_to_segment(pts[q].x(), pts[q].y(), trial) <= tol &&
+             std::abs(pts[q].z() - a.z()) <= tol;
+      }
+      if (!ok) break;
+      ++j;
+    }
+    out.push_back(
+        {pts[i].x(), pts[i].y(), pts[j].x(), pts[j].y(), std::min(pts[i].z(), pts[j].z())});
+    i = j;
+  }
+  return out;
+}
+
+}  // namespace
+
+double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
+                      double t1_s) {
+  if (!(t1_s > t0_s)) return 0.0;
+  const double d = work.boards[0].spacing();
+  const double r_off = tool.radial_offset_mm.empty()
+                           ? 0.0
+                           : std::max(0.0, *std::max_element(tool.radial_offset_mm.begin(),
+                                                             tool.radial_offset_mm.end()));
+  const double a_off =
+      tool.axial_offset_mm.empty()
+          ? 0.0
+          : *std::min_element(tool.axial_offset_mm.begin(), tool.axial_offset_mm.end());
+  const double R = tool.radius_mm + r_off, rc = tool.corner_radius_mm;
+  const double flat = R - rc;
+  const double top = work.box.hi[2];
+  // Chords within a quarter spacing of the path and at most 1 um: a chord of a curved path
+  // falls short of the arc's outer side by its deviation, material the next cut would meet
+  // as extra chip.
+  const std::vector<Piece> pieces =
+      chords(path, t0_s, t1_s, std::min(0.05, d), std::min(0.25 * d, 0.001));
+  double volume = 0;
+  auto idx = [&](const DexelBoard& board, int ax, int count, double lo, double hi) {
+    const double o = work.box.lo[static_cast<std::size_t>(ax)];
+    const int i0 = std::max(0, static_cast<int>(std::ceil((lo - o) / d - 0.5)));
+    const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d - 0.5)));
+    (void)board;
+    return std::pair<int, int>{i0, i1};
+  };
+  // The boards are independent: one task each.
+  tbb::parallel_for(0, 3, [&](int bsel) {
+    std::vector<Interval> removed;
+    for (std::size_t q = 0; q < pieces.size(); ++q) {
+      const Piece& p = pieces[q];
+      const double tip = p.z + a_off;
+      const double H = std::min(tool.flute_length_mm, top - tip);
+      if (!(H > 0)) continue;
+      // The start disc was inside the previous piece's capsule: only the rest is new (unless the
+      // tool went down since, when the previous piece left material below).
+      const bool skip_start = q > 0 && pieces[q - 1].z + a_off <= tip + 1e-9;
+      Interval parts[2];
+      // Z board: rays along z at (x, y) = (u, v).
+      if (bsel == 2) {
+        DexelBoard& board = work.boards[2];
+        const auto [i0, i1] =
+            idx(board, 0, board.count_u(), std::min(p.ax, p.bx) - R, std::max(p.ax, p.bx) + R);
+        for (int i = i0; i <= i1; ++i) {
+          const double x = board.u_of(i);
+          // In the frame of lines x = const: along y, across x.
+          const auto cap = capsule_on_line(p.ay, p.ax, p.by, p.bx, R, x);
+          if (!cap) continue;
+          std::optional<Interval> start;
+          if (skip_start) start = capsule_on_line(p.ay, p.ax, p.ay, p.ax, R, x);
+          const int np = minus(*cap, start, parts);
+          for (int k = 0; k < np; ++k) {
+            const auto [j0, j1] = idx(board, 1, board.count_v(), parts[k].lo, parts[k].hi);
+            for (int j = j0; j <= j1; ++j) {
+              const double rho = dist_to_segment(x, board.v_of(j), p);
+              double hmin = 0;
+              if (rho > flat) {
+                const double qq = rho - flat;
+                if (qq > rc) continue;
+                hmin = rc - std::sqrt(rc * rc - qq * qq);
+              }
+              removed.clear();
+              board.ray(i, j).subtract(tip + hmin, tip + H, removed);
+              for (const Interval& v : removed) volume += (v.hi - v.lo) * d * d;
+            }
+          }
+        }
+      }
+      // X board (rays along x at (y, z) = (u, v)) and Y board (rays along y at (z, x) = (u, v)):
+      // per layer, the capsule of that height's radius on each row.
+      if (bsel < 2) {
+        const int b = bsel;
+        DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
+        const bool z_first = b == 1;
+        const auto [z0, z1] = z_first ? idx(board, 2, board.count_u(), tip, tip + H)
+                                      : idx(board, 2, board.count_v(), tip, tip + H);
+        for (int zl = z0; zl <= z1; ++zl) {
+          const double h = (z_first ? board.u_of(zl) : board.v_of(zl)) - tip;
+          if (h < 0 || h > H) continue;
+          const double Rh = tool.profile_radius(h) + r_off;
+          if (!(Rh > 0)) continue;
+          // Rows: board 0 over y, board 1 over x.
+          const double c_lo = b == 0 ? std::min(p.ay, p.by) : std::min(p.ax, p.bx);
+          const double c_hi = b == 0 ? std::max(p.ay, p.by) : std::max(p.ax, p.bx);
+          const auto [r0, r1] = b == 0 ? idx(board, 1, board.count_u(), c_lo - Rh, c_hi + Rh)
+                                       : idx(board, 0, board.count_v(), c_lo - Rh, c_hi + Rh);
+          for (int r = r0; r <= r1; ++r) {
+            const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
+            std::optional<Interval> cap, start;
+            if (b == 0) {
+              const double y = board.u_of(i);
+              cap = capsule_on_line(p.ax, p.ay, p.bx, p.by, Rh, y);
+              if (skip_start) start = capsule_on_line(p.ax, p.ay, p.ax, p.ay, Rh, y);
+            } else {
+              const double x = board.v_of(j);
+              cap = capsule_on_line(p.ay, p.ax, p.by, p.bx, Rh, x);
+              if (skip_start) start = capsule_on_line(p.ay, p.ax, p.ay, p.ax, Rh, x);
+            }
+            if (!cap) continue;
+            const int np = minus(*cap, start, parts);
+            for (int k = 0; k < np; ++k) {
+              if (board.find(i, j) == nullptr &&
+                  !(board.full().hi > parts[k].lo && board.full().lo < parts[k].hi)) {
+                continue;
+              }
+              removed.clear();
+              board.ray(i, j).subtract(parts[k].lo, parts[k].hi, removed);
+            }
+          }
+        }
+      }
+    }
+  });
+  return volume;
+}
+
+}  // namespace trochomill
