@@ -136,37 +136,42 @@ TEST(Sim, StraightSlotRemovesTheSweptVolume) {
 }
 
 // The envelope sweep (the fast pre-roll) along a half circle of radius 6 mm from (6, 0) to
-// (-6, 0) (a 5 mm flat end mill, 1 mm deep) in a stock above y = 0: the swept area there is
-// the annular sector from 1 to 11 mm, 60 pi mm^2, times a_p (the end discs' outer halves lie
-// below y = 0). Bound per board: the boundary's length (58 mm) times a_p times d / 2, plus
-// the chords' 1 um over that length. The three boards agree with each other within the same
-// bound, and the time-stepped simulation of the same path (60 steps per revolution, dwelling a
-// revolution at the end; its feed marks f_z^2 / 8R = 1e-3 mm over the 35 mm of outer wall are
-// below the bound) leaves the same volume.
+// (-6, 0) (a 5 mm end mill, flat and with a 1 mm corner radius, 1 mm deep) in a stock above
+// y = 0: the swept volume there is the annular sector from 1 to 11 mm, 60 pi mm^2, times a_p,
+// less the corners (the end discs' outer halves lie below y = 0). Bound per board: the boundary's
+// length (58 mm) times a_p times d / 2, plus the chords' 1 um over that length. The three boards
+// agree with each other within the same bound, and the time-stepped simulation of the same path (60
+// steps per revolution, dwelling a revolution at the end; its feed marks f_z^2 / 8R = 1e-3 mm over
+// the 35 mm of outer wall are below the bound) leaves the same volume.
 TEST(Sim, EnvelopeSweepRemovesTheSweptVolume) {
-  const double want = 60 * kPi * 1.0;
-  const double d = 0.05;
-  const double bound = 58 * 1.0 * d / 2 + 58 * 1.0 * 0.001;
-  const StockBox box{{-12, 0, -2}, {12, 12, 0}};
-  ToolPath p;
-  p.append(Segment::arc_xy(0, 0, 6, 0, kPi, -1, -1, Motion::feed, 1200));
-  const SimTool tool = end_mill(0);
-  TriDexel env(box, d);
-  const double v = sweep_envelope(p, tool, env, 0, p.duration_s());
-  EXPECT_NEAR(v, want, bound);
-  double vb[3];
-  for (int b = 0; b < 3; ++b) {
-    vb[b] = box.volume_mm3() - env.boards[static_cast<std::size_t>(b)].volume_mm3();
-    EXPECT_NEAR(vb[b], want, bound) << b;
-  }
-  EXPECT_NEAR(vb[2], v, 1e-9 * want);
-  // The same path time-stepped with the teeth, dwelling a revolution at the end.
-  TriDexel work(box, d);
-  SimSettings s;
-  s.steps_per_rev = 60;
-  const SimResult r = simulate(p, tool, s, work, 0, p.duration_s() + 60.0 / 3000);
-  for (int b = 0; b < 3; ++b) {
-    EXPECT_NEAR(r.removed_by_board_mm3[static_cast<std::size_t>(b)], vb[b], bound) << b;
+  for (const double rc : {0.0, 1.0}) {
+    // Pappus: the tool's axial section (2R a_p less two corners of rc^2 (1 - pi / 4)) along the
+    // path's 6 pi mm.
+    const double want = (10.0 * 1.0 - 2 * rc * rc * (1 - kPi / 4)) * 6 * kPi;
+    const double d = 0.05;
+    const double bound = 58 * 1.0 * d / 2 + 58 * 1.0 * 0.001;
+    const StockBox box{{-12, 0, -2}, {12, 12, 0}};
+    ToolPath p;
+    p.append(Segment::arc_xy(0, 0, 6, 0, kPi, -1, -1, Motion::feed, 1200));
+    SimTool tool = end_mill(0);
+    tool.corner_radius_mm = rc;
+    TriDexel env(box, d);
+    const double v = sweep_envelope(p, tool, env, 0, p.duration_s());
+    EXPECT_NEAR(v, want, bound) << rc;
+    double vb[3];
+    for (int b = 0; b < 3; ++b) {
+      vb[b] = box.volume_mm3() - env.boards[static_cast<std::size_t>(b)].volume_mm3();
+      EXPECT_NEAR(vb[b], want, bound) << b;
+    }
+    EXPECT_NEAR(vb[2], v, 1e-9 * want);
+    // The same path time-stepped with the teeth, dwelling a revolution at the end.
+    TriDexel work(box, d);
+    SimSettings s;
+    s.steps_per_rev = 60;
+    const SimResult r = simulate(p, tool, s, work, 0, p.duration_s() + 60.0 / 3000);
+    for (int b = 0; b < 3; ++b) {
+      EXPECT_NEAR(r.removed_by_board_mm3[static_cast<std::size_t>(b)], vb[b], bound) << b;
+    }
   }
 }
 
