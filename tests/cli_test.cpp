@@ -330,3 +330,53 @@ TEST_F(Cli, MonitorSynthAndSpectrum) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// simulate on a steady cycle of Wagih's trochoid (coarse: 0.1 mm dexels, 60 steps per
+// revolution): the JSON keys with their values' invariants (the three boards remove
+// the same volume within the boundary bound: 2 x 50 mm of wall x 6 mm x d / 2), every output
+// file written and readable, and bad input refused with exit 2 naming the option.
+TEST_F(Cli, SimulateWritesItsOutputs) {
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  const std::string out = (dir_ / "sim").string();
+  const std::string common =
+      " --set simulation.resolution=0.1 --set simulation.steps_per_rev=60 --set slot.length=8";
+  const CliResult r = run_cli("simulate " + ex + " --cycles 3:4 --json - --out " + out + common);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"removed_volume_mm3", "h_max_mm", "steps", "dexel_updates", "wall_time_s",
+                          "complete", "memory_estimate_mb"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_TRUE(j["complete"].get<bool>());
+  EXPECT_GT(j["steps"].get<int>(), 1000);
+  // f_z = 600 / (2000 * 4) = 0.075 mm: the chip stays near it (feed marks, the wedge's width).
+  EXPECT_GT(j["h_max_mm"].get<double>(), 0.03);
+  EXPECT_LT(j["h_max_mm"].get<double>(), 0.075 * 1.1);
+  const auto by = j["removed_volume_by_board_mm3"];
+  for (int b = 0; b < 2; ++b) {
+    EXPECT_NEAR(by[b].get<double>(), by[2].get<double>(), 100 * 6 * 0.1 / 2);
+  }
+  for (const char* f : {"series.csv", "chips.h5", "walls.csv", "floor.csv", "surface.stl"}) {
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / f)) << f;
+  }
+  EXPECT_EQ(first_line_of(out + "/walls.csv"), "y_mm,z_mm,left_x_mm,right_x_mm");
+  const ChipMapData m = read_chip_map_h5(std::filesystem::path(out) / "chips.h5");
+  EXPECT_EQ(m.t_s.size(), j["steps"].get<std::size_t>());
+  EXPECT_EQ(m.teeth, 4u);
+
+  CliResult bad = run_cli("simulate " + ex + " --cycles 5:2" + common);
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("--cycles"), std::string::npos) << bad.out;
+  bad = run_cli("simulate " + ex + " --cycles 3:4 --memory-limit 0.000001" + common);
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("--memory-limit"), std::string::npos) << bad.out;
+  bad = run_cli("simulate " + ex + " --cycles 3:4 --set simulation.threads=-1" + common);
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("threads"), std::string::npos) << bad.out;
+}
+
+}  // namespace
+}  // namespace trochomill

@@ -7,11 +7,17 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <map>
 #include <optional>
 #include <random>
 
 #include "test_util.hpp"
 #include "trochomill/engagement.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
+#include "trochomill/report.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -383,6 +389,149 @@ TEST(Sim, TrochoidChipMatchesTheAnalysisKernel) {
   for (std::size_t i = 0; i < one.result.chip_map.size(); ++i) {
     EXPECT_EQ(one.result.chip_map[i].h_mm, two.result.chip_map[i].h_mm);
   }
+}
+
+}  // namespace
+}  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// A straight full slot (a_p 1 mm, R 5 mm, f_z 0.2 mm) read off each board: the X board's walls
+// lie at x = +-R less at most the feed marks' depth f_z^2 / 8R (1e-3 mm) on the rows the tool
+// passed; the Z and Y boards place the wall between their last cut ray and their first uncut
+// one, so within one spacing of it; the Z board's floor is the tip height z = -1 (exact: the
+// ray is cut from the tip up) and the X board is cut at every level above it and at none below.
+TEST(Sim, TheThreeBoardsAgreeOnTheMachinedSlot) {
+  const double d = 0.05, R = 5, fz = 0.2;
+  const StockBox box{{-8, -10, -2}, {8, 10, 0}};
+  TriDexel work(box, d);
+  SimSettings s;
+  s.steps_per_rev = 60;
+  const SimTool tool = end_mill(0);
+  const ToolPath p = line_path(0, -16, 16, -1, fz * 2 * 3000);
+  (void)simulate(p, tool, s, work, 0, p.duration_s());
+  const auto walls = wall_profiles(work, 0.0, 20);
+  int rows = 0;
+  for (const WallPoint& w : walls) {
+    if (w.y_mm < -9 || w.y_mm > 9) continue;
+    EXPECT_GT(w.z_mm, -1.0) << "cut below the tip";
+    EXPECT_NEAR(w.left_x_mm, -R, fz * fz / (8 * R) + 1e-9) << w.y_mm << " " << w.z_mm;
+    EXPECT_NEAR(w.right_x_mm, R, fz * fz / (8 * R) + 1e-9) << w.y_mm << " " << w.z_mm;
+    ++rows;
+  }
+  EXPECT_GT(rows, 1000);
+  // Z board: the floor profile across the slot at y = 0.
+  const auto floor = floor_profiles(work, 400);
+  int checked = 0;
+  for (const FloorPoint& f : floor) {
+    if (std::abs(f.y_mm - 0.025) > 1e-9) continue;
+    if (std::abs(f.x_mm) < R - d) {
+      EXPECT_DOUBLE_EQ(f.z_mm, -1.0) << f.x_mm;
+    }
+    if (std::abs(f.x_mm) > R + d) {
+      EXPECT_DOUBLE_EQ(f.z_mm, 0.0) << f.x_mm;
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 320);
+  // Y board (rays along y at (z, x)): at mid-depth, cut within the walls, whole outside.
+  const DexelBoard& yb = work.boards[1];
+  const int zl = static_cast<int>((-0.5 - box.lo[2]) / d);
+  for (int j = 0; j < yb.count_v(); ++j) {
+    const double x = yb.v_of(j);
+    const Dexel* ray = yb.find(zl, j);
+    const double len = ray ? ray->length() : yb.full().hi - yb.full().lo;
+    if (std::abs(x) < R - d) {
+      EXPECT_NEAR(len, 0.0, 1e-9) << x;
+    }
+    if (std::abs(x) > R + d) {
+      EXPECT_NEAR(len, 20.0, 1e-9) << x;
+    }
+  }
+}
+
+// The chip map through HDF5 and back: every value identical (float32 stored as float32).
+TEST(Sim, ChipMapHdf5RoundTrip) {
+  const StockBox box{{-8, -10, -2}, {8, 10, 0}};
+  TriDexel work(box, 0.1);
+  SimSettings s;
+  s.steps_per_rev = 60;
+  const SimTool tool = end_mill(30);
+  const ToolPath p = line_path(0, -14, -6, -1, 0.1 * 2 * 3000);
+  const SimResult r = simulate(p, tool, s, work, 0, p.duration_s());
+  const ChipMapData m = chip_map_data(r, tool, s);
+  ASSERT_EQ(m.h_mm.size(), r.steps.size() * 2 * static_cast<std::size_t>(r.segments_per_tooth));
+  std::size_t nonzero = 0;
+  for (const float v : m.h_mm) nonzero += v > 0 ? 1 : 0;
+  EXPECT_EQ(nonzero, r.chip_map.size());
+  const auto file = std::filesystem::temp_directory_path() / "trochomill_chips_test.h5";
+  write_chip_map_h5(file, m);
+  const ChipMapData back = read_chip_map_h5(file);
+  std::filesystem::remove(file);
+  EXPECT_EQ(back.teeth, 2u);
+  EXPECT_EQ(back.segments_per_tooth, m.segments_per_tooth);
+  EXPECT_EQ(back.steps_per_rev, 60);
+  EXPECT_TRUE(back.complete);
+  EXPECT_EQ(back.t_s, m.t_s);
+  EXPECT_EQ(back.tip_mm, m.tip_mm);
+  EXPECT_EQ(back.removed_mm3, m.removed_mm3);
+  EXPECT_EQ(back.h_mm, m.h_mm);
+  EXPECT_EQ(back.segment_height_mm, m.segment_height_mm);
+  EXPECT_THROW((void)read_chip_map_h5(file), Error);  // gone: a clear error, no crash
+}
+
+// The machined surface's STL is a closed solid: every edge is shared by exactly two
+// triangles, and its volume by the divergence theorem equals the height field's integral
+// (trapezoidal over the grid cells, which the two triangles per cell integrate exactly) to
+// float precision (1e-6 relative: the STL stores float32).
+TEST(Sim, SurfaceStlIsAClosedSolidOfTheHeightFieldsVolume) {
+  const StockBox box{{-8, -10, -2}, {8, 10, 0}};
+  TriDexel work(box, 0.1);
+  SimSettings s;
+  s.steps_per_rev = 60;
+  SimTool tool = end_mill(0);
+  tool.corner_radius_mm = 1;
+  const ToolPath p = line_path(0, -16, 4, -1, 0.2 * 2 * 3000);
+  (void)simulate(p, tool, s, work, 0, p.duration_s());
+  const HeightField f = surface_height_field(work, 0.2);
+  const std::string stl = height_field_stl(f);
+  std::uint32_t n = 0;
+  std::memcpy(&n, stl.data() + 80, 4);
+  ASSERT_EQ(stl.size(), 84u + 50u * n);
+  std::map<std::array<float, 6>, int> edges;
+  double vol = 0;
+  for (std::uint32_t t = 0; t < n; ++t) {
+    float v[12];
+    std::memcpy(v, stl.data() + 84 + 50 * t, 48);
+    const float* a = v + 3;
+    const float* b = v + 6;
+    const float* c = v + 9;
+    vol += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+            a[2] * (b[0] * c[1] - b[1] * c[0])) /
+           6.0;
+    for (const auto& [p0, p1] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) {
+      std::array<float, 6> key{p0[0], p0[1], p0[2], p1[0], p1[1], p1[2]};
+      std::array<float, 6> rev{p1[0], p1[1], p1[2], p0[0], p0[1], p0[2]};
+      ++edges[std::min(key, rev)];
+    }
+  }
+  for (const auto& [e, k] : edges) ASSERT_EQ(k, 2);
+  const std::size_t nc = f.x_mm_of_column.size(), nr = f.y_mm_of_row.size();
+  double want = 0;
+  for (std::size_t a = 0; a + 1 < nc; ++a) {
+    for (std::size_t b = 0; b + 1 < nr; ++b) {
+      const double dx = f.x_mm_of_column[a + 1] - f.x_mm_of_column[a];
+      const double dy = f.y_mm_of_row[b + 1] - f.y_mm_of_row[b];
+      // Two triangles on the diagonal (a, b)-(a+1, b+1): their integral.
+      const double z0 = f.z_mm[a * nr + b], z2 = f.z_mm[(a + 1) * nr + b + 1];
+      const double z1 = f.z_mm[(a + 1) * nr + b], z3 = f.z_mm[a * nr + b + 1];
+      want += dx * dy * ((z0 + z1 + z2) / 6 + (z0 + z2 + z3) / 6 - f.bottom_mm);
+    }
+  }
+  EXPECT_NEAR(vol, want, 1e-6 * std::abs(want) + 1e-3);
+  // And the slot is in it: the machined volume (stock less the solid) is near the slot's.
+  EXPECT_GT(box.volume_mm3() - want, 100.0);
 }
 
 }  // namespace

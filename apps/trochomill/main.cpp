@@ -1,9 +1,11 @@
 // trochomill command-line interface: parses arguments, calls the library, formats output.
 // Exit codes: 0 success, 2 bad input (arguments, job file, NC program), 1 runtime failure.
 #include <fmt/format.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -337,7 +339,14 @@ int run(int argc, char** argv) {
   sim->add_option("--cycles", sim_cycles,
                   "A:B: trochoid cycles A (inclusive) to B (exclusive), from 0");
   sim->add_option("--json", sim_json, "write the summary as JSON (- for stdout)");
-  sim->add_option("--out", sim_out, "directory for series.csv (per step)");
+  sim->add_option("--out", sim_out,
+                  "directory for series.csv, chips.h5, walls.csv, floor.csv and surface.stl");
+  std::optional<double> sim_mem_gb, sim_stl_step;
+  sim->add_option("--memory-limit", sim_mem_gb,
+                  "refuse to start above this estimate, GB (default: 75 % of RAM)");
+  sim->add_option("--stl-step", sim_stl_step,
+                  "grid step of surface.stl, mm (default: the dexel spacing, coarser when the "
+                  "mesh would pass 4 million triangles)");
 
   try {
     app.parse(argc, argv);
@@ -563,52 +572,108 @@ int run(int argc, char** argv) {
       if (sim_from) from = *sim_from;
       if (sim_to) to = *sim_to;
     }
+    // Refuse before starting when the estimate passes the limit.
+    const tmill::MemoryEstimate est = tmill::estimate_simulation_memory(job, path, from, to);
+    const double need =
+        est.boards_bytes + est.records_bytes + (sim_out.empty() ? 0.0 : est.dense_map_bytes);
+    const double ram =
+        static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+    if (sim_mem_gb && !(*sim_mem_gb > 0)) {
+      throw tmill::InputError(fmt::format("--memory-limit must be > 0 GB, got {}", *sim_mem_gb));
+    }
+    const double limit = sim_mem_gb ? *sim_mem_gb * 1e9 : 0.75 * ram;
+    if (need > limit) {
+      throw tmill::InputError(fmt::format(
+          "simulate: estimated memory {:.2f} GB (boards {:.2f}, records {:.2f}, HDF5 map {:.2f}) "
+          "exceeds the limit of {:.2f} GB ({}); coarsen [simulation] resolution (now {} mm), "
+          "shorten the window (--cycles, --from/--to) or raise --memory-limit",
+          need / 1e9, est.boards_bytes / 1e9, est.records_bytes / 1e9,
+          sim_out.empty() ? 0.0 : est.dense_map_bytes / 1e9, limit / 1e9,
+          sim_mem_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
+    }
+    // Ctrl-C stops after the current step; what was computed is written, marked incomplete.
+    static std::atomic<bool> interrupted{false};
+    struct sigaction sa {};
+    sa.sa_handler = [](int) { interrupted.store(true); };
+    sigemptyset(&sa.sa_mask);
+    struct sigaction old_sa {};
+    sigaction(SIGINT, &sa, &old_sa);
+    tmill::SimControl control;
+    control.cancel = &interrupted;
+    const bool tty = isatty(STDERR_FILENO) != 0;
     const auto t_start = std::chrono::steady_clock::now();
-    const tmill::JobSimulation js = tmill::simulate_job(job, path, from, to);
+    if (tty) {
+      control.progress = [&](std::size_t done, std::size_t total) {
+        const double f =
+            static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(1, total));
+        const double el =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+        const int w = 30, filled = static_cast<int>(f * w);
+        fmt::print(stderr, "\r[{}{}] {:5.1f} %  ETA {:.0f} s   ",
+                   std::string(static_cast<std::size_t>(filled), '#'),
+                   std::string(static_cast<std::size_t>(w - filled), '.'), 100 * f,
+                   f > 0 ? el * (1 - f) / f : 0.0);
+      };
+    }
+    const tmill::JobSimulation js = tmill::simulate_job(job, path, from, to, control);
+    sigaction(SIGINT, &old_sa, nullptr);
+    if (tty) fmt::print(stderr, "\r{}\r", std::string(60, ' '));
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     const tmill::SimResult& r = js.result;
     double h_max = 0;
     for (const auto& st : r.steps) h_max = std::max(h_max, st.h_max_mm);
-    nlohmann::json j = {{"removed_volume_mm3", r.removed_mm3},
-                        {"removed_volume_by_board_mm3", r.removed_by_board_mm3},
-                        {"h_max_mm", h_max},
-                        {"steps", r.steps.size()},
-                        {"dexel_updates", r.dexel_updates},
-                        {"wall_time_s", wall},
-                        {"from_s", from},
-                        {"to_s", to},
-                        {"resolution_mm", job.simulation.resolution_mm},
-                        {"steps_per_rev", job.simulation.steps_per_rev},
-                        {"memory_mb", static_cast<double>(js.memory_bytes) / 1048576.0},
-                        {"pre_roll_wall_s", js.pre_roll_wall_s},
-                        {"window_wall_s", js.window_wall_s},
-                        {"complete", true}};
+    nlohmann::json j = {
+        {"removed_volume_mm3", r.removed_mm3},
+        {"removed_volume_by_board_mm3", r.removed_by_board_mm3},
+        {"h_max_mm", h_max},
+        {"steps", r.steps.size()},
+        {"dexel_updates", r.dexel_updates},
+        {"wall_time_s", wall},
+        {"pre_roll_wall_s", js.pre_roll_wall_s},
+        {"window_wall_s", js.window_wall_s},
+        {"dexel_updates_per_s",
+         js.window_wall_s > 0 ? static_cast<double>(r.dexel_updates) / js.window_wall_s : 0.0},
+        {"from_s", from},
+        {"to_s", to},
+        {"resolution_mm", job.simulation.resolution_mm},
+        {"steps_per_rev", job.simulation.steps_per_rev},
+        {"memory_mb", static_cast<double>(js.memory_bytes) / 1048576.0},
+        {"memory_estimate_mb", need / 1048576.0},
+        {"complete", r.complete}};
     if (!sim_out.empty()) {
-      std::filesystem::create_directories(sim_out);
-      std::string csv = "t_s,x_mm,y_mm,z_mm";
-      const std::size_t nt = job.tool.tooth_angles_deg.size();
-      for (std::size_t k = 0; k < nt; ++k) csv += fmt::format(",removed_tooth{}_mm3", k);
-      csv += ",h_max_mm,h_mean_mm,engaged_segments\n";
-      for (const auto& st : r.steps) {
-        fmt::format_to(std::back_inserter(csv), "{:.7f},{:.5f},{:.5f},{:.5f}", st.t_s, st.tip_mm[0],
-                       st.tip_mm[1], st.tip_mm[2]);
-        for (const double v : st.removed_mm3) fmt::format_to(std::back_inserter(csv), ",{:.6g}", v);
-        fmt::format_to(std::back_inserter(csv), ",{:.6f},{:.6f},{}\n", st.h_max_mm, st.h_mean_mm,
-                       st.engaged_segments);
+      const std::filesystem::path dir(sim_out);
+      std::filesystem::create_directories(dir);
+      const tmill::SimTool tool = tmill::sim_tool(job, job.simulation);
+      emit((dir / "series.csv").string(), tmill::sim_series_csv(r, tool.tooth_angle_rad.size()));
+      tmill::write_chip_map_h5(dir / "chips.h5", tmill::chip_map_data(r, tool, job.simulation));
+      emit((dir / "walls.csv").string(),
+           tmill::wall_profiles_csv(tmill::wall_profiles(*js.work, 0.0)));
+      emit((dir / "floor.csv").string(),
+           tmill::floor_profiles_csv(tmill::floor_profiles(*js.work)));
+      double step = sim_stl_step.value_or(0.0);
+      if (sim_stl_step && !(*sim_stl_step > 0)) {
+        throw tmill::InputError(fmt::format("--stl-step must be > 0 mm, got {}", *sim_stl_step));
       }
-      emit((std::filesystem::path(sim_out) / "series.csv").string(), csv);
+      if (!sim_stl_step) {
+        const auto& zb = js.work->boards[2];
+        const double cells = static_cast<double>(zb.count_u()) * static_cast<double>(zb.count_v());
+        step = zb.spacing() * std::max(1.0, std::ceil(std::sqrt(2.0 * cells / 4e6)));
+      }
+      emit((dir / "surface.stl").string(),
+           tmill::height_field_stl(tmill::surface_height_field(*js.work, step)));
     }
     if (!sim_json.empty()) emit(sim_json, j.dump(2) + "\n");
     if (sim_json != "-") {
       fmt::print(
           "{}: {:.4f} to {:.4f} s, {} steps at {} per rev, {:g} mm dexels: removed "
-          "{:.4f} mm^3, h_max {:.5f} mm, {} dexel updates, {:.2f} s, {:.1f} MB\n",
+          "{:.4f} mm^3, h_max {:.5f} mm, {} dexel updates, {:.2f} s, {:.1f} MB{}\n",
           sim_args.job_file, from, to, r.steps.size(), job.simulation.steps_per_rev,
           job.simulation.resolution_mm, r.removed_mm3, h_max, r.dexel_updates, wall,
-          static_cast<double>(js.memory_bytes) / 1048576.0);
+          static_cast<double>(js.memory_bytes) / 1048576.0,
+          r.complete ? "" : " (interrupted: incomplete)");
     }
-    return 0;
+    return r.complete ? 0 : 130;
   }
 
   if (mon->parsed()) {

@@ -8,6 +8,7 @@
 #include "trochomill/analysis.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/signal.hpp"
+#include "trochomill/sim.hpp"
 
 namespace trochomill {
 
@@ -66,5 +67,15 @@ struct StudyPoint {
 /// Welch PSD as CSV (f_hz, psd_per_hz) and a spectrogram in long form (t_s, f_hz, db).
 [[nodiscard]] std::string spectrum_csv(const Spectrum& sp);
 [[nodiscard]] std::string spectrogram_csv(const Spectrogram& sg);
+
+/// The simulation's per-step series: t_s, x_mm, y_mm, z_mm, removed_tooth<k>_mm3, h_max_mm,
+/// h_mean_mm, engaged_segments.
+[[nodiscard]] std::string sim_series_csv(const SimResult& r, std::size_t teeth);
+/// Wall profiles: y_mm, z_mm, left_x_mm, right_x_mm.
+[[nodiscard]] std::string wall_profiles_csv(const std::vector<WallPoint>& w);
+/// Floor profiles: y_mm, x_mm, z_mm.
+[[nodiscard]] std::string floor_profiles_csv(const std::vector<FloorPoint>& f);
+/// The height field as a closed solid in binary STL (mm): top surface, side walls, bottom.
+[[nodiscard]] std::string height_field_stl(const HeightField& f);
 
 }  // namespace trochomill

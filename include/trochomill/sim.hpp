@@ -14,6 +14,7 @@
 #include <span>
 #include <vector>
 
+#include "trochomill/io.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 
@@ -164,6 +165,33 @@ struct SimControl {
                                  TriDexel& work, double t0_s, double t1_s,
                                  const SimControl& control = {});
 
+/// One point of the slot's wall profiles (mm): at (y, z), the walls' x on either side of the
+/// slot's centre line, read off the X board.
+struct WallPoint {
+  double y_mm = 0, z_mm = 0, left_x_mm = 0, right_x_mm = 0;
+};
+/// Wall profiles at about `levels` heights (every ray along y there), where the X board was
+/// cut and holds no material on the centre line x = centre_x_mm.
+[[nodiscard]] std::vector<WallPoint> wall_profiles(const TriDexel& work, double centre_x_mm,
+                                                   int levels = 10);
+
+/// One point of the floor profiles (mm): the top of the material on the Z board's ray (x, y).
+struct FloorPoint {
+  double x_mm = 0, y_mm = 0, z_mm = 0;
+};
+/// Floor profiles across the slot (every ray along x) at about `rows` positions along y,
+/// those where the Z board was cut.
+[[nodiscard]] std::vector<FloorPoint> floor_profiles(const TriDexel& work, int rows = 100);
+
+/// The machined surface as a height field over the Z board (every ray `step_mm` apart, at
+/// least the spacing): the top of the material at each (x, y), the stock's top where untouched.
+struct HeightField {
+  std::vector<double> x_mm_of_column, y_mm_of_row;
+  std::vector<double> z_mm;  ///< column-major: z_mm[column * rows + row]
+  double bottom_mm = 0;      ///< the stock's bottom
+};
+[[nodiscard]] HeightField surface_height_field(const TriDexel& work, double step_mm);
+
 /// Removes the tool's envelope swept along the path from t0 to t1 (s): the solid of revolution
 /// of its profile (radius plus the largest radial runout, tip at the lowest axial runout)
 /// along chords within a quarter spacing of the path and 1 um, without teeth or time steps. Fast:
@@ -171,6 +199,10 @@ struct SimControl {
 /// teeth would leave. Returns the volume removed from the Z board (mm^3).
 double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
                       double t1_s);
+
+/// The result's chip map made dense (the HDF5 layout, see ChipMapData).
+[[nodiscard]] ChipMapData chip_map_data(const SimResult& r, const SimTool& tool,
+                                        const SimSettings& s);
 
 /// The job's stock: `[stock]` min / max, or the slot region (y from 0 to the slot length: the
 /// slot runs through the workpiece) with a 1 mm margin beside the walls (x) and 0.5 mm below
@@ -192,7 +224,18 @@ struct JobSimulation {
   std::size_t memory_bytes = 0;
   std::unique_ptr<TriDexel> work;  ///< the workpiece after the window
 };
+/// Runs on `[simulation] threads` worker threads (0: all cores); the results are the same
+/// for any thread count.
 [[nodiscard]] JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s,
                                          double to_s, const SimControl& control = {});
+
+/// What a job's simulation will hold in memory (bytes), estimated before running it: the
+/// boards' tiles over the region the tool visits up to the window's end, the per-step
+/// records and the sparse chip map, and the dense chip map the HDF5 output needs.
+struct MemoryEstimate {
+  double boards_bytes = 0, records_bytes = 0, dense_map_bytes = 0;
+};
+[[nodiscard]] MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path,
+                                                        double from_s, double to_s);
 
 }  // namespace trochomill

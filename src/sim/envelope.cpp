@@ -164,8 +164,8 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
           if (!cap) continue;
           std::optional<Interval> start;
           // Within the corner's reach the depth depends on the distance, which this piece may
-        // bring nearer: only the start disc's flat part was finished.
-        if (skip_start) start = capsule_on_line(p.ay, p.ax, p.ay, p.ax, flat, x);
+          // bring nearer: only the start disc's flat part was finished.
+          if (skip_start) start = capsule_on_line(p.ay, p.ax, p.ay, p.ax, flat, x);
           const int np = minus(*cap, start, parts);
           for (int k = 0; k < np; ++k) {
             const auto [j0, j1] = idx(board, 1, board.count_v(), parts[k].lo, parts[k].hi);

@@ -3,6 +3,7 @@
 // docs/models.md section 11).
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -564,8 +565,8 @@ std::pair<double, double> cycle_window(const ToolPath& path, int a, int b) {
   return {t0, t1};
 }
 
-JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, double to_s,
-                           const SimControl& control) {
+JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double from_s,
+                                    double to_s, const SimControl& control) {
   const SimSettings& s = job.simulation;
   if (!(from_s >= 0) || !(to_s > from_s)) {
     throw InputError(
@@ -595,6 +596,61 @@ JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, 
   for (const auto& b : work.boards) out.memory_bytes += b.memory_bytes();
   out.work = std::make_unique<TriDexel>(std::move(work));
   return out;
+}
+
+JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, double to_s,
+                           const SimControl& control) {
+  // [simulation] threads: 0 = all cores. The results do not depend on it.
+  const int threads = job.simulation.threads;
+  if (threads < 0) {
+    throw InputError(
+        fmt::format("[simulation] threads must be >= 0 (0: all cores), got {}", threads));
+  }
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  return arena.execute([&] { return simulate_job_in_arena(job, path, from_s, to_s, control); });
+}
+
+MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, double from_s,
+                                          double to_s) {
+  const SimSettings& s = job.simulation;
+  const StockBox box = job_stock(job);
+  const double d = s.resolution_mm;
+  if (!(d > 0)) throw InputError(fmt::format("[simulation] resolution must be > 0 mm, got {}", d));
+  // The region the tool visits up to the window's end: the path's box grown by the radius.
+  const double R = job.tool.radius_mm() + job.tool.runout_radial_mm;
+  double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+  const double dt = std::max(1e-3, to_s / 20000.0);
+  std::vector<double> times;
+  for (double t = 0; t < to_s; t += dt) times.push_back(t);
+  times.push_back(to_s);
+  const PathSamples ps = sample_at_times(path, times);
+  for (std::size_t n = 0; n < ps.size(); ++n) {
+    const double p[3] = {ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  }
+  auto extent = [&](int k, double grow_lo, double grow_hi) {
+    const double a = std::max(box.lo[static_cast<std::size_t>(k)], lo[k] - grow_lo);
+    const double b = std::min(box.hi[static_cast<std::size_t>(k)], hi[k] + grow_hi);
+    return b > a ? b - a : 0.0;
+  };
+  const double ex = extent(0, R, R), ey = extent(1, R, R), ez = extent(2, 0, kInf);
+  const double tile = DexelBoard::kTile * d;
+  auto tiles = [&](double a, double b) {
+    return (std::ceil(a / tile) + 1) * (std::ceil(b / tile) + 1);
+  };
+  const double per_tile = static_cast<double>(DexelBoard::kTile * DexelBoard::kTile) *
+                          static_cast<double>(sizeof(Dexel));
+  MemoryEstimate m;
+  m.boards_bytes = (tiles(ex, ey) + tiles(ey, ez) + tiles(ez, ex)) * per_tile;
+  // The per-step records and the chip map: engaged segments taken as a quarter of all.
+  const double steps = (to_s - from_s) * spindle_speed_rpm(job) / 60.0 * s.steps_per_rev;
+  const SimTool tool = sim_tool(job, s);
+  const double cols = static_cast<double>(tool.tooth_angle_rad.size() * tool.segments());
+  m.records_bytes = steps * (static_cast<double>(sizeof(SimStep)) +
+                             8.0 * static_cast<double>(tool.tooth_angle_rad.size()) +
+                             0.25 * cols * static_cast<double>(sizeof(ChipEntry)));
+  m.dense_map_bytes = steps * cols * 4.0;
+  return m;
 }
 
 }  // namespace trochomill

@@ -1,0 +1,115 @@
+// Text and mesh outputs of the tri-dexel simulation: per-step series, wall and floor
+// profiles (CSV) and the machined surface (binary STL) (include/trochomill/report.hpp).
+#include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <initializer_list>
+#include <iterator>
+
+#include "trochomill/report.hpp"
+
+namespace trochomill {
+
+std::string sim_series_csv(const SimResult& r, std::size_t teeth) {
+  std::string csv = "t_s,x_mm,y_mm,z_mm";
+  for (std::size_t k = 0; k < teeth; ++k) csv += fmt::format(",removed_tooth{}_mm3", k);
+  csv += ",h_max_mm,h_mean_mm,engaged_segments\n";
+  auto out = std::back_inserter(csv);
+  for (const SimStep& st : r.steps) {
+    fmt::format_to(out, "{:.7f},{:.5f},{:.5f},{:.5f}", st.t_s, st.tip_mm[0], st.tip_mm[1],
+                   st.tip_mm[2]);
+    for (std::size_t k = 0; k < teeth; ++k) {
+      fmt::format_to(out, ",{:.6g}", k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
+    }
+    fmt::format_to(out, ",{:.6f},{:.6f},{}\n", st.h_max_mm, st.h_mean_mm, st.engaged_segments);
+  }
+  return csv;
+}
+
+std::string wall_profiles_csv(const std::vector<WallPoint>& w) {
+  std::string csv = "y_mm,z_mm,left_x_mm,right_x_mm\n";
+  auto out = std::back_inserter(csv);
+  for (const WallPoint& p : w) {
+    fmt::format_to(out, "{:.5f},{:.5f},{:.6f},{:.6f}\n", p.y_mm, p.z_mm, p.left_x_mm, p.right_x_mm);
+  }
+  return csv;
+}
+
+std::string floor_profiles_csv(const std::vector<FloorPoint>& f) {
+  std::string csv = "y_mm,x_mm,z_mm\n";
+  auto out = std::back_inserter(csv);
+  for (const FloorPoint& p : f)
+    fmt::format_to(out, "{:.5f},{:.5f},{:.6f}\n", p.y_mm, p.x_mm, p.z_mm);
+  return csv;
+}
+
+namespace {
+
+using P3 = std::array<double, 3>;
+
+void put_f32(std::string& s, double v) {
+  const auto f = static_cast<float>(v);
+  char b[4];
+  std::memcpy(b, &f, 4);
+  s.append(b, 4);
+}
+
+void triangle(std::string& s, const P3& a, const P3& b, const P3& c, std::uint32_t& count) {
+  const P3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  P3 n{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(len > 0)) return;  // degenerate: left out
+  for (double& x : n) x /= len;
+  for (const P3* p : std::initializer_list<const P3*>{&n, &a, &b, &c}) {
+    for (const double x : *p) put_f32(s, x);
+  }
+  s.append(2, '\0');
+  ++count;
+}
+
+}  // namespace
+
+std::string height_field_stl(const HeightField& f) {
+  const std::size_t nc = f.x_mm_of_column.size(), nr = f.y_mm_of_row.size();
+  std::string s(80, '\0');
+  const char header[] = "trochomill machined surface (height field of the Z board), mm";
+  std::memcpy(s.data(), header, sizeof(header) - 1);
+  s.append(4, '\0');  // triangle count, set at the end
+  std::uint32_t count = 0;
+  if (nc < 2 || nr < 2) return s;
+  auto top = [&](std::size_t a, std::size_t b) {
+    return P3{f.x_mm_of_column[a], f.y_mm_of_row[b], f.z_mm[a * nr + b]};
+  };
+  auto bot = [&](std::size_t a, std::size_t b) {
+    return P3{f.x_mm_of_column[a], f.y_mm_of_row[b], f.bottom_mm};
+  };
+  // Top: two triangles per cell, counter-clockwise seen from above (outward normals up).
+  for (std::size_t a = 0; a + 1 < nc; ++a) {
+    for (std::size_t b = 0; b + 1 < nr; ++b) {
+      triangle(s, top(a, b), top(a + 1, b), top(a + 1, b + 1), count);
+      triangle(s, top(a, b), top(a + 1, b + 1), top(a, b + 1), count);
+    }
+  }
+  // The boundary loop (counter-clockwise seen from above), its side walls, and the bottom as a
+  // fan from its centre: a closed solid.
+  std::vector<std::pair<std::size_t, std::size_t>> loop;
+  for (std::size_t a = 0; a + 1 < nc; ++a) loop.emplace_back(a, 0);
+  for (std::size_t b = 0; b + 1 < nr; ++b) loop.emplace_back(nc - 1, b);
+  for (std::size_t a = nc - 1; a > 0; --a) loop.emplace_back(a, nr - 1);
+  for (std::size_t b = nr - 1; b > 0; --b) loop.emplace_back(0, b);
+  const P3 centre{0.5 * (f.x_mm_of_column.front() + f.x_mm_of_column.back()),
+                  0.5 * (f.y_mm_of_row.front() + f.y_mm_of_row.back()), f.bottom_mm};
+  for (std::size_t q = 0; q < loop.size(); ++q) {
+    const auto [a0, b0] = loop[q];
+    const auto [a1, b1] = loop[(q + 1) % loop.size()];
+    triangle(s, bot(a0, b0), bot(a1, b1), top(a1, b1), count);
+    triangle(s, bot(a0, b0), top(a1, b1), top(a0, b0), count);
+    triangle(s, centre, bot(a1, b1), bot(a0, b0), count);
+  }
+  std::memcpy(s.data() + 80, &count, 4);
+  return s;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,119 @@
+// The machined slot read off the tri-dexel workpiece: wall profiles from the X board, floor
+// profiles and the machined surface (a height field) from the Z board
+// (include/trochomill/sim.hpp).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "trochomill/error.hpp"
+#include "trochomill/sim.hpp"
+
+namespace trochomill {
+
+namespace {
+
+// Every `stride`-th index of [0, n), always including the last.
+std::vector<int> strided(int n, int stride) {
+  std::vector<int> out;
+  for (int k = 0; k < n; k += std::max(1, stride)) out.push_back(k);
+  if (n > 0 && out.back() != n - 1) out.push_back(n - 1);
+  return out;
+}
+
+}  // namespace
+
+std::vector<WallPoint> wall_profiles(const TriDexel& work, double centre_x_mm, int levels) {
+  const DexelBoard& xb = work.boards[0];  // rays along x at (y, z) = (u, v)
+  std::vector<WallPoint> out;
+  const int stride = std::max(1, xb.count_v() / std::max(1, levels));
+  for (const int k : strided(xb.count_v(), stride)) {
+    for (int i = 0; i < xb.count_u(); ++i) {
+      const Dexel* ray = xb.find(i, k);
+      if (ray == nullptr) continue;
+      // The slot's walls: the material boundaries nearest the centre line on either side
+      // (the stock's edge where the cut runs out of it); no wall where material crosses it.
+      double left = xb.full().lo, right = xb.full().hi;
+      bool solid = false;
+      for (const Interval& v : ray->intervals()) {
+        if (v.hi <= centre_x_mm) left = v.hi;
+        if (v.lo >= centre_x_mm) {
+          right = v.lo;
+          break;
+        }
+        if (v.lo < centre_x_mm && v.hi > centre_x_mm) solid = true;
+      }
+      if (solid) continue;
+      out.push_back({xb.u_of(i), xb.v_of(k), left, right});
+    }
+  }
+  return out;
+}
+
+std::vector<FloorPoint> floor_profiles(const TriDexel& work, int rows) {
+  const DexelBoard& zb = work.boards[2];  // rays along z at (x, y) = (u, v)
+  std::vector<FloorPoint> out;
+  const int stride = std::max(1, zb.count_v() / std::max(1, rows));
+  for (const int j : strided(zb.count_v(), stride)) {
+    bool any = false;
+    for (int i = 0; i < zb.count_u() && !any; ++i) any = zb.find(i, j) != nullptr;
+    if (!any) continue;
+    for (int i = 0; i < zb.count_u(); ++i) {
+      const Dexel* ray = zb.find(i, j);
+      const double top =
+          ray == nullptr ? zb.full().hi
+                         : (ray->intervals().empty() ? zb.full().lo : ray->intervals().back().hi);
+      out.push_back({zb.u_of(i), zb.v_of(j), top});
+    }
+  }
+  return out;
+}
+
+HeightField surface_height_field(const TriDexel& work, double step_mm) {
+  const DexelBoard& zb = work.boards[2];
+  const double d = zb.spacing();
+  const int stride = std::max(1, static_cast<int>(std::lround(std::max(step_mm, d) / d)));
+  HeightField f;
+  f.x_mm_of_column.reserve(static_cast<std::size_t>(zb.count_u() / stride + 2));
+  const std::vector<int> cols = strided(zb.count_u(), stride);
+  const std::vector<int> rows = strided(zb.count_v(), stride);
+  for (const int i : cols) f.x_mm_of_column.push_back(zb.u_of(i));
+  for (const int j : rows) f.y_mm_of_row.push_back(zb.v_of(j));
+  f.z_mm.resize(cols.size() * rows.size());
+  f.bottom_mm = zb.full().lo;
+  for (std::size_t a = 0; a < cols.size(); ++a) {
+    for (std::size_t b = 0; b < rows.size(); ++b) {
+      const Dexel* ray = zb.find(cols[a], rows[b]);
+      f.z_mm[a * rows.size() + b] =
+          ray == nullptr ? zb.full().hi
+                         : (ray->intervals().empty() ? zb.full().lo : ray->intervals().back().hi);
+    }
+  }
+  return f;
+}
+
+ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSettings& s) {
+  ChipMapData m;
+  m.teeth = tool.tooth_angle_rad.size();
+  m.segments_per_tooth = static_cast<std::size_t>(r.segments_per_tooth);
+  m.resolution_mm = s.resolution_mm;
+  m.steps_per_rev = s.steps_per_rev;
+  m.complete = r.complete;
+  const std::size_t cols = m.teeth * m.segments_per_tooth;
+  m.h_mm.assign(r.steps.size() * cols, 0.0f);
+  for (const SimStep& st : r.steps) {
+    m.t_s.push_back(st.t_s);
+    m.tip_mm.insert(m.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
+    for (std::size_t k = 0; k < m.teeth; ++k) {
+      m.removed_mm3.push_back(k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
+    }
+  }
+  for (const ChipEntry& c : r.chip_map) m.h_mm[c.step * cols + c.segment] = c.h_mm;
+  for (std::size_t g = 0; g < m.segments_per_tooth; ++g) {
+    m.segment_height_mm.push_back((static_cast<double>(g) + 0.5) * tool.segment_mm);
+  }
+  return m;
+}
+
+}  // namespace trochomill
