@@ -536,3 +536,79 @@ TEST(Sim, SurfaceStlIsAClosedSolidOfTheHeightFieldsVolume) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// An insert mill with a 45 degree lead (R 8 mm at the tip, no corner radius, two inserts)
+// slotting straight through a 10 mm block 1 mm deep: the slot's section is the contour's,
+// 2 (R a_p - a_p^2 / 2) = 15 mm^2 (the edge runs in by a_p cot 45), so 150 mm^3 (bound: the
+// removed region's boundary, 168 mm^2 cut plus its 150 mm^2 opening in the top face, times
+// d / 2: the boards' layers do not fall on the faces at this spacing); the chip normal to the edge
+// peaks at f_z sin 45 (tolerance as for the end mill: the wedge's width and f_z^2 / 2R); a
+// per-insert seating offset of 0.02 mm raises that insert's chip by 0.02 sin 45 and lowers the
+// other's.
+TEST(Sim, InsertMillWithALeadAngle) {
+  const double fz = 0.1, R = 8, d = 0.03;
+  const std::string job_text = R"(
+[tool]
+type = "insert_mill"
+diameter = 16.0
+teeth = 2
+lead_angle = 45.0
+flute_length = 5.0
+[slot]
+width = 20.0
+length = 20.0
+depth = 1.0
+[cutting]
+feed_per_tooth = 0.1
+spindle_speed = 1000.0
+[path]
+type = "linear"
+step = 5.0
+)";
+  const Job job = parse_job(job_text, "insert.toml", {});
+  SimSettings s;
+  s.steps_per_rev = 60;
+  const SimTool tool = sim_tool(job, s);
+  EXPECT_NEAR(tool.profile_radius(0.0), R, 1e-12);
+  EXPECT_NEAR(tool.profile_radius(1.0), R - 1.0, 1e-12);
+  EXPECT_NEAR(tool.edge_sine(0.5), std::sqrt(0.5), 1e-12);
+  const StockBox box{{-10, -5, -2}, {10, 5, 0}};
+  TriDexel work(box, d);
+  const ToolPath p = line_path(0, -20, 20, -1, fz * 2 * 1000);
+  const SimResult r = simulate(p, tool, s, work, 0, p.duration_s());
+  const double want = 10 * 2 * (R * 1.0 - 0.5);
+  for (int b = 0; b < 3; ++b) {
+    EXPECT_NEAR(r.removed_by_board_mm3[static_cast<std::size_t>(b)], want, (168 + 150) * d / 2)
+        << b;
+  }
+  const double tol = fz * 2 * kTwoPi / s.steps_per_rev + fz * fz / (2 * R) + 4e-4;
+  double hmax = 0;
+  for (const SimStep& st : r.steps) {
+    if (st.tip_mm[1] < -11 || st.tip_mm[1] > -4) continue;  // the front in the block
+    hmax = std::max(hmax, st.h_max_mm);
+  }
+  EXPECT_NEAR(hmax, fz * std::sqrt(0.5), tol);
+
+  // Seating: insert 0 sits 0.02 mm further out.
+  Job seated = job;
+  seated.tool.insert_radial_mm = {0.02, 0.0};
+  const SimTool t2 = sim_tool(seated, s);
+  TriDexel w2(box, d);
+  const SimResult r2 = simulate(p, t2, s, w2, 0, p.duration_s());
+  double h0 = 0, h1 = 0;
+  for (const ChipEntry& c : r2.chip_map) {
+    const SimStep& st = r2.steps[c.step];
+    if (st.tip_mm[1] < -11 || st.tip_mm[1] > -4) continue;
+    (c.segment / static_cast<std::uint32_t>(r2.segments_per_tooth) == 0 ? h0 : h1) =
+        std::max(c.segment / static_cast<std::uint32_t>(r2.segments_per_tooth) == 0 ? h0 : h1,
+                 static_cast<double>(c.h_mm));
+  }
+  EXPECT_NEAR(h0 - h1, 2 * 0.02 * std::sqrt(0.5), 2 * tol);
+  EXPECT_NEAR(h0, (fz + 0.02) * std::sqrt(0.5), tol);
+}
+
+}  // namespace
+}  // namespace trochomill

@@ -13,20 +13,26 @@
 
 namespace trochomill {
 
+enum class ToolType { end_mill, insert_mill };
+
 struct Tool {
-  double diameter_mm = 0;       ///< cutter diameter D (mm)
-  int teeth = 0;                ///< number of teeth Z
-  double helix_angle_deg = 0;   ///< helix angle (degrees)
-  double corner_radius_mm = 0;  ///< corner radius (mm), 0 for a square end mill
-  double edge_radius_mm = 0;    ///< cutting-edge rounding radius r_e (mm)
-  double flute_length_mm = 0;   ///< flute length (mm); 0 = not given
-  double runout_radial_mm = 0;  ///< radial runout: axis offset e (mm)
-  double runout_axial_mm = 0;   ///< axial runout (mm)
-  double runout_phase_deg = 0;  ///< angle of the runout offset relative to tooth 0 (degrees)
+  ToolType type = ToolType::end_mill;  ///< solid end mill or indexable insert mill
+  double diameter_mm = 0;              ///< cutter diameter D (mm)
+  int teeth = 0;                       ///< number of teeth Z
+  double helix_angle_deg = 0;          ///< helix angle (degrees)
+  double corner_radius_mm = 0;         ///< corner radius (mm), 0 for a square end mill
+  double edge_radius_mm = 0;           ///< cutting-edge rounding radius r_e (mm)
+  double flute_length_mm = 0;          ///< flute length (mm); 0 = not given
+  double runout_radial_mm = 0;         ///< radial runout: axis offset e (mm)
+  double runout_axial_mm = 0;          ///< axial runout (mm)
+  double runout_phase_deg = 0;         ///< angle of the runout offset relative to tooth 0 (degrees)
   std::vector<double> tooth_angles_deg;  ///< tooth angular positions (degrees); Z equal pitches
                                          ///< when empty in the file (filled by load)
   int tool_number = 1;                   ///< T word for the tool change
   double flank_wear_mm = 0;              ///< flank wear land VB_B (mm); 0 = new tool
+  double lead_angle_deg = 90;            ///< insert mill: main edge's angle to the face (degrees)
+  std::vector<double> insert_radial_mm;  ///< insert mill: each insert's radial seating (mm)
+  std::vector<double> insert_axial_mm;   ///< insert mill: each insert's axial seating (mm)
   [[nodiscard]] double radius_mm() const noexcept { return 0.5 * diameter_mm; }
 };
 

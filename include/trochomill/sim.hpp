@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -108,19 +109,35 @@ struct TriDexel {
   std::array<DexelBoard, 3> boards;
 };
 
-/// The cutting tool as the simulation sees it: a solid end mill (radius, corner radius,
-/// flute length, teeth at their angles, helix) with runout; each edge split into segments
-/// along the edge (kappa, by height above the tip here: the corner arc and the flank).
+/// The cutting tool as the simulation sees it: a solid end mill or an indexable insert mill,
+/// each tooth (insert) an edge of the same contour at its own angle, with its own radial and
+/// axial offset (runout plus, for inserts, their seating). The contour in the axial plane,
+/// from the tip up: the corner arc (radius rc, tangent to the face) and then the main edge at
+/// the lead angle kappa_r to the face (90 degrees: a cylindrical flank at radius R; less: the
+/// edge runs inward, as on a face mill), up to the flute length (the edge's axial reach).
+/// Each edge is split into segments along the axis (kappa) with sub-segments inward (tau),
+/// the grid the force and wear models address.
 struct SimTool {
   double radius_mm = 0, corner_radius_mm = 0, flute_length_mm = 0;
   double helix_rad = 0;
+  double lead_rad = 1.5707963267948966;  ///< lead angle kappa_r of the main edge (rad)
   std::vector<double> tooth_angle_rad;   ///< at t = 0, height 0
-  std::vector<double> radial_offset_mm;  ///< per tooth, from the runout
+  std::vector<double> radial_offset_mm;  ///< per tooth: runout and insert seating
   std::vector<double> axial_offset_mm;   ///< per tooth (tip height)
   double omega_rad_per_s = 0;            ///< signed: negative for a cw spindle seen from +z
-  double segment_mm = 0.05;
-  /// Profile radius at height h above the tip (corner arc, then the flank).
+  double segment_mm = 0.05;              ///< segment length along the axis (kappa)
+  int sub_segments = 5;                  ///< sub-segments inward per segment (tau)
+  /// Contour radius at height h above the tip (mm); -1 where there is no edge (h < 0 or the
+  /// edge has run in to the axis).
   [[nodiscard]] double profile_radius(double h) const;
+  /// The sine of the edge's local angle to the face at height h: the factor from the radial
+  /// depth of cut to the chip thickness normal to the edge (1 on a cylindrical flank).
+  [[nodiscard]] double edge_sine(double h) const;
+  /// The heights whose contour reaches radius rho (one interval: the contour is unimodal), or
+  /// nothing.
+  [[nodiscard]] std::optional<Interval> heights_reaching(double rho) const;
+  /// The height of the contour's largest radius within [h0, h1].
+  [[nodiscard]] double widest_height(double h0, double h1) const;
   [[nodiscard]] int segments() const;
 };
 [[nodiscard]] SimTool sim_tool(const Job& job, const SimSettings& s);

@@ -27,7 +27,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
       {"tool",
        {"diameter", "teeth", "helix_angle", "corner_radius", "edge_radius", "flute_length",
         "runout_radial", "runout_axial", "runout_phase", "tooth_angles", "tool_number",
-        "flank_wear"}},
+        "flank_wear", "type", "lead_angle", "insert_radial", "insert_axial"}},
       {"slot", {"width", "length", "depth"}},
       {"path",
        {"type", "step", "aspect_ratio", "linear_distance", "direction", "entry", "entry_radius",
@@ -422,6 +422,33 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
       r.problem("tool", "tooth_angles", "must be strictly increasing degrees in [0, 360)");
     } else {
       tool.tooth_angles_deg = *angles;
+    }
+  }
+  tool.type =
+      r.choice<ToolType>("tool", "type",
+                         {{"end_mill", ToolType::end_mill}, {"insert_mill", ToolType::insert_mill}},
+                         ToolType::end_mill)
+          .value_or(ToolType::end_mill);
+  const auto lead = r.number("tool", "lead_angle", "degrees", Range{0, 90, false, true}, 90.0);
+  if (lead) {
+    if (tool.type != ToolType::insert_mill && *lead != 90.0) {
+      r.problem("tool", "lead_angle",
+                "applies to type = \"insert_mill\" (an end mill's flank is at 90 degrees)");
+    } else {
+      tool.lead_angle_deg = *lead;
+    }
+  }
+  for (const char* key : {"insert_radial", "insert_axial"}) {
+    if (auto v = r.number_array("tool", key, Range{-1.0, 1.0})) {
+      if (tool.type != ToolType::insert_mill) {
+        r.problem("tool", key, "applies to type = \"insert_mill\"");
+      } else if (tool.teeth > 0 && static_cast<int>(v->size()) != tool.teeth) {
+        r.problem("tool", key,
+                  fmt::format("must list one value (mm) per insert ({} for teeth = {}), got {}",
+                              tool.teeth, tool.teeth, v->size()));
+      } else {
+        (std::string(key) == "insert_radial" ? tool.insert_radial_mm : tool.insert_axial_mm) = *v;
+      }
     }
   }
   if (tool.tooth_angles_deg.empty() && tool.teeth > 0) {

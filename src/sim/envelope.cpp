@@ -124,8 +124,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       tool.axial_offset_mm.empty()
           ? 0.0
           : *std::min_element(tool.axial_offset_mm.begin(), tool.axial_offset_mm.end());
-  const double R = tool.radius_mm + r_off, rc = tool.corner_radius_mm;
-  const double flat = R - rc;
+  const double R = tool.radius_mm + r_off;
   const double top = work.box.hi[2];
   // Chords within a quarter spacing of the path and at most 1 um: a chord of a curved path
   // falls short of the arc's outer side by its deviation, material the next cut would meet
@@ -151,6 +150,9 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       // The start disc was inside the previous piece's capsule: only the rest is new (unless the
       // tool went down since, when the previous piece left material below).
       const bool skip_start = q > 0 && pieces[q - 1].z + a_off <= tip + 1e-9;
+      // The contour's smallest radius over the cutting height (unimodal: at an end).
+      const double flat =
+          std::max(0.0, std::min(tool.profile_radius(0), tool.profile_radius(H))) + r_off;
       Interval parts[2];
       // Z board: rays along z at (x, y) = (u, v).
       if (bsel == 2) {
@@ -171,14 +173,10 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
             const auto [j0, j1] = idx(board, 1, board.count_v(), parts[k].lo, parts[k].hi);
             for (int j = j0; j <= j1; ++j) {
               const double rho = dist_to_segment(x, board.v_of(j), p);
-              double hmin = 0;
-              if (rho > flat) {
-                const double qq = rho - flat;
-                if (qq > rc) continue;
-                hmin = rc - std::sqrt(rc * rc - qq * qq);
-              }
+              const auto reach = tool.heights_reaching(rho - r_off);
+              if (!reach) continue;
               removed.clear();
-              board.ray(i, j).subtract(tip + hmin, tip + H, removed);
+              board.ray(i, j).subtract(tip + reach->lo, tip + std::min(H, reach->hi), removed);
               for (const Interval& v : removed) volume += (v.hi - v.lo) * d * d;
             }
           }

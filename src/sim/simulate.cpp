@@ -18,11 +18,57 @@
 
 namespace trochomill {
 
+// The contour (see SimTool): corner arc about (R - rc, rc) from the face (angle phi = 0) to
+// phi_t = pi - kappa_r, at height h_t = rc (1 - cos phi_t) and radius r_t = R - rc + rc sin
+// phi_t; then the main edge, radius r_t - (h - h_t) cot kappa_r.
 double SimTool::profile_radius(double h) const {
   if (h < 0) return -1;
-  if (h >= corner_radius_mm) return radius_mm;
-  const double r = corner_radius_mm, dz = r - h;
-  return radius_mm - r + std::sqrt(std::max(0.0, r * r - dz * dz));
+  const double rc = corner_radius_mm, rcen = radius_mm - rc;
+  const double ht = rc * (1 - std::cos(kPi - lead_rad));
+  if (h <= ht && rc > 0) {
+    const double dz = rc - h;
+    return rcen + std::sqrt(std::max(0.0, rc * rc - dz * dz));
+  }
+  if (lead_rad >= 0.5 * kPi - 1e-12) return radius_mm;
+  const double rt = rcen + rc * std::sin(kPi - lead_rad);
+  const double r = rt - (h - ht) / std::tan(lead_rad);
+  return r > 0 ? r : -1;
+}
+
+double SimTool::edge_sine(double h) const {
+  const double rc = corner_radius_mm;
+  const double ht = rc * (1 - std::cos(kPi - lead_rad));
+  if (h <= ht && rc > 0) {
+    const double c = std::clamp(1 - std::max(0.0, h) / rc, -1.0, 1.0);
+    return std::sqrt(std::max(0.0, 1 - c * c));  // sin phi
+  }
+  return std::sin(lead_rad);
+}
+
+std::optional<Interval> SimTool::heights_reaching(double rho) const {
+  const double rc = corner_radius_mm, rcen = radius_mm - rc;
+  const double ht = rc * (1 - std::cos(kPi - lead_rad));
+  if (rho > radius_mm) return std::nullopt;
+  double lo = 0, hi = ht;
+  if (rho > rcen) {  // on the arc: |rc - h| <= sqrt(rc^2 - q^2)
+    const double q = rho - rcen, sq = std::sqrt(std::max(0.0, rc * rc - q * q));
+    lo = rc - sq;
+    hi = std::min(ht, rc + sq);
+  }
+  if (lead_rad >= 0.5 * kPi - 1e-12) {
+    if (rho <= profile_radius(ht + 1e-12) || rc == 0) hi = std::numeric_limits<double>::infinity();
+  } else {
+    const double rt = rcen + rc * std::sin(kPi - lead_rad);
+    if (rho <= rt) hi = std::max(hi, ht + (rt - rho) * std::tan(lead_rad));
+  }
+  if (!(hi >= lo)) return std::nullopt;
+  return Interval{lo, hi};
+}
+
+double SimTool::widest_height(double h0, double h1) const {
+  // The contour is widest at h = rc (the arc's outermost point; from there up on a
+  // cylindrical flank).
+  return std::clamp(corner_radius_mm, h0, h1);
 }
 
 int SimTool::segments() const {
@@ -48,7 +94,17 @@ SimTool sim_tool(const Job& job, const SimSettings& s) {
   }
   const double w = rpm_to_rad_per_s(spindle_speed_rpm(job));
   t.omega_rad_per_s = job.cutting.spindle_direction == SpindleDirection::cw ? -w : w;
+  t.lead_rad = deg_to_rad(job.tool.lead_angle_deg);
+  for (std::size_t k = 0; k < job.tool.insert_radial_mm.size() && k < t.radial_offset_mm.size();
+       ++k) {
+    t.radial_offset_mm[k] += job.tool.insert_radial_mm[k];
+  }
+  for (std::size_t k = 0; k < job.tool.insert_axial_mm.size() && k < t.axial_offset_mm.size();
+       ++k) {
+    t.axial_offset_mm[k] += job.tool.insert_axial_mm[k];
+  }
   t.segment_mm = s.segment_mm;
+  t.sub_segments = s.sub_segments;
   return t;
 }
 
@@ -220,7 +276,9 @@ class Stepper {
   void z_board(std::size_t k, const Wedge& w, BoardAcc& A) {
     DexelBoard& board = work_.boards[2];
     const double rmax = tool_.radius_mm + std::max(0.0, w.r_off);
-    const double flat = tool_.radius_mm - tool_.corner_radius_mm + w.r_off;
+    // The contour's smallest radius over the cutting height (it is unimodal: at an end).
+    const double flat =
+        std::max(0.0, std::min(tool_.profile_radius(0), tool_.profile_radius(w.H))) + w.r_off;
     // Rays nearer the centre than r_lo hold no material (annulus mode).
     const double r_lo = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, flat - w.r_in_drop);
     const double r_hi = rmax;
@@ -249,18 +307,16 @@ class Stepper {
           if (!has_material(board.find(i, j), board.full(), w.tip_z, w.tip_z + w.H)) continue;
           const double dy = board.v_of(j) - w.cy, rho = std::hypot(dx, dy);
           if (rho > rmax) continue;
-          // Corner: the profile reaches rho only from h_min up.
-          double hmin = 0;
-          if (rho > flat) {
-            const double r = tool_.corner_radius_mm, q2 = rho - flat;
-            if (q2 > r) continue;
-            hmin = r - std::sqrt(r * r - q2 * q2);
-          }
+          // The contour reaches rho only between these heights (the corner from below, a
+          // lead angle from above).
+          const auto reach = tool_.heights_reaching(rho - w.r_off);
+          if (!reach) continue;
+          const double hmin = reach->lo, hmax = reach->hi;
           const double th = std::atan2(dy, dx);
           A.removed.clear();
           auto cut_h = [&](double h_lo, double h_hi) {
             h_lo = std::max(h_lo, hmin);
-            h_hi = std::min(h_hi, w.H);
+            h_hi = std::min({h_hi, w.H, hmax});
             if (!(h_hi > h_lo)) return;
             if (board.ray(i, j).subtract(w.tip_z + h_lo, w.tip_z + h_hi, A.removed) > 0) {
               ++A.updates;
@@ -282,14 +338,14 @@ class Stepper {
           for (const Interval& p : A.removed) {
             A.removed_tooth[k] += (p.hi - p.lo) * d_ * d_;
             A.removed_board += (p.hi - p.lo) * d_ * d_;
-            // The chip on a vertical ray is the profile radius less rho, which grows with the
-            // height: each segment the piece spans takes it at its highest point there (exact:
-            // no sampling needed).
+            // The radial depth on a vertical ray is the contour radius less rho, largest where
+            // the contour is widest: each segment the piece spans takes it there (exact: no
+            // sampling needed), times the edge's sine for the thickness normal to the edge.
             const double h_lo = p.lo - w.tip_z, h_hi = p.hi - w.tip_z;
             for (int sg = seg_of(h_lo); sg <= seg_of(h_hi); ++sg) {
-              const double h = std::min(h_hi, (sg + 1) * tool_.segment_mm);
-              note(A, k, std::max(h_lo, sg * tool_.segment_mm),
-                   tool_.profile_radius(h) + w.r_off - rho);
+              const double a = std::max(h_lo, sg * tool_.segment_mm);
+              const double h = tool_.widest_height(a, std::min(h_hi, (sg + 1) * tool_.segment_mm));
+              note(A, k, a, (tool_.profile_radius(h) + w.r_off - rho) * tool_.edge_sine(h));
             }
           }
         }
@@ -350,7 +406,7 @@ class Stepper {
           A.removed_board += (p.hi - p.lo) * d_ * d_;
           // The piece's point nearest the centre: the perpendicular's foot, clamped.
           const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
-          note(A, k, h, R_h - std::hypot(perp, t));
+          note(A, k, h, (R_h - std::hypot(perp, t)) * tool_.edge_sine(h));
         }
       }
     }
