@@ -483,10 +483,36 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   // (at least the largest move) and one spacing; the wedges then only look at that annulus.
   // In the first revolution of a call, or while the depth changes, the wedge is the whole
   // sector.
+  //
+  // Tighter, per tooth: the angles tooth k sweeps now were swept by tooth j (whose tip is no
+  // higher) Delta_j = (its angular lag) / |omega| ago, about a centre at most D_j (the path
+  // length since) away, so material lies beyond the contour + r_off_j - D_j: the annulus is
+  // narrowed by the best such j (usually the previous tooth: about f_z instead of the feed
+  // per revolution).
   const auto spr = static_cast<std::size_t>(s.steps_per_rev);
-  std::vector<double> ring(spr, 0.0);  // moves of the last revolution's steps
-  double ring_sum = 0;
+  const std::size_t ring_n = spr + 4;
+  std::vector<double> cum(ring_n, 0.0);  // path length up to the last ring_n steps
+  double cum_now = 0;
   std::size_t level_steps = 0;  // steps since the depth last changed
+  struct Lag {
+    std::size_t steps;  // how many steps ago (rounded up, plus the wedge's span)
+    double dr;          // r_off_k - r_off_j
+  };
+  std::vector<std::vector<Lag>> lags(nz);
+  for (std::size_t k = 0; k < nz; ++k) {
+    for (std::size_t j = 0; j < nz; ++j) {
+      if (tool.axial_offset_mm[j] > tool.axial_offset_mm[k] + 1e-12) continue;
+      double lag = tool.omega_rad_per_s < 0 ? tool.tooth_angle_rad[k] - tool.tooth_angle_rad[j]
+                                            : tool.tooth_angle_rad[j] - tool.tooth_angle_rad[k];
+      lag = std::fmod(lag, kTwoPi);
+      if (lag < 0) lag += kTwoPi;
+      if (lag < 1e-12) lag = kTwoPi;  // the tooth itself, a revolution ago
+      const auto m = std::min(
+          spr + 2,
+          static_cast<std::size_t>(std::ceil(lag / kTwoPi * static_cast<double>(spr))) + 2);
+      lags[k].push_back({m, tool.radial_offset_mm[k] - tool.radial_offset_mm[j]});
+    }
+  }
   const double min_core = 0.5 * tool.radius_mm;
   const std::size_t every = std::max<std::size_t>(1, ps.size() / 200);
   for (std::size_t n = 1; n < ps.size(); ++n) {
@@ -497,10 +523,11 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     if (control.progress && n % every == 0) control.progress(n, ps.size() - 1);
     const std::array<double, 3> c{ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
     const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
-    ring_sum += moved - ring[n % spr];
-    ring[n % spr] = moved;
+    cum_now += moved;
+    cum[n % ring_n] = cum_now;
     level_steps = std::abs(ps.z_mm[n] - ps.z_mm[n - 1]) > 1e-9 ? 0 : level_steps + 1;
-    const double D = n > spr && level_steps >= spr ? std::max(0.0, ring_sum) : kInf;
+    const bool settled = n > spr + 2 && level_steps >= spr + 2;
+    const double D = settled ? cum_now - cum[(n - spr) % ring_n] : kInf;
     const bool annulus = D + d < min_core;
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
     const double ta = times[n - 1], tb = times[n];
@@ -518,20 +545,24 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       w.H = H > 0 ? H : 0.0;
       if (!(w.H > 0)) continue;
       if (annulus) {
-        // The wedge is taken about this step's centre; the previous step's was about the
-        // previous centre, so their shared edge is offset by the move between steps and would
-        // leave a sliver (width up to that move) that the next tooth finds with a doubled
-        // chip. Extending the wedge backwards over the shared edge by 2 move / R closes it
-        // for radii above R / 2, all the annulus (material goes once: overlap is harmless).
-        const double ext = 2 * moved / tool.radius_mm;
-        if (tool.omega_rad_per_s < 0) {
-          w.a1 += ext;  // turning clockwise: the older edge is the larger angle
-        } else {
-          w.a0 -= ext;
+        double drop = D;
+        for (const Lag& l : lags[k]) {
+          drop = std::min(drop, l.dr + cum_now - cum[(n - l.steps) % ring_n]);
         }
-        w.r_in_drop = D + d;
+        w.r_in_drop = s.exhaustive ? kInf : std::max(0.0, drop) + d;
         w.cx = c[0], w.cy = c[1];
         wedges.push_back(w), wedge_tooth.push_back(k);
+        // The wedge is taken about this step's centre; the previous step's was about the
+        // previous centre, so their shared edge (at pa) is offset by the move between steps
+        // and would leave a sliver (width up to that move) that the next tooth finds with a
+        // doubled chip. A thin sector about the previous centre from pa on, 2 move / R wide,
+        // closes it at every radius above R / 2: all the annulus.
+        const double ext = 2 * moved / tool.radius_mm;
+        Wedge thin = w;
+        thin.cx = ps.x_mm[n - 1], thin.cy = ps.y_mm[n - 1];
+        thin.a0 = tool.omega_rad_per_s < 0 ? pa - ext : pa;
+        thin.a1 = tool.omega_rad_per_s < 0 ? pa : pa + ext;
+        if (ext > 0) wedges.push_back(thin), wedge_tooth.push_back(k);
       } else {
         // The whole sector about both this step's centre and the previous one: consecutive
         // steps then share their edges exactly (no sliver at any radius).
