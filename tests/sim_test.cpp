@@ -239,6 +239,22 @@ TEST(Sim, FullSlotChipPeaksAtFz) {
     hmax = std::max(hmax, st.h_max_mm);
   }
   EXPECT_NEAR(hmax, fz, tol);
+  // The engaged width: the cut is 0.5 mm deep (tip at -0.5) and the segments 0.1 mm, so a
+  // segment with a real chip is engaged over its whole length. Within one step the rays that
+  // lose material see only part of it (the twisted wedge crosses a vertical ray over 0.37 mm
+  // of height and the rays are 0.04 mm apart), so the measured extent is at most the segment
+  // and, on average, most of it: mean above 80 %.
+  int full = 0;
+  double sum_w = 0;
+  for (const ChipEntry& c : r.chip_map) {
+    EXPECT_LE(c.w_mm, 0.1f + 1e-6f);
+    if (c.h_mm > 0.5 * fz && r.steps[c.step].tip_mm[1] > -10) {
+      sum_w += c.w_mm;
+      ++full;
+    }
+  }
+  EXPECT_GT(sum_w / full, 0.08);
+  EXPECT_GT(full, 100);
 }
 
 // Radial runout e (tooth 0 on the offset's side): tooth 0 cuts at R + e, tooth 1 at R - e,
@@ -477,6 +493,7 @@ TEST(Sim, ChipMapHdf5RoundTrip) {
   EXPECT_EQ(back.tip_mm, m.tip_mm);
   EXPECT_EQ(back.removed_mm3, m.removed_mm3);
   EXPECT_EQ(back.h_mm, m.h_mm);
+  EXPECT_EQ(back.w_mm, m.w_mm);
   EXPECT_EQ(back.segment_height_mm, m.segment_height_mm);
   EXPECT_THROW((void)read_chip_map_h5(file), Error);  // gone: a clear error, no crash
 }
@@ -651,6 +668,61 @@ TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
     ASSERT_EQ(a.chip_map[q].h_mm, b.chip_map[q].h_mm);
   }
   EXPECT_GT(a.removed_mm3, 1.0);
+}
+
+}  // namespace
+}  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// The edge's structured grid: segments equidistant along the edge (the corner arc's quarter
+// circle, pi rc / 2, then the flank), their widths summing to the edge's length, heights
+// rising, the contour radius and its outward normal (unit; (sin phi, 0, -cos phi) on the
+// arc, radial on the flank) at each segment's middle; tau sub-segments across the band.
+TEST(Sim, EdgeGridFollowsTheContour) {
+  SimTool t;
+  t.radius_mm = 8;
+  t.corner_radius_mm = 0.8;
+  t.flute_length_mm = 2;
+  t.segment_mm = 0.1;
+  t.sub_segments = 4;
+  const double arc = 0.5 * kPi * 0.8, total = arc + (2 - 0.8);
+  EXPECT_NEAR(t.edge_length_at(2), total, 1e-12);
+  EXPECT_NEAR(t.height_at_length(arc), 0.8, 1e-12);
+  EXPECT_NEAR(t.height_at_length(t.edge_length_at(0.3)), 0.3, 1e-12);
+  const EdgeGrid g = edge_grid(t, 0.2);
+  EXPECT_EQ(g.segments, static_cast<int>(std::ceil(total / 0.1)));
+  ASSERT_EQ(g.cells.size(), static_cast<std::size_t>(g.segments * 4));
+  double sum = 0, prev_h = -1;
+  for (int k = 0; k < g.segments; ++k) {
+    const EdgeCell& c = g.at(k, 0);
+    sum += c.width_mm;
+    EXPECT_GT(c.h_mm, prev_h);
+    prev_h = c.h_mm;
+    EXPECT_NEAR(c.r_mm, t.profile_radius(c.h_mm), 1e-12);
+    EXPECT_NEAR(std::hypot(c.normal[0], c.normal[2]), 1.0, 1e-12);
+    if (c.s_mm < arc) {
+      const double phi = c.s_mm / 0.8;
+      EXPECT_NEAR(c.normal[0], std::sin(phi), 1e-12);
+      EXPECT_NEAR(c.normal[2], -std::cos(phi), 1e-12);
+      EXPECT_NEAR(c.h_mm, 0.8 * (1 - std::cos(phi)), 1e-12);
+    } else {
+      EXPECT_NEAR(c.normal[0], 1.0, 1e-12);
+      EXPECT_NEAR(c.r_mm, 8.0, 1e-12);
+    }
+    if (k + 1 < g.segments) {
+      EXPECT_NEAR(c.width_mm, 0.1, 1e-12);
+    }
+    for (int q = 0; q < 4; ++q) EXPECT_NEAR(g.at(k, q).depth_mm, (q + 0.5) * 0.05, 1e-12);
+  }
+  EXPECT_NEAR(sum, total, 1e-12);
+  // The simulation's segment at a height is the grid's.
+  for (const double h : {0.0, 0.05, 0.4, 0.79, 0.81, 1.5}) {
+    const int k = t.segment_at(h);
+    EXPECT_LE(t.height_at_length(k * 0.1), h + 1e-12);
+    EXPECT_GT(t.height_at_length((k + 1) * 0.1), h);
+  }
 }
 
 }  // namespace

@@ -138,8 +138,41 @@ struct SimTool {
   [[nodiscard]] std::optional<Interval> heights_reaching(double rho) const;
   /// The height of the contour's largest radius within [h0, h1].
   [[nodiscard]] double widest_height(double h0, double h1) const;
+  /// Length along the edge (mm) from the tip up to height h (the corner arc, then the main
+  /// edge), and its inverse.
+  [[nodiscard]] double edge_length_at(double h) const;
+  [[nodiscard]] double height_at_length(double s) const;
+  /// Segments along the edge (kappa), `segment_mm` long each (the last shorter), up to the
+  /// flute length.
   [[nodiscard]] int segments() const;
+  /// The segment (kappa index) at height h.
+  [[nodiscard]] int segment_at(double h) const;
 };
+
+/// One cell of an edge's structured grid: segment kappa along the edge, sub-segment tau
+/// inward across the flank face. For a new edge the flank face is the contour swept
+/// backwards (against the cutting direction) and every sub-segment's normal is the
+/// contour's outward normal; the wear issue replaces them with digitised topography.
+struct EdgeCell {
+  int kappa = 0, tau = 0;
+  double s_mm = 0;      ///< the segment's middle, along the edge from the tip
+  double h_mm = 0;      ///< its height above the tip
+  double r_mm = 0;      ///< its contour radius
+  double width_mm = 0;  ///< w_s: the segment's length along the edge
+  double depth_mm = 0;  ///< the sub-segment's middle, inward from the edge
+  /// Unit normal in the tooth's frame (radial out, cutting direction, axial up).
+  std::array<double, 3> normal{};
+};
+struct EdgeGrid {
+  int segments = 0, sub_segments = 0;
+  double band_mm = 0;           ///< the band along the edge the sub-segments cover
+  std::vector<EdgeCell> cells;  ///< kappa-major: cells[kappa * sub_segments + tau]
+  [[nodiscard]] const EdgeCell& at(int kappa, int tau) const {
+    return cells[static_cast<std::size_t>(kappa * sub_segments + tau)];
+  }
+};
+/// The structured grid of one edge of the tool (all its teeth share the contour).
+[[nodiscard]] EdgeGrid edge_grid(const SimTool& tool, double band_mm = 0.2);
 [[nodiscard]] SimTool sim_tool(const Job& job, const SimSettings& s);
 
 /// One time step's results.
@@ -155,7 +188,8 @@ struct SimStep {
 struct ChipEntry {
   std::uint32_t step = 0;     ///< index into SimResult::steps
   std::uint32_t segment = 0;  ///< tooth * segments_per_tooth + segment along the edge
-  float h_mm = 0;             ///< uncut chip thickness
+  float h_mm = 0;             ///< uncut chip thickness, normal to the edge
+  float w_mm = 0;             ///< engaged width: the chip's extent along the edge (<= w_s)
 };
 
 struct SimResult {

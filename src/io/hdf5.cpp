@@ -73,8 +73,8 @@ void write_attr(hid_t obj, const char* name, double v) {
 void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) {
   const std::size_t steps = m.t_s.size();
   const std::size_t cols = m.teeth * m.segments_per_tooth;
-  if (m.h_mm.size() != steps * cols || m.tip_mm.size() != 3 * steps ||
-      m.removed_mm3.size() != steps * m.teeth) {
+  if (m.h_mm.size() != steps * cols || m.w_mm.size() != steps * cols ||
+      m.tip_mm.size() != 3 * steps || m.removed_mm3.size() != steps * m.teeth) {
     throw Error("write_chip_map_h5: inconsistent chip map sizes");
   }
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by exceptions
@@ -93,6 +93,8 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) 
       write_dataset(file, "removed_mm3", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, m.teeth},
                     m.removed_mm3.data(), "mm^3");
       write_dataset(file, "h_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.h_mm.data(), "mm",
+                    true);
+      write_dataset(file, "w_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.w_mm.data(), "mm",
                     true);
       write_dataset(file, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE,
                     {m.segment_height_mm.size()}, m.segment_height_mm.data(), "mm");
@@ -145,12 +147,14 @@ ChipMapData read_chip_map_h5(const std::filesystem::path& path) {
   m.tip_mm.resize(3 * steps);
   m.removed_mm3.resize(steps * m.teeth);
   m.h_mm.resize(steps * hd[1]);
+  m.w_mm.resize(steps * hd[1]);
   m.segment_height_mm.resize(dims_of("segment_height_mm")[0]);
   if (steps > 0) {
     read("t_s", H5T_NATIVE_DOUBLE, m.t_s.data());
     read("tip_mm", H5T_NATIVE_DOUBLE, m.tip_mm.data());
     read("removed_mm3", H5T_NATIVE_DOUBLE, m.removed_mm3.data());
     read("h_mm", H5T_NATIVE_FLOAT, m.h_mm.data());
+    read("w_mm", H5T_NATIVE_FLOAT, m.w_mm.data());
   }
   if (!m.segment_height_mm.empty()) {
     read("segment_height_mm", H5T_NATIVE_DOUBLE, m.segment_height_mm.data());

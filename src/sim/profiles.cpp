@@ -102,6 +102,7 @@ ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSett
   m.complete = r.complete;
   const std::size_t cols = m.teeth * m.segments_per_tooth;
   m.h_mm.assign(r.steps.size() * cols, 0.0f);
+  m.w_mm.assign(r.steps.size() * cols, 0.0f);
   for (const SimStep& st : r.steps) {
     m.t_s.push_back(st.t_s);
     m.tip_mm.insert(m.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
@@ -109,9 +110,13 @@ ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSett
       m.removed_mm3.push_back(k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
     }
   }
-  for (const ChipEntry& c : r.chip_map) m.h_mm[c.step * cols + c.segment] = c.h_mm;
+  for (const ChipEntry& c : r.chip_map) {
+    m.h_mm[c.step * cols + c.segment] = c.h_mm;
+    m.w_mm[c.step * cols + c.segment] = c.w_mm;
+  }
   for (std::size_t g = 0; g < m.segments_per_tooth; ++g) {
-    m.segment_height_mm.push_back((static_cast<double>(g) + 0.5) * tool.segment_mm);
+    m.segment_height_mm.push_back(
+        tool.height_at_length((static_cast<double>(g) + 0.5) * tool.segment_mm));
   }
   return m;
 }

@@ -71,8 +71,61 @@ double SimTool::widest_height(double h0, double h1) const {
   return std::clamp(corner_radius_mm, h0, h1);
 }
 
+double SimTool::edge_length_at(double h) const {
+  const double rc = corner_radius_mm;
+  const double phit = kPi - lead_rad, ht = rc * (1 - std::cos(phit));
+  h = std::max(0.0, h);
+  if (h <= ht && rc > 0) return rc * std::acos(std::clamp(1 - h / rc, -1.0, 1.0));
+  return rc * phit + (h - ht) / std::sin(lead_rad);
+}
+
+double SimTool::height_at_length(double s) const {
+  const double rc = corner_radius_mm;
+  const double phit = kPi - lead_rad, ht = rc * (1 - std::cos(phit));
+  s = std::max(0.0, s);
+  if (s <= rc * phit && rc > 0) return rc * (1 - std::cos(s / rc));
+  return ht + (s - rc * phit) * std::sin(lead_rad);
+}
+
 int SimTool::segments() const {
-  return std::max(1, static_cast<int>(std::ceil(flute_length_mm / segment_mm - 1e-9)));
+  return std::max(1,
+                  static_cast<int>(std::ceil(edge_length_at(flute_length_mm) / segment_mm - 1e-9)));
+}
+
+int SimTool::segment_at(double h) const {
+  return std::clamp(static_cast<int>(edge_length_at(h) / segment_mm), 0, segments() - 1);
+}
+
+EdgeGrid edge_grid(const SimTool& tool, double band_mm) {
+  if (!(band_mm > 0))
+    throw InputError(fmt::format("edge grid band must be > 0 mm, got {}", band_mm));
+  EdgeGrid g;
+  g.segments = tool.segments();
+  g.sub_segments = std::max(1, tool.sub_segments);
+  g.band_mm = band_mm;
+  const double total = tool.edge_length_at(tool.flute_length_mm);
+  for (int k = 0; k < g.segments; ++k) {
+    const double s0 = k * tool.segment_mm, s1 = std::min(total, (k + 1) * tool.segment_mm);
+    const double sm = 0.5 * (s0 + s1), h = tool.height_at_length(sm);
+    // The contour's outward normal in the (radial, axial) plane: (sin phi, -cos phi) on the
+    // corner arc, (sin kappa_r, cos kappa_r) on the main edge.
+    const double rc = tool.corner_radius_mm, phit = kPi - tool.lead_rad;
+    double nr = std::sin(tool.lead_rad), nz = std::cos(tool.lead_rad);
+    if (rc > 0 && sm <= rc * phit) nr = std::sin(sm / rc), nz = -std::cos(sm / rc);
+    for (int t = 0; t < g.sub_segments; ++t) {
+      EdgeCell c;
+      c.kappa = k;
+      c.tau = t;
+      c.s_mm = sm;
+      c.h_mm = h;
+      c.r_mm = tool.profile_radius(h);
+      c.width_mm = s1 - s0;
+      c.depth_mm = (t + 0.5) * band_mm / g.sub_segments;
+      c.normal = {nr, 0.0, nz};
+      g.cells.push_back(c);
+    }
+  }
+  return g;
 }
 
 SimTool sim_tool(const Job& job, const SimSettings& s) {
@@ -254,7 +307,7 @@ struct Wedge {
 
 // Accumulators of one board (merged in board order: the same numbers for any thread count).
 struct BoardAcc {
-  std::vector<double> seg_h, removed_tooth;
+  std::vector<double> seg_h, seg_lo, seg_hi, removed_tooth;
   double removed_board = 0;
   std::uint64_t updates = 0;
   std::vector<Interval> removed;
@@ -268,7 +321,15 @@ class Stepper {
         work_(work),
         d_(work.boards[0].spacing()),
         kappa_(std::tan(tool.helix_rad) / tool.radius_mm),
-        segs_(tool.segments()) {}
+        segs_(tool.segments()),
+        rc_(tool.corner_radius_mm),
+        ht_(rc_ * (1 - std::cos(kPi - tool.lead_rad))),
+        st_(rc_ * (kPi - tool.lead_rad)),
+        inv_sin_(1 / std::sin(tool.lead_rad)) {
+    for (int sg = 0; sg <= segs_; ++sg) {
+      bounds_.push_back(tool.height_at_length(sg * tool.segment_mm));
+    }
+  }
 
   // The Z board for one wedge: columns over the x-extent of the wedge swept over all heights
   // (within the annulus where material can be), rows over that sector on each column's line;
@@ -343,9 +404,14 @@ class Stepper {
             // sampling needed), times the edge's sine for the thickness normal to the edge.
             const double h_lo = p.lo - w.tip_z, h_hi = p.hi - w.tip_z;
             for (int sg = seg_of(h_lo); sg <= seg_of(h_hi); ++sg) {
-              const double a = std::max(h_lo, sg * tool_.segment_mm);
-              const double h = tool_.widest_height(a, std::min(h_hi, (sg + 1) * tool_.segment_mm));
-              note(A, k, a, (tool_.profile_radius(h) + w.r_off - rho) * tool_.edge_sine(h));
+              const double a = std::max(h_lo, seg_bottom(sg));
+              const double h = tool_.widest_height(a, std::min(h_hi, seg_top(sg)));
+              const double b = std::min(h_hi, seg_top(sg));
+              if (!(b > a)) continue;  // the piece only touches this segment
+              if (note(A, k, a, (tool_.profile_radius(h) + w.r_off - rho) * tool_.edge_sine(h))) {
+                // The engaged width: the pieces' extent along the segment.
+                extend(A, k, a, b);
+              }
             }
           }
         }
@@ -406,24 +472,45 @@ class Stepper {
           A.removed_board += (p.hi - p.lo) * d_ * d_;
           // The piece's point nearest the centre: the perpendicular's foot, clamped.
           const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
-          note(A, k, h, (R_h - std::hypot(perp, t)) * tool_.edge_sine(h));
+          if (note(A, k, h, (R_h - std::hypot(perp, t)) * tool_.edge_sine(h))) {
+            // One layer: a spacing of height.
+            extend(A, k, h - 0.5 * d_, h + 0.5 * d_);
+          }
         }
       }
     }
   }
 
+  // SimTool::edge_length_at with the constants taken once.
+  [[nodiscard]] double edge_length(double h) const {
+    h = std::max(0.0, h);
+    if (h <= ht_ && rc_ > 0) return rc_ * std::acos(std::clamp(1 - h / rc_, -1.0, 1.0));
+    return st_ + (h - ht_) * inv_sin_;
+  }
   [[nodiscard]] int segs() const noexcept { return segs_; }
 
  private:
   int seg_of(double h) const {
-    return std::clamp(static_cast<int>(h / tool_.segment_mm), 0, segs_ - 1);
+    return std::clamp(static_cast<int>(edge_length(h) / tool_.segment_mm), 0, segs_ - 1);
   }
+  // The segment's height range.
+  double seg_bottom(int sg) const { return bounds_[static_cast<std::size_t>(sg)]; }
+  double seg_top(int sg) const { return bounds_[static_cast<std::size_t>(sg) + 1]; }
   // Records a chip (mm) of tooth k at height h above its tip. Chips thinner than
   // chip_sampling are slivers of the discretisation, not engagement: not recorded.
-  void note(BoardAcc& A, std::size_t k, double h, double chip) const {
-    if (chip < s_.chip_sampling_mm) return;
+  bool note(BoardAcc& A, std::size_t k, double h, double chip) const {
+    if (chip < s_.chip_sampling_mm) return false;
     double& v = A.seg_h[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(seg_of(h))];
     v = std::max(v, chip);
+    return true;
+  }
+  // Extends the engaged part of tooth k's segment at the middle of [h0, h1] (heights above
+  // the tip, clipped to the segment).
+  void extend(BoardAcc& A, std::size_t k, double h0, double h1) const {
+    const int sg = seg_of(0.5 * (h0 + h1));
+    const std::size_t q = k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg);
+    A.seg_lo[q] = std::min(A.seg_lo[q], std::max(h0, seg_bottom(sg)));
+    A.seg_hi[q] = std::max(A.seg_hi[q], std::min(h1, seg_top(sg)));
   }
   // Grid index range covering [lo, hi] along a board axis.
   std::pair<int, int> idx(const DexelBoard& board, bool first, double lo, double hi) const {
@@ -440,6 +527,8 @@ class Stepper {
   TriDexel& work_;
   double d_, kappa_;
   int segs_;
+  double rc_, ht_, st_, inv_sin_;
+  std::vector<double> bounds_;  // segment boundaries' heights
 };
 
 }  // namespace
@@ -577,6 +666,8 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     }
     for (auto& A : bacc) {
       A.seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
+      A.seg_lo.assign(nz * static_cast<std::size_t>(segs), kInf);
+      A.seg_hi.assign(nz * static_cast<std::size_t>(segs), -kInf);
       A.removed_tooth.assign(nz, 0.0);
       A.removed_board = 0;
       A.updates = 0;
@@ -594,10 +685,14 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         }
       }
     });
-    std::vector<double> seg_h(nz * static_cast<std::size_t>(segs), 0.0);
+    std::vector<double> seg_h(nz * static_cast<std::size_t>(segs), 0.0), seg_lo(seg_h.size(), kInf),
+        seg_hi(seg_h.size(), -kInf);
     for (std::size_t b = 0; b < 3; ++b) {
-      for (std::size_t q = 0; q < seg_h.size(); ++q)
+      for (std::size_t q = 0; q < seg_h.size(); ++q) {
         seg_h[q] = std::max(seg_h[q], bacc[b].seg_h[q]);
+        seg_lo[q] = std::min(seg_lo[q], bacc[b].seg_lo[q]);
+        seg_hi[q] = std::max(seg_hi[q], bacc[b].seg_hi[q]);
+      }
       res.removed_by_board_mm3[b] += bacc[b].removed_board;
       res.dexel_updates += bacc[b].updates;
     }
@@ -612,8 +707,12 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         st.h_max_mm = std::max(st.h_max_mm, h);
         sum += h;
         ++st.engaged_segments;
-        res.chip_map.push_back({static_cast<std::uint32_t>(res.steps.size()),
-                                static_cast<std::uint32_t>(q), static_cast<float>(h)});
+        res.chip_map.push_back(
+            {static_cast<std::uint32_t>(res.steps.size()), static_cast<std::uint32_t>(q),
+             static_cast<float>(h),
+             static_cast<float>(seg_hi[q] > seg_lo[q] ? stepper.edge_length(seg_hi[q]) -
+                                                            stepper.edge_length(seg_lo[q])
+                                                      : 0.0)});
       }
     }
     st.h_mean_mm = st.engaged_segments > 0 ? sum / st.engaged_segments : 0.0;
