@@ -170,6 +170,21 @@ TEST(Sim, EnvelopeSweepRemovesTheSweptVolume) {
       EXPECT_NEAR(vb[b], want, bound) << b;
     }
     EXPECT_NEAR(vb[2], v, 1e-9 * want);
+    // The same half circle as 720 straight moves (the chord path of the sweep): the same
+    // volume on every board within the bound.
+    ToolPath poly;
+    for (int q = 0; q < 720; ++q) {
+      const double a0 = kPi * q / 720, a1 = kPi * (q + 1) / 720;
+      poly.append(Segment::line(Vec3(6 * std::cos(a0), 6 * std::sin(a0), -1),
+                                Vec3(6 * std::cos(a1), 6 * std::sin(a1), -1), Motion::feed, 1200));
+    }
+    TriDexel env2(box, d);
+    (void)sweep_envelope(poly, tool, env2, 0, poly.duration_s());
+    for (int b = 0; b < 3; ++b) {
+      EXPECT_NEAR(box.volume_mm3() - env2.boards[static_cast<std::size_t>(b)].volume_mm3(), vb[b],
+                  bound)
+          << b;
+    }
     // The same path time-stepped with the teeth, dwelling a revolution at the end.
     TriDexel work(box, d);
     SimSettings s;

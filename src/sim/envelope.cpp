@@ -8,17 +8,22 @@
 #include <limits>
 #include <optional>
 
+#include "sim/geometry.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
 
 namespace trochomill {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using sim_detail::kInf;
 
-// A chord of the path in plan view, its tip height the lower of its ends.
+// A piece of the path in plan view at one tip height (the lower of its ends): a chord from
+// (ax, ay) to (bx, by), or a circular arc about (cx, cy) of radius rho over the angles
+// [th0, th1] (counter-clockwise, at most a quarter turn) whose ends are (ax, ay), (bx, by).
 struct Piece {
   double ax, ay, bx, by, z;
+  bool arc = false;
+  double cx = 0, cy = 0, rho = 0, th0 = 0, th1 = 0;
 };
 
 // The offsets along a line of the points within r of the segment A-B (a capsule), in the
@@ -59,7 +64,7 @@ std::optional<Interval> capsule_on_line(double ax, double ay, double bx, double 
 }
 
 // [a] minus [b]: up to two intervals into out; returns how many.
-int minus(Interval a, std::optional<Interval> b, Interval out[2]) {
+int minus(Interval a, std::optional<Interval> b, Interval* out) {
   if (!b || b->hi <= a.lo || b->lo >= a.hi) {
     out[0] = a;
     return 1;
@@ -74,19 +79,19 @@ double dist_to_segment(double px, double py, const Piece& p) {
   const double ux = p.bx - p.ax, uy = p.by - p.ay, l2 = ux * ux + uy * uy;
   double t = l2 > 0 ? ((px - p.ax) * ux + (py - p.ay) * uy) / l2 : 0.0;
   t = std::clamp(t, 0.0, 1.0);
-  return std::hypot(px - p.ax - t * ux, py - p.ay - t * uy);
+  const double ex = px - p.ax - t * ux, ey = py - p.ay - t * uy;
+  return std::sqrt(ex * ex + ey * ey);
 }
 
-// Chords of the path between t0 and t1 within `tol` of it (greedy over points `step` apart).
-std::vector<Piece> chords(const ToolPath& path, double t0_s, double t1_s, double step, double tol) {
-  const PathSamples ends = sample_at_times(path, {t0_s, t1_s});
-  const double s0 = ends.s_mm[0], s1 = ends.s_mm[1];
+// Chords of the path between lengths s0 and s1 within `tol` of it (greedy over points `step`
+// apart), appended to `out`.
+void chords(const ToolPath& path, double s0, double s1, double step, double tol,
+            std::vector<Piece>& out) {
   std::vector<Vec3> pts;
   const auto n = static_cast<std::size_t>(std::ceil((s1 - s0) / step));
   for (std::size_t k = 0; k <= n; ++k) {
     pts.push_back(path.point_at_length(std::min(s1, s0 + static_cast<double>(k) * step)));
   }
-  std::vector<Piece> out;
   std::size_t i = 0;
   while (i + 1 < pts.size()) {
     std::size_t j = i + 1;
@@ -107,7 +112,111 @@ std::vector<Piece> chords(const ToolPath& path, double t0_s, double t1_s, double
         {pts[i].x(), pts[i].y(), pts[j].x(), pts[j].y(), std::min(pts[i].z(), pts[j].z())});
     i = j;
   }
+}
+
+// The path between t0 and t1 as pieces: its circular arcs in the XY plane exactly (split into
+// quarter turns at most), everything else as chords.
+std::vector<Piece> pieces_of(const ToolPath& path, double t0_s, double t1_s, double step,
+                             double tol) {
+  const PathSamples ends = sample_at_times(path, {t0_s, t1_s});
+  const double s0 = ends.s_mm[0], s1 = ends.s_mm[1];
+  std::vector<Piece> out;
+  double pending = s0;  // start of a stretch still to be cut into chords
+  for (std::size_t k = path.segment_at_length(s0); k < path.segments().size(); ++k) {
+    const Segment& seg = path.segments()[k];
+    const double a = std::max(s0, path.segment_start_length_mm(k));
+    const double b = std::min(s1, path.segment_start_length_mm(k) + seg.length_mm());
+    if (a >= s1) break;
+    if (!(b > a) || !seg.is_circular() || !seg.is_flat_xy()) continue;
+    if (a > pending) chords(path, pending, a, step, tol, out);
+    pending = b;
+    const Vec3 c = seg.center();
+    const double rho = seg.axis_a().norm();
+    const Vec3 pa = path.point_at_length(a), pb = path.point_at_length(b);
+    const double ta = std::atan2(pa.y() - c.y(), pa.x() - c.x());
+    const double span = (b - a) / rho;
+    // Counter-clockwise when a x b points up and u increases (or both reversed).
+    const bool ccw = (seg.axis_a().x() * seg.axis_b().y() - seg.axis_a().y() * seg.axis_b().x() >
+                      0) == (seg.u1() >= seg.u0());
+    const double lo = ccw ? ta : ta - span;
+    const int parts = std::max(1, static_cast<int>(std::ceil(span / (0.5 * kPi) - 1e-12)));
+    for (int q = 0; q < parts; ++q) {
+      Piece p{};
+      p.arc = true;
+      p.cx = c.x(), p.cy = c.y(), p.rho = rho, p.z = pa.z();
+      p.th0 = lo + span * q / parts;
+      p.th1 = lo + span * (q + 1) / parts;
+      p.ax = c.x() + rho * std::cos(p.th0), p.ay = c.y() + rho * std::sin(p.th0);
+      p.bx = c.x() + rho * std::cos(p.th1), p.by = c.y() + rho * std::sin(p.th1);
+      out.push_back(p);
+    }
+    (void)pb;
+  }
+  if (s1 > pending) chords(path, pending, s1, step, tol, out);
   return out;
+}
+
+// The piece's bounding box in plan: {x_lo, x_hi, y_lo, y_hi}.
+std::array<double, 4> bbox(const Piece& p) {
+  std::array<double, 4> b{std::min(p.ax, p.bx), std::max(p.ax, p.bx), std::min(p.ay, p.by),
+                          std::max(p.ay, p.by)};
+  if (p.arc) {
+    if (sim_detail::contains_angle(p.th0, p.th1, 0)) b[1] = p.cx + p.rho;
+    if (sim_detail::contains_angle(p.th0, p.th1, 0.5 * kPi)) b[3] = p.cy + p.rho;
+    if (sim_detail::contains_angle(p.th0, p.th1, kPi)) b[0] = p.cx - p.rho;
+    if (sim_detail::contains_angle(p.th0, p.th1, 1.5 * kPi)) b[2] = p.cy - p.rho;
+  }
+  return b;
+}
+
+// The points within r of an arc piece on the line {(t, yl)}: up to four intervals (the
+// annular sector's, up to two, and the end discs' chords; they may overlap).
+int arc_on_line(double cx, double cy, double rho, double th0, double th1, double r, double yl,
+                Interval out[4]) {
+  int n = 0;
+  const double p = yl - cy;
+  const double r_out = rho + r, r_in = std::max(0.0, rho - r);
+  if (const auto chord = sim_detail::SectorSlicer(th0, th1).on_line(p, r_out)) {
+    std::array<Interval, 2> parts{};
+    const int np = sim_detail::annulus_parts(p, chord->lo, chord->hi, r_in, r_out, parts);
+    for (int k = 0; k < np; ++k) {
+      out[n++] = {cx + parts[static_cast<std::size_t>(k)].lo,
+                  cx + parts[static_cast<std::size_t>(k)].hi};
+    }
+  }
+  for (const double th : {th0, th1}) {
+    const double ex = cx + rho * std::cos(th), ey = cy + rho * std::sin(th);
+    const double dy = yl - ey;
+    if (dy * dy < r * r) {
+      const double w = std::sqrt(r * r - dy * dy);
+      out[n++] = {ex - w, ex + w};
+    }
+  }
+  return n;
+}
+
+// The piece's points within r on the line {(t, yl)} in the plan frame (swap: the line
+// {(yl, t)} instead, t along y).
+int piece_on_line(const Piece& p, double r, double yl, bool swap, Interval out[4]) {
+  if (p.arc) {
+    return swap ? arc_on_line(p.cy, p.cx, p.rho, 0.5 * kPi - p.th1, 0.5 * kPi - p.th0, r, yl, out)
+                : arc_on_line(p.cx, p.cy, p.rho, p.th0, p.th1, r, yl, out);
+  }
+  const auto cap = swap ? capsule_on_line(p.ay, p.ax, p.by, p.bx, r, yl)
+                        : capsule_on_line(p.ax, p.ay, p.bx, p.by, r, yl);
+  if (!cap) return 0;
+  out[0] = *cap;
+  return 1;
+}
+
+double dist_to_piece(double px, double py, const Piece& p) {
+  if (!p.arc) return dist_to_segment(px, py, p);
+  const double dx = px - p.cx, dy = py - p.cy;
+  if (sim_detail::contains_angle(p.th0, p.th1, std::atan2(dy, dx))) {
+    return std::abs(std::sqrt(dx * dx + dy * dy) - p.rho);
+  }
+  const double ax = px - p.ax, ay = py - p.ay, bx = px - p.bx, by = py - p.by;
+  return std::sqrt(std::min(ax * ax + ay * ay, bx * bx + by * by));
 }
 
 }  // namespace
@@ -130,7 +239,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
   // falls short of the arc's outer side by its deviation, material the next cut would meet
   // as extra chip.
   const std::vector<Piece> pieces =
-      chords(path, t0_s, t1_s, std::min(0.05, d), std::min(0.25 * d, 0.001));
+      pieces_of(path, t0_s, t1_s, std::min(0.05, d), std::min(0.25 * d, 0.001));
   double volume = 0;
   auto idx = [&](const DexelBoard& board, int ax, int count, double lo, double hi) {
     const double o = work.box.lo[static_cast<std::size_t>(ax)];
@@ -149,30 +258,34 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       if (!(H > 0)) continue;
       // The start disc was inside the previous piece's capsule: only the rest is new (unless the
       // tool went down since, when the previous piece left material below).
-      const bool skip_start = q > 0 && pieces[q - 1].z + a_off <= tip + 1e-9;
+      const bool skip_start =
+          q > 0 && !p.arc && !pieces[q - 1].arc && pieces[q - 1].z + a_off <= tip + 1e-9;
       // The contour's smallest radius over the cutting height (unimodal: at an end).
       const double flat =
           std::max(0.0, std::min(tool.profile_radius(0), tool.profile_radius(H))) + r_off;
-      Interval parts[2];
       // Z board: rays along z at (x, y) = (u, v).
       if (bsel == 2) {
         DexelBoard& board = work.boards[2];
-        const auto [i0, i1] =
-            idx(board, 0, board.count_u(), std::min(p.ax, p.bx) - R, std::max(p.ax, p.bx) + R);
+        const auto bb = bbox(p);
+        const auto [i0, i1] = idx(board, 0, board.count_u(), bb[0] - R, bb[1] + R);
+        Interval segs[6];
         for (int i = i0; i <= i1; ++i) {
           const double x = board.u_of(i);
           // In the frame of lines x = const: along y, across x.
-          const auto cap = capsule_on_line(p.ay, p.ax, p.by, p.bx, R, x);
-          if (!cap) continue;
-          std::optional<Interval> start;
-          // Within the corner's reach the depth depends on the distance, which this piece may
-          // bring nearer: only the start disc's flat part was finished.
-          if (skip_start) start = capsule_on_line(p.ay, p.ax, p.ay, p.ax, flat, x);
-          const int np = minus(*cap, start, parts);
+          int np = 0;
+          if (skip_start) {
+            // Within the corner's reach the depth depends on the distance, which this piece
+            // may bring nearer: only the start disc's flat part was finished.
+            const auto cap = capsule_on_line(p.ay, p.ax, p.by, p.bx, R, x);
+            if (!cap) continue;
+            np = minus(*cap, capsule_on_line(p.ay, p.ax, p.ay, p.ax, flat, x), segs);
+          } else {
+            np = piece_on_line(p, R, x, true, segs);
+          }
           for (int k = 0; k < np; ++k) {
-            const auto [j0, j1] = idx(board, 1, board.count_v(), parts[k].lo, parts[k].hi);
+            const auto [j0, j1] = idx(board, 1, board.count_v(), segs[k].lo, segs[k].hi);
             for (int j = j0; j <= j1; ++j) {
-              const double rho = dist_to_segment(x, board.v_of(j), p);
+              const double rho = dist_to_piece(x, board.v_of(j), p);
               const auto reach = tool.heights_reaching(rho - r_off);
               if (!reach) continue;
               removed.clear();
@@ -183,44 +296,45 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
         }
       }
       // X board (rays along x at (y, z) = (u, v)) and Y board (rays along y at (z, x) = (u, v)):
-      // per layer, the capsule of that height's radius on each row.
+      // per layer, the piece's region of that height's radius on each row.
       if (bsel < 2) {
         const int b = bsel;
         DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
         const bool z_first = b == 1;
         const auto [z0, z1] = z_first ? idx(board, 2, board.count_u(), tip, tip + H)
                                       : idx(board, 2, board.count_v(), tip, tip + H);
+        const auto bb = bbox(p);
+        Interval segs[6];
         for (int zl = z0; zl <= z1; ++zl) {
           const double h = (z_first ? board.u_of(zl) : board.v_of(zl)) - tip;
           if (h < 0 || h > H) continue;
           const double Rh = tool.profile_radius(h) + r_off;
           if (!(Rh > 0)) continue;
           // Rows: board 0 over y, board 1 over x.
-          const double c_lo = b == 0 ? std::min(p.ay, p.by) : std::min(p.ax, p.bx);
-          const double c_hi = b == 0 ? std::max(p.ay, p.by) : std::max(p.ax, p.bx);
-          const auto [r0, r1] = b == 0 ? idx(board, 1, board.count_u(), c_lo - Rh, c_hi + Rh)
-                                       : idx(board, 0, board.count_v(), c_lo - Rh, c_hi + Rh);
+          const auto [r0, r1] = b == 0 ? idx(board, 1, board.count_u(), bb[2] - Rh, bb[3] + Rh)
+                                       : idx(board, 0, board.count_v(), bb[0] - Rh, bb[1] + Rh);
           for (int r = r0; r <= r1; ++r) {
             const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
-            std::optional<Interval> cap, start;
-            if (b == 0) {
-              const double y = board.u_of(i);
-              cap = capsule_on_line(p.ax, p.ay, p.bx, p.by, Rh, y);
-              if (skip_start) start = capsule_on_line(p.ax, p.ay, p.ax, p.ay, Rh, y);
+            const double line = b == 0 ? board.u_of(i) : board.v_of(j);
+            int np = 0;
+            if (skip_start) {
+              const auto cap = b == 0 ? capsule_on_line(p.ax, p.ay, p.bx, p.by, Rh, line)
+                                      : capsule_on_line(p.ay, p.ax, p.by, p.bx, Rh, line);
+              if (!cap) continue;
+              np = minus(*cap,
+                         b == 0 ? capsule_on_line(p.ax, p.ay, p.ax, p.ay, Rh, line)
+                                : capsule_on_line(p.ay, p.ax, p.ay, p.ax, Rh, line),
+                         segs);
             } else {
-              const double x = board.v_of(j);
-              cap = capsule_on_line(p.ay, p.ax, p.by, p.bx, Rh, x);
-              if (skip_start) start = capsule_on_line(p.ay, p.ax, p.ay, p.ax, Rh, x);
+              np = piece_on_line(p, Rh, line, b == 1, segs);
             }
-            if (!cap) continue;
-            const int np = minus(*cap, start, parts);
             for (int k = 0; k < np; ++k) {
               if (board.find(i, j) == nullptr &&
-                  !(board.full().hi > parts[k].lo && board.full().lo < parts[k].hi)) {
+                  !(board.full().hi > segs[k].lo && board.full().lo < segs[k].hi)) {
                 continue;
               }
               removed.clear();
-              board.ray(i, j).subtract(parts[k].lo, parts[k].hi, removed);
+              board.ray(i, j).subtract(segs[k].lo, segs[k].hi, removed);
             }
           }
         }

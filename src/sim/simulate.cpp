@@ -12,6 +12,7 @@
 #include <optional>
 #include <utility>
 
+#include "sim/geometry.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/units.hpp"
@@ -163,127 +164,45 @@ SimTool sim_tool(const Job& job, const SimSettings& s) {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using sim_detail::annulus_parts;
+using sim_detail::contains_angle;
+using sim_detail::kInf;
+using sim_detail::SectorSlicer;
 
-// Whether the angle range [a0, a1] contains alpha modulo 2 pi.
-bool contains_angle(double a0, double a1, double alpha) {
-  const double m = std::ceil((a0 - alpha) / kTwoPi);
-  return alpha + m * kTwoPi <= a1;
-}
-
-// The offsets x (along the line) of the points of the thin sector {t (cos a, sin a): 0 <= t
-// <= r, a in [a0, a1]} (a1 - a0 < pi) on lines at signed distance dy from the centre, parallel
-// to the first axis: x = dy cot a where sin a has the sign of dy, clipped to the disc's chord.
-// The angles' sines and cosines are taken once per sector, the lines then cost no trigonometry.
-class SectorSlicer {
- public:
-  SectorSlicer(double a0, double a1)
-      : has0_(contains_angle(a0, a1, 0.0)), has_pi_(contains_angle(a0, a1, kPi)) {
-    // Split at the multiples of pi (sin a = 0); each piece keeps lines on its sine's side.
-    const double cut = (std::floor(a0 / kPi) + 1) * kPi;
-    set(piece_[0], a0, std::min(a1, cut));
-    set(piece_[1], cut, a1);
+// An angle range [a0, a1] with its cosines and sines and the axes it crosses, taken once:
+// the bounding boxes of its annular sectors then cost no trigonometry.
+struct AngleSpan {
+  AngleSpan(double a0_, double a1_)
+      : a0(a0_),
+        a1(a1_),
+        c0(std::cos(a0_)),
+        s0(std::sin(a0_)),
+        c1(std::cos(a1_)),
+        s1(std::sin(a1_)) {
+    for (int q = 0; q < 4; ++q)
+      axis[q] = a1 - a0 >= kTwoPi || contains_angle(a0, a1, q * 0.5 * kPi);
   }
-
-  [[nodiscard]] std::optional<Interval> on_line(double dy, double r) const {
-    if (dy * dy >= r * r) return std::nullopt;
-    const double w = std::sqrt(r * r - dy * dy);
-    double lo = kInf, hi = -kInf;
-    if (dy == 0) {
-      if (has0_) lo = std::min(lo, 0.0), hi = std::max(hi, w);
-      if (has_pi_) lo = std::min(lo, -w), hi = std::max(hi, 0.0);
-    } else {
-      for (const Piece& p : piece_) {
-        if (!p.valid || p.s * dy <= 0) continue;
-        for (int e = 0; e < 2; ++e) {
-          const double sa = p.sin[e], ca = p.cos[e];
-          double x = 0;
-          if (std::abs(sa) < 1e-300 || sa * dy <= 0) {  // at a split: the line runs off
-            x = (ca * dy * p.s > 0) ? kInf : -kInf;
-          } else {
-            x = dy * ca / sa;
-          }
-          lo = std::min(lo, x), hi = std::max(hi, x);
-        }
-      }
-    }
-    lo = std::max(lo, -w);
-    hi = std::min(hi, w);
-    if (lo < hi) return Interval{lo, hi};
-    return std::nullopt;
+  // Bounding box of {t (cos a, sin a): r_in <= t <= r_out, a in [a0, a1]} (r_in 0: the
+  // sector, with the centre): {x_lo, x_hi, y_lo, y_hi}.
+  [[nodiscard]] std::array<double, 4> box(double r_in, double r_out) const {
+    std::array<double, 4> b{kInf, -kInf, kInf, -kInf};
+    auto add = [&](double x, double y) {
+      b[0] = std::min(b[0], x), b[1] = std::max(b[1], x), b[2] = std::min(b[2], y),
+      b[3] = std::max(b[3], y);
+    };
+    for (const double r : {r_in, r_out}) add(r * c0, r * s0), add(r * c1, r * s1);
+    if (axis[0]) add(r_out, 0);
+    if (axis[1]) add(0, r_out);
+    if (axis[2]) add(-r_out, 0);
+    if (axis[3]) add(0, -r_out);
+    return b;
   }
-
- private:
-  struct Piece {
-    bool valid = false;
-    double s = 0;  // sine at the piece's middle
-    double sin[2]{}, cos[2]{};
-  };
-  static void set(Piece& p, double p0, double p1) {
-    p.valid = p1 > p0;
-    if (!p.valid) return;
-    p.s = std::sin(0.5 * (p0 + p1));
-    p.sin[0] = std::sin(p0), p.cos[0] = std::cos(p0);
-    p.sin[1] = std::sin(p1), p.cos[1] = std::cos(p1);
-  }
-  bool has0_, has_pi_;
-  Piece piece_[2];
+  double a0, a1, c0, s0, c1, s1;
+  bool axis[4]{};
 };
 
-// Bounding box of the sector {t (cos a, sin a): 0 <= t <= r, a in [a0, a1]} about the
-// origin: {x_lo, x_hi, y_lo, y_hi}.
-std::array<double, 4> sector_box(double a0, double a1, double r) {
-  std::array<double, 4> b{0, 0, 0, 0};
-  auto add = [&](double a) {
-    const double x = r * std::cos(a), y = r * std::sin(a);
-    b[0] = std::min(b[0], x), b[1] = std::max(b[1], x), b[2] = std::min(b[2], y),
-    b[3] = std::max(b[3], y);
-  };
-  add(a0);
-  add(a1);
-  for (int q = 0; q < 4; ++q) {
-    if (a1 - a0 >= kTwoPi || contains_angle(a0, a1, q * 0.5 * kPi)) add(q * 0.5 * kPi);
-  }
-  return b;
-}
-
-// Bounding box of the annular sector {t (cos a, sin a): r_in <= t <= r_out, a in [a0, a1]}
-// about the origin: {x_lo, x_hi, y_lo, y_hi}.
 std::array<double, 4> annular_box(double a0, double a1, double r_in, double r_out) {
-  if (!(r_in > 0)) return sector_box(a0, a1, r_out);
-  std::array<double, 4> b{kInf, -kInf, kInf, -kInf};
-  auto add = [&](double a, double r) {
-    const double x = r * std::cos(a), y = r * std::sin(a);
-    b[0] = std::min(b[0], x), b[1] = std::max(b[1], x), b[2] = std::min(b[2], y),
-    b[3] = std::max(b[3], y);
-  };
-  for (const double r : {r_in, r_out}) add(a0, r), add(a1, r);
-  for (int q = 0; q < 4; ++q) {
-    if (a1 - a0 >= kTwoPi || contains_angle(a0, a1, q * 0.5 * kPi)) add(q * 0.5 * kPi, r_out);
-  }
-  return b;
-}
-
-// The parts of [lo, hi] (offsets along a line at distance p from the centre) whose distance
-// from the centre lies in [r_in, r_out]: up to two intervals, returned through `out`.
-int annulus_parts(double p, double lo, double hi, double r_in, double r_out,
-                  std::array<Interval, 2>& out) {
-  const double pp = p * p;
-  if (pp >= r_out * r_out) return 0;
-  const double to = std::sqrt(r_out * r_out - pp);
-  const double ti = pp < r_in * r_in ? std::sqrt(r_in * r_in - pp) : 0.0;
-  int n = 0;
-  auto add = [&](double a, double b) {
-    a = std::max(a, lo), b = std::min(b, hi);
-    if (a < b) out[static_cast<std::size_t>(n++)] = {a, b};
-  };
-  if (ti > 0) {
-    add(-to, -ti);
-    add(ti, to);
-  } else {
-    add(-to, to);
-  }
-  return n;
+  return AngleSpan(a0, a1).box(std::max(0.0, r_in), r_out);
 }
 
 // Whether a ray (nullptr: untouched, the full stock interval `full`) holds material in
@@ -366,7 +285,7 @@ class Stepper {
         for (int j = j0; j <= j1; ++j) {
           // Most rays the wedge crosses were emptied long ago: skip them first.
           if (!has_material(board.find(i, j), board.full(), w.tip_z, w.tip_z + w.H)) continue;
-          const double dy = board.v_of(j) - w.cy, rho = std::hypot(dx, dy);
+          const double dy = board.v_of(j) - w.cy, rho = std::sqrt(dx * dx + dy * dy);
           if (rho > rmax) continue;
           // The contour reaches rho only between these heights (the corner from below, a
           // lead angle from above).
@@ -427,6 +346,14 @@ class Stepper {
     const bool z_first = b == 1;  // board 1's u is z; board 0's v is z
     const auto [z0, z1] = idx(board, z_first, w.tip_z, w.tip_z + w.H);
     std::array<Interval, 2> parts{};
+    // Without a helix every layer has the wedge's angles: their trigonometry once.
+    std::optional<AngleSpan> flat_span;
+    std::optional<SectorSlicer> flat_slicer;
+    if (kappa_ == 0) {
+      flat_span.emplace(w.a0, w.a1);
+      flat_slicer.emplace(b == 0 ? SectorSlicer(w.a0, w.a1)
+                                 : SectorSlicer(w.a0 - 0.5 * kPi, w.a1 - 0.5 * kPi));
+    }
     for (int zl = z0; zl <= z1; ++zl) {
       const double z = z_first ? board.u_of(zl) : board.v_of(zl);
       const double h = z - w.tip_z;
@@ -435,9 +362,10 @@ class Stepper {
       if (!(R_h > 0)) continue;
       const double r_in = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, R_h - w.r_in_drop);
       const double ah0 = w.a0 + h * kappa_, ah1 = w.a1 + h * kappa_;
-      const auto bx = annular_box(ah0, ah1, r_in, R_h);
-      const SectorSlicer slicer =
-          b == 0 ? SectorSlicer(ah0, ah1) : SectorSlicer(ah0 - 0.5 * kPi, ah1 - 0.5 * kPi);
+      const auto bx = flat_span ? flat_span->box(r_in, R_h) : annular_box(ah0, ah1, r_in, R_h);
+      const SectorSlicer slicer = flat_slicer ? *flat_slicer
+                                  : b == 0    ? SectorSlicer(ah0, ah1)
+                                              : SectorSlicer(ah0 - 0.5 * kPi, ah1 - 0.5 * kPi);
       // Rows: board 0 over y (its u), board 1 over x (its v).
       const auto [r0, r1] = b == 0 ? idx(board, true, w.cy + bx[2], w.cy + bx[3])
                                    : idx(board, false, w.cx + bx[0], w.cx + bx[1]);
@@ -472,7 +400,7 @@ class Stepper {
           A.removed_board += (p.hi - p.lo) * d_ * d_;
           // The piece's point nearest the centre: the perpendicular's foot, clamped.
           const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
-          if (note(A, k, h, (R_h - std::hypot(perp, t)) * tool_.edge_sine(h))) {
+          if (note(A, k, h, (R_h - std::sqrt(perp * perp + t * t)) * tool_.edge_sine(h))) {
             // One layer: a spacing of height.
             extend(A, k, h - 0.5 * d_, h + 0.5 * d_);
           }
