@@ -1,8 +1,9 @@
 // Benchmarks of the tri-dexel simulation (issue 5), one thread each (the boards run in
 // parallel in the CLI; here the per-core rate is measured):
-//  - Sim/WagihCycleWindow: 0.1 s of a steady trochoid cycle (Wagih's example, 0.02 mm dexels,
-//    600 steps per revolution) after the envelope pre-roll; counters: dexel updates per
-//    second (subtractions that removed material) and steps per second.
+//  - Sim/WagihCycleWindow: 0.1 s of a steady trochoid cycle (Wagih's example, 6 mm deep,
+//    35 degree helix, 0.02 mm dexels, 600 steps per revolution) after the envelope pre-roll
+//    and a revolution with the teeth (untimed); counters: dexel updates per second
+//    (subtractions that removed material) and steps per second.
 //  - Sim/BergmannEnvelope: the envelope sweep of the first 10 s of the Bergmann case at
 //    0.01 mm.
 // The whole Bergmann arc at the paper's resolution is timed by scripts/bench-bergmann-arc.
@@ -35,7 +36,10 @@ void SimWagihCycleWindow(benchmark::State& state) {
   for (auto _ : state) {
     state.PauseTiming();
     TriDexel work(job_stock(job), job.simulation.resolution_mm);
-    (void)sweep_envelope(path, tool, work, 0, from + 0.5);
+    (void)sweep_envelope(path, tool, work, 0, from + 0.47);
+    SimControl lead;
+    lead.envelope_before = true;
+    (void)simulate(path, tool, job.simulation, work, from + 0.47, from + 0.5, lead);
     state.ResumeTiming();
     const SimResult r = simulate(path, tool, job.simulation, work, from + 0.5, from + 0.6);
     updates += static_cast<double>(r.dexel_updates);

@@ -651,9 +651,10 @@ namespace {
 // The annulus argument (docs/models.md section 11): after a revolution, searching only the
 // annulus beyond each tooth's contour less the path since an earlier tooth (no higher) swept
 // the same angles finds all the material. Against the same wedges searched whole, on a
-// trochoidal cut with radial and axial runout, a helix and three unequally pitched teeth:
-// bit-identical removed volumes, chip maps and update counts (the rays left out hold no
-// material, so nothing else changes).
+// trochoidal cut with radial and axial runout, a helix and three unequally pitched teeth,
+// starting from the envelope swept up to the window (so the annulus applies from the first
+// step, bounded by the path since): bit-identical removed volumes, chip maps and update
+// counts (the rays left out hold no material, so nothing else changes).
 TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
   const Job job = load_job(
       test::example("wagih2023/trochoidal.toml"),
@@ -671,8 +672,11 @@ TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
   TriDexel w1(job_stock(job), 0.05), w2(job_stock(job), 0.05);
   (void)sweep_envelope(path, tool, w1, 0, from);
   (void)sweep_envelope(path, tool, w2, 0, from);
-  const SimResult a = simulate(path, tool, job.simulation, w1, from, to);
-  const SimResult b = simulate(path, tool, ex, w2, from, to);
+  // Both from the envelope: the annulus from the first step.
+  SimControl after;
+  after.envelope_before = true;
+  const SimResult a = simulate(path, tool, job.simulation, w1, from, to, after);
+  const SimResult b = simulate(path, tool, ex, w2, from, to, after);
   ASSERT_EQ(a.steps.size(), b.steps.size());
   EXPECT_EQ(a.removed_by_board_mm3, b.removed_by_board_mm3);
   EXPECT_EQ(a.dexel_updates, b.dexel_updates);

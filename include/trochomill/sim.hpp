@@ -209,6 +209,9 @@ struct SimControl {
   /// When it turns true (e.g. from a SIGINT handler) the simulation stops after the current
   /// step and returns what it has, with `complete = false`.
   const std::atomic<bool>* cancel = nullptr;
+  /// The tool's envelope was swept (sweep_envelope) up to the call's start: the wedges may
+  /// search only the annulus from the first step (docs/models.md section 11).
+  bool envelope_before = false;
 };
 
 /// Simulates the path from t0 to t1 (s) on the workpiece (modified in place).

@@ -544,7 +544,11 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     cum[n % ring_n] = cum_now;
     level_steps = std::abs(ps.z_mm[n] - ps.z_mm[n - 1]) > 1e-9 ? 0 : level_steps + 1;
     const bool settled = n > spr + 2 && level_steps >= spr + 2;
-    const double D = settled ? cum_now - cum[(n - spr) % ring_n] : kInf;
+    // With the envelope swept up to t0 nothing is left within the contour of the centre at t0,
+    // so from the start nothing nearer the present centre than the contour less the path
+    // since t0 (at constant depth since t0).
+    const bool enveloped = control.envelope_before && level_steps + 1 >= n;
+    const double D = settled ? cum_now - cum[(n - spr) % ring_n] : enveloped ? cum_now : kInf;
     const bool annulus = D + d < min_core;
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
     const double ta = times[n - 1], tb = times[n];
@@ -564,7 +568,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       if (annulus) {
         double drop = D;
         for (const Lag& l : lags[k]) {
-          drop = std::min(drop, l.dr + cum_now - cum[(n - l.steps) % ring_n]);
+          if (n >= l.steps + 1) drop = std::min(drop, l.dr + cum_now - cum[(n - l.steps) % ring_n]);
         }
         w.r_in_drop = s.exhaustive ? kInf : std::max(0.0, drop) + d;
         w.cx = c[0], w.cy = c[1];
@@ -700,7 +704,9 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
     const double rev = kTwoPi / std::abs(tool.omega_rad_per_s);
     const double lead_from = std::max(0.0, from_s - rev);
     if (lead_from > 0) (void)sweep_envelope(path, tool, work, 0, lead_from);
-    (void)simulate(path, tool, s, work, lead_from, from_s);
+    SimControl lead;
+    lead.envelope_before = lead_from > 0;
+    (void)simulate(path, tool, s, work, lead_from, from_s, lead);
     out.pre_roll_s = from_s;
     out.pre_roll_wall_s = since(t0);
   }
