@@ -26,19 +26,20 @@ struct Interval {
   double lo = 0, hi = 0;
 };
 
-/// A dexel: sorted, disjoint material intervals along one ray. One interval (the common
-/// case: a ray through the floor or a wall) is stored inline; more go to the heap.
+/// A dexel: sorted, disjoint material intervals along one ray. Up to two intervals (the
+/// common cases: a ray through the floor, or across the slot with a wall on each side) are
+/// stored inline; more go to the heap.
 class Dexel {
  public:
   Dexel() = default;
-  explicit Dexel(Interval full) : in_(full), n_(1) {}
+  explicit Dexel(Interval full) : in_{full, {}}, n_(1) {}
   Dexel(const Dexel& o);
   Dexel& operator=(const Dexel& o);
   Dexel(Dexel&&) noexcept = default;
   Dexel& operator=(Dexel&&) noexcept = default;
   ~Dexel() = default;
   [[nodiscard]] std::span<const Interval> intervals() const noexcept {
-    return {heap_ ? heap_.get() : &in_, n_};
+    return {heap_ ? heap_.get() : in_, n_};
   }
   /// Removes [a, b] and appends the removed pieces to `removed` (in order). Returns the
   /// removed length (mm).
@@ -50,7 +51,7 @@ class Dexel {
   }
 
  private:
-  Interval in_{};
+  Interval in_[2]{};
   std::uint32_t n_ = 0, cap_ = 0;
   std::unique_ptr<Interval[]> heap_;
 };
@@ -89,6 +90,12 @@ class DexelBoard {
   static constexpr int kTile = 64;
 
  private:
+  // A ray's place in its tile: the board's inner loops run along u on the X board (rows of a
+  // layer) and along v on the others, and those neighbours are kept adjacent in memory.
+  [[nodiscard]] std::size_t in_tile(int i, int j) const noexcept {
+    const int a = i % kTile, b = j % kTile;
+    return static_cast<std::size_t>(axis_ == 0 ? b * kTile + a : a * kTile + b);
+  }
   [[nodiscard]] std::size_t tile_index(int i, int j) const noexcept {
     return static_cast<std::size_t>(i / kTile) * static_cast<std::size_t>(tv_) +
            static_cast<std::size_t>(j / kTile);

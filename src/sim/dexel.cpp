@@ -9,7 +9,7 @@
 
 namespace trochomill {
 
-Dexel::Dexel(const Dexel& o) : in_(o.in_), n_(o.n_), cap_(o.cap_) {
+Dexel::Dexel(const Dexel& o) : in_{o.in_[0], o.in_[1]}, n_(o.n_), cap_(o.cap_) {
   if (o.heap_) {
     heap_ = std::make_unique<Interval[]>(cap_);
     std::copy(o.heap_.get(), o.heap_.get() + n_, heap_.get());
@@ -23,7 +23,7 @@ Dexel& Dexel::operator=(const Dexel& o) {
 
 double Dexel::subtract(double a, double b, std::vector<Interval>& removed) {
   if (!(b > a) || n_ == 0) return 0.0;
-  Interval* v = heap_ ? heap_.get() : &in_;
+  Interval* v = heap_ ? heap_.get() : in_;
   if (b <= v[0].lo || a >= v[n_ - 1].hi) return 0.0;
   // Intervals [first, last) overlap (a, b); at most the first and the last keep a piece.
   std::uint32_t first = 0;
@@ -42,12 +42,8 @@ double Dexel::subtract(double a, double b, std::vector<Interval>& removed) {
   if (v[first].lo < a) keep[nk++] = {v[first].lo, a};
   if (v[last - 1].hi > b) keep[nk++] = {b, v[last - 1].hi};
   const std::uint32_t n_new = n_ - (last - first) + static_cast<std::uint32_t>(nk);
-  if (n_new <= 1 && !heap_) {  // inline stays inline (n_ was 1)
-    if (nk == 1) in_ = keep[0];
-    n_ = n_new;
-    return cut;
-  }
-  if (!heap_ || n_new > cap_) {  // grow into the heap: only a split of the widest case
+  const std::uint32_t cap_now = heap_ ? cap_ : 2;
+  if (n_new > cap_now) {  // grow into the heap: only a split of the widest case
     const std::uint32_t cap = std::max<std::uint32_t>(4, 2 * n_new);
     auto h = std::make_unique<Interval[]>(cap);
     std::copy(v, v + first, h.get());
@@ -104,13 +100,13 @@ Dexel& DexelBoard::ray(int i, int j) {
     for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = Dexel(full_);
     ++touched_;
   }
-  return tile[static_cast<std::size_t>((i % kTile) * kTile + (j % kTile))];
+  return tile[in_tile(i, j)];
 }
 
 const Dexel* DexelBoard::find(int i, int j) const {
   const auto& tile = tiles_[tile_index(i, j)];
   if (!tile) return nullptr;
-  return &tile[static_cast<std::size_t>((i % kTile) * kTile + (j % kTile))];
+  return &tile[in_tile(i, j)];
 }
 
 double DexelBoard::volume_mm3() const {
@@ -126,7 +122,7 @@ double DexelBoard::volume_mm3() const {
           const int i = ti * kTile + a, j = tj * kTile + b;
           if (i >= nu_ || j >= nv_) continue;
           touched_rays += 1;
-          len += tile[static_cast<std::size_t>(a * kTile + b)].length();
+          len += tile[in_tile(i, j)].length();
         }
       }
     }
