@@ -269,6 +269,15 @@ TEST(Sim, FullSlotChipPeaksAtFz) {
     }
   }
   EXPECT_GT(sum_w / full, 0.08);
+  // The segments' volumes add up to the teeth's (Z board): the map loses only the pieces of
+  // segments whose chip is below chip_sampling (slivers), bounded here by 1 %.
+  double seg_v = 0, tooth_v = 0;
+  for (const ChipEntry& c : r.chip_map) seg_v += c.v_mm3;
+  for (const SimStep& st : r.steps) {
+    for (const double v : st.removed_mm3) tooth_v += v;
+  }
+  EXPECT_NEAR(seg_v, tooth_v, 0.01 * tooth_v);
+  EXPECT_LE(seg_v, tooth_v * (1 + 1e-6));
   EXPECT_GT(full, 100);
 }
 
@@ -509,6 +518,7 @@ TEST(Sim, ChipMapHdf5RoundTrip) {
   EXPECT_EQ(back.removed_mm3, m.removed_mm3);
   EXPECT_EQ(back.h_mm, m.h_mm);
   EXPECT_EQ(back.w_mm, m.w_mm);
+  EXPECT_EQ(back.v_mm3, m.v_mm3);
   EXPECT_EQ(back.segment_height_mm, m.segment_height_mm);
   EXPECT_THROW((void)read_chip_map_h5(file), Error);  // gone: a clear error, no crash
 }

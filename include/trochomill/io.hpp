@@ -30,10 +30,12 @@ struct ChipMapData {
   std::vector<double> removed_mm3;        ///< per step and tooth (mm^3)
   std::vector<float> h_mm;                ///< uncut chip thickness (mm)
   std::vector<float> w_mm;                ///< engaged width along the edge (mm), same layout
+  std::vector<float> v_mm3;               ///< removed volume (mm^3), same layout
   std::vector<double> segment_height_mm;  ///< segment centres above the tip (mm)
 };
 
-/// Writes the chip map as HDF5 (datasets t_s, tip_mm, removed_mm3, h_mm and w_mm (deflate),
+/// Writes the chip map as HDF5 (datasets t_s, tip_mm, removed_mm3, h_mm, w_mm and v_mm3
+/// (deflate),
 /// segment_height_mm, each with a "unit" attribute; root attributes teeth,
 /// segments_per_tooth, resolution_mm, steps_per_rev, complete), atomically. Throws Error.
 void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m);

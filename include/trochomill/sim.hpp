@@ -197,6 +197,7 @@ struct ChipEntry {
   std::uint32_t segment = 0;  ///< tooth * segments_per_tooth + segment along the edge
   float h_mm = 0;             ///< uncut chip thickness, normal to the edge
   float w_mm = 0;             ///< engaged width: the chip's extent along the edge (<= w_s)
+  float v_mm3 = 0;            ///< volume the segment removed in the step (Z board)
 };
 
 struct SimResult {

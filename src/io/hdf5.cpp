@@ -74,7 +74,8 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) 
   const std::size_t steps = m.t_s.size();
   const std::size_t cols = m.teeth * m.segments_per_tooth;
   if (m.h_mm.size() != steps * cols || m.w_mm.size() != steps * cols ||
-      m.tip_mm.size() != 3 * steps || m.removed_mm3.size() != steps * m.teeth) {
+      m.v_mm3.size() != steps * cols || m.tip_mm.size() != 3 * steps ||
+      m.removed_mm3.size() != steps * m.teeth) {
     throw Error("write_chip_map_h5: inconsistent chip map sizes");
   }
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by exceptions
@@ -96,6 +97,8 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) 
                     true);
       write_dataset(file, "w_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.w_mm.data(), "mm",
                     true);
+      write_dataset(file, "v_mm3", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.v_mm3.data(),
+                    "mm^3", true);
       write_dataset(file, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE,
                     {m.segment_height_mm.size()}, m.segment_height_mm.data(), "mm");
       write_attr(file, "teeth", static_cast<double>(m.teeth));
@@ -148,6 +151,7 @@ ChipMapData read_chip_map_h5(const std::filesystem::path& path) {
   m.removed_mm3.resize(steps * m.teeth);
   m.h_mm.resize(steps * hd[1]);
   m.w_mm.resize(steps * hd[1]);
+  m.v_mm3.resize(steps * hd[1]);
   m.segment_height_mm.resize(dims_of("segment_height_mm")[0]);
   if (steps > 0) {
     read("t_s", H5T_NATIVE_DOUBLE, m.t_s.data());
@@ -155,6 +159,7 @@ ChipMapData read_chip_map_h5(const std::filesystem::path& path) {
     read("removed_mm3", H5T_NATIVE_DOUBLE, m.removed_mm3.data());
     read("h_mm", H5T_NATIVE_FLOAT, m.h_mm.data());
     read("w_mm", H5T_NATIVE_FLOAT, m.w_mm.data());
+    read("v_mm3", H5T_NATIVE_FLOAT, m.v_mm3.data());
   }
   if (!m.segment_height_mm.empty()) {
     read("segment_height_mm", H5T_NATIVE_DOUBLE, m.segment_height_mm.data());

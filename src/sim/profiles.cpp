@@ -103,6 +103,7 @@ ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSett
   const std::size_t cols = m.teeth * m.segments_per_tooth;
   m.h_mm.assign(r.steps.size() * cols, 0.0f);
   m.w_mm.assign(r.steps.size() * cols, 0.0f);
+  m.v_mm3.assign(r.steps.size() * cols, 0.0f);
   for (const SimStep& st : r.steps) {
     m.t_s.push_back(st.t_s);
     m.tip_mm.insert(m.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
@@ -113,6 +114,7 @@ ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSett
   for (const ChipEntry& c : r.chip_map) {
     m.h_mm[c.step * cols + c.segment] = c.h_mm;
     m.w_mm[c.step * cols + c.segment] = c.w_mm;
+    m.v_mm3[c.step * cols + c.segment] = c.v_mm3;
   }
   for (std::size_t g = 0; g < m.segments_per_tooth; ++g) {
     m.segment_height_mm.push_back(

@@ -226,7 +226,7 @@ struct Wedge {
 
 // Accumulators of one board (merged in board order: the same numbers for any thread count).
 struct BoardAcc {
-  std::vector<double> seg_h, seg_lo, seg_hi, removed_tooth;
+  std::vector<double> seg_h, seg_lo, seg_hi, seg_v, removed_tooth;
   double removed_board = 0;
   std::uint64_t updates = 0;
   std::vector<Interval> removed;
@@ -327,6 +327,8 @@ class Stepper {
               const double h = tool_.widest_height(a, std::min(h_hi, seg_top(sg)));
               const double b = std::min(h_hi, seg_top(sg));
               if (!(b > a)) continue;  // the piece only touches this segment
+              A.seg_v[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg)] +=
+                  (b - a) * d_ * d_;
               if (note(A, k, a, (tool_.profile_radius(h) + w.r_off - rho) * tool_.edge_sine(h))) {
                 // The engaged width: the pieces' extent along the segment.
                 extend(A, k, a, b);
@@ -599,6 +601,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     for (auto& A : bacc) {
       A.seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
       A.seg_lo.assign(nz * static_cast<std::size_t>(segs), kInf);
+      A.seg_v.assign(nz * static_cast<std::size_t>(segs), 0.0);
       A.seg_hi.assign(nz * static_cast<std::size_t>(segs), -kInf);
       A.removed_tooth.assign(nz, 0.0);
       A.removed_board = 0;
@@ -644,7 +647,8 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
              static_cast<float>(h),
              static_cast<float>(seg_hi[q] > seg_lo[q] ? stepper.edge_length(seg_hi[q]) -
                                                             stepper.edge_length(seg_lo[q])
-                                                      : 0.0)});
+                                                      : 0.0),
+             static_cast<float>(bacc[2].seg_v[q])});
       }
     }
     st.h_mean_mm = st.engaged_segments > 0 ? sum / st.engaged_segments : 0.0;
