@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -751,6 +752,48 @@ TEST(Sim, EdgeGridFollowsTheContour) {
     const int k = t.segment_at(h);
     EXPECT_LE(t.height_at_length(k * 0.1), h + 1e-12);
     EXPECT_GT(t.height_at_length((k + 1) * 0.1), h);
+  }
+}
+
+}  // namespace
+}  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// Cancellation (Ctrl-C in the CLI): a flag raised before the run stops it in the pre-roll,
+// with no steps and `complete` false; raised from the progress callback after some steps, the
+// window keeps the steps computed so far (fewer than the whole) and is marked incomplete.
+TEST(Sim, CancelKeepsWhatWasComputed) {
+  const Job job = load_job(
+      test::example("wagih2023/trochoidal.toml"),
+      {parse_override("slot.depth=0.5"), parse_override("slot.length=6"),
+       parse_override("simulation.resolution=0.1"), parse_override("simulation.steps_per_rev=60")});
+  const ToolPath path = plan_path(job).path;
+  const auto [from, to] = cycle_window(path, 2, 3);
+  std::atomic<bool> stop{true};
+  SimControl c;
+  c.cancel = &stop;
+  const JobSimulation early = simulate_job(job, path, from, to, c);
+  EXPECT_FALSE(early.result.complete);
+  EXPECT_TRUE(early.result.steps.empty());
+  ASSERT_NE(early.work, nullptr);
+
+  stop = false;
+  std::size_t calls = 0;
+  c.progress = [&](std::size_t done, std::size_t total) {
+    if (++calls == 3) stop = true;
+    EXPECT_LE(done, total);
+  };
+  const JobSimulation part = simulate_job(job, path, from, to, c);
+  EXPECT_FALSE(part.result.complete);
+  EXPECT_GT(part.result.steps.size(), 0u);
+  const JobSimulation whole = simulate_job(job, path, from, to);
+  EXPECT_TRUE(whole.result.complete);
+  EXPECT_LT(part.result.steps.size(), whole.result.steps.size());
+  // What was computed is what the whole run computed up to there.
+  for (std::size_t n = 0; n < part.result.steps.size(); ++n) {
+    ASSERT_EQ(part.result.steps[n].h_max_mm, whole.result.steps[n].h_max_mm);
   }
 }
 

@@ -259,8 +259,9 @@ struct HeightField {
 /// along chords within a quarter spacing of the path and 1 um, without teeth or time steps. Fast:
 /// the workpiece as that part of the cut leaves it, less the feed marks (about f_z^2 / 8R) the
 /// teeth would leave. Returns the volume removed from the Z board (mm^3).
+/// `cancel` (optional) stops it between pieces.
 double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
-                      double t1_s);
+                      double t1_s, const std::atomic<bool>* cancel = nullptr);
 
 /// The result's chip map made dense (the HDF5 layout, see ChipMapData).
 [[nodiscard]] ChipMapData chip_map_data(const SimResult& r, const SimTool& tool,

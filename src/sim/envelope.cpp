@@ -222,7 +222,7 @@ double dist_to_piece(double px, double py, const Piece& p) {
 }  // namespace
 
 double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
-                      double t1_s) {
+                      double t1_s, const std::atomic<bool>* cancel) {
   if (!(t1_s > t0_s)) return 0.0;
   const double d = work.boards[0].spacing();
   const double r_off = tool.radial_offset_mm.empty()
@@ -252,6 +252,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
   tbb::parallel_for(0, 3, [&](int bsel) {
     std::vector<Interval> removed;
     for (std::size_t q = 0; q < pieces.size(); ++q) {
+      if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) break;
       const Piece& p = pieces[q];
       const double tip = p.z + a_off;
       const double H = std::min(tool.flute_length_mm, top - tip);

@@ -707,12 +707,20 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
     const auto t0 = clock();
     const double rev = kTwoPi / std::abs(tool.omega_rad_per_s);
     const double lead_from = std::max(0.0, from_s - rev);
-    if (lead_from > 0) (void)sweep_envelope(path, tool, work, 0, lead_from);
+    if (lead_from > 0) (void)sweep_envelope(path, tool, work, 0, lead_from, control.cancel);
     SimControl lead;
     lead.envelope_before = lead_from > 0;
+    lead.cancel = control.cancel;
     (void)simulate(path, tool, s, work, lead_from, from_s, lead);
     out.pre_roll_s = from_s;
     out.pre_roll_wall_s = since(t0);
+    if (control.cancel != nullptr && control.cancel->load()) {  // stopped before the window
+      out.result.complete = false;
+      out.result.segments_per_tooth = tool.segments();
+      for (const auto& b : work.boards) out.memory_bytes += b.memory_bytes();
+      out.work = std::make_unique<TriDexel>(std::move(work));
+      return out;
+    }
   }
   const auto t1 = clock();
   out.result = simulate(path, tool, s, work, from_s, to_s, control);
