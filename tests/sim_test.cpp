@@ -799,3 +799,50 @@ TEST(Sim, CancelKeepsWhatWasComputed) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// The boards' material summaries: after random cuts, whenever a query says a stretch of rays
+// holds no material in a range, none of them does (checked ray by ray); and a range that
+// covers a ray's remaining material is always reported.
+TEST(Sim, BoardSummaryNeverHidesMaterial) {
+  const StockBox box{{0, 0, 0}, {10, 7, 3}};
+  DexelBoard board(0, box, 0.05);  // rays along x, 140 x 60 of them
+  board.enable_summary();
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> ri(0, board.count_u() - 1), rj(0, board.count_v() - 1);
+  std::uniform_real_distribution<double> x(-0.5, 10.5), len(0, 4);
+  std::vector<Interval> removed;
+  for (int k = 0; k < 20000; ++k) {
+    const double a = x(rng);
+    (void)board.subtract(ri(rng), rj(rng), a, a + len(rng), removed);
+  }
+  int empty = 0;
+  for (int q = 0; q < 4000; ++q) {
+    const int i0 = ri(rng), j0 = rj(rng);
+    const int i1 = std::min(board.count_u() - 1, i0 + 5),
+              j1 = std::min(board.count_v() - 1, j0 + 2);
+    const double lo = x(rng), hi = lo + 0.3 * len(rng);
+    bool any = false;
+    for (int i = i0; i <= i1; ++i) {
+      for (int j = j0; j <= j1; ++j) {
+        const Dexel* d = board.find(i, j);
+        if (d == nullptr) {
+          any = any || (hi > 0 && lo < 10);
+          continue;
+        }
+        for (const Interval& v : d->intervals()) any = any || (v.hi > lo && v.lo < hi);
+      }
+    }
+    const bool may = board.may_hold(i0, i1, j0, j1, lo, hi);
+    if (any) {
+      EXPECT_TRUE(may) << i0 << " " << j0 << " " << lo << " " << hi;
+    }
+    if (!may) ++empty;
+  }
+  EXPECT_GT(empty, 100);  // the summary does find empty stretches
+}
+
+}  // namespace
+}  // namespace trochomill

@@ -128,8 +128,9 @@ struct SimSettings {
   double segment_mm = 0.05;         ///< edge segment length along the edge (kappa)
   int sub_segments = 5;             ///< sub-segments inward (tau), for wear topography
   int threads = 0;                  ///< worker threads (0: all cores)
-  /// Search each wedge's whole sector, not only the annulus where material can be (slow; to
-  /// check the annulus argument of docs/models.md section 11). Not a job key.
+  /// Search each wedge's whole sector, not only the annulus where material can be, and every
+  /// ray, not only where the boards' summaries show material (slow; to check both arguments
+  /// of docs/models.md section 11). Not a job key.
   bool exhaustive = false;
 };
 

@@ -88,8 +88,26 @@ class DexelBoard {
   [[nodiscard]] std::size_t memory_bytes() const;
   /// Rays per tile side.
   static constexpr int kTile = 64;
+  /// Bins along the ray axis of a tile's material summary.
+  static constexpr int kBins = 256;
+
+  /// Keeps, per tile, which bins along the rays hold material (counts of rays per bin), so
+  /// that whole stretches of a tile can be found empty without touching its rays. Set before
+  /// the first cut.
+  void enable_summary();
+  /// Removes [a, b] from ray (i, j) (as Dexel::subtract), keeping the summary.
+  double subtract(int i, int j, double a, double b, std::vector<Interval>& removed);
+  /// False only when no ray (i, j), i in [i0, i1], j in [j0, j1], holds material in [lo, hi]
+  /// (by the summary: exact to a bin); always true without one.
+  [[nodiscard]] bool may_hold(int i0, int i1, int j0, int j1, double lo, double hi) const;
 
  private:
+  struct Summary {
+    std::array<std::uint16_t, kBins> count{};      // rays with material in each bin
+    std::array<std::uint64_t, kBins / 64> mask{};  // bins with a non-zero count
+  };
+  [[nodiscard]] std::array<std::uint64_t, kBins / 64> bins_of(const Dexel& d) const;
+  [[nodiscard]] int bin_of(double x) const noexcept;
   // A ray's place in its tile: the board's inner loops run along u on the X board (rows of a
   // layer) and along v on the others, and those neighbours are kept adjacent in memory.
   [[nodiscard]] std::size_t in_tile(int i, int j) const noexcept {
@@ -107,6 +125,9 @@ class DexelBoard {
   std::size_t touched_ = 0;
   // Dense table of tile pointers (null: untouched), tu_ x tv_.
   std::vector<std::unique_ptr<Dexel[]>> tiles_;
+  bool summarised_ = false;
+  double bin_w_ = 1;
+  std::vector<std::unique_ptr<Summary>> summaries_;  // parallel to tiles_
 };
 
 /// The three boards over one stock.

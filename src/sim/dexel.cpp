@@ -94,13 +94,96 @@ DexelBoard::DexelBoard(int axis, const StockBox& box, double spacing_mm)
 }
 
 Dexel& DexelBoard::ray(int i, int j) {
-  auto& tile = tiles_[tile_index(i, j)];
+  const std::size_t t = tile_index(i, j);
+  auto& tile = tiles_[t];
   if (!tile) {
     tile = std::make_unique<Dexel[]>(kTile * kTile);
     for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = Dexel(full_);
     ++touched_;
+    if (summarised_) {
+      // Every ray of the tile that exists holds the whole stock: all bins.
+      auto sm = std::make_unique<Summary>();
+      const int ti = i / kTile, tj = j / kTile;
+      const int rays = std::min(kTile, nu_ - ti * kTile) * std::min(kTile, nv_ - tj * kTile);
+      sm->count.fill(static_cast<std::uint16_t>(rays));
+      sm->mask.fill(~std::uint64_t{0});
+      summaries_[t] = std::move(sm);
+    }
   }
   return tile[in_tile(i, j)];
+}
+
+void DexelBoard::enable_summary() {
+  if (touched_ > 0) throw Error("DexelBoard::enable_summary: the board was already cut");
+  summarised_ = true;
+  bin_w_ = (full_.hi - full_.lo) / kBins;
+  summaries_.resize(tiles_.size());
+}
+
+int DexelBoard::bin_of(double x) const noexcept {
+  const double b = std::floor((x - full_.lo) / bin_w_);
+  return static_cast<int>(std::clamp(b, 0.0, static_cast<double>(kBins - 1)));
+}
+
+std::array<std::uint64_t, DexelBoard::kBins / 64> DexelBoard::bins_of(const Dexel& d) const {
+  std::array<std::uint64_t, kBins / 64> m{};
+  for (const Interval& v : d.intervals()) {
+    // Bins the interval overlaps (a bin touched only at its edge holds none of it).
+    const int b0 = bin_of(v.lo);
+    int b1 = bin_of(v.hi);
+    if (b1 > b0 && full_.lo + b1 * bin_w_ >= v.hi) --b1;
+    for (int w = b0 / 64; w <= b1 / 64; ++w) {
+      const int lo = w == b0 / 64 ? b0 % 64 : 0, hi = w == b1 / 64 ? b1 % 64 : 63;
+      const std::uint64_t upto = hi == 63 ? ~std::uint64_t{0} : (std::uint64_t{1} << (hi + 1)) - 1;
+      m[static_cast<std::size_t>(w)] |= upto & ~((std::uint64_t{1} << lo) - 1);
+    }
+  }
+  return m;
+}
+
+double DexelBoard::subtract(int i, int j, double a, double b, std::vector<Interval>& removed) {
+  Dexel& d = ray(i, j);
+  if (!summarised_) return d.subtract(a, b, removed);
+  const auto before = bins_of(d);
+  const double cut = d.subtract(a, b, removed);
+  if (cut > 0) {
+    const auto after = bins_of(d);
+    Summary& sm = *summaries_[tile_index(i, j)];
+    for (std::size_t w = 0; w < before.size(); ++w) {
+      std::uint64_t gone = before[w] & ~after[w];
+      while (gone != 0) {
+        const int bit = __builtin_ctzll(gone);
+        gone &= gone - 1;
+        const std::size_t bin = w * 64 + static_cast<std::size_t>(bit);
+        if (--sm.count[bin] == 0) sm.mask[w] &= ~(std::uint64_t{1} << bit);
+      }
+    }
+  }
+  return cut;
+}
+
+bool DexelBoard::may_hold(int i0, int i1, int j0, int j1, double lo, double hi) const {
+  if (!summarised_) return true;
+  if (!(hi > full_.lo && lo < full_.hi)) return false;
+  const int b0 = bin_of(lo), b1 = bin_of(hi);
+  for (int ti = std::max(0, i0) / kTile; ti <= std::min(nu_ - 1, i1) / kTile; ++ti) {
+    for (int tj = std::max(0, j0) / kTile; tj <= std::min(nv_ - 1, j1) / kTile; ++tj) {
+      const std::size_t t = tile_index(ti * kTile, tj * kTile);
+      if (!tiles_[t]) return true;  // untouched: the whole stock
+      const Summary& sm = *summaries_[t];
+      for (int b = b0; b <= b1;) {
+        const auto w = static_cast<std::size_t>(b / 64);
+        if (b % 64 == 0 && b + 63 <= b1) {  // a whole word
+          if (sm.mask[w] != 0) return true;
+          b += 64;
+          continue;
+        }
+        if ((sm.mask[w] >> (b % 64)) & 1) return true;
+        ++b;
+      }
+    }
+  }
+  return false;
 }
 
 const Dexel* DexelBoard::find(int i, int j) const {
@@ -132,7 +215,8 @@ double DexelBoard::volume_mm3() const {
 }
 
 std::size_t DexelBoard::memory_bytes() const {
-  std::size_t b = tiles_.size() * sizeof(tiles_[0]);
+  std::size_t b = tiles_.size() * (sizeof(tiles_[0]) + (summarised_ ? sizeof(summaries_[0]) : 0));
+  for (const auto& sm : summaries_) b += sm ? sizeof(Summary) : 0;
   for (const auto& tile : tiles_) {
     if (!tile) continue;
     b += sizeof(Dexel) * kTile * kTile;
@@ -150,6 +234,10 @@ TriDexel::TriDexel(const StockBox& b, double spacing_mm)
       throw InputError("stock box: every upper corner coordinate must exceed the lower one");
     }
   }
+  // The X and Y boards are searched row by row across layers: their summaries let empty
+  // stretches be skipped without touching rays.
+  boards[0].enable_summary();
+  boards[1].enable_summary();
 }
 
 }  // namespace trochomill

@@ -290,7 +290,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
               const auto reach = tool.heights_reaching(rho - r_off);
               if (!reach) continue;
               removed.clear();
-              board.ray(i, j).subtract(tip + reach->lo, tip + std::min(H, reach->hi), removed);
+              board.subtract(i, j, tip + reach->lo, tip + std::min(H, reach->hi), removed);
               for (const Interval& v : removed) volume += (v.hi - v.lo) * d * d;
             }
           }
@@ -335,7 +335,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
                 continue;
               }
               removed.clear();
-              board.ray(i, j).subtract(segs[k].lo, segs[k].hi, removed);
+              board.subtract(i, j, segs[k].lo, segs[k].hi, removed);
             }
           }
         }

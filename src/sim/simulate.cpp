@@ -298,7 +298,7 @@ class Stepper {
             h_lo = std::max(h_lo, hmin);
             h_hi = std::min({h_hi, w.H, hmax});
             if (!(h_hi > h_lo)) return;
-            if (board.ray(i, j).subtract(w.tip_z + h_lo, w.tip_z + h_hi, A.removed) > 0) {
+            if (board.subtract(i, j, w.tip_z + h_lo, w.tip_z + h_hi, A.removed) > 0) {
               ++A.updates;
             }
           };
@@ -371,6 +371,13 @@ class Stepper {
       // Rows: board 0 over y (its u), board 1 over x (its v).
       const auto [r0, r1] = b == 0 ? idx(board, true, w.cy + bx[2], w.cy + bx[3])
                                    : idx(board, false, w.cx + bx[0], w.cx + bx[1]);
+      // The tiles' summaries: nothing along these rows within the sector's extent, nothing to
+      // do on this layer (the tooth is out of the cut most of its turn).
+      if (!s_.exhaustive && r0 <= r1) {
+        const bool hold = b == 0 ? board.may_hold(r0, r1, zl, zl, w.cx + bx[0], w.cx + bx[1])
+                                 : board.may_hold(zl, zl, r0, r1, w.cy + bx[2], w.cy + bx[3]);
+        if (!hold) continue;
+      }
       for (int r = r0; r <= r1; ++r) {
         const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
         std::optional<Interval> off;
@@ -395,7 +402,7 @@ class Stepper {
         }
         if (!any) continue;
         A.removed.clear();
-        if (board.ray(i, j).subtract(along_c + off->lo, along_c + off->hi, A.removed) > 0) {
+        if (board.subtract(i, j, along_c + off->lo, along_c + off->hi, A.removed) > 0) {
           ++A.updates;
         }
         for (const Interval& p : A.removed) {
