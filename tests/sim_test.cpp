@@ -818,6 +818,13 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
     const double a = x(rng);
     (void)board.subtract(ri(rng), rj(rng), a, a + len(rng), removed);
   }
+  // Half the cuts with the upkeep paused, then rebuilt: the same guarantee.
+  board.pause_summary();
+  for (int k = 0; k < 10000; ++k) {
+    const double a = x(rng);
+    (void)board.subtract(ri(rng), rj(rng), a, a + len(rng), removed);
+  }
+  board.resume_summary();
   int empty = 0;
   for (int q = 0; q < 4000; ++q) {
     const int i0 = ri(rng), j0 = rj(rng);

@@ -95,6 +95,10 @@ class DexelBoard {
   /// that whole stretches of a tile can be found empty without touching its rays. Set before
   /// the first cut.
   void enable_summary();
+  /// Pauses the summary's upkeep for a burst of cuts (the envelope sweep); resuming rebuilds it
+  /// from the rays (cheaper than keeping it through many cuts).
+  void pause_summary();
+  void resume_summary();
   /// Removes [a, b] from ray (i, j) (as Dexel::subtract), keeping the summary.
   double subtract(int i, int j, double a, double b, std::vector<Interval>& removed);
   /// False only when no ray (i, j), i in [i0, i1], j in [j0, j1], holds material in [lo, hi]
@@ -125,7 +129,7 @@ class DexelBoard {
   std::size_t touched_ = 0;
   // Dense table of tile pointers (null: untouched), tu_ x tv_.
   std::vector<std::unique_ptr<Dexel[]>> tiles_;
-  bool summarised_ = false;
+  bool summarised_ = false, paused_ = false;
   double bin_w_ = 1;
   std::vector<std::unique_ptr<Summary>> summaries_;  // parallel to tiles_
 };

@@ -100,7 +100,7 @@ Dexel& DexelBoard::ray(int i, int j) {
     tile = std::make_unique<Dexel[]>(kTile * kTile);
     for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = Dexel(full_);
     ++touched_;
-    if (summarised_) {
+    if (summarised_ && !paused_) {
       // Every ray of the tile that exists holds the whole stock: all bins.
       auto sm = std::make_unique<Summary>();
       const int ti = i / kTile, tj = j / kTile;
@@ -118,6 +118,35 @@ void DexelBoard::enable_summary() {
   summarised_ = true;
   bin_w_ = (full_.hi - full_.lo) / kBins;
   summaries_.resize(tiles_.size());
+}
+
+void DexelBoard::pause_summary() { paused_ = summarised_; }
+
+void DexelBoard::resume_summary() {
+  if (!paused_) return;
+  paused_ = false;
+  for (int ti = 0; ti < tu_; ++ti) {
+    for (int tj = 0; tj < tv_; ++tj) {
+      const std::size_t t = tile_index(ti * kTile, tj * kTile);
+      if (!tiles_[t]) continue;
+      auto sm = std::make_unique<Summary>();
+      for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
+        for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
+          const auto m = bins_of(tiles_[t][in_tile(ti * kTile + a, tj * kTile + b)]);
+          for (std::size_t w = 0; w < m.size(); ++w) {
+            std::uint64_t bits = m[w];
+            sm->mask[w] |= bits;
+            while (bits != 0) {
+              const int bit = __builtin_ctzll(bits);
+              bits &= bits - 1;
+              ++sm->count[w * 64 + static_cast<std::size_t>(bit)];
+            }
+          }
+        }
+      }
+      summaries_[t] = std::move(sm);
+    }
+  }
 }
 
 int DexelBoard::bin_of(double x) const noexcept {
@@ -143,7 +172,7 @@ std::array<std::uint64_t, DexelBoard::kBins / 64> DexelBoard::bins_of(const Dexe
 
 double DexelBoard::subtract(int i, int j, double a, double b, std::vector<Interval>& removed) {
   Dexel& d = ray(i, j);
-  if (!summarised_) return d.subtract(a, b, removed);
+  if (!summarised_ || paused_) return d.subtract(a, b, removed);
   const auto before = bins_of(d);
   const double cut = d.subtract(a, b, removed);
   if (cut > 0) {
@@ -163,7 +192,7 @@ double DexelBoard::subtract(int i, int j, double a, double b, std::vector<Interv
 }
 
 bool DexelBoard::may_hold(int i0, int i1, int j0, int j1, double lo, double hi) const {
-  if (!summarised_) return true;
+  if (!summarised_ || paused_) return true;
   if (!(hi > full_.lo && lo < full_.hi)) return false;
   const int b0 = bin_of(lo), b1 = bin_of(hi);
   for (int ti = std::max(0, i0) / kTile; ti <= std::min(nu_ - 1, i1) / kTile; ++ti) {

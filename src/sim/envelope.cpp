@@ -248,7 +248,8 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
     (void)board;
     return std::pair<int, int>{i0, i1};
   };
-  // The boards are independent: one task each.
+  // The boards are independent: one task each. Their summaries are rebuilt after the burst.
+  for (auto& b : work.boards) b.pause_summary();
   tbb::parallel_for(0, 3, [&](int bsel) {
     std::vector<Interval> removed;
     for (std::size_t q = 0; q < pieces.size(); ++q) {
@@ -342,6 +343,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       }
     }
   });
+  for (auto& b : work.boards) b.resume_summary();
   return volume;
 }
 
