@@ -432,12 +432,6 @@ TEST(Sim, TrochoidChipMatchesTheAnalysisKernel) {
   }
 }
 
-}  // namespace
-}  // namespace trochomill
-
-namespace trochomill {
-namespace {
-
 // A straight full slot (a_p 1 mm, R 5 mm, f_z 0.2 mm) read off each board: the X board's walls
 // lie at x = +-R less at most the feed marks' depth f_z^2 / 8R (1e-3 mm) on the rows the tool
 // passed; the Z and Y boards place the wall between their last cut ray and their first uncut
@@ -577,12 +571,6 @@ TEST(Sim, SurfaceStlIsAClosedSolidOfTheHeightFieldsVolume) {
   EXPECT_GT(box.volume_mm3() - want, 100.0);
 }
 
-}  // namespace
-}  // namespace trochomill
-
-namespace trochomill {
-namespace {
-
 // An insert mill with a 45 degree lead (R 8 mm at the tip, no corner radius, two inserts)
 // slotting straight through a 10 mm block 1 mm deep: the slot's section is the contour's,
 // 2 (R a_p - a_p^2 / 2) = 15 mm^2 (the edge runs in by a_p cot 45), so 150 mm^3 (bound: the
@@ -653,12 +641,6 @@ step = 5.0
   EXPECT_NEAR(h0, (fz + 0.02) * std::sqrt(0.5), tol);
 }
 
-}  // namespace
-}  // namespace trochomill
-
-namespace trochomill {
-namespace {
-
 // The annulus argument (docs/models.md section 11): after a revolution, searching only the
 // annulus beyond each tooth's contour less the path since an earlier tooth (no higher) swept
 // the same angles finds all the material. Against the same wedges searched whole, on a
@@ -699,12 +681,6 @@ TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
   }
   EXPECT_GT(a.removed_mm3, 1.0);
 }
-
-}  // namespace
-}  // namespace trochomill
-
-namespace trochomill {
-namespace {
 
 // The edge's structured grid: segments equidistant along the edge (the corner arc's quarter
 // circle, pi rc / 2, then the flank), their widths summing to the edge's length, heights
@@ -755,12 +731,6 @@ TEST(Sim, EdgeGridFollowsTheContour) {
   }
 }
 
-}  // namespace
-}  // namespace trochomill
-
-namespace trochomill {
-namespace {
-
 // Cancellation (Ctrl-C in the CLI): a flag raised before the run stops it in the pre-roll,
 // with no steps and `complete` false; raised from the progress callback after some steps, the
 // window keeps the steps computed so far (fewer than the whole) and is marked incomplete.
@@ -796,12 +766,6 @@ TEST(Sim, CancelKeepsWhatWasComputed) {
     ASSERT_EQ(part.result.steps[n].h_max_mm, whole.result.steps[n].h_max_mm);
   }
 }
-
-}  // namespace
-}  // namespace trochomill
-
-namespace trochomill {
-namespace {
 
 // The boards' material summaries: after random cuts, whenever a query says a stretch of rays
 // holds no material in a range, none of them does (checked ray by ray); and a range that

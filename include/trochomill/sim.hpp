@@ -6,13 +6,16 @@
 // radians inside (degrees at the job interface).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "trochomill/io.hpp"
@@ -77,6 +80,15 @@ class DexelBoard {
   [[nodiscard]] int count_v() const noexcept { return nv_; }
   [[nodiscard]] double u_of(int i) const noexcept { return u0_ + (i + 0.5) * d_; }
   [[nodiscard]] double v_of(int j) const noexcept { return v0_ + (j + 0.5) * d_; }
+  /// The indices of the rays along u (`along_u`) or v whose coordinate lies in [lo, hi] (mm),
+  /// clipped to the board (empty when first > second).
+  [[nodiscard]] std::pair<int, int> index_range(bool along_u, double lo, double hi) const {
+    const double o = along_u ? u0_ : v0_;
+    const int count = along_u ? nu_ : nv_;
+    const int i0 = std::max(0, static_cast<int>(std::ceil((lo - o) / d_ - 0.5)));
+    const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d_ - 0.5)));
+    return {i0, i1};
+  }
   /// The ray (i, j), created (as the full stock interval) if untouched.
   Dexel& ray(int i, int j);
   /// The ray if it was ever touched, else nullptr (it then holds the full interval).

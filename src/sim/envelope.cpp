@@ -132,7 +132,7 @@ std::vector<Piece> pieces_of(const ToolPath& path, double t0_s, double t1_s, dou
     pending = b;
     const Vec3 c = seg.center();
     const double rho = seg.axis_a().norm();
-    const Vec3 pa = path.point_at_length(a), pb = path.point_at_length(b);
+    const Vec3 pa = path.point_at_length(a);
     const double ta = std::atan2(pa.y() - c.y(), pa.x() - c.x());
     const double span = (b - a) / rho;
     // Counter-clockwise when a x b points up and u increases (or both reversed).
@@ -150,7 +150,6 @@ std::vector<Piece> pieces_of(const ToolPath& path, double t0_s, double t1_s, dou
       p.bx = c.x() + rho * std::cos(p.th1), p.by = c.y() + rho * std::sin(p.th1);
       out.push_back(p);
     }
-    (void)pb;
   }
   if (s1 > pending) chords(path, pending, s1, step, tol, out);
   return out;
@@ -241,13 +240,6 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
   const std::vector<Piece> pieces =
       pieces_of(path, t0_s, t1_s, std::min(0.05, d), std::min(0.25 * d, 0.001));
   double volume = 0;
-  auto idx = [&](const DexelBoard& board, int ax, int count, double lo, double hi) {
-    const double o = work.box.lo[static_cast<std::size_t>(ax)];
-    const int i0 = std::max(0, static_cast<int>(std::ceil((lo - o) / d - 0.5)));
-    const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d - 0.5)));
-    (void)board;
-    return std::pair<int, int>{i0, i1};
-  };
   // The boards are independent: one task each. Their summaries are rebuilt after the burst.
   for (auto& b : work.boards) b.pause_summary();
   tbb::parallel_for(0, 3, [&](int bsel) {
@@ -269,7 +261,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       if (bsel == 2) {
         DexelBoard& board = work.boards[2];
         const auto bb = bbox(p);
-        const auto [i0, i1] = idx(board, 0, board.count_u(), bb[0] - R, bb[1] + R);
+        const auto [i0, i1] = board.index_range(true, bb[0] - R, bb[1] + R);
         Interval segs[6];
         for (int i = i0; i <= i1; ++i) {
           const double x = board.u_of(i);
@@ -285,7 +277,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
             np = piece_on_line(p, R, x, true, segs);
           }
           for (int k = 0; k < np; ++k) {
-            const auto [j0, j1] = idx(board, 1, board.count_v(), segs[k].lo, segs[k].hi);
+            const auto [j0, j1] = board.index_range(false, segs[k].lo, segs[k].hi);
             for (int j = j0; j <= j1; ++j) {
               const double rho = dist_to_piece(x, board.v_of(j), p);
               const auto reach = tool.heights_reaching(rho - r_off);
@@ -303,8 +295,8 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
         const int b = bsel;
         DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
         const bool z_first = b == 1;
-        const auto [z0, z1] = z_first ? idx(board, 2, board.count_u(), tip, tip + H)
-                                      : idx(board, 2, board.count_v(), tip, tip + H);
+        const auto [z0, z1] = z_first ? board.index_range(true, tip, tip + H)
+                                      : board.index_range(false, tip, tip + H);
         const auto bb = bbox(p);
         Interval segs[6];
         for (int zl = z0; zl <= z1; ++zl) {
@@ -313,8 +305,8 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
           const double Rh = tool.profile_radius(h) + r_off;
           if (!(Rh > 0)) continue;
           // Rows: board 0 over y, board 1 over x.
-          const auto [r0, r1] = b == 0 ? idx(board, 1, board.count_u(), bb[2] - Rh, bb[3] + Rh)
-                                       : idx(board, 0, board.count_v(), bb[0] - Rh, bb[1] + Rh);
+          const auto [r0, r1] = b == 0 ? board.index_range(true, bb[2] - Rh, bb[3] + Rh)
+                                       : board.index_range(false, bb[0] - Rh, bb[1] + Rh);
           for (int r = r0; r <= r1; ++r) {
             const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
             const double line = b == 0 ? board.u_of(i) : board.v_of(j);

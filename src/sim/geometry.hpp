@@ -80,11 +80,10 @@ class SectorSlicer {
   Piece piece_[2];
 };
 
-
 // The parts of [lo, hi] (offsets along a line at distance p from the centre) whose distance
 // from the centre lies in [r_in, r_out]: up to two intervals, returned through `out`.
 inline int annulus_parts(double p, double lo, double hi, double r_in, double r_out,
-                  std::array<Interval, 2>& out) {
+                         std::array<Interval, 2>& out) {
   const double pp = p * p;
   if (pp >= r_out * r_out) return 0;
   const double to = std::sqrt(r_out * r_out - pp);

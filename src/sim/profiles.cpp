@@ -1,13 +1,9 @@
 // The machined slot read off the tri-dexel workpiece: wall profiles from the X board, floor
 // profiles and the machined surface (a height field) from the Z board
 // (include/trochomill/sim.hpp).
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
-#include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
 
 namespace trochomill {

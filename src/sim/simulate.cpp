@@ -267,7 +267,7 @@ class Stepper {
     const bool wide = span_hi - span_lo >= kPi;
     const auto bx = wide ? std::array<double, 4>{-r_hi, r_hi, -r_hi, r_hi}
                          : annular_box(span_lo, span_hi, r_lo, r_hi);
-    const auto [i0, i1] = idx(board, true, w.cx + bx[0], w.cx + bx[1]);
+    const auto [i0, i1] = board.index_range(true, w.cx + bx[0], w.cx + bx[1]);
     std::array<Interval, 2> parts{};
     const SectorSlicer slicer(span_lo - 0.5 * kPi, span_hi - 0.5 * kPi);
     for (int i = i0; i <= i1; ++i) {
@@ -280,8 +280,8 @@ class Stepper {
       }
       const int np = annulus_parts(dx, chord.lo, chord.hi, r_lo, r_hi, parts);
       for (int q = 0; q < np; ++q) {
-        const auto [j0, j1] = idx(board, false, w.cy + parts[static_cast<std::size_t>(q)].lo,
-                                  w.cy + parts[static_cast<std::size_t>(q)].hi);
+        const auto [j0, j1] = board.index_range(false, w.cy + parts[static_cast<std::size_t>(q)].lo,
+                                                w.cy + parts[static_cast<std::size_t>(q)].hi);
         for (int j = j0; j <= j1; ++j) {
           // Most rays the wedge crosses were emptied long ago: skip them first.
           if (!has_material(board.find(i, j), board.full(), w.tip_z, w.tip_z + w.H)) continue;
@@ -306,9 +306,8 @@ class Stepper {
             if (contains_angle(w.a0, w.a1, th)) cut_h(0, w.H);
           } else {
             // th + 2 pi m in [a0 + h kappa, a1 + h kappa]: h in [th' - a1, th' - a0] / kappa.
-            const double lo = kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_;
-            const double hi = kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1;
-            const double m0 = std::ceil((lo - th) / kTwoPi), m1 = std::floor((hi - th) / kTwoPi);
+            const double m0 = std::ceil((span_lo - th) / kTwoPi);
+            const double m1 = std::floor((span_hi - th) / kTwoPi);
             for (double m = m0; m <= m1; m += 1) {
               const double tt = th + kTwoPi * m;
               const double ha = (tt - w.a1) / kappa_, hb = (tt - w.a0) / kappa_;
@@ -346,7 +345,7 @@ class Stepper {
   void xy_board(int b, std::size_t k, const Wedge& w, BoardAcc& A) {
     DexelBoard& board = work_.boards[static_cast<std::size_t>(b)];
     const bool z_first = b == 1;  // board 1's u is z; board 0's v is z
-    const auto [z0, z1] = idx(board, z_first, w.tip_z, w.tip_z + w.H);
+    const auto [z0, z1] = board.index_range(z_first, w.tip_z, w.tip_z + w.H);
     std::array<Interval, 2> parts{};
     // Without a helix every layer has the wedge's angles: their trigonometry once.
     std::optional<AngleSpan> flat_span;
@@ -369,8 +368,8 @@ class Stepper {
                                   : b == 0    ? SectorSlicer(ah0, ah1)
                                               : SectorSlicer(ah0 - 0.5 * kPi, ah1 - 0.5 * kPi);
       // Rows: board 0 over y (its u), board 1 over x (its v).
-      const auto [r0, r1] = b == 0 ? idx(board, true, w.cy + bx[2], w.cy + bx[3])
-                                   : idx(board, false, w.cx + bx[0], w.cx + bx[1]);
+      const auto [r0, r1] = b == 0 ? board.index_range(true, w.cy + bx[2], w.cy + bx[3])
+                                   : board.index_range(false, w.cx + bx[0], w.cx + bx[1]);
       // The tiles' summaries: nothing along these rows within the sector's extent, nothing to
       // do on this layer (the tooth is out of the cut most of its turn).
       if (!s_.exhaustive && r0 <= r1) {
@@ -448,15 +447,6 @@ class Stepper {
     const std::size_t q = k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg);
     A.seg_lo[q] = std::min(A.seg_lo[q], std::max(h0, seg_bottom(sg)));
     A.seg_hi[q] = std::max(A.seg_hi[q], std::min(h1, seg_top(sg)));
-  }
-  // Grid index range covering [lo, hi] along a board axis.
-  std::pair<int, int> idx(const DexelBoard& board, bool first, double lo, double hi) const {
-    const int ax = first ? (board.axis() + 1) % 3 : (board.axis() + 2) % 3;
-    const double o = work_.box.lo[static_cast<std::size_t>(ax)];
-    const int count = first ? board.count_u() : board.count_v();
-    const int i0 = std::max(0, static_cast<int>(std::ceil((lo - o) / d_ - 0.5)));
-    const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d_ - 0.5)));
-    return {i0, i1};
   }
 
   const SimTool& tool_;
@@ -721,17 +711,15 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
     (void)simulate(path, tool, s, work, lead_from, from_s, lead);
     out.pre_roll_s = from_s;
     out.pre_roll_wall_s = since(t0);
-    if (control.cancel != nullptr && control.cancel->load()) {  // stopped before the window
-      out.result.complete = false;
-      out.result.segments_per_tooth = tool.segments();
-      for (const auto& b : work.boards) out.memory_bytes += b.memory_bytes();
-      out.work = std::make_unique<TriDexel>(std::move(work));
-      return out;
-    }
   }
-  const auto t1 = clock();
-  out.result = simulate(path, tool, s, work, from_s, to_s, control);
-  out.window_wall_s = since(t1);
+  if (control.cancel != nullptr && control.cancel->load()) {  // stopped before the window
+    out.result.complete = false;
+    out.result.segments_per_tooth = tool.segments();
+  } else {
+    const auto t1 = clock();
+    out.result = simulate(path, tool, s, work, from_s, to_s, control);
+    out.window_wall_s = since(t1);
+  }
   for (const auto& b : work.boards) out.memory_bytes += b.memory_bytes();
   out.work = std::make_unique<TriDexel>(std::move(work));
   return out;
