@@ -578,6 +578,9 @@ int run(int argc, char** argv) {
         est.boards_bytes + est.records_bytes + (sim_out.empty() ? 0.0 : est.dense_map_bytes);
     const double ram =
         static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+    if (sim_stl_step && !(*sim_stl_step > 0)) {  // bad input refused before the run
+      throw tmill::InputError(fmt::format("--stl-step must be > 0 mm, got {}", *sim_stl_step));
+    }
     if (sim_mem_gb && !(*sim_mem_gb > 0)) {
       throw tmill::InputError(fmt::format("--memory-limit must be > 0 GB, got {}", *sim_mem_gb));
     }
@@ -652,9 +655,6 @@ int run(int argc, char** argv) {
       emit((dir / "floor.csv").string(),
            tmill::floor_profiles_csv(tmill::floor_profiles(*js.work)));
       double step = sim_stl_step.value_or(0.0);
-      if (sim_stl_step && !(*sim_stl_step > 0)) {
-        throw tmill::InputError(fmt::format("--stl-step must be > 0 mm, got {}", *sim_stl_step));
-      }
       if (!sim_stl_step) {
         const auto& zb = js.work->boards[2];
         const double cells = static_cast<double>(zb.count_u()) * static_cast<double>(zb.count_v());

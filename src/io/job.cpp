@@ -438,7 +438,8 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
       tool.lead_angle_deg = *lead;
     }
   }
-  for (const char* key : {"insert_radial", "insert_axial"}) {
+  for (auto [key, dest] : {std::pair{"insert_radial", &tool.insert_radial_mm},
+                           std::pair{"insert_axial", &tool.insert_axial_mm}}) {
     if (auto v = r.number_array("tool", key, Range{-1.0, 1.0})) {
       if (tool.type != ToolType::insert_mill) {
         r.problem("tool", key, "applies to type = \"insert_mill\"");
@@ -447,7 +448,7 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
                   fmt::format("must list one value (mm) per insert ({} for teeth = {}), got {}",
                               tool.teeth, tool.teeth, v->size()));
       } else {
-        (std::string(key) == "insert_radial" ? tool.insert_radial_mm : tool.insert_axial_mm) = *v;
+        *dest = *v;
       }
     }
   }
