@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -19,6 +20,7 @@
 
 #include "trochomill/analysis.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/force.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/job.hpp"
@@ -111,6 +113,28 @@ Box bounding_box(const tmill::ToolPath& path) {
     }
   }
   return b;
+}
+
+// The window of a path: --cycles A:B, or --from/--to (s), or the whole path.
+std::pair<double, double> parse_window(const tmill::ToolPath& path, const std::string& cycles,
+                                       std::optional<double> from_s, std::optional<double> to_s) {
+  double from = 0, to = path.duration_s();
+  if (!cycles.empty()) {
+    if (from_s || to_s) throw tmill::InputError("give --cycles or --from/--to, not both");
+    const auto colon = cycles.find(':');
+    char* e1 = nullptr;
+    char* e2 = nullptr;
+    const std::string a = cycles.substr(0, colon);
+    const std::string b = colon == std::string::npos ? "" : cycles.substr(colon + 1);
+    const long ca = std::strtol(a.c_str(), &e1, 10), cb = std::strtol(b.c_str(), &e2, 10);
+    if (colon == std::string::npos || a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0') {
+      throw tmill::InputError(fmt::format("--cycles '{}': expected A:B, e.g. 3:4", cycles));
+    }
+    return tmill::cycle_window(path, static_cast<int>(ca), static_cast<int>(cb));
+  }
+  if (from_s) from = *from_s;
+  if (to_s) to = *to_s;
+  return {from, to};
 }
 
 // Writes a WAV atomically: a temporary file beside the target, then a rename.
@@ -348,6 +372,63 @@ int run(int argc, char** argv) {
                   "grid step of surface.stl, mm (default: the dexel spacing, coarser when the "
                   "mesh would pass 4 million triangles)");
 
+  // forces
+  JobArgs fo_args;
+  std::string fo_gcode, fo_json, fo_csv, fo_cycles;
+  std::optional<double> fo_from, fo_to;
+  bool fo_fast = false;
+  auto* fo = app.add_subcommand(
+      "forces", "cutting forces F_x, F_y, F_z, torque and power over time ([material] model)");
+  add_job_args(fo, fo_args);
+  fo->add_option("--gcode", fo_gcode, "this NC program instead of the job's path");
+  fo->add_flag("--fast", fo_fast,
+               "chips from the analytic engagement (axial discs, helix lag) instead of the "
+               "dexel simulation");
+  fo->add_option("--from", fo_from, "window start, s of programmed time (default 0)");
+  fo->add_option("--to", fo_to, "window end, s (default: the path's end)");
+  fo->add_option("--cycles", fo_cycles, "A:B: trochoid cycles A (inclusive) to B (exclusive)");
+  fo->add_option("--csv", fo_csv, "write the series as CSV (- for stdout)");
+  fo->add_option("--json", fo_json, "write the summary as JSON (- for stdout)");
+
+  // calibrate
+  JobArgs ca_args;
+  std::string ca_measured, ca_mean, ca_model, ca_fit, ca_columns, ca_json, ca_write, ca_gcode,
+      ca_cycles, ca_time_unit = "s", ca_force_unit = "N";
+  std::optional<double> ca_from, ca_to, ca_cutoff, ca_shift;
+  bool ca_fast = false;
+  auto* ca = app.add_subcommand(
+      "calibrate", "fit force coefficients (and runout) to measured forces; write [material]");
+  add_job_args(ca, ca_args);
+  ca->add_option("--measured", ca_measured, "measured forces, CSV (t, F_x, F_y, F_z)");
+  ca->add_option("--mean-forces", ca_mean,
+                 "mean forces of full-immersion slot tests, CSV (feed_per_tooth_mm, f_x_n, "
+                 "f_y_n, f_z_n): linear model by regression");
+  ca->add_option("--model", ca_model,
+                 "bergmann, kienzle or linear (default: the job's, else bergmann)");
+  ca->add_option("--fit", ca_fit,
+                 "parameters, comma separated: k_c,k_n,m,m_n,k_a,m_a | k_tc,k_rc,k_ac,k_te,"
+                 "k_re,k_ae, runout_radial,runout_phase,runout_axial (default: the model's)");
+  ca->add_flag("--fast", ca_fast, "the fast chip source, as for forces");
+  ca->add_option("--columns", ca_columns,
+                 "time,fx,fy,fz column names (default t_s,f_x_n,f_y_n,f_z_n)");
+  ca->add_option("--time-unit", ca_time_unit, "s or ms (default s)");
+  ca->add_option("--force-unit", ca_force_unit, "N or kN (default N)");
+  ca->add_option("--cutoff", ca_cutoff,
+                 "low-pass of both signals, Hz (default 10 x tooth "
+                 "passing, below 0.4 x the coarser rate)");
+  ca->add_option("--max-shift", ca_shift, "alignment search +-, s (default one revolution)");
+  ca->add_option("--gcode", ca_gcode, "this NC program instead of the job's path");
+  ca->add_option("--from", ca_from, "model window start, s (default: the measurement's start)");
+  ca->add_option("--to", ca_to, "model window end, s (default: the measurement's end)");
+  ca->add_option("--cycles", ca_cycles, "A:B: the model window as trochoid cycles");
+  ca->add_option("--json", ca_json, "write the result as JSON (- for stdout)");
+  ca->add_option("--write", ca_write, "write the [material] block to this file");
+
+  // materials
+  bool ma_json = false;
+  auto* ma = app.add_subcommand("materials", "list the materials library (data/materials)");
+  ma->add_flag("--json", ma_json, "as JSON");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -406,7 +487,10 @@ int run(int argc, char** argv) {
   if (*an) {
     const tmill::Job job = load(an_args);
     const tmill::ToolPath tp = job_path(job, an_gcode);
-    const tmill::ProcessMetrics m = tmill::analyze_process(job, tp);
+    tmill::ProcessMetrics m = tmill::analyze_process(job, tp);
+    if (job.material.model) {
+      tmill::set_performance_index(job, m, tmill::predict_force_max(job, tp));
+    }
     if (!an_json.empty()) emit(an_json, tmill::metrics_json(job, m));
     if (!an_csv.empty()) emit(an_csv, tmill::series_csv(job, m.series));
     if (an_json != "-" && an_csv != "-") {
@@ -429,6 +513,10 @@ int run(int argc, char** argv) {
           "left {:.5f} mm, right {:.5f} mm (tooth)\n",
           m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm,
           m.walls_tooth.left.waviness_mm, m.walls_tooth.right.waviness_mm);
+      if (m.force_max_predicted_n) {
+        fmt::print("  F_R,max predicted    {:.1f} N ([material] {})\n", *m.force_max_predicted_n,
+                   tmill::to_string(*job.material.model));
+      }
       if (m.performance_index) fmt::print("  performance index    {:.6g}\n", *m.performance_index);
     }
     return 0;
@@ -555,23 +643,7 @@ int run(int argc, char** argv) {
   if (sim->parsed()) {
     const tmill::Job job = load(sim_args);
     const tmill::ToolPath path = job_path(job, sim_gcode);
-    double from = 0, to = path.duration_s();
-    if (!sim_cycles.empty()) {
-      if (sim_from || sim_to) throw tmill::InputError("give --cycles or --from/--to, not both");
-      const auto colon = sim_cycles.find(':');
-      char* e1 = nullptr;
-      char* e2 = nullptr;
-      const std::string a = sim_cycles.substr(0, colon);
-      const std::string b = colon == std::string::npos ? "" : sim_cycles.substr(colon + 1);
-      const long ca = std::strtol(a.c_str(), &e1, 10), cb = std::strtol(b.c_str(), &e2, 10);
-      if (colon == std::string::npos || a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0') {
-        throw tmill::InputError(fmt::format("--cycles '{}': expected A:B, e.g. 3:4", sim_cycles));
-      }
-      std::tie(from, to) = tmill::cycle_window(path, static_cast<int>(ca), static_cast<int>(cb));
-    } else {
-      if (sim_from) from = *sim_from;
-      if (sim_to) to = *sim_to;
-    }
+    const auto [from, to] = parse_window(path, sim_cycles, sim_from, sim_to);
     // Refuse before starting when the estimate passes the limit.
     const tmill::MemoryEstimate est = tmill::estimate_simulation_memory(job, path, from, to);
     const double need =
@@ -674,6 +746,219 @@ int run(int argc, char** argv) {
           r.complete ? "" : " (interrupted: incomplete)");
     }
     return r.complete ? 0 : 130;
+  }
+
+  if (fo->parsed()) {
+    const tmill::Job job = load(fo_args);
+    const tmill::ToolPath path = job_path(job, fo_gcode);
+    const auto [from, to] = parse_window(path, fo_cycles, fo_from, fo_to);
+    if (!job.material.model) {
+      throw tmill::InputError(fmt::format(
+          "{}: no [material] force model; give [material] model and coefficients or name (see "
+          "`trochomill materials`)",
+          fo_args.job_file));
+    }
+    if (!fo_fast) {
+      const tmill::MemoryEstimate est = tmill::estimate_simulation_memory(job, path, from, to);
+      const double ram = static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
+                         static_cast<double>(sysconf(_SC_PAGE_SIZE));
+      if (est.boards_bytes + est.records_bytes > 0.75 * ram) {
+        throw tmill::InputError(fmt::format(
+            "forces: the simulation would need {:.2f} GB (75 % of RAM is {:.2f} GB); shorten "
+            "the window (--cycles, --from/--to), coarsen [simulation] resolution or use --fast",
+            (est.boards_bytes + est.records_bytes) / 1e9, 0.75 * ram / 1e9));
+      }
+    }
+    const tmill::JobForces jf = tmill::job_forces(job, path, from, to, fo_fast);
+    if (!fo_csv.empty()) emit(fo_csv, tmill::force_series_csv(jf.series));
+    const tmill::ForceSummary& sm = jf.summary;
+    if (!fo_json.empty()) {
+      nlohmann::json j = {{"f_resultant_max_n", sm.f_resultant_max_n},
+                          {"t_resultant_max_s", sm.t_resultant_max_s},
+                          {"f_x_max_n", sm.f_x_max_n},
+                          {"f_y_max_n", sm.f_y_max_n},
+                          {"f_z_max_n", sm.f_z_max_n},
+                          {"f_x_mean_n", sm.f_x_mean_n},
+                          {"f_y_mean_n", sm.f_y_mean_n},
+                          {"f_z_mean_n", sm.f_z_mean_n},
+                          {"torque_max_nm", sm.torque_max_nm},
+                          {"power_max_w", sm.power_max_w},
+                          {"power_mean_w", sm.power_mean_w},
+                          {"model", tmill::to_string(*job.material.model)},
+                          {"material", job.material.name},
+                          {"chip_source", fo_fast ? "fast" : "simulation"},
+                          {"steps", jf.series.size()},
+                          {"from_s", from},
+                          {"to_s", to},
+                          {"chips_wall_s", jf.chips_wall_s},
+                          {"forces_wall_s", jf.forces_wall_s}};
+      emit(fo_json, j.dump(2) + "\n");
+    }
+    if (fo_json != "-" && fo_csv != "-") {
+      fmt::print(
+          "{}: {} model{}, {} chips, {:.4f} to {:.4f} s, {} steps\n"
+          "  F_R,max {:.1f} N at {:.4f} s; |F_x| {:.1f}, |F_y| {:.1f}, |F_z| {:.1f} N max\n"
+          "  torque max {:.3f} N m, power max {:.1f} W (mean {:.1f} W); {:.2f} s + {:.2f} s\n",
+          fo_args.job_file, tmill::to_string(*job.material.model),
+          job.material.name.empty() ? "" : " (" + job.material.name + ")",
+          fo_fast ? "fast" : "simulated", from, to, jf.series.size(), sm.f_resultant_max_n,
+          sm.t_resultant_max_s, sm.f_x_max_n, sm.f_y_max_n, sm.f_z_max_n, sm.torque_max_nm,
+          sm.power_max_w, sm.power_mean_w, jf.chips_wall_s, jf.forces_wall_s);
+    }
+    return 0;
+  }
+
+  if (ca->parsed()) {
+    const tmill::Job job = load(ca_args);
+    if (ca_measured.empty() == ca_mean.empty()) {
+      throw tmill::InputError("calibrate: give --measured FILE or --mean-forces FILE (one)");
+    }
+    if (!ca_mean.empty()) {
+      const tmill::MeanForceFit f = tmill::fit_mean_forces(job, tmill::read_mean_forces(ca_mean));
+      const tmill::Material& m = f.material;
+      const std::string block = fmt::format(
+          "[material]\nmodel = \"linear\"\nk_tc = {:.6g}  # N/mm^2\nk_rc = {:.6g}  # N/mm^2\n"
+          "k_ac = {:.6g}  # N/mm^2\nk_te = {:.6g}  # N/mm\nk_re = {:.6g}  # N/mm\n"
+          "k_ae = {:.6g}  # N/mm\nsource = \"{}\"\n",
+          m.k_tc, m.k_rc, m.k_ac, m.k_te, m.k_re, m.k_ae, m.source);
+      if (!ca_write.empty()) tmill::write_file_atomic(ca_write, block);
+      if (!ca_json.empty()) {
+        nlohmann::json j = {{"model", "linear"},   {"k_tc", m.k_tc},  {"k_rc", m.k_rc},
+                            {"k_ac", m.k_ac},      {"k_te", m.k_te},  {"k_re", m.k_re},
+                            {"k_ae", m.k_ae},      {"r2_axes", f.r2}, {"slope_n_per_mm", f.slope},
+                            {"offset_n", f.offset}};
+        emit(ca_json, j.dump(2) + "\n");
+      }
+      if (ca_json != "-") fmt::print("{}", block);
+      return 0;
+    }
+    tmill::ForceCsvFormat fmt_in;
+    if (!ca_columns.empty()) {
+      std::vector<std::string> cols;
+      std::string cur;
+      for (const char c : ca_columns + ",") {
+        if (c == ',') {
+          cols.push_back(cur);
+          cur.clear();
+        } else {
+          cur += c;
+        }
+      }
+      if (cols.size() != 4 ||
+          std::any_of(cols.begin(), cols.end(), [](const std::string& c) { return c.empty(); })) {
+        throw tmill::InputError(
+            fmt::format("--columns '{}': expected four names time,fx,fy,fz", ca_columns));
+      }
+      fmt_in.time = cols[0], fmt_in.fx = cols[1], fmt_in.fy = cols[2], fmt_in.fz = cols[3];
+    }
+    if (ca_time_unit == "ms") {
+      fmt_in.time_to_s = 1e-3;
+    } else if (ca_time_unit != "s") {
+      throw tmill::InputError(fmt::format("--time-unit '{}': s or ms", ca_time_unit));
+    }
+    if (ca_force_unit == "kN") {
+      fmt_in.force_to_n = 1e3;
+    } else if (ca_force_unit != "N") {
+      throw tmill::InputError(fmt::format("--force-unit '{}': N or kN", ca_force_unit));
+    }
+    tmill::CalibrationOptions o;
+    if (!ca_model.empty()) {
+      if (ca_model == "bergmann")
+        o.model = tmill::ForceModel::bergmann;
+      else if (ca_model == "kienzle")
+        o.model = tmill::ForceModel::kienzle;
+      else if (ca_model == "linear")
+        o.model = tmill::ForceModel::linear;
+      else
+        throw tmill::InputError(fmt::format("--model '{}': bergmann, kienzle or linear", ca_model));
+    } else if (job.material.model) {
+      o.model = *job.material.model;
+    }
+    std::string cur;
+    for (const char c : ca_fit + ",") {
+      if (c == ',') {
+        if (!cur.empty()) o.fit.push_back(cur);
+        cur.clear();
+      } else if (c != ' ') {
+        cur += c;
+      }
+    }
+    o.fast = ca_fast;
+    if (ca_cutoff) o.cutoff_hz = *ca_cutoff;
+    if (ca_shift) o.max_shift_s = *ca_shift;
+    const tmill::MeasuredForces meas = tmill::read_measured_forces(ca_measured, fmt_in);
+    const tmill::ToolPath path = job_path(job, ca_gcode);
+    if (ca_cycles.empty() && !ca_from && !ca_to) {
+      o.from_s = std::max(0.0, meas.t_s.front());
+      o.to_s = std::min(path.duration_s(), meas.t_s.back());
+    } else {
+      std::tie(o.from_s, o.to_s) = parse_window(path, ca_cycles, ca_from, ca_to);
+    }
+    const tmill::CalibrationResult r = tmill::calibrate_forces(job, path, meas, o);
+    const std::string block = tmill::material_toml(r);
+    if (!ca_write.empty()) tmill::write_file_atomic(ca_write, block);
+    if (!ca_json.empty()) {
+      nlohmann::json j = {{"model", tmill::to_string(*r.material.model)},
+                          {"rmse_n", r.rmse_n},
+                          {"r2", r.r2},
+                          {"shift_s", r.shift_s},
+                          {"cutoff_hz", r.cutoff_hz},
+                          {"samples", r.samples},
+                          {"iterations", r.iterations}};
+      nlohmann::json ci = nlohmann::json::object();
+      for (const auto& p : r.parameters) {
+        j[p.name] = p.value;
+        ci[p.name] = {{"lo", p.ci95_lo},
+                      {"hi", p.ci95_hi},
+                      {"std_error", p.std_error},
+                      {"at_bound", p.at_bound}};
+      }
+      j["ci95"] = ci;
+      emit(ca_json, j.dump(2) + "\n");
+    }
+    if (ca_json != "-") {
+      fmt::print("{}: {} samples per axis, shift {:.6f} s, low-pass {:.0f} Hz, {} iterations\n",
+                 ca_measured, r.samples, r.shift_s, r.cutoff_hz, r.iterations);
+      fmt::print("  RMSE {:.3f} N, R^2 {:.4f}\n", r.rmse_n, r.r2);
+      fmt::print("{}", block);
+    }
+    return 0;
+  }
+
+  if (ma->parsed()) {
+    const std::vector<tmill::Material> lib = tmill::material_library();
+    if (ma_json) {
+      nlohmann::json j = nlohmann::json::array();
+      for (const auto& m : lib) {
+        nlohmann::json o = {{"name", m.name},
+                            {"model", tmill::to_string(*m.model)},
+                            {"source", m.source},
+                            {"notes", m.notes}};
+        if (*m.model == tmill::ForceModel::linear) {
+          o["k_tc"] = m.k_tc, o["k_rc"] = m.k_rc, o["k_ac"] = m.k_ac;
+          o["k_te"] = m.k_te, o["k_re"] = m.k_re, o["k_ae"] = m.k_ae;
+        } else {
+          o["k_c"] = m.k_c, o["k_n"] = m.k_n, o["m"] = m.m;
+        }
+        j.push_back(o);
+      }
+      fmt::print("{}\n", j.dump(2));
+      return 0;
+    }
+    fmt::print("{} materials in {}\n", lib.size(), tmill::materials_dir().string());
+    for (const auto& m : lib) {
+      if (*m.model == tmill::ForceModel::linear) {
+        fmt::print(
+            "  {:<28} linear   K_tc {:g} K_rc {:g} K_ac {:g} N/mm^2, K_te {:g} K_re {:g} "
+            "K_ae {:g} N/mm\n",
+            m.name, m.k_tc, m.k_rc, m.k_ac, m.k_te, m.k_re, m.k_ae);
+      } else {
+        fmt::print("  {:<28} {:<8} k_c {:g} k_n {:g} N/mm^2, m {:g}\n", m.name,
+                   tmill::to_string(*m.model), m.k_c, m.k_n, m.m);
+      }
+      fmt::print("  {:<28} source: {}\n", "", m.source);
+    }
+    return 0;
   }
 
   if (mon->parsed()) {

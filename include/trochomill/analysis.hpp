@@ -63,7 +63,8 @@ struct ProcessMetrics {
   // Performance index (Wagih Eq. 7) from [measured]; W_max from the job's measurement or, if
   // absent, the tooth-level waviness. Units: (mm^3/min) / (N um um).
   std::optional<double> performance_index;
-  std::string performance_index_note;  ///< where its inputs came from, or what is missing
+  std::optional<double> force_max_predicted_n;  ///< F_R,max from the force model (N), if run
+  std::string performance_index_note;           ///< where its inputs came from, or what is missing
 
   EngagementSeries series;  ///< the time series (one sample per tooth pass / steps)
 };
@@ -71,5 +72,10 @@ struct ProcessMetrics {
 /// Analyses `path` for `job` (the job gives tool, slot, cutting conditions, step, [analysis]
 /// and [measured]). Throws InputError when the path never cuts the slot.
 [[nodiscard]] ProcessMetrics analyze_process(const Job& job, const ToolPath& path);
+
+/// Sets the performance index of `m`: F_R,max from [measured] force_max, else the predicted
+/// one (force.hpp: predict_force_max), with [measured] roughness_ra and the waviness.
+void set_performance_index(const Job& job, ProcessMetrics& m,
+                           std::optional<double> predicted_force_max_n = std::nullopt);
 
 }  // namespace trochomill

@@ -134,6 +134,47 @@ struct SimSettings {
   bool exhaustive = false;
 };
 
+/// Force model of `[material]` (force.hpp, docs/models.md section 12).
+enum class ForceModel { bergmann, kienzle, linear };
+
+/// `[material]`: the workpiece material's force coefficients, given in the job or taken from
+/// the materials library (`name`, data/materials/*.toml). Forces act on the workpiece.
+struct Material {
+  std::string name;                 ///< library name, when taken from the library
+  std::string source;               ///< citation of the coefficients
+  std::string notes;                ///< conditions they hold for (tool, speed, coolant...)
+  std::optional<ForceModel> model;  ///< absent: no force model in the job
+  // Bergmann 2021 Eq. 3 and Kienzle: F = w h^(1 - m) k per direction.
+  double k_c = 0;             ///< specific cutting force (N/mm^2), along the cutting direction
+  double k_n = 0;             ///< specific normal force (N/mm^2), along the contour normal
+  double m = 0;               ///< exponent of h (dimensionless, 0 <= m < 1)
+  std::optional<double> m_n;  ///< Kienzle: exponent of the normal force (default m)
+  double k_a = 0;             ///< Kienzle: specific force up the edge (N/mm^2)
+  std::optional<double> m_a;  ///< Kienzle: its exponent (default m)
+  // Linear edge-force model: F = w (K_c h + K_e) per direction.
+  double k_tc = 0, k_rc = 0, k_ac = 0;  ///< cutting coefficients (N/mm^2)
+  double k_te = 0, k_re = 0, k_ae = 0;  ///< edge coefficients (N/mm)
+};
+
+/// `[forces]`: settings of `trochomill forces` and `calibrate`.
+struct ForceSettings {
+  int fast_steps_per_rev = 96;      ///< fast chip source: time steps per revolution
+  double ploughing_angle_deg = 80;  ///< zeta: sub-segments steeper than this to v_c plough
+};
+
+/// `[topography]`: digitised (or synthetic) wear states of the cutting edge (topography.hpp).
+struct TopographySettings {
+  std::vector<std::filesystem::path> files;  ///< STL/PLY/OBJ meshes, one per wear state
+  std::vector<double> synthetic_vb_mm;       ///< or synthetic inserts, one per flank wear VB
+  int state = 0;                             ///< the wear state used (index)
+  double band_mm = 0.2;                      ///< band along the edge that is sampled (mm)
+  double rake_deg = 0;                       ///< synthetic insert: rake angle (degrees)
+  double clearance_deg = 7;                  ///< synthetic insert: clearance angle (degrees)
+  [[nodiscard]] std::size_t states() const noexcept {
+    return files.empty() ? synthetic_vb_mm.size() : files.size();
+  }
+};
+
 struct Job {
   std::string source;  ///< file name the job came from (for messages)
   Tool tool;
@@ -146,6 +187,9 @@ struct Job {
   MechanismJob mechanism;
   MonitorSettings monitor;
   SimSettings simulation;
+  Material material;
+  ForceSettings forces;
+  TopographySettings topography;
   /// `[stock]` min / max corners (mm); absent: the slot region with a 1 mm margin (sim.hpp).
   std::optional<std::array<double, 3>> stock_min_mm, stock_max_mm;
   // The original document, flattened `section.key = value` (TOML syntax), after overrides:
@@ -171,7 +215,14 @@ struct Override {
 [[nodiscard]] Job parse_job(std::string_view toml_text, std::string_view source_name,
                             const std::vector<Override>& overrides = {});
 
+/// The materials library: data/materials/*.toml, looked up in $TROCHOMILL_DATA/materials, then
+/// the source tree's data/materials, then the installed share/trochomill/materials.
+[[nodiscard]] std::filesystem::path materials_dir();
+/// Every material of the library, sorted by name. Throws InputError for a malformed file.
+[[nodiscard]] std::vector<Material> material_library();
+
 [[nodiscard]] std::string_view to_string(PathType t) noexcept;
+[[nodiscard]] std::string_view to_string(ForceModel m) noexcept;
 [[nodiscard]] std::string_view to_string(Dialect d) noexcept;
 [[nodiscard]] std::string_view to_string(EntryType e) noexcept;
 [[nodiscard]] std::string_view to_string(Direction d) noexcept;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "trochomill/analysis.hpp"
+#include "trochomill/force.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
@@ -71,6 +72,10 @@ struct StudyPoint {
 /// The simulation's per-step series: t_s, x_mm, y_mm, z_mm, removed_tooth<k>_mm3, h_max_mm,
 /// h_mean_mm, engaged_segments.
 [[nodiscard]] std::string sim_series_csv(const SimResult& r, std::size_t teeth);
+/// The force series: t_s, f_x_n, f_y_n, f_z_n, f_resultant_n, torque_nm, power_w, then per
+/// tooth k: tooth<k>_f_x_n, tooth<k>_f_y_n, tooth<k>_f_z_n, tooth<k>_torque_nm. `calibrate`
+/// reads it as it is.
+[[nodiscard]] std::string force_series_csv(const ForceSeries& s);
 /// Wall profiles: y_mm, z_mm, left_x_mm, right_x_mm.
 [[nodiscard]] std::string wall_profiles_csv(const std::vector<WallPoint>& w);
 /// Floor profiles: y_mm, x_mm, z_mm.

@@ -62,6 +62,11 @@ struct Sos {
 /// pre-warped edges (as scipy.signal.butter(order, [lo, hi], 'bandpass', fs=rate,
 /// output='sos')). Throws InputError unless 1 <= order <= 12 and 0 < lo < hi < rate / 2.
 [[nodiscard]] Sos butter_bandpass(int order, double lo_hz, double hi_hz, double rate_hz);
+/// Butterworth low-pass of the given order, cutoff in Hz (-3 dB), bilinear transform with a
+/// pre-warped cutoff (as scipy.signal.butter(order, cutoff, fs=rate, output='sos'), up to the
+/// sections' order and gain split). Throws InputError unless 1 <= order <= 12 and
+/// 0 < cutoff < rate / 2.
+[[nodiscard]] Sos butter_lowpass(int order, double cutoff_hz, double rate_hz);
 /// |H(e^{i 2 pi f / rate})| of the cascade.
 [[nodiscard]] double sos_gain(const Sos& sos, double f_hz, double rate_hz);
 

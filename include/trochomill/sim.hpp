@@ -194,18 +194,26 @@ struct SimTool {
 };
 
 /// One cell of an edge's structured grid: segment kappa along the edge, sub-segment tau
-/// inward across the flank face. For a new edge the flank face is the contour swept
-/// backwards (against the cutting direction) and every sub-segment's normal is the
-/// contour's outward normal; the wear issue replaces them with digitised topography.
+/// inward from the outer edge across the face the chip meets (Bergmann 2021 Section 4.1).
+/// `normal` is the contour's outward normal d_n (the segment's radial direction); `facet` is
+/// the sub-segment's surface normal d_c, which sets the force direction (Eq. 2). For a new
+/// sharp edge (edge_grid) every facet is the rake face, normal to the cutting direction, and
+/// the sub-segments split the band evenly; the topography module fills them from a
+/// digitised or synthetic insert (topography.hpp).
 struct EdgeCell {
   int kappa = 0, tau = 0;
   double s_mm = 0;      ///< the segment's middle, along the edge from the tip
   double h_mm = 0;      ///< its height above the tip
   double r_mm = 0;      ///< its contour radius
   double width_mm = 0;  ///< w_s: the segment's length along the edge
-  double depth_mm = 0;  ///< the sub-segment's middle, inward from the edge
+  double depth_mm = 0;  ///< the sub-segment's middle, inward from the edge (projected)
   /// Unit normal in the tooth's frame (radial out, cutting direction, axial up).
   std::array<double, 3> normal{};
+  /// The sub-segment's unit surface normal d_c, same frame.
+  std::array<double, 3> facet{0.0, 1.0, 0.0};
+  double proj_mm = 0;      ///< Delta_proj at its outer end: inward distance from the outer edge
+  double proj_end_mm = 0;  ///< Delta_proj at its inner end
+  double para_mm = 0;      ///< w_j: its length along the surface (Delta_para difference)
 };
 struct EdgeGrid {
   int segments = 0, sub_segments = 0;

@@ -541,21 +541,34 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
     m.h_max_tooth_mm = *std::max_element(m.h_max_per_tooth_mm.begin(), m.h_max_per_tooth_mm.end());
   }
 
-  // Performance index.
+  set_performance_index(job, m);
+  return m;
+}
+
+void set_performance_index(const Job& job, ProcessMetrics& m,
+                           std::optional<double> predicted_force_max_n) {
+  m.force_max_predicted_n = predicted_force_max_n;
   const double w_max_um = job.measured.waviness_um.value_or(
       1000.0 * std::max(m.walls_tooth.left.waviness_mm, m.walls_tooth.right.waviness_mm));
-  if (job.measured.force_max_n && job.measured.roughness_ra_um && w_max_um > 0) {
-    m.performance_index =
-        m.mrr_mm3_per_min / (*job.measured.force_max_n * *job.measured.roughness_ra_um * w_max_um);
+  const std::optional<double> force =
+      job.measured.force_max_n ? job.measured.force_max_n : predicted_force_max_n;
+  if (force && job.measured.roughness_ra_um && w_max_um > 0) {
+    m.performance_index = m.mrr_mm3_per_min / (*force * *job.measured.roughness_ra_um * w_max_um);
     m.performance_index_note = fmt::format(
-        "MRR {:.1f} mm^3/min (model), F_R,max {:g} N, Ra {:g} um (measured), W_max {:.3g} um ({})",
-        m.mrr_mm3_per_min, *job.measured.force_max_n, *job.measured.roughness_ra_um, w_max_um,
+        "MRR {:.1f} mm^3/min (model), F_R,max {:.4g} N ({}), Ra {:g} um (measured), W_max {:.3g} "
+        "um ({})",
+        m.mrr_mm3_per_min, *force,
+        job.measured.force_max_n
+            ? "measured"
+            : "predicted, [material] " + std::string(to_string(*job.material.model)),
+        *job.measured.roughness_ra_um, w_max_um,
         job.measured.waviness_um ? "measured" : "model, tooth level");
   } else {
+    m.performance_index.reset();
     m.performance_index_note =
-        "needs [measured] force_max (N) and roughness_ra (um); waviness (um) is optional";
+        "needs [measured] force_max (N) or a [material] force model, and [measured] "
+        "roughness_ra (um); waviness (um) is optional";
   }
-  return m;
 }
 
 }  // namespace trochomill

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <optional>
@@ -44,6 +45,11 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
       {"stock", {"min", "max"}},
       {"simulation",
        {"resolution", "steps_per_rev", "chip_sampling", "segment", "sub_segments", "threads"}},
+      {"material",
+       {"name", "model", "k_c", "k_n", "m", "m_n", "k_a", "m_a", "k_tc", "k_rc", "k_ac", "k_te",
+        "k_re", "k_ae", "friction_angle", "source", "notes"}},
+      {"forces", {"fast_steps_per_rev", "ploughing_angle"}},
+      {"topography", {"files", "synthetic_vb", "state", "band", "rake", "clearance"}},
       {"monitor",
        {"low_min", "low_max", "high_min", "high_max", "order", "window", "baseline_cycles",
         "wear_ratio", "ploughing_ratio", "phase_bins"}},
@@ -54,7 +60,7 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
 // Sections later modules own. They are accepted (not validated here) so one job file can
 // carry everything; each module validates its own section.
 const std::set<std::string>& reserved_sections() {
-  static const std::set<std::string> s = {"material", "forces"};
+  static const std::set<std::string> s = {};
   return s;
 }
 
@@ -228,6 +234,37 @@ class JobReader {
     return fallback;
   }
 
+  std::optional<std::string> string(const std::string& section, const std::string& key) {
+    const toml::node* n = find(section, key);
+    if (n == nullptr) return std::nullopt;
+    if (!n->is_string()) {
+      problem(section, key, fmt::format("expected a string, got {}", type_name(*n)));
+      return std::nullopt;
+    }
+    return n->value<std::string>().value_or("");
+  }
+
+  std::optional<std::vector<std::string>> string_array(const std::string& section,
+                                                       const std::string& key) {
+    const toml::node* n = find(section, key);
+    if (n == nullptr) return std::nullopt;
+    const toml::array* arr = n->as_array();
+    if (arr == nullptr) {
+      problem(section, key, fmt::format("expected an array of strings, got {}", type_name(*n)));
+      return std::nullopt;
+    }
+    std::vector<std::string> out;
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const toml::node& e = *arr->get(i);
+      if (!e.is_string()) {
+        problem(section, key, fmt::format("element {} must be a string, got {}", i, type_name(e)));
+        return std::nullopt;
+      }
+      out.push_back(e.value<std::string>().value_or(""));
+    }
+    return out;
+  }
+
   std::optional<std::vector<double>> number_array(const std::string& section,
                                                   const std::string& key, Range range) {
     const toml::node* n = find(section, key);
@@ -381,6 +418,78 @@ void flatten(const toml::table& root, std::vector<std::pair<std::string, std::st
     }
   }
 }
+
+// [material]: reads the keys present into m (absent keys keep m's values, so a job's keys
+// override a library entry's).
+void read_material_keys(JobReader& r, Material& m) {
+  if (auto v = r.string("material", "source")) m.source = *v;
+  if (auto v = r.string("material", "notes")) m.notes = *v;
+  if (auto v = r.choice<ForceModel>("material", "model",
+                                    {{"bergmann", ForceModel::bergmann},
+                                     {"kienzle", ForceModel::kienzle},
+                                     {"linear", ForceModel::linear}},
+                                    std::nullopt)) {
+    m.model = *v;
+  }
+  const auto num = [&](const char* key, const char* unit, Range range, double& dst) {
+    if (auto v = r.number("material", key, unit, range)) dst = *v;
+  };
+  num("k_c", "N/mm^2", positive(), m.k_c);
+  num("k_n", "N/mm^2", Range{}, m.k_n);
+  num("m", "", Range{0.0, 1.0, true, false}, m.m);
+  if (auto v = r.number("material", "m_n", "", Range{0.0, 1.0, true, false})) m.m_n = *v;
+  num("k_a", "N/mm^2", Range{}, m.k_a);
+  if (auto v = r.number("material", "m_a", "", Range{0.0, 1.0, true, false})) m.m_a = *v;
+  num("k_tc", "N/mm^2", positive(), m.k_tc);
+  num("k_rc", "N/mm^2", Range{}, m.k_rc);
+  num("k_ac", "N/mm^2", Range{}, m.k_ac);
+  num("k_te", "N/mm", Range{}, m.k_te);
+  num("k_re", "N/mm", Range{}, m.k_re);
+  num("k_ae", "N/mm", Range{}, m.k_ae);
+}
+
+// The coefficients a model needs are there, and the job gives none of another model's.
+void check_material(JobReader& r, const Material& m) {
+  static const std::vector<std::string> power_keys = {"k_c", "k_n", "m"};
+  static const std::vector<std::string> kienzle_keys = {"m_n", "k_a", "m_a"};
+  static const std::vector<std::string> linear_keys = {"k_tc", "k_rc", "k_ac",
+                                                       "k_te", "k_re", "k_ae"};
+  if (!m.model) {
+    for (const auto* keys : {&power_keys, &kienzle_keys, &linear_keys}) {
+      for (const auto& k : *keys) {
+        if (r.has("material", k)) {
+          r.problem("material", k, "give [material] model (bergmann | kienzle | linear) or name");
+          return;
+        }
+      }
+    }
+    return;
+  }
+  const std::string model(to_string(*m.model));
+  const auto foreign = [&](const std::vector<std::string>& keys, const char* owner) {
+    for (const auto& k : keys) {
+      if (r.has("material", k)) {
+        r.problem("material", k,
+                  fmt::format("belongs to the {} model, not to model = \"{}\"", owner, model));
+      }
+    }
+  };
+  if (*m.model == ForceModel::linear) {
+    foreign(power_keys, "bergmann/kienzle");
+    foreign(kienzle_keys, "kienzle");
+    if (!(m.k_tc > 0)) {
+      r.problem("material", "k_tc", "the linear model needs k_tc (N/mm^2, > 0)");
+    }
+    return;
+  }
+  foreign(linear_keys, "linear");
+  if (*m.model == ForceModel::bergmann) foreign(kienzle_keys, "kienzle");
+  if (!(m.k_c > 0)) {
+    r.problem("material", "k_c", fmt::format("model = \"{}\" needs k_c (N/mm^2, > 0)", model));
+  }
+}
+
+Material library_material(const std::string& name);
 
 Job build_job(toml::table& root, std::string source, const std::set<std::string>& overridden) {
   JobReader r(root, source, overridden);
@@ -674,12 +783,132 @@ Job build_job(toml::table& root, std::string source, const std::set<std::string>
   job.analysis.steps_per_tooth = r.integer("analysis", "steps_per_tooth", 1, 64, 1).value_or(1);
   job.analysis.imprint_points = r.integer("analysis", "imprint_points", 3, 10001, 81).value_or(81);
 
+  // [material]: a library entry by name, then the job's own keys over it.
+  {
+    Material& ma = job.material;
+    if (auto name = r.string("material", "name")) {
+      try {
+        ma = library_material(*name);
+      } catch (const InputError& e) {
+        r.problem("material", "name", e.what());
+      }
+    }
+    read_material_keys(r, ma);
+    check_material(r, ma);
+  }
+  // [forces]
+  job.forces.fast_steps_per_rev =
+      r.integer("forces", "fast_steps_per_rev", 8, 100000, 96).value_or(96);
+  job.forces.ploughing_angle_deg =
+      r.number("forces", "ploughing_angle", "degrees", Range{0.0, 90.0, false, false}, 80.0)
+          .value_or(80.0);
+  // [topography]: file names relative to the job file's directory.
+  {
+    TopographySettings& tp = job.topography;
+    if (auto files = r.string_array("topography", "files")) {
+      const std::filesystem::path base = std::filesystem::path(source).parent_path();
+      for (const auto& f : *files) {
+        const std::filesystem::path fp(f);
+        tp.files.push_back(fp.is_absolute() ? fp : base / fp);
+      }
+    }
+    if (auto vb = r.number_array("topography", "synthetic_vb", Range{0.0, 2.0})) {
+      tp.synthetic_vb_mm = *vb;
+    }
+    if (!tp.files.empty() && !tp.synthetic_vb_mm.empty()) {
+      r.problem("topography", "synthetic_vb", "give files or synthetic_vb, not both");
+    }
+    tp.band_mm = r.number("topography", "band", "mm", Range{1e-3, 5.0}, 0.2).value_or(0.2);
+    tp.rake_deg = r.number("topography", "rake", "degrees", Range{-30.0, 30.0}, 0.0).value_or(0.0);
+    tp.clearance_deg =
+        r.number("topography", "clearance", "degrees", Range{1.0, 30.0}, 7.0).value_or(7.0);
+    const int states = static_cast<int>(tp.states());
+    tp.state = r.integer("topography", "state", 0, std::max(0, states - 1), 0).value_or(0);
+  }
+
   r.check_unknown();
   if (!r.problems().empty()) throw InputError(r.problems());
   flatten(root, job.flat_keys);
   return job;
 }
 
+}  // namespace
+
+std::filesystem::path materials_dir() {
+  namespace fs = std::filesystem;
+  if (const char* env = std::getenv("TROCHOMILL_DATA"); env != nullptr && *env != '\0') {
+    return fs::path(env) / "materials";
+  }
+#ifdef TROCHOMILL_SOURCE_DATA_DIR
+  if (fs::is_directory(fs::path(TROCHOMILL_SOURCE_DATA_DIR) / "materials")) {
+    return fs::path(TROCHOMILL_SOURCE_DATA_DIR) / "materials";
+  }
+#endif
+#ifdef TROCHOMILL_INSTALL_DATA_DIR
+  return fs::path(TROCHOMILL_INSTALL_DATA_DIR) / "materials";
+#else
+  return fs::path("data") / "materials";
+#endif
+}
+
+std::vector<Material> material_library() {
+  namespace fs = std::filesystem;
+  const fs::path dir = materials_dir();
+  if (!fs::is_directory(dir)) {
+    throw InputError(fmt::format(
+        "materials library not found at {} (set TROCHOMILL_DATA to the directory holding "
+        "materials/)",
+        dir.string()));
+  }
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.is_regular_file() && e.path().extension() == ".toml") files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<Material> out;
+  for (const auto& f : files) {
+    std::string text;
+    try {
+      text = read_file(f);
+    } catch (const IoError& e) {
+      throw InputError(e.what());
+    }
+    toml::table root;
+    try {
+      root = toml::parse(text, f.string());
+    } catch (const toml::parse_error& e) {
+      throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", f.string(),
+                                   e.source().begin.line, e.source().begin.column,
+                                   e.description()));
+    }
+    JobReader r(root, f.string(), {});
+    Material m;
+    if (auto name = r.string("material", "name")) m.name = *name;
+    if (m.name.empty()) r.problem("material", "name", "a library entry needs a name");
+    read_material_keys(r, m);
+    if (!m.model) r.problem("material", "model", "a library entry needs a model");
+    check_material(r, m);
+    if (m.source.empty()) r.problem("material", "source", "a library entry must cite its source");
+    r.check_unknown();
+    if (!r.problems().empty()) throw InputError(r.problems());
+    out.push_back(std::move(m));
+  }
+  std::sort(out.begin(), out.end(),
+            [](const Material& a, const Material& b) { return a.name < b.name; });
+  return out;
+}
+
+namespace {
+Material library_material(const std::string& name) {
+  const std::vector<Material> lib = material_library();
+  std::vector<std::string> names;
+  for (const auto& m : lib) {
+    if (m.name == name) return m;
+    names.push_back(m.name);
+  }
+  throw InputError(
+      fmt::format("'{}' is not in the materials library{}", name, suggestion(name, names)));
+}
 }  // namespace
 
 Override parse_override(std::string_view text) {
@@ -743,6 +972,17 @@ std::string_view to_string(PathType t) noexcept {
       return "elliptical";
     case PathType::linear_elliptical:
       return "linear-elliptical";
+  }
+  return "?";
+}
+std::string_view to_string(ForceModel m) noexcept {
+  switch (m) {
+    case ForceModel::bergmann:
+      return "bergmann";
+    case ForceModel::kienzle:
+      return "kienzle";
+    case ForceModel::linear:
+      return "linear";
   }
   return "?";
 }

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "trochomill/error.hpp"
+#include "trochomill/force.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -60,6 +61,10 @@ const std::vector<Scalar>& scalars() {
       {"cycle_start_s", [](const ProcessMetrics& m) { return m.cycle_start_s; }},
       {"cutting_time_total_s", [](const ProcessMetrics& m) { return m.cutting_time_total_s; }},
       {"slot_volume_mm3", [](const ProcessMetrics& m) { return m.slot_volume_mm3; }},
+      {"force_max_predicted_n",
+       [](const ProcessMetrics& m) { return m.force_max_predicted_n.value_or(std::nan("")); }},
+      {"performance_index",
+       [](const ProcessMetrics& m) { return m.performance_index.value_or(std::nan("")); }},
   };
   return s;
 }
@@ -100,6 +105,8 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
   j["performance_index"] =
       m.performance_index ? nlohmann::json(*m.performance_index) : nlohmann::json(nullptr);
   j["performance_index_note"] = m.performance_index_note;
+  j["force_max_predicted_n"] =
+      m.force_max_predicted_n ? nlohmann::json(*m.force_max_predicted_n) : nlohmann::json(nullptr);
   j["samples"] = m.series.samples.size();
   return j;
 }
@@ -217,6 +224,9 @@ std::vector<StudyPoint> run_study(const std::string& job_file, const std::vector
       const Job job = load_job(job_file, sp.overrides);
       const PlannedPath planned = plan_path(job);
       sp.metrics = analyze_process(job, planned.path);
+      if (job.material.model) {
+        set_performance_index(job, sp.metrics, predict_force_max(job, planned.path));
+      }
       sp.metrics.series = EngagementSeries{};  // keep the study small
       sp.ok = true;
     } catch (const std::exception& e) {
@@ -234,15 +244,26 @@ std::string study_table(const std::vector<Vary>& varies, const std::vector<Study
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> head;
   for (const auto& v : varies) head.push_back(v.key);
-  for (const char* c : table_columns()) head.push_back(c);
+  std::vector<const char*> columns = table_columns();
+  // Predicted force and performance index when a force model ran (analyze and compare fill
+  // them from [material]).
+  for (const auto& p : points) {
+    if (p.ok && p.metrics.force_max_predicted_n) {
+      columns.push_back("force_max_predicted_n");
+      columns.push_back("performance_index");
+      break;
+    }
+  }
+  for (const char* c : columns) head.push_back(c);
   rows.push_back(head);
   for (const auto& p : points) {
     std::vector<std::string> r;
     for (std::size_t k = 0; k < varies.size(); ++k) {
       r.push_back(p.overrides[p.overrides.size() - varies.size() + k].value);
     }
-    for (const char* c : table_columns()) {
-      r.push_back(p.ok ? fmt::format("{:.5g}", scalar(p.metrics, c)) : "-");
+    for (const char* c : columns) {
+      const double v = p.ok ? scalar(p.metrics, c) : std::nan("");
+      r.push_back(std::isfinite(v) ? fmt::format("{:.5g}", v) : "-");
     }
     rows.push_back(r);
   }
@@ -303,7 +324,10 @@ std::string study_csv(const std::vector<Vary>& varies, const std::vector<StudyPo
       out += (val.find(',') != std::string::npos ? "\"" + val + "\"" : val) + ",";
     }
     out += p.ok ? "1" : "0";
-    for (const auto& s : scalars()) out += p.ok ? fmt::format(",{:.9g}", s.get(p.metrics)) : ",";
+    for (const auto& s : scalars()) {
+      const double v = p.ok ? s.get(p.metrics) : std::nan("");
+      out += std::isfinite(v) ? fmt::format(",{:.9g}", v) : ",";
+    }
     out += '\n';
   }
   return out;

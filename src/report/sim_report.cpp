@@ -28,6 +28,27 @@ std::string sim_series_csv(const SimResult& r, std::size_t teeth) {
   return csv;
 }
 
+std::string force_series_csv(const ForceSeries& s) {
+  std::string csv = "t_s,f_x_n,f_y_n,f_z_n,f_resultant_n,torque_nm,power_w";
+  for (int k = 0; k < s.teeth; ++k) {
+    csv += fmt::format(",tooth{0}_f_x_n,tooth{0}_f_y_n,tooth{0}_f_z_n,tooth{0}_torque_nm", k);
+  }
+  csv += '\n';
+  auto out = std::back_inserter(csv);
+  const auto nz = static_cast<std::size_t>(s.teeth);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    fmt::format_to(out, "{:.8f},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}", s.t_s[i], s.fx_n[i],
+                   s.fy_n[i], s.fz_n[i], s.resultant_n(i), s.torque_nm[i], s.power_w[i]);
+    for (std::size_t k = 0; k < nz; ++k) {
+      const std::size_t j = i * nz + k;
+      fmt::format_to(out, ",{:.6g},{:.6g},{:.6g},{:.6g}", s.tooth_fx_n[j], s.tooth_fy_n[j],
+                     s.tooth_fz_n[j], s.tooth_torque_nm[j]);
+    }
+    csv += '\n';
+  }
+  return csv;
+}
+
 std::string wall_profiles_csv(const std::vector<WallPoint>& w) {
   std::string csv = "y_mm,z_mm,left_x_mm,right_x_mm\n";
   auto out = std::back_inserter(csv);

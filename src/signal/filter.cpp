@@ -72,6 +72,46 @@ Sos butter_bandpass(int order, double lo_hz, double hi_hz, double rate_hz) {
   return sos;
 }
 
+Sos butter_lowpass(int order, double cutoff_hz, double rate_hz) {
+  if (order < 1 || order > 12) {
+    throw InputError(fmt::format("filter order must be 1..12, got {}", order));
+  }
+  if (!(rate_hz > 0)) throw InputError(fmt::format("sample rate must be > 0 Hz, got {}", rate_hz));
+  if (!(cutoff_hz > 0 && cutoff_hz < 0.5 * rate_hz)) {
+    throw InputError(fmt::format("cutoff {:g} Hz: need 0 < cutoff < rate / 2 = {:g} Hz", cutoff_hz,
+                                 0.5 * rate_hz));
+  }
+  // Analog poles wc p_k (pre-warped wc); bilinear transform; n zeros at z = -1; unit DC gain
+  // per section.
+  const int n = order;
+  const double fs2 = 2 * rate_hz, wc = fs2 * std::tan(kPi * cutoff_hz / rate_hz);
+  Sos sos;
+  std::vector<cplx> upper;
+  double real_pole = 0;
+  bool has_real = false;
+  for (int k = 0; k < n; ++k) {
+    const cplx s = wc * std::polar(1.0, kPi * (2.0 * k + n + 1) / (2.0 * n));
+    const cplx z = (fs2 + s) / (fs2 - s);
+    if (std::abs(z.imag()) < 1e-14) {
+      real_pole = z.real();
+      has_real = true;
+    } else if (z.imag() > 0) {
+      upper.push_back(z);
+    }
+  }
+  std::sort(upper.begin(), upper.end(),
+            [](const cplx& a, const cplx& b) { return std::abs(a) < std::abs(b); });
+  if (has_real) {  // (1 + z^-1) / (1 - p z^-1), gain (1 - p) / 2 at DC = 1
+    const double g = 0.5 * (1 - real_pole);
+    sos.sections.push_back({g, g, 0.0, 1.0, -real_pole, 0.0});
+  }
+  for (const cplx& p : upper) {  // (1 + z^-1)^2 / (1 - 2 Re p z^-1 + |p|^2 z^-2)
+    const double a1 = -2 * p.real(), a2 = std::norm(p), g = (1 + a1 + a2) / 4;
+    sos.sections.push_back({g, 2 * g, g, 1.0, a1, a2});
+  }
+  return sos;
+}
+
 double sos_gain(const Sos& sos, double f_hz, double rate_hz) {
   const cplx z1 = std::polar(1.0, -kTwoPi * f_hz / rate_hz);  // z^-1
   const cplx z2 = z1 * z1;

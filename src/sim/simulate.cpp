@@ -123,6 +123,10 @@ EdgeGrid edge_grid(const SimTool& tool, double band_mm) {
       c.width_mm = s1 - s0;
       c.depth_mm = (t + 0.5) * band_mm / g.sub_segments;
       c.normal = {nr, 0.0, nz};
+      c.facet = {0.0, 1.0, 0.0};  // the rake face of a sharp edge (zero rake)
+      c.proj_mm = t * band_mm / g.sub_segments;
+      c.proj_end_mm = (t + 1) * band_mm / g.sub_segments;
+      c.para_mm = band_mm / g.sub_segments;
       g.cells.push_back(c);
     }
   }

@@ -1,0 +1,192 @@
+// Cutting forces per engaged edge segment (Bergmann 2021 Eq. 2-3, Kienzle, the linear
+// edge-force model), summed per tooth and over the tool in the workpiece (dynamometer)
+// frame, with torque and spindle power; two chip sources (the dexel simulation and a fast
+// analytic one); calibration of the coefficients against measured forces. docs/models.md
+// section 12 gives every reading and its test.
+//
+// Units: mm, s, N, N m, W; angles in radians inside. Forces act on the workpiece: x across
+// the slot, y along it, z up (domain notes section 1).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "trochomill/engagement.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/sim.hpp"
+
+namespace trochomill {
+
+/// Force, torque and power over time: one entry per chip step (SimResult::steps).
+struct ForceSeries {
+  int teeth = 0;
+  std::vector<double> t_s;
+  std::vector<double> fx_n, fy_n, fz_n;  ///< on the workpiece (N)
+  std::vector<double> torque_nm;         ///< about the spindle axis, resisting the cut (N m)
+  std::vector<double> power_w;           ///< spindle power torque * |omega| (W)
+  /// Per tooth: [step * teeth + tooth].
+  std::vector<double> tooth_fx_n, tooth_fy_n, tooth_fz_n, tooth_torque_nm;
+  [[nodiscard]] std::size_t size() const noexcept { return t_s.size(); }
+  [[nodiscard]] double resultant_n(std::size_t i) const;
+};
+
+struct ForceSummary {
+  double f_resultant_max_n = 0, t_resultant_max_s = 0;
+  double f_x_max_n = 0, f_y_max_n = 0, f_z_max_n = 0;  ///< largest magnitude of each component
+  double f_x_mean_n = 0, f_y_mean_n = 0, f_z_mean_n = 0;
+  double torque_max_nm = 0, power_max_w = 0, power_mean_w = 0;
+};
+[[nodiscard]] ForceSummary summarize(const ForceSeries& s);
+
+/// The force model of a material on one edge grid: precomputed per segment the effective
+/// directions d_e as the chip covers more sub-segments (Eq. 2) and the ploughing depth.
+class SegmentForces {
+ public:
+  /// Throws InputError when the material has no model or its coefficients are unusable.
+  SegmentForces(const Material& material, const EdgeGrid& grid, double ploughing_angle_rad);
+  /// Force on the workpiece of segment kappa cutting a chip h (mm, normal to the edge) over
+  /// the width w (mm), in the tooth frame (radial out, cutting direction, axial up) (N).
+  [[nodiscard]] std::array<double, 3> force(int kappa, double h_mm, double w_mm) const;
+  [[nodiscard]] const Material& material() const noexcept { return m_; }
+
+ private:
+  struct Sub {
+    double proj_mm = 0;           // contact starts when h exceeds this
+    double plough_mm = 0;         // h_s candidate: its inner Delta_proj if steep, else 0
+    std::array<double, 3> d_e{};  // normalised sum of w_j d_c^j up to this sub-segment
+  };
+  Material m_;
+  int tau_ = 1;
+  std::vector<Sub> subs_;                     // [kappa * tau + j]
+  std::vector<std::array<double, 3>> d_n_;    // contour normal per kappa
+  std::vector<std::array<double, 3>> along_;  // up the edge per kappa
+};
+
+/// Forces of a chip record (SimResult::steps and chip_map, from `simulate` or `fast_chips`):
+/// each entry's segment force rotated into the workpiece frame at its edge angle (tooth
+/// angle, spindle rotation and helix lag at the segment's height).
+[[nodiscard]] ForceSeries compute_forces(const SimResult& chips, const SimTool& tool,
+                                         const EdgeGrid& grid, const SegmentForces& model);
+
+/// The fast chip source: the analytic engagement (engagement.hpp) gives the engaged arcs of
+/// the tool circle; each tooth's edge is cut into axial discs (one per edge segment), each
+/// at its own angle (helix lag); the chip is the tool-centre displacement since the earlier
+/// teeth's passes projected on the edge's radial direction, plus the radial offsets (runout,
+/// seating), times the edge sine on the corner. Same record format as the simulation
+/// (no removed volumes: SimStep::removed_mm3 stays empty). Throws InputError for an empty window.
+[[nodiscard]] SimResult fast_chips(const Job& job, const ToolPath& path, const SimTool& tool,
+                                   double from_s, double to_s, int steps_per_rev);
+/// The same, keeping the engagement and the centre path so chips can be recomputed for tools
+/// that differ in runout or seating only (calibration).
+class FastChipSource {
+ public:
+  FastChipSource(const Job& job, const ToolPath& path, double from_s, double to_s,
+                 int steps_per_rev);
+  /// Throws InputError when `tool` turns at another speed than the job's.
+  [[nodiscard]] SimResult chips(const SimTool& tool) const;
+
+ private:
+  int spr_ = 0;
+  double dt_ = 0;
+  std::size_t nsteps_ = 0, back_ = 0;
+  std::vector<double> times_;
+  PathSamples ps_;
+  EngagementSeries eng_;
+};
+
+/// Job level: the edge grid (with the job's topography), the chip source and the forces.
+struct JobForces {
+  ForceSeries series;
+  ForceSummary summary;
+  SimResult chips;
+  bool fast = false;
+  double chips_wall_s = 0, forces_wall_s = 0;
+};
+/// `from_s`..`to_s` of the path (programmed time, s). The simulation runs as `simulate_job`
+/// (pre-roll included). Throws InputError when the job has no [material] model.
+[[nodiscard]] JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double to_s,
+                                   bool fast, const SimControl& control = {});
+/// The edge grid of the job: edge_grid of its tool, filled from [topography] when given.
+[[nodiscard]] EdgeGrid job_edge_grid(const Job& job, const SimTool& tool);
+
+/// F_R,max (N) over the whole path with the fast chip source, when the job has a [material]
+/// force model; nothing otherwise. For the performance index of analyze and compare.
+[[nodiscard]] std::optional<double> predict_force_max(const Job& job, const ToolPath& path);
+
+// ---------------------------------------------------------------- calibration
+
+/// Measured forces (a dynamometer's record), on the workpiece, N over s.
+struct MeasuredForces {
+  std::vector<double> t_s, fx_n, fy_n, fz_n;
+};
+/// How to read a measured-force CSV: column names, and the factors to s and N.
+struct ForceCsvFormat {
+  std::string time = "t_s", fx = "f_x_n", fy = "f_y_n", fz = "f_z_n";
+  double time_to_s = 1.0;   ///< e.g. 1e-3 for a column in ms
+  double force_to_n = 1.0;  ///< e.g. 1e3 for kN
+};
+/// Reads a CSV with a header line (comma, semicolon or tab separated; '#' comments).
+/// Throws InputError naming the file, line and column for anything malformed.
+[[nodiscard]] MeasuredForces read_measured_forces(const std::filesystem::path& file,
+                                                  const ForceCsvFormat& format = {});
+
+struct CalibrationOptions {
+  ForceModel model = ForceModel::bergmann;
+  /// Parameters to fit: the model's coefficients (k_c, k_n, m, m_n, k_a, m_a | k_tc, k_rc,
+  /// k_ac, k_te, k_re, k_ae) and runout_radial, runout_phase, runout_axial. Empty: the
+  /// model's main coefficients.
+  std::vector<std::string> fit;
+  bool fast = false;            ///< fast chip source instead of the simulation
+  double cutoff_hz = 0;         ///< low-pass of both signals; 0: 4 tooth-passing harmonics
+  double max_shift_s = -1;      ///< alignment search +-; < 0: one spindle revolution
+  double from_s = 0, to_s = 0;  ///< the window of the path the measurement covers
+};
+struct FittedParameter {
+  std::string name;
+  double value = 0, std_error = 0, ci95_lo = 0, ci95_hi = 0;
+  bool at_bound = false;
+};
+struct CalibrationResult {
+  Material material;  ///< the fitted coefficients (model set)
+  Tool tool;          ///< the job's tool with the fitted runout
+  std::vector<FittedParameter> parameters;
+  double rmse_n = 0, r2 = 0;
+  double shift_s = 0;  ///< measured time = model time + shift
+  double cutoff_hz = 0;
+  std::size_t samples = 0;  ///< residual samples per axis
+  int iterations = 0;
+  std::string report;  ///< the solver's one-line summary
+};
+/// Fits the model to the measured forces with bounded nonlinear least squares (Ceres,
+/// trust region): both signals low-pass filtered alike, the measured one aligned to the
+/// model by cross-correlation of the resultant and sampled at the model's steps.
+/// Throws InputError for bad options or too little overlap.
+[[nodiscard]] CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
+                                                 const MeasuredForces& measured,
+                                                 const CalibrationOptions& options);
+/// The `[material]` block of a result, TOML.
+[[nodiscard]] std::string material_toml(const CalibrationResult& r);
+
+/// Classical mean-force calibration of the linear model from full-immersion straight slots
+/// at several feeds per tooth: per axis the mean force is linear in f_z, and the closed-form
+/// averages give the six coefficients (docs/models.md section 12).
+struct MeanForcePoint {
+  double feed_per_tooth_mm = 0, fx_n = 0, fy_n = 0, fz_n = 0;
+};
+struct MeanForceFit {
+  Material material;               ///< model linear, K_tc..K_ae
+  std::array<double, 3> r2{};      ///< of the line per axis
+  std::array<double, 3> slope{};   ///< N/mm per axis
+  std::array<double, 3> offset{};  ///< N per axis
+};
+[[nodiscard]] MeanForceFit fit_mean_forces(const Job& job,
+                                           const std::vector<MeanForcePoint>& points);
+/// Reads f_z_mm (feed per tooth), f_x_n, f_y_n, f_z_n mean forces per slot test from CSV.
+[[nodiscard]] std::vector<MeanForcePoint> read_mean_forces(const std::filesystem::path& file);
+
+}  // namespace trochomill

@@ -1,0 +1,629 @@
+// Calibration of the force models: bounded nonlinear least squares against measured forces
+// (Ceres), and the classical mean-force regression of the linear model (force.hpp;
+// docs/models.md section 12).
+#include <ceres/ceres.h>
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "trochomill/error.hpp"
+#include "trochomill/force.hpp"
+#include "trochomill/signal.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+
+namespace {
+
+// ------------------------------------------------------------------ CSV
+
+std::vector<std::string> split_fields(const std::string& line) {
+  const char sep = line.find(',') != std::string::npos   ? ','
+                   : line.find(';') != std::string::npos ? ';'
+                                                         : '\t';
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream ss(line);
+  while (std::getline(ss, cur, sep)) {
+    const auto b = cur.find_first_not_of(" \t\r\"");
+    const auto e = cur.find_last_not_of(" \t\r\"");
+    out.push_back(b == std::string::npos ? std::string() : cur.substr(b, e - b + 1));
+  }
+  return out;
+}
+
+struct Table {
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> rows;
+  std::vector<int> line_of_row;
+};
+
+// A numeric table with a header line; '#' lines and blank lines skipped.
+Table read_table(const std::filesystem::path& file, const std::vector<std::string>& wanted,
+                 std::vector<std::size_t>& index) {
+  std::ifstream in(file);
+  if (!in) throw InputError(fmt::format("{}: cannot open", file.string()));
+  Table t;
+  std::string line;
+  int ln = 0;
+  while (std::getline(in, line)) {
+    ++ln;
+    if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
+    const auto f = split_fields(line);
+    if (t.header.empty()) {
+      t.header = f;
+      index.clear();
+      for (const auto& w : wanted) {
+        const auto it = std::find(t.header.begin(), t.header.end(), w);
+        if (it == t.header.end()) {
+          std::string have;
+          for (const auto& h : t.header) have += (have.empty() ? "" : ", ") + h;
+          throw InputError(fmt::format("{}:{}: no column '{}' (the header has: {})", file.string(),
+                                       ln, w, have));
+        }
+        index.push_back(static_cast<std::size_t>(it - t.header.begin()));
+      }
+      continue;
+    }
+    std::vector<double> row;
+    for (std::size_t k = 0; k < index.size(); ++k) {
+      const std::size_t c = index[k];
+      if (c >= f.size()) {
+        throw InputError(fmt::format("{}:{}: {} fields, column '{}' is field {}", file.string(), ln,
+                                     f.size(), wanted[k], c + 1));
+      }
+      char* end = nullptr;
+      const double v = std::strtod(f[c].c_str(), &end);
+      if (f[c].empty() || *end != '\0' || !std::isfinite(v)) {
+        throw InputError(fmt::format("{}:{}:{}: '{}' in column '{}' is not a number", file.string(),
+                                     ln, c + 1, f[c], wanted[k]));
+      }
+      row.push_back(v);
+    }
+    t.rows.push_back(std::move(row));
+    t.line_of_row.push_back(ln);
+  }
+  if (t.header.empty())
+    throw InputError(fmt::format("{}: empty file (no header line)", file.string()));
+  return t;
+}
+
+// ------------------------------------------------------------------ parameters
+
+struct ParamSpec {
+  const char* name;
+  double lo, hi, scale, fallback;
+};
+
+const std::vector<ParamSpec>& specs() {
+  static const std::vector<ParamSpec> s = {{"k_c", 1.0, 1e5, 1000, 2000},
+                                           {"k_n", -1e5, 1e5, 1000, 500},
+                                           {"m", 0.0, 0.95, 1, 0.25},
+                                           {"m_n", 0.0, 0.95, 1, 0.25},
+                                           {"k_a", -1e5, 1e5, 1000, 0},
+                                           {"m_a", 0.0, 0.95, 1, 0.25},
+                                           {"k_tc", 1.0, 1e5, 1000, 1000},
+                                           {"k_rc", -1e5, 1e5, 1000, 300},
+                                           {"k_ac", -1e5, 1e5, 1000, 100},
+                                           {"k_te", -1e4, 1e4, 10, 10},
+                                           {"k_re", -1e4, 1e4, 10, 10},
+                                           {"k_ae", -1e4, 1e4, 10, 1},
+                                           {"runout_radial", 0.0, 0.2, 0.01, 0.005},
+                                           {"runout_axial", -0.2, 0.2, 0.01, 0},
+                                           {"runout_phase", -360, 360, 90, 0}};
+  return s;
+}
+
+const ParamSpec& spec(const std::string& name) {
+  for (const auto& s : specs()) {
+    if (name == s.name) return s;
+  }
+  std::string all;
+  for (const auto& s : specs()) all += (all.empty() ? "" : ", ") + std::string(s.name);
+  throw InputError(fmt::format("--fit: unknown parameter '{}' (one of {})", name, all));
+}
+
+double* material_field(Material& m, const std::string& n) {
+  if (n == "k_c") return &m.k_c;
+  if (n == "k_n") return &m.k_n;
+  if (n == "m") return &m.m;
+  if (n == "k_a") return &m.k_a;
+  if (n == "k_tc") return &m.k_tc;
+  if (n == "k_rc") return &m.k_rc;
+  if (n == "k_ac") return &m.k_ac;
+  if (n == "k_te") return &m.k_te;
+  if (n == "k_re") return &m.k_re;
+  if (n == "k_ae") return &m.k_ae;
+  return nullptr;
+}
+
+bool belongs(ForceModel model, const std::string& n) {
+  if (n.rfind("runout_", 0) == 0) return true;
+  if (model == ForceModel::linear) return n.size() == 4 && n.rfind("k_", 0) == 0;
+  if (n == "k_c" || n == "k_n" || n == "m") return true;
+  return model == ForceModel::kienzle && (n == "m_n" || n == "k_a" || n == "m_a");
+}
+
+double get_param(const Material& m, const Tool& t, const std::string& n) {
+  if (n == "m_n") return m.m_n.value_or(m.m);
+  if (n == "m_a") return m.m_a.value_or(m.m);
+  if (n == "runout_radial") return t.runout_radial_mm;
+  if (n == "runout_axial") return t.runout_axial_mm;
+  if (n == "runout_phase") return t.runout_phase_deg;
+  Material c = m;
+  return *material_field(c, n);
+}
+
+void set_param(Material& m, Tool& t, const std::string& n, double v) {
+  if (n == "m_n")
+    m.m_n = v;
+  else if (n == "m_a")
+    m.m_a = v;
+  else if (n == "runout_radial")
+    t.runout_radial_mm = v;
+  else if (n == "runout_axial")
+    t.runout_axial_mm = v;
+  else if (n == "runout_phase")
+    t.runout_phase_deg = v;
+  else
+    *material_field(m, n) = v;
+}
+
+double interp(const std::vector<double>& t, const std::vector<double>& y, double x) {
+  if (x <= t.front()) return y.front();
+  if (x >= t.back()) return y.back();
+  const auto it = std::upper_bound(t.begin(), t.end(), x);
+  const auto j = static_cast<std::size_t>(it - t.begin());
+  const double f = (x - t[j - 1]) / (t[j] - t[j - 1]);
+  return y[j - 1] + f * (y[j] - y[j - 1]);
+}
+
+// ------------------------------------------------------------------ the model
+
+class ForceProblem {
+ public:
+  ForceProblem(const Job& job, const ToolPath& path, const CalibrationOptions& o)
+      : job_(job), path_(path), o_(o) {
+    if (o.fast) {
+      // At least 500 steps per tooth pass: the model's steps then come 50 times faster than
+      // the default cutoff (10 tooth-passing harmonics), so where a tooth enters or leaves
+      // the cut the sampled force's jump is placed within 2 % of the cutoff's period
+      // (models.md section 12).
+      const int spr = std::max(job.forces.fast_steps_per_rev, 500 * std::max(1, job.tool.teeth));
+      fast_.emplace(job, path, o.from_s, o.to_s, spr);
+    }
+  }
+  // The model's filtered forces for these coefficients and tool (x, y, z per step).
+  std::array<std::vector<double>, 3> forces(const Material& m, const Tool& t,
+                                            std::vector<double>* times = nullptr) {
+    Job j = job_;
+    j.tool = t;
+    const SimTool tool = sim_tool(j, j.simulation);
+    const bool same_tool = chips_ && t.runout_radial_mm == tool_.runout_radial_mm &&
+                           t.runout_axial_mm == tool_.runout_axial_mm &&
+                           t.runout_phase_deg == tool_.runout_phase_deg;
+    if (!same_tool) {
+      chips_ = fast_ ? fast_->chips(tool) : simulate_job(j, path_, o_.from_s, o_.to_s).result;
+      tool_ = t;
+      if (!grid_) grid_ = job_edge_grid(j, tool);
+    }
+    const SegmentForces model(m, *grid_, deg_to_rad(job_.forces.ploughing_angle_deg));
+    const ForceSeries s = compute_forces(*chips_, tool, *grid_, model);
+    if (times) *times = s.t_s;
+    std::array<std::vector<double>, 3> out{s.fx_n, s.fy_n, s.fz_n};
+    if (sos_) {
+      for (auto& v : out) v = sosfiltfilt(*sos_, v);
+    }
+    return out;
+  }
+  void set_filter(const Sos& sos) { sos_ = sos; }
+
+ private:
+  const Job& job_;
+  const ToolPath& path_;
+  CalibrationOptions o_;
+  std::optional<FastChipSource> fast_;
+  std::optional<SimResult> chips_;
+  std::optional<EdgeGrid> grid_;
+  Tool tool_;
+  std::optional<Sos> sos_;
+};
+
+struct Residuals {
+  ForceProblem* problem;
+  const Material* base_m;
+  const Tool* base_t;
+  const std::vector<std::string>* names;
+  const std::vector<double>* scales;
+  const std::vector<double>* tm;                   // model step times
+  const std::vector<std::size_t>* idx;             // model steps compared
+  const std::vector<double>* t_meas;               // measured times
+  const std::array<std::vector<double>, 3>* meas;  // filtered measured forces
+  double shift_scale = 1;
+  // x[0]: the scaled parameters; x[1][0]: the time shift (s) / shift_scale.
+  bool operator()(double const* const* x, double* r) const {
+    Material m = *base_m;
+    Tool t = *base_t;
+    for (std::size_t i = 0; i < names->size(); ++i) {
+      set_param(m, t, (*names)[i], x[0][i] * (*scales)[i]);
+    }
+    const double shift = x[1][0] * shift_scale;
+    const auto f = problem->forces(m, t);
+    const std::size_t n = idx->size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t j = (*idx)[k];
+      const double tt = (*tm)[j] + shift;
+      for (std::size_t a = 0; a < 3; ++a) r[a * n + k] = f[a][j] - interp(*t_meas, (*meas)[a], tt);
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+MeasuredForces read_measured_forces(const std::filesystem::path& file,
+                                    const ForceCsvFormat& format) {
+  std::vector<std::size_t> idx;
+  const Table t = read_table(file, {format.time, format.fx, format.fy, format.fz}, idx);
+  MeasuredForces m;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& r = t.rows[i];
+    const double ts = r[0] * format.time_to_s;
+    if (!m.t_s.empty() && !(ts > m.t_s.back())) {
+      throw InputError(
+          fmt::format("{}:{}: time {} does not increase", file.string(), t.line_of_row[i], r[0]));
+    }
+    m.t_s.push_back(ts);
+    m.fx_n.push_back(r[1] * format.force_to_n);
+    m.fy_n.push_back(r[2] * format.force_to_n);
+    m.fz_n.push_back(r[3] * format.force_to_n);
+  }
+  if (m.t_s.size() < 16) {
+    throw InputError(fmt::format("{}: {} samples; need at least 16", file.string(), m.t_s.size()));
+  }
+  return m;
+}
+
+CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
+                                   const MeasuredForces& measured,
+                                   const CalibrationOptions& options) {
+  CalibrationOptions o = options;
+  if (!(o.to_s > o.from_s)) {
+    throw InputError(fmt::format("calibrate: empty window {:g}..{:g} s", o.from_s, o.to_s));
+  }
+  // Parameters: the model's own by default.
+  std::vector<std::string> names = o.fit;
+  if (names.empty()) {
+    names = o.model == ForceModel::linear
+                ? std::vector<std::string>{"k_tc", "k_rc", "k_ac", "k_te", "k_re", "k_ae"}
+                : std::vector<std::string>{"k_c", "k_n", "m"};
+  }
+  for (const auto& n : names) {
+    (void)spec(n);
+    if (!belongs(o.model, n)) {
+      throw InputError(
+          fmt::format("--fit: '{}' is not a parameter of the {} model", n, to_string(o.model)));
+    }
+    if (std::count(names.begin(), names.end(), n) > 1) {
+      throw InputError(fmt::format("--fit: '{}' given twice", n));
+    }
+  }
+  const bool has_phase = std::count(names.begin(), names.end(), "runout_phase") > 0;
+  const bool has_radial = std::count(names.begin(), names.end(), "runout_radial") > 0;
+  if (has_phase && has_radial && job.tool.teeth == 2 && job.tool.tooth_angles_deg.size() == 2 &&
+      std::abs(std::abs(job.tool.tooth_angles_deg[1] - job.tool.tooth_angles_deg[0]) - 180) <
+          1e-9) {
+    throw InputError(
+        "--fit: runout_radial and runout_phase together are not identifiable on two opposite "
+        "teeth (only e cos(phase) changes the chips); fit runout_radial alone");
+  }
+  // Start: the job's coefficients when it has this model, the defaults otherwise.
+  Material m0 = job.material;
+  if (!m0.model || *m0.model != o.model) {
+    m0 = Material{};
+    for (const auto& s : specs()) {
+      if (material_field(m0, s.name) != nullptr && belongs(o.model, s.name)) {
+        *material_field(m0, s.name) = s.fallback;
+      }
+    }
+  }
+  m0.model = o.model;
+  Tool t0 = job.tool;
+  for (const auto& n : names) {
+    if (n == "runout_radial" && t0.runout_radial_mm == 0) t0.runout_radial_mm = spec(n).fallback;
+  }
+
+  ForceProblem problem(job, path, o);
+  // Model time grid and rates.
+  std::vector<double> tm;
+  {
+    const auto f = problem.forces(m0, t0, &tm);
+    (void)f;
+  }
+  if (tm.size() < 16) throw InputError("calibrate: the window holds fewer than 16 model steps");
+  const double dt_model = (tm.back() - tm.front()) / static_cast<double>(tm.size() - 1);
+  const double dt_meas =
+      (measured.t_s.back() - measured.t_s.front()) / static_cast<double>(measured.t_s.size() - 1);
+  const double tooth_hz = spindle_speed_rpm(job) / 60.0 * job.tool.teeth;
+  double cutoff = o.cutoff_hz;
+  const double nyq = 0.5 / std::max(dt_model, dt_meas);
+  if (cutoff <= 0) cutoff = std::min(10 * tooth_hz, 0.8 * nyq);
+  if (!(cutoff < nyq)) {
+    throw InputError(fmt::format(
+        "calibrate: cutoff {:g} Hz must be below half the coarser sample rate ({:g} Hz)", cutoff,
+        nyq));
+  }
+  const Sos sos_model = butter_lowpass(4, cutoff, 1.0 / dt_model);
+  const Sos sos_meas = butter_lowpass(4, cutoff, 1.0 / dt_meas);
+  problem.set_filter(sos_model);
+  const std::array<std::vector<double>, 3> mf{sosfiltfilt(sos_meas, measured.fx_n),
+                                              sosfiltfilt(sos_meas, measured.fy_n),
+                                              sosfiltfilt(sos_meas, measured.fz_n)};
+  // Alignment: the shift (measured time = model time + shift) maximising the correlation of
+  // the resultants, at the model's step, refined by a parabola.
+  const auto f0 = problem.forces(m0, t0);
+  const double max_shift = o.max_shift_s >= 0 ? o.max_shift_s : 60.0 / spindle_speed_rpm(job);
+  const int ns = static_cast<int>(std::ceil(max_shift / dt_model));
+  std::vector<double> res_model(tm.size());
+  for (std::size_t k = 0; k < tm.size(); ++k) {
+    res_model[k] = std::sqrt(f0[0][k] * f0[0][k] + f0[1][k] * f0[1][k] + f0[2][k] * f0[2][k]);
+  }
+  std::vector<double> res_meas(measured.t_s.size());
+  for (std::size_t k = 0; k < res_meas.size(); ++k) {
+    res_meas[k] = std::sqrt(mf[0][k] * mf[0][k] + mf[1][k] * mf[1][k] + mf[2][k] * mf[2][k]);
+  }
+  std::vector<double> score(static_cast<std::size_t>(2 * ns + 1), -2.0);
+  for (int j = -ns; j <= ns; ++j) {
+    const double sh = j * dt_model;
+    double sxy = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
+    int n = 0;
+    for (std::size_t k = 0; k < tm.size(); ++k) {
+      const double tt = tm[k] + sh;
+      if (tt < measured.t_s.front() || tt > measured.t_s.back()) continue;
+      const double x = res_model[k], y = interp(measured.t_s, res_meas, tt);
+      sxy += x * y, sx += x, sy += y, sxx += x * x, syy += y * y;
+      ++n;
+    }
+    if (n < static_cast<int>(tm.size() / 2)) continue;
+    const double cov = sxy - sx * sy / n, vx = sxx - sx * sx / n, vy = syy - sy * sy / n;
+    score[static_cast<std::size_t>(j + ns)] = vx > 0 && vy > 0 ? cov / std::sqrt(vx * vy) : -2.0;
+  }
+  const auto best = std::max_element(score.begin(), score.end());
+  if (*best <= -2.0) {
+    throw InputError(fmt::format(
+        "calibrate: the measurement ({:g}..{:g} s) overlaps less than half of the model window "
+        "({:g}..{:g} s) at every shift within +-{:g} s; give the window it covers",
+        measured.t_s.front(), measured.t_s.back(), tm.front(), tm.back(), max_shift));
+  }
+  const auto jb = static_cast<int>(best - score.begin());
+  double shift = (jb - ns) * dt_model;
+  if (jb > 0 && jb + 1 < static_cast<int>(score.size()) &&
+      score[static_cast<std::size_t>(jb - 1)] > -2 &&
+      score[static_cast<std::size_t>(jb + 1)] > -2) {
+    const double a = score[static_cast<std::size_t>(jb - 1)], b = *best,
+                 c = score[static_cast<std::size_t>(jb + 1)];
+    const double den = a - 2 * b + c;
+    if (den < 0) shift += 0.5 * (a - c) / den * dt_model;
+  }
+  // The residual samples: model steps whose time, shifted by up to two model steps either
+  // way, the measurement covers (the shift is refined with the coefficients).
+  const double shift_span = 2 * dt_model;
+  std::vector<std::size_t> idx;
+  for (std::size_t k = 0; k < tm.size(); ++k) {
+    if (tm[k] + shift - shift_span < measured.t_s.front() ||
+        tm[k] + shift + shift_span > measured.t_s.back()) {
+      continue;
+    }
+    idx.push_back(k);
+  }
+  const std::size_t p = names.size();
+  if (idx.size() * 3 <= p + 2) throw InputError("calibrate: too few overlapping samples");
+
+  std::vector<double> scales(p), x(p);
+  for (std::size_t i = 0; i < p; ++i) {
+    const ParamSpec& s = spec(names[i]);
+    const double v0 = get_param(m0, t0, names[i]);
+    scales[i] = std::max(s.scale, std::abs(v0));
+    x[i] = std::clamp(v0, s.lo, s.hi) / scales[i];
+  }
+  double xs = 0;  // the shift's correction, in model steps
+  Residuals fn{&problem, &m0, &t0, &names, &scales, &tm, &idx, &measured.t_s, &mf, dt_model};
+  auto* cost =
+      new ceres::DynamicNumericDiffCostFunction<Residuals, ceres::CENTRAL>(new Residuals(fn));
+  cost->AddParameterBlock(static_cast<int>(p));
+  cost->AddParameterBlock(1);
+  cost->SetNumResiduals(static_cast<int>(3 * idx.size()));
+  xs = shift / dt_model;
+  ceres::Problem cp;
+  cp.AddResidualBlock(cost, nullptr, x.data(), &xs);
+  for (std::size_t i = 0; i < p; ++i) {
+    const ParamSpec& s = spec(names[i]);
+    cp.SetParameterLowerBound(x.data(), static_cast<int>(i), s.lo / scales[i]);
+    cp.SetParameterUpperBound(x.data(), static_cast<int>(i), s.hi / scales[i]);
+  }
+  cp.SetParameterLowerBound(&xs, 0, shift / dt_model - 2);
+  cp.SetParameterUpperBound(&xs, 0, shift / dt_model + 2);
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = 100;
+  so.function_tolerance = 1e-10;
+  so.parameter_tolerance = 1e-10;
+  so.gradient_tolerance = 1e-12;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &cp, &summary);
+
+  CalibrationResult out;
+  out.material = m0;
+  out.tool = t0;
+  for (std::size_t i = 0; i < p; ++i) set_param(out.material, out.tool, names[i], x[i] * scales[i]);
+  // Statistics at the optimum: residuals and Jacobian (scaled parameters).
+  std::vector<double> rv;
+  ceres::CRSMatrix jac;
+  double final_cost = 0;
+  cp.Evaluate(ceres::Problem::EvaluateOptions(), &final_cost, &rv, nullptr, &jac);
+  const std::size_t nr = rv.size();
+  const double shift_final = xs * dt_model;
+  double ssr = 0, sst = 0;
+  for (std::size_t a = 0; a < 3; ++a) {
+    std::vector<double> ma(idx.size());
+    double mean = 0;
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      ma[k] = interp(measured.t_s, mf[a], tm[idx[k]] + shift_final);
+      mean += ma[k];
+    }
+    mean /= static_cast<double>(idx.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      const double r = rv[a * idx.size() + k];
+      ssr += r * r;
+      sst += (ma[k] - mean) * (ma[k] - mean);
+    }
+  }
+  out.rmse_n = std::sqrt(ssr / static_cast<double>(nr));
+  out.r2 = sst > 0 ? 1 - ssr / sst : 0.0;
+  // Columns: the p parameters, then the shift (the covariance accounts for both).
+  Eigen::MatrixXd J =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nr), static_cast<Eigen::Index>(p + 1));
+  for (int r = 0; r < jac.num_rows; ++r) {
+    for (int k = jac.rows[static_cast<std::size_t>(r)];
+         k < jac.rows[static_cast<std::size_t>(r + 1)]; ++k) {
+      J(r, jac.cols[static_cast<std::size_t>(k)]) = jac.values[static_cast<std::size_t>(k)];
+    }
+  }
+  const double s2 = ssr / static_cast<double>(nr - p - 1);
+  const Eigen::MatrixXd cov =
+      (J.transpose() * J).completeOrthogonalDecomposition().pseudoInverse() * s2;
+  for (std::size_t i = 0; i < p; ++i) {
+    const ParamSpec& s = spec(names[i]);
+    FittedParameter fp;
+    fp.name = names[i];
+    fp.value = x[i] * scales[i];
+    fp.std_error =
+        std::sqrt(std::max(0.0, cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)))) *
+        scales[i];
+    fp.ci95_lo = fp.value - 1.959964 * fp.std_error;
+    fp.ci95_hi = fp.value + 1.959964 * fp.std_error;
+    const double span = s.hi - s.lo;
+    fp.at_bound = fp.value - s.lo < 1e-9 * span || s.hi - fp.value < 1e-9 * span;
+    out.parameters.push_back(fp);
+  }
+  out.shift_s = shift_final;
+  out.cutoff_hz = cutoff;
+  out.samples = idx.size();
+  out.iterations = static_cast<int>(summary.iterations.size());
+  out.report = summary.BriefReport();
+  out.material.source =
+      fmt::format("trochomill calibrate: RMSE {:.3g} N, R^2 {:.4f}", out.rmse_n, out.r2);
+  return out;
+}
+
+std::string material_toml(const CalibrationResult& r) {
+  const Material& m = r.material;
+  std::string s = "[material]\n";
+  s += fmt::format("model = \"{}\"\n", to_string(*m.model));
+  const auto line = [&](const std::string& key, double v, const char* unit) {
+    std::string ci;
+    for (const auto& p : r.parameters) {
+      if (p.name == key) {
+        ci = fmt::format("  # {}, 95 % CI [{:.6g}, {:.6g}]{}", unit, p.ci95_lo, p.ci95_hi,
+                         p.at_bound ? " (at its bound)" : "");
+      }
+    }
+    if (ci.empty()) ci = fmt::format("  # {} (not fitted)", unit);
+    s += fmt::format("{} = {:.6g}{}\n", key, v, ci);
+  };
+  if (*m.model == ForceModel::linear) {
+    line("k_tc", m.k_tc, "N/mm^2");
+    line("k_rc", m.k_rc, "N/mm^2");
+    line("k_ac", m.k_ac, "N/mm^2");
+    line("k_te", m.k_te, "N/mm");
+    line("k_re", m.k_re, "N/mm");
+    line("k_ae", m.k_ae, "N/mm");
+  } else {
+    line("k_c", m.k_c, "N/mm^2");
+    line("k_n", m.k_n, "N/mm^2");
+    line("m", m.m, "-");
+    if (*m.model == ForceModel::kienzle) {
+      line("m_n", m.m_n.value_or(m.m), "-");
+      line("k_a", m.k_a, "N/mm^2");
+      line("m_a", m.m_a.value_or(m.m), "-");
+    }
+  }
+  s += fmt::format("source = \"{}\"\n", m.source);
+  for (const auto& p : r.parameters) {
+    if (p.name.rfind("runout_", 0) == 0) {
+      s += fmt::format("# fitted [tool] {} = {:.6g}  # 95 % CI [{:.6g}, {:.6g}]\n", p.name, p.value,
+                       p.ci95_lo, p.ci95_hi);
+    }
+  }
+  return s;
+}
+
+// ------------------------------------------------------------------ mean forces
+
+std::vector<MeanForcePoint> read_mean_forces(const std::filesystem::path& file) {
+  std::vector<std::size_t> idx;
+  const Table t = read_table(file, {"feed_per_tooth_mm", "f_x_n", "f_y_n", "f_z_n"}, idx);
+  std::vector<MeanForcePoint> out;
+  for (const auto& r : t.rows) out.push_back({r[0], r[1], r[2], r[3]});
+  return out;
+}
+
+MeanForceFit fit_mean_forces(const Job& job, const std::vector<MeanForcePoint>& points) {
+  if (points.size() < 2) {
+    throw InputError(
+        fmt::format("mean-force fit: need slot tests at 2 or more feeds, got {}", points.size()));
+  }
+  double fmin = 1e300, fmax = -1e300;
+  for (const auto& p : points)
+    fmin = std::min(fmin, p.feed_per_tooth_mm), fmax = std::max(fmax, p.feed_per_tooth_mm);
+  if (!(fmax > fmin)) throw InputError("mean-force fit: the feeds per tooth must differ");
+  MeanForceFit r;
+  for (int a = 0; a < 3; ++a) {
+    double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
+    const double n = static_cast<double>(points.size());
+    for (const auto& p : points) {
+      const double y = a == 0 ? p.fx_n : a == 1 ? p.fy_n : p.fz_n;
+      sx += p.feed_per_tooth_mm, sy += y, sxx += p.feed_per_tooth_mm * p.feed_per_tooth_mm;
+      sxy += p.feed_per_tooth_mm * y, syy += y * y;
+    }
+    const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+    const double off = (sy - slope * sx) / n;
+    const double sst = syy - sy * sy / n;
+    double ssr = 0;
+    for (const auto& p : points) {
+      const double y = a == 0 ? p.fx_n : a == 1 ? p.fy_n : p.fz_n;
+      ssr += (y - slope * p.feed_per_tooth_mm - off) * (y - slope * p.feed_per_tooth_mm - off);
+    }
+    r.slope[static_cast<std::size_t>(a)] = slope;
+    r.offset[static_cast<std::size_t>(a)] = off;
+    r.r2[static_cast<std::size_t>(a)] = sst > 0 ? 1 - ssr / sst : 1.0;
+  }
+  // Full-immersion straight slot, Z teeth, depth a, cw spindle (models.md section 12):
+  // mean F_x = s (Z a / 4) K_tc f + s (Z a / pi) K_te with s = +1 (cw) or -1 (ccw),
+  // mean F_y = (Z a / 4) K_rc f + (Z a / pi) K_re,
+  // mean F_z = (Z a / pi) K_ac f + (Z a / 2) K_ae.
+  const double za = job.tool.teeth * job.slot.depth_mm;
+  const double sgn = job.cutting.spindle_direction == SpindleDirection::cw ? 1.0 : -1.0;
+  Material& m = r.material;
+  m.model = ForceModel::linear;
+  m.k_tc = sgn * 4 * r.slope[0] / za;
+  m.k_te = sgn * kPi * r.offset[0] / za;
+  m.k_rc = 4 * r.slope[1] / za;
+  m.k_re = kPi * r.offset[1] / za;
+  m.k_ac = kPi * r.slope[2] / za;
+  m.k_ae = 2 * r.offset[2] / za;
+  m.source =
+      fmt::format("trochomill calibrate --mean-forces: {} slot tests, R^2 {:.4f} {:.4f} {:.4f}",
+                  points.size(), r.r2[0], r.r2[1], r.r2[2]);
+  return r;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,231 @@
+// The fast chip source: analytic engagement, axial discs and helix lag (force.hpp;
+// docs/models.md section 12).
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "trochomill/engagement.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/force.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+
+namespace {
+
+bool in_arcs(const std::vector<AngleArc>& arcs, double th) {
+  for (const AngleArc& a : arcs) {
+    double d = std::fmod(th - a.start_rad, kTwoPi);
+    if (d < 0) d += kTwoPi;
+    if (d <= a.sweep_rad()) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+FastChipSource::FastChipSource(const Job& job, const ToolPath& path, double from_s, double to_s,
+                               int steps_per_rev)
+    : spr_(steps_per_rev) {
+  const double dur = path.duration_s();
+  from_s = std::max(0.0, from_s);
+  to_s = std::min(dur, to_s);
+  if (!(to_s > from_s)) {
+    throw InputError(fmt::format("forces: empty window {:g}..{:g} s (the path lasts {:g} s)",
+                                 from_s, to_s, dur));
+  }
+  if (steps_per_rev < 8) {
+    throw InputError(fmt::format("fast chips: steps_per_rev must be >= 8, got {}", steps_per_rev));
+  }
+  const double w = rpm_to_rad_per_s(spindle_speed_rpm(job));
+  if (!(w > 0)) throw InputError("fast chips: the spindle does not turn");
+  dt_ = kTwoPi / (w * steps_per_rev);
+  nsteps_ = static_cast<std::size_t>(std::ceil((to_s - from_s) / dt_ - 1e-9));
+
+  // Engaged arcs, one sample per tooth pass over the whole path (the history matters).
+  eng_ = compute_engagement(path, job, EngagementOptions{});
+
+  // Centre positions on the step grid, from one revolution plus a step before the window.
+  back_ = static_cast<std::size_t>(steps_per_rev) + 2;
+  times_.resize(nsteps_ + back_ + 1);
+  for (std::size_t g = 0; g < times_.size(); ++g) {
+    times_[g] = from_s + (static_cast<double>(g) - static_cast<double>(back_)) * dt_;
+  }
+  std::vector<double> clamped = times_;
+  for (double& t : clamped) t = std::clamp(t, 0.0, dur);
+  ps_ = sample_at_times(path, clamped);
+}
+
+SimResult FastChipSource::chips(const SimTool& tool) const {
+  const std::size_t nz = tool.tooth_angle_rad.size();
+  const double w = std::abs(tool.omega_rad_per_s);
+  if (nz == 0 || !(w > 0)) throw InputError("fast chips: the tool has no teeth or no speed");
+  if (std::abs(w * dt_ * spr_ - kTwoPi) > 1e-9) {
+    throw InputError("fast chips: the tool's spindle speed is not the job's");
+  }
+  const double dt = dt_;
+  const std::size_t nsteps = nsteps_, back = back_;
+  const std::vector<double>& times = times_;
+  const PathSamples& ps = ps_;
+  const EngagementSeries& eng = eng_;
+
+  // Per tooth k, the earlier teeth j and how long ago (in steps, fractional) they passed the
+  // same angle: the cutting-direction angle from j back to k, a full turn for k itself.
+  struct Lag {
+    double steps;
+    double dr;  // R_k - R_j
+  };
+  std::vector<std::vector<Lag>> lags(nz);
+  for (std::size_t k = 0; k < nz; ++k) {
+    for (std::size_t j = 0; j < nz; ++j) {
+      double a = tool.omega_rad_per_s < 0 ? tool.tooth_angle_rad[k] - tool.tooth_angle_rad[j]
+                                          : tool.tooth_angle_rad[j] - tool.tooth_angle_rad[k];
+      a = std::fmod(a, kTwoPi);
+      if (a < 0) a += kTwoPi;
+      if (a < 1e-12) a = kTwoPi;
+      lags[k].push_back({a / (w * dt), tool.radial_offset_mm[k] - tool.radial_offset_mm[j]});
+    }
+  }
+
+  const int spt = tool.segments();
+  const EdgeGrid grid = edge_grid(tool, 0.2);
+  struct Disc {
+    double h_mid, h0, h1, sine;
+    double s0, width;    // edge length at h0, and the segment's length
+    double lag, cl, sl;  // helix lag angle (wrapped to [0, 2 pi)), its cosine and sine
+  };
+  std::vector<Disc> discs;
+  const double total = tool.edge_length_at(tool.flute_length_mm);
+  for (int k = 0; k < spt; ++k) {
+    const double s0 = k * tool.segment_mm, s1 = std::min(total, (k + 1) * tool.segment_mm);
+    const double hm = grid.at(k, 0).h_mm;
+    double lag = std::fmod(hm * std::tan(tool.helix_rad) / tool.radius_mm, kTwoPi);
+    if (lag < 0) lag += kTwoPi;
+    discs.push_back({hm, tool.height_at_length(s0), tool.height_at_length(s1), tool.edge_sine(hm),
+                     s0, s1 - s0, lag, std::cos(lag), std::sin(lag)});
+  }
+
+  SimResult r;
+  r.segments_per_tooth = spt;
+  r.steps.resize(nsteps);
+  // Steps in chunks; each chunk's chips are appended in step order afterwards, so the record
+  // is the same for any thread count.
+  const std::size_t chunk = 256;
+  const std::size_t nchunks = (nsteps + chunk - 1) / chunk;
+  std::vector<std::vector<ChipEntry>> parts(nchunks);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nchunks), [&](const auto& range) {
+    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+      auto& out = parts[c];
+      for (std::size_t i = c * chunk; i < std::min(nsteps, (c + 1) * chunk); ++i) {
+        const std::size_t g = i + back + 1;
+        const double t = times[g];
+        SimStep& st = r.steps[i];
+        st.t_s = t;
+        st.tip_mm = {ps.x_mm[g], ps.y_mm[g], ps.z_mm[g]};
+        // The engagement sample nearest in time.
+        const auto it = std::lower_bound(eng.samples.t_s.begin(), eng.samples.t_s.end(), t);
+        std::size_t e = static_cast<std::size_t>(it - eng.samples.t_s.begin());
+        if (e == eng.samples.size() ||
+            (e > 0 && t - eng.samples.t_s[e - 1] < eng.samples.t_s[e] - t)) {
+          if (e > 0) --e;
+        }
+        if (e >= eng.arcs.size() || eng.arcs[e].empty()) continue;
+        const auto& arcs = eng.arcs[e];
+        double hsum = 0;
+        int hn = 0;
+        for (std::size_t k = 0; k < nz; ++k) {
+          const double tip_z = ps.z_mm[g] + tool.axial_offset_mm[k];
+          if (tip_z + discs[0].h0 >= 0) continue;  // the tooth is above the stock
+          // The centre's displacement since each earlier tooth passed, once per tooth.
+          std::array<double, 3> dx{}, dy{}, dr{};
+          const std::size_t nl = std::min<std::size_t>(lags[k].size(), 3);
+          std::vector<std::array<double, 3>> more;  // beyond three earlier teeth
+          for (std::size_t q = 0; q < lags[k].size(); ++q) {
+            const Lag& l = lags[k][q];
+            const double gp = static_cast<double>(g) - l.steps;
+            const auto g0 = static_cast<std::size_t>(std::max(0.0, std::floor(gp)));
+            const double f = std::clamp(gp - static_cast<double>(g0), 0.0, 1.0);
+            const std::size_t g1 = std::min(g0 + 1, times.size() - 1);
+            const double px = ps.x_mm[g0] + f * (ps.x_mm[g1] - ps.x_mm[g0]);
+            const double py = ps.y_mm[g0] + f * (ps.y_mm[g1] - ps.y_mm[g0]);
+            if (q < 3) {
+              dx[q] = ps.x_mm[g] - px, dy[q] = ps.y_mm[g] - py, dr[q] = l.dr;
+            } else {
+              more.push_back({ps.x_mm[g] - px, ps.y_mm[g] - py, l.dr});
+            }
+          }
+          double base = std::fmod(tool.tooth_angle_rad[k] + tool.omega_rad_per_s * t, kTwoPi);
+          if (base < 0) base += kTwoPi;
+          const double cb = std::cos(base), sb = std::sin(base);
+          // The engaged arcs relative to this tooth's tip angle, so each disc only adds its lag.
+          struct Rel {
+            double a0, sweep;
+          };
+          std::array<Rel, 8> rel{};
+          const std::size_t na = std::min<std::size_t>(arcs.size(), rel.size());
+          for (std::size_t q = 0; q < na; ++q) {
+            double a = std::fmod(arcs[q].start_rad - base, kTwoPi);
+            if (a < 0) a += kTwoPi;
+            rel[q] = {a, arcs[q].sweep_rad()};
+          }
+          for (int d = 0; d < spt; ++d) {
+            const Disc& dc = discs[static_cast<std::size_t>(d)];
+            if (tip_z + dc.h0 >= 0) break;  // above the top face from here up
+            // Engaged: the disc's lag (in [0, 2 pi) after wrapping) inside an arc.
+            double off = dc.lag;
+            bool in = false;
+            if (arcs.size() > rel.size()) {
+              in = in_arcs(arcs, base + off);
+            } else {
+              for (std::size_t q = 0; q < na && !in; ++q) {
+                double dd = off - rel[q].a0;
+                if (dd < 0) dd += kTwoPi;
+                in = dd <= rel[q].sweep;
+              }
+            }
+            if (!in) continue;
+            const double h1 = std::min(dc.h1, -tip_z);
+            const double width = h1 >= dc.h1 ? dc.width : tool.edge_length_at(h1) - dc.s0;
+            if (!(width > 0)) continue;
+            const double ux = cb * dc.cl - sb * dc.sl, uy = sb * dc.cl + cb * dc.sl;
+            double h = 1e300;
+            for (std::size_t q = 0; q < nl; ++q) h = std::min(h, dx[q] * ux + dy[q] * uy + dr[q]);
+            for (const auto& m3 : more) h = std::min(h, m3[0] * ux + m3[1] * uy + m3[2]);
+            h *= dc.sine;
+            if (!(h > 0)) continue;
+            ChipEntry ce;
+            ce.step = static_cast<std::uint32_t>(i);
+            ce.segment = static_cast<std::uint32_t>(k * static_cast<std::size_t>(spt) +
+                                                    static_cast<std::size_t>(d));
+            ce.h_mm = static_cast<float>(h);
+            ce.w_mm = static_cast<float>(width);
+            out.push_back(ce);
+            st.h_max_mm = std::max(st.h_max_mm, h);
+            hsum += h;
+            ++hn;
+          }
+        }
+        st.engaged_segments = hn;
+        st.h_mean_mm = hn > 0 ? hsum / hn : 0.0;
+      }
+    }
+  });
+  std::size_t total_chips = 0;
+  for (const auto& p : parts) total_chips += p.size();
+  r.chip_map.reserve(total_chips);
+  for (const auto& p : parts) r.chip_map.insert(r.chip_map.end(), p.begin(), p.end());
+  r.complete = true;
+  return r;
+}
+
+SimResult fast_chips(const Job& job, const ToolPath& path, const SimTool& tool, double from_s,
+                     double to_s, int steps_per_rev) {
+  return FastChipSource(job, path, from_s, to_s, steps_per_rev).chips(tool);
+}
+
+}  // namespace trochomill

@@ -1,0 +1,59 @@
+// Job-level forces: edge grid with the job's topography, chip source, forces (force.hpp).
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "trochomill/error.hpp"
+#include "trochomill/force.hpp"
+#include "trochomill/topography.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+
+EdgeGrid job_edge_grid(const Job& job, const SimTool& tool) {
+  const TopographySettings& tp = job.topography;
+  if (tp.states() == 0) return edge_grid(tool, tp.band_mm);
+  const auto state = static_cast<std::size_t>(tp.state);
+  if (state >= tp.states()) {
+    throw InputError(
+        fmt::format("[topography] state {} but only {} wear states", tp.state, tp.states()));
+  }
+  if (!tp.files.empty()) return sample_topography(read_mesh(tp.files[state]), tool, tp.band_mm);
+  SyntheticInsert s;
+  s.vb_mm = tp.synthetic_vb_mm[state];
+  s.edge_radius_mm = job.tool.edge_radius_mm > 0 ? job.tool.edge_radius_mm : 0.02;
+  s.rake_deg = tp.rake_deg;
+  s.clearance_deg = tp.clearance_deg;
+  s.face_mm = std::max(0.6, 2 * tp.band_mm + s.vb_mm + s.edge_radius_mm);
+  return sample_topography(synthetic_insert(tool, s), tool, tp.band_mm);
+}
+
+JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double to_s, bool fast,
+                     const SimControl& control) {
+  using clock = std::chrono::steady_clock;
+  JobForces out;
+  out.fast = fast;
+  const SimTool tool = sim_tool(job, job.simulation);
+  const EdgeGrid grid = job_edge_grid(job, tool);
+  const SegmentForces model(job.material, grid, deg_to_rad(job.forces.ploughing_angle_deg));
+  const auto t0 = clock::now();
+  if (fast) {
+    out.chips = fast_chips(job, path, tool, from_s, to_s, job.forces.fast_steps_per_rev);
+  } else {
+    out.chips = simulate_job(job, path, from_s, to_s, control).result;
+  }
+  const auto t1 = clock::now();
+  out.series = compute_forces(out.chips, tool, grid, model);
+  out.summary = summarize(out.series);
+  out.chips_wall_s = std::chrono::duration<double>(t1 - t0).count();
+  out.forces_wall_s = std::chrono::duration<double>(clock::now() - t1).count();
+  return out;
+}
+
+std::optional<double> predict_force_max(const Job& job, const ToolPath& path) {
+  if (!job.material.model) return std::nullopt;
+  return job_forces(job, path, 0.0, path.duration_s(), true).summary.f_resultant_max_n;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,215 @@
+// Mesh input and output through assimp, and the synthetic insert generator
+// (topography.hpp; docs/models.md section 13).
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <cmath>
+
+#include "contour.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
+#include "trochomill/topography.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+
+Mesh read_mesh(const std::filesystem::path& file) {
+  if (!std::filesystem::is_regular_file(file)) {
+    throw InputError(fmt::format("{}: no such mesh file", file.string()));
+  }
+  Assimp::Importer imp;
+  const aiScene* scene =
+      imp.ReadFile(file.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                      aiProcess_FindDegenerates | aiProcess_SortByPType);
+  if (scene == nullptr) {
+    throw InputError(fmt::format("{}: not a readable STL/PLY/OBJ mesh ({})", file.string(),
+                                 imp.GetErrorString()));
+  }
+  Mesh m;
+  for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+    const aiMesh* am = scene->mMeshes[i];
+    const auto base = static_cast<std::uint32_t>(m.vertices.size());
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      const aiVector3D& p = am->mVertices[v];
+      m.vertices.push_back(
+          {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
+    }
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines
+      m.triangles.push_back(
+          {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+    }
+  }
+  if (m.triangles.empty()) {
+    throw InputError(fmt::format("{}: the mesh has no triangles", file.string()));
+  }
+  return m;
+}
+
+void write_mesh(const std::filesystem::path& file, const Mesh& mesh) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::string format;
+  if (ext == ".stl") format = "stlb";
+  if (ext == ".ply") format = "plyb";
+  if (ext == ".obj") format = "objnomtl";
+  if (format.empty()) {
+    throw InputError(
+        fmt::format("{}: unknown mesh extension '{}' (.stl, .ply or .obj)", file.string(), ext));
+  }
+  aiScene scene;
+  scene.mRootNode = new aiNode();
+  scene.mMaterials = new aiMaterial* [1] { new aiMaterial() };
+  scene.mNumMaterials = 1;
+  scene.mMeshes = new aiMesh* [1] { new aiMesh() };
+  scene.mNumMeshes = 1;
+  scene.mRootNode->mMeshes = new unsigned[1]{0};
+  scene.mRootNode->mNumMeshes = 1;
+  aiMesh* am = scene.mMeshes[0];
+  am->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  am->mNumVertices = static_cast<unsigned>(mesh.vertices.size());
+  am->mVertices = new aiVector3D[mesh.vertices.size()];
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const auto& v = mesh.vertices[i];
+    am->mVertices[i] = aiVector3D(static_cast<ai_real>(v[0]), static_cast<ai_real>(v[1]),
+                                  static_cast<ai_real>(v[2]));
+  }
+  am->mNumFaces = static_cast<unsigned>(mesh.triangles.size());
+  am->mFaces = new aiFace[mesh.triangles.size()];
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    aiFace& f = am->mFaces[i];
+    f.mNumIndices = 3;
+    f.mIndices = new unsigned[3]{mesh.triangles[i][0], mesh.triangles[i][1], mesh.triangles[i][2]};
+  }
+  Assimp::Exporter ex;
+  const aiExportDataBlob* blob = ex.ExportToBlob(&scene, format);
+  if (blob == nullptr) {
+    throw IoError(
+        fmt::format("{}: cannot write the mesh ({})", file.string(), ex.GetErrorString()));
+  }
+  write_file_atomic(file, std::string_view(static_cast<const char*>(blob->data), blob->size));
+}
+
+namespace {
+
+using P2 = std::array<double, 2>;
+
+// The hone: the circle of radius r tangent to two faces through the corner c with outward
+// normals n1, n2; returns its centre.
+P2 hone_centre(const P2& c, const P2& n1, const P2& n2, double r) {
+  // (M - c) . n1 = -r, (M - c) . n2 = -r
+  const double det = n1[0] * n2[1] - n1[1] * n2[0];
+  const double mx = (-r * n2[1] + r * n1[1]) / det, my = (-r * n1[0] + r * n2[0]) / det;
+  return {c[0] + mx, c[1] + my};
+}
+
+void append_line(std::vector<P2>& out, const P2& a, const P2& b, double ds) {
+  const double len = std::hypot(b[0] - a[0], b[1] - a[1]);
+  const int n = std::max(1, static_cast<int>(std::ceil(len / ds)));
+  for (int i = out.empty() ? 0 : 1; i <= n; ++i) {
+    const double t = static_cast<double>(i) / n;
+    out.push_back({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])});
+  }
+}
+
+// The section profile in (p outward along the contour normal, q along the cutting
+// direction), from the flank's far end around the edge to the rake face's.
+std::vector<std::array<double, 2>> insert_profile(const SyntheticInsert& s) {
+  const double g = deg_to_rad(s.rake_deg), a = deg_to_rad(s.clearance_deg);
+  const P2 rake_dir{-std::cos(g), -std::sin(g)}, n_rake{-std::sin(g), std::cos(g)};
+  const P2 flank_dir{-std::sin(a), -std::cos(a)}, n_flank{std::cos(a), -std::sin(a)};
+  const double L = s.face_mm, r = s.edge_radius_mm;
+  // Length of the profile, for an even spacing with at least 24 points on the hone.
+  const double ds = (2 * L) / std::max(16, s.profile_points - 24);
+  std::vector<P2> out;
+  P2 corner{0, 0}, back_dir = flank_dir, n_back = n_flank;
+  if (s.vb_mm > 0) {
+    // The land: the plane p = -VB tan(alpha) from the flank at q = -VB to the rake face.
+    const double pw = -s.vb_mm * std::tan(a);
+    append_line(out, {L * flank_dir[0], L * flank_dir[1]}, {pw, -s.vb_mm}, ds);
+    corner = {pw, pw * std::tan(g)};
+    back_dir = {0, -1}, n_back = {1, 0};
+  }
+  const P2 far_back{corner[0] + (s.vb_mm > 0 ? 0.0 : L) * back_dir[0],
+                    corner[1] + (s.vb_mm > 0 ? 0.0 : L) * back_dir[1]};
+  const P2 rake_end{L * rake_dir[0], L * rake_dir[1]};
+  if (r > 0) {
+    const P2 m = hone_centre(corner, n_back, n_rake, r);
+    const P2 tb{m[0] + r * n_back[0], m[1] + r * n_back[1]};
+    const P2 tr{m[0] + r * n_rake[0], m[1] + r * n_rake[1]};
+    append_line(out, s.vb_mm > 0 ? out.back() : far_back, tb, ds);
+    const double a0 = std::atan2(n_back[1], n_back[0]);
+    double a1 = std::atan2(n_rake[1], n_rake[0]);
+    if (a1 < a0) a1 += kTwoPi;
+    const int n = std::max(24, static_cast<int>(std::ceil(r * (a1 - a0) / ds)));
+    for (int i = 1; i <= n; ++i) {
+      const double t = a0 + (a1 - a0) * i / n;
+      out.push_back({m[0] + r * std::cos(t), m[1] + r * std::sin(t)});
+    }
+    append_line(out, tr, rake_end, ds);
+  } else {
+    append_line(out, s.vb_mm > 0 ? out.back() : far_back, corner, ds);
+    append_line(out, corner, rake_end, ds);
+  }
+  return out;
+}
+
+}  // namespace
+
+Mesh synthetic_insert(const SimTool& tool, const SyntheticInsert& s) {
+  if (!(s.edge_radius_mm >= 0) || !(s.vb_mm >= 0) || !(s.face_mm > s.vb_mm + s.edge_radius_mm) ||
+      s.sections < 2 || s.profile_points < 8) {
+    throw InputError(fmt::format(
+        "synthetic insert: need edge radius >= 0, VB >= 0, face extent ({} mm) beyond VB ({} mm) "
+        "and the hone, >= 2 sections and >= 8 profile points",
+        s.face_mm, s.vb_mm));
+  }
+  if (!(std::abs(s.rake_deg) < 45 && s.clearance_deg > 0 && s.clearance_deg < 45)) {
+    throw InputError(
+        fmt::format("synthetic insert: rake {} and clearance {} degrees: need "
+                    "|rake| < 45 and 0 < clearance < 45",
+                    s.rake_deg, s.clearance_deg));
+  }
+  const std::vector<P2> prof = insert_profile(s);
+  const double total = tool.edge_length_at(tool.flute_length_mm);
+  Mesh m;
+  const auto np = static_cast<std::uint32_t>(prof.size());
+  for (int i = 0; i < s.sections; ++i) {
+    const double sl = total * i / (s.sections - 1);
+    const ContourPoint c = contour_at(tool, sl);
+    for (const P2& p : prof) {
+      m.vertices.push_back({c.r + p[0] * c.nr, p[1], c.h + p[0] * c.nz});
+    }
+  }
+  for (int i = 0; i + 1 < s.sections; ++i) {
+    const auto a = static_cast<std::uint32_t>(i) * np, b = a + np;
+    for (std::uint32_t j = 0; j + 1 < np; ++j) {
+      // Profile runs around the edge and sections run up it: (b, a) x (j, j+1) outward.
+      m.triangles.push_back({a + j, a + j + 1, b + j});
+      m.triangles.push_back({a + j + 1, b + j + 1, b + j});
+    }
+  }
+  // Orient outward: away from a point inside the tool behind the edge.
+  for (auto& t : m.triangles) {
+    const auto& p0 = m.vertices[t[0]];
+    const auto& p1 = m.vertices[t[1]];
+    const auto& p2 = m.vertices[t[2]];
+    const double ux = p1[0] - p0[0], uy = p1[1] - p0[1], uz = p1[2] - p0[2];
+    const double vx = p2[0] - p0[0], vy = p2[1] - p0[1], vz = p2[2] - p0[2];
+    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+    const double cx = (p0[0] + p1[0] + p2[0]) / 3, cy = (p0[1] + p1[1] + p2[1]) / 3,
+                 cz = (p0[2] + p1[2] + p2[2]) / 3;
+    const ContourPoint c = project_on_contour(tool, cx, cz);
+    const double ox = c.r - s.face_mm * c.nr, oy = -s.face_mm, oz = c.h - s.face_mm * c.nz;
+    if (nx * (cx - ox) + ny * (cy - oy) + nz * (cz - oz) < 0) std::swap(t[1], t[2]);
+  }
+  return m;
+}
+
+}  // namespace trochomill
