@@ -378,5 +378,69 @@ TEST_F(Cli, SimulateWritesItsOutputs) {
   EXPECT_NE(bad.out.find("threads"), std::string::npos) << bad.out;
 }
 
+// forces: the JSON keys the issue names; the CSV it writes is read by calibrate as it is and
+// gives back the coefficients that made it (the same chip source, noise-free: within 0.5 %,
+// the interpolation bound of force_test's round trip); materials lists the library; analyze
+// fills the performance index from the predicted force; bad input exits 2.
+TEST_F(Cli, ForcesCalibrateAndMaterials) {
+  const auto ex = test::example("bergmann2021/trochoidal.toml").string();
+  const auto csv = (dir_ / "f.csv").string();
+  const CliResult f = run_cli("forces " + ex +
+                              " --fast --from 134.0 --to 135.0 --set forces.fast_steps_per_rev=1000"
+                              " --csv " +
+                              csv + " --json -");
+  ASSERT_EQ(f.code, 0) << f.out;
+  const auto j = nlohmann::json::parse(f.out);
+  for (const char* k : {"f_resultant_max_n", "f_x_max_n", "f_y_max_n", "f_z_max_n", "torque_max_nm",
+                        "power_max_w"}) {
+    ASSERT_TRUE(j.contains(k)) << k;
+    EXPECT_GT(j[k].get<double>(), 0.0) << k;
+  }
+  // F_R,max >= each component's maximum, and power = torque * omega at the same step.
+  EXPECT_GE(j["f_resultant_max_n"].get<double>(), j["f_x_max_n"].get<double>());
+  EXPECT_EQ(first_line_of(csv).rfind("t_s,f_x_n,f_y_n,f_z_n,f_resultant_n,torque_nm,power_w", 0),
+            0u);
+  const CliResult c = run_cli("calibrate " + ex + " --measured " + csv +
+                              " --fast --fit k_c,k_n,m --set material.k_c=1500 --set material.m=0.2"
+                              " --json -");
+  ASSERT_EQ(c.code, 0) << c.out;
+  const auto cj = nlohmann::json::parse(c.out);
+  EXPECT_NEAR(cj["k_c"].get<double>(), 1926.08, 0.005 * 1926.08);
+  EXPECT_NEAR(cj["k_n"].get<double>(), 502.64, 0.005 * 502.64);
+  EXPECT_NEAR(cj["m"].get<double>(), 0.28, 0.005 * 0.28);
+  EXPECT_GT(cj["r2"].get<double>(), 0.999);
+  EXPECT_TRUE(cj.contains("rmse_n"));
+  EXPECT_TRUE(cj["ci95"].contains("k_c"));
+  // The human form prints the [material] block.
+  const auto block = (dir_ / "material.toml").string();
+  const CliResult h =
+      run_cli("calibrate " + ex + " --measured " + csv + " --fast --fit k_c --write " + block);
+  ASSERT_EQ(h.code, 0) << h.out;
+  EXPECT_NE(h.out.find("[material]"), std::string::npos) << h.out;
+  EXPECT_EQ(first_line_of(block), "[material]");
+  // materials
+  const CliResult m = run_cli("materials");
+  ASSERT_EQ(m.code, 0) << m.out;
+  EXPECT_NE(m.out.find("inconel718-bergmann2021"), std::string::npos);
+  EXPECT_NE(m.out.find("1926.08"), std::string::npos);
+  // Bad input: no measurement, an unknown parameter, a bad column list, no material.
+  EXPECT_EQ(run_cli("calibrate " + ex).code, 2);
+  EXPECT_EQ(run_cli("calibrate " + ex + " --measured " + csv + " --fast --fit k_x").code, 2);
+  EXPECT_EQ(run_cli("calibrate " + ex + " --measured " + csv + " --columns a,b").code, 2);
+  const CliResult nm =
+      run_cli("forces " + test::example("wagih2023/elliptical.toml").string() + " --fast");
+  EXPECT_EQ(nm.code, 2) << nm.out;
+  EXPECT_NE(nm.out.find("[material]"), std::string::npos) << nm.out;
+  // analyze: PI from the predicted force when [material] is given and roughness measured.
+  const CliResult a = run_cli("analyze " + test::example("wagih2023/elliptical.toml").string() +
+                              " --set material.name=al7075-t6-linear --set "
+                              "measured.roughness_ra=0.8 --json -");
+  ASSERT_EQ(a.code, 0) << a.out;
+  const auto aj = nlohmann::json::parse(a.out);
+  ASSERT_TRUE(aj["force_max_predicted_n"].is_number()) << a.out;
+  ASSERT_TRUE(aj["performance_index"].is_number()) << a.out;
+  EXPECT_NE(aj["performance_index_note"].get<std::string>().find("predicted"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace trochomill

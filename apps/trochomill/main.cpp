@@ -416,7 +416,7 @@ int run(int argc, char** argv) {
   ca->add_option("--cutoff", ca_cutoff,
                  "low-pass of both signals, Hz (default 10 x tooth "
                  "passing, below 0.4 x the coarser rate)");
-  ca->add_option("--max-shift", ca_shift, "alignment search +-, s (default one revolution)");
+  ca->add_option("--max-shift", ca_shift, "alignment search +-, s (default half a revolution)");
   ca->add_option("--gcode", ca_gcode, "this NC program instead of the job's path");
   ca->add_option("--from", ca_from, "model window start, s (default: the measurement's start)");
   ca->add_option("--to", ca_to, "model window end, s (default: the measurement's end)");

@@ -143,7 +143,7 @@ struct CalibrationOptions {
   std::vector<std::string> fit;
   bool fast = false;            ///< fast chip source instead of the simulation
   double cutoff_hz = 0;         ///< low-pass of both signals; 0: 4 tooth-passing harmonics
-  double max_shift_s = -1;      ///< alignment search +-; < 0: one spindle revolution
+  double max_shift_s = -1;      ///< alignment search +-; < 0: half a spindle revolution
   double from_s = 0, to_s = 0;  ///< the window of the path the measurement covers
 };
 struct FittedParameter {

@@ -394,14 +394,26 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
     const double cov = sxy - sx * sy / n, vx = sxx - sx * sx / n, vy = syy - sy * sy / n;
     score[static_cast<std::size_t>(j + ns)] = vx > 0 && vy > 0 ? cov / std::sqrt(vx * vy) : -2.0;
   }
-  const auto best = std::max_element(score.begin(), score.end());
-  if (*best <= -2.0) {
+  // The best score; among scores within 1e-3 of it (a periodic force repeats each
+  // revolution) the smallest shift.
+  const double top = *std::max_element(score.begin(), score.end());
+  if (top <= -2.0) {
     throw InputError(fmt::format(
         "calibrate: the measurement ({:g}..{:g} s) overlaps less than half of the model window "
         "({:g}..{:g} s) at every shift within +-{:g} s; give the window it covers",
         measured.t_s.front(), measured.t_s.back(), tm.front(), tm.back(), max_shift));
   }
-  const auto jb = static_cast<int>(best - score.begin());
+  int jb = ns;
+  for (int d = 0, found = 0; d <= ns && found == 0; ++d) {
+    for (const int j : {ns - d, ns + d}) {
+      if (score[static_cast<std::size_t>(j)] >= top - 1e-3) {
+        jb = j;
+        found = 1;
+        break;
+      }
+    }
+  }
+  const double* best = &score[static_cast<std::size_t>(jb)];
   double shift = (jb - ns) * dt_model;
   if (jb > 0 && jb + 1 < static_cast<int>(score.size()) &&
       score[static_cast<std::size_t>(jb - 1)] > -2 &&
