@@ -178,6 +178,30 @@ TEST(Forces, BergmannOnASharpEdgeIsKienzle) {
   }
 }
 
+// The fast source's fused forces equal compute_forces on its chip record (the same chips, the
+// edge angle's cosine and sine formed two ways: rounding only, 1e-9 N).
+TEST(Forces, FusedFastForcesEqualTheChipRecordsForces) {
+  const Job job = load_job(test::example("bergmann2021/trochoidal.toml"));
+  const ToolPath path = plan_path(job).path;
+  const auto [c0, c1] = cycle_window(path, 3, 4);
+  const SimTool tool = sim_tool(job, job.simulation);
+  const EdgeGrid grid = job_edge_grid(job, tool);
+  const SegmentForces model(job.material, grid, deg_to_rad(80));
+  const FastChipSource src(job, path, c0 + 8, c0 + 9, 240);
+  const ForceSeries a = src.forces(tool, grid, model);
+  const ForceSeries b = compute_forces(src.chips(tool), tool, grid, model);
+  ASSERT_EQ(a.size(), b.size());
+  double peak = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_NEAR(a.fx_n[i], b.fx_n[i], 1e-9);
+    EXPECT_NEAR(a.fy_n[i], b.fy_n[i], 1e-9);
+    EXPECT_NEAR(a.fz_n[i], b.fz_n[i], 1e-9);
+    EXPECT_NEAR(a.torque_nm[i], b.torque_nm[i], 1e-12);
+    peak = std::max(peak, a.resultant_n(i));
+  }
+  EXPECT_GT(peak, 50.0);  // the window cuts
+}
+
 // The force model refuses a job without a model, and names what to give.
 TEST(Forces, NoMaterialModelIsAClearError) {
   const Job job = straight_job(10.0);

@@ -89,13 +89,20 @@ class FastChipSource {
                  int steps_per_rev);
   /// Throws InputError when `tool` turns at another speed than the job's.
   [[nodiscard]] SimResult chips(const SimTool& tool) const;
+  /// The forces of those chips directly, without storing the chip record (the same numbers
+  /// as compute_forces(chips(tool), ...)); the steps (times, tips, chip statistics) if asked.
+  [[nodiscard]] ForceSeries forces(const SimTool& tool, const EdgeGrid& grid,
+                                   const SegmentForces& model,
+                                   std::vector<SimStep>* steps = nullptr) const;
 
  private:
+  template <class Visit>
+  void scan(const SimTool& tool, std::vector<SimStep>& steps, const Visit& visit) const;
   int spr_ = 0;
   double dt_ = 0;
   std::size_t nsteps_ = 0, back_ = 0;
   std::vector<double> times_;
-  PathSamples ps_;
+  PathSamples ps_;  ///< centre positions only (x, y, z) on times_
   EngagementSeries eng_;
 };
 
@@ -103,9 +110,10 @@ class FastChipSource {
 struct JobForces {
   ForceSeries series;
   ForceSummary summary;
-  SimResult chips;
+  SimResult chips;  ///< the simulation's record; in fast mode the steps only (no chip map)
   bool fast = false;
-  double chips_wall_s = 0, forces_wall_s = 0;
+  double chips_wall_s = 0;   ///< simulation, or the fast source's engagement and path
+  double forces_wall_s = 0;  ///< forces (in fast mode with the chips they come from)
 };
 /// `from_s`..`to_s` of the path (programmed time, s). The simulation runs as `simulate_job`
 /// (pre-roll included). Throws InputError when the job has no [material] model.

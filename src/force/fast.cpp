@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 
+#include "internal.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
@@ -17,6 +19,8 @@
 namespace trochomill {
 
 namespace {
+
+constexpr std::size_t kChunk = 256;
 
 bool in_arcs(const std::vector<AngleArc>& arcs, double th) {
   for (const AngleArc& a : arcs) {
@@ -47,21 +51,38 @@ FastChipSource::FastChipSource(const Job& job, const ToolPath& path, double from
   dt_ = kTwoPi / (w * steps_per_rev);
   nsteps_ = static_cast<std::size_t>(std::ceil((to_s - from_s) / dt_ - 1e-9));
 
-  // Engaged arcs, one sample per tooth pass over the whole path (the history matters).
-  eng_ = compute_engagement(path, job, EngagementOptions{});
-
   // Centre positions on the step grid, from one revolution plus a step before the window.
   back_ = static_cast<std::size_t>(steps_per_rev) + 2;
   times_.resize(nsteps_ + back_ + 1);
   for (std::size_t g = 0; g < times_.size(); ++g) {
     times_[g] = from_s + (static_cast<double>(g) - static_cast<double>(back_)) * dt_;
   }
-  std::vector<double> clamped = times_;
-  for (double& t : clamped) t = std::clamp(t, 0.0, dur);
-  ps_ = sample_at_times(path, clamped);
+  // The engaged arcs (one sample per tooth pass over the whole path: the history matters)
+  // beside the centre positions, sampled in blocks in parallel (each sample on its own: the
+  // same for any thread count).
+  const std::size_t blk = 16384, nb = (times_.size() + blk - 1) / blk;
+  std::vector<PathSamples> parts(nb);
+  tbb::parallel_invoke(
+      [&] { eng_ = compute_engagement(path, job, EngagementOptions{}); },
+      [&] {
+        tbb::parallel_for(std::size_t{0}, nb, [&](std::size_t b) {
+          std::vector<double> ts(
+              times_.begin() + static_cast<std::ptrdiff_t>(b * blk),
+              times_.begin() + static_cast<std::ptrdiff_t>(std::min(times_.size(), (b + 1) * blk)));
+          for (double& t : ts) t = std::clamp(t, 0.0, dur);
+          parts[b] = sample_at_times(path, ts);
+        });
+      });
+  for (const PathSamples& p : parts) {
+    ps_.x_mm.insert(ps_.x_mm.end(), p.x_mm.begin(), p.x_mm.end());
+    ps_.y_mm.insert(ps_.y_mm.end(), p.y_mm.begin(), p.y_mm.end());
+    ps_.z_mm.insert(ps_.z_mm.end(), p.z_mm.begin(), p.z_mm.end());
+  }
 }
 
-SimResult FastChipSource::chips(const SimTool& tool) const {
+template <class Visit>
+void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
+                          const Visit& visit) const {
   const std::size_t nz = tool.tooth_angle_rad.size();
   const double w = std::abs(tool.omega_rad_per_s);
   if (nz == 0 || !(w > 0)) throw InputError("fast chips: the tool has no teeth or no speed");
@@ -110,21 +131,22 @@ SimResult FastChipSource::chips(const SimTool& tool) const {
                      s0, s1 - s0, lag, std::cos(lag), std::sin(lag)});
   }
 
-  SimResult r;
-  r.segments_per_tooth = spt;
-  r.steps.resize(nsteps);
-  // Steps in chunks; each chunk's chips are appended in step order afterwards, so the record
-  // is the same for any thread count.
-  const std::size_t chunk = 256;
-  const std::size_t nchunks = (nsteps + chunk - 1) / chunk;
-  std::vector<std::vector<ChipEntry>> parts(nchunks);
+  steps.resize(nsteps);
+  std::vector<double> tooth_wrapped(nz), tooth_cos(nz), tooth_sin(nz);
+  for (std::size_t k = 0; k < nz; ++k) {
+    double a = std::fmod(tool.tooth_angle_rad[k], kTwoPi);
+    if (a < 0) a += kTwoPi;
+    tooth_wrapped[k] = a, tooth_cos[k] = std::cos(a), tooth_sin[k] = std::sin(a);
+  }
+  // Steps in chunks of kChunk in parallel; the visitor writes per chunk or per step only, so
+  // results are the same for any thread count.
+  const std::size_t nchunks = (nsteps + kChunk - 1) / kChunk;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nchunks), [&](const auto& range) {
     for (std::size_t c = range.begin(); c != range.end(); ++c) {
-      auto& out = parts[c];
-      for (std::size_t i = c * chunk; i < std::min(nsteps, (c + 1) * chunk); ++i) {
+      for (std::size_t i = c * kChunk; i < std::min(nsteps, (c + 1) * kChunk); ++i) {
         const std::size_t g = i + back + 1;
         const double t = times[g];
-        SimStep& st = r.steps[i];
+        SimStep& st = steps[i];
         st.t_s = t;
         st.tip_mm = {ps.x_mm[g], ps.y_mm[g], ps.z_mm[g]};
         // The engagement sample nearest in time.
@@ -136,6 +158,15 @@ SimResult FastChipSource::chips(const SimTool& tool) const {
         }
         if (e >= eng.arcs.size() || eng.arcs[e].empty()) continue;
         const auto& arcs = eng.arcs[e];
+        double spin = std::fmod(tool.omega_rad_per_s * t, kTwoPi);
+        if (spin < 0) spin += kTwoPi;
+        const double cs = std::cos(spin), ss = std::sin(spin);
+        std::array<double, 8> starts{};
+        for (std::size_t q = 0; q < std::min<std::size_t>(arcs.size(), starts.size()); ++q) {
+          double a = std::fmod(arcs[q].start_rad, kTwoPi);
+          if (a < 0) a += kTwoPi;
+          starts[q] = a;
+        }
         double hsum = 0;
         int hn = 0;
         for (std::size_t k = 0; k < nz; ++k) {
@@ -159,9 +190,11 @@ SimResult FastChipSource::chips(const SimTool& tool) const {
               more.push_back({ps.x_mm[g] - px, ps.y_mm[g] - py, l.dr});
             }
           }
-          double base = std::fmod(tool.tooth_angle_rad[k] + tool.omega_rad_per_s * t, kTwoPi);
-          if (base < 0) base += kTwoPi;
-          const double cb = std::cos(base), sb = std::sin(base);
+          // The tip angle: the tooth's own angle plus the spindle's, both in [0, 2 pi).
+          double base = tooth_wrapped[k] + spin;
+          if (base >= kTwoPi) base -= kTwoPi;
+          const double cb = tooth_cos[k] * cs - tooth_sin[k] * ss;
+          const double sb = tooth_sin[k] * cs + tooth_cos[k] * ss;
           // The engaged arcs relative to this tooth's tip angle, so each disc only adds its lag.
           struct Rel {
             double a0, sweep;
@@ -169,7 +202,7 @@ SimResult FastChipSource::chips(const SimTool& tool) const {
           std::array<Rel, 8> rel{};
           const std::size_t na = std::min<std::size_t>(arcs.size(), rel.size());
           for (std::size_t q = 0; q < na; ++q) {
-            double a = std::fmod(arcs[q].start_rad - base, kTwoPi);
+            double a = starts[q] - base;
             if (a < 0) a += kTwoPi;
             rel[q] = {a, arcs[q].sweep_rad()};
           }
@@ -198,13 +231,7 @@ SimResult FastChipSource::chips(const SimTool& tool) const {
             for (const auto& m3 : more) h = std::min(h, m3[0] * ux + m3[1] * uy + m3[2]);
             h *= dc.sine;
             if (!(h > 0)) continue;
-            ChipEntry ce;
-            ce.step = static_cast<std::uint32_t>(i);
-            ce.segment = static_cast<std::uint32_t>(k * static_cast<std::size_t>(spt) +
-                                                    static_cast<std::size_t>(d));
-            ce.h_mm = static_cast<float>(h);
-            ce.w_mm = static_cast<float>(width);
-            out.push_back(ce);
+            visit(c, i, k, d, h, width, ux, uy);
             st.h_max_mm = std::max(st.h_max_mm, h);
             hsum += h;
             ++hn;
@@ -215,12 +242,65 @@ SimResult FastChipSource::chips(const SimTool& tool) const {
       }
     }
   });
-  std::size_t total_chips = 0;
-  for (const auto& p : parts) total_chips += p.size();
-  r.chip_map.reserve(total_chips);
+}
+
+SimResult FastChipSource::chips(const SimTool& tool) const {
+  SimResult r;
+  r.segments_per_tooth = tool.segments();
+  const std::size_t nchunks = (nsteps_ + kChunk - 1) / kChunk;
+  std::vector<std::vector<ChipEntry>> parts(nchunks);
+  const int spt = r.segments_per_tooth;
+  scan(tool, r.steps,
+       [&](std::size_t c, std::size_t i, std::size_t k, int d, double h, double w, double, double) {
+         ChipEntry ce;
+         ce.step = static_cast<std::uint32_t>(i);
+         ce.segment = static_cast<std::uint32_t>(k * static_cast<std::size_t>(spt) +
+                                                 static_cast<std::size_t>(d));
+         ce.h_mm = static_cast<float>(h);
+         ce.w_mm = static_cast<float>(w);
+         parts[c].push_back(ce);
+       });
+  std::size_t total = 0;
+  for (const auto& p : parts) total += p.size();
+  r.chip_map.reserve(total);
   for (const auto& p : parts) r.chip_map.insert(r.chip_map.end(), p.begin(), p.end());
   r.complete = true;
   return r;
+}
+
+ForceSeries FastChipSource::forces(const SimTool& tool, const EdgeGrid& grid,
+                                   const SegmentForces& model,
+                                   std::vector<SimStep>* steps_out) const {
+  if (grid.segments != tool.segments()) {
+    throw InputError(fmt::format("fast forces: the edge grid has {} segments, the tool {}",
+                                 grid.segments, tool.segments()));
+  }
+  std::vector<SimStep> steps;
+  ForceSeries s;
+  const std::size_t nz = tool.tooth_angle_rad.size();
+  s.teeth = static_cast<int>(nz);
+  const std::size_t nt = nsteps_ * nz;
+  s.tooth_fx_n.assign(nt, 0.0), s.tooth_fy_n.assign(nt, 0.0), s.tooth_fz_n.assign(nt, 0.0);
+  s.tooth_torque_nm.assign(nt, 0.0);
+  const double dir = tool.omega_rad_per_s < 0 ? -1.0 : 1.0;
+  // The chip's force, rotated at the disc's angle (cosine and sine from the scan), summed per
+  // step and tooth in the scan's order.
+  scan(tool, steps,
+       [&](std::size_t, std::size_t i, std::size_t k, int d, double h, double w, double ct,
+           double st) {
+         // The record's precision: chips are stored as float in the simulation's format.
+         const auto f = model.force(d, static_cast<float>(h), static_cast<float>(w));
+         const std::size_t ti = i * nz + k;
+         s.tooth_fx_n[ti] += f[0] * ct - dir * f[1] * st;
+         s.tooth_fy_n[ti] += f[0] * st + dir * f[1] * ct;
+         s.tooth_fz_n[ti] += f[2];
+         s.tooth_torque_nm[ti] += f[1] * grid.at(d, 0).r_mm * 1e-3;
+       });
+  s.t_s.resize(steps.size());
+  for (std::size_t i = 0; i < steps.size(); ++i) s.t_s[i] = steps[i].t_s;
+  sum_teeth(s, std::abs(tool.omega_rad_per_s));
+  if (steps_out != nullptr) *steps_out = std::move(steps);
+  return s;
 }
 
 SimResult fast_chips(const Job& job, const ToolPath& path, const SimTool& tool, double from_s,

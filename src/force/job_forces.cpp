@@ -38,13 +38,19 @@ JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double
   const EdgeGrid grid = job_edge_grid(job, tool);
   const SegmentForces model(job.material, grid, deg_to_rad(job.forces.ploughing_angle_deg));
   const auto t0 = clock::now();
+  auto t1 = t0;
   if (fast) {
-    out.chips = fast_chips(job, path, tool, from_s, to_s, job.forces.fast_steps_per_rev);
+    // Forces straight from the scan: no chip record (it can hold tens of millions of entries
+    // for a whole slot).
+    const FastChipSource src(job, path, from_s, to_s, job.forces.fast_steps_per_rev);
+    t1 = clock::now();
+    out.series = src.forces(tool, grid, model, &out.chips.steps);
+    out.chips.segments_per_tooth = tool.segments();
   } else {
     out.chips = simulate_job(job, path, from_s, to_s, control).result;
+    t1 = clock::now();
+    out.series = compute_forces(out.chips, tool, grid, model);
   }
-  const auto t1 = clock::now();
-  out.series = compute_forces(out.chips, tool, grid, model);
   out.summary = summarize(out.series);
   out.chips_wall_s = std::chrono::duration<double>(t1 - t0).count();
   out.forces_wall_s = std::chrono::duration<double>(clock::now() - t1).count();

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "internal.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/units.hpp"
@@ -131,34 +132,54 @@ ForceSeries compute_forces(const SimResult& chips, const SimTool& tool, const Ed
   const std::size_t nt = n * static_cast<std::size_t>(nz);
   s.tooth_fx_n.assign(nt, 0.0), s.tooth_fy_n.assign(nt, 0.0), s.tooth_fz_n.assign(nt, 0.0);
   s.tooth_torque_nm.assign(nt, 0.0);
+  // The edge angle at a segment: tooth angle + omega t + the helix lag at its height. Per
+  // segment the lag's cosine and sine once; per (step, tooth) the rest's once (entries come
+  // grouped by step and tooth), combined by the angle-sum formulas.
   const double lag = std::tan(tool.helix_rad) / tool.radius_mm;  // rad per mm of height
+  std::vector<double> cl(static_cast<std::size_t>(spt)), sl(static_cast<std::size_t>(spt));
+  for (int k = 0; k < spt; ++k) {
+    cl[static_cast<std::size_t>(k)] = std::cos(grid.at(k, 0).h_mm * lag);
+    sl[static_cast<std::size_t>(k)] = std::sin(grid.at(k, 0).h_mm * lag);
+  }
   const double dir = tool.omega_rad_per_s < 0 ? -1.0 : 1.0;
+  std::size_t cached = static_cast<std::size_t>(-1);
+  double cb = 1, sb = 0;
   for (const ChipEntry& e : chips.chip_map) {
     const int tooth = static_cast<int>(e.segment) / spt, k = static_cast<int>(e.segment) % spt;
     if (tooth >= nz || e.step >= n || !(e.h_mm > 0) || !(e.w_mm > 0)) continue;
     const EdgeCell& c = grid.at(k, 0);
-    const double t = chips.steps[e.step].t_s;
-    const double th = tool.tooth_angle_rad[static_cast<std::size_t>(tooth)] +
-                      tool.omega_rad_per_s * t + c.h_mm * lag;
-    const double ct = std::cos(th), st = std::sin(th);
+    const std::size_t ti = e.step * static_cast<std::size_t>(nz) + static_cast<std::size_t>(tooth);
+    if (ti != cached) {
+      const double base = tool.tooth_angle_rad[static_cast<std::size_t>(tooth)] +
+                          tool.omega_rad_per_s * chips.steps[e.step].t_s;
+      cb = std::cos(base), sb = std::sin(base);
+      cached = ti;
+    }
+    const double ct = cb * cl[static_cast<std::size_t>(k)] - sb * sl[static_cast<std::size_t>(k)];
+    const double st = sb * cl[static_cast<std::size_t>(k)] + cb * sl[static_cast<std::size_t>(k)];
     const auto f = model.force(k, e.h_mm, e.w_mm);
     // radial (cos, sin), cutting direction dir * (-sin, cos), axial z.
     const double fx = f[0] * ct - dir * f[1] * st, fy = f[0] * st + dir * f[1] * ct, fz = f[2];
     const double torque = f[1] * c.r_mm * 1e-3;
-    const std::size_t ti = e.step * static_cast<std::size_t>(nz) + static_cast<std::size_t>(tooth);
     s.tooth_fx_n[ti] += fx, s.tooth_fy_n[ti] += fy, s.tooth_fz_n[ti] += fz;
     s.tooth_torque_nm[ti] += torque;
   }
-  const double w = std::abs(tool.omega_rad_per_s);
+  sum_teeth(s, std::abs(tool.omega_rad_per_s));
+  return s;
+}
+
+void sum_teeth(ForceSeries& s, double omega_abs) {
+  const std::size_t n = s.t_s.size(), nz = static_cast<std::size_t>(s.teeth);
+  s.fx_n.assign(n, 0.0), s.fy_n.assign(n, 0.0), s.fz_n.assign(n, 0.0);
+  s.torque_nm.assign(n, 0.0), s.power_w.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
-    for (int k = 0; k < nz; ++k) {  // summed in tooth order: the same for any entry order
-      const std::size_t ti = i * static_cast<std::size_t>(nz) + static_cast<std::size_t>(k);
+    for (std::size_t k = 0; k < nz; ++k) {  // in tooth order: the same for any entry order
+      const std::size_t ti = i * nz + k;
       s.fx_n[i] += s.tooth_fx_n[ti], s.fy_n[i] += s.tooth_fy_n[ti], s.fz_n[i] += s.tooth_fz_n[ti];
       s.torque_nm[i] += s.tooth_torque_nm[ti];
     }
-    s.power_w[i] = s.torque_nm[i] * w;
+    s.power_w[i] = s.torque_nm[i] * omega_abs;
   }
-  return s;
 }
 
 }  // namespace trochomill
