@@ -26,23 +26,7 @@ Job full_slot(const std::vector<Override>& extra = {}) {
       parse_override("material.k_ac=120"),   parse_override("material.k_te=25"),
       parse_override("material.k_re=30"),    parse_override("material.k_ae=4")};
   ov.insert(ov.end(), extra.begin(), extra.end());
-  return parse_job(
-      R"(
-[tool]
-diameter = 10.0
-teeth = 4
-[slot]
-width = 10.0
-length = 40.0
-depth = 6.0
-[path]
-type = "linear"
-step = 1.0
-[cutting]
-feed_rate = 600.0
-spindle_speed = 2000.0
-)",
-      "full-slot.toml", ov);
+  return straight_job(10.0, 4, ov);
 }
 
 // Mean of a series over [t0, t1).
@@ -397,10 +381,8 @@ TEST(Forces, CalibrationRefusesAnUnidentifiableFit) {
 }
 
 // [material] keys: the library by name, the job's keys over it, and clear errors.
-TEST(Forces, MaterialKeysAndTheLibrary) {
-  const auto lib = material_library();
-  ASSERT_GE(lib.size(), 3u);
-  const Job j = parse_job(R"(
+// A trochoidal job ending in an open [material] section.
+const char* const kMaterialJob = R"(
 [tool]
 diameter = 10.0
 teeth = 4
@@ -415,33 +397,20 @@ step = 1.0
 feed_rate = 600.0
 spindle_speed = 2000.0
 [material]
-name = "inconel718-bergmann2021"
-k_n = 480.0
-)",
-                          "m.toml");
+)";
+
+TEST(Forces, MaterialKeysAndTheLibrary) {
+  const auto lib = material_library();
+  ASSERT_GE(lib.size(), 3u);
+  const Job j = parse_job(
+      std::string(kMaterialJob) + "name = \"inconel718-bergmann2021\"\nk_n = 480.0\n", "m.toml");
   EXPECT_EQ(*j.material.model, ForceModel::bergmann);
   EXPECT_DOUBLE_EQ(j.material.k_c, 1926.08);
   EXPECT_DOUBLE_EQ(j.material.k_n, 480.0);  // the job's key over the library's
   EXPECT_DOUBLE_EQ(j.material.m, 0.28);
   const auto expect_error = [](const std::string& material, const std::string& needle) {
     try {
-      (void)parse_job(R"(
-[tool]
-diameter = 10.0
-teeth = 4
-[slot]
-width = 20.0
-length = 20.0
-depth = 2.0
-[path]
-type = "trochoidal"
-step = 1.0
-[cutting]
-feed_rate = 600.0
-spindle_speed = 2000.0
-[material]
-)" + material,
-                      "bad.toml");
+      (void)parse_job(std::string(kMaterialJob) + material, "bad.toml");
       ADD_FAILURE() << "no error for " << material;
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();

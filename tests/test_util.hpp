@@ -58,7 +58,7 @@ rapid_rate = 10000.0
 }
 
 // A straight slot 40 mm long, 6 deep, D 10 mm, 600 mm/min at 2000 rpm ("linear" family).
-inline Job straight_job(double width, int teeth = 4) {
+inline Job straight_job(double width, int teeth = 4, const std::vector<Override>& ov = {}) {
   return parse_job(R"(
 [tool]
 diameter = 10.0
@@ -76,7 +76,7 @@ step = 1.0
 feed_rate = 600.0
 spindle_speed = 2000.0
 )",
-                   "straight.toml");
+                   "straight.toml", ov);
 }
 
 // Distance from q to the polyline through samples (x, y, z), searching a window of indices

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -135,6 +136,37 @@ std::pair<double, double> parse_window(const tmill::ToolPath& path, const std::s
   if (from_s) from = *from_s;
   if (to_s) to = *to_s;
   return {from, to};
+}
+
+// A progress bar with ETA on stderr (for terminals).
+std::function<void(std::size_t, std::size_t)> progress_bar(
+    std::chrono::steady_clock::time_point start) {
+  return [start](std::size_t done, std::size_t total) {
+    const double f =
+        static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(1, total));
+    const double el =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int w = 30, filled = static_cast<int>(f * w);
+    fmt::print(stderr, "\r[{}{}] {:5.1f} %  ETA {:.0f} s   ",
+               std::string(static_cast<std::size_t>(filled), '#'),
+               std::string(static_cast<std::size_t>(w - filled), '.'), 100 * f,
+               f > 0 ? el * (1 - f) / f : 0.0);
+  };
+}
+
+// "a,b,c" -> {"a", "b", "c"} (spaces dropped; empty items kept, for the caller to refuse).
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (const char c : text + ",") {
+    if (c == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else if (c != ' ') {
+      cur += c;
+    }
+  }
+  return out;
 }
 
 // Writes a WAV atomically: a temporary file beside the target, then a rename.
@@ -677,19 +709,7 @@ int run(int argc, char** argv) {
     control.cancel = &interrupted;
     const bool tty = isatty(STDERR_FILENO) != 0;
     const auto t_start = std::chrono::steady_clock::now();
-    if (tty) {
-      control.progress = [&](std::size_t done, std::size_t total) {
-        const double f =
-            static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(1, total));
-        const double el =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-        const int w = 30, filled = static_cast<int>(f * w);
-        fmt::print(stderr, "\r[{}{}] {:5.1f} %  ETA {:.0f} s   ",
-                   std::string(static_cast<std::size_t>(filled), '#'),
-                   std::string(static_cast<std::size_t>(w - filled), '.'), 100 * f,
-                   f > 0 ? el * (1 - f) / f : 0.0);
-      };
-    }
+    if (tty) control.progress = progress_bar(t_start);
     const tmill::JobSimulation js = tmill::simulate_job(job, path, from, to, control);
     sigaction(SIGINT, &old_sa, nullptr);
     if (tty) fmt::print(stderr, "\r{}\r", std::string(60, ' '));
@@ -769,42 +789,15 @@ int run(int argc, char** argv) {
             (est.boards_bytes + est.records_bytes) / 1e9, 0.75 * ram / 1e9));
       }
     }
-    const tmill::JobForces jf = tmill::job_forces(job, path, from, to, fo_fast);
+    tmill::SimControl control;
+    const bool tty = !fo_fast && isatty(STDERR_FILENO) != 0;
+    if (tty) control.progress = progress_bar(std::chrono::steady_clock::now());
+    const tmill::JobForces jf = tmill::job_forces(job, path, from, to, fo_fast, control);
+    if (tty) fmt::print(stderr, "\r{}\r", std::string(60, ' '));
     if (!fo_csv.empty()) emit(fo_csv, tmill::force_series_csv(jf.series));
-    const tmill::ForceSummary& sm = jf.summary;
-    if (!fo_json.empty()) {
-      nlohmann::json j = {{"f_resultant_max_n", sm.f_resultant_max_n},
-                          {"t_resultant_max_s", sm.t_resultant_max_s},
-                          {"f_x_max_n", sm.f_x_max_n},
-                          {"f_y_max_n", sm.f_y_max_n},
-                          {"f_z_max_n", sm.f_z_max_n},
-                          {"f_x_mean_n", sm.f_x_mean_n},
-                          {"f_y_mean_n", sm.f_y_mean_n},
-                          {"f_z_mean_n", sm.f_z_mean_n},
-                          {"torque_max_nm", sm.torque_max_nm},
-                          {"power_max_w", sm.power_max_w},
-                          {"power_mean_w", sm.power_mean_w},
-                          {"model", tmill::to_string(*job.material.model)},
-                          {"material", job.material.name},
-                          {"chip_source", fo_fast ? "fast" : "simulation"},
-                          {"steps", jf.series.size()},
-                          {"from_s", from},
-                          {"to_s", to},
-                          {"chips_wall_s", jf.chips_wall_s},
-                          {"forces_wall_s", jf.forces_wall_s}};
-      emit(fo_json, j.dump(2) + "\n");
-    }
-    if (fo_json != "-" && fo_csv != "-") {
-      fmt::print(
-          "{}: {} model{}, {} chips, {:.4f} to {:.4f} s, {} steps\n"
-          "  F_R,max {:.1f} N at {:.4f} s; |F_x| {:.1f}, |F_y| {:.1f}, |F_z| {:.1f} N max\n"
-          "  torque max {:.3f} N m, power max {:.1f} W (mean {:.1f} W); {:.2f} s + {:.2f} s\n",
-          fo_args.job_file, tmill::to_string(*job.material.model),
-          job.material.name.empty() ? "" : " (" + job.material.name + ")",
-          fo_fast ? "fast" : "simulated", from, to, jf.series.size(), sm.f_resultant_max_n,
-          sm.t_resultant_max_s, sm.f_x_max_n, sm.f_y_max_n, sm.f_z_max_n, sm.torque_max_nm,
-          sm.power_max_w, sm.power_mean_w, jf.chips_wall_s, jf.forces_wall_s);
-    }
+    if (!fo_json.empty()) emit(fo_json, tmill::force_summary_json(job, jf, from, to));
+    if (fo_json != "-" && fo_csv != "-")
+      fmt::print("{}", tmill::force_summary_text(job, jf, from, to));
     return 0;
   }
 
@@ -815,35 +808,15 @@ int run(int argc, char** argv) {
     }
     if (!ca_mean.empty()) {
       const tmill::MeanForceFit f = tmill::fit_mean_forces(job, tmill::read_mean_forces(ca_mean));
-      const tmill::Material& m = f.material;
-      const std::string block = fmt::format(
-          "[material]\nmodel = \"linear\"\nk_tc = {:.6g}  # N/mm^2\nk_rc = {:.6g}  # N/mm^2\n"
-          "k_ac = {:.6g}  # N/mm^2\nk_te = {:.6g}  # N/mm\nk_re = {:.6g}  # N/mm\n"
-          "k_ae = {:.6g}  # N/mm\nsource = \"{}\"\n",
-          m.k_tc, m.k_rc, m.k_ac, m.k_te, m.k_re, m.k_ae, m.source);
+      const std::string block = tmill::mean_force_toml(f);
       if (!ca_write.empty()) tmill::write_file_atomic(ca_write, block);
-      if (!ca_json.empty()) {
-        nlohmann::json j = {{"model", "linear"},   {"k_tc", m.k_tc},  {"k_rc", m.k_rc},
-                            {"k_ac", m.k_ac},      {"k_te", m.k_te},  {"k_re", m.k_re},
-                            {"k_ae", m.k_ae},      {"r2_axes", f.r2}, {"slope_n_per_mm", f.slope},
-                            {"offset_n", f.offset}};
-        emit(ca_json, j.dump(2) + "\n");
-      }
+      if (!ca_json.empty()) emit(ca_json, tmill::mean_force_json(f));
       if (ca_json != "-") fmt::print("{}", block);
       return 0;
     }
     tmill::ForceCsvFormat fmt_in;
     if (!ca_columns.empty()) {
-      std::vector<std::string> cols;
-      std::string cur;
-      for (const char c : ca_columns + ",") {
-        if (c == ',') {
-          cols.push_back(cur);
-          cur.clear();
-        } else {
-          cur += c;
-        }
-      }
+      const std::vector<std::string> cols = split_list(ca_columns);
       if (cols.size() != 4 ||
           std::any_of(cols.begin(), cols.end(), [](const std::string& c) { return c.empty(); })) {
         throw tmill::InputError(
@@ -874,13 +847,10 @@ int run(int argc, char** argv) {
     } else if (job.material.model) {
       o.model = *job.material.model;
     }
-    std::string cur;
-    for (const char c : ca_fit + ",") {
-      if (c == ',') {
-        if (!cur.empty()) o.fit.push_back(cur);
-        cur.clear();
-      } else if (c != ' ') {
-        cur += c;
+    if (!ca_fit.empty()) {
+      for (const auto& p : split_list(ca_fit)) {
+        if (p.empty()) throw tmill::InputError(fmt::format("--fit '{}': an empty name", ca_fit));
+        o.fit.push_back(p);
       }
     }
     o.fast = ca_fast;
@@ -897,67 +867,15 @@ int run(int argc, char** argv) {
     const tmill::CalibrationResult r = tmill::calibrate_forces(job, path, meas, o);
     const std::string block = tmill::material_toml(r);
     if (!ca_write.empty()) tmill::write_file_atomic(ca_write, block);
-    if (!ca_json.empty()) {
-      nlohmann::json j = {{"model", tmill::to_string(*r.material.model)},
-                          {"rmse_n", r.rmse_n},
-                          {"r2", r.r2},
-                          {"shift_s", r.shift_s},
-                          {"cutoff_hz", r.cutoff_hz},
-                          {"samples", r.samples},
-                          {"iterations", r.iterations}};
-      nlohmann::json ci = nlohmann::json::object();
-      for (const auto& p : r.parameters) {
-        j[p.name] = p.value;
-        ci[p.name] = {{"lo", p.ci95_lo},
-                      {"hi", p.ci95_hi},
-                      {"std_error", p.std_error},
-                      {"at_bound", p.at_bound}};
-      }
-      j["ci95"] = ci;
-      emit(ca_json, j.dump(2) + "\n");
-    }
-    if (ca_json != "-") {
-      fmt::print("{}: {} samples per axis, shift {:.6f} s, low-pass {:.0f} Hz, {} iterations\n",
-                 ca_measured, r.samples, r.shift_s, r.cutoff_hz, r.iterations);
-      fmt::print("  RMSE {:.3f} N, R^2 {:.4f}\n", r.rmse_n, r.r2);
-      fmt::print("{}", block);
-    }
+    if (!ca_json.empty()) emit(ca_json, tmill::calibration_json(r));
+    if (ca_json != "-") fmt::print("{}", tmill::calibration_text(ca_measured, r));
     return 0;
   }
 
   if (ma->parsed()) {
     const std::vector<tmill::Material> lib = tmill::material_library();
-    if (ma_json) {
-      nlohmann::json j = nlohmann::json::array();
-      for (const auto& m : lib) {
-        nlohmann::json o = {{"name", m.name},
-                            {"model", tmill::to_string(*m.model)},
-                            {"source", m.source},
-                            {"notes", m.notes}};
-        if (*m.model == tmill::ForceModel::linear) {
-          o["k_tc"] = m.k_tc, o["k_rc"] = m.k_rc, o["k_ac"] = m.k_ac;
-          o["k_te"] = m.k_te, o["k_re"] = m.k_re, o["k_ae"] = m.k_ae;
-        } else {
-          o["k_c"] = m.k_c, o["k_n"] = m.k_n, o["m"] = m.m;
-        }
-        j.push_back(o);
-      }
-      fmt::print("{}\n", j.dump(2));
-      return 0;
-    }
-    fmt::print("{} materials in {}\n", lib.size(), tmill::materials_dir().string());
-    for (const auto& m : lib) {
-      if (*m.model == tmill::ForceModel::linear) {
-        fmt::print(
-            "  {:<28} linear   K_tc {:g} K_rc {:g} K_ac {:g} N/mm^2, K_te {:g} K_re {:g} "
-            "K_ae {:g} N/mm\n",
-            m.name, m.k_tc, m.k_rc, m.k_ac, m.k_te, m.k_re, m.k_ae);
-      } else {
-        fmt::print("  {:<28} {:<8} k_c {:g} k_n {:g} N/mm^2, m {:g}\n", m.name,
-                   tmill::to_string(*m.model), m.k_c, m.k_n, m.m);
-      }
-      fmt::print("  {:<28} source: {}\n", "", m.source);
-    }
+    fmt::print("{}", ma_json ? tmill::materials_json(lib)
+                             : tmill::materials_text(lib, tmill::materials_dir().string()));
     return 0;
   }
 

@@ -76,6 +76,22 @@ struct StudyPoint {
 /// tooth k: tooth<k>_f_x_n, tooth<k>_f_y_n, tooth<k>_f_z_n, tooth<k>_torque_nm. `calibrate`
 /// reads it as it is.
 [[nodiscard]] std::string force_series_csv(const ForceSeries& s);
+/// `trochomill forces`' summary: JSON (f_resultant_max_n, f_x_max_n, f_y_max_n, f_z_max_n,
+/// torque_max_nm, power_max_w, means, model, chip source, window, wall times) and text.
+[[nodiscard]] std::string force_summary_json(const Job& job, const JobForces& f, double from_s,
+                                             double to_s);
+[[nodiscard]] std::string force_summary_text(const Job& job, const JobForces& f, double from_s,
+                                             double to_s);
+/// A calibration: JSON (the fitted parameters under their key names, rmse_n, r2, shift_s,
+/// cutoff_hz, samples, iterations, ci95 per parameter) and text (with the [material] block).
+[[nodiscard]] std::string calibration_json(const CalibrationResult& r);
+[[nodiscard]] std::string calibration_text(const std::string& measured, const CalibrationResult& r);
+/// The mean-force regression's [material] block (TOML) and JSON.
+[[nodiscard]] std::string mean_force_toml(const MeanForceFit& f);
+[[nodiscard]] std::string mean_force_json(const MeanForceFit& f);
+/// The materials library as JSON and as a table with sources.
+[[nodiscard]] std::string materials_json(const std::vector<Material>& lib);
+[[nodiscard]] std::string materials_text(const std::vector<Material>& lib, const std::string& dir);
 /// Wall profiles: y_mm, z_mm, left_x_mm, right_x_mm.
 [[nodiscard]] std::string wall_profiles_csv(const std::vector<WallPoint>& w);
 /// Floor profiles: y_mm, x_mm, z_mm.

@@ -21,6 +21,7 @@ namespace trochomill {
 namespace {
 
 constexpr std::size_t kChunk = 256;
+constexpr std::size_t kMaxTeeth = 64;  // as [tool] teeth allows
 
 bool in_arcs(const std::vector<AngleArc>& arcs, double th) {
   for (const AngleArc& a : arcs) {
@@ -86,6 +87,9 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
   const std::size_t nz = tool.tooth_angle_rad.size();
   const double w = std::abs(tool.omega_rad_per_s);
   if (nz == 0 || !(w > 0)) throw InputError("fast chips: the tool has no teeth or no speed");
+  if (nz > kMaxTeeth) {
+    throw InputError(fmt::format("fast chips: {} teeth; at most {}", nz, kMaxTeeth));
+  }
   if (std::abs(w * dt_ * spr_ - kTwoPi) > 1e-9) {
     throw InputError("fast chips: the tool's spindle speed is not the job's");
   }
@@ -173,22 +177,17 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
           const double tip_z = ps.z_mm[g] + tool.axial_offset_mm[k];
           if (tip_z + discs[0].h0 >= 0) continue;  // the tooth is above the stock
           // The centre's displacement since each earlier tooth passed, once per tooth.
-          std::array<double, 3> dx{}, dy{}, dr{};
-          const std::size_t nl = std::min<std::size_t>(lags[k].size(), 3);
-          std::vector<std::array<double, 3>> more;  // beyond three earlier teeth
-          for (std::size_t q = 0; q < lags[k].size(); ++q) {
+          std::array<double, kMaxTeeth> dx, dy, dr;
+          const std::size_t nl = lags[k].size();
+          for (std::size_t q = 0; q < nl; ++q) {
             const Lag& l = lags[k][q];
             const double gp = static_cast<double>(g) - l.steps;
             const auto g0 = static_cast<std::size_t>(std::max(0.0, std::floor(gp)));
             const double f = std::clamp(gp - static_cast<double>(g0), 0.0, 1.0);
             const std::size_t g1 = std::min(g0 + 1, times.size() - 1);
-            const double px = ps.x_mm[g0] + f * (ps.x_mm[g1] - ps.x_mm[g0]);
-            const double py = ps.y_mm[g0] + f * (ps.y_mm[g1] - ps.y_mm[g0]);
-            if (q < 3) {
-              dx[q] = ps.x_mm[g] - px, dy[q] = ps.y_mm[g] - py, dr[q] = l.dr;
-            } else {
-              more.push_back({ps.x_mm[g] - px, ps.y_mm[g] - py, l.dr});
-            }
+            dx[q] = ps.x_mm[g] - (ps.x_mm[g0] + f * (ps.x_mm[g1] - ps.x_mm[g0]));
+            dy[q] = ps.y_mm[g] - (ps.y_mm[g0] + f * (ps.y_mm[g1] - ps.y_mm[g0]));
+            dr[q] = l.dr;
           }
           // The tip angle: the tooth's own angle plus the spindle's, both in [0, 2 pi).
           double base = tooth_wrapped[k] + spin;
@@ -228,7 +227,6 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
             const double ux = cb * dc.cl - sb * dc.sl, uy = sb * dc.cl + cb * dc.sl;
             double h = 1e300;
             for (std::size_t q = 0; q < nl; ++q) h = std::min(h, dx[q] * ux + dy[q] * uy + dr[q]);
-            for (const auto& m3 : more) h = std::min(h, m3[0] * ux + m3[1] * uy + m3[2]);
             h *= dc.sine;
             if (!(h > 0)) continue;
             visit(c, i, k, d, h, width, ux, uy);

@@ -3,9 +3,11 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "trochomill/sim.hpp"
+#include "trochomill/topography.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -50,6 +52,20 @@ inline ContourPoint project_on_contour(const SimTool& t, double x, double z) {
   const double d = std::hypot(x - c.r, z - c.h);
   if (d < best_d) best = c;
   return best;
+}
+
+/// A triangle's normal (p1 - p0) x (p2 - p0), not normalised (twice its area), and centroid.
+struct Facet {
+  std::array<double, 3> n, c;
+};
+inline Facet facet_of(const Mesh& m, const std::array<std::uint32_t, 3>& t) {
+  const auto& p0 = m.vertices[t[0]];
+  const auto& p1 = m.vertices[t[1]];
+  const auto& p2 = m.vertices[t[2]];
+  const double ux = p1[0] - p0[0], uy = p1[1] - p0[1], uz = p1[2] - p0[2];
+  const double vx = p2[0] - p0[0], vy = p2[1] - p0[1], vz = p2[2] - p0[2];
+  return {{uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx},
+          {(p0[0] + p1[0] + p2[0]) / 3, (p0[1] + p1[1] + p2[1]) / 3, (p0[2] + p1[2] + p2[2]) / 3}};
 }
 
 }  // namespace trochomill

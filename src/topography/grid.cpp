@@ -25,13 +25,8 @@ EdgeGrid sample_topography(const Mesh& mesh, const SimTool& tool, double band_mm
   std::vector<char> keep(mesh.vertices.size(), 0);
   std::size_t kept = 0;
   for (const auto& t : mesh.triangles) {
-    const auto& p0 = mesh.vertices[t[0]];
-    const auto& p1 = mesh.vertices[t[1]];
-    const auto& p2 = mesh.vertices[t[2]];
-    const double ux = p1[0] - p0[0], uy = p1[1] - p0[1], uz = p1[2] - p0[2];
-    const double vx = p2[0] - p0[0], vy = p2[1] - p0[1], vz = p2[2] - p0[2];
-    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-    const double nn = std::sqrt(nx * nx + ny * ny + nz * nz);
+    const auto n = facet_of(mesh, t).n;
+    const double nn = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), ny = n[1];
     if (!(nn > 0) || ny / nn < -tol) continue;
     ++kept;
     keep[t[0]] = keep[t[1]] = keep[t[2]] = 1;

@@ -197,17 +197,11 @@ Mesh synthetic_insert(const SimTool& tool, const SyntheticInsert& s) {
   }
   // Orient outward: away from a point inside the tool behind the edge.
   for (auto& t : m.triangles) {
-    const auto& p0 = m.vertices[t[0]];
-    const auto& p1 = m.vertices[t[1]];
-    const auto& p2 = m.vertices[t[2]];
-    const double ux = p1[0] - p0[0], uy = p1[1] - p0[1], uz = p1[2] - p0[2];
-    const double vx = p2[0] - p0[0], vy = p2[1] - p0[1], vz = p2[2] - p0[2];
-    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-    const double cx = (p0[0] + p1[0] + p2[0]) / 3, cy = (p0[1] + p1[1] + p2[1]) / 3,
-                 cz = (p0[2] + p1[2] + p2[2]) / 3;
+    const auto [n, ctr] = facet_of(m, t);
+    const double cx = ctr[0], cy = ctr[1], cz = ctr[2];
     const ContourPoint c = project_on_contour(tool, cx, cz);
     const double ox = c.r - s.face_mm * c.nr, oy = -s.face_mm, oz = c.h - s.face_mm * c.nz;
-    if (nx * (cx - ox) + ny * (cy - oy) + nz * (cz - oz) < 0) std::swap(t[1], t[2]);
+    if (n[0] * (cx - ox) + n[1] * (cy - oy) + n[2] * (cz - oz) < 0) std::swap(t[1], t[2]);
   }
   return m;
 }

@@ -1,0 +1,126 @@
+// Formatting of forces, calibration results and the materials library (report.hpp).
+#include <fmt/format.h>
+
+#include <nlohmann/json.hpp>
+
+#include "trochomill/report.hpp"
+
+namespace trochomill {
+
+std::string force_summary_json(const Job& job, const JobForces& f, double from_s, double to_s) {
+  const ForceSummary& sm = f.summary;
+  const nlohmann::json j = {{"f_resultant_max_n", sm.f_resultant_max_n},
+                            {"t_resultant_max_s", sm.t_resultant_max_s},
+                            {"f_x_max_n", sm.f_x_max_n},
+                            {"f_y_max_n", sm.f_y_max_n},
+                            {"f_z_max_n", sm.f_z_max_n},
+                            {"f_x_mean_n", sm.f_x_mean_n},
+                            {"f_y_mean_n", sm.f_y_mean_n},
+                            {"f_z_mean_n", sm.f_z_mean_n},
+                            {"torque_max_nm", sm.torque_max_nm},
+                            {"power_max_w", sm.power_max_w},
+                            {"power_mean_w", sm.power_mean_w},
+                            {"model", to_string(*job.material.model)},
+                            {"material", job.material.name},
+                            {"chip_source", f.fast ? "fast" : "simulation"},
+                            {"steps", f.series.size()},
+                            {"from_s", from_s},
+                            {"to_s", to_s},
+                            {"chips_wall_s", f.chips_wall_s},
+                            {"forces_wall_s", f.forces_wall_s}};
+  return j.dump(2) + "\n";
+}
+
+std::string force_summary_text(const Job& job, const JobForces& f, double from_s, double to_s) {
+  const ForceSummary& sm = f.summary;
+  return fmt::format(
+      "{}: {} model{}, {} chips, {:.4f} to {:.4f} s, {} steps\n"
+      "  F_R,max {:.1f} N at {:.4f} s; |F_x| {:.1f}, |F_y| {:.1f}, |F_z| {:.1f} N max\n"
+      "  torque max {:.3f} N m, power max {:.1f} W (mean {:.1f} W); {:.2f} s + {:.2f} s\n",
+      job.source, to_string(*job.material.model),
+      job.material.name.empty() ? "" : " (" + job.material.name + ")",
+      f.fast ? "fast" : "simulated", from_s, to_s, f.series.size(), sm.f_resultant_max_n,
+      sm.t_resultant_max_s, sm.f_x_max_n, sm.f_y_max_n, sm.f_z_max_n, sm.torque_max_nm,
+      sm.power_max_w, sm.power_mean_w, f.chips_wall_s, f.forces_wall_s);
+}
+
+std::string calibration_json(const CalibrationResult& r) {
+  nlohmann::json j = {{"model", to_string(*r.material.model)},
+                      {"rmse_n", r.rmse_n},
+                      {"r2", r.r2},
+                      {"shift_s", r.shift_s},
+                      {"cutoff_hz", r.cutoff_hz},
+                      {"samples", r.samples},
+                      {"iterations", r.iterations}};
+  nlohmann::json ci = nlohmann::json::object();
+  for (const auto& p : r.parameters) {
+    j[p.name] = p.value;
+    ci[p.name] = {
+        {"lo", p.ci95_lo}, {"hi", p.ci95_hi}, {"std_error", p.std_error}, {"at_bound", p.at_bound}};
+  }
+  j["ci95"] = ci;
+  return j.dump(2) + "\n";
+}
+
+std::string calibration_text(const std::string& measured, const CalibrationResult& r) {
+  return fmt::format(
+      "{}: {} samples per axis, shift {:.6f} s, low-pass {:.0f} Hz, {} iterations\n"
+      "  RMSE {:.3f} N, R^2 {:.4f}\n{}",
+      measured, r.samples, r.shift_s, r.cutoff_hz, r.iterations, r.rmse_n, r.r2, material_toml(r));
+}
+
+std::string mean_force_toml(const MeanForceFit& f) {
+  const Material& m = f.material;
+  return fmt::format(
+      "[material]\nmodel = \"linear\"\nk_tc = {:.6g}  # N/mm^2\nk_rc = {:.6g}  # N/mm^2\n"
+      "k_ac = {:.6g}  # N/mm^2\nk_te = {:.6g}  # N/mm\nk_re = {:.6g}  # N/mm\n"
+      "k_ae = {:.6g}  # N/mm\nsource = \"{}\"\n",
+      m.k_tc, m.k_rc, m.k_ac, m.k_te, m.k_re, m.k_ae, m.source);
+}
+
+std::string mean_force_json(const MeanForceFit& f) {
+  const Material& m = f.material;
+  const nlohmann::json j = {{"model", "linear"},   {"k_tc", m.k_tc},  {"k_rc", m.k_rc},
+                            {"k_ac", m.k_ac},      {"k_te", m.k_te},  {"k_re", m.k_re},
+                            {"k_ae", m.k_ae},      {"r2_axes", f.r2}, {"slope_n_per_mm", f.slope},
+                            {"offset_n", f.offset}};
+  return j.dump(2) + "\n";
+}
+
+std::string materials_json(const std::vector<Material>& lib) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& m : lib) {
+    nlohmann::json o = {
+        {"name", m.name}, {"model", to_string(*m.model)}, {"source", m.source}, {"notes", m.notes}};
+    if (*m.model == ForceModel::linear) {
+      o["k_tc"] = m.k_tc, o["k_rc"] = m.k_rc, o["k_ac"] = m.k_ac;
+      o["k_te"] = m.k_te, o["k_re"] = m.k_re, o["k_ae"] = m.k_ae;
+    } else {
+      o["k_c"] = m.k_c, o["k_n"] = m.k_n, o["m"] = m.m;
+      if (*m.model == ForceModel::kienzle) {
+        o["m_n"] = m.m_n.value_or(m.m), o["k_a"] = m.k_a, o["m_a"] = m.m_a.value_or(m.m);
+      }
+    }
+    j.push_back(o);
+  }
+  return j.dump(2) + "\n";
+}
+
+std::string materials_text(const std::vector<Material>& lib, const std::string& dir) {
+  std::string out = fmt::format("{} materials in {}\n", lib.size(), dir);
+  for (const auto& m : lib) {
+    if (*m.model == ForceModel::linear) {
+      out += fmt::format(
+          "  {:<28} linear   K_tc {:g} K_rc {:g} K_ac {:g} N/mm^2, K_te {:g} K_re {:g} K_ae {:g} "
+          "N/mm\n",
+          m.name, m.k_tc, m.k_rc, m.k_ac, m.k_te, m.k_re, m.k_ae);
+    } else {
+      out += fmt::format("  {:<28} {:<8} k_c {:g} k_n {:g} N/mm^2, m {:g}\n", m.name,
+                         to_string(*m.model), m.k_c, m.k_n, m.m);
+    }
+    out += fmt::format("  {:<28} source: {}\n", "", m.source);
+  }
+  return out;
+}
+
+}  // namespace trochomill
