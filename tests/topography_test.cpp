@@ -116,6 +116,32 @@ TEST(Topography, SyntheticInsertSamplesToItsGeometry) {
   }
 }
 
+// A worn insert on a 10 mm edge (sections 0.05 mm apart, points along them 0.001-0.01 mm
+// apart), through STL and back: on every segment the profile runs along the land (VB - r_beta),
+// round the hone (r_beta pi / 2) and over the rake face to 0.2 mm deep (0.2 - r_beta), within
+// 2 um, and its outermost sub-segment is the land (facet normal radial within 1 degree). Without
+// the along-edge scaling of the RBF's domain the land bulged 2 um between sections and most
+// segments lost part of it.
+TEST(Topography, AWornInsertFromStlKeepsItsLandOnEverySegment) {
+  SimTool tool = insert_tool();
+  tool.flute_length_mm = 10;
+  SyntheticInsert s;
+  s.vb_mm = 0.15;
+  const auto f = std::filesystem::temp_directory_path() / "trochomill_worn_insert.stl";
+  write_mesh(f, synthetic_insert(tool, s));
+  EdgeTopography info;
+  const EdgeGrid g = sample_topography(read_mesh(f), tool, 0.2, &info);
+  std::filesystem::remove(f);
+  EXPECT_LT(info.s_scale, 0.5);
+  const double expect = 0.15 - 0.02 + 0.02 * kPi / 2 + 0.2 - 0.02;
+  for (int k = 0; k < g.segments; ++k) {
+    double sum = 0;
+    for (int t = 0; t < g.sub_segments; ++t) sum += g.at(k, t).para_mm;
+    EXPECT_NEAR(sum, expect, 2e-3) << k;
+    EXPECT_LT(std::abs(g.at(k, 0).facet[1]), std::sin(deg_to_rad(1.0))) << k;
+  }
+}
+
 // A worn insert (flank wear land VB 0.15 mm) turns the effective direction outward for thin
 // chips, so at the same chip and width the force normal to the edge (the passive force) grows
 // and the cutting force falls; over a full slot the mean feed-direction force F_y (the normal

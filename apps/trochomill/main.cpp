@@ -30,6 +30,7 @@
 #include "trochomill/report.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/topography.hpp"
 #include "trochomill/units.hpp"
 #include "trochomill/version.hpp"
 
@@ -461,6 +462,34 @@ int run(int argc, char** argv) {
   auto* ma = app.add_subcommand("materials", "list the materials library (data/materials)");
   ma->add_flag("--json", ma_json, "as JSON");
 
+  // insert (synthetic insert meshes) and topography (the sampled edge grid)
+  JobArgs in_args;
+  std::string in_out;
+  tmill::SyntheticInsert in_spec;
+  std::optional<double> in_edge;
+  auto* ins = app.add_subcommand(
+      "insert",
+      "write a synthetic insert mesh (new, or worn with a flank wear land) for the "
+      "job's tool, in the tooth frame");
+  add_job_args(ins, in_args);
+  ins->add_option("-o,--output", in_out, "mesh file: .stl, .ply or .obj")->required();
+  ins->add_option("--vb", in_spec.vb_mm, "flank wear land width VB, mm (default 0: new)");
+  ins->add_option("--edge-radius", in_edge, "hone radius, mm (default [tool] edge_radius or 0.02)");
+  ins->add_option("--rake", in_spec.rake_deg, "rake angle, degrees (default 0)");
+  ins->add_option("--clearance", in_spec.clearance_deg, "clearance angle, degrees (default 7)");
+  ins->add_option("--sections", in_spec.sections, "profile sections along the edge (default 200)");
+  ins->add_option("--points", in_spec.profile_points, "points per profile (default 120)");
+
+  JobArgs tg_args;
+  std::string tg_mesh, tg_csv, tg_json;
+  auto* tg = app.add_subcommand(
+      "topography",
+      "sample a digitised (or synthetic) edge into the structured grid and report it");
+  add_job_args(tg, tg_args);
+  tg->add_option("--mesh", tg_mesh, "this mesh instead of the job's [topography] state");
+  tg->add_option("--csv", tg_csv, "write the grid as CSV (- for stdout)");
+  tg->add_option("--json", tg_json, "write the summary as JSON (- for stdout)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -876,6 +905,48 @@ int run(int argc, char** argv) {
     const std::vector<tmill::Material> lib = tmill::material_library();
     fmt::print("{}", ma_json ? tmill::materials_json(lib)
                              : tmill::materials_text(lib, tmill::materials_dir().string()));
+    return 0;
+  }
+
+  if (ins->parsed()) {
+    const tmill::Job job = load(in_args);
+    const tmill::SimTool tool = tmill::sim_tool(job, job.simulation);
+    tmill::SyntheticInsert ins_spec = in_spec;
+    ins_spec.edge_radius_mm =
+        in_edge.value_or(job.tool.edge_radius_mm > 0 ? job.tool.edge_radius_mm : 0.02);
+    ins_spec.face_mm = std::max(
+        ins_spec.face_mm, 2 * job.topography.band_mm + ins_spec.vb_mm + ins_spec.edge_radius_mm);
+    const tmill::Mesh mesh = tmill::synthetic_insert(tool, ins_spec);
+    tmill::write_mesh(in_out, mesh);
+    fmt::print(
+        "{}: {} vertices, {} triangles (VB {:g} mm, hone {:g} mm, rake {:g}, clearance {:g} "
+        "degrees)\n",
+        in_out, mesh.vertices.size(), mesh.triangles.size(), ins_spec.vb_mm,
+        ins_spec.edge_radius_mm, ins_spec.rake_deg, ins_spec.clearance_deg);
+    return 0;
+  }
+
+  if (tg->parsed()) {
+    const tmill::Job job = load(tg_args);
+    const tmill::SimTool tool = tmill::sim_tool(job, job.simulation);
+    tmill::EdgeTopography info;
+    tmill::EdgeGrid grid;
+    std::string source;
+    if (!tg_mesh.empty()) {
+      grid =
+          tmill::sample_topography(tmill::read_mesh(tg_mesh), tool, job.topography.band_mm, &info);
+      source = tg_mesh;
+    } else if (job.topography.states() > 0) {
+      grid = tmill::job_edge_grid(job, tool, &info);
+      source = fmt::format("[topography] state {}", job.topography.state);
+    } else {
+      throw tmill::InputError(fmt::format(
+          "{}: no [topography] (files or synthetic_vb) and no --mesh", tg_args.job_file));
+    }
+    if (!tg_csv.empty()) emit(tg_csv, tmill::edge_grid_csv(grid));
+    if (!tg_json.empty()) emit(tg_json, tmill::topography_json(grid, info));
+    if (tg_json != "-" && tg_csv != "-")
+      fmt::print("{}", tmill::topography_text(source, grid, info));
     return 0;
   }
 

@@ -19,6 +19,7 @@
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/topography.hpp"
 
 namespace trochomill {
 
@@ -120,7 +121,9 @@ struct JobForces {
 [[nodiscard]] JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double to_s,
                                    bool fast, const SimControl& control = {});
 /// The edge grid of the job: edge_grid of its tool, filled from [topography] when given.
-[[nodiscard]] EdgeGrid job_edge_grid(const Job& job, const SimTool& tool);
+/// `info`, if given, receives the topography's statistics (untouched for a sharp edge).
+[[nodiscard]] EdgeGrid job_edge_grid(const Job& job, const SimTool& tool,
+                                     EdgeTopography* info = nullptr);
 
 /// F_R,max (N) over the whole path with the fast chip source, when the job has a [material]
 /// force model; nothing otherwise. For the performance index of analyze and compare.

@@ -10,6 +10,7 @@
 #include "trochomill/job.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/topography.hpp"
 
 namespace trochomill {
 
@@ -92,6 +93,16 @@ struct StudyPoint {
 /// The materials library as JSON and as a table with sources.
 [[nodiscard]] std::string materials_json(const std::vector<Material>& lib);
 [[nodiscard]] std::string materials_text(const std::vector<Material>& lib, const std::string& dir);
+/// The structured grid per cell: kappa, tau, s_mm, h_mm, r_mm, width_mm, proj_mm,
+/// proj_end_mm, para_mm, facet_r, facet_c, facet_a (d_c in the tooth frame: radial, cutting
+/// direction, axial), normal_r, normal_a (d_n).
+[[nodiscard]] std::string edge_grid_csv(const EdgeGrid& g);
+/// A sampled topography: JSON (points, facets_kept, facets_total, s_min_mm, s_max_mm,
+/// segments, sub_segments, band_mm, and per segment the facet angle to the cutting direction
+/// of its outermost and innermost sub-segments) and text.
+[[nodiscard]] std::string topography_json(const EdgeGrid& g, const EdgeTopography& info);
+[[nodiscard]] std::string topography_text(const std::string& source, const EdgeGrid& g,
+                                          const EdgeTopography& info);
 /// Wall profiles: y_mm, z_mm, left_x_mm, right_x_mm.
 [[nodiscard]] std::string wall_profiles_csv(const std::vector<WallPoint>& w);
 /// Floor profiles: y_mm, x_mm, z_mm.

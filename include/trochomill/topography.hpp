@@ -78,6 +78,7 @@ struct EdgeTopography {
   std::size_t points = 0;  ///< visible points used
   std::size_t facets_kept = 0, facets_total = 0;
   double s_min_mm = 0, s_max_mm = 0;  ///< extent along the edge covered by the mesh
+  double s_scale = 1;  ///< along-edge scale of the RBF's domain (< 1 for meshes in sections)
 };
 
 /// Samples a mesh into the structured grid of `tool`'s edge (edge_grid's segments, tool's

@@ -11,7 +11,7 @@
 
 namespace trochomill {
 
-EdgeGrid job_edge_grid(const Job& job, const SimTool& tool) {
+EdgeGrid job_edge_grid(const Job& job, const SimTool& tool, EdgeTopography* info) {
   const TopographySettings& tp = job.topography;
   if (tp.states() == 0) return edge_grid(tool, tp.band_mm);
   const auto state = static_cast<std::size_t>(tp.state);
@@ -19,14 +19,16 @@ EdgeGrid job_edge_grid(const Job& job, const SimTool& tool) {
     throw InputError(
         fmt::format("[topography] state {} but only {} wear states", tp.state, tp.states()));
   }
-  if (!tp.files.empty()) return sample_topography(read_mesh(tp.files[state]), tool, tp.band_mm);
+  if (!tp.files.empty()) {
+    return sample_topography(read_mesh(tp.files[state]), tool, tp.band_mm, info);
+  }
   SyntheticInsert s;
   s.vb_mm = tp.synthetic_vb_mm[state];
   s.edge_radius_mm = job.tool.edge_radius_mm > 0 ? job.tool.edge_radius_mm : 0.02;
   s.rake_deg = tp.rake_deg;
   s.clearance_deg = tp.clearance_deg;
   s.face_mm = std::max(0.6, 2 * tp.band_mm + s.vb_mm + s.edge_radius_mm);
-  return sample_topography(synthetic_insert(tool, s), tool, tp.band_mm);
+  return sample_topography(synthetic_insert(tool, s), tool, tp.band_mm, info);
 }
 
 JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double to_s, bool fast,

@@ -1,6 +1,8 @@
 // Formatting of forces, calibration results and the materials library (report.hpp).
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "trochomill/report.hpp"
@@ -119,6 +121,69 @@ std::string materials_text(const std::vector<Material>& lib, const std::string& 
                          to_string(*m.model), m.k_c, m.k_n, m.m);
     }
     out += fmt::format("  {:<28} source: {}\n", "", m.source);
+  }
+  return out;
+}
+
+std::string edge_grid_csv(const EdgeGrid& g) {
+  std::string csv =
+      "kappa,tau,s_mm,h_mm,r_mm,width_mm,proj_mm,proj_end_mm,para_mm,facet_r,facet_c,facet_a,"
+      "normal_r,normal_a\n";
+  auto out = std::back_inserter(csv);
+  for (const EdgeCell& c : g.cells) {
+    fmt::format_to(out,
+                   "{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.7f},{:.7f},{:.7f},{:.6f},{:.6f},{:.6f},"
+                   "{:.6f},{:.6f}\n",
+                   c.kappa, c.tau, c.s_mm, c.h_mm, c.r_mm, c.width_mm, c.proj_mm, c.proj_end_mm,
+                   c.para_mm, c.facet[0], c.facet[1], c.facet[2], c.normal[0], c.normal[2]);
+  }
+  return csv;
+}
+
+namespace {
+double angle_to_cutting_deg(const EdgeCell& c) {
+  return std::acos(std::clamp(c.facet[1], -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+}
+}  // namespace
+
+std::string topography_json(const EdgeGrid& g, const EdgeTopography& info) {
+  nlohmann::json segs = nlohmann::json::array();
+  for (int k = 0; k < g.segments; ++k) {
+    const EdgeCell& o = g.at(k, 0);
+    const EdgeCell& i = g.at(k, g.sub_segments - 1);
+    segs.push_back({{"kappa", k},
+                    {"s_mm", o.s_mm},
+                    {"outer_facet_angle_deg", angle_to_cutting_deg(o)},
+                    {"inner_facet_angle_deg", angle_to_cutting_deg(i)},
+                    {"profile_length_mm", o.para_mm * g.sub_segments}});
+  }
+  const nlohmann::json j = {{"points", info.points},
+                            {"facets_kept", info.facets_kept},
+                            {"facets_total", info.facets_total},
+                            {"s_min_mm", info.s_min_mm},
+                            {"s_max_mm", info.s_max_mm},
+                            {"segments", g.segments},
+                            {"sub_segments", g.sub_segments},
+                            {"band_mm", g.band_mm},
+                            {"per_segment", segs}};
+  return j.dump(2) + "\n";
+}
+
+std::string topography_text(const std::string& source, const EdgeGrid& g,
+                            const EdgeTopography& info) {
+  std::string out = fmt::format(
+      "{}: {} of {} facets face the cutting direction, {} points along the edge from {:.3f} to "
+      "{:.3f} mm; grid {} segments x {} sub-segments in a {:g} mm band\n",
+      source, info.facets_kept, info.facets_total, info.points, info.s_min_mm, info.s_max_mm,
+      g.segments, g.sub_segments, g.band_mm);
+  out += "  kappa   s_mm   profile_mm  facet angle to v_c, outer -> inner (degrees)\n";
+  const int step = std::max(1, g.segments / 12);
+  for (int k = 0; k < g.segments; k += step) {
+    out += fmt::format("  {:5d} {:7.3f} {:10.4f} ", k, g.at(k, 0).s_mm,
+                       g.at(k, 0).para_mm * g.sub_segments);
+    for (int t = 0; t < g.sub_segments; ++t)
+      out += fmt::format(" {:5.1f}", angle_to_cutting_deg(g.at(k, t)));
+    out += "\n";
   }
   return out;
 }
