@@ -442,5 +442,30 @@ TEST_F(Cli, ForcesCalibrateAndMaterials) {
   EXPECT_NE(aj["performance_index_note"].get<std::string>().find("predicted"), std::string::npos);
 }
 
+// insert writes a synthetic mesh the topography command samples back; the JSON names its
+// statistics; a job without topography and no --mesh is bad input.
+TEST_F(Cli, InsertAndTopography) {
+  const auto ex = test::example("bergmann2021/trochoidal.toml").string();
+  const auto mesh = (dir_ / "worn.obj").string();
+  const CliResult w = run_cli("insert " + ex + " -o " + mesh + " --vb 0.1 --sections 60");
+  ASSERT_EQ(w.code, 0) << w.out;
+  ASSERT_TRUE(std::filesystem::exists(mesh));
+  const CliResult t = run_cli("topography " + ex + " --mesh " + mesh + " --json - --csv " +
+                              (dir_ / "grid.csv").string());
+  ASSERT_EQ(t.code, 0) << t.out;
+  const auto j = nlohmann::json::parse(t.out);
+  EXPECT_GT(j["points"].get<int>(), 1000);
+  EXPECT_LT(j["facets_kept"].get<int>(), j["facets_total"].get<int>());
+  // The land (0.1 - 0.02 mm) + hone quarter (0.0314) + rake (0.18) on every segment.
+  for (const auto& sgm : j["per_segment"]) {
+    EXPECT_NEAR(sgm["profile_length_mm"].get<double>(), 0.08 + 0.0314 + 0.18, 2e-3);
+    EXPECT_NEAR(sgm["outer_facet_angle_deg"].get<double>(), 90.0, 1.0);
+  }
+  EXPECT_EQ(first_line_of((dir_ / "grid.csv").string()).rfind("kappa,tau,s_mm", 0), 0u);
+  EXPECT_EQ(run_cli("topography " + ex).code, 2);
+  EXPECT_EQ(run_cli("insert " + ex + " -o " + (dir_ / "x.xyz").string()).code, 2);
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "x.xyz"));
+}
+
 }  // namespace
 }  // namespace trochomill
