@@ -550,7 +550,9 @@ int run(int argc, char** argv) {
     const tmill::ToolPath tp = job_path(job, an_gcode);
     tmill::ProcessMetrics m = tmill::analyze_process(job, tp);
     if (job.material.model) {
-      tmill::set_performance_index(job, m, tmill::predict_force_max(job, tp));
+      tmill::set_performance_index(
+          job, m,
+          tmill::predict_force_max(job, tp, m.cycle_start_s, m.cycle_start_s + m.cycle_time_s));
     }
     if (!an_json.empty()) emit(an_json, tmill::metrics_json(job, m));
     if (!an_csv.empty()) emit(an_csv, tmill::series_csv(job, m.series));

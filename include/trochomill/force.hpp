@@ -125,9 +125,11 @@ struct JobForces {
 [[nodiscard]] EdgeGrid job_edge_grid(const Job& job, const SimTool& tool,
                                      EdgeTopography* info = nullptr);
 
-/// F_R,max (N) over the whole path with the fast chip source, when the job has a [material]
-/// force model; nothing otherwise. For the performance index of analyze and compare.
-[[nodiscard]] std::optional<double> predict_force_max(const Job& job, const ToolPath& path);
+/// F_R,max (N) over `from_s`..`to_s` of the path with the fast chip source, when the job has a
+/// [material] force model; nothing otherwise. analyze and compare pass their steady cycle,
+/// as Wagih's F_R,max is the trochoidal operation's (the entry is not in it).
+[[nodiscard]] std::optional<double> predict_force_max(const Job& job, const ToolPath& path,
+                                                      double from_s, double to_s);
 
 // ---------------------------------------------------------------- calibration
 

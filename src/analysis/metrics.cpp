@@ -558,9 +558,9 @@ void set_performance_index(const Job& job, ProcessMetrics& m,
         "MRR {:.1f} mm^3/min (model), F_R,max {:.4g} N ({}), Ra {:g} um (measured), W_max {:.3g} "
         "um ({})",
         m.mrr_mm3_per_min, *force,
-        job.measured.force_max_n
-            ? "measured"
-            : "predicted, [material] " + std::string(to_string(*job.material.model)),
+        job.measured.force_max_n ? "measured"
+                                 : "predicted over the steady cycle, [material] " +
+                                       std::string(to_string(*job.material.model)),
         *job.measured.roughness_ra_um, w_max_um,
         job.measured.waviness_um ? "measured" : "model, tooth level");
   } else {

@@ -59,9 +59,10 @@ JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double
   return out;
 }
 
-std::optional<double> predict_force_max(const Job& job, const ToolPath& path) {
+std::optional<double> predict_force_max(const Job& job, const ToolPath& path, double from_s,
+                                        double to_s) {
   if (!job.material.model) return std::nullopt;
-  return job_forces(job, path, 0.0, path.duration_s(), true).summary.f_resultant_max_n;
+  return job_forces(job, path, from_s, to_s, true).summary.f_resultant_max_n;
 }
 
 }  // namespace trochomill

@@ -225,7 +225,10 @@ std::vector<StudyPoint> run_study(const std::string& job_file, const std::vector
       const PlannedPath planned = plan_path(job);
       sp.metrics = analyze_process(job, planned.path);
       if (job.material.model) {
-        set_performance_index(job, sp.metrics, predict_force_max(job, planned.path));
+        set_performance_index(
+            job, sp.metrics,
+            predict_force_max(job, planned.path, sp.metrics.cycle_start_s,
+                              sp.metrics.cycle_start_s + sp.metrics.cycle_time_s));
       }
       sp.metrics.series = EngagementSeries{};  // keep the study small
       sp.ok = true;
