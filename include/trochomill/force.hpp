@@ -76,10 +76,13 @@ class SegmentForces {
 
 /// The fast chip source: the analytic engagement (engagement.hpp) gives the engaged arcs of
 /// the tool circle; each tooth's edge is cut into axial discs (one per edge segment), each
-/// at its own angle (helix lag); the chip is the tool-centre displacement since the earlier
-/// teeth's passes projected on the edge's radial direction, plus the radial offsets (runout,
-/// seating), times the edge sine on the corner. Same record format as the simulation
-/// (no removed volumes: SimStep::removed_mm3 stays empty). Throws InputError for an empty window.
+/// at its own angle (helix lag); the chip normal to the edge is the offset, along the edge
+/// normal, between this tooth's contour and each earlier tooth's when it passed that angle:
+/// the tool-centre displacement projected on the radial direction plus the radial offsets
+/// (runout, seating), times the normal's radial part, plus the tip-height difference (axial
+/// runout, seating) times its downward part (docs/models.md section 12). Same record format
+/// as the simulation (no removed volumes: SimStep::removed_mm3 stays empty). Throws
+/// InputError for an empty window.
 [[nodiscard]] SimResult fast_chips(const Job& job, const ToolPath& path, const SimTool& tool,
                                    double from_s, double to_s, int steps_per_rev);
 /// The same, keeping the engagement and the centre path so chips can be recomputed for tools

@@ -104,6 +104,7 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
   struct Lag {
     double steps;
     double dr;  // R_k - R_j
+    double dz;  // z_j - z_k: how far tooth j's tip sits above tooth k's
   };
   std::vector<std::vector<Lag>> lags(nz);
   for (std::size_t k = 0; k < nz; ++k) {
@@ -113,14 +114,19 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
       a = std::fmod(a, kTwoPi);
       if (a < 0) a += kTwoPi;
       if (a < 1e-12) a = kTwoPi;
-      lags[k].push_back({a / (w * dt), tool.radial_offset_mm[k] - tool.radial_offset_mm[j]});
+      lags[k].push_back({a / (w * dt), tool.radial_offset_mm[k] - tool.radial_offset_mm[j],
+                         tool.axial_offset_mm[j] - tool.axial_offset_mm[k]});
     }
   }
 
   const int spt = tool.segments();
   const EdgeGrid grid = edge_grid(tool, 0.2);
+  // The chip normal to the edge against tooth j's surface: the contours' offset along the
+  // edge normal n = (n_r, n_z), (d . u + R_k - R_j) n_r + (z_j - z_k) (-n_z): on the
+  // cylinder the radial offset, at the corner's bottom the axial one (the floor layer an
+  // axially lower tooth cuts alone).
   struct Disc {
-    double h_mid, h0, h1, sine;
+    double h_mid, h0, h1, sine, down;  // sine = n_r, down = -n_z
     double s0, width;    // edge length at h0, and the segment's length
     double lag, cl, sl;  // helix lag angle (wrapped to [0, 2 pi)), its cosine and sine
   };
@@ -131,8 +137,9 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
     const double hm = grid.at(k, 0).h_mm;
     double lag = std::fmod(hm * std::tan(tool.helix_rad) / tool.radius_mm, kTwoPi);
     if (lag < 0) lag += kTwoPi;
-    discs.push_back({hm, tool.height_at_length(s0), tool.height_at_length(s1), tool.edge_sine(hm),
-                     s0, s1 - s0, lag, std::cos(lag), std::sin(lag)});
+    const auto& n = grid.at(k, 0).normal;  // (n_r, 0, n_z)
+    discs.push_back({hm, tool.height_at_length(s0), tool.height_at_length(s1), n[0], -n[2], s0,
+                     s1 - s0, lag, std::cos(lag), std::sin(lag)});
   }
 
   steps.resize(nsteps);
@@ -177,7 +184,7 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
           const double tip_z = ps.z_mm[g] + tool.axial_offset_mm[k];
           if (tip_z + discs[0].h0 >= 0) continue;  // the tooth is above the stock
           // The centre's displacement since each earlier tooth passed, once per tooth.
-          std::array<double, kMaxTeeth> dx, dy, dr;
+          std::array<double, kMaxTeeth> dx, dy, dr, dz;
           const std::size_t nl = lags[k].size();
           for (std::size_t q = 0; q < nl; ++q) {
             const Lag& l = lags[k][q];
@@ -188,6 +195,7 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
             dx[q] = ps.x_mm[g] - (ps.x_mm[g0] + f * (ps.x_mm[g1] - ps.x_mm[g0]));
             dy[q] = ps.y_mm[g] - (ps.y_mm[g0] + f * (ps.y_mm[g1] - ps.y_mm[g0]));
             dr[q] = l.dr;
+            dz[q] = l.dz;
           }
           // The tip angle: the tooth's own angle plus the spindle's, both in [0, 2 pi).
           double base = tooth_wrapped[k] + spin;
@@ -226,8 +234,9 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
             if (!(width > 0)) continue;
             const double ux = cb * dc.cl - sb * dc.sl, uy = sb * dc.cl + cb * dc.sl;
             double h = 1e300;
-            for (std::size_t q = 0; q < nl; ++q) h = std::min(h, dx[q] * ux + dy[q] * uy + dr[q]);
-            h *= dc.sine;
+            for (std::size_t q = 0; q < nl; ++q) {
+              h = std::min(h, (dx[q] * ux + dy[q] * uy + dr[q]) * dc.sine + dz[q] * dc.down);
+            }
             if (!(h > 0)) continue;
             visit(c, i, k, d, h, width, ux, uy);
             st.h_max_mm = std::max(st.h_max_mm, h);
