@@ -359,6 +359,50 @@ step = 1.0
   EXPECT_EQ(*back.material.model, ForceModel::bergmann);
 }
 
+// Calibration with the simulation as chip source (coefficients only: one simulation), on the
+// straight half-immersion cut: forces the simulation gives with Bergmann's coefficients, as
+// measured at the model's own steps, come back within 0.5 % from k_c 1500, k_n 300, m 0.2
+// (the same chips: only the filter's edges and the solver's tolerance remain).
+TEST(Forces, CalibrationWithSimulatedChips) {
+  const std::string text = R"(
+[tool]
+diameter = 10.0
+teeth = 2
+flute_length = 3.0
+[slot]
+width = 15.0
+length = 30.0
+depth = 1.0
+[path]
+type = "linear"
+step = 5.0
+[cutting]
+feed_per_tooth = 0.1
+spindle_speed = 3000.0
+[simulation]
+resolution = 0.02
+steps_per_rev = 240
+[material]
+)";
+  const Job truth = parse_job(text + "name = \"inconel718-bergmann2021\"\n", "truth.toml");
+  const ToolPath path = plan_path(truth).path;
+  const double t0 = 1.0, t1 = 1.2;  // ten revolutions in the cut
+  const JobForces gen = job_forces(truth, path, t0, t1, false);
+  MeasuredForces meas;
+  meas.t_s = gen.series.t_s;
+  meas.fx_n = gen.series.fx_n, meas.fy_n = gen.series.fy_n, meas.fz_n = gen.series.fz_n;
+  const Job start =
+      parse_job(text + "model = \"bergmann\"\nk_c = 1500.0\nk_n = 300.0\nm = 0.2\n", "start.toml");
+  CalibrationOptions o;
+  o.fast = false;
+  o.from_s = t0, o.to_s = t1;
+  const CalibrationResult r = calibrate_forces(start, path, meas, o);
+  EXPECT_NEAR(r.material.k_c, 1926.08, 0.005 * 1926.08);
+  EXPECT_NEAR(r.material.k_n, 502.64, 0.005 * 502.64);
+  EXPECT_NEAR(r.material.m, 0.28, 0.005 * 0.28);
+  EXPECT_NEAR(r.shift_s, 0.0, 1e-5);
+}
+
 // Runout phase is not identifiable with two teeth (only e cos(phase) enters): refused.
 TEST(Forces, CalibrationRefusesAnUnidentifiableFit) {
   const Job job = load_job(test::example("bergmann2021/trochoidal.toml"));
