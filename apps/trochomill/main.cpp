@@ -139,6 +139,29 @@ std::pair<double, double> parse_window(const tmill::ToolPath& path, const std::s
   return {from, to};
 }
 
+// Ctrl-C sets a flag the simulation polls after each step (it then stops, and what was
+// computed is written, marked incomplete); the previous handler comes back on scope exit.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    flag().store(false);
+    struct sigaction sa {};
+    sa.sa_handler = [](int) { flag().store(true); };
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_);
+  }
+  ~InterruptGuard() { sigaction(SIGINT, &old_, nullptr); }
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+  static std::atomic<bool>& flag() {
+    static std::atomic<bool> f{false};
+    return f;
+  }
+
+ private:
+  struct sigaction old_ {};
+};
+
 // A progress bar with ETA on stderr (for terminals).
 std::function<void(std::size_t, std::size_t)> progress_bar(
     std::chrono::steady_clock::time_point start) {
@@ -730,19 +753,13 @@ int run(int argc, char** argv) {
           sim_mem_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
     }
     // Ctrl-C stops after the current step; what was computed is written, marked incomplete.
-    static std::atomic<bool> interrupted{false};
-    struct sigaction sa {};
-    sa.sa_handler = [](int) { interrupted.store(true); };
-    sigemptyset(&sa.sa_mask);
-    struct sigaction old_sa {};
-    sigaction(SIGINT, &sa, &old_sa);
+    const InterruptGuard guard;
     tmill::SimControl control;
-    control.cancel = &interrupted;
+    control.cancel = &InterruptGuard::flag();
     const bool tty = isatty(STDERR_FILENO) != 0;
     const auto t_start = std::chrono::steady_clock::now();
     if (tty) control.progress = progress_bar(t_start);
     const tmill::JobSimulation js = tmill::simulate_job(job, path, from, to, control);
-    sigaction(SIGINT, &old_sa, nullptr);
     if (tty) fmt::print(stderr, "\r{}\r", std::string(60, ' '));
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
@@ -820,7 +837,11 @@ int run(int argc, char** argv) {
             (est.boards_bytes + est.records_bytes) / 1e9, 0.75 * ram / 1e9));
       }
     }
+    // In simulation mode Ctrl-C stops after the current step; the forces of what was
+    // simulated are written, marked incomplete (exit 130), as simulate does.
+    const InterruptGuard guard;
     tmill::SimControl control;
+    control.cancel = &InterruptGuard::flag();
     const bool tty = !fo_fast && isatty(STDERR_FILENO) != 0;
     if (tty) control.progress = progress_bar(std::chrono::steady_clock::now());
     const tmill::JobForces jf = tmill::job_forces(job, path, from, to, fo_fast, control);
@@ -829,7 +850,7 @@ int run(int argc, char** argv) {
     if (!fo_json.empty()) emit(fo_json, tmill::force_summary_json(job, jf, from, to));
     if (fo_json != "-" && fo_csv != "-")
       fmt::print("{}", tmill::force_summary_text(job, jf, from, to));
-    return 0;
+    return jf.chips.complete ? 0 : 130;
   }
 
   if (ca->parsed()) {

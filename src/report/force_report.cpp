@@ -29,7 +29,8 @@ std::string force_summary_json(const Job& job, const JobForces& f, double from_s
                             {"from_s", from_s},
                             {"to_s", to_s},
                             {"chips_wall_s", f.chips_wall_s},
-                            {"forces_wall_s", f.forces_wall_s}};
+                            {"forces_wall_s", f.forces_wall_s},
+                            {"complete", f.chips.complete}};
   return j.dump(2) + "\n";
 }
 
@@ -38,12 +39,13 @@ std::string force_summary_text(const Job& job, const JobForces& f, double from_s
   return fmt::format(
       "{}: {} model{}, {} chips, {:.4f} to {:.4f} s, {} steps\n"
       "  F_R,max {:.1f} N at {:.4f} s; |F_x| {:.1f}, |F_y| {:.1f}, |F_z| {:.1f} N max\n"
-      "  torque max {:.3f} N m, power max {:.1f} W (mean {:.1f} W); {:.2f} s + {:.2f} s\n",
+      "  torque max {:.3f} N m, power max {:.1f} W (mean {:.1f} W); {:.2f} s + {:.2f} s{}\n",
       job.source, to_string(*job.material.model),
       job.material.name.empty() ? "" : " (" + job.material.name + ")",
       f.fast ? "fast" : "simulated", from_s, to_s, f.series.size(), sm.f_resultant_max_n,
       sm.t_resultant_max_s, sm.f_x_max_n, sm.f_y_max_n, sm.f_z_max_n, sm.torque_max_nm,
-      sm.power_max_w, sm.power_mean_w, f.chips_wall_s, f.forces_wall_s);
+      sm.power_max_w, sm.power_mean_w, f.chips_wall_s, f.forces_wall_s,
+      f.chips.complete ? "" : " (interrupted: incomplete)");
 }
 
 std::string calibration_json(const CalibrationResult& r) {
