@@ -272,6 +272,8 @@ TEST(Forces, MeanForceRegressionRecoversTheLinearCoefficients) {
     sim.push_back({fr / (2000.0 * 4), m[0], m[1], m[2]});
   }
   const MeanForceFit fs = fit_mean_forces(job, sim);
+  // Any other job is refused: the closed form is for full-immersion straight slots.
+  EXPECT_THROW((void)fit_mean_forces(test::wagih_job("trochoidal"), sim), InputError);
   EXPECT_NEAR(fs.material.k_tc, 800, 2e-3 * 800);
   EXPECT_NEAR(fs.material.k_rc, 300, 2e-3 * 300);
   EXPECT_NEAR(fs.material.k_ac, 120, 2e-3 * 120);
