@@ -593,6 +593,14 @@ MeanForceFit fit_mean_forces(const Job& job, const std::vector<MeanForcePoint>& 
     throw InputError(
         fmt::format("mean-force fit: need slot tests at 2 or more feeds, got {}", points.size()));
   }
+  if (job.path.type != PathType::linear ||
+      std::abs(job.slot.width_mm - job.tool.diameter_mm) > 1e-9 * job.tool.diameter_mm) {
+    throw InputError(fmt::format(
+        "mean-force fit: the closed form holds for full-immersion straight slots; the job must "
+        "have [path] type = \"linear\" and [slot] width = [tool] diameter ({} mm), got {} with "
+        "width {} mm (e.g. --set path.type=linear --set slot.width={})",
+        job.tool.diameter_mm, to_string(job.path.type), job.slot.width_mm, job.tool.diameter_mm));
+  }
   double fmin = 1e300, fmax = -1e300;
   for (const auto& p : points)
     fmin = std::min(fmin, p.feed_per_tooth_mm), fmax = std::max(fmax, p.feed_per_tooth_mm);
