@@ -287,7 +287,7 @@ TEST(Forces, MeanForceRegressionRecoversTheLinearCoefficients) {
 // 1000 steps per revolution (the calibration's own rate for two teeth), interpolated to
 // 20 kHz 7.3 ms late with 3 N of Gaussian noise, are fitted from k_c 1500, k_n 300, m 0.2,
 // runout 0.005 mm. The noise is 1-2 % of the force amplitude and averages out over 20,000
-// samples; what remains is the linear interpolation of the generated series (0.2 % on k_c
+// samples; what remains is the linear interpolation of the generated series (0.3 % on k_c
 // when this was written); the fit must land within 1 % of each true value (the bound).
 TEST(Forces, CalibrationRoundTripRecoversCoefficientsAndRunout) {
   const std::vector<Override> fast = {parse_override("forces.fast_steps_per_rev=1000")};
