@@ -462,7 +462,14 @@ TEST_F(Cli, InsertAndTopography) {
     EXPECT_NEAR(sgm["outer_facet_angle_deg"].get<double>(), 90.0, 1.0);
   }
   EXPECT_EQ(first_line_of((dir_ / "grid.csv").string()).rfind("kappa,tau,s_mm", 0), 0u);
-  EXPECT_EQ(run_cli("topography " + ex).code, 2);
+  // The example's own wear states: state 1 is the worn insert (its land at 90 degrees).
+  const CliResult st = run_cli("topography " + ex + " --set topography.state=1 --json -");
+  ASSERT_EQ(st.code, 0) << st.out;
+  EXPECT_NEAR(
+      nlohmann::json::parse(st.out)["per_segment"][10]["outer_facet_angle_deg"].get<double>(), 90.0,
+      1.0);
+  // A job without [topography] and no --mesh is bad input.
+  EXPECT_EQ(run_cli("topography " + test::example("wagih2023/trochoidal.toml").string()).code, 2);
   EXPECT_EQ(run_cli("insert " + ex + " -o " + (dir_ / "x.xyz").string()).code, 2);
   EXPECT_FALSE(std::filesystem::exists(dir_ / "x.xyz"));
 }
