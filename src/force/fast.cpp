@@ -127,7 +127,7 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
   // axially lower tooth cuts alone).
   struct Disc {
     double h_mid, h0, h1, sine, down;  // sine = n_r, down = -n_z
-    double s0, width;    // edge length at h0, and the segment's length
+    double s0, width;                  // edge length at h0, and the segment's length
     double lag, cl, sl;  // helix lag angle (wrapped to [0, 2 pi)), its cosine and sine
   };
   std::vector<Disc> discs;
