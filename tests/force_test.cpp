@@ -29,6 +29,28 @@ Job full_slot(const std::vector<Override>& extra = {}) {
   return straight_job(10.0, 4, ov);
 }
 
+// A straight cut at half immersion: D 10 mm, 2 teeth, 1 mm deep, step 5 mm across a 15 mm
+// slot, f_z 0.1 mm at 3000 rpm, no helix; the overrides add material and resolutions.
+Job half_immersion(const std::vector<Override>& ov) {
+  return parse_job(R"(
+[tool]
+diameter = 10.0
+teeth = 2
+flute_length = 3.0
+[slot]
+width = 15.0
+length = 30.0
+depth = 1.0
+[path]
+type = "linear"
+step = 5.0
+[cutting]
+feed_per_tooth = 0.1
+spindle_speed = 3000.0
+)",
+                   "half.toml", ov);
+}
+
 // Mean of a series over [t0, t1).
 std::array<double, 3> mean_force(const ForceSeries& s, double t0, double t1) {
   std::array<double, 3> m{};
@@ -204,30 +226,10 @@ TEST(Forces, NoMaterialModelIsAClearError) {
 // width is below the segment's, sim_test), and its chips are sampled per step at the
 // chip-sampling resolution; the fast source is exact on a straight path.
 TEST(Forces, FastChipsAgreeWithTheSimulationOnAStraightCut) {
-  const Job job = parse_job(R"(
-[tool]
-diameter = 10.0
-teeth = 2
-flute_length = 3.0
-[slot]
-width = 15.0
-length = 30.0
-depth = 1.0
-[path]
-type = "linear"
-step = 5.0
-[cutting]
-feed_per_tooth = 0.1
-spindle_speed = 3000.0
-[material]
-name = "inconel718-bergmann2021"
-[simulation]
-resolution = 0.01
-steps_per_rev = 240
-[forces]
-fast_steps_per_rev = 240
-)",
-                            "half.toml");
+  const Job job = half_immersion({parse_override("material.name=inconel718-bergmann2021"),
+                                  parse_override("simulation.resolution=0.01"),
+                                  parse_override("simulation.steps_per_rev=240"),
+                                  parse_override("forces.fast_steps_per_rev=240")});
   const ToolPath path = plan_path(job).path;
   // Find a window of four revolutions with the tool wholly engaged in the first pass.
   const double rev = 0.02;
@@ -366,35 +368,22 @@ step = 1.0
 // measured at the model's own steps, come back within 0.5 % from k_c 1500, k_n 300, m 0.2
 // (the same chips: only the filter's edges and the solver's tolerance remain).
 TEST(Forces, CalibrationWithSimulatedChips) {
-  const std::string text = R"(
-[tool]
-diameter = 10.0
-teeth = 2
-flute_length = 3.0
-[slot]
-width = 15.0
-length = 30.0
-depth = 1.0
-[path]
-type = "linear"
-step = 5.0
-[cutting]
-feed_per_tooth = 0.1
-spindle_speed = 3000.0
-[simulation]
-resolution = 0.02
-steps_per_rev = 240
-[material]
-)";
-  const Job truth = parse_job(text + "name = \"inconel718-bergmann2021\"\n", "truth.toml");
+  const std::vector<Override> sim = {parse_override("simulation.resolution=0.02"),
+                                     parse_override("simulation.steps_per_rev=240")};
+  std::vector<Override> t = sim, st = sim;
+  t.push_back(parse_override("material.name=inconel718-bergmann2021"));
+  for (const char* o :
+       {"material.model=bergmann", "material.k_c=1500", "material.k_n=300", "material.m=0.2"}) {
+    st.push_back(parse_override(o));
+  }
+  const Job truth = half_immersion(t);
   const ToolPath path = plan_path(truth).path;
   const double t0 = 1.0, t1 = 1.2;  // ten revolutions in the cut
   const JobForces gen = job_forces(truth, path, t0, t1, false);
   MeasuredForces meas;
   meas.t_s = gen.series.t_s;
   meas.fx_n = gen.series.fx_n, meas.fy_n = gen.series.fy_n, meas.fz_n = gen.series.fz_n;
-  const Job start =
-      parse_job(text + "model = \"bergmann\"\nk_c = 1500.0\nk_n = 300.0\nm = 0.2\n", "start.toml");
+  const Job start = half_immersion(st);
   CalibrationOptions o;
   o.fast = false;
   o.from_s = t0, o.to_s = t1;
