@@ -572,11 +572,7 @@ int run(int argc, char** argv) {
     const tmill::Job job = load(an_args);
     const tmill::ToolPath tp = job_path(job, an_gcode);
     tmill::ProcessMetrics m = tmill::analyze_process(job, tp);
-    if (job.material.model) {
-      tmill::set_performance_index(
-          job, m,
-          tmill::predict_force_max(job, tp, m.cycle_start_s, m.cycle_start_s + m.cycle_time_s));
-    }
+    tmill::fill_predicted_force(job, tp, m);
     if (!an_json.empty()) emit(an_json, tmill::metrics_json(job, m));
     if (!an_csv.empty()) emit(an_csv, tmill::series_csv(job, m.series));
     if (an_json != "-" && an_csv != "-") {

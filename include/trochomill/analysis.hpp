@@ -74,7 +74,7 @@ struct ProcessMetrics {
 [[nodiscard]] ProcessMetrics analyze_process(const Job& job, const ToolPath& path);
 
 /// Sets the performance index of `m`: F_R,max from [measured] force_max, else the predicted
-/// one (force.hpp: predict_force_max), with [measured] roughness_ra and the waviness.
+/// one (force.hpp: fill_predicted_force), with [measured] roughness_ra and the waviness.
 void set_performance_index(const Job& job, ProcessMetrics& m,
                            std::optional<double> predicted_force_max_n = std::nullopt);
 

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "trochomill/analysis.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
@@ -89,8 +90,10 @@ class SegmentForces {
 /// that differ in runout or seating only (calibration).
 class FastChipSource {
  public:
+  /// `engagement`, if given, is the path's engagement at one sample per tooth pass (as
+  /// analyze computes it), used instead of computing it again.
   FastChipSource(const Job& job, const ToolPath& path, double from_s, double to_s,
-                 int steps_per_rev);
+                 int steps_per_rev, const EngagementSeries* engagement = nullptr);
   /// Throws InputError when `tool` turns at another speed than the job's.
   [[nodiscard]] SimResult chips(const SimTool& tool) const;
   /// The forces of those chips directly, without storing the chip record (the same numbers
@@ -122,17 +125,18 @@ struct JobForces {
 /// `from_s`..`to_s` of the path (programmed time, s). The simulation runs as `simulate_job`
 /// (pre-roll included). Throws InputError when the job has no [material] model.
 [[nodiscard]] JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double to_s,
-                                   bool fast, const SimControl& control = {});
+                                   bool fast, const SimControl& control = {},
+                                   const EngagementSeries* engagement = nullptr);
 /// The edge grid of the job: edge_grid of its tool, filled from [topography] when given.
 /// `info`, if given, receives the topography's statistics (untouched for a sharp edge).
 [[nodiscard]] EdgeGrid job_edge_grid(const Job& job, const SimTool& tool,
                                      EdgeTopography* info = nullptr);
 
-/// F_R,max (N) over `from_s`..`to_s` of the path with the fast chip source, when the job has a
-/// [material] force model; nothing otherwise. analyze and compare pass their steady cycle,
-/// as Wagih's F_R,max is the trochoidal operation's (the entry is not in it).
-[[nodiscard]] std::optional<double> predict_force_max(const Job& job, const ToolPath& path,
-                                                      double from_s, double to_s);
+/// When the job has a [material] force model: F_R,max (N) over the steady cycle of `m` with
+/// the fast chip source (Wagih's F_R,max is the trochoidal operation's, not the entry's),
+/// reusing m's engagement, and the performance index from it (set_performance_index).
+/// Nothing without a model. For analyze and compare.
+void fill_predicted_force(const Job& job, const ToolPath& path, ProcessMetrics& m);
 
 // ---------------------------------------------------------------- calibration
 

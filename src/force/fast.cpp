@@ -35,7 +35,7 @@ bool in_arcs(const std::vector<AngleArc>& arcs, double th) {
 }  // namespace
 
 FastChipSource::FastChipSource(const Job& job, const ToolPath& path, double from_s, double to_s,
-                               int steps_per_rev)
+                               int steps_per_rev, const EngagementSeries* engagement)
     : spr_(steps_per_rev) {
   const double dur = path.duration_s();
   from_s = std::max(0.0, from_s);
@@ -64,7 +64,7 @@ FastChipSource::FastChipSource(const Job& job, const ToolPath& path, double from
   const std::size_t blk = 16384, nb = (times_.size() + blk - 1) / blk;
   std::vector<PathSamples> parts(nb);
   tbb::parallel_invoke(
-      [&] { eng_ = compute_engagement(path, job, EngagementOptions{}); },
+      [&] { eng_ = engagement ? *engagement : compute_engagement(path, job, EngagementOptions{}); },
       [&] {
         tbb::parallel_for(std::size_t{0}, nb, [&](std::size_t b) {
           std::vector<double> ts(
@@ -296,12 +296,9 @@ ForceSeries FastChipSource::forces(const SimTool& tool, const EdgeGrid& grid,
        [&](std::size_t, std::size_t i, std::size_t k, int d, double h, double w, double ct,
            double st) {
          // The record's precision: chips are stored as float in the simulation's format.
-         const auto f = model.force(d, static_cast<float>(h), static_cast<float>(w));
-         const std::size_t ti = i * nz + k;
-         s.tooth_fx_n[ti] += f[0] * ct - dir * f[1] * st;
-         s.tooth_fy_n[ti] += f[0] * st + dir * f[1] * ct;
-         s.tooth_fz_n[ti] += f[2];
-         s.tooth_torque_nm[ti] += f[1] * grid.at(d, 0).r_mm * 1e-3;
+         add_segment_force(s, i * nz + k,
+                           model.force(d, static_cast<float>(h), static_cast<float>(w)), ct, st,
+                           dir, grid.at(d, 0).r_mm);
        });
   s.t_s.resize(steps.size());
   for (std::size_t i = 0; i < steps.size(); ++i) s.t_s[i] = steps[i].t_s;

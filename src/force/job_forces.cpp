@@ -32,7 +32,7 @@ EdgeGrid job_edge_grid(const Job& job, const SimTool& tool, EdgeTopography* info
 }
 
 JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double to_s, bool fast,
-                     const SimControl& control) {
+                     const SimControl& control, const EngagementSeries* engagement) {
   using clock = std::chrono::steady_clock;
   JobForces out;
   out.fast = fast;
@@ -44,7 +44,7 @@ JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double
   if (fast) {
     // Forces straight from the scan: no chip record (it can hold tens of millions of entries
     // for a whole slot).
-    const FastChipSource src(job, path, from_s, to_s, job.forces.fast_steps_per_rev);
+    const FastChipSource src(job, path, from_s, to_s, job.forces.fast_steps_per_rev, engagement);
     t1 = clock::now();
     out.series = src.forces(tool, grid, model, &out.chips.steps);
     out.chips.segments_per_tooth = tool.segments();
@@ -59,10 +59,14 @@ JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double
   return out;
 }
 
-std::optional<double> predict_force_max(const Job& job, const ToolPath& path, double from_s,
-                                        double to_s) {
-  if (!job.material.model) return std::nullopt;
-  return job_forces(job, path, from_s, to_s, true).summary.f_resultant_max_n;
+void fill_predicted_force(const Job& job, const ToolPath& path, ProcessMetrics& m) {
+  if (!job.material.model) return;
+  // analyze's series is the fast source's own engagement when it samples once per tooth pass.
+  const EngagementSeries* eng =
+      m.series.steps_per_tooth == 1 && !m.series.arcs.empty() ? &m.series : nullptr;
+  const JobForces f =
+      job_forces(job, path, m.cycle_start_s, m.cycle_start_s + m.cycle_time_s, true, {}, eng);
+  set_performance_index(job, m, f.summary.f_resultant_max_n);
 }
 
 }  // namespace trochomill

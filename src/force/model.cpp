@@ -157,12 +157,7 @@ ForceSeries compute_forces(const SimResult& chips, const SimTool& tool, const Ed
     }
     const double ct = cb * cl[static_cast<std::size_t>(k)] - sb * sl[static_cast<std::size_t>(k)];
     const double st = sb * cl[static_cast<std::size_t>(k)] + cb * sl[static_cast<std::size_t>(k)];
-    const auto f = model.force(k, e.h_mm, e.w_mm);
-    // radial (cos, sin), cutting direction dir * (-sin, cos), axial z.
-    const double fx = f[0] * ct - dir * f[1] * st, fy = f[0] * st + dir * f[1] * ct, fz = f[2];
-    const double torque = f[1] * c.r_mm * 1e-3;
-    s.tooth_fx_n[ti] += fx, s.tooth_fy_n[ti] += fy, s.tooth_fz_n[ti] += fz;
-    s.tooth_torque_nm[ti] += torque;
+    add_segment_force(s, ti, model.force(k, e.h_mm, e.w_mm), ct, st, dir, c.r_mm);
   }
   sum_teeth(s, std::abs(tool.omega_rad_per_s));
   return s;

@@ -224,12 +224,7 @@ std::vector<StudyPoint> run_study(const std::string& job_file, const std::vector
       const Job job = load_job(job_file, sp.overrides);
       const PlannedPath planned = plan_path(job);
       sp.metrics = analyze_process(job, planned.path);
-      if (job.material.model) {
-        set_performance_index(
-            job, sp.metrics,
-            predict_force_max(job, planned.path, sp.metrics.cycle_start_s,
-                              sp.metrics.cycle_start_s + sp.metrics.cycle_time_s));
-      }
+      fill_predicted_force(job, planned.path, sp.metrics);
       sp.metrics.series = EngagementSeries{};  // keep the study small
       sp.ok = true;
     } catch (const std::exception& e) {
