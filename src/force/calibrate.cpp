@@ -342,10 +342,7 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   ForceProblem problem(job, path, o);
   // Model time grid and rates.
   std::vector<double> tm;
-  {
-    const auto f = problem.forces(m0, t0, &tm);
-    (void)f;
-  }
+  auto f0 = problem.forces(m0, t0, &tm);  // unfiltered here; filtered below
   if (tm.size() < 16) throw InputError("calibrate: the window holds fewer than 16 model steps");
   const double dt_model = (tm.back() - tm.front()) / static_cast<double>(tm.size() - 1);
   const double dt_meas =
@@ -367,7 +364,7 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
                                               sosfiltfilt(sos_meas, measured.fz_n)};
   // Alignment: the shift (measured time = model time + shift) maximising the correlation of
   // the resultants, at the model's step, refined by a parabola.
-  const auto f0 = problem.forces(m0, t0);
+  for (auto& v : f0) v = sosfiltfilt(sos_model, v);  // as problem.forces filters from now on
   const double max_shift = o.max_shift_s >= 0 ? o.max_shift_s : 60.0 / spindle_speed_rpm(job);
   const int ns = static_cast<int>(std::ceil(max_shift / dt_model));
   std::vector<double> res_model(tm.size());
