@@ -365,7 +365,7 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   // Alignment: the shift (measured time = model time + shift) maximising the correlation of
   // the resultants, at the model's step, refined by a parabola.
   for (auto& v : f0) v = sosfiltfilt(sos_model, v);  // as problem.forces filters from now on
-  const double max_shift = o.max_shift_s >= 0 ? o.max_shift_s : 60.0 / spindle_speed_rpm(job);
+  const double max_shift = o.max_shift_s >= 0 ? o.max_shift_s : 30.0 / spindle_speed_rpm(job);
   const int ns = static_cast<int>(std::ceil(max_shift / dt_model));
   std::vector<double> res_model(tm.size());
   for (std::size_t k = 0; k < tm.size(); ++k) {
