@@ -57,12 +57,6 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
   return keys;
 }
 
-// Sections later modules own. They are accepted (not validated here) so one job file can
-// carry everything; each module validates its own section.
-const std::set<std::string>& reserved_sections() {
-  static const std::set<std::string> s = {};
-  return s;
-}
 
 std::size_t edit_distance(std::string_view a, std::string_view b) {
   std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
@@ -296,12 +290,10 @@ class JobReader {
     const auto& known = known_keys();
     std::vector<std::string> sections;
     for (const auto& [name, keys] : known) sections.push_back(name);
-    for (const auto& s : reserved_sections()) sections.push_back(s);
     for (auto&& [k, v] : root_) {
       const std::string section(k.str());
       const auto it = known.find(section);
       if (it == known.end()) {
-        if (reserved_sections().count(section)) continue;
         problems_.push_back(fmt::format("{}:{}:{}: unknown section [{}]{}", source_,
                                         k.source().begin.line, k.source().begin.column, section,
                                         suggestion(section, sections)));
