@@ -129,7 +129,10 @@ const ParamSpec& spec(const std::string& name) {
   throw InputError(fmt::format("--fit: unknown parameter '{}' (one of {})", name, all));
 }
 
-double* material_field(Material& m, const std::string& n) {
+// The coefficient named n (nullptr for the exponents m_n, m_a and the runout); const or not
+// as the material is.
+template <class M>
+auto* material_field(M& m, const std::string& n) {
   if (n == "k_c") return &m.k_c;
   if (n == "k_n") return &m.k_n;
   if (n == "m") return &m.m;
@@ -140,7 +143,7 @@ double* material_field(Material& m, const std::string& n) {
   if (n == "k_te") return &m.k_te;
   if (n == "k_re") return &m.k_re;
   if (n == "k_ae") return &m.k_ae;
-  return nullptr;
+  return static_cast<decltype(&m.k_c)>(nullptr);
 }
 
 bool belongs(ForceModel model, const std::string& n) {
@@ -156,8 +159,7 @@ double get_param(const Material& m, const Tool& t, const std::string& n) {
   if (n == "runout_radial") return t.runout_radial_mm;
   if (n == "runout_axial") return t.runout_axial_mm;
   if (n == "runout_phase") return t.runout_phase_deg;
-  Material c = m;
-  return *material_field(c, n);
+  return *material_field(m, n);
 }
 
 void set_param(Material& m, Tool& t, const std::string& n, double v) {
