@@ -57,7 +57,6 @@ const std::map<std::string, std::vector<std::string>>& known_keys() {
   return keys;
 }
 
-
 std::size_t edit_distance(std::string_view a, std::string_view b) {
   std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
   for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
