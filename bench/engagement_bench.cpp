@@ -6,6 +6,7 @@
 
 #include "trochomill/analysis.hpp"
 #include "trochomill/engagement.hpp"
+#include "trochomill/force.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/report.hpp"
@@ -60,7 +61,12 @@ void BM_CompareEightAspectRatios(benchmark::State& state) {
   const std::vector<trochomill::Vary> vary = {
       trochomill::parse_vary("path.aspect_ratio=0.5,0.6,0.7,0.8,0.9,1.0,1.1,1.2")};
   for (auto _ : state) {
-    const auto pts = trochomill::run_study(job, {}, vary, static_cast<int>(state.range(0)));
+    // As `compare` runs it: the file parsed once, every point analysed with its predicted force.
+    const auto doc = trochomill::JobDocument::load(job);
+    const auto pts = trochomill::run_study(
+        doc, {}, vary, static_cast<int>(state.range(0)), [](const trochomill::Job& j) {
+          return trochomill::analyze_with_forces(j, trochomill::plan_path(j).path);
+        });
     benchmark::DoNotOptimize(pts.data());
   }
   state.SetLabel(state.range(0) == 0 ? "all cores" : "1 thread");

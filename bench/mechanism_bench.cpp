@@ -16,7 +16,7 @@ trochomill::Job pivkin() {
 
 void BM_MechanismCycle3600(benchmark::State& state) {
   const trochomill::Job job = pivkin();
-  trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  trochomill::MechanismSettings st = job.mechanism;
   st.points = 3600;
   for (auto _ : state) {
     const auto c = trochomill::mechanism_curve(job, st);
@@ -29,7 +29,7 @@ BENCHMARK(BM_MechanismCycle3600)->Unit(benchmark::kMillisecond);
 void BM_MechanismCycle3600Wagih(benchmark::State& state) {
   const trochomill::Job job = trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) +
                                                    "/examples/wagih2023/elliptical.toml");
-  trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  trochomill::MechanismSettings st = job.mechanism;
   st.points = 3600;
   for (auto _ : state) {
     const auto c = trochomill::mechanism_curve(job, st);
@@ -40,7 +40,7 @@ BENCHMARK(BM_MechanismCycle3600Wagih)->Unit(benchmark::kMillisecond);
 
 void BM_MechanismCycle3600Pivkin(benchmark::State& state) {
   const trochomill::Job job = pivkin();
-  trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  trochomill::MechanismSettings st = job.mechanism;
   st.points = 3600;
   st.model = trochomill::ChipModel::pivkin2025;
   for (auto _ : state) {
@@ -52,7 +52,7 @@ BENCHMARK(BM_MechanismCycle3600Pivkin)->Unit(benchmark::kMillisecond);
 
 void BM_RecommendStep(benchmark::State& state) {
   const trochomill::Job job = pivkin();
-  const trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  const trochomill::MechanismSettings st = job.mechanism;
   for (auto _ : state) {
     const auto r = trochomill::recommend(job, st, false, false);
     benchmark::DoNotOptimize(r.value);
@@ -62,7 +62,7 @@ BENCHMARK(BM_RecommendStep)->Unit(benchmark::kMillisecond);
 
 void BM_RecommendStepPivkin(benchmark::State& state) {
   const trochomill::Job job = pivkin();
-  trochomill::MechanismSettings st = trochomill::mechanism_settings(job);
+  trochomill::MechanismSettings st = job.mechanism;
   st.model = trochomill::ChipModel::pivkin2025;
   for (auto _ : state) {
     const auto r = trochomill::recommend(job, st, false, false);

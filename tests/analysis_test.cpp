@@ -228,7 +228,7 @@ TEST(Analysis, SteadyChipMatchesMechanismModel) {
         "trochoidal", {parse_override("slot.width=" + std::to_string(width)),
                        parse_override("slot.length=70"), parse_override("tool.edge_radius=0.01")});
     const ProcessMetrics m = analyze_process(job, plan_path(job).path);
-    MechanismSettings st = mechanism_settings(job);
+    MechanismSettings st = job.mechanism;
     st.points = 3600;
     const ZoneSummary z = summarize_zones(mechanism_curve(job, st), st, false);
     EXPECT_NEAR(m.h_max_mm, z.h_max_mm, 0.02 * 0.075) << width;

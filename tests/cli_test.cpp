@@ -14,6 +14,7 @@
 #include "test_util.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/signal.hpp"
+#include "trochomill/sim.hpp"
 
 namespace trochomill {
 namespace {

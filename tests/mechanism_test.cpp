@@ -41,7 +41,7 @@ TEST(Mechanism, ExactModelMatchesKernel) {
                         Case{16, 12, 1.2, "trochoidal"}, Case{16, 12, 2.4, "trochoidal"},
                         Case{20, 10, 1.0, "elliptical"}}) {  // the example's r_e = 0.8 orbit
     const Job job = mech_job(cs.W, cs.D, cs.s, 0.01, cs.family);
-    const MechanismSettings st = mechanism_settings(job);
+    const MechanismSettings st = job.mechanism;
     const double a = 0.5 * (cs.W - cs.D), fz = job.cutting.feed_per_tooth_mm;
     const double T = mechanism_curve(job, st).cycle_time_s;
     const PlannedPath pp = plan_path(job);
@@ -88,7 +88,7 @@ TEST(Mechanism, AdaptiveCycleMatchesDirect) {
                         Case{40, 12, 0.3, "trochoidal"},  // once glitched near the wall
                         Case{20, 10, 1.0, "elliptical"}}) {
     const Job job = mech_job(cs.W, cs.D, cs.s, 0.01, cs.family);
-    const MechanismSettings st = mechanism_settings(job);
+    const MechanismSettings st = job.mechanism;
     const MechanismCurve adaptive = mechanism_curve(job, st);
     const MechanismCurve direct = mechanism_curve_at(job, st, adaptive.theta_rad);
     const double fz = job.cutting.feed_per_tooth_mm;
@@ -198,7 +198,7 @@ TEST(Pivkin2025, AgreesWithExactModelOnWideOrbits) {
   Job job = load_job(test::example("pivkin2025/trochoidal.toml"),
                      {parse_override("slot.width=252"), parse_override("path.step=0.3"),
                       parse_override("slot.length=2000")});
-  MechanismSettings st = mechanism_settings(job);
+  MechanismSettings st = job.mechanism;
   st.points = 720;
   const MechanismCurve ex = mechanism_curve(job, st);
   st.model = ChipModel::pivkin2025;
@@ -218,7 +218,7 @@ TEST(Pivkin2025, AgreesWithExactModelOnWideOrbits) {
   // Pivkin's experiment itself (a/R = 1/3): the published model's chip is much thinner,
   // because it treats the concave slot end as a straight wall (docs/models.md table).
   const Job piv = load_job(test::example("pivkin2025/trochoidal.toml"));
-  MechanismSettings sp = mechanism_settings(piv);
+  MechanismSettings sp = piv.mechanism;
   sp.points = 720;
   const double h_ex = summarize_zones(mechanism_curve(piv, sp), sp, false).h_max_mm;
   sp.model = ChipModel::pivkin2025;
@@ -229,7 +229,7 @@ TEST(Pivkin2025, AgreesWithExactModelOnWideOrbits) {
 // K_re = 100 h / r_e: halving r_e doubles it at every theta; zone shares sum to 1.
 TEST(Mechanism, KreScalesInverselyWithEdgeRadius) {
   const Job j1 = mech_job(16, 12, 1.2, 0.01), j2 = mech_job(16, 12, 1.2, 0.02);
-  MechanismSettings st = mechanism_settings(j1);
+  MechanismSettings st = j1.mechanism;
   st.points = 720;
   const MechanismCurve c1 = mechanism_curve(j1, st), c2 = mechanism_curve(j2, st);
   for (std::size_t i = 0; i < c1.k_re_pct.size(); ++i) {
@@ -252,7 +252,7 @@ TEST(Mechanism, KreScalesInverselyWithEdgeRadius) {
 // thickens the effective chip) can only lower it.
 TEST(Mechanism, RecommendationIsMonotonic) {
   const Job job = mech_job(16, 12, 1.2, 0.01);
-  MechanismSettings st = mechanism_settings(job);
+  MechanismSettings st = job.mechanism;
   st.points = 360;  // one point per degree: the shares move by < 1 % against 3600
   double prev = 0;
   for (const double share : {0.3, 0.5, 0.7}) {
@@ -273,12 +273,12 @@ TEST(Mechanism, RecommendationIsMonotonic) {
     prev = r.value;
   }
   const Recommendation fresh = recommend(job, st, false, false);
-  st.flank_wear_mm = 0.1;
-  const Recommendation worn = recommend(job, st, true, false);
+  Job worn_job = job;
+  worn_job.tool.flank_wear_mm = 0.1;
+  const Recommendation worn = recommend(worn_job, st, true, false);
   ASSERT_TRUE(worn.found);
   EXPECT_LE(worn.value, fresh.value * 1.001);
   // The feed variant at the job's step.
-  st.flank_wear_mm = 0;
   const Recommendation feed = recommend(job, st, false, true);
   ASSERT_TRUE(feed.found);
   EXPECT_GT(feed.value, 0.0);
@@ -287,7 +287,7 @@ TEST(Mechanism, RecommendationIsMonotonic) {
 // The curve is evaluated in parallel: the same numbers on one thread and on all.
 TEST(Mechanism, SameResultWhateverTheThreadCount) {
   const Job job = mech_job(16, 12, 1.2, 0.01);
-  MechanismSettings st = mechanism_settings(job);
+  MechanismSettings st = job.mechanism;
   st.points = 720;
   const MechanismCurve all = mechanism_curve(job, st);
   MechanismCurve one;
@@ -304,7 +304,7 @@ TEST(Mechanism, SameResultWhateverTheThreadCount) {
 TEST(Mechanism, MinimumUndeformedChipThickness) {
   Job job = mech_job(16, 12, 1.2, 0.01);
   job.mechanism.friction_angle_deg = 40.0;
-  MechanismSettings st = mechanism_settings(job);
+  MechanismSettings st = job.mechanism;
   st.points = 360;
   const ZoneSummary z = summarize_zones(mechanism_curve(job, st), st, false);
   EXPECT_NEAR(z.h_m_mm, 0.01 * (1 - std::cos(deg_to_rad(40.0))), 1e-15);
@@ -312,17 +312,17 @@ TEST(Mechanism, MinimumUndeformedChipThickness) {
 
 TEST(Mechanism, RejectsWhatItCannotModel) {
   const Job circ = load_job(test::example("wagih2023/circular.toml"));
-  MechanismSettings st = mechanism_settings(circ);
+  MechanismSettings st = circ.mechanism;
   EXPECT_THROW((void)mechanism_curve(circ, st), InputError);
   const Job no_edge =
       load_job(test::example("wagih2023/trochoidal.toml"), {parse_override("tool.edge_radius=0")});
-  EXPECT_THROW((void)mechanism_curve(no_edge, mechanism_settings(no_edge)), InputError);
+  EXPECT_THROW((void)mechanism_curve(no_edge, no_edge.mechanism), InputError);
   EXPECT_THROW((void)parse_chip_model("magic"), InputError);
   EXPECT_EQ(parse_chip_model("pivkin2025"), ChipModel::pivkin2025);
   // The published model is for the circular trochoid only.
   const Job ell = load_job(test::example("wagih2023/elliptical.toml"),
                            {parse_override("mechanism.model=pivkin2025")});
-  EXPECT_THROW((void)mechanism_curve(ell, mechanism_settings(ell)), InputError);
+  EXPECT_THROW((void)mechanism_curve(ell, ell.mechanism), InputError);
   EXPECT_THROW((void)load_job(test::example("wagih2023/trochoidal.toml"),
                               {parse_override("mechanism.czii_max=20")}),
                InputError);

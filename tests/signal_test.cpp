@@ -190,7 +190,7 @@ TEST(Signal, SegmentationRecoversSyntheticCycles) {
   std::vector<double> truth;
   for (const auto& mk : pp.path.cycles()) truth.push_back(o.lead_s + mk.start_time_s);
   const double T = truth[2] - truth[1];
-  const MechanismSettings st = mechanism_settings(job);
+  const MechanismSettings st = job.mechanism;
   const MechanismCurve curve = mechanism_curve(job, st);
   double onset = summarize_zones(curve, st, false).cutting_start_s;
   if (onset > 0.5 * curve.cycle_time_s) onset -= curve.cycle_time_s;

@@ -11,6 +11,7 @@
 // third of its cutting time as its window, and `periodic` is false.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -78,4 +79,31 @@ struct ProcessMetrics {
 void set_performance_index(const Job& job, ProcessMetrics& m,
                            std::optional<double> predicted_force_max_n = std::nullopt);
 
+/// A key varied by a parameter study, with its values (TOML, as typed).
+struct Vary {
+  std::string key;                  ///< "section.key"
+  std::vector<std::string> values;  ///< TOML values as typed
+};
+/// Parses "section.key=v1,v2,..." (a value may be a TOML array in brackets). Throws
+/// InputError.
+[[nodiscard]] Vary parse_vary(const std::string& text);
+
+/// One grid point of a study: its overrides and its metrics (or the error that stopped it).
+struct StudyPoint {
+  std::vector<Override> overrides;
+  bool ok = false;
+  std::string error;
+  ProcessMetrics metrics;
+};
+
+/// Evaluates every point of the grid (the Cartesian product of the varies, the first varying
+/// slowest) on `threads` threads (0: all cores). Each point's job is built from the parsed
+/// document `doc` with the `base` overrides then its own (the file is read once); results
+/// are in grid order whatever the thread count. A point whose job is invalid or whose
+/// evaluation fails records the message, not thrown. At most 100,000 points.
+[[nodiscard]] std::vector<StudyPoint> run_study(
+    const JobDocument& doc, const std::vector<Override>& base, const std::vector<Vary>& varies,
+    int threads, const std::function<ProcessMetrics(const Job&)>& evaluate);
+
+/// The study as a text table, JSON and CSV (one row per point).
 }  // namespace trochomill

@@ -59,6 +59,15 @@ struct GcodeProgram {
   GcodeProgramInfo info;
 };
 
+/// `[machine]` as the writer's and the reader's options: the dialect, arc output and tolerance
+/// the writer uses, the rapid rate the reader gives G0 moves. The one place the machine's
+/// settings become G-code options.
+struct GcodeOptions {
+  GcodeWriteOptions write;
+  GcodeReadOptions read;
+};
+[[nodiscard]] GcodeOptions gcode_options(const Machine& machine);
+
 /// Parses a program. Errors are InputError "name:line:column: what is wrong".
 /// The path starts at the first programmed position (the machine's start point is unknown).
 [[nodiscard]] GcodeProgram read_gcode(std::string_view text, std::string_view source_name,

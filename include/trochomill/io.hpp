@@ -1,9 +1,12 @@
-// File output helpers shared by the CLI and every writer: outputs are written to a temporary
-// file beside the target and renamed, so a failed or interrupted run never leaves a
-// half-finished file.
+// The small I/O toolkit every module shares: reading a text file (as bad input when it cannot
+// be read), atomic output (a temporary file beside the target, then a rename, so a failed or
+// interrupted run never leaves a half-written file; one mechanism for text, WAV and HDF5),
+// one numeric CSV reader with column selection, and string helpers.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,32 +17,45 @@ namespace trochomill {
 /// Throws IoError naming the path on failure; the target is then left untouched.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
+/// Atomic output through a writer: `write(tmp)` creates the file at `tmp` (beside `path`) in
+/// whatever format it writes (WAV through libsndfile, HDF5...); it is then renamed to `path`.
+/// When `write` throws, the temporary file is removed and the exception passes on.
+void write_file_atomic(const std::filesystem::path& path,
+                       const std::function<void(const std::filesystem::path& tmp)>& write);
+
 /// Reads a whole file. Throws IoError naming the path when it cannot be read.
 [[nodiscard]] std::string read_file(const std::filesystem::path& path);
+/// Reads a whole input file (a job, a program, a table): a file that cannot be read is bad
+/// input, so this throws InputError naming the path.
+[[nodiscard]] std::string read_text_file(const std::filesystem::path& path);
 
-/// A simulation's per-segment chip map, dense (the HDF5 file's layout): step n, tooth k,
-/// segment g at h_mm[n * teeth * segments_per_tooth + k * segments_per_tooth + g]; 0 where
-/// the segment is not engaged.
-struct ChipMapData {
-  std::size_t teeth = 0, segments_per_tooth = 0;
-  double resolution_mm = 0;
-  int steps_per_rev = 0;
-  bool complete = true;
-  std::vector<double> t_s;                ///< step times (s)
-  std::vector<double> tip_mm;             ///< tool tip per step, x y z (mm)
-  std::vector<double> removed_mm3;        ///< per step and tooth (mm^3)
-  std::vector<float> h_mm;                ///< uncut chip thickness (mm)
-  std::vector<float> w_mm;                ///< engaged width along the edge (mm), same layout
-  std::vector<float> v_mm3;               ///< removed volume (mm^3), same layout
-  std::vector<double> segment_height_mm;  ///< segment centres above the tip (mm)
+/// `s` without the leading and trailing characters in `chars`.
+[[nodiscard]] std::string trim(std::string_view s, std::string_view chars = " \t");
+/// "a,b,c" -> {"a", "b", "c"}: split at `sep`, each item trimmed (empty items kept, for the
+/// caller to refuse).
+[[nodiscard]] std::vector<std::string> split_trimmed(std::string_view s, char sep = ',');
+
+/// A numeric table read from CSV text: an optional header line, then rows of numbers.
+struct CsvTable {
+  std::vector<std::string> header;        ///< column names (empty without a header)
+  std::vector<std::vector<double>> rows;  ///< the selected columns, per row
+  std::vector<std::size_t> line_of_row;   ///< 1-based line of each row, for messages
 };
-
-/// Writes the chip map as HDF5 (datasets t_s, tip_mm, removed_mm3, h_mm, w_mm and v_mm3
-/// (deflate),
-/// segment_height_mm, each with a "unit" attribute; root attributes teeth,
-/// segments_per_tooth, resolution_mm, steps_per_rev, complete), atomically. Throws Error.
-void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m);
-/// Reads a file written by write_chip_map_h5. Throws Error.
-[[nodiscard]] ChipMapData read_chip_map_h5(const std::filesystem::path& path);
+/// How to read it. The separator is ',' (or, with `detect_separator`, the first of ',', ';'
+/// and tab that the line holds); '#' lines and blank lines are skipped; fields are trimmed of
+/// blanks, '\r' and, with `detect_separator`, quotes.
+struct CsvOptions {
+  /// Columns to select by name (the header is then required); empty: every column.
+  std::vector<std::string> columns;
+  /// The first line is a header when it does not start with a number (when `columns` is
+  /// empty); with `columns`, the first line always is.
+  bool detect_separator = false;
+  /// With no column selection: every row must have the first row's number of fields.
+  bool same_width = true;
+};
+/// Parses CSV text; `source` names it in messages ("file:line:column: ..."). Every selected
+/// field must be a finite number. Throws InputError.
+[[nodiscard]] CsvTable parse_csv(std::string_view text, std::string_view source,
+                                 const CsvOptions& options = {});
 
 }  // namespace trochomill

@@ -1,15 +1,27 @@
-// The job file: one TOML document describing tool, slot, path, cutting conditions and
-// machine. Every subcommand reads it; `--set section.key=value` overrides any key.
-// All lengths are mm, angles degrees, feeds mm/min, spindle speeds rpm, cutting speed m/min,
-// accelerations mm/s^2 at this interface (docs/user-guide.md lists every key).
+// The job file: one TOML document describing tool, slot, path, cutting conditions, machine,
+// material and each module's settings. Every subcommand reads it; `--set section.key=value`
+// overrides any key. All lengths are mm, angles degrees, feeds mm/min, spindle speeds rpm,
+// cutting speed m/min, accelerations mm/s^2 at this interface. The job's own sections are
+// defined here; each module owns its settings struct (trochomill/settings/<module>.hpp) and
+// the job aggregates them. Every key is one entry of the schema (src/job/schema.cpp), which
+// drives parsing, validation, `--set`, the G-code header and the key reference in
+// docs/user-guide.md (job_keys_markdown()).
 #pragma once
 
 #include <array>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "trochomill/settings/analysis.hpp"
+#include "trochomill/settings/force.hpp"
+#include "trochomill/settings/mechanism.hpp"
+#include "trochomill/settings/signal.hpp"
+#include "trochomill/settings/sim.hpp"
+#include "trochomill/settings/topography.hpp"
 
 namespace trochomill {
 
@@ -84,97 +96,6 @@ struct Machine {
   int program_number = 1000;               ///< O number (fanuc)
 };
 
-/// `[measured]`: results measured on the machine (or filled by a model); each optional.
-struct Measured {
-  std::optional<double> force_max_n;      ///< maximum resultant cutting force F_R,max (N)
-  std::optional<double> roughness_ra_um;  ///< maximum roughness Ra of the slot (micrometres)
-  std::optional<double> waviness_um;      ///< maximum wall waviness W_max (micrometres)
-};
-
-/// `[analysis]`: resolution of `trochomill analyze`.
-struct AnalysisSettings {
-  int steps_per_tooth = 1;  ///< engagement samples per tooth pass (1..64)
-  int imprint_points = 81;  ///< points across the slot width for the bottom imprint density
-};
-
-/// `[mechanism]` (Pivkin 2025's zones) and `[material] friction_angle`.
-struct MechanismJob {
-  double czi_max_pct = 25;      ///< K_re below this: CZI (percent of r_e)
-  double czii_max_pct = 60;     ///< K_re below this: CZII; above: CZIII
-  double transition_pct = 40;   ///< marker where the acoustic ratio k_f crosses 1
-  double share = 0.5;           ///< required CZIII share of the cutting part for `recommend`
-  std::string model = "exact";  ///< chip model
-  int points = 3600;            ///< theta samples per cycle
-  std::optional<double> friction_angle_deg;  ///< [material] friction_angle theta_m (degrees)
-};
-
-/// Vibroacoustic monitor settings (`[monitor]`; the CLI's flags override; signal.hpp).
-struct MonitorSettings {
-  double low_min_hz = 2000, low_max_hz = 5000;     ///< low band
-  double high_min_hz = 8000, high_max_hz = 13000;  ///< high band
-  int order = 4;                                   ///< Butterworth order of each band
-  double window_s = 0.005;                         ///< RMS window (and hop)
-  int baseline_cycles = 3;  ///< wear: cycles whose k_f level is the reference
-  double wear_ratio = 1.3;  ///< wear flagged where the k_f level exceeds the reference by this
-  double ploughing_ratio = 1.15;  ///< ploughing flagged where k_f in CZI exceeds CZIII's by this
-  int phase_bins = 50;            ///< k_f profile bins over a cycle
-};
-
-/// Tri-dexel simulation settings (`[simulation]`; sim.hpp).
-struct SimSettings {
-  double resolution_mm = 0.01;      ///< dexel spacing
-  int steps_per_rev = 600;          ///< time steps per spindle revolution
-  double chip_sampling_mm = 0.001;  ///< sampling of removed intervals into points
-  double segment_mm = 0.05;         ///< edge segment length along the edge (kappa)
-  int sub_segments = 5;             ///< sub-segments inward (tau), for wear topography
-  int threads = 0;                  ///< worker threads (0: all cores)
-  /// Search each wedge's whole sector, not only the annulus where material can be, and every
-  /// ray, not only where the boards' summaries show material (slow; to check both arguments
-  /// of docs/models.md section 11). Not a job key.
-  bool exhaustive = false;
-};
-
-/// Force model of `[material]` (force.hpp, docs/models.md section 12).
-enum class ForceModel { bergmann, kienzle, linear };
-
-/// `[material]`: the workpiece material's force coefficients, given in the job or taken from
-/// the materials library (`name`, data/materials/*.toml). Forces act on the workpiece.
-struct Material {
-  std::string name;                 ///< library name, when taken from the library
-  std::string source;               ///< citation of the coefficients
-  std::string notes;                ///< conditions they hold for (tool, speed, coolant...)
-  std::optional<ForceModel> model;  ///< absent: no force model in the job
-  // Bergmann 2021 Eq. 3 and Kienzle: F = w h^(1 - m) k per direction.
-  double k_c = 0;             ///< specific cutting force (N/mm^2), along the cutting direction
-  double k_n = 0;             ///< specific normal force (N/mm^2), along the contour normal
-  double m = 0;               ///< exponent of h (dimensionless, 0 <= m < 1)
-  std::optional<double> m_n;  ///< Kienzle: exponent of the normal force (default m)
-  double k_a = 0;             ///< Kienzle: specific force up the edge (N/mm^2)
-  std::optional<double> m_a;  ///< Kienzle: its exponent (default m)
-  // Linear edge-force model: F = w (K_c h + K_e) per direction.
-  double k_tc = 0, k_rc = 0, k_ac = 0;  ///< cutting coefficients (N/mm^2)
-  double k_te = 0, k_re = 0, k_ae = 0;  ///< edge coefficients (N/mm)
-};
-
-/// `[forces]`: settings of `trochomill forces` and `calibrate`.
-struct ForceSettings {
-  int fast_steps_per_rev = 96;      ///< fast chip source: time steps per revolution
-  double ploughing_angle_deg = 80;  ///< zeta: sub-segments steeper than this to v_c plough
-};
-
-/// `[topography]`: digitised (or synthetic) wear states of the cutting edge (topography.hpp).
-struct TopographySettings {
-  std::vector<std::filesystem::path> files;  ///< STL/PLY/OBJ meshes, one per wear state
-  std::vector<double> synthetic_vb_mm;       ///< or synthetic inserts, one per flank wear VB
-  int state = 0;                             ///< the wear state used (index)
-  double band_mm = 0.2;                      ///< band along the edge that is sampled (mm)
-  double rake_deg = 0;                       ///< synthetic insert: rake angle (degrees)
-  double clearance_deg = 7;                  ///< synthetic insert: clearance angle (degrees)
-  [[nodiscard]] std::size_t states() const noexcept {
-    return files.empty() ? synthetic_vb_mm.size() : files.size();
-  }
-};
-
 struct Job {
   std::string source;  ///< file name the job came from (for messages)
   Tool tool;
@@ -184,7 +105,7 @@ struct Job {
   Machine machine;
   Measured measured;
   AnalysisSettings analysis;
-  MechanismJob mechanism;
+  MechanismSettings mechanism;
   MonitorSettings monitor;
   SimSettings simulation;
   Material material;
@@ -201,10 +122,36 @@ struct Job {
 struct Override {
   std::string key;    ///< "section.key"
   std::string value;  ///< "0.8", "true", "elliptical", "[0, 90, 180, 270]"
+  /// Where it came from, for messages: empty for `--set`, else the CLI flag that is an alias
+  /// of the key ("--share").
+  std::string origin;
 };
 
 /// Parses "section.key=value". Throws InputError when there is no '=' or no section.
 [[nodiscard]] Override parse_override(std::string_view text);
+
+/// A parsed job document: read and parsed once, then turned into jobs with different overrides
+/// (a parameter study builds one job per grid point from one document).
+class JobDocument {
+ public:
+  /// Parses TOML text; `source_name` is used in messages. Throws InputError (syntax errors
+  /// with file:line:column).
+  static JobDocument parse(std::string_view toml_text, std::string_view source_name);
+  /// Reads and parses a job file. Throws InputError.
+  static JobDocument load(const std::filesystem::path& file);
+  JobDocument(JobDocument&&) noexcept;
+  JobDocument& operator=(JobDocument&&) noexcept;
+  ~JobDocument();
+  /// The validated job with the overrides applied in order (the document is not changed).
+  /// Throws InputError listing every problem (file:line:column or key, what is allowed).
+  [[nodiscard]] Job build(const std::vector<Override>& overrides = {}) const;
+  [[nodiscard]] const std::string& source() const noexcept;
+
+ private:
+  struct Impl;
+  explicit JobDocument(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
 
 /// Loads and validates a job file, applying overrides in order.
 /// Throws InputError listing every problem (file:line:column or key, what is allowed).
@@ -215,10 +162,32 @@ struct Override {
 [[nodiscard]] Job parse_job(std::string_view toml_text, std::string_view source_name,
                             const std::vector<Override>& overrides = {});
 
+/// Validates and applies overrides to a job that exists already (the default settings of a
+/// command run without a job file, e.g. `monitor`): each key as the schema reads it, then the
+/// rules of its section. Only the sections whose rules stand alone may be set this way
+/// (machine, measured, mechanism, monitor, simulation, forces, analysis); others throw
+/// InputError asking for a job file.
+void apply_overrides(Job& job, const std::vector<Override>& overrides);
+
+/// One key of the job schema, as the user sees it.
+struct JobKey {
+  std::string section, key;  ///< `[section] key`
+  std::string type;          ///< number, integer, string, choice, array of numbers, ...
+  std::string unit;          ///< mm, degrees, mm/min, rpm, Hz, ... (empty: dimensionless)
+  std::string allowed;       ///< range or choices, e.g. "> 0", "in [1, 64]", "climb | conventional"
+  std::string default_text;  ///< the default (from the settings struct), "required" or "none"
+  std::string doc;           ///< what it means
+};
+/// Every key of the job file, in the order of the reference (section by section).
+[[nodiscard]] const std::vector<JobKey>& job_keys();
+/// The key reference as Markdown tables (the one in docs/user-guide.md is this text).
+[[nodiscard]] std::string job_keys_markdown();
+
 /// The materials library: data/materials/*.toml, looked up in $TROCHOMILL_DATA/materials, then
 /// the source tree's data/materials, then the installed share/trochomill/materials.
 [[nodiscard]] std::filesystem::path materials_dir();
-/// Every material of the library, sorted by name. Throws InputError for a malformed file.
+/// Every material of the library, sorted by name; read once per directory and process.
+/// Throws InputError for a malformed file.
 [[nodiscard]] std::vector<Material> material_library();
 
 [[nodiscard]] std::string_view to_string(PathType t) noexcept;
@@ -226,6 +195,11 @@ struct Override {
 [[nodiscard]] std::string_view to_string(Dialect d) noexcept;
 [[nodiscard]] std::string_view to_string(EntryType e) noexcept;
 [[nodiscard]] std::string_view to_string(Direction d) noexcept;
+[[nodiscard]] std::string_view to_string(ChipModel m) noexcept;
+/// Parses a chip model name (exact | pivkin2025); InputError otherwise.
+[[nodiscard]] ChipModel parse_chip_model(std::string_view name);
+/// Parses a force model name (bergmann | kienzle | linear); InputError otherwise.
+[[nodiscard]] ForceModel parse_force_model(std::string_view name);
 /// Parses a dialect name (linuxcnc | fanuc | sinumerik | grbl); InputError otherwise.
 [[nodiscard]] Dialect parse_dialect(std::string_view name);
 

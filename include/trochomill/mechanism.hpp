@@ -15,16 +15,9 @@
 #include <vector>
 
 #include "trochomill/job.hpp"
+#include "trochomill/settings/mechanism.hpp"
 
 namespace trochomill {
-
-enum class ChipModel {
-  exact,       ///< chip between the tool circle, the previous tooth's circle and the earlier
-               ///< cycles' envelopes (semi-closed form; agrees with `analyze`'s kernel)
-  pivkin2025,  ///< Pivkin 2025's published model (Eqs. 2-23), class Pivkin2025 below
-};
-[[nodiscard]] ChipModel parse_chip_model(const std::string& name);  ///< throws InputError
-[[nodiscard]] std::string to_string(ChipModel m);
 
 /// Pivkin 2025's published chip model, equation by equation (docs/models.md section 9 gives
 /// our reading of each garbled equation). In the paper's frame: feed along +X, the tool
@@ -93,25 +86,9 @@ class Pivkin2025 {
   double n_, theta_tooth_;
 };
 
-/// Mechanism thresholds (percent of r_e) and the recommendation's default share.
-struct MechanismThresholds {
-  double czi_max_pct = 25;     ///< K_re below this: CZI (ploughing)
-  double czii_max_pct = 60;    ///< K_re below this (and >= czi_max): CZII; above: CZIII
-  double transition_pct = 40;  ///< marker where the acoustic ratio k_f crosses 1
-};
-
-/// Reads `[mechanism]` (czi_max, czii_max, transition, share, model, points), `[tool]
-/// flank_wear` and `[material] friction_angle` from the job's document. Throws InputError.
-struct MechanismSettings {
-  MechanismThresholds thresholds;
-  double share = 0.5;  ///< required CZIII share of the cutting part (0..1)
-  ChipModel model = ChipModel::exact;
-  int points = 3600;              ///< theta samples per cycle
-  double flank_wear_mm = 0;       ///< VB_B (mm)
-  double friction_angle_deg = 0;  ///< theta_m for h_m = r_e (1 - cos theta_m); 0 = not given
-};
-[[nodiscard]] MechanismSettings mechanism_settings(const Job& job);
-
+/// The settings (MechanismSettings, settings/mechanism.hpp) are the job's `[mechanism]`
+/// (job.mechanism); a caller may pass changed copies (a share, a model). The flank wear VB_B
+/// is the job's `[tool] flank_wear`.
 /// The curves over one cycle, structure of arrays (one entry per theta sample).
 struct MechanismCurve {
   ChipModel model = ChipModel::exact;

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "trochomill/job.hpp"
@@ -173,6 +174,15 @@ struct ToothTracks {
 /// the path (tangential and centripetal limits, junction-deviation corner speeds). Equals
 /// duration_s() when max_acceleration is 0.
 [[nodiscard]] double estimate_time_s(const ToolPath& path, const Machine& machine);
+
+/// The path's axis-aligned bounding box (mm): segment end points, curves sampled every
+/// quarter degree of parameter (an arc of radius r is then within r (1 - cos(pi/1440)) =
+/// 2.4e-6 r of it).
+struct BoundingBox {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 hi = Vec3::Constant(-std::numeric_limits<double>::infinity());
+};
+[[nodiscard]] BoundingBox bounding_box(const ToolPath& path);
 
 /// Geometry of a planned trochoidal slot (all mm).
 struct PlanInfo {

@@ -2,12 +2,16 @@
 // The library formats; the CLI decides where the text goes.
 #pragma once
 
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "trochomill/analysis.hpp"
 #include "trochomill/force.hpp"
+#include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
+#include "trochomill/mechanism.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/topography.hpp"
@@ -16,37 +20,36 @@ namespace trochomill {
 
 /// The analysis as a JSON document (keys carry their units: _mm, _s, _deg, _mm3_per_min).
 [[nodiscard]] std::string metrics_json(const Job& job, const ProcessMetrics& m);
+/// `analyze`'s summary; `gcode`: the program analysed (empty: the planned path).
+[[nodiscard]] std::string metrics_text(const std::string& job_file, const std::string& gcode,
+                                       const Job& job, const ProcessMetrics& m);
+
+/// `path`'s samples with every tooth's tip (mm, s).
+[[nodiscard]] std::string path_samples_csv(const PathSamples& s, const ToothTracks& tr);
+/// `check-gcode`'s report of a program: length, time (with the acceleration limit, when one
+/// is given), bounding box, feeds and spindle speed.
+[[nodiscard]] std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
+                                           double time_with_acceleration_s);
+[[nodiscard]] std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
+                                           double time_with_acceleration_s,
+                                           double max_acceleration_mm_per_s2);
+
+/// `mechanism`'s curves and zone summary (`use_wear`: K_re with the flank wear).
+[[nodiscard]] std::string mechanism_json(const Job& job, const MechanismSettings& st,
+                                         const MechanismCurve& c, const ZoneSummary& z,
+                                         bool use_wear);
+[[nodiscard]] std::string mechanism_csv(const MechanismCurve& c);
+[[nodiscard]] std::string mechanism_text(const std::string& job_file, const Job& job,
+                                         const MechanismSettings& st, const MechanismCurve& c,
+                                         const ZoneSummary& z, bool use_wear);
+[[nodiscard]] std::string recommendation_json(const Job& job, const MechanismSettings& st,
+                                              const Recommendation& r, bool for_feed);
 
 /// The time series as CSV: t_s, x_mm, y_mm, z_mm, engaged angles (deg, "start:end" pairs
 /// separated by ';'), engagement_deg, h_max_mm, teeth_in_cut, mrr_mm3_per_min.
 [[nodiscard]] std::string series_csv(const Job& job, const EngagementSeries& e);
 
 /// One `--vary key=v1,v2,...` of a parameter study.
-struct Vary {
-  std::string key;                  ///< "section.key"
-  std::vector<std::string> values;  ///< TOML values as typed
-};
-/// Parses "section.key=v1,v2,..." (a value may be a TOML array in brackets). Throws
-/// InputError.
-[[nodiscard]] Vary parse_vary(const std::string& text);
-
-/// One grid point of a study: its overrides and its metrics (or the error that stopped it).
-struct StudyPoint {
-  std::vector<Override> overrides;
-  bool ok = false;
-  std::string error;
-  ProcessMetrics metrics;
-};
-
-/// Runs the analysis at every point of the grid (the Cartesian product of the varies, the
-/// first varying slowest) on `threads` threads (0: all cores). Each point loads the job file
-/// with `base` overrides then its own, plans the path and analyses it; results are in grid
-/// order whatever the thread count. A point whose job is invalid is reported, not thrown.
-[[nodiscard]] std::vector<StudyPoint> run_study(const std::string& job_file,
-                                                const std::vector<Override>& base,
-                                                const std::vector<Vary>& varies, int threads);
-
-/// The study as a text table, JSON and CSV (one row per point).
 [[nodiscard]] std::string study_table(const std::vector<Vary>& varies,
                                       const std::vector<StudyPoint>& points);
 [[nodiscard]] std::string study_json(const std::vector<Vary>& varies,
@@ -69,10 +72,24 @@ struct StudyPoint {
 /// Welch PSD as CSV (f_hz, psd_per_hz) and a spectrogram in long form (t_s, f_hz, db).
 [[nodiscard]] std::string spectrum_csv(const Spectrum& sp);
 [[nodiscard]] std::string spectrogram_csv(const Spectrogram& sg);
+/// `spectrum`'s summary: the rate, the bins and the eight strongest peaks.
+[[nodiscard]] std::string spectrum_text(const std::string& file, const Signal& sig,
+                                        const Spectrum& sp, int nfft);
 
 /// The simulation's per-step series: t_s, x_mm, y_mm, z_mm, removed_tooth<k>_mm3, h_max_mm,
 /// h_mean_mm, engaged_segments.
 [[nodiscard]] std::string sim_series_csv(const SimResult& r, std::size_t teeth);
+/// `simulate`'s summary: the window, removed volume, h_max, updates, wall times (s) and
+/// memory (MB; `memory_estimate_bytes` as estimated before the run).
+[[nodiscard]] std::string simulation_json(const Job& job, const JobSimulation& js, double from_s,
+                                          double to_s, double wall_s, double memory_estimate_bytes);
+[[nodiscard]] std::string simulation_text(const std::string& job_file, const Job& job,
+                                          const JobSimulation& js, double from_s, double to_s,
+                                          double wall_s);
+/// Writes series.csv, chips.h5, walls.csv, floor.csv and surface.stl (grid step
+/// `stl_step_mm`, or default_surface_step_mm) into `dir` (created), each atomically.
+void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
+                              const JobSimulation& js, std::optional<double> stl_step_mm);
 /// The force series: t_s, f_x_n, f_y_n, f_z_n, f_resultant_n, torque_nm, power_w, then per
 /// tooth k: tooth<k>_f_x_n, tooth<k>_f_y_n, tooth<k>_f_z_n, tooth<k>_torque_nm. `calibrate`
 /// reads it as it is.

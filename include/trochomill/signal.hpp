@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <iosfwd>
 #include <optional>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "trochomill/job.hpp"
+#include "trochomill/settings/signal.hpp"
 
 namespace trochomill {
 
@@ -109,8 +111,8 @@ struct Spectrogram {
 };
 [[nodiscard]] Spectrogram spectrogram(const Signal& s, int nfft);
 
-/// MonitorSettings (job.hpp) are `[monitor]` in the job, validated by load_job; this checks
-/// them against a signal's rate. Throws InputError naming the setting.
+/// MonitorSettings (settings/signal.hpp) are `[monitor]` in the job, validated by load_job; this
+/// checks them against a signal's rate. Throws InputError naming the setting.
 void validate(const MonitorSettings& m, double rate_hz);
 
 /// k_f over time: windows of `window_s` (the last partial window dropped), window k covering
@@ -228,6 +230,17 @@ struct LiveWindow {
   int zone = -1;      ///< model zone (0 air, 1-3 CZI-III); -1 unknown
   std::vector<std::string> flags;
 };
+class LiveMonitor;
+/// Feeds a live monitor from a stream of samples until its end (`--stream`): raw f32 or s16
+/// (native byte order) or CSV (one number per line, '#' lines skipped). `out` is called for
+/// each completed window. Throws InputError naming the sample or line that is not a finite
+/// number, or a truncated last sample. Memory stays bounded (4096 samples at a time).
+void monitor_stream(std::FILE* in, SampleFormat format, LiveMonitor& live,
+                    const std::function<void(const LiveWindow&)>& out);
+
+/// The `count` strongest peaks (local maxima) of a spectrum, strongest first (bin indices).
+[[nodiscard]] std::vector<std::size_t> spectrum_peaks(const Spectrum& sp, std::size_t count);
+
 class LiveMonitor {
  public:
   LiveMonitor(double rate_hz, const MonitorSettings& m, const Job* job, double start_s);

@@ -14,6 +14,7 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/units.hpp"
 
@@ -23,75 +24,12 @@ namespace {
 
 // ------------------------------------------------------------------ CSV
 
-std::vector<std::string> split_fields(const std::string& line) {
-  const char sep = line.find(',') != std::string::npos   ? ','
-                   : line.find(';') != std::string::npos ? ';'
-                                                         : '\t';
-  std::vector<std::string> out;
-  std::string cur;
-  std::istringstream ss(line);
-  while (std::getline(ss, cur, sep)) {
-    const auto b = cur.find_first_not_of(" \t\r\"");
-    const auto e = cur.find_last_not_of(" \t\r\"");
-    out.push_back(b == std::string::npos ? std::string() : cur.substr(b, e - b + 1));
-  }
-  return out;
-}
-
-struct Table {
-  std::vector<std::string> header;
-  std::vector<std::vector<double>> rows;
-  std::vector<int> line_of_row;
-};
-
-// A numeric table with a header line; '#' lines and blank lines skipped.
-Table read_table(const std::filesystem::path& file, const std::vector<std::string>& wanted,
-                 std::vector<std::size_t>& index) {
-  std::ifstream in(file);
-  if (!in) throw InputError(fmt::format("{}: cannot open", file.string()));
-  Table t;
-  std::string line;
-  int ln = 0;
-  while (std::getline(in, line)) {
-    ++ln;
-    if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
-    const auto f = split_fields(line);
-    if (t.header.empty()) {
-      t.header = f;
-      index.clear();
-      for (const auto& w : wanted) {
-        const auto it = std::find(t.header.begin(), t.header.end(), w);
-        if (it == t.header.end()) {
-          std::string have;
-          for (const auto& h : t.header) have += (have.empty() ? "" : ", ") + h;
-          throw InputError(fmt::format("{}:{}: no column '{}' (the header has: {})", file.string(),
-                                       ln, w, have));
-        }
-        index.push_back(static_cast<std::size_t>(it - t.header.begin()));
-      }
-      continue;
-    }
-    std::vector<double> row;
-    for (std::size_t k = 0; k < index.size(); ++k) {
-      const std::size_t c = index[k];
-      if (c >= f.size()) {
-        throw InputError(fmt::format("{}:{}: {} fields, column '{}' is field {}", file.string(), ln,
-                                     f.size(), wanted[k], c + 1));
-      }
-      char* end = nullptr;
-      const double v = std::strtod(f[c].c_str(), &end);
-      if (f[c].empty() || *end != '\0' || !std::isfinite(v)) {
-        throw InputError(fmt::format("{}:{}:{}: '{}' in column '{}' is not a number", file.string(),
-                                     ln, c + 1, f[c], wanted[k]));
-      }
-      row.push_back(v);
-    }
-    t.rows.push_back(std::move(row));
-    t.line_of_row.push_back(ln);
-  }
-  if (t.header.empty())
-    throw InputError(fmt::format("{}: empty file (no header line)", file.string()));
-  return t;
+// A numeric table with the named columns (';' and tab separators and quotes accepted).
+CsvTable read_table(const std::filesystem::path& file, const std::vector<std::string>& wanted) {
+  CsvOptions o;
+  o.columns = wanted;
+  o.detect_separator = true;
+  return parse_csv(read_text_file(file), file.string(), o);
 }
 
 // ------------------------------------------------------------------ parameters
@@ -271,8 +209,7 @@ struct Residuals {
 
 MeasuredForces read_measured_forces(const std::filesystem::path& file,
                                     const ForceCsvFormat& format) {
-  std::vector<std::size_t> idx;
-  const Table t = read_table(file, {format.time, format.fx, format.fy, format.fz}, idx);
+  const CsvTable t = read_table(file, {format.time, format.fx, format.fy, format.fz});
   MeasuredForces m;
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
@@ -580,8 +517,7 @@ std::string material_toml(const CalibrationResult& r) {
 // ------------------------------------------------------------------ mean forces
 
 std::vector<MeanForcePoint> read_mean_forces(const std::filesystem::path& file) {
-  std::vector<std::size_t> idx;
-  const Table t = read_table(file, {"feed_per_tooth_mm", "f_x_n", "f_y_n", "f_z_n"}, idx);
+  const CsvTable t = read_table(file, {"feed_per_tooth_mm", "f_x_n", "f_y_n", "f_z_n"});
   std::vector<MeanForcePoint> out;
   for (const auto& r : t.rows) out.push_back({r[0], r[1], r[2], r[3]});
   return out;

@@ -286,4 +286,13 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
   return std::move(e.out());
 }
 
+GcodeOptions gcode_options(const Machine& machine) {
+  GcodeOptions o;
+  o.write.dialect = machine.dialect;
+  o.write.arc_output = machine.arc_output;
+  o.write.tolerance_mm = machine.arc_tolerance_mm;
+  o.read.rapid_rate_mm_per_min = machine.rapid_rate_mm_per_min;
+  return o;
+}
+
 }  // namespace trochomill

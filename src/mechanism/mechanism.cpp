@@ -15,35 +15,6 @@
 
 namespace trochomill {
 
-ChipModel parse_chip_model(const std::string& name) {
-  if (name == "exact") return ChipModel::exact;
-  if (name == "pivkin2025") return ChipModel::pivkin2025;
-  throw InputError(fmt::format("unknown chip model '{}': allowed: exact, pivkin2025", name));
-}
-
-std::string to_string(ChipModel m) {
-  switch (m) {
-    case ChipModel::exact:
-      return "exact";
-    case ChipModel::pivkin2025:
-      return "pivkin2025";
-  }
-  return "exact";
-}
-
-MechanismSettings mechanism_settings(const Job& job) {
-  MechanismSettings s;
-  s.thresholds.czi_max_pct = job.mechanism.czi_max_pct;
-  s.thresholds.czii_max_pct = job.mechanism.czii_max_pct;
-  s.thresholds.transition_pct = job.mechanism.transition_pct;
-  s.share = job.mechanism.share;
-  s.model = parse_chip_model(job.mechanism.model);
-  s.points = job.mechanism.points;
-  s.flank_wear_mm = job.tool.flank_wear_mm;
-  s.friction_angle_deg = job.mechanism.friction_angle_deg.value_or(0.0);
-  return s;
-}
-
 namespace {
 
 int zone_of(double k, const MechanismThresholds& t) {
@@ -217,7 +188,7 @@ MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const Cycle
     v->resize(n);
   }
   c.zone.resize(n);
-  const double re = job.tool.edge_radius_mm, vb = st.flank_wear_mm;
+  const double re = job.tool.edge_radius_mm, vb = job.tool.flank_wear_mm;
   for (std::size_t i = 0; i < n; ++i) {
     const mech::ChipPoint& p = pts[i];
     c.theta_rad[i] = thetas[i];
@@ -360,7 +331,7 @@ Recommendation recommend(const Job& job, const MechanismSettings& st, bool use_w
         "smallest {} {:.4g} mm puts {:.0f} % of the cutting part in CZIII (K_re >= {:g} %, "
         "r_e {:g} mm{}); CZI {:.0f} %, CZII {:.0f} %",
         what, r.value, 100 * r.zones.share[2], st.thresholds.czii_max_pct, job.tool.edge_radius_mm,
-        use_wear ? fmt::format(", flank wear {:g} mm", st.flank_wear_mm) : "",
+        use_wear ? fmt::format(", flank wear {:g} mm", job.tool.flank_wear_mm) : "",
         100 * r.zones.share[0], 100 * r.zones.share[1]);
   } else {
     r.explanation = fmt::format(

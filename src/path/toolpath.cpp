@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "trochomill/error.hpp"
 #include "trochomill/path.hpp"
@@ -67,6 +68,27 @@ std::size_t ToolPath::segment_at_time(double t_s) const {
 Vec3 ToolPath::point_at_length(double s_mm) const {
   const std::size_t i = segment_at_length(s_mm);
   return segments_[i].point_at(s_mm - start_length_[i]);
+}
+
+}  // namespace trochomill
+
+namespace trochomill {
+
+BoundingBox bounding_box(const ToolPath& path) {
+  BoundingBox b;
+  auto add = [&](const Vec3& p) {
+    b.lo = b.lo.cwiseMin(p);
+    b.hi = b.hi.cwiseMax(p);
+  };
+  for (const auto& seg : path.segments()) {
+    add(seg.start());
+    add(seg.end());
+    if (seg.kind() == Segment::Kind::curve) {
+      const int n = std::max(4, static_cast<int>(std::abs(seg.u1() - seg.u0()) * 720.0 / M_PI));
+      for (int k = 1; k < n; ++k) add(seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n));
+    }
+  }
+  return b;
 }
 
 }  // namespace trochomill

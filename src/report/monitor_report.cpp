@@ -150,3 +150,17 @@ std::string spectrogram_csv(const Spectrogram& sg) {
 }
 
 }  // namespace trochomill
+
+namespace trochomill {
+
+std::string spectrum_text(const std::string& file, const Signal& sig, const Spectrum& sp,
+                          int nfft) {
+  std::string out = fmt::format("{}: {:.3f} s at {:g} Hz, Welch nfft {} ({:.2f} Hz bins)\n", file,
+                                sig.duration_s(), sig.rate_hz, nfft, sig.rate_hz / nfft);
+  for (const std::size_t k : spectrum_peaks(sp, 8)) {
+    out += fmt::format("  peak {:10.1f} Hz  {:.3e} /Hz\n", sp.f_hz[k], sp.psd[k]);
+  }
+  return out;
+}
+
+}  // namespace trochomill

@@ -111,32 +111,6 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
   return j;
 }
 
-std::vector<std::string> split_values(const std::string& text) {
-  std::vector<std::string> out;
-  std::string cur;
-  int depth = 0;
-  bool quoted = false;
-  for (const char c : text) {
-    if (c == '"') quoted = !quoted;
-    if (!quoted && (c == '[' || c == '{')) ++depth;
-    if (!quoted && (c == ']' || c == '}')) --depth;
-    if (c == ',' && depth == 0 && !quoted) {
-      out.push_back(cur);
-      cur.clear();
-    } else {
-      cur += c;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t");
-  const auto e = s.find_last_not_of(" \t");
-  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
-}
-
 }  // namespace
 
 std::string metrics_json(const Job& job, const ProcessMetrics& m) {
@@ -152,6 +126,37 @@ std::string metrics_json(const Job& job, const ProcessMetrics& m) {
               {"feed_rate_mm_per_min", feed_rate_mm_per_min(job)},
               {"spindle_speed_rpm", spindle_speed_rpm(job)}};
   return j.dump(2) + "\n";
+}
+
+std::string metrics_text(const std::string& job_file, const std::string& gcode, const Job& job,
+                         const ProcessMetrics& m) {
+  std::string out = fmt::format("{}: {}{}\n", job_file, to_string(job.path.type),
+                                gcode.empty() ? "" : " (from " + gcode + ")");
+  out +=
+      fmt::format("  machining time       {:.3f} s ({:.3f} s with acceleration), path {:.2f} mm\n",
+                  m.machining_time_s, m.machining_time_accel_s, m.path_length_mm);
+  out += fmt::format("  {} cycle        {:.4f} s, {:.3f} mm; cutting {:.4f} s, cooling {:.4f} s\n",
+                     m.periodic ? "steady" : "window", m.cycle_time_s, m.path_length_per_cycle_mm,
+                     m.cutting_time_s, m.cooling_time_s);
+  out += fmt::format("  MRR                  {:.1f} mm^3/min steady, {:.1f} mm^3/min whole slot\n",
+                     m.mrr_mm3_per_min, m.mrr_total_mm3_per_min);
+  out += fmt::format(
+      "  h_max                {:.5f} mm at {:.4f} s after cutting starts (f_z {:.4g} mm; "
+      "{:.5f} mm over the program)\n",
+      m.h_max_mm, m.t_h_max_s, m.feed_per_tooth_mm, m.h_max_slot_mm);
+  out += fmt::format("  engagement max       {:.2f} deg\n", m.engagement_angle_max_deg);
+  out += fmt::format(
+      "  wall waviness        left {:.5f} mm, right {:.5f} mm (path); "
+      "left {:.5f} mm, right {:.5f} mm (tooth)\n",
+      m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm, m.walls_tooth.left.waviness_mm,
+      m.walls_tooth.right.waviness_mm);
+  if (m.force_max_predicted_n) {
+    out += fmt::format("  F_R,max predicted    {:.1f} N ([material] {})\n",
+                       *m.force_max_predicted_n, to_string(*job.material.model));
+  }
+  if (m.performance_index)
+    out += fmt::format("  performance index    {:.6g}\n", *m.performance_index);
+  return out;
 }
 
 std::string series_csv(const Job& job, const EngagementSeries& e) {
@@ -174,68 +179,6 @@ std::string series_csv(const Job& job, const EngagementSeries& e) {
                    e.teeth_in_cut[i], ap * e.swept_rate_mm2_per_s[i] * 60.0);
   }
   return out;
-}
-
-Vary parse_vary(const std::string& text) {
-  const auto eq = text.find('=');
-  if (eq == std::string::npos) {
-    throw InputError(fmt::format("--vary '{}': expected section.key=v1,v2,...", text));
-  }
-  Vary v;
-  v.key = trim(text.substr(0, eq));
-  const auto dot = v.key.find('.');
-  if (dot == std::string::npos || dot == 0 || dot + 1 == v.key.size()) {
-    throw InputError(
-        fmt::format("--vary '{}': the key must be section.key (e.g. path.aspect_ratio)", text));
-  }
-  for (auto& val : split_values(text.substr(eq + 1))) {
-    val = trim(val);
-    if (val.empty()) throw InputError(fmt::format("--vary '{}': empty value in the list", text));
-    v.values.push_back(val);
-  }
-  return v;
-}
-
-std::vector<StudyPoint> run_study(const std::string& job_file, const std::vector<Override>& base,
-                                  const std::vector<Vary>& varies, int threads) {
-  if (varies.empty()) throw InputError("compare: give at least one --vary key=v1,v2,...");
-  std::size_t total = 1;
-  for (const auto& v : varies) total *= v.values.size();
-  if (total > 100000) {
-    throw InputError(fmt::format("compare: the grid has {} points (limit 100000)", total));
-  }
-  std::vector<StudyPoint> points(total);
-  for (std::size_t p = 0; p < total; ++p) {
-    std::size_t rest = p;
-    std::vector<Override> ov = base;
-    std::vector<std::size_t> idx(varies.size());
-    for (std::size_t k = varies.size(); k-- > 0;) {  // the last vary changes fastest
-      idx[k] = rest % varies[k].values.size();
-      rest /= varies[k].values.size();
-    }
-    for (std::size_t k = 0; k < varies.size(); ++k) {
-      ov.push_back(Override{varies[k].key, varies[k].values[idx[k]]});
-    }
-    points[p].overrides = std::move(ov);
-  }
-  auto run_one = [&](std::size_t p) {
-    StudyPoint& sp = points[p];
-    try {
-      const Job job = load_job(job_file, sp.overrides);
-      const PlannedPath planned = plan_path(job);
-      sp.metrics = analyze_process(job, planned.path);
-      fill_predicted_force(job, planned.path, sp.metrics);
-      sp.metrics.series = EngagementSeries{};  // keep the study small
-      sp.ok = true;
-    } catch (const std::exception& e) {
-      sp.error = e.what();
-    }
-  };
-  const int n_threads = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
-  tbb::task_arena arena(n_threads);
-  arena.execute(
-      [&] { tbb::parallel_for(std::size_t{0}, total, [&](std::size_t p) { run_one(p); }); });
-  return points;
 }
 
 std::string study_table(const std::vector<Vary>& varies, const std::vector<StudyPoint>& points) {

@@ -2,12 +2,15 @@
 // profiles (CSV) and the machined surface (binary STL) (include/trochomill/report.hpp).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <initializer_list>
 #include <iterator>
+#include <nlohmann/json.hpp>
 
+#include "trochomill/io.hpp"
 #include "trochomill/report.hpp"
 
 namespace trochomill {
@@ -131,6 +134,63 @@ std::string height_field_stl(const HeightField& f) {
   }
   std::memcpy(s.data() + 80, &count, 4);
   return s;
+}
+
+}  // namespace trochomill
+
+namespace trochomill {
+
+std::string simulation_json(const Job& job, const JobSimulation& js, double from_s, double to_s,
+                            double wall_s, double memory_estimate_bytes) {
+  const SimResult& r = js.result;
+  double h_max = 0;
+  for (const auto& st : r.steps) h_max = std::max(h_max, st.h_max_mm);
+  const nlohmann::json j = {
+      {"removed_volume_mm3", r.removed_mm3},
+      {"removed_volume_by_board_mm3", r.removed_by_board_mm3},
+      {"h_max_mm", h_max},
+      {"steps", r.steps.size()},
+      {"dexel_updates", r.dexel_updates},
+      {"wall_time_s", wall_s},
+      {"pre_roll_wall_s", js.pre_roll_wall_s},
+      {"window_wall_s", js.window_wall_s},
+      {"dexel_updates_per_s",
+       js.window_wall_s > 0 ? static_cast<double>(r.dexel_updates) / js.window_wall_s : 0.0},
+      {"from_s", from_s},
+      {"to_s", to_s},
+      {"resolution_mm", job.simulation.resolution_mm},
+      {"steps_per_rev", job.simulation.steps_per_rev},
+      {"memory_mb", static_cast<double>(js.memory_bytes) / 1048576.0},
+      {"memory_estimate_mb", memory_estimate_bytes / 1048576.0},
+      {"complete", r.complete}};
+  return j.dump(2) + "\n";
+}
+
+std::string simulation_text(const std::string& job_file, const Job& job, const JobSimulation& js,
+                            double from_s, double to_s, double wall_s) {
+  const SimResult& r = js.result;
+  double h_max = 0;
+  for (const auto& st : r.steps) h_max = std::max(h_max, st.h_max_mm);
+  return fmt::format(
+      "{}: {:.4f} to {:.4f} s, {} steps at {} per rev, {:g} mm dexels: removed "
+      "{:.4f} mm^3, h_max {:.5f} mm, {} dexel updates, {:.2f} s, {:.1f} MB{}\n",
+      job_file, from_s, to_s, r.steps.size(), job.simulation.steps_per_rev,
+      job.simulation.resolution_mm, r.removed_mm3, h_max, r.dexel_updates, wall_s,
+      static_cast<double>(js.memory_bytes) / 1048576.0,
+      r.complete ? "" : " (interrupted: incomplete)");
+}
+
+void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
+                              const JobSimulation& js, std::optional<double> stl_step_mm) {
+  std::filesystem::create_directories(dir);
+  const SimResult& r = js.result;
+  const SimTool tool = sim_tool(job, job.simulation);
+  write_file_atomic(dir / "series.csv", sim_series_csv(r, tool.tooth_angle_rad.size()));
+  write_chip_map_h5(dir / "chips.h5", chip_map_data(r, tool, job.simulation));
+  write_file_atomic(dir / "walls.csv", wall_profiles_csv(wall_profiles(*js.work, 0.0)));
+  write_file_atomic(dir / "floor.csv", floor_profiles_csv(floor_profiles(*js.work)));
+  const double step = stl_step_mm ? *stl_step_mm : default_surface_step_mm(*js.work);
+  write_file_atomic(dir / "surface.stl", height_field_stl(surface_height_field(*js.work, step)));
 }
 
 }  // namespace trochomill

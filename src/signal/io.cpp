@@ -1,5 +1,7 @@
 // Reading and writing signals: libsndfile (WAV, FLAC, AIFF, OGG), CSV, raw float32 / int16
 // little-endian (include/trochomill/signal.hpp).
+#include "trochomill/io.hpp"
+
 #include <fmt/format.h>
 #include <sndfile.h>
 
@@ -82,55 +84,15 @@ Signal read_raw(const std::string& path, const SignalReadOptions& o, bool f32) {
 }
 
 Signal read_csv(const std::string& path, const SignalReadOptions& o) {
-  std::istringstream in(read_all(path));
-  std::string line;
-  int line_no = 0, time_col = -1;
+  const CsvTable table = parse_csv(read_all(path), path);
+  int time_col = -1;
+  for (std::size_t k = 0; k < table.header.size(); ++k) {
+    const std::string& c = table.header[k];
+    if (c == "t" || c == "t_s" || c == "time") time_col = static_cast<int>(k);
+  }
   std::vector<double> t, v;
-  bool first = true;
-  std::size_t ncols = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    std::vector<std::string> cells;
-    std::stringstream ls(line);
-    std::string cell;
-    while (std::getline(ls, cell, ',')) cells.push_back(cell);
-    auto trim = [](std::string x) {
-      const auto b = x.find_first_not_of(" \t"), e = x.find_last_not_of(" \t");
-      return b == std::string::npos ? std::string() : x.substr(b, e - b + 1);
-    };
-    for (auto& c : cells) c = trim(c);
-    if (first) {
-      first = false;
-      char* end = nullptr;
-      const std::string& c0 = cells.empty() ? std::string() : cells[0];
-      (void)std::strtod(c0.c_str(), &end);
-      if (end == c0.c_str() || *end != '\0') {  // a header
-        for (std::size_t k = 0; k < cells.size(); ++k) {
-          if (cells[k] == "t" || cells[k] == "t_s" || cells[k] == "time") {
-            time_col = static_cast<int>(k);
-          }
-        }
-        ncols = cells.size();
-        continue;
-      }
-      ncols = cells.size();
-    }
-    if (cells.size() != ncols) {
-      throw InputError(fmt::format("{}:{}: {} columns, the first row has {}", path, line_no,
-                                   cells.size(), ncols));
-    }
-    std::vector<double> row;
-    for (std::size_t k = 0; k < cells.size(); ++k) {
-      char* end = nullptr;
-      const double x = std::strtod(cells[k].c_str(), &end);
-      if (cells[k].empty() || *end != '\0' || !std::isfinite(x)) {
-        throw InputError(
-            fmt::format("{}:{}:{}: '{}' is not a finite number", path, line_no, k + 1, cells[k]));
-      }
-      row.push_back(x);
-    }
+  for (std::size_t i = 0; i < table.rows.size(); ++i) {
+    const std::vector<double>& row = table.rows[i];
     // Data columns: all but the time column, counted from 0.
     int data_k = -1;
     double value = 0;
@@ -146,7 +108,7 @@ Signal read_csv(const std::string& path, const SignalReadOptions& o) {
       throw InputError(
           fmt::format("{}:{}: no data column {} (0-based, the time column not "
                       "counted)",
-                      path, line_no, o.channel));
+                      path, table.line_of_row[i], o.channel));
     }
     if (time_col >= 0) t.push_back(row[static_cast<std::size_t>(time_col)]);
     v.push_back(value);

@@ -115,7 +115,7 @@ std::vector<double> planned_cycle_bounds(const Job& job) {
 }
 
 ModelProfile model_profile(const Job& job, int bins) {
-  const MechanismSettings st = mechanism_settings(job);
+  const MechanismSettings& st = job.mechanism;
   const MechanismCurve c = mechanism_curve(job, st);
   ModelProfile mp;
   for (int b = 0; b < bins; ++b) {

@@ -46,7 +46,7 @@ Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions
   const std::size_t ncyc =
       std::min<std::size_t>(static_cast<std::size_t>(o.cycles), starts.size() - 1);
   const double t_end = o.lead_s + starts[ncyc];
-  const MechanismSettings st = mechanism_settings(job);
+  const MechanismSettings& st = job.mechanism;
   const MechanismCurve c = mechanism_curve(job, st);
 
   Signal s;

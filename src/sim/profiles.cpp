@@ -120,3 +120,13 @@ ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSett
 }
 
 }  // namespace trochomill
+
+namespace trochomill {
+
+double default_surface_step_mm(const TriDexel& work) {
+  const DexelBoard& zb = work.boards[2];
+  const double cells = static_cast<double>(zb.count_u()) * static_cast<double>(zb.count_v());
+  return zb.spacing() * std::max(1.0, std::ceil(std::sqrt(2.0 * cells / 4e6)));
+}
+
+}  // namespace trochomill

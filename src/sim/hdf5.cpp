@@ -1,15 +1,15 @@
 // The simulation's per-segment chip map in HDF5 (libhdf5's C API), readable with h5py or
-// MATLAB (include/trochomill/io.hpp).
+// MATLAB (sim.hpp).
 #include <fmt/format.h>
 #include <hdf5.h>
 
 #include <filesystem>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/sim.hpp"
 
 namespace trochomill {
 namespace {
@@ -80,40 +80,29 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) 
   }
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by exceptions
   // Written beside the target and renamed into place: never a half-written file.
-  std::random_device rd;
-  const std::filesystem::path tmp =
-      path.parent_path() / fmt::format(".{}.tmp{:08x}", path.filename().string(), rd());
-  try {
-    {
-      Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
-                  tmp.c_str());
-      const hsize_t n = steps;
-      write_dataset(file, "t_s", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n}, m.t_s.data(), "s");
-      write_dataset(file, "tip_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, 3}, m.tip_mm.data(),
-                    "mm");
-      write_dataset(file, "removed_mm3", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, m.teeth},
-                    m.removed_mm3.data(), "mm^3");
-      write_dataset(file, "h_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.h_mm.data(), "mm",
-                    true);
-      write_dataset(file, "w_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.w_mm.data(), "mm",
-                    true);
-      write_dataset(file, "v_mm3", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.v_mm3.data(),
-                    "mm^3", true);
-      write_dataset(file, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE,
-                    {m.segment_height_mm.size()}, m.segment_height_mm.data(), "mm");
-      write_attr(file, "teeth", static_cast<double>(m.teeth));
-      write_attr(file, "segments_per_tooth", static_cast<double>(m.segments_per_tooth));
-      write_attr(file, "resolution_mm", m.resolution_mm);
-      write_attr(file, "steps_per_rev", static_cast<double>(m.steps_per_rev));
-      write_attr(file, "complete", m.complete ? 1.0 : 0.0);
-      check(H5Fflush(file, H5F_SCOPE_GLOBAL), "the file");
-    }
-    std::filesystem::rename(tmp, path);
-  } catch (...) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw;
-  }
+  write_file_atomic(path, [&](const std::filesystem::path& tmp) {
+    Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
+                tmp.c_str());
+    const hsize_t n = steps;
+    write_dataset(file, "t_s", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n}, m.t_s.data(), "s");
+    write_dataset(file, "tip_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, 3}, m.tip_mm.data(), "mm");
+    write_dataset(file, "removed_mm3", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, m.teeth},
+                  m.removed_mm3.data(), "mm^3");
+    write_dataset(file, "h_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.h_mm.data(), "mm",
+                  true);
+    write_dataset(file, "w_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.w_mm.data(), "mm",
+                  true);
+    write_dataset(file, "v_mm3", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.v_mm3.data(),
+                  "mm^3", true);
+    write_dataset(file, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE,
+                  {m.segment_height_mm.size()}, m.segment_height_mm.data(), "mm");
+    write_attr(file, "teeth", static_cast<double>(m.teeth));
+    write_attr(file, "segments_per_tooth", static_cast<double>(m.segments_per_tooth));
+    write_attr(file, "resolution_mm", m.resolution_mm);
+    write_attr(file, "steps_per_rev", static_cast<double>(m.steps_per_rev));
+    write_attr(file, "complete", m.complete ? 1.0 : 0.0);
+    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "the file");
+  });
 }
 
 ChipMapData read_chip_map_h5(const std::filesystem::path& path) {

@@ -1,0 +1,182 @@
+// The CLI's shared pieces (cli_common.hpp).
+#include "cli_common.hpp"
+
+#include <fmt/format.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+
+#include "trochomill/error.hpp"
+#include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
+#include "trochomill/sim.hpp"
+
+namespace trochomill::cli {
+
+std::vector<Override> JobArgs::overrides() const {
+  std::vector<Override> ov;
+  for (const auto& s : sets) ov.push_back(parse_override(s));
+  for (const auto& [flag, value] : aliases) {
+    // The flag's key was recorded when the flag was added: "--share=mechanism.share".
+    const auto eq = flag.find('=');
+    ov.push_back(Override{flag.substr(eq + 1), value, flag.substr(0, eq)});
+  }
+  return ov;
+}
+
+Job JobArgs::load() const { return load_job(file, overrides()); }
+
+void add_job_args(CLI::App* cmd, JobArgs& a) {
+  cmd->add_option("JOB", a.file, "job file (TOML)")->required();
+  cmd->add_option("--set", a.sets,
+                  "override a job key: section.key=value (repeatable), e.g. path.step=0.8")
+      ->take_all();
+}
+
+void add_key_alias(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
+                   const std::string& help) {
+  cmd->add_option_function<std::string>(
+      flag, [&a, flag, key](const std::string& v) { a.aliases.emplace_back(flag + "=" + key, v); },
+      fmt::format("{} (the job key {}: --set {}=VALUE)", help, key, key));
+}
+
+void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
+                  const std::string& value, const std::string& help) {
+  cmd->add_flag_callback(
+      flag, [&a, flag, key, value] { a.aliases.emplace_back(flag + "=" + key, value); },
+      fmt::format("{} (--set {}={})", help, key, value));
+}
+
+ToolPath job_path(const Job& job, const std::string& gcode_file) {
+  if (gcode_file.empty()) return plan_path(job).path;
+  return read_gcode_file(gcode_file, gcode_options(job.machine).read).path;
+}
+
+void emit(const std::string& target, const std::string& text) {
+  if (target == "-") {
+    std::fwrite(text.data(), 1, text.size(), stdout);
+    std::fflush(stdout);
+  } else {
+    write_file_atomic(target, text);
+  }
+}
+
+bool summary_to_stdout(std::initializer_list<const std::string*> outputs) {
+  return std::none_of(outputs.begin(), outputs.end(),
+                      [](const std::string* o) { return *o == "-"; });
+}
+
+std::pair<double, double> WindowArgs::resolve(const ToolPath& path) const {
+  if (!cycles.empty()) {
+    if (from_s || to_s) throw InputError("give --cycles or --from/--to, not both");
+    const auto colon = cycles.find(':');
+    char* e1 = nullptr;
+    char* e2 = nullptr;
+    const std::string a = cycles.substr(0, colon);
+    const std::string b = colon == std::string::npos ? "" : cycles.substr(colon + 1);
+    const long ca = std::strtol(a.c_str(), &e1, 10), cb = std::strtol(b.c_str(), &e2, 10);
+    if (colon == std::string::npos || a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0') {
+      throw InputError(fmt::format("--cycles '{}': expected A:B, e.g. 3:4", cycles));
+    }
+    return cycle_window(path, static_cast<int>(ca), static_cast<int>(cb));
+  }
+  return {from_s.value_or(0.0), to_s.value_or(path.duration_s())};
+}
+
+void add_window_args(CLI::App* cmd, WindowArgs& w, const std::string& what) {
+  cmd->add_option("--from", w.from_s, what + " start, s of programmed time (default 0)");
+  cmd->add_option("--to", w.to_s, what + " end, s (default: the path's end)");
+  cmd->add_option("--cycles", w.cycles,
+                  "A:B: trochoid cycles A (inclusive) to B (exclusive), from 0");
+}
+
+Signal SignalArgs::read() const {
+  SignalReadOptions o;
+  o.format = parse_sample_format(format);
+  o.rate_hz = rate;
+  o.channel = channel;
+  return read_signal(file, o);
+}
+
+void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required) {
+  auto* o = cmd->add_option("SIGNAL", a.file,
+                            "WAV/FLAC/AIFF (libsndfile), CSV, raw .f32/.s16 (- for stdin, raw)");
+  if (required) o->required();
+  cmd->add_option("--rate", a.rate, "sample rate, Hz (raw data, CSV without a time column)");
+  cmd->add_option("--format", a.format, "auto, wav, csv, f32 or s16 (default: by extension)");
+  cmd->add_option("--channel", a.channel, "0-based channel (or CSV data column)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+std::pair<double, double> parse_band(const std::string& opt, const std::string& text) {
+  const auto colon = text.find(':');
+  char* e1 = nullptr;
+  char* e2 = nullptr;
+  const std::string a = text.substr(0, colon),
+                    b = colon == std::string::npos ? "" : text.substr(colon + 1);
+  const double lo = std::strtod(a.c_str(), &e1), hi = std::strtod(b.c_str(), &e2);
+  if (colon == std::string::npos || a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0' ||
+      !(lo > 0 && hi > lo)) {
+    throw InputError(fmt::format(
+        "{} '{}': expected LOW:HIGH in Hz with 0 < LOW < HIGH, e.g. 2000:5000", opt, text));
+  }
+  return {lo, hi};
+}
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+struct sigaction g_old_action {};
+
+}  // namespace
+
+GuardedRun::GuardedRun(bool progress)
+    : bar_(progress && isatty(STDERR_FILENO) != 0), start_(std::chrono::steady_clock::now()) {
+  g_interrupted.store(false);
+  struct sigaction sa {};
+  sa.sa_handler = [](int) { g_interrupted.store(true); };
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, &g_old_action);
+}
+
+GuardedRun::~GuardedRun() { sigaction(SIGINT, &g_old_action, nullptr); }
+
+const std::atomic<bool>* GuardedRun::cancel() const { return &g_interrupted; }
+
+std::function<void(std::size_t, std::size_t)> GuardedRun::progress() const {
+  if (!bar_) return {};
+  return [start = start_](std::size_t done, std::size_t total) {
+    const double f =
+        static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(1, total));
+    const double el =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int w = 30, filled = static_cast<int>(f * w);
+    fmt::print(stderr, "\r[{}{}] {:5.1f} %  ETA {:.0f} s   ",
+               std::string(static_cast<std::size_t>(filled), '#'),
+               std::string(static_cast<std::size_t>(w - filled), '.'), 100 * f,
+               f > 0 ? el * (1 - f) / f : 0.0);
+  };
+}
+
+void GuardedRun::done() const {
+  if (bar_) fmt::print(stderr, "\r{}\r", std::string(60, ' '));
+}
+
+double memory_limit_bytes(std::optional<double> limit_gb) {
+  if (limit_gb && !(*limit_gb > 0)) {
+    throw InputError(fmt::format("--memory-limit must be > 0 GB, got {}", *limit_gb));
+  }
+  return limit_gb ? *limit_gb * 1e9
+                  : 0.75 * static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
+                        static_cast<double>(sysconf(_SC_PAGE_SIZE));
+}
+
+void add_memory_limit(CLI::App* cmd, std::optional<double>& limit_gb) {
+  cmd->add_option("--memory-limit", limit_gb,
+                  "refuse to start above this estimate, GB (default: 75 % of RAM)");
+}
+
+}  // namespace trochomill::cli

@@ -1,0 +1,98 @@
+// What every command of the CLI shares: the job argument with `--set` (and the flags that are
+// aliases of job keys), output emission ("-" is stdout), the time window of a path, signal
+// input options, and the guarded long run (memory check, Ctrl-C, progress bar). Each command
+// group registers its commands on the app in its own file (commands.hpp); main.cpp dispatches
+// and maps errors to exit codes.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "trochomill/job.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/signal.hpp"
+
+namespace trochomill::cli {
+
+/// A command's job: the file, its `--set` overrides, and alias flags that set job keys.
+struct JobArgs {
+  std::string file;
+  std::vector<std::string> sets;
+  /// (key, value) of the alias flags given, applied after the --set overrides.
+  std::vector<std::pair<std::string, std::string>> aliases;
+  [[nodiscard]] std::vector<Override> overrides() const;
+  [[nodiscard]] Job load() const;
+};
+/// Adds JOB (required) and --set to a command.
+void add_job_args(CLI::App* cmd, JobArgs& a);
+/// A flag that is an alias of a job key: `--flag VALUE` is `--set key=VALUE`, validated by the
+/// job schema alone (the message names the flag's key).
+void add_key_alias(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
+                   const std::string& help);
+/// A flag without a value that sets a key to `value` (e.g. --chords: machine.arc_output=chords).
+void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
+                  const std::string& value, const std::string& help);
+
+/// The job's planned path, or the NC program's when one is given.
+[[nodiscard]] ToolPath job_path(const Job& job, const std::string& gcode_file);
+
+/// Writes text to a file atomically, or to stdout for "-".
+void emit(const std::string& target, const std::string& text);
+/// True when the summary goes to stdout: no output option writes to "-".
+[[nodiscard]] bool summary_to_stdout(std::initializer_list<const std::string*> outputs);
+
+/// A time window: --cycles A:B or --from/--to (s), or the whole path.
+struct WindowArgs {
+  std::string cycles;
+  std::optional<double> from_s, to_s;
+  [[nodiscard]] bool given() const { return !cycles.empty() || from_s || to_s; }
+  [[nodiscard]] std::pair<double, double> resolve(const ToolPath& path) const;
+};
+void add_window_args(CLI::App* cmd, WindowArgs& w, const std::string& what);
+
+/// Signal-reading options shared by monitor and spectrum.
+struct SignalArgs {
+  std::string file;
+  std::optional<double> rate;
+  std::string format = "auto";
+  int channel = 0;
+  [[nodiscard]] Signal read() const;
+};
+void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required);
+
+/// "LO:HI" in Hz (0 < LO < HI). Throws InputError naming the option.
+[[nodiscard]] std::pair<double, double> parse_band(const std::string& opt, const std::string& text);
+
+/// A long run: refuses to start when the estimated memory passes the limit (bytes; by default
+/// 75 % of RAM), turns Ctrl-C into a flag the library polls (the previous handler comes back
+/// when it ends), and shows a progress bar with ETA on a terminal.
+class GuardedRun {
+ public:
+  /// `progress`: show a bar when stderr is a terminal.
+  explicit GuardedRun(bool progress);
+  ~GuardedRun();
+  GuardedRun(const GuardedRun&) = delete;
+  GuardedRun& operator=(const GuardedRun&) = delete;
+  /// The flag Ctrl-C sets.
+  [[nodiscard]] const std::atomic<bool>* cancel() const;
+  /// The progress callback (empty when no bar is shown).
+  [[nodiscard]] std::function<void(std::size_t, std::size_t)> progress() const;
+  /// Clears the bar's line.
+  void done() const;
+
+ private:
+  bool bar_;
+  std::chrono::steady_clock::time_point start_;
+};
+/// The memory limit of a long run (bytes): `--memory-limit` GB (> 0, else InputError), or 75 %
+/// of the machine's RAM.
+[[nodiscard]] double memory_limit_bytes(std::optional<double> limit_gb);
+/// Adds --memory-limit (GB).
+void add_memory_limit(CLI::App* cmd, std::optional<double>& limit_gb);
+
+}  // namespace trochomill::cli

@@ -1,0 +1,80 @@
+// analyze and compare: the process metrics of a slot program, and a parameter study over a
+// grid of job variants.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <memory>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/force.hpp"
+#include "trochomill/report.hpp"
+
+namespace trochomill::cli {
+
+void register_analysis_commands(CLI::App& app, int& exit_code) {
+  // analyze
+  {
+    struct Args {
+      JobArgs job;
+      std::string gcode, json, csv;
+    };
+    auto a = std::make_shared<Args>();
+    auto* cmd = app.add_subcommand(
+        "analyze", "engagement, chip thickness, times, MRR, waviness of a slot program");
+    add_job_args(cmd, a->job);
+    cmd->add_option("--gcode", a->gcode, "analyse this NC program instead of the planned path");
+    cmd->add_option("--json", a->json, "write the metrics as JSON (- for stdout)");
+    cmd->add_option("--csv", a->csv, "write the time series as CSV (- for stdout)");
+    cmd->final_callback([a, &exit_code] {
+      const Job job = a->job.load();
+      const ProcessMetrics m = analyze_with_forces(job, job_path(job, a->gcode));
+      if (!a->json.empty()) emit(a->json, metrics_json(job, m));
+      if (!a->csv.empty()) emit(a->csv, series_csv(job, m.series));
+      if (summary_to_stdout({&a->json, &a->csv})) {
+        fmt::print("{}", metrics_text(a->job.file, a->gcode, job, m));
+      }
+      exit_code = 0;
+    });
+  }
+  // compare
+  {
+    struct Args {
+      JobArgs job;
+      std::vector<std::string> vary;
+      std::string json, csv;
+      int threads = 0;
+    };
+    auto a = std::make_shared<Args>();
+    auto* cmd = app.add_subcommand("compare", "analyse a grid of job variants in parallel");
+    add_job_args(cmd, a->job);
+    cmd->add_option("--vary", a->vary,
+                    "section.key=v1,v2,... (repeatable: several give a grid), e.g. "
+                    "path.aspect_ratio=0.8,1.0,1.2")
+        ->required();
+    cmd->add_option("--json", a->json, "write the study as JSON (- for stdout)");
+    cmd->add_option("--csv", a->csv, "write the study as CSV (- for stdout)");
+    cmd->add_option("--threads", a->threads, "worker threads (0: all cores)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->final_callback([a, &exit_code] {
+      const std::vector<Override> base = a->job.overrides();
+      std::vector<Vary> varies;
+      for (const auto& v : a->vary) varies.push_back(parse_vary(v));
+      const JobDocument doc = JobDocument::load(a->job.file);
+      (void)doc.build(base);  // a bad base job is bad input (exit 2)
+      const auto points = run_study(doc, base, varies, a->threads, [](const Job& job) {
+        return analyze_with_forces(job, plan_path(job).path);
+      });
+      if (!a->json.empty()) emit(a->json, study_json(varies, points));
+      if (!a->csv.empty()) emit(a->csv, study_csv(varies, points));
+      if (summary_to_stdout({&a->json, &a->csv})) fmt::print("{}", study_table(varies, points));
+      if (std::none_of(points.begin(), points.end(), [](const StudyPoint& p) { return p.ok; })) {
+        throw InputError("compare: every point of the grid failed (see the table)");
+      }
+      exit_code = 0;
+    });
+  }
+}
+
+}  // namespace trochomill::cli

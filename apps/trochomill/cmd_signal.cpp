@@ -1,0 +1,157 @@
+// monitor, synth-signal and spectrum: Pivkin 2025's vibroacoustic k_f monitor (offline or
+// live), a synthetic recording that follows the model's zones, and the spectrum of a signal.
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
+#include "trochomill/report.hpp"
+#include "trochomill/signal.hpp"
+
+namespace trochomill::cli {
+
+void register_signal_commands(CLI::App& app, int& exit_code) {
+  // monitor
+  {
+    struct Args {
+      SignalArgs signal;
+      JobArgs job;
+      std::string json, csv;
+      double start_s = 0;
+      bool stream = false;
+    };
+    auto a = std::make_shared<Args>();
+    auto* cmd = app.add_subcommand(
+        "monitor", "vibroacoustic k_f = RMS(low band) / RMS(high band) per trochoid cycle, flags");
+    add_signal_args(cmd, a->signal, false);
+    cmd->add_option("--job", a->job.file,
+                    "job file: cycle timing, [monitor] settings, model zones");
+    cmd->add_option("--set", a->job.sets, "override a job key (repeatable)")->take_all();
+    cmd->add_option("--start", a->start_s, "time in the signal where the program starts, s");
+    // The band flags set two keys each; they are aliases of [monitor] keys like the others.
+    cmd->add_option_function<std::string>(
+        "--low",
+        [a](const std::string& v) {
+          const auto [lo, hi] = parse_band("--low", v);
+          a->job.aliases.emplace_back("--low=monitor.low_min", fmt::format("{}", lo));
+          a->job.aliases.emplace_back("--low=monitor.low_max", fmt::format("{}", hi));
+        },
+        "low band LOW:HIGH, Hz (the job keys monitor.low_min, low_max; default 2000:5000)");
+    cmd->add_option_function<std::string>(
+        "--high",
+        [a](const std::string& v) {
+          const auto [lo, hi] = parse_band("--high", v);
+          a->job.aliases.emplace_back("--high=monitor.high_min", fmt::format("{}", lo));
+          a->job.aliases.emplace_back("--high=monitor.high_max", fmt::format("{}", hi));
+        },
+        "high band LOW:HIGH, Hz (the job keys monitor.high_min, high_max; default 8000:13000)");
+    add_key_alias(cmd, a->job, "--order", "monitor.order", "Butterworth order per band");
+    add_key_alias(cmd, a->job, "--window", "monitor.window", "RMS window, s");
+    cmd->add_option("--json", a->json, "write the results as JSON (- for stdout)");
+    cmd->add_option("--csv", a->csv, "write the per-window series as CSV (- for stdout)");
+    cmd->add_flag("--stream", a->stream,
+                  "live: read samples from stdin (--format f32, s16 or csv; --rate), one JSON "
+                  "line per window");
+    cmd->final_callback([a, &exit_code] {
+      std::optional<Job> job;
+      MonitorSettings m;
+      if (!a->job.file.empty()) {
+        job = a->job.load();
+        m = job->monitor;
+      } else {
+        if (!a->job.sets.empty()) throw InputError("--set needs --job");
+        Job defaults;  // no job file: the band flags set the default settings
+        apply_overrides(defaults, a->job.overrides());
+        m = defaults.monitor;
+      }
+      exit_code = 0;
+      if (a->stream) {
+        if (!a->signal.file.empty() && a->signal.file != "-")
+          throw InputError("--stream reads stdin: give no SIGNAL (or -)");
+        if (!a->signal.rate) throw InputError("--stream needs --rate (Hz)");
+        const SampleFormat f =
+            parse_sample_format(a->signal.format == "auto" ? "f32" : a->signal.format);
+        LiveMonitor live(*a->signal.rate, m, job ? &*job : nullptr, a->start_s);
+        monitor_stream(stdin, f, live, [](const LiveWindow& w) {
+          const std::string line = live_json_line(w);
+          std::fwrite(line.data(), 1, line.size(), stdout);
+          std::fflush(stdout);  // one line per window, as soon as it completes
+        });
+        return;
+      }
+      if (a->signal.file.empty()) throw InputError("monitor: give a SIGNAL file (or --stream)");
+      const Signal sig = a->signal.read();
+      validate(m, sig.rate_hz);
+      const MonitorReport r = analyze_signal(sig, m, job ? &*job : nullptr, a->start_s);
+      if (!a->json.empty()) emit(a->json, monitor_json(r, a->signal.file, sig, m));
+      if (!a->csv.empty()) emit(a->csv, monitor_csv(r));
+      if (summary_to_stdout({&a->json, &a->csv})) {
+        fmt::print("{}", monitor_table(r, a->signal.file, sig));
+      }
+    });
+  }
+  // synth-signal
+  {
+    struct Args {
+      JobArgs job;
+      std::string out;
+      SynthOptions synth;
+    };
+    auto a = std::make_shared<Args>();
+    auto* cmd = app.add_subcommand(
+        "synth-signal", "synthetic vibroacoustic signal following the model's zones (WAV)");
+    add_job_args(cmd, a->job);
+    SynthOptions& syn = a->synth;
+    cmd->add_option("-o,--output", a->out, "output WAV file")->required();
+    cmd->add_option("--rate", syn.rate_hz, "sample rate, Hz (default 100000)");
+    cmd->add_option("--cycles", syn.cycles, "trochoid cycles to cover (default 12)");
+    cmd->add_option("--kf-czi", syn.kf_czi, "k_f in CZI (default 1.6)");
+    cmd->add_option("--kf-czii", syn.kf_czii, "k_f in CZII (default 1.15)");
+    cmd->add_option("--kf-cziii", syn.kf_cziii, "k_f in CZIII (default 1.0)");
+    cmd->add_option("--wear-drift", syn.wear_drift,
+                    "k_f grows by this fraction from the first cycle to the last (default 0)");
+    cmd->add_option("--noise", syn.noise, "white noise RMS relative to cutting (default 0.02)");
+    cmd->add_option("--lead", syn.lead_s, "air before the program start, s (default 0.1)");
+    cmd->add_option("--seed", syn.seed, "random seed (default 1)");
+    cmd->final_callback([a, &exit_code] {
+      const Job job = a->job.load();
+      const Signal sig = synth_signal(job, job.monitor, a->synth);
+      write_file_atomic(a->out,
+                        [&](const std::filesystem::path& tmp) { write_wav(tmp.string(), sig); });
+      fmt::print("{}: {:.3f} s at {:g} Hz, {} cycles from the program start at {:g} s -> {}\n",
+                 a->job.file, sig.duration_s(), sig.rate_hz, a->synth.cycles, a->synth.lead_s,
+                 a->out);
+      exit_code = 0;
+    });
+  }
+  // spectrum
+  {
+    struct Args {
+      SignalArgs signal;
+      int nfft = 4096;
+      std::string csv, spectrogram;
+    };
+    auto a = std::make_shared<Args>();
+    auto* cmd = app.add_subcommand("spectrum", "Welch spectrum and spectrogram, to choose bands");
+    add_signal_args(cmd, a->signal, true);
+    cmd->add_option("--nfft", a->nfft, "FFT length, a power of two (default 4096)");
+    cmd->add_option("--csv", a->csv, "write the PSD as CSV (- for stdout)");
+    cmd->add_option("--spectrogram", a->spectrogram,
+                    "write the spectrogram as CSV (t_s, f_hz, db)");
+    cmd->final_callback([a, &exit_code] {
+      const Signal sig = a->signal.read();
+      const Spectrum sp = welch(sig, a->nfft);
+      if (!a->csv.empty()) emit(a->csv, spectrum_csv(sp));
+      if (!a->spectrogram.empty()) {
+        emit(a->spectrogram, spectrogram_csv(spectrogram(sig, a->nfft)));
+      }
+      if (a->csv != "-") fmt::print("{}", spectrum_text(a->signal.file, sig, sp, a->nfft));
+      exit_code = 0;
+    });
+  }
+}
+
+}  // namespace trochomill::cli

@@ -1,0 +1,32 @@
+// Settings of the mechanism module (mechanism.hpp): Pivkin 2025's zone thresholds, the chip
+// model and the recommendation's share; `[mechanism]` and `[material] friction_angle` in the
+// job (src/job/schema.cpp holds their keys, units and ranges).
+#pragma once
+
+namespace trochomill {
+
+enum class ChipModel {
+  exact,       ///< chip between the tool circle, the previous tooth's circle and the earlier
+               ///< cycles' envelopes (semi-closed form; agrees with `analyze`'s kernel)
+  pivkin2025,  ///< Pivkin 2025's published model (Eqs. 2-23), class Pivkin2025
+};
+
+/// Mechanism thresholds (percent of r_e) and the recommendation's default share.
+struct MechanismThresholds {
+  double czi_max_pct = 25;     ///< K_re below this: CZI (ploughing)
+  double czii_max_pct = 60;    ///< K_re below this (and >= czi_max): CZII; above: CZIII
+  double transition_pct = 40;  ///< marker where the acoustic ratio k_f crosses 1
+};
+
+/// `[mechanism]`; the flank wear VB_B is the tool's (`[tool] flank_wear`).
+struct MechanismSettings {
+  MechanismThresholds thresholds;
+  double share = 0.5;  ///< required CZIII share of the cutting part (0..1)
+  ChipModel model = ChipModel::exact;
+  int points = 3600;  ///< theta samples per cycle
+  /// `[material] friction_angle` theta_m (degrees) for h_m = r_e (1 - cos theta_m); 0 = not
+  /// given.
+  double friction_angle_deg = 0;
+};
+
+}  // namespace trochomill

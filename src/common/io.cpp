@@ -1,0 +1,192 @@
+// The I/O toolkit (io.hpp): atomic output, file reading, CSV, string helpers.
+#include "trochomill/io.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "trochomill/error.hpp"
+
+namespace trochomill {
+
+namespace fs = std::filesystem;
+
+void write_file_atomic(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw IoError("cannot write '" + path.string() + "': directory '" + dir.string() +
+                  "' does not exist");
+  }
+  // A unique name per call: the random suffix avoids clashes between processes and threads.
+  std::random_device rd;
+  const fs::path tmp = path.string() + ".tmp." + std::to_string(rd());
+  try {
+    write(tmp);
+  } catch (...) {
+    fs::remove(tmp, ec);
+    throw;
+  }
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw IoError("cannot write '" + path.string() + "': " + ec.message());
+  }
+}
+
+void write_file_atomic(const fs::path& path, std::string_view content) {
+  write_file_atomic(path, [&](const fs::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw IoError("cannot write '" + path.string() + "': " + std::strerror(errno));
+    out.write(content.data(), static_cast<std::streamsize>(content.size()));
+    out.flush();
+    if (!out) throw IoError("cannot write '" + path.string() + "': write failed");
+  });
+}
+
+std::string read_file(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    throw IoError("cannot read '" + path.string() + "': it is a directory");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw IoError("cannot read '" + path.string() + "': " + std::strerror(errno));
+  }
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw IoError("cannot read '" + path.string() + "': read failed");
+  return ss.str();
+}
+
+std::string read_text_file(const fs::path& path) {
+  try {
+    return read_file(path);
+  } catch (const IoError& e) {
+    throw InputError(e.what());
+  }
+}
+
+std::string trim(std::string_view s, std::string_view chars) {
+  const auto b = s.find_first_not_of(chars);
+  if (b == std::string_view::npos) return {};
+  const auto e = s.find_last_not_of(chars);
+  return std::string(s.substr(b, e - b + 1));
+}
+
+std::vector<std::string> split_trimmed(std::string_view s, char sep) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  for (;;) {
+    const auto p = s.find(sep, start);
+    out.push_back(trim(s.substr(start, p == std::string_view::npos ? s.npos : p - start)));
+    if (p == std::string_view::npos) return out;
+    start = p + 1;
+  }
+}
+
+namespace {
+
+std::vector<std::string> fields_of(std::string_view line, bool detect) {
+  char sep = ',';
+  if (detect) {
+    sep = line.find(',') != std::string_view::npos   ? ','
+          : line.find(';') != std::string_view::npos ? ';'
+                                                     : '\t';
+  }
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  for (;;) {
+    const auto p = line.find(sep, start);
+    const std::string_view f =
+        line.substr(start, p == std::string_view::npos ? line.npos : p - start);
+    out.push_back(trim(f, detect ? " \t\r\"" : " \t\r"));
+    if (p == std::string_view::npos) return out;
+    start = p + 1;
+  }
+}
+
+bool parse_number(const std::string& f, double& v) {
+  char* end = nullptr;
+  v = std::strtod(f.c_str(), &end);
+  return !f.empty() && *end == '\0';
+}
+
+}  // namespace
+
+CsvTable parse_csv(std::string_view text, std::string_view source, const CsvOptions& o) {
+  CsvTable t;
+  std::vector<std::size_t> index;  // selected field of each output column
+  bool first = true;
+  std::size_t width = 0, ln = 0, start = 0;
+  while (start < text.size()) {
+    auto nl = text.find('\n', start);
+    if (nl == std::string_view::npos) nl = text.size();
+    std::string_view line = text.substr(start, nl - start);
+    start = nl + 1;
+    ++ln;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.find_first_not_of(" \t") == std::string_view::npos || line[0] == '#') continue;
+    const std::vector<std::string> f = fields_of(line, o.detect_separator);
+    if (first) {
+      first = false;
+      width = f.size();
+      double v = 0;
+      if (!o.columns.empty() || !parse_number(f.empty() ? std::string() : f[0], v)) {
+        t.header = f;
+        for (const auto& w : o.columns) {
+          const auto it = std::find(t.header.begin(), t.header.end(), w);
+          if (it == t.header.end()) {
+            std::string have;
+            for (const auto& h : t.header) have += (have.empty() ? "" : ", ") + h;
+            throw InputError(
+                fmt::format("{}:{}: no column '{}' (the header has: {})", source, ln, w, have));
+          }
+          index.push_back(static_cast<std::size_t>(it - t.header.begin()));
+        }
+        continue;
+      }
+    }
+    if (o.columns.empty()) {
+      if (o.same_width && f.size() != width) {
+        throw InputError(
+            fmt::format("{}:{}: {} columns, the first row has {}", source, ln, f.size(), width));
+      }
+      index.resize(f.size());
+      for (std::size_t k = 0; k < f.size(); ++k) index[k] = k;
+    }
+    std::vector<double> row;
+    row.reserve(index.size());
+    for (std::size_t k = 0; k < index.size(); ++k) {
+      const std::size_t c = index[k];
+      if (c >= f.size()) {
+        throw InputError(fmt::format("{}:{}: {} fields, column '{}' is field {}", source, ln,
+                                     f.size(), o.columns[k], c + 1));
+      }
+      double v = 0;
+      if (!parse_number(f[c], v) || !std::isfinite(v)) {
+        throw InputError(
+            o.columns.empty()
+                ? fmt::format("{}:{}:{}: '{}' is not a finite number", source, ln, c + 1, f[c])
+                : fmt::format("{}:{}:{}: '{}' in column '{}' is not a number", source, ln, c + 1,
+                              f[c], o.columns[k]));
+      }
+      row.push_back(v);
+    }
+    t.rows.push_back(std::move(row));
+    t.line_of_row.push_back(ln);
+  }
+  if (!o.columns.empty() && t.header.empty()) {
+    throw InputError(fmt::format("{}: empty file (no header line)", source));
+  }
+  return t;
+}
+
+}  // namespace trochomill

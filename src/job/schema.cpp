@@ -1,0 +1,758 @@
+// The job schema: one entry per key (section, key, type, unit, allowed range or choices, the
+// struct member it fills, what it means), with the default read from the struct. The table
+// drives parsing and validation (build_job), the unknown-key suggestions, `--set` (an
+// override is validated as the key it sets) and the key reference of docs/user-guide.md
+// (job_keys_markdown; a test fails when the two differ). The rules that tie several keys
+// together (one of feed_rate or feed_per_tooth, the slot wider than the tool, a material
+// model's coefficients) follow the table in build_job.
+#include "job/schema.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <functional>
+#include <set>
+#include <type_traits>
+
+#include "job/names.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill::job_detail {
+namespace {
+
+template <class T>
+struct is_optional : std::false_type {};
+template <class T>
+struct is_optional<std::optional<T>> : std::true_type {};
+
+// The member a key fills: a function from the job to a reference to it.
+template <class T>
+using Field = T& (*)(Job&);
+
+std::string show_number(double v) { return fmt_num(v); }
+
+template <class E, std::size_t N>
+std::vector<std::pair<std::string, E>> options_of(const Names<E> (&table)[N]) {
+  std::vector<std::pair<std::string, E>> out;
+  for (const auto& [name, v] : table) out.emplace_back(std::string(name), v);
+  return out;
+}
+
+template <class E, std::size_t N>
+std::string choices_text(const Names<E> (&table)[N]) {
+  std::string out;
+  for (const auto& [name, v] : table) out += (out.empty() ? "" : " | ") + std::string(name);
+  return out;
+}
+
+// A number key: absent keeps the member's value (the struct's default, or a library
+// material's coefficient); an optional member stays empty.
+template <class T>
+Key number(const char* section, const char* key, const char* unit, Range range, Field<T> field,
+           const char* doc, bool required = false) {
+  Key k{section, key, "number", unit, range.describe(), required, doc, {}, {}};
+  k.read = [=](JobReader& r, Job& job) {
+    T& dst = field(job);
+    if constexpr (is_optional<T>::value) {
+      if (auto v = r.number(section, key, unit, range)) dst = *v;
+    } else {
+      dst = r.number(section, key, unit, range, dst, required).value_or(dst);
+    }
+  };
+  k.show = [=](Job& defaults) -> std::string {
+    if (required) return "required";
+    if constexpr (is_optional<T>::value) {
+      const T& v = field(defaults);
+      return v ? show_number(*v) : "none";
+    } else {
+      return show_number(field(defaults));
+    }
+  };
+  return k;
+}
+
+Key integer(const char* section, const char* key, int lo, int hi, Field<int> field, const char* doc,
+            bool required = false) {
+  Key k{section, key, "integer", "", fmt::format("in [{}, {}]", lo, hi), required, doc, {}, {}};
+  k.read = [=](JobReader& r, Job& job) {
+    int& dst = field(job);
+    dst = r.integer(section, key, lo, hi, dst, required).value_or(dst);
+  };
+  k.show = [=](Job& d) { return required ? std::string("required") : fmt::format("{}", field(d)); };
+  return k;
+}
+
+template <class E, std::size_t N>
+Key choice(const char* section, const char* key, const Names<E> (&table)[N], Field<E> field,
+           const char* doc, bool required = false) {
+  Key k{section, key, "choice", "", choices_text(table), required, doc, {}, {}};
+  k.read = [=, options = options_of(table)](JobReader& r, Job& job) {
+    E& dst = field(job);
+    dst = r.choice<E>(section, key, options, dst, required).value_or(dst);
+  };
+  k.show = [=, &table](Job& d) {
+    return required ? std::string("required") : std::string(name_of(table, field(d)));
+  };
+  return k;
+}
+
+// A key whose reading is its own (arrays, keys that depend on others): `read` does it all.
+Key custom(const char* section, const char* key, const char* type, const char* unit,
+           std::string allowed, std::string default_text, const char* doc,
+           std::function<void(JobReader&, Job&)> read) {
+  return Key{section,
+             key,
+             type,
+             unit,
+             std::move(allowed),
+             false,
+             doc,
+             std::move(read),
+             [d = std::move(default_text)](Job&) { return d; }};
+}
+
+#define FIELD(member)     \
+  +[](Job & j) -> auto& { \
+    return j.member;      \
+  }
+
+// [material] keys (also read for a library entry, whose keys the job's then override).
+std::vector<Key> material_keys() {
+  const Range exponent{0.0, 1.0, true, false};
+  return {
+      custom("material", "name", "string", "", "a name of `trochomill materials`", "none",
+             "take the coefficients from the materials library (the job's keys override them)",
+             [](JobReader& r, Job& job) {
+               if (auto name = r.string("material", "name")) {
+                 try {
+                   job.material = library_material(*name);
+                 } catch (const InputError& e) {
+                   r.problem("material", "name", e.what());
+                 }
+               }
+             }),
+      custom("material", "source", "string", "", "text", "none", "citation of the coefficients",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.string("material", "source")) job.material.source = *v;
+             }),
+      custom("material", "notes", "string", "", "text", "none",
+             "conditions the coefficients hold for (tool, speed, coolant...)",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.string("material", "notes")) job.material.notes = *v;
+             }),
+      custom("material", "model", "choice", "", choices_text(kForceModels), "none",
+             "force model (docs/models.md section 12); absent: no force model",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.choice<ForceModel>("material", "model", options_of(kForceModels),
+                                                 std::nullopt)) {
+                 job.material.model = *v;
+               }
+             }),
+      number("material", "k_c", "N/mm^2", positive(), FIELD(material.k_c),
+             "specific cutting force along the cutting direction (bergmann, kienzle)"),
+      number("material", "k_n", "N/mm^2", Range{}, FIELD(material.k_n),
+             "specific normal force along the contour normal (bergmann, kienzle)"),
+      number("material", "m", "", exponent, FIELD(material.m),
+             "exponent of h: F = w h^(1 - m) k (bergmann, kienzle)"),
+      number("material", "m_n", "", exponent, FIELD(material.m_n),
+             "kienzle: exponent of the normal force (default m)"),
+      number("material", "k_a", "N/mm^2", Range{}, FIELD(material.k_a),
+             "kienzle: specific force up the edge"),
+      number("material", "m_a", "", exponent, FIELD(material.m_a),
+             "kienzle: exponent of the force up the edge (default m)"),
+      number("material", "k_tc", "N/mm^2", positive(), FIELD(material.k_tc),
+             "linear: tangential cutting coefficient"),
+      number("material", "k_rc", "N/mm^2", Range{}, FIELD(material.k_rc),
+             "linear: radial cutting coefficient"),
+      number("material", "k_ac", "N/mm^2", Range{}, FIELD(material.k_ac),
+             "linear: axial cutting coefficient"),
+      number("material", "k_te", "N/mm", Range{}, FIELD(material.k_te),
+             "linear: tangential edge coefficient"),
+      number("material", "k_re", "N/mm", Range{}, FIELD(material.k_re),
+             "linear: radial edge coefficient"),
+      number("material", "k_ae", "N/mm", Range{}, FIELD(material.k_ae),
+             "linear: axial edge coefficient"),
+  };
+}
+
+// Per-insert seating arrays of an insert mill.
+void read_insert_array(JobReader& r, Job& job, const char* key, std::vector<double>& dest) {
+  const Tool& tool = job.tool;
+  if (auto v = r.number_array("tool", key, Range{-1.0, 1.0})) {
+    if (tool.type != ToolType::insert_mill) {
+      r.problem("tool", key, "applies to type = \"insert_mill\"");
+    } else if (tool.teeth > 0 && static_cast<int>(v->size()) != tool.teeth) {
+      r.problem("tool", key,
+                fmt::format("must list one value (mm) per insert ({} for teeth = {}), got {}",
+                            tool.teeth, tool.teeth, v->size()));
+    } else {
+      dest = *v;
+    }
+  }
+}
+
+std::vector<Key> build_schema() {
+  std::vector<Key> keys =
+      {
+          // [tool]
+          number("tool", "diameter", "mm", positive(), FIELD(tool.diameter_mm), "cutter diameter D",
+                 true),
+          integer("tool", "teeth", 1, 64, FIELD(tool.teeth), "number of teeth Z", true),
+          number("tool", "helix_angle", "degrees", Range{0, 90, true, false},
+                 FIELD(tool.helix_angle_deg), "helix angle"),
+          number("tool", "corner_radius", "mm", non_negative(), FIELD(tool.corner_radius_mm),
+                 "corner radius (0: square end mill; at most D/2)"),
+          number("tool", "edge_radius", "mm", non_negative(), FIELD(tool.edge_radius_mm),
+                 "cutting-edge rounding radius r_e (below D/10)"),
+          number("tool", "flute_length", "mm", non_negative(), FIELD(tool.flute_length_mm),
+                 "flute length, the edge's axial reach (0: not given)"),
+          number("tool", "runout_radial", "mm", non_negative(), FIELD(tool.runout_radial_mm),
+                 "radial runout: the axis offset e"),
+          number("tool", "runout_axial", "mm", non_negative(), FIELD(tool.runout_axial_mm),
+                 "axial runout"),
+          number("tool", "runout_phase", "degrees", Range{-360, 360}, FIELD(tool.runout_phase_deg),
+                 "angle of the runout offset relative to tooth 0"),
+          integer("tool", "tool_number", 0, 9999, FIELD(tool.tool_number),
+                  "T word of the tool change"),
+          custom("tool", "tooth_angles", "array of numbers", "degrees",
+                 "strictly increasing in [0, 360), one per tooth", "equal pitches",
+                 "tooth angular positions (variable pitch)",
+                 [](JobReader& r, Job& job) {
+                   Tool& tool = job.tool;
+                   auto angles = r.number_array("tool", "tooth_angles", Range{0, 360, true, false});
+                   if (!angles) return;
+                   if (tool.teeth > 0 && static_cast<int>(angles->size()) != tool.teeth) {
+                     r.problem("tool", "tooth_angles",
+                               fmt::format("must list one angle per tooth ({} values for teeth = "
+                                           "{}), got {}",
+                                           tool.teeth, tool.teeth, angles->size()));
+                   } else if (!std::is_sorted(angles->begin(), angles->end()) ||
+                              std::adjacent_find(angles->begin(), angles->end()) != angles->end()) {
+                     r.problem("tool", "tooth_angles",
+                               "must be strictly increasing degrees in [0, 360)");
+                   } else {
+                     tool.tooth_angles_deg = *angles;
+                   }
+                 }),
+          choice("tool", "type", kToolTypes, FIELD(tool.type),
+                 "solid end mill or indexable insert mill"),
+          custom("tool", "lead_angle", "number", "degrees", "in (0, 90]", "90",
+                 "insert mill: the main edge's angle to the face",
+                 [](JobReader& r, Job& job) {
+                   const auto lead =
+                       r.number("tool", "lead_angle", "degrees", Range{0, 90, false, true}, 90.0);
+                   if (!lead) return;
+                   if (job.tool.type != ToolType::insert_mill && *lead != 90.0) {
+                     r.problem("tool", "lead_angle",
+                               "applies to type = \"insert_mill\" (an end mill's flank is at 90 "
+                               "degrees)");
+                   } else {
+                     job.tool.lead_angle_deg = *lead;
+                   }
+                 }),
+          custom("tool", "insert_radial", "array of numbers", "mm", "in [-1, 1], one per insert",
+                 "none", "insert mill: each insert's radial seating",
+                 [](JobReader& r, Job& job) {
+                   read_insert_array(r, job, "insert_radial", job.tool.insert_radial_mm);
+                 }),
+          custom("tool", "insert_axial", "array of numbers", "mm", "in [-1, 1], one per insert",
+                 "none", "insert mill: each insert's axial seating",
+                 [](JobReader& r, Job& job) {
+                   read_insert_array(r, job, "insert_axial", job.tool.insert_axial_mm);
+                 }),
+          number("tool", "flank_wear", "mm", non_negative(), FIELD(tool.flank_wear_mm),
+                 "flank wear land VB_B (0: new tool)"),
+          // [slot]
+          number("slot", "width", "mm", positive(), FIELD(slot.width_mm), "slot width W along X",
+                 true),
+          number("slot", "length", "mm", positive(), FIELD(slot.length_mm), "slot length along +Y",
+                 true),
+          number("slot", "depth", "mm", positive(), FIELD(slot.depth_mm),
+                 "slot depth a_p below the top face z = 0", true),
+          // [path]
+          choice("path", "type", kPathTypes, FIELD(path.type), "path family", true),
+          custom("path", "step", "number", "mm", "> 0, below the tool diameter",
+                 "required (linear: when W > D)",
+                 "trochoidal step s (advance per cycle); stepover of the linear family",
+                 [](JobReader& r, Job& job) {
+                   const bool needs_step = job.path.type != PathType::linear ||
+                                           job.slot.width_mm > job.tool.diameter_mm;
+                   job.path.step_mm =
+                       r.number("path", "step", "mm", positive(), 0.0, needs_step).value_or(0.0);
+                 }),
+          number("path", "aspect_ratio", "(b/a)", positive(), FIELD(path.aspect_ratio),
+                 "r_e = b / a of the elliptical families"),
+          number("path", "linear_distance", "mm", non_negative(), FIELD(path.linear_distance_mm),
+                 "d, the straight wall move of linear-elliptical"),
+          choice("path", "direction", kDirections, FIELD(path.direction), "milling direction"),
+          choice("path", "entry", kEntries, FIELD(path.entry), "how the tool enters the slot"),
+          number("path", "entry_radius", "mm", non_negative(), FIELD(path.entry_radius_mm),
+                 "helix radius (0: automatic)"),
+          number("path", "entry_pitch", "mm per turn", positive(), FIELD(path.entry_pitch_mm),
+                 "helix descent per turn"),
+          number("path", "entry_angle", "degrees", Range{0, 90, false, false},
+                 FIELD(path.entry_angle_deg), "ramp angle"),
+          number("path", "entry_feed", "mm/min", non_negative(), FIELD(path.entry_feed_mm_per_min),
+                 "feed of the entry moves (0: half the feed)"),
+          number("path", "clearance", "mm", non_negative(), FIELD(path.clearance_mm),
+                 "distance kept from the stock before feeding in"),
+          // [cutting]: the pairs are checked and completed after the table.
+          number("cutting", "feed_rate", "mm/min", positive(), FIELD(cutting.feed_rate_mm_per_min),
+                 "f_r, tool-centre feed (or feed_per_tooth)"),
+          number("cutting", "spindle_speed", "rpm", positive(), FIELD(cutting.spindle_speed_rpm),
+                 "n (or cutting_speed)"),
+          number("cutting", "feed_per_tooth", "mm", positive(), FIELD(cutting.feed_per_tooth_mm),
+                 "f_z = f_r / (n Z) (or feed_rate)"),
+          number("cutting", "cutting_speed", "m/min", positive(),
+                 FIELD(cutting.cutting_speed_m_per_min), "v_c = pi D n / 1000 (or spindle_speed)"),
+          choice("cutting", "spindle_direction", kSpindleDirections,
+                 FIELD(cutting.spindle_direction), "spindle rotation seen from above"),
+          choice("cutting", "coolant", kCoolants, FIELD(cutting.coolant), "coolant"),
+          // [machine]
+          choice("machine", "dialect", kDialects, FIELD(machine.dialect), "control of the program"),
+          number("machine", "safe_z", "mm above the top face", positive(), FIELD(machine.safe_z_mm),
+                 "retract height above the top face"),
+          number("machine", "rapid_rate", "mm/min", positive(),
+                 FIELD(machine.rapid_rate_mm_per_min), "rapid traverse rate"),
+          number("machine", "max_acceleration", "mm/s^2", non_negative(),
+                 FIELD(machine.max_acceleration_mm_per_s2),
+                 "path acceleration limit for time estimates (0: unlimited)"),
+          number("machine", "junction_deviation", "mm", non_negative(),
+                 FIELD(machine.junction_deviation_mm),
+                 "corner blending tolerance for time estimates"),
+          number("machine", "arc_tolerance", "mm", Range{1e-6, 1.0},
+                 FIELD(machine.arc_tolerance_mm),
+                 "largest deviation of fitted arcs or chords from the path"),
+          choice("machine", "arc_output", kArcOutputs, FIELD(machine.arc_output),
+                 "elliptical arcs as biarcs (G2/G3) or as G1 chords"),
+          integer("machine", "program_number", 1, 9999, FIELD(machine.program_number),
+                  "O number of the program (fanuc)"),
+          // [measured]
+          number("measured", "force_max", "N", positive(), FIELD(measured.force_max_n),
+                 "measured maximum resultant force F_R,max"),
+          number("measured", "roughness_ra", "um", positive(), FIELD(measured.roughness_ra_um),
+                 "measured maximum roughness Ra"),
+          number("measured", "waviness", "um", positive(), FIELD(measured.waviness_um),
+                 "measured maximum wall waviness W_max"),
+          // [mechanism]
+          number("mechanism", "czi_max", "% of r_e", positive(),
+                 FIELD(mechanism.thresholds.czi_max_pct), "K_re below this: CZI (ploughing)"),
+          number("mechanism", "czii_max", "% of r_e", positive(),
+                 FIELD(mechanism.thresholds.czii_max_pct),
+                 "K_re below this: CZII; above: CZIII (greater than czi_max)"),
+          number("mechanism", "transition", "% of r_e", positive(),
+                 FIELD(mechanism.thresholds.transition_pct),
+                 "marker where the acoustic ratio k_f crosses 1"),
+          number("mechanism", "share", "fraction", Range{0.0, 1.0, false, true},
+                 FIELD(mechanism.share),
+                 "required CZIII share of the cutting part for `recommend`"),
+          choice("mechanism", "model", kChipModels, FIELD(mechanism.model), "chip model"),
+          integer("mechanism", "points", 36, 1000000, FIELD(mechanism.points),
+                  "theta samples per cycle"),
+          number("material", "friction_angle", "degrees", Range{0.0, 90.0, false, false},
+                 FIELD(mechanism.friction_angle_deg),
+                 "friction angle theta_m of h_m = r_e (1 - cos theta_m) (0: not given)"),
+          // [monitor]
+          number("monitor", "low_min", "Hz", positive(), FIELD(monitor.low_min_hz),
+                 "low band, lower edge"),
+          number("monitor", "low_max", "Hz", positive(), FIELD(monitor.low_max_hz),
+                 "low band, upper edge"),
+          number("monitor", "high_min", "Hz", positive(), FIELD(monitor.high_min_hz),
+                 "high band, lower edge"),
+          number("monitor", "high_max", "Hz", positive(), FIELD(monitor.high_max_hz),
+                 "high band, upper edge"),
+          integer("monitor", "order", 1, 12, FIELD(monitor.order),
+                  "Butterworth order of each band"),
+          number("monitor", "window", "s", Range{1e-5, 10.0}, FIELD(monitor.window_s),
+                 "RMS window (and hop)"),
+          integer("monitor", "baseline_cycles", 1, 1000, FIELD(monitor.baseline_cycles),
+                  "wear: cycles whose k_f level is the reference"),
+          number("monitor", "wear_ratio", "ratio", Range{1.0, 100.0, false, true},
+                 FIELD(monitor.wear_ratio),
+                 "wear flagged where the k_f level exceeds the reference by this"),
+          number("monitor", "ploughing_ratio", "ratio", Range{1.0, 100.0, false, true},
+                 FIELD(monitor.ploughing_ratio),
+                 "ploughing flagged where k_f in CZI exceeds CZIII's by this"),
+          integer("monitor", "phase_bins", 4, 10000, FIELD(monitor.phase_bins),
+                  "k_f profile bins over a cycle"),
+          // [simulation]
+          number("simulation", "resolution", "mm", Range{1e-4, 10.0},
+                 FIELD(simulation.resolution_mm), "dexel spacing"),
+          integer("simulation", "steps_per_rev", 8, 100000, FIELD(simulation.steps_per_rev),
+                  "time steps per spindle revolution"),
+          number("simulation", "chip_sampling", "mm", Range{1e-5, 1.0},
+                 FIELD(simulation.chip_sampling_mm), "resolution of a recorded chip"),
+          number("simulation", "segment", "mm", Range{1e-3, 10.0}, FIELD(simulation.segment_mm),
+                 "edge segment length along the edge (kappa)"),
+          integer("simulation", "sub_segments", 1, 100, FIELD(simulation.sub_segments),
+                  "sub-segments inward (tau), for wear topography"),
+          integer("simulation", "threads", 0, 1024, FIELD(simulation.threads),
+                  "worker threads (0: all cores); results are the same for any count"),
+          // [stock]
+          custom("stock", "min", "array of numbers", "mm", "[x, y, z], below max",
+                 "the slot region", "lower corner of the stock box (give min and max)",
+                 [](JobReader& r, Job& job) {
+                   const auto lo = r.number_array("stock", "min", Range{});
+                   const auto hi = r.number_array("stock", "max", Range{});
+                   if (lo.has_value() != hi.has_value()) {
+                     r.problem("stock", lo ? "max" : "min",
+                               "give both min and max ([x, y, z] in mm)");
+                   } else if (lo) {
+                     if (lo->size() != 3 || hi->size() != 3) {
+                       r.problem("stock", "min", "min and max must each be [x, y, z] in mm");
+                     } else if (!((*hi)[0] > (*lo)[0] && (*hi)[1] > (*lo)[1] &&
+                                  (*hi)[2] > (*lo)[2])) {
+                       r.problem("stock", "max", "every coordinate of max must exceed min's");
+                     } else {
+                       job.stock_min_mm = std::array<double, 3>{(*lo)[0], (*lo)[1], (*lo)[2]};
+                       job.stock_max_mm = std::array<double, 3>{(*hi)[0], (*hi)[1], (*hi)[2]};
+                     }
+                   }
+                 }),
+          custom("stock", "max", "array of numbers", "mm", "[x, y, z], above min",
+                 "the slot region", "upper corner of the stock box (read with min)",
+                 [](JobReader&, Job&) {}),
+          // [analysis]
+          integer("analysis", "steps_per_tooth", 1, 64, FIELD(analysis.steps_per_tooth),
+                  "engagement samples per tooth pass"),
+          integer("analysis", "imprint_points", 3, 10001, FIELD(analysis.imprint_points),
+                  "points across the slot width for the bottom imprint density"),
+      };
+  for (Key& k : material_keys()) keys.push_back(std::move(k));
+  const std::vector<Key> rest = {
+      // [forces]
+      integer("forces", "fast_steps_per_rev", 8, 100000, FIELD(forces.fast_steps_per_rev),
+              "fast chip source: time steps per revolution"),
+      number("forces", "ploughing_angle", "degrees", Range{0.0, 90.0, false, false},
+             FIELD(forces.ploughing_angle_deg),
+             "zeta: sub-segments steeper than this to the cutting direction plough"),
+      // [topography]: file names relative to the job file's directory.
+      custom("topography", "files", "array of strings", "", "STL, PLY or OBJ files", "none",
+             "digitised wear states of the insert, one mesh each",
+             [](JobReader& r, Job& job) {
+               if (auto files = r.string_array("topography", "files")) {
+                 const std::filesystem::path base = std::filesystem::path(r.source()).parent_path();
+                 for (const auto& f : *files) {
+                   const std::filesystem::path fp(f);
+                   job.topography.files.push_back(fp.is_absolute() ? fp : base / fp);
+                 }
+               }
+             }),
+      custom("topography", "synthetic_vb", "array of numbers", "mm", "in [0, 2]", "none",
+             "or synthetic inserts, one per flank wear VB (not with files)",
+             [](JobReader& r, Job& job) {
+               if (auto vb = r.number_array("topography", "synthetic_vb", Range{0.0, 2.0})) {
+                 job.topography.synthetic_vb_mm = *vb;
+               }
+               if (!job.topography.files.empty() && !job.topography.synthetic_vb_mm.empty()) {
+                 r.problem("topography", "synthetic_vb", "give files or synthetic_vb, not both");
+               }
+             }),
+      number("topography", "band", "mm", Range{1e-3, 5.0}, FIELD(topography.band_mm),
+             "band along the edge that is sampled"),
+      number("topography", "rake", "degrees", Range{-30.0, 30.0}, FIELD(topography.rake_deg),
+             "synthetic insert: rake angle"),
+      number("topography", "clearance", "degrees", Range{1.0, 30.0},
+             FIELD(topography.clearance_deg), "synthetic insert: clearance angle"),
+      custom("topography", "state", "integer", "", "in [0, states - 1]", "0",
+             "the wear state used (index into files or synthetic_vb)",
+             [](JobReader& r, Job& job) {
+               const int states = static_cast<int>(job.topography.states());
+               job.topography.state =
+                   r.integer("topography", "state", 0, std::max(0, states - 1), 0).value_or(0);
+             }),
+  };
+  for (const Key& k : rest) keys.push_back(k);
+  return keys;
+}
+
+#undef FIELD
+
+}  // namespace
+
+const std::vector<Key>& schema() {
+  static const std::vector<Key> keys = build_schema();
+  return keys;
+}
+
+const std::map<std::string, std::vector<std::string>>& schema_sections() {
+  static const std::map<std::string, std::vector<std::string>> sections = [] {
+    std::map<std::string, std::vector<std::string>> m;
+    for (const Key& k : schema()) m[k.section].push_back(k.key);
+    return m;
+  }();
+  return sections;
+}
+
+// The coefficients a model needs are there, and the job gives none of another model's.
+void check_material(JobReader& r, const Material& m) {
+  static const std::vector<std::string> power_keys = {"k_c", "k_n", "m"};
+  static const std::vector<std::string> kienzle_keys = {"m_n", "k_a", "m_a"};
+  static const std::vector<std::string> linear_keys = {"k_tc", "k_rc", "k_ac",
+                                                       "k_te", "k_re", "k_ae"};
+  if (!m.model) {
+    for (const auto* keys : {&power_keys, &kienzle_keys, &linear_keys}) {
+      for (const auto& k : *keys) {
+        if (r.has("material", k)) {
+          r.problem("material", k, "give [material] model (bergmann | kienzle | linear) or name");
+          return;
+        }
+      }
+    }
+    return;
+  }
+  const std::string model(to_string(*m.model));
+  const auto foreign = [&](const std::vector<std::string>& keys, const char* owner) {
+    for (const auto& k : keys) {
+      if (r.has("material", k)) {
+        r.problem("material", k,
+                  fmt::format("belongs to the {} model, not to model = \"{}\"", owner, model));
+      }
+    }
+  };
+  if (*m.model == ForceModel::linear) {
+    foreign(power_keys, "bergmann/kienzle");
+    foreign(kienzle_keys, "kienzle");
+    if (!(m.k_tc > 0)) {
+      r.problem("material", "k_tc", "the linear model needs k_tc (N/mm^2, > 0)");
+    }
+    return;
+  }
+  foreign(linear_keys, "linear");
+  if (*m.model == ForceModel::bergmann) foreign(kienzle_keys, "kienzle");
+  if (!(m.k_c > 0)) {
+    r.problem("material", "k_c", fmt::format("model = \"{}\" needs k_c (N/mm^2, > 0)", model));
+  }
+}
+
+void read_material_section(JobReader& r, Material& m) {
+  Job holder;
+  holder.material = std::move(m);
+  for (const Key& k : schema()) {
+    if (std::string_view(k.section) == "material" && std::string_view(k.key) != "name" &&
+        std::string_view(k.key) != "friction_angle") {
+      k.read(r, holder);
+    }
+  }
+  m = std::move(holder.material);
+}
+
+namespace {
+
+// The rules of the sections that stand alone (a band's edges, the zone thresholds).
+void check_settings_rules(JobReader& r, const Job& job) {
+  const MechanismSettings& mj = job.mechanism;
+  if (mj.thresholds.czii_max_pct <= mj.thresholds.czi_max_pct) {
+    r.problem("mechanism", "czii_max",
+              fmt::format("must be greater than czi_max ({}), got {}",
+                          fmt_num(mj.thresholds.czi_max_pct), fmt_num(mj.thresholds.czii_max_pct)));
+  }
+  const MonitorSettings& mo = job.monitor;
+  if (mo.low_max_hz <= mo.low_min_hz) {
+    r.problem("monitor", "low_max",
+              fmt::format("must be greater than low_min ({} Hz), got {} Hz", fmt_num(mo.low_min_hz),
+                          fmt_num(mo.low_max_hz)));
+  }
+  if (mo.high_max_hz <= mo.high_min_hz) {
+    r.problem("monitor", "high_max",
+              fmt::format("must be greater than high_min ({} Hz), got {} Hz",
+                          fmt_num(mo.high_min_hz), fmt_num(mo.high_max_hz)));
+  }
+}
+
+// The rules that tie keys together, after every key was read.
+void check_rules(JobReader& r, Job& job) {
+  Tool& tool = job.tool;
+  if (tool.diameter_mm > 0 && tool.corner_radius_mm > tool.radius_mm()) {
+    r.problem("tool", "corner_radius",
+              fmt::format("must be <= the tool radius ({} mm), got {}", fmt_num(tool.radius_mm()),
+                          fmt_num(tool.corner_radius_mm)));
+  }
+  if (tool.diameter_mm > 0 && tool.edge_radius_mm >= 0.1 * tool.diameter_mm) {
+    r.problem("tool", "edge_radius",
+              fmt::format("must be < D/10 = {} mm (a cutting-edge rounding is micrometres), got {}",
+                          fmt_num(0.1 * tool.diameter_mm), fmt_num(tool.edge_radius_mm)));
+  }
+  if (tool.tooth_angles_deg.empty() && tool.teeth > 0) {
+    for (int k = 0; k < tool.teeth; ++k) tool.tooth_angles_deg.push_back(360.0 * k / tool.teeth);
+  }
+
+  // Geometry feasibility (only when the inputs themselves were valid).
+  const PathSpec& path = job.path;
+  const bool trochoidal_family = path.type != PathType::linear;
+  const double D = tool.diameter_mm, W = job.slot.width_mm;
+  const bool needs_step = trochoidal_family || W > D;
+  if (D > 0 && W > 0) {
+    if (W < D) {
+      r.problem("slot", "width",
+                fmt::format("the slot ({} mm) is narrower than the tool ([tool] diameter = {} mm)",
+                            fmt_num(W), fmt_num(D)));
+    } else if (trochoidal_family && W <= D) {
+      r.problem("slot", "width",
+                fmt::format("a {} path needs a slot wider than the tool ([tool] diameter = {} mm); "
+                            "use type = \"linear\" for W = D",
+                            to_string(path.type), fmt_num(D)));
+    }
+    if (path.step_mm > 0 && path.step_mm >= D && needs_step) {
+      r.problem("path", "step",
+                fmt::format("must be smaller than the tool diameter ({} mm), got {}", fmt_num(D),
+                            fmt_num(path.step_mm)));
+    }
+  }
+  if (path.type == PathType::trochoidal && r.has("path", "aspect_ratio") &&
+      path.aspect_ratio != 1.0) {
+    r.problem("path", "aspect_ratio",
+              "type = \"trochoidal\" is the elliptical family with aspect_ratio = 1; "
+              "use type = \"elliptical\" for other aspect ratios");
+  }
+
+  // [cutting]: exactly one way to give each of feed and speed; the table read the valid ones.
+  Cutting& cut = job.cutting;
+  const bool has_fr = r.has("cutting", "feed_rate"), has_fz = r.has("cutting", "feed_per_tooth");
+  const bool has_n = r.has("cutting", "spindle_speed"), has_vc = r.has("cutting", "cutting_speed");
+  const bool fr = has_fr && cut.feed_rate_mm_per_min > 0;
+  const bool fz = has_fz && cut.feed_per_tooth_mm > 0;
+  const bool n = has_n && cut.spindle_speed_rpm > 0;
+  const bool vc = has_vc && cut.cutting_speed_m_per_min > 0;
+  if (has_fr && has_fz) {
+    r.problem("cutting", "feed_per_tooth",
+              "give either [cutting] feed_rate (mm/min) or feed_per_tooth (mm), not both");
+  } else if (!has_fr && !has_fz) {
+    r.problems().push_back(fmt::format(
+        "{}: missing [cutting] feed_rate (mm/min) or feed_per_tooth (mm): give exactly one",
+        r.source()));
+  }
+  if (has_n && has_vc) {
+    r.problem("cutting", "cutting_speed",
+              "give either [cutting] spindle_speed (rpm) or cutting_speed (m/min), not both");
+  } else if (!has_n && !has_vc) {
+    r.problems().push_back(fmt::format(
+        "{}: missing [cutting] spindle_speed (rpm) or cutting_speed (m/min): give exactly one",
+        r.source()));
+  }
+  if ((n || vc) && D > 0) {
+    if (!n) cut.spindle_speed_rpm = spindle_rpm_from_cutting_speed(cut.cutting_speed_m_per_min, D);
+    cut.cutting_speed_m_per_min = cutting_speed_from_spindle_rpm(cut.spindle_speed_rpm, D);
+    if ((fr || fz) && tool.teeth > 0) {
+      if (!fr)
+        cut.feed_rate_mm_per_min = cut.feed_per_tooth_mm * tool.teeth * cut.spindle_speed_rpm;
+      cut.feed_per_tooth_mm = cut.feed_rate_mm_per_min / (tool.teeth * cut.spindle_speed_rpm);
+    }
+  }
+
+  check_settings_rules(r, job);
+  check_material(r, job.material);
+}
+
+}  // namespace
+
+Job build_job(const toml::table& root, const std::string& source,
+              const std::map<std::string, std::string>& overridden) {
+  JobReader r(root, source, overridden, schema_sections());
+  Job job;
+  job.source = source;
+  for (const Key& k : schema()) k.read(r, job);
+  check_rules(r, job);
+  r.check_unknown();
+  if (!r.problems().empty()) throw InputError(r.problems());
+  return job;
+}
+
+void apply_to_job(const toml::table& root, const std::map<std::string, std::string>& overridden,
+                  Job& job) {
+  static const std::set<std::string> standalone = {"machine",    "measured", "mechanism", "monitor",
+                                                   "simulation", "forces",   "analysis"};
+  JobReader r(root, job.source.empty() ? std::string("(no job file)") : job.source, overridden,
+              schema_sections());
+  for (auto&& [section, table] : root) {
+    if (!standalone.count(std::string(section.str()))) {
+      r.problems().push_back(fmt::format("[{}] keys need a job file", section.str()));
+    }
+  }
+  for (const Key& k : schema()) {
+    if (standalone.count(k.section) && r.has(k.section, k.key)) k.read(r, job);
+  }
+  check_settings_rules(r, job);
+  r.check_unknown();
+  if (!r.problems().empty()) throw InputError(r.problems());
+}
+
+}  // namespace trochomill::job_detail
+
+namespace trochomill {
+
+const std::vector<JobKey>& job_keys() {
+  static const std::vector<JobKey> keys = [] {
+    std::vector<JobKey> out;
+    Job defaults;
+    for (const auto& k : job_detail::schema()) {
+      out.push_back(JobKey{k.section, k.key, k.type, k.unit, k.allowed, k.show(defaults), k.doc});
+    }
+    return out;
+  }();
+  return keys;
+}
+
+std::string job_keys_markdown() {
+  std::string out;
+  std::string section;
+  for (const JobKey& k : job_keys()) {
+    if (k.section != section) {
+      section = k.section;
+      out += fmt::format(
+          "\n#### [{}]\n\n| key | type | unit | allowed | default | meaning |\n"
+          "|---|---|---|---|---|---|\n",
+          section);
+    }
+    std::string allowed = k.allowed;
+    for (std::size_t p = 0; (p = allowed.find('|', p)) != std::string::npos; p += 2) {
+      allowed.replace(p, 1, "\\|");
+    }
+    out += fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", k.key, k.type, k.unit, allowed,
+                       k.default_text, k.doc);
+  }
+  return out;
+}
+
+std::string_view to_string(PathType t) noexcept {
+  return job_detail::name_of(job_detail::kPathTypes, t);
+}
+std::string_view to_string(ForceModel m) noexcept {
+  return job_detail::name_of(job_detail::kForceModels, m);
+}
+std::string_view to_string(Dialect d) noexcept {
+  return job_detail::name_of(job_detail::kDialects, d);
+}
+std::string_view to_string(EntryType e) noexcept {
+  return job_detail::name_of(job_detail::kEntries, e);
+}
+std::string_view to_string(Direction d) noexcept {
+  return job_detail::name_of(job_detail::kDirections, d);
+}
+std::string_view to_string(ChipModel m) noexcept {
+  return job_detail::name_of(job_detail::kChipModels, m);
+}
+
+namespace {
+template <class E, std::size_t N>
+E parse_name(const job_detail::Names<E> (&table)[N], std::string_view what, std::string_view name) {
+  for (const auto& [n, v] : table) {
+    if (n == name) return v;
+  }
+  throw InputError(
+      fmt::format("{} '{}' is not one of {}", what, name, job_detail::choices_text(table)));
+}
+}  // namespace
+
+Dialect parse_dialect(std::string_view name) {
+  return parse_name(job_detail::kDialects, "dialect", name);
+}
+ChipModel parse_chip_model(std::string_view name) {
+  return parse_name(job_detail::kChipModels, "chip model", name);
+}
+ForceModel parse_force_model(std::string_view name) {
+  return parse_name(job_detail::kForceModels, "force model", name);
+}
+
+}  // namespace trochomill

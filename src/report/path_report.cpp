@@ -1,0 +1,73 @@
+// Formatting of paths and NC programs: sampled trajectories and `check-gcode`'s report
+// (report.hpp).
+#include <fmt/format.h>
+
+#include <iterator>
+#include <nlohmann/json.hpp>
+
+#include "trochomill/report.hpp"
+
+namespace trochomill {
+
+std::string path_samples_csv(const PathSamples& s, const ToothTracks& tr) {
+  std::string out = "t_s,s_mm,x_mm,y_mm,z_mm,tx,ty,tz,curvature_per_mm,segment";
+  for (int k = 0; k < tr.teeth; ++k)
+    out += fmt::format(",tooth{0}_x_mm,tooth{0}_y_mm,tooth{0}_z_mm", k);
+  out += '\n';
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    fmt::format_to(std::back_inserter(out),
+                   "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{}", s.t_s[i],
+                   s.s_mm[i], s.x_mm[i], s.y_mm[i], s.z_mm[i], s.tx[i], s.ty[i], s.tz[i],
+                   s.curvature_per_mm[i], s.segment[i]);
+    for (int k = 0; k < tr.teeth; ++k) {
+      fmt::format_to(std::back_inserter(out), ",{:.9g},{:.9g},{:.9g}", tr.x_mm[k][i], tr.y_mm[k][i],
+                     tr.z_mm[k][i]);
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
+                             double time_with_acceleration_s) {
+  const BoundingBox b = bounding_box(prog.path);
+  const nlohmann::json j = {
+      {"file", file},
+      {"lines", prog.info.lines},
+      {"motion_blocks", prog.info.motion_blocks},
+      {"segments", prog.path.segments().size()},
+      {"path_length_mm", prog.path.length_mm()},
+      {"feed_length_mm", prog.path.feed_length_mm()},
+      {"time_s", prog.path.duration_s()},
+      {"time_with_acceleration_s", time_with_acceleration_s},
+      {"bbox_min_mm", {b.lo.x(), b.lo.y(), b.lo.z()}},
+      {"bbox_max_mm", {b.hi.x(), b.hi.y(), b.hi.z()}},
+      {"feed_min_mm_per_min", prog.info.min_feed_mm_per_min},
+      {"feed_max_mm_per_min", prog.info.max_feed_mm_per_min},
+      {"spindle_max_rpm", prog.info.max_spindle_rpm},
+  };
+  return j.dump(2) + "\n";
+}
+
+std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
+                             double time_with_acceleration_s, double max_acceleration_mm_per_s2) {
+  const BoundingBox b = bounding_box(prog.path);
+  std::string out = fmt::format("{}: {} lines, {} segments\n", file, prog.info.lines,
+                                prog.path.segments().size());
+  out += fmt::format("  path length   {:.4f} mm ({:.4f} mm at feed)\n", prog.path.length_mm(),
+                     prog.path.feed_length_mm());
+  out += fmt::format("  time          {:.4f} s at programmed feed", prog.path.duration_s());
+  if (max_acceleration_mm_per_s2 > 0) {
+    out += fmt::format(", {:.4f} s with {:g} mm/s^2", time_with_acceleration_s,
+                       max_acceleration_mm_per_s2);
+  }
+  out += fmt::format(
+      "\n  bounding box  x [{:.4f}, {:.4f}]  y [{:.4f}, {:.4f}]  z [{:.4f}, {:.4f}] mm\n", b.lo.x(),
+      b.hi.x(), b.lo.y(), b.hi.y(), b.lo.z(), b.hi.z());
+  out += fmt::format("  feed          {:g} to {:g} mm/min, spindle up to {:g} rpm\n",
+                     prog.info.min_feed_mm_per_min, prog.info.max_feed_mm_per_min,
+                     prog.info.max_spindle_rpm);
+  return out;
+}
+
+}  // namespace trochomill
