@@ -84,7 +84,6 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
       }
       if (a->signal.file.empty()) throw InputError("monitor: give a SIGNAL file (or --stream)");
       const Signal sig = a->signal.read();
-      validate(m, sig.rate_hz);
       const MonitorReport r = analyze_signal(sig, m, job ? &*job : nullptr, a->start_s);
       if (!a->json.empty()) emit(a->json, monitor_json(r, a->signal.file, sig, m));
       if (!a->csv.empty()) emit(a->csv, monitor_csv(r));

@@ -185,6 +185,18 @@ struct BoundingBox {
 [[nodiscard]] BoundingBox bounding_box(const ToolPath& path);
 
 /// Geometry of a planned trochoidal slot (all mm).
+/// The slot's orbit as the families, the mechanism model and the analysis read it (Wagih 2023
+/// Section 2): the trochoid radius across the slot a = (W - D) / 2 and the semi-axis along it
+/// b = r_e a for the elliptical families (a for the others). Lengths in mm.
+struct SlotGeometry {
+  double width_mm = 0;        ///< W
+  double tool_radius_mm = 0;  ///< R = D / 2
+  double orbit_a_mm = 0;      ///< a = (W - D) / 2
+  double orbit_b_mm = 0;      ///< b = r_e a (elliptical, linear-elliptical), else a
+  double step_mm = 0;         ///< s
+};
+[[nodiscard]] SlotGeometry slot_geometry(const Job& job);
+
 struct PlanInfo {
   double trochoid_radius_mm = 0;  ///< a = (W - D) / 2
   double semi_axis_feed_mm = 0;   ///< b = r_e a

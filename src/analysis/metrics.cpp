@@ -241,11 +241,8 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
     // History: 2.5 cycles rebuild the region a cycle's own orbit covers; when the orbit is
     // wider than the tool (a > R) it leaves an island at its centre that only the cycles
     // whose orbit passes over it remove, about (b + R) / s cycles back.
-    const double a = 0.5 * (W - job.tool.diameter_mm);
-    const double b =
-        job.path.type == PathType::elliptical || job.path.type == PathType::linear_elliptical
-            ? job.path.aspect_ratio * a
-            : a;
+    const SlotGeometry sg = slot_geometry(job);
+    const double a = sg.orbit_a_mm, b = sg.orbit_b_mm;
     const double history =
         2.5 + (a > R && job.path.step_mm > 0 ? std::ceil((b + R) / job.path.step_mm) : 0.0);
     const double from = std::max(0.0, w.t0_s - history * T);

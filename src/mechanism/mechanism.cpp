@@ -50,14 +50,15 @@ CycleSetup setup(const Job& job, const MechanismSettings& st) {
   }
   if (st.points < 36) throw InputError(fmt::format("points must be >= 36, got {}", st.points));
   CycleSetup c;
-  c.R = job.tool.radius_mm();
-  c.a = 0.5 * (job.slot.width_mm - job.tool.diameter_mm);
+  const SlotGeometry sg = slot_geometry(job);
+  c.R = sg.tool_radius_mm;
+  c.a = sg.orbit_a_mm;
   if (!(c.a > 0)) {
     throw InputError(fmt::format("the slot ({} mm) must be wider than the tool ({} mm)",
                                  job.slot.width_mm, job.tool.diameter_mm));
   }
-  c.b = job.path.type == PathType::elliptical ? job.path.aspect_ratio * c.a : c.a;
-  c.s = job.path.step_mm;
+  c.b = sg.orbit_b_mm;
+  c.s = sg.step_mm;
   c.fz = job.cutting.feed_per_tooth_mm;
   c.feed = feed_rate_mm_per_min(job) / 60.0;
   c.edge_speed = rpm_to_rad_per_s(spindle_speed_rpm(job)) * c.R;

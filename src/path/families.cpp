@@ -319,16 +319,32 @@ void emit_entry(Builder& bld, const Geometry& g, const PathSpec& spec, const Vec
   }
 }
 
+}  // namespace
+
+SlotGeometry slot_geometry(const Job& job) {
+  SlotGeometry g;
+  g.width_mm = job.slot.width_mm;
+  g.tool_radius_mm = job.tool.radius_mm();
+  g.orbit_a_mm = 0.5 * (job.slot.width_mm - job.tool.diameter_mm);
+  g.orbit_b_mm =
+      job.path.type == PathType::elliptical || job.path.type == PathType::linear_elliptical
+          ? job.path.aspect_ratio * g.orbit_a_mm
+          : g.orbit_a_mm;
+  g.step_mm = job.path.step_mm;
+  return g;
+}
+
+namespace {
+
 Geometry make_geometry(const Job& job) {
   Geometry g;
   g.type = job.path.type;
-  g.R = job.tool.radius_mm();
-  g.W = job.slot.width_mm;
-  g.a = 0.5 * (g.W - job.tool.diameter_mm);
-  g.s = job.path.step_mm;
-  g.b = (g.type == PathType::elliptical || g.type == PathType::linear_elliptical)
-            ? job.path.aspect_ratio * g.a
-            : g.a;
+  const SlotGeometry sg = slot_geometry(job);
+  g.R = sg.tool_radius_mm;
+  g.W = sg.width_mm;
+  g.a = sg.orbit_a_mm;
+  g.s = sg.step_mm;
+  g.b = sg.orbit_b_mm;
   g.d = g.type == PathType::linear_elliptical ? job.path.linear_distance_mm : 0.0;
   g.L = job.slot.length_mm;
   g.zf = -job.slot.depth_mm;
