@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "trochomill/job.hpp"
-#include "trochomill/sim.hpp"
+#include "trochomill/cutter.hpp"
 
 namespace trochomill {
 

@@ -6,7 +6,7 @@
 #include <array>
 #include <cmath>
 
-#include "trochomill/sim.hpp"
+#include "trochomill/cutter.hpp"
 #include "trochomill/topography.hpp"
 #include "trochomill/units.hpp"
 
