@@ -1,5 +1,5 @@
 // Benchmarks of the engagement kernel on the Wagih 2023 examples (20 mm slots, one sample
-// per tooth pass, as issue 3's performance aim states).
+// per tooth pass, as the performance aim in docs/PERFORMANCE.md states).
 #include <benchmark/benchmark.h>
 
 #include <string>
@@ -35,7 +35,7 @@ BENCHMARK(BM_EngagementWagih)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 namespace {
 
 // The whole analysis (engagement, cycle, walls at path and tooth level, imprints, tooth
-// chips) of one Wagih example; issue 3's aim is < 100 ms on one core.
+// chips) of one Wagih example; the aim in docs/PERFORMANCE.md is < 100 ms on one core.
 void BM_AnalyzeWagih(benchmark::State& state) {
   static const char* const kNames[] = {"trochoidal", "circular", "elliptical", "linear-elliptical"};
   const char* name = kNames[state.range(0)];

@@ -1,4 +1,4 @@
-// Benchmarks of the force models and the wear topography (issue 6):
+// Benchmarks of the force models and the wear topography:
 //  - Force/FastWagihSlot: fast-mode forces (analytic chips, 96 steps per revolution) of the
 //    whole Wagih trochoidal slot with the al7075-t6 linear coefficients (aim < 200 ms); the
 //    machine's cores, as the CLI runs it.

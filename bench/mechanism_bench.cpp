@@ -1,4 +1,4 @@
-// Benchmarks of the mechanism model (issue 4): one cycle at 3600 points, and the step
+// Benchmarks of the mechanism model: one cycle at 3600 points, and the step
 // recommendation, on the Pivkin 2025 example.
 #include <benchmark/benchmark.h>
 

@@ -1,4 +1,4 @@
-// Benchmarks of the vibroacoustic monitor (issue 7): 10 s of one 100 kHz channel through the
+// Benchmarks of the vibroacoustic monitor: 10 s of one 100 kHz channel through the
 // default bands (2-5 kHz and 8-13 kHz, order 4): causal filtering, the offline zero-phase k_f
 // series and the live stream. Real-time factor = signal seconds / wall seconds, reported as
 // the counter `x_real_time`. The data: white noise from a fixed seed, or the raw float32

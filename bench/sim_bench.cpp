@@ -1,4 +1,4 @@
-// Benchmarks of the tri-dexel simulation (issue 5), one thread each (the boards run in
+// Benchmarks of the tri-dexel simulation, one thread each (the boards run in
 // parallel in the CLI; here the per-core rate is measured):
 //  - Sim/WagihCycleWindow: 0.1 s of a steady trochoid cycle (Wagih's example, 6 mm deep,
 //    35 degree helix, 0.02 mm dexels, 600 steps per revolution) after the envelope pre-roll

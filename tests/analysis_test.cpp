@@ -1,4 +1,4 @@
-// Process metrics (issue 3): closed forms for straight cuts, W s a_p / T_c against the
+// Process metrics: closed forms for straight cuts, W s a_p / T_c against the
 // independently integrated swept area, wall waviness against the analytic envelope of the
 // trochoid, convergence with the sampling step, G-code against the job that wrote it.
 #include "trochomill/analysis.hpp"
@@ -161,7 +161,7 @@ TEST(Analysis, SteadyStateMrrEqualsSweptArea) {
 // Convergence with the sampling step, 1, 2, 4, 8 samples per tooth pass: the steady MRR
 // integrated from the swept area approaches W s a_p / T_c less the wall scallops (see
 // SteadyStateMrrEqualsSweptArea), the cutting time and
-// the maximum engagement settle. Printed with the observed orders (issue 3 asks to show
+// the maximum engagement settle. Printed with the observed orders (shown with
 // them; docs/models.md records them).
 TEST(Analysis, ConvergesWithSamplingStep) {
   std::vector<double> mrr_err, tc, eng, h;

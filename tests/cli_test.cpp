@@ -131,7 +131,7 @@ TEST_F(Cli, VersionAndHelp) {
   EXPECT_NE(r.out.find("--dialect"), std::string::npos);
 }
 
-// analyze: the JSON has every key issue 3 names, consistent with itself; the CSV has one
+// analyze: the JSON has every metric key, consistent with itself; the CSV has one
 // row per sample; --gcode gives the same cycle as the job.
 TEST_F(Cli, AnalyzeJsonAndCsv) {
   const auto ex = test::example("wagih2023/elliptical.toml").string();

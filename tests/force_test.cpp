@@ -1,4 +1,4 @@
-// Cutting forces (issue 6): the linear model's mean forces in full-immersion slotting against
+// Cutting forces: the linear model's mean forces in full-immersion slotting against
 // their closed form, Kienzle at a constant chip against its formula, Bergmann's model on a
 // sharp edge against Kienzle, the fast chip source against the simulation, calibration round
 // trips (nonlinear and mean-force), job keys and the materials library.

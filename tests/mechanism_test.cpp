@@ -1,4 +1,4 @@
-// Cutting mechanism (issue 4): the exact chip model against the analysis kernel, K_re
+// Cutting mechanism: the exact chip model against the analysis kernel, K_re
 // scaling, zone shares, the recommendation's monotonicity, h_m.
 #include "trochomill/mechanism.hpp"
 
@@ -28,7 +28,7 @@ Job mech_job(double width, double diameter, double step, double edge_radius = 0.
 
 // The exact model's h_e(theta) against the kernel's h_max on the planned path's steady state
 // (an endless slot: stock open ahead, eight cycles of history), at every tooth pass of one
-// cycle in the middle: within 2 % of f_z (issue 4), for three steps and two a/R ratios
+// cycle in the middle: within 2 % of f_z, for three steps and two a/R ratios
 // (a/R = 1: W = 20, D = 10; a/R = 1/3: W = 16, D = 12 as in Pivkin's experiment), and the
 // elliptical family.
 TEST(Mechanism, ExactModelMatchesKernel) {

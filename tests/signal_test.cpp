@@ -1,4 +1,4 @@
-// Vibroacoustic monitoring (issue 7): filters against scipy.signal (frozen reference values,
+// Vibroacoustic monitoring: filters against scipy.signal (frozen reference values,
 // scripts/make-filter-reference), k_f of tones and noise, streaming against offline, cycle
 // segmentation and wear flags on synthetic signals, readers.
 #include "trochomill/signal.hpp"

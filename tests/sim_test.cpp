@@ -1,4 +1,4 @@
-// Tri-dexel simulation (issue 5, first part): dexel arithmetic, removed volume of a straight
+// Tri-dexel simulation: dexel arithmetic, removed volume of a straight
 // slot against the swept volume (converging with the spacing, the three boards agreeing),
 // the chip of a straight partial-immersion cut against f_z sin(phi).
 #include "trochomill/sim.hpp"

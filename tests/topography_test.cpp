@@ -1,4 +1,4 @@
-// Wear topography (issue 6): the cubic RBF against an analytic surface, mesh input/output
+// Wear topography: the cubic RBF against an analytic surface, mesh input/output
 // round trips, the structured grid of a synthetic insert against its geometry, and a worn
 // insert's larger passive force.
 #include "trochomill/topography.hpp"

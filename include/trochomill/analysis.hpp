@@ -1,4 +1,4 @@
-// Process metrics of a slot program (Wagih 2023 Sections 2-5, domain notes section 3), for
+// Process metrics of a slot program (Wagih 2023 Sections 2-5; docs/models.md sections 7-8), for
 // any path: planned from the job or read from G-code. Per-cycle quantities describe one
 // steady-state cycle in the middle of the slot; whole-program quantities cover entry, cycles
 // and exit.

@@ -1,7 +1,7 @@
 // Exact 2D engagement of the tool with the stock: at every sample of any path (planned or
 // read from G-code), the arcs of the tool circle that lie in stock not yet removed, the
 // engagement angle, radial engagement, teeth in cut and the local maximum uncut chip
-// thickness h_max (domain notes section 3).
+// thickness h_max (Wagih 2023 Sections 2-5).
 //
 // Model: the stock is the slot rectangle |x| <= W/2, 0 <= y <= L; the removed region is the
 // union of the tool discs (radius R) at all earlier samples with the tool in the material

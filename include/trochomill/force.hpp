@@ -5,7 +5,7 @@
 // section 12 gives every reading and its test.
 //
 // Units: mm, s, N, N m, W; angles in radians inside. Forces act on the workpiece: x across
-// the slot, y along it, z up (domain notes section 1).
+// the slot, y along it, z up (the frame of path.hpp).
 #pragma once
 
 #include <array>

@@ -1,5 +1,5 @@
-// Cutting mechanism over a trochoid cycle (Pivkin 2025, domain notes section 4): the uncut
-// chip thickness h_e(theta) at the contact, the ratio K_re = h_e / r_e that classifies the
+// Cutting mechanism over a trochoid cycle (Pivkin 2025 Sections 2-3; docs/models.md section 9): the
+// uncut chip thickness h_e(theta) at the contact, the ratio K_re = h_e / r_e that classifies the
 // mechanism (CZI ploughing, CZII mixed shear, CZIII cutting), contact angle, teeth in
 // contact, kinematic rake angle and kinematic angle change, the wear-corrected K_re, and
 // the smallest trochoid step (or feed per tooth) that puts a chosen share of the cutting

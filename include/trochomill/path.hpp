@@ -1,6 +1,6 @@
 // Tool paths as sequences of exact primitives, their arc-length parametrisation, timing,
 // sampling (by time, path length or spindle angle) and tooth-tip trajectories; and the
-// planner of the five trochoidal slot families (docs/models.md, domain-notes section 2).
+// planner of the five trochoidal slot families (docs/models.md sections 1-3; Wagih 2023 Eq. 1).
 // Frame: slot along +Y, width along X centred on x = 0, top face z = 0 (mm).
 #pragma once
 

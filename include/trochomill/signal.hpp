@@ -1,4 +1,4 @@
-// Vibroacoustic monitoring (Pivkin 2025 Sections 2.3, 4.6, 5.4; domain notes section 5): read
+// Vibroacoustic monitoring (Pivkin 2025 Sections 2.3, 4.6, 5.4; docs/models.md section 10): read
 // an accelerometer signal, band-pass it into a low (default 2-5 kHz) and a high (8-13 kHz)
 // band with Butterworth filters in second-order sections, take windowed RMS values and
 // their ratio k_f = RMS_low / RMS_high, cut the signal into trochoid cycles (from the

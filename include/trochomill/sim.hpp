@@ -1,5 +1,5 @@
-// Tri-dexel material-removal simulation (Bergmann 2021 Section 3; domain notes sections 6
-// and 7): the workpiece as three perpendicular boards of dexels (rays holding sorted
+// Tri-dexel material-removal simulation (Bergmann 2021 Section 3; docs/models.md
+// section 11): the workpiece as three perpendicular boards of dexels (rays holding sorted
 // material intervals), the tool's cutting edges sweeping thin wedges between time steps,
 // the removed intervals assigned to the edge segments that removed them, giving each
 // segment's uncut chip thickness and removed volume. Lengths in mm, times in s, angles in

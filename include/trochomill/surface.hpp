@@ -1,6 +1,6 @@
 // Machined-surface geometry from the path: the slot walls (path level, the envelope of the
 // tool circles; tooth level, the envelope of the tooth-tip trajectories) and the density of
-// the cutting edge's imprints on the floor (domain notes section 3, Wagih 2023 Section 4).
+// the cutting edge's imprints on the floor (Wagih 2023 Section 4; docs/models.md section 8).
 #pragma once
 
 #include <limits>

@@ -14,8 +14,8 @@
 #include <filesystem>
 #include <vector>
 
-#include "trochomill/job.hpp"
 #include "trochomill/cutter.hpp"
+#include "trochomill/job.hpp"
 
 namespace trochomill {
 

@@ -397,7 +397,7 @@ std::vector<AngleArc> join_wrap(ArcSet s) {
 
 // The local uncut chip thickness h(phi) = R - rho(phi) at the point of the tool circle at
 // angle phi, rho the distance from the centre to the last point of the ray in the region
-// the earlier tooth passes removed, before the circle (domain notes section 3: the chip
+// the earlier tooth passes removed, before the circle (Wagih 2023 Section 3: the chip
 // between the tool circle and the surface the previous tooth left; the slot's own edges do
 // not cut it short). Exact: the maximum over the engaged arcs is taken over every angle
 // where h can have a local maximum. rho is the largest of the ray's crossings with the

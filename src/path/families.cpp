@@ -1,6 +1,6 @@
-// The slot planner: the five path families of domain-notes section 2 with entry to depth,
-// cycles until the slot end is cleared, and exit. Everything is built for climb milling with
-// a clockwise spindle and mirrored in x for the other orbit direction.
+// The slot planner: the five path families of Wagih 2023 Eq. 1 (docs/models.md section 2) with
+// entry to depth, cycles until the slot end is cleared, and exit. Everything is built for climb
+// milling with a clockwise spindle and mirrored in x for the other orbit direction.
 //
 // Placement (docs/models.md, "Planning"): with an `outside` entry the slot is open at y = 0:
 // the tool feeds in along the wall line x = -a from outside the stock to the first cycle's

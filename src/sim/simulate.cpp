@@ -519,7 +519,7 @@ StockBox job_stock(const Job& job) {
     b.hi = *job.stock_max_mm;
     return b;
   }
-  // The domain notes' stock (the slot runs through the workpiece from y = 0 to its length)
+  // The default stock (the slot runs through the workpiece from y = 0 to its length)
   // with a margin beside the walls and below the floor, where the wall and floor profiles are
   // read.
   const double m = 1.0;
