@@ -13,6 +13,7 @@
 
 #include "test_util.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/job.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
 
@@ -120,6 +121,42 @@ TEST_F(Cli, PathCsvHasToothTracks) {
   const double duration = 64.957;  // s, the planned program (checked to 1 ms below)
   EXPECT_NEAR(static_cast<double>(rows), duration / 0.0025, 2.0);
   EXPECT_EQ(run_cli("path " + ex + " --dt 0.1 --ds 0.1").code, 2);  // exclusive options
+}
+
+// Flags that only set job keys are aliases of --set: validated by the schema, named in the
+// message as the flag with its key, recorded in the program's header like any override.
+TEST_F(Cli, KeyAliasesAreValidatedByTheSchema) {
+  const std::string ex = test::example("pivkin2025/trochoidal.toml").string();
+  CliResult r = run_cli("recommend " + ex + " --share 1.5");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--share (mechanism.share): must be in (0, 1] fraction, got 1.5"),
+            std::string::npos)
+      << r.out;
+  r = run_cli("mechanism " + ex + " --model magic");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--model (mechanism.model): 'magic' is not one of exact | pivkin2025"),
+            std::string::npos)
+      << r.out;
+  // Without a job file the monitor's flags set the default [monitor] settings, checked alike.
+  r = run_cli("monitor x.wav --order 0");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--order (monitor.order): must be an integer in [1, 12], got 0"),
+            std::string::npos)
+      << r.out;
+  const std::string ngc = (dir_ / "f.nc").string();
+  r = run_cli("plan " + test::example("wagih2023/elliptical.toml").string() + " -o " + ngc +
+              " --dialect fanuc --chords");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string code = read_file(ngc);
+  EXPECT_NE(code.find("(machine.dialect = \"fanuc\")"), std::string::npos);
+  EXPECT_NE(code.find("(machine.arc_output = \"chords\")"), std::string::npos);
+  EXPECT_EQ(code.find("\nG2 "), std::string::npos);  // chords only: no arc blocks
+  EXPECT_EQ(code.find("\nG3 "), std::string::npos);
+  // `keys` lists the schema: every section, each key once.
+  r = run_cli("keys --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.size(), job_keys().size());
 }
 
 TEST_F(Cli, VersionAndHelp) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
@@ -128,6 +129,48 @@ TEST(Io, AtomicWriteReplacesAndLeavesNoTemporaries) {
   EXPECT_EQ(files, 1);
   EXPECT_THROW(write_file_atomic(dir / "missing" / "b.txt", "x"), IoError);
   std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// The user guide's key reference is the schema's own text (scripts/update-key-reference
+// writes it): a key added, removed or changed in the schema and not in the guide fails here.
+TEST(Job, UserGuideKeyReferenceMatchesTheSchema) {
+  const std::string guide = read_file(test::source_dir() / "docs/user-guide.md");
+  const std::string begin = "<!-- keys:begin -->\n", end = "<!-- keys:end -->";
+  const auto a = guide.find(begin), b = guide.find(end);
+  ASSERT_NE(a, std::string::npos);
+  ASSERT_NE(b, std::string::npos);
+  EXPECT_EQ(guide.substr(a + begin.size(), b - a - begin.size()), job_keys_markdown())
+      << "run scripts/update-key-reference";
+}
+
+// Every key the schema lists is read: a document setting one key to a wrong type names that
+// key (a key in the table but not read would pass silently), and the defaults shown are the
+// struct's.
+TEST(Job, EverySchemaKeyIsReadAndItsDefaultIsTheStructs) {
+  const std::string base = read_file(test::example("wagih2023/trochoidal.toml"));
+  for (const JobKey& k : job_keys()) {
+    const std::string key = k.section + "." + k.key;
+    try {
+      (void)parse_job(base, "job.toml", {Override{key, "{ a = 1 }", {}}});
+      ADD_FAILURE() << key << ": a table value was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(k.key), std::string::npos) << key << ": " << e.what();
+    }
+  }
+  // Defaults come from the settings structs, whatever the module.
+  std::map<std::string, std::string> shown;
+  for (const JobKey& k : job_keys()) shown[k.section + "." + k.key] = k.default_text;
+  EXPECT_EQ(shown["machine.safe_z"], "5");
+  EXPECT_EQ(shown["monitor.window"], "0.005");
+  EXPECT_EQ(shown["mechanism.model"], "exact");
+  EXPECT_EQ(shown["simulation.steps_per_rev"], "600");
+  EXPECT_EQ(shown["tool.diameter"], "required");
 }
 
 }  // namespace

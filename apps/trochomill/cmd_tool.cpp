@@ -93,6 +93,23 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
       exit_code = 0;
     });
   }
+  // keys
+  {
+    struct Args {
+      bool markdown = false, json = false;
+    };
+    auto a = std::make_shared<Args>();
+    auto* cmd =
+        app.add_subcommand("keys", "list every job key: type, unit, allowed values, default");
+    auto* md = cmd->add_flag("--markdown", a->markdown, "as the user guide's Markdown tables");
+    cmd->add_flag("--json", a->json, "as JSON")->excludes(md);
+    cmd->final_callback([a, &exit_code] {
+      fmt::print("{}", a->markdown ? job_keys_markdown()
+                       : a->json   ? job_keys_json()
+                                   : job_keys_text());
+      exit_code = 0;
+    });
+  }
   // materials
   {
     auto json = std::make_shared<bool>(false);

@@ -108,6 +108,9 @@ void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
 [[nodiscard]] std::string mean_force_toml(const MeanForceFit& f);
 [[nodiscard]] std::string mean_force_json(const MeanForceFit& f);
 /// The materials library as JSON and as a table with sources.
+/// The job keys (job_keys()) as an aligned table, and as JSON.
+[[nodiscard]] std::string job_keys_text();
+[[nodiscard]] std::string job_keys_json();
 [[nodiscard]] std::string materials_json(const std::vector<Material>& lib);
 [[nodiscard]] std::string materials_text(const std::vector<Material>& lib, const std::string& dir);
 /// The structured grid per cell: kappa, tau, s_mm, h_mm, r_mm, width_mm, proj_mm,

@@ -122,7 +122,8 @@ std::vector<Key> material_keys() {
   const Range exponent{0.0, 1.0, true, false};
   return {
       custom("material", "name", "string", "", "a name of `trochomill materials`", "none",
-             "take the coefficients from the materials library (the job's keys override them)",
+             "a library entry (`trochomill materials`), e.g. inconel718-bergmann2021; keys given "
+             "beside it override the library's",
              [](JobReader& r, Job& job) {
                if (auto name = r.string("material", "name")) {
                  try {
@@ -132,7 +133,8 @@ std::vector<Key> material_keys() {
                  }
                }
              }),
-      custom("material", "source", "string", "", "text", "none", "citation of the coefficients",
+      custom("material", "source", "string", "", "text", "none",
+             "where the coefficients come from (`calibrate` fills it)",
              [](JobReader& r, Job& job) {
                if (auto v = r.string("material", "source")) job.material.source = *v;
              }),
@@ -142,7 +144,8 @@ std::vector<Key> material_keys() {
                if (auto v = r.string("material", "notes")) job.material.notes = *v;
              }),
       custom("material", "model", "choice", "", choices_text(kForceModels), "none",
-             "force model (docs/models.md section 12); absent: no force model",
+             "force model: bergmann (Bergmann 2021 Eq. 3, topography-aware), kienzle or linear "
+             "(docs/models.md section 12); absent: no force model",
              [](JobReader& r, Job& job) {
                if (auto v = r.choice<ForceModel>("material", "model", options_of(kForceModels),
                                                  std::nullopt)) {
@@ -193,243 +196,254 @@ void read_insert_array(JobReader& r, Job& job, const char* key, std::vector<doub
 }
 
 std::vector<Key> build_schema() {
-  std::vector<Key> keys =
-      {
-          // [tool]
-          number("tool", "diameter", "mm", positive(), FIELD(tool.diameter_mm), "cutter diameter D",
-                 true),
-          integer("tool", "teeth", 1, 64, FIELD(tool.teeth), "number of teeth Z", true),
-          number("tool", "helix_angle", "degrees", Range{0, 90, true, false},
-                 FIELD(tool.helix_angle_deg), "helix angle"),
-          number("tool", "corner_radius", "mm", non_negative(), FIELD(tool.corner_radius_mm),
-                 "corner radius (0: square end mill; at most D/2)"),
-          number("tool", "edge_radius", "mm", non_negative(), FIELD(tool.edge_radius_mm),
-                 "cutting-edge rounding radius r_e (below D/10)"),
-          number("tool", "flute_length", "mm", non_negative(), FIELD(tool.flute_length_mm),
-                 "flute length, the edge's axial reach (0: not given)"),
-          number("tool", "runout_radial", "mm", non_negative(), FIELD(tool.runout_radial_mm),
-                 "radial runout: the axis offset e"),
-          number("tool", "runout_axial", "mm", non_negative(), FIELD(tool.runout_axial_mm),
-                 "axial runout"),
-          number("tool", "runout_phase", "degrees", Range{-360, 360}, FIELD(tool.runout_phase_deg),
-                 "angle of the runout offset relative to tooth 0"),
-          integer("tool", "tool_number", 0, 9999, FIELD(tool.tool_number),
-                  "T word of the tool change"),
-          custom("tool", "tooth_angles", "array of numbers", "degrees",
-                 "strictly increasing in [0, 360), one per tooth", "equal pitches",
-                 "tooth angular positions (variable pitch)",
-                 [](JobReader& r, Job& job) {
-                   Tool& tool = job.tool;
-                   auto angles = r.number_array("tool", "tooth_angles", Range{0, 360, true, false});
-                   if (!angles) return;
-                   if (tool.teeth > 0 && static_cast<int>(angles->size()) != tool.teeth) {
-                     r.problem("tool", "tooth_angles",
-                               fmt::format("must list one angle per tooth ({} values for teeth = "
-                                           "{}), got {}",
-                                           tool.teeth, tool.teeth, angles->size()));
-                   } else if (!std::is_sorted(angles->begin(), angles->end()) ||
-                              std::adjacent_find(angles->begin(), angles->end()) != angles->end()) {
-                     r.problem("tool", "tooth_angles",
-                               "must be strictly increasing degrees in [0, 360)");
-                   } else {
-                     tool.tooth_angles_deg = *angles;
-                   }
-                 }),
-          choice("tool", "type", kToolTypes, FIELD(tool.type),
-                 "solid end mill or indexable insert mill"),
-          custom("tool", "lead_angle", "number", "degrees", "in (0, 90]", "90",
-                 "insert mill: the main edge's angle to the face",
-                 [](JobReader& r, Job& job) {
-                   const auto lead =
-                       r.number("tool", "lead_angle", "degrees", Range{0, 90, false, true}, 90.0);
-                   if (!lead) return;
-                   if (job.tool.type != ToolType::insert_mill && *lead != 90.0) {
-                     r.problem("tool", "lead_angle",
-                               "applies to type = \"insert_mill\" (an end mill's flank is at 90 "
-                               "degrees)");
-                   } else {
-                     job.tool.lead_angle_deg = *lead;
-                   }
-                 }),
-          custom("tool", "insert_radial", "array of numbers", "mm", "in [-1, 1], one per insert",
-                 "none", "insert mill: each insert's radial seating",
-                 [](JobReader& r, Job& job) {
-                   read_insert_array(r, job, "insert_radial", job.tool.insert_radial_mm);
-                 }),
-          custom("tool", "insert_axial", "array of numbers", "mm", "in [-1, 1], one per insert",
-                 "none", "insert mill: each insert's axial seating",
-                 [](JobReader& r, Job& job) {
-                   read_insert_array(r, job, "insert_axial", job.tool.insert_axial_mm);
-                 }),
-          number("tool", "flank_wear", "mm", non_negative(), FIELD(tool.flank_wear_mm),
-                 "flank wear land VB_B (0: new tool)"),
-          // [slot]
-          number("slot", "width", "mm", positive(), FIELD(slot.width_mm), "slot width W along X",
-                 true),
-          number("slot", "length", "mm", positive(), FIELD(slot.length_mm), "slot length along +Y",
-                 true),
-          number("slot", "depth", "mm", positive(), FIELD(slot.depth_mm),
-                 "slot depth a_p below the top face z = 0", true),
-          // [path]
-          choice("path", "type", kPathTypes, FIELD(path.type), "path family", true),
-          custom("path", "step", "number", "mm", "> 0, below the tool diameter",
-                 "required (linear: when W > D)",
-                 "trochoidal step s (advance per cycle); stepover of the linear family",
-                 [](JobReader& r, Job& job) {
-                   const bool needs_step = job.path.type != PathType::linear ||
-                                           job.slot.width_mm > job.tool.diameter_mm;
-                   job.path.step_mm =
-                       r.number("path", "step", "mm", positive(), 0.0, needs_step).value_or(0.0);
-                 }),
-          number("path", "aspect_ratio", "(b/a)", positive(), FIELD(path.aspect_ratio),
-                 "r_e = b / a of the elliptical families"),
-          number("path", "linear_distance", "mm", non_negative(), FIELD(path.linear_distance_mm),
-                 "d, the straight wall move of linear-elliptical"),
-          choice("path", "direction", kDirections, FIELD(path.direction), "milling direction"),
-          choice("path", "entry", kEntries, FIELD(path.entry), "how the tool enters the slot"),
-          number("path", "entry_radius", "mm", non_negative(), FIELD(path.entry_radius_mm),
-                 "helix radius (0: automatic)"),
-          number("path", "entry_pitch", "mm per turn", positive(), FIELD(path.entry_pitch_mm),
-                 "helix descent per turn"),
-          number("path", "entry_angle", "degrees", Range{0, 90, false, false},
-                 FIELD(path.entry_angle_deg), "ramp angle"),
-          number("path", "entry_feed", "mm/min", non_negative(), FIELD(path.entry_feed_mm_per_min),
-                 "feed of the entry moves (0: half the feed)"),
-          number("path", "clearance", "mm", non_negative(), FIELD(path.clearance_mm),
-                 "distance kept from the stock before feeding in"),
-          // [cutting]: the pairs are checked and completed after the table.
-          number("cutting", "feed_rate", "mm/min", positive(), FIELD(cutting.feed_rate_mm_per_min),
-                 "f_r, tool-centre feed (or feed_per_tooth)"),
-          number("cutting", "spindle_speed", "rpm", positive(), FIELD(cutting.spindle_speed_rpm),
-                 "n (or cutting_speed)"),
-          number("cutting", "feed_per_tooth", "mm", positive(), FIELD(cutting.feed_per_tooth_mm),
-                 "f_z = f_r / (n Z) (or feed_rate)"),
-          number("cutting", "cutting_speed", "m/min", positive(),
-                 FIELD(cutting.cutting_speed_m_per_min), "v_c = pi D n / 1000 (or spindle_speed)"),
-          choice("cutting", "spindle_direction", kSpindleDirections,
-                 FIELD(cutting.spindle_direction), "spindle rotation seen from above"),
-          choice("cutting", "coolant", kCoolants, FIELD(cutting.coolant), "coolant"),
-          // [machine]
-          choice("machine", "dialect", kDialects, FIELD(machine.dialect), "control of the program"),
-          number("machine", "safe_z", "mm above the top face", positive(), FIELD(machine.safe_z_mm),
-                 "retract height above the top face"),
-          number("machine", "rapid_rate", "mm/min", positive(),
-                 FIELD(machine.rapid_rate_mm_per_min), "rapid traverse rate"),
-          number("machine", "max_acceleration", "mm/s^2", non_negative(),
-                 FIELD(machine.max_acceleration_mm_per_s2),
-                 "path acceleration limit for time estimates (0: unlimited)"),
-          number("machine", "junction_deviation", "mm", non_negative(),
-                 FIELD(machine.junction_deviation_mm),
-                 "corner blending tolerance for time estimates"),
-          number("machine", "arc_tolerance", "mm", Range{1e-6, 1.0},
-                 FIELD(machine.arc_tolerance_mm),
-                 "largest deviation of fitted arcs or chords from the path"),
-          choice("machine", "arc_output", kArcOutputs, FIELD(machine.arc_output),
-                 "elliptical arcs as biarcs (G2/G3) or as G1 chords"),
-          integer("machine", "program_number", 1, 9999, FIELD(machine.program_number),
-                  "O number of the program (fanuc)"),
-          // [measured]
-          number("measured", "force_max", "N", positive(), FIELD(measured.force_max_n),
-                 "measured maximum resultant force F_R,max"),
-          number("measured", "roughness_ra", "um", positive(), FIELD(measured.roughness_ra_um),
-                 "measured maximum roughness Ra"),
-          number("measured", "waviness", "um", positive(), FIELD(measured.waviness_um),
-                 "measured maximum wall waviness W_max"),
-          // [mechanism]
-          number("mechanism", "czi_max", "% of r_e", positive(),
-                 FIELD(mechanism.thresholds.czi_max_pct), "K_re below this: CZI (ploughing)"),
-          number("mechanism", "czii_max", "% of r_e", positive(),
-                 FIELD(mechanism.thresholds.czii_max_pct),
-                 "K_re below this: CZII; above: CZIII (greater than czi_max)"),
-          number("mechanism", "transition", "% of r_e", positive(),
-                 FIELD(mechanism.thresholds.transition_pct),
-                 "marker where the acoustic ratio k_f crosses 1"),
-          number("mechanism", "share", "fraction", Range{0.0, 1.0, false, true},
-                 FIELD(mechanism.share),
-                 "required CZIII share of the cutting part for `recommend`"),
-          choice("mechanism", "model", kChipModels, FIELD(mechanism.model), "chip model"),
-          integer("mechanism", "points", 36, 1000000, FIELD(mechanism.points),
-                  "theta samples per cycle"),
-          number("material", "friction_angle", "degrees", Range{0.0, 90.0, false, false},
-                 FIELD(mechanism.friction_angle_deg),
-                 "friction angle theta_m of h_m = r_e (1 - cos theta_m) (0: not given)"),
-          // [monitor]
-          number("monitor", "low_min", "Hz", positive(), FIELD(monitor.low_min_hz),
-                 "low band, lower edge"),
-          number("monitor", "low_max", "Hz", positive(), FIELD(monitor.low_max_hz),
-                 "low band, upper edge"),
-          number("monitor", "high_min", "Hz", positive(), FIELD(monitor.high_min_hz),
-                 "high band, lower edge"),
-          number("monitor", "high_max", "Hz", positive(), FIELD(monitor.high_max_hz),
-                 "high band, upper edge"),
-          integer("monitor", "order", 1, 12, FIELD(monitor.order),
-                  "Butterworth order of each band"),
-          number("monitor", "window", "s", Range{1e-5, 10.0}, FIELD(monitor.window_s),
-                 "RMS window (and hop)"),
-          integer("monitor", "baseline_cycles", 1, 1000, FIELD(monitor.baseline_cycles),
-                  "wear: cycles whose k_f level is the reference"),
-          number("monitor", "wear_ratio", "ratio", Range{1.0, 100.0, false, true},
-                 FIELD(monitor.wear_ratio),
-                 "wear flagged where the k_f level exceeds the reference by this"),
-          number("monitor", "ploughing_ratio", "ratio", Range{1.0, 100.0, false, true},
-                 FIELD(monitor.ploughing_ratio),
-                 "ploughing flagged where k_f in CZI exceeds CZIII's by this"),
-          integer("monitor", "phase_bins", 4, 10000, FIELD(monitor.phase_bins),
-                  "k_f profile bins over a cycle"),
-          // [simulation]
-          number("simulation", "resolution", "mm", Range{1e-4, 10.0},
-                 FIELD(simulation.resolution_mm), "dexel spacing"),
-          integer("simulation", "steps_per_rev", 8, 100000, FIELD(simulation.steps_per_rev),
-                  "time steps per spindle revolution"),
-          number("simulation", "chip_sampling", "mm", Range{1e-5, 1.0},
-                 FIELD(simulation.chip_sampling_mm), "resolution of a recorded chip"),
-          number("simulation", "segment", "mm", Range{1e-3, 10.0}, FIELD(simulation.segment_mm),
-                 "edge segment length along the edge (kappa)"),
-          integer("simulation", "sub_segments", 1, 100, FIELD(simulation.sub_segments),
-                  "sub-segments inward (tau), for wear topography"),
-          integer("simulation", "threads", 0, 1024, FIELD(simulation.threads),
-                  "worker threads (0: all cores); results are the same for any count"),
-          // [stock]
-          custom("stock", "min", "array of numbers", "mm", "[x, y, z], below max",
-                 "the slot region", "lower corner of the stock box (give min and max)",
-                 [](JobReader& r, Job& job) {
-                   const auto lo = r.number_array("stock", "min", Range{});
-                   const auto hi = r.number_array("stock", "max", Range{});
-                   if (lo.has_value() != hi.has_value()) {
-                     r.problem("stock", lo ? "max" : "min",
-                               "give both min and max ([x, y, z] in mm)");
-                   } else if (lo) {
-                     if (lo->size() != 3 || hi->size() != 3) {
-                       r.problem("stock", "min", "min and max must each be [x, y, z] in mm");
-                     } else if (!((*hi)[0] > (*lo)[0] && (*hi)[1] > (*lo)[1] &&
-                                  (*hi)[2] > (*lo)[2])) {
-                       r.problem("stock", "max", "every coordinate of max must exceed min's");
-                     } else {
-                       job.stock_min_mm = std::array<double, 3>{(*lo)[0], (*lo)[1], (*lo)[2]};
-                       job.stock_max_mm = std::array<double, 3>{(*hi)[0], (*hi)[1], (*hi)[2]};
-                     }
-                   }
-                 }),
-          custom("stock", "max", "array of numbers", "mm", "[x, y, z], above min",
-                 "the slot region", "upper corner of the stock box (read with min)",
-                 [](JobReader&, Job&) {}),
-          // [analysis]
-          integer("analysis", "steps_per_tooth", 1, 64, FIELD(analysis.steps_per_tooth),
-                  "engagement samples per tooth pass"),
-          integer("analysis", "imprint_points", 3, 10001, FIELD(analysis.imprint_points),
-                  "points across the slot width for the bottom imprint density"),
-      };
+  std::vector<Key> keys = {
+      // [tool]
+      number("tool", "diameter", "mm", positive(), FIELD(tool.diameter_mm), "cutter diameter D",
+             true),
+      integer("tool", "teeth", 1, 64, FIELD(tool.teeth), "number of teeth Z", true),
+      number("tool", "helix_angle", "degrees", Range{0, 90, true, false},
+             FIELD(tool.helix_angle_deg), "helix angle"),
+      number("tool", "corner_radius", "mm", non_negative(), FIELD(tool.corner_radius_mm),
+             "corner radius (0: square end mill; at most D/2)"),
+      number("tool", "edge_radius", "mm", non_negative(), FIELD(tool.edge_radius_mm),
+             "cutting-edge rounding radius r_e (below D/10)"),
+      number("tool", "flute_length", "mm", non_negative(), FIELD(tool.flute_length_mm),
+             "flute length, the edge's axial reach (0: not given; the simulation then reaches 1 mm "
+             "above the slot)"),
+      number("tool", "runout_radial", "mm", non_negative(), FIELD(tool.runout_radial_mm),
+             "radial runout: the axis offset e"),
+      number("tool", "runout_axial", "mm", non_negative(), FIELD(tool.runout_axial_mm),
+             "axial runout"),
+      number("tool", "runout_phase", "degrees", Range{-360, 360}, FIELD(tool.runout_phase_deg),
+             "angle of the runout offset from tooth 0; the tooth at this angle cuts the largest "
+             "radius and sits lowest"),
+      integer("tool", "tool_number", 0, 9999, FIELD(tool.tool_number), "T word"),
+      custom("tool", "tooth_angles", "array of numbers", "degrees",
+             "strictly increasing in [0, 360), one per tooth", "equal pitches",
+             "tooth angular positions (variable pitch)",
+             [](JobReader& r, Job& job) {
+               Tool& tool = job.tool;
+               auto angles = r.number_array("tool", "tooth_angles", Range{0, 360, true, false});
+               if (!angles) return;
+               if (tool.teeth > 0 && static_cast<int>(angles->size()) != tool.teeth) {
+                 r.problem("tool", "tooth_angles",
+                           fmt::format("must list one angle per tooth ({} values for teeth = "
+                                       "{}), got {}",
+                                       tool.teeth, tool.teeth, angles->size()));
+               } else if (!std::is_sorted(angles->begin(), angles->end()) ||
+                          std::adjacent_find(angles->begin(), angles->end()) != angles->end()) {
+                 r.problem("tool", "tooth_angles",
+                           "must be strictly increasing degrees in [0, 360)");
+               } else {
+                 tool.tooth_angles_deg = *angles;
+               }
+             }),
+      choice("tool", "type", kToolTypes, FIELD(tool.type),
+             "solid end mill, or indexable insert mill (the teeth are the inserts)"),
+      custom("tool", "lead_angle", "number", "degrees", "in (0, 90]", "90",
+             "insert mill: the main edge's angle to the face; 90 is a shoulder mill, less runs the "
+             "edge inward (face mill)",
+             [](JobReader& r, Job& job) {
+               const auto lead =
+                   r.number("tool", "lead_angle", "degrees", Range{0, 90, false, true}, 90.0);
+               if (!lead) return;
+               if (job.tool.type != ToolType::insert_mill && *lead != 90.0) {
+                 r.problem("tool", "lead_angle",
+                           "applies to type = \"insert_mill\" (an end mill's flank is at 90 "
+                           "degrees)");
+               } else {
+                 job.tool.lead_angle_deg = *lead;
+               }
+             }),
+      custom("tool", "insert_radial", "array of numbers", "mm", "in [-1, 1], one per insert",
+             "none", "insert mill: each insert's radial seating, added to the runout",
+             [](JobReader& r, Job& job) {
+               read_insert_array(r, job, "insert_radial", job.tool.insert_radial_mm);
+             }),
+      custom("tool", "insert_axial", "array of numbers", "mm", "in [-1, 1], one per insert", "none",
+             "insert mill: each insert's axial seating (positive: lower)",
+             [](JobReader& r, Job& job) {
+               read_insert_array(r, job, "insert_axial", job.tool.insert_axial_mm);
+             }),
+      number("tool", "flank_wear", "mm", non_negative(), FIELD(tool.flank_wear_mm),
+             "flank wear land VB_B (0: new tool); the mechanism commands then use the "
+             "wear-corrected K_re"),
+      // [slot]
+      number("slot", "width", "mm", positive(), FIELD(slot.width_mm),
+             "slot width W along X, >= D (> D for the trochoidal families)", true),
+      number("slot", "length", "mm", positive(), FIELD(slot.length_mm), "slot length along +Y",
+             true),
+      number("slot", "depth", "mm", positive(), FIELD(slot.depth_mm),
+             "slot depth a_p below the top face z = 0", true),
+      // [path]
+      choice("path", "type", kPathTypes, FIELD(path.type), "path family (docs/models.md section 2)",
+             true),
+      custom(
+          "path", "step", "number", "mm", "> 0, below the tool diameter",
+          "required (linear: when W > D)",
+          "trochoidal step s (advance per cycle), below D; for linear the stepover between passes",
+          [](JobReader& r, Job& job) {
+            const bool needs_step =
+                job.path.type != PathType::linear || job.slot.width_mm > job.tool.diameter_mm;
+            job.path.step_mm =
+                r.number("path", "step", "mm", positive(), 0.0, needs_step).value_or(0.0);
+          }),
+      number("path", "aspect_ratio", "(b/a)", positive(), FIELD(path.aspect_ratio),
+             "r_e = b / a for elliptical and linear-elliptical (trochoidal is r_e = 1)"),
+      number("path", "linear_distance", "mm", non_negative(), FIELD(path.linear_distance_mm),
+             "d, the straight wall moves of linear-elliptical"),
+      choice("path", "direction", kDirections, FIELD(path.direction),
+             "milling direction (conventional mirrors the orbit)"),
+      choice("path", "entry", kEntries, FIELD(path.entry),
+             "outside: open slot start, feed in from y < 0 at depth; helix, ramp, plunge: closed "
+             "start"),
+      number("path", "entry_radius", "mm", non_negative(), FIELD(path.entry_radius_mm),
+             "helix radius (0: half the largest that fits)"),
+      number("path", "entry_pitch", "mm per turn", positive(), FIELD(path.entry_pitch_mm),
+             "helix descent per turn"),
+      number("path", "entry_angle", "degrees", Range{0, 90, false, false},
+             FIELD(path.entry_angle_deg), "ramp angle"),
+      number("path", "entry_feed", "mm/min", non_negative(), FIELD(path.entry_feed_mm_per_min),
+             "feed of the entry moves (0: half the feed)"),
+      number(
+          "path", "clearance", "mm", non_negative(), FIELD(path.clearance_mm),
+          "height above the top face where feeding starts; distance kept from the stock outside"),
+      // [cutting]: the pairs are checked and completed after the table.
+      number("cutting", "feed_rate", "mm/min", positive(), FIELD(cutting.feed_rate_mm_per_min),
+             "f_r, tool-centre feed (or feed_per_tooth)"),
+      number("cutting", "spindle_speed", "rpm", positive(), FIELD(cutting.spindle_speed_rpm),
+             "n (or cutting_speed)"),
+      number("cutting", "feed_per_tooth", "mm", positive(), FIELD(cutting.feed_per_tooth_mm),
+             "f_z = f_r / (n Z) (or feed_rate)"),
+      number("cutting", "cutting_speed", "m/min", positive(),
+             FIELD(cutting.cutting_speed_m_per_min), "v_c = pi D n / 1000 (or spindle_speed)"),
+      choice("cutting", "spindle_direction", kSpindleDirections, FIELD(cutting.spindle_direction),
+             "spindle rotation seen from above: cw = M3, ccw = M4"),
+      choice("cutting", "coolant", kCoolants, FIELD(cutting.coolant),
+             "coolant: flood = M8, mist = M7"),
+      // [machine]
+      choice("machine", "dialect", kDialects, FIELD(machine.dialect), "control of the program"),
+      number("machine", "safe_z", "mm above the top face", positive(), FIELD(machine.safe_z_mm),
+             "retract height above the top face"),
+      number("machine", "rapid_rate", "mm/min", positive(), FIELD(machine.rapid_rate_mm_per_min),
+             "rapid traverse rate (G0), for time estimates and G-code read back"),
+      number("machine", "max_acceleration", "mm/s^2", non_negative(),
+             FIELD(machine.max_acceleration_mm_per_s2),
+             "path acceleration limit for time estimates (0: unlimited)"),
+      number("machine", "junction_deviation", "mm", non_negative(),
+             FIELD(machine.junction_deviation_mm), "corner blending tolerance for time estimates"),
+      number("machine", "arc_tolerance", "mm", Range{1e-6, 1.0}, FIELD(machine.arc_tolerance_mm),
+             "largest deviation of fitted arcs or chords from the path"),
+      choice("machine", "arc_output", kArcOutputs, FIELD(machine.arc_output),
+             "elliptical arcs as biarcs (G2/G3) or as G1 chords"),
+      integer("machine", "program_number", 1, 9999, FIELD(machine.program_number),
+              "Fanuc O number"),
+      // [measured]
+      number("measured", "force_max", "N", positive(), FIELD(measured.force_max_n),
+             "measured maximum resultant force F_R,max"),
+      number("measured", "roughness_ra", "um", positive(), FIELD(measured.roughness_ra_um),
+             "measured maximum roughness Ra"),
+      number("measured", "waviness", "um", positive(), FIELD(measured.waviness_um),
+             "measured maximum wall waviness W_max"),
+      // [mechanism]
+      number("mechanism", "czi_max", "% of r_e", positive(),
+             FIELD(mechanism.thresholds.czi_max_pct), "K_re below this: CZI (ploughing)"),
+      number("mechanism", "czii_max", "% of r_e", positive(),
+             FIELD(mechanism.thresholds.czii_max_pct),
+             "K_re below this: CZII (mixed shear); above: CZIII (cutting); > czi_max"),
+      number("mechanism", "transition", "% of r_e", positive(),
+             FIELD(mechanism.thresholds.transition_pct),
+             "marker where the acoustic ratio k_f crosses 1"),
+      number("mechanism", "share", "fraction", Range{0.0, 1.0, false, true}, FIELD(mechanism.share),
+             "required CZIII share of the cutting part for `recommend`"),
+      choice("mechanism", "model", kChipModels, FIELD(mechanism.model),
+             "chip model: exact, or pivkin2025, the published model (circular trochoid only; "
+             "docs/models.md section 9)"),
+      integer("mechanism", "points", 36, 1000000, FIELD(mechanism.points),
+              "theta samples per cycle"),
+      number("material", "friction_angle", "degrees", Range{0.0, 90.0, false, false},
+             FIELD(mechanism.friction_angle_deg),
+             "friction angle theta_m for the mechanism model: h_m = r_e (1 - cos theta_m) (0: not "
+             "given)"),
+      // [monitor]
+      number("monitor", "low_min", "Hz", positive(), FIELD(monitor.low_min_hz),
+             "low band, lower -3 dB edge"),
+      number("monitor", "low_max", "Hz", positive(), FIELD(monitor.low_max_hz),
+             "low band, upper -3 dB edge"),
+      number("monitor", "high_min", "Hz", positive(), FIELD(monitor.high_min_hz),
+             "high band, lower edge"),
+      number("monitor", "high_max", "Hz", positive(), FIELD(monitor.high_max_hz),
+             "high band, upper edge"),
+      integer("monitor", "order", 1, 12, FIELD(monitor.order),
+              "Butterworth order of each band (the band-pass has twice the poles)"),
+      number("monitor", "window", "s", Range{1e-5, 10.0}, FIELD(monitor.window_s),
+             "RMS window (and hop)"),
+      integer("monitor", "baseline_cycles", 1, 1000, FIELD(monitor.baseline_cycles),
+              "wear: cycles whose k_f level is the reference"),
+      number("monitor", "wear_ratio", "ratio", Range{1.0, 100.0, false, true},
+             FIELD(monitor.wear_ratio),
+             "wear flagged where the k_f level exceeds the reference by this"),
+      number("monitor", "ploughing_ratio", "ratio", Range{1.0, 100.0, false, true},
+             FIELD(monitor.ploughing_ratio),
+             "ploughing flagged where k_f in CZI exceeds CZIII's by this"),
+      integer("monitor", "phase_bins", 4, 10000, FIELD(monitor.phase_bins),
+              "k_f profile bins over a cycle"),
+      // [simulation]
+      number("simulation", "resolution", "mm", Range{1e-4, 10.0}, FIELD(simulation.resolution_mm),
+             "dexel spacing of the three boards (Bergmann 2021: 0.005)"),
+      integer("simulation", "steps_per_rev", 8, 100000, FIELD(simulation.steps_per_rev),
+              "time steps per spindle revolution"),
+      number("simulation", "chip_sampling", "mm", Range{1e-5, 1.0},
+             FIELD(simulation.chip_sampling_mm),
+             "resolution of a chip: thinner ones are not recorded as engagement"),
+      number("simulation", "segment", "mm", Range{1e-3, 10.0}, FIELD(simulation.segment_mm),
+             "edge segment length along the edge (kappa)"),
+      integer("simulation", "sub_segments", 1, 100, FIELD(simulation.sub_segments),
+              "sub-segments inward (tau), for wear topography"),
+      integer("simulation", "threads", 0, 1024, FIELD(simulation.threads),
+              "worker threads (0: all cores); results are the same for any count"),
+      // [stock]
+      custom("stock", "min", "array of numbers", "mm", "[x, y, z], below max", "the slot region",
+             "lower corner of the stock box (give min and max); by default the slot from y = 0 to "
+             "its length, 1 mm beside each wall, 0.5 mm below the floor, up to z = 0",
+             [](JobReader& r, Job& job) {
+               const auto lo = r.number_array("stock", "min", Range{});
+               const auto hi = r.number_array("stock", "max", Range{});
+               if (lo.has_value() != hi.has_value()) {
+                 r.problem("stock", lo ? "max" : "min", "give both min and max ([x, y, z] in mm)");
+               } else if (lo) {
+                 if (lo->size() != 3 || hi->size() != 3) {
+                   r.problem("stock", "min", "min and max must each be [x, y, z] in mm");
+                 } else if (!((*hi)[0] > (*lo)[0] && (*hi)[1] > (*lo)[1] && (*hi)[2] > (*lo)[2])) {
+                   r.problem("stock", "max", "every coordinate of max must exceed min's");
+                 } else {
+                   job.stock_min_mm = std::array<double, 3>{(*lo)[0], (*lo)[1], (*lo)[2]};
+                   job.stock_max_mm = std::array<double, 3>{(*hi)[0], (*hi)[1], (*hi)[2]};
+                 }
+               }
+             }),
+      custom("stock", "max", "array of numbers", "mm", "[x, y, z], above min", "the slot region",
+             "upper corner of the stock box (read with min)", [](JobReader&, Job&) {}),
+      // [analysis]
+      integer("analysis", "steps_per_tooth", 1, 64, FIELD(analysis.steps_per_tooth),
+              "engagement samples per tooth pass (the chip spans that many)"),
+      integer("analysis", "imprint_points", 3, 10001, FIELD(analysis.imprint_points),
+              "points across the slot width for the floor imprint density"),
+  };
   for (Key& k : material_keys()) keys.push_back(std::move(k));
   const std::vector<Key> rest = {
       // [forces]
       integer("forces", "fast_steps_per_rev", 8, 100000, FIELD(forces.fast_steps_per_rev),
-              "fast chip source: time steps per revolution"),
+              "time steps per revolution of the fast chip source (forces --fast, analyze's "
+              "predicted force); calibration uses at least 500 per tooth pass"),
       number("forces", "ploughing_angle", "degrees", Range{0.0, 90.0, false, false},
              FIELD(forces.ploughing_angle_deg),
-             "zeta: sub-segments steeper than this to the cutting direction plough"),
+             "zeta: sub-segments steeper than this to the cutting direction form the ploughing "
+             "surrogate h_s"),
       // [topography]: file names relative to the job file's directory.
       custom("topography", "files", "array of strings", "", "STL, PLY or OBJ files", "none",
-             "digitised wear states of the insert, one mesh each",
+             "meshes of the insert or tooth, one per wear state (mm, tooth frame: x radial, y "
+             "cutting direction, z axial; paths relative to the job file)",
              [](JobReader& r, Job& job) {
                if (auto files = r.string_array("topography", "files")) {
                  const std::filesystem::path base = std::filesystem::path(r.source()).parent_path();
@@ -440,7 +454,8 @@ std::vector<Key> build_schema() {
                }
              }),
       custom("topography", "synthetic_vb", "array of numbers", "mm", "in [0, 2]", "none",
-             "or synthetic inserts, one per flank wear VB (not with files)",
+             "or synthetic inserts, one per flank wear land width VB (0: new; hone radius [tool] "
+             "edge_radius, default 0.02 mm); not with files",
              [](JobReader& r, Job& job) {
                if (auto vb = r.number_array("topography", "synthetic_vb", Range{0.0, 2.0})) {
                  job.topography.synthetic_vb_mm = *vb;
@@ -450,7 +465,7 @@ std::vector<Key> build_schema() {
                }
              }),
       number("topography", "band", "mm", Range{1e-3, 5.0}, FIELD(topography.band_mm),
-             "band along the edge that is sampled"),
+             "band along the edge that is sampled into the sub-segments"),
       number("topography", "rake", "degrees", Range{-30.0, 30.0}, FIELD(topography.rake_deg),
              "synthetic insert: rake angle"),
       number("topography", "clearance", "degrees", Range{1.0, 30.0},
@@ -695,22 +710,28 @@ const std::vector<JobKey>& job_keys() {
 }
 
 std::string job_keys_markdown() {
-  std::string out;
-  std::string section;
+  // One table per section, the sections in the order they first appear in the schema.
+  std::vector<std::string> sections;
   for (const JobKey& k : job_keys()) {
-    if (k.section != section) {
-      section = k.section;
-      out += fmt::format(
-          "\n#### [{}]\n\n| key | type | unit | allowed | default | meaning |\n"
-          "|---|---|---|---|---|---|\n",
-          section);
+    if (std::find(sections.begin(), sections.end(), k.section) == sections.end()) {
+      sections.push_back(k.section);
     }
-    std::string allowed = k.allowed;
-    for (std::size_t p = 0; (p = allowed.find('|', p)) != std::string::npos; p += 2) {
-      allowed.replace(p, 1, "\\|");
+  }
+  std::string out;
+  for (const std::string& section : sections) {
+    out += fmt::format(
+        "\n#### [{}]\n\n| key | type | unit | allowed | default | meaning |\n"
+        "|---|---|---|---|---|---|\n",
+        section);
+    for (const JobKey& k : job_keys()) {
+      if (k.section != section) continue;
+      std::string allowed = k.allowed;
+      for (std::size_t p = 0; (p = allowed.find('|', p)) != std::string::npos; p += 2) {
+        allowed.replace(p, 1, "\\|");
+      }
+      out += fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", k.key, k.type, k.unit, allowed,
+                         k.default_text, k.doc);
     }
-    out += fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", k.key, k.type, k.unit, allowed,
-                       k.default_text, k.doc);
   }
   return out;
 }

@@ -271,4 +271,29 @@ std::string study_csv(const std::vector<Vary>& varies, const std::vector<StudyPo
   return out;
 }
 
+std::string job_keys_text() {
+  std::size_t w = 0;
+  for (const JobKey& k : job_keys()) w = std::max(w, k.section.size() + 1 + k.key.size());
+  std::string out;
+  for (const JobKey& k : job_keys()) {
+    out += fmt::format("{:<{}}  {}{}, {}; default {}\n    {}\n", k.section + "." + k.key, w, k.type,
+                       k.unit.empty() ? "" : " (" + k.unit + ")", k.allowed, k.default_text, k.doc);
+  }
+  return out;
+}
+
+std::string job_keys_json() {
+  nlohmann::json j = nlohmann::json::array();
+  for (const JobKey& k : job_keys()) {
+    j.push_back({{"section", k.section},
+                 {"key", k.key},
+                 {"type", k.type},
+                 {"unit", k.unit},
+                 {"allowed", k.allowed},
+                 {"default", k.default_text},
+                 {"doc", k.doc}});
+  }
+  return j.dump(2) + "\n";
+}
+
 }  // namespace trochomill
