@@ -12,6 +12,23 @@
 #include "trochomill/signal.hpp"
 
 namespace trochomill::cli {
+namespace {
+
+// A band flag LOW:HIGH sets two [monitor] keys (band_min, band_max): an alias like the others.
+void add_band_alias(CLI::App* cmd, JobArgs& job, const std::string& flag, const std::string& band,
+                    const std::string& default_text) {
+  cmd->add_option_function<std::string>(
+      flag,
+      [&job, flag, band](const std::string& v) {
+        const auto [lo, hi] = parse_band(flag, v);
+        job.aliases.emplace_back(flag + "=monitor." + band + "_min", fmt::format("{}", lo));
+        job.aliases.emplace_back(flag + "=monitor." + band + "_max", fmt::format("{}", hi));
+      },
+      fmt::format("{} band LOW:HIGH, Hz (the job keys monitor.{}_min, {}_max; default {})", band,
+                  band, band, default_text));
+}
+
+}  // namespace
 
 void register_signal_commands(CLI::App& app, int& exit_code) {
   // monitor
@@ -31,23 +48,8 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
                     "job file: cycle timing, [monitor] settings, model zones");
     cmd->add_option("--set", a->job.sets, "override a job key (repeatable)")->take_all();
     cmd->add_option("--start", a->start_s, "time in the signal where the program starts, s");
-    // The band flags set two keys each; they are aliases of [monitor] keys like the others.
-    cmd->add_option_function<std::string>(
-        "--low",
-        [a](const std::string& v) {
-          const auto [lo, hi] = parse_band("--low", v);
-          a->job.aliases.emplace_back("--low=monitor.low_min", fmt::format("{}", lo));
-          a->job.aliases.emplace_back("--low=monitor.low_max", fmt::format("{}", hi));
-        },
-        "low band LOW:HIGH, Hz (the job keys monitor.low_min, low_max; default 2000:5000)");
-    cmd->add_option_function<std::string>(
-        "--high",
-        [a](const std::string& v) {
-          const auto [lo, hi] = parse_band("--high", v);
-          a->job.aliases.emplace_back("--high=monitor.high_min", fmt::format("{}", lo));
-          a->job.aliases.emplace_back("--high=monitor.high_max", fmt::format("{}", hi));
-        },
-        "high band LOW:HIGH, Hz (the job keys monitor.high_min, high_max; default 8000:13000)");
+    add_band_alias(cmd, a->job, "--low", "low", "2000:5000");
+    add_band_alias(cmd, a->job, "--high", "high", "8000:13000");
     add_key_alias(cmd, a->job, "--order", "monitor.order", "Butterworth order per band");
     add_key_alias(cmd, a->job, "--window", "monitor.window", "RMS window, s");
     cmd->add_option("--json", a->json, "write the results as JSON (- for stdout)");
