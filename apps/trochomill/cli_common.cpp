@@ -19,11 +19,7 @@ namespace trochomill::cli {
 std::vector<Override> JobArgs::overrides() const {
   std::vector<Override> ov;
   for (const auto& s : sets) ov.push_back(parse_override(s));
-  for (const auto& [flag, value] : aliases) {
-    // The flag's key was recorded when the flag was added: "--share=mechanism.share".
-    const auto eq = flag.find('=');
-    ov.push_back(Override{flag.substr(eq + 1), value, flag.substr(0, eq)});
-  }
+  for (const Alias& a : aliases) ov.push_back(Override{a.key, a.value, a.flag});
   return ov;
 }
 
@@ -39,14 +35,20 @@ void add_job_args(CLI::App* cmd, JobArgs& a) {
 void add_key_alias(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
                    const std::string& help) {
   cmd->add_option_function<std::string>(
-      flag, [&a, flag, key](const std::string& v) { a.aliases.emplace_back(flag + "=" + key, v); },
+      flag,
+      [&a, flag, key](const std::string& v) {
+        a.aliases.push_back({flag, key, v});
+      },
       fmt::format("{} (the job key {}: --set {}=VALUE)", help, key, key));
 }
 
 void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
                   const std::string& value, const std::string& help) {
   cmd->add_flag_callback(
-      flag, [&a, flag, key, value] { a.aliases.emplace_back(flag + "=" + key, value); },
+      flag,
+      [&a, flag, key, value] {
+        a.aliases.push_back({flag, key, value});
+      },
       fmt::format("{} (--set {}={})", help, key, value));
 }
 

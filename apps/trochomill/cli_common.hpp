@@ -23,8 +23,11 @@ namespace trochomill::cli {
 struct JobArgs {
   std::string file;
   std::vector<std::string> sets;
-  /// (key, value) of the alias flags given, applied after the --set overrides.
-  std::vector<std::pair<std::string, std::string>> aliases;
+  /// A flag given that sets a job key, applied after the --set overrides.
+  struct Alias {
+    std::string flag, key, value;
+  };
+  std::vector<Alias> aliases;
   [[nodiscard]] std::vector<Override> overrides() const;
   [[nodiscard]] Job load() const;
 };
@@ -68,9 +71,9 @@ void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required);
 /// "LO:HI" in Hz (0 < LO < HI). Throws InputError naming the option.
 [[nodiscard]] std::pair<double, double> parse_band(const std::string& opt, const std::string& text);
 
-/// A long run: refuses to start when the estimated memory passes the limit (bytes; by default
-/// 75 % of RAM), turns Ctrl-C into a flag the library polls (the previous handler comes back
-/// when it ends), and shows a progress bar with ETA on a terminal.
+/// A long run: turns Ctrl-C into a flag the library polls (the previous handler comes back
+/// when it ends; one run at a time) and shows a progress bar with ETA on a terminal. The
+/// memory check before it: memory_limit_bytes.
 class GuardedRun {
  public:
   /// `progress`: show a bar when stderr is a terminal.

@@ -21,8 +21,8 @@ void add_band_alias(CLI::App* cmd, JobArgs& job, const std::string& flag, const 
       flag,
       [&job, flag, band](const std::string& v) {
         const auto [lo, hi] = parse_band(flag, v);
-        job.aliases.emplace_back(flag + "=monitor." + band + "_min", fmt::format("{}", lo));
-        job.aliases.emplace_back(flag + "=monitor." + band + "_max", fmt::format("{}", hi));
+        job.aliases.push_back({flag, "monitor." + band + "_min", fmt::format("{}", lo)});
+        job.aliases.push_back({flag, "monitor." + band + "_max", fmt::format("{}", hi)});
       },
       fmt::format("{} band LOW:HIGH, Hz (the job keys monitor.{}_min, {}_max; default {})", band,
                   band, band, default_text));

@@ -43,12 +43,11 @@ struct CsvTable {
 };
 /// How to read it. The separator is ',' (or, with `detect_separator`, the first of ',', ';'
 /// and tab that the line holds); '#' lines and blank lines are skipped; fields are trimmed of
-/// blanks, '\r' and, with `detect_separator`, quotes.
+/// blanks, '\r' and, with `detect_separator`, quotes. With `columns` the first line is the
+/// header; without, it is a header when its first field is not a number.
 struct CsvOptions {
   /// Columns to select by name (the header is then required); empty: every column.
   std::vector<std::string> columns;
-  /// The first line is a header when it does not start with a number (when `columns` is
-  /// empty); with `columns`, the first line always is.
   bool detect_separator = false;
   /// With no column selection: every row must have the first row's number of fields.
   bool same_width = true;

@@ -481,13 +481,7 @@ GcodeProgram read_gcode(std::string_view text, std::string_view source_name,
 }
 
 GcodeProgram read_gcode_file(const std::filesystem::path& file, const GcodeReadOptions& options) {
-  std::string text;
-  try {
-    text = read_file(file);
-  } catch (const IoError& e) {
-    throw InputError(e.what());
-  }
-  return read_gcode(text, file.string(), options);
+  return read_gcode(read_text_file(file), file.string(), options);
 }
 
 }  // namespace trochomill

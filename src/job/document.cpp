@@ -177,13 +177,8 @@ Override parse_override(std::string_view text) {
   }
   std::string key(text.substr(0, eq));
   std::string value(text.substr(eq + 1));
-  auto trim = [](std::string& s) {
-    const auto b = s.find_first_not_of(" \t");
-    const auto e = s.find_last_not_of(" \t");
-    s = b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
-  };
-  trim(key);
-  trim(value);
+  key = trim(key);
+  value = trim(value);
   const auto dot = key.find('.');
   if (dot == std::string::npos || dot == 0 || dot + 1 == key.size()) {
     throw InputError(fmt::format("--set '{}': the key must be section.key (e.g. path.step)", text));

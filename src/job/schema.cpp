@@ -240,21 +240,9 @@ std::vector<Key> build_schema() {
              }),
       choice("tool", "type", kToolTypes, FIELD(tool.type),
              "solid end mill, or indexable insert mill (the teeth are the inserts)"),
-      custom("tool", "lead_angle", "number", "degrees", "in (0, 90]", "90",
-             "insert mill: the main edge's angle to the face; 90 is a shoulder mill, less runs the "
-             "edge inward (face mill)",
-             [](JobReader& r, Job& job) {
-               const auto lead =
-                   r.number("tool", "lead_angle", "degrees", Range{0, 90, false, true}, 90.0);
-               if (!lead) return;
-               if (job.tool.type != ToolType::insert_mill && *lead != 90.0) {
-                 r.problem("tool", "lead_angle",
-                           "applies to type = \"insert_mill\" (an end mill's flank is at 90 "
-                           "degrees)");
-               } else {
-                 job.tool.lead_angle_deg = *lead;
-               }
-             }),
+      number("tool", "lead_angle", "degrees", Range{0, 90, false, true}, FIELD(tool.lead_angle_deg),
+             "insert mill: the main edge's angle to the face; 90 is a shoulder mill, less runs "
+             "the edge inward (face mill)"),
       custom("tool", "insert_radial", "array of numbers", "mm", "in [-1, 1], one per insert",
              "none", "insert mill: each insert's radial seating, added to the runout",
              [](JobReader& r, Job& job) {
@@ -470,13 +458,16 @@ std::vector<Key> build_schema() {
              "synthetic insert: rake angle"),
       number("topography", "clearance", "degrees", Range{1.0, 30.0},
              FIELD(topography.clearance_deg), "synthetic insert: clearance angle"),
-      custom("topography", "state", "integer", "", "in [0, states - 1]", "0",
-             "the wear state used (index into files or synthetic_vb)",
-             [](JobReader& r, Job& job) {
-               const int states = static_cast<int>(job.topography.states());
-               job.topography.state =
-                   r.integer("topography", "state", 0, std::max(0, states - 1), 0).value_or(0);
-             }),
+      custom(
+          "topography", "state", "integer", "", "in [0, states - 1]",
+          fmt::format("{}", TopographySettings{}.state),
+          "the wear state used (index into files or synthetic_vb)",
+          [](JobReader& r, Job& job) {
+            const int states = static_cast<int>(job.topography.states());
+            int& state = job.topography.state;
+            state =
+                r.integer("topography", "state", 0, std::max(0, states - 1), state).value_or(state);
+          }),
   };
   for (const Key& k : rest) keys.push_back(k);
   return keys;
@@ -588,6 +579,11 @@ void check_rules(JobReader& r, Job& job) {
     r.problem("tool", "edge_radius",
               fmt::format("must be < D/10 = {} mm (a cutting-edge rounding is micrometres), got {}",
                           fmt_num(0.1 * tool.diameter_mm), fmt_num(tool.edge_radius_mm)));
+  }
+  if (tool.type != ToolType::insert_mill && r.has("tool", "lead_angle") &&
+      tool.lead_angle_deg != Tool{}.lead_angle_deg) {
+    r.problem("tool", "lead_angle",
+              "applies to type = \"insert_mill\" (an end mill's flank is at 90 degrees)");
   }
   if (tool.tooth_angles_deg.empty() && tool.teeth > 0) {
     for (int k = 0; k < tool.teeth; ++k) tool.tooth_angles_deg.push_back(360.0 * k / tool.teeth);

@@ -51,13 +51,12 @@ void check_finite(const std::string& path, const std::vector<double>& v) {
   }
 }
 
+// A file's bytes, or stdin's for "-".
 std::string read_all(const std::string& path) {
   if (path == "-") {
     return {std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>()};
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot open", path));
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  return read_text_file(path);
 }
 
 Signal read_raw(const std::string& path, const SignalReadOptions& o, bool f32) {
