@@ -128,7 +128,63 @@ TEST(Io, AtomicWriteReplacesAndLeavesNoTemporaries) {
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;
   EXPECT_EQ(files, 1);
   EXPECT_THROW(write_file_atomic(dir / "missing" / "b.txt", "x"), IoError);
+  // A writer that fails half-way leaves neither the target nor its temporary file.
+  EXPECT_THROW(write_file_atomic(dir / "c.bin",
+                                 [](const std::filesystem::path& tmp) {
+                                   write_file_atomic(tmp, "half");
+                                   throw IoError("disk full");
+                                 }),
+               IoError);
+  EXPECT_FALSE(std::filesystem::exists(dir / "c.bin"));
+  files = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;
+  EXPECT_EQ(files, 1);
   std::filesystem::remove_all(dir);
+}
+
+// The one CSV reader: columns by name in any order, ';' and quotes, a header detected when
+// the first field is not a number, and every error at file:line:column.
+TEST(Io, CsvReaderSelectsColumnsAndLocatesErrors) {
+  CsvOptions named;
+  named.columns = {"fz", "t"};
+  named.detect_separator = true;
+  const CsvTable t = parse_csv("# comment\n\"t\"; fx; fz\n0.5;1;2\n\n1.5;3;4\r\n", "f.csv", named);
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[1], (std::vector<double>{4, 1.5}));
+  EXPECT_EQ(t.line_of_row[1], 5u);
+  try {
+    (void)parse_csv("t,fz\n0,1\n1,x\n", "f.csv", CsvOptions{{"fz"}, false, true});
+    ADD_FAILURE() << "a word in a number column was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "f.csv:3:2: 'x' in column 'fz' is not a number");
+  }
+  EXPECT_THROW((void)parse_csv("a,b\n1,2\n", "f.csv", CsvOptions{{"c"}, false, true}), InputError);
+  const CsvTable plain = parse_csv("1, 2\n3, 4\n", "g.csv");  // no header
+  EXPECT_TRUE(plain.header.empty());
+  EXPECT_EQ(plain.rows.size(), 2u);
+  EXPECT_THROW((void)parse_csv("1,2\n3\n", "g.csv"), InputError);  // ragged
+  EXPECT_THROW((void)parse_csv("1,inf\n", "g.csv"), InputError);   // not finite
+  EXPECT_EQ(split_trimmed(" a, b ,,c"), (std::vector<std::string>{"a", "b", "", "c"}));
+}
+
+// One parsed document builds many jobs: each with its own overrides, each message still at
+// the file's line and column; settings-only overrides refuse the job's own sections.
+TEST(Job, OneDocumentBuildsManyJobs) {
+  const JobDocument doc = JobDocument::load(test::example("wagih2023/elliptical.toml"));
+  EXPECT_EQ(doc.build({parse_override("path.aspect_ratio=0.6")}).path.aspect_ratio, 0.6);
+  EXPECT_EQ(doc.build({parse_override("path.aspect_ratio=1.2")}).path.aspect_ratio, 1.2);
+  EXPECT_EQ(doc.build().path.aspect_ratio, 0.8);
+  try {
+    (void)doc.build({parse_override("slot.width=5")});
+    ADD_FAILURE() << "a slot narrower than the tool was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--set slot.width"), std::string::npos) << e.what();
+  }
+  Job defaults;
+  apply_overrides(defaults, {Override{"monitor.order", "6", "--order"}});
+  EXPECT_EQ(defaults.monitor.order, 6);
+  EXPECT_THROW(apply_overrides(defaults, {parse_override("tool.diameter=3")}), InputError);
+  EXPECT_THROW(apply_overrides(defaults, {parse_override("monitor.low_max=100")}), InputError);
 }
 
 }  // namespace
