@@ -40,8 +40,8 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
   cmd->add_flag("--fast", a->fast, "the fast chip source, as for forces");
   cmd->add_option("--columns", a->columns,
                   "time,fx,fy,fz column names (default t_s,f_x_n,f_y_n,f_z_n)");
-  cmd->add_option("--time-unit", a->time_unit, "s or ms (default s)");
-  cmd->add_option("--force-unit", a->force_unit, "N or kN (default N)");
+  cmd->add_option("--time-unit", a->time_unit, "s or ms")->capture_default_str();
+  cmd->add_option("--force-unit", a->force_unit, "N or kN")->capture_default_str();
   cmd->add_option("--cutoff", a->cutoff_hz,
                   "low-pass of both signals, Hz (default 10 x tooth "
                   "passing, below 0.4 x the coarser rate)");

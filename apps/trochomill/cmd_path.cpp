@@ -100,8 +100,8 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     auto* cmd = app.add_subcommand("check-gcode",
                                    "parse an NC program and report length, time, bounding box");
     cmd->add_option("FILE", a->file, "G-code file")->required();
-    cmd->add_option("--rapid-rate", a->machine.rapid_rate_mm_per_min,
-                    "rapid traverse rate, mm/min (default 10000)")
+    cmd->add_option("--rapid-rate", a->machine.rapid_rate_mm_per_min, "rapid traverse rate, mm/min")
+        ->capture_default_str()
         ->check(CLI::PositiveNumber);
     cmd->add_option("--max-acceleration", a->machine.max_acceleration_mm_per_s2,
                     "path acceleration limit for the time estimate, mm/s^2")

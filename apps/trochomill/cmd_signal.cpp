@@ -107,16 +107,18 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
     add_job_args(cmd, a->job);
     SynthOptions& syn = a->synth;
     cmd->add_option("-o,--output", a->out, "output WAV file")->required();
-    cmd->add_option("--rate", syn.rate_hz, "sample rate, Hz (default 100000)");
-    cmd->add_option("--cycles", syn.cycles, "trochoid cycles to cover (default 12)");
-    cmd->add_option("--kf-czi", syn.kf_czi, "k_f in CZI (default 1.6)");
-    cmd->add_option("--kf-czii", syn.kf_czii, "k_f in CZII (default 1.15)");
-    cmd->add_option("--kf-cziii", syn.kf_cziii, "k_f in CZIII (default 1.0)");
+    cmd->add_option("--rate", syn.rate_hz, "sample rate, Hz")->capture_default_str();
+    cmd->add_option("--cycles", syn.cycles, "trochoid cycles to cover")->capture_default_str();
+    cmd->add_option("--kf-czi", syn.kf_czi, "k_f in CZI")->capture_default_str();
+    cmd->add_option("--kf-czii", syn.kf_czii, "k_f in CZII")->capture_default_str();
+    cmd->add_option("--kf-cziii", syn.kf_cziii, "k_f in CZIII")->capture_default_str();
     cmd->add_option("--wear-drift", syn.wear_drift,
-                    "k_f grows by this fraction from the first cycle to the last (default 0)");
-    cmd->add_option("--noise", syn.noise, "white noise RMS relative to cutting (default 0.02)");
-    cmd->add_option("--lead", syn.lead_s, "air before the program start, s (default 0.1)");
-    cmd->add_option("--seed", syn.seed, "random seed (default 1)");
+                    "k_f grows by this fraction from the first cycle to the last")
+        ->capture_default_str();
+    cmd->add_option("--noise", syn.noise, "white noise RMS relative to cutting")
+        ->capture_default_str();
+    cmd->add_option("--lead", syn.lead_s, "air before the program start, s")->capture_default_str();
+    cmd->add_option("--seed", syn.seed, "random seed")->capture_default_str();
     cmd->final_callback([a, &exit_code] {
       const Job job = a->job.load();
       const Signal sig = synth_signal(job, job.monitor, a->synth);
@@ -138,7 +140,7 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand("spectrum", "Welch spectrum and spectrogram, to choose bands");
     add_signal_args(cmd, a->signal, true);
-    cmd->add_option("--nfft", a->nfft, "FFT length, a power of two (default 4096)");
+    cmd->add_option("--nfft", a->nfft, "FFT length, a power of two")->capture_default_str();
     cmd->add_option("--csv", a->csv, "write the PSD as CSV (- for stdout)");
     cmd->add_option("--spectrogram", a->spectrogram,
                     "write the spectrogram as CSV (t_s, f_hz, db)");
