@@ -269,5 +269,27 @@ TEST(Analysis, RejectsPathsThatNeverCut) {
   EXPECT_THROW((void)analyze_process(job, p), InputError);
 }
 
+// Valid jobs whose scallops are deeper than the path-level waviness (a long step, a low
+// feed): the tooth-level walls are found by widening the search band, not refused. The
+// tooth-level waviness stays within the path level's plus the cusp and search margin the
+// analysis itself allows (f_z^2 / R + 2 um, no runout here).
+TEST(Analysis, ToothLevelWallsOfLongStepsAndLowFeeds) {
+  const std::vector<std::pair<std::string, std::vector<Override>>> cases = {
+      {"trochoidal", {{"path.step", "1.2", {}}, {"cutting.feed_rate", "400", {}}}},
+      {"trochoidal", {{"path.step", "2.0", {}}, {"cutting.feed_rate", "600", {}}}},
+      {"linear-elliptical", {{"path.step", "1.2", {}}, {"cutting.feed_rate", "700", {}}}},
+  };
+  for (const auto& [family, ov] : cases) {
+    const Job job = load_job(test::example("wagih2023/" + family + ".toml"), ov);
+    const ProcessMetrics m = analyze_process(job, plan_path(job).path);
+    const double fz = job.cutting.feed_per_tooth_mm,
+                 margin = fz * fz / job.tool.radius_mm() + 0.002;
+    EXPECT_NEAR(m.walls_tooth.left.waviness_mm, m.walls_path.left.waviness_mm, margin)
+        << family << " step " << ov[0].value;
+    EXPECT_NEAR(m.walls_tooth.right.waviness_mm, m.walls_path.right.waviness_mm, margin)
+        << family << " step " << ov[0].value;
+  }
+}
+
 }  // namespace
 }  // namespace trochomill

@@ -457,7 +457,9 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
           last_end = t;
         }
       }
-      if (times.size() < 2) throw Error("analyze: no tooth-tip samples near the wall");
+      if (times.size() < 2) {  // the band is too narrow for any tip: it widens (below)
+        throw InputError("analyze: no tooth-tip samples near the wall");
+      }
       ToothTracks tr = tooth_tracks(ts, job.tool, job.cutting);
       for (const std::size_t b : breaks) {
         for (auto& z : tr.z_mm) z[b] = std::numeric_limits<double>::infinity();
@@ -469,18 +471,23 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
       double& yc = left ? yl : yr;
       for (double band = 1.5 * wp + base;; band *= 2) {
         Walls tw;
-        for (std::size_t k = 0;; ++k) {  // as for the path level: a period the tips cut
+        bool cut = false;
+        for (std::size_t k = 0; k < shifts.size() && !cut; ++k) {
+          // As for the path level: a period the tips cut. Where no tip within the band
+          // reaches some y of the period, the band is too narrow for this wall (a step or
+          // feed that leaves deeper scallops than the path-level waviness): it widens.
           try {
             tw = tips_for(left, yc + shifts[k] * period, band);
             if (shifts[k] != 0) {
               yc += shifts[k] * period;
               (left ? m.walls_path.left : m.walls_path.right) = path_side(left, yc);
             }
-            break;
+            cut = true;
           } catch (const InputError&) {
-            if (k + 1 == shifts.size()) throw;
+            if (k + 1 == shifts.size() && band > R) throw;
           }
         }
+        if (!cut) continue;
         const WallProfile& prof = left ? tw.left : tw.right;
         // Complete when the profile lies within the band of the extreme tip reach: a centre
         // beyond the band puts its tips (radius <= R + e) beyond the band too.
