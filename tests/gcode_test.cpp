@@ -252,6 +252,17 @@ TEST(GcodeReader, UnitsDistanceModesCommentsAndLineNumbers) {
 
 // Data-driven: first line "; expect: LINE:COL: message"; the error must read
 // "<file>:LINE:COL: message".
+// Lines are counted as `wc -l` and editors count them: a final newline ends the last line,
+// M30 ends the program, and a last line without a newline still counts.
+TEST(GcodeReader, CountsTheProgramsLines) {
+  const std::string body = "G21 G90\nG1 X1 F100\nG1 X2\n";
+  EXPECT_EQ(read_gcode(body, "a.ngc").info.lines, 3u);
+  EXPECT_EQ(read_gcode(body + "M30\n", "b.ngc").info.lines, 4u);
+  EXPECT_EQ(read_gcode(body + "M30\n(after the end)\n", "c.ngc").info.lines, 4u);
+  EXPECT_EQ(read_gcode("G21 G90\nG1 X1 F100\nG1 X2", "d.ngc").info.lines, 3u);
+  EXPECT_EQ(read_gcode(body + "\n", "e.ngc").info.lines, 4u);  // a blank last line is a line
+}
+
 TEST(GcodeReader, MalformedProgramsGiveTheExpectedMessage) {
   const auto files = test::files_in(test::source_dir() / "tests/data/bad_gcode", ".ngc");
   ASSERT_GE(files.size(), 15u);

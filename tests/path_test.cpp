@@ -149,15 +149,33 @@ TEST(Timing, AccelerationLimitMatchesTrapezoidFormula) {
   m.max_acceleration_mm_per_s2 = 500;
   ToolPath p;
   p.append(Segment::line(Vec3(0, 0, 0), Vec3(100, 0, 0), Motion::feed, 3000));  // 50 mm/s
-  // Trapezoid from rest to rest: t = L / v + v / a = 2 + 0.1 s. The node discretisation caps
-  // speed at nodes only, so the piece where cruise begins is slightly slower: < 1e-3 s.
-  EXPECT_NEAR(estimate_time_s(p, m), 100.0 / 50 + 50.0 / 500, 1e-3);
+  // Trapezoid from rest to rest: t = L / v + v / a = 2 + 0.1 s. Each piece runs the exact
+  // accelerate-cruise-brake profile, so only rounding remains.
+  EXPECT_NEAR(estimate_time_s(p, m), 100.0 / 50 + 50.0 / 500, 1e-9);
   ToolPath q;
   q.append(Segment::line(Vec3(0, 0, 0), Vec3(1, 0, 0), Motion::feed, 3000));
   // Triangle: the top speed sqrt(a L) = 22.4 < 50 mm/s, t = 2 sqrt(L / a).
   EXPECT_NEAR(estimate_time_s(q, m), 2 * std::sqrt(1.0 / 500), 1e-9);
   m.max_acceleration_mm_per_s2 = 0;
   EXPECT_EQ(estimate_time_s(p, m), p.duration_s());
+}
+
+// A machine that accelerates without limit takes the programmed time: on a whole planned
+// program (reversals, rapids, starts and stops) the limited time tends to it as a grows. The
+// excess is the sum of v / a over the stops (about 1e-9 s at 1e12 mm/s^2).
+TEST(Timing, UnboundedAccelerationGivesTheProgrammedTime) {
+  const Job job = test::wagih_job("elliptical");
+  const ToolPath p = plan_path(job).path;
+  Machine m = job.machine;
+  double previous = 1e300;
+  for (const double a : {1e3, 1e6, 1e12}) {
+    m.max_acceleration_mm_per_s2 = a;
+    const double t = estimate_time_s(p, m);
+    EXPECT_GE(t, p.duration_s() * (1 - 1e-12)) << a;
+    EXPECT_LE(t, previous) << a;  // a faster machine is never slower
+    previous = t;
+  }
+  EXPECT_NEAR(previous, p.duration_s(), 1e-6 * p.duration_s());
 }
 
 // ---- planned families -------------------------------------------------------------------

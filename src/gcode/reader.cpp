@@ -45,7 +45,8 @@ class Reader {
 
   GcodeProgram run() {
     std::size_t start = 0;
-    while (start <= text_.size() && !st_.ended) {
+    // A final newline ends the last line; it does not start another (wc -l counts the same).
+    while (start < text_.size() && !st_.ended) {
       std::size_t end = text_.find('\n', start);
       if (end == std::string_view::npos) end = text_.size();
       ++line_no_;

@@ -1,8 +1,11 @@
 // Machining time with an acceleration limit: the path is discretised, each node gets a speed
 // limit (programmed speed, centripetal limit sqrt(a / kappa), junction-deviation limit at
 // tangent discontinuities as Grbl plans corners, zero at start and end), then a forward and
-// a backward pass apply |dv/dt| <= a, and the time of each piece is 2 ds / (v0 + v1), exact
-// for constant acceleration.
+// a backward pass apply |dv/dt| <= a. Each piece is then run as fast as its own speed limit
+// and a allow between its end speeds: accelerate, cruise at the limit, decelerate (or a
+// triangle when the piece is too short to reach the limit). That is exact for the piecewise
+// model, and tends to the programmed time as a grows (2 ds / (v0 + v1), which the estimate
+// used before, doubled the time of every piece starting or ending at rest however large a).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -22,8 +25,10 @@ double estimate_time_s(const ToolPath& path, const Machine& machine) {
 
   std::vector<double> ds;    // length of the piece ending at node j (ds[0] = 0)
   std::vector<double> vlim;  // speed limit at node j (mm/s)
+  std::vector<double> vcap;  // speed limit inside the piece ending at node j (mm/s)
   ds.push_back(0);
   vlim.push_back(0);  // the machine starts at rest
+  vcap.push_back(0);
   const auto& segs = path.segments();
   for (std::size_t i = 0; i < segs.size(); ++i) {
     const Segment& g = segs[i];
@@ -50,6 +55,7 @@ double estimate_time_s(const ToolPath& path, const Machine& machine) {
       for (int k = 1; k <= n; ++k) {
         ds.push_back(g.length_mm() / n);
         vlim.push_back(F);
+        vcap.push_back(F);
       }
       continue;
     }
@@ -70,6 +76,7 @@ double estimate_time_s(const ToolPath& path, const Machine& machine) {
       ds.push_back(piece);
       sum += piece;
       vlim.push_back(v);
+      vcap.push_back(v);
     }
     if (sum > 0) {
       for (std::size_t j = first; j < ds.size(); ++j) ds[j] *= g.length_mm() / sum;
@@ -84,8 +91,18 @@ double estimate_time_s(const ToolPath& path, const Machine& machine) {
     v[j] = std::min(v[j], std::sqrt(v[j + 1] * v[j + 1] + 2 * amax * ds[j + 1]));
   double t = 0;
   for (std::size_t j = 1; j < m; ++j) {
-    const double vs = v[j - 1] + v[j];
-    if (vs > 0) t += 2.0 * ds[j] / vs;
+    const double v0 = v[j - 1], v1 = v[j];
+    const double top = std::max({vcap[j], v0, v1});
+    if (!(top > 0)) continue;
+    const double d_up = (top * top - v0 * v0) / (2 * amax);
+    const double d_down = (top * top - v1 * v1) / (2 * amax);
+    if (d_up + d_down <= ds[j]) {
+      t += (top - v0) / amax + (top - v1) / amax + (ds[j] - d_up - d_down) / top;
+    } else {  // a triangle: the peak speed where accelerating and braking meet
+      const double peak =
+          std::sqrt(std::max({v0 * v0, v1 * v1, 0.5 * (2 * amax * ds[j] + v0 * v0 + v1 * v1)}));
+      t += (peak - v0) / amax + (peak - v1) / amax;
+    }
   }
   return t;
 }
