@@ -159,6 +159,29 @@ TEST_F(Cli, KeyAliasesAreValidatedByTheSchema) {
   EXPECT_EQ(j.size(), job_keys().size());
 }
 
+// Numeric flags are finite and within a range the command can use: nan, a negative cut-off
+// or a zero rapid rate are bad input (exit 2) naming the flag, never a silent run.
+TEST_F(Cli, NumericFlagsAreFiniteAndInRange) {
+  const std::string wagih = test::example("wagih2023/elliptical.toml").string();
+  const std::string bergmann = test::example("bergmann2021/trochoidal.toml").string();
+  const std::string ngc = (dir_ / "e.ngc").string();
+  ASSERT_EQ(run_cli("plan " + wagih + " -o " + ngc).code, 0);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"check-gcode " + ngc + " --max-acceleration nan", "--max-acceleration: must be a finite"},
+      {"check-gcode " + ngc + " --rapid-rate 0", "--rapid-rate: must be a finite number in (0"},
+      {"forces " + bergmann + " --fast --from nan", "--from: must be a finite"},
+      {"calibrate " + bergmann + " --measured x.csv --cutoff -5", "--cutoff: must be a finite"},
+      {"calibrate " + bergmann + " --measured x.csv --max-shift nan", "--max-shift: must be"},
+      {"synth-signal " + wagih + " -o x.wav --rate 1e9", "--rate: must be a finite number"},
+      {"path " + wagih + " --dt inf", "--dt: must be a finite"},
+  };
+  for (const auto& [args, message] : cases) {
+    const CliResult r = run_cli(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(message), std::string::npos) << args << "\n" << r.out;
+  }
+}
+
 TEST_F(Cli, VersionAndHelp) {
   CliResult r = run_cli("--version");
   EXPECT_EQ(r.code, 0);

@@ -160,6 +160,26 @@ TEST(Timing, AccelerationLimitMatchesTrapezoidFormula) {
   EXPECT_EQ(estimate_time_s(p, m), p.duration_s());
 }
 
+// Counts are checked before they are converted or used: a step tiny against a long slot is
+// refused by its cycle count (it overflowed an int and printed -2147483647 cycles); a tiny
+// step on a short slot plans, with about L / s cycles (the envelope's columns stay clear of
+// its own sampling error, which had shown islands at the walls).
+TEST(Planner, CycleCountsAreCheckedAndTinyStepsPlan) {
+  try {
+    (void)plan_path(
+        test::wagih_job("trochoidal", {{"slot.length", "1e5", {}}, {"path.step", "0.001", {}}}));
+    ADD_FAILURE() << "1e8 cycles were planned";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("1e+08 cycles or passes (limit 1e+07)"), std::string::npos)
+        << e.what();
+  }
+  const PlannedPath p = plan_path(test::wagih_job("trochoidal", {{"path.step", "0.01", {}}}));
+  // The cycles advance over the slot's 20 mm, less the tool's own reach ahead (2R = 10 mm) at
+  // the least, plus the orbit's reach before and after (2 (a + b + R) = 30 mm) at the most.
+  EXPECT_GE(p.info.cycles * 0.01, 20.0 - 10.0);
+  EXPECT_LE(p.info.cycles * 0.01, 20.0 + 30.0);
+}
+
 // A machine that accelerates without limit takes the programmed time: on a whole planned
 // program (reversals, rapids, starts and stops) the limited time tends to it as a grows. The
 // excess is the sum of v / a over the stops (about 1e-9 s at 1e12 mm/s^2).

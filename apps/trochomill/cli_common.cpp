@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -15,6 +16,28 @@
 #include "trochomill/sim.hpp"
 
 namespace trochomill::cli {
+
+namespace {
+
+CLI::Validator finite_check(double lo, double hi, bool open_lo) {
+  const std::string what =
+      fmt::format("a finite number {}", open_lo ? fmt::format("in ({:g}, {:g}]", lo, hi)
+                                                : fmt::format("in [{:g}, {:g}]", lo, hi));
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        const bool ok = end != text.c_str() && *end == '\0' && std::isfinite(v) &&
+                        (open_lo ? v > lo : v >= lo) && v <= hi;
+        return ok ? std::string() : fmt::format("must be {}, got '{}'", what, text);
+      },
+      what);
+}
+
+}  // namespace
+
+CLI::Validator finite_in(double lo, double hi) { return finite_check(lo, hi, false); }
+CLI::Validator finite_above(double lo, double hi) { return finite_check(lo, hi, true); }
 
 std::vector<Override> JobArgs::overrides() const {
   std::vector<Override> ov;
@@ -89,8 +112,10 @@ std::pair<double, double> WindowArgs::resolve(const ToolPath& path) const {
 }
 
 void add_window_args(CLI::App* cmd, WindowArgs& w, const std::string& what) {
-  cmd->add_option("--from", w.from_s, what + " start, s of programmed time (default 0)");
-  cmd->add_option("--to", w.to_s, what + " end, s (default: the path's end)");
+  cmd->add_option("--from", w.from_s, what + " start, s of programmed time (default 0)")
+      ->check(finite_in(0, 1e9));
+  cmd->add_option("--to", w.to_s, what + " end, s (default: the path's end)")
+      ->check(finite_in(0, 1e9));
   cmd->add_option("--cycles", w.cycles,
                   "A:B: trochoid cycles A (inclusive) to B (exclusive), from 0");
 }
@@ -107,7 +132,8 @@ void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required) {
   auto* o = cmd->add_option("SIGNAL", a.file,
                             "WAV/FLAC/AIFF (libsndfile), CSV, raw .f32/.s16 (- for stdin, raw)");
   if (required) o->required();
-  cmd->add_option("--rate", a.rate, "sample rate, Hz (raw data, CSV without a time column)");
+  cmd->add_option("--rate", a.rate, "sample rate, Hz (raw data, CSV without a time column)")
+      ->check(finite_above(0, 1e8));
   cmd->add_option("--format", a.format, "auto, wav, csv, f32 or s16 (default: by extension)");
   cmd->add_option("--channel", a.channel, "0-based channel (or CSV data column)")
       ->check(CLI::NonNegativeNumber);
@@ -178,7 +204,8 @@ double memory_limit_bytes(std::optional<double> limit_gb) {
 
 void add_memory_limit(CLI::App* cmd, std::optional<double>& limit_gb) {
   cmd->add_option("--memory-limit", limit_gb,
-                  "refuse to start above this estimate, GB (default: 75 % of RAM)");
+                  "refuse to start above this estimate, GB (default: 75 % of RAM)")
+      ->check(finite_above(0, 1e6));
 }
 
 }  // namespace trochomill::cli

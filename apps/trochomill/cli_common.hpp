@@ -41,6 +41,12 @@ void add_key_alias(CLI::App* cmd, JobArgs& a, const std::string& flag, const std
 void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
                   const std::string& value, const std::string& help);
 
+/// A numeric flag's check: a finite number in [lo, hi] (CLI11's NonNegativeNumber and Range
+/// let "nan" through). The message names the range; bad input exits 2.
+[[nodiscard]] CLI::Validator finite_in(double lo, double hi);
+/// > lo (open at lo), finite, at most hi.
+[[nodiscard]] CLI::Validator finite_above(double lo, double hi);
+
 /// The job's planned path, or the NC program's when one is given.
 [[nodiscard]] ToolPath job_path(const Job& job, const std::string& gcode_file);
 

@@ -44,13 +44,17 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
   cmd->add_option("--force-unit", a->force_unit, "N or kN")->capture_default_str();
   cmd->add_option("--cutoff", a->cutoff_hz,
                   "low-pass of both signals, Hz (default 10 x tooth "
-                  "passing, below 0.4 x the coarser rate)");
+                  "passing, below 0.4 x the coarser rate)")
+      ->check(finite_above(0, 1e7));
   cmd->add_option("--max-shift", a->max_shift_s,
-                  "alignment search +-, s (default half a revolution)");
+                  "alignment search +-, s (default half a revolution)")
+      ->check(finite_above(0, 1e3));
   cmd->add_option("--gcode", a->gcode, "this NC program instead of the job's path");
   cmd->add_option("--from", a->window.from_s,
-                  "model window start, s (default: the measurement's start)");
-  cmd->add_option("--to", a->window.to_s, "model window end, s (default: the measurement's end)");
+                  "model window start, s (default: the measurement's start)")
+      ->check(finite_in(0, 1e9));
+  cmd->add_option("--to", a->window.to_s, "model window end, s (default: the measurement's end)")
+      ->check(finite_in(0, 1e9));
   cmd->add_option("--cycles", a->window.cycles, "A:B: the model window as trochoid cycles");
   cmd->add_option("--json", a->json, "write the result as JSON (- for stdout)");
   cmd->add_option("--write", a->write, "write the [material] block to this file");

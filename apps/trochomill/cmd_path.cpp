@@ -61,9 +61,11 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--gcode", a->gcode,
                     "take the path from this NC program instead of planning it");
     auto* o_spr =
-        cmd->add_option("--steps-per-rev", a->steps_per_rev, "samples per spindle revolution");
-    auto* o_dt = cmd->add_option("--dt", a->dt_s, "time step, s");
-    auto* o_ds = cmd->add_option("--ds", a->ds_mm, "path-length step, mm");
+        cmd->add_option("--steps-per-rev", a->steps_per_rev, "samples per spindle revolution")
+            ->check(CLI::Range(1, 100000));
+    auto* o_dt = cmd->add_option("--dt", a->dt_s, "time step, s")->check(finite_above(0, 1e3));
+    auto* o_ds =
+        cmd->add_option("--ds", a->ds_mm, "path-length step, mm")->check(finite_above(0, 1e3));
     o_spr->excludes(o_dt)->excludes(o_ds);
     o_dt->excludes(o_ds);
     cmd->final_callback([a, &exit_code] {
@@ -102,10 +104,10 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("FILE", a->file, "G-code file")->required();
     cmd->add_option("--rapid-rate", a->machine.rapid_rate_mm_per_min, "rapid traverse rate, mm/min")
         ->capture_default_str()
-        ->check(CLI::PositiveNumber);
+        ->check(finite_above(0, 1e6));
     cmd->add_option("--max-acceleration", a->machine.max_acceleration_mm_per_s2,
                     "path acceleration limit for the time estimate, mm/s^2")
-        ->check(CLI::NonNegativeNumber);
+        ->check(finite_in(0, 1e15));
     cmd->add_option("--json", a->json, "write the report as JSON (- for stdout)");
     cmd->final_callback([a, &exit_code] {
       const GcodeProgram prog = read_gcode_file(a->file, gcode_options(a->machine).read);

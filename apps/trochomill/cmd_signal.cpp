@@ -47,7 +47,8 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--job", a->job.file,
                     "job file: cycle timing, [monitor] settings, model zones");
     cmd->add_option("--set", a->job.sets, "override a job key (repeatable)")->take_all();
-    cmd->add_option("--start", a->start_s, "time in the signal where the program starts, s");
+    cmd->add_option("--start", a->start_s, "time in the signal where the program starts, s")
+        ->check(finite_in(0, 1e9));
     add_band_alias(cmd, a->job, "--low", "low", "2000:5000");
     add_band_alias(cmd, a->job, "--high", "high", "8000:13000");
     add_key_alias(cmd, a->job, "--order", "monitor.order", "Butterworth order per band");
@@ -107,17 +108,31 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
     add_job_args(cmd, a->job);
     SynthOptions& syn = a->synth;
     cmd->add_option("-o,--output", a->out, "output WAV file")->required();
-    cmd->add_option("--rate", syn.rate_hz, "sample rate, Hz")->capture_default_str();
-    cmd->add_option("--cycles", syn.cycles, "trochoid cycles to cover")->capture_default_str();
-    cmd->add_option("--kf-czi", syn.kf_czi, "k_f in CZI")->capture_default_str();
-    cmd->add_option("--kf-czii", syn.kf_czii, "k_f in CZII")->capture_default_str();
-    cmd->add_option("--kf-cziii", syn.kf_cziii, "k_f in CZIII")->capture_default_str();
+    cmd->add_option("--rate", syn.rate_hz, "sample rate, Hz")
+        ->capture_default_str()
+        ->check(finite_above(0, 1e7));
+    cmd->add_option("--cycles", syn.cycles, "trochoid cycles to cover")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 100000));
+    cmd->add_option("--kf-czi", syn.kf_czi, "k_f in CZI")
+        ->capture_default_str()
+        ->check(finite_above(0, 100));
+    cmd->add_option("--kf-czii", syn.kf_czii, "k_f in CZII")
+        ->capture_default_str()
+        ->check(finite_above(0, 100));
+    cmd->add_option("--kf-cziii", syn.kf_cziii, "k_f in CZIII")
+        ->capture_default_str()
+        ->check(finite_above(0, 100));
     cmd->add_option("--wear-drift", syn.wear_drift,
                     "k_f grows by this fraction from the first cycle to the last")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(finite_in(0, 100));
     cmd->add_option("--noise", syn.noise, "white noise RMS relative to cutting")
-        ->capture_default_str();
-    cmd->add_option("--lead", syn.lead_s, "air before the program start, s")->capture_default_str();
+        ->capture_default_str()
+        ->check(finite_in(0, 100));
+    cmd->add_option("--lead", syn.lead_s, "air before the program start, s")
+        ->capture_default_str()
+        ->check(finite_in(0, 1e4));
     cmd->add_option("--seed", syn.seed, "random seed")->capture_default_str();
     cmd->final_callback([a, &exit_code] {
       const Job job = a->job.load();
@@ -140,7 +155,9 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand("spectrum", "Welch spectrum and spectrogram, to choose bands");
     add_signal_args(cmd, a->signal, true);
-    cmd->add_option("--nfft", a->nfft, "FFT length, a power of two")->capture_default_str();
+    cmd->add_option("--nfft", a->nfft, "FFT length, a power of two")
+        ->capture_default_str()
+        ->check(CLI::Range(16, 1 << 24));
     cmd->add_option("--csv", a->csv, "write the PSD as CSV (- for stdout)");
     cmd->add_option("--spectrogram", a->spectrogram,
                     "write the spectrogram as CSV (t_s, f_hz, db)");

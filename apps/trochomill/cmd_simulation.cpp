@@ -35,7 +35,8 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
     add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("--stl-step", a->stl_step_mm,
                     "grid step of surface.stl, mm (default: the dexel spacing, coarser when the "
-                    "mesh would pass 4 million triangles)");
+                    "mesh would pass 4 million triangles)")
+        ->check(finite_above(0, 1e3));
     cmd->final_callback([a, &exit_code] {
       const Job job = a->job.load();
       const ToolPath path = job_path(job, a->gcode);

@@ -29,16 +29,24 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
         "job's tool, in the tooth frame");
     add_job_args(cmd, a->job);
     cmd->add_option("-o,--output", a->out, "mesh file: .stl, .ply or .obj")->required();
-    cmd->add_option("--vb", a->spec.vb_mm, "flank wear land width VB, mm")->capture_default_str();
+    cmd->add_option("--vb", a->spec.vb_mm, "flank wear land width VB, mm")
+        ->capture_default_str()
+        ->check(finite_in(0, 2));
     cmd->add_option("--edge-radius", a->edge_radius_mm,
-                    "hone radius, mm (default [tool] edge_radius or 0.02)");
-    cmd->add_option("--rake", a->spec.rake_deg, "rake angle, degrees")->capture_default_str();
+                    "hone radius, mm (default [tool] edge_radius or 0.02)")
+        ->check(finite_above(0, 1));
+    cmd->add_option("--rake", a->spec.rake_deg, "rake angle, degrees")
+        ->capture_default_str()
+        ->check(finite_in(-30, 30));
     cmd->add_option("--clearance", a->spec.clearance_deg, "clearance angle, degrees")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(finite_in(1, 30));
     cmd->add_option("--sections", a->spec.sections, "profile sections along the edge")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(CLI::Range(2, 20000));
     cmd->add_option("--points", a->spec.profile_points, "points per profile")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(CLI::Range(8, 20000));
     cmd->final_callback([a, &exit_code] {
       const Job job = a->job.load();
       const SimTool tool = sim_tool(job, job.simulation);

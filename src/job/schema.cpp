@@ -567,6 +567,58 @@ void check_settings_rules(JobReader& r, const Job& job) {
   }
 }
 
+// What a program and the models can represent (beyond each key's own range): coordinates
+// are written with 4 decimals (0.0001 mm), F with 4, S in whole rpm; counts of cycles must
+// fit the planner. A value outside is refused with the reason, never written rounded to 0.
+constexpr double kMaxLengthMm = 1e5;  // 100 m: any slot, tool or travel
+constexpr double kMinStepMm = 1e-3;   // 10 coordinate counts per cycle
+constexpr double kMinSpindleRpm = 1;  // S is written in whole rpm
+constexpr double kMaxSpindleRpm = 1e6;
+constexpr double kMinFeedMmPerMin = 1e-3;  // F has 4 decimals: 10 counts
+constexpr double kMaxFeedMmPerMin = 1e6;
+
+void check_representable(JobReader& r, const Job& job) {
+  const auto at_most = [&](const char* section, const char* key, double v, double hi,
+                           const char* unit) {
+    if (v > hi) {
+      r.problem(section, key,
+                fmt::format("must be at most {:g} {} (what trochomill represents), got {}", hi,
+                            unit, fmt_num(v)));
+    }
+  };
+  at_most("tool", "diameter", job.tool.diameter_mm, kMaxLengthMm, "mm");
+  at_most("slot", "width", job.slot.width_mm, kMaxLengthMm, "mm");
+  at_most("slot", "length", job.slot.length_mm, kMaxLengthMm, "mm");
+  at_most("slot", "depth", job.slot.depth_mm, kMaxLengthMm, "mm");
+  at_most("machine", "safe_z", job.machine.safe_z_mm, kMaxLengthMm, "mm");
+  at_most("machine", "rapid_rate", job.machine.rapid_rate_mm_per_min, kMaxFeedMmPerMin, "mm/min");
+  at_most("path", "entry_feed", job.path.entry_feed_mm_per_min, kMaxFeedMmPerMin, "mm/min");
+  if (job.path.step_mm > 0 && job.path.step_mm < kMinStepMm) {
+    r.problem("path", "step",
+              fmt::format("must be at least {:g} mm (the program's coordinates have 4 decimals), "
+                          "got {}",
+                          kMinStepMm, fmt_num(job.path.step_mm)));
+  }
+  // The cutting conditions as the program writes them, given or derived.
+  const Cutting& c = job.cutting;
+  const char* speed_key = r.has("cutting", "cutting_speed") ? "cutting_speed" : "spindle_speed";
+  if (c.spindle_speed_rpm > 0 &&
+      (c.spindle_speed_rpm < kMinSpindleRpm - 0.5 || c.spindle_speed_rpm > kMaxSpindleRpm)) {
+    r.problem("cutting", speed_key,
+              fmt::format("gives a spindle speed of {} rpm: it must be in [{:g}, {:g}] rpm (S is "
+                          "written in whole rpm)",
+                          fmt_num(c.spindle_speed_rpm), kMinSpindleRpm, kMaxSpindleRpm));
+  }
+  const char* feed_key = r.has("cutting", "feed_per_tooth") ? "feed_per_tooth" : "feed_rate";
+  if (c.feed_rate_mm_per_min > 0 &&
+      (c.feed_rate_mm_per_min < kMinFeedMmPerMin || c.feed_rate_mm_per_min > kMaxFeedMmPerMin)) {
+    r.problem("cutting", feed_key,
+              fmt::format("gives a feed of {} mm/min: it must be in [{:g}, {:g}] mm/min (F is "
+                          "written with 4 decimals)",
+                          fmt_num(c.feed_rate_mm_per_min), kMinFeedMmPerMin, kMaxFeedMmPerMin));
+  }
+}
+
 // The rules that tie keys together, after every key was read.
 void check_rules(JobReader& r, Job& job) {
   Tool& tool = job.tool;
@@ -654,6 +706,7 @@ void check_rules(JobReader& r, Job& job) {
 
   check_settings_rules(r, job);
   check_material(r, job.material);
+  check_representable(r, job);
 }
 
 }  // namespace

@@ -24,6 +24,21 @@
 namespace trochomill {
 namespace {
 
+// The planner's counts (cycles, passes, spans) from a ratio, computed in double and checked
+// before the conversion: a step tiny against the slot would overflow an int (and the path
+// would hold billions of segments). The limit is far above any real slot (a 1 m slot at a
+// 0.001 mm step is 1e6 cycles).
+constexpr double kMaxCount = 1e7;
+int checked_count(double n) {
+  if (!(n <= kMaxCount)) {
+    throw InputError(fmt::format(
+        "[path] step: the slot would need {:.4g} cycles or passes (limit {:g}); raise [path] step "
+        "or shorten [slot] length",
+        n, kMaxCount));
+  }
+  return static_cast<int>(n);
+}
+
 // Builds segments in the climb/cw frame and mirrors x on the way into the path when asked.
 class Builder {
  public:
@@ -124,7 +139,7 @@ void merge(std::vector<Interval>& v) {
 bool solid_extents(std::vector<Interval> iv, double s, double& front, double& rear, int& span) {
   merge(iv);
   const double lo = iv.front().first, hi = iv.back().second;
-  const int J = static_cast<int>(std::ceil((hi - lo) / s)) + 1;
+  const int J = checked_count(std::ceil((hi - lo) / s)) + 1;
   span = J;
   auto solid = [&](double sign, double& out) {
     std::vector<Interval> all;
@@ -365,7 +380,7 @@ PlannedPath plan_linear(const Job& job, const Geometry& g, bool mirror) {
         "[path] entry = \"helix\" is for the trochoidal families; a linear slot "
         "enters with \"ramp\", \"plunge\" or \"outside\"");
   }
-  const int passes = g.a > 0 ? static_cast<int>(std::ceil(2 * g.a / g.s - 1e-12)) + 1 : 1;
+  const int passes = g.a > 0 ? checked_count(std::ceil(2 * g.a / g.s - 1e-12)) + 1 : 1;
   const double y_start = closed ? g.R : 0.0;
   const double y_end = g.L + g.R + g.clearance;  // past the open end by the clearance
   for (int i = 0; i < passes; ++i) {
@@ -439,7 +454,13 @@ PlannedPath plan_path(const Job& job) {
   }
 
   // Wall scallop bound: circles of radius >= R touching the wall every s (docs/models.md).
-  const double delta = g.R - std::sqrt(g.R * g.R - 0.25 * g.s * g.s);
+  // Never inside the envelope's own sampling error (centres 0.1 mm apart leave gaps of
+  // 0.1^2 / 8R between their discs), twice over: for a tiny step the scallops are shallower
+  // than that gap, and the columns at the wall would show islands the cycles do not leave.
+  const double delta = std::max(g.R - std::sqrt(g.R * g.R - 0.25 * g.s * g.s),
+                                2 * 0.1 * 0.1 / (8 * g.R));
+  // The count first: a step tiny against the slot is refused before any work.
+  (void)checked_count(std::ceil((g.L + 2 * (g.a + g.b + g.R)) / g.s));
   const Envelope env = cycle_envelope(g, delta);
   const bool closed = job.path.entry != EntryType::outside;
   double y0;
@@ -455,8 +476,8 @@ PlannedPath plan_path(const Job& job) {
   // the finite union of the cycles actually covers every column from y = 0 to L (+margin):
   // with a wide orbit (a > R) each cycle leaves an island at its centre that only the rear
   // arcs of later cycles sweep.
-  const int n_front = std::max(
-      1, static_cast<int>(std::ceil((g.L + margin - y0 - env.min_front) / g.s - 1e-12)) + 1);
+  const int n_front =
+      std::max(1, checked_count(std::ceil((g.L + margin - y0 - env.min_front) / g.s - 1e-12)) + 1);
   const double approach_hi = -g.a + g.R;
   auto covers = [&](int n) {
     // With n - 1 >= 2 J + 2 the middle of the finite union is the verified gap-free periodic
@@ -486,7 +507,7 @@ PlannedPath plan_path(const Job& job) {
     return true;
   };
   int cycles = n_front;
-  const int n_max = n_front + static_cast<int>(std::ceil(2 * (g.a + g.b + g.R) / g.s)) + 8;
+  const int n_max = n_front + checked_count(std::ceil(2 * (g.a + g.b + g.R) / g.s)) + 8;
   while (!covers(cycles)) {
     if (++cycles > n_max) {
       throw Error(fmt::format("planner: {} cycles do not cover the slot; this is a bug", n_max));
