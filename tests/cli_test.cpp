@@ -182,6 +182,31 @@ TEST_F(Cli, NumericFlagsAreFiniteAndInRange) {
   }
 }
 
+// Messages say what the user typed: an unknown section from --set names the override (not
+// line 0:0), a huge --cycles is echoed as typed, an output the writer cannot honour is refused,
+// and a synthetic signal says how many cycles it covers.
+TEST_F(Cli, MessagesNameWhatWasTyped) {
+  const std::string wagih = test::example("wagih2023/trochoidal.toml").string();
+  CliResult r =
+      run_cli("plan " + wagih + " -o " + (dir_ / "x.ngc").string() + " --set unknown.key=1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--set unknown.key: unknown section [unknown]"), std::string::npos) << r.out;
+  r = run_cli("simulate " + wagih + " --cycles 99999999999:1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--cycles '99999999999:1': need 0 <= A < B <= 20"), std::string::npos)
+      << r.out;
+  const std::string pivkin = test::example("pivkin2025/trochoidal.toml").string();
+  r = run_cli("synth-signal " + pivkin + " -o " + (dir_ / "x.flac").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("synth-signal writes WAV"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "x.flac"));
+  r = run_cli("synth-signal " + pivkin + " -o " + (dir_ / "x.wav").string() +
+              " --rate 40000 --cycles 50");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("28 cycles (all the program has; 50 asked for)"), std::string::npos)
+      << r.out;
+}
+
 TEST_F(Cli, VersionAndHelp) {
   CliResult r = run_cli("--version");
   EXPECT_EQ(r.code, 0);

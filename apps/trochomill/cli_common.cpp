@@ -102,9 +102,14 @@ std::pair<double, double> WindowArgs::resolve(const ToolPath& path) const {
     char* e2 = nullptr;
     const std::string a = cycles.substr(0, colon);
     const std::string b = colon == std::string::npos ? "" : cycles.substr(colon + 1);
-    const long ca = std::strtol(a.c_str(), &e1, 10), cb = std::strtol(b.c_str(), &e2, 10);
+    const long long ca = std::strtoll(a.c_str(), &e1, 10), cb = std::strtoll(b.c_str(), &e2, 10);
     if (colon == std::string::npos || a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0') {
       throw InputError(fmt::format("--cycles '{}': expected A:B, e.g. 3:4", cycles));
+    }
+    const long long count = static_cast<long long>(path.cycles().size());
+    if (count > 0 && (ca < 0 || cb <= ca || cb > count)) {  // before any narrowing
+      throw InputError(
+          fmt::format("--cycles '{}': need 0 <= A < B <= {} (the path's cycles)", cycles, count));
     }
     return cycle_window(path, static_cast<int>(ca), static_cast<int>(cb));
   }

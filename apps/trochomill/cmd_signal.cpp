@@ -2,6 +2,9 @@
 // live), a synthetic recording that follows the model's zones, and the spectrum of a signal.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <memory>
 
 #include "cli_common.hpp"
@@ -135,13 +138,25 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
         ->check(finite_in(0, 1e4));
     cmd->add_option("--seed", syn.seed, "random seed")->capture_default_str();
     cmd->final_callback([a, &exit_code] {
+      const std::filesystem::path out(a->out);
+      std::string ext = out.extension().string();
+      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      if (ext != ".wav") {
+        throw InputError(fmt::format("-o {}: synth-signal writes WAV: give a .wav file", a->out));
+      }
       const Job job = a->job.load();
       const Signal sig = synth_signal(job, job.monitor, a->synth);
+      // The program may have fewer cycles than asked for: say how many the signal covers.
+      const int cycles =
+          std::min(a->synth.cycles, static_cast<int>(plan_path(job).path.cycles().size()));
       write_file_atomic(a->out,
                         [&](const std::filesystem::path& tmp) { write_wav(tmp.string(), sig); });
-      fmt::print("{}: {:.3f} s at {:g} Hz, {} cycles from the program start at {:g} s -> {}\n",
-                 a->job.file, sig.duration_s(), sig.rate_hz, a->synth.cycles, a->synth.lead_s,
-                 a->out);
+      fmt::print("{}: {:.3f} s at {:g} Hz, {} cycles{} from the program start at {:g} s -> {}\n",
+                 a->job.file, sig.duration_s(), sig.rate_hz, cycles,
+                 cycles < a->synth.cycles
+                     ? fmt::format(" (all the program has; {} asked for)", a->synth.cycles)
+                     : "",
+                 a->synth.lead_s, a->out);
       exit_code = 0;
     });
   }

@@ -29,6 +29,16 @@ void write_file_atomic(const fs::path& path, const std::function<void(const fs::
   const fs::path tmp = path.string() + ".tmp." + std::to_string(rd());
   try {
     write(tmp);
+  } catch (const Error& e) {
+    // The writer names the file it wrote, the temporary one: the user named the target.
+    fs::remove(tmp, ec);
+    std::string what = e.what();
+    for (std::size_t p = 0; (p = what.find(tmp.string(), p)) != std::string::npos;) {
+      what.replace(p, tmp.string().size(), path.string());
+      p += path.string().size();
+    }
+    if (dynamic_cast<const InputError*>(&e) != nullptr) throw InputError(what);
+    throw IoError(what);
   } catch (...) {
     fs::remove(tmp, ec);
     throw;

@@ -33,6 +33,7 @@ struct State {
   bool absolute = true;
   bool arc_absolute = false;  // G90.1
   double feed = 0;            // mm/min
+  bool feed_given = false;    // an F word was read (F0 is then a given zero feed)
   Vec3 pos = Vec3::Zero();
   bool pos_known = false;
   bool ended = false;
@@ -64,6 +65,14 @@ class Reader {
   }
 
  private:
+  // A character as a message shows it: printable ones quoted, others as a code (no raw bytes
+  // from a binary file on the terminal).
+  static std::string shown(char c) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u < 0x7f) return fmt::format("'{}'", c);
+    return fmt::format("byte 0x{:02x}", u);
+  }
+
   [[noreturn]] void fail(std::size_t column, const std::string& what) const {
     throw InputError(fmt::format("{}:{}:{}: {}", name_, line_no_, column, what));
   }
@@ -104,7 +113,7 @@ class Reader {
       }
       if (!std::isalpha(static_cast<unsigned char>(c))) {
         fail(i + 1,
-             fmt::format("unexpected character '{}' (expected a word such as G1 or X10)", c));
+             fmt::format("unexpected character {} (expected a word such as G1 or X10)", shown(c)));
       }
       const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
       const std::size_t col = i + 1;
@@ -139,13 +148,17 @@ class Reader {
     double v = 0;
     // The sign is handled above: from_chars does not accept a leading '+'.
     auto [ptr, ec] = std::from_chars(b, e, v, std::chars_format::fixed);
+    if (ec == std::errc::result_out_of_range) {
+      fail(col, fmt::format("'{}' has a number too large to represent", word));
+    }
     if (ec != std::errc() || ptr == b) {
       fail(col, fmt::format("'{}' needs a number after it", word));
     }
     i = static_cast<std::size_t>(ptr - line.data());
     if (i < line.size() && (std::isalpha(static_cast<unsigned char>(line[i])) == 0) &&
         line[i] != ' ' && line[i] != '\t' && line[i] != '(' && line[i] != ';') {
-      fail(i + 1, fmt::format("unexpected character '{}' after the number of '{}'", line[i], word));
+      fail(i + 1,
+           fmt::format("unexpected character {} after the number of '{}'", shown(line[i]), word));
     }
     if (!std::isfinite(v)) fail(col, fmt::format("'{}' has a non-finite number", word));
     return neg ? -v : v;
@@ -296,6 +309,7 @@ class Reader {
         case 'F':
           if (w.value < 0) fail(w.column, "feed F must be >= 0");
           st_.feed = w.value * st_.unit;
+          st_.feed_given = true;
           break;
         case 'S':
           if (w.value < 0) fail(w.column, "spindle speed S must be >= 0");
@@ -448,7 +462,10 @@ class Reader {
   }
 
   void check_feed(std::size_t col) {
-    if (!(st_.feed > 0)) fail(col, "feed move with no feed rate: program F before G1/G2/G3");
+    if (!(st_.feed > 0)) {
+      fail(col, st_.feed_given ? "feed move at F0: program a feed F > 0 (mm/min)"
+                               : "feed move with no feed rate: program F before G1/G2/G3");
+    }
     if (prog_.info.min_feed_mm_per_min == 0 || st_.feed < prog_.info.min_feed_mm_per_min) {
       prog_.info.min_feed_mm_per_min = st_.feed;
     }

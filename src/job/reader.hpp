@@ -264,9 +264,17 @@ class JobReader {
       const std::string section(k.str());
       const auto it = known.find(section);
       if (it == known.end()) {
-        problems_.push_back(fmt::format("{}:{}:{}: unknown section [{}]{}", source_,
-                                        k.source().begin.line, k.source().begin.column, section,
-                                        suggestion(section, sections)));
+        // A section only an override names has no place in the file: name the override.
+        std::string loc =
+            fmt::format("{}:{}:{}", source_, k.source().begin.line, k.source().begin.column);
+        for (const auto& [key, flag] : overridden_) {
+          if (key.rfind(section + ".", 0) == 0) {
+            loc = origin(overridden_.find(key));
+            break;
+          }
+        }
+        problems_.push_back(
+            fmt::format("{}: unknown section [{}]{}", loc, section, suggestion(section, sections)));
         continue;
       }
       const toml::table* t = v.as_table();

@@ -35,12 +35,20 @@ std::vector<double> band_noise(std::size_t n, const Sos& sos, double rate_hz, st
 }  // namespace
 
 Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o) {
-  if (!(o.rate_hz > 0) || o.cycles < 1 || !(o.lead_s >= 0) || !(o.noise >= 0) || !(o.idle >= 0) ||
-      !(o.kf_czi > 0 && o.kf_czii > 0 && o.kf_cziii > 0) || !(o.wear_drift > -1)) {
-    throw InputError(
-        "synth-signal: need rate > 0 Hz, cycles >= 1, lead >= 0 s, noise >= 0, idle >= 0, "
-        "k_f values > 0 and wear drift > -1");
-  }
+  // Each broken rule by itself, with the value that broke it.
+  std::vector<std::string> problems;
+  const auto need = [&](bool ok, std::string what) {
+    if (!ok) problems.push_back("synth-signal: " + std::move(what));
+  };
+  need(o.rate_hz > 0, fmt::format("rate must be > 0 Hz, got {}", o.rate_hz));
+  need(o.cycles >= 1, fmt::format("cycles must be >= 1, got {}", o.cycles));
+  need(o.lead_s >= 0, fmt::format("lead must be >= 0 s, got {}", o.lead_s));
+  need(o.noise >= 0, fmt::format("noise must be >= 0, got {}", o.noise));
+  need(o.idle >= 0, fmt::format("idle must be >= 0, got {}", o.idle));
+  need(o.kf_czi > 0 && o.kf_czii > 0 && o.kf_cziii > 0,
+       fmt::format("k_f values must be > 0, got {}, {}, {}", o.kf_czi, o.kf_czii, o.kf_cziii));
+  need(o.wear_drift > -1, fmt::format("wear drift must be > -1, got {}", o.wear_drift));
+  if (!problems.empty()) throw InputError(problems);
   validate(m, o.rate_hz);
   const std::vector<double> starts = planned_cycle_bounds(job);
   const std::size_t ncyc =

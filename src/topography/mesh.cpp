@@ -163,19 +163,27 @@ std::vector<std::array<double, 2>> insert_profile(const SyntheticInsert& s) {
 }  // namespace
 
 Mesh synthetic_insert(const SimTool& tool, const SyntheticInsert& s) {
-  if (!(s.edge_radius_mm >= 0) || !(s.vb_mm >= 0) || !(s.face_mm > s.vb_mm + s.edge_radius_mm) ||
-      s.sections < 2 || s.profile_points < 8) {
-    throw InputError(fmt::format(
-        "synthetic insert: need edge radius >= 0, VB >= 0, face extent ({} mm) beyond VB ({} mm) "
-        "and the hone, >= 2 sections and >= 8 profile points",
-        s.face_mm, s.vb_mm));
-  }
-  if (!(std::abs(s.rake_deg) < 45 && s.clearance_deg > 0 && s.clearance_deg < 45)) {
-    throw InputError(
-        fmt::format("synthetic insert: rake {} and clearance {} degrees: need "
-                    "|rake| < 45 and 0 < clearance < 45",
-                    s.rake_deg, s.clearance_deg));
-  }
+  // Each broken rule by itself, with the value that broke it.
+  std::vector<std::string> problems;
+  const auto need = [&](bool ok, std::string what) {
+    if (!ok) problems.push_back("synthetic insert: " + std::move(what));
+  };
+  need(s.edge_radius_mm >= 0, fmt::format("edge radius must be >= 0 mm, got {}", s.edge_radius_mm));
+  need(s.vb_mm >= 0, fmt::format("VB must be >= 0 mm, got {}", s.vb_mm));
+  need(s.face_mm > s.vb_mm + s.edge_radius_mm,
+       fmt::format("the face extent ({} mm) must pass VB plus the hone ({} mm)", s.face_mm,
+                   s.vb_mm + s.edge_radius_mm));
+  need(s.sections >= 2, fmt::format("need >= 2 sections, got {}", s.sections));
+  need(s.profile_points >= 8, fmt::format("need >= 8 profile points, got {}", s.profile_points));
+  need(std::abs(s.rake_deg) < 45, fmt::format("|rake| must be < 45 degrees, got {}", s.rake_deg));
+  need(s.clearance_deg > 0 && s.clearance_deg < 45,
+       fmt::format("clearance must be in (0, 45) degrees, got {}", s.clearance_deg));
+  // The mesh is sections x points vertices, two triangles each: refused before allocating.
+  const double vertices = static_cast<double>(s.sections) * static_cast<double>(s.profile_points);
+  need(vertices <= 2e7, fmt::format("{} sections x {} points is {:.3g} vertices (limit 2e7, about "
+                                    "2 GB of mesh); use fewer",
+                                    s.sections, s.profile_points, vertices));
+  if (!problems.empty()) throw InputError(problems);
   const std::vector<P2> prof = insert_profile(s);
   const double total = tool.edge_length_at(tool.flute_length_mm);
   Mesh m;
