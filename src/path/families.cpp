@@ -457,8 +457,8 @@ PlannedPath plan_path(const Job& job) {
   // Never inside the envelope's own sampling error (centres 0.1 mm apart leave gaps of
   // 0.1^2 / 8R between their discs), twice over: for a tiny step the scallops are shallower
   // than that gap, and the columns at the wall would show islands the cycles do not leave.
-  const double delta = std::max(g.R - std::sqrt(g.R * g.R - 0.25 * g.s * g.s),
-                                2 * 0.1 * 0.1 / (8 * g.R));
+  const double delta =
+      std::max(g.R - std::sqrt(g.R * g.R - 0.25 * g.s * g.s), 2 * 0.1 * 0.1 / (8 * g.R));
   // The count first: a step tiny against the slot is refused before any work.
   (void)checked_count(std::ceil((g.L + 2 * (g.a + g.b + g.R)) / g.s));
   const Envelope env = cycle_envelope(g, delta);
