@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -205,6 +206,41 @@ TEST_F(Cli, MessagesNameWhatWasTyped) {
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("28 cycles (all the program has; 50 asked for)"), std::string::npos)
       << r.out;
+}
+
+// Outputs: a link stays a link (its target is written), a FIFO stays a FIFO (written
+// through), an output that is an input or lies in a missing directory is refused before any
+// work, and nothing is half-written.
+TEST_F(Cli, OutputsNeverReplaceLinksPipesOrInputs) {
+  namespace fs = std::filesystem;
+  const std::string job = (dir_ / "job.toml").string();
+  fs::copy_file(test::example("wagih2023/elliptical.toml"), job);
+  const std::string before = read_file(job);
+  CliResult r = run_cli("plan " + job + " -o " + job);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("is the input"), std::string::npos) << r.out;
+  EXPECT_EQ(read_file(job), before);  // the job is untouched
+  // A symbolic link to a program: the link stays, the program it names is written.
+  const fs::path real = dir_ / "real.ngc", link = dir_ / "link.ngc";
+  { std::ofstream(real) << "old\n"; }
+  fs::create_symlink(real, link);
+  ASSERT_EQ(run_cli("plan " + job + " -o " + link.string()).code, 0);
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(link)));
+  EXPECT_GT(read_file(real).size(), 10000u);  // the program (about 40 kB), not "old"
+  // A FIFO with a reader: written through, still a FIFO afterwards.
+  const fs::path fifo = dir_ / "fifo", got = dir_ / "got.ngc";
+  const std::string shell = "mkfifo " + fifo.string() + " && { cat " + fifo.string() + " > " +
+                            got.string() + " & } && " + TROCHOMILL_CLI + " plan " + job + " -o " +
+                            fifo.string() + " > /dev/null && wait";
+  ASSERT_EQ(std::system(shell.c_str()), 0) << shell;
+  EXPECT_TRUE(fs::is_fifo(fifo));
+  EXPECT_EQ(read_file(got), read_file(real));
+  // Checked before the work: the JSON is not written when the CSV's directory is missing.
+  r = run_cli("analyze " + job + " --json " + (dir_ / "a.json").string() + " --csv " +
+              (dir_ / "nodir" / "a.csv").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("directory"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "a.json"));
 }
 
 TEST_F(Cli, VersionAndHelp) {

@@ -80,6 +80,38 @@ ToolPath job_path(const Job& job, const std::string& gcode_file) {
   return read_gcode_file(gcode_file, gcode_options(job.machine).read).path;
 }
 
+void check_outputs(std::initializer_list<const std::string*> outputs,
+                   std::initializer_list<const std::string*> inputs) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (const std::string* o : outputs) {
+    if (o->empty() || *o == "-") continue;
+    const fs::path out = fs::weakly_canonical(*o, ec);
+    for (const std::string* in : inputs) {
+      if (in->empty() || *in == "-") continue;
+      if (fs::weakly_canonical(*in, ec) == out) {
+        throw InputError(
+            fmt::format("output '{}' is the input '{}': choose another output file", *o, *in));
+      }
+    }
+    if (fs::is_directory(*o, ec)) {
+      throw InputError(fmt::format("output '{}' is a directory: give a file name", *o));
+    }
+    const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    if (!fs::is_directory(dir, ec)) {  // a file-system failure, as writing would find it
+      throw IoError(
+          fmt::format("cannot write '{}': directory '{}' does not exist", *o, dir.string()));
+    }
+  }
+}
+
+void check_output_dir(const std::string& dir, const std::string& option) {
+  std::error_code ec;
+  if (!dir.empty() && std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec)) {
+    throw InputError(fmt::format("{} '{}' exists and is not a directory", option, dir));
+  }
+}
+
 void emit(const std::string& target, const std::string& text) {
   if (target == "-") {
     std::fwrite(text.data(), 1, text.size(), stdout);

@@ -50,6 +50,15 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
 /// The job's planned path, or the NC program's when one is given.
 [[nodiscard]] ToolPath job_path(const Job& job, const std::string& gcode_file);
 
+/// Checks a command's outputs before any work: none is one of the inputs (`plan -o job.toml`
+/// would overwrite the job), none is a directory, each one's directory exists. "-" (stdout)
+/// and empty (not asked for) pass. Throws InputError naming the output (IoError for a missing
+/// directory, as the write would).
+void check_outputs(std::initializer_list<const std::string*> outputs,
+                   std::initializer_list<const std::string*> inputs);
+/// The same for an output directory (`simulate --out`): it is a directory or does not exist.
+void check_output_dir(const std::string& dir, const std::string& option);
+
 /// Writes text to a file atomically, or to stdout for "-".
 void emit(const std::string& target, const std::string& text);
 /// True when the summary goes to stdout: no output option writes to "-".

@@ -28,6 +28,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--json", a->json, "write the metrics as JSON (- for stdout)");
     cmd->add_option("--csv", a->csv, "write the time series as CSV (- for stdout)");
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->json, &a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
       const ProcessMetrics m = analyze_with_forces(job, job_path(job, a->gcode));
       if (!a->json.empty()) emit(a->json, metrics_json(job, m));
@@ -58,6 +59,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--threads", a->threads, "worker threads (0: all cores)")
         ->check(CLI::NonNegativeNumber);
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->json, &a->csv}, {&a->job.file});
       const std::vector<Override> base = a->job.overrides();
       std::vector<Vary> varies;
       for (const auto& v : a->vary) varies.push_back(parse_vary(v));

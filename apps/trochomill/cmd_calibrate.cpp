@@ -59,6 +59,7 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
   cmd->add_option("--json", a->json, "write the result as JSON (- for stdout)");
   cmd->add_option("--write", a->write, "write the [material] block to this file");
   cmd->final_callback([a, &exit_code] {
+    check_outputs({&a->json, &a->write}, {&a->job.file, &a->measured, &a->mean, &a->gcode});
     const Job job = a->job.load();
     if (a->measured.empty() == a->mean.empty()) {
       throw InputError("calibrate: give --measured FILE or --mean-forces FILE (one)");

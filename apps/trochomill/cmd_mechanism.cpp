@@ -35,6 +35,7 @@ void register_mechanism_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--json", a->json, "write curves and zone summary as JSON (- for stdout)");
     cmd->add_option("--csv", a->csv, "write the curves as CSV (- for stdout)");
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->json, &a->csv}, {&a->job.file});
       const Job job = a->job.load();
       const MechanismSettings& st = job.mechanism;
       const bool use_wear = job.tool.flank_wear_mm > 0;
@@ -65,6 +66,7 @@ void register_mechanism_commands(CLI::App& app, int& exit_code) {
     cmd->add_flag("--feed", a->feed, "recommend the feed per tooth at the job's step instead");
     cmd->add_option("--json", a->json, "write the recommendation as JSON (- for stdout)");
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->json}, {&a->job.file});
       const Job job = a->job.load();
       const bool use_wear = job.tool.flank_wear_mm > 0;
       const Recommendation r = recommend(job, job.mechanism, use_wear, a->feed);

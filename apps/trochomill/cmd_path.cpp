@@ -31,6 +31,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     add_key_flag(cmd, a->job, "--chords", "machine.arc_output", "chords",
                  "write curves as G1 chords instead of biarcs");
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->out}, {&a->job.file});
       const Job job = a->job.load();
       const PlannedPath planned = plan_path(job);
       const std::string code = write_gcode(job, planned.path, gcode_options(job.machine).write);
@@ -69,6 +70,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     o_spr->excludes(o_dt)->excludes(o_ds);
     o_dt->excludes(o_ds);
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
       const ToolPath tp = job_path(job, a->gcode);
       PathSamples s;
@@ -110,6 +112,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
         ->check(finite_in(0, 1e15));
     cmd->add_option("--json", a->json, "write the report as JSON (- for stdout)");
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->json}, {&a->file});
       const GcodeProgram prog = read_gcode_file(a->file, gcode_options(a->machine).read);
       const double t_acc = estimate_time_s(prog.path, a->machine);
       if (!a->json.empty()) emit(a->json, gcode_check_json(a->file, prog, t_acc));

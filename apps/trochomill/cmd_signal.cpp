@@ -62,6 +62,7 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
                   "live: read samples from stdin (--format f32, s16 or csv; --rate), one JSON "
                   "line per window");
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->json, &a->csv}, {&a->signal.file, &a->job.file});
       std::optional<Job> job;
       MonitorSettings m;
       if (!a->job.file.empty()) {
@@ -138,6 +139,7 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
         ->check(finite_in(0, 1e4));
     cmd->add_option("--seed", syn.seed, "random seed")->capture_default_str();
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->out}, {&a->job.file});
       const std::filesystem::path out(a->out);
       std::string ext = out.extension().string();
       for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -177,6 +179,7 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--spectrogram", a->spectrogram,
                     "write the spectrogram as CSV (t_s, f_hz, db)");
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->csv, &a->spectrogram}, {&a->signal.file});
       const Signal sig = a->signal.read();
       const Spectrum sp = welch(sig, a->nfft);
       if (!a->csv.empty()) emit(a->csv, spectrum_csv(sp));

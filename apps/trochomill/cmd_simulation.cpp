@@ -38,6 +38,8 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
                     "mesh would pass 4 million triangles)")
         ->check(finite_above(0, 1e3));
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->json}, {&a->job.file, &a->gcode});
+      check_output_dir(a->out, "--out");
       const Job job = a->job.load();
       const ToolPath path = job_path(job, a->gcode);
       const auto [from, to] = a->window.resolve(path);
@@ -96,6 +98,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--json", a->json, "write the summary as JSON (- for stdout)");
     add_memory_limit(cmd, a->memory_gb);
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->json, &a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
       const ToolPath path = job_path(job, a->gcode);
       const auto [from, to] = a->window.resolve(path);

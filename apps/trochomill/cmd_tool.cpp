@@ -48,6 +48,7 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
         ->capture_default_str()
         ->check(CLI::Range(8, 20000));
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->out}, {&a->job.file});
       const Job job = a->job.load();
       const SimTool tool = sim_tool(job, job.simulation);
       SyntheticInsert spec = a->spec;
@@ -80,6 +81,7 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--csv", a->csv, "write the grid as CSV (- for stdout)");
     cmd->add_option("--json", a->json, "write the summary as JSON (- for stdout)");
     cmd->final_callback([a, &exit_code] {
+      check_outputs({&a->csv, &a->json}, {&a->job.file, &a->mesh});
       const Job job = a->job.load();
       const SimTool tool = sim_tool(job, job.simulation);
       EdgeTopography info;

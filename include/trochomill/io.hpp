@@ -14,7 +14,9 @@
 namespace trochomill {
 
 /// Writes `content` to `path` atomically (temp file in the same directory, then rename).
-/// Throws IoError naming the path on failure; the target is then left untouched.
+/// Throws IoError naming the path on failure; the target is then left untouched. A symbolic
+/// link stays: its target is written. What is not a regular file (a FIFO, a device such as
+/// /dev/null) is never replaced: the output is written through to it.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
 /// Atomic output through a writer: `write(tmp)` creates the file at `tmp` (beside `path`) in

@@ -17,20 +17,16 @@ namespace trochomill {
 
 namespace fs = std::filesystem;
 
-void write_file_atomic(const fs::path& path, const std::function<void(const fs::path&)>& write) {
-  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+namespace {
+
+// Runs a writer on a temporary file; on failure removes it and names the target in the
+// message (the writer names the file it wrote, the temporary one).
+void run_writer(const std::function<void(const fs::path&)>& write, const fs::path& tmp,
+                const fs::path& path) {
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) {
-    throw IoError("cannot write '" + path.string() + "': directory '" + dir.string() +
-                  "' does not exist");
-  }
-  // A unique name per call: the random suffix avoids clashes between processes and threads.
-  std::random_device rd;
-  const fs::path tmp = path.string() + ".tmp." + std::to_string(rd());
   try {
     write(tmp);
   } catch (const Error& e) {
-    // The writer names the file it wrote, the temporary one: the user named the target.
     fs::remove(tmp, ec);
     std::string what = e.what();
     for (std::size_t p = 0; (p = what.find(tmp.string(), p)) != std::string::npos;) {
@@ -43,7 +39,58 @@ void write_file_atomic(const fs::path& path, const std::function<void(const fs::
     fs::remove(tmp, ec);
     throw;
   }
-  fs::rename(tmp, path, ec);
+}
+
+std::string unique_suffix() {
+  // A unique name per call: the random suffix avoids clashes between processes and threads.
+  std::random_device rd;
+  return ".tmp." + std::to_string(rd());
+}
+
+}  // namespace
+
+void write_file_atomic(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  std::error_code ec;
+  // A link stays a link: its target is written (a dangling link: the file it names).
+  fs::path target = path;
+  if (fs::is_symlink(fs::symlink_status(path, ec))) {
+    target = fs::weakly_canonical(path, ec);
+    if (ec) throw IoError("cannot write '" + path.string() + "': " + ec.message());
+  }
+  const fs::file_status st = fs::status(target, ec);
+  if (fs::is_directory(st)) {
+    throw IoError("cannot write '" + path.string() + "': it is a directory");
+  }
+  if (fs::exists(st) && !fs::is_regular_file(st)) {
+    // A FIFO or a device cannot be replaced: the output is made in the temporary directory
+    // and written through to it.
+    const fs::path tmp = fs::temp_directory_path() / ("trochomill" + unique_suffix());
+    run_writer(write, tmp, path);
+    {
+      std::ifstream in(tmp, std::ios::binary);
+      std::ofstream out(target, std::ios::binary);
+      if (!in || !out) {
+        fs::remove(tmp, ec);
+        throw IoError("cannot write '" + path.string() + "': " + std::strerror(errno));
+      }
+      out << in.rdbuf();
+      out.flush();
+      if (!out) {
+        fs::remove(tmp, ec);
+        throw IoError("cannot write '" + path.string() + "': write failed");
+      }
+    }
+    fs::remove(tmp, ec);
+    return;
+  }
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec)) {
+    throw IoError("cannot write '" + path.string() + "': directory '" + dir.string() +
+                  "' does not exist");
+  }
+  const fs::path tmp = target.string() + unique_suffix();
+  run_writer(write, tmp, path);
+  fs::rename(tmp, target, ec);
   if (ec) {
     std::error_code ignored;
     fs::remove(tmp, ignored);
