@@ -2,6 +2,7 @@
 // (nothing written on failure), --set, --version, and check-gcode's JSON report.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -46,9 +47,11 @@ std::string first_line_of(const std::string& path) {
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
+    // The process id keeps two suites running at once (a build and a sanitizer build) apart.
     dir_ = std::filesystem::temp_directory_path() /
            ("trochomill_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
