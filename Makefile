@@ -7,12 +7,15 @@ PREFIX     ?= /usr/local
 CMAKE_FLAGS ?=
 TROCHOMILL = $(BUILD)/bin/trochomill
 
-.PHONY: all deps build demo test test-asan bench install format clean
+.PHONY: all deps test-deps build demo test test-asan bench install format clean
 
 all: build
 
 deps:
 	@scripts/install-deps
+
+test-deps:
+	@scripts/install-deps --test
 
 $(BUILD)/build.ninja: | deps
 	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release -DTROCHOMILL_WERROR=ON $(CMAKE_FLAGS)
@@ -23,7 +26,7 @@ build: deps $(BUILD)/build.ninja
 demo: build
 	@scripts/demo $(TROCHOMILL) $(BUILD)/demo
 
-test: build
+test: test-deps build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 $(ASAN_BUILD)/build.ninja: | deps
@@ -31,7 +34,7 @@ $(ASAN_BUILD)/build.ninja: | deps
 	  -DTROCHOMILL_WERROR=ON \
 	  -DTROCHOMILL_SANITIZE=ON -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
 
-test-asan: deps $(ASAN_BUILD)/build.ninja
+test-asan: test-deps $(ASAN_BUILD)/build.ninja
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS)

@@ -59,6 +59,42 @@ class Cli : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
+// A program placed anywhere in the workpiece analyses as the slot it cuts when the job places
+// it the same way; a program written for other keys draws a warning naming each key.
+TEST_F(Cli, PlacedProgramAnalysesLikeThePlainOneAndHeaderMismatchesWarn) {
+  const auto ex = test::example("wagih2023/elliptical.toml").string();
+  const std::string place =
+      " --set slot.origin_x=-250.5 --set slot.origin_y=40 --set slot.angle=90";
+  const auto plain = (dir_ / "plain.ngc").string(), placed = (dir_ / "placed.ngc").string();
+  ASSERT_EQ(run_cli("plan " + ex + " -o " + plain).code, 0);
+  ASSERT_EQ(run_cli("plan " + ex + " -o " + placed + place).code, 0);
+  const CliResult a = run_cli("analyze " + ex + " --gcode " + plain + " --json -");
+  const CliResult b = run_cli("analyze " + ex + " --gcode " + placed + place + " --json -");
+  ASSERT_EQ(a.code, 0) << a.out;
+  ASSERT_EQ(b.code, 0) << b.out;
+  EXPECT_EQ(b.out.find("warning"), std::string::npos) << b.out;
+  const auto ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+  // A quarter turn and a move on the 1e-4 mm grid commute with the program's rounding: the
+  // turned-back program is the plain one to the reader's arithmetic (1e-9 relative).
+  for (const char* k : {"mrr_mm3_per_min", "h_max_mm", "engagement_angle_max_deg",
+                        "machining_time_s", "waviness_left_mm"}) {
+    ASSERT_TRUE(ja.contains(k)) << k;
+    EXPECT_NEAR(jb[k].get<double>(), ja[k].get<double>(), 1e-9 * std::abs(ja[k].get<double>()))
+        << k;
+  }
+  // The placed program with the plain job: both placement keys are named.
+  const CliResult c =
+      run_cli("analyze " + ex + " --gcode " + placed + " --json " + (dir_ / "c.json").string());
+  EXPECT_NE(c.out.find("warning: " + placed + " was written with slot.angle = 90"),
+            std::string::npos)
+      << c.out;
+  EXPECT_NE(c.out.find("slot.origin_x = -250.5"), std::string::npos) << c.out;
+  // A different feed in the job than in the program is named with both values.
+  const CliResult d = run_cli("analyze " + ex + " --gcode " + plain +
+                              " --set cutting.feed_rate=900 --json " + (dir_ / "d.json").string());
+  EXPECT_NE(d.out.find("cutting.feed_rate = 600.0, the job has 900"), std::string::npos) << d.out;
+}
+
 TEST_F(Cli, PlanWritesGcodeThatCheckGcodeReads) {
   const auto ex = test::example("wagih2023/elliptical.toml").string();
   const auto out = (dir_ / "e.ngc").string();

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/signal.hpp"
@@ -47,7 +48,13 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
 /// > lo (open at lo), finite, at most hi.
 [[nodiscard]] CLI::Validator finite_above(double lo, double hi);
 
-/// The job's planned path, or the NC program's when one is given.
+/// Where a trochomill program's header (the job keys it was written with) disagrees with the
+/// job in the sections the models read beside the moves ([tool], [slot], [path], [cutting]):
+/// one sentence per key. Empty for a program without such a header.
+[[nodiscard]] std::vector<std::string> header_mismatches(const Job& job, const GcodeProgram& prog,
+                                                         const std::string& name);
+/// The job's planned path, or the NC program's when one is given (turned into the slot frame
+/// by the job's placement; a warning on stderr for each header key that disagrees).
 [[nodiscard]] ToolPath job_path(const Job& job, const std::string& gcode_file);
 
 /// Checks a command's outputs before any work: none is one of the inputs (`plan -o job.toml`

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "trochomill/job.hpp"
@@ -52,6 +53,8 @@ struct GcodeProgramInfo {
   std::size_t lines = 0;
   std::size_t motion_blocks = 0;
   bool inch_units_seen = false;
+  /// The job keys a trochomill program records in its header, `section.key = value` (TOML).
+  std::vector<std::pair<std::string, std::string>> header_keys;
 };
 
 struct GcodeProgram {
@@ -69,9 +72,13 @@ struct GcodeOptions {
 [[nodiscard]] GcodeOptions gcode_options(const Machine& machine);
 
 /// Parses a program. Errors are InputError "name:line:column: what is wrong".
-/// The path starts at the first programmed position (the machine's start point is unknown).
+/// The path starts at the first move in X or Y (the machine's position before is unknown: a
+/// Z-only approach to the clearance plane gives the start its height, it is not a move).
 [[nodiscard]] GcodeProgram read_gcode(std::string_view text, std::string_view source_name,
                                       const GcodeReadOptions& options = {});
+/// The `section.key = value` comment lines of a program's leading comment block.
+[[nodiscard]] std::vector<std::pair<std::string, std::string>> gcode_header_keys(
+    std::string_view text);
 [[nodiscard]] GcodeProgram read_gcode_file(const std::filesystem::path& file,
                                            const GcodeReadOptions& options = {});
 

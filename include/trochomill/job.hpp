@@ -48,10 +48,17 @@ struct Tool {
   [[nodiscard]] double radius_mm() const noexcept { return 0.5 * diameter_mm; }
 };
 
+/// The slot in its own frame (the frame every model works in): along +Y from y = 0, width
+/// along X centred on x = 0, top face z = 0. The placement puts that frame in the workpiece
+/// (the work offset's frame) for the G-code: rotated by angle_deg about Z, counter-clockwise
+/// seen from +Z, then moved so the slot frame's origin lands on (origin_x_mm, origin_y_mm).
 struct Slot {
-  double width_mm = 0;   ///< slot width W along X (mm)
-  double length_mm = 0;  ///< slot length along +Y (mm)
-  double depth_mm = 0;   ///< slot depth a_p below the top face z = 0 (mm)
+  double width_mm = 0;     ///< slot width W along X (mm)
+  double length_mm = 0;    ///< slot length along +Y (mm)
+  double depth_mm = 0;     ///< slot depth a_p below the top face z = 0 (mm)
+  double origin_x_mm = 0;  ///< workpiece X of the slot frame's origin (mm)
+  double origin_y_mm = 0;  ///< workpiece Y of the slot frame's origin (mm)
+  double angle_deg = 0;    ///< direction of the slot's +Y in the workpiece, from +Y (degrees)
 };
 
 enum class PathType { linear, trochoidal, circular, elliptical, linear_elliptical };
@@ -60,6 +67,8 @@ enum class EntryType { helix, ramp, plunge, outside };
 enum class SpindleDirection { cw, ccw };
 enum class Coolant { off, flood, mist };
 enum class Dialect { linuxcnc, fanuc, sinumerik, grbl };
+/// The work offset the program selects (G54 .. G59).
+enum class WorkOffset { g54, g55, g56, g57, g58, g59 };
 enum class ArcOutput { arcs, chords };
 
 struct PathSpec {
@@ -87,13 +96,16 @@ struct Cutting {
 
 struct Machine {
   Dialect dialect = Dialect::linuxcnc;
-  double safe_z_mm = 5;                    ///< retract height above the top face (mm)
-  double rapid_rate_mm_per_min = 10000;    ///< rapid traverse rate (mm/min)
-  double max_acceleration_mm_per_s2 = 0;   ///< path acceleration limit (mm/s^2); 0 = unlimited
-  double junction_deviation_mm = 0.01;     ///< corner blending tolerance for time estimates (mm)
-  double arc_tolerance_mm = 0.001;         ///< max deviation when fitting arcs/chords (mm)
-  ArcOutput arc_output = ArcOutput::arcs;  ///< elliptical arcs as biarcs or as G1 chords
-  int program_number = 1000;               ///< O number (fanuc)
+  double safe_z_mm = 5;                      ///< retract height above the top face (mm)
+  double rapid_rate_mm_per_min = 10000;      ///< rapid traverse rate (mm/min)
+  double max_acceleration_mm_per_s2 = 0;     ///< path acceleration limit (mm/s^2); 0 = unlimited
+  double junction_deviation_mm = 0.01;       ///< corner blending tolerance for time estimates (mm)
+  double arc_tolerance_mm = 0.001;           ///< max deviation when fitting arcs/chords (mm)
+  ArcOutput arc_output = ArcOutput::arcs;    ///< elliptical arcs as biarcs or as G1 chords
+  int program_number = 1000;                 ///< O number (fanuc)
+  WorkOffset work_offset = WorkOffset::g54;  ///< work coordinate system of the program
+  /// Tool length offset register H (linuxcnc, fanuc: G43 H); 0 = the tool number.
+  int length_offset = 0;
 };
 
 struct Job {
@@ -196,6 +208,7 @@ struct JobKey {
 [[nodiscard]] std::string_view to_string(EntryType e) noexcept;
 [[nodiscard]] std::string_view to_string(Direction d) noexcept;
 [[nodiscard]] std::string_view to_string(ChipModel m) noexcept;
+[[nodiscard]] std::string_view to_string(WorkOffset w) noexcept;  ///< "G54" .. "G59"
 /// Parses a chip model name (exact | pivkin2025); InputError otherwise.
 [[nodiscard]] ChipModel parse_chip_model(std::string_view name);
 /// Parses a force model name (bergmann | kienzle | linear); InputError otherwise.

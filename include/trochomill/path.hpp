@@ -184,6 +184,24 @@ struct BoundingBox {
 };
 [[nodiscard]] BoundingBox bounding_box(const ToolPath& path);
 
+/// Where the slot frame sits in the workpiece (the frame of the program's work offset):
+/// `[slot] origin_x, origin_y, angle`. A point p of the slot frame is at
+/// (origin_x, origin_y, 0) + Rz(angle) p in the workpiece: turned counter-clockwise seen from
+/// +Z, then moved; Z is unchanged. Multiples of 90 degrees turn exactly (cos and sin 0 or 1).
+struct Placement {
+  double origin_x_mm = 0, origin_y_mm = 0;  ///< workpiece position of the slot origin (mm)
+  double angle_deg = 0;                     ///< turn of the slot frame about Z (degrees)
+  [[nodiscard]] bool is_identity() const noexcept;
+  [[nodiscard]] Vec3 to_work(const Vec3& slot_point_mm) const;  ///< slot frame -> workpiece
+  [[nodiscard]] Vec3 to_slot(const Vec3& work_point_mm) const;  ///< workpiece -> slot frame
+  [[nodiscard]] Vec3 turn(const Vec3& slot_vector) const;       ///< a direction, not moved
+};
+[[nodiscard]] Placement slot_placement(const Job& job);
+/// The path moved into the workpiece (to_work on every primitive, cycle marks kept).
+[[nodiscard]] ToolPath to_work_frame(const ToolPath& path, const Placement& placement);
+/// A workpiece path (read from a program) back in the slot frame the models work in.
+[[nodiscard]] ToolPath to_slot_frame(const ToolPath& path, const Placement& placement);
+
 /// Geometry of a planned trochoidal slot (all mm).
 /// The slot's orbit as the families, the mechanism model and the analysis read it (Wagih 2023
 /// Section 2): the trochoid radius across the slot a = (W - D) / 2 and the semi-axis along it

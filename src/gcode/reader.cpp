@@ -5,6 +5,7 @@
 // line; numbers go through std::from_chars.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -35,7 +36,7 @@ struct State {
   double feed = 0;            // mm/min
   bool feed_given = false;    // an F word was read (F0 is then a given zero feed)
   Vec3 pos = Vec3::Zero();
-  bool pos_known = false;
+  bool pos_known = false;  // X or Y programmed: the path has started
   bool ended = false;
 };
 
@@ -354,10 +355,10 @@ class Reader {
     apply(2, z);
     ++prog_.info.motion_blocks;
     if (!st_.pos_known) {
-      // The machine's position before the first move is unknown: the first move only
-      // establishes where the path starts.
+      // The machine's position before the program is unknown: a Z-only approach to the
+      // clearance plane and the first move in X or Y only establish where the path starts.
       st_.pos = target;
-      st_.pos_known = true;
+      st_.pos_known = x.has_value() || y.has_value();
       return;
     }
     const Vec3 from = st_.pos;
@@ -492,10 +493,46 @@ class Reader {
 
 }  // namespace
 
+std::vector<std::pair<std::string, std::string>> gcode_header_keys(std::string_view text) {
+  // The leading block of comment lines (and '%', O numbers, blank lines): "(k.e = v)" or
+  // "; k.e = v", where k.e is a dotted lower-case key.
+  std::vector<std::pair<std::string, std::string>> out;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t eol = text.find('\n', pos);
+    if (eol == std::string_view::npos) eol = text.size();
+    std::string_view line = text.substr(pos, eol - pos);
+    pos = eol + 1;
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
+    while (!line.empty() && line.front() == ' ') line.remove_prefix(1);
+    if (line.empty() || line == "%" || line.front() == 'O') continue;
+    std::string_view body;
+    if (line.front() == ';') {
+      body = line.substr(1);
+    } else if (line.front() == '(' && line.back() == ')') {
+      body = line.substr(1, line.size() - 2);
+    } else {
+      break;  // the first block that is not a comment ends the header
+    }
+    while (!body.empty() && body.front() == ' ') body.remove_prefix(1);
+    const std::size_t eq = body.find(" = ");
+    if (eq == std::string_view::npos) continue;
+    const std::string_view key = body.substr(0, eq);
+    const bool dotted =
+        key.find('.') != std::string_view::npos && std::all_of(key.begin(), key.end(), [](char c) {
+          return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '.';
+        });
+    if (dotted) out.emplace_back(std::string(key), std::string(body.substr(eq + 3)));
+  }
+  return out;
+}
+
 GcodeProgram read_gcode(std::string_view text, std::string_view source_name,
                         const GcodeReadOptions& options) {
   if (!(options.rapid_rate_mm_per_min > 0)) throw InputError("rapid rate must be > 0 mm/min");
-  return Reader(text, source_name, options).run();
+  GcodeProgram prog = Reader(text, source_name, options).run();
+  prog.info.header_keys = gcode_header_keys(text);
+  return prog;
 }
 
 GcodeProgram read_gcode_file(const std::filesystem::path& file, const GcodeReadOptions& options) {

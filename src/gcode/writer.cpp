@@ -18,7 +18,9 @@ namespace {
 
 class Emitter {
  public:
-  explicit Emitter(const GcodeWriteOptions& opt) : opt_(opt), scale_(std::pow(10.0, opt.decimals)) {
+  // Positions come in the slot frame and are written in the workpiece (the placement).
+  Emitter(const GcodeWriteOptions& opt, const Placement& placement)
+      : opt_(opt), placement_(placement), scale_(std::pow(10.0, opt.decimals)) {
     for (int k = 0; k < opt.decimals; ++k) pow10_ *= 10;
     out_.reserve(1 << 16);
   }
@@ -84,15 +86,21 @@ class Emitter {
     }
   }
 
-  // A motion block: code G0/G1/G2/G3, only the axes that change (all on the first move).
-  void move(int g, const Vec3& p, double feed, const double* ij = nullptr) {
+  // A motion block: code G0/G1/G2/G3, only the axes that change (X and Y on the first move
+  // after the Z approach).
+  void move(int g, const Vec3& slot_p, double feed, const double* slot_ij = nullptr) {
     const bool first = !have_pos_;
+    const Vec3 p = placement_.to_work(slot_p);
+    const Vec3 ij_work =
+        slot_ij != nullptr ? placement_.turn(Vec3(slot_ij[0], slot_ij[1], 0)) : Vec3::Zero();
+    const double ij_w[2] = {ij_work.x(), ij_work.y()};
+    const double* ij = slot_ij != nullptr ? ij_w : nullptr;
     out_ += 'G';
     out_ += static_cast<char>('0' + g);
     const Vec3 q = rounded(p);
     if (first || q.x() != pos_.x() || g >= 2) num('X', p.x());
     if (first || q.y() != pos_.y() || g >= 2) num('Y', p.y());
-    if (first || q.z() != pos_.z()) num('Z', p.z());
+    if (q.z() != pos_.z()) num('Z', p.z());
     if (ij != nullptr) {
       num('I', ij[0]);
       num('J', ij[1]);
@@ -105,7 +113,19 @@ class Emitter {
     pos_ = q;
     have_pos_ = true;
   }
-  void set_position(const Vec3& p) { pos_ = rounded(p); }
+  // A Z-only rapid with extra words after G0 (the length offset "G43 H1" on the first one).
+  void move_z(int g, double z, const std::string& words) {
+    out_ += 'G';
+    out_ += static_cast<char>('0' + g);
+    if (!words.empty()) {
+      out_ += ' ';
+      out_ += words;
+    }
+    num('Z', z);
+    out_ += '\n';
+    pos_.z() = rounded(Vec3(0, 0, z)).z();
+  }
+  [[nodiscard]] double z() const { return pos_.z(); }
 
  private:
   [[nodiscard]] Vec3 rounded(const Vec3& p) const {
@@ -113,6 +133,7 @@ class Emitter {
                 std::round(p.z() * scale_) / scale_);
   }
   const GcodeWriteOptions& opt_;
+  const Placement& placement_;
   double scale_;         ///< 10^decimals
   long long pow10_ = 1;  ///< 10^decimals
   std::string out_;
@@ -222,13 +243,35 @@ std::string coolant_code(Coolant c) {
   return "";
 }
 
+// The rule that keeps a program from rapiding into the stock: a rapid that moves X or Y runs at
+// or above the clearance plane; below it rapids only go straight up or down (the planner's
+// descents to the feed-start height, over air). A path that breaks it is a planner bug.
+void check_rapids(const ToolPath& path, double clear_z) {
+  constexpr double kTol = 1e-9;  // mm: far below the output's 1e-4 mm resolution
+  for (std::size_t i = 0; i < path.segments().size(); ++i) {
+    const Segment& seg = path.segments()[i];
+    if (seg.motion() != Motion::rapid) continue;
+    const Vec3 a = seg.start(), b = seg.end();
+    const bool moves_xy = std::hypot(b.x() - a.x(), b.y() - a.y()) > kTol;
+    if (seg.kind() == Segment::Kind::curve ||
+        (moves_xy && std::min(a.z(), b.z()) < clear_z - kTol)) {
+      throw Error(fmt::format(
+          "G-code writer: rapid {} moves X/Y below the clearance plane Z{:g} (from X{:.4f} Y{:.4f} "
+          "Z{:.4f} to X{:.4f} Y{:.4f} Z{:.4f}); refusing to write it: this is a bug",
+          i, clear_z, a.x(), a.y(), a.z(), b.x(), b.y(), b.z()));
+    }
+  }
+}
+
 }  // namespace
 
 std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOptions& opt) {
   if (path.empty()) throw Error("cannot write G-code for an empty path");
   if (!(opt.tolerance_mm > 0)) throw InputError("G-code tolerance must be > 0 mm");
   if (opt.decimals < 3 || opt.decimals > 6) throw InputError("G-code decimals must be in [3, 6]");
-  Emitter e(opt);
+  const Placement placement = slot_placement(job);
+  check_rapids(path, job.machine.safe_z_mm);  // a rigid motion about Z keeps what it checks
+  Emitter e(opt, placement);
   const Dialect d = opt.dialect;
   if (d == Dialect::linuxcnc || d == Dialect::fanuc) e.line("%");
   if (d == Dialect::fanuc) e.line(fmt::format("O{:04d}", job.machine.program_number));
@@ -238,6 +281,10 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
   e.comment(fmt::format("job: {}", job.source));
   e.comment(fmt::format("path length {:.3f} mm, {:.3f} s at programmed feed, {} dialect",
                         path.length_mm(), path.duration_s(), to_string(d)));
+  if (!placement.is_identity()) {
+    e.comment(fmt::format("slot origin at X{:g} Y{:g}, slot +Y turned {:g} degrees from +Y",
+                          placement.origin_x_mm, placement.origin_y_mm, placement.angle_deg));
+  }
   if (opt.arc_output == ArcOutput::arcs) {
     e.comment(fmt::format("curves fitted with biarcs within {:g} mm", opt.tolerance_mm));
   } else {
@@ -245,6 +292,8 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
   }
   for (const auto& [k, v] : job.flat_keys) e.comment(fmt::format("{} = {}", k, v));
 
+  // Set-up: units, plane, absolute, feed per minute, no cutter or length compensation, no
+  // canned cycle; then the work offset, the tool and its length offset, spindle, coolant.
   switch (d) {
     case Dialect::linuxcnc:
       e.line("G21 G17 G90 G94 G40 G49 G80");
@@ -260,13 +309,23 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
       e.line("G21 G17 G90 G94");
       break;
   }
+  e.line(std::string(to_string(job.machine.work_offset)));
   const int t = job.tool.tool_number;
+  const int h = job.machine.length_offset > 0 ? job.machine.length_offset : t;
+  const bool uses_h = d == Dialect::linuxcnc || d == Dialect::fanuc;
+  if (uses_h && h == 0) {
+    throw InputError(
+        "G43 H0 applies no tool length offset: give [tool] tool_number >= 1 or "
+        "[machine] length_offset >= 1");
+  }
   if (d == Dialect::sinumerik) {
-    e.line(fmt::format("T{} D1", t));
+    e.line(fmt::format("T{} D1", t));  // D1: the tool's length offset, applied on the next Z move
     e.line("M6");
   } else if (d == Dialect::grbl) {
-    e.comment(fmt::format("tool T{}: D = {:g} mm, Z = {} (change it by hand)", t,
-                          job.tool.diameter_mm, job.tool.teeth));
+    e.comment(
+        fmt::format("tool T{}: D = {:g} mm, Z = {} (change it by hand and touch off Z: "
+                    "Grbl has no tool table)",
+                    t, job.tool.diameter_mm, job.tool.teeth));
   } else {
     e.line(fmt::format("T{} M6", t));
   }
@@ -274,10 +333,18 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
   e.line(fmt::format("S{:.0f} {}", job.cutting.spindle_speed_rpm, spindle));
   if (const std::string c = coolant_code(job.cutting.coolant); !c.empty()) e.line(c);
 
-  // First position: a rapid to the path start at its height (all three axes).
-  e.move(0, path.segments().front().start(), 0);
+  // Approach: Z alone to the clearance plane (applying the length offset with that move),
+  // then X and Y above the start, then straight down to the start if it is lower.
+  const double clear_z = job.machine.safe_z_mm;
+  const Vec3 start = path.segments().front().start();
+  const double approach_z = std::max(clear_z, start.z());
+  e.move_z(0, approach_z, uses_h ? fmt::format("G43 H{}", h) : std::string());
+  e.move(0, Vec3(start.x(), start.y(), approach_z), 0);
+  if (start.z() < approach_z) e.move(0, start, 0);
   FitCache cache;
   for (const Segment& seg : path.segments()) emit_segment(e, seg, opt, cache);
+  // Leave at the clearance plane (every planned path ends there already).
+  if (e.z() < clear_z) e.move_z(0, clear_z, std::string());
 
   if (job.cutting.coolant != Coolant::off) e.line("M9");
   e.line("M5");

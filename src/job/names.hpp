@@ -34,6 +34,9 @@ inline constexpr Names<Dialect> kDialects[] = {{"linuxcnc", Dialect::linuxcnc},
                                                {"fanuc", Dialect::fanuc},
                                                {"sinumerik", Dialect::sinumerik},
                                                {"grbl", Dialect::grbl}};
+inline constexpr Names<WorkOffset> kWorkOffsets[] = {
+    {"G54", WorkOffset::g54}, {"G55", WorkOffset::g55}, {"G56", WorkOffset::g56},
+    {"G57", WorkOffset::g57}, {"G58", WorkOffset::g58}, {"G59", WorkOffset::g59}};
 inline constexpr Names<ArcOutput> kArcOutputs[] = {{"arcs", ArcOutput::arcs},
                                                    {"chords", ArcOutput::chords}};
 inline constexpr Names<ChipModel> kChipModels[] = {{"exact", ChipModel::exact},

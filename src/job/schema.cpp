@@ -21,6 +21,8 @@
 namespace trochomill::job_detail {
 namespace {
 
+constexpr double kMaxLengthMm = 1e5;  // 100 m: any slot, tool or travel
+
 template <class T>
 struct is_optional : std::false_type {};
 template <class T>
@@ -263,6 +265,14 @@ std::vector<Key> build_schema() {
              true),
       number("slot", "depth", "mm", positive(), FIELD(slot.depth_mm),
              "slot depth a_p below the top face z = 0", true),
+      number("slot", "origin_x", "mm", Range{-kMaxLengthMm, kMaxLengthMm}, FIELD(slot.origin_x_mm),
+             "workpiece X (in the work offset) of the slot frame's origin: the middle of the "
+             "slot's start"),
+      number("slot", "origin_y", "mm", Range{-kMaxLengthMm, kMaxLengthMm}, FIELD(slot.origin_y_mm),
+             "workpiece Y of the slot frame's origin"),
+      number("slot", "angle", "degrees", Range{-360, 360}, FIELD(slot.angle_deg),
+             "direction the slot runs in the workpiece: its +Y turned this far from +Y, "
+             "counter-clockwise seen from above (90: along -X)"),
       // [path]
       choice("path", "type", kPathTypes, FIELD(path.type), "path family (docs/models.md section 2)",
              true),
@@ -326,6 +336,10 @@ std::vector<Key> build_schema() {
              "elliptical arcs as biarcs (G2/G3) or as G1 chords"),
       integer("machine", "program_number", 1, 9999, FIELD(machine.program_number),
               "Fanuc O number"),
+      choice("machine", "work_offset", kWorkOffsets, FIELD(machine.work_offset),
+             "work coordinate system the program selects (sinumerik: G54 .. G57)"),
+      integer("machine", "length_offset", 0, 9999, FIELD(machine.length_offset),
+              "tool length offset register H of G43 (linuxcnc, fanuc; 0: the tool number)"),
       // [measured]
       number("measured", "force_max", "N", positive(), FIELD(measured.force_max_n),
              "measured maximum resultant force F_R,max"),
@@ -570,7 +584,6 @@ void check_settings_rules(JobReader& r, const Job& job) {
 // What a program and the models can represent (beyond each key's own range): coordinates
 // are written with 4 decimals (0.0001 mm), F with 4, S in whole rpm; counts of cycles must
 // fit the planner. A value outside is refused with the reason, never written rounded to 0.
-constexpr double kMaxLengthMm = 1e5;  // 100 m: any slot, tool or travel
 constexpr double kMinStepMm = 1e-3;   // 10 coordinate counts per cycle
 constexpr double kMinSpindleRpm = 1;  // S is written in whole rpm
 constexpr double kMaxSpindleRpm = 1e6;
@@ -639,6 +652,21 @@ void check_rules(JobReader& r, Job& job) {
   }
   if (tool.tooth_angles_deg.empty() && tool.teeth > 0) {
     for (int k = 0; k < tool.teeth; ++k) tool.tooth_angles_deg.push_back(360.0 * k / tool.teeth);
+  }
+
+  // [machine]: what the control can do with the program's set-up blocks.
+  const Machine& mc = job.machine;
+  if (mc.dialect == Dialect::sinumerik && mc.work_offset > WorkOffset::g57) {
+    r.problem("machine", "work_offset",
+              fmt::format("dialect = \"sinumerik\" has the settable offsets G54 .. G57, got {}",
+                          to_string(mc.work_offset)));
+  }
+  if ((mc.dialect == Dialect::linuxcnc || mc.dialect == Dialect::fanuc) &&
+      (mc.length_offset > 0 ? mc.length_offset : tool.tool_number) == 0) {
+    r.problem(r.has("machine", "length_offset") ? "machine" : "tool",
+              r.has("machine", "length_offset") ? "length_offset" : "tool_number",
+              "G43 H0 applies no tool length offset: give [tool] tool_number >= 1 or "
+              "[machine] length_offset >= 1");
   }
 
   // Geometry feasibility (only when the inputs themselves were valid).
@@ -802,6 +830,9 @@ std::string_view to_string(Direction d) noexcept {
 }
 std::string_view to_string(ChipModel m) noexcept {
   return job_detail::name_of(job_detail::kChipModels, m);
+}
+std::string_view to_string(WorkOffset w) noexcept {
+  return job_detail::name_of(job_detail::kWorkOffsets, w);
 }
 
 namespace {

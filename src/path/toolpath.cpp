@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "trochomill/error.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/units.hpp"
 
 namespace trochomill {
 
@@ -89,6 +91,87 @@ BoundingBox bounding_box(const ToolPath& path) {
     }
   }
   return b;
+}
+
+namespace {
+// cos and sin of an angle in degrees, exact at multiples of 90 degrees.
+std::pair<double, double> cos_sin_deg(double deg) {
+  double r = std::fmod(deg, 360.0);
+  if (r < 0) r += 360.0;
+  if (r == 0) return {1.0, 0.0};
+  if (r == 90) return {0.0, 1.0};
+  if (r == 180) return {-1.0, 0.0};
+  if (r == 270) return {0.0, -1.0};
+  return {std::cos(deg_to_rad(r)), std::sin(deg_to_rad(r))};
+}
+
+// Every primitive through a rigid motion about Z: points by `point`, directions by `turn`.
+template <class Point, class Turn>
+ToolPath rigidly_moved(const ToolPath& path, Point point, Turn turn) {
+  ToolPath out;
+  std::size_t next_mark = 0;
+  const auto& marks = path.cycles();
+  for (std::size_t i = 0; i < path.segments().size(); ++i) {
+    while (next_mark < marks.size() && marks[next_mark].first_segment == i) {
+      out.mark_cycle();
+      ++next_mark;
+    }
+    const Segment& s = path.segments()[i];
+    if (s.kind() == Segment::Kind::line) {
+      out.append(Segment::line(point(s.start()), point(s.end()), s.motion(), s.speed_mm_per_min()));
+    } else {
+      out.append(Segment::curve(point(s.center()), turn(s.axis_a()), turn(s.axis_b()),
+                                turn(s.drift()), s.u0(), s.u1(), s.motion(), s.speed_mm_per_min()));
+    }
+  }
+  while (next_mark < marks.size()) {
+    out.mark_cycle();
+    ++next_mark;
+  }
+  return out;
+}
+}  // namespace
+
+bool Placement::is_identity() const noexcept {
+  return origin_x_mm == 0 && origin_y_mm == 0 && cos_sin_deg(angle_deg).second == 0 &&
+         cos_sin_deg(angle_deg).first == 1;
+}
+
+Vec3 Placement::turn(const Vec3& v) const {
+  const auto [c, s] = cos_sin_deg(angle_deg);
+  return Vec3(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
+}
+
+Vec3 Placement::to_work(const Vec3& p) const {
+  const Vec3 q = turn(p);
+  return Vec3(q.x() + origin_x_mm, q.y() + origin_y_mm, q.z());
+}
+
+Vec3 Placement::to_slot(const Vec3& p) const {
+  const auto [c, s] = cos_sin_deg(angle_deg);
+  const double x = p.x() - origin_x_mm, y = p.y() - origin_y_mm;
+  return Vec3(c * x + s * y, -s * x + c * y, p.z());
+}
+
+Placement slot_placement(const Job& job) {
+  return Placement{job.slot.origin_x_mm, job.slot.origin_y_mm, job.slot.angle_deg};
+}
+
+ToolPath to_work_frame(const ToolPath& path, const Placement& pl) {
+  if (pl.is_identity()) return path;
+  return rigidly_moved(
+      path, [&](const Vec3& p) { return pl.to_work(p); },
+      [&](const Vec3& v) { return pl.turn(v); });
+}
+
+ToolPath to_slot_frame(const ToolPath& path, const Placement& pl) {
+  if (pl.is_identity()) return path;
+  const auto [c, s] = cos_sin_deg(pl.angle_deg);
+  return rigidly_moved(
+      path, [&](const Vec3& p) { return pl.to_slot(p); },
+      [c = c, s = s](const Vec3& v) {
+        return Vec3(c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z());
+      });
 }
 
 }  // namespace trochomill
