@@ -2,12 +2,15 @@
 # packages first (scripts/install-deps is idempotent), then build incrementally.
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
+FUZZ_RUNS ?= 0
 JOBS       ?= $(shell nproc)
 PREFIX     ?= /usr/local
 CMAKE_FLAGS ?=
 TROCHOMILL = $(BUILD)/bin/trochomill
 
-.PHONY: all deps test-deps build demo test test-asan bench install format clean
+.PHONY: all deps test-deps fuzz-deps build demo test test-asan fuzz bench install format clean
 
 all: build
 
@@ -16,6 +19,9 @@ deps:
 
 test-deps:
 	@scripts/install-deps --test
+
+fuzz-deps:
+	@scripts/install-deps --fuzz
 
 $(BUILD)/build.ninja: | deps
 	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release -DTROCHOMILL_WERROR=ON $(CMAKE_FLAGS)
@@ -39,6 +45,17 @@ test-asan: test-deps $(ASAN_BUILD)/build.ninja
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS)
 
+# libFuzzer targets, instrumented with ASan and UBSan (clang 14): FUZZ_SECONDS each, or
+# FUZZ_RUNS executions each; `make fuzz FUZZ_SECONDS=600` for a longer run.
+$(FUZZ_BUILD)/build.ninja: | fuzz-deps
+	CXX=clang++-14 cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DTROCHOMILL_WERROR=ON -DTROCHOMILL_FUZZ=ON -DTROCHOMILL_BUILD_TESTS=OFF \
+	  -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+
+fuzz: fuzz-deps $(FUZZ_BUILD)/build.ninja
+	cmake --build $(FUZZ_BUILD) -j $(JOBS)
+	scripts/fuzz $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_RUNS)
+
 bench: build
 	$(BUILD)/bin/trochomill_bench --benchmark_min_time=0.2
 
@@ -49,4 +66,4 @@ format:
 	clang-format -i $$(git ls-files '*.cpp' '*.hpp')
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -432,6 +433,47 @@ void tmill_signal_file(const std::filesystem::path& p) {
 // monitor, synth-signal, spectrum: a synthetic recording round trip with the required JSON
 // keys, the live stream (one JSON line per window, equal to the library's causal series),
 // and bad input (exit 2).
+// A recording without a period (a flat line, white noise) is still a result: the k_f series
+// and its mean, no cycles, a warning saying why, exit 0.
+TEST_F(Cli, MonitorWithoutAPeriodReportsTheSeries) {
+  const auto flat = (dir_ / "flat.f32").string(), noise = (dir_ / "noise.s16").string();
+  {
+    std::ofstream f(flat, std::ios::binary);
+    const std::vector<float> zeros(200000, 0.0f);  // 2 s at 100 kHz
+    f.write(reinterpret_cast<const char*>(zeros.data()),
+            static_cast<std::streamsize>(zeros.size() * sizeof(float)));
+    std::ofstream n(noise, std::ios::binary);
+    std::uint32_t state = 12345;  // a fixed LCG: white noise, the same every run
+    for (int i = 0; i < 200000; ++i) {
+      state = state * 1664525u + 1013904223u;
+      const auto v = static_cast<std::int16_t>(static_cast<std::int32_t>(state >> 16) - 32768);
+      n.write(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+  }
+  const CliResult a = run_cli("monitor " + flat + " --rate 100000 --json -");
+  ASSERT_EQ(a.code, 0) << a.out;
+  EXPECT_NE(a.out.find("warning: the signal"), std::string::npos) << a.out;
+  const auto ja = nlohmann::json::parse(a.out.substr(a.out.find('{')));
+  EXPECT_EQ(ja["cycles"].get<int>(), 0);
+  EXPECT_TRUE(ja["k_f_mean"].is_null());  // 0 / 0 in every window: no level to report
+  EXPECT_EQ(ja["warnings"].size(), 1u);
+
+  const auto csv = (dir_ / "noise.csv").string();
+  const CliResult b = run_cli("monitor " + noise + " --rate 100000 --json - --csv " + csv);
+  ASSERT_EQ(b.code, 0) << b.out;
+  EXPECT_NE(b.out.find("warning: no cycle period stands out"), std::string::npos) << b.out;
+  const auto jb = nlohmann::json::parse(b.out.substr(b.out.find('{')));
+  EXPECT_EQ(jb["cycles"].get<int>(), 0);
+  // White noise has a flat spectrum: the band RMS ratio is sqrt of the bandwidth ratio,
+  // sqrt(3000 / 5000) = 0.775 for the default bands (2-5 kHz over 8-13 kHz); within 10 %
+  // for the filters' skirts and the estimate's spread over 0.4 M samples.
+  EXPECT_NEAR(jb["k_f_mean"].get<double>(), std::sqrt(3000.0 / 5000.0), 0.08);
+  std::ifstream in(csv);
+  std::size_t rows = 0;
+  for (std::string line; std::getline(in, line);) ++rows;
+  EXPECT_GT(rows, 10u);  // the per-window series is written
+}
+
 TEST_F(Cli, MonitorSynthAndSpectrum) {
   const auto ex = test::example("pivkin2025/trochoidal.toml").string();
   const auto wav = (dir_ / "s.wav").string();

@@ -92,6 +92,7 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
       if (a->signal.file.empty()) throw InputError("monitor: give a SIGNAL file (or --stream)");
       const Signal sig = a->signal.read();
       const MonitorReport r = analyze_signal(sig, m, job ? &*job : nullptr, a->start_s);
+      for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
       if (!a->json.empty()) emit(a->json, monitor_json(r, a->signal.file, sig, m));
       if (!a->csv.empty()) emit(a->csv, monitor_csv(r));
       if (summary_to_stdout({&a->json, &a->csv})) {

@@ -148,6 +148,7 @@ struct CycleTiming {
   std::vector<double> start_s;  ///< start of every whole cycle in the signal
   std::vector<double> end_s;    ///< and its end
   double period_s = 0;          ///< mean cycle time
+  std::string note;             ///< why there are no cycles (a signal without a period)
 };
 /// The planned program's cycle boundaries (s from the program start, programmed feeds): n + 1
 /// values for n cycles, the last cycle lasting as long as the one before it. Throws
@@ -160,8 +161,9 @@ struct CycleTiming {
 /// envelope's autocorrelation (between min_period_s and max_period_s; refined by parabolic
 /// interpolation); each cycle starts at the envelope's steepest rise (the cut's onset, which
 /// the mechanism model may put a little before theta = 0) within a quarter period of the
-/// folded estimate; only cycles in which the envelope gets loud count. Throws Error when no
-/// period stands out (autocorrelation peak below 0.3).
+/// folded estimate; only cycles in which the envelope gets loud count. When no period stands
+/// out (a flat or too short signal, an autocorrelation peak below 0.3, as noise gives) there
+/// are no cycles and `note` says why.
 [[nodiscard]] CycleTiming cycles_from_signal(const KfSeries& kf, double min_period_s,
                                              double max_period_s);
 
@@ -193,6 +195,8 @@ struct MonitorReport {
   double reference_k_f = 0;  ///< mean k_f level of the first baseline_cycles cycles
   bool wear_trend = false;   ///< the last baseline_cycles cycles' level > wear_ratio * reference
   std::vector<std::string> flags;  ///< human-readable, one per finding
+  /// What limits the result (no period in the signal: no cycles, the mean over all windows).
+  std::vector<std::string> warnings;
 };
 
 /// The whole offline analysis. With `job` the cycles come from its planned path and

@@ -58,6 +58,7 @@ std::string monitor_json(const MonitorReport& r, const std::string& signal, cons
   j["reference_k_f"] = num(r.reference_k_f);
   j["wear_trend"] = r.wear_trend;
   j["flags"] = r.flags;
+  j["warnings"] = r.warnings;
   j["k_f_per_cycle"] = nlohmann::json::array();
   j["cycle_details"] = nlohmann::json::array();
   for (const auto& c : r.cycles) {

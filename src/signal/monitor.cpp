@@ -163,11 +163,14 @@ CycleTiming cycles_from_signal(const KfSeries& kf, double min_period_s, double m
       static_cast<std::size_t>(std::max(1.0, std::floor(min_period_s / kf.window_s)));
   const auto lag_hi =
       std::min(n / 2, static_cast<std::size_t>(std::ceil(max_period_s / kf.window_s)));
+  CycleTiming none;
+  none.source = "signal";
   if (!(var > 0) || lag_hi <= lag_lo + 2) {
-    throw Error(
-        fmt::format("the signal ({} windows) is too short or flat to find a cycle period "
-                    "between {:g} and {:g} s",
-                    n, min_period_s, max_period_s));
+    none.note = fmt::format(
+        "the signal ({} windows) is too short or flat to find a cycle period between {:g} and "
+        "{:g} s: no cycles (give --job and --start to take them from the program)",
+        n, min_period_s, max_period_s);
+    return none;
   }
   std::vector<double> ac(lag_hi + 2, 0.0);
   for (std::size_t lag = lag_lo - 1; lag <= lag_hi + 1 && lag < n; ++lag) {
@@ -182,10 +185,11 @@ CycleTiming cycles_from_signal(const KfSeries& kf, double min_period_s, double m
     if (ac[lag] >= ac[lag - 1] && ac[lag] >= ac[lag + 1]) best = std::max(best, ac[lag]);
   }
   if (best < 0.3) {
-    throw Error(
-        fmt::format("no cycle period stands out in the signal (autocorrelation peak "
-                    "{:.2f} < 0.3 between {:g} and {:g} s): give --job and --start",
-                    best, min_period_s, max_period_s));
+    none.note = fmt::format(
+        "no cycle period stands out in the signal (autocorrelation peak {:.2f} < 0.3 between "
+        "{:g} and {:g} s): no cycles (give --job and --start to take them from the program)",
+        best, min_period_s, max_period_s);
+    return none;
   }
   std::size_t pk = lag_lo;
   for (std::size_t lag = lag_lo; lag <= lag_hi; ++lag) {
@@ -283,6 +287,7 @@ MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m, const Jo
     r.model = model_profile(*job, m.phase_bins);
   } else {
     r.timing = cycles_from_signal(r.kf, 0.02, 20.0);
+    if (!r.timing.note.empty()) r.warnings.push_back(r.timing.note);
   }
   // Per cycle: windows whose centre falls in it, by phase bin.
   std::size_t w = 0;
