@@ -335,7 +335,25 @@ TEST(Forces, CalibrationRoundTripRecoversCoefficientsAndRunout) {
   EXPECT_NEAR(r.tool.runout_radial_mm, 0.013, 0.01 * 0.013);
   EXPECT_NEAR(r.shift_s, shift, 1e-4);  // a third of a model step (1/240 rev = 0.31 ms)
   EXPECT_GT(r.r2, 0.99);
-  EXPECT_LT(r.rmse_n, 3.0);  // the noise, partly filtered out
+  EXPECT_LT(r.rmse_n, 3.0);         // the noise, partly filtered out
+  EXPECT_TRUE(r.warnings.empty());  // 754 samples per tooth pass (20 kHz at 26.5 Hz)
+  // The same record at 500 Hz: 18.8 samples per tooth pass, fewer than the 25 that keep ten
+  // tooth-passing harmonics under 0.8 Nyquist: the fit says so.
+  MeasuredForces coarse;
+  for (std::size_t i = 0; i < meas.t_s.size(); i += 40) {
+    coarse.t_s.push_back(meas.t_s[i]);
+    coarse.fx_n.push_back(meas.fx_n[i]);
+    coarse.fy_n.push_back(meas.fy_n[i]);
+    coarse.fz_n.push_back(meas.fz_n[i]);
+  }
+  CalibrationOptions oc = o;
+  oc.fit = {"k_c"};
+  const CalibrationResult rc = calibrate_forces(start, path, coarse, oc);
+  ASSERT_EQ(rc.warnings.size(), 1u);
+  EXPECT_NE(rc.warnings[0].find("measured record has 18.8 samples per tooth pass, fewer than "
+                                "the 25"),
+            std::string::npos)
+      << rc.warnings[0];  // 500 Hz / (795.8 rpm / 60 x 2 teeth) = 18.85, printed to 0.1
   for (const auto& p : r.parameters) {
     EXPECT_LT(p.ci95_lo, p.value);
     EXPECT_GT(p.ci95_hi, p.value);

@@ -117,6 +117,7 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
       std::tie(o.from_s, o.to_s) = a->window.resolve(path);
     }
     const CalibrationResult r = calibrate_forces(job, path, meas, o);
+    for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
     const std::string block = material_toml(r);
     if (!a->write.empty()) write_file_atomic(a->write, block);
     if (!a->json.empty()) emit(a->json, calibration_json(r));

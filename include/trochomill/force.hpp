@@ -183,6 +183,8 @@ struct CalibrationResult {
   std::size_t samples = 0;  ///< residual samples per axis
   int iterations = 0;
   std::string report;  ///< the solver's one-line summary
+  /// What may bias the fit (a record too coarse for the force jumps of each tooth pass).
+  std::vector<std::string> warnings;
 };
 /// Fits the model to the measured forces with bounded nonlinear least squares (Ceres,
 /// trust region): both signals low-pass filtered alike, the measured one aligned to the

@@ -289,7 +289,23 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   const double tooth_hz = spindle_speed_rpm(job) / 60.0 * job.tool.teeth;
   double cutoff = o.cutoff_hz;
   const double nyq = 0.5 / std::max(dt_model, dt_meas);
-  if (cutoff <= 0) cutoff = std::min(10 * tooth_hz, 0.8 * nyq);
+  std::vector<std::string> warnings;
+  if (cutoff <= 0) {
+    cutoff = std::min(10 * tooth_hz, 0.8 * nyq);
+    if (cutoff < 10 * tooth_hz) {
+      // The force jumps at each tooth's entry and exit need the first ten tooth-passing
+      // harmonics; below 0.8 of the Nyquist frequency that takes 25 samples per tooth pass.
+      const double per_pass_meas = 1.0 / (dt_meas * tooth_hz);
+      const double per_pass_model = 1.0 / (dt_model * tooth_hz);
+      warnings.push_back(fmt::format(
+          "the {} has {:.1f} samples per tooth pass, fewer than the 25 that resolve the force "
+          "jumps at tooth entry and exit (10 harmonics of {:.1f} Hz): both signals are cut at "
+          "{:.0f} Hz and the fitted coefficients may be biased; record at {:.0f} Hz or more{}",
+          per_pass_meas <= per_pass_model ? "measured record" : "model",
+          std::min(per_pass_meas, per_pass_model), tooth_hz, cutoff, 25 * tooth_hz,
+          per_pass_meas <= per_pass_model ? "" : " (raise [forces] fast_steps_per_rev)"));
+    }
+  }
   if (!(cutoff < nyq)) {
     throw InputError(fmt::format(
         "calibrate: cutoff {:g} Hz must be below half the coarser sample rate ({:g} Hz)", cutoff,
@@ -411,6 +427,7 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   CalibrationResult out;
   out.material = m0;
   out.tool = t0;
+  out.warnings = std::move(warnings);
   for (std::size_t i = 0; i < p; ++i) set_param(out.material, out.tool, names[i], x[i] * scales[i]);
   // Statistics at the optimum: residuals and Jacobian (scaled parameters).
   std::vector<double> rv;

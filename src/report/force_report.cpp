@@ -55,7 +55,8 @@ std::string calibration_json(const CalibrationResult& r) {
                       {"shift_s", r.shift_s},
                       {"cutoff_hz", r.cutoff_hz},
                       {"samples", r.samples},
-                      {"iterations", r.iterations}};
+                      {"iterations", r.iterations},
+                      {"warnings", r.warnings}};
   nlohmann::json ci = nlohmann::json::object();
   for (const auto& p : r.parameters) {
     j[p.name] = p.value;
