@@ -5,8 +5,8 @@
 #include <unistd.h>
 
 #include <array>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -541,6 +541,38 @@ namespace {
 // revolution): the JSON keys with their values' invariants (the three boards remove
 // the same volume within the boundary bound: 2 x 50 mm of wall x 6 mm x d / 2), every output
 // file written and readable, and bad input refused with exit 2 naming the option.
+// The memory simulate estimates before it starts (and refuses past --memory-limit) is the
+// memory it then uses: within a factor of 2 of the process's measured peak (VmHWM) at every
+// resolution, with and without the HDF5 chip map; and the refusal names the numbers.
+TEST_F(Cli, SimulateMemoryEstimateMatchesThePeak) {
+  const auto ex = test::example("wagih2023/trochoidal.toml").string();
+  struct Case {
+    const char* resolution;
+    bool out;
+  };
+  for (const Case c :
+       {Case{"0.2", false}, Case{"0.1", false}, Case{"0.05", false}, Case{"0.2", true}}) {
+    const auto json = (dir_ / "s.json").string();
+    const std::string out = c.out ? " --out " + (dir_ / "out").string() : "";
+    const CliResult r = run_cli("simulate " + ex +
+                                " --from 10 --to 10.5 --set simulation.resolution=" + c.resolution +
+                                " --json " + json + out);
+    ASSERT_EQ(r.code, 0) << r.out;
+    std::ifstream in(json);
+    const auto j = nlohmann::json::parse(in);
+    const double est = j["memory_estimate_mb"].get<double>(),
+                 peak = j["memory_peak_mb"].get<double>();
+    EXPECT_GT(peak, 0.0);
+    EXPECT_LE(est, 2 * peak) << c.resolution << (c.out ? " with HDF5" : "");
+    EXPECT_GE(est, 0.5 * peak) << c.resolution << (c.out ? " with HDF5" : "");
+    std::filesystem::remove_all(dir_ / "out");
+  }
+  const CliResult refused = run_cli("simulate " + ex + " --from 10 --to 10.5 --memory-limit 0.01");
+  EXPECT_EQ(refused.code, 2) << refused.out;
+  EXPECT_NE(refused.out.find("exceeds the limit of 0.01 GB (--memory-limit)"), std::string::npos)
+      << refused.out;
+}
+
 TEST_F(Cli, SimulateWritesItsOutputs) {
   const std::string ex = test::example("wagih2023/trochoidal.toml");
   const std::string out = (dir_ / "sim").string();

@@ -45,18 +45,18 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       const auto [from, to] = a->window.resolve(path);
       // Refuse before starting when the estimate passes the limit.
       const MemoryEstimate est = estimate_simulation_memory(job, path, from, to);
-      const double need =
-          est.boards_bytes + est.records_bytes + (a->out.empty() ? 0.0 : est.dense_map_bytes);
+      const double need = est.total(!a->out.empty());
       if (a->stl_step_mm && !(*a->stl_step_mm > 0)) {  // bad input refused before the run
         throw InputError(fmt::format("--stl-step must be > 0 mm, got {}", *a->stl_step_mm));
       }
       const double limit = memory_limit_bytes(a->memory_gb);
       if (need > limit) {
         throw InputError(fmt::format(
-            "simulate: estimated memory {:.2f} GB (boards {:.2f}, records {:.2f}, HDF5 map "
-            "{:.2f}) exceeds the limit of {:.2f} GB ({}); coarsen [simulation] resolution (now "
-            "{} mm), shorten the window (--cycles, --from/--to) or raise --memory-limit",
-            need / 1e9, est.boards_bytes / 1e9, est.records_bytes / 1e9,
+            "simulate: estimated memory {:.2f} GB (boards {:.2f}, records {:.2f}, process "
+            "{:.2f}, HDF5 map {:.2f}) exceeds the limit of {:.2f} GB ({}); coarsen [simulation] "
+            "resolution (now {} mm), shorten the window (--cycles, --from/--to) or raise "
+            "--memory-limit",
+            need / 1e9, est.boards_bytes / 1e9, est.records_bytes / 1e9, est.base_bytes / 1e9,
             a->out.empty() ? 0.0 : est.dense_map_bytes / 1e9, limit / 1e9,
             a->memory_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
       }
@@ -65,6 +65,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       SimControl control;
       control.cancel = run.cancel();
       control.progress = run.progress();
+      control.reserve_chip_entries = static_cast<std::size_t>(est.chip_entries);
       const auto t_start = std::chrono::steady_clock::now();
       const JobSimulation js = simulate_job(job, path, from, to, control);
       run.done();
@@ -108,16 +109,18 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
             "`trochomill materials`)",
             a->job.file));
       }
+      std::size_t reserve = 0;
       if (!a->fast) {
         const MemoryEstimate est = estimate_simulation_memory(job, path, from, to);
         const double limit = memory_limit_bytes(a->memory_gb);
-        if (est.boards_bytes + est.records_bytes > limit) {
+        if (est.total(false) > limit) {
           throw InputError(fmt::format(
               "forces: the simulation would need {:.2f} GB ({} is {:.2f} GB); shorten the window "
               "(--cycles, --from/--to), coarsen [simulation] resolution or use --fast",
-              (est.boards_bytes + est.records_bytes) / 1e9,
-              a->memory_gb ? "--memory-limit" : "75 % of RAM", limit / 1e9));
+              est.total(false) / 1e9, a->memory_gb ? "--memory-limit" : "75 % of RAM",
+              limit / 1e9));
         }
+        reserve = static_cast<std::size_t>(est.chip_entries);
       }
       // In simulation mode Ctrl-C stops after the current step; the forces of what was
       // simulated are written, marked incomplete (exit 130), as simulate does.
@@ -125,6 +128,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       SimControl control;
       control.cancel = run.cancel();
       control.progress = run.progress();
+      control.reserve_chip_entries = reserve;
       const JobForces jf = job_forces(job, path, from, to, a->fast, control);
       run.done();
       if (!a->csv.empty()) emit(a->csv, force_series_csv(jf.series));

@@ -59,4 +59,7 @@ struct CsvOptions {
 [[nodiscard]] CsvTable parse_csv(std::string_view text, std::string_view source,
                                  const CsvOptions& options = {});
 
+/// The process's peak resident memory so far (bytes; Linux VmHWM), 0 where unknown.
+[[nodiscard]] std::size_t peak_memory_bytes();
+
 }  // namespace trochomill

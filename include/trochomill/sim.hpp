@@ -213,6 +213,8 @@ struct SimControl {
   /// The tool's envelope was swept (sweep_envelope) up to the call's start: the wedges may
   /// search only the annulus from the first step (docs/models.md section 11).
   bool envelope_before = false;
+  /// Chip map entries to reserve up front (MemoryEstimate::chip_entries); 0: grow as needed.
+  std::size_t reserve_chip_entries = 0;
 };
 
 /// Simulates the path from t0 to t1 (s) on the workpiece (modified in place).
@@ -292,7 +294,15 @@ struct JobSimulation {
 /// boards' tiles over the region the tool visits up to the window's end, the per-step
 /// records and the sparse chip map, and the dense chip map the HDF5 output needs.
 struct MemoryEstimate {
-  double boards_bytes = 0, records_bytes = 0, dense_map_bytes = 0;
+  double boards_bytes = 0;     ///< the dexel tiles of the region the tool visits
+  double records_bytes = 0;    ///< per-step records, sample arrays and the sparse chip map
+  double dense_map_bytes = 0;  ///< the HDF5 chip map (only with an output folder)
+  double base_bytes = 0;       ///< the process besides: libraries, job, path
+  double chip_entries = 0;     ///< expected engaged (segment, step) pairs
+  /// The whole, with or without the HDF5 map (bytes).
+  [[nodiscard]] double total(bool with_map) const {
+    return boards_bytes + records_bytes + base_bytes + (with_map ? dense_map_bytes : 0.0);
+  }
 };
 [[nodiscard]] MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path,
                                                         double from_s, double to_s);

@@ -246,4 +246,14 @@ CsvTable parse_csv(std::string_view text, std::string_view source, const CsvOpti
   return t;
 }
 
+std::size_t peak_memory_bytes() {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("VmHWM:", 0) == 0) {
+      return static_cast<std::size_t>(std::strtoull(line.c_str() + 6, nullptr, 10)) * 1024;
+    }
+  }
+  return 0;
+}
+
 }  // namespace trochomill

@@ -9,6 +9,7 @@
 #include <array>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <optional>
 
 #include "trochomill/error.hpp"
@@ -173,6 +174,12 @@ class Reader {
     std::size_t motion_col = 0, axis_col = 0;
     int new_motion = -1;
     for (const Word& w : words_) {
+      // Geometry beyond 1e6 mm (1 km; a job's lengths stop at 1e5 mm) is refused: an arc's
+      // radius or centre that far makes its length and sampling overflow.
+      if (std::strchr("XYZIJKRr", w.letter) != nullptr && std::abs(w.value) * st_.unit > 1e6) {
+        fail(w.column, fmt::format("{}{:g} is beyond +-1e6 mm, what trochomill represents",
+                                   w.letter, w.value));
+      }
       switch (w.letter) {
         case 'G': {
           const int g = code10(w.value);
@@ -353,6 +360,11 @@ class Reader {
     apply(0, x);
     apply(1, y);
     apply(2, z);
+    if (target.cwiseAbs().maxCoeff() > 1e6) {
+      fail(col, fmt::format("the move reaches X{:g} Y{:g} Z{:g} mm, beyond +-1e6 mm (incremental "
+                            "moves add up)",
+                            target.x(), target.y(), target.z()));
+    }
     ++prog_.info.motion_blocks;
     if (!st_.pos_known) {
       // The machine's position before the program is unknown: a Z-only approach to the

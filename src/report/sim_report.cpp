@@ -162,6 +162,7 @@ std::string simulation_json(const Job& job, const JobSimulation& js, double from
       {"steps_per_rev", job.simulation.steps_per_rev},
       {"memory_mb", static_cast<double>(js.memory_bytes) / 1048576.0},
       {"memory_estimate_mb", memory_estimate_bytes / 1048576.0},
+      {"memory_peak_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
       {"complete", r.complete}};
   return j.dump(2) + "\n";
 }

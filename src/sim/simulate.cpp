@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "sim/geometry.hpp"
+#include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/units.hpp"
@@ -347,6 +348,12 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   const int segs = stepper.segs();
 
   SimResult res;
+  if (control.reserve_chip_entries > 0) {
+    // One record per step, the chip map as estimated (estimate_simulation_memory): no
+    // doubling of either on the way, so the memory used is what was estimated.
+    res.steps.reserve(nsteps);
+    res.chip_map.reserve(control.reserve_chip_entries);
+  }
   res.segments_per_tooth = segs;
   std::array<BoardAcc, 3> bacc;
   std::vector<Wedge> wedges;  // this step's, per tooth (and centre)
@@ -626,14 +633,39 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
                           static_cast<double>(sizeof(Dexel));
   MemoryEstimate m;
   m.boards_bytes = (tiles(ex, ey) + tiles(ey, ez) + tiles(ez, ex)) * per_tile;
-  // The per-step records and the chip map: engaged segments taken as a quarter of all.
+  // The window's steps: one record each (its per-tooth removed volumes on the heap, a
+  // malloc chunk of at least 32 bytes), and the time and path sample arrays of the run.
   const double steps = (to_s - from_s) * spindle_speed_rpm(job) / 60.0 * s.steps_per_rev;
   const SimTool tool = sim_tool(job, s);
-  const double cols = static_cast<double>(tool.tooth_angle_rad.size() * tool.segments());
-  m.records_bytes = steps * (static_cast<double>(sizeof(SimStep)) +
-                             8.0 * static_cast<double>(tool.tooth_angle_rad.size()) +
-                             0.25 * cols * static_cast<double>(sizeof(ChipEntry)));
-  m.dense_map_bytes = steps * cols * 4.0;
+  const double teeth = static_cast<double>(tool.tooth_angle_rad.size());
+  const double heap_chunk = std::max(32.0, 16.0 * std::ceil((8.0 * teeth + 8.0) / 16.0));
+  m.records_bytes = steps * (static_cast<double>(sizeof(SimStep)) + heap_chunk +
+                             8.0 * (1 + 10));  // times, and PathSamples' ten arrays
+  // The chip map: one entry per engaged segment and step. Teeth in the cut from the exact 2D
+  // engagement of the path (per tooth pass, the slot's stock), times the segments along the
+  // edge within the depth of cut (the stock's top down to the deepest tip in the window).
+  double teeth_in_cut = 0, counted = 0, deepest = kInf;
+  {
+    const EngagementSeries es = compute_engagement(path, job);
+    for (std::size_t i = 0; i < es.samples.size(); ++i) {
+      const double t = es.samples.t_s[i];
+      if (t < from_s || t > to_s) continue;
+      teeth_in_cut += es.teeth_in_cut[i];
+      counted += 1;
+      deepest = std::min(deepest, es.samples.z_mm[i]);
+    }
+  }
+  const double mean_in_cut = counted > 0 ? teeth_in_cut / counted : 0.0;
+  const double depth = std::isfinite(deepest) ? std::max(0.0, box.hi[2] - deepest) : 0.0;
+  const double segs_in_cut = std::min(static_cast<double>(tool.segments()),
+                                      std::ceil(depth / std::max(tool.segment_mm, 1e-9)) + 1.0);
+  m.chip_entries = steps * mean_in_cut * segs_in_cut;
+  m.records_bytes += m.chip_entries * static_cast<double>(sizeof(ChipEntry));
+  // The HDF5 chip map is dense: h, w and v as float per step and edge segment of every tooth.
+  const double cols = teeth * static_cast<double>(tool.segments());
+  m.dense_map_bytes = steps * (cols * 12.0 + 8.0 * (4 + teeth));
+  // What the process holds besides (its libraries, the job, the path; measured 20 MB).
+  m.base_bytes = 20e6 + static_cast<double>(path.segments().size()) * 400.0;
   return m;
 }
 
