@@ -1,7 +1,7 @@
 # The layer check (cmake -P): every #include of a module's sources (src/<module>/) and public
 # header (include/trochomill/<module>.hpp) names only the module itself or a module it declares,
 # directly or through others (trochomill_module(... DEPENDS ...) in CMakeLists.txt). Headers of
-# include/trochomill/ belong to their module; units, error, io and version to common; the
+# include/trochomill/ belong to their module; units, error, io, progress and version to common; the
 # settings headers to job, which aggregates them. A wrong-way include fails the build here.
 cmake_minimum_required(VERSION 3.20)
 include(${DATA})
@@ -24,7 +24,7 @@ function(module_of include out)
   set(m "")
   if(include MATCHES "^trochomill/settings/")
     set(m job)
-  elseif(include MATCHES "^trochomill/(units|error|io|version)\\.hpp$")
+  elseif(include MATCHES "^trochomill/(units|error|io|progress|version)\\.hpp$")
     set(m common)
   elseif(include MATCHES "^trochomill/([a-z_]+)\\.hpp$")
     set(m ${CMAKE_MATCH_1})
@@ -56,7 +56,7 @@ foreach(m IN LISTS MODULES)
     list(APPEND files ${ROOT}/include/trochomill/${m}.hpp)
   endif()
   if(m STREQUAL "common")
-    foreach(h units error io)
+    foreach(h units error io progress)
       if(EXISTS ${ROOT}/include/trochomill/${h}.hpp)
         list(APPEND files ${ROOT}/include/trochomill/${h}.hpp)
       endif()

@@ -1,6 +1,9 @@
 // The CLI end to end: exit codes (0 ok, 2 bad input, 1 runtime failure), atomic outputs
 // (nothing written on failure), --set, --version, and check-gcode's JSON report.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,6 +22,8 @@
 #include "trochomill/job.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
+
+extern char** environ;
 
 namespace trochomill {
 namespace {
@@ -544,7 +549,92 @@ namespace {
 // The memory simulate estimates before it starts (and refuses past --memory-limit) is the
 // memory it then uses: within a factor of 2 of the process's measured peak (VmHWM) at every
 // resolution, with and without the HDF5 chip map; and the refusal names the numbers.
+// Peak resident memory of one run of the CLI (MB): wait4 gives that child's own maxrss.
+double peak_mb_of(const std::string& args) {
+  std::vector<std::string> words = {TROCHOMILL_CLI};
+  std::istringstream in(args);
+  for (std::string w; in >> w;) words.push_back(w);
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) return 0;
+  int status = 0;
+  struct rusage ru {};
+  wait4(pid, &status, 0, &ru);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << args;
+  return static_cast<double>(ru.ru_maxrss) / 1024.0;  // KB on Linux
+}
+
+double estimate_gb_of(const std::string& args) {
+  // --memory-limit 1e-6 GB refuses every run and prints the estimate.
+  const CliResult r = run_cli(args + " --memory-limit 0.000001");
+  EXPECT_EQ(r.code, 2) << r.out;
+  const auto at = r.out.find("estimated memory ");
+  EXPECT_NE(at, std::string::npos) << r.out;
+  return at == std::string::npos ? 0.0 : std::strtod(r.out.c_str() + at + 17, nullptr);
+}
+
+// Every command that can be asked for too much estimates its memory before it allocates,
+// refuses past --memory-limit with the numbers and what to change, and the estimate is
+// within a factor of 2 of the peak it then uses. The estimate is printed to 0.01 GB, so the
+// runs are sized to a hundred MB or more.
+TEST_F(Cli, MemoryEstimatesMatchThePeak) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer's shadow memory and redzones are not in the estimate";
+#endif
+  const auto w = test::example("wagih2023/trochoidal.toml").string();
+  const auto p = test::example("pivkin2025/trochoidal.toml").string();
+  const auto out = (dir_ / "o").string();
+  const std::vector<std::string> runs = {
+      "plan " + w + " -o " + out + ".ngc --set slot.length=1000 --set path.step=0.01",
+      "analyze " + w + " --set analysis.steps_per_tooth=16 --set slot.length=60 --json " + out +
+          ".json",
+      "synth-signal " + p + " -o " + out + ".wav --cycles 60 --rate 200000",
+  };
+  for (const std::string& args : runs) {
+    const double est_mb = 1000.0 * estimate_gb_of(args);
+    const double peak_mb = peak_mb_of(args);
+    EXPECT_GT(peak_mb, 100.0) << args;  // large enough for the 10 MB print resolution
+    EXPECT_LE(est_mb, 2 * peak_mb) << args;
+    EXPECT_GE(est_mb, 0.5 * peak_mb) << args;
+  }
+}
+
+// "-" is standard output for every output option, binary ones included; the summary then
+// goes to stderr. An extension the writer cannot honour is refused before any work.
+TEST_F(Cli, DashIsStdoutForBinaryOutputs) {
+  const auto p = test::example("pivkin2025/trochoidal.toml").string();
+  const auto wav = (dir_ / "s.wav").string(), stl = (dir_ / "i.stl").string();
+  ASSERT_EQ(run_cli("synth-signal " + p + " --cycles 1 --rate 30000 -o " + wav).code, 0);
+  ASSERT_EQ(run_cli("insert " + p + " --sections 4 --points 8 -o " + stl).code, 0);
+  const std::string cli = TROCHOMILL_CLI;
+  const auto wav2 = (dir_ / "s2.wav").string(), stl2 = (dir_ / "i2.stl").string();
+  ASSERT_EQ(std::system((cli + " synth-signal " + p + " --cycles 1 --rate 30000 -o - > " + wav2 +
+                         " 2>/dev/null")
+                            .c_str()),
+            0);
+  ASSERT_EQ(std::system(
+                (cli + " insert " + p + " --sections 4 --points 8 -o - > " + stl2 + " 2>/dev/null")
+                    .c_str()),
+            0);
+  EXPECT_EQ(read_file(wav2), read_file(wav));  // the same bytes as the file
+  EXPECT_EQ(read_file(stl2), read_file(stl));
+  const CliResult bad = run_cli("insert " + p + " -o " + (dir_ / "i.flac").string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.out.find("insert writes .stl, .ply or .obj"), std::string::npos) << bad.out;
+}
+
 TEST_F(Cli, SimulateMemoryEstimateMatchesThePeak) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer's shadow memory and redzones are not in the estimate";
+#endif
   const auto ex = test::example("wagih2023/trochoidal.toml").string();
   struct Case {
     const char* resolution;

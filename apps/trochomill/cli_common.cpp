@@ -92,8 +92,7 @@ std::vector<std::string> header_mismatches(const Job& job, const GcodeProgram& p
   // The sections the models read beside the program's moves (the tool, the slot and its
   // placement, the orbit, the spindle); the others (how the program was formatted, material,
   // measurements, analysis settings) may well differ on purpose.
-  static const std::vector<std::string> kProgramSections = {"tool.", "slot.", "path.",
-                                                            "cutting."};
+  static const std::vector<std::string> kProgramSections = {"tool.", "slot.", "path.", "cutting."};
   auto defines_program = [](const std::string& key) {
     return std::any_of(kProgramSections.begin(), kProgramSections.end(),
                        [&](const std::string& s) { return key.rfind(s, 0) == 0; });
@@ -293,6 +292,18 @@ double memory_limit_bytes(std::optional<double> limit_gb) {
   return limit_gb ? *limit_gb * 1e9
                   : 0.75 * static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
                         static_cast<double>(sysconf(_SC_PAGE_SIZE));
+}
+
+void check_memory(const char* command, double need_bytes, std::optional<double> limit_gb,
+                  const std::string& advice) {
+  const double limit = memory_limit_bytes(limit_gb);
+  if (!(need_bytes <= limit)) {
+    throw InputError(fmt::format(
+        "{}: estimated memory {:.2f} GB exceeds the limit of {:.2f} GB ({}): {}; or raise "
+        "--memory-limit",
+        command, need_bytes / 1e9, limit / 1e9, limit_gb ? "--memory-limit" : "75 % of RAM",
+        advice));
+  }
 }
 
 void add_memory_limit(CLI::App* cmd, std::optional<double>& limit_gb) {

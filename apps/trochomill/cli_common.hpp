@@ -53,6 +53,10 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
 /// one sentence per key. Empty for a program without such a header.
 [[nodiscard]] std::vector<std::string> header_mismatches(const Job& job, const GcodeProgram& prog,
                                                          const std::string& name);
+/// Refuses a run whose memory estimate (bytes) passes --memory-limit (or 75 % of RAM): the
+/// message gives both numbers and `advice` (what makes the run smaller). InputError (exit 2).
+void check_memory(const char* command, double need_bytes, std::optional<double> limit_gb,
+                  const std::string& advice);
 /// The job's planned path, or the NC program's when one is given (turned into the slot frame
 /// by the job's placement; a warning on stderr for each header key that disagrees).
 [[nodiscard]] ToolPath job_path(const Job& job, const std::string& gcode_file);

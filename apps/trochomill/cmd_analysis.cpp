@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -19,18 +20,31 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
     struct Args {
       JobArgs job;
       std::string gcode, json, csv;
+      std::optional<double> memory_gb;
     };
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand(
         "analyze", "engagement, chip thickness, times, MRR, waviness of a slot program");
     add_job_args(cmd, a->job);
+    add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("--gcode", a->gcode, "analyse this NC program instead of the planned path");
     cmd->add_option("--json", a->json, "write the metrics as JSON (- for stdout)");
     cmd->add_option("--csv", a->csv, "write the time series as CSV (- for stdout)");
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->json, &a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
-      const ProcessMetrics m = analyze_with_forces(job, job_path(job, a->gcode));
+      const ToolPath path = job_path(job, a->gcode);
+      check_memory("analyze", estimate_analysis_memory(job, path), a->memory_gb,
+                   fmt::format("{:.0f} s of program at {:g} rpm, {} samples per tooth pass: "
+                               "lower [analysis] steps_per_tooth or analyse a shorter program",
+                               path.duration_s(), job.cutting.spindle_speed_rpm,
+                               job.analysis.steps_per_tooth));
+      const GuardedRun run(true);
+      RunHooks hooks;
+      hooks.progress = run.progress();
+      hooks.cancel = run.cancel();
+      const ProcessMetrics m = analyze_with_forces(job, path, hooks);
+      run.done();
       if (!a->json.empty()) emit(a->json, metrics_json(job, m));
       if (!a->csv.empty()) emit(a->csv, series_csv(job, m.series));
       if (summary_to_stdout({&a->json, &a->csv})) {

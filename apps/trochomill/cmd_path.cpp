@@ -19,10 +19,12 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     struct Args {
       JobArgs job;
       std::string out;
+      std::optional<double> memory_gb;
     };
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand("plan", "write the slot program of a job as G-code");
     add_job_args(cmd, a->job);
+    add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("-o,--output", a->out, "output G-code file (- for stdout)")->required();
     add_key_alias(cmd, a->job, "--dialect", "machine.dialect",
                   "linuxcnc | fanuc | sinumerik | grbl");
@@ -33,6 +35,10 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->out}, {&a->job.file});
       const Job job = a->job.load();
+      check_memory("plan", estimate_plan_memory(job), a->memory_gb,
+                   fmt::format("a {:g} mm slot at a {:g} mm step: raise [path] step or plan a "
+                               "shorter slot",
+                               job.slot.length_mm, job.path.step_mm));
       const PlannedPath planned = plan_path(job);
       const std::string code = write_gcode(job, planned.path, gcode_options(job.machine).write);
       emit(a->out, code);

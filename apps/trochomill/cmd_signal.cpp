@@ -1,11 +1,13 @@
 // monitor, synth-signal and spectrum: Pivkin 2025's vibroacoustic k_f monitor (offline or
 // live), a synthetic recording that follows the model's zones, and the spectrum of a signal.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -106,13 +108,15 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
       JobArgs job;
       std::string out;
       SynthOptions synth;
+      std::optional<double> memory_gb;
     };
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand(
         "synth-signal", "synthetic vibroacoustic signal following the model's zones (WAV)");
     add_job_args(cmd, a->job);
     SynthOptions& syn = a->synth;
-    cmd->add_option("-o,--output", a->out, "output WAV file")->required();
+    cmd->add_option("-o,--output", a->out, "output WAV file (- for stdout)")->required();
+    add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("--rate", syn.rate_hz, "sample rate, Hz")
         ->capture_default_str()
         ->check(finite_above(0, 1e7));
@@ -144,17 +148,33 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
       const std::filesystem::path out(a->out);
       std::string ext = out.extension().string();
       for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      if (ext != ".wav") {
+      if (ext != ".wav" && a->out != "-") {
         throw InputError(fmt::format("-o {}: synth-signal writes WAV: give a .wav file", a->out));
       }
       const Job job = a->job.load();
+      check_memory("synth-signal", synth_signal_memory_bytes(job, a->synth), a->memory_gb,
+                   fmt::format("lower --rate (now {:g} Hz) or --cycles (now {})", a->synth.rate_hz,
+                               a->synth.cycles));
       const Signal sig = synth_signal(job, job.monitor, a->synth);
       // The program may have fewer cycles than asked for: say how many the signal covers.
       const int cycles =
           std::min(a->synth.cycles, static_cast<int>(plan_path(job).path.cycles().size()));
-      write_file_atomic(a->out,
-                        [&](const std::filesystem::path& tmp) { write_wav(tmp.string(), sig); });
-      fmt::print("{}: {:.3f} s at {:g} Hz, {} cycles{} from the program start at {:g} s -> {}\n",
+      if (a->out == "-") {
+        // libsndfile writes WAV to a seekable file: a temporary one, then copied to stdout.
+        const std::filesystem::path tmp =
+            std::filesystem::temp_directory_path() /
+            fmt::format("trochomill-synth-{}.wav", static_cast<long>(::getpid()));
+        write_wav(tmp.string(), sig);
+        const std::string bytes = read_file(tmp);
+        std::filesystem::remove(tmp);
+        emit("-", bytes);
+      } else {
+        write_file_atomic(a->out,
+                          [&](const std::filesystem::path& tmp) { write_wav(tmp.string(), sig); });
+      }
+      // With the WAV on stdout the summary goes to stderr.
+      fmt::print(a->out == "-" ? stderr : stdout,
+                 "{}: {:.3f} s at {:g} Hz, {} cycles{} from the program start at {:g} s -> {}\n",
                  a->job.file, sig.duration_s(), sig.rate_hz, cycles,
                  cycles < a->synth.cycles
                      ? fmt::format(" (all the program has; {} asked for)", a->synth.cycles)

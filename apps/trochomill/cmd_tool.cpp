@@ -1,13 +1,17 @@
 // insert, topography and materials: synthetic insert meshes, the sampled edge grid of a
 // digitised (or synthetic) wear state, and the materials library.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <memory>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/topography.hpp"
 
@@ -28,7 +32,9 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
         "write a synthetic insert mesh (new, or worn with a flank wear land) for the "
         "job's tool, in the tooth frame");
     add_job_args(cmd, a->job);
-    cmd->add_option("-o,--output", a->out, "mesh file: .stl, .ply or .obj")->required();
+    cmd->add_option("-o,--output", a->out,
+                    "mesh file: .stl, .ply or .obj (- for binary STL on stdout)")
+        ->required();
     cmd->add_option("--vb", a->spec.vb_mm, "flank wear land width VB, mm")
         ->capture_default_str()
         ->check(finite_in(0, 2));
@@ -49,6 +55,12 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
         ->check(CLI::Range(8, 20000));
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->out}, {&a->job.file});
+      std::string ext = std::filesystem::path(a->out).extension().string();
+      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      if (a->out != "-" && ext != ".stl" && ext != ".ply" && ext != ".obj") {
+        throw InputError(fmt::format(
+            "-o {}: insert writes .stl, .ply or .obj (or - for STL on stdout)", a->out));
+      }
       const Job job = a->job.load();
       const SimTool tool = sim_tool(job, job.simulation);
       SyntheticInsert spec = a->spec;
@@ -57,8 +69,20 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
       spec.face_mm =
           std::max(spec.face_mm, 2 * job.topography.band_mm + spec.vb_mm + spec.edge_radius_mm);
       const Mesh mesh = synthetic_insert(tool, spec);
-      write_mesh(a->out, mesh);
+      if (a->out == "-") {
+        // The mesh writer needs a file: a temporary STL, then copied to stdout.
+        const std::filesystem::path tmp =
+            std::filesystem::temp_directory_path() /
+            fmt::format("trochomill-insert-{}.stl", static_cast<long>(::getpid()));
+        write_mesh(tmp, mesh);
+        const std::string bytes = read_file(tmp);
+        std::filesystem::remove(tmp);
+        emit("-", bytes);
+      } else {
+        write_mesh(a->out, mesh);
+      }
       fmt::print(
+          a->out == "-" ? stderr : stdout,
           "{}: {} vertices, {} triangles (VB {:g} mm, hone {:g} mm, rake {:g}, clearance {:g} "
           "degrees)\n",
           a->out, mesh.vertices.size(), mesh.triangles.size(), spec.vb_mm, spec.edge_radius_mm,

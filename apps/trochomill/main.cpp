@@ -33,6 +33,9 @@ int main(int argc, char** argv) {
       return 2;
     }
     return exit_code;
+  } catch (const trochomill::Interrupted&) {
+    fmt::print(stderr, "\ninterrupted: nothing was written\n");
+    return 130;
   } catch (const trochomill::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return 2;

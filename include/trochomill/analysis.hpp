@@ -72,7 +72,12 @@ struct ProcessMetrics {
 
 /// Analyses `path` for `job` (the job gives tool, slot, cutting conditions, step, [analysis]
 /// and [measured]). Throws InputError when the path never cuts the slot.
-[[nodiscard]] ProcessMetrics analyze_process(const Job& job, const ToolPath& path);
+[[nodiscard]] ProcessMetrics analyze_process(const Job& job, const ToolPath& path,
+                                             const RunHooks& hooks = {});
+/// The memory analyze_process will hold (bytes), before running it: its samples (one per
+/// tooth pass / steps_per_tooth over the whole path, about 400 bytes each as measured) and
+/// the process (20 MB).
+[[nodiscard]] double estimate_analysis_memory(const Job& job, const ToolPath& path);
 
 /// Sets the performance index of `m`: F_R,max from [measured] force_max, else the predicted
 /// one (force.hpp: fill_predicted_force), with [measured] roughness_ra and the waviness.

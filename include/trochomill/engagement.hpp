@@ -23,6 +23,7 @@
 
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/progress.hpp"
 
 namespace trochomill {
 
@@ -39,6 +40,7 @@ struct EngagementOptions {
   /// Stock unbounded along +Y (the slot end ignored): a steady-state cycle as in an endless
   /// slot, for slots too short to hold one.
   bool open_ahead = false;
+  RunHooks hooks;  ///< progress over the samples; cancel throws Interrupted
 };
 
 /// Engagement along a path, structure of arrays (one entry per sample).

@@ -31,4 +31,10 @@ class IoError : public Error {
   using Error::Error;
 };
 
+/// The user stopped a computation (Ctrl-C, through RunHooks::cancel); nothing was written.
+class Interrupted : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace trochomill

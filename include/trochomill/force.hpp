@@ -138,7 +138,8 @@ struct JobForces {
 /// Nothing without a model. For analyze and compare.
 void fill_predicted_force(const Job& job, const ToolPath& path, ProcessMetrics& m);
 /// analyze_process with the predicted force filled in (what `analyze` and `compare` report).
-[[nodiscard]] ProcessMetrics analyze_with_forces(const Job& job, const ToolPath& path);
+[[nodiscard]] ProcessMetrics analyze_with_forces(const Job& job, const ToolPath& path,
+                                                 const RunHooks& hooks = {});
 
 // ---------------------------------------------------------------- calibration
 

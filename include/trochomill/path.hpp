@@ -229,6 +229,11 @@ struct PlannedPath {
   PlanInfo info;
 };
 
+/// The memory plan_path and the G-code of its program will take (bytes), before planning:
+/// the cycles the slot needs (its length and orbit over the step), about 3 kB each (the path
+/// and the program text), and the process (30 MB); within a factor of 2 of the measured peak.
+[[nodiscard]] double estimate_plan_memory(const Job& job);
+
 /// Plans the whole slot program of the job: entry to depth, the family's cycles until the
 /// slot end is cleared, and the exit. Throws InputError when the geometry is infeasible.
 [[nodiscard]] PlannedPath plan_path(const Job& job);

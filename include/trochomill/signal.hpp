@@ -221,6 +221,8 @@ struct SynthOptions {
   std::uint32_t seed = 1;
 };
 [[nodiscard]] Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o);
+/// The memory synth_signal will use (bytes), before running it.
+[[nodiscard]] double synth_signal_memory_bytes(const Job& job, const SynthOptions& options);
 
 /// Live monitoring: a KfStream and, with a job, each window's cycle, phase and zone from the
 /// planned timing (cycle k starts at start_s + its programmed start) with running flags:

@@ -173,11 +173,18 @@ ToothChip tooth_chip(const DenseCentre& c, const Tool& tool, double omega, doubl
 
 }  // namespace
 
-ProcessMetrics analyze_process(const Job& job, const ToolPath& path) {
+double estimate_analysis_memory(const Job& job, const ToolPath& path) {
+  const double per_tooth_s = tooth_period_s(job.tool, job.cutting);
+  const double samples = path.duration_s() / per_tooth_s * job.analysis.steps_per_tooth;
+  return 20e6 + samples * 400.0;
+}
+
+ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHooks& hooks) {
   if (path.empty()) throw InputError("analyze: the path is empty");
   ProcessMetrics m;
   EngagementOptions opt;
   opt.steps_per_tooth = job.analysis.steps_per_tooth;
+  opt.hooks = hooks;
   m.series = compute_engagement(path, job, opt);
   const EngagementSeries& e = m.series;
   const PathSamples& s = e.samples;

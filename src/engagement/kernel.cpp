@@ -634,6 +634,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   auto cutting = [&](std::size_t i) { return smp.z_mm[i] < 0; };
 
   for (std::size_t i = 0; i < n; ++i) {
+    opt.hooks.step(i, n);
     // The surface the previous tooth left: discs up to i - m.
     if (i >= static_cast<std::size_t>(m)) {
       const std::size_t k = i - m;

@@ -69,8 +69,8 @@ void fill_predicted_force(const Job& job, const ToolPath& path, ProcessMetrics& 
   set_performance_index(job, m, f.summary.f_resultant_max_n);
 }
 
-ProcessMetrics analyze_with_forces(const Job& job, const ToolPath& path) {
-  ProcessMetrics m = analyze_process(job, path);
+ProcessMetrics analyze_with_forces(const Job& job, const ToolPath& path, const RunHooks& hooks) {
+  ProcessMetrics m = analyze_process(job, path, hooks);
   fill_predicted_force(job, path, m);
   return m;
 }
