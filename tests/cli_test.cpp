@@ -591,13 +591,17 @@ TEST_F(Cli, MemoryEstimatesMatchThePeak) {
 #endif
   const auto w = test::example("wagih2023/trochoidal.toml").string();
   const auto p = test::example("pivkin2025/trochoidal.toml").string();
+  const auto b = test::example("bergmann2021/trochoidal.toml").string();
   const auto out = (dir_ / "o").string();
   const std::vector<std::string> runs = {
       "plan " + w + " -o " + out + ".ngc --set slot.length=1000 --set path.step=0.01",
       "analyze " + w + " --set analysis.steps_per_tooth=16 --set slot.length=60 --json " + out +
           ".json",
       "synth-signal " + p + " -o " + out + ".wav --cycles 60 --rate 200000",
+      "calibrate " + b + " --measured " + out + "-f.csv --fast --json " + out + "-c.json",
   };
+  // The record calibrate fits: 4 s of the fast model's forces.
+  ASSERT_EQ(run_cli("forces " + b + " --fast --from 20 --to 24 --csv " + out + "-f.csv").code, 0);
   for (const std::string& args : runs) {
     const double est_mb = 1000.0 * estimate_gb_of(args);
     const double peak_mb = peak_mb_of(args);

@@ -21,13 +21,14 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
     WindowArgs window;
     std::string measured, mean, model, fit, columns, json, write, gcode, time_unit = "s",
                                                                          force_unit = "N";
-    std::optional<double> cutoff_hz, max_shift_s;
+    std::optional<double> cutoff_hz, max_shift_s, memory_gb;
     bool fast = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "calibrate", "fit force coefficients (and runout) to measured forces; write [material]");
   add_job_args(cmd, a->job);
+  add_memory_limit(cmd, a->memory_gb);
   cmd->add_option("--measured", a->measured, "measured forces, CSV (t, F_x, F_y, F_z)");
   cmd->add_option("--mean-forces", a->mean,
                   "mean forces of full-immersion slot tests, CSV (feed_per_tooth_mm, f_x_n, "
@@ -116,6 +117,11 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
     } else {
       std::tie(o.from_s, o.to_s) = a->window.resolve(path);
     }
+    check_memory("calibrate", estimate_calibration_memory(job, path, o, meas.t_s.size()),
+                 a->memory_gb,
+                 fmt::format("the model window is {:.1f} s{}: a few cycles (--cycles A:B or "
+                             "--from/--to) hold the coefficients as well",
+                             o.to_s - o.from_s, o.fast ? "" : " of simulation (or use --fast)"));
     const CalibrationResult r = calibrate_forces(job, path, meas, o);
     for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
     const std::string block = material_toml(r);

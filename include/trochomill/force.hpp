@@ -194,6 +194,13 @@ struct CalibrationResult {
 [[nodiscard]] CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
                                                  const MeasuredForces& measured,
                                                  const CalibrationOptions& options);
+/// The memory calibrate_forces will hold (bytes), before running it: the chips of the window
+/// (simulated, or the fast source at its 500 steps per tooth pass), the model's force series,
+/// the solver's residuals and Jacobian (3 per model step), the measured record and its
+/// filtered copies, and the process (20 MB).
+[[nodiscard]] double estimate_calibration_memory(const Job& job, const ToolPath& path,
+                                                 const CalibrationOptions& options,
+                                                 std::size_t measured_samples);
 /// The `[material]` block of a result, TOML.
 [[nodiscard]] std::string material_toml(const CalibrationResult& r);
 

@@ -489,6 +489,29 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   return out;
 }
 
+double estimate_calibration_memory(const Job& job, const ToolPath& path,
+                                   const CalibrationOptions& o, std::size_t measured_samples) {
+  Job j = job;
+  if (o.fast) {
+    // The fast source's steps (as ForceProblem sets them) in place of the simulation's.
+    j.simulation.steps_per_rev =
+        std::max(job.forces.fast_steps_per_rev, 500 * std::max(1, job.tool.teeth));
+  }
+  const MemoryEstimate sim = estimate_simulation_memory(j, path, o.from_s, o.to_s);
+  const double steps =
+      (o.to_s - o.from_s) * spindle_speed_rpm(job) / 60.0 * j.simulation.steps_per_rev;
+  const double params = o.fit.empty() ? 6.0 : static_cast<double>(o.fit.size());
+  // Per model step: t and three forces, twice (raw and filtered), three residuals with their
+  // Jacobian rows (held twice by the solver).
+  const double model = steps * (8.0 * 8 + 3 * (8.0 + 2 * 8.0 * params));
+  // The record: t and three forces, their filtered copies and the resultant.
+  const double record = static_cast<double>(measured_samples) * 8.0 * 9;
+  const double chips = o.fast ? sim.records_bytes : sim.total(false) - sim.base_bytes;
+  // Measured (VmHWM, bergmann2021 --fast, 4 and 16 s windows: 116 and 238 MB): the process
+  // with Ceres holds 75 MB, and the terms above come to 1.2 times their sum.
+  return 75e6 + 1.2 * (chips + model + record);
+}
+
 std::string material_toml(const CalibrationResult& r) {
   const Material& m = r.material;
   std::string s = "[material]\n";
