@@ -242,6 +242,8 @@ void write_wav(const std::string& path, const Signal& s) {
   }
   SNDFILE* f = sf_open(path.c_str(), SFM_WRITE, &info);
   if (f == nullptr) throw Error(fmt::format("{}: cannot write: {}", path, sf_strerror(nullptr)));
+  // No PEAK chunk: it carries the writing time, and the same signal must give the same bytes.
+  sf_command(f, SFC_SET_ADD_PEAK_CHUNK, nullptr, SF_FALSE);
   const sf_count_t n = static_cast<sf_count_t>(s.samples.size());
   const sf_count_t put = sf_writef_double(f, s.samples.data(), n);
   const int rc = sf_close(f);
