@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -174,6 +175,27 @@ void emit(const std::string& target, const std::string& text) {
   } else {
     write_file_atomic(target, text);
   }
+}
+
+void emit_file(const std::string& target, const std::string& extension,
+               const std::function<void(const std::filesystem::path&)>& writer) {
+  if (target != "-") {
+    write_file_atomic(target, writer);
+    return;
+  }
+  const std::filesystem::path tmp =
+      std::filesystem::temp_directory_path() /
+      fmt::format("trochomill-{}{}", static_cast<long>(::getpid()), extension);
+  writer(tmp);
+  const std::string bytes = read_file(tmp);
+  std::filesystem::remove(tmp);
+  emit("-", bytes);
+}
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
 }
 
 bool summary_to_stdout(std::initializer_list<const std::string*> outputs) {

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -53,6 +54,12 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
 /// one sentence per key. Empty for a program without such a header.
 [[nodiscard]] std::vector<std::string> header_mismatches(const Job& job, const GcodeProgram& prog,
                                                          const std::string& name);
+/// A binary output whose writer needs a seekable file (libsndfile, assimp): written atomically
+/// to `target`, or for "-" to a temporary file `extension` that is then copied to stdout.
+void emit_file(const std::string& target, const std::string& extension,
+               const std::function<void(const std::filesystem::path&)>& writer);
+/// The lower-case extension of an output path (".wav").
+[[nodiscard]] std::string lower_extension(const std::string& path);
 /// Refuses a run whose memory estimate (bytes) passes --memory-limit (or 75 % of RAM): the
 /// message gives both numbers and `advice` (what makes the run smaller). InputError (exit 2).
 void check_memory(const char* command, double need_bytes, std::optional<double> limit_gb,

@@ -145,9 +145,7 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--seed", syn.seed, "random seed")->capture_default_str();
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->out}, {&a->job.file});
-      const std::filesystem::path out(a->out);
-      std::string ext = out.extension().string();
-      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      const std::string ext = lower_extension(a->out);
       if (ext != ".wav" && a->out != "-") {
         throw InputError(fmt::format("-o {}: synth-signal writes WAV: give a .wav file", a->out));
       }
@@ -159,19 +157,9 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
       // The program may have fewer cycles than asked for: say how many the signal covers.
       const int cycles =
           std::min(a->synth.cycles, static_cast<int>(plan_path(job).path.cycles().size()));
-      if (a->out == "-") {
-        // libsndfile writes WAV to a seekable file: a temporary one, then copied to stdout.
-        const std::filesystem::path tmp =
-            std::filesystem::temp_directory_path() /
-            fmt::format("trochomill-synth-{}.wav", static_cast<long>(::getpid()));
-        write_wav(tmp.string(), sig);
-        const std::string bytes = read_file(tmp);
-        std::filesystem::remove(tmp);
-        emit("-", bytes);
-      } else {
-        write_file_atomic(a->out,
-                          [&](const std::filesystem::path& tmp) { write_wav(tmp.string(), sig); });
-      }
+      // libsndfile writes WAV to a seekable file: for "-" a temporary one, then stdout.
+      emit_file(a->out, ".wav",
+                [&](const std::filesystem::path& tmp) { write_wav(tmp.string(), sig); });
       // With the WAV on stdout the summary goes to stderr.
       fmt::print(a->out == "-" ? stderr : stdout,
                  "{}: {:.3f} s at {:g} Hz, {} cycles{} from the program start at {:g} s -> {}\n",

@@ -55,8 +55,7 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
         ->check(CLI::Range(8, 20000));
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->out}, {&a->job.file});
-      std::string ext = std::filesystem::path(a->out).extension().string();
-      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      const std::string ext = lower_extension(a->out);
       if (a->out != "-" && ext != ".stl" && ext != ".ply" && ext != ".obj") {
         throw InputError(fmt::format(
             "-o {}: insert writes .stl, .ply or .obj (or - for STL on stdout)", a->out));
@@ -69,17 +68,10 @@ void register_tool_commands(CLI::App& app, int& exit_code) {
       spec.face_mm =
           std::max(spec.face_mm, 2 * job.topography.band_mm + spec.vb_mm + spec.edge_radius_mm);
       const Mesh mesh = synthetic_insert(tool, spec);
-      if (a->out == "-") {
-        // The mesh writer needs a file: a temporary STL, then copied to stdout.
-        const std::filesystem::path tmp =
-            std::filesystem::temp_directory_path() /
-            fmt::format("trochomill-insert-{}.stl", static_cast<long>(::getpid()));
-        write_mesh(tmp, mesh);
-        const std::string bytes = read_file(tmp);
-        std::filesystem::remove(tmp);
-        emit("-", bytes);
+      if (a->out == "-") {  // the mesh writer needs a file: a temporary STL, then stdout
+        emit_file("-", ".stl", [&](const std::filesystem::path& p) { write_mesh(p, mesh); });
       } else {
-        write_mesh(a->out, mesh);
+        write_mesh(a->out, mesh);  // atomic itself, its format by the extension
       }
       fmt::print(
           a->out == "-" ? stderr : stdout,

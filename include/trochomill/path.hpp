@@ -195,6 +195,7 @@ struct Placement {
   [[nodiscard]] Vec3 to_work(const Vec3& slot_point_mm) const;  ///< slot frame -> workpiece
   [[nodiscard]] Vec3 to_slot(const Vec3& work_point_mm) const;  ///< workpiece -> slot frame
   [[nodiscard]] Vec3 turn(const Vec3& slot_vector) const;       ///< a direction, not moved
+  [[nodiscard]] Vec3 turn_back(const Vec3& work_vector) const;  ///< the inverse turn
 };
 [[nodiscard]] Placement slot_placement(const Job& job);
 /// The path moved into the workpiece (to_work on every primitive, cycle marks kept).

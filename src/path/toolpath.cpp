@@ -133,8 +133,7 @@ ToolPath rigidly_moved(const ToolPath& path, Point point, Turn turn) {
 }  // namespace
 
 bool Placement::is_identity() const noexcept {
-  return origin_x_mm == 0 && origin_y_mm == 0 && cos_sin_deg(angle_deg).second == 0 &&
-         cos_sin_deg(angle_deg).first == 1;
+  return origin_x_mm == 0 && origin_y_mm == 0 && cos_sin_deg(angle_deg).first == 1;
 }
 
 Vec3 Placement::turn(const Vec3& v) const {
@@ -147,10 +146,13 @@ Vec3 Placement::to_work(const Vec3& p) const {
   return Vec3(q.x() + origin_x_mm, q.y() + origin_y_mm, q.z());
 }
 
-Vec3 Placement::to_slot(const Vec3& p) const {
+Vec3 Placement::turn_back(const Vec3& v) const {
   const auto [c, s] = cos_sin_deg(angle_deg);
-  const double x = p.x() - origin_x_mm, y = p.y() - origin_y_mm;
-  return Vec3(c * x + s * y, -s * x + c * y, p.z());
+  return Vec3(c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z());
+}
+
+Vec3 Placement::to_slot(const Vec3& p) const {
+  return turn_back(Vec3(p.x() - origin_x_mm, p.y() - origin_y_mm, p.z()));
 }
 
 Placement slot_placement(const Job& job) {
@@ -166,12 +168,9 @@ ToolPath to_work_frame(const ToolPath& path, const Placement& pl) {
 
 ToolPath to_slot_frame(const ToolPath& path, const Placement& pl) {
   if (pl.is_identity()) return path;
-  const auto [c, s] = cos_sin_deg(pl.angle_deg);
   return rigidly_moved(
       path, [&](const Vec3& p) { return pl.to_slot(p); },
-      [c = c, s = s](const Vec3& v) {
-        return Vec3(c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z());
-      });
+      [&](const Vec3& v) { return pl.turn_back(v); });
 }
 
 }  // namespace trochomill
