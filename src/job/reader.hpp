@@ -36,14 +36,19 @@ inline std::size_t edit_distance(std::string_view a, std::string_view b) {
 inline std::string suggestion(std::string_view word, const std::vector<std::string>& candidates) {
   std::string best;
   std::size_t best_d = std::numeric_limits<std::size_t>::max();
+  const std::size_t limit = std::max<std::size_t>(2, word.size() / 3);
   for (const auto& c : candidates) {
+    // The distance is at least the difference in length: a candidate that far off cannot be
+    // suggested, so the quadratic distance is not computed (long garbage keys stay cheap).
+    const std::size_t gap =
+        word.size() > c.size() ? word.size() - c.size() : c.size() - word.size();
+    if (gap > limit) continue;
     const std::size_t d = edit_distance(word, c);
     if (d < best_d) {
       best_d = d;
       best = c;
     }
   }
-  const std::size_t limit = std::max<std::size_t>(2, word.size() / 3);
   if (best_d <= limit) return fmt::format("; did you mean '{}'?", best);
   std::string all;
   for (const auto& c : candidates) all += (all.empty() ? "" : ", ") + c;
