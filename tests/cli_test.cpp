@@ -4,14 +4,17 @@
 #include <gtest/gtest.h>
 #include <spawn.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
 #include <cmath>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -666,6 +669,102 @@ TEST_F(Cli, SimulateMemoryEstimateMatchesThePeak) {
   EXPECT_EQ(refused.code, 2) << refused.out;
   EXPECT_NE(refused.out.find("exceeds the limit of 0.01 GB (--memory-limit)"), std::string::npos)
       << refused.out;
+}
+
+// Starts the CLI with `args` (split at blanks), stdout and stderr to `log`, TMPDIR `tmp`.
+pid_t spawn_cli(const std::string& args, const std::string& log, const std::string& tmp) {
+  std::vector<std::string> words{TROCHOMILL_CLI};
+  std::istringstream in(args);
+  for (std::string w; in >> w;) words.push_back(w);
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> env_s{"TMPDIR=" + tmp};
+  for (char** e = environ; *e != nullptr; ++e) {
+    if (std::strncmp(*e, "TMPDIR=", 7) != 0) env_s.emplace_back(*e);
+  }
+  std::vector<char*> envp;
+  for (auto& e : env_s) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&fa);
+  return rc == 0 ? pid : -1;
+}
+
+int exit_code_of(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::size_t files_in(const std::filesystem::path& dir) {
+  std::size_t n = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) n += e.exists() ? 1 : 0;
+  return n;
+}
+
+// Ctrl-C: a long run stops at the library's next check (exit 130); during output writing no
+// half-written file is left, whether a long run was under way (the staging of --out) or not
+// (the handler removes the temporary file and ends the process).
+TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  const auto tmp = dir_ / "tmp";
+  std::filesystem::create_directories(tmp);
+  const std::string log = (dir_ / "log").string();
+  // 1. Output to a FIFO nobody reads: the program is made in TMPDIR, then the copy into the
+  // FIFO blocks in open(). Ctrl-C there removes the temporary file and exits 130.
+  const std::string fifo = (dir_ / "fifo").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  pid_t pid = spawn_cli("plan " + ex + " -o " + fifo, log, tmp.string());
+  ASSERT_GT(pid, 0);
+  // Waits (up to 60 s: sanitizer builds are slow) for the temporary file to be complete.
+  for (int i = 0; i < 600 && files_in(tmp) == 0; ++i) ::usleep(100000);
+  ASSERT_EQ(files_in(tmp), 1u);
+  ::usleep(300000);  // the writer closes it, then blocks opening the FIFO
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(exit_code_of(pid), 130) << read_file(log);
+  EXPECT_EQ(files_in(tmp), 0u) << "the temporary program was left behind";
+  EXPECT_NE(read_file(log).find("interrupted"), std::string::npos) << read_file(log);
+
+  // 2. A simulation long enough to be interrupted (about a minute), Ctrl-C after 2 s: the run
+  // stops at the next step and writes what it computed, marked incomplete, exit 130. The
+  // --out folder then holds the whole set of files and no staging folder.
+  const auto out = dir_ / "sim";
+  const std::string json = (dir_ / "s.json").string();
+  pid = spawn_cli("simulate " + ex + " --cycles 2:8 --set simulation.resolution=0.02 --json " +
+                      json + " --out " + out.string(),
+                  log, tmp.string());
+  ASSERT_GT(pid, 0);
+  ::sleep(2);
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(exit_code_of(pid), 130) << read_file(log);
+  std::ifstream in(json);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_FALSE(j["complete"].get<bool>());
+  for (const char* f : {"series.csv", "chips.h5", "walls.csv", "floor.csv", "surface.stl"}) {
+    EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
+  }
+  EXPECT_EQ(files_in(out), 5u);
+  EXPECT_EQ(files_in(tmp), 0u);
+
+  // 3. analyze of a long program, Ctrl-C after 1 s: exit 130, no output at all.
+  const std::string ajson = (dir_ / "a.json").string();
+  pid = spawn_cli(
+      "analyze " + ex + " --set slot.length=2000 --set analysis.steps_per_tooth=8 --json " + ajson,
+      log, tmp.string());
+  ASSERT_GT(pid, 0);
+  ::sleep(1);
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(exit_code_of(pid), 130) << read_file(log);
+  EXPECT_NE(read_file(log).find("interrupted: nothing was written"), std::string::npos)
+      << read_file(log);
+  EXPECT_FALSE(std::filesystem::exists(ajson));
+  EXPECT_EQ(files_in(dir_), 5u);  // tmp, log, fifo, sim, s.json
 }
 
 TEST_F(Cli, SimulateWritesItsOutputs) {

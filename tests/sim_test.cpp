@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -13,6 +15,9 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include "test_util.hpp"
 #include "trochomill/engagement.hpp"
@@ -743,7 +748,7 @@ TEST(Sim, CancelKeepsWhatWasComputed) {
   const auto [from, to] = cycle_window(path, 2, 3);
   std::atomic<bool> stop{true};
   SimControl c;
-  c.cancel = &stop;
+  c.hooks.cancel = &stop;
   const JobSimulation early = simulate_job(job, path, from, to, c);
   EXPECT_FALSE(early.result.complete);
   EXPECT_TRUE(early.result.steps.empty());
@@ -751,11 +756,16 @@ TEST(Sim, CancelKeepsWhatWasComputed) {
 
   stop = false;
   std::size_t calls = 0;
-  c.progress = [&](std::size_t done, std::size_t total) {
-    if (++calls == 3) stop = true;
+  std::vector<std::string> phases;
+  c.hooks.phase = [&](std::string_view name) { phases.emplace_back(name); };
+  c.hooks.progress = [&](std::size_t done, std::size_t total) {
+    // Stopped in the window, after its third report.
+    if (phases.back() == "window" && ++calls == 3) stop = true;
     EXPECT_LE(done, total);
   };
   const JobSimulation part = simulate_job(job, path, from, to, c);
+  EXPECT_EQ(phases, (std::vector<std::string>{"pre-roll: envelope", "pre-roll: last revolution",
+                                              "window"}));
   EXPECT_FALSE(part.result.complete);
   EXPECT_GT(part.result.steps.size(), 0u);
   const JobSimulation whole = simulate_job(job, path, from, to);
@@ -765,6 +775,53 @@ TEST(Sim, CancelKeepsWhatWasComputed) {
   for (std::size_t n = 0; n < part.result.steps.size(); ++n) {
     ASSERT_EQ(part.result.steps[n].h_max_mm, whole.result.steps[n].h_max_mm);
   }
+}
+
+// simulate's --out is written as one set: cancelled between files, the folder holds none of
+// this run's files (an earlier run's stay as they were) and no staging folder; not cancelled,
+// all five replace the earlier ones.
+TEST(Sim, OutputsAreWrittenAsOneSet) {
+  const Job job = load_job(
+      test::example("wagih2023/trochoidal.toml"),
+      {parse_override("slot.depth=0.5"), parse_override("slot.length=6"),
+       parse_override("simulation.resolution=0.1"), parse_override("simulation.steps_per_rev=60")});
+  const ToolPath path = plan_path(job).path;
+  const auto [from, to] = cycle_window(path, 2, 3);
+  const JobSimulation js = simulate_job(job, path, from, to);
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("trochomill_outputs_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  write_file_atomic(dir / "series.csv", "an earlier run\n");
+  const auto entries = [&] {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(dir)) {
+      names.push_back(e.path().filename().string());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  std::atomic<bool> stop{false};
+  RunHooks hooks;
+  hooks.cancel = &stop;
+  std::vector<std::string> phases;
+  hooks.phase = [&](std::string_view name) { phases.emplace_back(name); };
+  hooks.progress = [&](std::size_t done, std::size_t total) {
+    EXPECT_EQ(total, 5u);
+    if (done == 3) stop = true;  // after three of the five files
+  };
+  EXPECT_THROW(write_simulation_outputs(dir, job, js, std::nullopt, hooks), Interrupted);
+  EXPECT_EQ(phases, std::vector<std::string>{"writing outputs"});
+  EXPECT_EQ(entries(), std::vector<std::string>{"series.csv"});
+  EXPECT_EQ(read_file(dir / "series.csv"), "an earlier run\n");
+
+  stop = false;
+  hooks.progress = {};
+  write_simulation_outputs(dir, job, js, std::nullopt, hooks);
+  EXPECT_EQ(entries(), (std::vector<std::string>{"chips.h5", "floor.csv", "series.csv",
+                                                 "surface.stl", "walls.csv"}));
+  EXPECT_NE(read_file(dir / "series.csv"), "an earlier run\n");
+  std::filesystem::remove_all(dir);
 }
 
 // The boards' material summaries: after random cuts, whenever a query says a stretch of rays

@@ -186,8 +186,16 @@ void emit_file(const std::string& target, const std::string& extension,
   const std::filesystem::path tmp =
       std::filesystem::temp_directory_path() /
       fmt::format("trochomill-{}{}", static_cast<long>(::getpid()), extension);
-  writer(tmp);
-  const std::string bytes = read_file(tmp);
+  const PendingFile pending(tmp);
+  std::string bytes;
+  try {
+    writer(tmp);
+    bytes = read_file(tmp);
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw;
+  }
   std::filesystem::remove(tmp);
   emit("-", bytes);
 }
@@ -271,40 +279,72 @@ std::pair<double, double> parse_band(const std::string& opt, const std::string& 
 namespace {
 
 std::atomic<bool> g_interrupted{false};
-struct sigaction g_old_action {};
+std::atomic<int> g_guarded{0};  // GuardedRuns alive (the library polls g_interrupted)
+
+void on_interrupt(int) {
+  if (g_guarded.load() > 0 && !g_interrupted.exchange(true)) return;  // the library stops
+  remove_pending_files();
+  static const char msg[] = "\ninterrupted\n";
+  (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
+  ::_exit(130);
+}
 
 }  // namespace
 
-GuardedRun::GuardedRun(bool progress)
-    : bar_(progress && isatty(STDERR_FILENO) != 0), start_(std::chrono::steady_clock::now()) {
-  g_interrupted.store(false);
+void install_interrupt_handler() {
   struct sigaction sa {};
-  sa.sa_handler = [](int) { g_interrupted.store(true); };
+  sa.sa_handler = on_interrupt;
   sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, &g_old_action);
+  sigaction(SIGINT, &sa, nullptr);
 }
 
-GuardedRun::~GuardedRun() { sigaction(SIGINT, &g_old_action, nullptr); }
+struct GuardedRun::Bar {
+  bool shown = false;
+  std::string label;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now(), last{};
+};
 
-const std::atomic<bool>* GuardedRun::cancel() const { return &g_interrupted; }
+GuardedRun::GuardedRun(bool progress) : bar_(std::make_shared<Bar>()) {
+  bar_->shown = progress && isatty(STDERR_FILENO) != 0;
+  g_interrupted.store(false);
+  g_guarded.fetch_add(1);
+}
 
-std::function<void(std::size_t, std::size_t)> GuardedRun::progress() const {
-  if (!bar_) return {};
-  return [start = start_](std::size_t done, std::size_t total) {
+GuardedRun::~GuardedRun() { g_guarded.fetch_sub(1); }
+
+RunHooks GuardedRun::hooks() const {
+  RunHooks h;
+  h.cancel = &g_interrupted;
+  if (!bar_->shown) return h;
+  h.phase = [bar = bar_](std::string_view name) {
+    bar->label = std::string(name);
+    bar->start = std::chrono::steady_clock::now();
+    bar->last = {};
+  };
+  h.progress = [bar = bar_](std::size_t done, std::size_t total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (done < total && now - bar->last < std::chrono::milliseconds(100)) return;
+    bar->last = now;
     const double f =
         static_cast<double>(done) / static_cast<double>(std::max<std::size_t>(1, total));
-    const double el =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const int w = 30, filled = static_cast<int>(f * w);
-    fmt::print(stderr, "\r[{}{}] {:5.1f} %  ETA {:.0f} s   ",
+    const double el = std::chrono::duration<double>(now - bar->start).count();
+    const int w = 30, filled = static_cast<int>(std::clamp(f, 0.0, 1.0) * w);
+    // The ETA once a little of the phase is done (before, it says nothing).
+    const std::string eta =
+        f >= 0.01 || (f > 0 && el > 2) ? fmt::format("{:.0f} s", el * (1 - f) / f) : "?";
+    fmt::print(stderr, "\r{:<26.26} [{}{}] {:5.1f} %  ETA {}   ", bar->label,
                std::string(static_cast<std::size_t>(filled), '#'),
-               std::string(static_cast<std::size_t>(w - filled), '.'), 100 * f,
-               f > 0 ? el * (1 - f) / f : 0.0);
+               std::string(static_cast<std::size_t>(w - filled), '.'), 100 * f, eta);
   };
+  return h;
 }
 
 void GuardedRun::done() const {
-  if (bar_) fmt::print(stderr, "\r{}\r", std::string(60, ' '));
+  if (bar_->shown) fmt::print(stderr, "\r{}\r", std::string(78, ' '));
+}
+
+void GuardedRun::finish(const char* what) const {
+  if (g_interrupted.load()) throw Interrupted(what);
 }
 
 double memory_limit_bytes(std::optional<double> limit_gb) {

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/progress.hpp"
 #include "trochomill/signal.hpp"
 
 namespace trochomill::cli {
@@ -104,9 +106,13 @@ void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required);
 /// "LO:HI" in Hz (0 < LO < HI). Throws InputError naming the option.
 [[nodiscard]] std::pair<double, double> parse_band(const std::string& opt, const std::string& text);
 
-/// A long run: turns Ctrl-C into a flag the library polls (the previous handler comes back
-/// when it ends; one run at a time) and shows a progress bar with ETA on a terminal. The
-/// memory check before it: memory_limit_bytes.
+/// Ctrl-C for the whole process (main installs it first). Outside a GuardedRun it removes
+/// the temporary file of any output being written and ends the process (exit 130); inside one
+/// it raises the flag the library polls, and a second Ctrl-C ends the process as outside.
+void install_interrupt_handler();
+
+/// A long run: Ctrl-C raises the flag its hooks carry (the library stops at the next check) and
+/// a progress bar with the phase's name and ETA is shown on a terminal.
 class GuardedRun {
  public:
   /// `progress`: show a bar when stderr is a terminal.
@@ -114,16 +120,17 @@ class GuardedRun {
   ~GuardedRun();
   GuardedRun(const GuardedRun&) = delete;
   GuardedRun& operator=(const GuardedRun&) = delete;
-  /// The flag Ctrl-C sets.
-  [[nodiscard]] const std::atomic<bool>* cancel() const;
-  /// The progress callback (empty when no bar is shown).
-  [[nodiscard]] std::function<void(std::size_t, std::size_t)> progress() const;
+  /// Hooks for the library: the Ctrl-C flag, the phase and progress callbacks (empty when no
+  /// bar is shown).
+  [[nodiscard]] RunHooks hooks() const;
   /// Clears the bar's line.
   void done() const;
+  /// Throws Interrupted when Ctrl-C came during the run (`what` says what was written).
+  void finish(const char* what) const;
 
  private:
-  bool bar_;
-  std::chrono::steady_clock::time_point start_;
+  struct Bar;
+  std::shared_ptr<Bar> bar_;
 };
 /// The memory limit of a long run (bytes): `--memory-limit` GB (> 0, else InputError), or 75 %
 /// of the machine's RAM.

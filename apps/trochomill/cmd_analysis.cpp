@@ -40,10 +40,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
                                path.duration_s(), job.cutting.spindle_speed_rpm,
                                job.analysis.steps_per_tooth));
       const GuardedRun run(true);
-      RunHooks hooks;
-      hooks.progress = run.progress();
-      hooks.cancel = run.cancel();
-      const ProcessMetrics m = analyze_with_forces(job, path, hooks);
+      const ProcessMetrics m = analyze_with_forces(job, path, run.hooks());
       run.done();
       if (!a->json.empty()) emit(a->json, metrics_json(job, m));
       if (!a->csv.empty()) emit(a->csv, series_csv(job, m.series));
@@ -79,9 +76,14 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       for (const auto& v : a->vary) varies.push_back(parse_vary(v));
       const JobDocument doc = JobDocument::load(a->job.file);
       (void)doc.build(base);  // a bad base job is bad input (exit 2)
-      const auto points = run_study(doc, base, varies, a->threads, [](const Job& job) {
-        return analyze_with_forces(job, plan_path(job).path);
-      });
+      const GuardedRun run(true);
+      RunHooks inner;  // each point only heeds Ctrl-C; the bar counts points
+      inner.cancel = run.hooks().cancel;
+      const auto points = run_study(
+          doc, base, varies, a->threads,
+          [&inner](const Job& job) { return analyze_with_forces(job, plan_path(job).path, inner); },
+          run.hooks());
+      run.done();
       if (!a->json.empty()) emit(a->json, study_json(varies, points));
       if (!a->csv.empty()) emit(a->csv, study_csv(varies, points));
       if (summary_to_stdout({&a->json, &a->csv})) fmt::print("{}", study_table(varies, points));

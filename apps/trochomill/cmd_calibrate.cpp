@@ -122,7 +122,10 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
                  fmt::format("the model window is {:.1f} s{}: a few cycles (--cycles A:B or "
                              "--from/--to) hold the coefficients as well",
                              o.to_s - o.from_s, o.fast ? "" : " of simulation (or use --fast)"));
+    const GuardedRun run(true);
+    o.hooks = run.hooks();
     const CalibrationResult r = calibrate_forces(job, path, meas, o);
+    run.done();
     for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
     const std::string block = material_toml(r);
     if (!a->write.empty()) write_file_atomic(a->write, block);

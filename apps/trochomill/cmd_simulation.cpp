@@ -61,17 +61,19 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
             a->memory_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
       }
       // Ctrl-C stops after the current step; what was computed is written, marked incomplete.
+      // A Ctrl-C during the output writing leaves --out without any file of this run.
       const GuardedRun run(true);
       SimControl control;
-      control.cancel = run.cancel();
-      control.progress = run.progress();
+      control.hooks = run.hooks();
       control.reserve_chip_entries = static_cast<std::size_t>(est.chip_entries);
       const auto t_start = std::chrono::steady_clock::now();
       const JobSimulation js = simulate_job(job, path, from, to, control);
-      run.done();
       const double wall =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-      if (!a->out.empty()) write_simulation_outputs(a->out, job, js, a->stl_step_mm);
+      RunHooks writing = control.hooks;
+      if (!js.result.complete) writing.cancel = nullptr;  // the first Ctrl-C stopped the run
+      if (!a->out.empty()) write_simulation_outputs(a->out, job, js, a->stl_step_mm, writing);
+      run.done();
       if (!a->json.empty()) emit(a->json, simulation_json(job, js, from, to, wall, need));
       if (a->json != "-") fmt::print("{}", simulation_text(a->job.file, job, js, from, to, wall));
       exit_code = js.result.complete ? 0 : 130;
@@ -124,10 +126,9 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       }
       // In simulation mode Ctrl-C stops after the current step; the forces of what was
       // simulated are written, marked incomplete (exit 130), as simulate does.
-      const GuardedRun run(!a->fast);
+      const GuardedRun run(true);
       SimControl control;
-      control.cancel = run.cancel();
-      control.progress = run.progress();
+      control.hooks = run.hooks();
       control.reserve_chip_entries = reserve;
       const JobForces jf = job_forces(job, path, from, to, a->fast, control);
       run.done();

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/version.hpp"
@@ -13,6 +14,7 @@
 int main(int argc, char** argv) {
   namespace cli = trochomill::cli;
   int exit_code = 0;
+  cli::install_interrupt_handler();
   try {
     CLI::App app{"trochomill: plan, analyse and simulate trochoidal slot milling"};
     app.set_version_flag("--version", std::string("trochomill ") + trochomill::kVersion);
@@ -33,8 +35,12 @@ int main(int argc, char** argv) {
       return 2;
     }
     return exit_code;
-  } catch (const trochomill::Interrupted&) {
-    fmt::print(stderr, "\ninterrupted: nothing was written\n");
+  } catch (const trochomill::Interrupted& e) {
+    // The library's own message is "interrupted"; a command that stopped while writing says
+    // what it wrote.
+    const std::string what = e.what();
+    fmt::print(stderr, "\n{}\n",
+               what == "interrupted" ? std::string("interrupted: nothing was written") : what);
     return 130;
   } catch (const trochomill::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());

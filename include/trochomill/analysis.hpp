@@ -105,10 +105,13 @@ struct StudyPoint {
 /// slowest) on `threads` threads (0: all cores). Each point's job is built from the parsed
 /// document `doc` with the `base` overrides then its own (the file is read once); results
 /// are in grid order whatever the thread count. A point whose job is invalid or whose
-/// evaluation fails records the message, not thrown. At most 100,000 points.
+/// evaluation fails records the message, not thrown. At most 100,000 points. `hooks`: the
+/// phase "grid" with progress per point; cancelling (or `evaluate` throwing Interrupted)
+/// stops the study with Interrupted.
 [[nodiscard]] std::vector<StudyPoint> run_study(
     const JobDocument& doc, const std::vector<Override>& base, const std::vector<Vary>& varies,
-    int threads, const std::function<ProcessMetrics(const Job&)>& evaluate);
+    int threads, const std::function<ProcessMetrics(const Job&)>& evaluate,
+    const RunHooks& hooks = {});
 
 /// The study as a text table, JSON and CSV (one row per point).
 }  // namespace trochomill

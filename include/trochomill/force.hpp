@@ -91,9 +91,14 @@ class SegmentForces {
 class FastChipSource {
  public:
   /// `engagement`, if given, is the path's engagement at one sample per tooth pass (as
-  /// analyze computes it), used instead of computing it again.
+  /// analyze computes it), used instead of computing it again. `hooks`: the phases
+  /// "engagement" (here) and "chips" (each scan) with their progress; cancelling throws
+  /// Interrupted.
   FastChipSource(const Job& job, const ToolPath& path, double from_s, double to_s,
-                 int steps_per_rev, const EngagementSeries* engagement = nullptr);
+                 int steps_per_rev, const EngagementSeries* engagement = nullptr,
+                 const RunHooks& hooks = {});
+  /// The hooks of the scans from now on.
+  void set_hooks(const RunHooks& hooks) { hooks_ = hooks; }
   /// Throws InputError when `tool` turns at another speed than the job's.
   [[nodiscard]] SimResult chips(const SimTool& tool) const;
   /// The forces of those chips directly, without storing the chip record (the same numbers
@@ -111,6 +116,7 @@ class FastChipSource {
   std::vector<double> times_;
   PathSamples ps_;  ///< centre positions only (x, y, z) on times_
   EngagementSeries eng_;
+  RunHooks hooks_;
 };
 
 /// Job level: the edge grid (with the job's topography), the chip source and the forces.
@@ -123,7 +129,9 @@ struct JobForces {
   double forces_wall_s = 0;  ///< forces (in fast mode with the chips they come from)
 };
 /// `from_s`..`to_s` of the path (programmed time, s). The simulation runs as `simulate_job`
-/// (pre-roll included). Throws InputError when the job has no [material] model.
+/// (pre-roll included; cancelled, its chips stop incomplete). In fast mode the phases are the
+/// fast source's, and cancelling throws Interrupted. Throws InputError when the job has no
+/// [material] model.
 [[nodiscard]] JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double to_s,
                                    bool fast, const SimControl& control = {},
                                    const EngagementSeries* engagement = nullptr);
@@ -168,6 +176,9 @@ struct CalibrationOptions {
   double cutoff_hz = 0;         ///< low-pass of both signals; 0: 4 tooth-passing harmonics
   double max_shift_s = -1;      ///< alignment search +-; < 0: half a spindle revolution
   double from_s = 0, to_s = 0;  ///< the window of the path the measurement covers
+  /// Phases: the model's chips (the simulation's or the fast source's phases), then "fit"
+  /// with progress per solver iteration (of at most 100). Cancelling throws Interrupted.
+  RunHooks hooks;
 };
 struct FittedParameter {
   std::string name;

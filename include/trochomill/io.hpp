@@ -25,6 +25,23 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 void write_file_atomic(const std::filesystem::path& path,
                        const std::function<void(const std::filesystem::path& tmp)>& write);
 
+/// A temporary output file while it is being written (write_file_atomic registers its own):
+/// remove_pending_files removes it if the process is stopped before it was renamed or
+/// removed. At most 32 at a time; more are written unregistered.
+class PendingFile {
+ public:
+  explicit PendingFile(const std::filesystem::path& path);
+  ~PendingFile();
+  PendingFile(const PendingFile&) = delete;
+  PendingFile& operator=(const PendingFile&) = delete;
+
+ private:
+  int slot_ = -1;
+};
+/// Removes every pending temporary output file (async-signal-safe: for a SIGINT handler that
+/// ends the process, so that no half-written file is left behind).
+void remove_pending_files() noexcept;
+
 /// Reads a whole file. Throws IoError naming the path when it cannot be read.
 [[nodiscard]] std::string read_file(const std::filesystem::path& path);
 /// Reads a whole input file (a job, a program, a table): a file that cannot be read is bad

@@ -12,6 +12,7 @@
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/mechanism.hpp"
+#include "trochomill/progress.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/topography.hpp"
@@ -87,9 +88,14 @@ namespace trochomill {
                                           const JobSimulation& js, double from_s, double to_s,
                                           double wall_s);
 /// Writes series.csv, chips.h5, walls.csv, floor.csv and surface.stl (grid step
-/// `stl_step_mm`, or default_surface_step_mm) into `dir` (created), each atomically.
+/// `stl_step_mm`, or default_surface_step_mm) into `dir` (created) as one set: they are made
+/// in a staging folder inside `dir`, then each is renamed into place. `hooks`: the phase
+/// "writing outputs" with progress per file; when cancelled between files the staging folder
+/// is removed and Interrupted thrown: `dir` then holds none of this run's files (those of an
+/// earlier run stay as they were).
 void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
-                              const JobSimulation& js, std::optional<double> stl_step_mm);
+                              const JobSimulation& js, std::optional<double> stl_step_mm,
+                              const RunHooks& hooks = {});
 /// The force series: t_s, f_x_n, f_y_n, f_z_n, f_resultant_n, torque_nm, power_w, then per
 /// tooth k: tooth<k>_f_x_n, tooth<k>_f_y_n, tooth<k>_f_z_n, tooth<k>_torque_nm. `calibrate`
 /// reads it as it is.

@@ -20,6 +20,7 @@
 
 #include "trochomill/cutter.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/progress.hpp"
 #include "trochomill/settings/sim.hpp"
 
 namespace trochomill {
@@ -205,11 +206,11 @@ struct SimResult {
 
 /// Progress and cancellation of a running simulation.
 struct SimControl {
-  /// Called from the calling thread now and then with (steps done, steps in the call).
-  std::function<void(std::size_t, std::size_t)> progress;
-  /// When it turns true (e.g. from a SIGINT handler) the simulation stops after the current
-  /// step and returns what it has, with `complete = false`.
-  const std::atomic<bool>* cancel = nullptr;
+  /// Phases ("pre-roll: envelope", "pre-roll: last revolution", "window") and progress in
+  /// each (pieces of path or steps). When `hooks.cancel` turns true (e.g. from a SIGINT
+  /// handler) the simulation stops after the current step and returns what it has, with
+  /// `complete = false` (no exception).
+  RunHooks hooks;
   /// The tool's envelope was swept (sweep_envelope) up to the call's start: the wedges may
   /// search only the annulus from the first step (docs/models.md section 11).
   bool envelope_before = false;
@@ -257,9 +258,9 @@ struct HeightField {
 /// along chords within a quarter spacing of the path and 1 um, without teeth or time steps. Fast:
 /// the workpiece as that part of the cut leaves it, less the feed marks (about f_z^2 / 8R) the
 /// teeth would leave. Returns the volume removed from the Z board (mm^3).
-/// `cancel` (optional) stops it between pieces.
+/// `hooks`: progress over the pieces (all boards); `hooks.cancel` stops it between pieces.
 double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
-                      double t1_s, const std::atomic<bool>* cancel = nullptr);
+                      double t1_s, const RunHooks& hooks = {});
 
 /// The result's chip map made dense (the HDF5 layout, see ChipMapData).
 [[nodiscard]] ChipMapData chip_map_data(const SimResult& r, const SimTool& tool,

@@ -185,6 +185,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   EngagementOptions opt;
   opt.steps_per_tooth = job.analysis.steps_per_tooth;
   opt.hooks = hooks;
+  hooks.begin("engagement");
   m.series = compute_engagement(path, job, opt);
   const EngagementSeries& e = m.series;
   const PathSamples& s = e.samples;

@@ -56,7 +56,8 @@ Vary parse_vary(const std::string& text) {
 
 std::vector<StudyPoint> run_study(const JobDocument& doc, const std::vector<Override>& base,
                                   const std::vector<Vary>& varies, int threads,
-                                  const std::function<ProcessMetrics(const Job&)>& evaluate) {
+                                  const std::function<ProcessMetrics(const Job&)>& evaluate,
+                                  const RunHooks& hooks) {
   if (varies.empty()) throw InputError("compare: give at least one --vary key=v1,v2,...");
   std::size_t total = 1;
   for (const auto& v : varies) total *= v.values.size();
@@ -77,15 +78,21 @@ std::vector<StudyPoint> run_study(const JobDocument& doc, const std::vector<Over
     }
     points[p].overrides = std::move(ov);
   }
+  hooks.begin("grid");
+  SharedProgress progress(hooks, total);
   auto run_one = [&](std::size_t p) {
+    hooks.check();
     StudyPoint& sp = points[p];
     try {
       sp.metrics = evaluate(doc.build(sp.overrides));
       sp.metrics.series = EngagementSeries{};  // keep the study small
       sp.ok = true;
+    } catch (const Interrupted&) {
+      throw;
     } catch (const std::exception& e) {
       sp.error = e.what();
     }
+    progress.add(1);
   };
   const int n_threads = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
   tbb::task_arena arena(n_threads);

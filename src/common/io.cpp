@@ -2,7 +2,9 @@
 #include "trochomill/io.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -16,6 +18,41 @@
 namespace trochomill {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// The pending temporary files: a slot is claimed (0 -> 1), its path copied, then published
+// (1 -> 2); a signal handler unlinks the published ones. Lock-free atomics only.
+constexpr int kPendingSlots = 32;
+constexpr std::size_t kPendingPathMax = 4096;
+std::atomic<int> g_pending_state[kPendingSlots];
+char g_pending_path[kPendingSlots][kPendingPathMax];
+
+}  // namespace
+
+PendingFile::PendingFile(const fs::path& path) {
+  const std::string& p = path.native();
+  if (p.size() >= kPendingPathMax) return;
+  for (int i = 0; i < kPendingSlots; ++i) {
+    int free = 0;
+    if (g_pending_state[i].compare_exchange_strong(free, 1)) {
+      std::memcpy(g_pending_path[i], p.c_str(), p.size() + 1);
+      g_pending_state[i].store(2);
+      slot_ = i;
+      return;
+    }
+  }
+}
+
+PendingFile::~PendingFile() {
+  if (slot_ >= 0) g_pending_state[slot_].store(0);
+}
+
+void remove_pending_files() noexcept {
+  for (int i = 0; i < kPendingSlots; ++i) {
+    if (g_pending_state[i].load() == 2) (void)::unlink(g_pending_path[i]);
+  }
+}
 
 namespace {
 
@@ -65,6 +102,7 @@ void write_file_atomic(const fs::path& path, const std::function<void(const fs::
     // A FIFO or a device cannot be replaced: the output is made in the temporary directory
     // and written through to it.
     const fs::path tmp = fs::temp_directory_path() / ("trochomill" + unique_suffix());
+    const PendingFile pending(tmp);
     run_writer(write, tmp, path);
     {
       std::ifstream in(tmp, std::ios::binary);
@@ -89,6 +127,7 @@ void write_file_atomic(const fs::path& path, const std::function<void(const fs::
                   "' does not exist");
   }
   const fs::path tmp = target.string() + unique_suffix();
+  const PendingFile pending(tmp);
   run_writer(write, tmp, path);
   fs::rename(tmp, target, ec);
   if (ec) {

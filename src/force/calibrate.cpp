@@ -126,6 +126,23 @@ double interp(const std::vector<double>& t, const std::vector<double>& y, double
 
 // ------------------------------------------------------------------ the model
 
+// Reports the solver's iterations and stops it on Ctrl-C.
+class StopAndReport : public ceres::IterationCallback {
+ public:
+  StopAndReport(const RunHooks& hooks, int max_iterations)
+      : hooks_(hooks), max_(static_cast<std::size_t>(max_iterations)) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (hooks_.cancelled()) return ceres::SOLVER_ABORT;
+    if (hooks_.progress)
+      hooks_.progress(std::min(max_, static_cast<std::size_t>(s.iteration)), max_);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const RunHooks& hooks_;
+  std::size_t max_;
+};
+
 class ForceProblem {
  public:
   ForceProblem(const Job& job, const ToolPath& path, const CalibrationOptions& o)
@@ -136,8 +153,13 @@ class ForceProblem {
       // the cut the sampled force's jump is placed within 2 % of the cutoff's period
       // (models.md section 12).
       const int spr = std::max(job.forces.fast_steps_per_rev, 500 * std::max(1, job.tool.teeth));
-      fast_.emplace(job, path, o.from_s, o.to_s, spr);
+      fast_.emplace(job, path, o.from_s, o.to_s, spr, nullptr, o.hooks);
     }
+  }
+  // Later chips (the fit's runout changes) only heed Ctrl-C: the fit reports per iteration.
+  void quiet() {
+    o_.hooks.phase = {}, o_.hooks.progress = {};
+    if (fast_) fast_->set_hooks(o_.hooks);
   }
   // The model's filtered forces for these coefficients and tool (x, y, z per step).
   std::array<std::vector<double>, 3> forces(const Material& m, const Tool& t,
@@ -149,7 +171,17 @@ class ForceProblem {
                            t.runout_axial_mm == tool_.runout_axial_mm &&
                            t.runout_phase_deg == tool_.runout_phase_deg;
     if (!same_tool) {
-      chips_ = fast_ ? fast_->chips(tool) : simulate_job(j, path_, o_.from_s, o_.to_s).result;
+      if (fast_) {
+        chips_ = fast_->chips(tool);
+      } else {
+        SimControl control;
+        control.hooks = o_.hooks;
+        chips_ = simulate_job(j, path_, o_.from_s, o_.to_s, control).result;
+        if (!chips_->complete) {
+          chips_.reset();
+          throw Interrupted("interrupted");
+        }
+      }
       tool_ = t;
       if (!grid_) grid_ = job_edge_grid(j, tool);
     }
@@ -194,7 +226,12 @@ struct Residuals {
       set_param(m, t, (*names)[i], x[0][i] * (*scales)[i]);
     }
     const double shift = x[1][0] * shift_scale;
-    const auto f = problem->forces(m, t);
+    std::array<std::vector<double>, 3> f;
+    try {
+      f = problem->forces(m, t);
+    } catch (const Interrupted&) {
+      return false;  // Ctrl-C: the iteration callback stops the solver
+    }
     const std::size_t n = idx->size();
     for (std::size_t k = 0; k < n; ++k) {
       const std::size_t j = (*idx)[k];
@@ -421,8 +458,13 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   so.gradient_tolerance = 1e-12;
   so.num_threads = 1;
   so.logging_type = ceres::SILENT;
+  problem.quiet();
+  o.hooks.begin("fit");
+  StopAndReport callback(o.hooks, so.max_num_iterations);
+  so.callbacks.push_back(&callback);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &cp, &summary);
+  o.hooks.check();
 
   CalibrationResult out;
   out.material = m0;

@@ -35,8 +35,9 @@ bool in_arcs(const std::vector<AngleArc>& arcs, double th) {
 }  // namespace
 
 FastChipSource::FastChipSource(const Job& job, const ToolPath& path, double from_s, double to_s,
-                               int steps_per_rev, const EngagementSeries* engagement)
-    : spr_(steps_per_rev) {
+                               int steps_per_rev, const EngagementSeries* engagement,
+                               const RunHooks& hooks)
+    : spr_(steps_per_rev), hooks_(hooks) {
   const double dur = path.duration_s();
   from_s = std::max(0.0, from_s);
   to_s = std::min(dur, to_s);
@@ -63,8 +64,17 @@ FastChipSource::FastChipSource(const Job& job, const ToolPath& path, double from
   // same for any thread count).
   const std::size_t blk = 16384, nb = (times_.size() + blk - 1) / blk;
   std::vector<PathSamples> parts(nb);
+  if (engagement == nullptr) hooks.begin("engagement");
   tbb::parallel_invoke(
-      [&] { eng_ = engagement ? *engagement : compute_engagement(path, job, EngagementOptions{}); },
+      [&] {
+        if (engagement != nullptr) {
+          eng_ = *engagement;
+          return;
+        }
+        EngagementOptions eo;
+        eo.hooks = hooks;
+        eng_ = compute_engagement(path, job, eo);
+      },
       [&] {
         tbb::parallel_for(std::size_t{0}, nb, [&](std::size_t b) {
           std::vector<double> ts(
@@ -152,8 +162,12 @@ void FastChipSource::scan(const SimTool& tool, std::vector<SimStep>& steps,
   // Steps in chunks of kChunk in parallel; the visitor writes per chunk or per step only, so
   // results are the same for any thread count.
   const std::size_t nchunks = (nsteps + kChunk - 1) / kChunk;
+  hooks_.begin("chips");
+  SharedProgress progress(hooks_, nchunks);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nchunks), [&](const auto& range) {
     for (std::size_t c = range.begin(); c != range.end(); ++c) {
+      hooks_.check();
+      progress.add(1);
       for (std::size_t i = c * kChunk; i < std::min(nsteps, (c + 1) * kChunk); ++i) {
         const std::size_t g = i + back + 1;
         const double t = times[g];

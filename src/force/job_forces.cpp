@@ -44,7 +44,8 @@ JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double
   if (fast) {
     // Forces straight from the scan: no chip record (it can hold tens of millions of entries
     // for a whole slot).
-    const FastChipSource src(job, path, from_s, to_s, job.forces.fast_steps_per_rev, engagement);
+    const FastChipSource src(job, path, from_s, to_s, job.forces.fast_steps_per_rev, engagement,
+                             control.hooks);
     t1 = clock::now();
     out.series = src.forces(tool, grid, model, &out.chips.steps);
     out.chips.segments_per_tooth = tool.segments();

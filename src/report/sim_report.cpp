@@ -1,15 +1,19 @@
 // Text and mesh outputs of the tri-dexel simulation: per-step series, wall and floor
 // profiles (CSV) and the machined surface (binary STL) (include/trochomill/report.hpp).
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <functional>
 #include <initializer_list>
 #include <iterator>
 #include <nlohmann/json.hpp>
 
+#include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/report.hpp"
 
@@ -182,16 +186,62 @@ std::string simulation_text(const std::string& job_file, const Job& job, const J
 }
 
 void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
-                              const JobSimulation& js, std::optional<double> stl_step_mm) {
-  std::filesystem::create_directories(dir);
+                              const JobSimulation& js, std::optional<double> stl_step_mm,
+                              const RunHooks& hooks) {
+  namespace fs = std::filesystem;
+  fs::create_directories(dir);
   const SimResult& r = js.result;
   const SimTool tool = sim_tool(job, job.simulation);
-  write_file_atomic(dir / "series.csv", sim_series_csv(r, tool.tooth_angle_rad.size()));
-  write_chip_map_h5(dir / "chips.h5", chip_map_data(r, tool, job.simulation));
-  write_file_atomic(dir / "walls.csv", wall_profiles_csv(wall_profiles(*js.work, 0.0)));
-  write_file_atomic(dir / "floor.csv", floor_profiles_csv(floor_profiles(*js.work)));
-  const double step = stl_step_mm ? *stl_step_mm : default_surface_step_mm(*js.work);
-  write_file_atomic(dir / "surface.stl", height_field_stl(surface_height_field(*js.work, step)));
+  const fs::path stage = dir / fmt::format(".trochomill-partial-{}", static_cast<long>(::getpid()));
+  std::error_code ec;
+  fs::remove_all(stage, ec);
+  fs::create_directory(stage);
+  const std::array<std::pair<const char*, std::function<void(const fs::path&)>>, 5> outputs{{
+      {"series.csv",
+       [&](const fs::path& p) {
+         write_file_atomic(p, sim_series_csv(r, tool.tooth_angle_rad.size()));
+       }},
+      {"chips.h5",
+       [&](const fs::path& p) { write_chip_map_h5(p, chip_map_data(r, tool, job.simulation)); }},
+      {"walls.csv",
+       [&](const fs::path& p) {
+         write_file_atomic(p, wall_profiles_csv(wall_profiles(*js.work, 0.0)));
+       }},
+      {"floor.csv",
+       [&](const fs::path& p) {
+         write_file_atomic(p, floor_profiles_csv(floor_profiles(*js.work)));
+       }},
+      {"surface.stl",
+       [&](const fs::path& p) {
+         const double step = stl_step_mm ? *stl_step_mm : default_surface_step_mm(*js.work);
+         write_file_atomic(p, height_field_stl(surface_height_field(*js.work, step)));
+       }},
+  }};
+  const char* stopped = "interrupted: --out not written (no file of this run is in it)";
+  hooks.begin("writing outputs");
+  try {
+    for (std::size_t k = 0; k < outputs.size(); ++k) {
+      hooks.check(stopped);
+      if (hooks.progress) hooks.progress(k, outputs.size());
+      outputs[k].second(stage / outputs[k].first);
+    }
+    hooks.check(stopped);
+    if (hooks.progress) hooks.progress(outputs.size(), outputs.size());
+  } catch (...) {
+    fs::remove_all(stage, ec);
+    throw;
+  }
+  // The set is complete: each file is renamed into place.
+  for (const auto& [name, write] : outputs) {
+    fs::rename(stage / name, dir / name, ec);
+    if (ec) {
+      const std::string msg =
+          fmt::format("cannot write '{}': {}", (dir / name).string(), ec.message());
+      fs::remove_all(stage, ec);
+      throw IoError(msg);
+    }
+  }
+  fs::remove(stage, ec);
 }
 
 }  // namespace trochomill

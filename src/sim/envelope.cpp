@@ -221,7 +221,7 @@ double dist_to_piece(double px, double py, const Piece& p) {
 }  // namespace
 
 double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
-                      double t1_s, const std::atomic<bool>* cancel) {
+                      double t1_s, const RunHooks& hooks) {
   if (!(t1_s > t0_s)) return 0.0;
   const double d = work.boards[0].spacing();
   const double r_off = tool.radial_offset_mm.empty()
@@ -242,10 +242,12 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
   double volume = 0;
   // The boards are independent: one task each. Their summaries are rebuilt after the burst.
   for (auto& b : work.boards) b.pause_summary();
+  SharedProgress progress(hooks, 3 * pieces.size());
   tbb::parallel_for(0, 3, [&](int bsel) {
     std::vector<Interval> removed;
     for (std::size_t q = 0; q < pieces.size(); ++q) {
-      if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) break;
+      if (hooks.cancelled()) break;
+      progress.add(1);
       const Piece& p = pieces[q];
       const double tip = p.z + a_off;
       const double H = std::min(tool.flute_length_mm, top - tip);

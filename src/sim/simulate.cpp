@@ -396,11 +396,11 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   const double min_core = 0.5 * tool.radius_mm;
   const std::size_t every = std::max<std::size_t>(1, ps.size() / 200);
   for (std::size_t n = 1; n < ps.size(); ++n) {
-    if (control.cancel != nullptr && control.cancel->load(std::memory_order_relaxed)) {
+    if (control.hooks.cancelled()) {
       res.complete = false;
       break;
     }
-    if (control.progress && n % every == 0) control.progress(n, ps.size() - 1);
+    if (control.hooks.progress && n % every == 0) control.hooks.progress(n, ps.size() - 1);
     const std::array<double, 3> c{ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
     const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
     cum_now += moved;
@@ -568,19 +568,24 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
     const auto t0 = clock();
     const double rev = kTwoPi / std::abs(tool.omega_rad_per_s);
     const double lead_from = std::max(0.0, from_s - rev);
-    if (lead_from > 0) (void)sweep_envelope(path, tool, work, 0, lead_from, control.cancel);
+    if (lead_from > 0) {
+      control.hooks.begin("pre-roll: envelope");
+      (void)sweep_envelope(path, tool, work, 0, lead_from, control.hooks);
+    }
     SimControl lead;
     lead.envelope_before = lead_from > 0;
-    lead.cancel = control.cancel;
+    lead.hooks = control.hooks;
+    lead.hooks.begin("pre-roll: last revolution");
     (void)simulate(path, tool, s, work, lead_from, from_s, lead);
     out.pre_roll_s = from_s;
     out.pre_roll_wall_s = since(t0);
   }
-  if (control.cancel != nullptr && control.cancel->load()) {  // stopped before the window
+  if (control.hooks.cancelled()) {  // stopped before the window
     out.result.complete = false;
     out.result.segments_per_tooth = tool.segments();
   } else {
     const auto t1 = clock();
+    control.hooks.begin("window");
     out.result = simulate(path, tool, s, work, from_s, to_s, control);
     out.window_wall_s = since(t1);
   }
