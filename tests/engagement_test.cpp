@@ -89,30 +89,31 @@ TEST(Engagement, StraightPartialImmersion) {
 struct Brute {
   double angle = 0, hmax = 0;
 };
+// The chip thickness at angle th of sample i's circle, or -1 where that point is not engaged.
+double h_at(const PathSamples& s, std::size_t i, int m, double R, double hw, double L, double th) {
+  const double cx = s.x_mm[i], cy = s.y_mm[i];
+  const double px = cx + R * std::cos(th), py = cy + R * std::sin(th);
+  if (std::abs(px) > hw || py < 0 || py > L) return -1;
+  double rho = 0;
+  const double ux = std::cos(th), uy = std::sin(th);
+  for (std::size_t j = 0; j + m <= i; ++j) {
+    if (s.z_mm[j] >= 0) continue;
+    const double ox = s.x_mm[j] - cx, oy = s.y_mm[j] - cy;
+    if (std::hypot(px - s.x_mm[j], py - s.y_mm[j]) <= R) return -1;
+    const double t = ox * ux + oy * uy, q = R * R - (ox * ox + oy * oy - t * t);
+    if (q >= 0 && t + std::sqrt(q) < R) rho = std::max(rho, t + std::sqrt(q));
+  }
+  return R - rho;
+}
+
 Brute brute(const PathSamples& s, std::size_t i, int m, double R, double hw, double L, int npts) {
   Brute b;
-  const double cx = s.x_mm[i], cy = s.y_mm[i];
   int in = 0;
   for (int k = 0; k < npts; ++k) {
-    const double th = kTwoPi * (k + 0.5) / npts;
-    const double px = cx + R * std::cos(th), py = cy + R * std::sin(th);
-    if (std::abs(px) > hw || py < 0 || py > L) continue;
-    bool removed = false;
-    double rho = 0;
-    const double ux = std::cos(th), uy = std::sin(th);
-    for (std::size_t j = 0; j + m <= i; ++j) {
-      if (s.z_mm[j] >= 0) continue;
-      const double ox = s.x_mm[j] - cx, oy = s.y_mm[j] - cy;
-      if (std::hypot(px - s.x_mm[j], py - s.y_mm[j]) <= R) {
-        removed = true;
-        break;
-      }
-      const double t = ox * ux + oy * uy, q = R * R - (ox * ox + oy * oy - t * t);
-      if (q >= 0 && t + std::sqrt(q) < R) rho = std::max(rho, t + std::sqrt(q));
-    }
-    if (!removed) {
+    const double h = h_at(s, i, m, R, hw, L, kTwoPi * (k + 0.5) / npts);
+    if (h >= 0) {
       ++in;
-      b.hmax = std::max(b.hmax, R - rho);
+      b.hmax = std::max(b.hmax, h);
     }
   }
   b.angle = kTwoPi * in / npts;
@@ -138,9 +139,20 @@ TEST(Engagement, MatchesBruteForceOnTrochoids) {
         const Brute b = brute(e.samples, i, m, 5.0, 10.0, 4.0, npts);
         if (b.angle == 0) {
           // No brute-force point is engaged: any arc the kernel finds is narrower than two
-          // point spacings, and its chip is a disc-model sliver, below f_z^2 / R.
+          // point spacings. Such an arc can nick the tip of a spike of material left where
+          // two earlier discs meet at a small angle (the linear-elliptical passes leave one
+          // on the centre line): a few um thick, a few nm wide, so points at any practical
+          // spacing miss its top. There the kernel's h_max is checked where it says it is:
+          // the brute force's own chip thickness at the kernel's angle (rounding only:
+          // 1e-9 mm), and no point of a 20 times finer brute force (0.005 deg) is thicker.
           EXPECT_LE(e.engagement_angle_rad[i], 2 * kTwoPi / npts) << type << " sample " << i;
-          EXPECT_LE(e.h_max_mm[i], 0.075 * 0.075 / 5.0) << type << " sample " << i;
+          if (e.h_max_mm[i] > 0) {
+            EXPECT_NEAR(h_at(e.samples, i, m, 5.0, 10.0, 4.0, e.h_max_angle_rad[i]), e.h_max_mm[i],
+                        1e-9)
+                << type << " sample " << i;
+            EXPECT_LE(brute(e.samples, i, m, 5.0, 10.0, 4.0, 20 * npts).hmax, e.h_max_mm[i] + 1e-9)
+                << type << " sample " << i;
+          }
           continue;
         }
         // Point sampling resolves each arc end to half a point: 2 ends per arc, a few arcs.

@@ -180,6 +180,56 @@ TEST(Planner, CycleCountsAreCheckedAndTinyStepsPlan) {
   EXPECT_LE(p.info.cycles * 0.01, 20.0 + 30.0);
 }
 
+// Narrow ellipses plan, and their program cuts the whole slot: on the path sampled every
+// 5 um (the sampled discs then fall short of the swept region by under ds^2 / 8 (kappa +
+// 1 / R) = 3e-6 mm here, kappa <= 0.8 / mm), every column of the slot from the wall band
+// inward is covered from y = 0 to L. The band is the scallop bound R - sqrt(R^2 - s^2 / 4)
+// plus 1 um (a hundredfold the sampling shortfall). The planner's own check, on one cycle's
+// centres spaced without regard to the orbit's curvature, had refused these with "uncut
+// islands" at the walls, where the orbit turns on a radius of b^2 / a = 1.25 mm.
+TEST(Planner, NarrowEllipsesPlanAndCutTheWholeSlot) {
+  for (const char* aspect : {"0.5", "0.3"}) {
+    for (const char* step : {"0.1", "0.3"}) {
+      const Job job = test::wagih_job("elliptical",
+                                      {{"path.aspect_ratio", aspect, {}}, {"path.step", step, {}}});
+      const PlannedPath p = plan_path(job);
+      const double R = job.tool.radius_mm(), W = job.slot.width_mm, L = job.slot.length_mm;
+      const double s = std::stod(step);
+      const double band = R - std::sqrt(R * R - 0.25 * s * s) + 1e-3;
+      const PathSamples ps = sample_by_length(p.path, 0.005);
+      const int nx = 200;
+      std::vector<std::vector<std::pair<double, double>>> cols(nx + 1);
+      const double x0 = -0.5 * W + band, dx = (W - 2 * band) / nx;
+      for (std::size_t i = 0; i < ps.size(); ++i) {
+        if (ps.z_mm[i] > -job.slot.depth_mm + 1e-9) continue;  // cutting at the slot's floor
+        for (int j = 0; j <= nx; ++j) {
+          const double x = x0 + dx * j, d = x - ps.x_mm[i];
+          if (std::abs(d) >= R) continue;
+          const double h = std::sqrt(R * R - d * d);
+          auto& c = cols[static_cast<std::size_t>(j)];
+          if (!c.empty() && ps.y_mm[i] - h <= c.back().second && ps.y_mm[i] + h >= c.back().first) {
+            c.back().first = std::min(c.back().first, ps.y_mm[i] - h);
+            c.back().second = std::max(c.back().second, ps.y_mm[i] + h);
+          } else {
+            c.emplace_back(ps.y_mm[i] - h, ps.y_mm[i] + h);
+          }
+        }
+      }
+      for (int j = 0; j <= nx; ++j) {
+        auto& c = cols[static_cast<std::size_t>(j)];
+        std::sort(c.begin(), c.end());
+        double reach = 0;  // covered from y = 0 up to here
+        for (const auto& [a, b] : c) {
+          if (a > reach) break;
+          reach = std::max(reach, b);
+        }
+        EXPECT_GE(reach, L) << "aspect " << aspect << ", step " << step << ": x = " << x0 + dx * j
+                            << " is cut only up to y = " << reach;
+      }
+    }
+  }
+}
+
 // A machine that accelerates without limit takes the programmed time: on a whole planned
 // program (reversals, rapids, starts and stops) the limited time tends to it as a grows. The
 // excess is the sum of v / a over the stops (about 1e-9 s at 1e12 mm/s^2).

@@ -104,6 +104,12 @@ void emit_cycle(Builder& bld, const Geometry& g, double y) {
   }
 }
 
+// The envelope's centre points are at most this far apart along the path (mm).
+constexpr double kEnvelopeSample = 0.1;
+// The largest shortfall of the sampled envelope (mm): that of centres kEnvelopeSample apart
+// on a straight path, 0.25 um for R = 5 mm.
+double envelope_sampling_error_mm(double R) { return kEnvelopeSample * kEnvelopeSample / (8 * R); }
+
 struct Envelope {
   double max_rear = -std::numeric_limits<double>::infinity();  // max_x of solid rear (rel. y)
   double min_front = std::numeric_limits<double>::infinity();  // min_x of solid front
@@ -174,14 +180,22 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
   emit_cycle(bld, g, 0.0);
   Envelope env;
   env.cycle_length = one.length_mm();
-  // Centre points every ~0.1 mm (a disc-union error <= ds^2 / 8R = 1.3e-4 mm for R >= 10 mm,
-  // below the 0.02 mm margin), spaced in each segment's parameter (only the set of
-  // positions matters here), plus every segment's end points.
+  // Centre points ds apart along the path, plus every segment's end points. Discs of radius
+  // R on a path of curvature kappa, ds apart, fall short of the region it sweeps by
+  // ds^2 / 8 (kappa + 1 / R) midway between two of them (the envelope's sampling error,
+  // docs/models.md): ds is chosen per segment, from its largest curvature, so that this stays
+  // within envelope_sampling_error_mm(R), which plan_path adds to the wall band.
+  const double err = envelope_sampling_error_mm(g.R);
   std::vector<double> xs, ys;
   for (const Segment& seg : one.segments()) {
-    const int n = std::max(2, static_cast<int>(std::ceil(seg.length_mm() / 0.1)));
+    double kappa = 0;
+    for (int k = 0; k <= 64; ++k)
+      kappa = std::max(kappa, seg.curvature_at(seg.length_mm() * k / 64));
+    // A 5 % margin on the curvature, for its peak between the 65 samples.
+    const double ds = std::min(kEnvelopeSample, std::sqrt(8 * err / (1.05 * kappa + 1 / g.R)));
+    const int n = std::max(2, static_cast<int>(std::ceil(seg.length_mm() / ds)));
     for (int k = 0; k <= n; ++k) {
-      const Vec3 p = seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n);
+      const Vec3 p = seg.point_at(seg.length_mm() * k / n);
       xs.push_back(p.x());
       ys.push_back(p.y());
     }
@@ -468,12 +482,14 @@ PlannedPath plan_path(const Job& job) {
     throw InputError(fmt::format("[path] step: must be in (0, {:g}) mm, got {:g}", 2 * g.R, g.s));
   }
 
-  // Wall scallop bound: circles of radius >= R touching the wall every s (docs/models.md).
-  // Never inside the envelope's own sampling error (centres 0.1 mm apart leave gaps of
-  // 0.1^2 / 8R between their discs), twice over: for a tiny step the scallops are shallower
-  // than that gap, and the columns at the wall would show islands the cycles do not leave.
+  // The wall band left out of the coverage check: the scallop bound (circles of radius >= R
+  // touching the wall every s, docs/models.md) plus twice the envelope's sampling error (its
+  // dips come on top of the scallops). With only the larger of the two, and centres spaced
+  // without regard to the path's curvature, the column at the band's edge sat on the
+  // scallops' crests and a dip between two samples there read as an uncut island (elliptical,
+  // aspect 0.5, step 0.3 mm, where the orbit turns on a 1.25 mm radius at the wall).
   const double delta =
-      std::max(g.R - std::sqrt(g.R * g.R - 0.25 * g.s * g.s), 2 * 0.1 * 0.1 / (8 * g.R));
+      g.R - std::sqrt(g.R * g.R - 0.25 * g.s * g.s) + 2 * envelope_sampling_error_mm(g.R);
   // The count first: a step tiny against the slot is refused before any work.
   (void)checked_count(std::ceil((g.L + 2 * (g.a + g.b + g.R)) / g.s));
   const Envelope env = cycle_envelope(g, delta);
