@@ -598,6 +598,7 @@ TEST_F(Cli, MemoryEstimatesMatchThePeak) {
   const auto out = (dir_ / "o").string();
   const std::vector<std::string> runs = {
       "plan " + w + " -o " + out + ".ngc --set slot.length=1000 --set path.step=0.01",
+      "path " + w + " --dt 5e-5",
       "analyze " + w + " --set analysis.steps_per_tooth=16 --set slot.length=60 --json " + out +
           ".json",
       "synth-signal " + p + " -o " + out + ".wav --cycles 60 --rate 200000",

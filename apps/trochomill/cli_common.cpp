@@ -7,9 +7,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <fstream>
 #include <map>
 
 #include "trochomill/error.hpp"
@@ -175,6 +178,25 @@ void emit(const std::string& target, const std::string& text) {
   } else {
     write_file_atomic(target, text);
   }
+}
+
+void emit_stream(const std::string& target,
+                 const std::function<void(const std::function<void(std::string_view)>&)>& produce) {
+  if (target == "-") {
+    produce([](std::string_view piece) { std::fwrite(piece.data(), 1, piece.size(), stdout); });
+    std::fflush(stdout);
+    return;
+  }
+  write_file_atomic(target, [&](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw IoError("cannot write '" + target + "': " + std::strerror(errno));
+    produce([&](std::string_view piece) {
+      out.write(piece.data(), static_cast<std::streamsize>(piece.size()));
+      if (!out) throw IoError("cannot write '" + target + "': write failed");
+    });
+    out.flush();
+    if (!out) throw IoError("cannot write '" + target + "': write failed");
+  });
 }
 
 void emit_file(const std::string& target, const std::string& extension,

@@ -81,6 +81,10 @@ void check_output_dir(const std::string& dir, const std::string& option);
 
 /// Writes text to a file atomically, or to stdout for "-".
 void emit(const std::string& target, const std::string& text);
+/// The same for text made piece by piece: `produce` hands each piece to the sink it is given
+/// (a file of any size without holding it in memory).
+void emit_stream(const std::string& target,
+                 const std::function<void(const std::function<void(std::string_view)>&)>& produce);
 /// True when the summary goes to stdout: no output option writes to "-".
 [[nodiscard]] bool summary_to_stdout(std::initializer_list<const std::string*> outputs);
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,6 +28,12 @@ namespace trochomill {
 
 /// `path`'s samples with every tooth's tip (mm, s).
 [[nodiscard]] std::string path_samples_csv(const PathSamples& s, const ToothTracks& tr);
+/// The same, handed to `sink` in pieces of about 1 MB (a file of any size, written as it is
+/// made); `hooks`: the phase "writing CSV" with progress over the rows, cancelling throws
+/// Interrupted.
+void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
+                            const std::function<void(std::string_view)>& sink,
+                            const RunHooks& hooks = {});
 /// `check-gcode`'s report of a program: length, time (with the acceleration limit, when one
 /// is given), bounding box, feeds and spindle speed.
 [[nodiscard]] std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,

@@ -9,12 +9,16 @@
 
 namespace trochomill {
 
-std::string path_samples_csv(const PathSamples& s, const ToothTracks& tr) {
+void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
+                            const std::function<void(std::string_view)>& sink,
+                            const RunHooks& hooks) {
   std::string out = "t_s,s_mm,x_mm,y_mm,z_mm,tx,ty,tz,curvature_per_mm,segment";
   for (int k = 0; k < tr.teeth; ++k)
     out += fmt::format(",tooth{0}_x_mm,tooth{0}_y_mm,tooth{0}_z_mm", k);
   out += '\n';
+  hooks.begin("writing CSV");
   for (std::size_t i = 0; i < s.size(); ++i) {
+    hooks.step(i, s.size());
     fmt::format_to(std::back_inserter(out),
                    "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{}", s.t_s[i],
                    s.s_mm[i], s.x_mm[i], s.y_mm[i], s.z_mm[i], s.tx[i], s.ty[i], s.tz[i],
@@ -24,8 +28,18 @@ std::string path_samples_csv(const PathSamples& s, const ToothTracks& tr) {
                      tr.z_mm[k][i]);
     }
     out += '\n';
+    if (out.size() >= (1u << 20)) {
+      sink(out);
+      out.clear();
+    }
   }
-  return out;
+  sink(out);
+}
+
+std::string path_samples_csv(const PathSamples& s, const ToothTracks& tr) {
+  std::string all;
+  write_path_samples_csv(s, tr, [&](std::string_view piece) { all += piece; });
+  return all;
 }
 
 std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
