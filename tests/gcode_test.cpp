@@ -282,5 +282,29 @@ TEST(GcodeReader, MalformedProgramsGiveTheExpectedMessage) {
   }
 }
 
+// A program's header names the job it was written for: read back with that job nothing
+// differs; with another step, placement or tool each changed key is named once, with both
+// values; numbers equal as numbers ("1" and "1.0") agree; a program without a header
+// (written by hand or another CAM) has nothing to compare.
+TEST(GcodeHeader, MismatchesNameEachChangedKey) {
+  const Job job = test::wagih_job("trochoidal", {{"slot.length", "4", {}}});
+  const std::string code = write_gcode(job, plan_path(job).path, gcode_options(job.machine).write);
+  const GcodeProgram prog = read_gcode(code, "p.ngc");
+  EXPECT_TRUE(header_mismatches(job, prog, "p.ngc").empty());
+  const Job other = test::wagih_job("trochoidal", {{"slot.length", "4", {}},
+                                                   {"path.step", "0.8", {}},
+                                                   {"slot.angle", "30", {}},
+                                                   {"machine.work_offset", "G55", {}}});
+  const std::vector<std::string> d = header_mismatches(other, prog, "p.ngc");
+  ASSERT_EQ(d.size(), 2u);  // [machine] is how the program is formatted, not what it cuts
+  EXPECT_NE(d[0].find("path.step = 1"), std::string::npos) << d[0];
+  EXPECT_NE(d[0].find("the job has 0.8"), std::string::npos) << d[0];
+  EXPECT_NE(d[1].find("slot.angle"), std::string::npos) << d[1];
+  const Job same = test::wagih_job("trochoidal", {{"slot.length", "4.0", {}}});
+  EXPECT_TRUE(header_mismatches(same, prog, "p.ngc").empty());
+  const GcodeProgram plain = read_gcode("G0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\n", "hand.ngc");
+  EXPECT_TRUE(header_mismatches(other, plain, "hand.ngc").empty());
+}
+
 }  // namespace
 }  // namespace trochomill

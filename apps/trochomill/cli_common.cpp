@@ -80,51 +80,6 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
       fmt::format("{} (--set {}={})", help, key, value));
 }
 
-namespace {
-// Two TOML values alike: the same text, or numbers equal as numbers ("37" and "37.0").
-bool same_value(const std::string& a, const std::string& b) {
-  if (a == b) return true;
-  char* ea = nullptr;
-  char* eb = nullptr;
-  const double x = std::strtod(a.c_str(), &ea), y = std::strtod(b.c_str(), &eb);
-  return ea != a.c_str() && *ea == '\0' && eb != b.c_str() && *eb == '\0' && x == y;
-}
-}  // namespace
-
-std::vector<std::string> header_mismatches(const Job& job, const GcodeProgram& prog,
-                                           const std::string& name) {
-  // The sections the models read beside the program's moves (the tool, the slot and its
-  // placement, the orbit, the spindle); the others (how the program was formatted, material,
-  // measurements, analysis settings) may well differ on purpose.
-  static const std::vector<std::string> kProgramSections = {"tool.", "slot.", "path.", "cutting."};
-  auto defines_program = [](const std::string& key) {
-    return std::any_of(kProgramSections.begin(), kProgramSections.end(),
-                       [&](const std::string& s) { return key.rfind(s, 0) == 0; });
-  };
-  std::vector<std::string> out;
-  if (prog.info.header_keys.empty()) return out;  // not written by trochomill
-  std::map<std::string, std::string> in_job(job.flat_keys.begin(), job.flat_keys.end());
-  std::map<std::string, std::string> in_program(prog.info.header_keys.begin(),
-                                                prog.info.header_keys.end());
-  for (const auto& [key, v] : in_program) {
-    if (!defines_program(key)) continue;
-    const auto it = in_job.find(key);
-    if (it == in_job.end()) {
-      out.push_back(
-          fmt::format("{} was written with {} = {}, which the job does not set", name, key, v));
-    } else if (!same_value(v, it->second)) {
-      out.push_back(
-          fmt::format("{} was written with {} = {}, the job has {}", name, key, v, it->second));
-    }
-  }
-  for (const auto& [key, v] : in_job) {
-    if (defines_program(key) && in_program.count(key) == 0) {
-      out.push_back(fmt::format("{} was written without {} (the job has {})", name, key, v));
-    }
-  }
-  return out;
-}
-
 ToolPath job_path(const Job& job, const std::string& gcode_file) {
   if (gcode_file.empty()) return plan_path(job).path;
   const GcodeProgram prog = read_gcode_file(gcode_file, gcode_options(job.machine).read);

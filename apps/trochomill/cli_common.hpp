@@ -51,11 +51,6 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
 /// > lo (open at lo), finite, at most hi.
 [[nodiscard]] CLI::Validator finite_above(double lo, double hi);
 
-/// Where a trochomill program's header (the job keys it was written with) disagrees with the
-/// job in the sections the models read beside the moves ([tool], [slot], [path], [cutting]):
-/// one sentence per key. Empty for a program without such a header.
-[[nodiscard]] std::vector<std::string> header_mismatches(const Job& job, const GcodeProgram& prog,
-                                                         const std::string& name);
 /// A binary output whose writer needs a seekable file (libsndfile, assimp): written atomically
 /// to `target`, or for "-" to a temporary file `extension` that is then copied to stdout.
 void emit_file(const std::string& target, const std::string& extension,

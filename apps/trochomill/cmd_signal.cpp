@@ -153,10 +153,9 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
       check_memory("synth-signal", synth_signal_memory_bytes(job, a->synth), a->memory_gb,
                    fmt::format("lower --rate (now {:g} Hz) or --cycles (now {})", a->synth.rate_hz,
                                a->synth.cycles));
-      const Signal sig = synth_signal(job, job.monitor, a->synth);
       // The program may have fewer cycles than asked for: say how many the signal covers.
-      const int cycles =
-          std::min(a->synth.cycles, static_cast<int>(plan_path(job).path.cycles().size()));
+      int cycles = 0;
+      const Signal sig = synth_signal(job, job.monitor, a->synth, &cycles);
       // libsndfile writes WAV to a seekable file: for "-" a temporary one, then stdout.
       emit_file(a->out, ".wav",
                 [&](const std::filesystem::path& tmp) { write_wav(tmp.string(), sig); });

@@ -81,5 +81,11 @@ struct GcodeOptions {
     std::string_view text);
 [[nodiscard]] GcodeProgram read_gcode_file(const std::filesystem::path& file,
                                            const GcodeReadOptions& options = {});
+/// Where a trochomill program's header (the job keys it was written with) disagrees with the
+/// job in the sections the models read beside the moves ([tool], [slot], [path], [cutting]):
+/// one sentence per key, naming the program as `name`. Empty for a program without such a
+/// header (not written by trochomill).
+[[nodiscard]] std::vector<std::string> header_mismatches(const Job& job, const GcodeProgram& prog,
+                                                         const std::string& name);
 
 }  // namespace trochomill

@@ -220,7 +220,10 @@ struct SynthOptions {
   double lead_s = 0.1;    ///< air before the first cycle (the program start)
   std::uint32_t seed = 1;
 };
-[[nodiscard]] Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o);
+/// `cycles_covered`, if given, receives the cycles the signal covers: `o.cycles`, or all the
+/// planned program has when it has fewer.
+[[nodiscard]] Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o,
+                                  int* cycles_covered = nullptr);
 /// The memory synth_signal will use (bytes), before running it.
 [[nodiscard]] double synth_signal_memory_bytes(const Job& job, const SynthOptions& options);
 

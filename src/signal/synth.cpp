@@ -34,7 +34,8 @@ std::vector<double> band_noise(std::size_t n, const Sos& sos, double rate_hz, st
 
 }  // namespace
 
-Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o) {
+Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions& o,
+                    int* cycles_covered) {
   // Each broken rule by itself, with the value that broke it.
   std::vector<std::string> problems;
   const auto need = [&](bool ok, std::string what) {
@@ -53,6 +54,7 @@ Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions
   const std::vector<double> starts = planned_cycle_bounds(job);
   const std::size_t ncyc =
       std::min<std::size_t>(static_cast<std::size_t>(o.cycles), starts.size() - 1);
+  if (cycles_covered != nullptr) *cycles_covered = static_cast<int>(ncyc);
   const double t_end = o.lead_s + starts[ncyc];
   if (!(t_end * o.rate_hz < 4e9)) {
     throw InputError(fmt::format("synth-signal: {:.4g} s at {:g} Hz is more than 4e9 samples",
