@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
 
 #include "trochomill/error.hpp"
 
@@ -61,6 +64,139 @@ TEST(Surface, ImprintDensityClosedForm) {
   EXPECT_DOUBLE_EQ(d.crossings_per_mm[1], 0.0);  // |X| = R: tangent, not a crossing pair
   EXPECT_DOUBLE_EQ(d.crossings_per_mm[2], 2 * 40 / 3.0);
   EXPECT_THROW((void)bottom_imprint_density({0.0}, 5.0, 10.0, 0.0, 5), InputError);
+}
+
+// ---- surface texture ---------------------------------------------------------------------
+
+std::vector<double> sinusoid(double amplitude, double wavelength, double dx, std::size_t n) {
+  std::vector<double> z(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    z[i] = amplitude * std::sin(2 * std::numbers::pi * static_cast<double>(i) * dx / wavelength);
+  }
+  return z;
+}
+
+// A sinusoid of amplitude A over whole periods, sampled 4000 times a period from a zero (its
+// peaks and valleys are samples): Ra = 2A/pi (the sampled mean of |sin| is cot(pi / 2N) / N,
+// 2e-7 above it for N = 2000 samples a half period), Rq = A/sqrt 2 (exact on whole periods),
+// Rp = Rv = A, Rz = Rt = 2A, Rsk = 0, Rku = 3/2, RSm = the wavelength; each to 1e-6 relative
+// (Rsk to 1e-9 absolute: odd moments cancel to rounding).
+TEST(Texture, SinusoidParametersMatchTheirClosedForms) {
+  const double A = 0.002, lambda = 0.1, dx = lambda / 4000;
+  const std::vector<double> z = sinusoid(A, lambda, dx, 40 * 4000);
+  const ProfileParameters p = profile_parameters(z, dx);
+  EXPECT_NEAR(p.ra_mm, 2 * A / std::numbers::pi, 1e-6 * A);
+  EXPECT_NEAR(p.rq_mm, A / std::sqrt(2.0), 1e-6 * A);
+  EXPECT_NEAR(p.rp_mm, A, 1e-6 * A);
+  EXPECT_NEAR(p.rv_mm, A, 1e-6 * A);
+  EXPECT_NEAR(p.rz_mm, 2 * A, 2e-6 * A);
+  EXPECT_NEAR(p.rt_mm, 2 * A, 2e-6 * A);
+  EXPECT_NEAR(p.rsk, 0.0, 1e-9);
+  EXPECT_NEAR(p.rku, 1.5, 1e-6);
+  EXPECT_NEAR(p.rsm_mm, lambda, 1e-6 * lambda);
+  EXPECT_GE(p.elements, 38);  // 40 periods less the incomplete stretches at the ends
+  EXPECT_EQ(p.sections, 5);
+  EXPECT_NEAR(p.evaluation_length_mm, 4.0, 1e-12);
+  // The material ratio: half the length lies above the mean line, all of it above the bottom.
+  const MaterialRatioCurve c = material_ratio_curve(z, 3);
+  EXPECT_NEAR(c.c_mm[0], A, 1e-12);
+  EXPECT_NEAR(c.ratio_percent[1], 50.0, 0.01);  // the zeros themselves: 2 samples a period
+  EXPECT_DOUBLE_EQ(c.ratio_percent[2], 100.0);
+}
+
+// Small bumps do not make elements: a sinusoid with a ripple of 5 % of its amplitude at 20
+// times its frequency crosses the mean line near every zero several times, stretches lower
+// than 10 % of Rz that merge into their neighbours; RSm stays the wavelength (1e-3 relative:
+// the merged crossings move by the ripple's share of the slope).
+TEST(Texture, SmallCrossingsMergeIntoTheirElements) {
+  const double A = 0.002, lambda = 0.1, dx = lambda / 4000;
+  std::vector<double> z = sinusoid(A, lambda, dx, 40 * 4000);
+  // The ripple is at its crest where the sinusoid crosses zero, moving the crossing; 15 % of
+  // A at 20 times the frequency is three times as steep, so it crosses back and forth.
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    z[i] += 0.15 * A * std::cos(2 * std::numbers::pi * 20 * static_cast<double>(i) * dx / lambda);
+  }
+  std::size_t crossings = 0;
+  for (std::size_t i = 1; i < z.size(); ++i) crossings += (z[i - 1] < 0) != (z[i] < 0) ? 1 : 0;
+  EXPECT_GE(crossings, 3u * 80u - 2);  // three times at each zero of the sinusoid
+  const ProfileParameters p = profile_parameters(z, dx);
+  EXPECT_NEAR(p.rsm_mm, lambda, 1e-3 * lambda);
+  EXPECT_LE(p.elements, 40);
+}
+
+// The filter's transmission: a sinusoid of wavelength lambda keeps exp(-pi (alpha lambda_c /
+// lambda)^2) of its amplitude in the mean line (50 % at lambda = lambda_c), measured by
+// projecting the mean line on sin and cos over whole periods, within 1e-4 over a sweep of
+// wavelengths from lambda_c / 4 to 10 lambda_c. The truncation at +-lambda_c (6.5e-7 of the
+// peak weight) and the 500 samples a cut-off leave far less than that.
+TEST(Texture, GaussianFilterTransmitsAsTheStandardSays) {
+  const double lc = 0.8, dx = lc / 500, A = 0.001;
+  EXPECT_NEAR(gaussian_transmission(lc, lc), 0.5, 1e-15);
+  for (const double ratio : {0.25, 0.5, 0.8, 1.0, 1.25, 2.0, 4.0, 10.0}) {
+    const double lambda = ratio * lc;
+    const std::size_t per = static_cast<std::size_t>(std::llround(lambda / dx));
+    const double lam = static_cast<double>(per) * dx;  // whole samples a period
+    const std::size_t periods = std::max<std::size_t>(4, static_cast<std::size_t>(12 * lc / lam));
+    const std::vector<double> z = sinusoid(A, lam, dx, periods * per + 2 * 500 + 1);
+    const FilteredProfile f = gaussian_filter(z, dx, lc);
+    ASSERT_EQ(f.first, 500u);
+    double s = 0, c = 0;
+    const std::size_t m = (f.mean_mm.size() / per) * per;  // whole periods of the mean line
+    for (std::size_t i = 0; i < m; ++i) {
+      const double ph =
+          2 * std::numbers::pi * static_cast<double>(f.first + i) / static_cast<double>(per);
+      s += f.mean_mm[i] * std::sin(ph), c += f.mean_mm[i] * std::cos(ph);
+    }
+    const double amp = 2 * std::hypot(s, c) / static_cast<double>(m);
+    EXPECT_NEAR(amp / A, gaussian_transmission(lam, lc), 1e-4) << ratio;
+    // Mean line and residual add up to the profile.
+    for (std::size_t i = 0; i < f.mean_mm.size(); i += 97) {
+      EXPECT_NEAR(f.mean_mm[i] + f.residual_mm[i], z[f.first + i], 1e-15);
+    }
+  }
+}
+
+// End handling: with renormalised weights the mean line of a constant is that constant to the
+// last sample, and away from the ends (one cut-off in) it equals the run-in/run-out filter's.
+TEST(Texture, FilterEnds) {
+  const double dx = 0.001, lc = 0.08;
+  const std::vector<double> flat(1000, 0.0123);
+  const FilteredProfile fn = gaussian_filter(flat, dx, lc, FilterEnds::normalize);
+  ASSERT_EQ(fn.mean_mm.size(), flat.size());
+  for (const double v : fn.residual_mm) EXPECT_NEAR(v, 0.0, 1e-15);
+  const std::vector<double> z = sinusoid(0.001, 0.05, dx, 1000);
+  const FilteredProfile a = gaussian_filter(z, dx, lc, FilterEnds::normalize),
+                        b = gaussian_filter(z, dx, lc, FilterEnds::discard);
+  ASSERT_EQ(b.first, 80u);
+  for (std::size_t i = 0; i < b.mean_mm.size(); ++i) {
+    EXPECT_NEAR(a.mean_mm[b.first + i], b.mean_mm[i], 1e-15);
+  }
+}
+
+TEST(Texture, BadInputIsRefusedWithTheReason) {
+  const std::vector<double> z(100, 0.0);
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message([&] { (void)gaussian_filter(z, 0.0, 0.1); }).find("sample spacing"),
+            std::string::npos);
+  EXPECT_NE(message([&] { (void)gaussian_filter(z, 0.01, 0.015); }).find("two sample spacings"),
+            std::string::npos);
+  EXPECT_NE(message([&] { (void)gaussian_filter(z, 0.01, 0.6); }).find("shorter than two cut-offs"),
+            std::string::npos);
+  std::vector<double> bad = z;
+  bad[7] = std::nan("");
+  EXPECT_NE(message([&] { (void)profile_parameters(bad, 0.01); }).find("(sample 7)"),
+            std::string::npos);
+  EXPECT_NE(message([&] {
+              (void)profile_parameters(std::vector<double>(6, 0.0), 0.01);
+            }).find("at least two per section"),
+            std::string::npos);
 }
 
 }  // namespace

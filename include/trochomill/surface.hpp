@@ -3,6 +3,7 @@
 // the cutting edge's imprints on the floor (Wagih 2023 Section 4; docs/models.md section 8).
 #pragma once
 
+#include <cstddef>
 #include <limits>
 #include <vector>
 
@@ -52,5 +53,72 @@ struct ImprintDensity {
 [[nodiscard]] ImprintDensity bottom_imprint_density(const std::vector<double>& centre_x_mm,
                                                     double radius_mm, double half_width_mm,
                                                     double advance_mm, int points);
+
+// ---- surface texture of a profile (ISO 16610-21 filter, ISO 21920-2 parameters) ----------
+
+/// How the Gaussian filter treats the profile's ends, where its weighting function (+-lambda)
+/// reaches past the data.
+enum class FilterEnds {
+  /// The mean line only where the whole weighting function lies on the profile: one cut-off
+  /// at each end is dropped (run-in and run-out, as on a stylus instrument's traverse).
+  discard,
+  /// Over the whole profile, the weights that lie on it renormalised to sum to one (the
+  /// zero-order Gaussian regression of ISO 16610-28's end-effect correction).
+  normalize,
+};
+
+/// A profile split by the ISO 16610-21 Gaussian filter: the mean line (wavelengths longer than
+/// the cut-off, transmitted at exp(-pi (alpha lambda_c / lambda)^2), 50 % at lambda_c, alpha =
+/// sqrt(ln 2 / pi)) and the residual (the profile less its mean line), on the span of the
+/// input the filter covers (`first`..`first + mean_mm.size()` of the input samples).
+struct FilteredProfile {
+  std::size_t first = 0;            ///< index of the first output sample in the input
+  std::vector<double> mean_mm;      ///< mean line (long-wave part), mm
+  std::vector<double> residual_mm;  ///< profile less mean line (short-wave part), mm
+};
+
+/// Filters heights `z_mm` sampled every `dx_mm` with cut-off `cutoff_mm` (the weighting
+/// function truncated at +-cutoff, where it is 6.5e-7 of its peak; weights normalised).
+/// Throws InputError for non-finite or non-positive dx or cut-off, a non-finite height, a
+/// cut-off under 2 dx, or (discard) a profile shorter than 2 cut-offs plus a sample.
+[[nodiscard]] FilteredProfile gaussian_filter(const std::vector<double>& z_mm, double dx_mm,
+                                              double cutoff_mm,
+                                              FilterEnds ends = FilterEnds::discard);
+
+/// The Gaussian filter's transmission of the long-wave part at wavelength `lambda_mm`.
+[[nodiscard]] double gaussian_transmission(double lambda_mm, double cutoff_mm);
+
+/// Profile parameters (ISO 21920-2, the successor of ISO 4287) of a profile that is already
+/// the part to evaluate (an R profile: the residual of the lambda_c filter), heights in mm
+/// about its mean line, sampled every dx_mm, over `sections` equal sampling lengths (5 by
+/// default; the section-wise parameters are their mean).
+struct ProfileParameters {
+  double ra_mm = 0;  ///< arithmetic mean height |z|
+  double rq_mm = 0;  ///< root mean square height
+  double rsk = 0;    ///< skewness (Rq^-3 mean z^3)
+  double rku = 0;    ///< kurtosis (Rq^-4 mean z^4)
+  double rp_mm = 0;  ///< largest peak height, mean over the sections
+  double rv_mm = 0;  ///< largest valley depth (positive), mean over the sections
+  double rz_mm = 0;  ///< Rp + Rv per section, mean over the sections
+  double rt_mm = 0;  ///< highest peak to lowest valley over the evaluation length
+  /// mean width of the profile elements (a peak above and a valley below the mean line, each
+  /// at least 10 % of Rz high and 1 % of the sampling length wide), mm; 0 without elements
+  double rsm_mm = 0;
+  int elements = 0;  ///< profile elements RSm is the mean of
+  double evaluation_length_mm = 0;
+  int sections = 0;
+};
+/// Throws InputError for fewer than 2 samples per section, bad dx or a non-finite height.
+[[nodiscard]] ProfileParameters profile_parameters(const std::vector<double>& z_mm, double dx_mm,
+                                                   int sections = 5);
+
+/// The material ratio (Abbott-Firestone) curve: the share of the evaluation length where the
+/// profile is at or above height c, for heights from its top to its bottom (`points` values).
+struct MaterialRatioCurve {
+  std::vector<double> c_mm;           ///< height, top to bottom
+  std::vector<double> ratio_percent;  ///< Rmr(c), 0 to 100
+};
+[[nodiscard]] MaterialRatioCurve material_ratio_curve(const std::vector<double>& z_mm,
+                                                      int points = 101);
 
 }  // namespace trochomill

@@ -1,0 +1,212 @@
+// Surface texture of a profile: the ISO 16610-21 Gaussian filter and the ISO 21920-2 profile
+// parameters (surface.hpp; docs/models.md section "Surface texture").
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "trochomill/error.hpp"
+#include "trochomill/surface.hpp"
+
+namespace trochomill {
+
+namespace {
+
+// alpha = sqrt(ln 2 / pi): the Gaussian whose transmission is 50 % at the cut-off.
+const double kAlpha = std::sqrt(std::numbers::ln2 / std::numbers::pi);
+
+void check_profile(const std::vector<double>& z_mm, double dx_mm, const char* what) {
+  if (!(std::isfinite(dx_mm) && dx_mm > 0)) {
+    throw InputError(
+        fmt::format("{}: the sample spacing must be a finite number > 0 mm, got {}", what, dx_mm));
+  }
+  for (std::size_t i = 0; i < z_mm.size(); ++i) {
+    if (!std::isfinite(z_mm[i])) {
+      throw InputError(
+          fmt::format("{}: height {} (sample {}) is not a finite number", what, z_mm[i], i));
+    }
+  }
+}
+
+}  // namespace
+
+double gaussian_transmission(double lambda_mm, double cutoff_mm) {
+  const double r = kAlpha * cutoff_mm / lambda_mm;
+  return std::exp(-std::numbers::pi * r * r);
+}
+
+FilteredProfile gaussian_filter(const std::vector<double>& z_mm, double dx_mm, double cutoff_mm,
+                                FilterEnds ends) {
+  check_profile(z_mm, dx_mm, "Gaussian filter");
+  if (!(std::isfinite(cutoff_mm) && cutoff_mm >= 2 * dx_mm)) {
+    throw InputError(fmt::format(
+        "Gaussian filter: the cut-off must be a finite number of at least two sample spacings "
+        "({} mm), got {} mm",
+        2 * dx_mm, cutoff_mm));
+  }
+  // The weighting function s(x) = exp(-pi (x / (alpha lambda_c))^2) / (alpha lambda_c) on the
+  // samples within +-lambda_c; normalised to sum to one (the discrete sum of a Gaussian this
+  // wide against its spacing is its integral to far below rounding).
+  const auto half = static_cast<std::size_t>(std::floor(cutoff_mm / dx_mm));
+  std::vector<double> w(2 * half + 1);
+  double sum = 0;
+  for (std::size_t k = 0; k < w.size(); ++k) {
+    const double x = (static_cast<double>(k) - static_cast<double>(half)) * dx_mm;
+    const double u = x / (kAlpha * cutoff_mm);
+    w[k] = std::exp(-std::numbers::pi * u * u);
+    sum += w[k];
+  }
+  for (double& v : w) v /= sum;
+  const std::size_t n = z_mm.size();
+  FilteredProfile out;
+  if (ends == FilterEnds::discard) {
+    if (n < 2 * half + 1) {
+      throw InputError(fmt::format(
+          "Gaussian filter: {:.6g} mm of profile is shorter than two cut-offs ({:.6g} mm) and "
+          "a sample: nothing is left after the run-in and run-out; give a longer profile, a "
+          "shorter cut-off or ends = normalize",
+          static_cast<double>(n - 1) * dx_mm, 2 * cutoff_mm));
+    }
+    out.first = half;
+    out.mean_mm.resize(n - 2 * half);
+    for (std::size_t i = half; i + half < n; ++i) {
+      double m = 0;
+      for (std::size_t k = 0; k < w.size(); ++k) m += w[k] * z_mm[i - half + k];
+      out.mean_mm[i - half] = m;
+    }
+  } else {
+    if (n == 0) throw InputError("Gaussian filter: the profile is empty");
+    out.mean_mm.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k0 = i < half ? half - i : 0;
+      const std::size_t k1 = std::min(w.size(), n + half - i);  // exclusive
+      double m = 0, ws = 0;
+      for (std::size_t k = k0; k < k1; ++k) {
+        m += w[k] * z_mm[i + k - half];
+        ws += w[k];
+      }
+      out.mean_mm[i] = m / ws;
+    }
+  }
+  out.residual_mm.resize(out.mean_mm.size());
+  for (std::size_t i = 0; i < out.mean_mm.size(); ++i) {
+    out.residual_mm[i] = z_mm[out.first + i] - out.mean_mm[i];
+  }
+  return out;
+}
+
+ProfileParameters profile_parameters(const std::vector<double>& z_mm, double dx_mm, int sections) {
+  check_profile(z_mm, dx_mm, "profile parameters");
+  if (sections < 1) {
+    throw InputError(fmt::format("profile parameters: sections must be >= 1, got {}", sections));
+  }
+  const std::size_t n = z_mm.size();
+  const auto ns = static_cast<std::size_t>(sections);
+  if (n < 2 * ns) {
+    throw InputError(fmt::format(
+        "profile parameters: {} samples for {} sections; at least two per section", n, sections));
+  }
+  ProfileParameters p;
+  p.sections = sections;
+  p.evaluation_length_mm = static_cast<double>(n) * dx_mm;
+  // Moments about the profile's mean line (z = 0 for a filtered profile; its mean otherwise).
+  double mean = 0;
+  for (const double z : z_mm) mean += z;
+  mean /= static_cast<double>(n);
+  double s1 = 0, s2 = 0, s3 = 0, s4 = 0;
+  for (const double v : z_mm) {
+    const double z = v - mean;
+    s1 += std::abs(z), s2 += z * z, s3 += z * z * z, s4 += z * z * z * z;
+  }
+  const double dn = static_cast<double>(n);
+  p.ra_mm = s1 / dn;
+  p.rq_mm = std::sqrt(s2 / dn);
+  p.rsk = p.rq_mm > 0 ? s3 / dn / (p.rq_mm * p.rq_mm * p.rq_mm) : 0.0;
+  p.rku = p.rq_mm > 0 ? s4 / dn / (p.rq_mm * p.rq_mm * p.rq_mm * p.rq_mm) : 0.0;
+  // Section-wise peak height and valley depth: sections of n / sections samples (the last
+  // takes the remainder).
+  double hi_all = -std::numeric_limits<double>::infinity(), lo_all = -hi_all;
+  for (std::size_t k = 0; k < ns; ++k) {
+    const std::size_t a = k * n / ns, b = (k + 1) * n / ns;
+    const auto [lo, hi] = std::minmax_element(z_mm.begin() + static_cast<std::ptrdiff_t>(a),
+                                              z_mm.begin() + static_cast<std::ptrdiff_t>(b));
+    p.rp_mm += (*hi - mean) / static_cast<double>(ns);
+    p.rv_mm += (mean - *lo) / static_cast<double>(ns);
+    hi_all = std::max(hi_all, *hi), lo_all = std::min(lo_all, *lo);
+  }
+  p.rz_mm = p.rp_mm + p.rv_mm;
+  p.rt_mm = hi_all - lo_all;
+  // Profile elements: the stretches between crossings of the mean line, each a peak (above)
+  // or a valley (below); one lower than 10 % of Rz or narrower than 1 % of the sampling
+  // length belongs to its neighbours (they merge over it). An element is a peak and the valley
+  // after it (or a valley and the peak after it); the stretches before the first crossing and
+  // after the last are incomplete and not counted.
+  struct Stretch {
+    bool above;
+    double width_mm, height_mm;
+  };
+  std::vector<double> cross;  // x of each crossing, mm
+  std::vector<Stretch> st;
+  for (std::size_t i = 1; i < n; ++i) {
+    const double a = z_mm[i - 1] - mean, b = z_mm[i] - mean;
+    if ((a < 0) != (b < 0)) cross.push_back((static_cast<double>(i - 1) + a / (a - b)) * dx_mm);
+  }
+  for (std::size_t c = 0; c + 1 < cross.size(); ++c) {
+    const auto i0 = static_cast<std::size_t>(std::ceil(cross[c] / dx_mm));
+    const auto i1 = std::min(n - 1, static_cast<std::size_t>(std::floor(cross[c + 1] / dx_mm)));
+    const bool above = z_mm[std::min(i0, n - 1)] - mean >= 0;
+    double h = 0;
+    for (std::size_t i = i0; i <= i1; ++i) h = std::max(h, std::abs(z_mm[i] - mean));
+    st.push_back({above, cross[c + 1] - cross[c], h});
+  }
+  const double min_h = 0.1 * p.rz_mm, min_w = 0.01 * p.evaluation_length_mm / sections;
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (std::size_t j = 0; j < st.size(); ++j) {
+      if (st[j].height_mm >= min_h && st[j].width_mm >= min_w) continue;
+      // Merge with both neighbours (of the other sign, so of one sign with each other).
+      const std::size_t a = j > 0 ? j - 1 : j, b = std::min(st.size() - 1, j + 1);
+      Stretch m{a == j ? st[b].above : st[a].above, 0, 0};
+      for (std::size_t k = a; k <= b; ++k) {
+        m.width_mm += st[k].width_mm;
+        if (st[k].above == m.above) m.height_mm = std::max(m.height_mm, st[k].height_mm);
+      }
+      st.erase(st.begin() + static_cast<std::ptrdiff_t>(a),
+               st.begin() + static_cast<std::ptrdiff_t>(b) + 1);
+      if (a == j && b == j) break;  // a lone stretch: nothing left to merge with
+      st.insert(st.begin() + static_cast<std::ptrdiff_t>(a), m);
+      merged = true;
+      break;
+    }
+  }
+  double widths = 0;
+  for (std::size_t j = 0; j + 1 < st.size(); j += 2) {
+    widths += st[j].width_mm + st[j + 1].width_mm;
+    ++p.elements;
+  }
+  p.rsm_mm = p.elements > 0 ? widths / p.elements : 0.0;
+  return p;
+}
+
+MaterialRatioCurve material_ratio_curve(const std::vector<double>& z_mm, int points) {
+  check_profile(z_mm, 1.0, "material ratio curve");
+  if (z_mm.empty() || points < 2) {
+    throw InputError("material ratio curve: needs a profile and at least 2 heights");
+  }
+  std::vector<double> sorted = z_mm;
+  std::sort(sorted.begin(), sorted.end());
+  const double top = sorted.back(), bottom = sorted.front();
+  MaterialRatioCurve c;
+  for (int k = 0; k < points; ++k) {
+    const double h = top - (top - bottom) * k / (points - 1);
+    // Samples at or above h: those from the first not below it.
+    const auto at = std::lower_bound(sorted.begin(), sorted.end(), h);
+    c.c_mm.push_back(h);
+    c.ratio_percent.push_back(100.0 * static_cast<double>(sorted.end() - at) /
+                              static_cast<double>(sorted.size()));
+  }
+  return c;
+}
+
+}  // namespace trochomill
