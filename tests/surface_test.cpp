@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "test_util.hpp"
 #include "trochomill/error.hpp"
 
 namespace trochomill {
@@ -197,6 +198,58 @@ TEST(Texture, BadInputIsRefusedWithTheReason) {
               (void)profile_parameters(std::vector<double>(6, 0.0), 0.01);
             }).find("at least two per section"),
             std::string::npos);
+}
+
+// One period of a periodic profile: a short wave (lambda_c / 16) keeps all of its amplitude
+// in the R profile (the mean line takes exp(-pi 16^2 alpha^2) of it: nothing), so Ra = 2A/pi
+// within 1e-4 and the W profile is flat; its Ra of 1.27 um takes the 0.8 mm default cut-off,
+// one of 0.064 um the 0.25 mm one. A long wave of five cut-offs (4 mm) and amplitude B goes
+// to the W profile at exp(-pi (alpha 0.8 / 4)^2) = 0.9727: Wt = 2 B times that, within 1e-3
+// (the evaluation length holds one whole period of it, its crest and trough samples).
+TEST(Texture, PeriodicProfileTextureChoosesTheCutOffAndSplitsRFromW) {
+  const double A = 0.002, period = 4.0, dx = period / 16000;
+  std::vector<double> z(16000);
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    z[i] = A * std::sin(2 * std::numbers::pi * 80 * static_cast<double>(i) / 16000);  // 0.05 mm
+  }
+  ProfileTexture t = periodic_profile_texture(z, dx);
+  EXPECT_EQ(t.cutoff_mm, 0.8);
+  EXPECT_EQ(t.cutoff_source, "ISO 21920-3 default from Ra");
+  EXPECT_NEAR(t.roughness.ra_mm, 2 * A / std::numbers::pi, 1e-4 * A);
+  EXPECT_LT(t.wt_mm, 1e-6 * A);
+  EXPECT_EQ(t.roughness.sections, 5);
+  std::vector<double> small = z;
+  for (double& v : small) v *= 0.05;  // Ra 0.064 um
+  EXPECT_EQ(periodic_profile_texture(small, dx).cutoff_mm, 0.25);
+  const double B = 0.01;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    z[i] += B * std::sin(2 * std::numbers::pi * static_cast<double>(i) / 16000);
+  }
+  t = periodic_profile_texture(z, dx, 0.8);
+  EXPECT_EQ(t.cutoff_source, "given");
+  EXPECT_NEAR(t.wt_mm, 2 * B * gaussian_transmission(4.0, 0.8), 1e-3 * 2 * B);
+}
+
+// Straight full-immersion slotting: the wall along the feed carries one cusp per tooth pass,
+// f_z apart and f_z^2 / (8 R) high (the kinematic roughness of the tooth-tip circles). The
+// tooth-level wall's Rz equals that within 5 % (the tips' trochoids are not quite circles:
+// the feed adds f_z / (2 pi R) of curvature), Rsm the cusp spacing f_z within 1 %.
+TEST(Texture, StraightSlotWallsGiveTheKinematicCusp) {
+  const Job job = test::straight_job(10.0);
+  const double fz = job.cutting.feed_per_tooth_mm, R = job.tool.radius_mm();
+  ToolPath p;
+  p.append(Segment::line(Vec3(0, 0, -6), Vec3(0, 3, -6), Motion::feed,
+                         job.cutting.feed_rate_mm_per_min));
+  const PathSamples s = sample_by_spindle_angle(p, 3600, job.cutting.spindle_speed_rpm);
+  const ToothTracks tr = tooth_tracks(s, job.tool, job.cutting);
+  // Only tips within 0.05 mm of the wall (the cusps are 0.14 um deep).
+  // 200 points a cusp: the sharp crest is missed by at most its slope f_z / 2R times half a
+  // spacing, 1 % of the cusp height.
+  const Walls w = walls_from_tips(tr, 0.0, 1.5, 1.5 + fz, 201, 0.05);
+  std::vector<double> z(w.left.x_mm.begin(), w.left.x_mm.end() - 1);
+  const ProfileTexture t = periodic_profile_texture(z, fz / 200);
+  EXPECT_NEAR(t.roughness.rz_mm, fz * fz / (8 * R), 0.05 * fz * fz / (8 * R));
+  EXPECT_NEAR(t.roughness.rsm_mm, fz, 0.01 * fz);
 }
 
 }  // namespace

@@ -59,10 +59,16 @@ struct ProcessMetrics {
   // Walls (steady state, one period of y) and floor.
   Walls walls_path;   ///< path level (envelope of tool circles)
   Walls walls_tooth;  ///< tooth level (envelope of tooth tips)
+  /// The predicted texture of each wall along the feed (y): the tooth-level profile (material
+  /// side up) repeated as the steady state repeats it, filtered at the ISO 21920-3 default
+  /// cut-off for its Ra (surface.hpp: periodic_profile_texture). Absent without a tooth-level
+  /// profile.
+  std::optional<ProfileTexture> texture_left, texture_right;
   ImprintDensity imprint;
 
-  // Performance index (Wagih Eq. 7) from [measured]; W_max from the job's measurement or, if
-  // absent, the tooth-level waviness. Units: (mm^3/min) / (N um um).
+  // Performance index (Wagih Eq. 7): F_R,max from [measured] or the force model, Ra from
+  // [measured] or the walls' predicted texture (the larger), W_max from [measured] or the
+  // tooth-level waviness. Units: (mm^3/min) / (N um um).
   std::optional<double> performance_index;
   std::optional<double> force_max_predicted_n;  ///< F_R,max from the force model (N), if run
   std::string performance_index_note;           ///< where its inputs came from, or what is missing

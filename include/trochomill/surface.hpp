@@ -5,6 +5,8 @@
 
 #include <cstddef>
 #include <limits>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "trochomill/path.hpp"
@@ -111,6 +113,32 @@ struct ProfileParameters {
 /// Throws InputError for fewer than 2 samples per section, bad dx or a non-finite height.
 [[nodiscard]] ProfileParameters profile_parameters(const std::vector<double>& z_mm, double dx_mm,
                                                    int sections = 5);
+
+/// The ISO 21920-3 (ISO 4288) default cut-off for a non-periodic profile of roughness Ra:
+/// 0.08 mm up to Ra 0.02 um, 0.25 mm to 0.1 um, 0.8 mm to 2 um, 2.5 mm to 10 um, 8 mm above.
+[[nodiscard]] double default_cutoff_mm(double ra_mm);
+
+/// Roughness (R profile: the residual of the lambda_c filter, five cut-offs long) and waviness
+/// (W profile: its mean line) of a profile, with the cut-off used.
+struct ProfileTexture {
+  double cutoff_mm = 0;
+  /// How the cut-off was chosen: "given", or "ISO 21920-3 default from Ra" (found by
+  /// iterating: Ra with 0.8 mm, the table's cut-off for it, again until it stays).
+  std::string cutoff_source;
+  ProfileParameters roughness;
+  double wa_mm = 0;  ///< arithmetic mean height of the W profile about its mean
+  double wt_mm = 0;  ///< total height of the W profile over the evaluation length
+};
+/// The texture of one period of a periodic profile (heights every dx_mm; the sample after the
+/// last would be the first again): repeated to a run-in, five cut-offs and a run-out, filtered
+/// with `cutoff_mm` or the default for its Ra, evaluated over the five cut-offs.
+[[nodiscard]] ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm,
+                                                      double dx_mm,
+                                                      std::optional<double> cutoff_mm = {});
+/// The same for an open profile (a measured trace): run-in and run-out of one cut-off each;
+/// the evaluation length is what lies between (five cut-offs or what there is, at least one).
+[[nodiscard]] ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
+                                             std::optional<double> cutoff_mm = {});
 
 /// The material ratio (Abbott-Firestone) curve: the share of the evaluation length where the
 /// profile is at or above height c, for heights from its top to its bottom (`points` values).

@@ -508,6 +508,19 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
         }
       }
     }
+    // The walls' texture along y: one period of the tooth-level profile (its last point is
+    // the first again), material side up (+x on the left wall, -x on the right).
+    for (const bool left : {true, false}) {
+      const WallProfile& wall = left ? m.walls_tooth.left : m.walls_tooth.right;
+      if (wall.x_mm.size() < 3) continue;
+      std::vector<double> z(wall.x_mm.begin(), wall.x_mm.end() - 1);
+      if (!left) {
+        for (double& v : z) v = -v;
+      }
+      const double dy =
+          (wall.y_mm.back() - wall.y_mm.front()) / static_cast<double>(wall.y_mm.size() - 1);
+      (left ? m.texture_left : m.texture_right) = periodic_profile_texture(z, dy);
+    }
   }
 
   // Bottom imprints: one circle per tooth pass at the floor in the window.
@@ -564,22 +577,27 @@ void set_performance_index(const Job& job, ProcessMetrics& m,
       1000.0 * std::max(m.walls_tooth.left.waviness_mm, m.walls_tooth.right.waviness_mm));
   const std::optional<double> force =
       job.measured.force_max_n ? job.measured.force_max_n : predicted_force_max_n;
-  if (force && job.measured.roughness_ra_um && w_max_um > 0) {
-    m.performance_index = m.mrr_mm3_per_min / (*force * *job.measured.roughness_ra_um * w_max_um);
+  std::optional<double> ra_um = job.measured.roughness_ra_um;
+  if (!ra_um && m.texture_left && m.texture_right) {
+    ra_um = 1000.0 * std::max(m.texture_left->roughness.ra_mm, m.texture_right->roughness.ra_mm);
+  }
+  if (force && ra_um && *ra_um > 0 && w_max_um > 0) {
+    m.performance_index = m.mrr_mm3_per_min / (*force * *ra_um * w_max_um);
     m.performance_index_note = fmt::format(
-        "MRR {:.1f} mm^3/min (model), F_R,max {:.4g} N ({}), Ra {:g} um (measured), W_max {:.3g} "
+        "MRR {:.1f} mm^3/min (model), F_R,max {:.4g} N ({}), Ra {:.4g} um ({}), W_max {:.3g} "
         "um ({})",
         m.mrr_mm3_per_min, *force,
         job.measured.force_max_n ? "measured"
                                  : "predicted over the steady cycle, [material] " +
                                        std::string(to_string(*job.material.model)),
-        *job.measured.roughness_ra_um, w_max_um,
-        job.measured.waviness_um ? "measured" : "model, tooth level");
+        *ra_um,
+        job.measured.roughness_ra_um ? "measured" : "predicted, the rougher wall, ISO 21920-2",
+        w_max_um, job.measured.waviness_um ? "measured" : "model, tooth level");
   } else {
     m.performance_index.reset();
     m.performance_index_note =
         "needs [measured] force_max (N) or a [material] force model, and [measured] "
-        "roughness_ra (um); waviness (um) is optional";
+        "roughness_ra (um) or the walls' predicted texture; waviness (um) is optional";
   }
 }
 

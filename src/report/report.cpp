@@ -54,6 +54,46 @@ const std::vector<Scalar>& scalars() {
        [](const ProcessMetrics& m) { return m.walls_tooth.left.waviness_mm; }},
       {"waviness_right_tooth_mm",
        [](const ProcessMetrics& m) { return m.walls_tooth.right.waviness_mm; }},
+      {"ra_left_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_left ? m.texture_left->roughness.ra_mm : std::nan("");
+       }},
+      {"ra_right_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_right ? m.texture_right->roughness.ra_mm : std::nan("");
+       }},
+      {"rz_left_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_left ? m.texture_left->roughness.rz_mm : std::nan("");
+       }},
+      {"rz_right_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_right ? m.texture_right->roughness.rz_mm : std::nan("");
+       }},
+      {"wa_left_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_left ? m.texture_left->wa_mm : std::nan("");
+       }},
+      {"wa_right_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_right ? m.texture_right->wa_mm : std::nan("");
+       }},
+      {"wt_left_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_left ? m.texture_left->wt_mm : std::nan("");
+       }},
+      {"wt_right_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_right ? m.texture_right->wt_mm : std::nan("");
+       }},
+      {"lambda_c_left_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_left ? m.texture_left->cutoff_mm : std::nan("");
+       }},
+      {"lambda_c_right_mm",
+       [](const ProcessMetrics& m) {
+         return m.texture_right ? m.texture_right->cutoff_mm : std::nan("");
+       }},
       {"axial_depth_mm", [](const ProcessMetrics& m) { return m.axial_depth_mm; }},
       {"cycle_start_s", [](const ProcessMetrics& m) { return m.cycle_start_s; }},
       {"cutting_time_total_s", [](const ProcessMetrics& m) { return m.cutting_time_total_s; }},
@@ -99,6 +139,11 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
                          {"crossings_per_mm", m.imprint.crossings_per_mm}};
   j["wall_peak_y_mm"] = {{"left", m.walls_path.left.peak_y_mm},
                          {"right", m.walls_path.right.peak_y_mm}};
+  for (const char* k :
+       {"ra_left_mm", "ra_right_mm", "rz_left_mm", "rz_right_mm", "wa_left_mm", "wa_right_mm",
+        "wt_left_mm", "wt_right_mm", "lambda_c_left_mm", "lambda_c_right_mm"}) {
+    if (std::isnan(j[k].get<double>())) j[k] = nullptr;
+  }
   j["performance_index"] =
       m.performance_index ? nlohmann::json(*m.performance_index) : nlohmann::json(nullptr);
   j["performance_index_note"] = m.performance_index_note;
@@ -147,6 +192,15 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
       "left {:.5f} mm, right {:.5f} mm (tooth)\n",
       m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm, m.walls_tooth.left.waviness_mm,
       m.walls_tooth.right.waviness_mm);
+  if (m.texture_left && m.texture_right) {
+    out += fmt::format(
+        "  wall texture         Ra {:.3f} / {:.3f} um, Rz {:.3f} / {:.3f} um, Wt {:.3f} / {:.3f} "
+        "um (left / right, lambda_c {:g} / {:g} mm)\n",
+        1000 * m.texture_left->roughness.ra_mm, 1000 * m.texture_right->roughness.ra_mm,
+        1000 * m.texture_left->roughness.rz_mm, 1000 * m.texture_right->roughness.rz_mm,
+        1000 * m.texture_left->wt_mm, 1000 * m.texture_right->wt_mm, m.texture_left->cutoff_mm,
+        m.texture_right->cutoff_mm);
+  }
   if (m.force_max_predicted_n) {
     out += fmt::format("  F_R,max predicted    {:.1f} N ([material] {})\n",
                        *m.force_max_predicted_n, to_string(*job.material.model));

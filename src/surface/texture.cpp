@@ -189,6 +189,111 @@ ProfileParameters profile_parameters(const std::vector<double>& z_mm, double dx_
   return p;
 }
 
+double default_cutoff_mm(double ra_mm) {
+  const double ra_um = 1000.0 * ra_mm;
+  if (ra_um <= 0.02) return 0.08;
+  if (ra_um <= 0.1) return 0.25;
+  if (ra_um <= 2) return 0.8;
+  if (ra_um <= 10) return 2.5;
+  return 8.0;
+}
+
+namespace {
+
+// Filters `z` (long enough for a run-in and run-out of `lc` each) and evaluates what lies
+// between, in sections of one cut-off (at most five).
+ProfileTexture texture_at(const std::vector<double>& z, double dx, double lc) {
+  const FilteredProfile f = gaussian_filter(z, dx, lc, FilterEnds::discard);
+  const auto per = static_cast<std::size_t>(std::llround(lc / dx));
+  const std::size_t sections = std::min<std::size_t>(5, f.residual_mm.size() / per);
+  if (sections < 1) {
+    throw InputError(fmt::format(
+        "profile texture: {:.4g} mm of profile holds less than three cut-offs of {:g} mm (run-in, "
+        "one sampling length, run-out); give a longer profile or a shorter --lambda-c",
+        static_cast<double>(z.size()) * dx, lc));
+  }
+  const std::vector<double> r(f.residual_mm.begin(),
+                              f.residual_mm.begin() + static_cast<std::ptrdiff_t>(sections * per));
+  const std::vector<double> w(f.mean_mm.begin(),
+                              f.mean_mm.begin() + static_cast<std::ptrdiff_t>(sections * per));
+  ProfileTexture t;
+  t.cutoff_mm = lc;
+  t.roughness = profile_parameters(r, dx, static_cast<int>(sections));
+  double mean = 0;
+  for (const double v : w) mean += v;
+  mean /= static_cast<double>(w.size());
+  for (const double v : w) t.wa_mm += std::abs(v - mean) / static_cast<double>(w.size());
+  const auto [lo, hi] = std::minmax_element(w.begin(), w.end());
+  t.wt_mm = *hi - *lo;
+  return t;
+}
+
+// The texture with the given cut-off, or the ISO 21920-3 default found by iteration; `make`
+// gives the profile to filter for a cut-off.
+template <class Make>
+ProfileTexture choose_and_evaluate(double dx, std::optional<double> cutoff, const Make& make) {
+  if (cutoff) {
+    ProfileTexture t = texture_at(make(*cutoff), dx, *cutoff);
+    t.cutoff_source = "given";
+    return t;
+  }
+  double lc = 0.8;
+  for (int k = 0; k < 4; ++k) {
+    ProfileTexture t = texture_at(make(lc), dx, lc);
+    const double next = default_cutoff_mm(t.roughness.ra_mm);
+    if (next == lc) {
+      t.cutoff_source = "ISO 21920-3 default from Ra";
+      return t;
+    }
+    lc = next;
+  }
+  ProfileTexture t = texture_at(make(lc), dx, lc);
+  t.cutoff_source = "ISO 21920-3 default from Ra (Ra lies at a boundary of its table)";
+  return t;
+}
+
+void check_cutoff(std::optional<double> cutoff_mm, double dx_mm) {
+  if (cutoff_mm && !(std::isfinite(*cutoff_mm) && *cutoff_mm >= 2 * dx_mm && *cutoff_mm <= 1e3)) {
+    throw InputError(fmt::format(
+        "profile texture: the cut-off must be between two sample spacings ({:g} mm) and 1000 "
+        "mm, got {}",
+        2 * dx_mm, *cutoff_mm));
+  }
+}
+
+}  // namespace
+
+ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm, double dx_mm,
+                                        std::optional<double> cutoff_mm) {
+  check_profile(period_z_mm, dx_mm, "profile texture");
+  check_cutoff(cutoff_mm, dx_mm);
+  if (period_z_mm.size() < 2) throw InputError("profile texture: a period of fewer than 2 samples");
+  return choose_and_evaluate(dx_mm, cutoff_mm, [&](double lc) {
+    // Run-in, five cut-offs, run-out, and a sample.
+    const auto n = static_cast<std::size_t>(std::llround(7 * lc / dx_mm)) + 1;
+    if (n > 50'000'000) {
+      throw InputError(fmt::format(
+          "profile texture: {:g} mm cut-offs at {:g} mm spacing need {} samples (limit 5e7)", lc,
+          dx_mm, n));
+    }
+    std::vector<double> z(n);
+    for (std::size_t i = 0; i < n; ++i) z[i] = period_z_mm[i % period_z_mm.size()];
+    return z;
+  });
+}
+
+ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
+                               std::optional<double> cutoff_mm) {
+  check_profile(z_mm, dx_mm, "profile texture");
+  check_cutoff(cutoff_mm, dx_mm);
+  return choose_and_evaluate(dx_mm, cutoff_mm, [&](double lc) {
+    // At most a run-in, five cut-offs and a run-out of the trace (ISO 21920-3's traverse).
+    const auto n =
+        std::min(z_mm.size(), static_cast<std::size_t>(std::llround(7 * lc / dx_mm)) + 1);
+    return std::vector<double>(z_mm.begin(), z_mm.begin() + static_cast<std::ptrdiff_t>(n));
+  });
+}
+
 MaterialRatioCurve material_ratio_curve(const std::vector<double>& z_mm, int points) {
   check_profile(z_mm, 1.0, "material ratio curve");
   if (z_mm.empty() || points < 2) {
