@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <sstream>
 
 #include "test_util.hpp"
@@ -25,6 +26,7 @@
 #include "trochomill/job.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/surface.hpp"
 
 extern char** environ;
 
@@ -768,6 +770,52 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   EXPECT_EQ(files_in(dir_), 5u);  // tmp, log, fifo, sim, s.json
 }
 
+// texture: a measured CSV profile (heights in um) of a short sinusoid on a long one gives the
+// closed forms (Ra = 2A/pi to 1e-4, the long wave's Wt = 2B T(4 mm) to 1e-3, RSm the short
+// wavelength), the same numbers as the library on the same samples; a job's walls are
+// analyze's; bad columns, units and sources exit 2 naming them.
+TEST_F(Cli, TextureOfAProfileAJobAndBadInput) {
+  const auto csv = (dir_ / "p.csv").string();
+  {
+    std::ofstream out(csv);
+    out << "x_mm,z_um\n";
+    for (int i = 0; i <= 16000; ++i) {
+      const double x = 0.00025 * i;
+      char line[64];
+      std::snprintf(line, sizeof line, "%.6f,%.9f\n", x,
+                    2 * std::sin(2 * std::numbers::pi * x / 0.05) +
+                        0.5 * std::sin(2 * std::numbers::pi * x / 4));
+      out << line;
+    }
+  }
+  const CliResult r = run_cli("texture " + csv + " --z-unit um --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out)["surfaces"][0];
+  EXPECT_EQ(j["lambda_c_mm"].get<double>(), 0.8);
+  EXPECT_NEAR(j["ra_mm"].get<double>(), 2 * 0.002 / std::numbers::pi, 1e-4 * 0.002);
+  EXPECT_NEAR(j["rsm_mm"].get<double>(), 0.05, 1e-4);
+  EXPECT_NEAR(j["wt_mm"].get<double>(), 2 * 0.0005 * gaussian_transmission(4.0, 0.8), 1e-3 * 0.001);
+  const auto ex = test::example("wagih2023/trochoidal.toml").string();
+  const CliResult t = run_cli("texture " + ex + " --json -");
+  ASSERT_EQ(t.code, 0) << t.out;
+  const CliResult an = run_cli("analyze " + ex + " --json -");
+  ASSERT_EQ(an.code, 0) << an.out;
+  const auto tj = nlohmann::json::parse(t.out)["surfaces"];
+  const auto aj = nlohmann::json::parse(an.out);
+  EXPECT_EQ(tj[0]["ra_mm"].get<double>(), aj["ra_left_mm"].get<double>());
+  EXPECT_EQ(tj[1]["rz_mm"].get<double>(), aj["rz_right_mm"].get<double>());
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {csv + " --columns x_mm,height", "no column 'height'"},
+           {csv + " --z-unit nm", "--z-unit 'nm': mm or um"},
+           {csv + " --surface top", "--surface 'top'"},
+           {(dir_ / "x.dat").string(), "is not a folder written by simulate --out"},
+           {csv + " --lambda-c 500", "shorter --lambda-c"}}) {
+    const CliResult b = run_cli("texture " + args);
+    EXPECT_EQ(b.code, 2) << args << "\n" << b.out;
+    EXPECT_NE(b.out.find(says), std::string::npos) << b.out;
+  }
+}
+
 TEST_F(Cli, SimulateWritesItsOutputs) {
   const std::string ex = test::example("wagih2023/trochoidal.toml");
   const std::string out = (dir_ / "sim").string();
@@ -796,6 +844,15 @@ TEST_F(Cli, SimulateWritesItsOutputs) {
   const ChipMapData m = read_chip_map_h5(std::filesystem::path(out) / "chips.h5");
   EXPECT_EQ(m.t_s.size(), j["steps"].get<std::size_t>());
   EXPECT_EQ(m.teeth, 4u);
+  // texture reads the folder's walls (at the middle level, each wall material side up).
+  const CliResult tex = run_cli("texture " + out + " --lambda-c 0.8 --json -");
+  ASSERT_EQ(tex.code, 0) << tex.out;
+  const auto tj = nlohmann::json::parse(tex.out)["surfaces"];
+  ASSERT_EQ(tj.size(), 2u);
+  EXPECT_EQ(tj[0]["surface"], "left");
+  EXPECT_NE(tj[0]["description"].get<std::string>().find("simulated left wall at z = "),
+            std::string::npos);
+  EXPECT_GT(tj[1]["ra_mm"].get<double>(), 0.0);
 
   CliResult bad = run_cli("simulate " + ex + " --cycles 5:2" + common);
   EXPECT_EQ(bad.code, 2) << bad.out;

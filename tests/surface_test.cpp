@@ -252,5 +252,27 @@ TEST(Texture, StraightSlotWallsGiveTheKinematicCusp) {
   EXPECT_NEAR(t.roughness.rsm_mm, fz, 0.01 * fz);
 }
 
+// A simulation's walls.csv: the level nearest the z asked for (the middle one by default),
+// sorted along y, each wall material side up; a gap in y is named by its line.
+TEST(Texture, WallProfilesFromASimulationsWallsCsv) {
+  const std::string csv =
+      "y_mm,z_mm,left_x_mm,right_x_mm\n"
+      "0.2,-1,-10.2,10.2\n0.0,-1,-10.0,10.0\n0.1,-1,-10.1,10.1\n"
+      "0.0,-2,-9.0,9.0\n0.1,-2,-9.1,9.1\n0.2,-2,-9.2,9.2\n"
+      "0.0,-3,-8.0,8.0\n0.1,-3,-8.1,8.1\n0.2,-3,-8.2,8.2\n";
+  const MeasuredProfile mid = read_wall_profile_csv(csv, "walls.csv", true);
+  EXPECT_EQ(mid.z_mm, (std::vector<double>{-9.0, -9.1, -9.2}));
+  EXPECT_NEAR(mid.dx_mm, 0.1, 1e-15);
+  const MeasuredProfile right = read_wall_profile_csv(csv, "walls.csv", false, -0.9);
+  EXPECT_EQ(right.z_mm, (std::vector<double>{-10.0, -10.1, -10.2}));
+  try {
+    (void)read_wall_profile_csv(
+        "y_mm,z_mm,left_x_mm,right_x_mm\n0,-1,1,1\n0.1,-1,1,1\n0.3,-1,1,1\n", "w.csv", true);
+    ADD_FAILURE() << "a gap was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("w.csv:4:"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace trochomill

@@ -11,7 +11,8 @@ void register_analysis_commands(CLI::App& app, int& exit_code);     // analyze, 
 void register_mechanism_commands(CLI::App& app, int& exit_code);    // mechanism, recommend
 void register_simulation_commands(CLI::App& app, int& exit_code);   // simulate, forces
 void register_calibration_commands(CLI::App& app, int& exit_code);  // calibrate
-void register_signal_commands(CLI::App& app, int& exit_code);  // monitor, synth-signal, spectrum
-void register_tool_commands(CLI::App& app, int& exit_code);    // insert, topography, materials
+void register_signal_commands(CLI::App& app, int& exit_code);   // monitor, synth-signal, spectrum
+void register_tool_commands(CLI::App& app, int& exit_code);     // insert, topography, materials
+void register_surface_commands(CLI::App& app, int& exit_code);  // texture
 
 }  // namespace trochomill::cli

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
     cli::register_calibration_commands(app, exit_code);
     cli::register_signal_commands(app, exit_code);
     cli::register_tool_commands(app, exit_code);
+    cli::register_surface_commands(app, exit_code);
     try {
       app.parse(argc, argv);  // the chosen command runs in its callback
     } catch (const CLI::Success& e) {

@@ -16,6 +16,7 @@
 #include "trochomill/progress.hpp"
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/surface.hpp"
 #include "trochomill/topography.hpp"
 
 namespace trochomill {
@@ -142,5 +143,18 @@ void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
 [[nodiscard]] std::string floor_profiles_csv(const std::vector<FloorPoint>& f);
 /// The height field as a closed solid in binary STL (mm): top surface, side walls, bottom.
 [[nodiscard]] std::string height_field_stl(const HeightField& f);
+
+/// One evaluated surface of `trochomill texture`.
+struct TextureEntry {
+  std::string surface;      ///< "left", "right" or "profile"
+  std::string description;  ///< where the profile came from
+  ProfileTexture texture;
+};
+/// `texture`'s report: per surface the cut-off (and how it was chosen), Ra, Rq, Rsk, Rku, Rp,
+/// Rv, Rz, Rt, RSm, Wa, Wt (mm), evaluation length (mm) and sections.
+[[nodiscard]] std::string texture_json(const std::string& source,
+                                       const std::vector<TextureEntry>& entries);
+[[nodiscard]] std::string texture_text(const std::string& source,
+                                       const std::vector<TextureEntry>& entries);
 
 }  // namespace trochomill

@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "trochomill/path.hpp"
@@ -139,6 +140,25 @@ struct ProfileTexture {
 /// the evaluation length is what lies between (five cut-offs or what there is, at least one).
 [[nodiscard]] ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
                                              std::optional<double> cutoff_mm = {});
+
+/// A profile read from a file: heights (mm) every spacing (mm), and where it came from.
+struct MeasuredProfile {
+  std::vector<double> z_mm;
+  double dx_mm = 0;
+  std::string description;  ///< e.g. "left wall at z = -3.01 mm"
+};
+/// A profile from CSV text: the columns `x_column` and `z_column` (by header name; empty: the
+/// first two columns), x in mm and z in mm times `z_to_mm` (1e-3 for um); x must increase in
+/// equal steps (to 1e-6 of a step). Throws InputError naming source:line.
+[[nodiscard]] MeasuredProfile read_profile_csv(std::string_view text, std::string_view source,
+                                               const std::string& x_column = "",
+                                               const std::string& z_column = "",
+                                               double z_to_mm = 1.0);
+/// One wall of a simulation's walls.csv (y_mm, z_mm, left_x_mm, right_x_mm: `simulate --out`)
+/// along y at the level nearest `z_mm` (default: the middle level), material side up (+x on
+/// the left wall, -x on the right). Throws InputError naming source:line or what is missing.
+[[nodiscard]] MeasuredProfile read_wall_profile_csv(std::string_view text, std::string_view source,
+                                                    bool left, std::optional<double> z_mm = {});
 
 /// The material ratio (Abbott-Firestone) curve: the share of the evaluation length where the
 /// profile is at or above height c, for heights from its top to its bottom (`points` values).

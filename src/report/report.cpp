@@ -350,4 +350,49 @@ std::string job_keys_json() {
   return j.dump(2) + "\n";
 }
 
+std::string texture_json(const std::string& source, const std::vector<TextureEntry>& entries) {
+  nlohmann::json surfaces = nlohmann::json::array();
+  for (const TextureEntry& e : entries) {
+    const ProfileParameters& r = e.texture.roughness;
+    surfaces.push_back({{"surface", e.surface},
+                        {"description", e.description},
+                        {"lambda_c_mm", e.texture.cutoff_mm},
+                        {"lambda_c_source", e.texture.cutoff_source},
+                        {"ra_mm", r.ra_mm},
+                        {"rq_mm", r.rq_mm},
+                        {"rsk", r.rsk},
+                        {"rku", r.rku},
+                        {"rp_mm", r.rp_mm},
+                        {"rv_mm", r.rv_mm},
+                        {"rz_mm", r.rz_mm},
+                        {"rt_mm", r.rt_mm},
+                        {"rsm_mm", r.rsm_mm},
+                        {"profile_elements", r.elements},
+                        {"wa_mm", e.texture.wa_mm},
+                        {"wt_mm", e.texture.wt_mm},
+                        {"evaluation_length_mm", r.evaluation_length_mm},
+                        {"sections", r.sections}});
+  }
+  const nlohmann::json j = {{"source", source},
+                            {"standards", "ISO 16610-21 Gaussian filter, ISO 21920-2 parameters"},
+                            {"surfaces", surfaces}};
+  return j.dump(2) + "\n";
+}
+
+std::string texture_text(const std::string& source, const std::vector<TextureEntry>& entries) {
+  std::string out = fmt::format("{}:\n", source);
+  for (const TextureEntry& e : entries) {
+    const ProfileParameters& r = e.texture.roughness;
+    out += fmt::format(
+        "  {}: {}\n    lambda_c {:g} mm ({}), {} x {:g} mm\n"
+        "    Ra {:.4f} um  Rq {:.4f} um  Rz {:.4f} um  Rt {:.4f} um  Rp {:.4f} um  Rv {:.4f} um\n"
+        "    Rsk {:.3f}  Rku {:.3f}  RSm {:.4f} mm ({} elements)  Wa {:.4f} um  Wt {:.4f} um\n",
+        e.surface, e.description, e.texture.cutoff_mm, e.texture.cutoff_source, r.sections,
+        r.evaluation_length_mm / r.sections, 1000 * r.ra_mm, 1000 * r.rq_mm, 1000 * r.rz_mm,
+        1000 * r.rt_mm, 1000 * r.rp_mm, 1000 * r.rv_mm, r.rsk, r.rku, r.rsm_mm, r.elements,
+        1000 * e.texture.wa_mm, 1000 * e.texture.wt_mm);
+  }
+  return out;
+}
+
 }  // namespace trochomill

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/surface.hpp"
 
 namespace trochomill {
@@ -203,15 +204,17 @@ namespace {
 // Filters `z` (long enough for a run-in and run-out of `lc` each) and evaluates what lies
 // between, in sections of one cut-off (at most five).
 ProfileTexture texture_at(const std::vector<double>& z, double dx, double lc) {
-  const FilteredProfile f = gaussian_filter(z, dx, lc, FilterEnds::discard);
   const auto per = static_cast<std::size_t>(std::llround(lc / dx));
-  const std::size_t sections = std::min<std::size_t>(5, f.residual_mm.size() / per);
+  const auto half = static_cast<std::size_t>(std::floor(lc / dx));
+  const std::size_t sections =
+      z.size() > 2 * half ? std::min<std::size_t>(5, (z.size() - 2 * half) / per) : 0;
   if (sections < 1) {
     throw InputError(fmt::format(
         "profile texture: {:.4g} mm of profile holds less than three cut-offs of {:g} mm (run-in, "
         "one sampling length, run-out); give a longer profile or a shorter --lambda-c",
         static_cast<double>(z.size()) * dx, lc));
   }
+  const FilteredProfile f = gaussian_filter(z, dx, lc, FilterEnds::discard);
   const std::vector<double> r(f.residual_mm.begin(),
                               f.residual_mm.begin() + static_cast<std::ptrdiff_t>(sections * per));
   const std::vector<double> w(f.mean_mm.begin(),
@@ -292,6 +295,98 @@ ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
         std::min(z_mm.size(), static_cast<std::size_t>(std::llround(7 * lc / dx_mm)) + 1);
     return std::vector<double>(z_mm.begin(), z_mm.begin() + static_cast<std::ptrdiff_t>(n));
   });
+}
+
+namespace {
+
+// The spacing of equally spaced positions (to 1e-6 of a step), or InputError naming the line.
+double equal_spacing(const std::vector<double>& x, const std::vector<std::size_t>& line,
+                     std::string_view source, const char* what) {
+  if (x.size() < 2) {
+    throw InputError(fmt::format("{}: {} holds fewer than 2 points", source, what));
+  }
+  const double dx = (x.back() - x.front()) / static_cast<double>(x.size() - 1);
+  if (!(dx > 0)) {
+    throw InputError(fmt::format("{}: {} must increase along the profile", source, what));
+  }
+  const double first = x[1] - x[0];
+  for (std::size_t i = 1; i < x.size(); ++i) {
+    if (std::abs(x[i] - x[i - 1] - first) > 1e-6 * dx) {
+      throw InputError(fmt::format(
+          "{}:{}: {} must step equally ({:g} mm from the first point on), but steps {:g} mm here",
+          source, line[i], what, first, x[i] - x[i - 1]));
+    }
+  }
+  return dx;
+}
+
+}  // namespace
+
+MeasuredProfile read_profile_csv(std::string_view text, std::string_view source,
+                                 const std::string& x_column, const std::string& z_column,
+                                 double z_to_mm) {
+  CsvOptions o;
+  o.detect_separator = true;
+  if (!x_column.empty() || !z_column.empty()) {
+    if (x_column.empty() || z_column.empty()) {
+      throw InputError(fmt::format("{}: name both the x and the z column", source));
+    }
+    o.columns = {x_column, z_column};
+  }
+  const CsvTable t = parse_csv(text, source, o);
+  MeasuredProfile p;
+  std::vector<double> x;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    if (t.rows[r].size() < 2) {
+      throw InputError(fmt::format("{}:{}: a profile row needs x and z", source, t.line_of_row[r]));
+    }
+    x.push_back(t.rows[r][0]);
+    p.z_mm.push_back(t.rows[r][1] * z_to_mm);
+  }
+  p.dx_mm = equal_spacing(x, t.line_of_row, source, "x");
+  p.description = fmt::format("profile of {} points every {:g} mm", x.size(), p.dx_mm);
+  return p;
+}
+
+MeasuredProfile read_wall_profile_csv(std::string_view text, std::string_view source, bool left,
+                                      std::optional<double> z_mm) {
+  CsvOptions o;
+  o.columns = {"y_mm", "z_mm", left ? "left_x_mm" : "right_x_mm"};
+  const CsvTable t = parse_csv(text, source, o);
+  std::vector<double> levels;
+  for (const auto& row : t.rows) levels.push_back(row[1]);
+  std::sort(levels.begin(), levels.end());
+  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+  if (levels.empty()) throw InputError(fmt::format("{}: no wall points", source));
+  double level = levels[levels.size() / 2];
+  if (z_mm) {
+    level = *std::min_element(levels.begin(), levels.end(), [&](double a, double b) {
+      return std::abs(a - *z_mm) < std::abs(b - *z_mm);
+    });
+  }
+  std::vector<std::pair<double, double>> pts;  // (y, height)
+  std::vector<std::size_t> lines;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    if (t.rows[r][1] != level) continue;
+    pts.emplace_back(t.rows[r][0], left ? t.rows[r][2] : -t.rows[r][2]);
+    lines.push_back(t.line_of_row[r]);
+  }
+  std::vector<std::size_t> order(pts.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(),
+            [&](auto a, auto b) { return pts[a].first < pts[b].first; });
+  std::vector<double> y;
+  std::vector<std::size_t> line;
+  MeasuredProfile p;
+  for (const std::size_t i : order) {
+    y.push_back(pts[i].first);
+    line.push_back(lines[i]);
+    p.z_mm.push_back(pts[i].second);
+  }
+  p.dx_mm = equal_spacing(y, line, source, fmt::format("y at z = {:g} mm", level).c_str());
+  p.description = fmt::format("{} wall at z = {:g} mm, y {:g} to {:g} mm ({} points)",
+                              left ? "left" : "right", level, y.front(), y.back(), y.size());
+  return p;
 }
 
 MaterialRatioCurve material_ratio_curve(const std::vector<double>& z_mm, int points) {
