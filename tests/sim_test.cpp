@@ -736,14 +736,20 @@ TEST(Sim, EdgeGridFollowsTheContour) {
   }
 }
 
+// Wagih's job made small for a quick simulation: 0.5 mm deep, 6 mm long, 0.1 mm dexels, 60
+// steps a revolution.
+Job small_wagih_job() {
+  return load_job(
+      test::example("wagih2023/trochoidal.toml"),
+      {parse_override("slot.depth=0.5"), parse_override("slot.length=6"),
+       parse_override("simulation.resolution=0.1"), parse_override("simulation.steps_per_rev=60")});
+}
+
 // Cancellation (Ctrl-C in the CLI): a flag raised before the run stops it in the pre-roll,
 // with no steps and `complete` false; raised from the progress callback after some steps, the
 // window keeps the steps computed so far (fewer than the whole) and is marked incomplete.
 TEST(Sim, CancelKeepsWhatWasComputed) {
-  const Job job = load_job(
-      test::example("wagih2023/trochoidal.toml"),
-      {parse_override("slot.depth=0.5"), parse_override("slot.length=6"),
-       parse_override("simulation.resolution=0.1"), parse_override("simulation.steps_per_rev=60")});
+  const Job job = small_wagih_job();
   const ToolPath path = plan_path(job).path;
   const auto [from, to] = cycle_window(path, 2, 3);
   std::atomic<bool> stop{true};
@@ -781,10 +787,7 @@ TEST(Sim, CancelKeepsWhatWasComputed) {
 // this run's files (an earlier run's stay as they were) and no staging folder; not cancelled,
 // all five replace the earlier ones.
 TEST(Sim, OutputsAreWrittenAsOneSet) {
-  const Job job = load_job(
-      test::example("wagih2023/trochoidal.toml"),
-      {parse_override("slot.depth=0.5"), parse_override("slot.length=6"),
-       parse_override("simulation.resolution=0.1"), parse_override("simulation.steps_per_rev=60")});
+  const Job job = small_wagih_job();
   const ToolPath path = plan_path(job).path;
   const auto [from, to] = cycle_window(path, 2, 3);
   const JobSimulation js = simulate_job(job, path, from, to);

@@ -21,88 +21,75 @@ struct Scalar {
   std::function<double(const ProcessMetrics&)> get;
 };
 
+// The walls' texture keys (left and right) and how to read one from a ProfileTexture.
+struct TextureKey {
+  const char* left;
+  const char* right;
+  double (*get)(const ProfileTexture&);
+};
+const TextureKey kTextureKeys[] = {
+    {"ra_left_mm", "ra_right_mm", [](const ProfileTexture& t) { return t.roughness.ra_mm; }},
+    {"rz_left_mm", "rz_right_mm", [](const ProfileTexture& t) { return t.roughness.rz_mm; }},
+    {"wa_left_mm", "wa_right_mm", [](const ProfileTexture& t) { return t.wa_mm; }},
+    {"wt_left_mm", "wt_right_mm", [](const ProfileTexture& t) { return t.wt_mm; }},
+    {"lambda_c_left_mm", "lambda_c_right_mm", [](const ProfileTexture& t) { return t.cutoff_mm; }},
+};
+
 const std::vector<Scalar>& scalars() {
-  static const std::vector<Scalar> s = {
-      {"path_length_mm", [](const ProcessMetrics& m) { return m.path_length_mm; }},
-      {"feed_length_mm", [](const ProcessMetrics& m) { return m.feed_length_mm; }},
-      {"path_length_per_cycle_mm",
-       [](const ProcessMetrics& m) { return m.path_length_per_cycle_mm; }},
-      {"cycle_time_s", [](const ProcessMetrics& m) { return m.cycle_time_s; }},
-      {"cutting_time_s", [](const ProcessMetrics& m) { return m.cutting_time_s; }},
-      {"cooling_time_s", [](const ProcessMetrics& m) { return m.cooling_time_s; }},
-      {"machining_time_s", [](const ProcessMetrics& m) { return m.machining_time_s; }},
-      {"machining_time_with_acceleration_s",
-       [](const ProcessMetrics& m) { return m.machining_time_accel_s; }},
-      {"mrr_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_mm3_per_min; }},
-      {"mrr_swept_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_swept_mm3_per_min; }},
-      {"mrr_total_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_total_mm3_per_min; }},
-      {"feed_per_tooth_mm", [](const ProcessMetrics& m) { return m.feed_per_tooth_mm; }},
-      {"h_max_mm", [](const ProcessMetrics& m) { return m.h_max_mm; }},
-      {"t_h_max_s", [](const ProcessMetrics& m) { return m.t_h_max_s; }},
-      {"h_max_slot_mm", [](const ProcessMetrics& m) { return m.h_max_slot_mm; }},
-      {"t_h_max_slot_s", [](const ProcessMetrics& m) { return m.t_h_max_slot_s; }},
-      {"h_max_tooth_mm", [](const ProcessMetrics& m) { return m.h_max_tooth_mm; }},
-      {"chip_translation_error_mm",
-       [](const ProcessMetrics& m) { return m.chip_translation_error_mm; }},
-      {"engagement_angle_max_deg",
-       [](const ProcessMetrics& m) { return m.engagement_angle_max_deg; }},
-      {"engagement_angle_max_slot_deg",
-       [](const ProcessMetrics& m) { return m.engagement_angle_max_slot_deg; }},
-      {"waviness_left_mm", [](const ProcessMetrics& m) { return m.walls_path.left.waviness_mm; }},
-      {"waviness_right_mm", [](const ProcessMetrics& m) { return m.walls_path.right.waviness_mm; }},
-      {"waviness_left_tooth_mm",
-       [](const ProcessMetrics& m) { return m.walls_tooth.left.waviness_mm; }},
-      {"waviness_right_tooth_mm",
-       [](const ProcessMetrics& m) { return m.walls_tooth.right.waviness_mm; }},
-      {"ra_left_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_left ? m.texture_left->roughness.ra_mm : std::nan("");
-       }},
-      {"ra_right_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_right ? m.texture_right->roughness.ra_mm : std::nan("");
-       }},
-      {"rz_left_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_left ? m.texture_left->roughness.rz_mm : std::nan("");
-       }},
-      {"rz_right_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_right ? m.texture_right->roughness.rz_mm : std::nan("");
-       }},
-      {"wa_left_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_left ? m.texture_left->wa_mm : std::nan("");
-       }},
-      {"wa_right_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_right ? m.texture_right->wa_mm : std::nan("");
-       }},
-      {"wt_left_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_left ? m.texture_left->wt_mm : std::nan("");
-       }},
-      {"wt_right_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_right ? m.texture_right->wt_mm : std::nan("");
-       }},
-      {"lambda_c_left_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_left ? m.texture_left->cutoff_mm : std::nan("");
-       }},
-      {"lambda_c_right_mm",
-       [](const ProcessMetrics& m) {
-         return m.texture_right ? m.texture_right->cutoff_mm : std::nan("");
-       }},
-      {"axial_depth_mm", [](const ProcessMetrics& m) { return m.axial_depth_mm; }},
-      {"cycle_start_s", [](const ProcessMetrics& m) { return m.cycle_start_s; }},
-      {"cutting_time_total_s", [](const ProcessMetrics& m) { return m.cutting_time_total_s; }},
-      {"slot_volume_mm3", [](const ProcessMetrics& m) { return m.slot_volume_mm3; }},
-      {"force_max_predicted_n",
-       [](const ProcessMetrics& m) { return m.force_max_predicted_n.value_or(std::nan("")); }},
-      {"performance_index",
-       [](const ProcessMetrics& m) { return m.performance_index.value_or(std::nan("")); }},
-  };
+  static const std::vector<Scalar> s = [] {
+    std::vector<Scalar> v = {
+        {"path_length_mm", [](const ProcessMetrics& m) { return m.path_length_mm; }},
+        {"feed_length_mm", [](const ProcessMetrics& m) { return m.feed_length_mm; }},
+        {"path_length_per_cycle_mm",
+         [](const ProcessMetrics& m) { return m.path_length_per_cycle_mm; }},
+        {"cycle_time_s", [](const ProcessMetrics& m) { return m.cycle_time_s; }},
+        {"cutting_time_s", [](const ProcessMetrics& m) { return m.cutting_time_s; }},
+        {"cooling_time_s", [](const ProcessMetrics& m) { return m.cooling_time_s; }},
+        {"machining_time_s", [](const ProcessMetrics& m) { return m.machining_time_s; }},
+        {"machining_time_with_acceleration_s",
+         [](const ProcessMetrics& m) { return m.machining_time_accel_s; }},
+        {"mrr_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_mm3_per_min; }},
+        {"mrr_swept_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_swept_mm3_per_min; }},
+        {"mrr_total_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_total_mm3_per_min; }},
+        {"feed_per_tooth_mm", [](const ProcessMetrics& m) { return m.feed_per_tooth_mm; }},
+        {"h_max_mm", [](const ProcessMetrics& m) { return m.h_max_mm; }},
+        {"t_h_max_s", [](const ProcessMetrics& m) { return m.t_h_max_s; }},
+        {"h_max_slot_mm", [](const ProcessMetrics& m) { return m.h_max_slot_mm; }},
+        {"t_h_max_slot_s", [](const ProcessMetrics& m) { return m.t_h_max_slot_s; }},
+        {"h_max_tooth_mm", [](const ProcessMetrics& m) { return m.h_max_tooth_mm; }},
+        {"chip_translation_error_mm",
+         [](const ProcessMetrics& m) { return m.chip_translation_error_mm; }},
+        {"engagement_angle_max_deg",
+         [](const ProcessMetrics& m) { return m.engagement_angle_max_deg; }},
+        {"engagement_angle_max_slot_deg",
+         [](const ProcessMetrics& m) { return m.engagement_angle_max_slot_deg; }},
+        {"waviness_left_mm", [](const ProcessMetrics& m) { return m.walls_path.left.waviness_mm; }},
+        {"waviness_right_mm",
+         [](const ProcessMetrics& m) { return m.walls_path.right.waviness_mm; }},
+        {"waviness_left_tooth_mm",
+         [](const ProcessMetrics& m) { return m.walls_tooth.left.waviness_mm; }},
+        {"waviness_right_tooth_mm",
+         [](const ProcessMetrics& m) { return m.walls_tooth.right.waviness_mm; }},
+        {"axial_depth_mm", [](const ProcessMetrics& m) { return m.axial_depth_mm; }},
+        {"cycle_start_s", [](const ProcessMetrics& m) { return m.cycle_start_s; }},
+        {"cutting_time_total_s", [](const ProcessMetrics& m) { return m.cutting_time_total_s; }},
+        {"slot_volume_mm3", [](const ProcessMetrics& m) { return m.slot_volume_mm3; }},
+        {"force_max_predicted_n",
+         [](const ProcessMetrics& m) { return m.force_max_predicted_n.value_or(std::nan("")); }},
+        {"performance_index",
+         [](const ProcessMetrics& m) { return m.performance_index.value_or(std::nan("")); }},
+    };
+    // NaN (JSON null) without a tooth-level wall.
+    for (const TextureKey& k : kTextureKeys) {
+      v.push_back({k.left, [get = k.get](const ProcessMetrics& m) {
+                     return m.texture_left ? get(*m.texture_left) : std::nan("");
+                   }});
+      v.push_back({k.right, [get = k.get](const ProcessMetrics& m) {
+                     return m.texture_right ? get(*m.texture_right) : std::nan("");
+                   }});
+    }
+    return v;
+  }();
   return s;
 }
 
@@ -139,10 +126,10 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
                          {"crossings_per_mm", m.imprint.crossings_per_mm}};
   j["wall_peak_y_mm"] = {{"left", m.walls_path.left.peak_y_mm},
                          {"right", m.walls_path.right.peak_y_mm}};
-  for (const char* k :
-       {"ra_left_mm", "ra_right_mm", "rz_left_mm", "rz_right_mm", "wa_left_mm", "wa_right_mm",
-        "wt_left_mm", "wt_right_mm", "lambda_c_left_mm", "lambda_c_right_mm"}) {
-    if (std::isnan(j[k].get<double>())) j[k] = nullptr;
+  for (const TextureKey& k : kTextureKeys) {
+    for (const char* key : {k.left, k.right}) {
+      if (std::isnan(j[key].get<double>())) j[key] = nullptr;
+    }
   }
   j["performance_index"] =
       m.performance_index ? nlohmann::json(*m.performance_index) : nlohmann::json(nullptr);
