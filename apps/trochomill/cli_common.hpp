@@ -124,7 +124,9 @@ class GuardedRun {
   [[nodiscard]] RunHooks hooks() const;
   /// Clears the bar's line.
   void done() const;
-  /// Throws Interrupted when Ctrl-C came during the run (`what` says what was written).
+  /// Throws Interrupted when Ctrl-C came during the run (`what` says what was written): the
+  /// last statement of a command, so a Ctrl-C that came while its outputs were written (or
+  /// that stopped a simulation, whose partial results are written) ends it with 130.
   void finish(const char* what) const;
 
  private:

@@ -47,6 +47,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       if (summary_to_stdout({&a->json, &a->csv})) {
         fmt::print("{}", metrics_text(a->job.file, a->gcode, job, m));
       }
+      run.finish("interrupted: the outputs were written in full");
       exit_code = 0;
     });
   }
@@ -87,6 +88,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       if (!a->json.empty()) emit(a->json, study_json(varies, points));
       if (!a->csv.empty()) emit(a->csv, study_csv(varies, points));
       if (summary_to_stdout({&a->json, &a->csv})) fmt::print("{}", study_table(varies, points));
+      run.finish("interrupted: the outputs were written in full");
       if (std::none_of(points.begin(), points.end(), [](const StudyPoint& p) { return p.ok; })) {
         throw InputError("compare: every point of the grid failed (see the table)");
       }

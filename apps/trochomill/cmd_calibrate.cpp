@@ -131,6 +131,7 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
     if (!a->write.empty()) write_file_atomic(a->write, block);
     if (!a->json.empty()) emit(a->json, calibration_json(r));
     if (a->json != "-") fmt::print("{}", calibration_text(a->measured, r));
+    run.finish("interrupted: the outputs were written in full");
   });
 }
 

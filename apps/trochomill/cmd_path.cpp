@@ -114,6 +114,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
             s.size(), tp.duration_s(), tp.length_mm(), tr.teeth, job.cutting.feed_per_tooth_mm,
             job.cutting.spindle_speed_rpm, a->csv.empty() ? "" : " -> " + a->csv);
       }
+      run.finish("interrupted: the outputs were written in full");
       exit_code = 0;
     });
   }

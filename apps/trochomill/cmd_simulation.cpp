@@ -76,6 +76,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       run.done();
       if (!a->json.empty()) emit(a->json, simulation_json(job, js, from, to, wall, need));
       if (a->json != "-") fmt::print("{}", simulation_text(a->job.file, job, js, from, to, wall));
+      run.finish("interrupted: the outputs were written in full");
       exit_code = js.result.complete ? 0 : 130;
     });
   }
@@ -137,6 +138,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       if (summary_to_stdout({&a->json, &a->csv})) {
         fmt::print("{}", force_summary_text(job, jf, from, to));
       }
+      run.finish("interrupted: the outputs were written in full");
       exit_code = jf.chips.complete ? 0 : 130;
     });
   }
