@@ -746,8 +746,7 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   ::sleep(2);
   ::kill(pid, SIGINT);
   EXPECT_EQ(exit_code_of(pid), 130) << read_file(log);
-  EXPECT_NE(read_file(log).find("interrupted: the outputs were written in full"),
-            std::string::npos)
+  EXPECT_NE(read_file(log).find("interrupted: the outputs were written in full"), std::string::npos)
       << read_file(log);
   std::ifstream in(json);
   const auto j = nlohmann::json::parse(in);
