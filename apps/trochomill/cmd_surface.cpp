@@ -75,16 +75,11 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
           throw InputError(fmt::format("{}: the analysis found no tooth-level {} wall", a->source,
                                        left ? "left" : "right"));
         }
-        std::vector<double> z(w.x_mm.begin(), w.x_mm.end() - 1);
-        if (!left) {
-          for (double& v : z) v = -v;
-        }
-        const double dy = (w.y_mm.back() - w.y_mm.front()) / static_cast<double>(w.y_mm.size() - 1);
         entries.push_back(
             {left ? "left" : "right",
              fmt::format("predicted {} wall, tooth level, one step of y repeated ({:g} mm)",
                          left ? "left" : "right", w.y_mm.back() - w.y_mm.front()),
-             periodic_profile_texture(z, dy, a->lambda_c_mm)});
+             wall_texture(w, left, a->lambda_c_mm)});
       }
     } else if (ext == ".csv" || ext == ".txt") {
       double unit = 1.0;

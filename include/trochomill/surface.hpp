@@ -136,6 +136,11 @@ struct ProfileTexture {
 [[nodiscard]] ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm,
                                                       double dx_mm,
                                                       std::optional<double> cutoff_mm = {});
+/// The texture along the feed of a wall whose profile covers one period of y (its last point
+/// is the first again: a tooth-level wall of one step), material side up (+x on the left wall,
+/// -x on the right). Throws InputError for a profile of fewer than 3 points.
+[[nodiscard]] ProfileTexture wall_texture(const WallProfile& wall, bool left,
+                                          std::optional<double> cutoff_mm = {});
 /// The same for an open profile (a measured trace): run-in and run-out of one cut-off each;
 /// the evaluation length is what lies between (five cut-offs or what there is, at least one).
 [[nodiscard]] ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,

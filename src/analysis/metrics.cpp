@@ -508,18 +508,12 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
         }
       }
     }
-    // The walls' texture along y: one period of the tooth-level profile (its last point is
-    // the first again), material side up (+x on the left wall, -x on the right).
+    // The walls' texture along y: one period of the tooth-level profile.
     for (const bool left : {true, false}) {
       const WallProfile& wall = left ? m.walls_tooth.left : m.walls_tooth.right;
-      if (wall.x_mm.size() < 3) continue;
-      std::vector<double> z(wall.x_mm.begin(), wall.x_mm.end() - 1);
-      if (!left) {
-        for (double& v : z) v = -v;
+      if (wall.x_mm.size() >= 3) {
+        (left ? m.texture_left : m.texture_right) = wall_texture(wall, left);
       }
-      const double dy =
-          (wall.y_mm.back() - wall.y_mm.front()) / static_cast<double>(wall.y_mm.size() - 1);
-      (left ? m.texture_left : m.texture_right) = periodic_profile_texture(z, dy);
     }
   }
 

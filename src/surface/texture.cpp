@@ -30,6 +30,24 @@ void check_profile(const std::vector<double>& z_mm, double dx_mm, const char* wh
   }
 }
 
+// The weighting function s(x) = exp(-pi (x / (alpha lambda_c))^2) / (alpha lambda_c) on the
+// samples within +-lambda_c (2 half + 1 of them, half = floor(lambda_c / dx)); normalised to sum
+// to one (the discrete sum of a Gaussian this wide against its spacing is its integral to far
+// below rounding).
+std::vector<double> gaussian_weights(double dx_mm, double cutoff_mm) {
+  const auto half = static_cast<std::size_t>(std::floor(cutoff_mm / dx_mm));
+  std::vector<double> w(2 * half + 1);
+  double sum = 0;
+  for (std::size_t k = 0; k < w.size(); ++k) {
+    const double x = (static_cast<double>(k) - static_cast<double>(half)) * dx_mm;
+    const double u = x / (kAlpha * cutoff_mm);
+    w[k] = std::exp(-std::numbers::pi * u * u);
+    sum += w[k];
+  }
+  for (double& v : w) v /= sum;
+  return w;
+}
+
 }  // namespace
 
 double gaussian_transmission(double lambda_mm, double cutoff_mm) {
@@ -46,19 +64,8 @@ FilteredProfile gaussian_filter(const std::vector<double>& z_mm, double dx_mm, d
         "({} mm), got {} mm",
         2 * dx_mm, cutoff_mm));
   }
-  // The weighting function s(x) = exp(-pi (x / (alpha lambda_c))^2) / (alpha lambda_c) on the
-  // samples within +-lambda_c; normalised to sum to one (the discrete sum of a Gaussian this
-  // wide against its spacing is its integral to far below rounding).
-  const auto half = static_cast<std::size_t>(std::floor(cutoff_mm / dx_mm));
-  std::vector<double> w(2 * half + 1);
-  double sum = 0;
-  for (std::size_t k = 0; k < w.size(); ++k) {
-    const double x = (static_cast<double>(k) - static_cast<double>(half)) * dx_mm;
-    const double u = x / (kAlpha * cutoff_mm);
-    w[k] = std::exp(-std::numbers::pi * u * u);
-    sum += w[k];
-  }
-  for (double& v : w) v /= sum;
+  const std::vector<double> w = gaussian_weights(dx_mm, cutoff_mm);
+  const std::size_t half = w.size() / 2;
   const std::size_t n = z_mm.size();
   FilteredProfile out;
   if (ends == FilterEnds::discard) {
@@ -201,24 +208,10 @@ double default_cutoff_mm(double ra_mm) {
 
 namespace {
 
-// Filters `z` (long enough for a run-in and run-out of `lc` each) and evaluates what lies
-// between, in sections of one cut-off (at most five).
-ProfileTexture texture_at(const std::vector<double>& z, double dx, double lc) {
-  const auto per = static_cast<std::size_t>(std::llround(lc / dx));
-  const auto half = static_cast<std::size_t>(std::floor(lc / dx));
-  const std::size_t sections =
-      z.size() > 2 * half ? std::min<std::size_t>(5, (z.size() - 2 * half) / per) : 0;
-  if (sections < 1) {
-    throw InputError(fmt::format(
-        "profile texture: {:.4g} mm of profile holds less than three cut-offs of {:g} mm (run-in, "
-        "one sampling length, run-out); give a longer profile or a shorter --lambda-c",
-        static_cast<double>(z.size()) * dx, lc));
-  }
-  const FilteredProfile f = gaussian_filter(z, dx, lc, FilterEnds::discard);
-  const std::vector<double> r(f.residual_mm.begin(),
-                              f.residual_mm.begin() + static_cast<std::ptrdiff_t>(sections * per));
-  const std::vector<double> w(f.mean_mm.begin(),
-                              f.mean_mm.begin() + static_cast<std::ptrdiff_t>(sections * per));
+// The roughness of the R profile `r` and the waviness of the W profile `w` (the mean line),
+// `sections` sampling lengths of cut-off `lc`.
+ProfileTexture texture_of(const std::vector<double>& r, const std::vector<double>& w, double dx,
+                          double lc, std::size_t sections) {
   ProfileTexture t;
   t.cutoff_mm = lc;
   t.roughness = profile_parameters(r, dx, static_cast<int>(sections));
@@ -231,18 +224,18 @@ ProfileTexture texture_at(const std::vector<double>& z, double dx, double lc) {
   return t;
 }
 
-// The texture with the given cut-off, or the ISO 21920-3 default found by iteration; `make`
-// gives the profile to filter for a cut-off.
-template <class Make>
-ProfileTexture choose_and_evaluate(double dx, std::optional<double> cutoff, const Make& make) {
+// The texture with the given cut-off, or the ISO 21920-3 default found by iteration;
+// `evaluate` gives the texture at a cut-off.
+template <class Evaluate>
+ProfileTexture choose_and_evaluate(std::optional<double> cutoff, const Evaluate& evaluate) {
   if (cutoff) {
-    ProfileTexture t = texture_at(make(*cutoff), dx, *cutoff);
+    ProfileTexture t = evaluate(*cutoff);
     t.cutoff_source = "given";
     return t;
   }
   double lc = 0.8;
   for (int k = 0; k < 4; ++k) {
-    ProfileTexture t = texture_at(make(lc), dx, lc);
+    ProfileTexture t = evaluate(lc);
     const double next = default_cutoff_mm(t.roughness.ra_mm);
     if (next == lc) {
       t.cutoff_source = "ISO 21920-3 default from Ra";
@@ -250,7 +243,7 @@ ProfileTexture choose_and_evaluate(double dx, std::optional<double> cutoff, cons
     }
     lc = next;
   }
-  ProfileTexture t = texture_at(make(lc), dx, lc);
+  ProfileTexture t = evaluate(lc);
   t.cutoff_source = "ISO 21920-3 default from Ra (Ra lies at a boundary of its table)";
   return t;
 }
@@ -271,29 +264,75 @@ ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm, 
   check_profile(period_z_mm, dx_mm, "profile texture");
   check_cutoff(cutoff_mm, dx_mm);
   if (period_z_mm.size() < 2) throw InputError("profile texture: a period of fewer than 2 samples");
-  return choose_and_evaluate(dx_mm, cutoff_mm, [&](double lc) {
-    // Run-in, five cut-offs, run-out, and a sample.
-    const auto n = static_cast<std::size_t>(std::llround(7 * lc / dx_mm)) + 1;
-    if (n > 50'000'000) {
+  const std::vector<double>& z = period_z_mm;
+  const std::size_t n = z.size();
+  return choose_and_evaluate(cutoff_mm, [&](double lc) {
+    // The filter of the endless repetition is periodic: its mean line once over the period
+    // (the weights wrapped around it), then the five sampling lengths read off the repetition
+    // from where a run-in of one cut-off would have left it.
+    const std::vector<double> w = gaussian_weights(dx_mm, lc);
+    const std::size_t half = w.size() / 2, per = static_cast<std::size_t>(std::llround(lc / dx_mm));
+    if (5 * per > 50'000'000) {
       throw InputError(fmt::format(
           "profile texture: {:g} mm cut-offs at {:g} mm spacing need {} samples (limit 5e7)", lc,
-          dx_mm, n));
+          dx_mm, 5 * per));
     }
-    std::vector<double> z(n);
-    for (std::size_t i = 0; i < n; ++i) z[i] = period_z_mm[i % period_z_mm.size()];
-    return z;
+    const std::size_t shift = n - half % n;  // (j + k - half) mod n = (j + k + shift) mod n
+    std::vector<double> mean(n);
+    for (std::size_t j = 0; j < n; ++j) {
+      double m = 0;
+      for (std::size_t k = 0; k < w.size(); ++k) m += w[k] * z[(j + k + shift) % n];
+      mean[j] = m;
+    }
+    std::vector<double> r(5 * per), wl(5 * per);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const std::size_t j = (half + i) % n;
+      r[i] = z[j] - mean[j];
+      wl[i] = mean[j];
+    }
+    return texture_of(r, wl, dx_mm, lc, 5);
   });
+}
+
+ProfileTexture wall_texture(const WallProfile& wall, bool left, std::optional<double> cutoff_mm) {
+  if (wall.x_mm.size() < 3) {
+    throw InputError(fmt::format("wall texture: the {} wall's profile has {} points (3 or more)",
+                                 left ? "left" : "right", wall.x_mm.size()));
+  }
+  std::vector<double> z(wall.x_mm.begin(), wall.x_mm.end() - 1);
+  if (!left) {
+    for (double& v : z) v = -v;
+  }
+  const double dy =
+      (wall.y_mm.back() - wall.y_mm.front()) / static_cast<double>(wall.y_mm.size() - 1);
+  return periodic_profile_texture(z, dy, cutoff_mm);
 }
 
 ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
                                std::optional<double> cutoff_mm) {
   check_profile(z_mm, dx_mm, "profile texture");
   check_cutoff(cutoff_mm, dx_mm);
-  return choose_and_evaluate(dx_mm, cutoff_mm, [&](double lc) {
-    // At most a run-in, five cut-offs and a run-out of the trace (ISO 21920-3's traverse).
-    const auto n =
-        std::min(z_mm.size(), static_cast<std::size_t>(std::llround(7 * lc / dx_mm)) + 1);
-    return std::vector<double>(z_mm.begin(), z_mm.begin() + static_cast<std::ptrdiff_t>(n));
+  return choose_and_evaluate(cutoff_mm, [&](double lc) {
+    // At most a run-in, five cut-offs and a run-out of the trace (ISO 21920-3's traverse);
+    // what lies between the run-in and run-out, in sampling lengths of one cut-off.
+    const auto per = static_cast<std::size_t>(std::llround(lc / dx_mm));
+    const auto half = static_cast<std::size_t>(std::floor(lc / dx_mm));
+    const std::size_t n = std::min(z_mm.size(), 2 * half + 5 * per + 1);
+    const std::size_t sections = n > 2 * half ? std::min<std::size_t>(5, (n - 2 * half) / per) : 0;
+    if (sections < 1) {
+      throw InputError(fmt::format(
+          "profile texture: {:.4g} mm of profile holds less than three cut-offs of {:g} mm "
+          "(run-in, one sampling length, run-out); give a longer profile or a shorter "
+          "--lambda-c",
+          static_cast<double>(z_mm.size()) * dx_mm, lc));
+    }
+    const FilteredProfile f = gaussian_filter(
+        std::vector<double>(z_mm.begin(), z_mm.begin() + static_cast<std::ptrdiff_t>(n)), dx_mm, lc,
+        FilterEnds::discard);
+    const auto len = static_cast<std::ptrdiff_t>(sections * per);
+    return texture_of(std::vector<double>(f.residual_mm.begin(), f.residual_mm.begin() + len),
+                      std::vector<double>(f.mean_mm.begin(), f.mean_mm.begin() + len), dx_mm, lc,
+                      sections);
   });
 }
 
