@@ -277,11 +277,14 @@ ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm, 
           "profile texture: {:g} mm cut-offs at {:g} mm spacing need {} samples (limit 5e7)", lc,
           dx_mm, 5 * per));
     }
-    const std::size_t shift = n - half % n;  // (j + k - half) mod n = (j + k + shift) mod n
+    // The period unrolled over the weights' reach: zz[i] = z[(i - half) mod n].
+    const std::size_t shift = n - half % n;
+    std::vector<double> zz(n + 2 * half);
+    for (std::size_t i = 0; i < zz.size(); ++i) zz[i] = z[(i + shift) % n];
     std::vector<double> mean(n);
     for (std::size_t j = 0; j < n; ++j) {
       double m = 0;
-      for (std::size_t k = 0; k < w.size(); ++k) m += w[k] * z[(j + k + shift) % n];
+      for (std::size_t k = 0; k < w.size(); ++k) m += w[k] * zz[j + k];
       mean[j] = m;
     }
     std::vector<double> r(5 * per), wl(5 * per);
