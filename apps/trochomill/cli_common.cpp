@@ -142,16 +142,7 @@ void emit_stream(const std::string& target,
     std::fflush(stdout);
     return;
   }
-  write_file_atomic(target, [&](const std::filesystem::path& tmp) {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError("cannot write '" + target + "': " + std::strerror(errno));
-    produce([&](std::string_view piece) {
-      out.write(piece.data(), static_cast<std::streamsize>(piece.size()));
-      if (!out) throw IoError("cannot write '" + target + "': write failed");
-    });
-    out.flush();
-    if (!out) throw IoError("cannot write '" + target + "': write failed");
-  });
+  write_text_atomic(target, produce);
 }
 
 void emit_file(const std::string& target, const std::string& extension,

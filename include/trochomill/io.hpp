@@ -42,6 +42,12 @@ class PendingFile {
 /// ends the process, so that no half-written file is left behind).
 void remove_pending_files() noexcept;
 
+/// Text made piece by piece, written atomically as write_file_atomic: `produce` hands each
+/// piece to the sink it is given (a file of any size without holding it in memory).
+void write_text_atomic(
+    const std::filesystem::path& path,
+    const std::function<void(const std::function<void(std::string_view)>&)>& produce);
+
 /// Reads a whole file. Throws IoError naming the path when it cannot be read.
 [[nodiscard]] std::string read_file(const std::filesystem::path& path);
 /// Reads a whole input file (a job, a program, a table): a file that cannot be read is bad

@@ -137,14 +137,24 @@ void write_file_atomic(const fs::path& path, const std::function<void(const fs::
   }
 }
 
-void write_file_atomic(const fs::path& path, std::string_view content) {
+void write_text_atomic(
+    const fs::path& path,
+    const std::function<void(const std::function<void(std::string_view)>&)>& produce) {
   write_file_atomic(path, [&](const fs::path& tmp) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw IoError("cannot write '" + path.string() + "': " + std::strerror(errno));
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
+    produce([&](std::string_view piece) {
+      out.write(piece.data(), static_cast<std::streamsize>(piece.size()));
+      if (!out) throw IoError("cannot write '" + path.string() + "': write failed");
+    });
     out.flush();
     if (!out) throw IoError("cannot write '" + path.string() + "': write failed");
   });
+}
+
+void write_file_atomic(const fs::path& path, std::string_view content) {
+  write_text_atomic(path,
+                    [&](const std::function<void(std::string_view)>& sink) { sink(content); });
 }
 
 std::string read_file(const fs::path& path) {
