@@ -198,6 +198,19 @@ TEST(Texture, BadInputIsRefusedWithTheReason) {
               (void)profile_parameters(std::vector<double>(6, 0.0), 0.01);
             }).find("at least two per section"),
             std::string::npos);
+  // Found by fuzzing the profile readers: a profile sampled every 4 mm cannot resolve the
+  // default 0.8 mm cut-off (it divided by the cut-off's zero samples); a cut-off of 1e9
+  // samples is refused before its weights are allocated (8 GB), with either end treatment.
+  EXPECT_NE(message([&] { (void)profile_texture(z, 4.0); }).find("sampled too coarsely"),
+            std::string::npos);
+  EXPECT_NE(message([&] { (void)periodic_profile_texture(z, 4.0); }).find("sampled too coarsely"),
+            std::string::npos);
+  for (const FilterEnds ends : {FilterEnds::discard, FilterEnds::normalize}) {
+    EXPECT_NE(message([&] { (void)gaussian_filter(z, 1e-9, 1.0, ends); }).find("(limit 5e+07)"),
+              std::string::npos);
+  }
+  EXPECT_NE(message([&] { (void)profile_texture(z, 1e-9, 1.0); }).find("(limit 5e+07)"),
+            std::string::npos);
 }
 
 // One period of a periodic profile: a short wave (lambda_c / 16) keeps all of its amplitude

@@ -34,8 +34,24 @@ void check_profile(const std::vector<double>& z_mm, double dx_mm, const char* wh
 // samples within +-lambda_c (2 half + 1 of them, half = floor(lambda_c / dx)); normalised to sum
 // to one (the discrete sum of a Gaussian this wide against its spacing is its integral to far
 // below rounding).
-std::vector<double> gaussian_weights(double dx_mm, double cutoff_mm) {
-  const auto half = static_cast<std::size_t>(std::floor(cutoff_mm / dx_mm));
+// `reach` (samples each side, default all within +-lambda_c) may cut it shorter when the
+// profile is shorter than the kernel: the samples beyond it would never be weighted.
+constexpr double kMaxKernelHalf = 2.5e7;  // samples each side: 400 MB of weights
+
+std::size_t kernel_half(double dx_mm, double cutoff_mm) {
+  const double half = std::floor(cutoff_mm / dx_mm);
+  if (!(half <= kMaxKernelHalf)) {
+    throw InputError(fmt::format(
+        "Gaussian filter: a {:g} mm cut-off at {:g} mm spacing spans {:.3g} samples (limit "
+        "{:.3g}); resample the profile coarser or give a shorter cut-off",
+        cutoff_mm, dx_mm, 2 * half + 1, 2 * kMaxKernelHalf + 1));
+  }
+  return static_cast<std::size_t>(half);
+}
+
+std::vector<double> gaussian_weights(double dx_mm, double cutoff_mm,
+                                     std::size_t reach = std::numeric_limits<std::size_t>::max()) {
+  const std::size_t half = std::min(kernel_half(dx_mm, cutoff_mm), reach);
   std::vector<double> w(2 * half + 1);
   double sum = 0;
   for (std::size_t k = 0; k < w.size(); ++k) {
@@ -64,18 +80,22 @@ FilteredProfile gaussian_filter(const std::vector<double>& z_mm, double dx_mm, d
         "({} mm), got {} mm",
         2 * dx_mm, cutoff_mm));
   }
-  const std::vector<double> w = gaussian_weights(dx_mm, cutoff_mm);
-  const std::size_t half = w.size() / 2;
   const std::size_t n = z_mm.size();
+  if (n == 0) throw InputError("Gaussian filter: the profile is empty");
+  // The weights before anything else is allocated: too many of them is an error of its own.
+  const std::size_t full_half = kernel_half(dx_mm, cutoff_mm);
+  if (ends == FilterEnds::discard && n < 2 * full_half + 1) {
+    throw InputError(fmt::format(
+        "Gaussian filter: {:.6g} mm of profile is shorter than two cut-offs ({:.6g} mm) and "
+        "a sample: nothing is left after the run-in and run-out; give a longer profile, a "
+        "shorter cut-off or ends = normalize",
+        static_cast<double>(n - 1) * dx_mm, 2 * cutoff_mm));
+  }
+  const std::vector<double> w =
+      gaussian_weights(dx_mm, cutoff_mm, ends == FilterEnds::discard ? full_half : n - 1);
+  const std::size_t half = w.size() / 2;
   FilteredProfile out;
   if (ends == FilterEnds::discard) {
-    if (n < 2 * half + 1) {
-      throw InputError(fmt::format(
-          "Gaussian filter: {:.6g} mm of profile is shorter than two cut-offs ({:.6g} mm) and "
-          "a sample: nothing is left after the run-in and run-out; give a longer profile, a "
-          "shorter cut-off or ends = normalize",
-          static_cast<double>(n - 1) * dx_mm, 2 * cutoff_mm));
-    }
     out.first = half;
     out.mean_mm.resize(n - 2 * half);
     for (std::size_t i = half; i + half < n; ++i) {
@@ -84,7 +104,6 @@ FilteredProfile gaussian_filter(const std::vector<double>& z_mm, double dx_mm, d
       out.mean_mm[i - half] = m;
     }
   } else {
-    if (n == 0) throw InputError("Gaussian filter: the profile is empty");
     out.mean_mm.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t k0 = i < half ? half - i : 0;
@@ -248,6 +267,16 @@ ProfileTexture choose_and_evaluate(std::optional<double> cutoff, const Evaluate&
   return t;
 }
 
+// A cut-off the sampling resolves (the default one too: a coarse profile may not resolve it).
+void check_resolved(double lc, double dx_mm) {
+  if (!(lc >= 2 * dx_mm)) {
+    throw InputError(fmt::format(
+        "profile texture: the {:g} mm cut-off is shorter than two sample spacings ({:g} mm): "
+        "the profile is sampled too coarsely for it; give a cut-off of at least {:g} mm",
+        lc, 2 * dx_mm, 2 * dx_mm));
+  }
+}
+
 void check_cutoff(std::optional<double> cutoff_mm, double dx_mm) {
   if (cutoff_mm && !(std::isfinite(*cutoff_mm) && *cutoff_mm >= 2 * dx_mm && *cutoff_mm <= 1e3)) {
     throw InputError(fmt::format(
@@ -270,13 +299,16 @@ ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm, 
     // The filter of the endless repetition is periodic: its mean line once over the period
     // (the weights wrapped around it), then the five sampling lengths read off the repetition
     // from where a run-in of one cut-off would have left it.
+    check_resolved(lc, dx_mm);
+    const double samples = 5 * std::round(lc / dx_mm);
+    if (!(samples <= 5e7)) {
+      throw InputError(fmt::format(
+          "profile texture: {:g} mm cut-offs at {:g} mm spacing need {:.3g} samples (limit "
+          "5e7)",
+          lc, dx_mm, samples));
+    }
     const std::vector<double> w = gaussian_weights(dx_mm, lc);
     const std::size_t half = w.size() / 2, per = static_cast<std::size_t>(std::llround(lc / dx_mm));
-    if (5 * per > 50'000'000) {
-      throw InputError(fmt::format(
-          "profile texture: {:g} mm cut-offs at {:g} mm spacing need {} samples (limit 5e7)", lc,
-          dx_mm, 5 * per));
-    }
     // The period unrolled over the weights' reach: zz[i] = z[(i - half) mod n].
     const std::size_t shift = n - half % n;
     std::vector<double> zz(n + 2 * half);
@@ -318,8 +350,9 @@ ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
   return choose_and_evaluate(cutoff_mm, [&](double lc) {
     // At most a run-in, five cut-offs and a run-out of the trace (ISO 21920-3's traverse);
     // what lies between the run-in and run-out, in sampling lengths of one cut-off.
+    check_resolved(lc, dx_mm);
+    const std::size_t half = kernel_half(dx_mm, lc);
     const auto per = static_cast<std::size_t>(std::llround(lc / dx_mm));
-    const auto half = static_cast<std::size_t>(std::floor(lc / dx_mm));
     const std::size_t n = std::min(z_mm.size(), 2 * half + 5 * per + 1);
     const std::size_t sections = n > 2 * half ? std::min<std::size_t>(5, (n - 2 * half) / per) : 0;
     if (sections < 1) {
