@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
 #include <limits>
 #include <optional>
 #include <string>
@@ -173,5 +174,123 @@ struct MaterialRatioCurve {
 };
 [[nodiscard]] MaterialRatioCurve material_ratio_curve(const std::vector<double>& z_mm,
                                                       int points = 101);
+
+// ---- areal surface texture (ISO 16610-61 filter, ISO 25178-2 parameters) -----------------
+
+/// A surface on a regular grid: heights (mm) at nx columns along x, every dx_mm, by ny rows
+/// along y, every dy_mm; row-major, z_mm[row * nx + column]; the first point at (x0, y0) mm.
+struct HeightMap {
+  std::size_t nx = 0, ny = 0;
+  double dx_mm = 0, dy_mm = 0;
+  double x0_mm = 0, y0_mm = 0;
+  std::vector<double> z_mm;
+  std::string description;  ///< e.g. "floor, simulated" or the instrument's record
+  [[nodiscard]] double at(std::size_t column, std::size_t row) const {
+    return z_mm[row * nx + column];
+  }
+};
+/// Throws InputError unless the map has at least 2 x 2 points, finite positive spacings, as
+/// many heights as points and every height finite; `what` names it in the message.
+void check_height_map(const HeightMap& map, std::string_view what);
+
+/// The areal Gaussian filter (ISO 16610-61): the mean surface (wavelengths longer than the
+/// nesting index `cutoff_mm`, transmitted as the profile filter's exp(-pi (alpha lambda_c /
+/// lambda)^2) in each direction). The weighting function is separable, so it runs as the
+/// profile filter along x, then along y, each line by FFT convolution (FFTW) when its kernel
+/// is long; at the map's edges the weights on the map are renormalised (FilterEnds::normalize:
+/// on a rectangle the 2-D renormalisation is the product of the two 1-D ones). Results do not
+/// depend on the thread count. Throws InputError for a bad map, a cut-off under two spacings
+/// in either direction or a kernel past 5e7 samples.
+[[nodiscard]] HeightMap gaussian_filter_areal(const HeightMap& map, double cutoff_mm);
+
+/// The F-operator: what is removed as the surface's form before the L-filter.
+enum class FormRemoval {
+  none,        ///< nothing (the mean height only)
+  plane,       ///< the least-squares plane
+  polynomial,  ///< the least-squares polynomial in x and y of total degree `degree` (1..6)
+};
+/// The map less its least-squares form (the fit on the full grid: separable sums, exact to
+/// rounding). Throws InputError for a degree outside 1..6 with FormRemoval::polynomial.
+[[nodiscard]] HeightMap remove_form(const HeightMap& map, FormRemoval form, int degree = 2);
+
+/// Areal field parameters (ISO 25178-2) of a scale-limited surface, heights about its mean
+/// plane (mm); the spacings give the area.
+struct ArealParameters {
+  double sa_mm = 0;  ///< arithmetic mean height
+  double sq_mm = 0;  ///< root mean square height
+  double ssk = 0;    ///< skewness
+  double sku = 0;    ///< kurtosis
+  double sp_mm = 0;  ///< largest peak height
+  double sv_mm = 0;  ///< largest pit depth (positive)
+  double sz_mm = 0;  ///< maximum height, Sp + Sv
+  /// Developed interfacial area ratio, percent: each grid cell's area from the mean slopes
+  /// of its edges, dx dy sqrt(1 + zx^2 + zy^2), summed, over the projected area, less one.
+  double sdr_percent = 0;
+  /// Autocorrelation length (mm): the shortest lag at which the areal autocorrelation
+  /// function decays to 0.2, searched over directions (0.5 degree apart) out to half the
+  /// map's extent; empty when it does not decay that far in any direction.
+  std::optional<double> sal_mm;
+  /// Texture aspect ratio: Sal over the longest decay length (0..1); empty when the
+  /// autocorrelation does not decay to 0.2 within half the extent in every direction (a
+  /// strongly directional texture: Str tends to 0).
+  std::optional<double> str;
+  double area_mm2 = 0;  ///< the evaluation area
+};
+/// `autocorrelation`: compute Sal and Str (an FFT of the map padded by half its extent).
+[[nodiscard]] ArealParameters areal_parameters(const HeightMap& surface,
+                                               bool autocorrelation = true);
+
+/// How the areal texture is separated: the S-filter (short wavelengths, optional), the
+/// F-operator, the L-filter (the roughness surface is what it leaves).
+struct ArealFilterOptions {
+  std::optional<double> s_mm;  ///< S-filter nesting index, mm (none: no S-filter)
+  /// L-filter nesting index, mm (none: ISO 21920-3's profile cut-off for the S-L surface's
+  /// Sa, found by iteration as for a profile, and stated in the result)
+  std::optional<double> l_mm;
+  FormRemoval form = FormRemoval::plane;
+  int degree = 2;  ///< polynomial degree with FormRemoval::polynomial
+};
+/// The texture of a surface: the S-F surface (S-filtered, form removed: roughness and
+/// waviness) and the S-L surface (less the L-filter's mean surface: roughness), with the
+/// filters used.
+struct ArealTexture {
+  double s_mm = 0;  ///< 0: no S-filter
+  double l_mm = 0;
+  std::string l_source;  ///< "given" or how the default was chosen
+  FormRemoval form = FormRemoval::plane;
+  int degree = 0;
+  ArealParameters sf;  ///< S-F surface (without Sal and Str)
+  ArealParameters sl;  ///< S-L surface
+};
+/// Throws InputError for a bad map or nesting indices the sampling cannot resolve (under two
+/// spacings) or longer than the map's shorter side.
+[[nodiscard]] ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& options);
+
+[[nodiscard]] const char* form_removal_name(FormRemoval form);
+
+// ---- X3P (ISO 5436-2, openGPS): the exchange format of stylus and optical instruments ------
+
+/// What an X3P file says of the data besides the heights (its Record2).
+struct X3pInfo {
+  std::string date;     ///< ISO 8601; empty: SOURCE_DATE_EPOCH (if set) or now, in UTC
+  std::string creator;  ///< who or what made it
+  std::string manufacturer = "trochomill", model, serial = "-", version;
+  std::string probing = "Software";  ///< Contacting, NonContacting or Software
+  std::string comment;
+};
+
+/// Writes a height map (or, with ny = 1, a profile) as an X3P file: main.xml (ISO5436_2 schema,
+/// lengths in metres), bindata/data.bin (little-endian doubles, x fastest) with its MD5 in
+/// main.xml, and md5checksum.hex (the MD5 of main.xml). Throws InputError for a bad map,
+/// IoError when the file cannot be written.
+void write_x3p(const std::filesystem::path& file, const HeightMap& map, const X3pInfo& info = {});
+
+/// Reads an X3P file: a surface (FeatureType SUR) or a profile (PRF, ny = 1) on incremental
+/// x and y axes, heights of any of the format's types (int16, int32, float, double; scaled by
+/// CZ's increment and offset) from bindata or listed in main.xml, in mm. Checks the data's
+/// MD5 when main.xml gives one. Throws InputError naming the file (and main.xml's line:column
+/// for XML errors) for what is not a valid X3P file, and for what it cannot use: point clouds
+/// (absolute axes), several layers, and points marked invalid (it needs complete maps).
+[[nodiscard]] HeightMap read_x3p(const std::filesystem::path& file, X3pInfo* info = nullptr);
 
 }  // namespace trochomill

@@ -6,11 +6,15 @@
 #include <cmath>
 #include <numbers>
 
+#include "surface/gaussian.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/surface.hpp"
 
 namespace trochomill {
+
+using detail::gaussian_weights;
+using detail::kernel_half;
 
 namespace {
 
@@ -30,13 +34,9 @@ void check_profile(const std::vector<double>& z_mm, double dx_mm, const char* wh
   }
 }
 
-// The weighting function s(x) = exp(-pi (x / (alpha lambda_c))^2) / (alpha lambda_c) on the
-// samples within +-lambda_c (2 half + 1 of them, half = floor(lambda_c / dx)); normalised to sum
-// to one (the discrete sum of a Gaussian this wide against its spacing is its integral to far
-// below rounding).
-// `reach` (samples each side, default all within +-lambda_c) may cut it shorter when the
-// profile is shorter than the kernel: the samples beyond it would never be weighted.
-constexpr double kMaxKernelHalf = 2.5e7;  // samples each side: 400 MB of weights
+}  // namespace
+
+namespace detail {
 
 std::size_t kernel_half(double dx_mm, double cutoff_mm) {
   const double half = std::floor(cutoff_mm / dx_mm);
@@ -49,8 +49,10 @@ std::size_t kernel_half(double dx_mm, double cutoff_mm) {
   return static_cast<std::size_t>(half);
 }
 
-std::vector<double> gaussian_weights(double dx_mm, double cutoff_mm,
-                                     std::size_t reach = std::numeric_limits<std::size_t>::max()) {
+// s(x) = exp(-pi (x / (alpha lambda_c))^2) / (alpha lambda_c) on 2 half + 1 samples, normalised
+// to sum to one (the discrete sum of a Gaussian this wide against its spacing is its integral
+// to far below rounding).
+std::vector<double> gaussian_weights(double dx_mm, double cutoff_mm, std::size_t reach) {
   const std::size_t half = std::min(kernel_half(dx_mm, cutoff_mm), reach);
   std::vector<double> w(2 * half + 1);
   double sum = 0;
@@ -64,7 +66,7 @@ std::vector<double> gaussian_weights(double dx_mm, double cutoff_mm,
   return w;
 }
 
-}  // namespace
+}  // namespace detail
 
 double gaussian_transmission(double lambda_mm, double cutoff_mm) {
   const double r = kAlpha * cutoff_mm / lambda_mm;

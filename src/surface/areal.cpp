@@ -1,0 +1,599 @@
+// Areal surface texture: the ISO 16610-61 Gaussian filter (separable, FFT convolution with
+// FFTW), the F-operator (least-squares plane or polynomial) and the ISO 25178-2 field
+// parameters (surface.hpp; docs/models.md section "Surface texture").
+//
+// Determinism: every line (row or column) is filtered by the same FFTW plan (FFTW_ESTIMATE,
+// made once per size) on its own buffer, so a line's result does not depend on which thread
+// ran it or on the others; sums over the map run in one fixed order.
+#include <fftw3.h>
+#include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <memory>
+#include <mutex>
+#include <numbers>
+
+#include "surface/gaussian.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/surface.hpp"
+
+namespace trochomill {
+
+namespace {
+
+// FFTW's planner is not thread-safe (its execute functions are).
+std::mutex& planner_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+// The smallest n' >= n of the form 2^a 3^b 5^c 7^d (FFTW's fast sizes).
+std::size_t fast_fft_size(std::size_t n) {
+  for (std::size_t m = std::max<std::size_t>(n, 1);; ++m) {
+    std::size_t r = m;
+    for (const std::size_t p : {2, 3, 5, 7}) {
+      while (r % p == 0) r /= p;
+    }
+    if (r == 1) return m;
+  }
+}
+
+struct FftwFree {
+  void operator()(void* p) const { fftw_free(p); }
+};
+template <class T>
+using FftwBuffer = std::unique_ptr<T[], FftwFree>;
+
+template <class T>
+FftwBuffer<T> fftw_buffer(std::size_t n) {
+  auto* p = static_cast<T*>(fftw_malloc(sizeof(T) * std::max<std::size_t>(n, 1)));
+  if (p == nullptr) throw std::bad_alloc();
+  return FftwBuffer<T>(p);
+}
+
+// One real-to-complex and its inverse plan of length n (FFTW_ESTIMATE: the same plan for the
+// same size, whatever ran before).
+class RealPlans {
+ public:
+  explicit RealPlans(std::size_t n) : n_(n) {
+    auto in = fftw_buffer<double>(n);
+    auto out = fftw_buffer<fftw_complex>(n / 2 + 1);
+    const std::lock_guard lock(planner_mutex());
+    const int ni = static_cast<int>(n);
+    forward_ = fftw_plan_dft_r2c_1d(ni, in.get(), out.get(), FFTW_ESTIMATE);
+    inverse_ = fftw_plan_dft_c2r_1d(ni, out.get(), in.get(), FFTW_ESTIMATE);
+    if (forward_ == nullptr || inverse_ == nullptr) throw Error("FFTW could not plan a transform");
+  }
+  RealPlans(const RealPlans&) = delete;
+  RealPlans& operator=(const RealPlans&) = delete;
+  ~RealPlans() {
+    const std::lock_guard lock(planner_mutex());
+    fftw_destroy_plan(forward_);
+    fftw_destroy_plan(inverse_);
+  }
+  [[nodiscard]] std::size_t size() const { return n_; }
+  void forward(double* in, fftw_complex* out) const { fftw_execute_dft_r2c(forward_, in, out); }
+  // Destroys `in` (FFTW's c2r does).
+  void inverse(fftw_complex* in, double* out) const { fftw_execute_dft_c2r(inverse_, in, out); }
+
+ private:
+  std::size_t n_;
+  fftw_plan forward_ = nullptr, inverse_ = nullptr;
+};
+
+// A complex transform of length n, both directions.
+class ComplexPlans {
+ public:
+  explicit ComplexPlans(std::size_t n) : n_(n) {
+    auto a = fftw_buffer<fftw_complex>(n);
+    auto b = fftw_buffer<fftw_complex>(n);
+    const std::lock_guard lock(planner_mutex());
+    const int ni = static_cast<int>(n);
+    forward_ = fftw_plan_dft_1d(ni, a.get(), b.get(), FFTW_FORWARD, FFTW_ESTIMATE);
+    inverse_ = fftw_plan_dft_1d(ni, a.get(), b.get(), FFTW_BACKWARD, FFTW_ESTIMATE);
+    if (forward_ == nullptr || inverse_ == nullptr) throw Error("FFTW could not plan a transform");
+  }
+  ComplexPlans(const ComplexPlans&) = delete;
+  ComplexPlans& operator=(const ComplexPlans&) = delete;
+  ~ComplexPlans() {
+    const std::lock_guard lock(planner_mutex());
+    fftw_destroy_plan(forward_);
+    fftw_destroy_plan(inverse_);
+  }
+  void forward(fftw_complex* in, fftw_complex* out) const { fftw_execute_dft(forward_, in, out); }
+  void inverse(fftw_complex* in, fftw_complex* out) const { fftw_execute_dft(inverse_, in, out); }
+
+ private:
+  std::size_t n_;
+  fftw_plan forward_ = nullptr, inverse_ = nullptr;
+};
+
+// Below this many weights a line is convolved directly (fewer operations than two FFTs).
+constexpr std::size_t kDirectWeights = 48;
+
+// The Gaussian mean line of lines of n samples: out[i] = sum_k w[k] z[i + k - h] over the
+// samples on the line, divided by the sum of those weights (renormalised ends).
+class LineFilter {
+ public:
+  LineFilter(std::size_t n, double spacing_mm, double cutoff_mm)
+      : n_(n), w_(detail::gaussian_weights(spacing_mm, cutoff_mm, n - 1)) {
+    half_ = w_.size() / 2;
+    // The weights on the line at each output: a prefix-sum difference.
+    std::vector<double> prefix(w_.size() + 1, 0.0);
+    for (std::size_t k = 0; k < w_.size(); ++k) prefix[k + 1] = prefix[k] + w_[k];
+    norm_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k0 = i < half_ ? half_ - i : 0;
+      const std::size_t k1 = std::min(w_.size(), n + half_ - i);
+      norm_[i] = prefix[k1] - prefix[k0];
+    }
+    if (w_.size() > kDirectWeights) {
+      // Linear convolution by a circular one: n + half zero-padded samples are enough (the
+      // wrapped weights meet only padding at the outputs kept).
+      plans_ = std::make_unique<RealPlans>(fast_fft_size(n + half_));
+      const std::size_t m = plans_->size();
+      auto kern = fftw_buffer<double>(m);
+      std::fill(kern.get(), kern.get() + m, 0.0);
+      for (std::size_t k = 0; k < w_.size(); ++k) kern[(k + m - half_) % m] = w_[k];
+      kernel_.resize(m / 2 + 1);
+      auto spec = fftw_buffer<fftw_complex>(m / 2 + 1);
+      plans_->forward(kern.get(), spec.get());
+      // The inverse transform is unnormalised: the 1/m goes into the kernel's spectrum.
+      const double scale = 1.0 / static_cast<double>(m);
+      for (std::size_t j = 0; j < kernel_.size(); ++j) {
+        kernel_[j] = std::complex<double>(spec[j][0], spec[j][1]) * scale;
+      }
+    }
+  }
+
+  // Scratch buffers for one thread.
+  struct Work {
+    FftwBuffer<double> real;
+    FftwBuffer<fftw_complex> spec;
+  };
+  [[nodiscard]] Work work() const {
+    const std::size_t m = plans_ ? plans_->size() : n_;
+    return {fftw_buffer<double>(m), fftw_buffer<fftw_complex>(m / 2 + 1)};
+  }
+
+  // Filters the line in[0..n) (read with `stride`) into out[0..n) (written with `stride`).
+  void run(const double* in, std::size_t in_stride, double* out, std::size_t out_stride,
+           Work& work) const {
+    if (!plans_) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        const std::size_t k0 = i < half_ ? half_ - i : 0;
+        const std::size_t k1 = std::min(w_.size(), n_ + half_ - i);
+        double m = 0;
+        for (std::size_t k = k0; k < k1; ++k) m += w_[k] * in[(i + k - half_) * in_stride];
+        out[i * out_stride] = m / norm_[i];
+      }
+      return;
+    }
+    const std::size_t m = plans_->size();
+    double* r = work.real.get();
+    for (std::size_t i = 0; i < n_; ++i) r[i] = in[i * in_stride];
+    std::fill(r + n_, r + m, 0.0);
+    plans_->forward(r, work.spec.get());
+    for (std::size_t j = 0; j < kernel_.size(); ++j) {
+      const std::complex<double> v =
+          std::complex<double>(work.spec[j][0], work.spec[j][1]) * kernel_[j];
+      work.spec[j][0] = v.real();
+      work.spec[j][1] = v.imag();
+    }
+    plans_->inverse(work.spec.get(), r);
+    for (std::size_t i = 0; i < n_; ++i) out[i * out_stride] = r[i] / norm_[i];
+  }
+
+ private:
+  std::size_t n_, half_ = 0;
+  std::vector<double> w_, norm_;
+  std::unique_ptr<RealPlans> plans_;
+  std::vector<std::complex<double>> kernel_;
+};
+
+void check_nesting_index(const HeightMap& map, double cutoff_mm, const char* what) {
+  const double finest = std::max(map.dx_mm, map.dy_mm);
+  if (!(std::isfinite(cutoff_mm) && cutoff_mm >= 2 * finest)) {
+    throw InputError(fmt::format(
+        "{}: the nesting index must be a finite number of at least two sample spacings ({:g} "
+        "mm), got {} mm",
+        what, 2 * finest, cutoff_mm));
+  }
+  (void)detail::kernel_half(map.dx_mm, cutoff_mm);
+  (void)detail::kernel_half(map.dy_mm, cutoff_mm);
+}
+
+// Columns are filtered in blocks of this many (their samples of a row lie side by side).
+constexpr std::size_t kColumnBlock = 8;
+
+}  // namespace
+
+void check_height_map(const HeightMap& map, std::string_view what) {
+  if (map.nx < 2 || map.ny < 2) {
+    throw InputError(fmt::format("{}: a height map needs at least 2 x 2 points, got {} x {}", what,
+                                 map.nx, map.ny));
+  }
+  for (const auto& [v, name] : {std::pair{map.dx_mm, "x"}, std::pair{map.dy_mm, "y"}}) {
+    if (!(std::isfinite(v) && v > 0 && v < 1e6)) {
+      throw InputError(fmt::format(
+          "{}: the {} spacing must be a finite number in (0, 1e6) mm, got {}", what, name, v));
+    }
+  }
+  if (map.z_mm.size() != map.nx * map.ny) {
+    throw InputError(
+        fmt::format("{}: {} heights for {} x {} points", what, map.z_mm.size(), map.nx, map.ny));
+  }
+  for (std::size_t i = 0; i < map.z_mm.size(); ++i) {
+    if (!std::isfinite(map.z_mm[i])) {
+      throw InputError(fmt::format("{}: the height at column {}, row {} is not a finite number",
+                                   what, i % map.nx, i / map.nx));
+    }
+  }
+}
+
+HeightMap gaussian_filter_areal(const HeightMap& map, double cutoff_mm) {
+  check_height_map(map, "areal Gaussian filter");
+  check_nesting_index(map, cutoff_mm, "areal Gaussian filter");
+  const std::size_t nx = map.nx, ny = map.ny;
+  HeightMap tmp = map, out = map;
+  out.description = map.description + fmt::format(", Gaussian mean surface {:g} mm", cutoff_mm);
+  {  // along x: each row
+    const LineFilter f(nx, map.dx_mm, cutoff_mm);
+    tbb::enumerable_thread_specific<LineFilter::Work> work([&] { return f.work(); });
+    tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {
+      f.run(map.z_mm.data() + r * nx, 1, tmp.z_mm.data() + r * nx, 1, work.local());
+    });
+  }
+  {  // along y: each column, in blocks gathered row by row
+    const LineFilter f(ny, map.dy_mm, cutoff_mm);
+    struct ColumnWork {
+      LineFilter::Work line;
+      std::vector<double> in, out;
+    };
+    tbb::enumerable_thread_specific<ColumnWork> work([&] {
+      return ColumnWork{f.work(), std::vector<double>(ny * kColumnBlock),
+                        std::vector<double>(ny * kColumnBlock)};
+    });
+    const std::size_t blocks = (nx + kColumnBlock - 1) / kColumnBlock;
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+      ColumnWork& w = work.local();
+      const std::size_t c0 = b * kColumnBlock, nc = std::min(kColumnBlock, nx - c0);
+      for (std::size_t r = 0; r < ny; ++r) {
+        for (std::size_t c = 0; c < nc; ++c) w.in[c * ny + r] = tmp.z_mm[r * nx + c0 + c];
+      }
+      for (std::size_t c = 0; c < nc; ++c) {
+        f.run(w.in.data() + c * ny, 1, w.out.data() + c * ny, 1, w.line);
+      }
+      for (std::size_t r = 0; r < ny; ++r) {
+        for (std::size_t c = 0; c < nc; ++c) out.z_mm[r * nx + c0 + c] = w.out[c * ny + r];
+      }
+    });
+  }
+  return out;
+}
+
+const char* form_removal_name(FormRemoval form) {
+  switch (form) {
+    case FormRemoval::none:
+      return "none";
+    case FormRemoval::plane:
+      return "plane";
+    case FormRemoval::polynomial:
+      return "polynomial";
+  }
+  return "?";
+}
+
+HeightMap remove_form(const HeightMap& map, FormRemoval form, int degree) {
+  check_height_map(map, "form removal");
+  if (form == FormRemoval::polynomial && (degree < 1 || degree > 6)) {
+    throw InputError(
+        fmt::format("form removal: the polynomial degree must be 1 to 6, got {}", degree));
+  }
+  const int d = form == FormRemoval::none ? 0 : form == FormRemoval::plane ? 1 : degree;
+  const std::size_t nx = map.nx, ny = map.ny;
+  // Legendre polynomials of u in [-1, 1] across each side: well conditioned at any degree here.
+  auto legendre = [d](std::size_t n) {
+    std::vector<double> p((static_cast<std::size_t>(d) + 1) * n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double u = 2.0 * static_cast<double>(i) / static_cast<double>(n - 1) - 1.0;
+      p[i] = 1.0;
+      if (d >= 1) p[n + i] = u;
+      for (int k = 2; k <= d; ++k) {
+        const auto kk = static_cast<std::size_t>(k);
+        p[kk * n + i] =
+            ((2.0 * k - 1) * u * p[(kk - 1) * n + i] - (k - 1.0) * p[(kk - 2) * n + i]) /
+            static_cast<double>(k);
+      }
+    }
+    return p;
+  };
+  const std::vector<double> px = legendre(nx), py = legendre(ny);
+  // The terms P_i(u) P_j(v) with i + j <= d. On the full grid the normal equations separate:
+  // sum P_i P_j' Q_k Q_l = (sum_x P_i P_i')(sum_y Q_k Q_l); the right side sums row moments.
+  std::vector<std::pair<int, int>> terms;
+  for (int t = 0; t <= d; ++t) {
+    for (int j = 0; j <= t; ++j) terms.emplace_back(t - j, j);
+  }
+  const auto D = static_cast<std::size_t>(d) + 1;
+  Eigen::MatrixXd gx(D, D), gy(D, D);
+  for (std::size_t a = 0; a < D; ++a) {
+    for (std::size_t b = 0; b < D; ++b) {
+      double sx = 0, sy = 0;
+      for (std::size_t i = 0; i < nx; ++i) sx += px[a * nx + i] * px[b * nx + i];
+      for (std::size_t i = 0; i < ny; ++i) sy += py[a * ny + i] * py[b * ny + i];
+      gx(a, b) = sx, gy(a, b) = sy;
+    }
+  }
+  // moments(i, r) = sum over the row r of P_i(u) z; then the right side sums Q_j(v) over rows.
+  Eigen::MatrixXd moments(D, ny);
+  for (std::size_t r = 0; r < ny; ++r) {
+    for (std::size_t a = 0; a < D; ++a) {
+      double s = 0;
+      for (std::size_t c = 0; c < nx; ++c) s += px[a * nx + c] * map.z_mm[r * nx + c];
+      moments(a, r) = s;
+    }
+  }
+  const auto T = terms.size();
+  Eigen::MatrixXd normal(T, T);
+  Eigen::VectorXd rhs(T);
+  for (std::size_t p = 0; p < T; ++p) {
+    const auto [i, j] = terms[p];
+    for (std::size_t q = 0; q < T; ++q) {
+      normal(p, q) = gx(i, terms[q].first) * gy(j, terms[q].second);
+    }
+    double s = 0;
+    for (std::size_t r = 0; r < ny; ++r)
+      s += moments(i, r) * py[static_cast<std::size_t>(j) * ny + r];
+    rhs(p) = s;
+  }
+  const Eigen::VectorXd coef = normal.ldlt().solve(rhs);
+  HeightMap out = map;
+  for (std::size_t r = 0; r < ny; ++r) {
+    for (std::size_t c = 0; c < nx; ++c) {
+      double f = 0;
+      for (std::size_t p = 0; p < T; ++p) {
+        const auto [i, j] = terms[p];
+        f += coef(p) * px[static_cast<std::size_t>(i) * nx + c] *
+             py[static_cast<std::size_t>(j) * ny + r];
+      }
+      out.z_mm[r * nx + c] -= f;
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// The areal autocorrelation function for lags 0..lx along x and -ly..ly along y (samples),
+// normalised by each lag's overlap (an unbiased estimate) and to 1 at zero lag:
+// acf[(ty + ly) * (lx + 1) + tx]. By the map padded with zeros to at least (nx + lx) x
+// (ny + ly): rows by real FFT, columns by complex FFT, |.|^2, and back.
+std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t lx,
+                                    std::size_t ly) {
+  const std::size_t nx = s.nx, ny = s.ny;
+  const std::size_t px = fast_fft_size(nx + lx), py = fast_fft_size(ny + ly), hx = px / 2 + 1;
+  const RealPlans rows(px);
+  const ComplexPlans cols(py);
+  std::vector<std::complex<double>> spec(hx * py, 0.0);  // [row][frequency along x]
+  {
+    struct Work {
+      FftwBuffer<double> real;
+      FftwBuffer<fftw_complex> out;
+    };
+    tbb::enumerable_thread_specific<Work> work([&] {
+      return Work{fftw_buffer<double>(px), fftw_buffer<fftw_complex>(hx)};
+    });
+    tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {
+      Work& w = work.local();
+      for (std::size_t c = 0; c < nx; ++c) w.real[c] = s.z_mm[r * nx + c] - mean;
+      std::fill(w.real.get() + nx, w.real.get() + px, 0.0);
+      rows.forward(w.real.get(), w.out.get());
+      for (std::size_t j = 0; j < hx; ++j) spec[r * hx + j] = {w.out[j][0], w.out[j][1]};
+    });
+  }
+  {  // each frequency column: forward, power, inverse (rows past ny are zero)
+    struct Work {
+      FftwBuffer<fftw_complex> a, b;
+    };
+    tbb::enumerable_thread_specific<Work> work([&] {
+      return Work{fftw_buffer<fftw_complex>(py), fftw_buffer<fftw_complex>(py)};
+    });
+    tbb::parallel_for(std::size_t{0}, hx, [&](std::size_t j) {
+      Work& w = work.local();
+      for (std::size_t r = 0; r < py; ++r) {
+        const std::complex<double> v = r < ny ? spec[r * hx + j] : 0.0;
+        w.a[r][0] = v.real();
+        w.a[r][1] = v.imag();
+      }
+      cols.forward(w.a.get(), w.b.get());
+      for (std::size_t r = 0; r < py; ++r) {
+        w.b[r][0] = w.b[r][0] * w.b[r][0] + w.b[r][1] * w.b[r][1];
+        w.b[r][1] = 0;
+      }
+      cols.inverse(w.b.get(), w.a.get());
+      for (std::size_t r = 0; r < py; ++r) spec[r * hx + j] = {w.a[r][0], w.a[r][1]};
+    });
+  }
+  const std::size_t wx = lx + 1, wy = 2 * ly + 1;
+  std::vector<double> acf(wx * wy);
+  {
+    struct Work {
+      FftwBuffer<fftw_complex> in;
+      FftwBuffer<double> out;
+    };
+    tbb::enumerable_thread_specific<Work> work([&] {
+      return Work{fftw_buffer<fftw_complex>(hx), fftw_buffer<double>(px)};
+    });
+    tbb::parallel_for(std::size_t{0}, wy, [&](std::size_t k) {
+      Work& w = work.local();
+      const auto ty = static_cast<std::ptrdiff_t>(k) - static_cast<std::ptrdiff_t>(ly);
+      const std::size_t r =
+          ty >= 0 ? static_cast<std::size_t>(ty) : py - static_cast<std::size_t>(-ty);
+      for (std::size_t j = 0; j < hx; ++j) {
+        w.in[j][0] = spec[r * hx + j].real();
+        w.in[j][1] = spec[r * hx + j].imag();
+      }
+      rows.inverse(w.in.get(), w.out.get());
+      const double oy = static_cast<double>(ny - static_cast<std::size_t>(std::abs(ty)));
+      for (std::size_t tx = 0; tx < wx; ++tx) {
+        acf[k * wx + tx] = w.out[tx] / (oy * static_cast<double>(nx - tx));
+      }
+    });
+  }
+  const double zero = acf[ly * wx];
+  for (double& v : acf) v /= zero;
+  return acf;
+}
+
+}  // namespace
+
+ArealParameters areal_parameters(const HeightMap& s, bool autocorrelation_lengths) {
+  check_height_map(s, "areal parameters");
+  const std::size_t nx = s.nx, ny = s.ny, n = nx * ny;
+  ArealParameters p;
+  p.area_mm2 = static_cast<double>(nx - 1) * s.dx_mm * static_cast<double>(ny - 1) * s.dy_mm;
+  double mean = 0;
+  for (const double z : s.z_mm) mean += z;
+  mean /= static_cast<double>(n);
+  double s1 = 0, s2 = 0, s3 = 0, s4 = 0, hi = -INFINITY, lo = INFINITY;
+  for (const double v : s.z_mm) {
+    const double z = v - mean;
+    s1 += std::abs(z), s2 += z * z, s3 += z * z * z, s4 += z * z * z * z;
+    hi = std::max(hi, z), lo = std::min(lo, z);
+  }
+  const double dn = static_cast<double>(n);
+  p.sa_mm = s1 / dn;
+  p.sq_mm = std::sqrt(s2 / dn);
+  p.ssk = p.sq_mm > 0 ? s3 / dn / std::pow(p.sq_mm, 3) : 0.0;
+  p.sku = p.sq_mm > 0 ? s4 / dn / std::pow(p.sq_mm, 4) : 0.0;
+  p.sp_mm = hi, p.sv_mm = -lo, p.sz_mm = hi - lo;
+  // Sdr: each cell's slopes, the mean of its two edges in each direction.
+  double developed = 0;
+  for (std::size_t r = 0; r + 1 < ny; ++r) {
+    for (std::size_t c = 0; c + 1 < nx; ++c) {
+      const double z00 = s.z_mm[r * nx + c], z10 = s.z_mm[r * nx + c + 1];
+      const double z01 = s.z_mm[(r + 1) * nx + c], z11 = s.z_mm[(r + 1) * nx + c + 1];
+      const double gx = 0.5 * ((z10 - z00) + (z11 - z01)) / s.dx_mm;
+      const double gy = 0.5 * ((z01 - z00) + (z11 - z10)) / s.dy_mm;
+      developed += std::sqrt(1.0 + gx * gx + gy * gy);
+    }
+  }
+  p.sdr_percent = 100.0 * (developed / static_cast<double>((nx - 1) * (ny - 1)) - 1.0);
+  if (!autocorrelation_lengths || p.sq_mm == 0) return p;
+
+  const std::size_t lx = nx / 2, ly = ny / 2, wx = lx + 1;
+  const std::vector<double> acf = autocorrelation(s, mean, lx, ly);
+  auto at = [&](double tx, double ty) {  // bilinear, lags in samples; tx >= 0
+    const double fx = std::floor(tx), fy = std::floor(ty);
+    const auto i = static_cast<std::size_t>(fx);
+    const auto k = static_cast<std::size_t>(fy + static_cast<double>(ly));
+    const double ax = tx - fx, ay = ty - fy;
+    const std::size_t i1 = std::min(i + 1, lx), k1 = std::min(k + 1, 2 * ly);
+    return (1 - ay) * ((1 - ax) * acf[k * wx + i] + ax * acf[k * wx + i1]) +
+           ay * ((1 - ax) * acf[k1 * wx + i] + ax * acf[k1 * wx + i1]);
+  };
+  // Each direction in [0, 180) degrees (the function is even: t and -t agree), marched out in
+  // steps of a quarter of the finer spacing to the first value under 0.2, refined by bisection.
+  constexpr double kThreshold = 0.2;
+  const double step = 0.25 * std::min(s.dx_mm, s.dy_mm);
+  double shortest = INFINITY, longest = 0;
+  bool all = true;
+  for (int a = 0; a < 360; ++a) {
+    const double th = a * std::numbers::pi / 360.0;
+    double cx = std::cos(th), cy = std::sin(th);
+    if (cx < 0) cx = -cx, cy = -cy;  // keep tx >= 0 (the function is even)
+    auto value = [&](double r) { return at(r * cx / s.dx_mm, r * cy / s.dy_mm); };
+    auto inside = [&](double r) {
+      return r * cx / s.dx_mm <= static_cast<double>(lx) &&
+             std::abs(r * cy / s.dy_mm) <= static_cast<double>(ly) - 1e-9;
+    };
+    double r0 = 0, r1 = step;
+    bool found = false;
+    while (inside(r1)) {
+      if (value(r1) < kThreshold) {
+        found = true;
+        break;
+      }
+      r0 = r1, r1 += step;
+    }
+    if (!found) {
+      all = false;
+      continue;
+    }
+    for (int it = 0; it < 40; ++it) {
+      const double m = 0.5 * (r0 + r1);
+      (value(m) < kThreshold ? r1 : r0) = m;
+    }
+    const double r = 0.5 * (r0 + r1);
+    shortest = std::min(shortest, r), longest = std::max(longest, r);
+  }
+  if (std::isfinite(shortest)) p.sal_mm = shortest;
+  if (all && longest > 0) p.str = shortest / longest;
+  return p;
+}
+
+ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
+  check_height_map(map, "areal texture");
+  const double shorter = std::min(static_cast<double>(map.nx - 1) * map.dx_mm,
+                                  static_cast<double>(map.ny - 1) * map.dy_mm);
+  ArealTexture t;
+  t.form = o.form;
+  t.degree = o.form == FormRemoval::polynomial ? o.degree : o.form == FormRemoval::plane ? 1 : 0;
+  HeightMap primary = map;
+  if (o.s_mm) {
+    check_nesting_index(map, *o.s_mm, "S-filter");
+    const HeightMap mean = gaussian_filter_areal(map, *o.s_mm);
+    primary.z_mm = mean.z_mm;  // the S-filter keeps the long wavelengths
+    t.s_mm = *o.s_mm;
+  }
+  const HeightMap sf = remove_form(primary, o.form, o.degree);
+  t.sf = areal_parameters(sf, false);
+  auto sl_of = [&](double l) {
+    check_nesting_index(map, l, "L-filter");
+    if (l > shorter) {
+      throw InputError(fmt::format(
+          "L-filter: the nesting index {:g} mm is longer than the map's shorter side ({:g} mm); "
+          "give a shorter one (--lambda-c) or a larger map",
+          l, shorter));
+    }
+    if (o.s_mm && l <= *o.s_mm) {
+      throw InputError(fmt::format(
+          "L-filter: the nesting index {:g} mm must be longer than the S-filter's ({:g} mm)", l,
+          *o.s_mm));
+    }
+    HeightMap sl = gaussian_filter_areal(sf, l);
+    for (std::size_t i = 0; i < sl.z_mm.size(); ++i) sl.z_mm[i] = sf.z_mm[i] - sl.z_mm[i];
+    return sl;
+  };
+  HeightMap sl;
+  if (o.l_mm) {
+    t.l_mm = *o.l_mm;
+    t.l_source = "given";
+    sl = sl_of(t.l_mm);
+  } else {
+    // ISO 21920-3's profile table on the S-L surface's Sa, iterated from 0.8 mm as for a
+    // profile (ISO 25178-3 leaves the nesting index to the specification).
+    t.l_mm = 0.8;
+    t.l_source = "ISO 21920-3 default from Sa";
+    for (int k = 0;; ++k) {
+      sl = sl_of(t.l_mm);
+      const double next = default_cutoff_mm(areal_parameters(sl, false).sa_mm);
+      if (next == t.l_mm) break;
+      if (k == 3) {
+        t.l_source = "ISO 21920-3 default from Sa (Sa lies at a boundary of its table)";
+        break;
+      }
+      t.l_mm = next;
+    }
+  }
+  t.sl = areal_parameters(sl, true);
+  return t;
+}
+
+}  // namespace trochomill
