@@ -211,7 +211,7 @@ enum class FormRemoval {
 };
 /// The map less its least-squares form (the fit on the full grid: separable sums, exact to
 /// rounding). Throws InputError for a degree outside 1..6 with FormRemoval::polynomial.
-[[nodiscard]] HeightMap remove_form(const HeightMap& map, FormRemoval form, int degree = 2);
+[[nodiscard]] HeightMap remove_form(HeightMap map, FormRemoval form, int degree = 2);
 
 /// Areal field parameters (ISO 25178-2) of a scale-limited surface, heights about its mean
 /// plane (mm); the spacings give the area.

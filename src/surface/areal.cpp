@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <numbers>
@@ -236,20 +237,21 @@ void check_height_map(const HeightMap& map, std::string_view what) {
   }
 }
 
-HeightMap gaussian_filter_areal(const HeightMap& map, double cutoff_mm) {
-  check_height_map(map, "areal Gaussian filter");
-  check_nesting_index(map, cutoff_mm, "areal Gaussian filter");
+namespace {
+
+// The areal Gaussian mean surface of `map` (checked) into out[0..nx ny).
+void filter_into(const HeightMap& map, double cutoff_mm, double* out) {
   const std::size_t nx = map.nx, ny = map.ny;
-  HeightMap tmp = map, out = map;
-  out.description = map.description + fmt::format(", Gaussian mean surface {:g} mm", cutoff_mm);
-  {  // along x: each row
+  // Rows first into a scratch map (not initialised: every sample is written).
+  const std::unique_ptr<double[]> tmp(new double[nx * ny]);
+  {
     const LineFilter f(nx, map.dx_mm, cutoff_mm);
     tbb::enumerable_thread_specific<LineFilter::Work> work([&] { return f.work(); });
     tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {
-      f.run(map.z_mm.data() + r * nx, 1, tmp.z_mm.data() + r * nx, 1, work.local());
+      f.run(map.z_mm.data() + r * nx, 1, tmp.get() + r * nx, 1, work.local());
     });
   }
-  {  // along y: each column, in blocks gathered row by row
+  {  // then each column, in blocks gathered row by row (their samples lie side by side)
     const LineFilter f(ny, map.dy_mm, cutoff_mm);
     struct ColumnWork {
       LineFilter::Work line;
@@ -264,16 +266,35 @@ HeightMap gaussian_filter_areal(const HeightMap& map, double cutoff_mm) {
       ColumnWork& w = work.local();
       const std::size_t c0 = b * kColumnBlock, nc = std::min(kColumnBlock, nx - c0);
       for (std::size_t r = 0; r < ny; ++r) {
-        for (std::size_t c = 0; c < nc; ++c) w.in[c * ny + r] = tmp.z_mm[r * nx + c0 + c];
+        for (std::size_t c = 0; c < nc; ++c) w.in[c * ny + r] = tmp[r * nx + c0 + c];
       }
       for (std::size_t c = 0; c < nc; ++c) {
         f.run(w.in.data() + c * ny, 1, w.out.data() + c * ny, 1, w.line);
       }
       for (std::size_t r = 0; r < ny; ++r) {
-        for (std::size_t c = 0; c < nc; ++c) out.z_mm[r * nx + c0 + c] = w.out[c * ny + r];
+        for (std::size_t c = 0; c < nc; ++c) out[r * nx + c0 + c] = w.out[c * ny + r];
       }
     });
   }
+}
+
+HeightMap same_grid(const HeightMap& map, std::string description) {
+  HeightMap out;
+  out.nx = map.nx, out.ny = map.ny, out.dx_mm = map.dx_mm, out.dy_mm = map.dy_mm;
+  out.x0_mm = map.x0_mm, out.y0_mm = map.y0_mm;
+  out.description = std::move(description);
+  return out;
+}
+
+}  // namespace
+
+HeightMap gaussian_filter_areal(const HeightMap& map, double cutoff_mm) {
+  check_height_map(map, "areal Gaussian filter");
+  check_nesting_index(map, cutoff_mm, "areal Gaussian filter");
+  HeightMap out =
+      same_grid(map, map.description + fmt::format(", Gaussian mean surface {:g} mm", cutoff_mm));
+  out.z_mm.resize(map.z_mm.size());
+  filter_into(map, cutoff_mm, out.z_mm.data());
   return out;
 }
 
@@ -289,7 +310,7 @@ const char* form_removal_name(FormRemoval form) {
   return "?";
 }
 
-HeightMap remove_form(const HeightMap& map, FormRemoval form, int degree) {
+HeightMap remove_form(HeightMap map, FormRemoval form, int degree) {
   check_height_map(map, "form removal");
   if (form == FormRemoval::polynomial && (degree < 1 || degree > 6)) {
     throw InputError(
@@ -353,7 +374,7 @@ HeightMap remove_form(const HeightMap& map, FormRemoval form, int degree) {
     rhs(p) = s;
   }
   const Eigen::VectorXd coef = normal.ldlt().solve(rhs);
-  HeightMap out = map;
+  HeightMap& out = map;  // taken by value: moved in where the caller is done with it
   for (std::size_t r = 0; r < ny; ++r) {
     for (std::size_t c = 0; c < nx; ++c) {
       double f = 0;
@@ -365,7 +386,7 @@ HeightMap remove_form(const HeightMap& map, FormRemoval form, int degree) {
       out.z_mm[r * nx + c] -= f;
     }
   }
-  return out;
+  return map;
 }
 
 namespace {
@@ -380,7 +401,10 @@ std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t
   const std::size_t px = fast_fft_size(nx + lx), py = fast_fft_size(ny + ly), hx = px / 2 + 1;
   const RealPlans rows(px);
   const ComplexPlans cols(py);
-  std::vector<std::complex<double>> spec(hx * py, 0.0);  // [row][frequency along x]
+  const std::size_t wx = lx + 1, wy = 2 * ly + 1;
+  // The row spectra [row][frequency along x], then in the same rows the columns' results at
+  // the lags kept (ty = -ly..ly in rows 0..2ly); not initialised: every value read is written.
+  auto spec = fftw_buffer<fftw_complex>(std::max(ny, wy) * hx);
   {
     struct Work {
       FftwBuffer<double> real;
@@ -394,33 +418,50 @@ std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t
       for (std::size_t c = 0; c < nx; ++c) w.real[c] = s.z_mm[r * nx + c] - mean;
       std::fill(w.real.get() + nx, w.real.get() + px, 0.0);
       rows.forward(w.real.get(), w.out.get());
-      for (std::size_t j = 0; j < hx; ++j) spec[r * hx + j] = {w.out[j][0], w.out[j][1]};
+      std::memcpy(spec.get() + r * hx, w.out.get(), hx * sizeof(fftw_complex));
     });
   }
-  {  // each frequency column: forward, power, inverse (rows past ny are zero)
+  {  // frequency columns in blocks: forward, power, inverse (rows past ny are zero)
     struct Work {
       FftwBuffer<fftw_complex> a, b;
     };
     tbb::enumerable_thread_specific<Work> work([&] {
-      return Work{fftw_buffer<fftw_complex>(py), fftw_buffer<fftw_complex>(py)};
+      return Work{fftw_buffer<fftw_complex>(py * kColumnBlock),
+                  fftw_buffer<fftw_complex>(py * kColumnBlock)};
     });
-    tbb::parallel_for(std::size_t{0}, hx, [&](std::size_t j) {
+    const std::size_t blocks = (hx + kColumnBlock - 1) / kColumnBlock;
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
       Work& w = work.local();
+      const std::size_t j0 = blk * kColumnBlock, nj = std::min(kColumnBlock, hx - j0);
       for (std::size_t r = 0; r < py; ++r) {
-        const std::complex<double> v = r < ny ? spec[r * hx + j] : 0.0;
-        w.a[r][0] = v.real();
-        w.a[r][1] = v.imag();
+        for (std::size_t j = 0; j < nj; ++j) {
+          fftw_complex& d = w.a[j * py + r];
+          if (r < ny) {
+            d[0] = spec[r * hx + j0 + j][0], d[1] = spec[r * hx + j0 + j][1];
+          } else {
+            d[0] = d[1] = 0;
+          }
+        }
       }
-      cols.forward(w.a.get(), w.b.get());
-      for (std::size_t r = 0; r < py; ++r) {
-        w.b[r][0] = w.b[r][0] * w.b[r][0] + w.b[r][1] * w.b[r][1];
-        w.b[r][1] = 0;
+      for (std::size_t j = 0; j < nj; ++j) {
+        fftw_complex* a = w.a.get() + j * py;
+        fftw_complex* b = w.b.get() + j * py;
+        cols.forward(a, b);
+        for (std::size_t r = 0; r < py; ++r) {
+          b[r][0] = b[r][0] * b[r][0] + b[r][1] * b[r][1];
+          b[r][1] = 0;
+        }
+        cols.inverse(b, a);
       }
-      cols.inverse(w.b.get(), w.a.get());
-      for (std::size_t r = 0; r < py; ++r) spec[r * hx + j] = {w.a[r][0], w.a[r][1]};
+      for (std::size_t k = 0; k < wy; ++k) {
+        const std::size_t r = k >= ly ? k - ly : py - (ly - k);
+        for (std::size_t j = 0; j < nj; ++j) {
+          spec[k * hx + j0 + j][0] = w.a[j * py + r][0];
+          spec[k * hx + j0 + j][1] = w.a[j * py + r][1];
+        }
+      }
     });
   }
-  const std::size_t wx = lx + 1, wy = 2 * ly + 1;
   std::vector<double> acf(wx * wy);
   {
     struct Work {
@@ -433,12 +474,7 @@ std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t
     tbb::parallel_for(std::size_t{0}, wy, [&](std::size_t k) {
       Work& w = work.local();
       const auto ty = static_cast<std::ptrdiff_t>(k) - static_cast<std::ptrdiff_t>(ly);
-      const std::size_t r =
-          ty >= 0 ? static_cast<std::size_t>(ty) : py - static_cast<std::size_t>(-ty);
-      for (std::size_t j = 0; j < hx; ++j) {
-        w.in[j][0] = spec[r * hx + j].real();
-        w.in[j][1] = spec[r * hx + j].imag();
-      }
+      std::memcpy(w.in.get(), spec.get() + k * hx, hx * sizeof(fftw_complex));
       rows.inverse(w.in.get(), w.out.get());
       const double oy = static_cast<double>(ny - static_cast<std::size_t>(std::abs(ty)));
       for (std::size_t tx = 0; tx < wx; ++tx) {
@@ -545,14 +581,13 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
   ArealTexture t;
   t.form = o.form;
   t.degree = o.form == FormRemoval::polynomial ? o.degree : o.form == FormRemoval::plane ? 1 : 0;
-  HeightMap primary = map;
   if (o.s_mm) {
     check_nesting_index(map, *o.s_mm, "S-filter");
-    const HeightMap mean = gaussian_filter_areal(map, *o.s_mm);
-    primary.z_mm = mean.z_mm;  // the S-filter keeps the long wavelengths
     t.s_mm = *o.s_mm;
   }
-  const HeightMap sf = remove_form(primary, o.form, o.degree);
+  // The S-filter keeps the long wavelengths (its mean surface); then the form goes.
+  const HeightMap sf = o.s_mm ? remove_form(gaussian_filter_areal(map, *o.s_mm), o.form, o.degree)
+                              : remove_form(map, o.form, o.degree);
   t.sf = areal_parameters(sf, false);
   auto sl_of = [&](double l) {
     check_nesting_index(map, l, "L-filter");

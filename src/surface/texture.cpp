@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "surface/gaussian.hpp"
 #include "trochomill/error.hpp"
@@ -190,25 +191,40 @@ ProfileParameters profile_parameters(const std::vector<double>& z_mm, double dx_
     st.push_back({above, cross[c + 1] - cross[c], h});
   }
   const double min_h = 0.1 * p.rz_mm, min_w = 0.01 * p.evaluation_length_mm / sections;
-  for (bool merged = true; merged;) {
-    merged = false;
-    for (std::size_t j = 0; j < st.size(); ++j) {
-      if (st[j].height_mm >= min_h && st[j].width_mm >= min_w) continue;
-      // Merge with both neighbours (of the other sign, so of one sign with each other).
-      const std::size_t a = j > 0 ? j - 1 : j, b = std::min(st.size() - 1, j + 1);
-      Stretch m{a == j ? st[b].above : st[a].above, 0, 0};
-      for (std::size_t k = a; k <= b; ++k) {
-        m.width_mm += st[k].width_mm;
-        if (st[k].above == m.above) m.height_mm = std::max(m.height_mm, st[k].height_mm);
-      }
-      st.erase(st.begin() + static_cast<std::ptrdiff_t>(a),
-               st.begin() + static_cast<std::ptrdiff_t>(b) + 1);
-      if (a == j && b == j) break;  // a lone stretch: nothing left to merge with
-      st.insert(st.begin() + static_cast<std::ptrdiff_t>(a), m);
-      merged = true;
+  // One pass, left to right: everything already kept is large enough, so a small stretch
+  // merges into the kept one before it (the three become one large stretch: it holds that
+  // one) with the next; a small first stretch merges with the next into a stretch of that
+  // one's sign, which is then judged in turn; a lone small stretch leaves nothing.
+  auto small = [&](const Stretch& x) { return x.height_mm < min_h || x.width_mm < min_w; };
+  std::vector<Stretch> kept;
+  kept.reserve(st.size());
+  std::optional<Stretch> carry;
+  for (std::size_t i = 0;;) {
+    Stretch cur;
+    if (carry) {
+      cur = *carry;
+      carry.reset();
+    } else if (i < st.size()) {
+      cur = st[i++];
+    } else {
       break;
     }
+    if (!small(cur)) {
+      kept.push_back(cur);
+    } else if (!kept.empty()) {
+      Stretch& a = kept.back();
+      a.width_mm += cur.width_mm;
+      if (i < st.size()) {
+        a.width_mm += st[i].width_mm;
+        a.height_mm = std::max(a.height_mm, st[i].height_mm);
+        ++i;
+      }
+    } else if (i < st.size()) {
+      carry = Stretch{st[i].above, cur.width_mm + st[i].width_mm, st[i].height_mm};
+      ++i;
+    }
   }
+  st = std::move(kept);
   double widths = 0;
   for (std::size_t j = 0; j + 1 < st.size(); j += 2) {
     widths += st[j].width_mm + st[j + 1].width_mm;
