@@ -754,7 +754,13 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   for (const char* f : {"series.csv", "chips.h5", "walls.csv", "floor.csv", "surface.stl"}) {
     EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
   }
-  EXPECT_EQ(files_in(out), 5u);
+  // floor.x3p too when the run got as far as cutting the floor across the slot; if not, the
+  // note says why.
+  const bool floor = std::filesystem::exists(out / "floor.x3p");
+  EXPECT_EQ(files_in(out), floor ? 6u : 5u);
+  if (!floor) {
+    EXPECT_NE(read_file(log).find("floor.x3p not written"), std::string::npos) << read_file(log);
+  }
   EXPECT_EQ(files_in(tmp), 0u);
 
   // 3. analyze of a long program, Ctrl-C after 1 s: exit 130, no output at all.
@@ -818,6 +824,69 @@ TEST_F(Cli, TextureOfAProfileAJobAndBadInput) {
   }
 }
 
+// texture of X3P files: a surface z = A sin(2 pi x / 0.02) sampled 40 times a period, with a
+// tilt the plane takes out, filtered with lambda_s 0.002 mm (transmitting the wave at T =
+// exp(-pi (alpha 0.002 / 0.02)^2)) and lambda_c 0.08 mm (passing 1.5e-5 of it to the mean
+// surface): Sa = T A (2/N) cot(pi/N) (the mean of |sin| over N samples a period) and Sq =
+// T A / sqrt 2, to 2e-3 (the renormalised mean surface within a cut-off of the map's ends
+// carries a little of the wave); the F-operator and filters asked for are stated. A profile
+// X3P is a profile (Ra of 400 samples a period to 1e-5); malformed files and options exit 2
+// naming them.
+TEST_F(Cli, TextureOfX3pSurfacesAndProfiles) {
+  const double A = 0.001;
+  HeightMap m;
+  m.nx = 4000, m.ny = 400, m.dx_mm = m.dy_mm = 0.0005;
+  for (std::size_t r = 0; r < m.ny; ++r) {
+    for (std::size_t c = 0; c < m.nx; ++c) {
+      m.z_mm.push_back(A * std::sin(2 * std::numbers::pi * static_cast<double>(c) / 40) +
+                       0.01 * static_cast<double>(r) * m.dy_mm);
+    }
+  }
+  const auto x3p = (dir_ / "s.x3p").string();
+  write_x3p(x3p, m);
+  const CliResult r = run_cli("texture " + x3p + " --lambda-c 0.08 --lambda-s 0.002 --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  const auto s = j["surfaces"][0];
+  EXPECT_EQ(s["kind"], "areal");
+  EXPECT_EQ(s["l_filter_mm"].get<double>(), 0.08);
+  EXPECT_EQ(s["s_filter_mm"].get<double>(), 0.002);
+  EXPECT_EQ(s["form"], "plane");
+  const double keep = gaussian_transmission(0.02, 0.002);
+  const double mean_abs = 2.0 / 40 / std::tan(std::numbers::pi / 40);
+  EXPECT_NEAR(s["sl"]["sa_mm"].get<double>() / (A * keep * mean_abs), 1.0, 2e-3);
+  EXPECT_NEAR(s["sl"]["sq_mm"].get<double>() / (A * keep / std::sqrt(2.0)), 1.0, 2e-3);
+  EXPECT_NE(j["standards"].get<std::string>().find("ISO 25178-2"), std::string::npos);
+
+  HeightMap prf;
+  prf.nx = 32000, prf.ny = 1, prf.dx_mm = prf.dy_mm = 0.000125;
+  for (std::size_t c = 0; c < prf.nx; ++c) {
+    prf.z_mm.push_back(A * std::sin(2 * std::numbers::pi * static_cast<double>(c) / 400));
+  }
+  const auto px = (dir_ / "p.x3p").string();
+  write_x3p(px, prf);
+  const CliResult p = run_cli("texture " + px + " --json -");
+  ASSERT_EQ(p.code, 0) << p.out;
+  const auto pj = nlohmann::json::parse(p.out)["surfaces"][0];
+  EXPECT_EQ(pj["kind"], "profile");
+  EXPECT_NEAR(pj["ra_mm"].get<double>() / (A * 2.0 / 400 / std::tan(std::numbers::pi / 400)), 1.0,
+              1e-5);
+
+  write_file_atomic(dir_ / "bad.x3p", "PK not really");
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {(dir_ / "bad.x3p").string(), "not an X3P file"},
+           {x3p + " --form cubic", "--form 'cubic': plane, polynomial or none"},
+           {x3p + " --form polynomial --degree 8", "degree must be 1 to 6"},
+           {x3p + " --lambda-c 0.5", "longer than the map's shorter side"},
+           {x3p + " --memory-limit 0.01", "the memory limit"},
+           {test::example("wagih2023/trochoidal.toml").string() + " --surface floor",
+            "simulate it first"}}) {
+    const CliResult b = run_cli("texture " + args);
+    EXPECT_EQ(b.code, 2) << args << "\n" << b.out;
+    EXPECT_NE(b.out.find(says), std::string::npos) << args << "\n" << b.out;
+  }
+}
+
 TEST_F(Cli, SimulateWritesItsOutputs) {
   const std::string ex = test::example("wagih2023/trochoidal.toml");
   const std::string out = (dir_ / "sim").string();
@@ -839,7 +908,8 @@ TEST_F(Cli, SimulateWritesItsOutputs) {
   for (int b = 0; b < 2; ++b) {
     EXPECT_NEAR(by[b].get<double>(), by[2].get<double>(), 100 * 6 * 0.1 / 2);
   }
-  for (const char* f : {"series.csv", "chips.h5", "walls.csv", "floor.csv", "surface.stl"}) {
+  for (const char* f :
+       {"series.csv", "chips.h5", "walls.csv", "floor.csv", "surface.stl", "floor.x3p"}) {
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / f)) << f;
   }
   EXPECT_EQ(first_line_of(out + "/walls.csv"), "y_mm,z_mm,left_x_mm,right_x_mm");
@@ -850,7 +920,14 @@ TEST_F(Cli, SimulateWritesItsOutputs) {
   const CliResult tex = run_cli("texture " + out + " --lambda-c 0.8 --json -");
   ASSERT_EQ(tex.code, 0) << tex.out;
   const auto tj = nlohmann::json::parse(tex.out)["surfaces"];
-  ASSERT_EQ(tj.size(), 2u);
+  // The floor, cut across the slot in this window: an end mill without axial runout leaves it
+  // flat (every Z ray ends at the tool's bottom), so Sa and Sz are 0 to rounding.
+  ASSERT_TRUE(std::filesystem::exists(std::filesystem::path(out) / "floor.x3p"));
+  ASSERT_EQ(tj.size(), 3u);
+  EXPECT_EQ(tj[2]["surface"], "floor");
+  EXPECT_EQ(tj[2]["kind"], "areal");
+  EXPECT_LT(tj[2]["sl"]["sa_mm"].get<double>(), 1e-12);
+  EXPECT_LT(tj[2]["sl"]["sz_mm"].get<double>(), 1e-12);
   EXPECT_EQ(tj[0]["surface"], "left");
   EXPECT_NE(tj[0]["description"].get<std::string>().find("simulated left wall at z = "),
             std::string::npos);

@@ -785,7 +785,7 @@ TEST(Sim, CancelKeepsWhatWasComputed) {
 
 // simulate's --out is written as one set: cancelled between files, the folder holds none of
 // this run's files (an earlier run's stay as they were) and no staging folder; not cancelled,
-// all five replace the earlier ones.
+// all six replace the earlier ones.
 TEST(Sim, OutputsAreWrittenAsOneSet) {
   const Job job = small_wagih_job();
   const ToolPath path = plan_path(job).path;
@@ -809,20 +809,31 @@ TEST(Sim, OutputsAreWrittenAsOneSet) {
   hooks.cancel = &stop;
   std::vector<std::string> phases;
   hooks.phase = [&](std::string_view name) { phases.emplace_back(name); };
+  // The floor: cut across the slot in this window (floor.x3p is then the sixth file).
+  const double half =
+      0.5 * job.slot.width_mm - job.tool.corner_radius_mm - job.simulation.resolution_mm;
+  const HeightMap floor = floor_height_map(*js.work, -half, half, -0.5 * job.slot.depth_mm);
+  EXPECT_GE(floor.nx, 2u);
   hooks.progress = [&](std::size_t done, std::size_t total) {
-    EXPECT_EQ(total, 5u);
-    if (done == 3) stop = true;  // after three of the five files
+    EXPECT_EQ(total, 6u);
+    if (done == 3) stop = true;  // after three of the six files
   };
-  EXPECT_THROW(write_simulation_outputs(dir, job, js, std::nullopt, hooks), Interrupted);
+  EXPECT_THROW((void)write_simulation_outputs(dir, job, js, std::nullopt, hooks), Interrupted);
   EXPECT_EQ(phases, std::vector<std::string>{"writing outputs"});
   EXPECT_EQ(entries(), std::vector<std::string>{"series.csv"});
   EXPECT_EQ(read_file(dir / "series.csv"), "an earlier run\n");
 
   stop = false;
   hooks.progress = {};
-  write_simulation_outputs(dir, job, js, std::nullopt, hooks);
-  EXPECT_EQ(entries(), (std::vector<std::string>{"chips.h5", "floor.csv", "series.csv",
+  EXPECT_EQ(write_simulation_outputs(dir, job, js, std::nullopt, hooks), "");
+  EXPECT_EQ(entries(), (std::vector<std::string>{"chips.h5", "floor.csv", "floor.x3p", "series.csv",
                                                  "surface.stl", "walls.csv"}));
+  // floor.x3p holds the floor: the same heights (to one rounding, mm to m and back).
+  const HeightMap back = read_x3p(dir / "floor.x3p");
+  ASSERT_EQ(back.z_mm.size(), floor.z_mm.size());
+  for (std::size_t i = 0; i < floor.z_mm.size(); ++i) {
+    ASSERT_NEAR(back.z_mm[i], floor.z_mm[i], 2.3e-16 * std::abs(floor.z_mm[i]));
+  }
   EXPECT_NE(read_file(dir / "series.csv"), "an earlier run\n");
   std::filesystem::remove_all(dir);
 }

@@ -30,8 +30,9 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--gcode", a->gcode, "simulate this NC program instead of the job's path");
     add_window_args(cmd, a->window, "window");
     cmd->add_option("--json", a->json, "write the summary as JSON (- for stdout)");
-    cmd->add_option("--out", a->out,
-                    "directory for series.csv, chips.h5, walls.csv, floor.csv and surface.stl");
+    cmd->add_option(
+        "--out", a->out,
+        "directory for series.csv, chips.h5, walls.csv, floor.csv, surface.stl and floor.x3p");
     add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("--stl-step", a->stl_step_mm,
                     "grid step of surface.stl, mm (default: the dexel spacing, coarser when the "
@@ -72,10 +73,14 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
       RunHooks writing = control.hooks;
       if (!js.result.complete) writing.cancel = nullptr;  // the first Ctrl-C stopped the run
-      if (!a->out.empty()) write_simulation_outputs(a->out, job, js, a->stl_step_mm, writing);
+      std::string note;
+      if (!a->out.empty()) {
+        note = write_simulation_outputs(a->out, job, js, a->stl_step_mm, writing);
+      }
       run.done();
       if (!a->json.empty()) emit(a->json, simulation_json(job, js, from, to, wall, need));
       if (a->json != "-") fmt::print("{}", simulation_text(a->job.file, job, js, from, to, wall));
+      if (!note.empty()) fmt::print(stderr, "simulate: {}\n", note);
       run.finish("interrupted: the outputs were written in full");
       exit_code = js.result.complete ? 0 : 130;
     });

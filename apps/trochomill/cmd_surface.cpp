@@ -1,5 +1,7 @@
 // texture: roughness and waviness (ISO 16610-21 filter, ISO 21920-2 parameters) of a measured
-// profile (CSV), a simulation's walls (simulate --out folder) or a job's predicted walls.
+// profile (CSV or X3P), a simulation's walls (simulate --out folder) or a job's predicted
+// walls; the areal texture (ISO 16610-61 filter, ISO 25178-2 parameters) of a simulation's
+// floor (floor.x3p) or a measured surface (X3P).
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -18,23 +20,36 @@ namespace trochomill::cli {
 
 void register_surface_commands(CLI::App& app, int& exit_code) {
   struct Args {
-    std::string source, surface = "both", columns, z_unit = "mm", json;
-    std::optional<double> lambda_c_mm, z_mm;
+    std::string source, surface = "all", columns, z_unit = "mm", json, form = "plane";
+    std::optional<double> lambda_c_mm, lambda_s_mm, z_mm, memory_gb;
+    int degree = 2;
     std::vector<std::string> sets;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "texture",
-      "roughness and waviness of a profile: a measured CSV, a simulate --out folder (its walls) "
-      "or a job (its predicted walls)");
+      "surface texture: roughness and waviness of profiles (a measured CSV or X3P, the walls of "
+      "a simulate --out folder or of a job) and areal parameters of surfaces (a folder's "
+      "floor.x3p, a measured X3P)");
   cmd->add_option("SOURCE", a->source,
-                  "profile CSV (x, z), folder written by simulate --out, or job TOML")
+                  "profile CSV (x, z), X3P file (surface or profile), folder written by simulate "
+                  "--out, or job TOML")
       ->required();
-  cmd->add_option("--surface", a->surface, "left, right or both (walls of a folder or a job)")
+  cmd->add_option("--surface", a->surface,
+                  "left, right, walls (both), floor or all (a folder: walls and floor; a job: "
+                  "walls)")
       ->capture_default_str();
   cmd->add_option("--lambda-c", a->lambda_c_mm,
-                  "cut-off wavelength, mm (default: ISO 21920-3's for the profile's Ra)")
+                  "cut-off wavelength (areal: the L-filter's nesting index), mm (default: "
+                  "ISO 21920-3's for the Ra or Sa)")
       ->check(finite_above(0, 1e3));
+  cmd->add_option("--lambda-s", a->lambda_s_mm, "areal S-filter nesting index, mm (default: none)")
+      ->check(finite_above(0, 1e3));
+  cmd->add_option("--form", a->form, "areal form removal: plane, polynomial or none")
+      ->capture_default_str();
+  cmd->add_option("--degree", a->degree, "polynomial degree with --form polynomial (1 to 6)")
+      ->capture_default_str();
+  add_memory_limit(cmd, a->memory_gb);
   cmd->add_option("--z", a->z_mm, "the wall level of a simulation folder, mm (default: middle)")
       ->check(finite_in(-1e4, 1e4));
   cmd->add_option("--columns", a->columns,
@@ -46,24 +61,80 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
   cmd->final_callback([a, &exit_code] {
     check_outputs({&a->json}, {&a->source});
     namespace fs = std::filesystem;
-    if (a->surface != "left" && a->surface != "right" && a->surface != "both") {
-      throw InputError(fmt::format("--surface '{}': left, right or both", a->surface));
+    const std::string& sf = a->surface;
+    if (sf != "left" && sf != "right" && sf != "walls" && sf != "both" && sf != "floor" &&
+        sf != "all") {
+      throw InputError(fmt::format("--surface '{}': left, right, walls, floor or all", sf));
     }
+    ArealFilterOptions areal;
+    areal.s_mm = a->lambda_s_mm;
+    areal.l_mm = a->lambda_c_mm;
+    areal.degree = a->degree;
+    if (a->form == "plane") {
+      areal.form = FormRemoval::plane;
+    } else if (a->form == "polynomial") {
+      areal.form = FormRemoval::polynomial;
+    } else if (a->form == "none") {
+      areal.form = FormRemoval::none;
+    } else {
+      throw InputError(fmt::format("--form '{}': plane, polynomial or none", a->form));
+    }
+    // An areal texture holds about 12 copies of the map's doubles at its peak (the map, the
+    // S-filtered, form-removed and L-filtered surfaces, the filter's scratch, and the
+    // autocorrelation's spectra over the map padded by half in each direction): 100 bytes
+    // a point with the process besides. Maps are refused past the limit before being read.
+    constexpr double kArealBytesPerPoint = 100, kBaseBytes = 40e6;
+    const double max_points = (memory_limit_bytes(a->memory_gb) - kBaseBytes) / kArealBytesPerPoint;
+    auto areal_entry = [&](const std::string& surface, const HeightMap& m) {
+      return TextureEntry{surface, m.description, {}, areal_texture(m, areal)};
+    };
+    const bool want_left = sf == "left" || sf == "walls" || sf == "both" || sf == "all";
+    const bool want_right = sf == "right" || sf == "walls" || sf == "both" || sf == "all";
+    const bool want_floor = sf == "floor" || sf == "all";
     std::vector<bool> sides;
-    if (a->surface != "right") sides.push_back(true);
-    if (a->surface != "left") sides.push_back(false);
+    if (want_left) sides.push_back(true);
+    if (want_right) sides.push_back(false);
     std::vector<TextureEntry> entries;
     std::error_code ec;
     const std::string ext = lower_extension(a->source);
     if (fs::is_directory(a->source, ec)) {
       const fs::path walls = fs::path(a->source) / "walls.csv";
-      const std::string text = read_text_file(walls);
-      for (const bool left : sides) {
-        const MeasuredProfile p = read_wall_profile_csv(text, walls.string(), left, a->z_mm);
-        entries.push_back({left ? "left" : "right", "simulated " + p.description,
-                           profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm)});
+      const fs::path floor = fs::path(a->source) / "floor.x3p";
+      if (!sides.empty()) {
+        const std::string text = read_text_file(walls);
+        for (const bool left : sides) {
+          const MeasuredProfile p = read_wall_profile_csv(text, walls.string(), left, a->z_mm);
+          entries.push_back({left ? "left" : "right",
+                             "simulated " + p.description,
+                             profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm),
+                             {}});
+        }
+      }
+      if (want_floor && (sf == "floor" || fs::exists(floor, ec))) {
+        if (!fs::exists(floor, ec)) {
+          throw InputError(fmt::format(
+              "{}: no floor.x3p (simulate writes it when its window leaves a floor cut across "
+              "the slot)",
+              a->source));
+        }
+        X3pInfo info;
+        HeightMap m = read_x3p(floor, &info, max_points);
+        if (!info.comment.empty()) m.description = info.comment;  // what simulate wrote
+        entries.push_back(areal_entry("floor", m));
+      }
+    } else if (ext == ".x3p") {
+      const HeightMap m = read_x3p(a->source, nullptr, max_points);
+      if (m.ny == 1) {
+        entries.push_back(
+            {"profile", m.description, profile_texture(m.z_mm, m.dx_mm, a->lambda_c_mm), {}});
+      } else {
+        entries.push_back(areal_entry("surface", m));
       }
     } else if (ext == ".toml") {
+      if (sf == "floor") {
+        throw InputError(
+            "--surface floor of a job: simulate it first (simulate --out DIR), then texture DIR");
+      }
       JobArgs job;
       job.file = a->source;
       job.sets = a->sets;
@@ -79,7 +150,8 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
             {left ? "left" : "right",
              fmt::format("predicted {} wall, tooth level, one step of y repeated ({:g} mm)",
                          left ? "left" : "right", w.y_mm.back() - w.y_mm.front()),
-             wall_texture(w, left, a->lambda_c_mm)});
+             wall_texture(w, left, a->lambda_c_mm),
+             {}});
       }
     } else if (ext == ".csv" || ext == ".txt") {
       double unit = 1.0;
@@ -99,11 +171,11 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       const MeasuredProfile p =
           read_profile_csv(read_text_file(a->source), a->source, xc, zc, unit);
       entries.push_back(
-          {"profile", p.description, profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm)});
+          {"profile", p.description, profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm), {}});
     } else {
       throw InputError(fmt::format(
-          "texture: '{}' is not a folder written by simulate --out, a job (.toml) or a CSV "
-          "profile (.csv)",
+          "texture: '{}' is not a folder written by simulate --out, a job (.toml), an X3P file "
+          "(.x3p) or a CSV profile (.csv)",
           a->source));
     }
     if (!a->json.empty()) emit(a->json, texture_json(a->source, entries));

@@ -95,15 +95,20 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 [[nodiscard]] std::string simulation_text(const std::string& job_file, const Job& job,
                                           const JobSimulation& js, double from_s, double to_s,
                                           double wall_s);
-/// Writes series.csv, chips.h5, walls.csv, floor.csv and surface.stl (grid step
-/// `stl_step_mm`, or default_surface_step_mm) into `dir` (created) as one set: they are made
-/// in a staging folder inside `dir`, then each is renamed into place. `hooks`: the phase
-/// "writing outputs" with progress per file; when cancelled between files the staging folder
-/// is removed and Interrupted thrown: `dir` then holds none of this run's files (those of an
-/// earlier run stay as they were).
-void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
-                              const JobSimulation& js, std::optional<double> stl_step_mm,
-                              const RunHooks& hooks = {});
+/// Writes series.csv, chips.h5, walls.csv, floor.csv, surface.stl (grid step `stl_step_mm`,
+/// or default_surface_step_mm) and floor.x3p (the slot's floor as a height map at the dexel
+/// spacing: floor_height_map across the slot less the tool's corner radius and a spacing at
+/// each wall, cut below half the depth) into `dir` (created) as one set: they are made in a
+/// staging folder inside `dir`, then each is renamed into place. When the window left no
+/// floor cut across the slot, floor.x3p is not written (an earlier run's is removed: the set
+/// stays one run's) and the reason is returned; otherwise the result is empty. `hooks`: the
+/// phase "writing outputs" with progress per file; when cancelled between files the staging
+/// folder is removed and Interrupted thrown: `dir` then holds none of this run's files (those
+/// of an earlier run stay as they were).
+[[nodiscard]] std::string write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
+                                                   const JobSimulation& js,
+                                                   std::optional<double> stl_step_mm,
+                                                   const RunHooks& hooks = {});
 /// The force series: t_s, f_x_n, f_y_n, f_z_n, f_resultant_n, torque_nm, power_w, then per
 /// tooth k: tooth<k>_f_x_n, tooth<k>_f_y_n, tooth<k>_f_z_n, tooth<k>_torque_nm. `calibrate`
 /// reads it as it is.
@@ -146,12 +151,15 @@ void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
 
 /// One evaluated surface of `trochomill texture`.
 struct TextureEntry {
-  std::string surface;      ///< "left", "right" or "profile"
-  std::string description;  ///< where the profile came from
-  ProfileTexture texture;
+  std::string surface;                ///< "left", "right", "floor", "profile" or "surface"
+  std::string description;            ///< where the profile or map came from
+  ProfileTexture texture;             ///< a profile's texture (when `areal` is empty)
+  std::optional<ArealTexture> areal;  ///< an areal surface's texture instead
 };
-/// `texture`'s report: per surface the cut-off (and how it was chosen), Ra, Rq, Rsk, Rku, Rp,
-/// Rv, Rz, Rt, RSm, Wa, Wt (mm), evaluation length (mm) and sections.
+/// `texture`'s report: per profile the cut-off (and how it was chosen), Ra, Rq, Rsk, Rku, Rp,
+/// Rv, Rz, Rt, RSm, Wa, Wt (mm), evaluation length (mm) and sections; per areal surface the
+/// S- and L-filters' nesting indices, the F-operator, and Sa, Sq, Ssk, Sku, Sp, Sv, Sz (mm),
+/// Sdr (%), Sal (mm), Str of the S-L surface and the same but Sal and Str of the S-F surface.
 [[nodiscard]] std::string texture_json(const std::string& source,
                                        const std::vector<TextureEntry>& entries);
 [[nodiscard]] std::string texture_text(const std::string& source,

@@ -22,6 +22,7 @@
 #include "trochomill/path.hpp"
 #include "trochomill/progress.hpp"
 #include "trochomill/settings/sim.hpp"
+#include "trochomill/surface.hpp"
 
 namespace trochomill {
 
@@ -249,6 +250,12 @@ struct HeightField {
   double bottom_mm = 0;      ///< the stock's bottom
 };
 [[nodiscard]] HeightField surface_height_field(const TriDexel& work, double step_mm);
+/// The slot's floor as a height map (ISO 25178 input): every ray of the Z board (its spacing)
+/// with x in [x_from_mm, x_to_mm], along the longest run of rows in which every one of those
+/// rays was cut below `below_mm` (the floor, clear of the stock's top). Throws InputError
+/// naming the range when no row is cut across it, or fewer than 2 x 2 rays remain.
+[[nodiscard]] HeightMap floor_height_map(const TriDexel& work, double x_from_mm, double x_to_mm,
+                                         double below_mm);
 /// The grid step (mm) of the machined surface's mesh: the Z board's spacing, coarser in whole
 /// multiples when the mesh would pass 4 million triangles.
 [[nodiscard]] double default_surface_step_mm(const TriDexel& work);

@@ -291,6 +291,8 @@ void write_x3p(const std::filesystem::path& file, const HeightMap& map, const X3
 /// MD5 when main.xml gives one. Throws InputError naming the file (and main.xml's line:column
 /// for XML errors) for what is not a valid X3P file, and for what it cannot use: point clouds
 /// (absolute axes), several layers, and points marked invalid (it needs complete maps).
-[[nodiscard]] HeightMap read_x3p(const std::filesystem::path& file, X3pInfo* info = nullptr);
+/// `max_points`: a larger map is refused before its data is read (the caller's memory limit).
+[[nodiscard]] HeightMap read_x3p(const std::filesystem::path& file, X3pInfo* info = nullptr,
+                                 double max_points = 268435456.0);
 
 }  // namespace trochomill

@@ -337,11 +337,47 @@ std::string job_keys_json() {
   return j.dump(2) + "\n";
 }
 
+namespace {
+
+nlohmann::json areal_json(const ArealParameters& p, bool lengths) {
+  nlohmann::json j = {{"sa_mm", p.sa_mm},      {"sq_mm", p.sq_mm},
+                      {"ssk", p.ssk},          {"sku", p.sku},
+                      {"sp_mm", p.sp_mm},      {"sv_mm", p.sv_mm},
+                      {"sz_mm", p.sz_mm},      {"sdr_percent", p.sdr_percent},
+                      {"area_mm2", p.area_mm2}};
+  if (lengths) {
+    j["sal_mm"] = p.sal_mm ? nlohmann::json(*p.sal_mm) : nlohmann::json(nullptr);
+    j["str"] = p.str ? nlohmann::json(*p.str) : nlohmann::json(nullptr);
+  }
+  return j;
+}
+
+}  // namespace
+
 std::string texture_json(const std::string& source, const std::vector<TextureEntry>& entries) {
   nlohmann::json surfaces = nlohmann::json::array();
+  bool profiles = false, areal = false;
   for (const TextureEntry& e : entries) {
+    if (e.areal) {
+      areal = true;
+      const ArealTexture& t = *e.areal;
+      surfaces.push_back(
+          {{"surface", e.surface},
+           {"kind", "areal"},
+           {"description", e.description},
+           {"s_filter_mm", t.s_mm > 0 ? nlohmann::json(t.s_mm) : nlohmann::json(nullptr)},
+           {"l_filter_mm", t.l_mm},
+           {"l_filter_source", t.l_source},
+           {"form", form_removal_name(t.form)},
+           {"form_degree", t.degree},
+           {"sl", areal_json(t.sl, true)},
+           {"sf", areal_json(t.sf, false)}});
+      continue;
+    }
+    profiles = true;
     const ProfileParameters& r = e.texture.roughness;
     surfaces.push_back({{"surface", e.surface},
+                        {"kind", "profile"},
                         {"description", e.description},
                         {"lambda_c_mm", e.texture.cutoff_mm},
                         {"lambda_c_source", e.texture.cutoff_source},
@@ -360,15 +396,37 @@ std::string texture_json(const std::string& source, const std::vector<TextureEnt
                         {"evaluation_length_mm", r.evaluation_length_mm},
                         {"sections", r.sections}});
   }
-  const nlohmann::json j = {{"source", source},
-                            {"standards", "ISO 16610-21 Gaussian filter, ISO 21920-2 parameters"},
-                            {"surfaces", surfaces}};
+  std::string standards;
+  if (profiles) standards = "ISO 16610-21 Gaussian filter, ISO 21920-2 parameters";
+  if (areal) {
+    standards += std::string(profiles ? "; " : "") +
+                 "ISO 16610-61 areal Gaussian filter, ISO 25178-2 parameters";
+  }
+  const nlohmann::json j = {{"source", source}, {"standards", standards}, {"surfaces", surfaces}};
   return j.dump(2) + "\n";
 }
 
 std::string texture_text(const std::string& source, const std::vector<TextureEntry>& entries) {
   std::string out = fmt::format("{}:\n", source);
   for (const TextureEntry& e : entries) {
+    if (e.areal) {
+      const ArealTexture& t = *e.areal;
+      const ArealParameters& p = t.sl;
+      out += fmt::format(
+          "  {}: {}\n    S-filter {}, F-operator {}{}, L-filter {:g} mm ({}), {:.4g} mm^2\n"
+          "    Sa {:.4f} um  Sq {:.4f} um  Sz {:.4f} um  Sp {:.4f} um  Sv {:.4f} um\n"
+          "    Ssk {:.3f}  Sku {:.3f}  Sdr {:.4f} %  Sal {}  Str {}\n"
+          "    S-F surface: Sa {:.4f} um  Sq {:.4f} um  Sz {:.4f} um\n",
+          e.surface, e.description, t.s_mm > 0 ? fmt::format("{:g} mm", t.s_mm) : "none",
+          form_removal_name(t.form),
+          t.form == FormRemoval::polynomial ? fmt::format(" (degree {})", t.degree) : "", t.l_mm,
+          t.l_source, p.area_mm2, 1000 * p.sa_mm, 1000 * p.sq_mm, 1000 * p.sz_mm, 1000 * p.sp_mm,
+          1000 * p.sv_mm, p.ssk, p.sku, p.sdr_percent,
+          p.sal_mm ? fmt::format("{:.4f} mm", *p.sal_mm) : "- (no decay to 0.2 within the map)",
+          p.str ? fmt::format("{:.3f}", *p.str) : "- (directional)", 1000 * t.sf.sa_mm,
+          1000 * t.sf.sq_mm, 1000 * t.sf.sz_mm);
+      continue;
+    }
     const ProfileParameters& r = e.texture.roughness;
     out += fmt::format(
         "  {}: {}\n    lambda_c {:g} mm ({}), {} x {:g} mm\n"

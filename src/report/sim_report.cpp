@@ -12,10 +12,12 @@
 #include <initializer_list>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/report.hpp"
+#include "trochomill/version.hpp"
 
 namespace trochomill {
 
@@ -185,9 +187,9 @@ std::string simulation_text(const std::string& job_file, const Job& job, const J
       r.complete ? "" : " (interrupted: incomplete)");
 }
 
-void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
-                              const JobSimulation& js, std::optional<double> stl_step_mm,
-                              const RunHooks& hooks) {
+std::string write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
+                                     const JobSimulation& js, std::optional<double> stl_step_mm,
+                                     const RunHooks& hooks) {
   namespace fs = std::filesystem;
   fs::create_directories(dir);
   const SimResult& r = js.result;
@@ -196,7 +198,19 @@ void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
   std::error_code ec;
   fs::remove_all(stage, ec);
   fs::create_directory(stage);
-  const std::array<std::pair<const char*, std::function<void(const fs::path&)>>, 5> outputs{{
+  // The floor as a height map, when the window left one across the slot.
+  std::optional<HeightMap> floor;
+  std::string floor_note;
+  {
+    const double d = job.simulation.resolution_mm;
+    const double half = 0.5 * job.slot.width_mm - job.tool.corner_radius_mm - d;
+    try {
+      floor = floor_height_map(*js.work, -half, half, -0.5 * job.slot.depth_mm);
+    } catch (const InputError& e) {
+      floor_note = fmt::format("floor.x3p not written: {}", e.what());
+    }
+  }
+  std::vector<std::pair<const char*, std::function<void(const fs::path&)>>> outputs{{
       {"series.csv",
        [&](const fs::path& p) {
          write_file_atomic(p, sim_series_csv(r, tool.tooth_angle_rad.size()));
@@ -217,6 +231,19 @@ void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
          write_file_atomic(p, height_field_stl(surface_height_field(*js.work, step)));
        }},
   }};
+  if (floor) {
+    outputs.emplace_back("floor.x3p", [&](const fs::path& p) {
+      X3pInfo info;
+      info.creator = fmt::format("trochomill {}", kVersion);
+      info.model = "tri-dexel simulation";
+      info.comment = fmt::format(
+          "{}; {:g} mm dexels, {} steps per revolution, t {:.4f} to {:.4f} s", floor->description,
+          job.simulation.resolution_mm, job.simulation.steps_per_rev,
+          js.result.steps.empty() ? 0.0 : js.result.steps.front().t_s,
+          js.result.steps.empty() ? 0.0 : js.result.steps.back().t_s);
+      write_x3p(p, *floor, info);
+    });
+  }
   const char* stopped = "interrupted: --out not written (no file of this run is in it)";
   hooks.begin("writing outputs");
   try {
@@ -242,6 +269,8 @@ void write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
     }
   }
   fs::remove(stage, ec);
+  if (!floor) fs::remove(dir / "floor.x3p", ec);  // an earlier run's: not this set's
+  return floor_note;
 }
 
 }  // namespace trochomill

@@ -1,9 +1,12 @@
 // The machined slot read off the tri-dexel workpiece: wall profiles from the X board, floor
 // profiles and the machined surface (a height field) from the Z board
 // (include/trochomill/sim.hpp).
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
+#include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
 
 namespace trochomill {
@@ -87,6 +90,49 @@ HeightField surface_height_field(const TriDexel& work, double step_mm) {
     }
   }
   return f;
+}
+
+HeightMap floor_height_map(const TriDexel& work, double x_from_mm, double x_to_mm,
+                           double below_mm) {
+  const DexelBoard& zb = work.boards[2];
+  // The columns within [x_from, x_to].
+  int c0 = zb.count_u(), c1 = -1;
+  for (int i = 0; i < zb.count_u(); ++i) {
+    if (zb.u_of(i) >= x_from_mm && zb.u_of(i) <= x_to_mm) c0 = std::min(c0, i), c1 = i;
+  }
+  auto top = [&](int i, int j) {
+    const Dexel* ray = zb.find(i, j);
+    return ray == nullptr ? zb.full().hi
+                          : (ray->intervals().empty() ? zb.full().lo : ray->intervals().back().hi);
+  };
+  // The longest run of rows cut across the whole range.
+  int best0 = 0, best_n = 0;
+  for (int j = 0, run0 = 0, run = 0; j < zb.count_v() && c1 >= c0; ++j) {
+    bool cut = true;
+    for (int i = c0; i <= c1 && cut; ++i) cut = top(i, j) < below_mm;
+    run = cut ? run + 1 : 0;
+    if (run == 1) run0 = j;
+    if (run > best_n) best0 = run0, best_n = run;
+  }
+  if (c1 - c0 + 1 < 2 || best_n < 2) {
+    throw InputError(fmt::format(
+        "floor: no two rows of the workpiece are cut below z = {:g} mm across x = {:g} to {:g} "
+        "mm (simulate more of the path, or a window where the tool crosses the slot)",
+        below_mm, x_from_mm, x_to_mm));
+  }
+  HeightMap m;
+  m.nx = static_cast<std::size_t>(c1 - c0 + 1);
+  m.ny = static_cast<std::size_t>(best_n);
+  m.dx_mm = m.dy_mm = zb.spacing();
+  m.x0_mm = zb.u_of(c0);
+  m.y0_mm = zb.v_of(best0);
+  m.z_mm.reserve(m.nx * m.ny);
+  for (int j = best0; j < best0 + best_n; ++j) {
+    for (int i = c0; i <= c1; ++i) m.z_mm.push_back(top(i, j));
+  }
+  m.description = fmt::format("floor, simulated: x {:.4g} to {:.4g} mm, y {:.4g} to {:.4g} mm",
+                              m.x0_mm, zb.u_of(c1), m.y0_mm, zb.v_of(best0 + best_n - 1));
+  return m;
 }
 
 ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSettings& s) {

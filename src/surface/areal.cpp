@@ -506,8 +506,12 @@ ArealParameters areal_parameters(const HeightMap& s, bool autocorrelation_length
   const double dn = static_cast<double>(n);
   p.sa_mm = s1 / dn;
   p.sq_mm = std::sqrt(s2 / dn);
-  p.ssk = p.sq_mm > 0 ? s3 / dn / std::pow(p.sq_mm, 3) : 0.0;
-  p.sku = p.sq_mm > 0 ? s4 / dn / std::pow(p.sq_mm, 4) : 0.0;
+  // A surface flat to rounding (Sq within 1e-12 of its heights' size) has no shape: Ssk, Sku,
+  // Sal and Str stay 0 and empty rather than ratios of rounding errors.
+  const double size = std::max({std::abs(hi + mean), std::abs(lo + mean), 1e-300});
+  const bool flat = p.sq_mm <= 1e-12 * size;
+  p.ssk = flat ? 0.0 : s3 / dn / std::pow(p.sq_mm, 3);
+  p.sku = flat ? 0.0 : s4 / dn / std::pow(p.sq_mm, 4);
   p.sp_mm = hi, p.sv_mm = -lo, p.sz_mm = hi - lo;
   // Sdr: each cell's slopes, the mean of its two edges in each direction.
   double developed = 0;
@@ -521,7 +525,7 @@ ArealParameters areal_parameters(const HeightMap& s, bool autocorrelation_length
     }
   }
   p.sdr_percent = 100.0 * (developed / static_cast<double>((nx - 1) * (ny - 1)) - 1.0);
-  if (!autocorrelation_lengths || p.sq_mm == 0) return p;
+  if (!autocorrelation_lengths || flat) return p;
 
   const std::size_t lx = nx / 2, ly = ny / 2, wx = lx + 1;
   const std::vector<double> acf = autocorrelation(s, mean, lx, ly);

@@ -183,7 +183,8 @@ namespace {
 // what is wrong.
 class X3pReader {
  public:
-  explicit X3pReader(std::filesystem::path file) : file_(std::move(file)) {}
+  X3pReader(std::filesystem::path file, double max_points)
+      : file_(std::move(file)), max_points_(max_points) {}
 
   [[noreturn]] void fail(const std::string& what) const {
     throw InputError(fmt::format("{}: {}", file_.string(), what));
@@ -372,8 +373,10 @@ class X3pReader {
       fail_at(sz, fmt::format("SizeZ {}: several layers per point are not read (1 expected)",
                               text(sz)));
     }
-    if (static_cast<double>(m.nx) * static_cast<double>(m.ny) > kMaxPoints) {
-      fail_at(dim, fmt::format("{} x {} points is past the limit of 2^28", m.nx, m.ny));
+    if (static_cast<double>(m.nx) * static_cast<double>(m.ny) > max_points_) {
+      fail_at(dim, fmt::format("{} x {} points is past the limit of {:.4g} points{}", m.nx, m.ny,
+                               max_points_,
+                               max_points_ < kMaxPoints ? " (the memory limit)" : " (2^28)"));
     }
     if (type == "PRF" && m.ny != 1) fail_at(dim, "a profile (PRF) has SizeY 1");
     const std::size_t n = m.nx * m.ny;
@@ -486,6 +489,7 @@ class X3pReader {
 
  private:
   std::filesystem::path file_;
+  double max_points_;
   Zip z_;
   std::string xml_;
   pugi::xml_document doc_;
@@ -494,8 +498,8 @@ class X3pReader {
 
 }  // namespace
 
-HeightMap read_x3p(const std::filesystem::path& file, X3pInfo* info) {
-  X3pReader r(file);
+HeightMap read_x3p(const std::filesystem::path& file, X3pInfo* info, double max_points) {
+  X3pReader r(file, std::min(max_points, kMaxPoints));
   return r.read(info);
 }
 
