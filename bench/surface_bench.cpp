@@ -47,16 +47,32 @@ BENCHMARK(SurfaceArealTexture)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+void SurfaceArealFilter(benchmark::State& state) {
+  const HeightMap m = milled_map(4096);
+  const double lc = static_cast<double>(state.range(0)) / 1000;  // um to mm
+  for (auto _ : state) {
+    const HeightMap f = gaussian_filter_areal(m, lc);
+    benchmark::DoNotOptimize(f.z_mm.data());
+  }
+}
+BENCHMARK(SurfaceArealFilter)
+    ->Name("Surface/ArealFilter4096")
+    ->Arg(25)
+    ->Arg(800)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 void SurfaceArealParameters(benchmark::State& state) {
   const HeightMap m = milled_map(static_cast<std::size_t>(state.range(0)));
   for (auto _ : state) {
-    const ArealParameters p = areal_parameters(m, true);
+    const ArealParameters p = areal_parameters(m, state.range(1) != 0);
     benchmark::DoNotOptimize(p.sa_mm);
   }
 }
 BENCHMARK(SurfaceArealParameters)
     ->Name("Surface/ArealParameters")
-    ->Arg(4096)
+    ->Args({4096, 0})
+    ->Args({4096, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -7,6 +7,7 @@
 // ran it or on the others; sums over the map run in one fixed order.
 #include <fftw3.h>
 #include <fmt/format.h>
+#include <sys/mman.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <cstring>
 #include <memory>
 #include <mutex>
@@ -44,74 +46,124 @@ std::size_t fast_fft_size(std::size_t n) {
   }
 }
 
-struct FftwFree {
-  void operator()(void* p) const { fftw_free(p); }
+// FFTW's double and single precision interfaces under one name.
+template <class Real>
+struct Fftw;
+template <>
+struct Fftw<double> {
+  using complex = fftw_complex;
+  using plan = fftw_plan;
+  static void* allocate(std::size_t bytes) { return fftw_malloc(bytes); }
+  static void release(void* p) { fftw_free(p); }
+  static plan r2c(int n, double* in, complex* out) {
+    return fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
+  }
+  static plan c2r(int n, complex* in, double* out) {
+    return fftw_plan_dft_c2r_1d(n, in, out, FFTW_ESTIMATE);
+  }
+  static plan dft(int n, complex* in, complex* out, int sign) {
+    return fftw_plan_dft_1d(n, in, out, sign, FFTW_ESTIMATE);
+  }
+  static void destroy(plan p) { fftw_destroy_plan(p); }
+  static void run(plan p, double* in, complex* out) { fftw_execute_dft_r2c(p, in, out); }
+  static void run(plan p, complex* in, double* out) { fftw_execute_dft_c2r(p, in, out); }
+  static void run(plan p, complex* in, complex* out) { fftw_execute_dft(p, in, out); }
 };
-template <class T>
-using FftwBuffer = std::unique_ptr<T[], FftwFree>;
+template <>
+struct Fftw<float> {
+  using complex = fftwf_complex;
+  using plan = fftwf_plan;
+  static void* allocate(std::size_t bytes) { return fftwf_malloc(bytes); }
+  static void release(void* p) { fftwf_free(p); }
+  static plan r2c(int n, float* in, complex* out) {
+    return fftwf_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
+  }
+  static plan c2r(int n, complex* in, float* out) {
+    return fftwf_plan_dft_c2r_1d(n, in, out, FFTW_ESTIMATE);
+  }
+  static plan dft(int n, complex* in, complex* out, int sign) {
+    return fftwf_plan_dft_1d(n, in, out, sign, FFTW_ESTIMATE);
+  }
+  static void destroy(plan p) { fftwf_destroy_plan(p); }
+  static void run(plan p, float* in, complex* out) { fftwf_execute_dft_r2c(p, in, out); }
+  static void run(plan p, complex* in, float* out) { fftwf_execute_dft_c2r(p, in, out); }
+  static void run(plan p, complex* in, complex* out) { fftwf_execute_dft(p, in, out); }
+};
 
-template <class T>
-FftwBuffer<T> fftw_buffer(std::size_t n) {
-  auto* p = static_cast<T*>(fftw_malloc(sizeof(T) * std::max<std::size_t>(n, 1)));
+template <class Real>
+struct FftwFree {
+  void operator()(void* p) const { Fftw<Real>::release(p); }
+};
+template <class T, class Real = double>
+using FftwBuffer = std::unique_ptr<T[], FftwFree<Real>>;
+
+template <class T, class Real = double>
+FftwBuffer<T, Real> fftw_buffer(std::size_t n) {
+  auto* p = static_cast<T*>(Fftw<Real>::allocate(sizeof(T) * std::max<std::size_t>(n, 1)));
   if (p == nullptr) throw std::bad_alloc();
-  return FftwBuffer<T>(p);
+  return FftwBuffer<T, Real>(p);
 }
 
 // One real-to-complex and its inverse plan of length n (FFTW_ESTIMATE: the same plan for the
 // same size, whatever ran before).
+template <class Real = double>
 class RealPlans {
  public:
+  using F = Fftw<Real>;
+  using complex = typename F::complex;
   explicit RealPlans(std::size_t n) : n_(n) {
-    auto in = fftw_buffer<double>(n);
-    auto out = fftw_buffer<fftw_complex>(n / 2 + 1);
+    auto in = fftw_buffer<Real, Real>(n);
+    auto out = fftw_buffer<complex, Real>(n / 2 + 1);
     const std::lock_guard lock(planner_mutex());
     const int ni = static_cast<int>(n);
-    forward_ = fftw_plan_dft_r2c_1d(ni, in.get(), out.get(), FFTW_ESTIMATE);
-    inverse_ = fftw_plan_dft_c2r_1d(ni, out.get(), in.get(), FFTW_ESTIMATE);
+    forward_ = F::r2c(ni, in.get(), out.get());
+    inverse_ = F::c2r(ni, out.get(), in.get());
     if (forward_ == nullptr || inverse_ == nullptr) throw Error("FFTW could not plan a transform");
   }
   RealPlans(const RealPlans&) = delete;
   RealPlans& operator=(const RealPlans&) = delete;
   ~RealPlans() {
     const std::lock_guard lock(planner_mutex());
-    fftw_destroy_plan(forward_);
-    fftw_destroy_plan(inverse_);
+    F::destroy(forward_);
+    F::destroy(inverse_);
   }
   [[nodiscard]] std::size_t size() const { return n_; }
-  void forward(double* in, fftw_complex* out) const { fftw_execute_dft_r2c(forward_, in, out); }
+  void forward(Real* in, complex* out) const { F::run(forward_, in, out); }
   // Destroys `in` (FFTW's c2r does).
-  void inverse(fftw_complex* in, double* out) const { fftw_execute_dft_c2r(inverse_, in, out); }
+  void inverse(complex* in, Real* out) const { F::run(inverse_, in, out); }
 
  private:
   std::size_t n_;
-  fftw_plan forward_ = nullptr, inverse_ = nullptr;
+  typename F::plan forward_ = nullptr, inverse_ = nullptr;
 };
 
 // A complex transform of length n, both directions.
+template <class Real = double>
 class ComplexPlans {
  public:
-  explicit ComplexPlans(std::size_t n) : n_(n) {
-    auto a = fftw_buffer<fftw_complex>(n);
-    auto b = fftw_buffer<fftw_complex>(n);
+  using F = Fftw<Real>;
+  using complex = typename F::complex;
+  explicit ComplexPlans(std::size_t n) {
+    auto a = fftw_buffer<complex, Real>(n);
+    auto b = fftw_buffer<complex, Real>(n);
     const std::lock_guard lock(planner_mutex());
     const int ni = static_cast<int>(n);
-    forward_ = fftw_plan_dft_1d(ni, a.get(), b.get(), FFTW_FORWARD, FFTW_ESTIMATE);
-    inverse_ = fftw_plan_dft_1d(ni, a.get(), b.get(), FFTW_BACKWARD, FFTW_ESTIMATE);
+    forward_ = F::dft(ni, a.get(), b.get(), FFTW_FORWARD);
+    inverse_ = F::dft(ni, a.get(), b.get(), FFTW_BACKWARD);
     if (forward_ == nullptr || inverse_ == nullptr) throw Error("FFTW could not plan a transform");
   }
   ComplexPlans(const ComplexPlans&) = delete;
   ComplexPlans& operator=(const ComplexPlans&) = delete;
   ~ComplexPlans() {
     const std::lock_guard lock(planner_mutex());
-    fftw_destroy_plan(forward_);
-    fftw_destroy_plan(inverse_);
+    F::destroy(forward_);
+    F::destroy(inverse_);
   }
-  void forward(fftw_complex* in, fftw_complex* out) const { fftw_execute_dft(forward_, in, out); }
-  void inverse(fftw_complex* in, fftw_complex* out) const { fftw_execute_dft(inverse_, in, out); }
+  void forward(complex* in, complex* out) const { F::run(forward_, in, out); }
+  void inverse(complex* in, complex* out) const { F::run(inverse_, in, out); }
 
  private:
-  std::size_t n_;
-  fftw_plan forward_ = nullptr, inverse_ = nullptr;
+  typename F::plan forward_ = nullptr, inverse_ = nullptr;
 };
 
 // Below this many weights a line is convolved directly (fewer operations than two FFTs).
@@ -136,7 +188,7 @@ class LineFilter {
     if (w_.size() > kDirectWeights) {
       // Linear convolution by a circular one: n + half zero-padded samples are enough (the
       // wrapped weights meet only padding at the outputs kept).
-      plans_ = std::make_unique<RealPlans>(fast_fft_size(n + half_));
+      plans_ = std::make_unique<RealPlans<>>(fast_fft_size(n + half_));
       const std::size_t m = plans_->size();
       auto kern = fftw_buffer<double>(m);
       std::fill(kern.get(), kern.get() + m, 0.0);
@@ -146,9 +198,7 @@ class LineFilter {
       plans_->forward(kern.get(), spec.get());
       // The inverse transform is unnormalised: the 1/m goes into the kernel's spectrum.
       const double scale = 1.0 / static_cast<double>(m);
-      for (std::size_t j = 0; j < kernel_.size(); ++j) {
-        kernel_[j] = std::complex<double>(spec[j][0], spec[j][1]) * scale;
-      }
+      for (std::size_t j = 0; j < kernel_.size(); ++j) kernel_[j] = spec[j][0] * scale;
     }
   }
 
@@ -163,38 +213,42 @@ class LineFilter {
   }
 
   // Filters the line in[0..n) (read with `stride`) into out[0..n) (written with `stride`).
-  void run(const double* in, std::size_t in_stride, double* out, std::size_t out_stride,
-           Work& work) const {
+  // Filters the line in[0..n) into out[0..n) (they may be the same: the line is copied first).
+  void run(const double* in, double* out, Work& work) const {
+    double* r = work.real.get();
+    std::copy(in, in + n_, r);
     if (!plans_) {
-      for (std::size_t i = 0; i < n_; ++i) {
-        const std::size_t k0 = i < half_ ? half_ - i : 0;
-        const std::size_t k1 = std::min(w_.size(), n_ + half_ - i);
-        double m = 0;
-        for (std::size_t k = k0; k < k1; ++k) m += w_[k] * in[(i + k - half_) * in_stride];
-        out[i * out_stride] = m / norm_[i];
+      // Term by term over the whole line (each output sums its weights in k order, as the
+      // ends do): the inner loop runs along the line and vectorises.
+      std::fill(out, out + n_, 0.0);
+      for (std::size_t k = 0; k < w_.size(); ++k) {
+        const double wk = w_[k];
+        // outputs i with 0 <= i + k - half < n
+        const std::size_t i0 = k < half_ ? half_ - k : 0;
+        const std::size_t i1 = std::min(n_, n_ + half_ - k);
+        const double* src = r + (i0 + k - half_);
+        for (std::size_t i = i0; i < i1; ++i) out[i] += wk * src[i - i0];
       }
+      for (std::size_t i = 0; i < n_; ++i) out[i] /= norm_[i];
       return;
     }
     const std::size_t m = plans_->size();
-    double* r = work.real.get();
-    for (std::size_t i = 0; i < n_; ++i) r[i] = in[i * in_stride];
     std::fill(r + n_, r + m, 0.0);
     plans_->forward(r, work.spec.get());
+    // The kernel is even about its centre: its spectrum is real (to rounding).
     for (std::size_t j = 0; j < kernel_.size(); ++j) {
-      const std::complex<double> v =
-          std::complex<double>(work.spec[j][0], work.spec[j][1]) * kernel_[j];
-      work.spec[j][0] = v.real();
-      work.spec[j][1] = v.imag();
+      work.spec[j][0] *= kernel_[j];
+      work.spec[j][1] *= kernel_[j];
     }
     plans_->inverse(work.spec.get(), r);
-    for (std::size_t i = 0; i < n_; ++i) out[i * out_stride] = r[i] / norm_[i];
+    for (std::size_t i = 0; i < n_; ++i) out[i] = r[i] / norm_[i];
   }
 
  private:
   std::size_t n_, half_ = 0;
   std::vector<double> w_, norm_;
-  std::unique_ptr<RealPlans> plans_;
-  std::vector<std::complex<double>> kernel_;
+  std::unique_ptr<RealPlans<>> plans_;
+  std::vector<double> kernel_;
 };
 
 void check_nesting_index(const HeightMap& map, double cutoff_mm, const char* what) {
@@ -239,19 +293,21 @@ void check_height_map(const HeightMap& map, std::string_view what) {
 
 namespace {
 
-// The areal Gaussian mean surface of `map` (checked) into out[0..nx ny).
-void filter_into(const HeightMap& map, double cutoff_mm, double* out) {
+// The areal Gaussian mean surface of `map` (checked) into out[0..nx ny): the rows into `out`,
+// then the columns of `out` in place.
+// With `residual`, the map less its mean surface instead (the last pass writes it).
+void filter_into(const HeightMap& map, double cutoff_mm, double* out, bool residual = false) {
   const std::size_t nx = map.nx, ny = map.ny;
-  // Rows first into a scratch map (not initialised: every sample is written).
-  const std::unique_ptr<double[]> tmp(new double[nx * ny]);
   {
     const LineFilter f(nx, map.dx_mm, cutoff_mm);
     tbb::enumerable_thread_specific<LineFilter::Work> work([&] { return f.work(); });
     tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {
-      f.run(map.z_mm.data() + r * nx, 1, tmp.get() + r * nx, 1, work.local());
+      f.run(map.z_mm.data() + r * nx, out + r * nx, work.local());
     });
   }
-  {  // then each column, in blocks gathered row by row (their samples lie side by side)
+  const double* tmp = out;
+  {  // then each column, in blocks gathered row by row (their samples lie side by side); a
+     // block is read whole before it is written back
     const LineFilter f(ny, map.dy_mm, cutoff_mm);
     struct ColumnWork {
       LineFilter::Work line;
@@ -269,13 +325,36 @@ void filter_into(const HeightMap& map, double cutoff_mm, double* out) {
         for (std::size_t c = 0; c < nc; ++c) w.in[c * ny + r] = tmp[r * nx + c0 + c];
       }
       for (std::size_t c = 0; c < nc; ++c) {
-        f.run(w.in.data() + c * ny, 1, w.out.data() + c * ny, 1, w.line);
+        f.run(w.in.data() + c * ny, w.out.data() + c * ny, w.line);
       }
       for (std::size_t r = 0; r < ny; ++r) {
-        for (std::size_t c = 0; c < nc; ++c) out[r * nx + c0 + c] = w.out[c * ny + r];
+        double* o = out + r * nx + c0;
+        if (residual) {
+          const double* z = map.z_mm.data() + r * nx + c0;
+          for (std::size_t c = 0; c < nc; ++c) o[c] = z[c] - w.out[c * ny + r];
+        } else {
+          for (std::size_t c = 0; c < nc; ++c) o[c] = w.out[c * ny + r];
+        }
       }
     });
   }
+}
+
+// Asks for transparent huge pages on a large buffer about to be first touched: on a
+// virtual machine a 4 KB page fault costs more than the filter's arithmetic on the page.
+void prefer_huge_pages(void* p, std::size_t bytes) {
+  constexpr std::uintptr_t kHuge = 2u << 20;
+  const auto a = (reinterpret_cast<std::uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+  const auto b = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(kHuge - 1);
+  if (b > a) (void)::madvise(reinterpret_cast<void*>(a), b - a, MADV_HUGEPAGE);
+}
+
+// A vector of n doubles, zeroed, on huge pages where the system gives them.
+void zeroed(std::vector<double>& v, std::size_t n) {
+  v.clear();
+  v.reserve(n);
+  prefer_huge_pages(v.data(), n * sizeof(double));
+  v.resize(n);
 }
 
 HeightMap same_grid(const HeightMap& map, std::string description) {
@@ -286,16 +365,28 @@ HeightMap same_grid(const HeightMap& map, std::string description) {
   return out;
 }
 
+// The public functions check their input; areal_texture checks the map once and calls
+// these (a derived surface of a finite map is finite).
+HeightMap mean_surface(const HeightMap& map, double cutoff_mm, bool residual = false) {
+  HeightMap out = same_grid(
+      map, map.description +
+               (residual ? fmt::format(", less its Gaussian mean surface {:g} mm", cutoff_mm)
+                         : fmt::format(", Gaussian mean surface {:g} mm", cutoff_mm)));
+  zeroed(out.z_mm, map.z_mm.size());
+  filter_into(map, cutoff_mm, out.z_mm.data(), residual);
+  return out;
+}
+
 }  // namespace
+
+// Unchecked cores of remove_form and areal_parameters (internal; defined below).
+HeightMap form_removed(HeightMap map, FormRemoval form, int degree);
+ArealParameters parameters_of(const HeightMap& s, bool autocorrelation_lengths);
 
 HeightMap gaussian_filter_areal(const HeightMap& map, double cutoff_mm) {
   check_height_map(map, "areal Gaussian filter");
   check_nesting_index(map, cutoff_mm, "areal Gaussian filter");
-  HeightMap out =
-      same_grid(map, map.description + fmt::format(", Gaussian mean surface {:g} mm", cutoff_mm));
-  out.z_mm.resize(map.z_mm.size());
-  filter_into(map, cutoff_mm, out.z_mm.data());
-  return out;
+  return mean_surface(map, cutoff_mm);
 }
 
 const char* form_removal_name(FormRemoval form) {
@@ -312,6 +403,10 @@ const char* form_removal_name(FormRemoval form) {
 
 HeightMap remove_form(HeightMap map, FormRemoval form, int degree) {
   check_height_map(map, "form removal");
+  return form_removed(std::move(map), form, degree);
+}
+
+HeightMap form_removed(HeightMap map, FormRemoval form, int degree) {
   if (form == FormRemoval::polynomial && (degree < 1 || degree > 6)) {
     throw InputError(
         fmt::format("form removal: the polynomial degree must be 1 to 6, got {}", degree));
@@ -353,13 +448,13 @@ HeightMap remove_form(HeightMap map, FormRemoval form, int degree) {
   }
   // moments(i, r) = sum over the row r of P_i(u) z; then the right side sums Q_j(v) over rows.
   Eigen::MatrixXd moments(D, ny);
-  for (std::size_t r = 0; r < ny; ++r) {
+  tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {  // each its own: deterministic
     for (std::size_t a = 0; a < D; ++a) {
       double s = 0;
       for (std::size_t c = 0; c < nx; ++c) s += px[a * nx + c] * map.z_mm[r * nx + c];
       moments(a, r) = s;
     }
-  }
+  });
   const auto T = terms.size();
   Eigen::MatrixXd normal(T, T);
   Eigen::VectorXd rhs(T);
@@ -374,18 +469,21 @@ HeightMap remove_form(HeightMap map, FormRemoval form, int degree) {
     rhs(p) = s;
   }
   const Eigen::VectorXd coef = normal.ldlt().solve(rhs);
-  HeightMap& out = map;  // taken by value: moved in where the caller is done with it
-  for (std::size_t r = 0; r < ny; ++r) {
+  // The fit along each row: sum_j Q_j(v) sum_i c_ij P_i(u), the inner sums per row first.
+  tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {
+    std::vector<double> cx(D, 0.0);  // the coefficient of P_i(u) on this row
+    for (std::size_t p = 0; p < T; ++p) {
+      const auto [i, j] = terms[p];
+      cx[static_cast<std::size_t>(i)] +=
+          coef(static_cast<Eigen::Index>(p)) * py[static_cast<std::size_t>(j) * ny + r];
+    }
+    double* z = map.z_mm.data() + r * nx;
     for (std::size_t c = 0; c < nx; ++c) {
       double f = 0;
-      for (std::size_t p = 0; p < T; ++p) {
-        const auto [i, j] = terms[p];
-        f += coef(p) * px[static_cast<std::size_t>(i) * nx + c] *
-             py[static_cast<std::size_t>(j) * ny + r];
-      }
-      out.z_mm[r * nx + c] -= f;
+      for (std::size_t i = 0; i < D; ++i) f += cx[i] * px[i * nx + c];
+      z[c] -= f;
     }
-  }
+  });
   return map;
 }
 
@@ -395,39 +493,44 @@ namespace {
 // normalised by each lag's overlap (an unbiased estimate) and to 1 at zero lag:
 // acf[(ty + ly) * (lx + 1) + tx]. By the map padded with zeros to at least (nx + lx) x
 // (ny + ly): rows by real FFT, columns by complex FFT, |.|^2, and back.
-std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t lx,
-                                    std::size_t ly) {
+std::vector<float> autocorrelation(const HeightMap& s, double mean, std::size_t lx,
+                                   std::size_t ly) {
   const std::size_t nx = s.nx, ny = s.ny;
   const std::size_t px = fast_fft_size(nx + lx), py = fast_fft_size(ny + ly), hx = px / 2 + 1;
-  const RealPlans rows(px);
-  const ComplexPlans cols(py);
+  // Single precision: the function's values (to 1e-6) place Sal far more finely than its
+  // bilinear interpolation does, at half the memory and time of double.
+  using C = fftwf_complex;
+  const RealPlans<float> rows(px);
+  const ComplexPlans<float> cols(py);
   const std::size_t wx = lx + 1, wy = 2 * ly + 1;
   // The row spectra [row][frequency along x], then in the same rows the columns' results at
   // the lags kept (ty = -ly..ly in rows 0..2ly); not initialised: every value read is written.
-  auto spec = fftw_buffer<fftw_complex>(std::max(ny, wy) * hx);
+  auto spec = fftw_buffer<C, float>(std::max(ny, wy) * hx);
+  prefer_huge_pages(spec.get(), std::max(ny, wy) * hx * sizeof(C));
   {
     struct Work {
-      FftwBuffer<double> real;
-      FftwBuffer<fftw_complex> out;
+      FftwBuffer<float, float> real;
+      FftwBuffer<C, float> out;
     };
     tbb::enumerable_thread_specific<Work> work([&] {
-      return Work{fftw_buffer<double>(px), fftw_buffer<fftw_complex>(hx)};
+      return Work{fftw_buffer<float, float>(px), fftw_buffer<C, float>(hx)};
     });
     tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {
       Work& w = work.local();
-      for (std::size_t c = 0; c < nx; ++c) w.real[c] = s.z_mm[r * nx + c] - mean;
-      std::fill(w.real.get() + nx, w.real.get() + px, 0.0);
+      for (std::size_t c = 0; c < nx; ++c)
+        w.real[c] = static_cast<float>(s.z_mm[r * nx + c] - mean);
+      std::fill(w.real.get() + nx, w.real.get() + px, 0.0f);
       rows.forward(w.real.get(), w.out.get());
-      std::memcpy(spec.get() + r * hx, w.out.get(), hx * sizeof(fftw_complex));
+      std::memcpy(spec.get() + r * hx, w.out.get(), hx * sizeof(C));
     });
   }
   {  // frequency columns in blocks: forward, power, inverse (rows past ny are zero)
     struct Work {
-      FftwBuffer<fftw_complex> a, b;
+      FftwBuffer<C, float> a, b;
     };
     tbb::enumerable_thread_specific<Work> work([&] {
-      return Work{fftw_buffer<fftw_complex>(py * kColumnBlock),
-                  fftw_buffer<fftw_complex>(py * kColumnBlock)};
+      return Work{fftw_buffer<C, float>(py * kColumnBlock),
+                  fftw_buffer<C, float>(py * kColumnBlock)};
     });
     const std::size_t blocks = (hx + kColumnBlock - 1) / kColumnBlock;
     tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
@@ -435,7 +538,7 @@ std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t
       const std::size_t j0 = blk * kColumnBlock, nj = std::min(kColumnBlock, hx - j0);
       for (std::size_t r = 0; r < py; ++r) {
         for (std::size_t j = 0; j < nj; ++j) {
-          fftw_complex& d = w.a[j * py + r];
+          C& d = w.a[j * py + r];
           if (r < ny) {
             d[0] = spec[r * hx + j0 + j][0], d[1] = spec[r * hx + j0 + j][1];
           } else {
@@ -444,8 +547,8 @@ std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t
         }
       }
       for (std::size_t j = 0; j < nj; ++j) {
-        fftw_complex* a = w.a.get() + j * py;
-        fftw_complex* b = w.b.get() + j * py;
+        C* a = w.a.get() + j * py;
+        C* b = w.b.get() + j * py;
         cols.forward(a, b);
         for (std::size_t r = 0; r < py; ++r) {
           b[r][0] = b[r][0] * b[r][0] + b[r][1] * b[r][1];
@@ -462,28 +565,28 @@ std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t
       }
     });
   }
-  std::vector<double> acf(wx * wy);
+  std::vector<float> acf(wx * wy);
   {
     struct Work {
-      FftwBuffer<fftw_complex> in;
-      FftwBuffer<double> out;
+      FftwBuffer<C, float> in;
+      FftwBuffer<float, float> out;
     };
     tbb::enumerable_thread_specific<Work> work([&] {
-      return Work{fftw_buffer<fftw_complex>(hx), fftw_buffer<double>(px)};
+      return Work{fftw_buffer<C, float>(hx), fftw_buffer<float, float>(px)};
     });
     tbb::parallel_for(std::size_t{0}, wy, [&](std::size_t k) {
       Work& w = work.local();
       const auto ty = static_cast<std::ptrdiff_t>(k) - static_cast<std::ptrdiff_t>(ly);
-      std::memcpy(w.in.get(), spec.get() + k * hx, hx * sizeof(fftw_complex));
+      std::memcpy(w.in.get(), spec.get() + k * hx, hx * sizeof(C));
       rows.inverse(w.in.get(), w.out.get());
       const double oy = static_cast<double>(ny - static_cast<std::size_t>(std::abs(ty)));
       for (std::size_t tx = 0; tx < wx; ++tx) {
-        acf[k * wx + tx] = w.out[tx] / (oy * static_cast<double>(nx - tx));
+        acf[k * wx + tx] = static_cast<float>(w.out[tx] / (oy * static_cast<double>(nx - tx)));
       }
     });
   }
-  const double zero = acf[ly * wx];
-  for (double& v : acf) v /= zero;
+  const float zero = acf[ly * wx];
+  for (float& v : acf) v /= zero;
   return acf;
 }
 
@@ -491,17 +594,52 @@ std::vector<double> autocorrelation(const HeightMap& s, double mean, std::size_t
 
 ArealParameters areal_parameters(const HeightMap& s, bool autocorrelation_lengths) {
   check_height_map(s, "areal parameters");
+  return parameters_of(s, autocorrelation_lengths);
+}
+
+ArealParameters parameters_of(const HeightMap& s, bool autocorrelation_lengths) {
   const std::size_t nx = s.nx, ny = s.ny, n = nx * ny;
   ArealParameters p;
   p.area_mm2 = static_cast<double>(nx - 1) * s.dx_mm * static_cast<double>(ny - 1) * s.dy_mm;
+  // Sums row by row (in parallel), then over the rows in order: the same result for any
+  // thread count.
+  std::vector<double> row_sum(ny);
+  tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {
+    double t = 0;
+    for (std::size_t c = 0; c < nx; ++c) t += s.z_mm[r * nx + c];
+    row_sum[r] = t;
+  });
   double mean = 0;
-  for (const double z : s.z_mm) mean += z;
+  for (const double t : row_sum) mean += t;
   mean /= static_cast<double>(n);
-  double s1 = 0, s2 = 0, s3 = 0, s4 = 0, hi = -INFINITY, lo = INFINITY;
-  for (const double v : s.z_mm) {
-    const double z = v - mean;
-    s1 += std::abs(z), s2 += z * z, s3 += z * z * z, s4 += z * z * z * z;
-    hi = std::max(hi, z), lo = std::min(lo, z);
+  struct Row {
+    double s1, s2, s3, s4, hi, lo, developed;
+  };
+  std::vector<Row> rows(ny);
+  const double idx = 0.5 / s.dx_mm, idy = 0.5 / s.dy_mm;
+  tbb::parallel_for(std::size_t{0}, ny, [&](std::size_t r) {
+    Row q{0, 0, 0, 0, -INFINITY, INFINITY, 0};
+    const double* z0 = s.z_mm.data() + r * nx;
+    for (std::size_t c = 0; c < nx; ++c) {
+      const double z = z0[c] - mean, z2 = z * z;
+      q.s1 += std::abs(z), q.s2 += z2, q.s3 += z2 * z, q.s4 += z2 * z2;
+      q.hi = std::max(q.hi, z), q.lo = std::min(q.lo, z);
+    }
+    // Sdr: each cell's slopes, the mean of its two edges in each direction.
+    if (r + 1 < ny) {
+      const double* z1 = z0 + nx;
+      for (std::size_t c = 0; c + 1 < nx; ++c) {
+        const double gx = ((z0[c + 1] - z0[c]) + (z1[c + 1] - z1[c])) * idx;
+        const double gy = ((z1[c] - z0[c]) + (z1[c + 1] - z0[c + 1])) * idy;
+        q.developed += std::sqrt(1.0 + gx * gx + gy * gy);
+      }
+    }
+    rows[r] = q;
+  });
+  double s1 = 0, s2 = 0, s3 = 0, s4 = 0, hi = -INFINITY, lo = INFINITY, developed = 0;
+  for (const Row& q : rows) {
+    s1 += q.s1, s2 += q.s2, s3 += q.s3, s4 += q.s4, developed += q.developed;
+    hi = std::max(hi, q.hi), lo = std::min(lo, q.lo);
   }
   const double dn = static_cast<double>(n);
   p.sa_mm = s1 / dn;
@@ -513,39 +651,31 @@ ArealParameters areal_parameters(const HeightMap& s, bool autocorrelation_length
   p.ssk = flat ? 0.0 : s3 / dn / std::pow(p.sq_mm, 3);
   p.sku = flat ? 0.0 : s4 / dn / std::pow(p.sq_mm, 4);
   p.sp_mm = hi, p.sv_mm = -lo, p.sz_mm = hi - lo;
-  // Sdr: each cell's slopes, the mean of its two edges in each direction.
-  double developed = 0;
-  for (std::size_t r = 0; r + 1 < ny; ++r) {
-    for (std::size_t c = 0; c + 1 < nx; ++c) {
-      const double z00 = s.z_mm[r * nx + c], z10 = s.z_mm[r * nx + c + 1];
-      const double z01 = s.z_mm[(r + 1) * nx + c], z11 = s.z_mm[(r + 1) * nx + c + 1];
-      const double gx = 0.5 * ((z10 - z00) + (z11 - z01)) / s.dx_mm;
-      const double gy = 0.5 * ((z01 - z00) + (z11 - z10)) / s.dy_mm;
-      developed += std::sqrt(1.0 + gx * gx + gy * gy);
-    }
-  }
   p.sdr_percent = 100.0 * (developed / static_cast<double>((nx - 1) * (ny - 1)) - 1.0);
   if (!autocorrelation_lengths || flat) return p;
 
   const std::size_t lx = nx / 2, ly = ny / 2, wx = lx + 1;
-  const std::vector<double> acf = autocorrelation(s, mean, lx, ly);
+  const std::vector<float> acf = autocorrelation(s, mean, lx, ly);
   auto at = [&](double tx, double ty) {  // bilinear, lags in samples; tx >= 0
     const double fx = std::floor(tx), fy = std::floor(ty);
     const auto i = static_cast<std::size_t>(fx);
     const auto k = static_cast<std::size_t>(fy + static_cast<double>(ly));
     const double ax = tx - fx, ay = ty - fy;
     const std::size_t i1 = std::min(i + 1, lx), k1 = std::min(k + 1, 2 * ly);
-    return (1 - ay) * ((1 - ax) * acf[k * wx + i] + ax * acf[k * wx + i1]) +
-           ay * ((1 - ax) * acf[k1 * wx + i] + ax * acf[k1 * wx + i1]);
+    const auto v = [&](std::size_t q) { return static_cast<double>(acf[q]); };
+    return (1 - ay) * ((1 - ax) * v(k * wx + i) + ax * v(k * wx + i1)) +
+           ay * ((1 - ax) * v(k1 * wx + i) + ax * v(k1 * wx + i1));
   };
   // Each direction in [0, 180) degrees (the function is even: t and -t agree), marched out in
-  // steps of a quarter of the finer spacing to the first value under 0.2, refined by bisection.
+  // steps of half the finer spacing to the first value under 0.2 (the interpolated function
+  // is linear along a step's grid lines: it cannot dip under and back within one), refined by
+  // bisection; directions run in parallel, each into its own slot (-1: no decay).
   constexpr double kThreshold = 0.2;
-  const double step = 0.25 * std::min(s.dx_mm, s.dy_mm);
-  double shortest = INFINITY, longest = 0;
-  bool all = true;
-  for (int a = 0; a < 360; ++a) {
-    const double th = a * std::numbers::pi / 360.0;
+  constexpr int kDirections = 360;
+  const double step = 0.5 * std::min(s.dx_mm, s.dy_mm);
+  std::vector<double> decay(kDirections);
+  tbb::parallel_for(0, kDirections, [&](int a) {
+    const double th = a * std::numbers::pi / kDirections;
     double cx = std::cos(th), cy = std::sin(th);
     if (cx < 0) cx = -cx, cy = -cy;  // keep tx >= 0 (the function is even)
     auto value = [&](double r) { return at(r * cx / s.dx_mm, r * cy / s.dy_mm); };
@@ -563,15 +693,23 @@ ArealParameters areal_parameters(const HeightMap& s, bool autocorrelation_length
       r0 = r1, r1 += step;
     }
     if (!found) {
-      all = false;
-      continue;
+      decay[static_cast<std::size_t>(a)] = -1;
+      return;
     }
     for (int it = 0; it < 40; ++it) {
       const double m = 0.5 * (r0 + r1);
       (value(m) < kThreshold ? r1 : r0) = m;
     }
-    const double r = 0.5 * (r0 + r1);
-    shortest = std::min(shortest, r), longest = std::max(longest, r);
+    decay[static_cast<std::size_t>(a)] = 0.5 * (r0 + r1);
+  });
+  double shortest = INFINITY, longest = 0;
+  bool all = true;
+  for (const double r : decay) {
+    if (r < 0) {
+      all = false;
+    } else {
+      shortest = std::min(shortest, r), longest = std::max(longest, r);
+    }
   }
   if (std::isfinite(shortest)) p.sal_mm = shortest;
   if (all && longest > 0) p.str = shortest / longest;
@@ -590,9 +728,9 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
     t.s_mm = *o.s_mm;
   }
   // The S-filter keeps the long wavelengths (its mean surface); then the form goes.
-  const HeightMap sf = o.s_mm ? remove_form(gaussian_filter_areal(map, *o.s_mm), o.form, o.degree)
-                              : remove_form(map, o.form, o.degree);
-  t.sf = areal_parameters(sf, false);
+  const HeightMap sf = o.s_mm ? form_removed(mean_surface(map, *o.s_mm), o.form, o.degree)
+                              : form_removed(map, o.form, o.degree);
+  t.sf = parameters_of(sf, false);
   auto sl_of = [&](double l) {
     check_nesting_index(map, l, "L-filter");
     if (l > shorter) {
@@ -606,9 +744,7 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
           "L-filter: the nesting index {:g} mm must be longer than the S-filter's ({:g} mm)", l,
           *o.s_mm));
     }
-    HeightMap sl = gaussian_filter_areal(sf, l);
-    for (std::size_t i = 0; i < sl.z_mm.size(); ++i) sl.z_mm[i] = sf.z_mm[i] - sl.z_mm[i];
-    return sl;
+    return mean_surface(sf, l, true);
   };
   HeightMap sl;
   if (o.l_mm) {
@@ -622,7 +758,7 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
     t.l_source = "ISO 21920-3 default from Sa";
     for (int k = 0;; ++k) {
       sl = sl_of(t.l_mm);
-      const double next = default_cutoff_mm(areal_parameters(sl, false).sa_mm);
+      const double next = default_cutoff_mm(parameters_of(sl, false).sa_mm);
       if (next == t.l_mm) break;
       if (k == 3) {
         t.l_source = "ISO 21920-3 default from Sa (Sa lies at a boundary of its table)";
@@ -631,7 +767,7 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
       t.l_mm = next;
     }
   }
-  t.sl = areal_parameters(sl, true);
+  t.sl = parameters_of(sl, true);
   return t;
 }
 
