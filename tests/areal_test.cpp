@@ -310,6 +310,42 @@ print(np.abs(e).mean(), sq, (e ** 3).mean() / sq ** 3, (e ** 4).mean() / sq ** 4
   fs::remove_all(dir);
 }
 
+// A measured surface against a predicted one: the measured is the predicted shape moved by
+// (0.07, -0.05) mm (7 and -5 samples), set up 2 um higher and tilted by (0.01, -0.005):
+// compare_surfaces finds the shift exactly, the plane's tilt to 1e-9 and leaves a difference
+// of rounding only (1e-12 mm); the two surfaces' parameters over the overlap agree to 1e-9.
+// A shift beyond the allowed search is not found.
+TEST(Areal, CompareSurfacesAlignsAShiftedTiltedCopy) {
+  const auto f = [](double x, double y) {
+    return 0.003 * std::sin(2 * std::numbers::pi * (x / 0.37 + y / 0.91)) +
+           0.002 * std::cos(2 * std::numbers::pi * (x / 0.23 - y / 0.41)) +
+           0.001 * std::sin(2 * std::numbers::pi * x * y / 0.5);
+  };
+  HeightMap predicted = map_of(200, 150, 0.01, 0.01, f);
+  HeightMap measured = map_of(220, 160, 0.01, 0.01, [&](double x, double y) {
+    const double X = x + 0.3, Y = y - 0.2;  // the measured map's origin
+    return f(X - 0.07, Y + 0.05) + 0.002 + 0.01 * X - 0.005 * Y;
+  });
+  measured.x0_mm = 0.3, measured.y0_mm = -0.2;
+  const SurfaceComparison c = compare_surfaces(measured, predicted, 0.2);
+  EXPECT_NEAR(c.shift_x_mm, 0.07, 1e-12);
+  EXPECT_NEAR(c.shift_y_mm, -0.05, 1e-12);
+  EXPECT_NEAR(c.tilt_x, 0.01, 1e-9);
+  EXPECT_NEAR(c.tilt_y, -0.005, 1e-9);
+  EXPECT_LT(c.rms_difference_mm, 1e-12);
+  EXPECT_LT(c.max_difference_mm, 1e-11);
+  EXPECT_NEAR(c.correlation, 1.0, 1e-9);
+  EXPECT_NEAR(c.measured.sq_mm / c.predicted.sq_mm, 1.0, 1e-9);
+  EXPECT_GT(c.points, 150u * 140u);
+  // Not allowed to look that far: the best match within 0.03 mm is another one, worse.
+  const SurfaceComparison near = compare_surfaces(measured, predicted, 0.03);
+  EXPECT_FALSE(std::abs(near.shift_x_mm - 0.07) < 1e-9 && std::abs(near.shift_y_mm + 0.05) < 1e-9);
+  EXPECT_GT(near.rms_difference_mm, 1e-5);
+  EXPECT_NE(message_of([&] { (void)compare_surfaces(measured, predicted, -1.0); })
+                .find("largest shift"),
+            std::string::npos);
+}
+
 // ---- X3P ---------------------------------------------------------------------------------
 
 fs::path scratch(const std::string& name) {

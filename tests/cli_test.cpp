@@ -872,6 +872,34 @@ TEST_F(Cli, TextureOfX3pSurfacesAndProfiles) {
   EXPECT_NEAR(pj["ra_mm"].get<double>() / (A * 2.0 / 400 / std::tan(std::numbers::pi / 400)), 1.0,
               1e-5);
 
+  // --against: a predicted surface and the "measured" one, the same shape moved by (0.05,
+  // 0.03) mm and set 1 um higher: the comparison finds the shift, the offset, and no
+  // difference left (to rounding).
+  const auto f = [](double x, double y) {
+    return 0.003 * std::sin(2 * std::numbers::pi * (x / 0.37 + y / 0.91)) +
+           0.002 * std::cos(2 * std::numbers::pi * (x / 0.23 - y / 0.41));
+  };
+  HeightMap pred, meas;
+  pred.nx = meas.nx = 200, pred.ny = meas.ny = 150;
+  pred.dx_mm = pred.dy_mm = meas.dx_mm = meas.dy_mm = 0.01;
+  for (std::size_t row = 0; row < 150; ++row) {
+    for (std::size_t c = 0; c < 200; ++c) {
+      const double x = static_cast<double>(c) * 0.01, y = static_cast<double>(row) * 0.01;
+      pred.z_mm.push_back(f(x, y));
+      meas.z_mm.push_back(f(x - 0.05, y - 0.03) + 0.001);
+    }
+  }
+  const auto pp = (dir_ / "pred.x3p").string(), mp = (dir_ / "meas.x3p").string();
+  write_x3p(pp, pred);
+  write_x3p(mp, meas);
+  const CliResult cmp = run_cli("texture " + mp + " --against " + pp + " --lambda-c 0.25 --json -");
+  ASSERT_EQ(cmp.code, 0) << cmp.out;
+  const auto cj = nlohmann::json::parse(cmp.out)["surfaces"][0]["comparison"];
+  EXPECT_NEAR(cj["shift_x_mm"].get<double>(), 0.05, 1e-12);
+  EXPECT_NEAR(cj["shift_y_mm"].get<double>(), 0.03, 1e-12);
+  EXPECT_LT(cj["rms_difference_mm"].get<double>(), 1e-12);
+  EXPECT_EQ(cj["against"].get<std::string>(), pp);
+
   write_file_atomic(dir_ / "bad.x3p", "PK not really");
   for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
            {(dir_ / "bad.x3p").string(), "not an X3P file"},
@@ -879,6 +907,8 @@ TEST_F(Cli, TextureOfX3pSurfacesAndProfiles) {
            {x3p + " --form polynomial --degree 8", "degree must be 1 to 6"},
            {x3p + " --lambda-c 0.5", "longer than the map's shorter side"},
            {x3p + " --memory-limit 0.01", "the memory limit"},
+           {px + " --against " + x3p, "--against compares areal surfaces"},
+           {x3p + " --against " + (dir_ / "p.csv").string(), "an X3P file or a folder"},
            {test::example("wagih2023/trochoidal.toml").string() + " --surface floor",
             "simulate it first"}}) {
     const CliResult b = run_cli("texture " + args);

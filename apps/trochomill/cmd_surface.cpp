@@ -4,6 +4,7 @@
 // floor (floor.x3p) or a measured surface (X3P).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -21,7 +22,8 @@ namespace trochomill::cli {
 void register_surface_commands(CLI::App& app, int& exit_code) {
   struct Args {
     std::string source, surface = "all", columns, z_unit = "mm", json, form = "plane";
-    std::optional<double> lambda_c_mm, lambda_s_mm, z_mm, memory_gb;
+    std::string against;
+    std::optional<double> lambda_c_mm, lambda_s_mm, z_mm, memory_gb, max_shift_mm;
     int degree = 2;
     std::vector<std::string> sets;
   };
@@ -49,6 +51,13 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--degree", a->degree, "polynomial degree with --form polynomial (1 to 6)")
       ->capture_default_str();
+  cmd->add_option("--against", a->against,
+                  "compare an areal SOURCE with a predicted surface: an X3P file or a simulate "
+                  "--out folder (its floor.x3p); aligned by shift and plane, point by point");
+  cmd->add_option("--max-shift", a->max_shift_mm,
+                  "largest shift searched by --against, mm (default: a quarter of the measured "
+                  "map's shorter side)")
+      ->check(finite_in(0, 1e3));
   add_memory_limit(cmd, a->memory_gb);
   cmd->add_option("--z", a->z_mm, "the wall level of a simulation folder, mm (default: middle)")
       ->check(finite_in(-1e4, 1e4));
@@ -85,8 +94,31 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
     // a point with the process besides. Maps are refused past the limit before being read.
     constexpr double kArealBytesPerPoint = 100, kBaseBytes = 40e6;
     const double max_points = (memory_limit_bytes(a->memory_gb) - kBaseBytes) / kArealBytesPerPoint;
+    std::error_code ec;
+    // The predicted surface of --against, checked before any work.
+    fs::path against = a->against;
+    if (!against.empty()) {
+      if (fs::is_directory(against, ec)) against /= "floor.x3p";
+      if (lower_extension(against.string()) != ".x3p") {
+        throw InputError(fmt::format(
+            "--against '{}': an X3P file or a folder written by simulate --out", a->against));
+      }
+    }
+    auto profile_entry = [](std::string surface, std::string description, ProfileTexture t) {
+      TextureEntry e;
+      e.surface = std::move(surface), e.description = std::move(description);
+      e.texture = std::move(t);
+      return e;
+    };
     auto areal_entry = [&](const std::string& surface, const HeightMap& m) {
-      return TextureEntry{surface, m.description, {}, areal_texture(m, areal)};
+      TextureEntry e;
+      e.surface = surface, e.description = m.description;
+      e.areal = areal_texture(m, areal);
+      if (!against.empty()) {
+        e.comparison = compare_surfaces(m, read_x3p(against, nullptr, max_points), a->max_shift_mm);
+        e.against = against.string();
+      }
+      return e;
     };
     const bool want_left = sf == "left" || sf == "walls" || sf == "both" || sf == "all";
     const bool want_right = sf == "right" || sf == "walls" || sf == "both" || sf == "all";
@@ -95,7 +127,6 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
     if (want_left) sides.push_back(true);
     if (want_right) sides.push_back(false);
     std::vector<TextureEntry> entries;
-    std::error_code ec;
     const std::string ext = lower_extension(a->source);
     if (fs::is_directory(a->source, ec)) {
       const fs::path walls = fs::path(a->source) / "walls.csv";
@@ -104,10 +135,8 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
         const std::string text = read_text_file(walls);
         for (const bool left : sides) {
           const MeasuredProfile p = read_wall_profile_csv(text, walls.string(), left, a->z_mm);
-          entries.push_back({left ? "left" : "right",
-                             "simulated " + p.description,
-                             profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm),
-                             {}});
+          entries.push_back(profile_entry(left ? "left" : "right", "simulated " + p.description,
+                                          profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm)));
         }
       }
       if (want_floor && (sf == "floor" || fs::exists(floor, ec))) {
@@ -125,8 +154,8 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
     } else if (ext == ".x3p") {
       const HeightMap m = read_x3p(a->source, nullptr, max_points);
       if (m.ny == 1) {
-        entries.push_back(
-            {"profile", m.description, profile_texture(m.z_mm, m.dx_mm, a->lambda_c_mm), {}});
+        entries.push_back(profile_entry("profile", m.description,
+                                        profile_texture(m.z_mm, m.dx_mm, a->lambda_c_mm)));
       } else {
         entries.push_back(areal_entry("surface", m));
       }
@@ -146,12 +175,11 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
           throw InputError(fmt::format("{}: the analysis found no tooth-level {} wall", a->source,
                                        left ? "left" : "right"));
         }
-        entries.push_back(
-            {left ? "left" : "right",
-             fmt::format("predicted {} wall, tooth level, one step of y repeated ({:g} mm)",
-                         left ? "left" : "right", w.y_mm.back() - w.y_mm.front()),
-             wall_texture(w, left, a->lambda_c_mm),
-             {}});
+        entries.push_back(profile_entry(
+            left ? "left" : "right",
+            fmt::format("predicted {} wall, tooth level, one step of y repeated ({:g} mm)",
+                        left ? "left" : "right", w.y_mm.back() - w.y_mm.front()),
+            wall_texture(w, left, a->lambda_c_mm)));
       }
     } else if (ext == ".csv" || ext == ".txt") {
       double unit = 1.0;
@@ -170,13 +198,19 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       }
       const MeasuredProfile p =
           read_profile_csv(read_text_file(a->source), a->source, xc, zc, unit);
-      entries.push_back(
-          {"profile", p.description, profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm), {}});
+      entries.push_back(profile_entry("profile", p.description,
+                                      profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm)));
     } else {
       throw InputError(fmt::format(
           "texture: '{}' is not a folder written by simulate --out, a job (.toml), an X3P file "
           "(.x3p) or a CSV profile (.csv)",
           a->source));
+    }
+    if (!a->against.empty() && std::none_of(entries.begin(), entries.end(),
+                                            [](const TextureEntry& e) { return e.areal; })) {
+      throw InputError(
+          "--against compares areal surfaces: give an X3P surface or a folder "
+          "with a floor.x3p as SOURCE");
     }
     if (!a->json.empty()) emit(a->json, texture_json(a->source, entries));
     if (a->json != "-") fmt::print("{}", texture_text(a->source, entries));

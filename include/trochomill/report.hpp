@@ -155,6 +155,9 @@ struct TextureEntry {
   std::string description;            ///< where the profile or map came from
   ProfileTexture texture;             ///< a profile's texture (when `areal` is empty)
   std::optional<ArealTexture> areal;  ///< an areal surface's texture instead
+  /// The areal surface against a predicted one (`texture --against`), and where that came from.
+  std::optional<SurfaceComparison> comparison;
+  std::string against;
 };
 /// `texture`'s report: per profile the cut-off (and how it was chosen), Ra, Rq, Rsk, Rku, Rp,
 /// Rv, Rz, Rt, RSm, Wa, Wt (mm), evaluation length (mm) and sections; per areal surface the

@@ -266,6 +266,32 @@ struct ArealTexture {
 /// spacings) or longer than the map's shorter side.
 [[nodiscard]] ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& options);
 
+/// A measured surface against a predicted one, point by point.
+struct SurfaceComparison {
+  /// Where the predicted surface's point (x, y) was found on the measured one: measured(x +
+  /// shift_x, y + shift_y) best matches predicted(x, y) (mm; a whole number of the measured
+  /// spacings).
+  double shift_x_mm = 0, shift_y_mm = 0;
+  /// The best-fit plane taken out of the difference (measured - predicted): its mean (mm) and
+  /// slopes (mm/mm): the two surfaces' set-up in height and tilt.
+  double offset_mm = 0, tilt_x = 0, tilt_y = 0;
+  /// Correlation of the two over the overlap, each less its plane there (1: the same shape).
+  double correlation = 0;
+  double overlap_mm2 = 0;  ///< the area compared
+  std::size_t points = 0;  ///< measured points compared
+  double rms_difference_mm = 0, max_difference_mm = 0;  ///< after the plane, over the overlap
+  ArealParameters measured, predicted;  ///< over the overlap, each less its own plane
+};
+/// Aligns `predicted` to `measured` and compares them on the measured grid: the predicted
+/// surface is resampled there (bilinear), the shift is the one of largest normalised
+/// cross-correlation (both less their planes; by FFT, shifts up to `max_shift_mm` each way,
+/// default a quarter of the measured map's shorter side; an overlap of at least half the
+/// smaller map), then the best-fit plane of the difference is removed. Throws InputError for
+/// bad maps or when no shift leaves enough overlap.
+[[nodiscard]] SurfaceComparison compare_surfaces(const HeightMap& measured,
+                                                 const HeightMap& predicted,
+                                                 std::optional<double> max_shift_mm = {});
+
 [[nodiscard]] const char* form_removal_name(FormRemoval form);
 
 // ---- X3P (ISO 5436-2, openGPS): the exchange format of stylus and optical instruments ------

@@ -372,6 +372,22 @@ std::string texture_json(const std::string& source, const std::vector<TextureEnt
            {"form_degree", t.degree},
            {"sl", areal_json(t.sl, true)},
            {"sf", areal_json(t.sf, false)}});
+      if (e.comparison) {
+        const SurfaceComparison& c = *e.comparison;
+        surfaces.back()["comparison"] = {{"against", e.against},
+                                         {"shift_x_mm", c.shift_x_mm},
+                                         {"shift_y_mm", c.shift_y_mm},
+                                         {"offset_mm", c.offset_mm},
+                                         {"tilt_x", c.tilt_x},
+                                         {"tilt_y", c.tilt_y},
+                                         {"correlation", c.correlation},
+                                         {"overlap_mm2", c.overlap_mm2},
+                                         {"points", c.points},
+                                         {"rms_difference_mm", c.rms_difference_mm},
+                                         {"max_difference_mm", c.max_difference_mm},
+                                         {"measured", areal_json(c.measured, false)},
+                                         {"predicted", areal_json(c.predicted, false)}};
+      }
       continue;
     }
     profiles = true;
@@ -425,6 +441,17 @@ std::string texture_text(const std::string& source, const std::vector<TextureEnt
           p.sal_mm ? fmt::format("{:.4f} mm", *p.sal_mm) : "- (no decay to 0.2 within the map)",
           p.str ? fmt::format("{:.3f}", *p.str) : "- (directional)", 1000 * t.sf.sa_mm,
           1000 * t.sf.sq_mm, 1000 * t.sf.sz_mm);
+      if (e.comparison) {
+        const SurfaceComparison& c = *e.comparison;
+        out += fmt::format(
+            "    against {}: shift ({:.4f}, {:.4f}) mm, offset {:.4f} um, tilt ({:.3g}, {:.3g}), "
+            "correlation {:.4f}\n"
+            "      over {:.4g} mm^2 ({} points): difference rms {:.4f} um, max {:.4f} um; Sa "
+            "{:.4f} um measured, {:.4f} um predicted\n",
+            e.against, c.shift_x_mm, c.shift_y_mm, 1000 * c.offset_mm, c.tilt_x, c.tilt_y,
+            c.correlation, c.overlap_mm2, c.points, 1000 * c.rms_difference_mm,
+            1000 * c.max_difference_mm, 1000 * c.measured.sa_mm, 1000 * c.predicted.sa_mm);
+      }
       continue;
     }
     const ProfileParameters& r = e.texture.roughness;

@@ -772,3 +772,292 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
 }
 
 }  // namespace trochomill
+
+namespace trochomill {
+
+namespace {
+
+// The 2-D real spectrum of a (rows x cols, row-major) zero-padded to py x px, single
+// precision: rows by real FFT, then columns by complex FFT; [row][frequency along x].
+FftwBuffer<fftwf_complex, float> spectrum2(const std::vector<float>& a, std::size_t cols,
+                                           std::size_t rows, std::size_t px, std::size_t py,
+                                           const RealPlans<float>& rp,
+                                           const ComplexPlans<float>& cp) {
+  using C = fftwf_complex;
+  const std::size_t hx = px / 2 + 1;
+  auto spec = fftw_buffer<C, float>(py * hx);
+  prefer_huge_pages(spec.get(), py * hx * sizeof(C));
+  struct RowWork {
+    FftwBuffer<float, float> real;
+    FftwBuffer<C, float> out;
+  };
+  tbb::enumerable_thread_specific<RowWork> rw([&] {
+    return RowWork{fftw_buffer<float, float>(px), fftw_buffer<C, float>(hx)};
+  });
+  tbb::parallel_for(std::size_t{0}, py, [&](std::size_t r) {
+    if (r >= rows) {
+      std::fill(&spec[r * hx][0], &spec[r * hx][0] + 2 * hx, 0.0f);
+      return;
+    }
+    RowWork& w = rw.local();
+    std::copy(a.begin() + static_cast<std::ptrdiff_t>(r * cols),
+              a.begin() + static_cast<std::ptrdiff_t>((r + 1) * cols), w.real.get());
+    std::fill(w.real.get() + cols, w.real.get() + px, 0.0f);
+    rp.forward(w.real.get(), w.out.get());
+    std::memcpy(spec.get() + r * hx, w.out.get(), hx * sizeof(C));
+  });
+  struct ColWork {
+    FftwBuffer<C, float> a, b;
+  };
+  tbb::enumerable_thread_specific<ColWork> cw([&] {
+    return ColWork{fftw_buffer<C, float>(py), fftw_buffer<C, float>(py)};
+  });
+  tbb::parallel_for(std::size_t{0}, hx, [&](std::size_t j) {
+    ColWork& w = cw.local();
+    for (std::size_t r = 0; r < py; ++r) {
+      w.a[r][0] = spec[r * hx + j][0], w.a[r][1] = spec[r * hx + j][1];
+    }
+    cp.forward(w.a.get(), w.b.get());
+    for (std::size_t r = 0; r < py; ++r) {
+      spec[r * hx + j][0] = w.b[r][0], spec[r * hx + j][1] = w.b[r][1];
+    }
+  });
+  return spec;
+}
+
+// Sums of v and v^2 over rectangles: summed-area tables (double) of a rows x cols map.
+struct AreaSums {
+  std::size_t cols = 0;
+  std::vector<double> s1, s2;  // (rows + 1) x (cols + 1)
+  AreaSums(const std::vector<float>& v, std::size_t c, std::size_t rows) : cols(c) {
+    s1.assign((rows + 1) * (c + 1), 0.0);
+    s2.assign((rows + 1) * (c + 1), 0.0);
+    for (std::size_t r = 0; r < rows; ++r) {
+      double a = 0, b = 0;
+      for (std::size_t i = 0; i < c; ++i) {
+        const double x = v[r * c + i];
+        a += x, b += x * x;
+        s1[(r + 1) * (c + 1) + i + 1] = s1[r * (c + 1) + i + 1] + a;
+        s2[(r + 1) * (c + 1) + i + 1] = s2[r * (c + 1) + i + 1] + b;
+      }
+    }
+  }
+  // Over columns [c0, c1) and rows [r0, r1).
+  [[nodiscard]] std::pair<double, double> over(std::size_t c0, std::size_t c1, std::size_t r0,
+                                               std::size_t r1) const {
+    const std::size_t w = cols + 1;
+    auto rect = [&](const std::vector<double>& s) {
+      return s[r1 * w + c1] - s[r0 * w + c1] - s[r1 * w + c0] + s[r0 * w + c0];
+    };
+    return {rect(s1), rect(s2)};
+  }
+};
+
+// The least-squares plane z = a + b x + c y over points (x, y, z): (a, b, c).
+Eigen::Vector3d plane_fit(const std::vector<std::array<double, 3>>& p) {
+  Eigen::Matrix3d n = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  for (const auto& q : p) {
+    const Eigen::Vector3d u(1.0, q[0], q[1]);
+    n += u * u.transpose();
+    r += u * q[2];
+  }
+  return n.ldlt().solve(r);
+}
+
+}  // namespace
+
+SurfaceComparison compare_surfaces(const HeightMap& measured, const HeightMap& predicted,
+                                   std::optional<double> max_shift_mm) {
+  check_height_map(measured, "surface comparison (measured)");
+  check_height_map(predicted, "surface comparison (predicted)");
+  const HeightMap& m = measured;
+  const double dx = m.dx_mm, dy = m.dy_mm;
+  // The predicted surface resampled on the measured spacing over its own extent (bilinear).
+  const auto qx = static_cast<std::size_t>(std::floor(
+                      static_cast<double>(predicted.nx - 1) * predicted.dx_mm / dx + 1e-9)) +
+                  1;
+  const auto qy = static_cast<std::size_t>(std::floor(
+                      static_cast<double>(predicted.ny - 1) * predicted.dy_mm / dy + 1e-9)) +
+                  1;
+  if (qx < 2 || qy < 2) {
+    throw InputError(
+        "surface comparison: the predicted surface is smaller than two measured "
+        "spacings");
+  }
+  if (static_cast<double>(qx) * static_cast<double>(qy) >
+      4.0 * static_cast<double>(m.nx * m.ny) + 1e6) {
+    throw InputError(fmt::format(
+        "surface comparison: the predicted surface resampled at the measured spacing has {} x "
+        "{} points, over four times the measured map's: compare a predicted surface of about "
+        "the measured one's size",
+        qx, qy));
+  }
+  HeightMap q = same_grid(predicted, predicted.description);
+  q.nx = qx, q.ny = qy, q.dx_mm = dx, q.dy_mm = dy;
+  q.z_mm.resize(qx * qy);
+  for (std::size_t j = 0; j < qy; ++j) {
+    const double v = std::min(static_cast<double>(j) * dy / predicted.dy_mm,
+                              static_cast<double>(predicted.ny - 1));
+    const auto j0 = std::min(static_cast<std::size_t>(v), predicted.ny - 2);
+    const double fy = v - static_cast<double>(j0);
+    for (std::size_t i = 0; i < qx; ++i) {
+      const double u = std::min(static_cast<double>(i) * dx / predicted.dx_mm,
+                                static_cast<double>(predicted.nx - 1));
+      const auto i0 = std::min(static_cast<std::size_t>(u), predicted.nx - 2);
+      const double fx = u - static_cast<double>(i0);
+      q.z_mm[j * qx + i] =
+          (1 - fy) * ((1 - fx) * predicted.at(i0, j0) + fx * predicted.at(i0 + 1, j0)) +
+          fy * ((1 - fx) * predicted.at(i0, j0 + 1) + fx * predicted.at(i0 + 1, j0 + 1));
+    }
+  }
+  // The shift by the normalised cross-correlation of the two, each less its plane.
+  const double side =
+      std::min(static_cast<double>(m.nx - 1) * dx, static_cast<double>(m.ny - 1) * dy);
+  const double reach = max_shift_mm.value_or(0.25 * side);
+  if (!(std::isfinite(reach) && reach >= 0)) {
+    throw InputError(
+        fmt::format("surface comparison: the largest shift must be a finite number "
+                    ">= 0 mm, got {}",
+                    reach));
+  }
+  // The natural offset (the two origins) and the search around it, in measured samples.
+  const long kx0 = std::lround((q.x0_mm - m.x0_mm) / dx),
+             ky0 = std::lround((q.y0_mm - m.y0_mm) / dy);
+  const long sx = std::min<long>(std::lround(reach / dx), static_cast<long>(std::max(m.nx, qx))),
+             sy = std::min<long>(std::lround(reach / dy), static_cast<long>(std::max(m.ny, qy)));
+  const HeightMap mp = form_removed(m, FormRemoval::plane, 1);
+  const HeightMap qp = form_removed(q, FormRemoval::plane, 1);
+  std::vector<float> a(qx * qy), b(m.nx * m.ny);
+  for (std::size_t i = 0; i < a.size(); ++i) a[i] = static_cast<float>(qp.z_mm[i]);
+  for (std::size_t i = 0; i < b.size(); ++i) b[i] = static_cast<float>(mp.z_mm[i]);
+  // C(k) = sum_i Q(i) M(i + k) for k in [k0 - s, k0 + s]: Q placed at k0 (its origin), the
+  // circular correlation of a size with room for the shifts.
+  const std::size_t px =
+      fast_fft_size(std::max(m.nx, qx) + static_cast<std::size_t>(std::abs(kx0) + sx) + 1);
+  const std::size_t py =
+      fast_fft_size(std::max(m.ny, qy) + static_cast<std::size_t>(std::abs(ky0) + sy) + 1);
+  if (static_cast<double>(px) * static_cast<double>(py) > 3e8) {
+    throw InputError(
+        "surface comparison: the shift search is too large (give a smaller "
+        "largest shift, or surfaces placed closer to each other)");
+  }
+  const RealPlans<float> rp(px);
+  const ComplexPlans<float> cp(py);
+  auto fa = spectrum2(a, qx, qy, px, py, rp, cp);
+  auto fb = spectrum2(b, m.nx, m.ny, px, py, rp, cp);
+  const std::size_t hx = px / 2 + 1;
+  for (std::size_t i = 0; i < hx * py; ++i) {  // conj(A) B
+    const float ar = fa[i][0], ai = fa[i][1], br = fb[i][0], bi = fb[i][1];
+    fb[i][0] = ar * br + ai * bi;
+    fb[i][1] = ar * bi - ai * br;
+  }
+  fa.reset();
+  // Back: columns, then the rows of the lags searched.
+  {
+    FftwBuffer<fftwf_complex, float> col_a = fftw_buffer<fftwf_complex, float>(py),
+                                     col_b = fftw_buffer<fftwf_complex, float>(py);
+    for (std::size_t j = 0; j < hx; ++j) {
+      for (std::size_t r = 0; r < py; ++r)
+        col_a[r][0] = fb[r * hx + j][0], col_a[r][1] = fb[r * hx + j][1];
+      cp.inverse(col_a.get(), col_b.get());
+      for (std::size_t r = 0; r < py; ++r)
+        fb[r * hx + j][0] = col_b[r][0], fb[r * hx + j][1] = col_b[r][1];
+    }
+  }
+  const AreaSums qs(a, qx, qy), ms(b, m.nx, m.ny);
+  const double min_points = 0.5 * static_cast<double>(std::min(qx * qy, m.nx * m.ny));
+  double best = -2;
+  long bx = 0, by = 0;
+  auto row = fftw_buffer<float, float>(px);
+  auto in = fftw_buffer<fftwf_complex, float>(hx);
+  const double scale = 1.0 / (static_cast<double>(px) * static_cast<double>(py));
+  for (long ky = ky0 - sy; ky <= ky0 + sy; ++ky) {
+    const std::size_t rr = static_cast<std::size_t>(
+        (ky % static_cast<long>(py) + static_cast<long>(py)) % static_cast<long>(py));
+    std::memcpy(in.get(), fb.get() + rr * hx, hx * sizeof(fftwf_complex));
+    rp.inverse(in.get(), row.get());
+    // Rows of Q with a measured row at +ky.
+    const long j0 = std::max<long>(0, -ky),
+               j1 = std::min<long>(static_cast<long>(qy), static_cast<long>(m.ny) - ky);
+    if (j1 <= j0) continue;
+    for (long kx = kx0 - sx; kx <= kx0 + sx; ++kx) {
+      const long i0 = std::max<long>(0, -kx),
+                 i1 = std::min<long>(static_cast<long>(qx), static_cast<long>(m.nx) - kx);
+      if (i1 <= i0) continue;
+      const double n = static_cast<double>((i1 - i0) * (j1 - j0));
+      if (n < min_points) continue;
+      const auto [sq1, sq2] = qs.over(static_cast<std::size_t>(i0), static_cast<std::size_t>(i1),
+                                      static_cast<std::size_t>(j0), static_cast<std::size_t>(j1));
+      const auto [sm1, sm2] =
+          ms.over(static_cast<std::size_t>(i0 + kx), static_cast<std::size_t>(i1 + kx),
+                  static_cast<std::size_t>(j0 + ky), static_cast<std::size_t>(j1 + ky));
+      const std::size_t cc = static_cast<std::size_t>(
+          (kx % static_cast<long>(px) + static_cast<long>(px)) % static_cast<long>(px));
+      const double c = static_cast<double>(row[cc]) * scale;
+      const double vq = sq2 - sq1 * sq1 / n, vm = sm2 - sm1 * sm1 / n;
+      if (!(vq > 0 && vm > 0)) continue;
+      const double ncc = (c - sq1 * sm1 / n) / std::sqrt(vq * vm);
+      if (ncc > best) best = ncc, bx = kx, by = ky;
+    }
+  }
+  if (best < -1.5) {
+    throw InputError(fmt::format(
+        "surface comparison: no shift within {:g} mm leaves half of the smaller surface "
+        "overlapping the other (or one of them is flat): place them closer or allow a larger "
+        "shift",
+        reach));
+  }
+  SurfaceComparison out;
+  out.correlation = best;
+  // measured(i + k) against predicted(i): the predicted point at x_q(i) lies on the measured
+  // point at x_m(i + k); the shift is how far that is from where the coordinates put it.
+  out.shift_x_mm = static_cast<double>(bx) * dx + m.x0_mm - q.x0_mm;
+  out.shift_y_mm = static_cast<double>(by) * dy + m.y0_mm - q.y0_mm;
+  const long i0 = std::max<long>(0, -bx),
+             i1 = std::min<long>(static_cast<long>(qx), static_cast<long>(m.nx) - bx);
+  const long j0 = std::max<long>(0, -by),
+             j1 = std::min<long>(static_cast<long>(qy), static_cast<long>(m.ny) - by);
+  const auto ox = static_cast<std::size_t>(i1 - i0), oy = static_cast<std::size_t>(j1 - j0);
+  std::vector<std::array<double, 3>> diff;
+  diff.reserve(ox * oy);
+  HeightMap mo = same_grid(m, m.description), qo = same_grid(q, q.description);
+  mo.nx = qo.nx = ox, mo.ny = qo.ny = oy;
+  for (long j = j0; j < j1; ++j) {
+    for (long i = i0; i < i1; ++i) {
+      const double zm = m.at(static_cast<std::size_t>(i + bx), static_cast<std::size_t>(j + by));
+      const double zq = q.at(static_cast<std::size_t>(i), static_cast<std::size_t>(j));
+      mo.z_mm.push_back(zm), qo.z_mm.push_back(zq);
+      diff.push_back({static_cast<double>(i - i0) * dx, static_cast<double>(j - j0) * dy, zm - zq});
+    }
+  }
+  const Eigen::Vector3d pl = plane_fit(diff);
+  out.tilt_x = pl(1), out.tilt_y = pl(2);
+  double s2 = 0, mx = 0, sum = 0;
+  for (const auto& d : diff) {
+    const double r = d[2] - (pl(0) + pl(1) * d[0] + pl(2) * d[1]);
+    s2 += r * r, mx = std::max(mx, std::abs(r)), sum += d[2];
+  }
+  out.offset_mm = sum / static_cast<double>(diff.size());
+  out.points = diff.size();
+  out.rms_difference_mm = std::sqrt(s2 / static_cast<double>(diff.size()));
+  out.max_difference_mm = mx;
+  out.overlap_mm2 = static_cast<double>(ox - 1) * dx * static_cast<double>(oy - 1) * dy;
+  if (ox >= 2 && oy >= 2) {
+    const HeightMap mf = form_removed(std::move(mo), FormRemoval::plane, 1);
+    const HeightMap qf = form_removed(std::move(qo), FormRemoval::plane, 1);
+    out.measured = parameters_of(mf, false);
+    out.predicted = parameters_of(qf, false);
+    // The correlation reported: over the overlap, each less its plane there (the search's
+    // used each map's plane over the whole map).
+    double smq = 0, smm = 0, sqq = 0;
+    for (std::size_t k = 0; k < mf.z_mm.size(); ++k) {
+      smq += mf.z_mm[k] * qf.z_mm[k], smm += mf.z_mm[k] * mf.z_mm[k],
+          sqq += qf.z_mm[k] * qf.z_mm[k];
+    }
+    out.correlation = smm > 0 && sqq > 0 ? smq / std::sqrt(smm * sqq) : 0.0;
+  }
+  return out;
+}
+
+}  // namespace trochomill
