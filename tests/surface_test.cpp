@@ -213,6 +213,54 @@ TEST(Texture, BadInputIsRefusedWithTheReason) {
             std::string::npos);
 }
 
+// The robust Gaussian regression filter (ISO 16610-31) against scratches: a long wave (4 mm,
+// 5 um) and a fine texture (0.05 mm, 1 um) with a 20 um deep, 0.02 mm wide scratch every
+// 0.8 mm. The plain filter's mean line dips under each scratch by the scratch's area times
+// the weighting function's peak, 4e-4 mm^2 / (alpha lambda_c) = 1.06 um (to 5 %: the long
+// wave's slope and the texture under the scratch add a little); the robust one gives the
+// scratches no weight and stays on the mean line of the profile without them to a tenth of
+// that (0.09 um measured: around each scratch the fine texture is averaged over an uneven
+// set of weights), so the scratches' full depth is in its R profile (Rv above 15 um).
+TEST(Texture, RobustFilterIgnoresScratches) {
+  const double dx = 0.0005, lc = 0.8;
+  const std::size_t n = 16000;
+  std::vector<double> clean(n), scratched(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = static_cast<double>(i) * dx;
+    clean[i] = 0.005 * std::sin(2 * std::numbers::pi * x / 4) +
+               0.001 * std::sin(2 * std::numbers::pi * x / 0.05);
+    const double in_period = std::fmod(x, 0.8);
+    scratched[i] = clean[i] - (in_period > 0.4 && in_period < 0.42 ? 0.02 : 0.0);
+  }
+  const FilteredProfile reference = gaussian_filter(clean, dx, lc);
+  const FilteredProfile plain = gaussian_filter(scratched, dx, lc);
+  const FilteredProfile robust = robust_gaussian_filter(scratched, dx, lc);
+  ASSERT_EQ(robust.mean_mm.size(), reference.mean_mm.size());
+  double plain_off = 0, robust_off = 0;
+  for (std::size_t i = 0; i < reference.mean_mm.size(); ++i) {
+    plain_off = std::max(plain_off, std::abs(plain.mean_mm[i] - reference.mean_mm[i]));
+    robust_off = std::max(robust_off, std::abs(robust.mean_mm[i] - reference.mean_mm[i]));
+  }
+  const double alpha = std::sqrt(std::log(2.0) / std::numbers::pi);
+  EXPECT_NEAR(plain_off / (4e-4 / (alpha * lc)), 1.0, 0.05);
+  EXPECT_LT(robust_off, 0.1 * plain_off);
+  ProfileFilterOptions o;
+  o.robust = true;
+  const ProfileTexture t = profile_texture(scratched, dx, lc, o);
+  EXPECT_TRUE(t.robust);
+  EXPECT_GT(t.roughness.rv_mm, 0.015);
+  // lambda_s: a 2.5 um short-wave filter leaves the 0.05 mm texture (transmission
+  // exp(-pi (alpha 0.0025 / 0.05)^2) = 0.998) and is stated.
+  ProfileFilterOptions s;
+  s.lambda_s_mm = 0.0025;
+  const ProfileTexture ts = profile_texture(clean, dx, lc, s);
+  const ProfileTexture t0 = profile_texture(clean, dx, lc);
+  EXPECT_EQ(ts.lambda_s_mm, 0.0025);
+  EXPECT_NEAR(ts.roughness.ra_mm / t0.roughness.ra_mm, gaussian_transmission(0.05, 0.0025), 1e-3);
+  s.lambda_s_mm = 0.9;
+  EXPECT_THROW((void)profile_texture(clean, dx, lc, s), InputError);
+}
+
 // One period of a periodic profile: a short wave (lambda_c / 16) keeps all of its amplitude
 // in the R profile (the mean line takes exp(-pi 16^2 alpha^2) of it: nothing), so Ra = 2A/pi
 // within 1e-4 and the W profile is flat; its Ra of 1.27 um takes the 0.8 mm default cut-off,

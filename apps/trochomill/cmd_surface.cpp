@@ -25,6 +25,7 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
     std::string against;
     std::optional<double> lambda_c_mm, lambda_s_mm, z_mm, memory_gb, max_shift_mm;
     int degree = 2;
+    bool robust = false;
     std::vector<std::string> sets;
   };
   auto a = std::make_shared<Args>();
@@ -45,8 +46,13 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
                   "cut-off wavelength (areal: the L-filter's nesting index), mm (default: "
                   "ISO 21920-3's for the Ra or Sa)")
       ->check(finite_above(0, 1e3));
-  cmd->add_option("--lambda-s", a->lambda_s_mm, "areal S-filter nesting index, mm (default: none)")
+  cmd->add_option("--lambda-s", a->lambda_s_mm,
+                  "short-wave cut-off (lambda_s; areal: the S-filter's nesting index), mm "
+                  "(default: none)")
       ->check(finite_above(0, 1e3));
+  cmd->add_flag("--robust", a->robust,
+                "profiles: the robust Gaussian regression filter (ISO 16610-31) for the mean "
+                "line, which scratches and peaks do not drag");
   cmd->add_option("--form", a->form, "areal form removal: plane, polynomial or none")
       ->capture_default_str();
   cmd->add_option("--degree", a->degree, "polynomial degree with --form polynomial (1 to 6)")
@@ -120,6 +126,9 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       }
       return e;
     };
+    ProfileFilterOptions pf;
+    pf.lambda_s_mm = a->lambda_s_mm;
+    pf.robust = a->robust;
     const bool want_left = sf == "left" || sf == "walls" || sf == "both" || sf == "all";
     const bool want_right = sf == "right" || sf == "walls" || sf == "both" || sf == "all";
     const bool want_floor = sf == "floor" || sf == "all";
@@ -136,7 +145,7 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
         for (const bool left : sides) {
           const MeasuredProfile p = read_wall_profile_csv(text, walls.string(), left, a->z_mm);
           entries.push_back(profile_entry(left ? "left" : "right", "simulated " + p.description,
-                                          profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm)));
+                                          profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm, pf)));
         }
       }
       if (want_floor && (sf == "floor" || fs::exists(floor, ec))) {
@@ -155,7 +164,7 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       const HeightMap m = read_x3p(a->source, nullptr, max_points);
       if (m.ny == 1) {
         entries.push_back(profile_entry("profile", m.description,
-                                        profile_texture(m.z_mm, m.dx_mm, a->lambda_c_mm)));
+                                        profile_texture(m.z_mm, m.dx_mm, a->lambda_c_mm, pf)));
       } else {
         entries.push_back(areal_entry("surface", m));
       }
@@ -163,6 +172,11 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       if (sf == "floor") {
         throw InputError(
             "--surface floor of a job: simulate it first (simulate --out DIR), then texture DIR");
+      }
+      if (a->robust || a->lambda_s_mm) {
+        throw InputError(
+            "--robust and --lambda-s filter measured or simulated profiles and surfaces; a "
+            "job's predicted walls are one period of an ideal profile");
       }
       JobArgs job;
       job.file = a->source;
@@ -199,7 +213,7 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       const MeasuredProfile p =
           read_profile_csv(read_text_file(a->source), a->source, xc, zc, unit);
       entries.push_back(profile_entry("profile", p.description,
-                                      profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm)));
+                                      profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm, pf)));
     } else {
       throw InputError(fmt::format(
           "texture: '{}' is not a folder written by simulate --out, a job (.toml), an X3P file "

@@ -89,6 +89,16 @@ struct FilteredProfile {
                                               double cutoff_mm,
                                               FilterEnds ends = FilterEnds::discard);
 
+/// The robust Gaussian regression filter (ISO 16610-31, zero order): the mean line of the
+/// Gaussian weights times Tukey's biweight of each sample's residual, delta = (1 - (r /
+/// c)^2)^2 for |r| < c = 4.4 median |r| (else 0), iterated from the plain filter until the
+/// mean line moves less than 1e-9 of the profile's range (at most 50 times). Deep scratches
+/// and high peaks, which drag the plain filter's mean line, get no weight. Same inputs and
+/// errors as gaussian_filter.
+[[nodiscard]] FilteredProfile robust_gaussian_filter(const std::vector<double>& z_mm, double dx_mm,
+                                                     double cutoff_mm,
+                                                     FilterEnds ends = FilterEnds::discard);
+
 /// The Gaussian filter's transmission of the long-wave part at wavelength `lambda_mm`.
 [[nodiscard]] double gaussian_transmission(double lambda_mm, double cutoff_mm);
 
@@ -128,8 +138,17 @@ struct ProfileTexture {
   /// iterating: Ra with 0.8 mm, the table's cut-off for it, again until it stays).
   std::string cutoff_source;
   ProfileParameters roughness;
-  double wa_mm = 0;  ///< arithmetic mean height of the W profile about its mean
-  double wt_mm = 0;  ///< total height of the W profile over the evaluation length
+  double wa_mm = 0;        ///< arithmetic mean height of the W profile about its mean
+  double wt_mm = 0;        ///< total height of the W profile over the evaluation length
+  double lambda_s_mm = 0;  ///< the S-filter's cut-off (0: none)
+  bool robust = false;     ///< the mean line by the robust filter (ISO 16610-31)
+};
+/// How a measured profile is filtered besides the cut-off.
+struct ProfileFilterOptions {
+  /// The lambda_s filter (ISO 3274 / 21920-3): the primary profile is the Gaussian mean
+  /// line of this cut-off (mm; none: the profile as given).
+  std::optional<double> lambda_s_mm;
+  bool robust = false;  ///< robust_gaussian_filter for the lambda_c mean line
 };
 /// The texture of one period of a periodic profile (heights every dx_mm; the sample after the
 /// last would be the first again): repeated to a run-in, five cut-offs and a run-out, filtered
@@ -145,7 +164,8 @@ struct ProfileTexture {
 /// The same for an open profile (a measured trace): run-in and run-out of one cut-off each;
 /// the evaluation length is what lies between (five cut-offs or what there is, at least one).
 [[nodiscard]] ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
-                                             std::optional<double> cutoff_mm = {});
+                                             std::optional<double> cutoff_mm = {},
+                                             const ProfileFilterOptions& options = {});
 
 /// A profile read from a file: heights (mm) every spacing (mm), and where it came from.
 struct MeasuredProfile {
@@ -277,8 +297,8 @@ struct SurfaceComparison {
   double offset_mm = 0, tilt_x = 0, tilt_y = 0;
   /// Correlation of the two over the overlap, each less its plane there (1: the same shape).
   double correlation = 0;
-  double overlap_mm2 = 0;  ///< the area compared
-  std::size_t points = 0;  ///< measured points compared
+  double overlap_mm2 = 0;                               ///< the area compared
+  std::size_t points = 0;                               ///< measured points compared
   double rms_difference_mm = 0, max_difference_mm = 0;  ///< after the plane, over the overlap
   ArealParameters measured, predicted;  ///< over the overlap, each less its own plane
 };

@@ -392,25 +392,30 @@ std::string texture_json(const std::string& source, const std::vector<TextureEnt
     }
     profiles = true;
     const ProfileParameters& r = e.texture.roughness;
-    surfaces.push_back({{"surface", e.surface},
-                        {"kind", "profile"},
-                        {"description", e.description},
-                        {"lambda_c_mm", e.texture.cutoff_mm},
-                        {"lambda_c_source", e.texture.cutoff_source},
-                        {"ra_mm", r.ra_mm},
-                        {"rq_mm", r.rq_mm},
-                        {"rsk", r.rsk},
-                        {"rku", r.rku},
-                        {"rp_mm", r.rp_mm},
-                        {"rv_mm", r.rv_mm},
-                        {"rz_mm", r.rz_mm},
-                        {"rt_mm", r.rt_mm},
-                        {"rsm_mm", r.rsm_mm},
-                        {"profile_elements", r.elements},
-                        {"wa_mm", e.texture.wa_mm},
-                        {"wt_mm", e.texture.wt_mm},
-                        {"evaluation_length_mm", r.evaluation_length_mm},
-                        {"sections", r.sections}});
+    surfaces.push_back(
+        {{"surface", e.surface},
+         {"kind", "profile"},
+         {"description", e.description},
+         {"lambda_c_mm", e.texture.cutoff_mm},
+         {"lambda_c_source", e.texture.cutoff_source},
+         {"lambda_s_mm", e.texture.lambda_s_mm > 0 ? nlohmann::json(e.texture.lambda_s_mm)
+                                                   : nlohmann::json(nullptr)},
+         {"mean_line", e.texture.robust ? "robust Gaussian regression (ISO 16610-31)"
+                                        : "Gaussian (ISO 16610-21)"},
+         {"ra_mm", r.ra_mm},
+         {"rq_mm", r.rq_mm},
+         {"rsk", r.rsk},
+         {"rku", r.rku},
+         {"rp_mm", r.rp_mm},
+         {"rv_mm", r.rv_mm},
+         {"rz_mm", r.rz_mm},
+         {"rt_mm", r.rt_mm},
+         {"rsm_mm", r.rsm_mm},
+         {"profile_elements", r.elements},
+         {"wa_mm", e.texture.wa_mm},
+         {"wt_mm", e.texture.wt_mm},
+         {"evaluation_length_mm", r.evaluation_length_mm},
+         {"sections", r.sections}});
   }
   std::string standards;
   if (profiles) standards = "ISO 16610-21 Gaussian filter, ISO 21920-2 parameters";
@@ -456,10 +461,12 @@ std::string texture_text(const std::string& source, const std::vector<TextureEnt
     }
     const ProfileParameters& r = e.texture.roughness;
     out += fmt::format(
-        "  {}: {}\n    lambda_c {:g} mm ({}), {} x {:g} mm\n"
+        "  {}: {}\n    lambda_c {:g} mm ({}){}{}, {} x {:g} mm\n"
         "    Ra {:.4f} um  Rq {:.4f} um  Rz {:.4f} um  Rt {:.4f} um  Rp {:.4f} um  Rv {:.4f} um\n"
         "    Rsk {:.3f}  Rku {:.3f}  RSm {:.4f} mm ({} elements)  Wa {:.4f} um  Wt {:.4f} um\n",
-        e.surface, e.description, e.texture.cutoff_mm, e.texture.cutoff_source, r.sections,
+        e.surface, e.description, e.texture.cutoff_mm, e.texture.cutoff_source,
+        e.texture.lambda_s_mm > 0 ? fmt::format(", lambda_s {:g} mm", e.texture.lambda_s_mm) : "",
+        e.texture.robust ? ", robust mean line" : "", r.sections,
         r.evaluation_length_mm / r.sections, 1000 * r.ra_mm, 1000 * r.rq_mm, 1000 * r.rz_mm,
         1000 * r.rt_mm, 1000 * r.rp_mm, 1000 * r.rv_mm, r.rsk, r.rku, r.rsm_mm, r.elements,
         1000 * e.texture.wa_mm, 1000 * e.texture.wt_mm);

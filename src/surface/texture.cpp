@@ -126,6 +126,65 @@ FilteredProfile gaussian_filter(const std::vector<double>& z_mm, double dx_mm, d
   return out;
 }
 
+FilteredProfile robust_gaussian_filter(const std::vector<double>& z_mm, double dx_mm,
+                                       double cutoff_mm, FilterEnds ends) {
+  FilteredProfile f = gaussian_filter(z_mm, dx_mm, cutoff_mm, ends);  // checks, and the start
+  const std::size_t n = z_mm.size();
+  const std::size_t half = ends == FilterEnds::discard
+                               ? kernel_half(dx_mm, cutoff_mm)
+                               : std::min(kernel_half(dx_mm, cutoff_mm), n - 1);
+  const std::vector<double> w = gaussian_weights(dx_mm, cutoff_mm, half);
+  const auto [lo, hi] = std::minmax_element(z_mm.begin(), z_mm.end());
+  const double tolerance = 1e-9 * std::max(*hi - *lo, 1e-300);
+  // The mean line at every sample the weights need (the outputs and, in discard mode, the
+  // run-in and run-out around them): residuals over the whole profile.
+  std::vector<double> mean(n), delta(n), r(n);
+  auto full_mean = [&](const std::vector<double>* weights) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k0 = i < half ? half - i : 0;
+      const std::size_t k1 = std::min(w.size(), n + half - i);
+      double m = 0, ws = 0;
+      for (std::size_t k = k0; k < k1; ++k) {
+        const std::size_t j = i + k - half;
+        const double wk = weights ? w[k] * (*weights)[j] : w[k];
+        m += wk * z_mm[j];
+        ws += wk;
+      }
+      // Every neighbour an outlier: the plain mean line there.
+      if (ws > 0) {
+        mean[i] = m / ws;
+      } else {
+        double mp = 0, wp = 0;
+        for (std::size_t k = k0; k < k1; ++k) mp += w[k] * z_mm[i + k - half], wp += w[k];
+        mean[i] = mp / wp;
+      }
+    }
+  };
+  full_mean(nullptr);
+  for (int it = 0; it < 50; ++it) {
+    for (std::size_t i = 0; i < n; ++i) r[i] = std::abs(z_mm[i] - mean[i]);
+    std::vector<double> sorted = r;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(n / 2),
+                     sorted.end());
+    const double c = 4.4 * sorted[n / 2];
+    if (!(c > 0)) break;  // half the profile on its mean line: nothing to weigh
+    for (std::size_t i = 0; i < n; ++i) {
+      const double u = (z_mm[i] - mean[i]) / c;
+      delta[i] = std::abs(u) < 1 ? (1 - u * u) * (1 - u * u) : 0.0;
+    }
+    const std::vector<double> before = mean;
+    full_mean(&delta);
+    double moved = 0;
+    for (std::size_t i = 0; i < n; ++i) moved = std::max(moved, std::abs(mean[i] - before[i]));
+    if (moved < tolerance) break;
+  }
+  for (std::size_t i = 0; i < f.mean_mm.size(); ++i) {
+    f.mean_mm[i] = mean[f.first + i];
+    f.residual_mm[i] = z_mm[f.first + i] - f.mean_mm[i];
+  }
+  return f;
+}
+
 ProfileParameters profile_parameters(const std::vector<double>& z_mm, double dx_mm, int sections) {
   check_profile(z_mm, dx_mm, "profile parameters");
   if (sections < 1) {
@@ -361,11 +420,25 @@ ProfileTexture wall_texture(const WallProfile& wall, bool left, std::optional<do
   return periodic_profile_texture(z, dy, cutoff_mm);
 }
 
-ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
-                               std::optional<double> cutoff_mm) {
-  check_profile(z_mm, dx_mm, "profile texture");
+ProfileTexture profile_texture(const std::vector<double>& raw_z_mm, double dx_mm,
+                               std::optional<double> cutoff_mm, const ProfileFilterOptions& o) {
+  check_profile(raw_z_mm, dx_mm, "profile texture");
   check_cutoff(cutoff_mm, dx_mm);
-  return choose_and_evaluate(cutoff_mm, [&](double lc) {
+  // The primary profile: the lambda_s filter's mean line (renormalised at the ends: the
+  // run-in and run-out the lambda_c filter drops cover them).
+  std::vector<double> primary;
+  if (o.lambda_s_mm) {
+    const double ls = *o.lambda_s_mm;
+    if (!(std::isfinite(ls) && ls >= 2 * dx_mm && (!cutoff_mm || ls < *cutoff_mm))) {
+      throw InputError(fmt::format(
+          "profile texture: lambda_s must be at least two sample spacings ({:g} mm) and shorter "
+          "than lambda_c, got {} mm",
+          2 * dx_mm, ls));
+    }
+    primary = gaussian_filter(raw_z_mm, dx_mm, ls, FilterEnds::normalize).mean_mm;
+  }
+  const std::vector<double>& z_mm = o.lambda_s_mm ? primary : raw_z_mm;
+  ProfileTexture t = choose_and_evaluate(cutoff_mm, [&](double lc) {
     // At most a run-in, five cut-offs and a run-out of the trace (ISO 21920-3's traverse);
     // what lies between the run-in and run-out, in sampling lengths of one cut-off.
     check_resolved(lc, dx_mm);
@@ -380,14 +453,23 @@ ProfileTexture profile_texture(const std::vector<double>& z_mm, double dx_mm,
           "--lambda-c",
           static_cast<double>(z_mm.size()) * dx_mm, lc));
     }
-    const FilteredProfile f = gaussian_filter(
-        std::vector<double>(z_mm.begin(), z_mm.begin() + static_cast<std::ptrdiff_t>(n)), dx_mm, lc,
-        FilterEnds::discard);
+    if (o.lambda_s_mm && *o.lambda_s_mm >= lc) {
+      throw InputError(
+          fmt::format("profile texture: lambda_s ({:g} mm) must be shorter than lambda_c ({:g} mm)",
+                      *o.lambda_s_mm, lc));
+    }
+    const std::vector<double> part(z_mm.begin(), z_mm.begin() + static_cast<std::ptrdiff_t>(n));
+    const FilteredProfile f = o.robust
+                                  ? robust_gaussian_filter(part, dx_mm, lc, FilterEnds::discard)
+                                  : gaussian_filter(part, dx_mm, lc, FilterEnds::discard);
     const auto len = static_cast<std::ptrdiff_t>(sections * per);
     return texture_of(std::vector<double>(f.residual_mm.begin(), f.residual_mm.begin() + len),
                       std::vector<double>(f.mean_mm.begin(), f.mean_mm.begin() + len), dx_mm, lc,
                       sections);
   });
+  t.lambda_s_mm = o.lambda_s_mm.value_or(0.0);
+  t.robust = o.robust;
+  return t;
 }
 
 namespace {
