@@ -958,6 +958,9 @@ TEST_F(Cli, SimulateWritesItsOutputs) {
   EXPECT_EQ(tj[2]["kind"], "areal");
   EXPECT_LT(tj[2]["sl"]["sa_mm"].get<double>(), 1e-12);
   EXPECT_LT(tj[2]["sl"]["sz_mm"].get<double>(), 1e-12);
+  EXPECT_EQ(tj[2]["sl"]["sku"].get<double>(), 0.0);  // no shape: not a ratio of rounding errors
+  EXPECT_TRUE(tj[2]["sl"]["sal_mm"].is_null());
+  EXPECT_TRUE(tj[2]["sl"]["flat"].get<bool>());
   EXPECT_EQ(tj[0]["surface"], "left");
   EXPECT_NE(tj[0]["description"].get<std::string>().find("simulated left wall at z = "),
             std::string::npos);

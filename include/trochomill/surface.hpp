@@ -255,6 +255,9 @@ struct ArealParameters {
   /// strongly directional texture: Str tends to 0).
   std::optional<double> str;
   double area_mm2 = 0;  ///< the evaluation area
+  /// Flat to rounding (Sq within 1e-12 of the heights it came from): Ssk and Sku are 0 and
+  /// Sal and Str empty.
+  bool flat = false;
 };
 /// `autocorrelation`: compute Sal and Str (an FFT of the map padded by half its extent).
 [[nodiscard]] ArealParameters areal_parameters(const HeightMap& surface,

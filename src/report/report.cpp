@@ -340,11 +340,11 @@ std::string job_keys_json() {
 namespace {
 
 nlohmann::json areal_json(const ArealParameters& p, bool lengths) {
-  nlohmann::json j = {{"sa_mm", p.sa_mm},      {"sq_mm", p.sq_mm},
-                      {"ssk", p.ssk},          {"sku", p.sku},
-                      {"sp_mm", p.sp_mm},      {"sv_mm", p.sv_mm},
-                      {"sz_mm", p.sz_mm},      {"sdr_percent", p.sdr_percent},
-                      {"area_mm2", p.area_mm2}};
+  nlohmann::json j = {{"sa_mm", p.sa_mm},       {"sq_mm", p.sq_mm},
+                      {"ssk", p.ssk},           {"sku", p.sku},
+                      {"sp_mm", p.sp_mm},       {"sv_mm", p.sv_mm},
+                      {"sz_mm", p.sz_mm},       {"sdr_percent", p.sdr_percent},
+                      {"area_mm2", p.area_mm2}, {"flat", p.flat}};
   if (lengths) {
     j["sal_mm"] = p.sal_mm ? nlohmann::json(*p.sal_mm) : nlohmann::json(nullptr);
     j["str"] = p.str ? nlohmann::json(*p.str) : nlohmann::json(nullptr);
@@ -443,9 +443,11 @@ std::string texture_text(const std::string& source, const std::vector<TextureEnt
           t.form == FormRemoval::polynomial ? fmt::format(" (degree {})", t.degree) : "", t.l_mm,
           t.l_source, p.area_mm2, 1000 * p.sa_mm, 1000 * p.sq_mm, 1000 * p.sz_mm, 1000 * p.sp_mm,
           1000 * p.sv_mm, p.ssk, p.sku, p.sdr_percent,
-          p.sal_mm ? fmt::format("{:.4f} mm", *p.sal_mm) : "- (no decay to 0.2 within the map)",
-          p.str ? fmt::format("{:.3f}", *p.str) : "- (directional)", 1000 * t.sf.sa_mm,
-          1000 * t.sf.sq_mm, 1000 * t.sf.sz_mm);
+          p.sal_mm
+              ? fmt::format("{:.4f} mm", *p.sal_mm)
+              : std::string(p.flat ? "- (flat to rounding)" : "- (no decay to 0.2 within the map)"),
+          p.str ? fmt::format("{:.3f}", *p.str) : std::string(p.flat ? "-" : "- (directional)"),
+          1000 * t.sf.sa_mm, 1000 * t.sf.sq_mm, 1000 * t.sf.sz_mm);
       if (e.comparison) {
         const SurfaceComparison& c = *e.comparison;
         out += fmt::format(

@@ -381,7 +381,10 @@ HeightMap mean_surface(const HeightMap& map, double cutoff_mm, bool residual = f
 
 // Unchecked cores of remove_form and areal_parameters (internal; defined below).
 HeightMap form_removed(HeightMap map, FormRemoval form, int degree);
-ArealParameters parameters_of(const HeightMap& s, bool autocorrelation_lengths);
+// `scale_mm`: the size of the heights the surface was derived from (a filtered or form-removed
+// surface's rounding errors are relative to those, not to what is left).
+ArealParameters parameters_of(const HeightMap& s, bool autocorrelation_lengths,
+                              double scale_mm = 0);
 
 HeightMap gaussian_filter_areal(const HeightMap& map, double cutoff_mm) {
   check_height_map(map, "areal Gaussian filter");
@@ -597,7 +600,7 @@ ArealParameters areal_parameters(const HeightMap& s, bool autocorrelation_length
   return parameters_of(s, autocorrelation_lengths);
 }
 
-ArealParameters parameters_of(const HeightMap& s, bool autocorrelation_lengths) {
+ArealParameters parameters_of(const HeightMap& s, bool autocorrelation_lengths, double scale_mm) {
   const std::size_t nx = s.nx, ny = s.ny, n = nx * ny;
   ArealParameters p;
   p.area_mm2 = static_cast<double>(nx - 1) * s.dx_mm * static_cast<double>(ny - 1) * s.dy_mm;
@@ -644,10 +647,12 @@ ArealParameters parameters_of(const HeightMap& s, bool autocorrelation_lengths) 
   const double dn = static_cast<double>(n);
   p.sa_mm = s1 / dn;
   p.sq_mm = std::sqrt(s2 / dn);
-  // A surface flat to rounding (Sq within 1e-12 of its heights' size) has no shape: Ssk, Sku,
-  // Sal and Str stay 0 and empty rather than ratios of rounding errors.
-  const double size = std::max({std::abs(hi + mean), std::abs(lo + mean), 1e-300});
+  // A surface flat to rounding (Sq within 1e-12 of its heights' size, or of the heights it
+  // was derived from) has no shape: Ssk, Sku, Sal and Str stay 0 and empty rather than ratios
+  // of rounding errors.
+  const double size = std::max({std::abs(hi + mean), std::abs(lo + mean), scale_mm, 1e-300});
   const bool flat = p.sq_mm <= 1e-12 * size;
+  p.flat = flat;
   p.ssk = flat ? 0.0 : s3 / dn / std::pow(p.sq_mm, 3);
   p.sku = flat ? 0.0 : s4 / dn / std::pow(p.sq_mm, 4);
   p.sp_mm = hi, p.sv_mm = -lo, p.sz_mm = hi - lo;
@@ -730,7 +735,9 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
   // The S-filter keeps the long wavelengths (its mean surface); then the form goes.
   const HeightMap sf = o.s_mm ? form_removed(mean_surface(map, *o.s_mm), o.form, o.degree)
                               : form_removed(map, o.form, o.degree);
-  t.sf = parameters_of(sf, false);
+  double scale = 0;
+  for (const double z : map.z_mm) scale = std::max(scale, std::abs(z));
+  t.sf = parameters_of(sf, false, scale);
   auto sl_of = [&](double l) {
     check_nesting_index(map, l, "L-filter");
     if (l > shorter) {
@@ -758,7 +765,7 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
     t.l_source = "ISO 21920-3 default from Sa";
     for (int k = 0;; ++k) {
       sl = sl_of(t.l_mm);
-      const double next = default_cutoff_mm(parameters_of(sl, false).sa_mm);
+      const double next = default_cutoff_mm(parameters_of(sl, false, scale).sa_mm);
       if (next == t.l_mm) break;
       if (k == 3) {
         t.l_source = "ISO 21920-3 default from Sa (Sa lies at a boundary of its table)";
@@ -767,7 +774,7 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
       t.l_mm = next;
     }
   }
-  t.sl = parameters_of(sl, true);
+  t.sl = parameters_of(sl, true, scale);
   return t;
 }
 
