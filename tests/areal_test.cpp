@@ -341,9 +341,9 @@ TEST(Areal, CompareSurfacesAlignsAShiftedTiltedCopy) {
   const SurfaceComparison near = compare_surfaces(measured, predicted, 0.03);
   EXPECT_FALSE(std::abs(near.shift_x_mm - 0.07) < 1e-9 && std::abs(near.shift_y_mm + 0.05) < 1e-9);
   EXPECT_GT(near.rms_difference_mm, 1e-5);
-  EXPECT_NE(message_of([&] { (void)compare_surfaces(measured, predicted, -1.0); })
-                .find("largest shift"),
-            std::string::npos);
+  EXPECT_NE(
+      message_of([&] { (void)compare_surfaces(measured, predicted, -1.0); }).find("largest shift"),
+      std::string::npos);
 }
 
 // ---- X3P ---------------------------------------------------------------------------------
