@@ -960,17 +960,25 @@ SurfaceComparison compare_surfaces(const HeightMap& measured, const HeightMap& p
     fb[i][1] = ar * bi - ai * br;
   }
   fa.reset();
-  // Back: columns, then the rows of the lags searched.
+  // Back: columns (in parallel, each on its own buffers, as spectrum2 runs them), then the
+  // rows of the lags searched.
   {
-    FftwBuffer<fftwf_complex, float> col_a = fftw_buffer<fftwf_complex, float>(py),
-                                     col_b = fftw_buffer<fftwf_complex, float>(py);
-    for (std::size_t j = 0; j < hx; ++j) {
-      for (std::size_t r = 0; r < py; ++r)
-        col_a[r][0] = fb[r * hx + j][0], col_a[r][1] = fb[r * hx + j][1];
-      cp.inverse(col_a.get(), col_b.get());
-      for (std::size_t r = 0; r < py; ++r)
-        fb[r * hx + j][0] = col_b[r][0], fb[r * hx + j][1] = col_b[r][1];
-    }
+    struct ColWork {
+      FftwBuffer<fftwf_complex, float> a, b;
+    };
+    tbb::enumerable_thread_specific<ColWork> cw([&] {
+      return ColWork{fftw_buffer<fftwf_complex, float>(py), fftw_buffer<fftwf_complex, float>(py)};
+    });
+    tbb::parallel_for(std::size_t{0}, hx, [&](std::size_t j) {
+      ColWork& w = cw.local();
+      for (std::size_t r = 0; r < py; ++r) {
+        w.a[r][0] = fb[r * hx + j][0], w.a[r][1] = fb[r * hx + j][1];
+      }
+      cp.inverse(w.a.get(), w.b.get());
+      for (std::size_t r = 0; r < py; ++r) {
+        fb[r * hx + j][0] = w.b[r][0], fb[r * hx + j][1] = w.b[r][1];
+      }
+    });
   }
   const AreaSums qs(a, qx, qy), ms(b, m.nx, m.ny);
   const double min_points = 0.5 * static_cast<double>(std::min(qx * qy, m.nx * m.ny));
