@@ -82,7 +82,9 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
 
 ToolPath job_path(const Job& job, const std::string& gcode_file) {
   if (gcode_file.empty()) return plan_path(job).path;
-  const GcodeProgram prog = read_gcode_file(gcode_file, gcode_options(job.machine).read);
+  GcodeReadOptions ro = gcode_options(job.machine).read;
+  const GcodeProgram prog = read_gcode_file(gcode_file, ro);
+  for (const std::string& w : prog.info.warnings) fmt::print(stderr, "warning: {}\n", w);
   const std::vector<std::string> differ = header_mismatches(job, prog, gcode_file);
   for (const std::string& w : differ) fmt::print(stderr, "warning: {}\n", w);
   if (!differ.empty()) {

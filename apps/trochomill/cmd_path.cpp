@@ -3,6 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
 #include <memory>
 
 #include "cli_common.hpp"
@@ -10,8 +13,75 @@
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/report.hpp"
+#include "trochomill/units.hpp"
 
 namespace trochomill::cli {
+
+namespace {
+
+Dialect parse_dialect(const std::string& s) {
+  if (s == "fanuc") return Dialect::fanuc;
+  if (s == "sinumerik") return Dialect::sinumerik;
+  if (s == "grbl") return Dialect::grbl;
+  return Dialect::linuxcnc;
+}
+
+// "G54" .. "G59.3" -> 1 .. 9.
+int work_system_number(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  static const std::array<std::string, 9> kNames{"G54", "G55",   "G56",   "G57",  "G58",
+                                                 "G59", "G59.1", "G59.2", "G59.3"};
+  const auto it = std::find(kNames.begin(), kNames.end(), s);
+  if (it == kNames.end()) {
+    throw InputError(
+        fmt::format("work system '{}': one of G54 G55 G56 G57 G58 G59 G59.1 G59.2 "
+                    "G59.3",
+                    s));
+  }
+  return static_cast<int>(it - kNames.begin()) + 1;
+}
+
+// "G55=100,0,-20" -> (2, (100, 0, -20)).
+std::pair<int, Vec3> parse_offset(const std::string& s) {
+  const auto eq = s.find('=');
+  auto bad = [&] {
+    return InputError(
+        fmt::format("--offset '{}': write SYSTEM=X,Y,Z in mm, e.g. G55=100,0,-20", s));
+  };
+  if (eq == std::string::npos) throw bad();
+  const int n = work_system_number(s.substr(0, eq));
+  Vec3 v;
+  std::size_t pos = eq + 1;
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t end = k < 2 ? s.find(',', pos) : s.size();
+    if (end == std::string::npos) throw bad();
+    const std::string part = s.substr(pos, end - pos);
+    char* stop = nullptr;
+    v[k] = std::strtod(part.c_str(), &stop);
+    if (part.empty() || *stop != '\0' || !std::isfinite(v[k]) || std::abs(v[k]) > 1e6) throw bad();
+    pos = end + 1;
+  }
+  return {n, v};
+}
+
+// One move of --trace.
+std::string trace_line(const GcodeMove& m) {
+  const char* kind = m.kind == GcodeMove::Kind::rapid  ? "G0"
+                     : m.kind == GcodeMove::Kind::feed ? "G1"
+                     : m.sweep_rad > 0                 ? "G3"
+                                                       : "G2";
+  std::string s = fmt::format("{}{} X{:.9f} Y{:.9f} Z{:.9f}", m.path_started ? "" : "; ", kind,
+                              m.end_mm.x(), m.end_mm.y(), m.end_mm.z());
+  if (m.kind == GcodeMove::Kind::arc) {
+    s += fmt::format(" C{:.9f},{:.9f},{:.9f} A{:.0f},{:.0f},{:.0f} T{:.9f}", m.centre_mm.x(),
+                     m.centre_mm.y(), m.centre_mm.z(), m.axis.x(), m.axis.y(), m.axis.z(),
+                     m.sweep_rad * 180.0 / kPi);
+  }
+  s += fmt::format(" F{:.9f} G{} {}:{}", m.feed_mm_per_min, m.plane, m.file, m.line);
+  return s;
+}
+
+}  // namespace
 
 void register_path_commands(CLI::App& app, int& exit_code) {
   // plan
@@ -123,10 +193,17 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     struct Args {
       std::string file, json;
       Machine machine;
+      GcodeReadOptions read;
+      std::string dialect, tool_table, work_system = "G54";
+      std::vector<std::string> offsets, includes;
+      std::vector<double> g28, g30;
+      bool trace = false;
     };
     auto a = std::make_shared<Args>();
-    auto* cmd = app.add_subcommand("check-gcode",
-                                   "parse an NC program and report length, time, bounding box");
+    auto* cmd = app.add_subcommand(
+        "check-gcode",
+        "interpret an NC program (RS274/NGC as LinuxCNC runs it) and report its length, time, "
+        "bounding box; --trace prints every move");
     cmd->add_option("FILE", a->file, "G-code file")->required();
     cmd->add_option("--rapid-rate", a->machine.rapid_rate_mm_per_min, "rapid traverse rate, mm/min")
         ->capture_default_str()
@@ -134,10 +211,64 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--max-acceleration", a->machine.max_acceleration_mm_per_s2,
                     "path acceleration limit for the time estimate, mm/s^2")
         ->check(finite_in(0, 1e15));
+    cmd->add_option("--dialect", a->dialect, "language: linuxcnc (default) or fanuc")
+        ->check(CLI::IsMember({"linuxcnc", "fanuc", "sinumerik", "grbl"}));
+    cmd->add_option("-I,--include", a->includes,
+                    "folder searched for o<name> call's name.ngc (repeatable; the program's own "
+                    "folder is searched first)")
+        ->check(CLI::ExistingDirectory);
+    cmd->add_option("--tool-table", a->tool_table,
+                    "LinuxCNC tool table (T1 P1 Z<length> D<diameter>, mm) for G43's lengths")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--work-system", a->work_system,
+                    "work coordinate system the program starts in and the moves are given in")
+        ->capture_default_str()
+        ->check(
+            CLI::IsMember({"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"}));
+    cmd->add_option("--offset", a->offsets,
+                    "a work offset in machine coordinates, SYSTEM=X,Y,Z mm (e.g. G55=100,0,-20; "
+                    "repeatable)");
+    cmd->add_option("--g28", a->g28, "G28 position in machine coordinates, X,Y,Z mm")
+        ->delimiter(',')
+        ->expected(3);
+    cmd->add_option("--g30", a->g30, "G30 position in machine coordinates, X,Y,Z mm")
+        ->delimiter(',')
+        ->expected(3);
+    cmd->add_option("--peck-clearance", a->read.peck_clearance_mm,
+                    "G73/G83 retract between pecks, mm")
+        ->capture_default_str()
+        ->check(finite_in(0, 1e3));
+    cmd->add_option("--max-blocks", a->read.max_blocks,
+                    "blocks interpreted before the reader stops (a loop without end)")
+        ->capture_default_str()
+        ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40));
+    cmd->add_flag("--trace", a->trace,
+                  "print every move as the interpreter resolved it (one line each: kind, end "
+                  "X Y Z mm, arc centre and turn, feed mm/min, plane, file:line)");
     cmd->add_option("--json", a->json, "write the report as JSON (- for stdout)");
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->json}, {&a->file});
-      const GcodeProgram prog = read_gcode_file(a->file, gcode_options(a->machine).read);
+      GcodeReadOptions ro = a->read;
+      ro.rapid_rate_mm_per_min = a->machine.rapid_rate_mm_per_min;
+      if (!a->dialect.empty()) ro.dialect = parse_dialect(a->dialect);
+      for (const auto& d : a->includes) ro.include_dirs.emplace_back(d);
+      if (!a->tool_table.empty()) ro.tools = read_tool_table(a->tool_table);
+      ro.work_system = work_system_number(a->work_system);
+      for (const std::string& o : a->offsets) {
+        const auto [n, v] = parse_offset(o);
+        ro.work_offsets_mm[static_cast<std::size_t>(n - 1)] = v;
+      }
+      if (!a->g28.empty()) ro.g28_position_mm = Vec3(a->g28[0], a->g28[1], a->g28[2]);
+      if (!a->g30.empty()) ro.g30_position_mm = Vec3(a->g30[0], a->g30[1], a->g30[2]);
+      if (a->trace) {
+        ro.trace = [](const GcodeMove& m) { fmt::print("{}\n", trace_line(m)); };
+      }
+      const GcodeProgram prog = read_gcode_file(a->file, ro);
+      for (const std::string& w : prog.info.warnings) fmt::print(stderr, "warning: {}\n", w);
+      if (a->trace) {
+        exit_code = 0;
+        return;
+      }
       const double t_acc = estimate_time_s(prog.path, a->machine);
       if (!a->json.empty()) emit(a->json, gcode_check_json(a->file, prog, t_acc));
       if (a->json != "-") {

@@ -4,7 +4,12 @@
 // analysis runs on any NC program.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -41,9 +46,62 @@ struct FitArc {
 /// Chords (G1) of a curve segment whose deviation is at most tolerance_mm.
 [[nodiscard]] std::vector<Vec3> fit_chords(const Segment& curve, double tolerance_mm);
 
+/// One tool of a LinuxCNC tool table (`T1 P1 Z50.2 D6 ;comment`): the length offset G43 applies
+/// and the diameter (mm).
+struct ToolTableEntry {
+  double length_mm = 0;
+  double diameter_mm = 0;
+};
+
+/// One canonical move as the interpreter resolved it (what `check-gcode --trace` prints):
+/// end points in the output frame (the job's work coordinate system, mm), the feed it runs at
+/// (mm/min, the rapid rate for rapids) and the program line that made it.
+struct GcodeMove {
+  enum class Kind { rapid, feed, arc };
+  Kind kind = Kind::feed;
+  Vec3 start_mm = Vec3::Zero(), end_mm = Vec3::Zero();
+  Vec3 centre_mm = Vec3::Zero();  ///< arcs: the centre, at the start's height along the axis
+  Vec3 axis = Vec3::UnitZ();      ///< arcs: the plane's normal (G17 +Z, G18 +Y, G19 +X)
+  double sweep_rad = 0;           ///< arcs: signed turn about the axis (+ = counter-clockwise)
+  double feed_mm_per_min = 0;
+  int plane = 17;             ///< the active plane: 17, 18 or 19
+  bool path_started = false;  ///< false for the approach before the path starts (see read_gcode)
+  std::string_view file;      ///< the file of the block (the program or a subroutine file)
+  std::size_t line = 0;       ///< 1-based line in that file
+};
+
+/// The interpreter's setting: the language, where the machine's offsets and home are, the
+/// tool table, the limits that stop a runaway program. Machine positions are mm.
 struct GcodeReadOptions {
   double rapid_rate_mm_per_min = 10000;    ///< speed given to G0 moves (mm/min)
   double arc_radius_tolerance_mm = 0.002;  ///< allowed start/end radius mismatch of arcs (mm)
+  /// The language: linuxcnc (RS274/NGC with O-words) or fanuc (Macro B); sinumerik and grbl
+  /// read as linuxcnc's plain subset plus their unit words.
+  Dialect dialect = Dialect::linuxcnc;
+  /// Folders searched, in order, for `o<name> call`'s `name.ngc` when the program does not
+  /// define the subroutine itself (the program's own folder is searched first).
+  std::vector<std::filesystem::path> include_dirs;
+  std::map<int, ToolTableEntry> tools;  ///< tool number -> entry; a missing tool has length 0
+  /// Origins of G54, G55, ... G59.3 (index 0 .. 8) in machine coordinates (mm) and their XY
+  /// rotations (degrees); unset ones are zero (a warning names them when a program uses them).
+  std::array<std::optional<Vec3>, 9> work_offsets_mm;
+  std::array<double, 9> work_rotation_deg{};
+  /// G28 and G30 positions in machine coordinates (mm); unset: X0 Y0 of the output frame at
+  /// `home_z_mm` above its origin (stated in a warning when a program uses them).
+  std::optional<Vec3> g28_position_mm, g30_position_mm;
+  double home_z_mm = 5;
+  /// The work coordinate system the program starts in and the path is given in: 1 = G54 .. 9 =
+  /// G59.3.
+  int work_system = 1;
+  /// How far above the last peck G73 and G83 return before feeding on (mm): LinuxCNC 2.9's
+  /// 0.010 inch.
+  double peck_clearance_mm = 0.254;
+  std::uint64_t max_blocks = 200'000'000;  ///< interpreted blocks before "infinite loop?" stops
+  int max_call_depth = 64;                 ///< nested subroutine calls
+  /// Called for every canonical move, in order (check-gcode --trace); may be empty.
+  std::function<void(const GcodeMove&)> trace;
+  /// Polled every 64k blocks; true stops the reader with Interrupted (Ctrl-C).
+  std::function<bool()> cancel;
 };
 
 /// What the reader saw besides the motion.
@@ -52,7 +110,10 @@ struct GcodeProgramInfo {
   double min_feed_mm_per_min = 0, max_feed_mm_per_min = 0;
   std::size_t lines = 0;
   std::size_t motion_blocks = 0;
+  std::uint64_t blocks_executed = 0;  ///< blocks interpreted (loops and calls count each pass)
   bool inch_units_seen = false;
+  /// What the reader assumed (an offset, a home position) or ignored, each naming its line.
+  std::vector<std::string> warnings;
   /// The job keys a trochomill program records in its header, `section.key = value` (TOML).
   std::vector<std::pair<std::string, std::string>> header_keys;
 };
@@ -61,6 +122,10 @@ struct GcodeProgram {
   ToolPath path;
   GcodeProgramInfo info;
 };
+
+/// Reads a LinuxCNC tool table: lines `T<n> P<pocket> Z<length> D<diameter> ;comment` (other
+/// axis words are allowed and ignored). Errors name file:line:column.
+[[nodiscard]] std::map<int, ToolTableEntry> read_tool_table(const std::filesystem::path& file);
 
 /// `[machine]` as the writer's and the reader's options: the dialect, arc output and tolerance
 /// the writer uses, the rapid rate the reader gives G0 moves. The one place the machine's
@@ -71,9 +136,12 @@ struct GcodeOptions {
 };
 [[nodiscard]] GcodeOptions gcode_options(const Machine& machine);
 
-/// Parses a program. Errors are InputError "name:line:column: what is wrong".
+/// Interprets a program: RS274/NGC as LinuxCNC runs it (parameters, expressions, O-word
+/// subroutines and loops, work offsets, G92, G28/G30/G53, canned cycles, feed modes) or Fanuc
+/// with Macro B. Errors are InputError "name:line:column: what is wrong".
 /// The path starts at the first move in X or Y (the machine's position before is unknown: a
 /// Z-only approach to the clearance plane gives the start its height, it is not a move).
+/// Positions are the tool tip in the output frame (options.work_system), mm.
 [[nodiscard]] GcodeProgram read_gcode(std::string_view text, std::string_view source_name,
                                       const GcodeReadOptions& options = {});
 /// The `section.key = value` comment lines of a program's leading comment block.

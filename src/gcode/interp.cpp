@@ -1,0 +1,2416 @@
+// The RS274/NGC interpreter: LinuxCNC's language (its documentation and its interpreter's
+// behaviour are the reference: docs/gcode.md) turned into trochomill's ToolPath.
+//  - values: numbers, #n and #<name> parameters, [expressions] with LinuxCNC's precedence
+//    (** > * / MOD > + - > EQ NE GT GE LT LE > AND OR XOR), unary functions;
+//  - parameter settings take effect after the whole line is read, before it runs;
+//  - O-words: sub/endsub/call/return with arguments and values, if/elseif/else/endif,
+//    while/endwhile, do/while, repeat/endrepeat, break/continue, subroutine files;
+//  - the block runs in LinuxCNC's order (feed mode, F, S, T, M, then the G groups, stop);
+//  - modal state: planes, units, distance modes, feed modes, work offsets (G54-G59.3, G10 L2
+//    and L20), G92/G52, tool length (G43/G43.1/G49), G28/G30/G53, canned cycles G73 G81-G86
+//    G89 with G98/G99 and L.
+// Positions are kept in program coordinates (mm) as the interpreter keeps them; each move is
+// turned into the output frame (the job's work coordinate system) when it is emitted.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <deque>
+#include <fstream>
+#include <optional>
+#include <unordered_map>
+
+#include "ngc_lexer.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+constexpr int kMaxParameter = 5602;  // #1 .. #5601, as LinuxCNC
+constexpr double kTolEqual = 1e-6;   // EQ/NE/LE/GE compare within this (LinuxCNC's TOLERANCE_EQUAL)
+constexpr double kMaxCoordinate = 1e6;  // mm: beyond this a move is refused (1 km)
+
+enum class Plane { xy, zx, yz };
+enum class FeedMode { per_minute, inverse_time, per_rev };
+
+// The keywords after an O label.
+enum class OKind {
+  none,
+  sub,
+  endsub,
+  call,
+  ret,
+  if_,
+  elseif,
+  else_,
+  endif,
+  while_,
+  endwhile,
+  do_,
+  repeat,
+  endrepeat,
+  brk,
+  cont
+};
+
+struct OKeyword {
+  std::string_view name;
+  OKind kind;
+};
+constexpr std::array<OKeyword, 15> kOKeywords{{{"sub", OKind::sub},
+                                               {"endsub", OKind::endsub},
+                                               {"call", OKind::call},
+                                               {"return", OKind::ret},
+                                               {"if", OKind::if_},
+                                               {"elseif", OKind::elseif},
+                                               {"else", OKind::else_},
+                                               {"endif", OKind::endif},
+                                               {"while", OKind::while_},
+                                               {"endwhile", OKind::endwhile},
+                                               {"do", OKind::do_},
+                                               {"repeat", OKind::repeat},
+                                               {"endrepeat", OKind::endrepeat},
+                                               {"break", OKind::brk},
+                                               {"continue", OKind::cont}}};
+
+// An O-word line of a file, found by the index (one pass over the file, made when the program
+// first needs to jump).
+struct OLine {
+  std::size_t offset = 0;  // of the line's first character
+  std::size_t line_no = 0;
+  std::string label;
+  OKind kind = OKind::none;
+};
+
+struct Source {
+  std::string owned;  // the text of a subroutine file (the main program's is the caller's)
+  std::string_view text;
+  std::string name;
+  bool indexed = false;
+  std::vector<OLine> olines;
+};
+
+// Where the interpreter reads next.
+struct Cursor {
+  std::size_t source = 0;
+  std::size_t offset = 0;   // of the next line
+  std::size_t line_no = 0;  // of the line before it (the next line is line_no + 1)
+};
+
+// An open if or loop of the running frame.
+struct Control {
+  OKind kind = OKind::if_;  // if_, while_, do_, repeat
+  std::string label;
+  Cursor start;          // while: its own line; do/repeat: the line after it
+  bool taken = false;    // if: a branch ran
+  double remaining = 0;  // repeat: passes left
+};
+
+struct Frame {
+  std::string label;                                   // the subroutine ("" at the top)
+  Cursor ret;                                          // where the call returns to
+  std::array<double, 31> saved_locals{};               // #1..#30 of the caller
+  std::vector<std::pair<std::string, double>> locals;  // named local parameters
+  std::vector<Control> controls;
+  bool restore_modal = false;  // M73 in the subroutine
+};
+
+// The modal state M70 saves and M72 restores (LinuxCNC's list, what matters to motion).
+struct ModalSave {
+  bool valid = false;
+  Plane plane = Plane::xy;
+  double unit = 1;
+  bool absolute = true, arc_absolute = false;
+  FeedMode feed_mode = FeedMode::per_minute;
+  double feed = 0, speed = 0;
+  bool retract_r = false;
+  int system = 1;
+};
+
+// One block's words: letters with values and columns, G and M codes, parameter settings.
+struct Block {
+  std::array<double, 26> value{};
+  std::array<std::uint32_t, 26> column{};
+  std::uint32_t present = 0;  // bit per letter
+  struct Code {
+    int code10;  // G90.1 -> 901
+    std::uint32_t column;
+  };
+  std::vector<Code> g, m;
+  struct NumberedSet {
+    int index;
+    double value;
+  };
+  struct NamedSet {
+    std::string name;
+    double value;
+    std::uint32_t column;
+  };
+  std::vector<NumberedSet> numbered;
+  std::vector<NamedSet> named;
+
+  void clear() {
+    present = 0;
+    g.clear();
+    m.clear();
+    numbered.clear();
+    named.clear();
+  }
+  [[nodiscard]] bool has(char c) const { return (present >> (c - 'a')) & 1U; }
+  [[nodiscard]] double operator[](char c) const { return value[static_cast<std::size_t>(c - 'a')]; }
+  [[nodiscard]] std::uint32_t col(char c) const {
+    return column[static_cast<std::size_t>(c - 'a')];
+  }
+  [[nodiscard]] bool has_axis() const { return has('x') || has('y') || has('z'); }
+};
+
+int code10(double v) { return static_cast<int>(std::lround(v * 10.0)); }
+std::string code_name(char letter, int c10) {
+  return c10 % 10 == 0 ? fmt::format("{}{}", letter, c10 / 10)
+                       : fmt::format("{}{}.{}", letter, c10 / 10, c10 % 10);
+}
+
+void rotate(double& x, double& y, double deg) {
+  if (deg == 0) return;
+  const double t = deg * kPi / 180.0, c = std::cos(t), s = std::sin(t);
+  const double rx = x * c - y * s;
+  y = x * s + y * c;
+  x = rx;
+}
+
+class Interpreter {
+ public:
+  Interpreter(std::string_view text, std::string_view name, const GcodeReadOptions& opt)
+      : opt_(opt) {
+    Source main;
+    main.text = text;
+    main.name = std::string(name);
+    sources_.push_back(std::move(main));
+    params_.assign(kMaxParameter, 0.0);
+    frames_.emplace_back();
+    init_offsets();
+  }
+
+  GcodeProgram run() {
+    // A program between '%' lines: the first non-blank line '%' opens it, the next one ends it.
+    bool percent_open = false, first = true;
+    while (!ended_) {
+      std::string_view raw;
+      if (!next_line(raw)) break;
+      if (first) {
+        std::string_view t = raw;
+        while (!t.empty() && (t.front() == ' ' || t.front() == '\t')) t.remove_prefix(1);
+        while (!t.empty() && (t.back() == ' ' || t.back() == '\t' || t.back() == '\r')) {
+          t.remove_suffix(1);
+        }
+        if (t.empty()) continue;
+        first = false;
+        if (t == "%") {
+          percent_open = true;
+          continue;
+        }
+      } else if (percent_open && cur_.source == 0) {
+        std::string_view t = raw;
+        while (!t.empty() && (t.back() == ' ' || t.back() == '\t' || t.back() == '\r')) {
+          t.remove_suffix(1);
+        }
+        if (t == "%") break;
+      }
+      run_line(raw);
+    }
+    if (frames_.size() > 1) {
+      fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
+                             frames_.back().label));
+    }
+    prog_.info.lines = std::max(prog_.info.lines, main_lines_);
+    if (prog_.path.empty()) {
+      throw InputError(
+          fmt::format("{}: the program has no motion (no G0/G1/G2/G3 moves)", sources_[0].name));
+    }
+    return std::move(prog_);
+  }
+
+ private:
+  // ---- reading lines ------------------------------------------------------------------------
+
+  bool next_line(std::string_view& raw) {
+    Source& src = sources_[cur_.source];
+    if (cur_.offset >= src.text.size()) {
+      if (cur_.source == 0) return false;
+      // A subroutine file ran out: only an error when its subroutine has not returned.
+      fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
+                             frames_.back().label));
+    }
+    std::size_t end = src.text.find('\n', cur_.offset);
+    if (end == std::string_view::npos) end = src.text.size();
+    raw = src.text.substr(cur_.offset, end - cur_.offset);
+    line_offset_ = cur_.offset;
+    cur_.offset = end == src.text.size() ? end : end + 1;
+    ++cur_.line_no;
+    if (cur_.source == 0) main_lines_ = std::max(main_lines_, cur_.line_no);
+    return true;
+  }
+
+  [[noreturn]] void fail_at(std::uint32_t column, const std::string& what) const {
+    const Source& src = sources_[cur_.source];
+    if (column == 0) throw InputError(fmt::format("{}:{}: {}", src.name, cur_.line_no, what));
+    throw InputError(fmt::format("{}:{}:{}: {}", src.name, cur_.line_no, column, what));
+  }
+  // The column of text index i of the current line.
+  [[nodiscard]] std::uint32_t col_of(std::size_t i) const {
+    return line_.column[std::min(i, line_.column.size() - 1)];
+  }
+  [[noreturn]] void fail(std::size_t i, const std::string& what) const { fail_at(col_of(i), what); }
+
+  void warn(const std::string& what) {
+    if (prog_.info.warnings.size() < 100) {
+      prog_.info.warnings.push_back(
+          fmt::format("{}:{}: {}", sources_[cur_.source].name, cur_.line_no, what));
+    }
+  }
+
+  void count_block() {
+    ++prog_.info.blocks_executed;
+    if (prog_.info.blocks_executed > opt_.max_blocks) {
+      fail_at(0, fmt::format("stopped after {} blocks: does the program loop without end? "
+                             "(the limit is the reader's max_blocks, check-gcode --max-blocks)",
+                             opt_.max_blocks));
+    }
+    if ((prog_.info.blocks_executed & 0xffff) == 0 && opt_.cancel && opt_.cancel()) {
+      throw Interrupted("reading the NC program was interrupted");
+    }
+  }
+
+  // ---- one line -----------------------------------------------------------------------------
+
+  void run_line(std::string_view raw) {
+    ngc::normalise(raw, line_);
+    if (line_.error_column != 0) fail_at(line_.error_column, line_.error);
+    const std::string& s = line_.text;
+    std::size_t i = 0;
+    if (i < s.size() && s[i] == '/') ++i;  // block delete: the switch is off, the block runs
+    if (i < s.size() && s[i] == 'n') {     // line number
+      std::size_t j = i + 1;
+      while (j < s.size() && ((s[j] >= '0' && s[j] <= '9') || s[j] == '.')) ++j;
+      if (j == i + 1) fail(i, "'N' needs a line number after it");
+      i = j;
+    }
+    if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
+      if (o_statement(i)) return;
+    }
+    if (i >= s.size()) return;  // blank or comment only: (MSG, ...) and the like do not move
+    count_block();
+    read_block(i);
+    // Parameter settings take effect after the whole line is read, before it runs.
+    for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
+    for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
+    execute();
+  }
+
+  // ---- values and expressions ----------------------------------------------------------------
+
+  double read_number(std::size_t& i) {
+    const std::string& s = line_.text;
+    const std::size_t at = i;
+    bool neg = false;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) {
+      neg = s[i] == '-';
+      ++i;
+    }
+    const char* b = s.data() + i;
+    const char* e = s.data() + s.size();
+    double v = 0;
+    auto [ptr, ec] = std::from_chars(b, e, v, std::chars_format::fixed);
+    if (ec == std::errc::result_out_of_range) {
+      if (word_ != 0) {
+        fail(word_at_, fmt::format("'{}' has a number too large to represent", upper(word_)));
+      }
+      fail(at, "a number too large to represent");
+    }
+    if (ec != std::errc() || ptr == b) {
+      if (word_ != 0 && at == word_at_ + 1) {
+        fail(word_at_, fmt::format("'{}' needs a number after it", upper(word_)));
+      }
+      if (i < s.size()) {
+        fail(i, fmt::format("expected a number, found {}", ngc::shown(s[i])));
+      }
+      fail(i, "expected a number at the end of the line");
+    }
+    i = static_cast<std::size_t>(ptr - s.data());
+    return neg ? -v : v;
+  }
+
+  double checked(double v, std::size_t at) const {
+    if (std::isnan(v)) fail(at, "the calculation gives 'not a number'");
+    if (std::isinf(v)) fail(at, "the calculation gives infinity");
+    return v;
+  }
+
+  // A real value: number, #parameter, [expression], unary function, or -value / +value.
+  double read_value(std::size_t& i) {
+    const std::string& s = line_.text;
+    if (i >= s.size()) fail(i, "expected a value at the end of the line");
+    const std::size_t at = i;
+    const char c = s[i];
+    const char c1 = i + 1 < s.size() ? s[i + 1] : '\0';
+    double v;
+    if (c == '[') {
+      v = read_expression(i);
+    } else if (c == '#') {
+      v = read_parameter(i);
+    } else if ((c == '+' || c == '-') && c1 != '\0' && !(c1 >= '0' && c1 <= '9') && c1 != '.') {
+      ++i;
+      v = read_value(i);
+      if (c == '-') v = -v;
+    } else if (c >= 'a' && c <= 'z') {
+      if (word_ != 0 && at == word_at_ + 1 && !function_follows(i)) {
+        fail(word_at_, fmt::format("'{}' needs a number after it", upper(word_)));
+      }
+      v = read_function(i);
+    } else {
+      v = read_number(i);
+    }
+    return checked(v, at);
+  }
+
+  // An expression "[ ... ]" with LinuxCNC's precedence, left to right within a level.
+  double read_expression(std::size_t& i) {
+    const std::size_t open = i;
+    ++i;  // '['
+    double v = read_binary(i, 1);
+    if (i >= line_.text.size() || line_.text[i] != ']') {
+      if (i >= line_.text.size()) fail(open, "'[' is not closed on this line");
+      fail(i, fmt::format("expected an operator or ']', found {}", ngc::shown(line_.text[i])));
+    }
+    ++i;
+    return v;
+  }
+
+  enum class Op { none, pow, mul, div, mod, add, sub, eq, ne, gt, ge, lt, le, and_, or_, xor_ };
+  static int precedence(Op op) {
+    switch (op) {
+      case Op::pow:
+        return 6;
+      case Op::mul:
+      case Op::div:
+      case Op::mod:
+        return 5;
+      case Op::add:
+      case Op::sub:
+        return 4;
+      case Op::eq:
+      case Op::ne:
+      case Op::gt:
+      case Op::ge:
+      case Op::lt:
+      case Op::le:
+        return 3;
+      case Op::and_:
+      case Op::or_:
+      case Op::xor_:
+        return 2;
+      case Op::none:
+        break;
+    }
+    return 0;
+  }
+
+  // The operator at i (without consuming it), and its length.
+  Op peek_op(std::size_t i, std::size_t& len) const {
+    const std::string_view s = std::string_view(line_.text).substr(i);
+    struct Name {
+      std::string_view text;
+      Op op;
+    };
+    static constexpr std::array<Name, 15> kOps{{{"**", Op::pow},
+                                                {"*", Op::mul},
+                                                {"/", Op::div},
+                                                {"mod", Op::mod},
+                                                {"+", Op::add},
+                                                {"-", Op::sub},
+                                                {"eq", Op::eq},
+                                                {"ne", Op::ne},
+                                                {"gt", Op::gt},
+                                                {"ge", Op::ge},
+                                                {"lt", Op::lt},
+                                                {"le", Op::le},
+                                                {"and", Op::and_},
+                                                {"or", Op::or_},
+                                                {"xor", Op::xor_}}};
+    for (const Name& n : kOps) {
+      if (s.substr(0, n.text.size()) == n.text) {
+        len = n.text.size();
+        return n.op;
+      }
+    }
+    len = 0;
+    return Op::none;
+  }
+
+  double read_binary(std::size_t& i, int min_prec) {
+    double left = read_value(i);
+    for (;;) {
+      std::size_t len = 0;
+      const Op op = peek_op(i, len);
+      if (op == Op::none || precedence(op) < min_prec) return left;
+      const std::size_t at = i;
+      i += len;
+      const double right = read_binary(i, precedence(op) + 1);
+      left = checked(apply(op, left, right, at), at);
+    }
+  }
+
+  double apply(Op op, double a, double b, std::size_t at) const {
+    switch (op) {
+      case Op::pow:
+        if (a < 0 && std::floor(b) != b) fail(at, "a negative number to a non-integer power");
+        return std::pow(a, b);
+      case Op::mul:
+        return a * b;
+      case Op::div:
+        if (b == 0) fail(at, "division by zero");
+        return a / b;
+      case Op::mod: {
+        if (b == 0) fail(at, "MOD by zero");
+        double r = std::fmod(a, b);
+        if (r < 0) r += std::abs(b);
+        return r;
+      }
+      case Op::add:
+        return a + b;
+      case Op::sub:
+        return a - b;
+      case Op::eq:
+        return std::abs(a - b) < kTolEqual ? 1 : 0;
+      case Op::ne:
+        return std::abs(a - b) >= kTolEqual ? 1 : 0;
+      case Op::gt:
+        return a > b ? 1 : 0;
+      case Op::ge:
+        return (std::abs(a - b) < kTolEqual || a >= b) ? 1 : 0;
+      case Op::lt:
+        return a < b ? 1 : 0;
+      case Op::le:
+        return (std::abs(a - b) < kTolEqual || a <= b) ? 1 : 0;
+      case Op::and_:
+        return (a != 0 && b != 0) ? 1 : 0;
+      case Op::or_:
+        return (a != 0 || b != 0) ? 1 : 0;
+      case Op::xor_:
+        return ((a != 0) != (b != 0)) ? 1 : 0;
+      case Op::none:
+        break;
+    }
+    return a;
+  }
+
+  // A function name and '[' at i (else the letter is the next word: "X F100").
+  bool function_follows(std::size_t i) const {
+    const std::string& s = line_.text;
+    std::size_t j = i;
+    while (j < s.size() && s[j] >= 'a' && s[j] <= 'z') ++j;
+    return j > i + 1 && j < s.size() && s[j] == '[';
+  }
+
+  double read_function(std::size_t& i) {
+    const std::string& s = line_.text;
+    const std::size_t at = i;
+    std::size_t j = i;
+    while (j < s.size() && s[j] >= 'a' && s[j] <= 'z') ++j;
+    const std::string_view name = std::string_view(s).substr(i, j - i);
+    static constexpr std::array<std::string_view, 14> kNames{
+        "abs", "acos", "asin",  "atan", "cos",  "exp", "fix",
+        "fup", "ln",   "round", "sin",  "sqrt", "tan", "exists"};
+    if (std::find(kNames.begin(), kNames.end(), name) == kNames.end()) {
+      fail(at, fmt::format("unknown function '{}' (ABS ACOS ASIN ATAN COS EXISTS EXP FIX FUP LN "
+                           "ROUND SIN SQRT TAN)",
+                           name));
+    }
+    i = j;
+    if (i >= s.size() || s[i] != '[') {
+      fail(i, fmt::format("{} needs its argument in [ ]", name));
+    }
+    if (name == "exists") {
+      // EXISTS[#<name>]: 1 when the named parameter is defined.
+      ++i;
+      if (s.compare(i, 2, "#<") != 0) fail(i, "EXISTS needs a named parameter: EXISTS[#<name>]");
+      const std::size_t close = s.find('>', i);
+      if (close == std::string::npos) fail(i, "the parameter name has no closing '>'");
+      const std::string pname = s.substr(i + 2, close - i - 2);
+      i = close + 1;
+      if (i >= s.size() || s[i] != ']') fail(i, "expected ']' after EXISTS's parameter");
+      ++i;
+      return find_named(pname) != nullptr ? 1 : 0;
+    }
+    const double x = read_expression(i);
+    if (name == "atan") {
+      // ATAN[y]/[x]: degrees, the quadrant from both signs.
+      if (i >= s.size() || s[i] != '/') fail(i, "ATAN is written ATAN[y]/[x]");
+      ++i;
+      if (i >= s.size() || s[i] != '[') fail(i, "ATAN is written ATAN[y]/[x]");
+      const double xx = read_expression(i);
+      return std::atan2(x, xx) * 180.0 / kPi;
+    }
+    if (name == "abs") return std::abs(x);
+    if (name == "acos" || name == "asin") {
+      if (x < -1 || x > 1) fail(at, fmt::format("{} of {:g}, outside -1 .. 1", name, x));
+      return (name == "acos" ? std::acos(x) : std::asin(x)) * 180.0 / kPi;
+    }
+    if (name == "cos") return std::cos(x * kPi / 180.0);
+    if (name == "sin") return std::sin(x * kPi / 180.0);
+    if (name == "tan") return std::tan(x * kPi / 180.0);
+    if (name == "exp") return std::exp(x);
+    if (name == "fix") return std::floor(x);
+    if (name == "fup") return std::ceil(x);
+    if (name == "ln") {
+      if (x <= 0) fail(at, fmt::format("LN of {:g}, which is not > 0", x));
+      return std::log(x);
+    }
+    if (name == "round") {
+      if (std::abs(x) > 2e9) fail(at, fmt::format("ROUND of {:g}, beyond +-2e9", x));
+      return static_cast<double>(static_cast<int>(x + (x < 0 ? -0.5 : 0.5)));
+    }
+    // sqrt
+    if (x < 0) fail(at, fmt::format("SQRT of {:g}, which is negative", x));
+    return std::sqrt(x);
+  }
+
+  // '#' then a number/expression (numbered) or <name>.
+  double read_parameter(std::size_t& i) {
+    const std::size_t at = i;
+    ++i;
+    if (i < line_.text.size() && line_.text[i] == '<') {
+      const std::string name = read_name(i);
+      return named_value(name, at);
+    }
+    const int index = parameter_index(read_value(i), at);
+    return params_[static_cast<std::size_t>(index)];
+  }
+
+  int parameter_index(double v, std::size_t at) const {
+    const double r = std::round(v);
+    if (std::abs(v - r) > 1e-4) fail(at, fmt::format("parameter number {:g} is not whole", v));
+    if (r < 1 || r >= kMaxParameter) {
+      fail(at, fmt::format("parameter number {:g} is outside 1 .. {}", r, kMaxParameter - 1));
+    }
+    return static_cast<int>(r);
+  }
+
+  // At '<': the name up to '>' (blanks already removed, lower case).
+  std::string read_name(std::size_t& i) {
+    const std::size_t close = line_.text.find('>', i);
+    if (close == std::string::npos) fail(i, "the parameter name has no closing '>'");
+    if (close == i + 1) fail(i, "an empty parameter name");
+    std::string name = line_.text.substr(i + 1, close - i - 1);
+    i = close + 1;
+    return name;
+  }
+
+  double* find_named(const std::string& name) {
+    if (!name.empty() && name[0] == '_') {
+      auto it = globals_.find(name);
+      return it == globals_.end() ? nullptr : &it->second;
+    }
+    for (auto& [k, v] : frames_.back().locals) {
+      if (k == name) return &v;
+    }
+    return nullptr;
+  }
+
+  double named_value(const std::string& name, std::size_t at) {
+    if (const auto v = predefined(name)) return *v;
+    if (const double* p = find_named(name)) return *p;
+    fail(at, fmt::format("named parameter #<{}> is not defined", name));
+  }
+
+  // LinuxCNC's read-only named parameters (the ones that describe motion).
+  std::optional<double> predefined(const std::string& name) const {
+    if (name.empty() || name[0] != '_') return std::nullopt;
+    const double u = unit_;
+    if (name == "_x") return cur_pos_.x() / u;
+    if (name == "_y") return cur_pos_.y() / u;
+    if (name == "_z") return cur_pos_.z() / u;
+    if (name == "_abs_x" || name == "_abs_y" || name == "_abs_z") {
+      const Vec3 m = to_machine_tip(cur_pos_);
+      return (name == "_abs_x" ? m.x() : name == "_abs_y" ? m.y() : m.z()) / u;
+    }
+    if (name == "_value") return value_;
+    if (name == "_value_returned") return value_returned_ ? 1 : 0;
+    if (name == "_line") return static_cast<double>(cur_.line_no);
+    if (name == "_metric") return u == 1 ? 1 : 0;
+    if (name == "_imperial") return u == 1 ? 0 : 1;
+    if (name == "_absolute") return absolute_ ? 1 : 0;
+    if (name == "_incremental") return absolute_ ? 0 : 1;
+    if (name == "_inverse_time") return feed_mode_ == FeedMode::inverse_time ? 1 : 0;
+    if (name == "_units_per_minute") return feed_mode_ == FeedMode::per_minute ? 1 : 0;
+    if (name == "_units_per_rev") return feed_mode_ == FeedMode::per_rev ? 1 : 0;
+    if (name == "_feed") return feed_ / u;  // program units
+    if (name == "_rpm") return speed_;
+    if (name == "_current_tool") return tool_loaded_;
+    if (name == "_selected_tool") return tool_selected_;
+    if (name == "_tool_offset") return tool_z_ / u;
+    if (name == "_coord_system") {
+      static constexpr std::array<int, 9> kCodes{540, 550, 560, 570, 580, 590, 591, 592, 593};
+      return kCodes[static_cast<std::size_t>(system_ - 1)];
+    }
+    if (name == "_plane") return plane_ == Plane::xy ? 170 : plane_ == Plane::zx ? 180 : 190;
+    if (name == "_motion_mode") return motion_ < 0 ? 800 : motion_;
+    if (name == "_ijk_absolute_mode") return arc_absolute_ ? 1 : 0;
+    if (name == "_retract_r_plane") return retract_r_ ? 1 : 0;
+    if (name == "_retract_old_z") return retract_r_ ? 0 : 1;
+    if (name == "_call_level") return static_cast<double>(frames_.size() - 1);
+    if (name == "_spindle_on") return spindle_on_ ? 1 : 0;
+    if (name == "_ccomp") return 400;
+    return std::nullopt;
+  }
+
+  void set_named(const std::string& name, double v, std::uint32_t column) {
+    if (predefined(name)) {
+      fail_at(column,
+              fmt::format("#<{}> is read-only (one of LinuxCNC's predefined parameters)", name));
+    }
+    if (double* p = find_named(name)) {
+      *p = v;
+    } else if (name[0] == '_') {
+      globals_.emplace(name, v);
+    } else {
+      frames_.back().locals.emplace_back(name, v);
+    }
+  }
+
+  // ---- the block ----------------------------------------------------------------------------
+
+  void read_block(std::size_t i) {
+    block_.clear();
+    const std::string& s = line_.text;
+    while (i < s.size()) {
+      const char c = s[i];
+      const std::size_t at = i;
+      if (c == '#') {
+        // #n = value or #<name> = value
+        ++i;
+        std::string name;
+        int index = 0;
+        if (i < s.size() && s[i] == '<') {
+          name = read_name(i);
+        } else {
+          index = parameter_index(read_value(i), at);
+        }
+        if (i >= s.size() || s[i] != '=') {
+          fail(i, "a parameter on its own is not a word: write #1 = value to set it");
+        }
+        ++i;
+        const double v = read_value(i);
+        if (name.empty()) {
+          block_.numbered.push_back({index, v});
+        } else {
+          block_.named.push_back({std::move(name), v, col_of(at)});
+        }
+        continue;
+      }
+      if (c < 'a' || c > 'z') {
+        fail(i, fmt::format("unexpected character {} (expected a word such as G1 or X10)",
+                            ngc::shown(c)));
+      }
+      ++i;
+      char letter = c;
+      // Sinumerik's radius "CR=5".
+      if (c == 'c' && s.compare(i, 2, "r=") == 0) {
+        i += 2;
+        letter = 'r';
+      }
+      if (i >= s.size()) fail(at, fmt::format("'{}' needs a number after it", upper(c)));
+      word_ = c;
+      word_at_ = at;
+      const double v = read_value(i);
+      word_ = 0;
+      if (letter == 'g' || letter == 'm') {
+        (letter == 'g' ? block_.g : block_.m).push_back({code10(v), col_of(at)});
+        continue;
+      }
+      if (letter == 'o') fail(at, "an O-word must start its line");
+      if (letter == 'e') fail(at, "unsupported word 'E'");
+      const auto k = static_cast<std::size_t>(letter - 'a');
+      if (block_.has(letter)) {
+        fail(at, fmt::format("two {} words in one block", upper(letter)));
+      }
+      block_.present |= 1U << k;
+      block_.value[k] = v;
+      block_.column[k] = col_of(at);
+    }
+  }
+
+  static char upper(char c) { return static_cast<char>(c - 'a' + 'A'); }
+
+  // A length word in mm.
+  double len(char c) const { return block_[c] * unit_; }
+
+  void check_range(char c) const {
+    if (std::abs(block_[c]) * unit_ > kMaxCoordinate) {
+      fail_at(block_.col(c), fmt::format("{}{:g} is beyond +-1e6 mm, what trochomill represents",
+                                         upper(c), block_[c]));
+    }
+  }
+
+  void execute() {
+    // Words no milling program of ours uses: refused by name.
+    for (const char c : std::string_view("abcuvw")) {
+      if (block_.has(c)) {
+        fail_at(block_.col(c),
+                fmt::format("rotary axis {} is not supported (3-axis programs only)", upper(c)));
+      }
+    }
+    for (const char c : std::string_view("xyzijkrq")) {
+      if (block_.has(c)) check_range(c);
+    }
+    // G codes by modal group (two of one group are an error).
+    int motion = -1, group0 = -1, plane = -1, units = -1, distance = -1, arc_distance = -1,
+        feed_mode = -1, tool_length = -1, system = -1, retract = -1, comp = -1, dwell = -1;
+    std::uint32_t motion_col = 0, group0_col = 0;
+    bool g53 = false;
+    auto set = [&](int& slot, int g, std::uint32_t column, const char* what) {
+      // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
+      if (&slot == &motion && (slot == 800 || g == 800) && slot != g) {
+        if (slot < 0 || slot == 800) slot = g;
+        return;
+      }
+      if (slot >= 0) fail_at(column, fmt::format("two {} codes in one block", what));
+      slot = g;
+    };
+    for (const auto& [g, column] : block_.g) {
+      switch (g) {
+        case 0:
+        case 10:
+        case 20:
+        case 30:
+        case 730:
+        case 800:
+        case 810:
+        case 820:
+        case 830:
+        case 850:
+        case 860:
+        case 890:
+          set(motion, g, column, "motion");
+          motion_col = column;
+          break;
+        case 40:
+          set(dwell, g, column, "dwell");
+          break;
+        case 100:
+        case 280:
+        case 281:
+        case 300:
+        case 301:
+        case 520:
+        case 920:
+        case 921:
+        case 922:
+        case 923:
+          set(group0, g, column, "non-modal (G10 G28 G30 G52 G92)");
+          group0_col = column;
+          break;
+        case 530:
+          g53 = true;
+          break;
+        case 170:
+        case 180:
+        case 190:
+          set(plane, g, column, "plane");
+          break;
+        case 200:
+        case 210:
+        case 700:
+        case 710:
+        case 7000:
+        case 7100:
+          set(units, g, column, "units");
+          break;
+        case 900:
+        case 910:
+          set(distance, g, column, "distance mode");
+          break;
+        case 901:
+        case 911:
+          set(arc_distance, g, column, "arc distance mode");
+          break;
+        case 930:
+        case 940:
+        case 950:
+          set(feed_mode, g, column, "feed mode");
+          break;
+        case 430:
+        case 431:
+        case 490:
+          set(tool_length, g, column, "tool length");
+          break;
+        case 540:
+        case 550:
+        case 560:
+        case 570:
+        case 580:
+        case 590:
+        case 591:
+        case 592:
+        case 593:
+          set(system, g, column, "coordinate system");
+          break;
+        case 980:
+        case 990:
+          set(retract, g, column, "retract mode");
+          break;
+        case 400:
+        case 410:
+        case 420:
+        case 411:
+        case 421:
+          set(comp, g, column, "cutter compensation");
+          break;
+        case 610:
+        case 611:
+        case 640:
+        case 970:
+        case 150:
+        case 160:
+          break;  // path blending, constant spindle speed, polar off: no effect on the path
+        default:
+          unsupported_g(g, column);
+      }
+    }
+    // Feed mode, F, S, T, M, then the G groups in LinuxCNC's order.
+    if (feed_mode >= 0) {
+      feed_mode_ = feed_mode == 930   ? FeedMode::inverse_time
+                   : feed_mode == 950 ? FeedMode::per_rev
+                                      : FeedMode::per_minute;
+    }
+    inverse_f_ = -1;
+    if (block_.has('f')) {
+      if (block_['f'] < 0) fail_at(block_.col('f'), "feed F must be >= 0");
+      if (feed_mode_ == FeedMode::inverse_time) {
+        inverse_f_ = block_['f'];
+      } else {
+        feed_ = block_['f'] * unit_;  // a unit change later keeps the feed (as LinuxCNC)
+        feed_given_ = true;
+      }
+    }
+    if (block_.has('s')) {
+      if (block_['s'] < 0) fail_at(block_.col('s'), "spindle speed S must be >= 0");
+      speed_ = block_['s'];
+      prog_.info.max_spindle_rpm = std::max(prog_.info.max_spindle_rpm, speed_);
+    }
+    if (block_.has('t')) {
+      if (block_['t'] < 0 || block_['t'] != std::floor(block_['t'])) {
+        fail_at(block_.col('t'), "tool number T must be a whole number >= 0");
+      }
+      tool_selected_ = block_['t'];
+    }
+    bool stop = false;
+    for (const auto& [m, column] : block_.m) {
+      switch (m) {
+        case 0:
+        case 10:
+        case 600:
+          break;  // pause: the program goes on when the operator resumes
+        case 20:
+        case 300:
+          stop = true;
+          break;
+        case 30:
+        case 40:
+          spindle_on_ = true;
+          break;
+        case 50:
+          spindle_on_ = false;
+          break;
+        case 60:
+          tool_loaded_ = tool_selected_;
+          break;
+        case 70:
+        case 80:
+        case 90:
+        case 480:
+        case 490:
+        case 500:
+        case 510:
+        case 520:
+        case 530:
+        case 620:
+        case 630:
+        case 640:
+        case 650:
+        case 660:
+        case 670:
+        case 680:
+          break;  // coolant, overrides, outputs: no effect on the path
+        case 610:
+          if (!block_.has('q')) fail_at(column, "M61 needs the tool number in Q");
+          tool_loaded_ = block_['q'];
+          break;
+        case 700:
+          save_modal(saved_);
+          break;
+        case 710:
+          saved_.valid = false;
+          break;
+        case 720:
+          if (!saved_.valid) fail_at(column, "M72 without a state saved by M70");
+          restore_modal(saved_);
+          break;
+        case 730:
+          if (frames_.size() < 2) fail_at(column, "M73 is for subroutines (it restores at return)");
+          save_modal(frames_.back().restore_modal ? sub_saved_.back() : push_sub_saved());
+          frames_.back().restore_modal = true;
+          break;
+        default:
+          if (m >= 1000 && m <= 1990 && m % 10 == 0) {
+            warn(fmt::format("{} (a user M-code) was ignored: it runs a program of the machine's",
+                             code_name('M', m)));
+            break;
+          }
+          fail_at(column, fmt::format("unsupported M-code {}", code_name('M', m)));
+      }
+    }
+    if (dwell >= 0 && !block_.has('p')) fail_at(block_.g.front().column, "G4 needs P (seconds)");
+    if (plane >= 0) plane_ = plane == 170 ? Plane::xy : plane == 180 ? Plane::zx : Plane::yz;
+    if (units >= 0) {
+      unit_ = (units == 200 || units == 700 || units == 7000) ? 25.4 : 1.0;
+      if (unit_ != 1.0) prog_.info.inch_units_seen = true;
+    }
+    if (comp >= 0) {
+      if (comp != 400) {
+        fail_at(block_.g.front().column,
+                "cutter radius compensation (G41/G42) is not supported: the programmed path "
+                "would not be the tool-centre path");
+      }
+    }
+    if (tool_length >= 0) tool_length_offset(tool_length);
+    if (system >= 0) select_system(system);
+    if (distance >= 0) absolute_ = distance == 900;
+    if (arc_distance >= 0) arc_absolute_ = arc_distance == 901;
+    if (retract >= 0) retract_r_ = retract == 990;
+    if (group0 >= 0) {
+      non_modal(group0, group0_col);
+    }
+    if (motion >= 0) {
+      if (motion == 800) {
+        motion_ = -1;
+        cycle_il_flag_ = false;
+      } else {
+        motion_ = motion;
+      }
+    }
+    const bool axis_used_by_group0 =
+        group0 == 100 || group0 == 280 || group0 == 300 || group0 == 520 || group0 == 920;
+    if (block_.has_axis() && !axis_used_by_group0) {
+      if (motion == 800) {
+        fail_at(motion_col, "G80 cancels the motion mode: it cannot take axis words");
+      }
+      if (motion_ < 0) {
+        const char first = block_.has('x') ? 'x' : block_.has('y') ? 'y' : 'z';
+        fail_at(block_.col(first), "axis words without a motion mode (G0/G1/G2/G3)");
+      }
+      ++prog_.info.motion_blocks;
+      if (motion_ >= 730) {
+        canned_cycle(motion_);
+      } else {
+        move(g53, motion >= 0 ? motion_col
+                              : block_.col(block_.has('x')   ? 'x'
+                                           : block_.has('y') ? 'y'
+                                                             : 'z'));
+      }
+    } else if (motion >= 20 && motion <= 30 && !axis_used_by_group0) {
+      fail_at(motion_col, "arc without an end point");
+    } else if (g53) {
+      fail_at(block_.g.front().column, "G53 needs axis words (a move in machine coordinates)");
+    }
+    if (motion_ >= 0 && motion_ < 730) cycle_il_flag_ = false;
+    check_unused(group0, dwell, tool_length);
+    if (stop) end_program();
+  }
+
+  // Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).
+  void check_unused(int group0, int dwell, int tool_length) const {
+    const bool moved = block_.has_axis() && group0 != 100 && group0 != 920 && group0 != 520;
+    const bool cycle = moved && motion_ >= 730;
+    const bool arc = moved && (motion_ == 20 || motion_ == 30);
+    bool m61 = false;
+    for (const auto& mc : block_.m) m61 = m61 || mc.code10 == 610;
+    auto refuse = [&](char c, const char* users) {
+      fail_at(block_.col(c), fmt::format("{} word with no {} to use it", upper(c), users));
+    };
+    if (block_.has('q') && !(cycle && (motion_ == 730 || motion_ == 830)) && !m61) {
+      refuse('q', "G73, G83 or M61");
+    }
+    if (block_.has('l') && !cycle && group0 != 100) refuse('l', "G10 or canned cycle");
+    if (block_.has('r') && !arc && !cycle && group0 != 100) {
+      refuse('r', "G2/G3, canned cycle or G10");
+    }
+    for (const char c : std::string_view("ijk")) {
+      if (block_.has(c) && !arc) refuse(c, "G2/G3");
+    }
+    if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100) {
+      refuse('p', "G2/G3, G4, G10 or canned cycle");
+    }
+    if (block_.has('h') && tool_length != 430) refuse('h', "G43");
+  }
+
+  [[noreturn]] void unsupported_g(int g, std::uint32_t column) const {
+    const std::string name = code_name('G', g);
+    if (g == 330 || g == 331 || g == 760) {
+      fail_at(column, fmt::format("{} (threading) is not supported on a milling path", name));
+    }
+    if (g >= 380 && g <= 385) fail_at(column, fmt::format("{} (probing) is not supported", name));
+    if (g == 50 || g == 51 || g == 52 || g == 53) {
+      fail_at(column, fmt::format("{} (splines) is not supported", name));
+    }
+    if (g == 840 || g == 740 || g == 870 || g == 880) {
+      fail_at(column,
+              fmt::format("canned cycle {} is not supported (G73 G81-G83 G85 G86 G89 are)", name));
+    }
+    if (g == 70 || g == 80 || g == 960) {
+      fail_at(column, fmt::format("{} is a lathe mode, not supported", name));
+    }
+    fail_at(column, fmt::format("unsupported G-code {}", name));
+  }
+
+  // ---- modal state changes ------------------------------------------------------------------
+
+  ModalSave& push_sub_saved() {
+    sub_saved_.emplace_back();
+    return sub_saved_.back();
+  }
+
+  void save_modal(ModalSave& m) const {
+    m.valid = true;
+    m.plane = plane_;
+    m.unit = unit_;
+    m.absolute = absolute_;
+    m.arc_absolute = arc_absolute_;
+    m.feed_mode = feed_mode_;
+    m.feed = feed_;
+    m.speed = speed_;
+    m.retract_r = retract_r_;
+    m.system = system_;
+  }
+  void restore_modal(const ModalSave& m) {
+    plane_ = m.plane;
+    unit_ = m.unit;
+    absolute_ = m.absolute;
+    arc_absolute_ = m.arc_absolute;
+    feed_mode_ = m.feed_mode;
+    feed_ = m.feed;
+    speed_ = m.speed;
+    retract_r_ = m.retract_r;
+    if (m.system != system_) select_system(m.system == 1 ? 540 : 540 + (m.system - 1) * 10);
+  }
+
+  // Parameters of a coordinate system n (1 = G54 .. 9 = G59.3): X at 5201 + 20 n, R at 5210 +
+  // 20 n. G92: 5211-5213, enabled at 5210. G28: 5161-5163, G30: 5181-5183. All mm.
+  static std::size_t sys_param(int n, int axis) {
+    return static_cast<std::size_t>(5201 + 20 * n + axis);
+  }
+
+  void init_offsets() {
+    if (opt_.work_system < 1 || opt_.work_system > 9) {
+      throw InputError(
+          fmt::format("work system {} is outside 1 (G54) .. 9 (G59.3)", opt_.work_system));
+    }
+    for (int n = 1; n <= 9; ++n) {
+      const auto& o = opt_.work_offsets_mm[static_cast<std::size_t>(n - 1)];
+      for (int a = 0; a < 3; ++a) params_[sys_param(n, a)] = o ? (*o)[a] : 0.0;
+      params_[sys_param(n, 9)] = opt_.work_rotation_deg[static_cast<std::size_t>(n - 1)];
+    }
+    system_ = opt_.work_system;
+    params_[5220] = system_;
+    out_origin_ = Vec3(params_[sys_param(system_, 0)], params_[sys_param(system_, 1)],
+                       params_[sys_param(system_, 2)]);
+    out_rotation_ = params_[sys_param(system_, 9)];
+    load_system();
+    // G28 / G30 positions: given, or X0 Y0 of the output frame at home_z above it.
+    auto home = [&](const std::optional<Vec3>& given, std::size_t p) {
+      const Vec3 h = given ? *given : out_origin_ + Vec3(0, 0, opt_.home_z_mm);
+      for (int a = 0; a < 3; ++a) params_[p + static_cast<std::size_t>(a)] = h[a];
+      return given.has_value();
+    };
+    g28_given_ = home(opt_.g28_position_mm, 5161);
+    g30_given_ = home(opt_.g30_position_mm, 5181);
+  }
+
+  void load_system() {
+    origin_ = Vec3(params_[sys_param(system_, 0)], params_[sys_param(system_, 1)],
+                   params_[sys_param(system_, 2)]);
+    rotation_ = params_[sys_param(system_, 9)];
+  }
+
+  // Machine position of the tool tip for program coordinates p.
+  [[nodiscard]] Vec3 to_machine_tip(const Vec3& p) const {
+    double x = p.x() + g92_.x(), y = p.y() + g92_.y();
+    rotate(x, y, rotation_);
+    return Vec3(x + origin_.x(), y + origin_.y(), p.z() + g92_.z() + origin_.z());
+  }
+  // Program coordinates of a machine tip position (LinuxCNC's find_relative without the tool).
+  [[nodiscard]] Vec3 from_machine_tip(const Vec3& m) const {
+    double x = m.x() - origin_.x(), y = m.y() - origin_.y();
+    rotate(x, y, -rotation_);
+    return Vec3(x - g92_.x(), y - g92_.y(), m.z() - origin_.z() - g92_.z());
+  }
+  // The output frame (the job's work system as the program started) of program coordinates.
+  [[nodiscard]] Vec3 to_out(const Vec3& p) const {
+    const Vec3 m = to_machine_tip(p);
+    double x = m.x() - out_origin_.x(), y = m.y() - out_origin_.y();
+    rotate(x, y, -out_rotation_);
+    return Vec3(x, y, m.z() - out_origin_.z());
+  }
+  // A direction (no translation) from program to output frame.
+  [[nodiscard]] Vec3 dir_to_out(const Vec3& d) const {
+    double x = d.x(), y = d.y();
+    rotate(x, y, rotation_ - out_rotation_);
+    return Vec3(x, y, d.z());
+  }
+
+  void note_system_used(int n) {
+    if (n != opt_.work_system && !opt_.work_offsets_mm[static_cast<std::size_t>(n - 1)] &&
+        !system_warned_[static_cast<std::size_t>(n - 1)]) {
+      system_warned_[static_cast<std::size_t>(n - 1)] = true;
+      static constexpr std::array<std::string_view, 9> kNames{
+          "G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
+      warn(
+          fmt::format("{} is used but its offset is not given ([machine] work_offsets): "
+                      "assumed equal to {}'s",
+                      kNames[static_cast<std::size_t>(n - 1)],
+                      kNames[static_cast<std::size_t>(opt_.work_system - 1)]));
+      // Unknown offsets are taken as the output system's (a program moving between systems on
+      // one part then keeps its geometry).
+      for (int a = 0; a < 3; ++a)
+        params_[sys_param(n, a)] = params_[sys_param(opt_.work_system, a)];
+    }
+  }
+
+  void select_system(int g) {
+    static constexpr std::array<int, 9> kCodes{540, 550, 560, 570, 580, 590, 591, 592, 593};
+    const int n = static_cast<int>(std::find(kCodes.begin(), kCodes.end(), g) - kCodes.begin()) + 1;
+    if (n == system_) return;
+    note_system_used(n);
+    const Vec3 machine = to_machine_tip(cur_pos_);
+    system_ = n;
+    params_[5220] = n;
+    load_system();
+    cur_pos_ = from_machine_tip(machine);
+  }
+
+  void tool_length_offset(int g) {
+    double z = 0;
+    if (g == 430) {
+      double h = tool_loaded_;
+      if (block_.has('h')) h = block_['h'];
+      if (h < 0 || h != std::floor(h)) fail_at(block_.col('h'), "H must be a whole number >= 0");
+      const auto it = tools_.find(static_cast<int>(h));
+      unknown_tool_ = -1;
+      if (it != tools_.end()) {
+        z = it->second.length_mm;
+      } else if (h != 0) {
+        unknown_tool_ = h;  // named if a machine-coordinate move needs the length
+      }
+    } else if (g == 431) {
+      unknown_tool_ = -1;
+      if (!block_.has('z')) fail_at(block_.g.front().column, "G43.1 needs the length in Z");
+      z = len('z');
+      block_.present &= ~(1U << ('z' - 'a'));  // the Z word was the offset, not a move
+    }
+    if (g == 490) unknown_tool_ = -1;
+    // The spindle does not move: the controlled point's program Z takes the change.
+    cur_pos_.z() += tool_z_ - z;
+    tool_z_ = z;
+  }
+
+  void non_modal(int g, std::uint32_t column) {
+    switch (g) {
+      case 100:
+        g10(column);
+        break;
+      case 280:
+      case 300:
+        home_move(g, column);
+        break;
+      case 281:
+      case 301: {
+        // Store the current machine position (of the spindle's gauge line, as LinuxCNC) as
+        // the G28 / G30 position.
+        const Vec3 m = to_machine_tip(cur_pos_) + Vec3(0, 0, tool_z_);
+        const std::size_t p = g == 281 ? 5161 : 5181;
+        for (int a = 0; a < 3; ++a) params_[p + static_cast<std::size_t>(a)] = m[a];
+        (g == 281 ? g28_given_ : g30_given_) = true;
+        break;
+      }
+      case 920: {
+        // G92: offsets so that the current point has the given coordinates.
+        if (!block_.has_axis()) fail_at(column, "G92 needs at least one axis word");
+        for (int a = 0; a < 3; ++a) {
+          const char c = static_cast<char>('x' + a);
+          if (!block_.has(c)) continue;
+          g92_[a] = cur_pos_[a] + g92_[a] - len(c);
+          cur_pos_[a] = len(c);
+          params_[5211 + static_cast<std::size_t>(a)] = g92_[a];
+        }
+        params_[5210] = 1;
+        break;
+      }
+      case 520: {
+        // G52: a local offset, given directly.
+        for (int a = 0; a < 3; ++a) {
+          const char c = static_cast<char>('x' + a);
+          if (!block_.has(c)) continue;
+          cur_pos_[a] += g92_[a] - len(c);
+          g92_[a] = len(c);
+          params_[5211 + static_cast<std::size_t>(a)] = g92_[a];
+        }
+        params_[5210] = 1;
+        break;
+      }
+      case 921:
+      case 922:
+        cur_pos_ += g92_;
+        g92_.setZero();
+        params_[5210] = 0;
+        if (g == 921) {
+          for (std::size_t p = 5211; p <= 5219; ++p) params_[p] = 0;
+        }
+        break;
+      case 923:
+        params_[5210] = 1;
+        for (int a = 0; a < 3; ++a) {
+          const double o = params_[5211 + static_cast<std::size_t>(a)];
+          cur_pos_[a] += g92_[a] - o;
+          g92_[a] = o;
+        }
+        break;
+      default:
+        break;
+    }
+  }
+
+  void g10(std::uint32_t column) {
+    if (!block_.has('l')) fail_at(column, "G10 needs L (L1 tool table, L2 or L20 work offsets)");
+    const int l = static_cast<int>(std::lround(block_['l']));
+    if (l == 1 || l == 10 || l == 11) {
+      // Tool table entries: the length matters only to machine-coordinate moves.
+      if (!block_.has('p')) fail_at(column, fmt::format("G10 L{} needs the tool number in P", l));
+      ToolTableEntry& t = tools_[static_cast<int>(block_['p'])];
+      if (l == 1) {
+        if (block_.has('z')) t.length_mm = len('z');
+        if (block_.has('r')) t.diameter_mm = 2 * len('r');
+      } else {
+        // L10/L11: the length so that the current point would be at the given Z.
+        if (block_.has('z')) t.length_mm = cur_pos_.z() + tool_z_ - len('z');
+      }
+      return;
+    }
+    if (l != 2 && l != 20) {
+      fail_at(block_.col('l'), fmt::format("G10 L{} is not supported (L1 L2 L10 L11 L20 are)", l));
+    }
+    if (!block_.has('p'))
+      fail_at(column, fmt::format("G10 L{} needs the coordinate system in P", l));
+    const double pv = block_['p'];
+    int n = static_cast<int>(pv + 0.0001);
+    if (pv < 0 || pv > 9.0001 || std::abs(pv - n) > 1e-4) {
+      fail_at(block_.col('p'),
+              fmt::format("G10 L{} P{:g}: P is 0 (the active system) or 1 .. 9", l, pv));
+    }
+    if (n == 0) n = system_;
+    // The machine position stays; the active system's coordinates follow the new origin.
+    const Vec3 machine = to_machine_tip(cur_pos_);
+    const double r = block_.has('r') ? block_['r'] : params_[sys_param(n, 9)];
+    if (block_.has('r')) {
+      if (l == 20) fail_at(block_.col('r'), "R is not allowed in G10 L20");
+      params_[sys_param(n, 9)] = r;
+    }
+    if (l == 2) {
+      for (int a = 0; a < 3; ++a) {
+        const char c = static_cast<char>('x' + a);
+        if (block_.has(c)) params_[sys_param(n, a)] = len(c);
+      }
+    } else {
+      // L20: the origin such that the current point has the given coordinates in system n.
+      // The current point in system n (without G92, as LinuxCNC's find_current_in_system).
+      Vec3 in_n = machine;
+      in_n.x() -= params_[sys_param(n, 0)];
+      in_n.y() -= params_[sys_param(n, 1)];
+      in_n.z() -= params_[sys_param(n, 2)];
+      double cx = in_n.x(), cy = in_n.y();
+      rotate(cx, cy, -r);
+      double x = block_.has('x') ? len('x') : cx, y = block_.has('y') ? len('y') : cy;
+      double ox = cx, oy = cy;
+      rotate(ox, oy, r);
+      rotate(x, y, r);
+      params_[sys_param(n, 0)] += ox - x;
+      params_[sys_param(n, 1)] += oy - y;
+      if (block_.has('z')) params_[sys_param(n, 2)] += in_n.z() - len('z');
+    }
+    note_given(n);
+    if (n == system_) {
+      load_system();
+      cur_pos_ = from_machine_tip(machine);
+    }
+  }
+
+  // A system set by G10 is known: no warning when it is selected later.
+  void note_given(int n) { system_warned_[static_cast<std::size_t>(n - 1)] = true; }
+
+  // G28 / G30: rapid to the waypoint (the axis words, in the current mode), then to the stored
+  // position for those axes (all three when none is given).
+  void home_move(int g, std::uint32_t column) {
+    const bool given = g == 280 ? g28_given_ : g30_given_;
+    if (!given && !home_warned_) {
+      home_warned_ = true;
+      const std::size_t p = g == 280 ? 5161 : 5181;
+      const Vec3 h(params_[p], params_[p + 1], params_[p + 2]);
+      const Vec3 o = to_out(from_machine_tip(h));
+      warn(
+          fmt::format("{}: the machine's {} position is not given ([machine] {}_position): "
+                      "assumed X{:g} Y{:g} Z{:g} in the program's frame",
+                      code_name('G', g), g == 280 ? "G28" : "G30", g == 280 ? "g28" : "g30", o.x(),
+                      o.y(), o.z()));
+    }
+    ++prog_.info.motion_blocks;
+    note_tool_length(g == 280 ? "G28" : "G30");
+    const Vec3 waypoint = ends(false);
+    emit_line(waypoint, true, column);
+    cur_pos_ = waypoint;
+    const std::size_t p = g == 280 ? 5161 : 5181;
+    // The stored position is of the gauge line: the tip is the tool length below it.
+    const Vec3 home = from_machine_tip(Vec3(params_[p], params_[p + 1], params_[p + 2] - tool_z_));
+    Vec3 target = cur_pos_;
+    const bool any = block_.has_axis();
+    for (int a = 0; a < 3; ++a) {
+      if (!any || block_.has(static_cast<char>('x' + a))) target[a] = home[a];
+    }
+    emit_line(target, true, column, !any);
+    cur_pos_ = target;
+  }
+
+  // A move in machine coordinates with G43 on a tool the table does not have: say so once.
+  void note_tool_length(const char* what) {
+    if (unknown_tool_ < 0 || tool_warned_) return;
+    tool_warned_ = true;
+    warn(
+        fmt::format("{} with G43 H{:g}: tool {:g} is not in the tool table (--tool-table, "
+                    "[machine] tool_table); its length is taken as 0",
+                    what, unknown_tool_, unknown_tool_));
+  }
+
+  // The end point of a move in program coordinates (mm): the axis words in the distance mode,
+  // or G53's machine coordinates.
+  Vec3 ends(bool g53) {
+    Vec3 t = cur_pos_;
+    if (g53) {
+      note_tool_length("G53");
+      const Vec3 m = to_machine_tip(cur_pos_) + Vec3(0, 0, tool_z_);
+      Vec3 target_machine = m;
+      for (int a = 0; a < 3; ++a) {
+        const char c = static_cast<char>('x' + a);
+        if (block_.has(c)) target_machine[a] = len(c);
+      }
+      target_machine.z() -= tool_z_;
+      return from_machine_tip(target_machine);
+    }
+    for (int a = 0; a < 3; ++a) {
+      const char c = static_cast<char>('x' + a);
+      if (block_.has(c)) t[a] = absolute_ ? len(c) : cur_pos_[a] + len(c);
+    }
+    return t;
+  }
+
+  // ---- motion -------------------------------------------------------------------------------
+
+  void move(bool g53, std::uint32_t column) {
+    if (g53 && motion_ != 0 && motion_ != 10) {
+      fail_at(column, "G53 moves need G0 or G1 (a straight move in machine coordinates)");
+    }
+    const Vec3 target = ends(g53);
+    if (motion_ <= 10) {
+      emit_line(target, motion_ == 0, column);
+      cur_pos_ = target;
+      return;
+    }
+    arc(target, column);
+  }
+
+  double feed_for(double length_mm, std::uint32_t column) {
+    double f = 0;
+    switch (feed_mode_) {
+      case FeedMode::per_minute:
+        if (!(feed_ > 0)) {
+          fail_at(column, feed_given_ ? "feed move at F0: program a feed F > 0 (mm/min)"
+                                      : "feed move with no feed rate: program F before G1/G2/G3");
+        }
+        f = feed_;
+        break;
+      case FeedMode::inverse_time:
+        if (inverse_f_ < 0) {
+          fail_at(column, "inverse-time feed (G93): every feed move needs its own F");
+        }
+        if (!(inverse_f_ > 0)) fail_at(column, "inverse-time feed F0: the move would never end");
+        f = length_mm * inverse_f_;  // the move takes 1/F minutes
+        break;
+      case FeedMode::per_rev:
+        if (!(feed_ > 0)) fail_at(column, "feed per revolution (G95) with no feed F > 0");
+        if (!(speed_ > 0)) {
+          fail_at(column, "feed per revolution (G95) with the spindle speed S0: program S");
+        }
+        f = feed_ * speed_;
+        break;
+    }
+    return f;
+  }
+
+  void note_feed(double f) {
+    if (!(f > 0)) return;
+    if (prog_.info.min_feed_mm_per_min == 0 || f < prog_.info.min_feed_mm_per_min) {
+      prog_.info.min_feed_mm_per_min = f;
+    }
+    prog_.info.max_feed_mm_per_min = std::max(prog_.info.max_feed_mm_per_min, f);
+  }
+
+  void check_target(const Vec3& out, std::uint32_t column) const {
+    if (!(out.cwiseAbs().maxCoeff() <= kMaxCoordinate)) {
+      fail_at(column, fmt::format("the move reaches X{:g} Y{:g} Z{:g} mm, beyond +-1e6 mm "
+                                  "(incremental moves add up)",
+                                  out.x(), out.y(), out.z()));
+    }
+  }
+
+  // A straight move to program position `target`. `starts` marks a move that fixes every axis
+  // (G28 without axis words): it starts the path like an XY move.
+  void emit_line(const Vec3& target, bool rapid, std::uint32_t column, bool starts = false) {
+    const Vec3 end = to_out(target);
+    check_target(end, column);
+    GcodeMove mv;
+    mv.kind = rapid ? GcodeMove::Kind::rapid : GcodeMove::Kind::feed;
+    mv.start_mm = started_ ? out_pos_ : to_out(cur_pos_);
+    mv.end_mm = end;
+    mv.plane = plane_code();
+    mv.file = sources_[cur_.source].name;
+    mv.line = cur_.line_no;
+    if (!started_) {
+      // The machine's position before the program is unknown: the first move in X or Y only
+      // establishes where the path starts.
+      mv.feed_mm_per_min = rapid ? opt_.rapid_rate_mm_per_min : 0;
+      if (!rapid) mv.feed_mm_per_min = feed_for((end - mv.start_mm).norm(), column);
+      trace(mv);
+      out_pos_ = end;
+      started_ = starts || block_.has('x') || block_.has('y');
+      return;
+    }
+    const double length = (end - out_pos_).norm();
+    const double f = rapid ? opt_.rapid_rate_mm_per_min : feed_for(length, column);
+    if (!rapid) note_feed(f);
+    mv.feed_mm_per_min = f;
+    mv.path_started = true;
+    trace(mv);
+    if (length > 0) {
+      append(Segment::line(out_pos_, end, rapid ? Motion::rapid : Motion::feed, f), column);
+    }
+    out_pos_ = end;
+  }
+
+  [[nodiscard]] const char* unit_name() const { return unit_ == 1.0 ? "mm" : "in"; }
+
+  int plane_code() const { return plane_ == Plane::xy ? 17 : plane_ == Plane::zx ? 18 : 19; }
+
+  void trace(const GcodeMove& mv) const {
+    if (opt_.trace) opt_.trace(mv);
+  }
+
+  void append(Segment seg, std::uint32_t column) {
+    try {
+      prog_.path.append(std::move(seg));
+    } catch (const Error& e) {
+      fail_at(column, e.what());
+    }
+  }
+
+  void arc(const Vec3& target, std::uint32_t column) {
+    const double u = unit_;
+    const Vec3 from = cur_pos_;
+    // The plane: e1, e2 span it, n = e1 x e2 (G17: XY/Z, G18: ZX/Y, G19: YZ/X); positive
+    // angles turn from e1 to e2 (G3).
+    int i1 = 0, i2 = 1, in = 2;
+    char o1 = 'i', o2 = 'j';
+    if (plane_ == Plane::zx) {
+      i1 = 2;
+      i2 = 0;
+      in = 1;
+      o1 = 'k';
+      o2 = 'i';
+    } else if (plane_ == Plane::yz) {
+      i1 = 1;
+      i2 = 2;
+      in = 0;
+      o1 = 'j';
+      o2 = 'k';
+    }
+    const double s1 = from[i1], s2 = from[i2], t1 = target[i1], t2 = target[i2];
+    const bool ccw = motion_ == 30;
+    double c1, c2;
+    if (block_.has('r')) {
+      const double rr = len('r');
+      const double dx = t1 - s1, dy = t2 - s2, chord = std::hypot(dx, dy);
+      if (chord <= 1e-12) fail_at(column, "an R-form arc cannot be a full circle (end = start)");
+      if (std::abs(rr) * 2 < chord - opt_.arc_radius_tolerance_mm) {
+        fail_at(column, fmt::format("arc radius R{:g} is smaller than half the chord ({:.4f} {})",
+                                    block_['r'], 0.5 * chord / u, unit_name()));
+      }
+      const double h = std::sqrt(std::max(0.0, rr * rr - 0.25 * chord * chord));
+      // Centre left of the chord for a ccw arc of <= 180 degrees, right for cw; R < 0 flips.
+      double side = ccw ? 1.0 : -1.0;
+      if (rr < 0) side = -side;
+      c1 = 0.5 * (s1 + t1) - side * h * dy / chord;
+      c2 = 0.5 * (s2 + t2) + side * h * dx / chord;
+    } else {
+      if (!block_.has(o1) && !block_.has(o2)) {
+        fail_at(column,
+                fmt::format("arc needs its centre ({} or {} for the G{} plane) or a radius R",
+                            upper(o1), upper(o2), plane_code()));
+      }
+      const double d1 = block_.has(o1) ? len(o1) : 0.0, d2 = block_.has(o2) ? len(o2) : 0.0;
+      c1 = arc_absolute_ ? d1 : s1 + d1;
+      c2 = arc_absolute_ ? d2 : s2 + d2;
+      const double r0 = std::hypot(s1 - c1, s2 - c2), r1 = std::hypot(t1 - c1, t2 - c2);
+      if (std::abs(r0 - r1) > opt_.arc_radius_tolerance_mm) {
+        fail_at(
+            column,
+            fmt::format("arc radius to the end ({:.4f} {}) differs from the radius to the start "
+                        "({:.4f} {}) by more than {:g} mm",
+                        r1 / u, unit_name(), r0 / u, unit_name(), opt_.arc_radius_tolerance_mm));
+      }
+      // Move the centre onto the chord's bisector so both radii agree exactly.
+      const double mx = 0.5 * (s1 + t1), my = 0.5 * (s2 + t2);
+      const double dx = t1 - s1, dy = t2 - s2, L2 = dx * dx + dy * dy;
+      if (L2 > 0) {
+        const double k = ((c1 - mx) * dx + (c2 - my) * dy) / L2;
+        c1 -= k * dx;
+        c2 -= k * dy;
+      }
+    }
+    const double rad = std::hypot(s1 - c1, s2 - c2);
+    if (rad <= 1e-9) fail_at(column, "arc radius is zero");
+    const double a0 = std::atan2(s2 - c2, s1 - c1), a1 = std::atan2(t2 - c2, t1 - c1);
+    double sweep;
+    const bool full = std::hypot(t1 - s1, t2 - s2) <= 1e-9;
+    if (ccw) {
+      sweep = full ? kTwoPi : std::fmod(a1 - a0 + 2 * kTwoPi, kTwoPi);
+      if (sweep <= 0) sweep += kTwoPi;
+    } else {
+      sweep = full ? -kTwoPi : -std::fmod(a0 - a1 + 2 * kTwoPi, kTwoPi);
+      if (sweep >= 0) sweep -= kTwoPi;
+    }
+    if (block_.has('p')) {
+      const double p = block_['p'];
+      if (p < 1 || std::abs(p - std::round(p)) > 1e-9) {
+        fail_at(block_.col('p'), "arc turns P must be a whole number >= 1");
+      }
+      if (p > 1e4) fail_at(block_.col('p'), "arc turns P beyond 10000");
+      sweep += (ccw ? 1.0 : -1.0) * kTwoPi * (std::round(p) - 1.0);
+    }
+    Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero(), nrm = Vec3::Zero();
+    e1[i1] = 1;
+    e2[i2] = 1;
+    nrm[in] = 1;
+    Vec3 c = Vec3::Zero();
+    c[i1] = c1;
+    c[i2] = c2;
+    c[in] = from[in];
+    const Vec3 A = rad * (std::cos(a0) * e1 + std::sin(a0) * e2);
+    const Vec3 B = rad * (-std::sin(a0) * e1 + std::cos(a0) * e2);
+    const Vec3 V = nrm * ((target[in] - from[in]) / sweep);
+    const Vec3 c_out = to_out(c), A_out = dir_to_out(A), B_out = dir_to_out(B),
+               V_out = dir_to_out(V);
+    Segment seg = Segment::curve(c_out, A_out, B_out, V_out, 0.0, sweep, Motion::feed, 1.0);
+    const Vec3 end = seg.end();
+    check_target(end, column);
+    GcodeMove mv;
+    mv.kind = GcodeMove::Kind::arc;
+    mv.start_mm = started_ ? out_pos_ : to_out(from);
+    mv.end_mm = end;
+    mv.centre_mm = c_out;
+    mv.axis = dir_to_out(nrm);
+    mv.sweep_rad = sweep;
+    mv.plane = plane_code();
+    mv.file = sources_[cur_.source].name;
+    mv.line = cur_.line_no;
+    const double f = feed_for(seg.length_mm(), column);
+    mv.feed_mm_per_min = f;
+    cur_pos_ = target;
+    if (!started_) {
+      trace(mv);
+      out_pos_ = end;
+      started_ = block_.has('x') || block_.has('y');
+      return;
+    }
+    if ((seg.start() - out_pos_).norm() > 1e-9) {
+      fail_at(column,
+              "an arc right after a tool length change (G43/G49) starts where the tool "
+              "is not: program a straight move first");
+    }
+    note_feed(f);
+    mv.path_started = true;
+    trace(mv);
+    append(Segment::curve(c_out, A_out, B_out, V_out, 0.0, sweep, Motion::feed, f), column);
+    out_pos_ = end;
+  }
+
+  // ---- canned cycles (G17) ------------------------------------------------------------------
+
+  void canned_cycle(int g) {
+    const std::uint32_t column = block_.g.empty() ? block_.col('x') : block_.g.front().column;
+    if (plane_ != Plane::xy) {
+      fail_at(column, "canned cycles are supported in the XY plane (G17) only");
+    }
+    if (feed_mode_ == FeedMode::inverse_time) {
+      fail_at(column, "canned cycles cannot run in inverse-time feed (G93)");
+    }
+    const bool first = g != cycle_motion_;
+    if (first && !block_.has('z')) {
+      fail_at(column, fmt::format("{} needs Z (the bottom of the hole) in its first block",
+                                  code_name('G', g)));
+    }
+    cycle_motion_ = g;
+    const double z_word = block_.has('z') ? len('z') : cycle_z_;
+    if (block_.has('r')) {
+      cycle_r_ = len('r');
+    } else if (first) {
+      fail_at(column, fmt::format("{} needs R (the retract plane)", code_name('G', g)));
+    }
+    double current_z = cur_pos_.z();
+    double old_z;
+    if (cycle_il_flag_) {
+      old_z = cycle_il_;
+    } else {
+      old_z = cycle_il_ = current_z;
+      cycle_il_flag_ = true;
+    }
+    double r, bottom, x, y, dx = 0, dy = 0;
+    if (absolute_) {
+      r = cycle_r_;
+      bottom = z_word;
+      x = block_.has('x') ? len('x') : cur_pos_.x();
+      y = block_.has('y') ? len('y') : cur_pos_.y();
+    } else {
+      if (block_.has('x')) dx = len('x');
+      if (block_.has('y')) dy = len('y');
+      r = cycle_r_ + old_z;
+      bottom = r + z_word;
+      x = cur_pos_.x();
+      y = cur_pos_.y();
+    }
+    if (r < bottom) {
+      fail_at(column, fmt::format("the R plane ({:g}) is below the bottom Z ({:g})", r / unit_,
+                                  bottom / unit_));
+    }
+    double q = 0, p = 0;
+    if (g == 730 || g == 830) {
+      if (block_.has('q')) {
+        cycle_q_ = len('q');
+      } else if (cycle_q_ <= 0 || first) {
+        fail_at(column, fmt::format("{} needs Q (the peck depth)", code_name('G', g)));
+      }
+      q = cycle_q_;
+      if (q <= 0) fail_at(block_.col('q'), "the peck depth Q must be > 0");
+    }
+    if (g == 820 || g == 860 || g == 890) {
+      if (block_.has('p')) {
+        cycle_p_ = block_['p'];
+      } else if (first) {
+        fail_at(column, fmt::format("{} needs P (the dwell, s)", code_name('G', g)));
+      }
+      p = cycle_p_;
+      (void)p;  // dwells take time the path does not model
+    }
+    int repeats = 1;
+    if (block_.has('l')) {
+      const double l = block_['l'];
+      if (l < 0 || l != std::floor(l) || l > 1e6) {
+        fail_at(block_.col('l'), "the repeat count L must be a whole number 0 .. 1e6");
+      }
+      repeats = static_cast<int>(l);
+    }
+    // Below the R plane: rapid straight up to it first.
+    if (old_z < r) {
+      line_to(Vec3(cur_pos_.x(), cur_pos_.y(), r), true, column);
+      old_z = r;
+      current_z = r;
+    }
+    const double clear = retract_r_ ? r : old_z;
+    for (int k = 0; k < repeats; ++k) {
+      x += dx;
+      y += dy;
+      if (k == 0 && current_z > r) {
+        line_to(Vec3(x, y, current_z), true, column);
+        line_to(Vec3(x, y, r), true, column);
+      } else {
+        line_to(Vec3(x, y, clear), true, column);
+        if (clear > r) line_to(Vec3(x, y, r), true, column);
+      }
+      switch (g) {
+        case 810:
+        case 820:
+        case 860:
+          line_to(Vec3(x, y, bottom), false, column);
+          line_to(Vec3(x, y, clear), true, column);
+          break;
+        case 850:
+          line_to(Vec3(x, y, bottom), false, column);
+          line_to(Vec3(x, y, r), false, column);
+          line_to(Vec3(x, y, clear), true, column);
+          break;
+        case 890:
+          line_to(Vec3(x, y, bottom), false, column);
+          line_to(Vec3(x, y, clear), false, column);
+          break;
+        case 730:
+        case 830: {
+          const double back = opt_.peck_clearance_mm;
+          for (double depth = r - q; depth > bottom; depth -= q) {
+            line_to(Vec3(x, y, depth), false, column);
+            if (g == 830) {
+              line_to(Vec3(x, y, r), true, column);
+              line_to(Vec3(x, y, depth + back), true, column);
+            } else {
+              line_to(Vec3(x, y, depth + back), true, column);
+            }
+          }
+          line_to(Vec3(x, y, bottom), false, column);
+          line_to(Vec3(x, y, clear), true, column);
+          break;
+        }
+        default:
+          break;
+      }
+    }
+    cur_pos_ = Vec3(x, y, clear);
+    cycle_z_ = z_word;
+  }
+
+  void line_to(const Vec3& target, bool rapid, std::uint32_t column) {
+    emit_line(target, rapid, column, true);
+    cur_pos_ = target;
+  }
+
+  // ---- O-words ------------------------------------------------------------------------------
+
+  // At 'o' (or ':'): an O-word statement (true) or a Fanuc/plain program number (false, the
+  // rest of the line is a block).
+  bool o_statement(std::size_t i) {
+    const std::string& s = line_.text;
+    const std::size_t at = i;
+    ++i;
+    std::string label;
+    if (i < s.size() && s[i] == '<') {
+      label = read_name(i);
+    } else if (i < s.size() && s[i] == '[') {
+      const double v = read_expression(i);
+      label = fmt::format("{:g}", v);
+    } else {
+      const std::size_t j0 = i;
+      while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+      if (i == j0) fail(at, "'O' needs a number or <name> after it");
+      label = s.substr(j0, i - j0);
+      // Strip leading zeros: o0100 and o100 are one label.
+      const std::size_t nz = label.find_first_not_of('0');
+      label = nz == std::string::npos ? "0" : label.substr(nz);
+    }
+    const std::size_t kw_at = i;
+    std::size_t j = i;
+    while (j < s.size() && s[j] >= 'a' && s[j] <= 'z') ++j;
+    const std::string_view kw = std::string_view(s).substr(i, j - i);
+    OKind kind = OKind::none;
+    for (const OKeyword& k : kOKeywords) {
+      if (kw == k.name) kind = k.kind;
+    }
+    if (kind == OKind::none) {
+      if (kw.empty() && (j >= s.size() || s[at] == ':')) return true;  // program number "O1234"
+      if (kw.empty() && s[at] == 'o') {
+        // "O1000 G0 X1": a program number before a block (Fanuc): the block runs.
+        line_.text.erase(0, j);
+        line_.column.erase(line_.column.begin(),
+                           line_.column.begin() + static_cast<std::ptrdiff_t>(j));
+        run_after_program_number();
+        return true;
+      }
+      fail(kw_at, fmt::format("unknown O-word keyword '{}' (sub endsub call return if elseif "
+                              "else endif while endwhile do repeat endrepeat break continue)",
+                              kw));
+    }
+    i = j;
+    count_block();
+    o_word(kind, label, i, at);
+    return true;
+  }
+
+  void run_after_program_number() {
+    std::size_t i = 0;
+    if (line_.text.empty()) return;
+    count_block();
+    read_block(i);
+    for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
+    for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
+    execute();
+  }
+
+  // An optional [condition] / [value] after a keyword.
+  std::optional<double> o_value(std::size_t& i) {
+    if (i >= line_.text.size()) return std::nullopt;
+    if (line_.text[i] != '[') {
+      fail(i, fmt::format("expected [expression] here, found {}", ngc::shown(line_.text[i])));
+    }
+    return read_expression(i);
+  }
+  double o_required(std::size_t& i, std::string_view what) {
+    if (i >= line_.text.size()) fail(i, fmt::format("{} needs [expression]", what));
+    return *o_value(i);
+  }
+  void o_end(std::size_t i) {
+    if (i < line_.text.size()) {
+      fail(i, fmt::format("unexpected {} after the O-word", ngc::shown(line_.text[i])));
+    }
+  }
+
+  // The O-word lines of a source (built once).
+  void index(Source& src) {
+    if (src.indexed) return;
+    src.indexed = true;
+    ngc::Line l;
+    std::size_t off = 0, no = 0;
+    const std::string_view t = src.text;
+    while (off < t.size()) {
+      std::size_t end = t.find('\n', off);
+      if (end == std::string_view::npos) end = t.size();
+      ++no;
+      const std::string_view raw = t.substr(off, end - off);
+      // Cheap filter: an 'o' must be among the first characters.
+      const std::size_t first = raw.find_first_not_of(" \t/");
+      if (first != std::string_view::npos &&
+          (raw[first] == 'o' || raw[first] == 'O' || raw[first] == 'n' || raw[first] == 'N')) {
+        ngc::normalise(raw, l);
+        std::size_t i = 0;
+        const std::string& s = l.text;
+        if (i < s.size() && s[i] == '/') ++i;
+        if (i < s.size() && s[i] == 'n') {
+          ++i;
+          while (i < s.size() && ((s[i] >= '0' && s[i] <= '9') || s[i] == '.')) ++i;
+        }
+        if (l.error_column == 0 && i < s.size() && s[i] == 'o') {
+          OLine ol;
+          ol.offset = off;
+          ol.line_no = no;
+          ++i;
+          if (i < s.size() && s[i] == '<') {
+            const std::size_t close = s.find('>', i);
+            if (close != std::string::npos) {
+              ol.label = s.substr(i + 1, close - i - 1);
+              i = close + 1;
+            }
+          } else {
+            const std::size_t j0 = i;
+            while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+            ol.label = s.substr(j0, i - j0);
+            const std::size_t nz = ol.label.find_first_not_of('0');
+            ol.label = nz == std::string::npos ? "0" : ol.label.substr(nz);
+          }
+          std::size_t j = i;
+          while (j < s.size() && s[j] >= 'a' && s[j] <= 'z') ++j;
+          const std::string_view kw = std::string_view(s).substr(i, j - i);
+          for (const OKeyword& k : kOKeywords) {
+            if (kw == k.name) ol.kind = k.kind;
+          }
+          if (ol.kind != OKind::none && !ol.label.empty()) src.olines.push_back(std::move(ol));
+        }
+      }
+      off = end == t.size() ? end : end + 1;
+    }
+  }
+
+  // The index in the running source's O-lines of the line just read.
+  std::size_t this_oline() {
+    Source& src = sources_[cur_.source];
+    index(src);
+    const auto it =
+        std::lower_bound(src.olines.begin(), src.olines.end(), line_offset_,
+                         [](const OLine& o, std::size_t off) { return o.offset < off; });
+    return static_cast<std::size_t>(it - src.olines.begin());
+  }
+
+  // The next O-line after `from` with this label and one of the kinds; fails naming `what`.
+  std::size_t find_forward(std::size_t from, const std::string& label,
+                           std::initializer_list<OKind> kinds, std::string_view what,
+                           std::size_t at) {
+    const Source& src = sources_[cur_.source];
+    for (std::size_t k = from + 1; k < src.olines.size(); ++k) {
+      const OLine& o = src.olines[k];
+      if (o.label != label) continue;
+      if (std::find(kinds.begin(), kinds.end(), o.kind) != kinds.end()) return k;
+    }
+    fail(at, fmt::format("o{} has no matching {} below it", show_label(label), what));
+  }
+
+  static std::string show_label(const std::string& label) {
+    const bool number = !label.empty() && std::all_of(label.begin(), label.end(),
+                                                      [](char c) { return c >= '0' && c <= '9'; });
+    return number ? label : "<" + label + ">";
+  }
+
+  // Continue reading at O-line k of the running source (that line itself, or the one after).
+  void jump(std::size_t k, bool after) {
+    const Source& src = sources_[cur_.source];
+    const OLine& o = src.olines[k];
+    if (!after) {
+      cur_.offset = o.offset;
+      cur_.line_no = o.line_no - 1;
+      return;
+    }
+    const std::size_t end = src.text.find('\n', o.offset);
+    cur_.offset = end == std::string_view::npos ? src.text.size() : end + 1;
+    cur_.line_no = o.line_no;
+  }
+
+  Control* find_control(const std::string& label) {
+    auto& cs = frames_.back().controls;
+    for (auto it = cs.rbegin(); it != cs.rend(); ++it) {
+      if (it->label == label) return &*it;
+    }
+    return nullptr;
+  }
+
+  void pop_to(const std::string& label) {
+    auto& cs = frames_.back().controls;
+    while (!cs.empty() && cs.back().label != label) cs.pop_back();
+    if (!cs.empty()) cs.pop_back();
+  }
+
+  void o_word(OKind kind, const std::string& label, std::size_t i, std::size_t at) {
+    auto& controls = frames_.back().controls;
+    switch (kind) {
+      case OKind::sub: {
+        o_end(i);
+        // A definition met in the flow: skip its body.
+        const std::size_t k = this_oline();
+        jump(find_forward(k, label, {OKind::endsub}, "endsub", at), true);
+        return;
+      }
+      case OKind::endsub:
+      case OKind::ret: {
+        const std::optional<double> v = o_value(i);
+        o_end(i);
+        if (frames_.size() < 2 || frames_.back().label != label) {
+          if (kind == OKind::endsub && frames_.size() < 2) {
+            fail(at, fmt::format("o{} endsub without its sub", show_label(label)));
+          }
+          fail(at, fmt::format(
+                       "o{} {} outside subroutine o{}", show_label(label),
+                       kind == OKind::ret ? "return" : "endsub",
+                       show_label(frames_.back().label.empty() ? label : frames_.back().label)));
+        }
+        value_returned_ = v.has_value();
+        value_ = v.value_or(0.0);
+        return_from_sub();
+        return;
+      }
+      case OKind::call:
+        call(label, i, at);
+        return;
+      case OKind::if_: {
+        const double c = o_required(i, "if");
+        o_end(i);
+        Control ctl;
+        ctl.kind = OKind::if_;
+        ctl.label = label;
+        ctl.taken = c != 0;
+        controls.push_back(ctl);
+        if (!ctl.taken) {
+          const std::size_t k = this_oline();
+          jump(find_forward(k, label, {OKind::elseif, OKind::else_, OKind::endif},
+                            "elseif, else or endif", at),
+               false);
+        }
+        return;
+      }
+      case OKind::elseif:
+      case OKind::else_: {
+        Control* ctl = find_control(label);
+        if (ctl == nullptr || ctl->kind != OKind::if_) {
+          fail(at, fmt::format("o{} {} without its if", show_label(label),
+                               kind == OKind::else_ ? "else" : "elseif"));
+        }
+        const std::size_t k = this_oline();
+        if (ctl->taken) {
+          jump(find_forward(k, label, {OKind::endif}, "endif", at), false);
+          return;
+        }
+        if (kind == OKind::else_) {
+          o_end(i);
+          ctl->taken = true;
+          return;
+        }
+        const double c = o_required(i, "elseif");
+        o_end(i);
+        if (c != 0) {
+          ctl->taken = true;
+        } else {
+          jump(find_forward(k, label, {OKind::elseif, OKind::else_, OKind::endif},
+                            "elseif, else or endif", at),
+               false);
+        }
+        return;
+      }
+      case OKind::endif: {
+        o_end(i);
+        Control* ctl = find_control(label);
+        if (ctl == nullptr || ctl->kind != OKind::if_) {
+          fail(at, fmt::format("o{} endif without its if", show_label(label)));
+        }
+        pop_to(label);
+        return;
+      }
+      case OKind::while_: {
+        Control* open = find_control(label);
+        if (open != nullptr && open->kind == OKind::do_) {
+          // The end of a do loop.
+          const double c = o_required(i, "while");
+          o_end(i);
+          if (c != 0) {
+            cur_ = open->start;
+          } else {
+            pop_to(label);
+          }
+          return;
+        }
+        const double c = o_required(i, "while");
+        o_end(i);
+        const bool here = open != nullptr && open->kind == OKind::while_ &&
+                          open->start.offset == line_offset_ && open->start.source == cur_.source;
+        if (c != 0) {
+          if (!here) {
+            Control ctl;
+            ctl.kind = OKind::while_;
+            ctl.label = label;
+            ctl.start = Cursor{cur_.source, line_offset_, cur_.line_no - 1};
+            controls.push_back(ctl);
+          }
+          return;
+        }
+        if (here) pop_to(label);
+        const std::size_t k = this_oline();
+        jump(find_forward(k, label, {OKind::endwhile}, "endwhile", at), true);
+        return;
+      }
+      case OKind::endwhile: {
+        o_end(i);
+        Control* ctl = find_control(label);
+        if (ctl == nullptr || ctl->kind != OKind::while_) {
+          fail(at, fmt::format("o{} endwhile without its while", show_label(label)));
+        }
+        cur_ = ctl->start;  // the while line again: its condition decides
+        return;
+      }
+      case OKind::do_: {
+        o_end(i);
+        Control ctl;
+        ctl.kind = OKind::do_;
+        ctl.label = label;
+        ctl.start = cur_;
+        controls.push_back(ctl);
+        return;
+      }
+      case OKind::repeat: {
+        const double n = o_required(i, "repeat");
+        o_end(i);
+        if (n >= 1) {
+          Control ctl;
+          ctl.kind = OKind::repeat;
+          ctl.label = label;
+          ctl.start = cur_;
+          ctl.remaining = std::floor(n);
+          controls.push_back(ctl);
+          return;
+        }
+        const std::size_t k = this_oline();
+        jump(find_forward(k, label, {OKind::endrepeat}, "endrepeat", at), true);
+        return;
+      }
+      case OKind::endrepeat: {
+        o_end(i);
+        Control* ctl = find_control(label);
+        if (ctl == nullptr || ctl->kind != OKind::repeat) {
+          fail(at, fmt::format("o{} endrepeat without its repeat", show_label(label)));
+        }
+        end_repeat_pass(*ctl, label);
+        return;
+      }
+      case OKind::brk:
+      case OKind::cont: {
+        o_end(i);
+        Control* ctl = find_control(label);
+        if (ctl == nullptr || (ctl->kind != OKind::while_ && ctl->kind != OKind::do_)) {
+          fail(at, fmt::format("o{} {} outside a while or do loop o{} (LinuxCNC's break and "
+                               "continue work in those, not in repeat)",
+                               show_label(label), kind == OKind::brk ? "break" : "continue",
+                               show_label(label)));
+        }
+        const std::size_t k = this_oline();
+        if (kind == OKind::brk) {
+          const OKind closing = ctl->kind == OKind::while_ ? OKind::endwhile
+                                : ctl->kind == OKind::do_  ? OKind::while_
+                                                           : OKind::endrepeat;
+          const std::size_t e = find_forward(k, label, {closing}, "loop end", at);
+          pop_to(label);
+          jump(e, true);
+        } else if (ctl->kind == OKind::while_) {
+          cur_ = ctl->start;
+        } else if (ctl->kind == OKind::do_) {
+          jump(find_forward(k, label, {OKind::while_}, "while", at), false);
+        } else {
+          end_repeat_pass(*ctl, label);
+        }
+        return;
+      }
+      case OKind::none:
+        break;
+    }
+  }
+
+  void end_repeat_pass(Control& ctl, const std::string& label) {
+    ctl.remaining -= 1;
+    if (ctl.remaining >= 1) {
+      cur_ = ctl.start;
+      return;
+    }
+    // Done: continue after the endrepeat.
+    const std::size_t k = this_oline();
+    const Source& src = sources_[cur_.source];
+    std::size_t e = k;
+    if (src.olines[k].kind != OKind::endrepeat) {
+      e = find_forward(k, label, {OKind::endrepeat}, "endrepeat", 0);
+    }
+    pop_to(label);
+    jump(e, true);
+  }
+
+  void call(const std::string& label, std::size_t i, std::size_t at) {
+    // Arguments: [expr] [expr] ... into #1 .. #30.
+    std::array<double, 31> args{};
+    int n = 0;
+    while (i < line_.text.size()) {
+      if (line_.text[i] != '[') {
+        fail(i, fmt::format("a call's arguments are [expressions], found {}",
+                            ngc::shown(line_.text[i])));
+      }
+      if (n == 30) fail(i, "more than 30 arguments");
+      args[static_cast<std::size_t>(++n)] = read_expression(i);
+    }
+    if (static_cast<int>(frames_.size()) > opt_.max_call_depth) {
+      fail(at, fmt::format("subroutine calls nested deeper than {} (recursion without end?)",
+                           opt_.max_call_depth));
+    }
+    const auto [src, k] = find_sub(label, at);
+    Frame f;
+    f.label = label;
+    f.ret = cur_;
+    for (std::size_t p = 1; p <= 30; ++p) {
+      f.saved_locals[p] = params_[p];
+      params_[p] = args[p];
+    }
+    frames_.push_back(std::move(f));
+    cur_.source = src;
+    jump(k, true);
+  }
+
+  void return_from_sub() {
+    Frame& f = frames_.back();
+    for (std::size_t p = 1; p <= 30; ++p) params_[p] = f.saved_locals[p];
+    const bool restore = f.restore_modal;
+    cur_ = f.ret;
+    frames_.pop_back();
+    if (restore) {
+      restore_modal(sub_saved_.back());
+      sub_saved_.pop_back();
+    }
+  }
+
+  // The source and O-line of `o<label> sub`: the running file, then the loaded ones, then
+  // label.ngc on the search path.
+  std::pair<std::size_t, std::size_t> find_sub(const std::string& label, std::size_t at) {
+    auto in = [&](std::size_t s) -> std::optional<std::size_t> {
+      index(sources_[s]);
+      const auto& ol = sources_[s].olines;
+      for (std::size_t k = 0; k < ol.size(); ++k) {
+        if (ol[k].kind == OKind::sub && ol[k].label == label) return k;
+      }
+      return std::nullopt;
+    };
+    if (auto k = in(cur_.source)) return {cur_.source, *k};
+    for (std::size_t s = 0; s < sources_.size(); ++s) {
+      if (auto k = in(s)) return {s, *k};
+    }
+    const bool number =
+        std::all_of(label.begin(), label.end(), [](char c) { return c >= '0' && c <= '9'; });
+    std::vector<std::filesystem::path> dirs;
+    const std::filesystem::path main(sources_[0].name);
+    if (main.has_parent_path()) {
+      dirs.push_back(main.parent_path());
+    } else {
+      dirs.emplace_back(".");
+    }
+    dirs.insert(dirs.end(), opt_.include_dirs.begin(), opt_.include_dirs.end());
+    if (!number && label.find('/') == std::string::npos) {
+      for (const auto& d : dirs) {
+        const std::filesystem::path file = d / (label + ".ngc");
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(file, ec)) continue;
+        Source s;
+        s.owned = read_text_file(file);
+        s.name = file.string();
+        sources_.push_back(std::move(s));
+        Source& added = sources_.back();
+        added.text = added.owned;
+        if (auto k = in(sources_.size() - 1)) return {sources_.size() - 1, *k};
+        fail(at, fmt::format("{} does not define o<{}> sub", file.string(), label));
+      }
+    }
+    std::string where;
+    for (const auto& d : dirs) where += (where.empty() ? "" : ", ") + d.string();
+    fail(at, fmt::format("subroutine o{} is not defined in the program{}", show_label(label),
+                         number ? "" : fmt::format(" nor found as {}.ngc in {}", label, where)));
+  }
+
+  void end_program() { ended_ = true; }
+
+  // ---- state --------------------------------------------------------------------------------
+
+  GcodeReadOptions opt_;
+  std::deque<Source> sources_;
+  Cursor cur_;
+  std::size_t line_offset_ = 0;  // of the line being run
+  std::size_t main_lines_ = 0;
+  ngc::Line line_;
+  Block block_;
+  char word_ = 0;  // the word whose value is being read (for messages)
+  std::size_t word_at_ = 0;
+  std::vector<double> params_;
+  std::unordered_map<std::string, double> globals_;
+  std::vector<Frame> frames_;
+  ModalSave saved_;
+  std::vector<ModalSave> sub_saved_;
+  double value_ = 0;
+  bool value_returned_ = false;
+
+  // Modal state (lengths in mm).
+  int motion_ = -1;  // 0, 10, 20, 30, 730, 810 .. 890; -1 = none / G80
+  Plane plane_ = Plane::xy;
+  double unit_ = 1.0;
+  bool absolute_ = true, arc_absolute_ = false;
+  FeedMode feed_mode_ = FeedMode::per_minute;
+  double feed_ = 0;  // mm/min (G95: mm/rev)
+  bool feed_given_ = false;
+  double inverse_f_ = -1;  // G93: this block's F
+  double speed_ = 0;
+  bool spindle_on_ = false;
+  // G99 (retract to R) until G98: LinuxCNC's interpreter starts so (its setup leaves the mode
+  // at its first value, R_PLANE); Fanuc starts in G98.
+  bool retract_r_ = opt_.dialect != Dialect::fanuc;
+  double tool_loaded_ = 0, tool_selected_ = 0;
+  double tool_z_ = 0;  // active tool length offset (mm)
+  std::map<int, ToolTableEntry> tools_ = opt_.tools;
+  // Coordinate systems.
+  int system_ = 1;
+  Vec3 origin_ = Vec3::Zero();
+  double rotation_ = 0;
+  Vec3 g92_ = Vec3::Zero();
+  Vec3 out_origin_ = Vec3::Zero();
+  double out_rotation_ = 0;
+  bool g28_given_ = false, g30_given_ = false, home_warned_ = false, tool_warned_ = false;
+  double unknown_tool_ = -1;  // the H of an active G43 whose tool the table lacks
+  std::array<bool, 9> system_warned_{};
+  // Canned cycles.
+  int cycle_motion_ = -1;
+  double cycle_r_ = 0, cycle_z_ = 0, cycle_q_ = 0, cycle_p_ = 0, cycle_il_ = 0;
+  bool cycle_il_flag_ = false;
+  // Position.
+  Vec3 cur_pos_ = Vec3::Zero();  // program coordinates (mm)
+  Vec3 out_pos_ = Vec3::Zero();  // output frame, the path's end
+  bool started_ = false;
+  bool ended_ = false;
+  GcodeProgram prog_;
+};
+
+}  // namespace
+
+GcodeProgram interpret_gcode(std::string_view text, std::string_view source_name,
+                             const GcodeReadOptions& options) {
+  return Interpreter(text, source_name, options).run();
+}
+
+std::map<int, ToolTableEntry> read_tool_table(const std::filesystem::path& file) {
+  const std::string text = read_text_file(file);
+  std::map<int, ToolTableEntry> out;
+  std::size_t off = 0, no = 0;
+  while (off < text.size()) {
+    std::size_t end = text.find('\n', off);
+    if (end == std::string::npos) end = text.size();
+    ++no;
+    std::string_view line(text.data() + off, end - off);
+    off = end + 1;
+    if (const auto sc = line.find(';'); sc != std::string_view::npos) line = line.substr(0, sc);
+    std::optional<int> tool;
+    ToolTableEntry e;
+    std::size_t i = 0;
+    auto fail = [&](std::size_t col, const std::string& what) {
+      throw InputError(fmt::format("{}:{}:{}: {}", file.string(), no, col + 1, what));
+    };
+    while (i < line.size()) {
+      const char c = line[i];
+      if (c == ' ' || c == '\t' || c == '\r') {
+        ++i;
+        continue;
+      }
+      const char L = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+      if (std::string_view("TPXYZABCUVWDIJQ").find(L) == std::string_view::npos) {
+        fail(i, fmt::format("unexpected {} in a tool table line (T P X Y Z ... D I J Q words)",
+                            ngc::shown(c)));
+      }
+      const std::size_t at = i++;
+      const char* b = line.data() + i;
+      const char* e2 = line.data() + line.size();
+      double v = 0;
+      bool neg = false;
+      if (b < e2 && (*b == '+' || *b == '-')) {
+        neg = *b == '-';
+        ++b;
+      }
+      auto [ptr, ec] = std::from_chars(b, e2, v, std::chars_format::fixed);
+      if (ec != std::errc() || ptr == b || !std::isfinite(v)) {
+        fail(at, fmt::format("'{}' needs a number after it", L));
+      }
+      if (neg) v = -v;
+      i = static_cast<std::size_t>(ptr - line.data());
+      if (L == 'T') {
+        if (v < 0 || v != std::floor(v) || v > 1e6) fail(at, "T must be a whole number >= 0");
+        tool = static_cast<int>(v);
+      } else if (L == 'Z') {
+        if (std::abs(v) > 1e4) fail(at, "a tool length beyond +-1e4 mm");
+        e.length_mm = v;
+      } else if (L == 'D') {
+        if (v < 0 || v > 1e4) fail(at, "a tool diameter outside 0 .. 1e4 mm");
+        e.diameter_mm = v;
+      }
+    }
+    if (tool) out[*tool] = e;
+  }
+  return out;
+}
+
+}  // namespace trochomill

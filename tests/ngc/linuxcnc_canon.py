@@ -1,0 +1,257 @@
+#!/usr/bin/python3
+"""LinuxCNC's own interpreter (Debian linuxcnc-uspace's Python module `gcode`, the interpreter
+AXIS previews with) run on an NC program: prints every canonical move in machine coordinates
+(mm, full double precision), in the format of `trochomill check-gcode --trace`, so the two can
+be compared move by move.
+
+    /usr/bin/python3 tests/ngc/linuxcnc_canon.py PROGRAM [--var FILE] [--tools FILE]
+
+--var: a LinuxCNC parameter file (work offsets, G28/G30 positions, mm: the module starts its
+interpreter in mm); --tools: tool lengths, lines "T<n> Z<length mm>". Positions and feeds reach
+the canon in inches and go out in mm.
+Exit 77 when the module is missing (a skip for CTest).
+"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+try:
+    import gcode  # noqa: E402  (Debian: /usr/lib/python3/dist-packages)
+except ImportError:
+    print("LinuxCNC's Python module 'gcode' is not installed (Debian linuxcnc-uspace)",
+          file=sys.stderr)
+    sys.exit(77)
+
+IN = 25.4  # the module reports inches
+
+
+class Canon:
+    def __init__(self, parameter_file, tools):
+        self.parameter_file = parameter_file
+        self.tools = tools
+        self.lineno = 0
+        self.plane = 1
+        self.feed = 0.0
+        self.g5x = [0.0, 0.0, 0.0]
+        self.g92 = [0.0, 0.0, 0.0]
+        self.rotation = 0.0
+        self.state = None
+        self.per_rev = False  # G95, from the interpreter's comment (its state lags a line)
+        self.spindle = 0.0
+        self.moves = []
+
+    # What the interpreter asks.
+    def get_tool(self, pocket):
+        length = self.tools.get(pocket, 0.0)  # mm: the interpreter's user units here
+        return (pocket, 0.0, 0.0, length, 0, 0, 0, 0, 0, 0, 0.0, 0, 0, 0)
+
+    def get_external_angular_units(self):
+        return 1.0
+
+    def get_external_length_units(self):
+        return 1.0
+
+    def get_axis_mask(self):
+        return 7  # X Y Z
+
+    def get_block_delete(self):
+        return False
+
+    def check_abort(self):
+        return False
+
+    # What it says.
+    def next_line(self, st):
+        self.state = st
+        self.lineno = st.sequence_number
+
+    def set_g5x_offset(self, index, x, y, z, *rest):
+        self.g5x = [x * IN, y * IN, z * IN]
+
+    def set_g92_offset(self, x, y, z, *rest):
+        self.g92 = [x * IN, y * IN, z * IN]
+
+    def set_xy_rotation(self, theta):
+        self.rotation = theta
+
+    def set_plane(self, plane):
+        self.plane = plane
+
+    def set_feed_rate(self, rate):
+        self.feed = rate * IN
+
+    def to_machine(self, x, y, z):
+        x, y, z = x * IN + self.g92[0], y * IN + self.g92[1], z * IN + self.g92[2]
+        t = math.radians(self.rotation)
+        x, y = x * math.cos(t) - y * math.sin(t), x * math.sin(t) + y * math.cos(t)
+        return x + self.g5x[0], y + self.g5x[1], z + self.g5x[2]
+
+    def feed_now(self):
+        # G95 (units per revolution): the canon rate times the spindle speed.
+        return self.feed * self.spindle if self.per_rev else self.feed
+
+    def comment(self, text):
+        if text.startswith("interpreter: feed mode set to"):
+            self.per_rev = "revolution" in text
+
+    def set_spindle_rate(self, *args):
+        self.spindle = args[-1] if len(args) > 1 else args[0]
+
+    def straight_traverse(self, x, y, z, *rest):
+        self.moves.append(("G0",) + self.to_machine(x, y, z) + (None, self.lineno))
+
+    def straight_feed(self, x, y, z, *rest):
+        self.moves.append(("G1",) + self.to_machine(x, y, z) + (self.feed_now(), self.lineno))
+
+    def arc_feed(self, first_end, second_end, first_axis, second_axis, rotation, axis_end, *rest):
+        # CANON_PLANE: 1 XY (first X, second Y, axis Z), 2 YZ (Y, Z, X), 3 XZ (Z, X, Y).
+        if self.plane == 1:
+            end = (first_end, second_end, axis_end)
+            centre = (first_axis, second_axis, None)
+            axis = (0, 0, 1)
+        elif self.plane == 2:
+            end = (axis_end, first_end, second_end)
+            centre = (None, first_axis, second_axis)
+            axis = (1, 0, 0)
+        else:
+            end = (second_end, axis_end, first_end)
+            centre = (second_axis, None, first_axis)
+            axis = (0, 1, 0)
+        self.moves.append(("G3" if rotation > 0 else "G2",) + self.to_machine(*end)
+                          + (self.feed_now(), self.lineno, machine_centre(self, centre), axis,
+                             rotation))
+
+    def __getattr__(self, name):
+        # Every other canonical call (spindle, coolant, comments, dwell, tool change...).
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return lambda *args: None
+
+
+def run_rs274(program, var, tools):
+    """The standalone interpreter `rs274 -g` (4 decimals): for programs that use the tool
+    table, which this Debian build's Python module crashes on. Its external units are inches:
+    the var file and the tool lengths go to it in inches, it prints mm."""
+    import re
+    import shutil
+    exe = shutil.which("rs274")
+    if exe is None:
+        print("rs274 (Debian linuxcnc-uspace) is not installed", file=sys.stderr)
+        sys.exit(77)
+    tmp = tempfile.mkdtemp()
+    vfile = os.path.join(tmp, "p.var")
+    with open(vfile, "w") as f:
+        if var:
+            for line in open(var):
+                n, v = line.split()
+                f.write("%s\t%.12f\n" % (n, float(v) / IN))
+    tfile = os.path.join(tmp, "t.tbl")
+    with open(tfile, "w") as f:
+        for t, z in sorted(tools.items()):
+            f.write("T%d P%d Z%.12f D0\n" % (t, t, z / IN))
+    out = subprocess.run([exe, "-t", tfile, "-v", vfile, "-g", program], capture_output=True,
+                         text=True, stdin=subprocess.DEVNULL).stdout
+    canon = Canon(vfile, tools)
+    plane = "XY"
+    call = re.compile(r"^\s*\d+ N\S*\s+(\w+)\((.*)\)\s*$")
+    for line in out.splitlines():
+        m = call.match(line)
+        if not m:
+            if line.strip() and line.strip() != "executing":
+                print("error: " + line)
+                sys.exit(1)
+            continue
+        name, args = m.group(1), m.group(2)
+        nums = [float(a) for a in re.findall(r"-?\d+\.\d+|-?\d+", args.split("CANON_")[0])] \
+            if "CANON_" not in args else []
+        # Values reach the Canon methods in inches (they scale by IN).
+        if name == "SET_G5X_OFFSET":
+            canon.g5x = [v for v in nums[1:4]]
+        elif name == "SET_G92_OFFSET":
+            canon.g92 = [v for v in nums[0:3]]
+        elif name == "SET_XY_ROTATION":
+            canon.rotation = nums[0]
+        elif name == "SELECT_PLANE":
+            plane = args.replace("CANON_PLANE_", "")
+            canon.plane = {"XY": 1, "YZ": 2, "XZ": 3}[plane]
+        elif name == "SET_FEED_RATE":
+            canon.feed = nums[0]
+        elif name == "SET_FEED_MODE":
+            canon.per_rev = int(nums[1]) == 1
+        elif name == "SET_SPINDLE_SPEED":
+            canon.spindle = nums[-1]
+        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
+            x, y, z = (v / IN for v in nums[0:3])
+            canon.lineno = 0
+            if name == "STRAIGHT_TRAVERSE":
+                canon.straight_traverse(x, y, z)
+            else:
+                canon.straight_feed(x, y, z)
+        elif name == "ARC_FEED":
+            v = nums
+            canon.arc_feed(v[0] / IN, v[1] / IN, v[2] / IN, v[3] / IN, int(v[4]), v[5] / IN)
+    return canon
+
+
+def main():
+    args = sys.argv[1:]
+    program = args[0]
+    var = None
+    tools = {}
+    if "--var" in args:
+        var = args[args.index("--var") + 1]
+    if "--tools" in args:
+        with open(args[args.index("--tools") + 1]) as f:
+            for line in f:
+                words = line.split()
+                if not words:
+                    continue
+                t = int(words[0][1:])
+                for w in words[1:]:
+                    if w[0] in "Zz":
+                        tools[t] = float(w[1:])
+    if "--rs274" in args:
+        canon = run_rs274(program, var, tools)
+        print_moves(canon)
+        return
+    tmp = tempfile.mkdtemp()
+    param = os.path.join(tmp, "p.var")
+    with open(param, "w") as f:
+        if var:
+            with open(var) as v:
+                f.write(v.read())
+    canon = Canon(param, tools)
+    # "G21" first: the module's canon starts without units, and converts to inches only once
+    # a program has set mm (a feed on the G21 line itself would otherwise go through unscaled).
+    result, seq = gcode.parse(program, canon, "G21", "")
+    if result > gcode.MIN_ERROR:
+        print("error: line %d: %s" % (seq, gcode.strerror(result)))
+        sys.exit(1)
+    print_moves(canon)
+
+
+def print_moves(canon):
+    for m in canon.moves:
+        kind, x, y, z, feed, line = m[:6]
+        s = "%s X%.9f Y%.9f Z%.9f" % (kind, x, y, z)
+        if kind in ("G2", "G3"):
+            centre, axis, rotation = m[6:]
+            s += " C%s,%s,%s A%d,%d,%d R%d" % (
+                tuple("%.9f" % c if c is not None else "-" for c in centre) + axis + (rotation,))
+        if feed is not None:
+            s += " F%.9f" % feed
+        s += " L%d" % line
+        print(s)
+
+
+def machine_centre(canon, centre):
+    # The centre's two plane coordinates through the offsets active at the arc (XY rotation
+    # only turns XY).
+    c = [v if v is not None else 0.0 for v in centre]
+    x, y, z = canon.to_machine(*c)
+    return tuple(None if centre[i] is None else (x, y, z)[i] for i in range(3))
+
+
+main()
