@@ -1,4 +1,4 @@
-// The G-code reader: every input is a path or an InputError naming file:line:column.
+// The G-code interpreter: every input is a path or an InputError naming file:line:column.
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
@@ -10,7 +10,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace trochomill;
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   try {
-    const GcodeProgram prog = read_gcode(text, "fuzz.ngc");
+    // Bounded work per input (a loop without end stops at the block budget) and no files: the
+    // program's folder does not exist, so o<name> call finds no subroutine file.
+    GcodeReadOptions options;
+    options.max_blocks = 200'000;
+    options.max_call_depth = 32;
+    const GcodeProgram prog = read_gcode(text, "/nonexistent/fuzz.ngc", options);
     (void)prog.path.length_mm();
     (void)gcode_header_keys(text);
   } catch (const InputError&) {

@@ -5,9 +5,12 @@
 #include "trochomill/gcode.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
@@ -265,12 +268,15 @@ TEST(GcodeReader, CountsTheProgramsLines) {
 
 TEST(GcodeReader, MalformedProgramsGiveTheExpectedMessage) {
   const auto files = test::files_in(test::source_dir() / "tests/data/bad_gcode", ".ngc");
-  ASSERT_GE(files.size(), 15u);
+  ASSERT_GE(files.size(), 60u);
+  // A small block budget: loop_without_end.ngc must stop within the test's time.
+  GcodeReadOptions ro;
+  ro.max_blocks = 100'000;
   for (const auto& f : files) {
     std::string expect = test::first_line(f);
     expect = expect.substr(std::string("; expect: ").size());
     try {
-      (void)read_gcode_file(f);
+      (void)read_gcode_file(f, ro);
       ADD_FAILURE() << f << ": read without error, expected: " << expect;
     } catch (const InputError& e) {
       const std::string want = std::isdigit(static_cast<unsigned char>(expect[0]))
@@ -304,6 +310,84 @@ TEST(GcodeHeader, MismatchesNameEachChangedKey) {
   EXPECT_TRUE(header_mismatches(same, prog, "p.ngc").empty());
   const GcodeProgram plain = read_gcode("G0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\n", "hand.ngc");
   EXPECT_TRUE(header_mismatches(other, plain, "hand.ngc").empty());
+}
+
+
+// ---- the interpreter's machine: offsets, home positions, tool table from the job -------------
+
+TEST(GcodeInterp, JobMachineKeysPlaceOffsetsHomeAndToolLengths) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("trochomill-interp-" + std::to_string(static_cast<long>(getpid())));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "tools.tbl") << "T1 P1 Z50 D10 ;end mill\nT2 P2 Z80.5 D6\n";
+  const Job job = test::wagih_job(
+      "trochoidal",
+      {parse_override("machine.origin_g55=[100.0, 0.0, -20.0]"),
+       parse_override("machine.g28_position=[0.0, 0.0, 120.0]"),
+       parse_override("machine.tool_table=\"" + (dir / "tools.tbl").string() + "\"")});
+  EXPECT_EQ(job.machine.tool_table, dir / "tools.tbl");
+  const GcodeReadOptions ro = gcode_options(job.machine).read;
+  // G54 (the job's work_offset) is not given: machine coordinates are G54's.
+  const GcodeProgram p = read_gcode(
+      "G21 G90 G0 X0 Y0 Z5\nG55 G0 X1 Y2\nG1 Z-3 F300\nG43 H2\nG28 G91 Z0\nG90 G53 G0 Z0\n",
+      "machine.ngc", ro);
+  const auto& seg = p.path.segments();
+  ASSERT_EQ(seg.size(), 5u);
+  // G55's origin (100, 0, -20): X1 Y2 in G55 is (101, 2) in G54; Z5 stays where it was.
+  EXPECT_LE((seg[0].end() - Vec3(101, 2, 5)).norm(), 1e-12);
+  EXPECT_LE((seg[1].end() - Vec3(101, 2, -23)).norm(), 1e-12);  // Z-3 in G55
+  // G28 Z: the gauge line to machine Z120, the tip a tool length (80.5 mm) below it.
+  EXPECT_LE((seg[3].end() - Vec3(101, 2, 120 - 80.5)).norm(), 1e-12);
+  // G53 Z0: the gauge line to machine zero.
+  EXPECT_LE((seg[4].end() - Vec3(101, 2, -80.5)).norm(), 1e-12);
+  EXPECT_TRUE(p.info.warnings.empty()) << p.info.warnings.front();
+  std::filesystem::remove_all(dir);
+}
+
+TEST(GcodeInterp, AssumptionsAreNamedInWarnings) {
+  const GcodeProgram p =
+      read_gcode("G0 X0 Y0 Z5\nG56 G0 X1 Y1\nG28\nT3 M6 G43 H3\nG53 G0 Z0\n", "assume.ngc");
+  ASSERT_EQ(p.info.warnings.size(), 3u);
+  EXPECT_NE(p.info.warnings[0].find("assume.ngc:2: G56 is used but its offset is not given"),
+            std::string::npos)
+      << p.info.warnings[0];
+  EXPECT_NE(p.info.warnings[1].find("assume.ngc:3: G28: the machine's G28 position is not given"),
+            std::string::npos)
+      << p.info.warnings[1];
+  EXPECT_NE(p.info.warnings[2].find("assume.ngc:5: G53 with G43 H3: tool 3 is not in the tool "
+                                    "table"),
+            std::string::npos)
+      << p.info.warnings[2];
+  // The assumptions: G56 as G54, G28 at X0 Y0 5 mm above the work origin.
+  EXPECT_LE((p.path.segments()[1].end() - Vec3(0, 0, 5)).norm(), 1e-12);
+}
+
+TEST(GcodeInterp, ToolTableErrorsNameLineAndColumn) {
+  const auto file = std::filesystem::temp_directory_path() /
+                    ("trochomill-tbl-" + std::to_string(static_cast<long>(getpid())) + ".tbl");
+  std::ofstream(file) << "T1 P1 Z50\nT2 P2 Zx\n";
+  try {
+    (void)read_tool_table(file);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string() + ":2:7: 'Z' needs a number after it"),
+              std::string::npos)
+        << e.what();
+  }
+  std::filesystem::remove(file);
+}
+
+// Loops and calls: the interpreter keeps LinuxCNC's semantics where a reading could differ.
+TEST(GcodeInterp, ParametersTakeEffectAfterTheLineAndLocalsBelongToTheCall) {
+  const GcodeProgram p = read_gcode(
+      "#1 = 2\n#1 = 7 #2 = #1\nG0 X0 Y0 Z0\nG1 X#2 F100\n"
+      "o1 sub\n  #1 = 50\n  G1 X#1\no1 endsub\no1 call [3]\nG1 X#1\n",
+      "semantics.ngc");
+  const auto& seg = p.path.segments();
+  ASSERT_EQ(seg.size(), 3u);
+  EXPECT_EQ(seg[0].end().x(), 2.0);   // #2 took #1's value before the line
+  EXPECT_EQ(seg[1].end().x(), 50.0);  // inside the call
+  EXPECT_EQ(seg[2].end().x(), 7.0);   // #1 restored after it
 }
 
 }  // namespace

@@ -252,7 +252,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       ro.rapid_rate_mm_per_min = a->machine.rapid_rate_mm_per_min;
       if (!a->dialect.empty()) ro.dialect = parse_dialect(a->dialect);
       for (const auto& d : a->includes) ro.include_dirs.emplace_back(d);
-      if (!a->tool_table.empty()) ro.tools = read_tool_table(a->tool_table);
+      if (!a->tool_table.empty()) ro.tool_table = a->tool_table;
       ro.work_system = work_system_number(a->work_system);
       for (const std::string& o : a->offsets) {
         const auto [n, v] = parse_offset(o);

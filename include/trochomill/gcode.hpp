@@ -82,6 +82,8 @@ struct GcodeReadOptions {
   /// define the subroutine itself (the program's own folder is searched first).
   std::vector<std::filesystem::path> include_dirs;
   std::map<int, ToolTableEntry> tools;  ///< tool number -> entry; a missing tool has length 0
+  /// A LinuxCNC tool table read when the program is (its entries over `tools`); empty: none.
+  std::filesystem::path tool_table;
   /// Origins of G54, G55, ... G59.3 (index 0 .. 8) in machine coordinates (mm) and their XY
   /// rotations (degrees); unset ones are zero (a warning names them when a program uses them).
   std::array<std::optional<Vec3>, 9> work_offsets_mm;

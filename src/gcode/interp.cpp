@@ -34,6 +34,7 @@ namespace {
 constexpr int kMaxParameter = 5602;  // #1 .. #5601, as LinuxCNC
 constexpr double kTolEqual = 1e-6;   // EQ/NE/LE/GE compare within this (LinuxCNC's TOLERANCE_EQUAL)
 constexpr double kMaxCoordinate = 1e6;  // mm: beyond this a move is refused (1 km)
+constexpr int kMaxNesting = 200;        // brackets, signs and # in one value
 
 enum class Plane { xy, zx, yz };
 enum class FeedMode { per_minute, inverse_time, per_rev };
@@ -197,6 +198,9 @@ class Interpreter {
   }
 
   GcodeProgram run() {
+    if (!opt_.tool_table.empty()) {
+      for (const auto& [n, t] : read_tool_table(opt_.tool_table)) tools_[n] = t;
+    }
     // A program between '%' lines: the first non-blank line '%' opens it, the next one ends it.
     bool percent_open = false, first = true;
     while (!ended_) {
@@ -355,6 +359,15 @@ class Interpreter {
   double read_value(std::size_t& i) {
     const std::string& s = line_.text;
     if (i >= s.size()) fail(i, "expected a value at the end of the line");
+    // Brackets, signs and # nest by recursion: bounded, so no line can exhaust the stack.
+    struct Depth {
+      int& d;
+      explicit Depth(int& x) : d(++x) {}
+      ~Depth() { --d; }
+    } depth(depth_);
+    if (depth_ > kMaxNesting) {
+      fail(i, fmt::format("the expression nests deeper than {} levels", kMaxNesting));
+    }
     const std::size_t at = i;
     const char c = s[i];
     const char c1 = i + 1 < s.size() ? s[i + 1] : '\0';
@@ -1016,7 +1029,10 @@ class Interpreter {
       }
       ++prog_.info.motion_blocks;
       if (motion_ >= 730) {
-        canned_cycle(motion_);
+        canned_cycle(motion_, motion >= 0 ? motion_col
+                                          : block_.col(block_.has('x')   ? 'x'
+                                                       : block_.has('y') ? 'y'
+                                                                         : 'z'));
       } else {
         move(g53, motion >= 0 ? motion_col
                               : block_.col(block_.has('x')   ? 'x'
@@ -1666,8 +1682,7 @@ class Interpreter {
 
   // ---- canned cycles (G17) ------------------------------------------------------------------
 
-  void canned_cycle(int g) {
-    const std::uint32_t column = block_.g.empty() ? block_.col('x') : block_.g.front().column;
+  void canned_cycle(int g, std::uint32_t column) {
     if (plane_ != Plane::xy) {
       fail_at(column, "canned cycles are supported in the XY plane (G17) only");
     }
@@ -2298,6 +2313,7 @@ class Interpreter {
   std::size_t main_lines_ = 0;
   ngc::Line line_;
   Block block_;
+  int depth_ = 0;  // nesting of read_value
   char word_ = 0;  // the word whose value is being read (for messages)
   std::size_t word_at_ = 0;
   std::vector<double> params_;

@@ -359,6 +359,18 @@ GcodeOptions gcode_options(const Machine& machine) {
   o.write.arc_output = machine.arc_output;
   o.write.tolerance_mm = machine.arc_tolerance_mm;
   o.read.rapid_rate_mm_per_min = machine.rapid_rate_mm_per_min;
+  o.read.dialect = machine.dialect;
+  o.read.work_system = static_cast<int>(machine.work_offset) + 1;  // G54 .. G59 = 1 .. 6
+  for (std::size_t n = 0; n < machine.origins_mm.size(); ++n) {
+    if (const auto& v = machine.origins_mm[n])
+      o.read.work_offsets_mm[n] = Vec3((*v)[0], (*v)[1], (*v)[2]);
+  }
+  if (const auto& v = machine.g28_position_mm)
+    o.read.g28_position_mm = Vec3((*v)[0], (*v)[1], (*v)[2]);
+  if (const auto& v = machine.g30_position_mm)
+    o.read.g30_position_mm = Vec3((*v)[0], (*v)[1], (*v)[2]);
+  o.read.home_z_mm = machine.safe_z_mm;
+  o.read.tool_table = machine.tool_table;
   return o;
 }
 

@@ -114,6 +114,21 @@ Key custom(const char* section, const char* key, const char* type, const char* u
              [d = std::move(default_text)](Job&) { return d; }};
 }
 
+// A [machine] key [x, y, z] in machine coordinates (mm).
+Key machine_position(const char* key, const char* doc,
+                     std::optional<std::array<double, 3>>& (*field)(Job&)) {
+  return custom("machine", key, "array of numbers", "mm", "[x, y, z], within +-1e6", "none", doc,
+                [key, field](JobReader& r, Job& job) {
+                  if (auto v = r.number_array("machine", key, Range{-1e6, 1e6})) {
+                    if (v->size() != 3) {
+                      r.problem("machine", key, "give [x, y, z] in mm");
+                    } else {
+                      field(job) = std::array<double, 3>{(*v)[0], (*v)[1], (*v)[2]};
+                    }
+                  }
+                });
+}
+
 #define FIELD(member)     \
   +[](Job & j) -> auto& { \
     return j.member;      \
@@ -340,6 +355,71 @@ std::vector<Key> build_schema() {
              "work coordinate system the program selects (sinumerik: G54 .. G57)"),
       integer("machine", "length_offset", 0, 9999, FIELD(machine.length_offset),
               "tool length offset register H of G43 (linuxcnc, fanuc; 0: the tool number)"),
+      custom("machine", "tool_table", "string", "", "a LinuxCNC tool table file", "none",
+             "tool lengths for G43 when reading programs (T1 P1 Z<length> D<diameter>, mm; "
+             "relative to the job file)",
+             [](JobReader& r, Job& job) {
+               if (auto f = r.string("machine", "tool_table")) {
+                 const std::filesystem::path fp(*f);
+                 job.machine.tool_table =
+                     fp.is_absolute() ? fp : std::filesystem::path(r.source()).parent_path() / fp;
+               }
+             }),
+      machine_position(
+          "g28_position",
+          "G28's position in machine coordinates, for reading programs (default: X0 "
+          "Y0 of the work system at safe_z)",
+          [](Job & j) -> auto& { return j.machine.g28_position_mm; }),
+      machine_position(
+          "g30_position",
+          "G30's position in machine coordinates, for reading programs (default: as "
+          "G28's)",
+          [](Job & j) -> auto& { return j.machine.g30_position_mm; }),
+      machine_position(
+          "origin_g54",
+          "G54's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[0]; }),
+      machine_position(
+          "origin_g55",
+          "G55's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[1]; }),
+      machine_position(
+          "origin_g56",
+          "G56's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[2]; }),
+      machine_position(
+          "origin_g57",
+          "G57's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[3]; }),
+      machine_position(
+          "origin_g58",
+          "G58's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[4]; }),
+      machine_position(
+          "origin_g59",
+          "G59's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[5]; }),
+      machine_position(
+          "origin_g59_1",
+          "G59.1's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[6]; }),
+      machine_position(
+          "origin_g59_2",
+          "G59.2's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[7]; }),
+      machine_position(
+          "origin_g59_3",
+          "G59.3's origin in machine coordinates, for reading programs that use it "
+          "(default: the work_offset system's)",
+          [](Job & j) -> auto& { return j.machine.origins_mm[8]; }),
       // [measured]
       number("measured", "force_max", "N", positive(), FIELD(measured.force_max_n),
              "measured maximum resultant force F_R,max"),
