@@ -263,13 +263,17 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       if (a->trace) {
         ro.trace = [](const GcodeMove& m) { fmt::print("{}\n", trace_line(m)); };
       }
+      // The time with acceleration needs the whole path; without it the program is read as a
+      // stream (its summary only).
+      ro.keep_path = a->machine.max_acceleration_mm_per_s2 > 0;
       const GcodeProgram prog = read_gcode_file(a->file, ro);
       for (const std::string& w : prog.info.warnings) fmt::print(stderr, "warning: {}\n", w);
       if (a->trace) {
         exit_code = 0;
         return;
       }
-      const double t_acc = estimate_time_s(prog.path, a->machine);
+      const double t_acc =
+          ro.keep_path ? estimate_time_s(prog.path, a->machine) : prog.summary.duration_s;
       if (!a->json.empty()) emit(a->json, gcode_check_json(a->file, prog, t_acc));
       if (a->json != "-") {
         fmt::print("{}",

@@ -98,6 +98,9 @@ struct GcodeReadOptions {
   /// How far above the last peck G73 and G83 return before feeding on (mm): LinuxCNC 2.9's
   /// 0.010 inch.
   double peck_clearance_mm = 0.254;
+  /// false: the segments are not kept, only their summary (GcodeProgram::summary): a long
+  /// program is then read in memory for its text alone.
+  bool keep_path = true;
   std::uint64_t max_blocks = 200'000'000;  ///< interpreted blocks before "infinite loop?" stops
   int max_call_depth = 64;                 ///< nested subroutine calls
   /// Called for every canonical move, in order (check-gcode --trace); may be empty.
@@ -121,8 +124,9 @@ struct GcodeProgramInfo {
 };
 
 struct GcodeProgram {
-  ToolPath path;
+  ToolPath path;  ///< empty when read with keep_path = false
   GcodeProgramInfo info;
+  PathSummary summary;  ///< filled when read with keep_path = false (else summarize(path))
 };
 
 /// Reads a LinuxCNC tool table: lines `T<n> P<pocket> Z<length> D<diameter> ;comment` (other

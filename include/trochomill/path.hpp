@@ -108,6 +108,8 @@ class ToolPath {
   void append(Segment segment);
   /// Marks the start of a cycle at the current end of the path.
   void mark_cycle();
+  /// Room for n segments (a reader that knows about how many will come).
+  void reserve(std::size_t n);
 
   [[nodiscard]] const std::vector<Segment>& segments() const noexcept { return segments_; }
   [[nodiscard]] const std::vector<CycleMark>& cycles() const noexcept { return cycles_; }
@@ -183,6 +185,20 @@ struct BoundingBox {
   Vec3 hi = Vec3::Constant(-std::numeric_limits<double>::infinity());
 };
 [[nodiscard]] BoundingBox bounding_box(const ToolPath& path);
+/// Grows `box` by one segment (as bounding_box does).
+void extend(BoundingBox& box, const Segment& segment);
+
+/// A path's totals accumulated segment by segment, without keeping the segments (a long NC
+/// program read as a stream): the same sums as ToolPath's length_mm, feed_length_mm and
+/// duration_s, and its bounding box.
+struct PathSummary {
+  std::size_t segments = 0;
+  double length_mm = 0, feed_length_mm = 0, duration_s = 0;
+  BoundingBox box;
+  void add(const Segment& segment);
+};
+/// The summary of a whole path.
+[[nodiscard]] PathSummary summarize(const ToolPath& path);
 
 /// Where the slot frame sits in the workpiece (the frame of the program's work offset):
 /// `[slot] origin_x, origin_y, angle`. A point p of the slot frame is at

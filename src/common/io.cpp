@@ -166,6 +166,22 @@ std::string read_file(const fs::path& path) {
   if (!in) {
     throw IoError("cannot read '" + path.string() + "': " + std::strerror(errno));
   }
+  // A regular file is read straight into a string of its size (one copy in memory: a 100 MB
+  // program takes 100 MB, not the 2-3 times a growing stream buffer and its copy take).
+  const auto size = fs::is_regular_file(path, ec) ? fs::file_size(path, ec) : std::uintmax_t{0};
+  if (!ec && size > 0) {
+    std::string text(static_cast<std::size_t>(size), '\0');
+    in.read(text.data(), static_cast<std::streamsize>(size));
+    text.resize(static_cast<std::size_t>(in.gcount()));
+    if (in.bad()) throw IoError("cannot read '" + path.string() + "': read failed");
+    // A file that grew while read: the rest follows.
+    if (in.peek() != std::char_traits<char>::eof()) {
+      std::ostringstream rest;
+      rest << in.rdbuf();
+      text += rest.str();
+    }
+    return text;
+  }
   std::ostringstream ss;
   ss << in.rdbuf();
   if (in.bad()) throw IoError("cannot read '" + path.string() + "': read failed");

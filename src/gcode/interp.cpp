@@ -201,6 +201,11 @@ class Interpreter {
     if (!opt_.tool_table.empty()) {
       for (const auto& [n, t] : read_tool_table(opt_.tool_table)) tools_[n] = t;
     }
+    if (opt_.keep_path) {
+      // About a segment a line: room up front spares the copies of a growing path.
+      const std::string_view t = sources_[0].text;
+      prog_.path.reserve(static_cast<std::size_t>(std::count(t.begin(), t.end(), '\n')) + 1);
+    }
     // A program between '%' lines: the first non-blank line '%' opens it, the next one ends it.
     bool percent_open = false, first = true;
     while (!ended_) {
@@ -232,7 +237,7 @@ class Interpreter {
                              frames_.back().label));
     }
     prog_.info.lines = std::max(prog_.info.lines, main_lines_);
-    if (prog_.path.empty()) {
+    if (prog_.path.empty() && prog_.summary.segments == 0) {
       throw InputError(
           fmt::format("{}: the program has no motion (no G0/G1/G2/G3 moves)", sources_[0].name));
     }
@@ -1543,6 +1548,10 @@ class Interpreter {
   }
 
   void append(Segment seg, std::uint32_t column) {
+    if (!opt_.keep_path) {
+      prog_.summary.add(seg);
+      return;
+    }
     try {
       prog_.path.append(std::move(seg));
     } catch (const Error& e) {

@@ -33,6 +33,12 @@ void ToolPath::append(Segment segment) {
   segments_.push_back(std::move(segment));
 }
 
+void ToolPath::reserve(std::size_t n) {
+  segments_.reserve(n);
+  start_length_.reserve(n);
+  start_time_.reserve(n);
+}
+
 void ToolPath::mark_cycle() {
   cycles_.push_back(CycleMark{segments_.size(), length_mm(), duration_s()});
 }
@@ -76,21 +82,38 @@ Vec3 ToolPath::point_at_length(double s_mm) const {
 
 namespace trochomill {
 
-BoundingBox bounding_box(const ToolPath& path) {
-  BoundingBox b;
+void extend(BoundingBox& b, const Segment& seg) {
   auto add = [&](const Vec3& p) {
     b.lo = b.lo.cwiseMin(p);
     b.hi = b.hi.cwiseMax(p);
   };
-  for (const auto& seg : path.segments()) {
-    add(seg.start());
-    add(seg.end());
-    if (seg.kind() == Segment::Kind::curve) {
-      const int n = std::max(4, static_cast<int>(std::abs(seg.u1() - seg.u0()) * 720.0 / M_PI));
-      for (int k = 1; k < n; ++k) add(seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n));
-    }
+  add(seg.start());
+  add(seg.end());
+  if (seg.kind() == Segment::Kind::curve) {
+    const int n = std::max(4, static_cast<int>(std::abs(seg.u1() - seg.u0()) * 720.0 / M_PI));
+    for (int k = 1; k < n; ++k) add(seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n));
   }
+}
+
+BoundingBox bounding_box(const ToolPath& path) {
+  BoundingBox b;
+  for (const auto& seg : path.segments()) extend(b, seg);
   return b;
+}
+
+void PathSummary::add(const Segment& seg) {
+  if (seg.length_mm() <= 0) return;  // as ToolPath::append
+  ++segments;
+  length_mm += seg.length_mm();
+  if (seg.motion() == Motion::feed) feed_length_mm += seg.length_mm();
+  duration_s += seg.length_mm() / (seg.speed_mm_per_min() / 60.0);
+  extend(box, seg);
+}
+
+PathSummary summarize(const ToolPath& path) {
+  PathSummary s;
+  for (const auto& seg : path.segments()) s.add(seg);
+  return s;
 }
 
 namespace {

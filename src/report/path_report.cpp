@@ -44,15 +44,18 @@ std::string path_samples_csv(const PathSamples& s, const ToothTracks& tr) {
 
 std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
                              double time_with_acceleration_s) {
-  const BoundingBox b = bounding_box(prog.path);
+  const PathSummary sum = prog.path.empty() ? prog.summary : summarize(prog.path);
+  const BoundingBox& b = sum.box;
   const nlohmann::json j = {
       {"file", file},
       {"lines", prog.info.lines},
       {"motion_blocks", prog.info.motion_blocks},
-      {"segments", prog.path.segments().size()},
-      {"path_length_mm", prog.path.length_mm()},
-      {"feed_length_mm", prog.path.feed_length_mm()},
-      {"time_s", prog.path.duration_s()},
+      {"blocks_executed", prog.info.blocks_executed},
+      {"warnings", prog.info.warnings},
+      {"segments", sum.segments},
+      {"path_length_mm", sum.length_mm},
+      {"feed_length_mm", sum.feed_length_mm},
+      {"time_s", sum.duration_s},
       {"time_with_acceleration_s", time_with_acceleration_s},
       {"bbox_min_mm", {b.lo.x(), b.lo.y(), b.lo.z()}},
       {"bbox_max_mm", {b.hi.x(), b.hi.y(), b.hi.z()}},
@@ -65,12 +68,13 @@ std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
 
 std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
                              double time_with_acceleration_s, double max_acceleration_mm_per_s2) {
-  const BoundingBox b = bounding_box(prog.path);
-  std::string out = fmt::format("{}: {} lines, {} segments\n", file, prog.info.lines,
-                                prog.path.segments().size());
-  out += fmt::format("  path length   {:.4f} mm ({:.4f} mm at feed)\n", prog.path.length_mm(),
-                     prog.path.feed_length_mm());
-  out += fmt::format("  time          {:.4f} s at programmed feed", prog.path.duration_s());
+  const PathSummary sum = prog.path.empty() ? prog.summary : summarize(prog.path);
+  const BoundingBox& b = sum.box;
+  std::string out = fmt::format("{}: {} lines, {} blocks run, {} segments\n", file, prog.info.lines,
+                                prog.info.blocks_executed, sum.segments);
+  out += fmt::format("  path length   {:.4f} mm ({:.4f} mm at feed)\n", sum.length_mm,
+                     sum.feed_length_mm);
+  out += fmt::format("  time          {:.4f} s at programmed feed", sum.duration_s);
   if (max_acceleration_mm_per_s2 > 0) {
     out += fmt::format(", {:.4f} s with {:g} mm/s^2", time_with_acceleration_s,
                        max_acceleration_mm_per_s2);
