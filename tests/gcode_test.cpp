@@ -312,7 +312,6 @@ TEST(GcodeHeader, MismatchesNameEachChangedKey) {
   EXPECT_TRUE(header_mismatches(other, plain, "hand.ngc").empty());
 }
 
-
 // ---- the interpreter's machine: offsets, home positions, tool table from the job -------------
 
 TEST(GcodeInterp, JobMachineKeysPlaceOffsetsHomeAndToolLengths) {
@@ -388,6 +387,108 @@ TEST(GcodeInterp, ParametersTakeEffectAfterTheLineAndLocalsBelongToTheCall) {
   EXPECT_EQ(seg[0].end().x(), 2.0);   // #2 took #1's value before the line
   EXPECT_EQ(seg[1].end().x(), 50.0);  // inside the call
   EXPECT_EQ(seg[2].end().x(), 7.0);   // #1 restored after it
+}
+
+// ---- Fanuc Macro B (hand-computed motion: LinuxCNC does not read these) ----------------------
+
+std::vector<Vec3> ends_of(const GcodeProgram& p) {
+  std::vector<Vec3> e;
+  for (const Segment& s : p.path.segments()) e.push_back(s.end());
+  return e;
+}
+
+TEST(GcodeFanuc, MacroBLoopsJumpsSubprogramsAndMacroCalls) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const std::string prog = R"(%
+O1000 (MAIN)
+G21 G90 G17 G94
+G54 G0 X0. Y0. Z5.
+#100 = 0
+WHILE [#100 LT 3] DO 1
+  G1 X[#100 * 10.] Y0. F500.
+  #100 = #100 + 1
+END 1
+IF [#100 EQ 3] GOTO 50
+G1 X999.
+N50 G1 Y5.
+IF [#1 EQ #0] THEN #2 = 7.
+G1 Y#2
+M98 P2000 L2
+G65 P3000 A1. B2.
+G1 X#24 Y#500
+#3 = 2 + 3 * 4 AND 6 OR 1
+G1 X#3
+M30
+O2000 (SUB)
+G91 G1 X1.
+G90
+M99
+O3000 (MACRO)
+G1 X#1 Y#2
+#24 = 42.
+#500 = 9.
+M99
+%
+)";
+  const GcodeProgram p = read_gcode(prog, "fanuc.nc", ro);
+  // By hand: the loop draws X0, X10, X20; the jump skips X999; #1 is vacant, so #2 = 7; M98
+  // L2 steps X twice by 1; G65 moves to (A, B) = (1, 2) and sets its own #24 (gone at M99)
+  // and the common #500; the vacant #24 leaves X out of the next block; 2 + [3 * 4 AND 6] OR 1
+  // = 2 + [12 AND 6 = 4] = 6, OR 1 = 7 (Fanuc: AND binds like *, OR like +).
+  const std::vector<Vec3> want = {{10, 0, 5}, {20, 0, 5}, {20, 5, 5}, {20, 7, 5}, {21, 7, 5},
+                                  {22, 7, 5}, {1, 2, 5},  {1, 9, 5},  {7, 9, 5}};
+  const std::vector<Vec3> got = ends_of(p);
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t k = 0; k < want.size(); ++k) {
+    EXPECT_LE((got[k] - want[k]).norm(), 1e-12) << k << ": " << got[k].transpose();
+  }
+}
+
+TEST(GcodeFanuc, NumbersWithoutDecimalPointAreNamedInAWarning) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const GcodeProgram p = read_gcode("G21 G90 G0 X0 Y0 Z5\nG1 X100 F200\n", "nodot.nc", ro);
+  EXPECT_EQ(p.path.segments().back().end().x(), 100.0);
+  ASSERT_EQ(p.info.warnings.size(), 1u);
+  EXPECT_NE(p.info.warnings[0].find("nodot.nc:1: X0 has no decimal point: taken as 0 mm"),
+            std::string::npos)
+      << p.info.warnings[0];
+}
+
+TEST(GcodeFanuc, MalformedMacrosNameTheLine) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  ro.max_blocks = 10'000;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"G0 X0. Y0. Z0.\nEND 1\n", "f.nc:2:1: END 1 without its WHILE .. DO 1"},
+      {"G0 X0. Y0. Z0.\nWHILE [1 LT 0] DO 2\nG1 X1.\n", "f.nc:2:1: WHILE .. DO 2 has no END 2"},
+      {"G0 X0. Y0. Z0.\nGOTO 70\n", "f.nc:2:1: GOTO 70: no block N70 in f.nc"},
+      {"G0 X0. Y0. Z0.\nM98 P9\n", "f.nc:2:5: program O0009 is not in the program"},
+      {"G0 X0. Y0. Z0.\n#3000 = 12 (TOOL BROKEN)\n",
+       "f.nc:2:1: the program raised alarm #3000 = 12 (TOOL BROKEN)"},
+      {"G0 X0. Y0. Z0.\n#0 = 1\n", "f.nc:2:1: #0 is always vacant: it cannot be set"},
+      {"G0 X0. Y0. Z0.\nIF [1] X1.\n", "f.nc:2:8: IF [condition] is followed by GOTO n or THEN"},
+      {"G0 X0. Y0. Z0.\nN10 G1 X1. F100.\nGOTO 10\n", "stopped after 10000 blocks"},
+  };
+  for (const auto& [code, want] : cases) {
+    try {
+      (void)read_gcode(code, "f.nc", ro);
+      ADD_FAILURE() << "no error for:\n" << code;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(want), std::string::npos)
+          << "want: " << want << "\ngot:  " << e.what();
+    }
+  }
+  // M98 in the LinuxCNC dialect says where it belongs.
+  try {
+    (void)read_gcode("G0 X0 Y0 Z0\nM98 P100\n", "l.ngc");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("l.ngc:2:1: M98 is Fanuc's subprogram call"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

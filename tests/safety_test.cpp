@@ -55,7 +55,7 @@ TEST(Safety, SetUpAndApproachFollowTheDialect) {
       {Dialect::linuxcnc,
        {"G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "S2000 M3", "G0 G43 H7 Z5", "G0 X-5 Y"}},
       {Dialect::fanuc,
-       {"O1000", "G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "G0 G43 H7 Z5", "G0 X-5 Y"}},
+       {"O1000", "G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "G0 G43 H7 Z5.", "G0 X-5. Y"}},
       {Dialect::sinumerik, {"G71 G17 G90 G94 G40", "G54", "T7 D1", "M6", "G0 Z5", "G0 X-5 Y"}},
       {Dialect::grbl, {"G21 G17 G90 G94", "G54", "S2000 M3", "G0 Z5", "G0 X-5 Y"}},
   };
@@ -69,6 +69,12 @@ TEST(Safety, SetUpAndApproachFollowTheDialect) {
     // The XY approach block carries no Z: the Z move came first, alone.
     EXPECT_EQ(lines[at].find('Z'), std::string::npos) << lines[at];
   }
+  // Every Fanuc number carries its decimal point (a Fanuc set to least-increment input reads
+  // "Z5" as 5 um): read back as Fanuc, no number is without one.
+  GcodeReadOptions fanuc;
+  fanuc.dialect = Dialect::fanuc;
+  const GcodeProgram back = read_gcode(write(job, Dialect::fanuc), "f.nc", fanuc);
+  EXPECT_TRUE(back.info.warnings.empty()) << back.info.warnings.front();
   // The length offset register and the work offset are the job's.
   const Job other = test::wagih_job("trochoidal", {parse_override("machine.length_offset=27"),
                                                    parse_override("machine.work_offset=G57"),

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <deque>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <unordered_map>
 
@@ -113,9 +114,12 @@ struct Control {
 };
 
 struct Frame {
-  std::string label;                                   // the subroutine ("" at the top)
-  Cursor ret;                                          // where the call returns to
-  std::array<double, 31> saved_locals{};               // #1..#30 of the caller
+  std::string label;                      // the subroutine ("" at the top)
+  Cursor ret;                             // where the call returns to
+  std::array<double, 34> saved_locals{};  // #1..#30 (Fanuc #1..#33) of the caller
+  bool new_locals = true;                 // false: Fanuc M98 (the caller's locals)
+  Cursor start;                           // Fanuc: the subprogram's first line (L repeats)
+  double repeats = 1;                     // Fanuc M98 L
   std::vector<std::pair<std::string, double>> locals;  // named local parameters
   std::vector<Control> controls;
   bool restore_modal = false;  // M73 in the subroutine
@@ -193,6 +197,14 @@ class Interpreter {
     main.name = std::string(name);
     sources_.push_back(std::move(main));
     params_.assign(kMaxParameter, 0.0);
+    if (fanuc_) {
+      // Fanuc's local and common variables start vacant.
+      const double vacant = std::numeric_limits<double>::quiet_NaN();
+      params_[0] = vacant;
+      for (std::size_t p = 1; p <= 33; ++p) params_[p] = vacant;
+      for (std::size_t p = 100; p <= 199; ++p) params_[p] = vacant;
+      for (std::size_t p = 500; p <= 999; ++p) params_[p] = vacant;
+    }
     frames_.emplace_back();
     init_offsets();
   }
@@ -309,7 +321,16 @@ class Interpreter {
       if (j == i + 1) fail(i, "'N' needs a line number after it");
       i = j;
     }
-    if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
+    if (fanuc_) {
+      if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
+        // A program number: the start of a (sub)program; the rest of the line runs.
+        std::size_t j = i + 1;
+        while (j < s.size() && s[j] >= '0' && s[j] <= '9') ++j;
+        if (j == i + 1) fail(i, "'O' needs a program number after it");
+        i = j;
+      }
+      if (fanuc_statement(i)) return;
+    } else if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
       if (o_statement(i)) return;
     }
     if (i >= s.size()) return;  // blank or comment only: (MSG, ...) and the like do not move
@@ -355,7 +376,7 @@ class Interpreter {
   }
 
   double checked(double v, std::size_t at) const {
-    if (std::isnan(v)) fail(at, "the calculation gives 'not a number'");
+    if (std::isnan(v) && !fanuc_) fail(at, "the calculation gives 'not a number'");
     if (std::isinf(v)) fail(at, "the calculation gives infinity");
     return v;
   }
@@ -410,7 +431,29 @@ class Interpreter {
   }
 
   enum class Op { none, pow, mul, div, mod, add, sub, eq, ne, gt, ge, lt, le, and_, or_, xor_ };
-  static int precedence(Op op) {
+  // LinuxCNC: ** > * / MOD > + - > comparisons > AND OR XOR. Fanuc (Macro B): * / AND MOD >
+  // + - OR XOR > comparisons, AND OR XOR bitwise on whole numbers.
+  int precedence(Op op) const {
+    if (fanuc_) {
+      switch (op) {
+        case Op::pow:
+          return 6;
+        case Op::mul:
+        case Op::div:
+        case Op::mod:
+        case Op::and_:
+          return 5;
+        case Op::add:
+        case Op::sub:
+        case Op::or_:
+        case Op::xor_:
+          return 4;
+        case Op::none:
+          return 0;
+        default:
+          return 3;
+      }
+    }
     switch (op) {
       case Op::pow:
         return 6;
@@ -484,6 +527,21 @@ class Interpreter {
   }
 
   double apply(Op op, double a, double b, std::size_t at) const {
+    if (fanuc_) {
+      // A vacant variable (NaN here) is "null": equal only to another null, 0 elsewhere.
+      const bool na = std::isnan(a), nb = std::isnan(b);
+      if (op == Op::eq && (na || nb)) return na && nb ? 1 : 0;
+      if (op == Op::ne && (na || nb)) return na && nb ? 0 : 1;
+      if (na) a = 0;
+      if (nb) b = 0;
+      if (op == Op::and_ || op == Op::or_ || op == Op::xor_) {
+        if (std::abs(a) > 2e9 || std::abs(b) > 2e9 || a != std::floor(a) || b != std::floor(b)) {
+          fail(at, "AND, OR and XOR take whole numbers (Fanuc: bit by bit)");
+        }
+        const auto x = static_cast<long long>(a), y = static_cast<long long>(b);
+        return static_cast<double>(op == Op::and_ ? (x & y) : op == Op::or_ ? (x | y) : (x ^ y));
+      }
+    }
     switch (op) {
       case Op::pow:
         if (a < 0 && std::floor(b) != b) fail(at, "a negative number to a non-integer power");
@@ -527,6 +585,8 @@ class Interpreter {
     return a;
   }
 
+  [[nodiscard]] static double zero_if_vacant(double v) { return std::isnan(v) ? 0.0 : v; }
+
   // A function name and '[' at i (else the letter is the next word: "X F100").
   bool function_follows(std::size_t i) const {
     const std::string& s = line_.text;
@@ -565,14 +625,28 @@ class Interpreter {
       ++i;
       return find_named(pname) != nullptr ? 1 : 0;
     }
-    const double x = read_expression(i);
+    if (name == "atan" && fanuc_) {
+      // Fanuc writes ATAN[y]/[x] or ATAN[y,x].
+      const std::size_t comma = line_.text.find(',', i);
+      const std::size_t close = line_.text.find(']', i);
+      if (comma != std::string::npos && comma < close) {
+        ++i;
+        const double yy = zero_if_vacant(read_binary(i, 1));
+        ++i;  // ','
+        const double xx = zero_if_vacant(read_binary(i, 1));
+        if (i >= s.size() || s[i] != ']') fail(i, "ATAN is written ATAN[y,x]");
+        ++i;
+        return std::atan2(yy, xx) * 180.0 / kPi;
+      }
+    }
+    const double x = zero_if_vacant(read_expression(i));
     if (name == "atan") {
       // ATAN[y]/[x]: degrees, the quadrant from both signs.
       if (i >= s.size() || s[i] != '/') fail(i, "ATAN is written ATAN[y]/[x]");
       ++i;
       if (i >= s.size() || s[i] != '[') fail(i, "ATAN is written ATAN[y]/[x]");
       const double xx = read_expression(i);
-      return std::atan2(x, xx) * 180.0 / kPi;
+      return std::atan2(x, zero_if_vacant(xx)) * 180.0 / kPi;
     }
     if (name == "abs") return std::abs(x);
     if (name == "acos" || name == "asin") {
@@ -607,10 +681,21 @@ class Interpreter {
       return named_value(name, at);
     }
     const int index = parameter_index(read_value(i), at);
+    if (fanuc_) return fanuc_variable(index);
+    return params_[static_cast<std::size_t>(index)];
+  }
+
+  // Fanuc's system variables that describe the position; #0 is always vacant.
+  double fanuc_variable(int index) const {
+    if (index >= 5001 && index <= 5003) return cur_pos_[index - 5001] / unit_;
+    if (index >= 5041 && index <= 5043) return cur_pos_[index - 5041] / unit_;
+    if (index >= 5021 && index <= 5023) return to_machine_tip(cur_pos_)[index - 5021] / unit_;
     return params_[static_cast<std::size_t>(index)];
   }
 
   int parameter_index(double v, std::size_t at) const {
+    if (fanuc_ && std::isnan(v)) fail(at, "a variable number that is vacant (#0)");
+    if (fanuc_ && v == 0) return 0;  // #0: vacant, read only
     const double r = std::round(v);
     if (std::abs(v - r) > 1e-4) fail(at, fmt::format("parameter number {:g} is not whole", v));
     if (r < 1 || r >= kMaxParameter) {
@@ -723,7 +808,9 @@ class Interpreter {
           fail(i, "a parameter on its own is not a word: write #1 = value to set it");
         }
         ++i;
-        const double v = read_value(i);
+        // Fanuc: the right side is an expression without brackets (#1 = #1 + 1).
+        const double v = fanuc_ ? read_binary(i, 1) : read_value(i);
+        if (fanuc_ && name.empty()) check_fanuc_write(index, at, v);
         if (name.empty()) {
           block_.numbered.push_back({index, v});
         } else {
@@ -745,8 +832,26 @@ class Interpreter {
       if (i >= s.size()) fail(at, fmt::format("'{}' needs a number after it", upper(c)));
       word_ = c;
       word_at_ = at;
+      const std::size_t value_at = i;
       const double v = read_value(i);
       word_ = 0;
+      if (fanuc_) {
+        if (std::isnan(v)) continue;  // a word whose variable is vacant is not there
+        if (std::string_view("xyzijkrq").find(letter) != std::string_view::npos &&
+            !decimal_warned_) {
+          const std::string_view lit = std::string_view(s).substr(value_at, i - value_at);
+          const bool plain =
+              !lit.empty() && lit.find_first_not_of("+-0123456789") == std::string_view::npos;
+          if (plain) {
+            decimal_warned_ = true;
+            warn(
+                fmt::format("{}{} has no decimal point: taken as {} {} (calculator-type input); "
+                            "a control set to least-increment input reads {:g} {}",
+                            upper(letter), lit, lit, unit_name(),
+                            v * (unit_ == 1.0 ? 0.001 : 0.0001), unit_name()));
+          }
+        }
+      }
       if (letter == 'g' || letter == 'm') {
         (letter == 'g' ? block_.g : block_.m).push_back({code10(v), col_of(at)});
         continue;
@@ -765,6 +870,17 @@ class Interpreter {
 
   static char upper(char c) { return static_cast<char>(c - 'a' + 'A'); }
 
+  void check_fanuc_write(int index, std::size_t at, double v) const {
+    if (index == 0) fail(at, "#0 is always vacant: it cannot be set");
+    if (index == 3000) {
+      fail(at, fmt::format("the program raised alarm #3000 = {:g}{}", v,
+                           line_.comment.empty() ? "" : " (" + line_.comment + ")"));
+    }
+    if (index >= 5001 && index <= 5043) {
+      fail(at, fmt::format("#{} is a position the control keeps: read only", index));
+    }
+  }
+
   // A length word in mm.
   double len(char c) const { return block_[c] * unit_; }
 
@@ -776,6 +892,14 @@ class Interpreter {
   }
 
   void execute() {
+    pending_m98_.reset();
+    pending_m99_ = false;
+    for (const auto& gc : block_.g) {
+      if (gc.code10 == 650) {
+        macro_call(gc.column);
+        return;
+      }
+    }
     // Words no milling program of ours uses: refused by name.
     for (const char c : std::string_view("abcuvw")) {
       if (block_.has(c)) {
@@ -965,6 +1089,36 @@ class Interpreter {
         case 670:
         case 680:
           break;  // coolant, overrides, outputs: no effect on the path
+        case 980: {
+          if (!fanuc_) {
+            fail_at(column,
+                    "M98 is Fanuc's subprogram call: read the program with the fanuc "
+                    "dialect, or call an o-word subroutine");
+          }
+          if (!block_.has('p')) fail_at(column, "M98 needs the program number in P");
+          double prog = block_['p'], times = block_.has('l') ? block_['l'] : 1;
+          if (prog < 0 || prog != std::floor(prog) || prog > 99999999) {
+            fail_at(block_.col('p'), "M98 P must be a program number");
+          }
+          if (!block_.has('l') && prog > 9999) {  // P<times 4 digits><program 4 digits>
+            times = std::floor(prog / 10000);
+            prog = std::fmod(prog, 10000);
+          }
+          if (times < 0 || times != std::floor(times) || times > 9999) {
+            fail_at(column, "M98's repeat count L must be a whole number 0 .. 9999");
+          }
+          pending_m98_ = std::make_pair(prog, times);
+          break;
+        }
+        case 990:
+          if (!fanuc_) {
+            fail_at(column,
+                    "M99 is Fanuc's subprogram return: read the program with the fanuc "
+                    "dialect, or end an o-word subroutine with endsub");
+          }
+          pending_m99_ = true;
+          m99_p_ = block_.has('p') ? block_['p'] : -1;
+          break;
         case 610:
           if (!block_.has('q')) fail_at(column, "M61 needs the tool number in Q");
           tool_loaded_ = block_['q'];
@@ -1052,6 +1206,8 @@ class Interpreter {
     if (motion_ >= 0 && motion_ < 730) cycle_il_flag_ = false;
     check_unused(group0, dwell, tool_length);
     if (stop) end_program();
+    if (pending_m98_ && !ended_) subprogram_call();
+    if (pending_m99_ && !ended_) subprogram_return();
   }
 
   // Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).
@@ -1067,14 +1223,15 @@ class Interpreter {
     if (block_.has('q') && !(cycle && (motion_ == 730 || motion_ == 830)) && !m61) {
       refuse('q', "G73, G83 or M61");
     }
-    if (block_.has('l') && !cycle && group0 != 100) refuse('l', "G10 or canned cycle");
+    const bool m98 = pending_m98_.has_value();
+    if (block_.has('l') && !cycle && group0 != 100 && !m98) refuse('l', "G10 or canned cycle");
     if (block_.has('r') && !arc && !cycle && group0 != 100) {
       refuse('r', "G2/G3, canned cycle or G10");
     }
     for (const char c : std::string_view("ijk")) {
       if (block_.has(c) && !arc) refuse(c, "G2/G3");
     }
-    if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100) {
+    if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_) {
       refuse('p', "G2/G3, G4, G10 or canned cycle");
     }
     if (block_.has('h') && tool_length != 430) refuse('h', "G43");
@@ -1825,6 +1982,319 @@ class Interpreter {
     cur_pos_ = target;
   }
 
+  // ---- Fanuc Macro B --------------------------------------------------------------------------
+
+  // GOTO, IF [..] GOTO / THEN, WHILE [..] DO m, DO m, END m at i: true when the line was one.
+  bool fanuc_statement(std::size_t i) {
+    const std::string& s = line_.text;
+    const std::string_view rest = std::string_view(s).substr(std::min(i, s.size()));
+    auto starts = [&](std::string_view w) { return rest.substr(0, w.size()) == w; };
+    auto digit_at = [&](std::size_t k) {
+      return k < rest.size() && rest[k] >= '0' && rest[k] <= '9';
+    };
+    const std::size_t at = i;
+    if (starts("goto")) {
+      count_block();
+      i += 4;
+      const double n = read_value(i);
+      fanuc_end(i);
+      goto_label(n, at);
+      return true;
+    }
+    if (starts("if[")) {
+      count_block();
+      i += 2;
+      const double c = zero_if_vacant(read_expression(i));
+      const std::string_view after = std::string_view(s).substr(i);
+      if (after.substr(0, 4) == "goto") {
+        i += 4;
+        const double n = read_value(i);
+        fanuc_end(i);
+        if (c != 0) goto_label(n, at);
+        return true;
+      }
+      if (after.substr(0, 4) == "then") {
+        i += 4;
+        read_block(i);
+        if (block_.present != 0 || !block_.g.empty() || !block_.m.empty() ||
+            block_.numbered.empty()) {
+          fail(i, "IF [..] THEN takes a variable assignment (#1 = ...)");
+        }
+        if (c != 0) {
+          for (const auto& p : block_.numbered)
+            params_[static_cast<std::size_t>(p.index)] = p.value;
+        }
+        return true;
+      }
+      fail(i, "IF [condition] is followed by GOTO n or THEN #i = value");
+    }
+    if (starts("while[")) {
+      count_block();
+      i += 5;
+      const double c = zero_if_vacant(read_expression(i));
+      if (std::string_view(s).substr(i, 2) != "do")
+        fail(i, "WHILE [condition] DO m: DO is missing");
+      i += 2;
+      const std::string label = loop_id(i);
+      Control* open = find_control(label);
+      const bool here = open != nullptr && open->kind == OKind::while_ &&
+                        open->start.offset == line_offset_ && open->start.source == cur_.source;
+      if (c != 0) {
+        if (!here) {
+          Control ctl;
+          ctl.kind = OKind::while_;
+          ctl.label = label;
+          ctl.start = Cursor{cur_.source, line_offset_, cur_.line_no - 1};
+          frames_.back().controls.push_back(ctl);
+        }
+        return true;
+      }
+      if (here) pop_to(label);
+      skip_past_end(label, at);
+      return true;
+    }
+    if (starts("do") && digit_at(2)) {
+      count_block();
+      i += 2;
+      Control ctl;
+      ctl.kind = OKind::do_;
+      ctl.label = loop_id(i);
+      ctl.start = cur_;
+      frames_.back().controls.push_back(ctl);
+      return true;
+    }
+    if (starts("end") && digit_at(3)) {
+      count_block();
+      i += 3;
+      const std::string label = loop_id(i);
+      Control* ctl = find_control(label);
+      if (ctl == nullptr) fail(at, fmt::format("END {} without its WHILE .. DO {}", label, label));
+      cur_ = ctl->start;
+      return true;
+    }
+    return false;
+  }
+
+  void fanuc_end(std::size_t i) const {
+    if (i < line_.text.size()) {
+      fail(i, fmt::format("unexpected {} after the statement", ngc::shown(line_.text[i])));
+    }
+  }
+
+  // The m of DO m / END m (1 .. 3 on a Fanuc; any whole number here).
+  std::string loop_id(std::size_t& i) {
+    const std::size_t j0 = i;
+    while (i < line_.text.size() && line_.text[i] >= '0' && line_.text[i] <= '9') ++i;
+    if (i == j0) fail(i, "DO and END need their loop number (DO 1 .. END 1)");
+    std::string id = line_.text.substr(j0, i - j0);
+    fanuc_end(i);
+    return id;
+  }
+
+  // After a false WHILE: on after its END m.
+  void skip_past_end(const std::string& label, std::size_t at) {
+    const Source& src = sources_[cur_.source];
+    ngc::Line l;
+    std::size_t off = cur_.offset, no = cur_.line_no;
+    while (off < src.text.size()) {
+      std::size_t end = src.text.find('\n', off);
+      if (end == std::string_view::npos) end = src.text.size();
+      ++no;
+      ngc::normalise(src.text.substr(off, end - off), l);
+      std::size_t k = 0;
+      const std::string& t = l.text;
+      if (k < t.size() && t[k] == '/') ++k;
+      if (k < t.size() && t[k] == 'n') {
+        ++k;
+        while (k < t.size() && ((t[k] >= '0' && t[k] <= '9') || t[k] == '.')) ++k;
+      }
+      off = end == src.text.size() ? end : end + 1;
+      if (t.compare(k, std::string::npos, "end" + label) == 0) {
+        cur_.offset = off;
+        cur_.line_no = no;
+        return;
+      }
+    }
+    fail(at, fmt::format("WHILE .. DO {} has no END {} below it", label, label));
+  }
+
+  // GOTO n: the block numbered N n, searched forward from here, then from the file's start.
+  void goto_label(double n, std::size_t at) {
+    if (std::isnan(n) || n < 0 || n != std::floor(n) || n > 99999) {
+      fail(at, "GOTO needs a sequence number 0 .. 99999");
+    }
+    const Source& src = sources_[cur_.source];
+    ngc::Line l;
+    for (int pass = 0; pass < 2; ++pass) {
+      std::size_t off = pass == 0 ? cur_.offset : 0, no = pass == 0 ? cur_.line_no : 0;
+      const std::size_t stop = pass == 0 ? src.text.size() : cur_.offset;
+      while (off < stop) {
+        std::size_t end = src.text.find('\n', off);
+        if (end == std::string_view::npos) end = src.text.size();
+        ++no;
+        const std::string_view raw = src.text.substr(off, end - off);
+        const std::size_t first = raw.find_first_not_of(" \t/");
+        if (first != std::string_view::npos && (raw[first] == 'n' || raw[first] == 'N')) {
+          ngc::normalise(raw, l);
+          std::size_t k = l.text.empty() || l.text[0] != '/' ? 0 : 1;
+          if (k < l.text.size() && l.text[k] == 'n') {
+            double v = 0;
+            const char* b = l.text.data() + k + 1;
+            auto [ptr, ec] =
+                std::from_chars(b, l.text.data() + l.text.size(), v, std::chars_format::fixed);
+            if (ec == std::errc() && ptr != b && v == n) {
+              cur_.offset = off;
+              cur_.line_no = no - 1;
+              return;
+            }
+          }
+        }
+        off = end == src.text.size() ? end : end + 1;
+      }
+    }
+    fail(at, fmt::format("GOTO {:g}: no block N{:g} in {}", n, n, src.name));
+  }
+
+  // G65 P<program> L<times> with arguments A B C I J K D E F H M Q R S T U V W X Y Z: a call
+  // with its own local variables #1 .. #26 (Fanuc's argument specification I).
+  void macro_call(std::uint32_t column) {
+    if (!fanuc_)
+      fail_at(column, "G65 is Fanuc's macro call: read the program with the fanuc dialect");
+    if (block_.g.size() > 1 || !block_.m.empty()) {
+      fail_at(column, "G65 takes its arguments only: no other G or M code in its block");
+    }
+    if (!block_.has('p')) fail_at(column, "G65 needs the program number in P");
+    static constexpr std::array<std::pair<char, int>, 21> kArgs{
+        {{'a', 1},  {'b', 2},  {'c', 3},  {'i', 4},  {'j', 5},  {'k', 6},  {'d', 7},
+         {'e', 8},  {'f', 9},  {'h', 11}, {'m', 13}, {'q', 17}, {'r', 18}, {'s', 19},
+         {'t', 20}, {'u', 21}, {'v', 22}, {'w', 23}, {'x', 24}, {'y', 25}, {'z', 26}}};
+    std::array<double, 34> args;
+    args.fill(std::numeric_limits<double>::quiet_NaN());
+    for (const auto& [c, n] : kArgs) {
+      if (block_.has(c)) args[static_cast<std::size_t>(n)] = block_[c];
+    }
+    const double times = block_.has('l') ? block_['l'] : 1;
+    if (times < 0 || times != std::floor(times) || times > 9999) {
+      fail_at(block_.col('l'), "G65's repeat count L must be a whole number 0 .. 9999");
+    }
+    if (times == 0) return;
+    Frame f = program_frame(block_['p'], column);
+    f.new_locals = true;
+    f.repeats = times;
+    for (std::size_t p = 1; p <= 33; ++p) {
+      f.saved_locals[p] = params_[p];
+      params_[p] = args[p];
+    }
+    enter(std::move(f));
+  }
+
+  void subprogram_call() {
+    const auto [prog, times] = *pending_m98_;
+    if (times == 0) return;
+    Frame f = program_frame(prog, block_.col('p'));
+    f.new_locals = false;  // M98: the caller's local variables
+    f.repeats = times;
+    enter(std::move(f));
+  }
+
+  void enter(Frame f) {
+    if (static_cast<int>(frames_.size()) > opt_.max_call_depth) {
+      fail_at(0, fmt::format("subprogram calls nested deeper than {} (recursion without end?)",
+                             opt_.max_call_depth));
+    }
+    const Cursor start = f.start;
+    frames_.push_back(std::move(f));
+    cur_ = start;
+  }
+
+  void subprogram_return() {
+    if (frames_.size() < 2) {
+      warn("M99 in the main program repeats it on the machine: it was read once");
+      end_program();
+      return;
+    }
+    Frame& f = frames_.back();
+    if (f.repeats > 1) {
+      f.repeats -= 1;
+      cur_ = f.start;
+      f.controls.clear();
+      return;
+    }
+    const double p = m99_p_;
+    return_from_sub();
+    if (p >= 0) goto_label(p, 0);
+  }
+
+  // The frame of a call to program O<n>: in the loaded files, else a file O<n> (O0010,
+  // O10, with .nc, .ngc or none) in the program's folder or the include folders.
+  Frame program_frame(double n, std::uint32_t column) {
+    if (n < 0 || n != std::floor(n) || n > 99999999) {
+      fail_at(column, fmt::format("P{:g} is not a program number", n));
+    }
+    const auto number = static_cast<long>(n);
+    auto find_in = [&](std::size_t si) -> std::optional<Cursor> {
+      const std::string_view t = sources_[si].text;
+      ngc::Line l;
+      std::size_t off = 0, no = 0;
+      while (off < t.size()) {
+        std::size_t end = t.find('\n', off);
+        if (end == std::string_view::npos) end = t.size();
+        ++no;
+        const std::string_view raw = t.substr(off, end - off);
+        off = end == t.size() ? end : end + 1;
+        const std::size_t first = raw.find_first_not_of(" \t");
+        if (first == std::string_view::npos ||
+            (raw[first] != 'o' && raw[first] != 'O' && raw[first] != ':')) {
+          continue;
+        }
+        ngc::normalise(raw, l);
+        if (l.text.size() < 2) continue;
+        long v = 0;
+        auto [ptr, ec] = std::from_chars(l.text.data() + 1, l.text.data() + l.text.size(), v);
+        if (ec == std::errc() && ptr != l.text.data() + 1 && v == number) {
+          return Cursor{si, off, no};
+        }
+      }
+      return std::nullopt;
+    };
+    Frame f;
+    f.label = fmt::format("O{:04d}", number);
+    f.ret = cur_;
+    for (std::size_t si = 0; si < sources_.size(); ++si) {
+      if (auto c = find_in(si)) {
+        f.start = *c;
+        return f;
+      }
+    }
+    std::vector<std::filesystem::path> dirs;
+    const std::filesystem::path main(sources_[0].name);
+    dirs.push_back(main.has_parent_path() ? main.parent_path() : std::filesystem::path("."));
+    dirs.insert(dirs.end(), opt_.include_dirs.begin(), opt_.include_dirs.end());
+    for (const auto& d : dirs) {
+      for (const std::string& stem : {fmt::format("O{:04d}", number), fmt::format("O{}", number)}) {
+        for (const char* ext : {"", ".nc", ".ngc"}) {
+          const std::filesystem::path file = d / (stem + ext);
+          std::error_code ec;
+          if (!std::filesystem::is_regular_file(file, ec)) continue;
+          Source src;
+          src.owned = read_text_file(file);
+          src.name = file.string();
+          sources_.push_back(std::move(src));
+          sources_.back().text = sources_.back().owned;
+          if (auto c = find_in(sources_.size() - 1)) {
+            f.start = *c;
+            return f;
+          }
+          f.start = Cursor{sources_.size() - 1, 0, 0};  // a file of the program's body alone
+          return f;
+        }
+      }
+    }
+    fail_at(column, fmt::format("program O{:04d} is not in the program nor a file O{:04d}(.nc) "
+                                "in its folder or the include folders",
+                                number, number));
+  }
+
   // ---- O-words ------------------------------------------------------------------------------
 
   // At 'o' (or ':'): an O-word statement (true) or a Fanuc/plain program number (false, the
@@ -2255,7 +2725,9 @@ class Interpreter {
 
   void return_from_sub() {
     Frame& f = frames_.back();
-    for (std::size_t p = 1; p <= 30; ++p) params_[p] = f.saved_locals[p];
+    if (f.new_locals) {
+      for (std::size_t p = 1; p <= (fanuc_ ? 33U : 30U); ++p) params_[p] = f.saved_locals[p];
+    }
     const bool restore = f.restore_modal;
     cur_ = f.ret;
     frames_.pop_back();
@@ -2316,6 +2788,11 @@ class Interpreter {
   // ---- state --------------------------------------------------------------------------------
 
   GcodeReadOptions opt_;
+  bool fanuc_ = opt_.dialect == Dialect::fanuc;  // Fanuc with Macro B
+  bool decimal_warned_ = false;
+  std::optional<std::pair<double, double>> pending_m98_;  // P, L of this block's M98
+  bool pending_m99_ = false;
+  double m99_p_ = -1;
   std::deque<Source> sources_;
   Cursor cur_;
   std::size_t line_offset_ = 0;  // of the line being run

@@ -51,8 +51,9 @@ class Emitter {
     out_ += '\n';
   }
 
-  // Number with fixed decimals, trailing zeros trimmed, no "-0": the value is rounded to an
-  // integer count of 10^-decimals mm (the same rounding as rounded()) and printed exactly.
+  // Number with fixed decimals, trailing zeros trimmed (Fanuc: the point kept), no "-0": the
+  // value is rounded to an integer count of 10^-decimals mm (the same rounding as rounded())
+  // and printed exactly.
   void num(char letter, double v) {
     const double scaled = std::round(v * scale_);
     if (!(std::abs(scaled) < 9e15)) throw Error(fmt::format("coordinate {} is out of range", v));
@@ -83,6 +84,10 @@ class Emitter {
       while (len > 0 && digits[len - 1] == '0') --len;
       out_ += '.';
       out_.append(digits, static_cast<std::size_t>(len));
+    } else if (opt_.dialect == Dialect::fanuc) {
+      // A Fanuc set to least-increment input (its factory setting) reads "Z5" as 5 um: every
+      // Fanuc number carries its decimal point.
+      out_ += '.';
     }
   }
 
