@@ -25,6 +25,7 @@ except ImportError:
     sys.exit(77)
 
 IN = 25.4  # the module reports inches
+TMP = tempfile.TemporaryDirectory()  # the parameter file LinuxCNC reads and writes; removed at exit
 
 
 class Canon:
@@ -140,7 +141,7 @@ def run_rs274(program, var, tools):
     if exe is None:
         print("rs274 (Debian linuxcnc-uspace) is not installed", file=sys.stderr)
         sys.exit(77)
-    tmp = tempfile.mkdtemp()
+    tmp = TMP.name
     vfile = os.path.join(tmp, "p.var")
     with open(vfile, "w") as f:
         if var:
@@ -216,7 +217,7 @@ def main():
         canon = run_rs274(program, var, tools)
         print_moves(canon)
         return
-    tmp = tempfile.mkdtemp()
+    tmp = TMP.name
     param = os.path.join(tmp, "p.var")
     with open(param, "w") as f:
         if var:
