@@ -853,6 +853,9 @@ class Interpreter {
         }
       }
       if (letter == 'g' || letter == 'm') {
+        // Every code is below 1000 (G59.3, M199): anything larger is no code (and would not
+        // fit the tenths it is compared in).
+        if (!(std::abs(v) < 1e4)) fail(at, fmt::format("{}{:g} is not a code", upper(letter), v));
         (letter == 'g' ? block_.g : block_.m).push_back({code10(v), col_of(at)});
         continue;
       }
@@ -1386,7 +1389,9 @@ class Interpreter {
     if (g == 430) {
       double h = tool_loaded_;
       if (block_.has('h')) h = block_['h'];
-      if (h < 0 || h != std::floor(h)) fail_at(block_.col('h'), "H must be a whole number >= 0");
+      if (h < 0 || h != std::floor(h) || h > 1e6) {
+        fail_at(block_.col('h'), "H must be a whole number 0 .. 1e6");
+      }
       const auto it = tools_.find(static_cast<int>(h));
       unknown_tool_ = -1;
       if (it != tools_.end()) {
@@ -1474,11 +1479,20 @@ class Interpreter {
 
   void g10(std::uint32_t column) {
     if (!block_.has('l')) fail_at(column, "G10 needs L (L1 tool table, L2 or L20 work offsets)");
-    const int l = static_cast<int>(std::lround(block_['l']));
+    const double lv = block_['l'];
+    if (lv != std::floor(lv) || lv < 0 || lv > 100) {
+      fail_at(block_.col('l'), fmt::format("G10 L{:g}: L is 1, 2, 10, 11 or 20", lv));
+    }
+    const int l = static_cast<int>(lv);
     if (l == 1 || l == 10 || l == 11) {
       // Tool table entries: the length matters only to machine-coordinate moves.
       if (!block_.has('p')) fail_at(column, fmt::format("G10 L{} needs the tool number in P", l));
-      ToolTableEntry& t = tools_[static_cast<int>(block_['p'])];
+      const double tool = block_['p'];
+      if (tool < 0 || tool != std::floor(tool) || tool > 1e6) {
+        fail_at(block_.col('p'),
+                fmt::format("G10 L{} P{:g}: P is a tool number 0 .. 1e6", l, tool));
+      }
+      ToolTableEntry& t = tools_[static_cast<int>(tool)];
       if (l == 1) {
         if (block_.has('z')) t.length_mm = len('z');
         if (block_.has('r')) t.diameter_mm = 2 * len('r');
@@ -1494,8 +1508,9 @@ class Interpreter {
     if (!block_.has('p'))
       fail_at(column, fmt::format("G10 L{} needs the coordinate system in P", l));
     const double pv = block_['p'];
-    int n = static_cast<int>(pv + 0.0001);
-    if (pv < 0 || pv > 9.0001 || std::abs(pv - n) > 1e-4) {
+    const bool in_range = pv >= 0 && pv <= 9.0001;  // checked before the conversion
+    int n = in_range ? static_cast<int>(pv + 0.0001) : -1;
+    if (!in_range || std::abs(pv - n) > 1e-4) {
       fail_at(block_.col('p'),
               fmt::format("G10 L{} P{:g}: P is 0 (the active system) or 1 .. 9", l, pv));
     }
