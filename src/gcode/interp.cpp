@@ -95,6 +95,8 @@ struct Source {
   std::string name;
   bool indexed = false;
   std::vector<OLine> olines;
+  // Fanuc: program number -> the line after its O line (made on the first M98/G65).
+  std::optional<std::map<long, std::pair<std::size_t, std::size_t>>> programs;
 };
 
 // Where the interpreter reads next.
@@ -173,6 +175,18 @@ struct Block {
   }
   [[nodiscard]] bool has_axis() const { return has('x') || has('y') || has('z'); }
 };
+
+// The index past a normalised line's block delete '/' and line number "n123" (the statement's
+// start), as every scan of the lines reads it.
+std::size_t past_line_number(const std::string& t) {
+  std::size_t k = 0;
+  if (k < t.size() && t[k] == '/') ++k;
+  if (k < t.size() && t[k] == 'n') {
+    ++k;
+    while (k < t.size() && ((t[k] >= '0' && t[k] <= '9') || t[k] == '.')) ++k;
+  }
+  return k;
+}
 
 int code10(double v) { return static_cast<int>(std::lround(v * 10.0)); }
 std::string code_name(char letter, int c10) {
@@ -1827,7 +1841,11 @@ class Interpreter {
     const Vec3 V = nrm * ((target[in] - from[in]) / sweep);
     const Vec3 c_out = to_out(c), A_out = dir_to_out(A), B_out = dir_to_out(B),
                V_out = dir_to_out(V);
-    Segment seg = Segment::curve(c_out, A_out, B_out, V_out, 0.0, sweep, Motion::feed, 1.0);
+    // A circle or helix: its length in closed form gives the feed (G93) before the segment is
+    // made once, at that feed.
+    const double length = std::hypot(rad * sweep, target[in] - from[in]);
+    const double f = feed_for(length, column);
+    Segment seg = Segment::curve(c_out, A_out, B_out, V_out, 0.0, sweep, Motion::feed, f);
     const Vec3 end = seg.end();
     check_target(end, column);
     GcodeMove mv;
@@ -1840,7 +1858,6 @@ class Interpreter {
     mv.plane = plane_code();
     mv.file = sources_[cur_.source].name;
     mv.line = cur_.line_no;
-    const double f = feed_for(seg.length_mm(), column);
     mv.feed_mm_per_min = f;
     cur_pos_ = target;
     if (!started_) {
@@ -1857,7 +1874,7 @@ class Interpreter {
     note_feed(f);
     mv.path_started = true;
     trace(mv);
-    append(Segment::curve(c_out, A_out, B_out, V_out, 0.0, sweep, Motion::feed, f), column);
+    append(std::move(seg), column);
     out_pos_ = end;
   }
 
@@ -2116,13 +2133,8 @@ class Interpreter {
       if (end == std::string_view::npos) end = src.text.size();
       ++no;
       ngc::normalise(src.text.substr(off, end - off), l);
-      std::size_t k = 0;
       const std::string& t = l.text;
-      if (k < t.size() && t[k] == '/') ++k;
-      if (k < t.size() && t[k] == 'n') {
-        ++k;
-        while (k < t.size() && ((t[k] >= '0' && t[k] <= '9') || t[k] == '.')) ++k;
-      }
+      const std::size_t k = past_line_number(t);
       off = end == src.text.size() ? end : end + 1;
       if (t.compare(k, std::string::npos, "end" + label) == 0) {
         cur_.offset = off;
@@ -2240,6 +2252,32 @@ class Interpreter {
     if (p >= 0) goto_label(p, 0);
   }
 
+  // Every "O<n>" line of a source: where its program's first line starts.
+  static void index_programs(Source& src) {
+    src.programs.emplace();
+    const std::string_view t = src.text;
+    ngc::Line l;
+    std::size_t off = 0, no = 0;
+    while (off < t.size()) {
+      std::size_t end = t.find('\n', off);
+      if (end == std::string_view::npos) end = t.size();
+      ++no;
+      const std::string_view raw = t.substr(off, end - off);
+      off = end == t.size() ? end : end + 1;
+      const std::size_t first = raw.find_first_not_of(" \t");
+      if (first == std::string_view::npos ||
+          (raw[first] != 'o' && raw[first] != 'O' && raw[first] != ':')) {
+        continue;
+      }
+      ngc::normalise(raw, l);
+      if (l.text.size() < 2) continue;
+      long v = 0;
+      auto [ptr, ec] = std::from_chars(l.text.data() + 1, l.text.data() + l.text.size(), v);
+      if (ec == std::errc() && ptr != l.text.data() + 1)
+        src.programs->emplace(v, std::make_pair(off, no));
+    }
+  }
+
   // The frame of a call to program O<n>: in the loaded files, else a file O<n> (O0010,
   // O10, with .nc, .ngc or none) in the program's folder or the include folders.
   Frame program_frame(double n, std::uint32_t column) {
@@ -2248,29 +2286,11 @@ class Interpreter {
     }
     const auto number = static_cast<long>(n);
     auto find_in = [&](std::size_t si) -> std::optional<Cursor> {
-      const std::string_view t = sources_[si].text;
-      ngc::Line l;
-      std::size_t off = 0, no = 0;
-      while (off < t.size()) {
-        std::size_t end = t.find('\n', off);
-        if (end == std::string_view::npos) end = t.size();
-        ++no;
-        const std::string_view raw = t.substr(off, end - off);
-        off = end == t.size() ? end : end + 1;
-        const std::size_t first = raw.find_first_not_of(" \t");
-        if (first == std::string_view::npos ||
-            (raw[first] != 'o' && raw[first] != 'O' && raw[first] != ':')) {
-          continue;
-        }
-        ngc::normalise(raw, l);
-        if (l.text.size() < 2) continue;
-        long v = 0;
-        auto [ptr, ec] = std::from_chars(l.text.data() + 1, l.text.data() + l.text.size(), v);
-        if (ec == std::errc() && ptr != l.text.data() + 1 && v == number) {
-          return Cursor{si, off, no};
-        }
-      }
-      return std::nullopt;
+      Source& src = sources_[si];
+      if (!src.programs) index_programs(src);
+      const auto it = src.programs->find(number);
+      if (it == src.programs->end()) return std::nullopt;
+      return Cursor{si, it->second.first, it->second.second};
     };
     Frame f;
     f.label = fmt::format("O{:04d}", number);
@@ -2406,13 +2426,8 @@ class Interpreter {
       if (first != std::string_view::npos &&
           (raw[first] == 'o' || raw[first] == 'O' || raw[first] == 'n' || raw[first] == 'N')) {
         ngc::normalise(raw, l);
-        std::size_t i = 0;
         const std::string& s = l.text;
-        if (i < s.size() && s[i] == '/') ++i;
-        if (i < s.size() && s[i] == 'n') {
-          ++i;
-          while (i < s.size() && ((s[i] >= '0' && s[i] <= '9') || s[i] == '.')) ++i;
-        }
+        std::size_t i = past_line_number(s);
         if (l.error_column == 0 && i < s.size() && s[i] == 'o') {
           OLine ol;
           ol.offset = off;
