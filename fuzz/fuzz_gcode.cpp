@@ -13,7 +13,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // Bounded work per input (a loop without end stops at the block budget) and no files: the
     // program's folder does not exist, so o<name> call finds no subroutine file.
     GcodeReadOptions options;
-    options.max_blocks = 20'000;
+    options.max_blocks = 2'000;
     options.max_call_depth = 32;
     const GcodeProgram prog = read_gcode(text, "/nonexistent/fuzz.ngc", options);
     (void)prog.path.length_mm();

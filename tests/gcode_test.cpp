@@ -4,6 +4,7 @@
 // program in tests/data/bad_gcode gives the message its first line expects.
 #include "trochomill/gcode.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -387,6 +388,116 @@ TEST(GcodeInterp, ParametersTakeEffectAfterTheLineAndLocalsBelongToTheCall) {
   EXPECT_EQ(seg[0].end().x(), 2.0);   // #2 took #1's value before the line
   EXPECT_EQ(seg[1].end().x(), 50.0);  // inside the call
   EXPECT_EQ(seg[2].end().x(), 7.0);   // #1 restored after it
+}
+
+// ---- cutter radius compensation (closed forms; tests/ngc compares it with LinuxCNC) ----------
+
+// The outside of a W x H rectangle run clockwise with the tool on the left (G41.1 D = 2r): the
+// tool centre runs the rectangle's edges a radius out and a quarter circle of radius r about
+// each corner, so the compensated loop is 2 (W + H) + 2 pi r long, whatever the radius.
+TEST(GcodeComp, OutsideCornersAreArcsAboutTheProgrammedCorners) {
+  for (const double d : {2.0, 8.0, 13.0}) {
+    const double r = d / 2, w = 40, h = 30;
+    const std::string prog = fmt::format(
+        "G21 G17 G90 G94\nG0 X-20 Y-20 Z5\nG1 Z-2 F800\nG41.1 D{}\nG1 X0 Y0\nG1 Y{}\n"
+        "G1 X{}\nG1 Y0\nG1 X0\nG1 Y1\nG40\nG1 X-20 Y-20\nM2\n",
+        d, h, w);
+    const GcodeProgram p = read_gcode(prog, "outside.ngc");
+    const auto& seg = p.path.segments();
+    // The corner at (0, 0) between the entry and the first edge is concave; then each of the
+    // corners (0, 30), (40, 30), (40, 0), (0, 0) is an arc of radius r about it.
+    std::vector<std::size_t> arcs;
+    for (std::size_t i = 0; i < seg.size(); ++i) {
+      if (seg[i].kind() != Segment::Kind::curve) continue;
+      arcs.push_back(i);
+      EXPECT_TRUE(seg[i].is_circular());
+      EXPECT_NEAR(seg[i].axis_a().norm(), r, 1e-12);  // radius r about the corner
+      EXPECT_NEAR(std::abs(seg[i].u1() - seg[i].u0()), kPi / 2, 1e-12);
+      const Vec3 c = seg[i].center();
+      const bool at_corner = (std::abs(c.x()) < 1e-12 || std::abs(c.x() - w) < 1e-12) &&
+                             (std::abs(c.y()) < 1e-12 || std::abs(c.y() - h) < 1e-12);
+      EXPECT_TRUE(at_corner) << c.transpose();
+    }
+    ASSERT_EQ(arcs.size(), 4u) << "d = " << d;
+    // From the first corner arc to the move after the last one (up to Y1): the top, right
+    // and bottom edges, 1 mm up the left one and four quarter circles (1e-9 mm: sums of
+    // exact pieces, each to ~1e-12 mm).
+    double loop = 0;
+    for (std::size_t i = arcs.front(); i <= arcs.back() + 1; ++i) loop += seg[i].length_mm();
+    EXPECT_NEAR(loop, w + h + w + 1 + 2 * kPi * r, 1e-9) << "d = " << d;
+  }
+}
+
+// The inside of the rectangle run counterclockwise with the tool on the left: concave corners,
+// each move ends where the two offset edges cross, so the tool centre runs the rectangle
+// shrunk by r on every side, corners (r, r), (W - r, r), (W - r, H - r), (r, H - r).
+TEST(GcodeComp, InsideCornersEndWhereTheOffsetEdgesCross) {
+  const double r = 5, w = 40, h = 30;
+  const GcodeProgram p = read_gcode(
+      "G21 G17 G90 G94\nG0 X-20 Y20 Z5\nG1 Z-3 F600\nG41.1 D10\nG1 X0 Y0\nG1 X40\n"
+      "G1 Y30\nG1 X0\nG1 Y0\nG40\nG1 X-20 Y20\nM2\n",
+      "inside.ngc");
+  std::vector<Vec3> e;
+  for (const Segment& sg : p.path.segments()) e.push_back(sg.end());
+  ASSERT_EQ(e.size(), 7u);
+  // The entry (from (-20, 20) to (0, 0), offset r to its left, along (r, r) / sqrt 2) makes a
+  // concave corner with the first edge too: it ends where its offset line meets y = r, at
+  // x = r (sqrt 2 - 1). G40 ends the last edge r beside (0, 0).
+  const std::vector<Vec3> want{{r * (std::sqrt(2.0) - 1), r, -3},
+                               {w - r, r, -3},
+                               {w - r, h - r, -3},
+                               {r, h - r, -3},
+                               {r, 0, -3},
+                               {-20, 20, -3}};
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    // 1e-12 mm: each corner is one tangent and one cosine of exact angles.
+    EXPECT_LE((e[i + 1] - want[i]).norm(), 1e-12) << i << ": " << e[i + 1].transpose();
+  }
+}
+
+// A circle run inside (G3 with the tool left) is a circle r smaller; outside (G2 with the tool
+// left), r larger; a negative diameter turns G41.1 into G42.1.
+TEST(GcodeComp, CirclesShrinkOrGrowByTheRadiusAndNegativeDiametersSwapSides) {
+  auto last_arc = [](const std::string& body) {
+    const GcodeProgram p =
+        read_gcode("G21 G17 G90 G94\nG0 X0 Y0 Z0\nF500\n" + body + "M2\n", "circle.ngc");
+    const auto& seg = p.path.segments();
+    for (auto it = seg.rbegin(); it != seg.rend(); ++it) {
+      if (it->kind() == Segment::Kind::curve) return *it;
+    }
+    throw std::runtime_error("no arc");
+  };
+  // An entry along the circle's tangent at (20, 0), then a full circle of radius 20 about the
+  // origin: the tool runs all of it, a circle of radius 20 -+ 3 (1e-12 mm: exact trig).
+  const Segment in = last_arc("G0 X20 Y-20\nG41.1 D6\nG1 Y0\nG3 X20 Y0 I-20 J0\nG40\nG1 X0\n");
+  EXPECT_NEAR(in.axis_a().norm(), 17, 1e-12);
+  EXPECT_NEAR(in.u1() - in.u0(), 2 * kPi, 1e-12);
+  const Segment out = last_arc("G0 X20 Y20\nG41.1 D6\nG1 Y0\nG2 X20 Y0 I-20 J0\nG40\nG1 X0\n");
+  EXPECT_NEAR(out.axis_a().norm(), 23, 1e-12);
+  EXPECT_NEAR(out.u1() - out.u0(), -2 * kPi, 1e-12);
+  const Segment swapped =
+      last_arc("G0 X20 Y-20\nG41.1 D-6\nG1 Y0\nG3 X20 Y0 I-20 J0\nG40\nG1 X0\n");
+  EXPECT_NEAR(swapped.axis_a().norm(), 23, 1e-12);  // right of a ccw circle: outside
+}
+
+TEST(GcodeComp, TheToolTableGivesTheRadiusAndFanucIsWarned) {
+  GcodeReadOptions o;
+  o.tools[4] = ToolTableEntry{50, 12};
+  const std::string body =
+      "G21 G17 G90 G94\nG0 X20. Y-20. Z0.\nF500.\nG41 D4\nG1 Y0.\nG3 X20. Y0. I-20. J0.\n"
+      "G40\nG1 X0.\nM30\n";
+  GcodeProgram p = read_gcode(body, "table.ngc", o);
+  ASSERT_EQ(p.path.segments().size(), 3u);
+  EXPECT_NEAR(p.path.segments()[1].axis_a().norm(), 14, 1e-12);  // 20 - 12 / 2
+  EXPECT_TRUE(p.info.warnings.empty());
+  o.dialect = Dialect::fanuc;
+  p = read_gcode(body, "table.nc", o);
+  ASSERT_EQ(p.path.segments().size(), 3u);
+  EXPECT_NEAR(p.path.segments()[1].axis_a().norm(), 14, 1e-12);
+  ASSERT_EQ(p.info.warnings.size(), 1u);
+  EXPECT_NE(p.info.warnings[0].find("table.nc:4: G41 read with LinuxCNC's rules"),
+            std::string::npos)
+      << p.info.warnings[0];
 }
 
 // ---- Fanuc Macro B (hand-computed motion: LinuxCNC does not read these) ----------------------

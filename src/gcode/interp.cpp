@@ -262,6 +262,7 @@ class Interpreter {
       fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
                              frames_.back().label));
     }
+    dequeue();  // compensated moves still waiting run as they are
     prog_.info.lines = std::max(prog_.info.lines, main_lines_);
     if (prog_.path.empty() && prog_.summary.segments == 0) {
       throw InputError(
@@ -696,13 +697,22 @@ class Interpreter {
     }
     const int index = parameter_index(read_value(i), at);
     if (fanuc_) return fanuc_variable(index);
+    if (index >= 5420 && index <= 5428) {
+      // The current position in the active system (A B C U V W: 0).
+      if (comp_on()) {
+        fail(at, fmt::format("#{} (the current position) cannot be read with cutter radius "
+                             "compensation on (#<_x> #<_y> #<_z> give the tool centre)",
+                             index));
+      }
+      return index <= 5422 ? cur_pos_[index - 5420] / unit_ : 0.0;
+    }
     return params_[static_cast<std::size_t>(index)];
   }
 
   // Fanuc's system variables that describe the position; #0 is always vacant.
   double fanuc_variable(int index) const {
     if (index >= 5001 && index <= 5003) return cur_pos_[index - 5001] / unit_;
-    if (index >= 5041 && index <= 5043) return cur_pos_[index - 5041] / unit_;
+    if (index >= 5041 && index <= 5043) return current()[index - 5041] / unit_;
     if (index >= 5021 && index <= 5023) return to_machine_tip(cur_pos_)[index - 5021] / unit_;
     return params_[static_cast<std::size_t>(index)];
   }
@@ -749,9 +759,9 @@ class Interpreter {
   std::optional<double> predefined(const std::string& name) const {
     if (name.empty() || name[0] != '_') return std::nullopt;
     const double u = unit_;
-    if (name == "_x") return cur_pos_.x() / u;
-    if (name == "_y") return cur_pos_.y() / u;
-    if (name == "_z") return cur_pos_.z() / u;
+    if (name == "_x") return current().x() / u;
+    if (name == "_y") return current().y() / u;
+    if (name == "_z") return current().z() / u;
     if (name == "_abs_x" || name == "_abs_y" || name == "_abs_z") {
       const Vec3 m = to_machine_tip(cur_pos_);
       return (name == "_abs_x" ? m.x() : name == "_abs_y" ? m.y() : m.z()) / u;
@@ -930,7 +940,7 @@ class Interpreter {
     // G codes by modal group (two of one group are an error).
     int motion = -1, group0 = -1, plane = -1, units = -1, distance = -1, arc_distance = -1,
         feed_mode = -1, tool_length = -1, system = -1, retract = -1, comp = -1, dwell = -1;
-    std::uint32_t motion_col = 0, group0_col = 0;
+    std::uint32_t motion_col = 0, group0_col = 0, comp_col = 0, tool_length_col = 0, system_col = 0;
     bool g53 = false;
     auto set = [&](int& slot, int g, std::uint32_t column, const char* what) {
       // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
@@ -1007,6 +1017,7 @@ class Interpreter {
         case 431:
         case 490:
           set(tool_length, g, column, "tool length");
+          tool_length_col = column;
           break;
         case 540:
         case 550:
@@ -1018,10 +1029,13 @@ class Interpreter {
         case 592:
         case 593:
           set(system, g, column, "coordinate system");
+          system_col = column;
           break;
         case 980:
         case 990:
           set(retract, g, column, "retract mode");
+          refuse_with_comp(column,
+                           fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
           break;
         case 400:
         case 410:
@@ -1029,10 +1043,13 @@ class Interpreter {
         case 411:
         case 421:
           set(comp, g, column, "cutter compensation");
+          comp_col = column;
           break;
         case 610:
         case 611:
         case 640:
+          refuse_with_comp(column, fmt::format("{} (path control mode)", code_name('G', g)));
+          break;
         case 970:
         case 150:
         case 160:
@@ -1068,13 +1085,14 @@ class Interpreter {
       }
       tool_selected_ = block_['t'];
     }
-    bool stop = false;
+    bool stop = false, pause = false;
     for (const auto& [m, column] : block_.m) {
       switch (m) {
         case 0:
         case 10:
         case 600:
-          break;  // pause: the program goes on when the operator resumes
+          pause = true;  // the program goes on when the operator resumes
+          break;
         case 20:
         case 300:
           stop = true;
@@ -1087,6 +1105,7 @@ class Interpreter {
           spindle_on_ = false;
           break;
         case 60:
+          refuse_with_comp(column, "M6 (a tool change)");
           tool_loaded_ = tool_selected_;
           break;
         case 70:
@@ -1105,7 +1124,9 @@ class Interpreter {
         case 660:
         case 670:
         case 680:
-          break;  // coolant, overrides, outputs: no effect on the path
+          // Outputs wait for motion to stop, which a compensated path cannot (LinuxCNC).
+          refuse_with_comp(column, fmt::format("{} (a motion output)", code_name('M', m)));
+          break;
         case 980: {
           if (!fanuc_) {
             fail_at(column,
@@ -1165,24 +1186,34 @@ class Interpreter {
       }
     }
     if (dwell >= 0 && !block_.has('p')) fail_at(block_.g.front().column, "G4 needs P (seconds)");
-    if (plane >= 0) plane_ = plane == 170 ? Plane::xy : plane == 180 ? Plane::zx : Plane::yz;
+    if (plane >= 0) {
+      if (plane != 170) refuse_with_comp(block_.g.front().column, "a plane change (G18/G19)");
+      plane_ = plane == 170 ? Plane::xy : plane == 180 ? Plane::zx : Plane::yz;
+    }
     if (units >= 0) {
       unit_ = (units == 200 || units == 700 || units == 7000) ? 25.4 : 1.0;
       if (unit_ != 1.0) prog_.info.inch_units_seen = true;
     }
-    if (comp >= 0) {
-      if (comp != 400) {
-        fail_at(block_.g.front().column,
-                "cutter radius compensation (G41/G42) is not supported: the programmed path "
-                "would not be the tool-centre path");
-      }
+    if (comp == 400) {
+      comp_stop();
+    } else if (comp >= 0) {
+      comp_start(comp, comp_col);
     }
-    if (tool_length >= 0) tool_length_offset(tool_length);
-    if (system >= 0) select_system(system);
+    if (tool_length >= 0) {
+      refuse_with_comp(tool_length_col, "a tool length offset change (G43/G43.1/G49)");
+      tool_length_offset(tool_length);
+    }
+    if (system >= 0) {
+      refuse_with_comp(system_col, "a coordinate system change (G54-G59.3)");
+      select_system(system);
+    }
     if (distance >= 0) absolute_ = distance == 900;
     if (arc_distance >= 0) arc_absolute_ = arc_distance == 901;
     if (retract >= 0) retract_r_ = retract == 990;
     if (group0 >= 0) {
+      if (group0 != 100) {
+        refuse_with_comp(group0_col, fmt::format("{}", code_name('G', group0)));
+      }
       non_modal(group0, group0_col);
     }
     if (motion >= 0) {
@@ -1205,6 +1236,10 @@ class Interpreter {
       }
       ++prog_.info.motion_blocks;
       if (motion_ >= 730) {
+        refuse_with_comp(motion >= 0        ? motion_col
+                         : block_.g.empty() ? 0
+                                            : block_.g.front().column,
+                         "a canned cycle");
         canned_cycle(motion_, motion >= 0 ? motion_col
                                           : block_.col(block_.has('x')   ? 'x'
                                                        : block_.has('y') ? 'y'
@@ -1221,14 +1256,18 @@ class Interpreter {
       fail_at(block_.g.front().column, "G53 needs axis words (a move in machine coordinates)");
     }
     if (motion_ >= 0 && motion_ < 730) cycle_il_flag_ = false;
-    check_unused(group0, dwell, tool_length);
+    check_unused(group0, dwell, tool_length, comp > 400);
+    if (stop || pause) {
+      comp_flush_at_stop(block_.m.front().column);
+      if (stop) comp_side_ = CompSide::off, comp_first_ = true;
+    }
     if (stop) end_program();
     if (pending_m98_ && !ended_) subprogram_call();
     if (pending_m99_ && !ended_) subprogram_return();
   }
 
   // Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).
-  void check_unused(int group0, int dwell, int tool_length) const {
+  void check_unused(int group0, int dwell, int tool_length, bool comp_word) const {
     const bool moved = block_.has_axis() && group0 != 100 && group0 != 920 && group0 != 520;
     const bool cycle = moved && motion_ >= 730;
     const bool arc = moved && (motion_ == 20 || motion_ == 30);
@@ -1252,6 +1291,11 @@ class Interpreter {
       refuse('p', "G2/G3, G4, G10 or canned cycle");
     }
     if (block_.has('h') && tool_length != 430) refuse('h', "G43");
+    // D alone: LinuxCNC refuses it; Sinumerik's "T1 D1" (its tool offset) is tolerated, as its
+    // other words are, and Fanuc's D is an offset register.
+    if (block_.has('d') && !comp_word && opt_.dialect == Dialect::linuxcnc && !block_.has('t')) {
+      refuse('d', "G41/G42 (or G41.1/G42.1)");
+    }
   }
 
   [[noreturn]] void unsupported_g(int g, std::uint32_t column) const {
@@ -1529,6 +1573,7 @@ class Interpreter {
               fmt::format("G10 L{} P{:g}: P is 0 (the active system) or 1 .. 9", l, pv));
     }
     if (n == 0) n = system_;
+    if (n == system_) refuse_with_comp(column, "a change of the active system's origin (G10)");
     // The machine position stays; the active system's coordinates follow the new origin.
     const Vec3 machine = to_machine_tip(cur_pos_);
     const double r = block_.has('r') ? block_['r'] : params_[sys_param(n, 9)];
@@ -1638,9 +1683,25 @@ class Interpreter {
     if (g53 && motion_ != 0 && motion_ != 10) {
       fail_at(column, "G53 moves need G0 or G1 (a straight move in machine coordinates)");
     }
+    if (g53) refuse_with_comp(column, "G53 (a move in machine coordinates)");
     const Vec3 target = ends(g53);
     if (motion_ <= 10) {
-      emit_line(target, motion_ == 0, column);
+      arc_not_allowed_ = false;
+      if (comp_moves()) {
+        comp_line(target, motion_ == 0, column);
+      } else {
+        emit_line(target, motion_ == 0, column);
+      }
+      cur_pos_ = target;
+      return;
+    }
+    if (arc_not_allowed_) {
+      fail_at(column,
+              "the move right after cutter compensation ends (G40) must be straight, "
+              "not an arc (the tool is a radius away from the programmed point)");
+    }
+    if (comp_moves()) {
+      comp_arc(target, column);
       cur_pos_ = target;
       return;
     }
@@ -1694,28 +1755,39 @@ class Interpreter {
   // A straight move to program position `target`. `starts` marks a move that fixes every axis
   // (G28 without axis words): it starts the path like an XY move.
   void emit_line(const Vec3& target, bool rapid, std::uint32_t column, bool starts = false) {
-    const Vec3 end = to_out(target);
+    put_line(to_out(target), rapid, -1, column, cur_.source, cur_.line_no,
+             starts || block_.has('x') || block_.has('y'));
+  }
+
+  // A straight move to `end` (output frame) at feed f (mm/min; < 0: the feed mode's), made by
+  // line `line` of source `source`. `xy` marks a move that fixes X and Y (it starts the path).
+  void put_line(const Vec3& end, bool rapid, double f, std::uint32_t column, std::size_t source,
+                std::size_t line, bool xy) {
     check_target(end, column);
     GcodeMove mv;
     mv.kind = rapid ? GcodeMove::Kind::rapid : GcodeMove::Kind::feed;
     mv.start_mm = started_ ? out_pos_ : to_out(cur_pos_);
     mv.end_mm = end;
     mv.plane = plane_code();
-    mv.file = sources_[cur_.source].name;
-    mv.line = cur_.line_no;
+    mv.file = sources_[source].name;
+    mv.line = line;
     if (!started_) {
       // The machine's position before the program is unknown: the first move in X or Y only
       // establishes where the path starts.
       mv.feed_mm_per_min = rapid ? opt_.rapid_rate_mm_per_min : 0;
-      if (!rapid) mv.feed_mm_per_min = feed_for((end - mv.start_mm).norm(), column);
+      if (!rapid) mv.feed_mm_per_min = f >= 0 ? f : feed_for((end - mv.start_mm).norm(), column);
       trace(mv);
       out_pos_ = end;
-      started_ = starts || block_.has('x') || block_.has('y');
+      started_ = xy;
       return;
     }
     const double length = (end - out_pos_).norm();
-    const double f = rapid ? opt_.rapid_rate_mm_per_min : feed_for(length, column);
-    if (!rapid) note_feed(f);
+    if (rapid) {
+      f = opt_.rapid_rate_mm_per_min;
+    } else {
+      if (f < 0) f = feed_for(length, column);
+      note_feed(f);
+    }
     mv.feed_mm_per_min = f;
     mv.path_started = true;
     trace(mv);
@@ -1745,9 +1817,17 @@ class Interpreter {
     }
   }
 
-  void arc(const Vec3& target, std::uint32_t column) {
+  // An arc of the plane: centre (c1, c2) on its axes i1, i2 (normal in), radius and sweep (rad,
+  // positive counterclockwise, with P's extra turns).
+  struct ArcData {
+    int i1 = 0, i2 = 1, in = 2;
+    double c1 = 0, c2 = 0, rad = 0, sweep = 0;
+  };
+
+  // The arc of this block's words from `from` to `target` (program mm): its centre from I J K
+  // (moved onto the chord's bisector) or R, its sweep with P turns.
+  ArcData arc_data(const Vec3& from, const Vec3& target, std::uint32_t column) const {
     const double u = unit_;
-    const Vec3 from = cur_pos_;
     // The plane: e1, e2 span it, n = e1 x e2 (G17: XY/Z, G18: ZX/Y, G19: YZ/X); positive
     // angles turn from e1 to e2 (G3).
     int i1 = 0, i2 = 1, in = 2;
@@ -1828,23 +1908,56 @@ class Interpreter {
       if (p > 1e4) fail_at(block_.col('p'), "arc turns P beyond 10000");
       sweep += (ccw ? 1.0 : -1.0) * kTwoPi * (std::round(p) - 1.0);
     }
+    ArcData d;
+    d.i1 = i1;
+    d.i2 = i2;
+    d.in = in;
+    d.c1 = c1;
+    d.c2 = c2;
+    d.rad = rad;
+    d.sweep = sweep;
+    return d;
+  }
+
+  void arc(const Vec3& target, std::uint32_t column) {
+    const ArcData d = arc_data(cur_pos_, target, column);
+    // A circle or helix: its length in closed form gives the feed (G93) before the segment is
+    // made once, at that feed.
+    const double length = std::hypot(d.rad * d.sweep, target[d.in] - cur_pos_[d.in]);
+    const double f = feed_for(length, column);
+    const Vec3 from = cur_pos_;
+    cur_pos_ = target;
+    put_arc(from, d, target[d.in], f, column, cur_.source, cur_.line_no,
+            block_.has('x') || block_.has('y'));
+  }
+
+  // An arc from `from` (program mm) about d's centre through d.sweep, ending at `axial` along
+  // the plane's normal, at feed f (mm/min), made by line `line` of source `source`. With
+  // `exact_end` (program mm) the arc ends there: a radius at the end that differs from the one
+  // at the start (cutter compensation's corners, rounding) becomes a drift spread along it, as
+  // a control runs such an arc as a spiral.
+  void put_arc(const Vec3& from, const ArcData& d, double axial, double f, std::uint32_t column,
+               std::size_t source, std::size_t line, bool xy, const Vec3* exact_end = nullptr) {
+    const int i1 = d.i1, i2 = d.i2, in = d.in;
+    const double rad = d.rad, sweep = d.sweep;
+    const double a0 = std::atan2(from[i2] - d.c2, from[i1] - d.c1);
     Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero(), nrm = Vec3::Zero();
     e1[i1] = 1;
     e2[i2] = 1;
     nrm[in] = 1;
     Vec3 c = Vec3::Zero();
-    c[i1] = c1;
-    c[i2] = c2;
+    c[i1] = d.c1;
+    c[i2] = d.c2;
     c[in] = from[in];
     const Vec3 A = rad * (std::cos(a0) * e1 + std::sin(a0) * e2);
     const Vec3 B = rad * (-std::sin(a0) * e1 + std::cos(a0) * e2);
-    const Vec3 V = nrm * ((target[in] - from[in]) / sweep);
+    Vec3 V = nrm * ((axial - from[in]) / sweep);
+    if (exact_end != nullptr) {
+      const Vec3 miss = *exact_end - (c + A * std::cos(sweep) + B * std::sin(sweep) + V * sweep);
+      if (miss.norm() > 1e-9) V += miss / sweep;
+    }
     const Vec3 c_out = to_out(c), A_out = dir_to_out(A), B_out = dir_to_out(B),
                V_out = dir_to_out(V);
-    // A circle or helix: its length in closed form gives the feed (G93) before the segment is
-    // made once, at that feed.
-    const double length = std::hypot(rad * sweep, target[in] - from[in]);
-    const double f = feed_for(length, column);
     Segment seg = Segment::curve(c_out, A_out, B_out, V_out, 0.0, sweep, Motion::feed, f);
     const Vec3 end = seg.end();
     check_target(end, column);
@@ -1856,26 +1969,471 @@ class Interpreter {
     mv.axis = dir_to_out(nrm);
     mv.sweep_rad = sweep;
     mv.plane = plane_code();
-    mv.file = sources_[cur_.source].name;
-    mv.line = cur_.line_no;
+    mv.file = sources_[source].name;
+    mv.line = line;
     mv.feed_mm_per_min = f;
-    cur_pos_ = target;
     if (!started_) {
       trace(mv);
       out_pos_ = end;
-      started_ = block_.has('x') || block_.has('y');
+      started_ = xy;
       return;
     }
     if ((seg.start() - out_pos_).norm() > 1e-9) {
       fail_at(column,
-              "an arc right after a tool length change (G43/G49) starts where the tool "
-              "is not: program a straight move first");
+              "an arc that starts where the tool is not (right after a tool length change "
+              "G43/G49 or the end of cutter compensation G40): program a straight move first");
     }
     note_feed(f);
     mv.path_started = true;
     trace(mv);
     append(std::move(seg), column);
     out_pos_ = end;
+  }
+
+  // ---- cutter radius compensation (G41/G42, G41.1/G42.1, G40) -------------------------------
+  // LinuxCNC's algorithm (docs/gcode.md): the tool centre runs a radius beside the programmed
+  // contour in the XY plane. Each compensated move waits in a queue until the next one shows
+  // the corner between them: a concave corner moves the waiting move's end back to where the
+  // two offset contours meet, a convex one adds an arc about the programmed corner. Positions
+  // are program mm; cur_pos_ stays the programmed point, comp_cur_ is the tool centre.
+
+  enum class CompSide { off, left, right };
+
+  struct QueuedMove {
+    GcodeMove::Kind kind = GcodeMove::Kind::feed;
+    Vec3 end = Vec3::Zero();    // program mm
+    double d1 = 0, d2 = 0;      // lines: the direction the end may not turn against
+    double c1 = 0, c2 = 0;      // arcs: the centre
+    int turn = 0;               // arcs: turns, positive counterclockwise (LinuxCNC's)
+    double original_sweep = 0;  // arcs: the sweep as queued (rad); 0: never checked
+    double feed = 0;            // mm/min
+    std::size_t source = 0, line = 0;
+    std::uint32_t column = 0;
+  };
+
+  static constexpr double kConcaveTol = 0.05;  // rad, LinuxCNC's TOLERANCE_CONCAVE_CORNER
+
+  [[nodiscard]] bool comp_on() const { return comp_side_ != CompSide::off; }
+  [[nodiscard]] bool comp_moves() const { return comp_on() && comp_radius_ > 0; }
+  [[nodiscard]] bool left() const { return comp_side_ == CompSide::left; }
+  // The tool is inside an arc of this turning sense: left of a counterclockwise one.
+  [[nodiscard]] bool inside(int turn) const { return left() ? turn > 0 : turn < 0; }
+
+  // The position LinuxCNC reports as #<_x> #<_y> #<_z>: the tool centre while compensation
+  // runs (Fanuc's #5041-#5043 too).
+  [[nodiscard]] const Vec3& current() const {
+    return comp_moves() && !comp_first_ ? comp_cur_ : cur_pos_;
+  }
+
+  void refuse_with_comp(std::uint32_t column, const std::string& what) const {
+    if (comp_on()) {
+      fail_at(column,
+              fmt::format("{} with cutter radius compensation on: cancel it with G40 first", what));
+    }
+  }
+
+  // LinuxCNC's find_turn: the sweep (rad) from (x1, y1) to (x2, y2) about (cx, cy), `turn`
+  // circles counterclockwise (negative: clockwise); 0 for turn 0.
+  static double find_turn(double x1, double y1, double cx, double cy, int turn, double x2,
+                          double y2) {
+    if (turn == 0) return 0.0;
+    double a = std::atan2(y1 - cy, x1 - cx), b = std::atan2(y2 - cy, x2 - cx);
+    if (turn > 0) {
+      if (b <= a) b += kTwoPi;
+      return b - a + (turn - 1) * kTwoPi;
+    }
+    if (a <= b) a += kTwoPi;
+    return b - a + (turn + 1) * kTwoPi;
+  }
+
+  void comp_start(int g, std::uint32_t column) {
+    if (plane_ != Plane::xy) {
+      fail_at(column, "cutter radius compensation is supported in the XY plane (G17) only");
+    }
+    if (comp_on()) {
+      fail_at(column, "G41/G42 while cutter radius compensation is on: cancel it with G40 first");
+    }
+    CompSide side = (g == 410 || g == 411) ? CompSide::left : CompSide::right;
+    double radius = 0;
+    const std::string name = code_name('G', g);
+    if (g == 411 || g == 421) {
+      if (!block_.has('d')) fail_at(column, fmt::format("{} needs the tool diameter in D", name));
+      radius = 0.5 * len('d');
+    } else {
+      double tool = tool_loaded_;
+      if (block_.has('d')) {
+        tool = block_['d'];
+        if (tool < 0 || tool != std::floor(tool) || tool > 1e6) {
+          fail_at(block_.col('d'), fmt::format("{} D{:g}: D is a tool number 0 .. 1e6 (its "
+                                               "diameter in the tool table sets the offset)",
+                                               name, tool));
+        }
+      }
+      if (fanuc_ && !comp_fanuc_warned_) {
+        comp_fanuc_warned_ = true;
+        warn(
+            fmt::format("{} read with LinuxCNC's rules: D is a tool of the tool table (half "
+                        "its diameter is the offset) and corners follow LinuxCNC; a Fanuc "
+                        "control reads D as an offset register and starts up by its own type",
+                        name));
+      }
+      if (tool == 0) {
+        warn(
+            fmt::format("{} with no tool loaded (M6) and no D: the offset is 0, the path is "
+                        "not compensated",
+                        name));
+      } else {
+        const auto it = tools_.find(static_cast<int>(tool));
+        if (it == tools_.end()) {
+          fail_at(block_.has('d') ? block_.col('d') : column,
+                  fmt::format("{}: tool {:g} is not in the tool table (--tool-table, [machine] "
+                              "tool_table); its diameter sets the offset",
+                              name, tool));
+        }
+        radius = 0.5 * it->second.diameter_mm;
+      }
+    }
+    if (radius < 0) {  // a negative diameter offsets to the other side (LinuxCNC)
+      radius = -radius;
+      side = side == CompSide::left ? CompSide::right : CompSide::left;
+    }
+    comp_side_ = side;
+    comp_radius_ = radius;
+    comp_first_ = true;
+  }
+
+  void comp_stop() {
+    if (comp_moves() && !comp_first_) {
+      move_endpoint_and_flush(comp_cur_.x(), comp_cur_.y(), block_.g.front().column);
+      dequeue();
+      arc_not_allowed_ = true;  // the tool is not at the programmed point
+    }
+    comp_side_ = CompSide::off;
+    comp_first_ = true;
+  }
+
+  // A program stop (M0 M1 M2 M30 M60): the waiting moves run to where they are.
+  void comp_flush_at_stop(std::uint32_t column) {
+    if (queue_.empty()) return;
+    move_endpoint_and_flush(comp_cur_.x(), comp_cur_.y(), column);
+    dequeue();
+  }
+
+  void enqueue(QueuedMove q, std::uint32_t column) {
+    q.source = cur_.source;
+    q.line = cur_.line_no;
+    q.column = column;
+    queue_.push_back(q);
+  }
+
+  void set_endpoint(double x, double y) {
+    endpoint_[0] = x;
+    endpoint_[1] = y;
+    endpoint_valid_ = true;
+  }
+
+  // The waiting moves run (in the order queued), from where the last one ended.
+  void dequeue() {
+    endpoint_valid_ = false;
+    for (const QueuedMove& q : queue_) {
+      if (q.kind == GcodeMove::Kind::arc) {
+        ArcData d;
+        d.c1 = q.c1;
+        d.c2 = q.c2;
+        d.rad = std::hypot(emitted_.x() - q.c1, emitted_.y() - q.c2);
+        d.sweep = find_turn(emitted_.x(), emitted_.y(), q.c1, q.c2, q.turn, q.end.x(), q.end.y());
+        put_arc(emitted_, d, q.end.z(), q.feed, q.column, q.source, q.line, true, &q.end);
+      } else {
+        put_line(to_out(q.end), q.kind == GcodeMove::Kind::rapid, q.feed, q.column, q.source,
+                 q.line, true);
+      }
+      emitted_ = q.end;
+    }
+    queue_.clear();
+  }
+
+  // Every waiting move now ends at (x, y): a move that would have to turn back (the corner
+  // is deeper than the move is long) or an arc that would have to sweep further gouges.
+  void move_endpoint_and_flush(double x, double y, std::uint32_t column) {
+    if (queue_.empty()) return;
+    for (QueuedMove& q : queue_) {
+      if (q.kind == GcodeMove::Kind::arc) {
+        const double r1 = std::hypot(q.end.x() - q.c1, q.end.y() - q.c2);
+        const double r2 = std::hypot(x - q.c1, y - q.c2);
+        const double l2 = find_turn(endpoint_[0], endpoint_[1], q.c1, q.c2, q.turn, x, y);
+        if (std::abs(r1 - r2) > 0.01 * unit_) {
+          fail_at(column, fmt::format("cutter compensation cannot end the arc of line {} on its "
+                                      "circle (radius {:.4f} against {:.4f} mm)",
+                                      q.line, r1, r2));
+        }
+        if (q.original_sweep != 0 && endpoint_valid_ &&
+            std::abs(l2) > std::abs(q.original_sweep) + 0.0254) {
+          fail_at(column, fmt::format("the arc of line {} meets a concave corner the "
+                                      "compensated tool cannot reach without gouging",
+                                      q.line));
+        }
+      } else if (endpoint_valid_ && q.d1 * (x - endpoint_[0]) + q.d2 * (y - endpoint_[1]) < 0) {
+        fail_at(column,
+                fmt::format("the move of line {} meets a concave corner the compensated tool "
+                            "cannot reach without gouging (the corner is deeper than the move "
+                            "is long)",
+                            q.line));
+      }
+      q.end.x() = x;
+      q.end.y() = y;
+    }
+    dequeue();
+    set_endpoint(x, y);
+  }
+
+  // A G0/G1 move to programmed p with compensation on (LinuxCNC's convert_straight_comp1/2).
+  void comp_line(const Vec3& p, bool rapid, std::uint32_t column) {
+    const double r = comp_radius_;
+    QueuedMove q;
+    q.kind = rapid ? GcodeMove::Kind::rapid : GcodeMove::Kind::feed;
+    const Vec3 c = comp_first_ ? cur_pos_ : comp_cur_;
+    q.feed = rapid ? 0 : feed_for((p - c).norm(), column);
+    if (comp_first_) {
+      // The entry move: to a radius beside the programmed end, square to the move.
+      const double distance = std::hypot(p.x() - c.x(), p.y() - c.y());
+      if (distance <= r) {
+        fail_at(column, fmt::format("the move that starts cutter compensation ({:.4f} mm in XY) "
+                                    "must be longer than the tool radius ({:.4f} mm)",
+                                    distance, r));
+      }
+      const double alpha = std::atan2(p.y() - c.y(), p.x() - c.x()) + (left() ? kPi / 2 : -kPi / 2);
+      q.end = Vec3(p.x() + r * std::cos(alpha), p.y() + r * std::sin(alpha), p.z());
+      q.d1 = std::cos(alpha);
+      q.d2 = std::sin(alpha);
+      set_endpoint(c.x(), c.y());
+      emitted_ = c;
+      enqueue(q, column);
+      comp_first_ = false;
+      comp_cur_ = q.end;
+      return;
+    }
+    const Vec3 op = cur_pos_;
+    if (p.x() == op.x() && p.y() == op.y()) {  // no XY motion: waits with the move before
+      q.end = Vec3(c.x(), c.y(), p.z());
+      enqueue(q, column);
+      comp_cur_.z() = p.z();
+      return;
+    }
+    double theta = std::atan2(c.y() - op.y(), c.x() - op.x());
+    double alpha = std::atan2(p.y() - op.y(), p.x() - op.x());
+    double beta = 0, gamma = 0;
+    if (left()) {
+      if (theta < alpha) theta += kTwoPi;
+      beta = theta - alpha - kPi / 2;
+      gamma = kPi / 2;
+    } else {
+      if (alpha < theta) alpha += kTwoPi;
+      beta = alpha - theta - kPi / 2;
+      gamma = -kPi / 2;
+    }
+    const double ex = p.x() + r * std::cos(alpha + gamma), ey = p.y() + r * std::sin(alpha + gamma);
+    const double mx = op.x() + r * std::cos(alpha + gamma),
+                 my = op.y() + r * std::sin(alpha + gamma);
+    bool concave = beta < -kConcaveTol || beta > kPi + kConcaveTol;
+    if (!concave && beta > kPi - kConcaveTol && !queue_.empty() &&
+        queue_.front().kind == GcodeMove::Kind::arc &&
+        ((!left() && queue_.front().turn > 0) || (left() && queue_.front().turn < 0))) {
+      concave = true;  // over a round top, then down beside it: stay outside ("h" shape)
+    }
+    if (!concave && beta > kConcaveTol) {
+      // Convex: around the programmed corner on an arc (a rapid goes straight).
+      move_endpoint_and_flush(c.x(), c.y(), column);
+      QueuedMove corner;
+      corner.end = Vec3(mx, my, c.z());
+      corner.feed = q.feed;
+      if (rapid) {
+        corner.kind = GcodeMove::Kind::rapid;
+      } else {
+        corner.kind = GcodeMove::Kind::arc;
+        corner.c1 = op.x();
+        corner.c2 = op.y();
+        corner.turn = left() ? -1 : 1;
+      }
+      enqueue(corner, column);
+      dequeue();
+      set_endpoint(mx, my);
+    } else if (concave) {
+      if (queue_.empty()) concave_after_stop(column);
+      if (queue_.front().kind != GcodeMove::Kind::arc) {
+        // Line to line: back along the move before to where the offset lines cross.
+        const double half = (beta + kPi) / 2;
+        if (half == 0) fail_at(column, "a zero-degree inside corner cannot be compensated");
+        const double retreat = r / std::tan(half);
+        move_endpoint_and_flush(c.x() + retreat * std::cos(theta + gamma),
+                                c.y() + retreat * std::sin(theta + gamma), column);
+      } else {
+        // Arc to line: along the compensated arc to where it meets the offset line.
+        const QueuedMove& prev = queue_.front();
+        const double oldrad = std::hypot(prev.c2 - prev.end.y(), prev.c1 - prev.end.x());
+        const double base = std::atan2(p.y() - op.y(), p.x() - op.x());
+        const double th = prev.turn > 0 ? base + kPi / 2 : base - kPi / 2;
+        const double phi = std::atan2(prev.c2 - op.y(), prev.c1 - op.x());
+        const bool in = inside(prev.turn);
+        const double uncomp = in ? oldrad + r : oldrad - r;
+        const double d = uncomp * std::cos(th - phi);
+        const double l = (in ? d - r : d + r) / oldrad;
+        if (l > 1.0 || l < -1.0) gouge(column, "an arc and a straight move");
+        const double sign = (prev.turn > 0) == in ? -1.0 : 1.0;
+        const double angle = sign * std::acos(l) + th + kPi;
+        move_endpoint_and_flush(prev.c1 + oldrad * std::cos(angle),
+                                prev.c2 + oldrad * std::sin(angle), column);
+      }
+    } else {
+      // Straight on (or tangent from an arc).
+      dequeue();
+      set_endpoint(c.x(), c.y());
+    }
+    q.end = Vec3(ex, ey, p.z());
+    q.d1 = p.x() - op.x();
+    q.d2 = p.y() - op.y();
+    enqueue(q, column);
+    comp_cur_ = q.end;
+  }
+
+  [[noreturn]] void gouge(std::uint32_t column, const char* what) const {
+    fail_at(column, fmt::format("{} make a corner the compensated tool cannot fit in without "
+                                "gouging (a tool radius of {:.4f} mm)",
+                                what, comp_radius_));
+  }
+
+  [[noreturn]] void concave_after_stop(std::uint32_t column) const {
+    fail_at(column,
+            "a concave corner right after a program stop (M0/M1/M60) with cutter compensation "
+            "on: the move before the stop is done, the tool would gouge the corner");
+  }
+
+  // A G2/G3 move to programmed p with compensation on (LinuxCNC's convert_arc_comp1/2).
+  void comp_arc(const Vec3& p, std::uint32_t column) {
+    const double r = comp_radius_;
+    const bool ccw = motion_ == 30;
+    const Vec3 op = cur_pos_;
+    const ArcData a = arc_data(op, p, column);
+    const int turns = block_.has('p') ? static_cast<int>(std::round(block_['p'])) : 1;
+    const int turn = ccw ? turns : -turns;
+    const double f = feed_for(std::hypot(a.rad * a.sweep, p.z() - op.z()), column);
+    const double arc_radius = std::hypot(a.c1 - p.x(), a.c2 - p.y());
+    const bool in = inside(turn);
+    if (in && arc_radius <= r) {
+      fail_at(column, fmt::format("the tool radius ({:.4f} mm) is not less than the radius of "
+                                  "the arc it runs inside ({:.4f} mm)",
+                                  r, arc_radius));
+    }
+    QueuedMove q;
+    q.kind = GcodeMove::Kind::arc;
+    q.feed = f;
+    q.turn = turn;
+    q.c1 = a.c1;
+    q.c2 = a.c2;
+    if (comp_first_) {
+      // The entry arc: tangent to the tool where it stands, through the offset end point.
+      const Vec3 c = cur_pos_;
+      if (std::hypot(p.x() - c.x(), p.y() - c.y()) <= r) {
+        fail_at(column, fmt::format("the arc that starts cutter compensation must end farther "
+                                    "than the tool radius ({:.4f} mm) from where it starts",
+                                    r));
+      }
+      const double gamma =
+          in ? std::atan2(a.c2 - p.y(), a.c1 - p.x()) : std::atan2(p.y() - a.c2, p.x() - a.c1);
+      const double ex = p.x() + r * std::cos(gamma), ey = p.y() + r * std::sin(gamma);
+      const double b_len = std::hypot(c.y() - ey, c.x() - ex) / 2;
+      const double ab = std::atan2(a.c2 - ey, a.c1 - ex);
+      const double ang = std::atan2(c.y() - ey, c.x() - ex) - ab;
+      if (std::abs(std::cos(ang)) < kTolEqual) {
+        fail_at(column,
+                "the arc that starts cutter compensation has no arc through the tool's "
+                "position and the offset end point");
+      }
+      const double c_len = b_len / std::cos(ang);
+      q.c1 = ex + c_len * std::cos(ab);
+      q.c2 = ey + c_len * std::sin(ab);
+      q.end = Vec3(ex, ey, p.z());
+      q.original_sweep = find_turn(c.x(), c.y(), q.c1, q.c2, turn, ex, ey);
+      comp_first_ = false;
+      emitted_ = c;
+      enqueue(q, column);
+      comp_cur_ = q.end;
+      return;
+    }
+    const Vec3 c = comp_cur_;
+    double theta = std::atan2(c.y() - op.y(), c.x() - op.x());
+    theta = left() ? theta - kPi / 2 : theta + kPi / 2;
+    double delta = std::atan2(a.c2 - op.y(), a.c1 - op.x());
+    const double alpha = ccw ? delta - kPi / 2 : delta + kPi / 2;
+    double beta = left() ? theta - alpha : alpha - theta;
+    beta = beta > 1.5 * kPi ? beta - kTwoPi : beta < -kPi / 2 ? beta + kTwoPi : beta;
+    double gamma;
+    if ((left() && ccw) || (!left() && !ccw)) {
+      gamma = std::atan2(a.c2 - p.y(), a.c1 - p.x());  // the tool inside the arc
+    } else {
+      gamma = std::atan2(p.y() - a.c2, p.x() - a.c1);
+      delta += kPi;
+    }
+    const double ex = p.x() + r * std::cos(gamma), ey = p.y() + r * std::sin(gamma);
+    q.end = Vec3(ex, ey, p.z());
+    q.original_sweep = find_turn(op.x(), op.y(), a.c1, a.c2, turn, p.x(), p.y());
+    if (beta < -kConcaveTol || beta > kPi + kConcaveTol ||
+        (std::abs(beta - kPi) < kConcaveTol && !in)) {
+      // Concave.
+      if (queue_.empty()) concave_after_stop(column);
+      if (queue_.front().kind != GcodeMove::Kind::arc) {
+        // Line to arc: back along the line to where it meets the offset arc.
+        const double cy = arc_radius * std::sin(beta - kPi / 2);
+        const double from_centre = in ? arc_radius - r : arc_radius + r;
+        const double l = (in ? cy + r : cy - r) / from_centre;
+        if (l > 1.0 || l < -1.0) gouge(column, "a straight move and an arc");
+        double angle;
+        if (in) {
+          angle = turn > 0 ? theta + std::asin(l) : theta - std::asin(l);
+        } else {
+          angle = turn > 0 ? theta + kPi - std::asin(l) : theta + kPi + std::asin(l);
+        }
+        move_endpoint_and_flush(a.c1 + from_centre * std::cos(angle),
+                                a.c2 + from_centre * std::sin(angle), column);
+      } else {
+        // Arc to arc: where the two offset circles cross.
+        const QueuedMove& prev = queue_.front();
+        const double oldrad = std::hypot(prev.c2 - prev.end.y(), prev.c1 - prev.end.x());
+        const double newrad = in ? arc_radius - r : arc_radius + r;
+        const double cc = std::hypot(prev.c2 - a.c2, prev.c1 - a.c1);
+        if (oldrad == 0 || cc == 0) {
+          fail_at(column,
+                  "an arc after an arc about the same centre makes no corner to "
+                  "compensate (the arcs share their centre)");
+        }
+        const double k = (oldrad * oldrad + cc * cc - newrad * newrad) / (2 * oldrad * cc);
+        if (k > 1.0 || k < -1.0) gouge(column, "two arcs");
+        const double pullback = std::acos(k);
+        const double dir_cc = std::atan2(a.c2 - prev.c2, a.c1 - prev.c1);
+        const bool plus = inside(prev.turn) == (turn > 0);
+        const double dir = plus ? dir_cc + pullback : dir_cc - pullback;
+        move_endpoint_and_flush(prev.c1 + oldrad * std::cos(dir), prev.c2 + oldrad * std::sin(dir),
+                                column);
+      }
+    } else if (beta > kConcaveTol) {
+      // Convex: around the programmed corner on an arc first.
+      const double mx = op.x() + r * std::cos(delta), my = op.y() + r * std::sin(delta);
+      dequeue();
+      QueuedMove corner;
+      corner.kind = GcodeMove::Kind::arc;
+      corner.end = Vec3(mx, my, c.z());
+      corner.c1 = op.x();
+      corner.c2 = op.y();
+      corner.turn = left() ? -1 : 1;
+      corner.feed = f;
+      enqueue(corner, column);
+      dequeue();
+      set_endpoint(mx, my);
+    } else {
+      dequeue();  // tangent
+      set_endpoint(c.x(), c.y());
+    }
+    enqueue(q, column);
+    comp_cur_ = q.end;
   }
 
   // ---- canned cycles (G17) ------------------------------------------------------------------
@@ -2814,6 +3372,18 @@ class Interpreter {
   }
 
   void end_program() { ended_ = true; }
+
+  // Cutter radius compensation.
+  CompSide comp_side_ = CompSide::off;
+  double comp_radius_ = 0;  // mm
+  bool comp_first_ = true;  // the next move starts compensation
+  bool arc_not_allowed_ = false;
+  bool comp_fanuc_warned_ = false;
+  Vec3 comp_cur_ = Vec3::Zero();  // the tool centre (program mm)
+  Vec3 emitted_ = Vec3::Zero();   // where the last compensated move to run ends (program mm)
+  std::vector<QueuedMove> queue_;
+  std::array<double, 2> endpoint_{};  // where the last queued XY move starts
+  bool endpoint_valid_ = false;
 
   // ---- state --------------------------------------------------------------------------------
 

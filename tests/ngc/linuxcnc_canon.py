@@ -7,7 +7,7 @@ be compared move by move.
     /usr/bin/python3 tests/ngc/linuxcnc_canon.py PROGRAM [--var FILE] [--tools FILE]
 
 --var: a LinuxCNC parameter file (work offsets, G28/G30 positions, mm: the module starts its
-interpreter in mm); --tools: tool lengths, lines "T<n> Z<length mm>". Positions and feeds reach
+interpreter in mm); --tools: a tool table, lines "T<n> Z<length mm> D<diameter mm>". Positions and feeds reach
 the canon in inches and go out in mm.
 Exit 77 when the module is missing (a skip for CTest).
 """
@@ -45,7 +45,7 @@ class Canon:
 
     # What the interpreter asks.
     def get_tool(self, pocket):
-        length = self.tools.get(pocket, 0.0)  # mm: the interpreter's user units here
+        length = self.tools.get(pocket, (0.0, 0.0))[0]  # mm: the interpreter's user units here
         return (pocket, 0.0, 0.0, length, 0, 0, 0, 0, 0, 0, 0.0, 0, 0, 0)
 
     def get_external_angular_units(self):
@@ -134,7 +134,7 @@ class Canon:
 def run_rs274(program, var, tools):
     """The standalone interpreter `rs274 -g` (4 decimals): for programs that use the tool
     table, which this Debian build's Python module crashes on. Its external units are inches:
-    the var file and the tool lengths go to it in inches, it prints mm."""
+    the var file and the tool lengths and diameters go to it in inches, it prints mm."""
     import re
     import shutil
     exe = shutil.which("rs274")
@@ -150,8 +150,8 @@ def run_rs274(program, var, tools):
                 f.write("%s\t%.12f\n" % (n, float(v) / IN))
     tfile = os.path.join(tmp, "t.tbl")
     with open(tfile, "w") as f:
-        for t, z in sorted(tools.items()):
-            f.write("T%d P%d Z%.12f D0\n" % (t, t, z / IN))
+        for t, (z, d) in sorted(tools.items()):
+            f.write("T%d P%d Z%.12f D%.12f\n" % (t, t, z / IN, d / IN))
     out = subprocess.run([exe, "-t", tfile, "-v", vfile, "-g", program], capture_output=True,
                          text=True, stdin=subprocess.DEVNULL).stdout
     canon = Canon(vfile, tools)
@@ -210,9 +210,13 @@ def main():
                 if not words:
                     continue
                 t = int(words[0][1:])
+                z = d = 0.0
                 for w in words[1:]:
                     if w[0] in "Zz":
-                        tools[t] = float(w[1:])
+                        z = float(w[1:])
+                    elif w[0] in "Dd":
+                        d = float(w[1:])
+                tools[t] = (z, d)
     if "--rs274" in args:
         canon = run_rs274(program, var, tools)
         print_moves(canon)

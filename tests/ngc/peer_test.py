@@ -93,7 +93,8 @@ def main():
         # module crashes on tool data and does not pass the spindle speed), which prints 4 decimals: ends within half its last
         # digit, lengths within that per move.
         text = open(prog).read().upper()
-        standalone = "G43" in text or "M6" in text or "G95" in text
+        standalone = "G43" in text or "M6" in text or "G95" in text or "G41 " in text \
+            or "G42 " in text
         tol = 5e-5 + 1e-9 if standalone else TOL_MM
         peer = subprocess.run(
             ["/usr/bin/python3", os.path.join(HERE, "linuxcnc_canon.py"), prog, "--var",
