@@ -556,6 +556,73 @@ M99
   }
 }
 
+// G88 stops for the operator to retract by hand: the retraction is modelled as a rapid to the
+// clear plane and named (LinuxCNC's canon has no move there; docs/gcode.md).
+TEST(GcodeCycles, G88RetractsAsTheOperatorWouldAndSaysSo) {
+  const GcodeProgram p = read_gcode(
+      "G21 G17 G90 G94\nG0 X0 Y0 Z10\nS500 M3 F200\nG98 G88 X5 Y5 Z-4 R2 P1\nG80\nM2\n", "g88.ngc");
+  const std::vector<Vec3> want{{5, 5, 10}, {5, 5, 2}, {5, 5, -4}, {5, 5, 10}};
+  ASSERT_EQ(p.path.segments().size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    EXPECT_EQ(p.path.segments()[i].end(), want[i]) << i;  // words copied: exact
+  }
+  EXPECT_EQ(p.path.segments()[2].motion(), Motion::feed);
+  EXPECT_EQ(p.path.segments()[3].motion(), Motion::rapid);
+  ASSERT_EQ(p.info.warnings.size(), 1u);
+  EXPECT_NE(p.info.warnings[0].find("g88.ngc:4: G88 stops the program"), std::string::npos)
+      << p.info.warnings[0];
+}
+
+// Fanuc's fine boring G76 and back boring G87 (Q shifts off the wall, along +X by the
+// parameter's default) and tapping G84 (out to R at the feed), as Fanuc's manual describes
+// them; LinuxCNC does not read these.
+TEST(GcodeFanuc, BoringAndTappingCyclesMoveAsTheManualDescribes) {
+  GcodeReadOptions o;
+  o.dialect = Dialect::fanuc;
+  const GcodeProgram p = read_gcode(
+      "G21 G17 G90 G94\nG0 X0. Y0. Z10.\nS500 M3 F200.\nG98 G76 X5. Y5. Z-4. R2. Q0.5 P100\n"
+      "G80\nG99 G84 X10. Y0. Z-6. R1.\nG80\nG0 Z10.\nG98 G87 X20. Y0. Z-3. R-10. Q1.\nG80\n"
+      "M30\n",
+      "bore.nc", o);
+  const std::vector<std::pair<Vec3, Motion>> want{
+      // G76: to the hole, down to R, bore, shift, out, shift back.
+      {{5, 5, 10}, Motion::rapid},
+      {{5, 5, 2}, Motion::rapid},
+      {{5, 5, -4}, Motion::feed},
+      {{5.5, 5, -4}, Motion::rapid},
+      {{5.5, 5, 10}, Motion::rapid},
+      {{5, 5, 10}, Motion::rapid},
+      // G84 in G99: in and out to R at the feed.
+      {{10, 0, 10}, Motion::rapid},
+      {{10, 0, 1}, Motion::rapid},
+      {{10, 0, -6}, Motion::feed},
+      {{10, 0, 1}, Motion::feed},
+      {{10, 0, 10}, Motion::rapid},  // G0 Z10
+      // G87: shifted down through the hole to R (the bore's bottom), back on the axis, bore up
+      // to Z at the feed, shifted, out to the initial level, back on the axis.
+      {{20, 0, 10}, Motion::rapid},
+      {{21, 0, 10}, Motion::rapid},
+      {{21, 0, -10}, Motion::rapid},
+      {{20, 0, -10}, Motion::rapid},
+      {{20, 0, -3}, Motion::feed},
+      {{21, 0, -3}, Motion::rapid},
+      {{21, 0, 10}, Motion::rapid},
+      {{20, 0, 10}, Motion::rapid}};
+  const auto& seg = p.path.segments();
+  ASSERT_EQ(seg.size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    // 1e-12 mm: sums of the words (5 + 0.5) in double.
+    EXPECT_LE((seg[i].end() - want[i].first).norm(), 1e-12)
+        << i << ": " << seg[i].end().transpose();
+    EXPECT_EQ(seg[i].motion(), want[i].second) << i;
+  }
+  ASSERT_EQ(p.info.warnings.size(), 1u);
+  EXPECT_NE(
+      p.info.warnings[0].find("bore.nc:4: G76: the shift Q off the bore's wall goes along +X"),
+      std::string::npos)
+      << p.info.warnings[0];
+}
+
 TEST(GcodeFanuc, NumbersWithoutDecimalPointAreNamedInAWarning) {
   GcodeReadOptions ro;
   ro.dialect = Dialect::fanuc;

@@ -958,13 +958,23 @@ class Interpreter {
         case 20:
         case 30:
         case 730:
+        case 740:
         case 800:
         case 810:
         case 820:
         case 830:
+        case 840:
         case 850:
         case 860:
+        case 870:
+        case 880:
         case 890:
+          set(motion, g, column, "motion");
+          motion_col = column;
+          break;
+        case 760:
+          // Fanuc's fine boring cycle (LinuxCNC's G76 is lathe threading).
+          if (!fanuc_) unsupported_g(g, column);
           set(motion, g, column, "motion");
           motion_col = column;
           break;
@@ -1100,9 +1110,11 @@ class Interpreter {
         case 30:
         case 40:
           spindle_on_ = true;
+          spindle_dir_ = m == 30 ? 1 : -1;
           break;
         case 50:
           spindle_on_ = false;
+          spindle_dir_ = 0;
           break;
         case 60:
           refuse_with_comp(column, "M6 (a tool change)");
@@ -1255,7 +1267,10 @@ class Interpreter {
     } else if (g53) {
       fail_at(block_.g.front().column, "G53 needs axis words (a move in machine coordinates)");
     }
-    if (motion_ >= 0 && motion_ < 730) cycle_il_flag_ = false;
+    if (motion_ < 730) {
+      cycle_il_flag_ = false;
+      cycle_motion_ = -1;  // the next cycle is a first one (its Z and R again)
+    }
     check_unused(group0, dwell, tool_length, comp > 400);
     if (stop || pause) {
       comp_flush_at_stop(block_.m.front().column);
@@ -1276,16 +1291,21 @@ class Interpreter {
     auto refuse = [&](char c, const char* users) {
       fail_at(block_.col(c), fmt::format("{} word with no {} to use it", upper(c), users));
     };
-    if (block_.has('q') && !(cycle && (motion_ == 730 || motion_ == 830)) && !m61) {
-      refuse('q', "G73, G83 or M61");
-    }
+    const bool q_cycle = cycle && (motion_ == 730 || motion_ == 830 ||
+                                   (fanuc_ && (motion_ == 760 || motion_ == 870)));
+    if (block_.has('q') && !q_cycle && !m61) refuse('q', "G73, G83 or M61");
     const bool m98 = pending_m98_.has_value();
-    if (block_.has('l') && !cycle && group0 != 100 && !m98) refuse('l', "G10 or canned cycle");
+    // LinuxCNC takes no L with G74 (its check lists G73 and G76-G89).
+    const bool l_cycle = cycle && (fanuc_ || motion_ != 740);
+    if (block_.has('l') && !l_cycle && group0 != 100 && !m98) {
+      refuse('l', "G10 or canned cycle other than G74");
+    }
     if (block_.has('r') && !arc && !cycle && group0 != 100) {
       refuse('r', "G2/G3, canned cycle or G10");
     }
+    const bool g87 = cycle && motion_ == 870 && !fanuc_;
     for (const char c : std::string_view("ijk")) {
-      if (block_.has(c) && !arc) refuse(c, "G2/G3");
+      if (block_.has(c) && !arc && !g87) refuse(c, "G2/G3 or G87");
     }
     if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_) {
       refuse('p', "G2/G3, G4, G10 or canned cycle");
@@ -1300,16 +1320,17 @@ class Interpreter {
 
   [[noreturn]] void unsupported_g(int g, std::uint32_t column) const {
     const std::string name = code_name('G', g);
-    if (g == 330 || g == 331 || g == 760) {
+    if (g == 330 || g == 331) {
       fail_at(column, fmt::format("{} (threading) is not supported on a milling path", name));
     }
     if (g >= 380 && g <= 385) fail_at(column, fmt::format("{} (probing) is not supported", name));
     if (g == 50 || g == 51 || g == 52 || g == 53) {
       fail_at(column, fmt::format("{} (splines) is not supported", name));
     }
-    if (g == 840 || g == 740 || g == 870 || g == 880) {
+    if (g == 760) {
       fail_at(column,
-              fmt::format("canned cycle {} is not supported (G73 G81-G83 G85 G86 G89 are)", name));
+              "G76 is LinuxCNC's lathe threading cycle, not supported on a milling path "
+              "(Fanuc's fine boring G76: read with the fanuc dialect)");
     }
     if (g == 70 || g == 80 || g == 960) {
       fail_at(column, fmt::format("{} is a lathe mode, not supported", name));
@@ -2436,71 +2457,117 @@ class Interpreter {
     comp_cur_ = q.end;
   }
 
-  // ---- canned cycles (G17) ------------------------------------------------------------------
+  // ---- canned cycles ------------------------------------------------------------------------
+  // LinuxCNC's cycles in every plane: the hole's position on the plane's axes (i1, i2), the
+  // drilling along its normal (in; Z in G17, Y in G18, X in G19), R and the bottom on it.
 
   void canned_cycle(int g, std::uint32_t column) {
-    if (plane_ != Plane::xy) {
-      fail_at(column, "canned cycles are supported in the XY plane (G17) only");
-    }
+    const ArcData ax = plane_axes();
+    const int i1 = ax.i1, i2 = ax.i2, in = ax.in;
+    const char w1 = static_cast<char>('x' + i1), w2 = static_cast<char>('x' + i2),
+               wn = static_cast<char>('x' + in);
+    const std::string name = code_name('G', g);
     if (feed_mode_ == FeedMode::inverse_time) {
       fail_at(column, "canned cycles cannot run in inverse-time feed (G93)");
     }
     const bool first = g != cycle_motion_;
-    if (first && !block_.has('z')) {
-      fail_at(column, fmt::format("{} needs Z (the bottom of the hole) in its first block",
-                                  code_name('G', g)));
+    if (first && !block_.has(wn)) {
+      fail_at(column, fmt::format("{} needs {} (the bottom of the hole) in its first block", name,
+                                  upper(wn)));
     }
     cycle_motion_ = g;
-    const double z_word = block_.has('z') ? len('z') : cycle_z_;
+    const double bottom_word = block_.has(wn) ? len(wn) : cycle_z_;
     if (block_.has('r')) {
       cycle_r_ = len('r');
     } else if (first) {
-      fail_at(column, fmt::format("{} needs R (the retract plane)", code_name('G', g)));
+      fail_at(column, fmt::format("{} needs R (the retract plane)", name));
     }
-    double current_z = cur_pos_.z();
-    double old_z;
+    double current = cur_pos_[in];
+    double old;
     if (cycle_il_flag_) {
-      old_z = cycle_il_;
+      old = cycle_il_;
     } else {
-      old_z = cycle_il_ = current_z;
+      old = cycle_il_ = current;
       cycle_il_flag_ = true;
     }
-    double r, bottom, x, y, dx = 0, dy = 0;
+    double r, bottom, a, b, da = 0, db = 0;
     if (absolute_) {
       r = cycle_r_;
-      bottom = z_word;
-      x = block_.has('x') ? len('x') : cur_pos_.x();
-      y = block_.has('y') ? len('y') : cur_pos_.y();
+      bottom = bottom_word;
+      a = block_.has(w1) ? len(w1) : cur_pos_[i1];
+      b = block_.has(w2) ? len(w2) : cur_pos_[i2];
     } else {
-      if (block_.has('x')) dx = len('x');
-      if (block_.has('y')) dy = len('y');
-      r = cycle_r_ + old_z;
-      bottom = r + z_word;
-      x = cur_pos_.x();
-      y = cur_pos_.y();
+      if (block_.has(w1)) da = len(w1);
+      if (block_.has(w2)) db = len(w2);
+      r = cycle_r_ + old;
+      bottom = r + bottom_word;
+      a = cur_pos_[i1];
+      b = cur_pos_[i2];
     }
-    if (r < bottom) {
-      fail_at(column, fmt::format("the R plane ({:g}) is below the bottom Z ({:g})", r / unit_,
-                                  bottom / unit_));
+    const bool back_bore_fanuc = fanuc_ && g == 870;
+    if (r < bottom && !back_bore_fanuc) {
+      fail_at(column, fmt::format("the R plane ({:g}) is below the bottom {} ({:g})", r / unit_,
+                                  upper(wn), bottom / unit_));
     }
-    double q = 0, p = 0;
+    double q = 0;
     if (g == 730 || g == 830) {
       if (block_.has('q')) {
         cycle_q_ = len('q');
       } else if (cycle_q_ <= 0 || first) {
-        fail_at(column, fmt::format("{} needs Q (the peck depth)", code_name('G', g)));
+        fail_at(column, fmt::format("{} needs Q (the peck depth)", name));
       }
       q = cycle_q_;
       if (q <= 0) fail_at(block_.col('q'), "the peck depth Q must be > 0");
     }
-    if (g == 820 || g == 860 || g == 890) {
+    if (g == 760 || back_bore_fanuc) {
+      if (block_.has('q')) cycle_q_ = len('q');
+      q = cycle_q_;  // the shift off the bore's wall (0: none)
+      if (q < 0) fail_at(block_.col('q'), fmt::format("{}'s shift Q must be >= 0", name));
+      note_fanuc_shift(name);
+    }
+    if (g == 820 || g == 860 || g == 880 || g == 890) {
       if (block_.has('p')) {
         cycle_p_ = block_['p'];
       } else if (first) {
-        fail_at(column, fmt::format("{} needs P (the dwell, s)", code_name('G', g)));
+        fail_at(column, fmt::format("{} needs P (the dwell, s)", name));
       }
-      p = cycle_p_;
-      (void)p;  // dwells take time the path does not model
+    } else if ((g == 740 || g == 840 || g == 760) && block_.has('p')) {
+      cycle_p_ = block_['p'];
+    }
+    // The spindle the cycle needs (dwells take time the path does not model).
+    if ((g == 840 || g == 740) && !fanuc_) {
+      if (spindle_dir_ == 0) fail_at(column, fmt::format("{} with the spindle stopped", name));
+      if (g == 840 && spindle_dir_ < 0) {
+        fail_at(column, "G84 (right-hand tapping) with the spindle turning counterclockwise (M4)");
+      }
+      if (g == 740 && spindle_dir_ > 0) {
+        fail_at(column, "G74 (left-hand tapping) with the spindle turning clockwise (M3)");
+      }
+    }
+    if ((g == 860 || g == 870 || g == 880) && spindle_dir_ == 0 && !fanuc_) {
+      fail_at(column, fmt::format("{} with the spindle stopped (M3 or M4 first)", name));
+    }
+    // G87: the offset to pass the bar through the hole, and the top of the back bore.
+    double o1 = 0, o2 = 0, middle = 0;
+    if (g == 870 && !fanuc_) {
+      const char l1 = static_cast<char>('i' + i1), l2 = static_cast<char>('i' + i2),
+                 ln = static_cast<char>('i' + in);
+      for (const char c : {l1, l2, ln}) {
+        if (first && !block_.has(c)) {
+          fail_at(column, fmt::format("G87 needs {} in its first block (I J K: the offset along "
+                                      "the plane's axes, the top of the back bore)",
+                                      upper(c)));
+        }
+      }
+      const std::size_t k1 = static_cast<std::size_t>(i1), k2 = static_cast<std::size_t>(i2),
+                        kn = static_cast<std::size_t>(in);
+      for (const std::size_t k : {k1, k2, kn}) {
+        const char c = static_cast<char>('i' + k);
+        if (block_.has(c)) cycle_ijk_[k] = len(c);
+      }
+      o1 = cycle_ijk_[k1];
+      o2 = cycle_ijk_[k2];
+      middle = absolute_ ? cycle_ijk_[kn] : bottom + cycle_ijk_[kn];
     }
     int repeats = 1;
     if (block_.has('l')) {
@@ -2510,61 +2577,154 @@ class Interpreter {
       }
       repeats = static_cast<int>(l);
     }
+    auto at = [&](double pa, double pb, double pn) {
+      Vec3 v = Vec3::Zero();
+      v[i1] = pa;
+      v[i2] = pb;
+      v[in] = pn;
+      return v;
+    };
     // Below the R plane: rapid straight up to it first.
-    if (old_z < r) {
-      line_to(Vec3(cur_pos_.x(), cur_pos_.y(), r), true, column);
-      old_z = r;
-      current_z = r;
+    if (old < r) {
+      line_to(at(cur_pos_[i1], cur_pos_[i2], r), true, column);
+      old = r;
+      current = r;
     }
-    const double clear = retract_r_ ? r : old_z;
+    const double clear = retract_r_ ? r : old;
+    // Fanuc's shifted cycles: the shift is along the plane's first axis (+X in G17).
+    const double s1 = q;
     for (int k = 0; k < repeats; ++k) {
-      x += dx;
-      y += dy;
-      if (k == 0 && current_z > r) {
-        line_to(Vec3(x, y, current_z), true, column);
-        line_to(Vec3(x, y, r), true, column);
+      a += da;
+      b += db;
+      if (back_bore_fanuc) {
+        // At the initial level: orient, shift, rapid down to R (the bore's bottom), shift
+        // back, feed up to the bottom word (the bore's top), orient, shift, rapid out.
+        line_to(at(a, b, current), true, column);
+        line_to(at(a + s1, b, current), true, column);
+        line_to(at(a + s1, b, r), true, column);
+        line_to(at(a, b, r), true, column);
+        line_to(at(a, b, bottom), false, column);
+        line_to(at(a + s1, b, bottom), true, column);
+        line_to(at(a + s1, b, old), true, column);
+        line_to(at(a, b, old), true, column);
+        continue;
+      }
+      if (k == 0 && current > r) {
+        line_to(at(a, b, current), true, column);
+        line_to(at(a, b, r), true, column);
       } else {
-        line_to(Vec3(x, y, clear), true, column);
-        if (clear > r) line_to(Vec3(x, y, r), true, column);
+        line_to(at(a, b, clear), true, column);
+        if (clear > r) line_to(at(a, b, r), true, column);
       }
       switch (g) {
         case 810:
         case 820:
         case 860:
-          line_to(Vec3(x, y, bottom), false, column);
-          line_to(Vec3(x, y, clear), true, column);
+          line_to(at(a, b, bottom), false, column);
+          line_to(at(a, b, clear), true, column);
           break;
         case 850:
-          line_to(Vec3(x, y, bottom), false, column);
-          line_to(Vec3(x, y, r), false, column);
-          line_to(Vec3(x, y, clear), true, column);
+          line_to(at(a, b, bottom), false, column);
+          line_to(at(a, b, r), false, column);
+          line_to(at(a, b, clear), true, column);
           break;
         case 890:
-          line_to(Vec3(x, y, bottom), false, column);
-          line_to(Vec3(x, y, clear), false, column);
+          line_to(at(a, b, bottom), false, column);
+          line_to(at(a, b, clear), false, column);
+          break;
+        case 740:
+        case 840:
+          // In at the feed, the spindle reversed, out at the feed (Fanuc: out to R, then a
+          // rapid to the initial level).
+          line_to(at(a, b, bottom), false, column);
+          if (fanuc_) {
+            line_to(at(a, b, r), false, column);
+            if (clear > r) line_to(at(a, b, clear), true, column);
+          } else {
+            line_to(at(a, b, clear), false, column);
+          }
+          break;
+        case 760:
+          // Fanuc's fine boring: in at the feed, the spindle oriented, shifted off the wall,
+          // out at rapid, shifted back.
+          line_to(at(a, b, bottom), false, column);
+          line_to(at(a + s1, b, bottom), true, column);
+          line_to(at(a + s1, b, clear), true, column);
+          line_to(at(a, b, clear), true, column);
+          break;
+        case 870:
+          // LinuxCNC's back boring: through the hole at the offset with the spindle oriented,
+          // over to the axis, feed up to the top of the bore and back down, out at the offset.
+          line_to(at(a + o1, b + o2, r), true, column);
+          line_to(at(a + o1, b + o2, bottom), true, column);
+          line_to(at(a, b, bottom), true, column);
+          line_to(at(a, b, middle), false, column);
+          line_to(at(a, b, bottom), false, column);
+          line_to(at(a + o1, b + o2, bottom), true, column);
+          line_to(at(a + o1, b + o2, clear), true, column);
+          line_to(at(a, b, clear), true, column);
+          break;
+        case 880:
+          // In at the feed; the program stops and the operator retracts by hand: modelled as
+          // a rapid to the clear plane, named in a warning.
+          line_to(at(a, b, bottom), false, column);
+          if (!g88_warned_) {
+            g88_warned_ = true;
+            warn(
+                "G88 stops the program for the operator to retract the spindle by hand: "
+                "modelled as a rapid straight out to the clear plane");
+          }
+          line_to(at(a, b, clear), true, column);
           break;
         case 730:
         case 830: {
           const double back = opt_.peck_clearance_mm;
           for (double depth = r - q; depth > bottom; depth -= q) {
-            line_to(Vec3(x, y, depth), false, column);
+            line_to(at(a, b, depth), false, column);
             if (g == 830) {
-              line_to(Vec3(x, y, r), true, column);
-              line_to(Vec3(x, y, depth + back), true, column);
+              line_to(at(a, b, r), true, column);
+              line_to(at(a, b, depth + back), true, column);
             } else {
-              line_to(Vec3(x, y, depth + back), true, column);
+              line_to(at(a, b, depth + back), true, column);
             }
           }
-          line_to(Vec3(x, y, bottom), false, column);
-          line_to(Vec3(x, y, clear), true, column);
+          line_to(at(a, b, bottom), false, column);
+          line_to(at(a, b, clear), true, column);
           break;
         }
         default:
           break;
       }
     }
-    cur_pos_ = Vec3(x, y, clear);
-    cycle_z_ = z_word;
+    cur_pos_ = at(a, b, back_bore_fanuc ? old : clear);
+    cycle_z_ = bottom_word;
+  }
+
+  // The plane's axes: i1, i2 on it, in along its normal.
+  [[nodiscard]] ArcData plane_axes() const {
+    ArcData d;
+    if (plane_ == Plane::zx) {
+      d.i1 = 2;
+      d.i2 = 0;
+      d.in = 1;
+    } else if (plane_ == Plane::yz) {
+      d.i1 = 1;
+      d.i2 = 2;
+      d.in = 0;
+    }
+    return d;
+  }
+
+  void note_fanuc_shift(const std::string& name) {
+    if (shift_warned_) return;
+    shift_warned_ = true;
+    warn(
+        fmt::format("{}: the shift Q off the bore's wall goes along +{} (Fanuc's parameter "
+                    "5101 RD1 = RD2 = 0; the machine's own setting may differ)",
+                    name,
+                    plane_ == Plane::xy   ? 'X'
+                    : plane_ == Plane::zx ? 'Z'
+                                          : 'Y'));
   }
 
   void line_to(const Vec3& target, bool rapid, std::uint32_t column) {
@@ -3421,6 +3581,7 @@ class Interpreter {
   double inverse_f_ = -1;  // G93: this block's F
   double speed_ = 0;
   bool spindle_on_ = false;
+  int spindle_dir_ = 0;  // 1 clockwise (M3), -1 counterclockwise (M4), 0 stopped
   // G99 (retract to R) until G98: LinuxCNC's interpreter starts so (its setup leaves the mode
   // at its first value, R_PLANE); Fanuc starts in G98.
   bool retract_r_ = opt_.dialect != Dialect::fanuc;
@@ -3440,6 +3601,8 @@ class Interpreter {
   // Canned cycles.
   int cycle_motion_ = -1;
   double cycle_r_ = 0, cycle_z_ = 0, cycle_q_ = 0, cycle_p_ = 0, cycle_il_ = 0;
+  std::array<double, 3> cycle_ijk_{};  // G87's I J K (mm)
+  bool g88_warned_ = false, shift_warned_ = false;
   bool cycle_il_flag_ = false;
   // Position.
   Vec3 cur_pos_ = Vec3::Zero();  // program coordinates (mm)
