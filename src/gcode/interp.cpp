@@ -80,6 +80,56 @@ constexpr std::array<OKeyword, 15> kOKeywords{{{"sub", OKind::sub},
                                                {"break", OKind::brk},
                                                {"continue", OKind::cont}}};
 
+// The modal groups of G codes (LinuxCNC's, as the block checks them) and their codes (x10).
+enum GroupIndex {
+  kMotion,
+  kGroup0,
+  kPlane,
+  kUnits,
+  kDistance,
+  kArcDistance,
+  kFeedMode,
+  kToolLength,
+  kSystem,
+  kRetract,
+  kComp,
+  kDwell,
+  kGroups
+};
+constexpr std::array<const char*, kGroups> kGroupNames{"motion",
+                                                       "non-modal (G10 G28 G30 G52 G92)",
+                                                       "plane",
+                                                       "units",
+                                                       "distance mode",
+                                                       "arc distance mode",
+                                                       "feed mode",
+                                                       "tool length",
+                                                       "coordinate system",
+                                                       "retract mode",
+                                                       "cutter compensation",
+                                                       "dwell"};
+struct GroupOf {
+  int code10;
+  GroupIndex group;
+};
+constexpr std::array<GroupOf, 63> kGroupOf{{
+    {0, kMotion},        {10, kMotion},      {20, kMotion},      {30, kMotion},
+    {730, kMotion},      {740, kMotion},     {760, kMotion},     {800, kMotion},
+    {810, kMotion},      {820, kMotion},     {830, kMotion},     {840, kMotion},
+    {850, kMotion},      {860, kMotion},     {870, kMotion},     {880, kMotion},
+    {890, kMotion},      {40, kDwell},       {100, kGroup0},     {280, kGroup0},
+    {281, kGroup0},      {300, kGroup0},     {301, kGroup0},     {520, kGroup0},
+    {920, kGroup0},      {921, kGroup0},     {922, kGroup0},     {923, kGroup0},
+    {170, kPlane},       {180, kPlane},      {190, kPlane},      {200, kUnits},
+    {210, kUnits},       {700, kUnits},      {710, kUnits},      {7000, kUnits},
+    {7100, kUnits},      {900, kDistance},   {910, kDistance},   {901, kArcDistance},
+    {911, kArcDistance}, {930, kFeedMode},   {940, kFeedMode},   {950, kFeedMode},
+    {430, kToolLength},  {431, kToolLength}, {490, kToolLength}, {540, kSystem},
+    {550, kSystem},      {560, kSystem},     {570, kSystem},     {580, kSystem},
+    {590, kSystem},      {591, kSystem},     {592, kSystem},     {593, kSystem},
+    {980, kRetract},     {990, kRetract},    {400, kComp},       {410, kComp},
+    {411, kComp},        {420, kComp},       {421, kComp},
+}};
 // An O-word line of a file, found by the index (one pass over the file, made when the program
 // first needs to jump).
 struct OLine {
@@ -938,136 +988,49 @@ class Interpreter {
       if (block_.has(c)) check_range(c);
     }
     // G codes by modal group (two of one group are an error).
-    int motion = -1, group0 = -1, plane = -1, units = -1, distance = -1, arc_distance = -1,
-        feed_mode = -1, tool_length = -1, system = -1, retract = -1, comp = -1, dwell = -1;
-    std::uint32_t motion_col = 0, group0_col = 0, comp_col = 0, tool_length_col = 0, system_col = 0;
+    std::array<int, kGroups> code;
+    code.fill(-1);
+    std::array<std::uint32_t, kGroups> col{};
     bool g53 = false;
-    auto set = [&](int& slot, int g, std::uint32_t column, const char* what) {
-      // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
-      if (&slot == &motion && (slot == 800 || g == 800) && slot != g) {
-        if (slot < 0 || slot == 800) slot = g;
-        return;
-      }
-      if (slot >= 0) fail_at(column, fmt::format("two {} codes in one block", what));
-      slot = g;
-    };
     for (const auto& [g, column] : block_.g) {
-      switch (g) {
-        case 0:
-        case 10:
-        case 20:
-        case 30:
-        case 730:
-        case 740:
-        case 800:
-        case 810:
-        case 820:
-        case 830:
-        case 840:
-        case 850:
-        case 860:
-        case 870:
-        case 880:
-        case 890:
-          set(motion, g, column, "motion");
-          motion_col = column;
-          break;
-        case 760:
-          // Fanuc's fine boring cycle (LinuxCNC's G76 is lathe threading).
-          if (!fanuc_) unsupported_g(g, column);
-          set(motion, g, column, "motion");
-          motion_col = column;
-          break;
-        case 40:
-          set(dwell, g, column, "dwell");
-          break;
-        case 100:
-        case 280:
-        case 281:
-        case 300:
-        case 301:
-        case 520:
-        case 920:
-        case 921:
-        case 922:
-        case 923:
-          set(group0, g, column, "non-modal (G10 G28 G30 G52 G92)");
-          group0_col = column;
-          break;
-        case 530:
-          g53 = true;
-          break;
-        case 170:
-        case 180:
-        case 190:
-          set(plane, g, column, "plane");
-          break;
-        case 200:
-        case 210:
-        case 700:
-        case 710:
-        case 7000:
-        case 7100:
-          set(units, g, column, "units");
-          break;
-        case 900:
-        case 910:
-          set(distance, g, column, "distance mode");
-          break;
-        case 901:
-        case 911:
-          set(arc_distance, g, column, "arc distance mode");
-          break;
-        case 930:
-        case 940:
-        case 950:
-          set(feed_mode, g, column, "feed mode");
-          break;
-        case 430:
-        case 431:
-        case 490:
-          set(tool_length, g, column, "tool length");
-          tool_length_col = column;
-          break;
-        case 540:
-        case 550:
-        case 560:
-        case 570:
-        case 580:
-        case 590:
-        case 591:
-        case 592:
-        case 593:
-          set(system, g, column, "coordinate system");
-          system_col = column;
-          break;
-        case 980:
-        case 990:
-          set(retract, g, column, "retract mode");
-          refuse_with_comp(column,
-                           fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
-          break;
-        case 400:
-        case 410:
-        case 420:
-        case 411:
-        case 421:
-          set(comp, g, column, "cutter compensation");
-          comp_col = column;
-          break;
-        case 610:
-        case 611:
-        case 640:
-          refuse_with_comp(column, fmt::format("{} (path control mode)", code_name('G', g)));
-          break;
-        case 970:
-        case 150:
-        case 160:
-          break;  // path blending, constant spindle speed, polar off: no effect on the path
-        default:
-          unsupported_g(g, column);
+      if (g == 530) {
+        g53 = true;
+        continue;
       }
+      if (g == 610 || g == 611 || g == 640) {
+        refuse_with_comp(column, fmt::format("{} (path control mode)", code_name('G', g)));
+        continue;  // path blending: no effect on the path
+      }
+      if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
+      // G76 is Fanuc's fine boring cycle; LinuxCNC's is lathe threading.
+      if (g == 760 && !fanuc_) unsupported_g(g, column);
+      const auto it = std::find_if(kGroupOf.begin(), kGroupOf.end(),
+                                   [g = g](const GroupOf& e) { return e.code10 == g; });
+      if (it == kGroupOf.end()) unsupported_g(g, column);
+      const auto k = static_cast<std::size_t>(it->group);
+      if (it->group == kRetract) {
+        refuse_with_comp(column, fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
+      }
+      // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
+      if (it->group == kMotion && (code[k] == 800 || g == 800) && code[k] != g) {
+        if (code[k] < 0 || code[k] == 800) {
+          code[k] = g;
+          col[k] = column;
+        }
+        continue;
+      }
+      if (code[k] >= 0) {
+        fail_at(column, fmt::format("two {} codes in one block", kGroupNames[k]));
+      }
+      code[k] = g;
+      col[k] = column;
     }
+    const int motion = code[kMotion], group0 = code[kGroup0], plane = code[kPlane],
+              units = code[kUnits], distance = code[kDistance], arc_distance = code[kArcDistance],
+              feed_mode = code[kFeedMode], tool_length = code[kToolLength], system = code[kSystem],
+              retract = code[kRetract], comp = code[kComp], dwell = code[kDwell];
+    const std::uint32_t motion_col = col[kMotion], group0_col = col[kGroup0], comp_col = col[kComp],
+                        tool_length_col = col[kToolLength], system_col = col[kSystem];
     // Feed mode, F, S, T, M, then the G groups in LinuxCNC's order.
     if (feed_mode >= 0) {
       feed_mode_ = feed_mode == 930   ? FeedMode::inverse_time
@@ -2790,13 +2753,8 @@ class Interpreter {
       const bool here = open != nullptr && open->kind == OKind::while_ &&
                         open->start.offset == line_offset_ && open->start.source == cur_.source;
       if (c != 0) {
-        if (!here) {
-          Control ctl;
-          ctl.kind = OKind::while_;
-          ctl.label = label;
-          ctl.start = Cursor{cur_.source, line_offset_, cur_.line_no - 1};
-          frames_.back().controls.push_back(ctl);
-        }
+        if (!here)
+          open_control(OKind::while_, label, {cur_.source, line_offset_, cur_.line_no - 1});
         return true;
       }
       if (here) pop_to(label);
@@ -2806,11 +2764,7 @@ class Interpreter {
     if (starts("do") && digit_at(2)) {
       count_block();
       i += 2;
-      Control ctl;
-      ctl.kind = OKind::do_;
-      ctl.label = loop_id(i);
-      ctl.start = cur_;
-      frames_.back().controls.push_back(ctl);
+      open_control(OKind::do_, loop_id(i), cur_);
       return true;
     }
     if (starts("end") && digit_at(3)) {
@@ -3220,6 +3174,26 @@ class Interpreter {
     cur_.line_no = o.line_no;
   }
 
+  // Opens an if or loop of the running frame.
+  Control& open_control(OKind kind, const std::string& label, const Cursor& start) {
+    Control ctl;
+    ctl.kind = kind;
+    ctl.label = label;
+    ctl.start = start;
+    frames_.back().controls.push_back(ctl);
+    return frames_.back().controls.back();
+  }
+
+  // The open `kind` labelled `label`, or an error: "o<label> <what> without its <opener>".
+  Control& open_of(OKind kind, const std::string& label, std::string_view what,
+                   std::string_view opener, std::size_t at) {
+    Control* ctl = find_control(label);
+    if (ctl == nullptr || ctl->kind != kind) {
+      fail(at, fmt::format("o{} {} without its {}", show_label(label), what, opener));
+    }
+    return *ctl;
+  }
+
   Control* find_control(const std::string& label) {
     auto& cs = frames_.back().controls;
     for (auto it = cs.rbegin(); it != cs.rend(); ++it) {
@@ -3235,7 +3209,6 @@ class Interpreter {
   }
 
   void o_word(OKind kind, const std::string& label, std::size_t i, std::size_t at) {
-    auto& controls = frames_.back().controls;
     switch (kind) {
       case OKind::sub: {
         o_end(i);
@@ -3268,12 +3241,8 @@ class Interpreter {
       case OKind::if_: {
         const double c = o_required(i, "if");
         o_end(i);
-        Control ctl;
-        ctl.kind = OKind::if_;
-        ctl.label = label;
-        ctl.taken = c != 0;
-        controls.push_back(ctl);
-        if (!ctl.taken) {
+        open_control(OKind::if_, label, cur_).taken = c != 0;
+        if (c == 0) {
           const std::size_t k = this_oline();
           jump(find_forward(k, label, {OKind::elseif, OKind::else_, OKind::endif},
                             "elseif, else or endif", at),
@@ -3283,11 +3252,8 @@ class Interpreter {
       }
       case OKind::elseif:
       case OKind::else_: {
-        Control* ctl = find_control(label);
-        if (ctl == nullptr || ctl->kind != OKind::if_) {
-          fail(at, fmt::format("o{} {} without its if", show_label(label),
-                               kind == OKind::else_ ? "else" : "elseif"));
-        }
+        Control* ctl =
+            &open_of(OKind::if_, label, kind == OKind::else_ ? "else" : "elseif", "if", at);
         const std::size_t k = this_oline();
         if (ctl->taken) {
           jump(find_forward(k, label, {OKind::endif}, "endif", at), false);
@@ -3311,10 +3277,7 @@ class Interpreter {
       }
       case OKind::endif: {
         o_end(i);
-        Control* ctl = find_control(label);
-        if (ctl == nullptr || ctl->kind != OKind::if_) {
-          fail(at, fmt::format("o{} endif without its if", show_label(label)));
-        }
+        (void)open_of(OKind::if_, label, "endif", "if", at);
         pop_to(label);
         return;
       }
@@ -3337,11 +3300,7 @@ class Interpreter {
                           open->start.offset == line_offset_ && open->start.source == cur_.source;
         if (c != 0) {
           if (!here) {
-            Control ctl;
-            ctl.kind = OKind::while_;
-            ctl.label = label;
-            ctl.start = Cursor{cur_.source, line_offset_, cur_.line_no - 1};
-            controls.push_back(ctl);
+            open_control(OKind::while_, label, {cur_.source, line_offset_, cur_.line_no - 1});
           }
           return;
         }
@@ -3352,32 +3311,20 @@ class Interpreter {
       }
       case OKind::endwhile: {
         o_end(i);
-        Control* ctl = find_control(label);
-        if (ctl == nullptr || ctl->kind != OKind::while_) {
-          fail(at, fmt::format("o{} endwhile without its while", show_label(label)));
-        }
-        cur_ = ctl->start;  // the while line again: its condition decides
+        cur_ =
+            open_of(OKind::while_, label, "endwhile", "while", at).start;  // its condition decides
         return;
       }
       case OKind::do_: {
         o_end(i);
-        Control ctl;
-        ctl.kind = OKind::do_;
-        ctl.label = label;
-        ctl.start = cur_;
-        controls.push_back(ctl);
+        open_control(OKind::do_, label, cur_);
         return;
       }
       case OKind::repeat: {
         const double n = o_required(i, "repeat");
         o_end(i);
         if (n >= 1) {
-          Control ctl;
-          ctl.kind = OKind::repeat;
-          ctl.label = label;
-          ctl.start = cur_;
-          ctl.remaining = std::floor(n);
-          controls.push_back(ctl);
+          open_control(OKind::repeat, label, cur_).remaining = std::floor(n);
           return;
         }
         const std::size_t k = this_oline();
@@ -3386,11 +3333,7 @@ class Interpreter {
       }
       case OKind::endrepeat: {
         o_end(i);
-        Control* ctl = find_control(label);
-        if (ctl == nullptr || ctl->kind != OKind::repeat) {
-          fail(at, fmt::format("o{} endrepeat without its repeat", show_label(label)));
-        }
-        end_repeat_pass(*ctl, label);
+        end_repeat_pass(open_of(OKind::repeat, label, "endrepeat", "repeat", at), label);
         return;
       }
       case OKind::brk:
