@@ -156,6 +156,41 @@ TEST_F(Cli, MalformedGcodeNamesLineAndColumn) {
   EXPECT_NE(r.out.find(f + ":3:8: unexpected character '.'"), std::string::npos) << r.out;
 }
 
+// check-gcode --job takes the machine from the job: its G55 origin, G28 position and tool
+// table; a flag given overrides the job.
+TEST_F(Cli, CheckGcodeTakesTheMachineFromAJob) {
+  const auto ex = test::example("wagih2023/elliptical.toml").string();
+  const auto tbl = (dir_ / "t.tbl").string();
+  write_file_atomic(tbl, "T3 P3 Z40 D8\n");
+  const auto f = (dir_ / "m.ngc").string();
+  // In G55 (origin X100 in machine coordinates), the output frame G54 (origin 0): X5 in G55 is
+  // X105 in G54; a G41 D3 circle of radius 20 run inside with tool 3 (8 mm) has radius 16.
+  write_file_atomic(f,
+                    "G21 G17 G90 G94\nG55 G0 X5 Y-20 Z2\nF300\nG41 D3\nG1 X5 Y0\n"
+                    "G3 X5 Y0 I20 J0\nG40\nG1 X5 Y-20\nG28\nM2\n");
+  const std::string sets =
+      " --set machine.origin_g54=[0,0,0] --set machine.origin_g55=[100,0,0]"
+      " --set machine.g28_position=[0,0,50] --set machine.tool_table=" +
+      tbl;
+  const CliResult r = run_cli("check-gcode " + f + " --json - --job " + ex + sets);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  // The circle's tool centre: x from 105 + 4 to 105 + 36 (16 mm about (125, 0)); G28 ends at
+  // the machine's 0, 0, 50 (1e-9 mm: sums of the words).
+  EXPECT_NEAR(j["bbox_max_mm"][0].get<double>(), 141.0, 1e-9);
+  EXPECT_NEAR(j["bbox_max_mm"][2].get<double>(), 50.0, 1e-9);
+  EXPECT_NEAR(j["bbox_min_mm"][0].get<double>(), 0.0, 1e-9);
+  // The flag over the job: G55's origin given on the command line.
+  const CliResult o =
+      run_cli("check-gcode " + f + " --json - --job " + ex + sets + " --offset G55=200,0,0");
+  ASSERT_EQ(o.code, 0) << o.out;
+  EXPECT_NEAR(nlohmann::json::parse(o.out)["bbox_max_mm"][0].get<double>(), 241.0, 1e-9);
+  // --set without --job is an error that says so.
+  const CliResult e = run_cli("check-gcode " + f + " --set machine.dialect=fanuc");
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.out.find("--set needs --job"), std::string::npos) << e.out;
+}
+
 TEST_F(Cli, PathCsvHasToothTracks) {
   const auto ex = test::example("wagih2023/trochoidal.toml").string();
   const auto csv = (dir_ / "p.csv").string();

@@ -198,6 +198,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       std::vector<std::string> offsets, includes;
       std::vector<double> g28, g30;
       bool trace = false;
+      JobArgs job;
     };
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand(
@@ -246,14 +247,42 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                   "print every move as the interpreter resolved it (one line each: kind, end "
                   "X Y Z mm, arc centre and turn, feed mm/min, plane, file:line)");
     cmd->add_option("--json", a->json, "write the report as JSON (- for stdout)");
-    cmd->final_callback([a, &exit_code] {
+    cmd->add_option("--job", a->job.file,
+                    "read the machine from this job's [machine] (dialect, work offset and "
+                    "origins, G28/G30 positions, tool table, rapid rate, acceleration); the "
+                    "flags above override it")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--set", a->job.sets, "override a key of --job's job: section.key=value")
+        ->take_all();
+    cmd->final_callback([a, cmd, &exit_code] {
       check_outputs({&a->json}, {&a->file});
+      if (!a->job.sets.empty() && a->job.file.empty()) {
+        throw InputError("check-gcode: --set needs --job (the job whose keys it overrides)");
+      }
       GcodeReadOptions ro = a->read;
       ro.rapid_rate_mm_per_min = a->machine.rapid_rate_mm_per_min;
+      ro.work_system = work_system_number(a->work_system);
+      if (!a->job.file.empty()) {
+        // The job's machine first; each flag given on the command line over it.
+        const Job job = a->job.load();
+        GcodeReadOptions from_job = gcode_options(job.machine).read;
+        from_job.include_dirs = ro.include_dirs;
+        from_job.peck_clearance_mm = ro.peck_clearance_mm;
+        from_job.max_blocks = ro.max_blocks;
+        if (cmd->count("--rapid-rate") > 0) {
+          from_job.rapid_rate_mm_per_min = ro.rapid_rate_mm_per_min;
+        } else {
+          a->machine.rapid_rate_mm_per_min = job.machine.rapid_rate_mm_per_min;
+        }
+        if (cmd->count("--max-acceleration") == 0) {
+          a->machine.max_acceleration_mm_per_s2 = job.machine.max_acceleration_mm_per_s2;
+        }
+        if (cmd->count("--work-system") > 0) from_job.work_system = ro.work_system;
+        ro = from_job;
+      }
       if (!a->dialect.empty()) ro.dialect = parse_dialect(a->dialect);
       for (const auto& d : a->includes) ro.include_dirs.emplace_back(d);
       if (!a->tool_table.empty()) ro.tool_table = a->tool_table;
-      ro.work_system = work_system_number(a->work_system);
       for (const std::string& o : a->offsets) {
         const auto [n, v] = parse_offset(o);
         ro.work_offsets_mm[static_cast<std::size_t>(n - 1)] = v;
