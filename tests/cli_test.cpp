@@ -27,6 +27,7 @@
 #include "trochomill/signal.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/surface.hpp"
+#include "trochomill/units.hpp"
 
 extern char** environ;
 
@@ -87,8 +88,8 @@ TEST_F(Cli, PlacedProgramAnalysesLikeThePlainOneAndHeaderMismatchesWarn) {
   const auto ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
   // A quarter turn and a move on the 1e-4 mm grid commute with the program's rounding: the
   // turned-back program is the plain one to the reader's arithmetic (1e-9 relative).
-  for (const char* k : {"mrr_mm3_per_min", "h_max_mm", "engagement_angle_max_deg",
-                        "machining_time_s", "waviness_left_mm"}) {
+  for (const char* k : {"cycle_mrr_mm3_per_min", "h_max_mm", "cycle_h_max_mm",
+                        "engagement_angle_max_deg", "machining_time_s", "waviness_left_mm"}) {
     ASSERT_TRUE(ja.contains(k)) << k;
     EXPECT_NEAR(jb[k].get<double>(), ja[k].get<double>(), 1e-9 * std::abs(ja[k].get<double>()))
         << k;
@@ -104,6 +105,45 @@ TEST_F(Cli, PlacedProgramAnalysesLikeThePlainOneAndHeaderMismatchesWarn) {
   const CliResult d = run_cli("analyze " + ex + " --gcode " + plain +
                               " --set cutting.feed_rate=900 --json " + (dir_ / "d.json").string());
   EXPECT_NE(d.out.find("cutting.feed_rate = 600.0, the job has 900"), std::string::npos) << d.out;
+}
+
+// A program without a steady cycle (a full slot, then a 1 mm side pass) is summarised by the
+// whole program: h_max is the slot's full chip f_z (R >= W/2 and the tool fully engaged: the
+// chip is f_z at the slot's centre line), the cycle figures are null, the text says so.
+TEST_F(Cli, AnalyzeSummarisesAProgramWithoutACycleByTheWholeProgram) {
+  const auto ex = test::example("wagih2023/elliptical.toml").string();
+  const auto f = (dir_ / "slot_then_side.ngc").string();
+  // Slot frame: along +Y, x = 0 its centre line; the job's 10 mm tool, 4 teeth, 600 mm/min at
+  // 2000 rpm (f_z = 0.075 mm) in its 20 x 20 mm slot, 6 mm deep: a full pass down the middle
+  // (10 mm wide), then one 1 mm to the side.
+  write_file_atomic(f,
+                    "G21 G17 G90 G94\nG0 X0 Y-6 Z5\nG1 Z-6 F600\nG1 Y26\nG0 Z5\nG0 X1 Y-6\n"
+                    "G1 Z-6\nG1 Y26\nG0 Z5\nM2\n");
+  const CliResult r = run_cli("analyze " + ex + " --gcode " + f + " --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["periodic"].get<bool>());
+  // The full slot's chip: f_z where the tooth crosses the feed direction (within the kernel's
+  // sampling, 1e-9 relative: the chip of a circle translated by f_z at its apex is f_z).
+  EXPECT_NEAR(j["h_max_mm"].get<double>(), 0.075, 0.075 * 1e-6);
+  // Full engagement: the half circle ahead and the two slivers the last tooth pass (f_z back)
+  // left, 180 + 2 asin(f_z / 2R) degrees (1e-9 deg: exact arcs).
+  EXPECT_NEAR(j["engagement_angle_max_deg"].get<double>(),
+              180.0 + 2 * std::asin(0.075 / 10.0) * 180.0 / kPi, 1e-9);
+  // Removed: (10 + 1) mm x 20 mm x 6 mm. The swept-rate integral over tooth-pass samples
+  // (rectangle rule, the entry and exit arcs included) is within 1e-3 of it.
+  EXPECT_NEAR(j["removed_volume_mm3"].get<double>(), 1320.0, 1320.0 * 1e-3);
+  EXPECT_NEAR(j["mrr_total_mm3_per_min"].get<double>(),
+              j["removed_volume_mm3"].get<double>() / j["machining_time_s"].get<double>() * 60.0,
+              1e-9);
+  for (const char* key : {"cycle_time_s", "cycle_h_max_mm", "cycle_mrr_mm3_per_min",
+                          "waviness_left_mm", "performance_index", "cycle_h_max_per_tooth_mm"}) {
+    EXPECT_TRUE(j[key].is_null()) << key;
+  }
+  const CliResult t = run_cli("analyze " + ex + " --gcode " + f);
+  ASSERT_EQ(t.code, 0) << t.out;
+  EXPECT_NE(t.out.find("h_max                0.07500 mm"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find("steady cycle         none"), std::string::npos) << t.out;
 }
 
 TEST_F(Cli, PlanWritesGcodeThatCheckGcodeReads) {
@@ -345,18 +385,22 @@ TEST_F(Cli, AnalyzeJsonAndCsv) {
   const CliResult r = run_cli("analyze " + ex + " --json - --csv " + csv);
   ASSERT_EQ(r.code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
-  for (const char* key : {"path_length_mm", "path_length_per_cycle_mm", "cycle_time_s",
-                          "cutting_time_s", "cooling_time_s", "machining_time_s", "mrr_mm3_per_min",
-                          "mrr_total_mm3_per_min", "feed_per_tooth_mm", "h_max_mm", "t_h_max_s",
-                          "engagement_angle_max_deg", "waviness_left_mm", "waviness_right_mm",
-                          "waviness_left_tooth_mm", "waviness_right_tooth_mm", "h_max_slot_mm"}) {
+  for (const char* key :
+       {"path_length_mm", "machining_time_s", "mrr_total_mm3_per_min", "feed_per_tooth_mm",
+        "h_max_mm", "t_h_max_s", "engagement_angle_max_deg", "cycle_path_length_mm", "cycle_time_s",
+        "cycle_cutting_time_s", "cycle_cooling_time_s", "cycle_mrr_mm3_per_min", "cycle_h_max_mm",
+        "cycle_t_h_max_s", "cycle_engagement_angle_max_deg", "waviness_left_mm",
+        "waviness_right_mm", "waviness_left_tooth_mm", "waviness_right_tooth_mm"}) {
     ASSERT_TRUE(j.contains(key)) << key;
     EXPECT_TRUE(j[key].is_number()) << key;
   }
+  EXPECT_TRUE(j["periodic"].get<bool>());
+  // The program's largest chip is at least the cycle's (it includes the cycle).
+  EXPECT_GE(j["h_max_mm"].get<double>(), j["cycle_h_max_mm"].get<double>());
   // Cycle time = cycle length / feed (600 mm/min); MRR = W s a_p / T_c.
-  EXPECT_NEAR(j["cycle_time_s"].get<double>(), j["path_length_per_cycle_mm"].get<double>() / 10.0,
+  EXPECT_NEAR(j["cycle_time_s"].get<double>(), j["cycle_path_length_mm"].get<double>() / 10.0,
               1e-9);
-  EXPECT_NEAR(j["mrr_mm3_per_min"].get<double>(),
+  EXPECT_NEAR(j["cycle_mrr_mm3_per_min"].get<double>(),
               20.0 * 1.0 * 6.0 / j["cycle_time_s"].get<double>() * 60.0, 1e-6);
   EXPECT_TRUE(j["performance_index"].is_null());
   std::ifstream in(csv);
@@ -411,8 +455,8 @@ TEST_F(Cli, CompareGrid) {
   EXPECT_EQ(j["points"][1]["set"]["path.aspect_ratio"], "0.8");
   EXPECT_EQ(j["points"][1]["set"]["path.step"], "1.0");
   // A longer cycle (r_e 1.2) removes less per minute at the same step.
-  EXPECT_GT(j["points"][0]["metrics"]["mrr_mm3_per_min"].get<double>(),
-            j["points"][2]["metrics"]["mrr_mm3_per_min"].get<double>());
+  EXPECT_GT(j["points"][0]["metrics"]["cycle_mrr_mm3_per_min"].get<double>(),
+            j["points"][2]["metrics"]["cycle_mrr_mm3_per_min"].get<double>());
   std::ifstream in(csv);
   std::string line;
   std::size_t rows = 0;
@@ -1071,7 +1115,7 @@ TEST_F(Cli, ForcesCalibrateAndMaterials) {
                               "measured.roughness_ra=0.8 --json -");
   ASSERT_EQ(a.code, 0) << a.out;
   const auto aj = nlohmann::json::parse(a.out);
-  ASSERT_TRUE(aj["force_max_predicted_n"].is_number()) << a.out;
+  ASSERT_TRUE(aj["cycle_force_max_predicted_n"].is_number()) << a.out;
   ASSERT_TRUE(aj["performance_index"].is_number()) << a.out;
   EXPECT_NE(aj["performance_index_note"].get<std::string>().find("predicted"), std::string::npos);
 }

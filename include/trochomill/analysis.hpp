@@ -30,7 +30,10 @@ struct ProcessMetrics {
   double machining_time_s = 0;        ///< at programmed feeds and rapid rate (s)
   double machining_time_accel_s = 0;  ///< with [machine] max_acceleration (s)
   double slot_volume_mm3 = 0;         ///< W L depth (mm^3)
-  double mrr_total_mm3_per_min = 0;   ///< slot volume / machining time (mm^3/min)
+  /// Volume the program removes from the slot's stock: the swept plan-view area times the
+  /// depth cut, integrated over the samples (mm^3).
+  double removed_volume_mm3 = 0;
+  double mrr_total_mm3_per_min = 0;  ///< removed volume / machining time (mm^3/min)
   double feed_per_tooth_mm = 0;
   double h_max_slot_mm = 0;                  ///< largest local chip over the program (mm)
   double t_h_max_slot_s = 0;                 ///< when it occurs (s from program start)

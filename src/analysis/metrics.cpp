@@ -213,7 +213,13 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   m.machining_time_s = path.duration_s();
   m.machining_time_accel_s = estimate_time_s(path, job.machine);
   m.slot_volume_mm3 = W * job.slot.length_mm * depth;
-  m.mrr_total_mm3_per_min = m.slot_volume_mm3 / m.machining_time_s * 60.0;
+  // What the program removes: the plan-view area the tool sweeps into stock times the depth
+  // it cuts at, sample by sample (a program need not clear the slot, or may cut it twice).
+  for (std::size_t i = 0; i < n; ++i) {
+    m.removed_volume_mm3 +=
+        std::clamp(-s.z_mm[i], 0.0, depth) * e.swept_rate_mm2_per_s[i] * dt_sample;
+  }
+  m.mrr_total_mm3_per_min = m.removed_volume_mm3 / m.machining_time_s * 60.0;
   m.feed_per_tooth_mm = job.cutting.feed_per_tooth_mm;
   for (std::size_t i = 0; i < n; ++i) {
     // A tool descending into stock no earlier position has touched (a helix, ramp or plunge

@@ -61,7 +61,8 @@ JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double
 }
 
 void fill_predicted_force(const Job& job, const ToolPath& path, ProcessMetrics& m) {
-  if (!job.material.model) return;
+  // Over the steady cycle: a program without one has no figure to report (analysis.hpp).
+  if (!job.material.model || !m.periodic) return;
   // analyze's series is the fast source's own engagement when it samples once per tooth pass.
   const EngagementSeries* eng =
       m.series.steps_per_tooth == 1 && !m.series.arcs.empty() ? &m.series : nullptr;

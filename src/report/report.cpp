@@ -15,10 +15,12 @@
 namespace trochomill {
 namespace {
 
-// The scalar metrics every output shares: JSON key (with unit), getter.
+// The scalar metrics every output shares: JSON key (with unit), getter, and whether it
+// describes the steady cycle (null, NaN in tables, for a program without one).
 struct Scalar {
   const char* key;
   std::function<double(const ProcessMetrics&)> get;
+  bool cycle = false;
 };
 
 // The walls' texture keys (left and right) and how to read one from a ProfileTexture.
@@ -37,56 +39,66 @@ const TextureKey kTextureKeys[] = {
 
 const std::vector<Scalar>& scalars() {
   static const std::vector<Scalar> s = [] {
+    // The whole program's figures first, then the steady cycle's (cycle_*), then the walls
+    // (the steady state's, so null without a cycle too).
     std::vector<Scalar> v = {
         {"path_length_mm", [](const ProcessMetrics& m) { return m.path_length_mm; }},
         {"feed_length_mm", [](const ProcessMetrics& m) { return m.feed_length_mm; }},
-        {"path_length_per_cycle_mm",
-         [](const ProcessMetrics& m) { return m.path_length_per_cycle_mm; }},
-        {"cycle_time_s", [](const ProcessMetrics& m) { return m.cycle_time_s; }},
-        {"cutting_time_s", [](const ProcessMetrics& m) { return m.cutting_time_s; }},
-        {"cooling_time_s", [](const ProcessMetrics& m) { return m.cooling_time_s; }},
         {"machining_time_s", [](const ProcessMetrics& m) { return m.machining_time_s; }},
         {"machining_time_with_acceleration_s",
          [](const ProcessMetrics& m) { return m.machining_time_accel_s; }},
-        {"mrr_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_mm3_per_min; }},
-        {"mrr_swept_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_swept_mm3_per_min; }},
-        {"mrr_total_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_total_mm3_per_min; }},
-        {"feed_per_tooth_mm", [](const ProcessMetrics& m) { return m.feed_per_tooth_mm; }},
-        {"h_max_mm", [](const ProcessMetrics& m) { return m.h_max_mm; }},
-        {"t_h_max_s", [](const ProcessMetrics& m) { return m.t_h_max_s; }},
-        {"h_max_slot_mm", [](const ProcessMetrics& m) { return m.h_max_slot_mm; }},
-        {"t_h_max_slot_s", [](const ProcessMetrics& m) { return m.t_h_max_slot_s; }},
-        {"h_max_tooth_mm", [](const ProcessMetrics& m) { return m.h_max_tooth_mm; }},
-        {"chip_translation_error_mm",
-         [](const ProcessMetrics& m) { return m.chip_translation_error_mm; }},
-        {"engagement_angle_max_deg",
-         [](const ProcessMetrics& m) { return m.engagement_angle_max_deg; }},
-        {"engagement_angle_max_slot_deg",
-         [](const ProcessMetrics& m) { return m.engagement_angle_max_slot_deg; }},
-        {"waviness_left_mm", [](const ProcessMetrics& m) { return m.walls_path.left.waviness_mm; }},
-        {"waviness_right_mm",
-         [](const ProcessMetrics& m) { return m.walls_path.right.waviness_mm; }},
-        {"waviness_left_tooth_mm",
-         [](const ProcessMetrics& m) { return m.walls_tooth.left.waviness_mm; }},
-        {"waviness_right_tooth_mm",
-         [](const ProcessMetrics& m) { return m.walls_tooth.right.waviness_mm; }},
-        {"axial_depth_mm", [](const ProcessMetrics& m) { return m.axial_depth_mm; }},
-        {"cycle_start_s", [](const ProcessMetrics& m) { return m.cycle_start_s; }},
         {"cutting_time_total_s", [](const ProcessMetrics& m) { return m.cutting_time_total_s; }},
         {"slot_volume_mm3", [](const ProcessMetrics& m) { return m.slot_volume_mm3; }},
-        {"force_max_predicted_n",
-         [](const ProcessMetrics& m) { return m.force_max_predicted_n.value_or(std::nan("")); }},
+        {"removed_volume_mm3", [](const ProcessMetrics& m) { return m.removed_volume_mm3; }},
+        {"mrr_total_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_total_mm3_per_min; }},
+        {"feed_per_tooth_mm", [](const ProcessMetrics& m) { return m.feed_per_tooth_mm; }},
+        {"h_max_mm", [](const ProcessMetrics& m) { return m.h_max_slot_mm; }},
+        {"t_h_max_s", [](const ProcessMetrics& m) { return m.t_h_max_slot_s; }},
+        {"engagement_angle_max_deg",
+         [](const ProcessMetrics& m) { return m.engagement_angle_max_slot_deg; }},
+        {"cycle_start_s", [](const ProcessMetrics& m) { return m.cycle_start_s; }, true},
+        {"cycle_time_s", [](const ProcessMetrics& m) { return m.cycle_time_s; }, true},
+        {"cycle_path_length_mm", [](const ProcessMetrics& m) { return m.path_length_per_cycle_mm; },
+         true},
+        {"cycle_cutting_time_s", [](const ProcessMetrics& m) { return m.cutting_time_s; }, true},
+        {"cycle_cooling_time_s", [](const ProcessMetrics& m) { return m.cooling_time_s; }, true},
+        {"cycle_mrr_mm3_per_min", [](const ProcessMetrics& m) { return m.mrr_mm3_per_min; }, true},
+        {"cycle_mrr_swept_mm3_per_min",
+         [](const ProcessMetrics& m) { return m.mrr_swept_mm3_per_min; }, true},
+        {"cycle_h_max_mm", [](const ProcessMetrics& m) { return m.h_max_mm; }, true},
+        {"cycle_t_h_max_s", [](const ProcessMetrics& m) { return m.t_h_max_s; }, true},
+        {"cycle_h_max_tooth_mm", [](const ProcessMetrics& m) { return m.h_max_tooth_mm; }, true},
+        {"cycle_chip_translation_error_mm",
+         [](const ProcessMetrics& m) { return m.chip_translation_error_mm; }, true},
+        {"cycle_engagement_angle_max_deg",
+         [](const ProcessMetrics& m) { return m.engagement_angle_max_deg; }, true},
+        {"cycle_axial_depth_mm", [](const ProcessMetrics& m) { return m.axial_depth_mm; }, true},
+        {"cycle_force_max_predicted_n",
+         [](const ProcessMetrics& m) { return m.force_max_predicted_n.value_or(std::nan("")); },
+         true},
+        {"waviness_left_mm", [](const ProcessMetrics& m) { return m.walls_path.left.waviness_mm; },
+         true},
+        {"waviness_right_mm",
+         [](const ProcessMetrics& m) { return m.walls_path.right.waviness_mm; }, true},
+        {"waviness_left_tooth_mm",
+         [](const ProcessMetrics& m) { return m.walls_tooth.left.waviness_mm; }, true},
+        {"waviness_right_tooth_mm",
+         [](const ProcessMetrics& m) { return m.walls_tooth.right.waviness_mm; }, true},
         {"performance_index",
-         [](const ProcessMetrics& m) { return m.performance_index.value_or(std::nan("")); }},
+         [](const ProcessMetrics& m) { return m.performance_index.value_or(std::nan("")); }, true},
     };
     // NaN (JSON null) without a tooth-level wall.
     for (const TextureKey& k : kTextureKeys) {
-      v.push_back({k.left, [get = k.get](const ProcessMetrics& m) {
+      v.push_back({k.left,
+                   [get = k.get](const ProcessMetrics& m) {
                      return m.texture_left ? get(*m.texture_left) : std::nan("");
-                   }});
-      v.push_back({k.right, [get = k.get](const ProcessMetrics& m) {
+                   },
+                   true});
+      v.push_back({k.right,
+                   [get = k.get](const ProcessMetrics& m) {
                      return m.texture_right ? get(*m.texture_right) : std::nan("");
-                   }});
+                   },
+                   true});
     }
     return v;
   }();
@@ -96,12 +108,12 @@ const std::vector<Scalar>& scalars() {
 // The columns of a study's table (a subset, in reading order).
 const std::vector<const char*>& table_columns() {
   static const std::vector<const char*> c = {"cycle_time_s",
-                                             "cooling_time_s",
-                                             "mrr_mm3_per_min",
+                                             "cycle_cooling_time_s",
+                                             "cycle_mrr_mm3_per_min",
                                              "mrr_total_mm3_per_min",
-                                             "h_max_mm",
-                                             "t_h_max_s",
-                                             "engagement_angle_max_deg",
+                                             "cycle_h_max_mm",
+                                             "cycle_t_h_max_s",
+                                             "cycle_engagement_angle_max_deg",
                                              "waviness_left_mm",
                                              "waviness_right_mm",
                                              "waviness_left_tooth_mm",
@@ -112,30 +124,31 @@ const std::vector<const char*>& table_columns() {
 
 double scalar(const ProcessMetrics& m, const std::string& key) {
   for (const auto& s : scalars()) {
-    if (key == s.key) return s.get(m);
+    if (key == s.key) return s.cycle && !m.periodic ? std::nan("") : s.get(m);
   }
   throw Error("unknown metric " + key);
 }
 
 nlohmann::json metrics_object(const ProcessMetrics& m) {
+  // A figure that is not there (no cycle, no tooth-level wall, no force model) is null.
   nlohmann::json j = nlohmann::json::object();
-  for (const auto& s : scalars()) j[s.key] = s.get(m);
+  for (const auto& s : scalars()) {
+    const double v = scalar(m, s.key);
+    j[s.key] = std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v);
+  }
   j["periodic"] = m.periodic;
-  j["h_max_per_tooth_mm"] = m.h_max_per_tooth_mm;
+  j["cycle_h_max_per_tooth_mm"] =
+      m.periodic ? nlohmann::json(m.h_max_per_tooth_mm) : nlohmann::json(nullptr);
   j["bottom_imprint"] = {{"x_mm", m.imprint.x_mm},
                          {"crossings_per_mm", m.imprint.crossings_per_mm}};
-  j["wall_peak_y_mm"] = {{"left", m.walls_path.left.peak_y_mm},
-                         {"right", m.walls_path.right.peak_y_mm}};
-  for (const TextureKey& k : kTextureKeys) {
-    for (const char* key : {k.left, k.right}) {
-      if (std::isnan(j[key].get<double>())) j[key] = nullptr;
-    }
-  }
-  j["performance_index"] =
-      m.performance_index ? nlohmann::json(*m.performance_index) : nlohmann::json(nullptr);
-  j["performance_index_note"] = m.performance_index_note;
-  j["force_max_predicted_n"] =
-      m.force_max_predicted_n ? nlohmann::json(*m.force_max_predicted_n) : nlohmann::json(nullptr);
+  j["wall_peak_y_mm"] = m.periodic ? nlohmann::json{{"left", m.walls_path.left.peak_y_mm},
+                                                    {"right", m.walls_path.right.peak_y_mm}}
+                                   : nlohmann::json(nullptr);
+  j["performance_index_note"] =
+      m.periodic ? m.performance_index_note
+                 : std::string(
+                       "no steady cycle (the program is not periodic): Wagih's index "
+                       "compares one cycle's removal rate");
   j["samples"] = m.series.samples.size();
   return j;
 }
@@ -164,16 +177,26 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
   out +=
       fmt::format("  machining time       {:.3f} s ({:.3f} s with acceleration), path {:.2f} mm\n",
                   m.machining_time_s, m.machining_time_accel_s, m.path_length_mm);
-  out += fmt::format("  {} cycle        {:.4f} s, {:.3f} mm; cutting {:.4f} s, cooling {:.4f} s\n",
-                     m.periodic ? "steady" : "window", m.cycle_time_s, m.path_length_per_cycle_mm,
-                     m.cutting_time_s, m.cooling_time_s);
-  out += fmt::format("  MRR                  {:.1f} mm^3/min steady, {:.1f} mm^3/min whole slot\n",
-                     m.mrr_mm3_per_min, m.mrr_total_mm3_per_min);
+  // The whole program, then the steady cycle where there is one.
+  out +=
+      fmt::format("  MRR                  {:.1f} mm^3/min over the program ({:.1f} mm^3 removed)\n",
+                  m.mrr_total_mm3_per_min, m.removed_volume_mm3);
+  out += fmt::format("  h_max                {:.5f} mm at {:.4f} s (f_z {:.4g} mm)\n",
+                     m.h_max_slot_mm, m.t_h_max_slot_s, m.feed_per_tooth_mm);
+  out += fmt::format("  engagement max       {:.2f} deg\n", m.engagement_angle_max_slot_deg);
+  if (!m.periodic) {
+    out +=
+        "  steady cycle         none (the path does not repeat with the step): whole-program "
+        "figures only\n";
+    return out;
+  }
   out += fmt::format(
-      "  h_max                {:.5f} mm at {:.4f} s after cutting starts (f_z {:.4g} mm; "
-      "{:.5f} mm over the program)\n",
-      m.h_max_mm, m.t_h_max_s, m.feed_per_tooth_mm, m.h_max_slot_mm);
-  out += fmt::format("  engagement max       {:.2f} deg\n", m.engagement_angle_max_deg);
+      "  steady cycle         {:.4f} s, {:.3f} mm; cutting {:.4f} s, cooling {:.4f} s\n",
+      m.cycle_time_s, m.path_length_per_cycle_mm, m.cutting_time_s, m.cooling_time_s);
+  out += fmt::format("    MRR                {:.1f} mm^3/min\n", m.mrr_mm3_per_min);
+  out += fmt::format("    h_max              {:.5f} mm at {:.4f} s after cutting starts\n",
+                     m.h_max_mm, m.t_h_max_s);
+  out += fmt::format("    engagement max     {:.2f} deg\n", m.engagement_angle_max_deg);
   out += fmt::format(
       "  wall waviness        left {:.5f} mm, right {:.5f} mm (path); "
       "left {:.5f} mm, right {:.5f} mm (tooth)\n",
@@ -189,7 +212,7 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
         m.texture_right->cutoff_mm);
   }
   if (m.force_max_predicted_n) {
-    out += fmt::format("  F_R,max predicted    {:.1f} N ([material] {})\n",
+    out += fmt::format("  F_R,max predicted    {:.1f} N over the cycle ([material] {})\n",
                        *m.force_max_predicted_n, to_string(*job.material.model));
   }
   if (m.performance_index)
