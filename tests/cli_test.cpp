@@ -784,6 +784,31 @@ int exit_code_of(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// CPU seconds a process has used (utime + stime of /proc/PID/stat), -1 when it is gone.
+double cpu_seconds(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  if (!std::getline(in, text)) return -1;
+  // The fields after the command name (which may hold blanks) start past its ')'.
+  std::istringstream rest(text.substr(text.rfind(')') + 2));
+  std::string field;
+  double ticks = 0;
+  for (int k = 3; k <= 15 && rest >> field; ++k) {
+    if (k == 14 || k == 15) ticks += std::stod(field);
+  }
+  return ticks / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+// Waits until a process has used `seconds` of CPU (up to 120 s of wall time): on a loaded or
+// sanitizer machine a fixed sleep may end before the run has started.
+void wait_for_cpu(pid_t pid, double seconds) {
+  for (int i = 0; i < 2400; ++i) {
+    const double c = cpu_seconds(pid);
+    if (c < 0 || c >= seconds) return;
+    ::usleep(50000);
+  }
+}
+
 std::size_t files_in(const std::filesystem::path& dir) {
   std::size_t n = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir)) n += e.exists() ? 1 : 0;
@@ -813,16 +838,17 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   EXPECT_EQ(files_in(tmp), 0u) << "the temporary program was left behind";
   EXPECT_NE(read_file(log).find("interrupted"), std::string::npos) << read_file(log);
 
-  // 2. A simulation long enough to be interrupted (about a minute), Ctrl-C after 2 s: the run
-  // stops at the next step and writes what it computed, marked incomplete, exit 130. The
-  // --out folder then holds the whole set of files and no staging folder.
+  // 2. A simulation long enough to be interrupted (about a minute), Ctrl-C once it has used
+  // 2 s of CPU: the run stops at the next step and writes what it computed, marked
+  // incomplete, exit 130. The --out folder then holds the whole set of files and no staging
+  // folder.
   const auto out = dir_ / "sim";
   const std::string json = (dir_ / "s.json").string();
   pid = spawn_cli("simulate " + ex + " --cycles 2:8 --set simulation.resolution=0.02 --json " +
                       json + " --out " + out.string(),
                   log, tmp.string());
   ASSERT_GT(pid, 0);
-  ::sleep(2);
+  wait_for_cpu(pid, 2.0);
   ::kill(pid, SIGINT);
   EXPECT_EQ(exit_code_of(pid), 130) << read_file(log);
   EXPECT_NE(read_file(log).find("interrupted: the outputs were written in full"), std::string::npos)
@@ -842,13 +868,14 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   }
   EXPECT_EQ(files_in(tmp), 0u);
 
-  // 3. analyze of a long program, Ctrl-C after 1 s: exit 130, no output at all.
+  // 3. analyze of a long program (minutes), Ctrl-C once it has used 2 s of CPU (planning
+  // the path takes a fraction of that, under the sanitizers too): exit 130, no output at all.
   const std::string ajson = (dir_ / "a.json").string();
   pid = spawn_cli(
       "analyze " + ex + " --set slot.length=2000 --set analysis.steps_per_tooth=8 --json " + ajson,
       log, tmp.string());
   ASSERT_GT(pid, 0);
-  ::sleep(1);
+  wait_for_cpu(pid, 2.0);
   ::kill(pid, SIGINT);
   EXPECT_EQ(exit_code_of(pid), 130) << read_file(log);
   EXPECT_NE(read_file(log).find("interrupted: nothing was written"), std::string::npos)
@@ -891,7 +918,26 @@ TEST_F(Cli, TextureOfAProfileAJobAndBadInput) {
   const auto aj = nlohmann::json::parse(an.out);
   EXPECT_EQ(tj[0]["ra_mm"].get<double>(), aj["ra_left_mm"].get<double>());
   EXPECT_EQ(tj[1]["rz_mm"].get<double>(), aj["rz_right_mm"].get<double>());
+  // A job's floor runs its simulation window: an ideal flat end mill (no corner radius, no
+  // axial runout) leaves a plane floor, so every height is the plane to rounding ("flat",
+  // Sa below 1e-12 mm); a coarse simulation (0.05 mm dexels, 60 steps a revolution) keeps
+  // the test short. The window is named.
+  const CliResult fl = run_cli("texture " + ex +
+                               " --surface floor --cycles 4:5 --lambda-c 0.5 --set "
+                               "simulation.resolution=0.05 --set simulation.steps_per_rev=60 "
+                               "--json -");
+  ASSERT_EQ(fl.code, 0) << fl.out;
+  const auto fj = nlohmann::json::parse(fl.out)["surfaces"];
+  ASSERT_EQ(fj.size(), 1u);
+  EXPECT_EQ(fj[0]["surface"], "floor");
+  EXPECT_EQ(fj[0]["kind"], "areal");
+  EXPECT_TRUE(fj[0]["sf"]["flat"].get<bool>());
+  EXPECT_LT(fj[0]["sf"]["sa_mm"].get<double>(), 1e-12);
+  EXPECT_NE(fj[0]["description"].get<std::string>().find("simulated, 0.05 mm dexels, t "),
+            std::string::npos)
+      << fj[0]["description"];
   for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {csv + " --cycles 1:2", "choose the simulation window of a job's floor"},
            {csv + " --columns x_mm,height", "no column 'height'"},
            {csv + " --z-unit nm", "--z-unit 'nm': mm or um"},
            {csv + " --surface top", "--surface 'top'"},
@@ -988,8 +1034,9 @@ TEST_F(Cli, TextureOfX3pSurfacesAndProfiles) {
            {x3p + " --memory-limit 0.01", "the memory limit"},
            {px + " --against " + x3p, "--against compares areal surfaces"},
            {x3p + " --against " + (dir_ / "p.csv").string(), "an X3P file or a folder"},
-           {test::example("wagih2023/trochoidal.toml").string() + " --surface floor",
-            "simulate it first"}}) {
+           {test::example("wagih2023/trochoidal.toml").string() +
+                " --surface floor --memory-limit 0.001",
+            "texture: estimated memory"}}) {
     const CliResult b = run_cli("texture " + args);
     EXPECT_EQ(b.code, 2) << args << "\n" << b.out;
     EXPECT_NE(b.out.find(says), std::string::npos) << args << "\n" << b.out;

@@ -27,6 +27,7 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
     int degree = 2;
     bool robust = false;
     std::vector<std::string> sets;
+    WindowArgs window;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -40,7 +41,8 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       ->required();
   cmd->add_option("--surface", a->surface,
                   "left, right, walls (both), floor or all (a folder: walls and floor; a job: "
-                  "walls)")
+                  "its predicted walls, and with floor or an explicit all the floor of a "
+                  "simulation window)")
       ->capture_default_str();
   cmd->add_option("--lambda-c", a->lambda_c_mm,
                   "cut-off wavelength (areal: the L-filter's nesting index), mm (default: "
@@ -72,8 +74,9 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
   cmd->add_option("--z-unit", a->z_unit, "unit of a CSV profile's heights: mm or um")
       ->capture_default_str();
   cmd->add_option("--set", a->sets, "override a job key, section.key=value (job source)");
+  add_window_args(cmd, a->window, "a job's floor: the simulation window's");
   cmd->add_option("--json", a->json, "write the report as JSON (- for stdout)");
-  cmd->final_callback([a, &exit_code] {
+  cmd->final_callback([a, cmd, &exit_code] {
     check_outputs({&a->json}, {&a->source});
     namespace fs = std::filesystem;
     const std::string& sf = a->surface;
@@ -137,6 +140,14 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
     if (want_right) sides.push_back(false);
     std::vector<TextureEntry> entries;
     const std::string ext = lower_extension(a->source);
+    // A job's floor comes from a simulation window (--surface floor, or all given explicitly).
+    const bool job_floor =
+        ext == ".toml" && (sf == "floor" || (sf == "all" && cmd->count("--surface") > 0));
+    if (a->window.given() && !job_floor) {
+      throw InputError(
+          "--cycles, --from and --to choose the simulation window of a job's floor (--surface "
+          "floor or all with a job as SOURCE)");
+    }
     if (fs::is_directory(a->source, ec)) {
       const fs::path walls = fs::path(a->source) / "walls.csv";
       const fs::path floor = fs::path(a->source) / "floor.x3p";
@@ -169,11 +180,9 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
         entries.push_back(areal_entry("surface", m));
       }
     } else if (ext == ".toml") {
-      if (sf == "floor") {
-        throw InputError(
-            "--surface floor of a job: simulate it first (simulate --out DIR), then texture DIR");
-      }
-      if (a->robust || a->lambda_s_mm) {
+      // A job: its predicted walls (the analysis's tooth-level profiles); its floor from a
+      // simulation window.
+      if (!sides.empty() && (a->robust || a->lambda_s_mm)) {
         throw InputError(
             "--robust and --lambda-s filter measured or simulated profiles and surfaces; a "
             "job's predicted walls are one period of an ideal profile");
@@ -182,7 +191,8 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       job.file = a->source;
       job.sets = a->sets;
       const Job j = job.load();
-      const ProcessMetrics m = analyze_process(j, plan_path(j).path);
+      const ToolPath path = plan_path(j).path;
+      const ProcessMetrics m = sides.empty() ? ProcessMetrics{} : analyze_process(j, path);
       for (const bool left : sides) {
         const WallProfile& w = left ? m.walls_tooth.left : m.walls_tooth.right;
         if (w.x_mm.size() < 3) {
@@ -194,6 +204,25 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
             fmt::format("predicted {} wall, tooth level, one step of y repeated ({:g} mm)",
                         left ? "left" : "right", w.y_mm.back() - w.y_mm.front()),
             wall_texture(w, left, a->lambda_c_mm)));
+      }
+      if (job_floor) {
+        const auto [from, to] = a->window.resolve(path);
+        const MemoryEstimate est = estimate_simulation_memory(j, path, from, to);
+        check_memory("texture", est.total(false), a->memory_gb,
+                     fmt::format("shorten the window (--cycles, --from/--to) or coarsen "
+                                 "[simulation] resolution (now {} mm)",
+                                 j.simulation.resolution_mm));
+        const GuardedRun run(true);
+        SimControl control;
+        control.hooks = run.hooks();
+        control.reserve_chip_entries = static_cast<std::size_t>(est.chip_entries);
+        const JobSimulation js = simulate_job(j, path, from, to, control);
+        run.done();
+        run.finish("interrupted: nothing written");
+        HeightMap floor = simulated_floor(j, js);
+        floor.description = fmt::format("{}; simulated, {:g} mm dexels, t {:.4f} to {:.4f} s",
+                                        floor.description, j.simulation.resolution_mm, from, to);
+        entries.push_back(areal_entry("floor", floor));
       }
     } else if (ext == ".csv" || ext == ".txt") {
       double unit = 1.0;

@@ -95,6 +95,10 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 [[nodiscard]] std::string simulation_text(const std::string& job_file, const Job& job,
                                           const JobSimulation& js, double from_s, double to_s,
                                           double wall_s);
+/// The slot's floor a simulation left, as a height map at the dexel spacing: floor_height_map
+/// across the slot less the tool's corner radius and a spacing at each wall, cut below half
+/// the depth. Throws InputError when the window left no floor cut across the slot.
+[[nodiscard]] HeightMap simulated_floor(const Job& job, const JobSimulation& js);
 /// Writes series.csv, chips.h5, walls.csv, floor.csv, surface.stl (grid step `stl_step_mm`,
 /// or default_surface_step_mm) and floor.x3p (the slot's floor as a height map at the dexel
 /// spacing: floor_height_map across the slot less the tool's corner radius and a spacing at

@@ -187,6 +187,12 @@ std::string simulation_text(const std::string& job_file, const Job& job, const J
       r.complete ? "" : " (interrupted: incomplete)");
 }
 
+HeightMap simulated_floor(const Job& job, const JobSimulation& js) {
+  const double d = job.simulation.resolution_mm;
+  const double half = 0.5 * job.slot.width_mm - job.tool.corner_radius_mm - d;
+  return floor_height_map(*js.work, -half, half, -0.5 * job.slot.depth_mm);
+}
+
 std::string write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
                                      const JobSimulation& js, std::optional<double> stl_step_mm,
                                      const RunHooks& hooks) {
@@ -201,14 +207,10 @@ std::string write_simulation_outputs(const std::filesystem::path& dir, const Job
   // The floor as a height map, when the window left one across the slot.
   std::optional<HeightMap> floor;
   std::string floor_note;
-  {
-    const double d = job.simulation.resolution_mm;
-    const double half = 0.5 * job.slot.width_mm - job.tool.corner_radius_mm - d;
-    try {
-      floor = floor_height_map(*js.work, -half, half, -0.5 * job.slot.depth_mm);
-    } catch (const InputError& e) {
-      floor_note = fmt::format("floor.x3p not written: {}", e.what());
-    }
+  try {
+    floor = simulated_floor(job, js);
+  } catch (const InputError& e) {
+    floor_note = fmt::format("floor.x3p not written: {}", e.what());
   }
   std::vector<std::pair<const char*, std::function<void(const fs::path&)>>> outputs{{
       {"series.csv",
