@@ -228,6 +228,15 @@ struct Block {
 
 // The index past a normalised line's block delete '/' and line number "n123" (the statement's
 // start), as every scan of the lines reads it.
+// A cheap filter for the line scans (O-words, N labels, Fanuc program numbers): whether the
+// first character the line normaliser keeps may be one of `letters`. Blanks, carriage returns
+// and block delete are skipped; a comment may come first (then the line is normalised).
+bool may_start_with(std::string_view raw, std::string_view letters) {
+  const std::size_t first = raw.find_first_not_of(" \t\r/");
+  return first != std::string_view::npos &&
+         (raw[first] == '(' || letters.find(raw[first]) != std::string_view::npos);
+}
+
 std::size_t past_line_number(const std::string& t) {
   std::size_t k = 0;
   if (k < t.size() && t[k] == '/') ++k;
@@ -396,6 +405,9 @@ class Interpreter {
       }
       if (fanuc_statement(i)) return;
     } else if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
+      if (line_.comment_column != 0 && line_.comment_column < col_of(i)) {
+        fail(i, "an O-word must start its line (a comment comes before it)");
+      }
       if (o_statement(i)) return;
     }
     if (i >= s.size()) return;  // blank or comment only: (MSG, ...) and the like do not move
@@ -2832,8 +2844,7 @@ class Interpreter {
         if (end == std::string_view::npos) end = src.text.size();
         ++no;
         const std::string_view raw = src.text.substr(off, end - off);
-        const std::size_t first = raw.find_first_not_of(" \t/");
-        if (first != std::string_view::npos && (raw[first] == 'n' || raw[first] == 'N')) {
+        if (may_start_with(raw, "nN")) {
           ngc::normalise(raw, l);
           std::size_t k = l.text.empty() || l.text[0] != '/' ? 0 : 1;
           if (k < l.text.size() && l.text[k] == 'n') {
@@ -2936,11 +2947,7 @@ class Interpreter {
       ++no;
       const std::string_view raw = t.substr(off, end - off);
       off = end == t.size() ? end : end + 1;
-      const std::size_t first = raw.find_first_not_of(" \t");
-      if (first == std::string_view::npos ||
-          (raw[first] != 'o' && raw[first] != 'O' && raw[first] != ':')) {
-        continue;
-      }
+      if (!may_start_with(raw, "oO:")) continue;
       ngc::normalise(raw, l);
       if (l.text.size() < 2) continue;
       long v = 0;
@@ -3093,10 +3100,7 @@ class Interpreter {
       if (end == std::string_view::npos) end = t.size();
       ++no;
       const std::string_view raw = t.substr(off, end - off);
-      // Cheap filter: an 'o' must be among the first characters.
-      const std::size_t first = raw.find_first_not_of(" \t/");
-      if (first != std::string_view::npos &&
-          (raw[first] == 'o' || raw[first] == 'O' || raw[first] == 'n' || raw[first] == 'N')) {
+      if (may_start_with(raw, "oOnN")) {
         ngc::normalise(raw, l);
         const std::string& s = l.text;
         std::size_t i = past_line_number(s);
@@ -3138,6 +3142,13 @@ class Interpreter {
     const auto it =
         std::lower_bound(src.olines.begin(), src.olines.end(), line_offset_,
                          [](const OLine& o, std::size_t off) { return o.offset < off; });
+    if (it == src.olines.end() || it->offset != line_offset_) {
+      // The index reads lines as the interpreter does; a line it missed is a reader bug.
+      throw Error(
+          fmt::format("{}:{}: this O-word line is not in the reader's index (a bug of "
+                      "trochomill's: please report it with the program)",
+                      src.name, cur_.line_no));
+    }
     return static_cast<std::size_t>(it - src.olines.begin());
   }
 
