@@ -298,5 +298,97 @@ TEST(Analysis, ToothLevelWallsOfLongStepsAndLowFeeds) {
   }
 }
 
+// ---- chip-load feed scheduling ----------------------------------------------------------------
+
+// Re-analysed independently (the engagement of the scheduled path as it is, pieces merged):
+// the largest chip of each move. The tolerance is the 3 %: the chip is proportional
+// to the feed only where the engaged arcs stay the same.
+std::vector<double> chips_per_segment(const Job& job, const ToolPath& path) {
+  const EngagementSeries e = compute_engagement(path, job);
+  std::vector<double> h(path.segments().size(), 0.0);
+  const double R = 0.5 * job.tool.diameter_mm;
+  for (std::size_t i = 1; i < e.samples.size(); ++i) {
+    const bool plunging =
+        e.samples.z_mm[i] < e.samples.z_mm[i - 1] && e.h_max_mm[i] >= R * (1 - 1e-12);
+    if (!plunging) h[e.samples.segment[i]] = std::max(h[e.samples.segment[i]], e.h_max_mm[i]);
+  }
+  return h;
+}
+
+// A straight full slot cuts the chip f_z everywhere: scheduled to h_max = f_z its feed stays
+// the job's (1e-6: the chip is the step to rounding).
+TEST(FeedSchedule, AStraightFullSlotKeepsItsFeed) {
+  const Job job = test::straight_job(10.0);
+  const ToolPath path = plan_path(job).path;
+  FeedTargets t;
+  t.min_feed_mm_per_min = 60;
+  t.max_feed_mm_per_min = 1800;
+  const FeedSchedule fs = schedule_feed(job, path, t);
+  ASSERT_FALSE(fs.piece_feed_mm_per_min.empty());
+  std::size_t cutting = 0;
+  for (std::size_t k = 0; k < fs.piece_feed_mm_per_min.size(); ++k) {
+    if (fs.piece_limit[k] != FeedLimit::none) continue;  // air before and after the slot
+    ++cutting;
+    // Pieces in full cut: the chip is the step, so the feed stays 600 mm/min; the entry and
+    // exit pieces (the disc entering and leaving the stock) cut thinner chips and go faster.
+    if (std::abs(fs.piece_h_max_mm[k] - 0.075) < 1e-6) {
+      EXPECT_NEAR(fs.piece_feed_mm_per_min[k], 600.0, 600.0 * 1e-6) << k;
+    }
+  }
+  EXPECT_GT(cutting, 50u);
+  EXPECT_NEAR(fs.h_max_after_mm, 0.075, 0.075 * 1e-6);
+}
+
+// The four Wagih 2023 paths at constant feed cut their largest chip only briefly each cycle:
+// scheduled to h_max = f_z they hold it within 3 % (re-analysed), never exceed it by more,
+// stay within the feed limits, and run faster.
+TEST(FeedSchedule, HoldsTheTargetChipOnTheWagihPaths) {
+  for (const char* type : {"trochoidal", "elliptical", "circular", "linear-elliptical"}) {
+    const Job job = test::wagih_job(type);
+    const ToolPath path = plan_path(job).path;
+    FeedTargets t;
+    t.min_feed_mm_per_min = 60;
+    t.max_feed_mm_per_min = 1800;
+    t.feed_step_percent = 0;  // every piece at its own feed: the check is per piece
+    const FeedSchedule fs = schedule_feed(job, path, t);
+    const std::vector<double> h = chips_per_segment(job, fs.path);
+    const auto& seg = fs.path.segments();
+    std::size_t held = 0, free = 0;
+    for (std::size_t k = 0; k < seg.size(); ++k) {
+      if (seg[k].motion() == Motion::rapid) continue;
+      const double f = seg[k].speed_mm_per_min();
+      EXPECT_GE(f, 60.0 * (1 - 1e-12)) << type << " " << k;
+      EXPECT_LE(f, 1800.0 * (1 + 1e-12)) << type << " " << k;
+      EXPECT_LE(h[k], 0.075 * 1.03) << type << " segment " << k << " at " << f << " mm/min";
+      if (h[k] > 0 && f < 1800.0 * (1 - 1e-9) && f > 60.0 * (1 + 1e-9)) {
+        ++free;
+        held += h[k] >= 0.075 * 0.97 ? 1 : 0;
+      }
+    }
+    // Pieces free of the limits: most hold the target within 3 %; the rest cut less (a piece
+    // whose tooth pass it shares with a faster neighbour is held to that step's chip, and the
+    // last rounds only lower feeds). Measured: 75-84 % within 3 % on the four paths; the
+    // bound is 70 %.
+    EXPECT_GE(static_cast<double>(held), 0.7 * static_cast<double>(free)) << type;
+    EXPECT_LT(fs.time_after_s, 0.7 * fs.time_before_s) << type;
+    EXPECT_NEAR(fs.path.length_mm(), path.length_mm(), 1e-6 * path.length_mm()) << type;
+  }
+}
+
+TEST(FeedSchedule, BadTargetsAreRefused) {
+  const Job job = test::straight_job(10.0);
+  const ToolPath path = plan_path(job).path;
+  FeedTargets t;
+  t.min_feed_mm_per_min = 60;
+  t.max_feed_mm_per_min = 1800;
+  t.h_max_mm = -1;
+  EXPECT_THROW((void)schedule_feed(job, path, t), InputError);
+  t.h_max_mm = 6;  // beyond the tool radius
+  EXPECT_THROW((void)schedule_feed(job, path, t), InputError);
+  t.h_max_mm.reset();
+  t.max_feed_mm_per_min = 10;  // below the min
+  EXPECT_THROW((void)schedule_feed(job, path, t), InputError);
+}
+
 }  // namespace
 }  // namespace trochomill

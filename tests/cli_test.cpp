@@ -146,6 +146,28 @@ TEST_F(Cli, AnalyzeSummarisesAProgramWithoutACycleByTheWholeProgram) {
   EXPECT_NE(t.out.find("steady cycle         none"), std::string::npos) << t.out;
 }
 
+// plan --feed-schedule: the same path (length to the writer's rounding) at varying feeds,
+// faster than at the constant one, read back by check-gcode; its options need the flag.
+TEST_F(Cli, PlanWithAFeedScheduleWritesTheSamePathFaster) {
+  const auto ex = test::example("wagih2023/trochoidal.toml").string();
+  const auto plain = (dir_ / "plain.ngc").string(), fast = (dir_ / "fast.ngc").string();
+  ASSERT_EQ(run_cli("plan " + ex + " -o " + plain).code, 0);
+  const CliResult r = run_cli("plan " + ex + " -o " + fast + " --feed-schedule --max-feed 1500");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("feed schedule: h_max 0.07500 ->"), std::string::npos) << r.out;
+  const auto a = nlohmann::json::parse(run_cli("check-gcode " + plain + " --json -").out);
+  const auto b = nlohmann::json::parse(run_cli("check-gcode " + fast + " --json -").out);
+  // The writer rounds to 1e-4 mm (4 decimals): lengths agree within 1e-4 relative.
+  EXPECT_NEAR(b["path_length_mm"].get<double>(), a["path_length_mm"].get<double>(),
+              1e-4 * a["path_length_mm"].get<double>());
+  EXPECT_LT(b["time_s"].get<double>(), 0.7 * a["time_s"].get<double>());
+  EXPECT_LE(b["feed_max_mm_per_min"].get<double>(), 1500.0);
+  EXPECT_GE(b["feed_min_mm_per_min"].get<double>(), 60.0);
+  const CliResult e = run_cli("plan " + ex + " -o " + fast + " --max-feed 900");
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.out.find("--max-feed is an option of --feed-schedule"), std::string::npos) << e.out;
+}
+
 TEST_F(Cli, PlanWritesGcodeThatCheckGcodeReads) {
   const auto ex = test::example("wagih2023/elliptical.toml").string();
   const auto out = (dir_ / "e.ngc").string();

@@ -10,6 +10,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "trochomill/analysis.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/report.hpp"
@@ -90,6 +91,9 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       JobArgs job;
       std::string out;
       std::optional<double> memory_gb;
+      bool schedule = false;
+      FeedTargets targets;
+      std::optional<double> min_feed, max_feed;
     };
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand("plan", "write the slot program of a job as G-code");
@@ -102,16 +106,65 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                   "max deviation of fitted arcs/chords, mm");
     add_key_flag(cmd, a->job, "--chords", "machine.arc_output", "chords",
                  "write curves as G1 chords instead of biarcs");
-    cmd->final_callback([a, &exit_code] {
+    cmd->add_flag("--feed-schedule", a->schedule,
+                  "variable feed: each piece of the path fed so that its largest chip is the "
+                  "target (--h-max), within --min-feed and --max-feed");
+    cmd->add_option("--h-max", a->targets.h_max_mm,
+                    "target largest chip, mm (default: the job's feed per tooth)")
+        ->check(finite_above(0, 100));
+    cmd->add_option("--min-feed", a->min_feed,
+                    "slowest scheduled feed, mm/min (default: a tenth of the job's feed)")
+        ->check(finite_above(0, 1e6));
+    cmd->add_option("--max-feed", a->max_feed,
+                    "fastest scheduled feed, mm/min (default: three times the job's feed)")
+        ->check(finite_above(0, 1e6));
+    cmd->add_option("--air-feed", a->targets.air_feed_mm_per_min,
+                    "feed where the tool cuts nothing, mm/min (default: the max feed)")
+        ->check(finite_in(0, 1e6));
+    cmd->add_option("--feed-step", a->targets.feed_step_percent,
+                    "neighbouring pieces within this percent share the slower feed")
+        ->capture_default_str()
+        ->check(finite_in(0, 100));
+    cmd->add_option("--piece", a->targets.piece_mm, "the longest piece fed alone, mm")
+        ->capture_default_str()
+        ->check(finite_above(0, 1e3));
+    cmd->final_callback([a, cmd, &exit_code] {
       check_outputs({&a->out}, {&a->job.file});
       const Job job = a->job.load();
       check_memory("plan", estimate_plan_memory(job), a->memory_gb,
                    fmt::format("a {:g} mm slot at a {:g} mm step: raise [path] step or plan a "
                                "shorter slot",
                                job.slot.length_mm, job.path.step_mm));
-      const PlannedPath planned = plan_path(job);
+      for (const char* o :
+           {"--h-max", "--min-feed", "--max-feed", "--air-feed", "--feed-step", "--piece"}) {
+        if (cmd->count(o) > 0 && !a->schedule) {
+          throw InputError(fmt::format("{} is an option of --feed-schedule", o));
+        }
+      }
+      PlannedPath planned = plan_path(job);
+      std::optional<FeedSchedule> fs;
+      if (a->schedule) {
+        const double f = feed_rate_mm_per_min(job);
+        FeedTargets t = a->targets;
+        t.min_feed_mm_per_min = a->min_feed.value_or(0.1 * f);
+        t.max_feed_mm_per_min = a->max_feed.value_or(3.0 * f);
+        const GuardedRun run(true);
+        fs = schedule_feed(job, planned.path, t, run.hooks());
+        run.done();
+        run.finish("interrupted: nothing was written");
+        planned.path = fs->path;
+      }
       const std::string code = write_gcode(job, planned.path, gcode_options(job.machine).write);
       emit(a->out, code);
+      if (fs) {
+        fmt::print(stderr,
+                   "feed schedule: h_max {:.5f} -> {:.5f} mm (target {:g}), time {:.3f} -> "
+                   "{:.3f} s ({:+.1f} %), {} pieces\n",
+                   fs->h_max_before_mm, fs->h_max_after_mm,
+                   a->targets.h_max_mm.value_or(job.cutting.feed_per_tooth_mm), fs->time_before_s,
+                   fs->time_after_s, 100.0 * (fs->time_after_s / fs->time_before_s - 1.0),
+                   fs->pieces);
+      }
       if (a->out != "-") {
         fmt::print(
             "{}: {} {} cycles, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "

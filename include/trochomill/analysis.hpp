@@ -93,6 +93,42 @@ struct ProcessMetrics {
 void set_performance_index(const Job& job, ProcessMetrics& m,
                            std::optional<double> predicted_force_max_n = std::nullopt);
 
+/// What a feed schedule holds along a path (schedule_feed).
+struct FeedTargets {
+  /// The largest local chip (mm) each piece of the path is fed to; default: the job's f_z.
+  std::optional<double> h_max_mm;
+  double min_feed_mm_per_min = 0;  ///< the slowest feed allowed (mm/min, > 0)
+  double max_feed_mm_per_min = 0;  ///< the fastest feed allowed (mm/min, >= min)
+  double air_feed_mm_per_min = 0;  ///< feed where the tool cuts nothing (0: the max feed)
+  double piece_mm = 0.5;           ///< the path is fed in pieces at most this long (mm)
+  /// Neighbouring pieces of one move whose feeds differ by less than this (percent) share
+  /// the slower feed, so the program changes F fewer times.
+  double feed_step_percent = 5;
+  int iterations = 12;  ///< rounds of engagement and rescaling (each a full engagement run)
+};
+/// What limits a piece's feed.
+enum class FeedLimit { none, min_feed, max_feed, air };
+/// A path with scheduled feeds and how it got them.
+struct FeedSchedule {
+  ToolPath path;               ///< the same geometry in pieces, each at its feed
+  double time_before_s = 0;    ///< the input path's programmed time (s)
+  double time_after_s = 0;     ///< the scheduled path's (s)
+  double h_max_before_mm = 0;  ///< the largest chip at the input's feeds (mm)
+  double h_max_after_mm = 0;   ///< at the scheduled feeds, before pieces are merged (mm)
+  std::size_t pieces = 0;      ///< segments of the scheduled path
+  /// Per feed piece (before merging): its largest chip (mm), feed (mm/min) and limit.
+  std::vector<double> piece_h_max_mm, piece_feed_mm_per_min;
+  std::vector<FeedLimit> piece_limit;
+};
+/// Schedules the feed along `path` so that the largest local chip of every piece is the
+/// target (Wagih 2023's h_max from the exact engagement, docs/models.md section 15): the
+/// chip grows in proportion to the feed per tooth where the engaged arcs stay the same, so
+/// each piece's feed is scaled by target / h_max, bounded by the limits, and the engagement
+/// evaluated again on the new path, `iterations` times. Rapids keep their rate. Throws
+/// InputError for bad targets; `hooks.cancel` stops it with Interrupted.
+[[nodiscard]] FeedSchedule schedule_feed(const Job& job, const ToolPath& path,
+                                         const FeedTargets& targets, const RunHooks& hooks = {});
+
 /// A key varied by a parameter study, with its values (TOML, as typed).
 struct Vary {
   std::string key;                  ///< "section.key"

@@ -1,0 +1,215 @@
+// Chip-load feed scheduling of a path (analysis.hpp: schedule_feed). The engagement kernel
+// gives the local maximum chip h_max at every tooth pass; the chip a tooth cuts grows in
+// proportion to the feed per tooth where the engaged arcs stay the same (the removed region
+// is the path's, whatever its feed; only the last tooth pass's step changes), so the feed of
+// each piece of the path is scaled by target / h_max and the engagement evaluated again on
+// the new path, until every piece holds its target or a limit.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "trochomill/analysis.hpp"
+#include "trochomill/engagement.hpp"
+#include "trochomill/error.hpp"
+
+namespace trochomill {
+namespace {
+
+// A piece of a segment: the sub-range [a, b] of its arc length (mm) and its feed (mm/min).
+struct Piece {
+  std::size_t segment = 0;
+  double a_mm = 0, b_mm = 0;
+  double feed = 0;
+  FeedLimit limit = FeedLimit::none;
+};
+
+// The segment's part between arc lengths a and b at the given speed.
+Segment part(const Segment& seg, double a, double b, double speed) {
+  if (seg.kind() == Segment::Kind::line) {
+    return Segment::line(seg.point_at(a), seg.point_at(b), seg.motion(), speed);
+  }
+  return Segment::curve(seg.center(), seg.axis_a(), seg.axis_b(), seg.drift(), seg.u_at_length(a),
+                        seg.u_at_length(b), seg.motion(), speed);
+}
+
+ToolPath build(const ToolPath& path, const std::vector<Piece>& pieces) {
+  ToolPath out;
+  out.reserve(pieces.size());
+  const auto& segs = path.segments();
+  const auto& cycles = path.cycles();
+  std::size_t next_mark = 0;
+  for (const Piece& p : pieces) {
+    // Cycle marks stay at the start of the segment they marked.
+    while (next_mark < cycles.size() && cycles[next_mark].first_segment == p.segment &&
+           p.a_mm == 0) {
+      out.mark_cycle();
+      ++next_mark;
+    }
+    const Segment& seg = segs[p.segment];
+    if (p.a_mm == 0 && p.b_mm == seg.length_mm()) {
+      Segment whole = seg;
+      out.append(seg.motion() == Motion::rapid ? std::move(whole)
+                                               : part(seg, 0, seg.length_mm(), p.feed));
+    } else {
+      out.append(part(seg, p.a_mm, p.b_mm, p.feed));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTargets& targets,
+                           const RunHooks& hooks) {
+  const double f0 = job.cutting.feed_per_tooth_mm;
+  const double h_target = targets.h_max_mm.value_or(f0);
+  if (!(h_target > 0) || !std::isfinite(h_target)) {
+    throw InputError(
+        fmt::format("feed schedule: the target h_max must be > 0 mm, got {}", h_target));
+  }
+  if (h_target >= 0.5 * job.tool.diameter_mm) {
+    throw InputError(
+        fmt::format("feed schedule: the target h_max {:g} mm is not below the tool radius {:g} mm",
+                    h_target, 0.5 * job.tool.diameter_mm));
+  }
+  const double lo = targets.min_feed_mm_per_min, hi = targets.max_feed_mm_per_min;
+  if (!(lo > 0) || !(hi >= lo) || !std::isfinite(hi)) {
+    throw InputError(fmt::format(
+        "feed schedule: the feed limits must be 0 < min <= max (mm/min), got {} and {}", lo, hi));
+  }
+  const double air = targets.air_feed_mm_per_min > 0 ? targets.air_feed_mm_per_min : hi;
+  if (!(targets.piece_mm > 0) || !std::isfinite(targets.piece_mm)) {
+    throw InputError("feed schedule: the piece length must be > 0 mm");
+  }
+  if (!(targets.feed_step_percent >= 0) || !(targets.feed_step_percent <= 100)) {
+    throw InputError("feed schedule: the feed step must be 0 .. 100 %");
+  }
+
+  // Pieces of at most piece_mm along each feed move; rapids stay whole.
+  std::vector<Piece> pieces;
+  const auto& segs = path.segments();
+  for (std::size_t k = 0; k < segs.size(); ++k) {
+    const Segment& seg = segs[k];
+    const double len = seg.length_mm();
+    if (seg.motion() == Motion::rapid || len <= targets.piece_mm) {
+      pieces.push_back({k, 0, len, seg.speed_mm_per_min(), FeedLimit::none});
+      continue;
+    }
+    const auto n = static_cast<std::size_t>(std::ceil(len / targets.piece_mm));
+    if (n > 100'000'000 / std::max<std::size_t>(segs.size(), 1)) {
+      throw InputError("feed schedule: the path is too long for the piece length");
+    }
+    for (std::size_t j = 0; j < n; ++j) {
+      const double a = len * static_cast<double>(j) / static_cast<double>(n);
+      const double b = j + 1 == n ? len : len * static_cast<double>(j + 1) / static_cast<double>(n);
+      pieces.push_back({k, a, b, seg.speed_mm_per_min(), FeedLimit::none});
+    }
+  }
+
+  FeedSchedule out;
+  out.time_before_s = path.duration_s();
+  EngagementOptions eo;
+  eo.steps_per_tooth = 1;
+  eo.hooks = hooks;
+  // The path as pieces: its segments are the pieces, so a sample's segment is its piece.
+  ToolPath current = build(path, pieces);
+  // Each piece's largest chip over its samples, and the feed each piece may run at: a chip
+  // is the step from the tooth pass before, proportional to the feed it was made at (the
+  // step's length over the tooth period), so the step's feed times target / h is the feed
+  // that cuts that chip at the target. The step belongs to the pieces of both its ends: a
+  // fast piece that ends where the engagement rises makes the next one's first chip.
+  struct PieceChips {
+    std::vector<double> h_mm, allowed_feed;
+  };
+  const double tiny = 1e-9 * h_target;
+  auto piece_chips = [&](const EngagementSeries& e) {
+    PieceChips c;
+    c.h_mm.assign(pieces.size(), 0.0);
+    c.allowed_feed.assign(pieces.size(), std::numeric_limits<double>::infinity());
+    const auto& s = e.samples;
+    const double R = 0.5 * job.tool.diameter_mm;
+    for (std::size_t i = 1; i < s.size(); ++i) {
+      // A tool descending into stock no earlier position touched has no radial chip (the
+      // kernel caps it at R; the chip there is axial): as the analysis counts it.
+      const bool plunging = s.z_mm[i] < s.z_mm[i - 1] && e.h_max_mm[i] >= R * (1 - 1e-12);
+      const double dt = s.t_s[i] - s.t_s[i - 1];
+      if (plunging || !(e.h_max_mm[i] > tiny) || !(dt > 0)) continue;
+      const double step_feed = (s.s_mm[i] - s.s_mm[i - 1]) / dt * 60.0;
+      const double allowed = step_feed * h_target / e.h_max_mm[i];
+      for (const std::size_t k : {s.segment[i - 1], s.segment[i]}) {
+        c.h_mm[k] = std::max(c.h_mm[k], e.h_max_mm[i]);
+        c.allowed_feed[k] = std::min(c.allowed_feed[k], allowed);
+      }
+    }
+    return c;
+  };
+  const int iterations = std::max(1, targets.iterations);
+  for (int it = 0; it <= iterations; ++it) {
+    const EngagementSeries e = compute_engagement(current, job, eo);
+    const PieceChips pc = piece_chips(e);
+    const std::vector<double>& h = pc.h_mm;
+    if (it == 0) {
+      out.h_max_before_mm = *std::max_element(e.h_max_mm.begin(), e.h_max_mm.end());
+    }
+    if (it == iterations) {
+      out.h_max_after_mm = 0;
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        if (segs[pieces[k].segment].motion() == Motion::rapid) continue;
+        out.h_max_after_mm = std::max(out.h_max_after_mm, h[k]);
+        out.piece_h_max_mm.push_back(h[k]);
+        out.piece_feed_mm_per_min.push_back(pieces[k].feed);
+        out.piece_limit.push_back(pieces[k].limit);
+      }
+      break;
+    }
+    // Each piece at the feed its chips allow, within the limits; a piece without a chip (air)
+    // at the air feed.
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      Piece& p = pieces[k];
+      if (segs[p.segment].motion() == Motion::rapid) continue;
+      const bool cuts = std::isfinite(pc.allowed_feed[k]);
+      double f = cuts ? pc.allowed_feed[k] : air;
+      // The chip is proportional to the step only where the engaged arcs stay as they were:
+      // the region behind the tool is scalloped by the earlier steps too, so the feeds settle
+      // by lowering alone in the second half of the rounds (the chip ends at or below the
+      // target instead of swinging about it).
+      if (2 * it >= iterations) f = std::min(f, p.feed);
+      p.limit = cuts ? FeedLimit::none : FeedLimit::air;
+      if (f > hi) {
+        f = hi;
+        if (p.limit == FeedLimit::none) p.limit = FeedLimit::max_feed;
+      }
+      if (f < lo) {
+        f = lo;
+        p.limit = FeedLimit::min_feed;
+      }
+      p.feed = f;
+    }
+    current = build(path, pieces);
+    hooks.check("feed schedule interrupted");
+  }
+  // Merge neighbouring pieces of one segment whose feeds differ by less than the step: the
+  // slower one's feed for both (the chip stays at or below the target).
+  std::vector<Piece> merged;
+  for (const Piece& p : pieces) {
+    if (!merged.empty()) {
+      Piece& q = merged.back();
+      const double step = 0.01 * targets.feed_step_percent;
+      if (q.segment == p.segment && q.b_mm == p.a_mm &&
+          std::abs(q.feed - p.feed) <= step * std::min(q.feed, p.feed)) {
+        q.b_mm = p.b_mm;
+        q.feed = std::min(q.feed, p.feed);
+        continue;
+      }
+    }
+    merged.push_back(p);
+  }
+  out.path = build(path, merged);
+  out.time_after_s = out.path.duration_s();
+  out.pieces = merged.size();
+  return out;
+}
+
+}  // namespace trochomill
