@@ -3018,11 +3018,13 @@ class Interpreter {
     const std::size_t at = i;
     ++i;
     std::string label;
+    bool computed = false;
     if (i < s.size() && s[i] == '<') {
       label = read_name(i);
     } else if (i < s.size() && s[i] == '[') {
       const double v = read_expression(i);
       label = fmt::format("{:g}", v);
+      computed = true;
     } else {
       const std::size_t j0 = i;
       while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
@@ -3053,6 +3055,15 @@ class Interpreter {
       fail(kw_at, fmt::format("unknown O-word keyword '{}' (sub endsub call return if elseif "
                               "else endif while endwhile do repeat endrepeat break continue)",
                               kw));
+    }
+    // The statements that jump by label are found by the index of O-word lines, which knows
+    // written labels only: a computed label calls, and ':' (Fanuc's program number) is no
+    // statement.
+    if (s[at] == ':') {
+      fail(at, "':' starts a program number (Fanuc's O); an O-word statement starts with O");
+    }
+    if (computed && kind != OKind::call) {
+      fail(at, fmt::format("a computed O label (o[...]) is for call only, not {}", kw));
     }
     i = j;
     count_block();
