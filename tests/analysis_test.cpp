@@ -308,11 +308,17 @@ std::vector<double> chips_per_segment(const Job& job, const ToolPath& path) {
   std::vector<double> h(path.segments().size(), 0.0);
   const double R = 0.5 * job.tool.diameter_mm;
   for (std::size_t i = 1; i < e.samples.size(); ++i) {
-    const bool plunging =
-        e.samples.z_mm[i] < e.samples.z_mm[i - 1] && e.h_max_mm[i] >= R * (1 - 1e-12);
-    if (!plunging) h[e.samples.segment[i]] = std::max(h[e.samples.segment[i]], e.h_max_mm[i]);
+    h[e.samples.segment[i]] = std::max(h[e.samples.segment[i]], radial_chip_mm(e, i, R));
   }
   return h;
+}
+
+// Feed limits of the schedule tests: a tenth and three times the jobs' 600 mm/min.
+FeedTargets limits_60_1800() {
+  FeedTargets t;
+  t.min_feed_mm_per_min = 60;
+  t.max_feed_mm_per_min = 1800;
+  return t;
 }
 
 // A straight full slot cuts the chip f_z everywhere: scheduled to h_max = f_z its feed stays
@@ -320,10 +326,7 @@ std::vector<double> chips_per_segment(const Job& job, const ToolPath& path) {
 TEST(FeedSchedule, AStraightFullSlotKeepsItsFeed) {
   const Job job = test::straight_job(10.0);
   const ToolPath path = plan_path(job).path;
-  FeedTargets t;
-  t.min_feed_mm_per_min = 60;
-  t.max_feed_mm_per_min = 1800;
-  const FeedSchedule fs = schedule_feed(job, path, t);
+  const FeedSchedule fs = schedule_feed(job, path, limits_60_1800());
   ASSERT_FALSE(fs.piece_feed_mm_per_min.empty());
   std::size_t cutting = 0;
   for (std::size_t k = 0; k < fs.piece_feed_mm_per_min.size(); ++k) {
@@ -346,9 +349,7 @@ TEST(FeedSchedule, HoldsTheTargetChipOnTheWagihPaths) {
   for (const char* type : {"trochoidal", "elliptical", "circular", "linear-elliptical"}) {
     const Job job = test::wagih_job(type);
     const ToolPath path = plan_path(job).path;
-    FeedTargets t;
-    t.min_feed_mm_per_min = 60;
-    t.max_feed_mm_per_min = 1800;
+    FeedTargets t = limits_60_1800();
     t.feed_step_percent = 0;  // every piece at its own feed: the check is per piece
     const FeedSchedule fs = schedule_feed(job, path, t);
     const std::vector<double> h = chips_per_segment(job, fs.path);
@@ -378,9 +379,7 @@ TEST(FeedSchedule, HoldsTheTargetChipOnTheWagihPaths) {
 TEST(FeedSchedule, BadTargetsAreRefused) {
   const Job job = test::straight_job(10.0);
   const ToolPath path = plan_path(job).path;
-  FeedTargets t;
-  t.min_feed_mm_per_min = 60;
-  t.max_feed_mm_per_min = 1800;
+  FeedTargets t = limits_60_1800();
   t.h_max_mm = -1;
   EXPECT_THROW((void)schedule_feed(job, path, t), InputError);
   t.h_max_mm = 6;  // beyond the tool radius

@@ -61,6 +61,17 @@ struct EngagementSeries {
   std::vector<double> swept_rate_mm2_per_s;
 };
 
+/// The radial chip of sample i (mm): its h_max, or 0 where the tool descends into stock no
+/// earlier position touched (a helix, ramp or plunge start: the kernel caps h_max at the
+/// radius there, but the chip is axial). What the program's h_max and the feed schedule
+/// count.
+[[nodiscard]] inline double radial_chip_mm(const EngagementSeries& e, std::size_t i,
+                                           double radius_mm) {
+  const bool plunging = i > 0 && e.samples.z_mm[i] < e.samples.z_mm[i - 1] &&
+                        e.h_max_mm[i] >= radius_mm * (1 - 1e-12);
+  return plunging ? 0.0 : e.h_max_mm[i];
+}
+
 /// Engagement at every sample of `path`, sampled every tooth pass / steps_per_tooth
 /// (time step 60 / (n Z steps_per_tooth) s). Throws InputError for bad options.
 [[nodiscard]] EngagementSeries compute_engagement(const ToolPath& path, const Job& job,

@@ -48,13 +48,8 @@ ToolPath build(const ToolPath& path, const std::vector<Piece>& pieces) {
       ++next_mark;
     }
     const Segment& seg = segs[p.segment];
-    if (p.a_mm == 0 && p.b_mm == seg.length_mm()) {
-      Segment whole = seg;
-      out.append(seg.motion() == Motion::rapid ? std::move(whole)
-                                               : part(seg, 0, seg.length_mm(), p.feed));
-    } else {
-      out.append(part(seg, p.a_mm, p.b_mm, p.feed));
-    }
+    // Rapids stay whole at their rate; feed moves take their piece's feed.
+    out.append(seg.motion() == Motion::rapid ? seg : part(seg, p.a_mm, p.b_mm, p.feed));
   }
   return out;
 }
@@ -131,15 +126,13 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     const auto& s = e.samples;
     const double R = 0.5 * job.tool.diameter_mm;
     for (std::size_t i = 1; i < s.size(); ++i) {
-      // A tool descending into stock no earlier position touched has no radial chip (the
-      // kernel caps it at R; the chip there is axial): as the analysis counts it.
-      const bool plunging = s.z_mm[i] < s.z_mm[i - 1] && e.h_max_mm[i] >= R * (1 - 1e-12);
+      const double h = radial_chip_mm(e, i, R);  // as the analysis counts it
       const double dt = s.t_s[i] - s.t_s[i - 1];
-      if (plunging || !(e.h_max_mm[i] > tiny) || !(dt > 0)) continue;
+      if (!(h > tiny) || !(dt > 0)) continue;
       const double step_feed = (s.s_mm[i] - s.s_mm[i - 1]) / dt * 60.0;
-      const double allowed = step_feed * h_target / e.h_max_mm[i];
+      const double allowed = step_feed * h_target / h;
       for (const std::size_t k : {s.segment[i - 1], s.segment[i]}) {
-        c.h_mm[k] = std::max(c.h_mm[k], e.h_max_mm[i]);
+        c.h_mm[k] = std::max(c.h_mm[k], h);
         c.allowed_feed[k] = std::min(c.allowed_feed[k], allowed);
       }
     }

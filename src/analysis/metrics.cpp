@@ -222,12 +222,10 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   m.mrr_total_mm3_per_min = m.removed_volume_mm3 / m.machining_time_s * 60.0;
   m.feed_per_tooth_mm = job.cutting.feed_per_tooth_mm;
   for (std::size_t i = 0; i < n; ++i) {
-    // A tool descending into stock no earlier position has touched (a helix, ramp or plunge
-    // start) has no radial chip: the kernel caps it at R, but the chip there is axial. Such
-    // samples do not count towards the program's radial h_max.
-    const bool plunging = i > 0 && s.z_mm[i] < s.z_mm[i - 1] && e.h_max_mm[i] >= R * (1 - 1e-12);
-    if (!plunging && e.h_max_mm[i] > m.h_max_slot_mm) {
-      m.h_max_slot_mm = e.h_max_mm[i];
+    // Plunge starts have no radial chip (engagement.hpp: radial_chip_mm).
+    const double h = radial_chip_mm(e, i, R);
+    if (h > m.h_max_slot_mm) {
+      m.h_max_slot_mm = h;
       m.t_h_max_slot_s = s.t_s[i];
     }
     m.engagement_angle_max_slot_deg =

@@ -133,7 +133,7 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
   // A figure that is not there (no cycle, no tooth-level wall, no force model) is null.
   nlohmann::json j = nlohmann::json::object();
   for (const auto& s : scalars()) {
-    const double v = scalar(m, s.key);
+    const double v = s.cycle && !m.periodic ? std::nan("") : s.get(m);
     j[s.key] = std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v);
   }
   j["periodic"] = m.periodic;
