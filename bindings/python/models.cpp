@@ -1,0 +1,648 @@
+// The model chains as Python functions: analyze, compare, mechanism, recommend, simulate,
+// forces, calibrate, monitor, synth_signal. Each returns the CLI's JSON document (the same
+// keys, units in their names) as a dict, with its series as numpy arrays beside it. Long
+// calls release the GIL and stop on Ctrl-C (run_released).
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "common.hpp"
+#include "trochomill/analysis.hpp"
+#include "trochomill/force.hpp"
+#include "trochomill/mechanism.hpp"
+#include "trochomill/report.hpp"
+#include "trochomill/signal.hpp"
+#include "trochomill/sim.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill::python {
+
+namespace {
+
+// The path of an argument: a Path as it is, a Job's planned path.
+ToolPath path_of(const py::object& job_or_path) {
+  if (py::isinstance<PyPath>(job_or_path)) return job_or_path.cast<const PyPath&>().path;
+  return plan_path(job_of(job_or_path, "path").job).path;
+}
+
+// A time window: cycles=(A, B) (trochoid cycles A inclusive to B exclusive, from 0), or
+// from_s / to_s (s of programmed time), or the whole path.
+std::pair<double, double> window_of(const ToolPath& path, const py::object& cycles,
+                                    std::optional<double> from_s, std::optional<double> to_s) {
+  if (!cycles.is_none()) {
+    if (from_s || to_s) throw InputError("give cycles or from_s/to_s, not both");
+    const auto ab = cycles.cast<std::pair<long long, long long>>();
+    const long long count = static_cast<long long>(path.cycles().size());
+    if (ab.first < 0 || ab.second <= ab.first || ab.second > count) {
+      throw InputError(fmt::format("cycles ({}, {}): need 0 <= A < B <= {} (the path's cycles)",
+                                   ab.first, ab.second, count));
+    }
+    return cycle_window(path, static_cast<int>(ab.first), static_cast<int>(ab.second));
+  }
+  for (const auto& [name, v] : {std::pair{"from_s", from_s}, std::pair{"to_s", to_s}}) {
+    if (v && !(std::isfinite(*v) && *v >= 0 && *v <= 1e9)) {
+      throw InputError(fmt::format("{} must be a finite time in [0, 1e9] s, got {}", name, *v));
+    }
+  }
+  return {from_s.value_or(0.0), to_s.value_or(path.duration_s())};
+}
+
+std::vector<double> degrees(const std::vector<double>& rad) {
+  std::vector<double> out(rad.size());
+  std::transform(rad.begin(), rad.end(), out.begin(), [](double r) { return rad_to_deg(r); });
+  return out;
+}
+
+// A 1-D float64 array, every value finite (`what` names it in the message).
+std::vector<double> finite_vector(
+    const py::array_t<double, py::array::c_style | py::array::forcecast>& a, const char* what) {
+  if (a.ndim() != 1)
+    throw InputError(fmt::format("{}: a 1-D array, got {} dimensions", what, a.ndim()));
+  std::vector<double> v(a.data(), a.data() + a.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) {
+      throw InputError(
+          fmt::format("{}[{}] is {}: every sample must be a finite number", what, i, v[i]));
+    }
+  }
+  return v;
+}
+
+py::dict analyze_series(const Job& job, EngagementSeries&& e) {
+  PathSamples& s = e.samples;
+  std::vector<double> mrr(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    mrr[i] = std::clamp(-s.z_mm[i], 0.0, job.slot.depth_mm) * e.swept_rate_mm2_per_s[i] * 60.0;
+  }
+  py::dict d;
+  d["engagement_deg"] = to_array(degrees(e.engagement_angle_rad));
+  d["t_s"] = to_array(std::move(s.t_s));
+  d["x_mm"] = to_array(std::move(s.x_mm));
+  d["y_mm"] = to_array(std::move(s.y_mm));
+  d["z_mm"] = to_array(std::move(s.z_mm));
+  d["h_max_mm"] = to_array(std::move(e.h_max_mm));
+  d["teeth_in_cut"] = to_array(std::move(e.teeth_in_cut));
+  d["mrr_mm3_per_min"] = to_array(std::move(mrr));
+  d["radial_engagement_mm"] = to_array(std::move(e.radial_engagement_mm));
+  return d;
+}
+
+py::dict force_arrays(ForceSeries&& s) {
+  const auto n = static_cast<py::ssize_t>(s.size());
+  std::vector<double> fr(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) fr[i] = s.resultant_n(i);
+  py::dict d;
+  d["f_resultant_n"] = to_array(std::move(fr));
+  d["t_s"] = to_array(std::move(s.t_s));
+  d["f_x_n"] = to_array(std::move(s.fx_n));
+  d["f_y_n"] = to_array(std::move(s.fy_n));
+  d["f_z_n"] = to_array(std::move(s.fz_n));
+  d["torque_nm"] = to_array(std::move(s.torque_nm));
+  d["power_w"] = to_array(std::move(s.power_w));
+  const py::ssize_t teeth = s.teeth;
+  d["tooth_f_x_n"] = to_array(std::move(s.tooth_fx_n), {n, teeth});
+  d["tooth_f_y_n"] = to_array(std::move(s.tooth_fy_n), {n, teeth});
+  d["tooth_f_z_n"] = to_array(std::move(s.tooth_fz_n), {n, teeth});
+  d["tooth_torque_nm"] = to_array(std::move(s.tooth_torque_nm), {n, teeth});
+  return d;
+}
+
+// The machined surface as a triangle mesh of its height field: vertices (n, 3) mm, faces
+// (m, 3) vertex indices, two triangles per grid cell, counter-clockwise seen from above.
+py::dict surface_mesh(const HeightField& f) {
+  const std::size_t cols = f.x_mm_of_column.size(), rows = f.y_mm_of_row.size();
+  std::vector<double> v;
+  v.reserve(cols * rows * 3);
+  for (std::size_t c = 0; c < cols; ++c) {
+    for (std::size_t r = 0; r < rows; ++r) {
+      v.insert(v.end(), {f.x_mm_of_column[c], f.y_mm_of_row[r], f.z_mm[c * rows + r]});
+    }
+  }
+  std::vector<std::uint32_t> faces;
+  if (cols > 1 && rows > 1) faces.reserve((cols - 1) * (rows - 1) * 6);
+  for (std::size_t c = 0; c + 1 < cols; ++c) {
+    for (std::size_t r = 0; r + 1 < rows; ++r) {
+      const auto a = static_cast<std::uint32_t>(c * rows + r),
+                 b = a + static_cast<std::uint32_t>(rows);
+      faces.insert(faces.end(), {a, b, b + 1, a, b + 1, a + 1});
+    }
+  }
+  py::dict d;
+  const auto nv = static_cast<py::ssize_t>(v.size() / 3),
+             nf = static_cast<py::ssize_t>(faces.size() / 3);
+  d["vertices_mm"] = to_array(std::move(v), {nv, 3});
+  d["faces"] = to_array(std::move(faces), {nf, 3});
+  d["bottom_mm"] = f.bottom_mm;
+  return d;
+}
+
+py::dict chip_map_dict(ChipMapData&& c) {
+  const auto steps = static_cast<py::ssize_t>(c.t_s.size());
+  const auto teeth = static_cast<py::ssize_t>(c.teeth);
+  const auto segs = static_cast<py::ssize_t>(c.segments_per_tooth);
+  py::dict d;
+  d["t_s"] = to_array(std::move(c.t_s));
+  d["tip_mm"] = to_array(std::move(c.tip_mm), {steps, 3});
+  d["removed_mm3"] = to_array(std::move(c.removed_mm3), {steps, teeth});
+  d["h_mm"] = to_array(std::move(c.h_mm), {steps, teeth, segs});
+  d["w_mm"] = to_array(std::move(c.w_mm), {steps, teeth, segs});
+  d["v_mm3"] = to_array(std::move(c.v_mm3), {steps, teeth, segs});
+  d["segment_height_mm"] = to_array(std::move(c.segment_height_mm));
+  d["resolution_mm"] = c.resolution_mm;
+  d["steps_per_rev"] = c.steps_per_rev;
+  return d;
+}
+
+// "(n, 3)": an array's shape as Python writes it.
+std::string shape_text(const py::array& a) {
+  std::string out = "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) out += fmt::format("{}{}", i ? ", " : "", a.shape(i));
+  return out + (a.ndim() == 1 ? ",)" : ")");
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void bind_models(py::module_& m) {
+  m.def(
+      "analyze",
+      [](const py::object& job_or_path, std::optional<double> memory_limit_gb,
+         const py::object& progress) {
+        const Job& job = job_of(job_or_path, "analyze").job;
+        const ToolPath path = path_of(job_or_path);
+        check_memory("analyze", estimate_analysis_memory(job, path), memory_limit_gb,
+                     fmt::format("{:.0f} s of program at {:g} rpm, {} samples per tooth pass: "
+                                 "lower analysis.steps_per_tooth or analyse a shorter program",
+                                 path.duration_s(), job.cutting.spindle_speed_rpm,
+                                 job.analysis.steps_per_tooth));
+        ProcessMetrics pm = run_released(
+            [&](const RunHooks& h) { return analyze_with_forces(job, path, h); }, progress);
+        py::dict out = from_json(metrics_json(job, pm));
+        out["series"] = analyze_series(job, std::move(pm.series));
+        return out;
+      },
+      py::arg("job"), py::kw_only(), py::arg("memory_limit_gb") = py::none(),
+      py::arg("progress") = py::none(),
+      R"(Engagement, chip thickness, times, removal rate, walls and texture of a slot program.
+
+job: a Job (its planned path) or a Path (planned, or read from G-code with a job).
+Returns the keys of `trochomill analyze --json` (units in their names: _mm, _s, _deg,
+_mm3_per_min; cycle_* keys None when the path has no steady cycle) and "series": float64
+arrays t_s, x_mm, y_mm, z_mm, engagement_deg, h_max_mm, mrr_mm3_per_min,
+radial_engagement_mm and the int32 array teeth_in_cut, one entry per sample.
+progress: None or callable(phase: str, done: int, total: int).)");
+
+  m.def(
+      "compare",
+      [](const PyJob& job, const py::dict& vary, int threads, const py::object& progress) {
+        if (threads < 0) throw InputError(fmt::format("threads must be >= 0, got {}", threads));
+        std::vector<Vary> varies;
+        for (const auto& [k, values] : vary) {
+          Vary v;
+          v.key = py::str(k).cast<std::string>();
+          if (!py::isinstance<py::sequence>(values) || py::isinstance<py::str>(values)) {
+            throw InputError(fmt::format("vary {}: a list of values", v.key));
+          }
+          for (const py::handle x : values) {
+            v.values.push_back(toml_value(x, v.key));
+          }
+          varies.push_back(std::move(v));
+        }
+        const std::vector<StudyPoint> points = run_released(
+            [&](const RunHooks& h) {
+              RunHooks inner;
+              inner.cancel = h.cancel;
+              return run_study(
+                  *job.doc, job.overrides, varies, threads,
+                  [&inner](const Job& j) {
+                    return analyze_with_forces(j, plan_path(j).path, inner);
+                  },
+                  h);
+            },
+            progress);
+        py::dict doc = from_json(study_json(varies, points));
+        // Columns: each varied key (its values as read back by TOML), ok, error, and every
+        // metric of the points that ran (NaN where a point failed or has no value).
+        py::dict cols;
+        const py::module_ tomllib = py::module_::import("tomllib");
+        for (const Vary& v : varies) {
+          py::list col;
+          for (const StudyPoint& p : points) {
+            for (const Override& o : p.overrides) {
+              if (o.key == v.key) col.append(tomllib.attr("loads")("v = " + o.value)["v"]);
+            }
+          }
+          cols[py::str(v.key)] = py::module_::import("numpy").attr("asarray")(col);
+        }
+        py::list pts = doc["points"];
+        std::vector<std::string> metric_keys;
+        for (const py::handle p : pts) {
+          if (!p["ok"].cast<bool>()) continue;
+          for (const auto& [k, val] : p.cast<py::dict>()) {
+            const std::string key = py::str(k).cast<std::string>();
+            if (key != "ok" && key != "set" && key != "error" &&
+                (py::isinstance<py::float_>(val) || py::isinstance<py::int_>(val) ||
+                 val.is_none()) &&
+                std::find(metric_keys.begin(), metric_keys.end(), key) == metric_keys.end()) {
+              metric_keys.push_back(key);
+            }
+          }
+        }
+        std::vector<bool> ok;
+        py::list errors;
+        for (const py::handle p : pts) {
+          ok.push_back(p["ok"].cast<bool>());
+          const py::dict pd = p.cast<py::dict>();
+          errors.append(pd.contains("error") ? pd["error"] : py::str(""));
+        }
+        py::array_t<bool> ok_arr(static_cast<py::ssize_t>(ok.size()));
+        for (std::size_t i = 0; i < ok.size(); ++i)
+          ok_arr.mutable_at(static_cast<py::ssize_t>(i)) = ok[i];
+        cols["ok"] = ok_arr;
+        cols["error"] = errors;
+        for (const std::string& key : metric_keys) {
+          std::vector<double> col;
+          for (const py::handle p : pts) {
+            const py::dict pd = p.cast<py::dict>();
+            const py::str k(key);
+            col.push_back(
+                pd.contains(k) && !pd[k].is_none() &&
+                        (py::isinstance<py::float_>(pd[k]) || py::isinstance<py::int_>(pd[k]))
+                    ? pd[k].cast<double>()
+                    : std::nan(""));
+          }
+          cols[py::str(key)] = to_array(std::move(col));
+        }
+        return cols;
+      },
+      py::arg("job"), py::arg("vary"), py::kw_only(), py::arg("threads") = 0,
+      py::arg("progress") = py::none(),
+      R"(A parameter study: analyze on the grid of `vary` ({"section.key": [values]}; several
+keys give their Cartesian product, the first varying slowest), in parallel (threads 0: all
+cores), results in grid order whatever the thread count. Returns columns: each varied key,
+"ok" (bool), "error" (str, empty where the point ran) and each metric of `analyze` as a
+float64 array (NaN where the point failed or the metric is None).)");
+
+  m.def(
+      "mechanism",
+      [](const PyJob& pj, const std::optional<std::string>& model,
+         std::optional<double> flank_wear_mm) {
+        std::vector<Override> more;
+        if (model) more.push_back({"mechanism.model", "\"" + *model + "\"", "model"});
+        if (flank_wear_mm)
+          more.push_back({"tool.flank_wear", fmt::format("{}", *flank_wear_mm), "flank_wear_mm"});
+        const Job job = more.empty() ? pj.job : pj.with(more);
+        const MechanismSettings& st = job.mechanism;
+        const bool use_wear = job.tool.flank_wear_mm > 0;
+        MechanismCurve c = mechanism_curve(job, st, use_wear);
+        const ZoneSummary z = summarize_zones(c, st, use_wear);
+        py::dict out = from_json(mechanism_json(job, st, c, z, use_wear));
+        out["theta_deg"] = to_array(degrees(c.theta_rad));
+        out["psi_deg"] = to_array(degrees(c.psi_rad));
+        out["gamma_k_deg"] = to_array(degrees(c.gamma_k_rad));
+        out["kappa_deg"] = to_array(degrees(c.kappa_rad));
+        out["k_re_pct"] = to_array(use_wear ? std::move(c.k_re_wear_pct) : std::move(c.k_re_pct));
+        if (use_wear) out["k_re_wear_pct"] = out["k_re_pct"];
+        out["t_s"] = to_array(std::move(c.t_s));
+        out["h_mm"] = to_array(std::move(c.h_mm));
+        out["teeth_in_contact"] = to_array(std::move(c.teeth_in_contact));
+        out["zone"] = to_array(std::move(c.zone));
+        return out;
+      },
+      py::arg("job"), py::kw_only(), py::arg("model") = py::none(),
+      py::arg("flank_wear_mm") = py::none(),
+      R"(Chip thickness, K_re and the cutting-mechanism zones over one trochoid cycle (Pivkin
+2025): the keys of `trochomill mechanism --json` with the curves as arrays over the cycle:
+theta_deg, t_s, h_mm, psi_deg, teeth_in_contact, gamma_k_deg, kappa_deg, k_re_pct (with the
+flank wear when the tool has one) and zone (int32: 0 not cutting, 1 CZI, 2 CZII, 3 CZIII).
+model: "exact" or "pivkin2025" (default the job's mechanism.model); flank_wear_mm: VB_B (mm).)");
+
+  m.def(
+      "recommend",
+      [](const PyJob& pj, std::optional<double> share, bool feed) {
+        std::vector<Override> more;
+        if (share) more.push_back({"mechanism.share", fmt::format("{}", *share), "share"});
+        const Job job = more.empty() ? pj.job : pj.with(more);
+        const Recommendation r = recommend(job, job.mechanism, job.tool.flank_wear_mm > 0, feed);
+        py::dict out = from_json(recommendation_json(job, job.mechanism, r, feed));
+        out["explanation"] = r.explanation;
+        return out;
+      },
+      py::arg("job"), py::kw_only(), py::arg("share") = py::none(), py::arg("feed") = false,
+      R"(The smallest trochoid step (mm), or with feed=True the feed per tooth (mm) at the job's
+step, whose cutting part is at least `share` (0..1, default mechanism.share) in CZIII: the
+keys of `trochomill recommend --json` and "explanation".)");
+
+  m.def(
+      "simulate",
+      [](const py::object& job_or_path, const py::object& cycles, std::optional<double> from_s,
+         std::optional<double> to_s, const py::object& progress,
+         std::optional<double> memory_limit_gb) {
+        const Job& job = job_of(job_or_path, "simulate").job;
+        const ToolPath path = path_of(job_or_path);
+        const auto [from, to] = window_of(path, cycles, from_s, to_s);
+        const MemoryEstimate est = estimate_simulation_memory(job, path, from, to);
+        const double need = est.total(true);
+        check_memory("simulate", need, memory_limit_gb,
+                     fmt::format("coarsen simulation.resolution (now {} mm) or shorten the "
+                                 "window (cycles, from_s/to_s)",
+                                 job.simulation.resolution_mm));
+        const auto t0 = std::chrono::steady_clock::now();
+        JobSimulation js = run_released(
+            [&](const RunHooks& h) {
+              SimControl control;
+              control.hooks = h;
+              control.reserve_chip_entries = static_cast<std::size_t>(est.chip_entries);
+              return simulate_job(job, path, from, to, control);
+            },
+            progress);
+        const double wall = seconds_since(t0);
+        py::dict out = from_json(simulation_json(job, js, from, to, wall, need));
+        const SimTool tool = sim_tool(job, job.simulation);
+        const SimResult& r = js.result;
+        const auto steps = static_cast<py::ssize_t>(r.steps.size());
+        const auto teeth = static_cast<py::ssize_t>(job.tool.teeth);
+        std::vector<double> t(r.steps.size()), tip(r.steps.size() * 3), removed,
+            h_max(r.steps.size()), h_mean(r.steps.size());
+        std::vector<std::int32_t> engaged(r.steps.size());
+        removed.reserve(r.steps.size() * static_cast<std::size_t>(teeth));
+        for (std::size_t i = 0; i < r.steps.size(); ++i) {
+          const SimStep& st = r.steps[i];
+          t[i] = st.t_s;
+          std::copy(st.tip_mm.begin(), st.tip_mm.end(),
+                    tip.begin() + static_cast<std::ptrdiff_t>(3 * i));
+          removed.insert(removed.end(), st.removed_mm3.begin(), st.removed_mm3.end());
+          h_max[i] = st.h_max_mm;
+          h_mean[i] = st.h_mean_mm;
+          engaged[i] = st.engaged_segments;
+        }
+        py::dict series;
+        series["t_s"] = to_array(std::move(t));
+        series["tip_mm"] = to_array(std::move(tip), {steps, 3});
+        series["removed_mm3"] = to_array(std::move(removed), {steps, teeth});
+        series["h_max_mm"] = to_array(std::move(h_max));
+        series["h_mean_mm"] = to_array(std::move(h_mean));
+        series["engaged_segments"] = to_array(std::move(engaged));
+        out["series"] = series;
+        out["chip_map"] = chip_map_dict(chip_map_data(r, tool, job.simulation));
+        out["surface"] =
+            surface_mesh(surface_height_field(*js.work, default_surface_step_mm(*js.work)));
+        return out;
+      },
+      py::arg("job"), py::kw_only(), py::arg("cycles") = py::none(), py::arg("from_s") = py::none(),
+      py::arg("to_s") = py::none(), py::arg("progress") = py::none(),
+      py::arg("memory_limit_gb") = py::none(),
+      R"(Tri-dexel material removal (Bergmann 2021) over a window of the path: cycles=(A, B)
+(trochoid cycles A to B-1) or from_s/to_s (s of programmed time), default the whole path.
+Returns the keys of `trochomill simulate --json`, "series" (t_s, tip_mm (n, 3),
+removed_mm3 (n, teeth), h_max_mm, h_mean_mm, engaged_segments per step), "chip_map" (t_s,
+tip_mm, removed_mm3 and float32 h_mm, w_mm, v_mm3 (steps, teeth, segments), the
+segment_height_mm of each edge segment above the tip) and "surface" (the machined surface:
+vertices_mm (n, 3), faces (m, 3) uint32, bottom_mm). The GIL is released while it runs.
+progress: None or callable(phase: str, done: int, total: int).)");
+
+  m.def(
+      "forces",
+      [](const py::object& job_or_path, bool fast, const py::object& cycles,
+         std::optional<double> from_s, std::optional<double> to_s, const py::object& progress,
+         std::optional<double> memory_limit_gb) {
+        const Job& job = job_of(job_or_path, "forces").job;
+        const ToolPath path = path_of(job_or_path);
+        const auto [from, to] = window_of(path, cycles, from_s, to_s);
+        if (!job.material.model) {
+          throw InputError(fmt::format(
+              "{}: no [material] force model; give [material] model and coefficients or name "
+              "(see `trochomill materials`)",
+              job.source));
+        }
+        std::size_t reserve = 0;
+        if (!fast) {
+          const MemoryEstimate est = estimate_simulation_memory(job, path, from, to);
+          check_memory("forces", est.total(false), memory_limit_gb,
+                       "shorten the window (cycles, from_s/to_s), coarsen simulation.resolution "
+                       "or use fast=True");
+          reserve = static_cast<std::size_t>(est.chip_entries);
+        }
+        JobForces jf = run_released(
+            [&](const RunHooks& h) {
+              SimControl control;
+              control.hooks = h;
+              control.reserve_chip_entries = reserve;
+              return job_forces(job, path, from, to, fast, control);
+            },
+            progress);
+        py::dict out = from_json(force_summary_json(job, jf, from, to));
+        out["series"] = force_arrays(std::move(jf.series));
+        return out;
+      },
+      py::arg("job"), py::kw_only(), py::arg("fast") = true, py::arg("cycles") = py::none(),
+      py::arg("from_s") = py::none(), py::arg("to_s") = py::none(),
+      py::arg("progress") = py::none(), py::arg("memory_limit_gb") = py::none(),
+      R"(Cutting forces on the workpiece with the job's [material] model: the keys of
+`trochomill forces --json` and "series": t_s, f_x_n, f_y_n, f_z_n, f_resultant_n (N),
+torque_nm (N m), power_w (W), and per tooth tooth_f_x_n, tooth_f_y_n, tooth_f_z_n,
+tooth_torque_nm (steps, teeth). fast=True: chips from the analytic engagement; False: from
+the dexel simulation. Window as for simulate.)");
+
+  m.def(
+      "calibrate",
+      [](const py::object& job_or_path,
+         const py::array_t<double, py::array::c_style | py::array::forcecast>& t_s,
+         const py::array_t<double, py::array::c_style | py::array::forcecast>& f_n,
+         const std::vector<std::string>& fit, const std::optional<std::string>& model, bool fast,
+         std::optional<double> cutoff_hz, std::optional<double> max_shift_s,
+         const py::object& cycles, std::optional<double> from_s, std::optional<double> to_s,
+         const py::object& progress, std::optional<double> memory_limit_gb) {
+        const Job& job = job_of(job_or_path, "calibrate").job;
+        MeasuredForces meas;
+        meas.t_s = finite_vector(t_s, "t_s");
+        if (f_n.ndim() != 2 || f_n.shape(1) != 3 ||
+            static_cast<std::size_t>(f_n.shape(0)) != meas.t_s.size()) {
+          throw InputError(
+              fmt::format("f_n: an array of shape ({}, 3) (F_x, F_y, F_z in N per time), got {}",
+                          meas.t_s.size(), shape_text(f_n)));
+        }
+        if (meas.t_s.size() < 2) throw InputError("t_s: at least 2 samples");
+        for (std::size_t i = 1; i < meas.t_s.size(); ++i) {
+          if (!(meas.t_s[i] > meas.t_s[i - 1])) {
+            throw InputError(
+                fmt::format("t_s[{}] = {} does not follow t_s[{}] = {}: times must increase", i,
+                            meas.t_s[i], i - 1, meas.t_s[i - 1]));
+          }
+        }
+        const double* f = f_n.data();
+        for (std::size_t i = 0; i < meas.t_s.size(); ++i) {
+          for (int k = 0; k < 3; ++k) {
+            if (!std::isfinite(f[3 * i + static_cast<std::size_t>(k)])) {
+              throw InputError(fmt::format("f_n[{}, {}] is not a finite force", i, k));
+            }
+          }
+          meas.fx_n.push_back(f[3 * i]);
+          meas.fy_n.push_back(f[3 * i + 1]);
+          meas.fz_n.push_back(f[3 * i + 2]);
+        }
+        CalibrationOptions o;
+        if (model) {
+          o.model = parse_force_model(*model);
+        } else if (job.material.model) {
+          o.model = *job.material.model;
+        }
+        o.fit = fit;
+        o.fast = fast;
+        if (cutoff_hz) o.cutoff_hz = *cutoff_hz;
+        if (max_shift_s) o.max_shift_s = *max_shift_s;
+        const ToolPath path = path_of(job_or_path);
+        if (cycles.is_none() && !from_s && !to_s) {
+          o.from_s = std::max(0.0, meas.t_s.front());
+          o.to_s = std::min(path.duration_s(), meas.t_s.back());
+        } else {
+          std::tie(o.from_s, o.to_s) = window_of(path, cycles, from_s, to_s);
+        }
+        check_memory("calibrate", estimate_calibration_memory(job, path, o, meas.t_s.size()),
+                     memory_limit_gb,
+                     fmt::format("the model window is {:.1f} s: a few cycles hold the "
+                                 "coefficients as well",
+                                 o.to_s - o.from_s));
+        const CalibrationResult r = run_released(
+            [&](const RunHooks& h) {
+              CalibrationOptions oo = o;
+              oo.hooks = h;
+              return calibrate_forces(job, path, meas, oo);
+            },
+            progress);
+        py::dict out = from_json(calibration_json(r));
+        out["material_toml"] = material_toml(r);
+        return out;
+      },
+      py::arg("job"), py::arg("t_s"), py::arg("f_n"), py::kw_only(),
+      py::arg("fit") = std::vector<std::string>{}, py::arg("model") = py::none(),
+      py::arg("fast") = false, py::arg("cutoff_hz") = py::none(),
+      py::arg("max_shift_s") = py::none(), py::arg("cycles") = py::none(),
+      py::arg("from_s") = py::none(), py::arg("to_s") = py::none(),
+      py::arg("progress") = py::none(), py::arg("memory_limit_gb") = py::none(),
+      R"(Fits the force model to measured forces: t_s (n,) s, increasing; f_n (n, 3) N on the
+workpiece (F_x, F_y, F_z). fit: the parameters (k_c, k_n, m, m_n, k_a, m_a | k_tc, k_rc,
+k_ac, k_te, k_re, k_ae, runout_radial, runout_phase, runout_axial; default the model's main
+coefficients); model: bergmann, kienzle or linear (default the job's); cutoff_hz: low-pass
+of both signals (default from the tooth-passing frequency); max_shift_s: the alignment
+search (default half a revolution); the model window: cycles or from_s/to_s, default the
+measurement's span. Returns the keys of `trochomill calibrate --json` and "material_toml"
+(the fitted [material] block).)");
+
+  m.def(
+      "monitor",
+      [](const py::array_t<double, py::array::c_style | py::array::forcecast>& samples,
+         double rate_hz, const py::object& job_obj, double start_s, const py::object& set) {
+        if (!(std::isfinite(rate_hz) && rate_hz > 0 && rate_hz <= 1e7)) {
+          throw InputError(fmt::format("rate_hz must be in (0, 1e7] Hz, got {}", rate_hz));
+        }
+        if (!(std::isfinite(start_s) && start_s >= 0 && start_s <= 1e9)) {
+          throw InputError(fmt::format("start_s must be in [0, 1e9] s, got {}", start_s));
+        }
+        std::vector<Override> keys;
+        if (!set.is_none()) {
+          for (const auto& [k, v] : set.cast<py::dict>()) {
+            keys.push_back({py::str(k).cast<std::string>(),
+                            toml_value(v, py::str(k).cast<std::string>()), ""});
+          }
+        }
+        std::optional<Job> job;
+        MonitorSettings ms;
+        if (!job_obj.is_none()) {
+          const PyJob& pj = job_obj.cast<const PyJob&>();
+          job = keys.empty() ? pj.job : pj.with(keys);
+          ms = job->monitor;
+        } else {
+          Job defaults;
+          apply_overrides(defaults, keys);
+          ms = defaults.monitor;
+        }
+        Signal sig;
+        sig.rate_hz = rate_hz;
+        sig.samples = finite_vector(samples, "samples");
+        MonitorReport r = run_released([&](const RunHooks&) {
+          return analyze_signal(sig, ms, job ? &*job : nullptr, start_s);
+        });
+        py::dict out = from_json(monitor_json(r, "<array>", sig, ms));
+        py::dict windows;
+        windows["t_s"] = to_array(std::move(r.kf.t_s));
+        windows["rms_low"] = to_array(std::move(r.kf.rms_low));
+        windows["rms_high"] = to_array(std::move(r.kf.rms_high));
+        windows["k_f"] = to_array(std::move(r.kf.k_f));
+        out["windows"] = windows;
+        out["warnings"] = r.warnings;
+        return out;
+      },
+      py::arg("samples"), py::arg("rate_hz"), py::kw_only(), py::arg("job") = py::none(),
+      py::arg("start_s") = 0.0, py::arg("set") = py::none(),
+      R"(The vibroacoustic monitor (Pivkin 2025): k_f = RMS(low band) / RMS(high band) per
+window and per trochoid cycle, with flags. samples: one channel (float64, any unit) at
+rate_hz (Hz); job: the cycle timing and the model's zones (without one the cycles come from
+the signal's period); start_s: where the program starts in the recording (s); set:
+{"monitor.key": value} overrides (bands low_min/low_max/high_min/high_max in Hz, order,
+window in s). Returns the keys of `trochomill monitor --json`, "windows" (t_s, rms_low,
+rms_high, k_f arrays) and "warnings".)");
+
+  m.def(
+      "synth_signal",
+      [](const PyJob& pj, double rate_hz, int cycles, double kf_czi, double kf_czii,
+         double kf_cziii, double wear_drift, double noise, double lead_s, std::uint32_t seed,
+         std::optional<double> memory_limit_gb) {
+        struct Range {
+          const char* name;
+          double v, lo, hi;
+          bool open_lo;
+        };
+        for (const Range& r :
+             {Range{"rate_hz", rate_hz, 0, 1e7, true},
+              Range{"cycles", static_cast<double>(cycles), 1, 100000, false},
+              Range{"kf_czi", kf_czi, 0, 100, true}, Range{"kf_czii", kf_czii, 0, 100, true},
+              Range{"kf_cziii", kf_cziii, 0, 100, true},
+              Range{"wear_drift", wear_drift, 0, 100, false}, Range{"noise", noise, 0, 100, false},
+              Range{"lead_s", lead_s, 0, 1e4, false}}) {
+          if (!(std::isfinite(r.v) && (r.open_lo ? r.v > r.lo : r.v >= r.lo) && r.v <= r.hi)) {
+            throw InputError(fmt::format("{} must be in {}{}, {}], got {}", r.name,
+                                         r.open_lo ? "(" : "[", r.lo, r.hi, r.v));
+          }
+        }
+        SynthOptions o;
+        o.rate_hz = rate_hz;
+        o.cycles = cycles;
+        o.kf_czi = kf_czi;
+        o.kf_czii = kf_czii;
+        o.kf_cziii = kf_cziii;
+        o.wear_drift = wear_drift;
+        o.noise = noise;
+        o.lead_s = lead_s;
+        o.seed = seed;
+        check_memory(
+            "synth_signal", synth_signal_memory_bytes(pj.job, o), memory_limit_gb,
+            fmt::format("lower rate_hz (now {:g} Hz) or cycles (now {})", rate_hz, cycles));
+        int covered = 0;
+        Signal sig = run_released(
+            [&](const RunHooks&) { return synth_signal(pj.job, pj.job.monitor, o, &covered); });
+        py::dict out;
+        out["rate_hz"] = sig.rate_hz;
+        out["cycles"] = covered;
+        out["start_s"] = lead_s;
+        out["samples"] = to_array(std::move(sig.samples));
+        return out;
+      },
+      py::arg("job"), py::kw_only(), py::arg("rate_hz") = 100000.0, py::arg("cycles") = 12,
+      py::arg("kf_czi") = 1.6, py::arg("kf_czii") = 1.15, py::arg("kf_cziii") = 1.0,
+      py::arg("wear_drift") = 0.0, py::arg("noise") = 0.02, py::arg("lead_s") = 0.1,
+      py::arg("seed") = 1, py::arg("memory_limit_gb") = py::none(),
+      R"(A synthetic vibroacoustic signal following the model's zones, as `trochomill
+synth-signal` writes it: per cycle of the steady trochoid, noise bands whose RMS ratio is
+k_f of the zone (kf_czi, kf_czii, kf_cziii), a wear drift (k_f x (1 + wear_drift) by the last
+cycle), white noise (RMS relative to cutting), lead_s (s) of air before the program.
+Returns {"samples": float64 array, "rate_hz", "cycles" (covered), "start_s"}.)");
+}
+
+}  // namespace trochomill::python
