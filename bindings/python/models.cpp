@@ -242,42 +242,43 @@ progress: None or callable(phase: str, done: int, total: int).)");
         }
         py::list pts = doc["points"];
         std::vector<std::string> metric_keys;
+        auto is_number = [](const py::handle& v) {
+          return !py::isinstance<py::bool_>(v) &&
+                 (py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v));
+        };
         for (const py::handle p : pts) {
           if (!p["ok"].cast<bool>()) continue;
-          for (const auto& [k, val] : p.cast<py::dict>()) {
+          for (const auto& [k, val] : p["metrics"].cast<py::dict>()) {
             const std::string key = py::str(k).cast<std::string>();
-            if (key != "ok" && key != "set" && key != "error" &&
-                (py::isinstance<py::float_>(val) || py::isinstance<py::int_>(val) ||
-                 val.is_none()) &&
+            if ((is_number(val) || val.is_none()) &&
                 std::find(metric_keys.begin(), metric_keys.end(), key) == metric_keys.end()) {
               metric_keys.push_back(key);
             }
           }
         }
-        std::vector<bool> ok;
+        py::array_t<bool> ok(static_cast<py::ssize_t>(py::len(pts)));
         py::list errors;
+        py::ssize_t i = 0;
         for (const py::handle p : pts) {
-          ok.push_back(p["ok"].cast<bool>());
           const py::dict pd = p.cast<py::dict>();
+          ok.mutable_at(i++) = pd["ok"].cast<bool>();
           errors.append(pd.contains("error") ? pd["error"] : py::str(""));
         }
-        py::array_t<bool> ok_arr(static_cast<py::ssize_t>(ok.size()));
-        for (std::size_t i = 0; i < ok.size(); ++i)
-          ok_arr.mutable_at(static_cast<py::ssize_t>(i)) = ok[i];
-        cols["ok"] = ok_arr;
+        cols["ok"] = ok;
         cols["error"] = errors;
         for (const std::string& key : metric_keys) {
           std::vector<double> col;
+          const py::str k(key);
           for (const py::handle p : pts) {
             const py::dict pd = p.cast<py::dict>();
-            const py::str k(key);
-            col.push_back(
-                pd.contains(k) && !pd[k].is_none() &&
-                        (py::isinstance<py::float_>(pd[k]) || py::isinstance<py::int_>(pd[k]))
-                    ? pd[k].cast<double>()
-                    : std::nan(""));
+            py::object v = py::none();
+            if (pd.contains("metrics")) {
+              const py::dict md = pd["metrics"].cast<py::dict>();
+              if (md.contains(k)) v = md[k];
+            }
+            col.push_back(is_number(v) ? v.cast<double>() : std::nan(""));
           }
-          cols[py::str(key)] = to_array(std::move(col));
+          cols[k] = to_array(std::move(col));
         }
         return cols;
       },
@@ -286,8 +287,8 @@ progress: None or callable(phase: str, done: int, total: int).)");
       R"(A parameter study: analyze on the grid of `vary` ({"section.key": [values]}; several
 keys give their Cartesian product, the first varying slowest), in parallel (threads 0: all
 cores), results in grid order whatever the thread count. Returns columns: each varied key,
-"ok" (bool), "error" (str, empty where the point ran) and each metric of `analyze` as a
-float64 array (NaN where the point failed or the metric is None).)");
+"ok" (bool), "error" (str, empty where the point ran) and each number of `analyze`'s JSON
+as a float64 array (NaN where the point failed or the metric is None).)");
 
   m.def(
       "mechanism",
@@ -330,14 +331,12 @@ model: "exact" or "pivkin2025" (default the job's mechanism.model); flank_wear_m
         if (share) more.push_back({"mechanism.share", fmt::format("{}", *share), "share"});
         const Job job = more.empty() ? pj.job : pj.with(more);
         const Recommendation r = recommend(job, job.mechanism, job.tool.flank_wear_mm > 0, feed);
-        py::dict out = from_json(recommendation_json(job, job.mechanism, r, feed));
-        out["explanation"] = r.explanation;
-        return out;
+        return from_json(recommendation_json(job, job.mechanism, r, feed));
       },
       py::arg("job"), py::kw_only(), py::arg("share") = py::none(), py::arg("feed") = false,
       R"(The smallest trochoid step (mm), or with feed=True the feed per tooth (mm) at the job's
 step, whose cutting part is at least `share` (0..1, default mechanism.share) in CZIII: the
-keys of `trochomill recommend --json` and "explanation".)");
+keys of `trochomill recommend --json` (with its "explanation").)");
 
   m.def(
       "simulate",
@@ -576,7 +575,6 @@ measurement's span. Returns the keys of `trochomill calibrate --json` and "mater
         windows["rms_high"] = to_array(std::move(r.kf.rms_high));
         windows["k_f"] = to_array(std::move(r.kf.k_f));
         out["windows"] = windows;
-        out["warnings"] = r.warnings;
         return out;
       },
       py::arg("samples"), py::arg("rate_hz"), py::kw_only(), py::arg("job") = py::none(),
@@ -587,7 +585,7 @@ rate_hz (Hz); job: the cycle timing and the model's zones (without one the cycle
 the signal's period); start_s: where the program starts in the recording (s); set:
 {"monitor.key": value} overrides (bands low_min/low_max/high_min/high_max in Hz, order,
 window in s). Returns the keys of `trochomill monitor --json`, "windows" (t_s, rms_low,
-rms_high, k_f arrays) and "warnings".)");
+rms_high, k_f arrays).)");
 
   m.def(
       "synth_signal",

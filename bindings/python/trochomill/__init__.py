@@ -54,3 +54,13 @@ __all__ = [
     "simulate",
     "synth_signal",
 ]
+
+# Errors and objects name the package, not its extension module, in tracebacks and help().
+for _name in __all__:
+    _obj = globals()[_name]
+    if getattr(_obj, "__module__", None) == "trochomill._trochomill":
+        try:
+            _obj.__module__ = "trochomill"
+        except (AttributeError, TypeError):
+            pass
+del _name, _obj

@@ -1,0 +1,246 @@
+"""Every model function against the CLI for the same job: the JSON documents key for key and
+value for value, the series to the last digit the CLI prints."""
+
+import wave
+
+import numpy as np
+import pytest
+import trochomill as tm
+
+from conftest import assert_printed, cli_csv, cli_json, run_cli
+
+# A small dexel simulation of the Bergmann example: a 6 mm slot at a 0.05 mm spacing and 120
+# steps per revolution (the example's 0.005 mm and 600 take minutes).
+SMALL_SIM = {"simulation.resolution": 0.05, "simulation.steps_per_rev": 120, "slot.length": 6.0}
+
+
+def sets(d):
+    out = []
+    for k, v in d.items():
+        out += ["--set", f"{k}={v}"]
+    return out
+
+
+def without(d, *keys):
+    return {k: v for k, v in d.items() if k not in keys}
+
+
+@pytest.mark.parametrize("overrides", [{}, {"path.aspect_ratio": 1.25, "path.step": 0.8}])
+def test_analyze_is_the_clis(wagih, overrides):
+    job = tm.Job.from_toml(wagih, set=overrides)
+    result = tm.analyze(job)
+    series = result.pop("series")
+    assert result == cli_json("analyze", wagih, *sets(overrides))
+    csv = cli_csv("analyze", wagih, *sets(overrides))
+    for name in ["t_s", "x_mm", "y_mm", "z_mm", "engagement_deg", "h_max_mm", "teeth_in_cut",
+                 "mrr_mm3_per_min"]:
+        assert_printed(series[name], csv[name], name)
+    n = len(series["t_s"])
+    for name, a in series.items():
+        assert a.shape == (n,), name
+        assert a.dtype == (np.int32 if name == "teeth_in_cut" else np.float64), name
+    # The largest chip of the program is the series' largest (the radial chip, no plunge).
+    assert result["h_max_mm"] == pytest.approx(series["h_max_mm"].max(), rel=1e-12)
+
+
+def test_analyze_a_job_without_a_steady_cycle(wagih):
+    job = tm.Job.from_toml(wagih, set={"path.type": "linear", "path.aspect_ratio": 1.0})
+    result = tm.analyze(job)
+    assert result["cycle_h_max_mm"] is None
+    result.pop("series")
+    assert result == cli_json("analyze", wagih, "--set", "path.type=linear",
+                              "--set", "path.aspect_ratio=1.0")
+
+
+def test_compare_columns_are_the_clis_points(wagih):
+    job = tm.Job.from_toml(wagih, set={"slot.length": 8.0})
+    vary = {"path.aspect_ratio": [0.8, 1.2], "path.step": [0.8, 1.0]}
+    cols = tm.compare(job, vary, threads=2)
+    cli = cli_json("compare", wagih, "--set", "slot.length=8.0", "--vary",
+                   "path.aspect_ratio=0.8,1.2", "--vary", "path.step=0.8,1.0")
+    points = cli["points"]
+    assert list(cols["path.aspect_ratio"]) == [0.8, 0.8, 1.2, 1.2]  # the first varies slowest
+    assert list(cols["path.step"]) == [0.8, 1.0, 0.8, 1.0]
+    assert list(cols["ok"]) == [p["ok"] for p in points] == [True] * 4
+    for key in ["h_max_mm", "cycle_time_s", "mrr_total_mm3_per_min", "machining_time_s"]:
+        assert list(cols[key]) == [p["metrics"][key] for p in points], key
+    # The same grid on one thread: the same columns.
+    one = tm.compare(job, vary, threads=1)
+    for key, col in cols.items():
+        if key == "error":
+            assert one[key] == col
+        else:
+            np.testing.assert_array_equal(one[key], col, err_msg=key)  # NaN where None
+
+
+def test_compare_records_a_failed_point(wagih):
+    cols = tm.compare(tm.Job.from_toml(wagih, set={"slot.length": 8.0}), {"path.step": [1.0, -1.0]})
+    assert list(cols["ok"]) == [True, False]
+    assert "path.step" in cols["error"][1] and cols["error"][0] == ""
+    assert np.isnan(cols["h_max_mm"][1]) and cols["h_max_mm"][0] > 0
+
+
+@pytest.mark.parametrize("model", ["exact", "pivkin2025"])
+def test_mechanism_is_the_clis(pivkin, model):
+    result = tm.mechanism(tm.Job.from_toml(pivkin), model=model)
+    cli = cli_json("mechanism", pivkin, "--model", model)
+    for key, value in cli.items():
+        if isinstance(value, list):
+            np.testing.assert_array_equal(result[key], value, err_msg=key)
+        else:
+            assert result[key] == value, key
+    csv = cli_csv("mechanism", pivkin, "--model", model)
+    for name in ["theta_deg", "t_s", "h_mm", "psi_deg", "teeth_in_contact", "gamma_k_deg",
+                 "kappa_deg", "k_re_pct", "zone"]:
+        assert_printed(result[name], csv[name], name)
+    assert result["zone"].dtype == np.int32
+    # K_re is 100 h / r_e (Pivkin 2025 Eq. 1) for a sharp-free new tool.
+    np.testing.assert_allclose(result["k_re_pct"], 100 * result["h_mm"] / result["edge_radius_mm"],
+                               rtol=1e-12)
+
+
+def test_mechanism_with_wear_is_the_clis(pivkin):
+    result = tm.mechanism(tm.Job.from_toml(pivkin), flank_wear_mm=0.1)
+    cli = cli_json("mechanism", pivkin, "--wear", "0.1")
+    assert result["flank_wear_mm"] == 0.1
+    np.testing.assert_array_equal(result["k_re_pct"], cli["k_re_pct"])
+
+
+@pytest.mark.parametrize("feed", [False, True])
+def test_recommend_is_the_clis(pivkin, feed):
+    result = tm.recommend(tm.Job.from_toml(pivkin), share=0.6, feed=feed)
+    cli = cli_json("recommend", pivkin, "--share", "0.6", *(["--feed"] if feed else []))
+    assert result == cli
+    assert "60 % of the cutting part in CZIII" in result["explanation"]
+
+
+def test_simulate_is_the_clis(bergmann, tmp_path):
+    job = tm.Job.from_toml(bergmann, set=SMALL_SIM)
+    result = tm.simulate(job, cycles=(1, 2))
+    out = tmp_path / "sim"
+    cli = cli_json("simulate", bergmann, *sets(SMALL_SIM), "--cycles", "1:2", "--out", out)
+    timing = ("wall_time_s", "window_wall_s", "pre_roll_wall_s", "dexel_updates_per_s",
+              "memory_mb", "memory_peak_mb", "memory_estimate_mb")
+    # The memory estimate includes the dense chip map the module returns (as --out's HDF5).
+    assert without(result, "series", "chip_map", "surface", *timing) == without(cli, *timing)
+    series = result["series"]
+    import csv as csvmod
+    with open(out / "series.csv") as f:
+        rows = list(csvmod.reader(f))
+    cols = {name: [r[i] for r in rows[1:]] for i, name in enumerate(rows[0])}
+    assert_printed(series["t_s"], cols["t_s"], "t_s")
+    for axis, name in enumerate(["x_mm", "y_mm", "z_mm"]):
+        assert_printed(series["tip_mm"][:, axis], cols[name], name)
+    for k in range(2):
+        assert_printed(series["removed_mm3"][:, k], cols[f"removed_tooth{k}_mm3"], f"tooth {k}")
+    assert_printed(series["h_max_mm"], cols["h_max_mm"], "h_max_mm")
+    assert_printed(series["engaged_segments"], cols["engaged_segments"], "engaged_segments")
+    # The removed volume is the steps' sum; the chip map's volumes are the steps' volumes.
+    assert series["removed_mm3"].sum() == pytest.approx(result["removed_volume_mm3"], rel=1e-9)
+    chips = result["chip_map"]
+    steps = len(series["t_s"])
+    assert chips["h_mm"].dtype == np.float32 and chips["h_mm"].shape[:2] == (steps, 2)
+    np.testing.assert_array_equal(chips["removed_mm3"], series["removed_mm3"])
+    np.testing.assert_array_equal(chips["t_s"], series["t_s"])
+    assert chips["h_mm"].max() == pytest.approx(result["h_max_mm"], rel=1e-6)  # float32
+    surface = result["surface"]
+    v, f = surface["vertices_mm"], surface["faces"]
+    assert v.shape[1] == 3 and f.shape[1] == 3 and f.dtype == np.uint32
+    assert f.max() < len(v)
+    # The surface lies between the stock's bottom and its top (z = 0), cut into the slot.
+    assert v[:, 2].max() <= 1e-9 and v[:, 2].min() >= surface["bottom_mm"] - 1e-9
+    assert v[:, 2].min() < -0.9  # the 1 mm deep slot
+
+
+def test_forces_are_the_clis(bergmann):
+    job = tm.Job.from_toml(bergmann, set=SMALL_SIM)
+    result = tm.forces(job, fast=True, from_s=45.6, to_s=45.9)
+    window = ["--fast", "--from", "45.6", "--to", "45.9"]
+    cli = cli_json("forces", bergmann, *sets(SMALL_SIM), *window)
+    timing = ("chips_wall_s", "forces_wall_s")
+    assert without(result, "series", *timing) == without(cli, *timing)
+    csv = cli_csv("forces", bergmann, *sets(SMALL_SIM), *window)
+    s = result["series"]
+    for name in ["t_s", "f_x_n", "f_y_n", "f_z_n", "f_resultant_n", "torque_nm", "power_w"]:
+        assert_printed(s[name], csv[name], name)
+    for k in range(2):
+        assert_printed(s["tooth_f_x_n"][:, k], csv[f"tooth{k}_f_x_n"], f"tooth {k}")
+    # The teeth's forces add up to the tool's.
+    np.testing.assert_allclose(s["tooth_f_x_n"].sum(axis=1), s["f_x_n"], rtol=1e-12, atol=1e-9)
+    assert result["f_resultant_max_n"] == pytest.approx(s["f_resultant_n"].max(), rel=1e-12)
+
+
+def test_forces_need_a_material(wagih):
+    with pytest.raises(tm.InputError, match="no \\[material\\] force model"):
+        tm.forces(tm.Job.from_toml(wagih))
+
+
+def test_calibrate_is_the_clis(bergmann, tmp_path):
+    job = tm.Job.from_toml(bergmann, set=SMALL_SIM)
+    measured = tmp_path / "forces.csv"
+    window = ["--fast", "--from", "45.6", "--to", "45.9"]
+    run_cli("forces", bergmann, *sets(SMALL_SIM), *window, "--csv", measured)
+    data = np.genfromtxt(measured, delimiter=",", names=True)
+    f = np.column_stack([data["f_x_n"], data["f_y_n"], data["f_z_n"]])
+    # The CSV's printed values are the measurement both fit.
+    result = tm.calibrate(job, data["t_s"], f, fast=True)
+    toml_block = result.pop("material_toml")
+    cli = cli_json("calibrate", bergmann, *sets(SMALL_SIM), "--measured", measured, "--fast")
+    assert result == cli
+    assert "[material]" in toml_block
+    with pytest.raises(tm.InputError, match="shape"):
+        tm.calibrate(job, data["t_s"], f[:, :2])
+    with pytest.raises(tm.InputError, match="times must increase"):
+        tm.calibrate(job, data["t_s"][::-1].copy(), f)
+
+
+def read_float_wav(path):
+    """A mono IEEE-float WAV (format 3) as float64, read chunk by chunk."""
+    raw = path.read_bytes()
+    assert raw[:4] == b"RIFF" and raw[8:12] == b"WAVE"
+    pos, fmt, data = 12, None, None
+    while pos < len(raw):
+        cid, size = raw[pos:pos + 4], int.from_bytes(raw[pos + 4:pos + 8], "little")
+        body = raw[pos + 8:pos + 8 + size]
+        if cid == b"fmt ":
+            fmt = body
+        elif cid == b"data":
+            data = body
+        pos += 8 + size + (size & 1)
+    assert int.from_bytes(fmt[0:2], "little") in (3, 0xFFFE)
+    rate = int.from_bytes(fmt[4:8], "little")
+    return np.frombuffer(data, dtype="<f4").astype(np.float64), rate
+
+
+def test_synth_signal_is_the_clis(pivkin, tmp_path):
+    job = tm.Job.from_toml(pivkin)
+    sig = tm.synth_signal(job, rate_hz=40000, cycles=3, seed=7)
+    wav = tmp_path / "s.wav"
+    run_cli("synth-signal", pivkin, "--rate", "40000", "--cycles", "3", "--seed", "7", "-o", wav)
+    samples, rate = read_float_wav(wav)
+    assert rate == 40000 and sig["rate_hz"] == 40000 and sig["cycles"] == 3
+    # The WAV holds float32: the module's float64 samples rounded to float32 are its samples.
+    np.testing.assert_array_equal(sig["samples"].astype(np.float32).astype(np.float64), samples)
+
+
+def test_monitor_is_the_clis(pivkin, tmp_path):
+    job = tm.Job.from_toml(pivkin)
+    sig = tm.synth_signal(job, rate_hz=40000, cycles=4, wear_drift=0.5)
+    x = sig["samples"]
+    path = tmp_path / "s.csv"
+    np.savetxt(path, x, fmt="%.17g")  # read back to the same doubles
+    result = tm.monitor(x, 40000, job=job, start_s=sig["start_s"])
+    windows = result.pop("windows")
+    cli = cli_json("monitor", path, "--rate", "40000", "--job", pivkin, "--start", sig["start_s"])
+    assert without(result, "signal") == without(cli, "signal")
+    csv = cli_csv("monitor", path, "--rate", "40000", "--job", pivkin, "--start", sig["start_s"])
+    for name in ["t_s", "rms_low", "rms_high", "k_f"]:
+        assert_printed(windows[name], csv[name], name)
+    assert result["warnings"] == []
+    # Without a job the bands can be set as keys; a band above the Nyquist rate is refused.
+    free = tm.monitor(x, 40000, set={"monitor.window": 0.002})
+    assert free["windows"]["t_s"][1] - free["windows"]["t_s"][0] == pytest.approx(0.002)
+    with pytest.raises(tm.InputError, match="rate / 2"):
+        tm.monitor(x[:4000], 10000)
+    with pytest.raises(tm.InputError, match=r"samples\[3\] is nan"):
+        tm.monitor(np.array([0, 1, 2, np.nan, 4.0]), 40000)
