@@ -29,3 +29,18 @@ if(NOT consumer STREQUAL cli OR cli STREQUAL "")
   message(FATAL_ERROR "the consumer printed '${consumer}', the installed CLI '${cli}'")
 endif()
 message(STATUS "consumer built against the installed tree: ${consumer}")
+
+# The installed Python package (when built): imported from the prefix's site-packages alone,
+# it plans the same slot.
+if(DEFINED PYTHON AND DEFINED PYTHON_DIR)
+  execute_process(
+    COMMAND ${CMAKE_COMMAND} -E env PYTHONPATH=${WORK}/prefix/${PYTHON_DIR} ${PYTHON} -c
+      "import sys, trochomill as tm; assert tm.__file__.startswith(sys.argv[2]), tm.__file__; p = tm.plan(tm.Job.from_toml(sys.argv[1])); print(f'{p.cycles} cycles, path {p.length_mm:.3f} mm')"
+      ${example} ${WORK}/prefix
+    RESULT_VARIABLE rc OUTPUT_VARIABLE py ERROR_VARIABLE err WORKING_DIRECTORY ${WORK})
+  string(STRIP "${py}" py)
+  if(NOT rc EQUAL 0 OR NOT py STREQUAL cli)
+    message(FATAL_ERROR "the installed Python package printed '${py}' (${rc}), the CLI '${cli}'\n${err}")
+  endif()
+  message(STATUS "the installed Python package: ${py}")
+endif()
