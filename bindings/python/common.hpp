@@ -77,6 +77,8 @@ py::array_t<T> to_array(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
 /// A Python value (bool, int, float, str, a list of them) in TOML syntax, for the job key
 /// `key` (named when the value's type cannot be one).
 [[nodiscard]] std::string toml_value(const py::handle& v, const std::string& key);
+/// {"section.key": value} (None: none) as overrides; a key without a section is refused.
+[[nodiscard]] std::vector<Override> overrides_of(const py::object& set);
 /// JSON text (the CLI's --json documents) as Python objects (json.loads).
 [[nodiscard]] py::object from_json(const std::string& text);
 

@@ -156,6 +156,39 @@ py::dict chip_map_dict(ChipMapData&& c) {
   return d;
 }
 
+// A profile texture's evaluated R and W profiles: x_mm (along the input), roughness_mm,
+// waviness_mm.
+py::dict profile_arrays(ProfileTexture& t) {
+  std::vector<double> x(t.roughness_profile_mm.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    x[i] = t.profile_start_mm + static_cast<double>(i) * t.profile_dx_mm;
+  }
+  py::dict d;
+  d["x_mm"] = to_array(std::move(x));
+  d["roughness_mm"] = to_array(std::move(t.roughness_profile_mm));
+  d["waviness_mm"] = to_array(std::move(t.waviness_profile_mm));
+  return d;
+}
+
+// The one surface of a texture JSON document.
+py::dict first_surface(const std::string& json) {
+  const py::list surfaces = from_json(json)["surfaces"];
+  return surfaces[0];
+}
+
+// A height map as a dict: z_mm (ny, nx), dx_mm, dy_mm, x0_mm, y0_mm, description.
+py::dict height_map_dict(HeightMap&& m) {
+  py::dict d;
+  d["dx_mm"] = m.dx_mm;
+  d["dy_mm"] = m.dy_mm;
+  d["x0_mm"] = m.x0_mm;
+  d["y0_mm"] = m.y0_mm;
+  d["description"] = m.description;
+  d["z_mm"] =
+      to_array(std::move(m.z_mm), {static_cast<py::ssize_t>(m.ny), static_cast<py::ssize_t>(m.nx)});
+  return d;
+}
+
 // "(n, 3)": an array's shape as Python writes it.
 std::string shape_text(const py::array& a) {
   std::string out = "(";
@@ -185,6 +218,10 @@ void bind_models(py::module_& m) {
             [&](const RunHooks& h) { return analyze_with_forces(job, path, h); }, progress);
         py::dict out = from_json(metrics_json(job, pm));
         out["series"] = analyze_series(job, std::move(pm.series));
+        py::dict walls;  // the steady cycle's walls, as the JSON reports their texture
+        if (pm.periodic && pm.texture_left) walls["left"] = profile_arrays(*pm.texture_left);
+        if (pm.periodic && pm.texture_right) walls["right"] = profile_arrays(*pm.texture_right);
+        out["wall_texture_profiles"] = walls;
         return out;
       },
       py::arg("job"), py::kw_only(), py::arg("memory_limit_gb") = py::none(),
@@ -195,7 +232,9 @@ job: a Job (its planned path) or a Path (planned, or read from G-code with a job
 Returns the keys of `trochomill analyze --json` (units in their names: _mm, _s, _deg,
 _mm3_per_min; cycle_* keys None when the path has no steady cycle) and "series": float64
 arrays t_s, x_mm, y_mm, z_mm, engagement_deg, h_max_mm, mrr_mm3_per_min,
-radial_engagement_mm and the int32 array teeth_in_cut, one entry per sample.
+radial_engagement_mm and the int32 array teeth_in_cut, one entry per sample;
+"wall_texture_profiles": per wall ("left", "right") the predicted R and W profiles the wall
+texture was evaluated on (x_mm along the feed, roughness_mm, waviness_mm).
 progress: None or callable(phase: str, done: int, total: int).)");
 
   m.def(
@@ -392,6 +431,13 @@ keys of `trochomill recommend --json` (with its "explanation").)");
         out["chip_map"] = chip_map_dict(chip_map_data(r, tool, job.simulation));
         out["surface"] =
             surface_mesh(surface_height_field(*js.work, default_surface_step_mm(*js.work)));
+        try {
+          out["floor"] = height_map_dict(simulated_floor(job, js));
+          out["floor_note"] = "";
+        } catch (const InputError& e) {  // the window left no floor cut across the slot
+          out["floor"] = py::none();
+          out["floor_note"] = e.what();
+        }
         return out;
       },
       py::arg("job"), py::kw_only(), py::arg("cycles") = py::none(), py::arg("from_s") = py::none(),
@@ -403,7 +449,10 @@ Returns the keys of `trochomill simulate --json`, "series" (t_s, tip_mm (n, 3),
 removed_mm3 (n, teeth), h_max_mm, h_mean_mm, engaged_segments per step), "chip_map" (t_s,
 tip_mm, removed_mm3 and float32 h_mm, w_mm, v_mm3 (steps, teeth, segments), the
 segment_height_mm of each edge segment above the tip) and "surface" (the machined surface:
-vertices_mm (n, 3), faces (m, 3) uint32, bottom_mm). The GIL is released while it runs.
+vertices_mm (n, 3), faces (m, 3) uint32, bottom_mm) and "floor" (the slot's floor as a
+height map at the dexel spacing, as floor.x3p: z_mm (ny, nx), dx_mm, dy_mm, x0_mm, y0_mm; None
+with the reason in "floor_note" when the window left no floor cut across the slot). The GIL
+is released while it runs.
 progress: None or callable(phase: str, done: int, total: int).)");
 
   m.def(
@@ -544,13 +593,7 @@ measurement's span. Returns the keys of `trochomill calibrate --json` and "mater
         if (!(std::isfinite(start_s) && start_s >= 0 && start_s <= 1e9)) {
           throw InputError(fmt::format("start_s must be in [0, 1e9] s, got {}", start_s));
         }
-        std::vector<Override> keys;
-        if (!set.is_none()) {
-          for (const auto& [k, v] : set.cast<py::dict>()) {
-            keys.push_back({py::str(k).cast<std::string>(),
-                            toml_value(v, py::str(k).cast<std::string>()), ""});
-          }
-        }
+        const std::vector<Override> keys = overrides_of(set);
         std::optional<Job> job;
         MonitorSettings ms;
         if (!job_obj.is_none()) {
@@ -610,13 +653,7 @@ rms_high, k_f arrays).)");
   m.def(
       "_monitor_filters",
       [](double rate_hz, const py::object& set) {
-        std::vector<Override> keys;
-        if (!set.is_none()) {
-          for (const auto& [k, v] : set.cast<py::dict>()) {
-            keys.push_back({py::str(k).cast<std::string>(),
-                            toml_value(v, py::str(k).cast<std::string>()), ""});
-          }
-        }
+        const std::vector<Override> keys = overrides_of(set);
         Job defaults;
         apply_overrides(defaults, keys);
         const MonitorSettings& ms = defaults.monitor;
@@ -632,6 +669,84 @@ rms_high, k_f arrays).)");
             rows(butter_bandpass(ms.order, ms.high_min_hz, ms.high_max_hz, rate_hz)));
       },
       py::arg("rate_hz"), py::arg("set") = py::none());
+
+  m.def(
+      "texture_profile",
+      [](const py::array_t<double, py::array::c_style | py::array::forcecast>& z, double dx_mm,
+         std::optional<double> lambda_c_mm, std::optional<double> lambda_s_mm, bool robust) {
+        TextureEntry e;
+        e.surface = "profile";
+        const std::vector<double> heights = finite_vector(z, "z_mm");
+        e.description = fmt::format("profile of {} points every {:g} mm", heights.size(), dx_mm);
+        ProfileFilterOptions o;
+        o.lambda_s_mm = lambda_s_mm;
+        o.robust = robust;
+        e.texture = run_released(
+            [&](const RunHooks&) { return profile_texture(heights, dx_mm, lambda_c_mm, o); });
+        py::dict out = first_surface(texture_json("<array>", {e}));
+        out["profile"] = profile_arrays(e.texture);
+        return out;
+      },
+      py::arg("z_mm"), py::arg("dx_mm"), py::kw_only(), py::arg("lambda_c_mm") = py::none(),
+      py::arg("lambda_s_mm") = py::none(), py::arg("robust") = false,
+      R"(Roughness and waviness of a profile (ISO 16610-21 Gaussian filter, ISO 21920-2
+parameters), as `trochomill texture` reports a CSV profile: z_mm heights (mm) every dx_mm (mm);
+lambda_c_mm the cut-off (default the ISO 21920-3 one for its Ra, found by iteration and
+stated), lambda_s_mm the S-filter, robust the ISO 16610-31 robust filter. Returns the keys
+of the CLI's JSON surface (ra_mm, rq_mm, rz_mm, rt_mm, rsm_mm, wa_mm, wt_mm, lambda_c_mm,
+evaluation_length_mm, ...) and "profile": x_mm (along the input), roughness_mm (R profile)
+and waviness_mm (W profile, the filter's mean line) over the evaluation length.)");
+
+  m.def(
+      "texture_areal",
+      [](const py::array_t<double, py::array::c_style | py::array::forcecast>& z, double dx_mm,
+         double dy_mm, std::optional<double> s_mm, std::optional<double> l_mm,
+         const std::string& form, int degree, std::optional<double> memory_limit_gb) {
+        if (z.ndim() != 2) {
+          throw InputError(fmt::format(
+              "z_mm: a 2-D array (rows along y, columns along x), got {} dimensions", z.ndim()));
+        }
+        // An areal texture holds about 12 copies of the map at its peak (as the CLI counts).
+        check_memory("texture_areal", static_cast<double>(z.size()) * 100.0 + 40e6, memory_limit_gb,
+                     "evaluate a smaller map");
+        HeightMap map;
+        map.ny = static_cast<std::size_t>(z.shape(0));
+        map.nx = static_cast<std::size_t>(z.shape(1));
+        map.dx_mm = dx_mm;
+        map.dy_mm = dy_mm;
+        map.z_mm.assign(z.data(), z.data() + z.size());
+        map.description =
+            fmt::format("map of {} x {} points every {:g} x {:g} mm", map.nx, map.ny, dx_mm, dy_mm);
+        check_height_map(map, "z_mm");
+        ArealFilterOptions o;
+        o.s_mm = s_mm;
+        o.l_mm = l_mm;
+        o.degree = degree;
+        if (form == "plane") {
+          o.form = FormRemoval::plane;
+        } else if (form == "polynomial") {
+          o.form = FormRemoval::polynomial;
+        } else if (form == "none") {
+          o.form = FormRemoval::none;
+        } else {
+          throw InputError(fmt::format("form '{}': plane, polynomial or none", form));
+        }
+        TextureEntry e;
+        e.surface = "surface";
+        e.description = map.description;
+        e.areal = run_released([&](const RunHooks&) { return areal_texture(map, o); });
+        return first_surface(texture_json("<array>", {e}));
+      },
+      py::arg("z_mm"), py::arg("dx_mm"), py::arg("dy_mm"), py::kw_only(),
+      py::arg("s_mm") = py::none(), py::arg("l_mm") = py::none(), py::arg("form") = "plane",
+      py::arg("degree") = 2, py::arg("memory_limit_gb") = py::none(),
+      R"(Areal texture of a height map (ISO 16610-61 Gaussian filter, ISO 25178-2 parameters), as
+`trochomill texture` reports an X3P surface: z_mm heights (mm) as (rows along y, columns
+along x), every dx_mm along x and dy_mm along y; s_mm the S-filter's nesting index (default
+none), l_mm the L-filter's (default the ISO 21920-3 cut-off for the S-L surface's Sa), form
+the F-operator ("plane", "polynomial" of `degree`, "none"). Returns the keys of the CLI's
+JSON surface: the S-F and S-L surfaces' Sa, Sq, Ssk, Sku, Sp, Sv, Sz (mm), Sdr (%), Sal (mm)
+and Str, with the filters used. A simulation's floor (simulate(...)["floor"]) is such a map.)");
 
   m.def(
       "synth_signal",

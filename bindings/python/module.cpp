@@ -15,8 +15,6 @@
 
 namespace trochomill::python {
 
-namespace {}  // namespace
-
 std::string toml_value(const py::handle& v, const std::string& key) {
   if (py::isinstance<py::bool_>(v)) return v.cast<bool>() ? "true" : "false";
   if (py::isinstance<py::str>(v)) {
@@ -61,16 +59,6 @@ PyJob job_from_document(JobDocument doc, std::vector<Override> overrides) {
   j.overrides = std::move(overrides);
   j.job = j.doc->build(j.overrides);
   return j;
-}
-
-// set={"path.step": 0.8, ...} as overrides.
-std::vector<Override> overrides_of(const py::object& set) {
-  std::vector<Override> out;
-  if (set.is_none()) return out;
-  for (const auto& [k, v] : set.cast<py::dict>()) {
-    out.push_back(make_override(py::str(k).cast<std::string>(), v));
-  }
-  return out;
 }
 
 // The job's keys (the document after the overrides) as nested dicts, read by tomllib.
@@ -154,6 +142,15 @@ PyPath read_program(const py::object& program, const py::object& job_obj) {
 }
 
 }  // namespace
+
+std::vector<Override> overrides_of(const py::object& set) {
+  std::vector<Override> out;
+  if (set.is_none()) return out;
+  for (const auto& [k, v] : set.cast<py::dict>()) {
+    out.push_back(make_override(py::str(k).cast<std::string>(), v));
+  }
+  return out;
+}
 
 const PyJob& job_of(const py::object& job_or_path, const char* function) {
   if (py::isinstance<PyJob>(job_or_path)) return job_or_path.cast<const PyJob&>();

@@ -142,6 +142,12 @@ struct ProfileTexture {
   double wt_mm = 0;        ///< total height of the W profile over the evaluation length
   double lambda_s_mm = 0;  ///< the S-filter's cut-off (0: none)
   bool robust = false;     ///< the mean line by the robust filter (ISO 16610-31)
+  /// The evaluated R profile (the residual of the lambda_c filter) and W profile (its mean
+  /// line), mm, every `profile_dx_mm` over the evaluation length; the first point lies
+  /// `profile_start_mm` along the input from its first sample (for a periodic profile, along
+  /// its endless repetition).
+  std::vector<double> roughness_profile_mm, waviness_profile_mm;
+  double profile_dx_mm = 0, profile_start_mm = 0;
 };
 /// How a measured profile is filtered besides the cut-off.
 struct ProfileFilterOptions {

@@ -305,11 +305,13 @@ double default_cutoff_mm(double ra_mm) {
 namespace {
 
 // The roughness of the R profile `r` and the waviness of the W profile `w` (the mean line),
-// `sections` sampling lengths of cut-off `lc`.
-ProfileTexture texture_of(const std::vector<double>& r, const std::vector<double>& w, double dx,
-                          double lc, std::size_t sections) {
+// `sections` sampling lengths of cut-off `lc`, the first sample `start` samples along the input.
+ProfileTexture texture_of(std::vector<double> r, std::vector<double> w, double dx, double lc,
+                          std::size_t sections, std::size_t start) {
   ProfileTexture t;
   t.cutoff_mm = lc;
+  t.profile_dx_mm = dx;
+  t.profile_start_mm = static_cast<double>(start) * dx;
   t.roughness = profile_parameters(r, dx, static_cast<int>(sections));
   double mean = 0;
   for (const double v : w) mean += v;
@@ -317,6 +319,8 @@ ProfileTexture texture_of(const std::vector<double>& r, const std::vector<double
   for (const double v : w) t.wa_mm += std::abs(v - mean) / static_cast<double>(w.size());
   const auto [lo, hi] = std::minmax_element(w.begin(), w.end());
   t.wt_mm = *hi - *lo;
+  t.roughness_profile_mm = std::move(r);
+  t.waviness_profile_mm = std::move(w);
   return t;
 }
 
@@ -402,7 +406,7 @@ ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm, 
       r[i] = z[j] - mean[j];
       wl[i] = mean[j];
     }
-    return texture_of(r, wl, dx_mm, lc, 5);
+    return texture_of(std::move(r), std::move(wl), dx_mm, lc, 5, half);
   });
 }
 
@@ -465,7 +469,7 @@ ProfileTexture profile_texture(const std::vector<double>& raw_z_mm, double dx_mm
     const auto len = static_cast<std::ptrdiff_t>(sections * per);
     return texture_of(std::vector<double>(f.residual_mm.begin(), f.residual_mm.begin() + len),
                       std::vector<double>(f.mean_mm.begin(), f.mean_mm.begin() + len), dx_mm, lc,
-                      sections);
+                      sections, f.first);
   });
   t.lambda_s_mm = o.lambda_s_mm.value_or(0.0);
   t.robust = o.robust;

@@ -30,7 +30,13 @@ def test_analyze_is_the_clis(wagih, overrides):
     job = tm.Job.from_toml(wagih, set=overrides)
     result = tm.analyze(job)
     series = result.pop("series")
+    walls = result.pop("wall_texture_profiles")
     assert result == cli_json("analyze", wagih, *sets(overrides))
+    # The predicted walls' Ra is the mean |R| of the profile they were evaluated on.
+    for side in ("left", "right"):
+        r = walls[side]["roughness_mm"]
+        assert np.mean(np.abs(r)) == pytest.approx(result[f"ra_{side}_mm"], rel=1e-12)
+        assert len(walls[side]["x_mm"]) == len(r) == len(walls[side]["waviness_mm"])
     csv = cli_csv("analyze", wagih, *sets(overrides))
     for name in ["t_s", "x_mm", "y_mm", "z_mm", "engagement_deg", "h_max_mm", "teeth_in_cut",
                  "mrr_mm3_per_min"]:
@@ -48,6 +54,9 @@ def test_analyze_a_job_without_a_steady_cycle(wagih):
     result = tm.analyze(job)
     assert result["cycle_h_max_mm"] is None
     result.pop("series")
+    walls = result.pop("wall_texture_profiles")
+    for side in ("left", "right"):  # profiles exactly where the JSON has a wall texture
+        assert (side in walls) == (result[f"ra_{side}_mm"] is not None)
     assert result == cli_json("analyze", wagih, "--set", "path.type=linear",
                               "--set", "path.aspect_ratio=1.0")
 
@@ -122,7 +131,13 @@ def test_simulate_is_the_clis(bergmann, tmp_path):
     timing = ("wall_time_s", "window_wall_s", "pre_roll_wall_s", "dexel_updates_per_s",
               "memory_mb", "memory_peak_mb", "memory_estimate_mb")
     # The memory estimate includes the dense chip map the module returns (as --out's HDF5).
-    assert without(result, "series", "chip_map", "surface", *timing) == without(cli, *timing)
+    assert without(result, "series", "chip_map", "surface", "floor", "floor_note", *timing) == \
+        without(cli, *timing)
+    # One cycle of a 50 mm wide slot leaves no floor cut across it: no floor.x3p from the CLI
+    # (it says why), no floor map here, with the same reason.
+    assert not (out / "floor.x3p").exists()
+    assert result["floor"] is None
+    assert result["floor_note"].startswith("floor: no two rows of the workpiece are cut")
     series = result["series"]
     import csv as csvmod
     with open(out / "series.csv") as f:

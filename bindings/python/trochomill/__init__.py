@@ -34,6 +34,8 @@ from ._trochomill import (
     recommend,
     simulate,
     synth_signal,
+    texture_areal,
+    texture_profile,
 )
 
 __all__ = [
@@ -53,6 +55,8 @@ __all__ = [
     "recommend",
     "simulate",
     "synth_signal",
+    "texture_areal",
+    "texture_profile",
 ]
 
 # Errors and objects name the package, not its extension module, in tracebacks and help().

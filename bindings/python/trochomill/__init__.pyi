@@ -107,3 +107,10 @@ def synth_signal(job: Job, *, rate_hz: float = 100000.0, cycles: int = 12, kf_cz
                  noise: float = 0.02, lead_s: float = 0.1, seed: int = 1,
                  memory_limit_gb: float | None = None) -> dict[str, Any]:
     """{"samples": float64 array, "rate_hz", "cycles", "start_s"}."""
+def texture_profile(z_mm: npt.ArrayLike, dx_mm: float, *, lambda_c_mm: float | None = None,
+                    lambda_s_mm: float | None = None, robust: bool = False) -> dict[str, Any]:
+    """The CLI texture JSON's keys and "profile" (x_mm, roughness_mm, waviness_mm)."""
+def texture_areal(z_mm: npt.ArrayLike, dx_mm: float, dy_mm: float, *, s_mm: float | None = None,
+                  l_mm: float | None = None, form: str = "plane", degree: int = 2,
+                  memory_limit_gb: float | None = None) -> dict[str, Any]:
+    """The CLI texture JSON's keys of an areal surface (S-F and S-L parameters)."""
