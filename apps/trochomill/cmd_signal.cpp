@@ -194,7 +194,10 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
       if (!a->spectrogram.empty()) {
         emit(a->spectrogram, spectrogram_csv(spectrogram(sig, a->nfft)));
       }
-      if (a->csv != "-") fmt::print("{}", spectrum_text(a->signal.file, sig, sp, a->nfft));
+      // The summary only where it does not mix into a CSV on stdout.
+      if (summary_to_stdout({&a->csv, &a->spectrogram})) {
+        fmt::print("{}", spectrum_text(a->signal.file, sig, sp, a->nfft));
+      }
       exit_code = 0;
     });
   }

@@ -749,6 +749,56 @@ JSON surface: the S-F and S-L surfaces' Sa, Sq, Ssk, Sku, Sp, Sv, Sz (mm), Sdr (
 and Str, with the filters used. A simulation's floor (simulate(...)["floor"]) is such a map.)");
 
   m.def(
+      "spectrum",
+      [](const py::array_t<double, py::array::c_style | py::array::forcecast>& samples,
+         double rate_hz, int nfft, bool with_spectrogram) {
+        if (!(std::isfinite(rate_hz) && rate_hz > 0 && rate_hz <= 1e7)) {
+          throw InputError(fmt::format("rate_hz must be in (0, 1e7] Hz, got {}", rate_hz));
+        }
+        if (nfft < 16 || nfft > (1 << 24)) {
+          throw InputError(fmt::format("nfft must be in [16, 16777216], got {}", nfft));
+        }
+        Signal sig;
+        sig.rate_hz = rate_hz;
+        sig.samples = finite_vector(samples, "samples");
+        Spectrum sp = run_released([&](const RunHooks&) { return welch(sig, nfft); });
+        py::dict out;
+        out["f_hz"] = to_array(std::move(sp.f_hz));
+        out["psd_per_hz"] = to_array(std::move(sp.psd));
+        if (with_spectrogram) {
+          Spectrogram sg = run_released([&](const RunHooks&) { return spectrogram(sig, nfft); });
+          const auto frames = static_cast<py::ssize_t>(sg.db.size());
+          const auto bins = static_cast<py::ssize_t>(sg.f_hz.size());
+          std::vector<double> db;
+          db.reserve(static_cast<std::size_t>(frames * bins));
+          for (const auto& row : sg.db) db.insert(db.end(), row.begin(), row.end());
+          py::dict g;
+          g["t_s"] = to_array(std::move(sg.t_s));
+          g["f_hz"] = to_array(std::move(sg.f_hz));
+          g["db"] = to_array(std::move(db), {frames, bins});
+          out["spectrogram"] = g;
+        }
+        return out;
+      },
+      py::arg("samples"), py::arg("rate_hz"), py::kw_only(), py::arg("nfft") = 4096,
+      py::arg("spectrogram") = false,
+      R"(Welch power spectral density of one channel, as `trochomill spectrum` (to choose the
+monitor's bands): samples (float64, any unit U) at rate_hz (Hz), nfft a power of two
+(Hann windows, half overlap). Returns f_hz and psd_per_hz (U^2/Hz) arrays; with
+spectrogram=True also "spectrogram": t_s (frame centres), f_hz and db (frames, bins:
+20 log10 of the amplitude).)");
+
+  m.def(
+      "keys", [] { return from_json(job_keys_json()); },
+      R"(Every key of the job file, as `trochomill keys --json`: a list of dicts with section,
+key, type, unit, allowed (range or choices), default and doc.)");
+
+  m.def(
+      "materials", [] { return from_json(materials_json(material_library())); },
+      R"(The materials library (force model coefficients with their sources), as `trochomill
+materials --json`: a list of dicts; a job names one with [material] name.)");
+
+  m.def(
       "synth_signal",
       [](const PyJob& pj, double rate_hz, int cycles, double kf_czi, double kf_czii,
          double kf_cziii, double wear_drift, double noise, double lead_s, std::uint32_t seed,

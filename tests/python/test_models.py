@@ -259,3 +259,32 @@ def test_monitor_is_the_clis(pivkin, tmp_path):
         tm.monitor(x[:4000], 10000)
     with pytest.raises(tm.InputError, match=r"samples\[3\] is nan"):
         tm.monitor(np.array([0, 1, 2, np.nan, 4.0]), 40000)
+
+
+def test_spectrum_is_the_clis(pivkin, tmp_path):
+    sig = tm.synth_signal(tm.Job.from_toml(pivkin), rate_hz=40000, cycles=2)
+    path = tmp_path / "s.csv"
+    np.savetxt(path, sig["samples"], fmt="%.17g")
+    sp = tm.spectrum(sig["samples"], 40000, nfft=1024, spectrogram=True)
+    csv = cli_csv("spectrum", path, "--rate", "40000", "--nfft", "1024")
+    assert_printed(sp["f_hz"], csv["f_hz"], "f_hz")
+    assert_printed(sp["psd_per_hz"], csv["psd_per_hz"], "psd_per_hz")
+    g = sp["spectrogram"]
+    assert g["db"].shape == (len(g["t_s"]), len(g["f_hz"]))
+    long_form = cli_csv("spectrum", path, "--rate", "40000", "--nfft", "1024", option="--spectrogram")
+    assert_printed(g["db"].ravel(), long_form["db"], "db")  # frame by frame, bins within
+    # Parseval: the PSD integrates to the signal's variance (Welch with a Hann window and
+    # density scaling; 2 % for the averaging over segments of a non-stationary signal).
+    df = sp["f_hz"][1] - sp["f_hz"][0]
+    assert np.sum(sp["psd_per_hz"]) * df == pytest.approx(np.var(sig["samples"]), rel=0.02)
+
+
+def test_keys_and_materials_are_the_clis():
+    assert tm.keys() == cli_json_plain("keys")
+    assert tm.materials() == cli_json_plain("materials")
+    assert any(k["section"] == "path" and k["key"] == "step" and k["unit"] == "mm" for k in tm.keys())
+
+
+def cli_json_plain(*args):
+    import json
+    return json.loads(run_cli(*args, "--json").stdout)

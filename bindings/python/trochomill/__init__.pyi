@@ -114,3 +114,10 @@ def texture_areal(z_mm: npt.ArrayLike, dx_mm: float, dy_mm: float, *, s_mm: floa
                   l_mm: float | None = None, form: str = "plane", degree: int = 2,
                   memory_limit_gb: float | None = None) -> dict[str, Any]:
     """The CLI texture JSON's keys of an areal surface (S-F and S-L parameters)."""
+def spectrum(samples: npt.ArrayLike, rate_hz: float, *, nfft: int = 4096,
+             spectrogram: bool = False) -> dict[str, Any]:
+    """f_hz and psd_per_hz arrays (and "spectrogram": t_s, f_hz, db)."""
+def keys() -> list[dict[str, str]]:
+    """Every job key: section, key, type, unit, allowed, default, doc."""
+def materials() -> list[dict[str, Any]]:
+    """The materials library."""
