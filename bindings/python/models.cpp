@@ -799,6 +799,61 @@ key, type, unit, allowed (range or choices), default and doc.)");
 materials --json`: a list of dicts; a job names one with [material] name.)");
 
   m.def(
+      "schedule_feed",
+      [](const py::object& job_or_path, std::optional<double> h_max_mm,
+         std::optional<double> min_feed_mm_per_min, std::optional<double> max_feed_mm_per_min,
+         double air_feed_mm_per_min, double feed_step_percent, double piece_mm,
+         const py::object& progress) {
+        const PyJob& pj = job_of(job_or_path, "schedule_feed");
+        const ToolPath path = path_of(job_or_path);
+        // The defaults and checks of `plan --feed-schedule`: the limits a tenth and three
+        // times the job's feed; the rest validated by schedule_feed (InputError).
+        const double f = feed_rate_mm_per_min(pj.job);
+        FeedTargets t;
+        t.h_max_mm = h_max_mm;
+        t.min_feed_mm_per_min = min_feed_mm_per_min.value_or(0.1 * f);
+        t.max_feed_mm_per_min = max_feed_mm_per_min.value_or(3.0 * f);
+        t.air_feed_mm_per_min = air_feed_mm_per_min;
+        t.feed_step_percent = feed_step_percent;
+        t.piece_mm = piece_mm;
+        FeedSchedule fs = run_released(
+            [&](const RunHooks& h) { return schedule_feed(pj.job, path, t, h); }, progress);
+        PyPath p;
+        p.path = std::move(fs.path);
+        p.cycles = static_cast<int>(p.path.cycles().size());
+        p.source = py::isinstance<PyPath>(job_or_path) ? job_or_path.cast<const PyPath&>().source
+                                                       : std::string("plan");
+        p.job = std::make_shared<const PyJob>(pj);
+        py::dict out;
+        out["path"] = std::move(p);
+        out["time_before_s"] = fs.time_before_s;
+        out["time_after_s"] = fs.time_after_s;
+        out["h_max_before_mm"] = fs.h_max_before_mm;
+        out["h_max_after_mm"] = fs.h_max_after_mm;
+        out["pieces"] = fs.pieces;
+        std::vector<std::int32_t> limit(fs.piece_limit.size());
+        for (std::size_t i = 0; i < limit.size(); ++i)
+          limit[i] = static_cast<std::int32_t>(fs.piece_limit[i]);
+        out["piece_h_max_mm"] = to_array(std::move(fs.piece_h_max_mm));
+        out["piece_feed_mm_per_min"] = to_array(std::move(fs.piece_feed_mm_per_min));
+        out["piece_limit"] = to_array(std::move(limit));
+        return out;
+      },
+      py::arg("job"), py::kw_only(), py::arg("h_max_mm") = py::none(),
+      py::arg("min_feed_mm_per_min") = py::none(), py::arg("max_feed_mm_per_min") = py::none(),
+      py::arg("air_feed_mm_per_min") = 0.0, py::arg("feed_step_percent") = 5.0,
+      py::arg("piece_mm") = 0.5, py::arg("progress") = py::none(),
+      R"(Chip-load feed scheduling, as `plan --feed-schedule` (docs/models.md section 15): each
+piece of the path (at most piece_mm long) fed so that its largest chip is h_max_mm (default
+the job's feed per tooth), within min_feed_mm_per_min and max_feed_mm_per_min (default a
+tenth and three times the job's feed), air_feed_mm_per_min where the tool cuts nothing (0:
+the max feed), neighbouring pieces within feed_step_percent sharing the slower feed. job: a
+Job (its planned path) or a Path. Returns "path" (the scheduled Path: path.gcode() is the
+program), time_before_s, time_after_s, h_max_before_mm, h_max_after_mm, pieces, and per
+feed piece piece_h_max_mm, piece_feed_mm_per_min and piece_limit (int32: 0 none, 1 min
+feed, 2 max feed, 3 air).)");
+
+  m.def(
       "synth_signal",
       [](const PyJob& pj, double rate_hz, int cycles, double kf_czi, double kf_czii,
          double kf_cziii, double wear_drift, double noise, double lead_s, std::uint32_t seed,

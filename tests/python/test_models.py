@@ -288,3 +288,26 @@ def test_keys_and_materials_are_the_clis():
 def cli_json_plain(*args):
     import json
     return json.loads(run_cli(*args, "--json").stdout)
+
+
+def test_schedule_feed_is_plan_feed_schedule(wagih, tmp_path):
+    job = tm.Job.from_toml(wagih)
+    fs = tm.schedule_feed(job, max_feed_mm_per_min=1500.0)
+    out = tmp_path / "fs.ngc"
+    p = run_cli("plan", wagih, "-o", out, "--feed-schedule", "--max-feed", "1500")
+    assert fs["path"].gcode() == out.read_text()
+    # "feed schedule: h_max 0.07500 -> 0.07501 mm (target 0.075), time 58.844 -> 27.377 s"
+    assert f"h_max {fs['h_max_before_mm']:.5f} -> {fs['h_max_after_mm']:.5f} mm" in p.stderr
+    assert f"time {fs['time_before_s']:.3f} -> {fs['time_after_s']:.3f} s" in p.stderr
+    assert fs["time_after_s"] < fs["time_before_s"]
+    feeds = fs["piece_feed_mm_per_min"]
+    assert feeds.max() <= 1500.0 and feeds.min() >= 0.1 * job.feed_rate_mm_per_min
+    # Where no limit holds a piece, its largest chip is the target, the job's f_z = f_r / (n Z):
+    # three quarters of such pieces come within 3 % on the Wagih paths (docs/PERFORMANCE.md),
+    # so their median must.
+    free = fs["piece_limit"] == 0
+    assert free.any()
+    fz = job.feed_rate_mm_per_min / (job.spindle_speed_rpm * job.to_dict()["tool"]["teeth"])
+    assert np.median(np.abs(fs["piece_h_max_mm"][free] / fz - 1)) < 0.03
+    with pytest.raises(tm.InputError):
+        tm.schedule_feed(job, h_max_mm=-1.0)
