@@ -113,13 +113,16 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                     "target largest chip, mm (default: the job's feed per tooth)")
         ->check(finite_above(0, 100));
     cmd->add_option("--min-feed", a->min_feed,
-                    "slowest scheduled feed, mm/min (default: a tenth of the job's feed)")
+                    "slowest scheduled feed, mm/min (default: machine.min_feed, else a tenth of "
+                    "the job's feed)")
         ->check(finite_above(0, 1e6));
     cmd->add_option("--max-feed", a->max_feed,
-                    "fastest scheduled feed, mm/min (default: three times the job's feed)")
+                    "fastest scheduled feed, mm/min (default: machine.max_feed, else three times "
+                    "the job's feed)")
         ->check(finite_above(0, 1e6));
     cmd->add_option("--air-feed", a->targets.air_feed_mm_per_min,
-                    "feed where the tool cuts nothing, mm/min (default: the max feed)")
+                    "feed where the tool cuts nothing, mm/min (default: machine.air_feed, else "
+                    "the max feed)")
         ->check(finite_in(0, 1e6));
     cmd->add_option("--feed-step", a->targets.feed_step_percent,
                     "neighbouring pieces within this percent share the slower feed")
@@ -144,10 +147,14 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       PlannedPath planned = plan_path(job);
       std::optional<FeedSchedule> fs;
       if (a->schedule) {
-        const double f = feed_rate_mm_per_min(job);
-        FeedTargets t = a->targets;
-        t.min_feed_mm_per_min = a->min_feed.value_or(0.1 * f);
-        t.max_feed_mm_per_min = a->max_feed.value_or(3.0 * f);
+        // The flags over the job's [machine] limits.
+        FeedTargets t = default_feed_targets(job);
+        t.h_max_mm = a->targets.h_max_mm;
+        t.feed_step_percent = a->targets.feed_step_percent;
+        t.piece_mm = a->targets.piece_mm;
+        if (a->min_feed) t.min_feed_mm_per_min = *a->min_feed;
+        if (a->max_feed) t.max_feed_mm_per_min = *a->max_feed;
+        if (cmd->count("--air-feed") > 0) t.air_feed_mm_per_min = a->targets.air_feed_mm_per_min;
         const GuardedRun run(true);
         fs = schedule_feed(job, planned.path, t, run.hooks());
         run.done();

@@ -802,18 +802,17 @@ materials --json`: a list of dicts; a job names one with [material] name.)");
       "schedule_feed",
       [](const py::object& job_or_path, std::optional<double> h_max_mm,
          std::optional<double> min_feed_mm_per_min, std::optional<double> max_feed_mm_per_min,
-         double air_feed_mm_per_min, double feed_step_percent, double piece_mm,
+         std::optional<double> air_feed_mm_per_min, double feed_step_percent, double piece_mm,
          const py::object& progress) {
         const PyJob& pj = job_of(job_or_path, "schedule_feed");
         const ToolPath path = path_of(job_or_path);
-        // The defaults and checks of `plan --feed-schedule`: the limits a tenth and three
-        // times the job's feed; the rest validated by schedule_feed (InputError).
-        const double f = feed_rate_mm_per_min(pj.job);
-        FeedTargets t;
+        // The arguments over the job's [machine] limits, as `plan --feed-schedule`; checked by
+        // schedule_feed (InputError).
+        FeedTargets t = default_feed_targets(pj.job);
         t.h_max_mm = h_max_mm;
-        t.min_feed_mm_per_min = min_feed_mm_per_min.value_or(0.1 * f);
-        t.max_feed_mm_per_min = max_feed_mm_per_min.value_or(3.0 * f);
-        t.air_feed_mm_per_min = air_feed_mm_per_min;
+        if (min_feed_mm_per_min) t.min_feed_mm_per_min = *min_feed_mm_per_min;
+        if (max_feed_mm_per_min) t.max_feed_mm_per_min = *max_feed_mm_per_min;
+        if (air_feed_mm_per_min) t.air_feed_mm_per_min = *air_feed_mm_per_min;
         t.feed_step_percent = feed_step_percent;
         t.piece_mm = piece_mm;
         FeedSchedule fs = run_released(
@@ -841,13 +840,14 @@ materials --json`: a list of dicts; a job names one with [material] name.)");
       },
       py::arg("job"), py::kw_only(), py::arg("h_max_mm") = py::none(),
       py::arg("min_feed_mm_per_min") = py::none(), py::arg("max_feed_mm_per_min") = py::none(),
-      py::arg("air_feed_mm_per_min") = 0.0, py::arg("feed_step_percent") = 5.0,
+      py::arg("air_feed_mm_per_min") = py::none(), py::arg("feed_step_percent") = 5.0,
       py::arg("piece_mm") = 0.5, py::arg("progress") = py::none(),
       R"(Chip-load feed scheduling, as `plan --feed-schedule` (docs/models.md section 15): each
 piece of the path (at most piece_mm long) fed so that its largest chip is h_max_mm (default
-the job's feed per tooth), within min_feed_mm_per_min and max_feed_mm_per_min (default a
-tenth and three times the job's feed), air_feed_mm_per_min where the tool cuts nothing (0:
-the max feed), neighbouring pieces within feed_step_percent sharing the slower feed. job: a
+the job's feed per tooth), within min_feed_mm_per_min and max_feed_mm_per_min (default the
+job's machine.min_feed and max_feed, else a tenth and three times its feed),
+air_feed_mm_per_min where the tool cuts nothing (default machine.air_feed, else the max
+feed), neighbouring pieces within feed_step_percent sharing the slower feed. job: a
 Job (its planned path) or a Path. Returns "path" (the scheduled Path: path.gcode() is the
 program), time_before_s, time_after_s, h_max_before_mm, h_max_after_mm, pieces, and per
 feed piece piece_h_max_mm, piece_feed_mm_per_min and piece_limit (int32: 0 none, 1 min

@@ -106,6 +106,9 @@ struct FeedTargets {
   double feed_step_percent = 5;
   int iterations = 12;  ///< rounds of engagement and rescaling (each a full engagement run)
 };
+/// The job's feed targets: the [machine] max_feed, min_feed and air_feed, where 0 gives three
+/// times and a tenth of the job's feed, and the max feed; the chip target unset (the job's f_z).
+[[nodiscard]] FeedTargets default_feed_targets(const Job& job);
 /// What limits a piece's feed.
 enum class FeedLimit { none, min_feed, max_feed, air };
 /// A path with scheduled feeds and how it got them.

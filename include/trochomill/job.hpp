@@ -96,9 +96,13 @@ struct Cutting {
 
 struct Machine {
   Dialect dialect = Dialect::linuxcnc;
-  double safe_z_mm = 5;                      ///< retract height above the top face (mm)
-  double rapid_rate_mm_per_min = 10000;      ///< rapid traverse rate (mm/min)
-  double max_acceleration_mm_per_s2 = 0;     ///< path acceleration limit (mm/s^2); 0 = unlimited
+  double safe_z_mm = 5;                   ///< retract height above the top face (mm)
+  double rapid_rate_mm_per_min = 10000;   ///< rapid traverse rate (mm/min)
+  double max_acceleration_mm_per_s2 = 0;  ///< path acceleration limit (mm/s^2); 0 = unlimited
+  /// Feed scheduling limits (mm/min): the fastest and slowest feed a schedule may program and
+  /// the feed where the tool cuts nothing; 0 = three times, a tenth of the job's feed, and
+  /// the max feed (analysis.hpp: default_feed_targets).
+  double max_feed_mm_per_min = 0, min_feed_mm_per_min = 0, air_feed_mm_per_min = 0;
   double junction_deviation_mm = 0.01;       ///< corner blending tolerance for time estimates (mm)
   double arc_tolerance_mm = 0.001;           ///< max deviation when fitting arcs/chords (mm)
   ArcOutput arc_output = ArcOutput::arcs;    ///< elliptical arcs as biarcs or as G1 chords

@@ -56,6 +56,16 @@ ToolPath build(const ToolPath& path, const std::vector<Piece>& pieces) {
 
 }  // namespace
 
+FeedTargets default_feed_targets(const Job& job) {
+  const Machine& m = job.machine;
+  const double f = feed_rate_mm_per_min(job);
+  FeedTargets t;
+  t.min_feed_mm_per_min = m.min_feed_mm_per_min > 0 ? m.min_feed_mm_per_min : 0.1 * f;
+  t.max_feed_mm_per_min = m.max_feed_mm_per_min > 0 ? m.max_feed_mm_per_min : 3.0 * f;
+  t.air_feed_mm_per_min = m.air_feed_mm_per_min;
+  return t;
+}
+
 FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTargets& targets,
                            const RunHooks& hooks) {
   const double f0 = job.cutting.feed_per_tooth_mm;

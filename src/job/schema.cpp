@@ -343,6 +343,12 @@ std::vector<Key> build_schema() {
       number("machine", "max_acceleration", "mm/s^2", non_negative(),
              FIELD(machine.max_acceleration_mm_per_s2),
              "path acceleration limit for time estimates (0: unlimited)"),
+      number("machine", "max_feed", "mm/min", non_negative(), FIELD(machine.max_feed_mm_per_min),
+             "fastest feed a feed schedule may program (0: three times the job's feed)"),
+      number("machine", "min_feed", "mm/min", non_negative(), FIELD(machine.min_feed_mm_per_min),
+             "slowest feed a feed schedule may program (0: a tenth of the job's feed)"),
+      number("machine", "air_feed", "mm/min", non_negative(), FIELD(machine.air_feed_mm_per_min),
+             "feed a schedule programs where the tool cuts nothing (0: the max feed)"),
       number("machine", "junction_deviation", "mm", non_negative(),
              FIELD(machine.junction_deviation_mm), "corner blending tolerance for time estimates"),
       number("machine", "arc_tolerance", "mm", Range{1e-6, 1.0}, FIELD(machine.arc_tolerance_mm),
@@ -685,6 +691,16 @@ void check_representable(JobReader& r, const Job& job) {
   at_most("slot", "depth", job.slot.depth_mm, kMaxLengthMm, "mm");
   at_most("machine", "safe_z", job.machine.safe_z_mm, kMaxLengthMm, "mm");
   at_most("machine", "rapid_rate", job.machine.rapid_rate_mm_per_min, kMaxFeedMmPerMin, "mm/min");
+  at_most("machine", "max_feed", job.machine.max_feed_mm_per_min, kMaxFeedMmPerMin, "mm/min");
+  at_most("machine", "min_feed", job.machine.min_feed_mm_per_min, kMaxFeedMmPerMin, "mm/min");
+  at_most("machine", "air_feed", job.machine.air_feed_mm_per_min, kMaxFeedMmPerMin, "mm/min");
+  if (job.machine.min_feed_mm_per_min > 0 && job.machine.max_feed_mm_per_min > 0 &&
+      job.machine.min_feed_mm_per_min > job.machine.max_feed_mm_per_min) {
+    r.problem("machine", "min_feed",
+              fmt::format("must not exceed max_feed ({} mm/min), got {} mm/min",
+                          fmt_num(job.machine.max_feed_mm_per_min),
+                          fmt_num(job.machine.min_feed_mm_per_min)));
+  }
   at_most("path", "entry_feed", job.path.entry_feed_mm_per_min, kMaxFeedMmPerMin, "mm/min");
   if (job.path.step_mm > 0 && job.path.step_mm < kMinStepMm) {
     r.problem("path", "step",

@@ -311,3 +311,18 @@ def test_schedule_feed_is_plan_feed_schedule(wagih, tmp_path):
     assert np.median(np.abs(fs["piece_h_max_mm"][free] / fz - 1)) < 0.03
     with pytest.raises(tm.InputError):
         tm.schedule_feed(job, h_max_mm=-1.0)
+
+
+def test_feed_limits_from_the_machine(wagih, tmp_path):
+    job = tm.Job.from_toml(wagih, set={"machine.max_feed": 1500.0, "machine.min_feed": 100.0})
+    from_keys = tm.schedule_feed(job)
+    given = tm.schedule_feed(tm.Job.from_toml(wagih), max_feed_mm_per_min=1500.0,
+                             min_feed_mm_per_min=100.0)
+    np.testing.assert_array_equal(from_keys["piece_feed_mm_per_min"], given["piece_feed_mm_per_min"])
+    assert from_keys["piece_feed_mm_per_min"].max() == 1500.0  # the air moves, at the max feed
+    out = tmp_path / "fs.ngc"
+    run_cli("plan", wagih, "-o", out, "--feed-schedule", "--set", "machine.max_feed=1500.0",
+            "--set", "machine.min_feed=100.0")  # as typed: the header records the keys
+    assert from_keys["path"].gcode() == out.read_text()
+    with pytest.raises(tm.InputError, match="machine.min_feed: must not exceed max_feed"):
+        job.set("machine.min_feed", 2000.0)

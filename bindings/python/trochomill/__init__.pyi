@@ -123,7 +123,7 @@ def materials() -> list[dict[str, Any]]:
     """The materials library."""
 def schedule_feed(job: Job | Path, *, h_max_mm: float | None = None,
                   min_feed_mm_per_min: float | None = None,
-                  max_feed_mm_per_min: float | None = None, air_feed_mm_per_min: float = 0.0,
+                  max_feed_mm_per_min: float | None = None, air_feed_mm_per_min: float | None = None,
                   feed_step_percent: float = 5.0, piece_mm: float = 0.5,
                   progress: _Progress = None) -> dict[str, Any]:
     """"path" (the scheduled Path), times and chips before and after, per-piece arrays."""
