@@ -1,7 +1,7 @@
 """Pivkin 2025's vibroacoustic monitor on a synthetic signal: k_f = RMS(low band) / RMS(high
-band) over time and per trochoid cycle, with a wear drift of 30 % over the recording (the
-monitor's wear flag), and k_f against the cycle phase with the model's zones. Writes
-monitor_kf.png.
+band) over time and per trochoid cycle, on a recording whose k_f drifts up by 50 % as the
+tool wears (the monitor flags it past monitor.wear_ratio, 1.3, times the first cycles' level),
+and k_f against the cycle phase, one line per cycle. Writes monitor_kf.png.
 
     PYTHONPATH=build/python python3 examples/python/monitor_kf.py [OUTPUT_DIR]
 """
@@ -25,7 +25,7 @@ QUICK = os.environ.get("TROCHOMILL_EXAMPLE_QUICK") == "1"  # the test suite's re
 def main(out_dir):
     job = tm.Job.from_toml(HERE.parent / "pivkin2025" / "trochoidal.toml")
     sig = tm.synth_signal(job, rate_hz=40000 if QUICK else 100000, cycles=4 if QUICK else 12,
-                          wear_drift=0.3)
+                          wear_drift=0.5)
     r = tm.monitor(sig["samples"], sig["rate_hz"], job=job, start_s=sig["start_s"])
     w = r["windows"]
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
@@ -33,6 +33,12 @@ def main(out_dir):
     starts = [c["start_s"] for c in r["cycle_details"]]
     ends = [c["end_s"] for c in r["cycle_details"]]
     ax1.hlines(r["k_f_per_cycle"], starts, ends, color="tab:red", lw=2, label="k_f per cycle")
+    # The wear flag's level: monitor.wear_ratio (the job's, else its default) times the
+    # reference, the first cycles' k_f level.
+    ratio = next(k["default"] for k in tm.keys() if k["section"] == "monitor" and k["key"] == "wear_ratio")
+    ratio = job.to_dict().get("monitor", {}).get("wear_ratio", float(ratio))
+    threshold = ratio * r["reference_k_f"]
+    ax1.axhline(threshold, color="tab:red", ls="--", lw=0.8, label=f"wear threshold {threshold:.2f}")
     ax1.set_xlabel("time (s)")
     ax1.set_ylabel("k_f = RMS(low) / RMS(high)")
     flags = "; ".join(r["flags"]) if r["flags"] else "none"
