@@ -170,6 +170,14 @@ py::dict profile_arrays(ProfileTexture& t) {
   return d;
 }
 
+// The monitor's settings without a job file: the defaults with `keys` applied, as the CLI's
+// `monitor` without --job (only the sections that stand alone may be set).
+MonitorSettings monitor_settings_without_job(const std::vector<Override>& keys) {
+  Job defaults;
+  apply_overrides(defaults, keys);
+  return defaults.monitor;
+}
+
 // The one surface of a texture JSON document.
 py::dict first_surface(const std::string& json) {
   const py::list surfaces = from_json(json)["surfaces"];
@@ -601,9 +609,7 @@ measurement's span. Returns the keys of `trochomill calibrate --json` and "mater
           job = keys.empty() ? pj.job : pj.with(keys);
           ms = job->monitor;
         } else {
-          Job defaults;
-          apply_overrides(defaults, keys);
-          ms = defaults.monitor;
+          ms = monitor_settings_without_job(keys);
         }
         Signal sig;
         sig.rate_hz = rate_hz;
@@ -653,10 +659,7 @@ rms_high, k_f arrays).)");
   m.def(
       "_monitor_filters",
       [](double rate_hz, const py::object& set) {
-        const std::vector<Override> keys = overrides_of(set);
-        Job defaults;
-        apply_overrides(defaults, keys);
-        const MonitorSettings& ms = defaults.monitor;
+        const MonitorSettings ms = monitor_settings_without_job(overrides_of(set));
         validate(ms, rate_hz);
         auto rows = [](const Sos& sos) {
           std::vector<double> v;
