@@ -172,4 +172,83 @@ struct TextureEntry {
 [[nodiscard]] std::string texture_text(const std::string& source,
                                        const std::vector<TextureEntry>& entries);
 
+// ---- the HTML report (`trochomill report`) ---------------------------------------------------
+
+/// Indices of the samples to keep when a series is drawn at `columns` pixel columns: the
+/// samples are split into `columns` runs of equal length and each run keeps its first and last
+/// sample and, for every series in `ys`, the sample of its minimum and maximum (NaN skipped).
+/// So every extreme of every series survives, and at most columns * (2 + 2 ys.size()) samples
+/// remain. All samples are kept when there are at most 2 columns. Sorted, without repeats.
+[[nodiscard]] std::vector<std::size_t> decimation_indices(
+    std::size_t samples, const std::vector<const std::vector<double>*>& ys, std::size_t columns);
+
+/// A parameter study shown in the report.
+struct ReportStudy {
+  std::vector<Vary> varies;
+  std::vector<StudyPoint> points;
+};
+/// The mechanism of the report: the job's chip model, and the other one when both apply.
+struct ReportMechanism {
+  MechanismCurve curve;
+  ZoneSummary zones;
+  bool use_wear = false;
+  std::optional<MechanismCurve> other;  ///< the other chip model's curve (exact or published)
+};
+/// Forces of the report (fast chip source): the job's wear state, and the last state when the
+/// job has several ([topography]).
+struct ReportForces {
+  JobForces forces;
+  double from_s = 0, to_s = 0;  ///< the window (s of program)
+  std::optional<JobForces> worn;
+  std::string state_label, worn_label;  ///< e.g. "new (VB 0 mm)"
+};
+/// A calibration of the report: the fit, the measured record and the fitted model's forces.
+struct ReportCalibration {
+  std::string measured_file;
+  CalibrationResult result;
+  MeasuredForces measured;
+  ForceSeries model;  ///< the fitted model over the window (measured time = t + shift_s)
+};
+/// A simulation of the report.
+struct ReportSimulation {
+  JobSimulation sim;
+  double from_s = 0, to_s = 0, wall_s = 0, memory_estimate_bytes = 0;
+};
+/// The monitor of the report.
+struct ReportMonitor {
+  std::string signal_file;
+  Signal signal;
+  MonitorSettings settings;
+  MonitorReport report;
+  Spectrum spectrum;
+  Spectrogram spectrogram;
+};
+/// Everything a report shows; each optional part is drawn when present, and `notes` say why a
+/// default part is missing (e.g. no [material]: no forces).
+struct ReportData {
+  std::string job_file, gcode_file;
+  std::string job_text;                ///< the job file as read
+  std::vector<std::string> overrides;  ///< the --set overrides and flags, "key=value"
+  std::string command;                 ///< the command line that made the report
+  Job job;
+  ToolPath path;
+  ProcessMetrics metrics;
+  std::optional<ReportMechanism> mechanism;
+  std::optional<ReportForces> forces;
+  std::optional<ReportCalibration> calibration;
+  std::optional<ReportSimulation> simulation;
+  std::optional<ReportMonitor> monitor;
+  std::optional<ReportStudy> study;
+  std::vector<std::string> notes;
+};
+/// The report as one self-contained HTML page: the data (decimated for display: at most
+/// `report_columns` pixel columns per series by decimation_indices, the surface mesh within
+/// `report_triangles`) as JSON and the bundled scripts and styles (uPlot, and three.js when
+/// there is a 3D view) inline, nothing fetched. `hooks`: the phase "writing report".
+inline constexpr std::size_t report_columns = 1000;
+inline constexpr std::size_t report_triangles = 400000;
+[[nodiscard]] std::string report_html(const ReportData& data, const RunHooks& hooks = {});
+/// The data document the page draws (what report_html embeds), for tests and scripts.
+[[nodiscard]] std::string report_data_json(const ReportData& data, const RunHooks& hooks = {});
+
 }  // namespace trochomill
