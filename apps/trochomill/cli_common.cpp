@@ -220,8 +220,8 @@ Signal SignalArgs::read() const {
   return read_signal(file, o);
 }
 
-void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required) {
-  auto* o = cmd->add_option("SIGNAL", a.file,
+void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required, const std::string& name) {
+  auto* o = cmd->add_option(name, a.file,
                             "WAV/FLAC/AIFF (libsndfile), CSV, raw .f32/.s16 (- for stdin, raw)");
   if (required) o->required();
   cmd->add_option("--rate", a.rate, "sample rate, Hz (raw data, CSV without a time column)")

@@ -100,7 +100,10 @@ struct SignalArgs {
   int channel = 0;
   [[nodiscard]] Signal read() const;
 };
-void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required);
+/// The signal file as `name` (a positional SIGNAL, or an option such as --signal), and its
+/// reading options.
+void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required,
+                     const std::string& name = "SIGNAL");
 
 /// "LO:HI" in Hz (0 < LO < HI). Throws InputError naming the option.
 [[nodiscard]] std::pair<double, double> parse_band(const std::string& opt, const std::string& text);

@@ -64,7 +64,7 @@ void register_report_commands(CLI::App& app, int& exit_code, int argc, char** ar
                   "mechanism and forces are on by default where the job allows them and, "
                   "named here, required");
   add_window_args(cmd, a->window, "forces' and simulation's window (default: the steady cycle)");
-  add_signal_args(cmd, a->signal, false);
+  add_signal_args(cmd, a->signal, false, "--signal");
   cmd->add_option("--start", a->start_s,
                   "time in the signal where the program starts, s (the cycles come from the "
                   "job's planned path)")

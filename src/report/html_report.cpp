@@ -24,7 +24,6 @@ using nlohmann::json;
 
 constexpr std::size_t kPathSamples = 6000;  // the path drawn and scrubbed (uniform in time)
 constexpr std::size_t kMapColumns = 1500;   // heat maps: time bins
-constexpr std::size_t kMapRows = 400;       // heat maps: rows (segments, frequency bins)
 constexpr double kRad = 180.0 / 3.14159265358979323846;
 
 // Six significant digits: what a plot can show, and a third of the text of full precision.
@@ -443,7 +442,9 @@ json monitor_part(const ReportData& d) {
   const Spectrogram& sg = mo.spectrogram;
   if (!sg.t_s.empty() && !sg.f_hz.empty()) {
     const std::size_t frames = sg.t_s.size(), bins = sg.f_hz.size();
-    const std::size_t cols = std::min(frames, kMapColumns), rows = std::min(bins, kMapRows);
+    // A spectrogram is read by eye: 600 x 256 cells (the full one is `spectrum --spectrogram`).
+    const std::size_t cols = std::min<std::size_t>(frames, 600);
+    const std::size_t rows = std::min<std::size_t>(bins, 256);
     std::vector<double> map(rows * cols, -std::numeric_limits<double>::infinity());
     for (std::size_t c = 0; c < cols; ++c) {
       for (std::size_t f = bin_start(c, frames, cols); f < bin_start(c + 1, frames, cols); ++f) {

@@ -270,7 +270,7 @@ function bands(list, scale = 'y') {
       const y0 = u.valToPos(b.to, scale, true), y1 = u.valToPos(b.from, scale, true);
       c.fillStyle = b.fill;
       c.fillRect(left, Math.min(y0, y1), width, Math.abs(y1 - y0));
-      if (b.label) {
+      if (b.label && Math.abs(y1 - y0) > 14 * uPlot.pxRatio) {
         c.fillStyle = '#5b6475';
         c.font = `${11 * uPlot.pxRatio}px sans-serif`;
         c.fillText(b.label, left + width - 48 * uPlot.pxRatio, Math.min(y0, y1) + 14 * uPlot.pxRatio);

@@ -65,7 +65,7 @@ export function createView(box, opts) {
   const span = Math.max(grid.x1_mm - grid.x0_mm, grid.y1_mm - grid.y0_mm, 1);
   const camera = new PerspectiveCamera(35, width / height, span / 1000, span * 20);
   camera.up.set(0, 0, 1);
-  camera.position.set(cx - 0.6 * span, cy - 1.1 * span, 0.9 * span);
+  camera.position.set(cx - 0.8 * span, cy - 1.5 * span, 1.2 * span);
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.set(cx, cy, -slot.depth_mm / 2);
   controls.update();
