@@ -1,8 +1,15 @@
-// Report helpers: --vary parsing and study tables.
+// Report helpers: --vary parsing and study tables; the HTML report's decimation and data.
 #include "trochomill/report.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "test_util.hpp"
 #include "trochomill/error.hpp"
 
 namespace trochomill {
@@ -21,6 +28,76 @@ TEST(Report, ParseVary) {
   EXPECT_THROW((void)parse_vary("path.step"), InputError);
   EXPECT_THROW((void)parse_vary("step=1,2"), InputError);
   EXPECT_THROW((void)parse_vary("path.step=1,,2"), InputError);
+}
+
+// Every run of samples that one pixel column covers keeps its first and last sample and
+// the smallest and largest of every series (checked against the runs recomputed here).
+TEST(Report, DecimationKeepsEveryExtremeOfEveryColumn) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0, 1);
+  const std::size_t n = 100003, columns = 487;
+  std::vector<double> a(n), b(n), c(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    a[i] = std::sin(1e-3 * static_cast<double>(i)) + 0.1 * noise(rng);
+    b[i] = noise(rng);
+    c[i] = i % 1000 < 300 ? std::numeric_limits<double>::quiet_NaN() : noise(rng);  // gaps
+  }
+  const auto idx = decimation_indices(n, {&a, &b, &c}, columns);
+  ASSERT_TRUE(std::is_sorted(idx.begin(), idx.end()));
+  ASSERT_EQ(std::adjacent_find(idx.begin(), idx.end()), idx.end());
+  EXPECT_LE(idx.size(), columns * 8);
+  EXPECT_GE(idx.size(), columns * 2);
+  const auto kept = [&idx](std::size_t i) { return std::binary_search(idx.begin(), idx.end(), i); };
+  for (std::size_t k = 0; k < columns; ++k) {
+    const std::size_t lo = k * n / columns, hi = (k + 1) * n / columns;
+    EXPECT_TRUE(kept(lo) && kept(hi - 1)) << "column " << k;
+    for (const std::vector<double>* y : {&a, &b, &c}) {
+      double mn = std::numeric_limits<double>::infinity(), mx = -mn;
+      for (std::size_t i = lo; i < hi; ++i) {
+        if (!std::isnan((*y)[i])) mn = std::min(mn, (*y)[i]), mx = std::max(mx, (*y)[i]);
+      }
+      if (std::isinf(mn)) continue;  // all NaN here
+      bool has_min = false, has_max = false;
+      for (const std::size_t i : idx) {
+        if (i < lo || i >= hi) continue;
+        has_min = has_min || (*y)[i] == mn;
+        has_max = has_max || (*y)[i] == mx;
+      }
+      EXPECT_TRUE(has_min && has_max) << "column " << k;
+    }
+  }
+  // Short series are kept whole.
+  const auto all = decimation_indices(2 * columns, {&a}, columns);
+  EXPECT_EQ(all.size(), 2 * columns);
+}
+
+// The page's data: the summary is analyze's JSON as it is, the path is sampled uniformly,
+// and no "</" can end the script element the document sits in.
+TEST(Report, DataDocumentHoldsTheAnalysisAndCannotCloseItsScript) {
+  ReportData d;
+  d.job = load_job(test::example("wagih2023/circular.toml"));
+  d.job_file = "circular.toml";
+  d.job_text = "# </script><script>alert(1)</script>\n";
+  d.command = "trochomill report circular.toml -o r.html";
+  d.path = plan_path(d.job).path;
+  d.metrics = analyze_process(d.job, d.path);
+  const std::string text = report_data_json(d);
+  EXPECT_EQ(text.find("</"), std::string::npos);
+  const auto doc = nlohmann::json::parse(text);
+  EXPECT_EQ(doc["summary"], nlohmann::json::parse(metrics_json(d.job, d.metrics)));
+  EXPECT_EQ(doc["job_text"], d.job_text);
+  EXPECT_EQ(doc["path"]["samples"], 6001);
+  EXPECT_EQ(doc["path"]["x_mm"].size(), 6001u);
+  // dt is the path's duration over 6000 to six significant digits.
+  EXPECT_NEAR(doc["path"]["dt_s"].get<double>(), d.path.duration_s() / 6000,
+              1e-5 * d.path.duration_s() / 6000);
+  EXPECT_FALSE(doc.contains("mechanism"));
+  EXPECT_FALSE(doc.contains("simulation"));
+  const std::string html = report_html(d);
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  // Without a simulation the page carries no three.js.
+  EXPECT_EQ(html.find("TrochomillView3D="), std::string::npos);
+  EXPECT_NE(html.find("trochomill-data"), std::string::npos);
 }
 
 }  // namespace

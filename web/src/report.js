@@ -14,8 +14,9 @@ const api = (window.trochomillReport = {
   figures: [], // ids in page order
   views: {},   // id -> 3D view
   ready: false,
-  firstDrawMs: null,
+  firstDrawMs: null, // after the script started (ms)
   readyMs: null,
+  firstDrawSinceNavigationMs: null, // after the navigation started (ms): the page's time to its first figure
   errors: [],
 });
 
@@ -192,7 +193,10 @@ function addExports(fig, u, labels) {
 
 function register(fig, u) {
   api.plots[fig.id] = u;
-  if (api.firstDrawMs === null) api.firstDrawMs = performance.now() - t0;
+  if (api.firstDrawMs === null) {
+    api.firstDrawMs = performance.now() - t0;
+    api.firstDrawSinceNavigationMs = performance.now();
+  }
 }
 
 // ---- line plots --------------------------------------------------------------------------
