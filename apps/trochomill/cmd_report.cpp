@@ -157,6 +157,10 @@ void register_report_commands(CLI::App& app, int& exit_code, int argc, char** ar
               fmt::format("mechanism: the other chip model does not apply: {}", e.what()));
         }
         d.mechanism = std::move(mech);
+        if (!a->gcode.empty()) {
+          d.notes.push_back(
+              "mechanism: the cycle of the job's [path] family, not of the NC program's moves");
+        }
       } catch (const InputError& e) {
         if (with.count("mechanism")) throw;
         d.notes.push_back(fmt::format("mechanism: not shown: {}", e.what()));

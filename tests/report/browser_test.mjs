@@ -303,6 +303,62 @@ test('Pivkin 2025: mechanism with both chip models and the acoustic monitor', as
   });
 });
 
+test('calibration against a measured record, a parameter study, and the exports', async (t) => {
+  // A "measured" record made by the model itself (fast chips, library coefficients), fitted
+  // from a wrong k_c: the fit must reproduce it.
+  const berg = ex('bergmann2021/trochoidal.toml');
+  const meas = join(OUT, 'measured.csv');
+  cli('forces', berg, '--fast', '--from', '134', '--to', '134.5', '--set', 'forces.fast_steps_per_rev=400', '--csv', meas);
+  const html = join(OUT, 'calibration.html');
+  cli('report', berg, '--measured', meas, '--set', 'material.k_c=1500', '-o', html);
+  const { page, problems } = await open(html);
+  await t.test('measured against model, and the residuals', async () => {
+    assert.deepEqual(problems, []);
+    assert.equal((await canvasInk(page, 'calibration-fit')).series, 2);
+    assert.equal((await canvasInk(page, 'calibration-residual')).series, 3);
+    const c = await page.evaluate(() => window.trochomillReport.data.calibration);
+    // The record is the model at other time steps (400 per revolution against the report's
+    // own): a near-perfect fit, residuals a few percent of the force at most (the force
+    // jumps as each insert enters fall between different steps).
+    assert.ok(c.summary.r2 > 0.99, `R2 ${c.summary.r2}`);
+    assert.ok(Math.abs(c.summary.k_c - 1926.08) / 1926.08 < 0.02, `k_c ${c.summary.k_c}`);
+    const peak = Math.max(...c.model.f_resultant_n);
+    const rms = Math.sqrt(c.residual.f_x_n.filter((v) => v != null).reduce((a, v) => a + v * v, 0) / c.residual.f_x_n.length);
+    assert.ok(rms < 0.05 * peak, `residual RMS ${rms} N against ${peak} N`);
+  });
+  await page.close();
+
+  const study = join(OUT, 'study.html');
+  cli('report', ex('wagih2023/elliptical.toml'), '--vary', 'path.aspect_ratio=0.8,1.0,1.2', '-o', study);
+  const s = await open(study);
+  await t.test('the study plots any metric against the varied key', async () => {
+    assert.deepEqual(s.problems, []);
+    const compare = JSON.parse(cli('compare', ex('wagih2023/elliptical.toml'), '--vary', 'path.aspect_ratio=0.8,1.0,1.2', '--json', '-'));
+    await s.page.selectOption('#study-metric', 'h_max_mm');
+    const drawn = await s.page.evaluate(() => { const u = window.trochomillReport.plots.study; return [u.data[0], u.data[1]]; });
+    assert.deepEqual(drawn[0], [0.8, 1.0, 1.2]);
+    assert.deepEqual(drawn[1], compare.points.map((p) => p.metrics.h_max_mm));
+  });
+  await t.test('a figure exports as PNG and as SVG', async () => {
+    const [png] = await Promise.all([s.page.waitForEvent('download'), s.page.click('#fig-engagement-program button:text("PNG")')]);
+    const pngPath = join(OUT, 'export.png');
+    await png.saveAs(pngPath);
+    const ink = await pngInk(readFileSync(pngPath));
+    assert.ok(ink.share > 0.02 && ink.colours > 10, `PNG export blank: ${JSON.stringify(ink)}`);
+    const [svg] = await Promise.all([s.page.waitForEvent('download'), s.page.click('#fig-engagement-program button:text("SVG")')]);
+    const svgPath = join(OUT, 'export.svg');
+    await svg.saveAs(svgPath);
+    const text = readFileSync(svgPath, 'utf8');
+    assert.match(text, /^<svg xmlns/);
+    // One path per trace (3), each with hundreds of points.
+    const paths = [...text.matchAll(/<path d="([^"]*)"/g)].map((m) => m[1]);
+    assert.equal(paths.length, 3);
+    for (const d of paths) assert.ok((d.match(/[ML]/g) || []).length > 100, 'a trace with few points');
+    assert.match(text, /engagement angle/);
+  });
+  await s.page.close();
+});
+
 test('a job whose text holds "</script>" cannot break out of the page', async () => {
   const job = join(OUT, 'script-in-comment.toml');
   writeFileSync(job, readFileSync(ex('wagih2023/circular.toml'), 'utf8') + '\n# </script><script>document.title="broken"</script>\n');
