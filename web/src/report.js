@@ -641,11 +641,28 @@ function forcesPart() {
     series: [{ label: 'torque (N m)', values: s.torque_nm, scale: 'y' }, { label: 'power (W)', values: s.power_w, scale: 'y2' }] });
   if (f.worn) {
     const w = f.worn.series;
-    const fig2 = figure(sec, 'forces-wear', `New against worn: ${f.label} and ${f.worn.label}`, `F_R,max ${fmtNum(sm.f_resultant_max_n)} N against ${fmtNum(f.worn.summary.f_resultant_max_n)} N`);
-    const j = joined([[s.t_s, s.f_resultant_n], [w.t_s, w.f_resultant_n], [s.t_s, s.f_z_n], [w.t_s, w.f_z_n]]);
-    linePlot(fig2, { x: j[0], xLabel: 'time (s)', axes: { y: 'force (N)' },
-      series: [{ label: `F_R ${f.label}`, values: j[1], spanGaps: true }, { label: `F_R ${f.worn.label}`, values: j[2], spanGaps: true },
-        { label: `F_z ${f.label}`, values: j[3], spanGaps: true, dash: [4, 3] }, { label: `F_z ${f.worn.label}`, values: j[4], spanGaps: true, dash: [4, 3] }] });
+    // The forces swing every tooth pass: drawn raw, two states cover each other. Their
+    // envelopes (the largest F_R and the most negative F_z in each of 400 time bins) show
+    // the difference.
+    const bins = 400;
+    const t0 = Math.min(s.t_s[0], w.t_s[0]), t1 = Math.max(s.t_s[s.t_s.length - 1], w.t_s[w.t_s.length - 1]);
+    const centres = Array.from({ length: bins }, (_, b) => t0 + ((b + 0.5) / bins) * (t1 - t0));
+    const envelope = (t, v, pick) => {
+      const out = new Array(bins).fill(null);
+      for (let i = 0; i < t.length; i++) {
+        if (v[i] == null) continue;
+        const b = Math.min(bins - 1, Math.floor(((t[i] - t0) / (t1 - t0)) * bins));
+        out[b] = out[b] == null ? v[i] : pick(out[b], v[i]);
+      }
+      return out;
+    };
+    const fig2 = figure(sec, 'forces-wear', `New against worn: ${f.label} and ${f.worn.label}`,
+      `F_R,max ${fmtNum(sm.f_resultant_max_n)} N against ${fmtNum(f.worn.summary.f_resultant_max_n)} N; envelopes: the largest F_R and the most negative F_z in each of ${bins} time bins`);
+    linePlot(fig2, { x: centres, xLabel: 'time (s)', axes: { y: 'force (N)' },
+      series: [{ label: `F_R max ${f.label}`, values: envelope(s.t_s, s.f_resultant_n, Math.max), width: 1.8 },
+        { label: `F_R max ${f.worn.label}`, values: envelope(w.t_s, w.f_resultant_n, Math.max), width: 1.8 },
+        { label: `F_z min ${f.label}`, values: envelope(s.t_s, s.f_z_n, Math.min), dash: [4, 3] },
+        { label: `F_z min ${f.worn.label}`, values: envelope(w.t_s, w.f_z_n, Math.min), dash: [4, 3] }] });
   }
 }
 
