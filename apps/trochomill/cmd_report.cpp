@@ -50,8 +50,18 @@ void register_report_commands(CLI::App& app, int& exit_code, int argc, char** ar
     std::string command;
   };
   auto a = std::make_shared<Args>();
-  a->command = "trochomill";  // the program's name, not its path: the page is the same anywhere
-  for (int i = 1; i < argc; ++i) a->command += " " + std::string(argv[i]);
+  // The program's name, not its path, and without the output file: the same command writes
+  // the same page wherever it runs and whatever the page is called.
+  a->command = "trochomill";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "-o" || arg == "--output") {
+      ++i;
+      continue;
+    }
+    if (arg.rfind("--output=", 0) == 0 || (arg.rfind("-o", 0) == 0 && arg.size() > 2)) continue;
+    a->command += " " + arg;
+  }
   auto* cmd = app.add_subcommand(
       "report",
       "one self-contained HTML page with the figures: path, engagement, walls, "

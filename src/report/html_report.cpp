@@ -46,6 +46,16 @@ std::vector<std::size_t> all_indices(std::size_t n) {
   return idx;
 }
 
+// Measurements of the run itself (wall times, rates, the process's peak memory) differ from
+// run to run: a report leaves them out, so the same command writes the same page.
+json without_measurements(json j) {
+  for (const char* k : {"wall_time_s", "pre_roll_wall_s", "window_wall_s", "dexel_updates_per_s",
+                        "memory_peak_mb", "chips_wall_s", "forces_wall_s"}) {
+    j.erase(k);
+  }
+  return j;
+}
+
 // A decimated block of series sharing their x: `cols` named columns, the first the x.
 struct Column {
   std::string name;
@@ -284,13 +294,16 @@ json force_series_part(const ForceSeries& s) {
 
 json forces_part(const ReportData& d) {
   const ReportForces& f = *d.forces;
-  json out = {{"summary", json::parse(force_summary_json(d.job, f.forces, f.from_s, f.to_s))},
+  json out = {{"summary", without_measurements(
+                              json::parse(force_summary_json(d.job, f.forces, f.from_s, f.to_s)))},
               {"series", force_series_part(f.forces.series)},
               {"label", f.state_label}};
   if (f.worn) {
-    out["worn"] = {{"summary", json::parse(force_summary_json(d.job, *f.worn, f.from_s, f.to_s))},
-                   {"series", force_series_part(f.worn->series)},
-                   {"label", f.worn_label}};
+    out["worn"] = {
+        {"summary",
+         without_measurements(json::parse(force_summary_json(d.job, *f.worn, f.from_s, f.to_s)))},
+        {"series", force_series_part(f.worn->series)},
+        {"label", f.worn_label}};
   }
   return out;
 }
@@ -346,8 +359,9 @@ json simulation_part(const ReportData& d, const RunHooks& hooks) {
   const ReportSimulation& rs = *d.simulation;
   const JobSimulation& js = rs.sim;
   const SimResult& r = js.result;
-  json out = {{"summary", json::parse(simulation_json(d.job, js, rs.from_s, rs.to_s, rs.wall_s,
-                                                      rs.memory_estimate_bytes))}};
+  json out = {
+      {"summary", without_measurements(json::parse(simulation_json(
+                      d.job, js, rs.from_s, rs.to_s, rs.wall_s, rs.memory_estimate_bytes)))}};
   // Per step: removed volume (all teeth), largest and mean chip, engaged segments.
   const std::size_t n = r.steps.size();
   std::vector<double> t(n), removed(n), hmax(n), hmean(n), segs(n);

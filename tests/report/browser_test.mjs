@@ -359,6 +359,20 @@ test('calibration against a measured record, a parameter study, and the exports'
   await s.page.close();
 });
 
+test('the same command writes the same page, whatever the thread count', () => {
+  const job = ex('bergmann2021/trochoidal.toml');
+  const args = (threads) => ['report', job, '--with', 'simulate', '--cycles', '3:4', '--set', 'simulation.resolution=0.2',
+    '--set', 'simulation.steps_per_rev=24', '--set', `simulation.threads=${threads}`];
+  const a = join(OUT, 'same-a.html'), b = join(OUT, 'same-b.html'), c = join(OUT, 'same-c.html');
+  cli(...args(1), '-o', a);
+  cli(...args(1), '-o', b);
+  cli(...args(2), '-o', c);
+  assert.ok(readFileSync(a).equals(readFileSync(b)), 'two runs of one command differ');
+  // With another thread count only the recorded command and overrides differ.
+  const strip = (f) => readFileSync(f, 'utf8').replace(/simulation\.threads=\d/g, 'simulation.threads=N');
+  assert.equal(strip(a), strip(c));
+});
+
 test('a job whose text holds "</script>" cannot break out of the page', async () => {
   const job = join(OUT, 'script-in-comment.toml');
   writeFileSync(job, readFileSync(ex('wagih2023/circular.toml'), 'utf8') + '\n# </script><script>document.title="broken"</script>\n');
