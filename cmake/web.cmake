@@ -10,6 +10,7 @@ if(NOT TROCHOMILL_NPM OR NOT TROCHOMILL_NODE)
                       "scripts/install-deps installs them (Debian's nodejs and npm)")
 endif()
 set(TROCHOMILL_WEB_DIR ${PROJECT_BINARY_DIR}/web)
+file(MAKE_DIRECTORY ${TROCHOMILL_WEB_DIR})  # the commands below run in it
 set(web_src ${PROJECT_SOURCE_DIR}/web)
 add_custom_command(
   OUTPUT ${TROCHOMILL_WEB_DIR}/npm.stamp

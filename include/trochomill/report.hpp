@@ -241,6 +241,43 @@ struct ReportData {
   std::optional<ReportStudy> study;
   std::vector<std::string> notes;
 };
+/// What a report is asked to show besides the defaults, and what it records.
+struct ReportRequest {
+  std::string job_file, gcode_file;  ///< shown in the page
+  std::string job_text;              ///< the job file as read
+  std::vector<Override> overrides;   ///< recorded, and the base of the study's points
+  std::string command;               ///< the command line that made it
+  /// "mechanism" or "forces" (required: an error where the job cannot have them; by default
+  /// shown where it can) and "simulate" (the tri-dexel window).
+  std::vector<std::string> with;
+  /// The window of forces, simulation and calibration (s of program); default: the steady
+  /// cycle analyze finds (calibration: the measured record's span).
+  std::optional<std::pair<double, double>> window_s;
+  std::optional<Signal> signal;  ///< the monitor's recording
+  std::string signal_file;
+  std::optional<double> signal_start_s;    ///< where the program starts in it (s)
+  std::optional<MeasuredForces> measured;  ///< a record to calibrate against
+  std::string measured_file;
+  std::vector<Vary> varies;               ///< a parameter study over these keys
+  const JobDocument* document = nullptr;  ///< the job's document (the study builds from it)
+  /// Called with the simulation's memory estimate (bytes) before it runs; throws to refuse.
+  std::function<void(double)> check_simulation_memory;
+};
+/// Checks a request against its job before any work: the items of `with`, a signal without
+/// its start (or the reverse), forces or a calibration without a [material] model, a study
+/// without its document, the monitor's settings against the signal's rate. Throws
+/// InputError naming the item and what is allowed.
+void check_report_request(const Job& job, const ReportRequest& request);
+/// Runs what the report needs on `path` (the job's plan or an NC program): analyze, the
+/// mechanism where the family has one (both chip models where both apply), the fast forces
+/// where the job has a [material] model (its wear state against the last or first of
+/// [topography]), and what the request adds: the simulation window, the monitor (Welch
+/// spectrum and spectrogram with it), the calibration (fast chips) with the fitted model's
+/// forces, the study. What a default part leaves out goes into `notes`. Checks the request
+/// first (check_report_request). `hooks`: the phases of each part; cancelling throws
+/// Interrupted (a stopped simulation too).
+[[nodiscard]] ReportData build_report(Job job, ToolPath path, ReportRequest request,
+                                      const RunHooks& hooks = {});
 /// The report as one self-contained HTML page: the data (decimated for display: at most
 /// `report_columns` pixel columns per series by decimation_indices, the surface mesh within
 /// `report_triangles`) as JSON and the bundled scripts and styles (uPlot, and three.js when
