@@ -75,20 +75,6 @@ py::dict job_dict(const Job& job) {
   return out;
 }
 
-// The job as a TOML document (section by section, in the document's order).
-std::string job_toml(const Job& job) {
-  std::string out, section;
-  for (const auto& [key, value] : job.flat_keys) {
-    const auto dot = key.find('.');
-    if (key.substr(0, dot) != section) {
-      section = key.substr(0, dot);
-      out += fmt::format("{}[{}]\n", out.empty() ? "" : "\n", section);
-    }
-    out += fmt::format("{} = {}\n", key.substr(dot + 1), value);
-  }
-  return out;
-}
-
 // Columns of a sampled path: t_s, s_mm, x_mm, y_mm, z_mm, feed_mm_per_min, rapid.
 py::dict sample_dict(const ToolPath& path, PathSamples&& s) {
   std::vector<double> feed(s.size());
@@ -142,6 +128,20 @@ PyPath read_program(const py::object& program, const py::object& job_obj) {
 }
 
 }  // namespace
+
+// The job as a TOML document (section by section, in the document's order).
+std::string job_toml(const Job& job) {
+  std::string out, section;
+  for (const auto& [key, value] : job.flat_keys) {
+    const auto dot = key.find('.');
+    if (key.substr(0, dot) != section) {
+      section = key.substr(0, dot);
+      out += fmt::format("{}[{}]\n", out.empty() ? "" : "\n", section);
+    }
+    out += fmt::format("{} = {}\n", key.substr(dot + 1), value);
+  }
+  return out;
+}
 
 std::vector<Override> overrides_of(const py::object& set) {
   std::vector<Override> out;

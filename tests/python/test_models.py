@@ -1,6 +1,7 @@
 """Every model function against the CLI for the same job: the JSON documents key for key and
 value for value, the series to the last digit the CLI prints."""
 
+import json
 import wave
 
 import numpy as np
@@ -326,3 +327,39 @@ def test_feed_limits_from_the_machine(wagih, tmp_path):
     assert from_keys["path"].gcode() == out.read_text()
     with pytest.raises(tm.InputError, match="machine.min_feed: must not exceed max_feed"):
         job.set("machine.min_feed", 2000.0)
+
+
+def report_data(html):
+    """The data document a report page embeds."""
+    start = html.index('<script type="application/json" id="trochomill-data">')
+    start = html.index(">", start) + 1
+    end = html.index("</script>", start)
+    return json.loads(html[start:end].replace("<\\/", "</"))
+
+
+def test_report_is_the_clis_page(bergmann, tmp_path):
+    """The same parts and numbers as `trochomill report` (the document but for how the job
+    and the command are recorded), written atomically where asked."""
+    ex = bergmann
+    job = tm.Job.from_toml(ex)
+    out = tmp_path / "py.html"
+    html = tm.report(job, out, cycles=(3, 4))
+    assert out.read_text() == html
+    cli_out = tmp_path / "cli.html"
+    run_cli("report", ex, "--cycles", "3:4", "-o", cli_out)
+    a, b = report_data(html), report_data(cli_out.read_text())
+    for doc in (a, b):
+        for k in ("command", "job_text", "job_file"):
+            doc.pop(k)
+    assert a == b
+    assert a["forces"]["worn"]["label"] == "state 1 (VB 0.15 mm)"
+
+
+def test_report_refuses_bad_requests(pivkin):
+    job = tm.Job.from_toml(pivkin)
+    with pytest.raises(tm.InputError, match="unknown item; allowed: mechanism, forces, simulate"):
+        tm.report(job, parts=["plots"])
+    with pytest.raises(tm.InputError, match="needs --start"):
+        tm.report(job, signal=np.zeros(1000), rate_hz=100000.0)
+    with pytest.raises(tm.InputError, match="no \\[material\\] force model"):
+        tm.report(job, parts=["forces"])

@@ -99,6 +99,15 @@ def calibrate(job: Job | Path, t_s: npt.ArrayLike, f_n: npt.ArrayLike, *, fit: S
               from_s: float | None = None, to_s: float | None = None, progress: _Progress = None,
               memory_limit_gb: float | None = None) -> dict[str, Any]:
     """`calibrate --json`'s keys and "material_toml"."""
+def report(job: Job | Path, output: str | os.PathLike[str] | None = None, *,
+           parts: Sequence[str] = ..., cycles: tuple[int, int] | None = None,
+           from_s: float | None = None, to_s: float | None = None,
+           signal: npt.ArrayLike | None = None, rate_hz: float | None = None,
+           start_s: float | None = None, measured_t_s: npt.ArrayLike | None = None,
+           measured_f_n: npt.ArrayLike | None = None,
+           vary: Mapping[str, Sequence[_Value]] | None = None, progress: _Progress = None,
+           memory_limit_gb: float | None = None) -> str:
+    """`trochomill report`'s self-contained HTML page (also written to `output`)."""
 def monitor(samples: npt.ArrayLike, rate_hz: float, *, job: Job | None = None, start_s: float = 0.0,
             set: Mapping[str, _Value] | None = None) -> dict[str, Any]:
     """`monitor --json`'s keys and "windows" (t_s, rms_low, rms_high, k_f)."""
