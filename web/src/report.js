@@ -538,26 +538,21 @@ function engagementPart() {
   const e = data.engagement;
   const sec = section('engagement', 'Engagement and chip thickness',
     'Wagih 2023: engaged angle of the tool circle, the largest local uncut chip thickness h and the teeth in cut, from the exact engagement kernel (one sample per tooth pass fraction). Series are decimated for display keeping every extreme (min and max per pixel column); the full series is `analyze --csv`.');
-  const pr = e.program;
-  const fig = figure(sec, 'engagement-program', 'Over the program', `${pr.samples} samples, ${pr.shown} shown; h_max of the program ${fmtNum(e.program_h_max.h_mm)} mm at ${fmtNum(e.program_h_max.t_s)} s`);
-  linePlot(fig, {
-    x: pr.t_s, xLabel: 'time (s)', axes: { y: 'engagement angle (°)', y2: 'h (mm)', y3: 'teeth in cut' },
-    series: [{ label: 'engagement (°)', values: pr.engagement_deg, scale: 'y' },
-      { label: 'h_max (mm)', values: pr.h_max_mm, scale: 'y2' },
-      { label: 'teeth in cut', values: pr.teeth_in_cut, scale: 'y3', stepped: true, color: '#8c959f' }],
-    draw: marker(e.program_h_max.t_s, e.program_h_max.h_mm, `h_max ${fmtNum(e.program_h_max.h_mm, 4)} mm`, 'y2'),
+  // One plot of engagement, h and teeth in cut, with h_max marked.
+  const plot = (fig, block, xLabel, peak) => linePlot(fig, {
+    x: block.t_s, xLabel, axes: { y: 'engagement angle (°)', y2: 'h (mm)', y3: 'teeth in cut' },
+    series: [{ label: 'engagement (°)', values: block.engagement_deg, scale: 'y' },
+      { label: 'h_max (mm)', values: block.h_max_mm, scale: 'y2' },
+      { label: 'teeth in cut', values: block.teeth_in_cut, scale: 'y3', stepped: true, color: '#8c959f' }],
+    draw: marker(peak.t_s, peak.h_mm, `h_max ${fmtNum(peak.h_mm, 4)} mm`, 'y2'),
   });
+  const pr = e.program;
+  plot(figure(sec, 'engagement-program', 'Over the program', `${pr.samples} samples, ${pr.shown} shown; h_max of the program ${fmtNum(e.program_h_max.h_mm)} mm at ${fmtNum(e.program_h_max.t_s)} s`),
+    pr, 'time (s)', e.program_h_max);
   if (e.cycle) {
-    const c = e.cycle;
-    const fig2 = figure(sec, 'engagement-cycle', data.summary.periodic === false ? 'Over the analysis window (no periodic cycle)' : 'Over the steady cycle',
-      `from ${fmtNum(data.path.cycle_from_s)} s; h_max ${fmtNum(e.cycle_h_max.h_mm)} mm at ${fmtNum(e.cycle_h_max.t_s)} s into the cycle`);
-    linePlot(fig2, {
-      x: c.t_s, xLabel: 'time from the cycle start (s)', axes: { y: 'engagement angle (°)', y2: 'h (mm)', y3: 'teeth in cut' },
-      series: [{ label: 'engagement (°)', values: c.engagement_deg, scale: 'y' },
-        { label: 'h_max (mm)', values: c.h_max_mm, scale: 'y2' },
-        { label: 'teeth in cut', values: c.teeth_in_cut, scale: 'y3', stepped: true, color: '#8c959f' }],
-      draw: marker(e.cycle_h_max.t_s, e.cycle_h_max.h_mm, `h_max ${fmtNum(e.cycle_h_max.h_mm, 4)} mm`, 'y2'),
-    });
+    plot(figure(sec, 'engagement-cycle', data.summary.periodic === false ? 'Over the analysis window (no periodic cycle)' : 'Over the steady cycle',
+      `from ${fmtNum(data.path.cycle_from_s)} s; h_max ${fmtNum(e.cycle_h_max.h_mm)} mm at ${fmtNum(e.cycle_h_max.t_s)} s into the cycle`),
+    e.cycle, 'time from the cycle start (s)', e.cycle_h_max);
   }
 }
 
