@@ -1,0 +1,91 @@
+// Studies over many job variants: `trochomill sweep` evaluates a grid or a space-filling
+// sample of keys with analyze, mechanism, forces or simulate and writes one row per point,
+// appended as points finish (in point order), so a stopped run resumes where it stopped.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "trochomill/analysis.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/progress.hpp"
+
+namespace trochomill {
+
+/// A key sampled over an interval (`--range key=lo:hi`); integer keys are rounded.
+struct SweepRange {
+  std::string key;
+  double lo = 0, hi = 0;
+};
+/// Parses "section.key=lo:hi" (lo < hi, finite). Throws InputError.
+[[nodiscard]] SweepRange parse_range(const std::string& text);
+
+enum class Sampler {
+  sobol,  ///< Sobol's low-discrepancy sequence (Joe and Kuo's directions; first point skipped)
+  lhs,    ///< Latin hypercube: one sample per stratum and dimension, seeded permutations
+};
+[[nodiscard]] Sampler parse_sampler(const std::string& name);
+
+/// The points of a sweep: every combination of the grid's values (the first key slowest),
+/// each combined with every sample of the ranges (`samples` points in [lo, hi] per key).
+struct SweepPlan {
+  std::vector<std::string> keys;                 ///< the grid's keys, then the ranges'
+  std::vector<std::vector<std::string>> points;  ///< per point, a TOML value per key
+};
+/// Throws InputError for an unknown key, a key given twice, ranges without samples (or
+/// samples without ranges), or more than 1,000,000 points.
+[[nodiscard]] SweepPlan plan_sweep(const std::vector<Vary>& grid,
+                                   const std::vector<SweepRange>& ranges, std::size_t samples,
+                                   Sampler sampler, std::uint64_t seed);
+/// The unit-cube samples (samples x dimensions, each in [0, 1)) the plan maps onto its ranges.
+[[nodiscard]] std::vector<std::vector<double>> unit_samples(std::size_t samples,
+                                                            std::size_t dimensions, Sampler sampler,
+                                                            std::uint64_t seed);
+
+/// What each point runs.
+enum class SweepEval { analyze, mechanism, forces, simulate };
+[[nodiscard]] SweepEval parse_sweep_eval(const std::string& name);
+[[nodiscard]] std::string_view to_string(SweepEval e) noexcept;
+
+/// How a sweep runs.
+struct SweepOptions {
+  SweepEval eval = SweepEval::analyze;
+  /// forces and simulate: the window, trochoid cycles [first, last) (default: the steady
+  /// cycle analyze finds).
+  std::optional<std::pair<int, int>> cycles;
+  int threads = 0;  ///< points evaluated at once (0: all cores)
+};
+
+/// The columns of a sweep's CSV: index, the plan's keys, ok, error, then the metrics of the
+/// evaluation (the numeric leaves of its JSON document, nested keys joined by '.', e.g.
+/// zone_share.CZIII; wall times left out).
+[[nodiscard]] std::vector<std::string> sweep_columns(const SweepPlan& plan, const Job& base,
+                                                     SweepEval eval);
+
+/// Runs the sweep into `csv`: rows are appended as points finish, in point order, each with
+/// one write (a killed run leaves whole rows; a torn last line is dropped on resume). With
+/// `resume`, an existing file whose header is this sweep's keeps its rows and only the points
+/// not in it run; without, an existing file is refused. A point that fails records its
+/// message in `error` (the sweep goes on). Each point's job is built from `doc` with `base`
+/// then its values. Returns the number of points evaluated now. `hooks`: the phase "points"
+/// with progress per point; Ctrl-C stops it after the points running (Interrupted; the rows
+/// written stay). Results do not depend on the thread count.
+std::size_t run_sweep(const JobDocument& doc, const std::vector<Override>& base,
+                      const SweepPlan& plan, const SweepOptions& options,
+                      const std::filesystem::path& csv, bool resume, const RunHooks& hooks = {});
+
+/// A sweep's CSV read back: the columns and the rows (cells as text). Throws InputError for
+/// a file that is not a sweep's.
+struct SweepTable {
+  std::vector<std::string> columns;
+  std::vector<std::vector<std::string>> rows;
+};
+[[nodiscard]] SweepTable read_sweep_csv(const std::filesystem::path& csv);
+/// The table as JSON: {"columns": [...], "points": [{column: value}...]} (numbers as numbers).
+[[nodiscard]] std::string sweep_json(const SweepTable& t);
+
+}  // namespace trochomill

@@ -1,0 +1,170 @@
+// The sweep: its samplers (Sobol's sequence, Latin hypercube), its plan, and runs that write,
+// stop and resume the same file whatever the thread count.
+#include "trochomill/study.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "test_util.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
+#include "trochomill/report.hpp"
+
+namespace trochomill {
+namespace {
+
+namespace fs = std::filesystem;
+
+// scipy.stats.qmc.Sobol(d=3, scramble=False).random(5) (Joe and Kuo's directions) without its
+// first point, the origin, which Boost's generator skips: exact binary fractions.
+TEST(Sweep, SobolIsJoeAndKuosSequence) {
+  const auto u = unit_samples(4, 3, Sampler::sobol, 0);
+  const double want[4][3] = {
+      {0.5, 0.5, 0.5}, {0.75, 0.25, 0.25}, {0.25, 0.75, 0.75}, {0.375, 0.375, 0.625}};
+  for (int i = 0; i < 4; ++i) {
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(u[i][d], want[i][d]) << i << "," << d;
+  }
+}
+
+// A Latin hypercube has exactly one sample in each of the N strata of every dimension, the
+// same for a seed, another for another seed.
+TEST(Sweep, LatinHypercubeFillsEveryStratumOnce) {
+  const std::size_t n = 37;
+  const auto a = unit_samples(n, 4, Sampler::lhs, 11);
+  for (std::size_t d = 0; d < 4; ++d) {
+    std::set<std::size_t> strata;
+    for (const auto& p : a) {
+      ASSERT_GE(p[d], 0.0);
+      ASSERT_LT(p[d], 1.0);
+      strata.insert(static_cast<std::size_t>(p[d] * static_cast<double>(n)));
+    }
+    EXPECT_EQ(strata.size(), n);
+  }
+  EXPECT_EQ(a, unit_samples(n, 4, Sampler::lhs, 11));
+  EXPECT_NE(a, unit_samples(n, 4, Sampler::lhs, 12));
+}
+
+TEST(Sweep, PlanIsTheGridTimesTheSample) {
+  const SweepPlan p = plan_sweep({parse_vary("path.aspect_ratio=0.8,1.0"),
+                                  parse_vary("path.direction=\"climb\",\"conventional\"")},
+                                 {parse_range("path.step=0.5:1.5"), parse_range("tool.teeth=2:6")},
+                                 3, Sampler::sobol, 0);
+  ASSERT_EQ(p.keys, (std::vector<std::string>{"path.aspect_ratio", "path.direction", "path.step",
+                                              "tool.teeth"}));
+  ASSERT_EQ(p.points.size(), 12u);
+  // First key slowest; the sample innermost: step = 0.5 + u (Sobol 0.5, 0.75, 0.25); teeth
+  // rounded from 2 + 4 u (0.5, 0.25, 0.75 -> 4, 3, 5).
+  EXPECT_EQ(p.points[0], (std::vector<std::string>{"0.8", "\"climb\"", "1", "4"}));
+  EXPECT_EQ(p.points[1], (std::vector<std::string>{"0.8", "\"climb\"", "1.25", "3"}));
+  EXPECT_EQ(p.points[2], (std::vector<std::string>{"0.8", "\"climb\"", "0.75", "5"}));
+  EXPECT_EQ(p.points[3][1], "\"conventional\"");
+  EXPECT_EQ(p.points[6][0], "1.0");
+  // Bad input names the option and the key.
+  EXPECT_THROW((void)plan_sweep({parse_vary("path.nope=1,2")}, {}, 0, Sampler::sobol, 0),
+               InputError);
+  EXPECT_THROW((void)plan_sweep({parse_vary("path.step=1,2")}, {parse_range("path.step=1:2")}, 4,
+                                Sampler::sobol, 0),
+               InputError);
+  EXPECT_THROW((void)plan_sweep({}, {parse_range("path.type=1:2")}, 4, Sampler::sobol, 0),
+               InputError);
+  EXPECT_THROW((void)plan_sweep({}, {parse_range("path.step=1:2")}, 0, Sampler::sobol, 0),
+               InputError);
+  EXPECT_THROW((void)parse_range("path.step=2:1"), InputError);
+  EXPECT_THROW((void)parse_range("path.step=1:nan"), InputError);
+  EXPECT_THROW((void)parse_sampler("halton"), InputError);
+  EXPECT_THROW((void)parse_sweep_eval("optimize"), InputError);
+}
+
+class SweepRun : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ =
+        fs::temp_directory_path() /
+        ("trochomill-sweep-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+         "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+// Each row holds what `compare` gives the same point (the same evaluation, printed to 17
+// digits: equal to the last bit); a point whose job is invalid records why and the sweep
+// goes on.
+TEST_F(SweepRun, RowsAreTheAnalysisOfEachPointAndFailuresAreRecorded) {
+  const JobDocument doc = JobDocument::load(test::example("wagih2023/elliptical.toml"));
+  const SweepPlan plan =
+      plan_sweep({parse_vary("path.aspect_ratio=0.8,1.2"), parse_vary("path.step=1,-1")}, {}, 0,
+                 Sampler::sobol, 0);
+  const fs::path csv = dir_ / "a.csv";
+  EXPECT_EQ(run_sweep(doc, {}, plan, SweepOptions{}, csv, false), 4u);
+  const SweepTable t = read_sweep_csv(csv);
+  ASSERT_EQ(t.rows.size(), 4u);
+  const auto col = [&t](const std::string& name) {
+    return static_cast<std::size_t>(std::find(t.columns.begin(), t.columns.end(), name) -
+                                    t.columns.begin());
+  };
+  const std::vector<Vary> varies = {parse_vary("path.aspect_ratio=0.8,1.2")};
+  const auto study =
+      nlohmann::json::parse(study_json(varies, run_study(doc, {}, varies, 1, [](const Job& j) {
+                                         return analyze_with_forces(j, plan_path(j).path);
+                                       })));
+  for (const std::size_t row : {0u, 2u}) {
+    EXPECT_EQ(t.rows[row][col("ok")], "1");
+    const auto& m = study["points"][row / 2]["metrics"];
+    for (const char* k : {"h_max_mm", "cycle_mrr_mm3_per_min", "waviness_left_mm"}) {
+      EXPECT_EQ(std::stod(t.rows[row][col(k)]), m[k].get<double>()) << k;
+    }
+  }
+  for (const std::size_t row : {1u, 3u}) {
+    EXPECT_EQ(t.rows[row][col("ok")], "0");
+    EXPECT_NE(t.rows[row][col("error")].find("path.step"), std::string::npos)
+        << t.rows[row][col("error")];
+    EXPECT_EQ(t.rows[row][col("h_max_mm")], "");
+  }
+  // An existing file is refused without --resume.
+  EXPECT_THROW((void)run_sweep(doc, {}, plan, SweepOptions{}, csv, false), InputError);
+}
+
+// A run stopped after two rows and in the middle of the third resumes to the same file; one
+// and two threads write the same bytes.
+TEST_F(SweepRun, ResumeAfterAKillAndAnyThreadCountGiveTheSameFile) {
+  const JobDocument doc = JobDocument::load(test::example("pivkin2025/trochoidal.toml"));
+  const SweepPlan plan = plan_sweep(
+      {}, {parse_range("path.step=0.05:0.2"), parse_range("cutting.feed_per_tooth=0.02:0.08")}, 6,
+      Sampler::lhs, 5);
+  SweepOptions o;
+  o.eval = SweepEval::mechanism;
+  o.threads = 1;
+  const fs::path one = dir_ / "one.csv", two = dir_ / "two.csv";
+  ASSERT_EQ(run_sweep(doc, {}, plan, o, one, false), 6u);
+  o.threads = 2;
+  ASSERT_EQ(run_sweep(doc, {}, plan, o, two, false), 6u);
+  const std::string full = read_text_file(one);
+  EXPECT_EQ(full, read_text_file(two));
+  // The header, two rows and half of the third: what a kill during that write could leave.
+  std::size_t cut = 0;
+  for (int lines = 0; lines < 3; ++lines) cut = full.find('\n', cut) + 1;
+  const std::size_t half = cut + (full.find('\n', cut) - cut) / 2;
+  const fs::path resumed = dir_ / "resumed.csv";
+  write_file_atomic(resumed, full.substr(0, half));
+  EXPECT_EQ(run_sweep(doc, {}, plan, o, resumed, true), 4u);
+  EXPECT_EQ(read_text_file(resumed), full);
+  // Resuming a finished sweep runs nothing; another sweep's file is refused.
+  EXPECT_EQ(run_sweep(doc, {}, plan, o, resumed, true), 0u);
+  const SweepPlan other = plan_sweep(
+      {}, {parse_range("path.step=0.05:0.3"), parse_range("cutting.feed_per_tooth=0.02:0.08")}, 6,
+      Sampler::lhs, 5);
+  EXPECT_THROW((void)run_sweep(doc, {}, other, o, resumed, true), InputError);
+  o.eval = SweepEval::analyze;
+  EXPECT_THROW((void)run_sweep(doc, {}, plan, o, resumed, true), InputError);
+}
+
+}  // namespace
+}  // namespace trochomill
