@@ -168,3 +168,84 @@ TEST_F(SweepRun, ResumeAfterAKillAndAnyThreadCountGiveTheSameFile) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// A problem with a closed-form answer from trochomill's own metrics: a full-width straight
+// slot (the linear family) cuts a chip h_max = f_z = F / (Z n) and removes faster the faster
+// it feeds, so the largest removal rate with h_max <= 0.05 mm over F in [100, 2000] mm/min and
+// n in [1000, 3000] rpm is at n = 3000, F = 0.05 * 4 * 3000 = 600 mm/min. The optimiser finds
+// it within 0.5 %, and the analysis of the job it returns holds the constraint.
+TEST(Optimize, FindsTheLargestFeedWhoseChipStaysBelowTheLimit) {
+  const JobDocument doc = JobDocument::load(test::example("wagih2023/trochoidal.toml"));
+  const std::vector<Override> base = {{"path.type", "\"linear\"", ""}};
+  OptimizeOptions o;
+  o.max_evaluations = 100;
+  const OptimizeResult r =
+      optimize(doc, base,
+               {parse_opt_variable("cutting.feed_rate=100:2000"),
+                parse_opt_variable("cutting.spindle_speed=1000:3000")},
+               {{"mrr_total_mm3_per_min", true}}, {parse_constraint("h_max_mm<=0.05")}, o);
+  ASSERT_TRUE(r.best);
+  const double feed = std::stod(r.best->values[0]), rpm = std::stod(r.best->values[1]);
+  EXPECT_NEAR(feed, 600.0, 0.005 * 600.0);
+  EXPECT_NEAR(rpm, 3000.0, 0.005 * 3000.0);
+  EXPECT_LE(r.evaluations, 100u);
+  std::vector<Override> best = base;
+  best.push_back({"cutting.feed_rate", r.best->values[0], ""});
+  best.push_back({"cutting.spindle_speed", r.best->values[1], ""});
+  const Job job = doc.build(best);
+  const ProcessMetrics m = analyze_with_forces(job, plan_path(job).path);
+  EXPECT_LE(m.h_max_slot_mm, 0.05 * (1 + 1e-9));
+  // The job written for it reads back as the same job.
+  const Job again = parse_job(to_toml(job), "best.toml");
+  EXPECT_EQ(again.flat_keys, job.flat_keys);
+}
+
+// Two goals pulling apart (removal rate up, chip down): every point of the Pareto set is
+// feasible and none dominates another.
+TEST(Optimize, ParetoSetIsNonDominated) {
+  const JobDocument doc = JobDocument::load(test::example("wagih2023/trochoidal.toml"));
+  OptimizeOptions o;
+  o.max_evaluations = 48;
+  o.population = 8;
+  const std::vector<Objective> goals = {{"mrr_total_mm3_per_min", true}, {"h_max_mm", false}};
+  const OptimizeResult r = optimize(doc, {{"path.type", "\"linear\"", ""}},
+                                    {parse_opt_variable("cutting.feed_rate=100:2000")}, goals,
+                                    {parse_constraint("h_max_mm<=0.2")}, o);
+  ASSERT_GE(r.pareto.size(), 5u);
+  for (const OptPoint& a : r.pareto) {
+    EXPECT_TRUE(a.feasible);
+    EXPECT_LE(a.metrics.at("h_max_mm"), 0.2 * (1 + 1e-9));
+    for (const OptPoint& b : r.pareto) {
+      const bool dominates =
+          b.metrics.at("mrr_total_mm3_per_min") >= a.metrics.at("mrr_total_mm3_per_min") &&
+          b.metrics.at("h_max_mm") <= a.metrics.at("h_max_mm") &&
+          (b.metrics.at("mrr_total_mm3_per_min") > a.metrics.at("mrr_total_mm3_per_min") ||
+           b.metrics.at("h_max_mm") < a.metrics.at("h_max_mm"));
+      EXPECT_FALSE(dominates) << b.values[0] << " dominates " << a.values[0];
+    }
+  }
+}
+
+TEST(Optimize, BadVariablesMetricsAndConstraintsAreRefused) {
+  EXPECT_THROW((void)parse_constraint("h_max_mm<0.05"), InputError);
+  EXPECT_THROW((void)parse_constraint("h_max_mm<=abc"), InputError);
+  EXPECT_THROW((void)parse_opt_variable("path.type=1:2"), InputError);
+  EXPECT_THROW((void)parse_opt_variable("path.type=elliptical"), InputError);
+  EXPECT_THROW((void)parse_opt_variable("path.nope=1:2"), InputError);
+  const JobDocument doc = JobDocument::load(test::example("wagih2023/trochoidal.toml"));
+  try {
+    (void)optimize(doc, {}, {parse_opt_variable("path.step=0.5:1.5")}, {{"mrr", true}}, {},
+                   OptimizeOptions{});
+    FAIL() << "an unknown metric was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--maximize mrr: not a metric of --eval analyze"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace trochomill

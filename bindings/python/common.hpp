@@ -79,8 +79,6 @@ py::array_t<T> to_array(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
 [[nodiscard]] std::string toml_value(const py::handle& v, const std::string& key);
 /// {"section.key": value} (None: none) as overrides; a key without a section is refused.
 [[nodiscard]] std::vector<Override> overrides_of(const py::object& set);
-/// The job as a TOML document (its keys after the overrides, section by section).
-[[nodiscard]] std::string job_toml(const Job& job);
 /// JSON text (the CLI's --json documents) as Python objects (json.loads).
 [[nodiscard]] py::object from_json(const std::string& text);
 

@@ -611,7 +611,7 @@ measurement's span. Returns the keys of `trochomill calibrate --json` and "mater
         const bool program = py::isinstance<PyPath>(job_or_path);
         ReportRequest r;
         r.job_file = pj.job.source;
-        r.job_text = job_toml(pj.job);
+        r.job_text = to_toml(pj.job);
         r.overrides = pj.overrides;
         r.with = parts;
         r.command = "trochomill.report (Python)";

@@ -129,20 +129,6 @@ PyPath read_program(const py::object& program, const py::object& job_obj) {
 
 }  // namespace
 
-// The job as a TOML document (section by section, in the document's order).
-std::string job_toml(const Job& job) {
-  std::string out, section;
-  for (const auto& [key, value] : job.flat_keys) {
-    const auto dot = key.find('.');
-    if (key.substr(0, dot) != section) {
-      section = key.substr(0, dot);
-      out += fmt::format("{}[{}]\n", out.empty() ? "" : "\n", section);
-    }
-    out += fmt::format("{} = {}\n", key.substr(dot + 1), value);
-  }
-  return out;
-}
-
 std::vector<Override> overrides_of(const py::object& set) {
   std::vector<Override> out;
   if (set.is_none()) return out;
@@ -245,7 +231,7 @@ Units: mm, s, mm/min, rpm, degrees (`trochomill keys` lists every key with its u
           "to_dict", [](const PyJob& j) { return job_dict(j.job); },
           "The job's keys as given (file and overrides): {section: {key: value}}.")
       .def(
-          "to_toml", [](const PyJob& j) { return job_toml(j.job); },
+          "to_toml", [](const PyJob& j) { return to_toml(j.job); },
           "The job's keys as a TOML document (Job.from_text reads it back).")
       .def_property_readonly(
           "source", [](const PyJob& j) { return j.doc->source(); }, "where the job came from")

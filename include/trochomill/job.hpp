@@ -149,6 +149,10 @@ struct Override {
   std::string origin;
 };
 
+/// The job as a TOML document: its keys after the overrides (`flat_keys`), section by
+/// section in the document's order; load_job of it gives the same job.
+[[nodiscard]] std::string to_toml(const Job& job);
+
 /// Parses "section.key=value". Throws InputError when there is no '=' or no section.
 [[nodiscard]] Override parse_override(std::string_view text);
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -51,6 +52,14 @@ enum class SweepEval { analyze, mechanism, forces, simulate };
 [[nodiscard]] SweepEval parse_sweep_eval(const std::string& name);
 [[nodiscard]] std::string_view to_string(SweepEval e) noexcept;
 
+/// The metrics of one point: the numbers of the evaluation's JSON document (as the sweep's
+/// columns; null figures left out). Throws what the evaluation throws.
+[[nodiscard]] std::map<std::string, double> point_metrics(
+    const Job& job, SweepEval eval, const std::optional<std::pair<int, int>>& cycles,
+    const RunHooks& hooks = {});
+/// The metric names an evaluation gives (the sweep's metric columns).
+[[nodiscard]] std::vector<std::string> metric_names(const Job& base, SweepEval eval);
+
 /// How a sweep runs.
 struct SweepOptions {
   SweepEval eval = SweepEval::analyze;
@@ -87,5 +96,64 @@ struct SweepTable {
 [[nodiscard]] SweepTable read_sweep_csv(const std::filesystem::path& csv);
 /// The table as JSON: {"columns": [...], "points": [{column: value}...]} (numbers as numbers).
 [[nodiscard]] std::string sweep_json(const SweepTable& t);
+
+// ---- optimisation (`trochomill optimize`) ---------------------------------------------------
+
+/// A variable: a number key over [lo, hi] (`key=lo:hi`; integer keys rounded) or a choice
+/// among TOML values (`key=a,b,c`, e.g. the path family).
+struct OptVariable {
+  std::string key;
+  double lo = 0, hi = 0;
+  bool integer = false;
+  std::vector<std::string> choices;  ///< non-empty: a choice variable
+};
+/// Parses "section.key=lo:hi" or "section.key=v1,v2,..."; checks the key (a number or integer
+/// key for a range). Throws InputError.
+[[nodiscard]] OptVariable parse_opt_variable(const std::string& text);
+/// A goal: a metric to maximise or minimise.
+struct Objective {
+  std::string metric;
+  bool maximize = true;
+};
+/// A constraint "metric<=value" or "metric>=value".
+struct Constraint {
+  std::string metric;
+  bool upper = true;  ///< metric <= value (else >=)
+  double value = 0;
+};
+[[nodiscard]] Constraint parse_constraint(const std::string& text);
+
+struct OptimizeOptions {
+  SweepEval eval = SweepEval::analyze;
+  std::optional<std::pair<int, int>> cycles;  ///< forces and simulate: the window
+  int max_evaluations = 300;                  ///< per choice combination
+  std::uint64_t seed = 1;
+  int population = 24;  ///< NSGA-II's population (two or more objectives; a multiple of 4)
+};
+/// One evaluated point.
+struct OptPoint {
+  std::vector<std::string> values;        ///< per variable, the TOML value
+  std::map<std::string, double> metrics;  ///< empty when the point failed
+  std::string error;
+  bool feasible = false;  ///< evaluated, every constraint held (within 1e-9 of its bound)
+};
+struct OptimizeResult {
+  std::vector<std::string> keys;  ///< the variables' keys
+  std::optional<OptPoint> best;   ///< one objective: the best feasible point
+  std::vector<OptPoint> pareto;   ///< two or more: the feasible non-dominated points
+  std::size_t evaluations = 0;    ///< distinct points evaluated
+  std::string method;
+};
+/// One objective: for each combination of the choice variables, NLopt's ISRES (global,
+/// with the constraints) then COBYLA (local polish) over the numeric variables, seeded; the
+/// best feasible point of all evaluated. Two or more: pagmo's NSGA-II, infeasible points
+/// penalised, and the Pareto set of all feasible points evaluated. Points that fail count as
+/// infeasible. Throws InputError for an unknown metric or no variables; cancelling (hooks)
+/// throws Interrupted.
+[[nodiscard]] OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& base,
+                                      const std::vector<OptVariable>& variables,
+                                      const std::vector<Objective>& objectives,
+                                      const std::vector<Constraint>& constraints,
+                                      const OptimizeOptions& options, const RunHooks& hooks = {});
 
 }  // namespace trochomill

@@ -245,4 +245,17 @@ void apply_overrides(Job& job, const std::vector<Override>& overrides) {
   job_detail::apply_to_job(root, overridden, job);
 }
 
+std::string to_toml(const Job& job) {
+  std::string out, section;
+  for (const auto& [key, value] : job.flat_keys) {
+    const auto dot = key.find('.');
+    if (key.substr(0, dot) != section) {
+      section = key.substr(0, dot);
+      out += fmt::format("{}[{}]\n", out.empty() ? "" : "\n", section);
+    }
+    out += fmt::format("{} = {}\n", key.substr(dot + 1), value);
+  }
+  return out;
+}
+
 }  // namespace trochomill

@@ -171,6 +171,28 @@ std::size_t below(std::mt19937_64& g, std::size_t n) {
 
 }  // namespace
 
+std::map<std::string, double> point_metrics(const Job& job, SweepEval eval,
+                                            const std::optional<std::pair<int, int>>& cycles,
+                                            const RunHooks& hooks) {
+  std::vector<std::pair<std::string, json>> leaves;
+  flatten(evaluate(job, eval, cycles, hooks), "", leaves);
+  std::map<std::string, double> out;
+  for (const auto& [k, v] : leaves) {
+    if (v.is_boolean()) {
+      out.emplace(k, v.get<bool>() ? 1.0 : 0.0);
+    } else if (v.is_number()) {
+      const double d = v.get<double>();
+      if (std::isfinite(d)) out.emplace(k, d);
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> metric_names(const Job& base, SweepEval eval) {
+  const std::vector<std::string> cols = sweep_columns(SweepPlan{}, base, eval);
+  return {cols.begin() + 3, cols.end()};  // after index, ok, error
+}
+
 SweepRange parse_range(const std::string& text) {
   const auto eq = text.find('=');
   const auto colon = text.find(':', eq == std::string::npos ? 0 : eq);

@@ -2,6 +2,8 @@
 with SIGKILL half-way then resumed, against an uninterrupted run."""
 
 import csv
+import json
+import pathlib
 import io
 import os
 import signal
@@ -67,6 +69,42 @@ def test_bad_sweeps_exit_2(wagih, tmp_path):
         (["--vary", "path.step=1,2", "--cycles", "1:2"], "--cycles is for --eval forces or simulate"),
     ]:
         p = run_cli("sweep", wagih, *extra, "-o", out, check=False)
+        assert p.returncode == 2, (extra, p.stderr)
+        assert message in p.stderr, (extra, p.stderr)
+        assert not out.exists()
+
+
+def test_optimize_writes_a_job_that_holds_its_constraint(tmp_path):
+    """The best job written by optimize, analysed again by the CLI, keeps h_max under the
+    limit, and its feed is the closed-form optimum F = h_max Z n (a straight full slot cuts a
+    chip f_z = F / (Z n)) within 0.5 %; a choice variable runs each of its values."""
+    job = tmp_path / "linear.toml"
+    src = (pathlib.Path(__file__).resolve().parents[2] / "examples/wagih2023/trochoidal.toml")
+    job.write_text(src.read_text().replace('type = "trochoidal"', 'type = "linear"'))
+    best = tmp_path / "best.toml"
+    r = run_cli("optimize", job, "--var", "cutting.feed_rate=100:2000",
+                "--var", 'path.direction="climb","conventional"', "--maximize",
+                "mrr_total_mm3_per_min", "--subject-to", "h_max_mm<=0.05", "--max-evals", "60",
+                "-o", best, "--json", "-")
+    result = json.loads(r.stdout)
+    assert result["evaluations"] <= 120
+    again = json.loads(run_cli("analyze", best, "--json", "-").stdout)
+    assert again["h_max_mm"] <= 0.05 * (1 + 1e-9)
+    feed = float(result["best"]["values"]["cutting.feed_rate"])
+    assert abs(feed - 0.05 * 4 * 2000) <= 0.005 * 400, feed
+    assert result["best"]["margins"]["h_max_mm<=0.05"] >= -1e-9 * 0.05
+
+
+def test_bad_optimizations_exit_2(wagih, tmp_path):
+    out = tmp_path / "best.toml"
+    for extra, message in [
+        (["--var", "path.step=0.5:1.5", "--maximize", "mrr"], "--maximize mrr: not a metric of --eval analyze"),
+        (["--var", "path.step=0.5:1.5", "--maximize", "h_max_mm", "--subject-to", "h_max_mm<0.1"],
+         "expected METRIC<=VALUE or METRIC>=VALUE"),
+        (["--var", "path.type=1:2", "--maximize", "h_max_mm"], "not a number"),
+        (["--var", "path.step=0.5:1.5"], "give --maximize or --minimize"),
+    ]:
+        p = run_cli("optimize", wagih, *extra, "-o", out, check=False)
         assert p.returncode == 2, (extra, p.stderr)
         assert message in p.stderr, (extra, p.stderr)
         assert not out.exists()

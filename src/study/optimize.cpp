@@ -1,0 +1,365 @@
+// `trochomill optimize`: the best job variant under constraints. One objective: NLopt's ISRES
+// (a seeded evolution strategy that handles nonlinear constraints) over the numeric variables,
+// polished by COBYLA, for each combination of the choice variables. Two or more: pagmo's
+// NSGA-II, and the Pareto set of everything evaluated. Every evaluation is a job built from
+// the document with the variables' values and run through the sweep's evaluation.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <nlopt.hpp>
+#include <pagmo/algorithms/nsga2.hpp>
+#include <pagmo/population.hpp>
+#include <pagmo/problem.hpp>
+
+#include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
+#include "trochomill/study.hpp"
+
+namespace trochomill {
+namespace {
+
+constexpr double kPenalty = 1e30;  // a failed or infeasible point's objective
+
+const JobKey* find_key(const std::string& key) {
+  for (const JobKey& k : job_keys()) {
+    if (k.section + "." + k.key == key) return &k;
+  }
+  return nullptr;
+}
+
+// Evaluates points, each once: the values are the cache's key.
+class Evaluator {
+ public:
+  Evaluator(const JobDocument& doc, const std::vector<Override>& base,
+            const std::vector<OptVariable>& vars, const std::vector<Constraint>& constraints,
+            const OptimizeOptions& o, const RunHooks& hooks)
+      : doc_(doc), base_(base), vars_(vars), constraints_(constraints), o_(o), hooks_(hooks) {
+    inner_.cancel = hooks.cancel;
+  }
+
+  // The TOML value of variable k at x (a number, or a choice index's value).
+  std::string value(std::size_t k, double x) const {
+    const OptVariable& v = vars_[k];
+    if (!v.choices.empty()) {
+      const auto i = static_cast<std::size_t>(
+          std::clamp(std::floor(x), 0.0, static_cast<double>(v.choices.size() - 1)));
+      return v.choices[i];
+    }
+    x = std::clamp(x, v.lo, v.hi);
+    return v.integer ? fmt::format("{}", std::llround(x)) : fmt::format("{:.12g}", x);
+  }
+
+  const OptPoint& at(const std::vector<std::string>& values) {
+    {
+      const std::lock_guard<std::mutex> lock(mu_);
+      const auto it = cache_.find(values);
+      if (it != cache_.end()) return it->second;
+    }
+    hooks_.check("interrupted");
+    OptPoint p;
+    p.values = values;
+    std::vector<Override> o = base_;
+    for (std::size_t k = 0; k < vars_.size(); ++k) o.push_back({vars_[k].key, values[k], "--var"});
+    try {
+      p.metrics = point_metrics(doc_.build(o), o_.eval, o_.cycles, inner_);
+      p.feasible = true;
+      for (const Constraint& c : constraints_) p.feasible = p.feasible && violation(p, c) <= 0;
+    } catch (const Interrupted&) {
+      throw;
+    } catch (const std::exception& e) {
+      p.error = e.what();
+      p.metrics.clear();
+    }
+    const std::lock_guard<std::mutex> lock(mu_);
+    const auto [it, fresh] = cache_.emplace(values, std::move(p));
+    if (fresh && hooks_.progress) hooks_.progress(cache_.size(), 0);
+    return it->second;
+  }
+
+  // How far a point is from holding c (<= 0: it holds; a missing metric: violated), with a
+  // tolerance of 1e-9 of the bound (relative).
+  static double violation(const OptPoint& p, const Constraint& c) {
+    const auto it = p.metrics.find(c.metric);
+    if (it == p.metrics.end()) return kPenalty;
+    const double d = c.upper ? it->second - c.value : c.value - it->second;
+    return d - 1e-9 * std::abs(c.value);
+  }
+
+  [[nodiscard]] std::vector<const OptPoint*> all() const {
+    std::vector<const OptPoint*> out;
+    for (const auto& [k, p] : cache_) out.push_back(&p);
+    return out;
+  }
+
+ private:
+  const JobDocument& doc_;
+  const std::vector<Override>& base_;
+  const std::vector<OptVariable>& vars_;
+  const std::vector<Constraint>& constraints_;
+  const OptimizeOptions& o_;
+  const RunHooks& hooks_;
+  RunHooks inner_;
+  std::mutex mu_;
+  std::map<std::vector<std::string>, OptPoint> cache_;
+};
+
+// The objective's value to minimise (maximise: its negative); a failed point's penalty.
+double goal(const OptPoint& p, const Objective& o) {
+  const auto it = p.metrics.find(o.metric);
+  if (it == p.metrics.end()) return kPenalty;
+  return o.maximize ? -it->second : it->second;
+}
+
+// pagmo's problem: minimise every goal (a point that fails or breaks a constraint gets the
+// penalty in all of them: the death penalty).
+struct ParetoProblem {
+  Evaluator* eval = nullptr;
+  const std::vector<OptVariable>* vars = nullptr;
+  const std::vector<Objective>* goals = nullptr;
+  [[nodiscard]] pagmo::vector_double fitness(const pagmo::vector_double& x) const {
+    std::vector<std::string> values;
+    for (std::size_t k = 0; k < x.size(); ++k) values.push_back(eval->value(k, x[k]));
+    const OptPoint& p = eval->at(values);
+    pagmo::vector_double f;
+    for (const Objective& o : *goals) f.push_back(p.feasible ? goal(p, o) : kPenalty);
+    return f;
+  }
+  [[nodiscard]] std::pair<pagmo::vector_double, pagmo::vector_double> get_bounds() const {
+    pagmo::vector_double lo, hi;
+    for (const OptVariable& v : *vars) {
+      lo.push_back(v.choices.empty() ? v.lo : 0.0);
+      hi.push_back(v.choices.empty() ? v.hi : static_cast<double>(v.choices.size()) - 1e-9);
+    }
+    return {lo, hi};
+  }
+  [[nodiscard]] pagmo::vector_double::size_type get_nobj() const { return goals->size(); }
+};
+
+bool dominates(const OptPoint& a, const OptPoint& b, const std::vector<Objective>& goals) {
+  bool better = false;
+  for (const Objective& o : goals) {
+    const double fa = goal(a, o), fb = goal(b, o);
+    if (fa > fb) return false;
+    if (fa < fb) better = true;
+  }
+  return better;
+}
+
+}  // namespace
+
+OptVariable parse_opt_variable(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) {
+    throw InputError(
+        fmt::format("--var '{}': expected section.key=lo:hi or section.key=v1,v2,...", text));
+  }
+  OptVariable v;
+  v.key = trim(text.substr(0, eq));
+  const JobKey* k = find_key(v.key);
+  if (!k) throw InputError(fmt::format("--var {}: no such job key (see `trochomill keys`)", v.key));
+  const std::string rest = text.substr(eq + 1);
+  if (rest.find(':') != std::string::npos && rest.find(',') == std::string::npos) {
+    const SweepRange r = parse_range(text);
+    if (k->type != "number" && k->type != "integer") {
+      throw InputError(
+          fmt::format("--var {}: the key is {}, not a number: give its choices as {}=a,b,...",
+                      v.key, k->type, v.key));
+    }
+    v.lo = r.lo;
+    v.hi = r.hi;
+    v.integer = k->type == "integer";
+    return v;
+  }
+  v.choices = parse_vary(text).values;
+  if (v.choices.size() < 2) {
+    throw InputError(fmt::format("--var {}: a choice needs two or more values", v.key));
+  }
+  return v;
+}
+
+Constraint parse_constraint(const std::string& text) {
+  Constraint c;
+  auto op = text.find("<=");
+  c.upper = true;
+  if (op == std::string::npos) {
+    op = text.find(">=");
+    c.upper = false;
+  }
+  if (op == std::string::npos) {
+    throw InputError(fmt::format(
+        "--subject-to '{}': expected METRIC<=VALUE or METRIC>=VALUE, e.g. h_max_mm<=0.05", text));
+  }
+  c.metric = trim(text.substr(0, op));
+  const std::string v = trim(text.substr(op + 2));
+  char* end = nullptr;
+  c.value = std::strtod(v.c_str(), &end);
+  if (c.metric.empty() || v.empty() || *end != '\0' || !std::isfinite(c.value)) {
+    throw InputError(fmt::format(
+        "--subject-to '{}': expected METRIC<=VALUE or METRIC>=VALUE with a finite number", text));
+  }
+  return c;
+}
+
+OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& base,
+                        const std::vector<OptVariable>& vars, const std::vector<Objective>& goals,
+                        const std::vector<Constraint>& constraints, const OptimizeOptions& o,
+                        const RunHooks& hooks) {
+  if (vars.empty()) throw InputError("optimize: give at least one --var");
+  if (goals.empty()) throw InputError("optimize: give --maximize or --minimize METRIC");
+  if (o.max_evaluations < 10) throw InputError("optimize: --max-evals must be at least 10");
+  // Every metric named must be one the evaluation gives.
+  const Job base_job = doc.build(base);
+  const std::vector<std::string> names = metric_names(base_job, o.eval);
+  const auto check = [&](const std::string& m, const char* option) {
+    if (std::find(names.begin(), names.end(), m) == names.end()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      throw InputError(fmt::format("{} {}: not a metric of --eval {}; these are: {}", option, m,
+                                   to_string(o.eval), list));
+    }
+  };
+  for (const Objective& g : goals) check(g.metric, g.maximize ? "--maximize" : "--minimize");
+  for (const Constraint& c : constraints) check(c.metric, "--subject-to");
+  for (std::size_t a = 0; a < vars.size(); ++a) {
+    for (std::size_t b = a + 1; b < vars.size(); ++b) {
+      if (vars[a].key == vars[b].key) {
+        throw InputError(fmt::format("--var {}: given twice", vars[a].key));
+      }
+    }
+  }
+
+  OptimizeResult r;
+  for (const OptVariable& v : vars) r.keys.push_back(v.key);
+  Evaluator ev(doc, base, vars, constraints, o, hooks);
+  if (hooks.phase) hooks.phase("evaluations");
+
+  if (goals.size() == 1) {
+    r.method = "NLopt ISRES (global) then COBYLA (local), per choice combination";
+    const Objective& g = goals.front();
+    std::vector<std::size_t> numeric, choice;
+    for (std::size_t k = 0; k < vars.size(); ++k) {
+      (vars[k].choices.empty() ? numeric : choice).push_back(k);
+    }
+    std::vector<std::size_t> pick(choice.size(), 0);
+    for (;;) {
+      // x over every variable: choices fixed at this combination.
+      std::vector<double> full(vars.size(), 0.0);
+      for (std::size_t c = 0; c < choice.size(); ++c)
+        full[choice[c]] = static_cast<double>(pick[c]);
+      const auto values_at = [&](const std::vector<double>& x) {
+        std::vector<double> all = full;
+        for (std::size_t i = 0; i < numeric.size(); ++i) all[numeric[i]] = x[i];
+        std::vector<std::string> values;
+        for (std::size_t k = 0; k < vars.size(); ++k) values.push_back(ev.value(k, all[k]));
+        return values;
+      };
+      if (numeric.empty()) {
+        (void)ev.at(values_at({}));
+      } else {
+        struct Ctx {
+          Evaluator* ev;
+          const Objective* g;
+          const Constraint* c;
+          std::function<std::vector<std::string>(const std::vector<double>&)> values;
+        };
+        const std::size_t n = numeric.size();
+        std::vector<double> lo(n), hi(n), x(n);
+        for (std::size_t i = 0; i < n; ++i) {
+          lo[i] = vars[numeric[i]].lo;
+          hi[i] = vars[numeric[i]].hi;
+          x[i] = 0.5 * (lo[i] + hi[i]);
+        }
+        // The callbacks, as lambdas with their context.
+        Ctx obj{&ev, &g, nullptr, {}};
+        obj.values = [&](const std::vector<double>& xs) { return values_at(xs); };
+        std::vector<Ctx> cons;
+        for (const Constraint& c : constraints) cons.push_back({&ev, &g, &c, obj.values});
+        const auto f = [](unsigned dim, const double* xs, double*, void* data) -> double {
+          auto* ctx = static_cast<Ctx*>(data);
+          const OptPoint& p = ctx->ev->at(ctx->values(std::vector<double>(xs, xs + dim)));
+          return p.metrics.empty() ? kPenalty : goal(p, *ctx->g);
+        };
+        const auto gfun = [](unsigned dim, const double* xs, double*, void* data) -> double {
+          auto* ctx = static_cast<Ctx*>(data);
+          const OptPoint& p = ctx->ev->at(ctx->values(std::vector<double>(xs, xs + dim)));
+          return p.metrics.empty() ? kPenalty : Evaluator::violation(p, *ctx->c);
+        };
+        const auto run = [&](nlopt::algorithm alg, int evals) {
+          nlopt::opt opt(alg, static_cast<unsigned>(n));
+          opt.set_lower_bounds(lo);
+          opt.set_upper_bounds(hi);
+          opt.set_min_objective(static_cast<nlopt::func>(f), &obj);
+          for (Ctx& c : cons)
+            opt.add_inequality_constraint(static_cast<nlopt::func>(gfun), &c, 0.0);
+          opt.set_maxeval(evals);
+          opt.set_xtol_rel(1e-7);
+          if (alg == nlopt::GN_ISRES)
+            opt.set_population(static_cast<unsigned>(std::max(20, 10 * static_cast<int>(n + 1))));
+          double fx = 0;
+          try {
+            (void)opt.optimize(x, fx);
+          } catch (const nlopt::roundoff_limited&) {
+          } catch (const nlopt::forced_stop&) {
+          }
+        };
+        nlopt::srand(o.seed);
+        const int global = o.max_evaluations * 2 / 3;
+        run(nlopt::GN_ISRES, global);
+        hooks.check("interrupted");
+        // Polish from the best feasible point of this combination found so far.
+        const OptPoint* best = nullptr;
+        for (const OptPoint* p : ev.all()) {
+          bool here = true;
+          for (std::size_t c = 0; c < choice.size(); ++c) {
+            here = here && p->values[choice[c]] == vars[choice[c]].choices[pick[c]];
+          }
+          if (here && p->feasible && (!best || goal(*p, g) < goal(*best, g))) best = p;
+        }
+        if (best) {
+          for (std::size_t i = 0; i < n; ++i) x[i] = std::stod(best->values[numeric[i]]);
+        }
+        run(nlopt::LN_COBYLA, o.max_evaluations - global);
+      }
+      hooks.check("interrupted");
+      std::size_t c = choice.size();
+      while (c > 0) {
+        if (++pick[c - 1] < vars[choice[c - 1]].choices.size()) break;
+        pick[c - 1] = 0;
+        --c;
+      }
+      if (c == 0) break;
+    }
+    for (const OptPoint* p : ev.all()) {
+      if (p->feasible && (!r.best || goal(*p, g) < goal(*r.best, g))) r.best = *p;
+    }
+  } else {
+    r.method = "pagmo NSGA-II (infeasible points penalised)";
+    const int pop = std::max(8, (o.population + 3) / 4 * 4);
+    const int generations = std::max(1, o.max_evaluations / pop - 1);
+    pagmo::problem prob{ParetoProblem{&ev, &vars, &goals}};
+    pagmo::population population(prob, static_cast<pagmo::population::size_type>(pop),
+                                 static_cast<unsigned>(o.seed));
+    pagmo::algorithm algo{pagmo::nsga2(static_cast<unsigned>(generations), 0.95, 10., 0.01, 50.,
+                                       static_cast<unsigned>(o.seed))};
+    population = algo.evolve(population);
+    hooks.check("interrupted");
+    const auto all = ev.all();
+    for (const OptPoint* p : all) {
+      if (!p->feasible) continue;
+      const bool dominated = std::any_of(all.begin(), all.end(), [&](const OptPoint* q) {
+        return q->feasible && dominates(*q, *p, goals);
+      });
+      if (!dominated) r.pareto.push_back(*p);
+    }
+    std::sort(r.pareto.begin(), r.pareto.end(), [&](const OptPoint& a, const OptPoint& b) {
+      return goal(a, goals.front()) < goal(b, goals.front());
+    });
+  }
+  r.evaluations = ev.all().size();
+  return r;
+}
+
+}  // namespace trochomill
