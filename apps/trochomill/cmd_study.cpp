@@ -97,9 +97,17 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       const JobDocument doc = JobDocument::load(a->job.file);
       const std::vector<Override> base = a->job.overrides();
       (void)doc.build(base);  // a bad base job is bad input (exit 2)
-      const GuardedRun run(true);
-      const std::size_t n = run_sweep(doc, base, plan, o, a->output, a->resume, run.hooks());
+      // Under mpirun the ranks share the points; rank 0 writes (a plain run is one rank).
+      const Distributed world;
+      const GuardedRun run(world.rank() == 0);
+      const std::size_t n =
+          run_sweep(doc, base, plan, o, a->output, a->resume, run.hooks(), &world);
       run.done();
+      if (world.rank() != 0) {
+        run.finish("interrupted");
+        exit_code = 0;
+        return;
+      }
       const SweepTable t = read_sweep_csv(a->output);
       std::size_t failed = 0;
       for (const auto& row : t.rows) failed += row[1 + plan.keys.size()] == "0" ? 1 : 0;

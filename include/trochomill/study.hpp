@@ -75,6 +75,25 @@ struct SweepOptions {
 [[nodiscard]] std::vector<std::string> sweep_columns(const SweepPlan& plan, const Job& base,
                                                      SweepEval eval);
 
+/// The MPI world of a run started by mpirun (Open MPI's OMPI_COMM_WORLD_SIZE or a PMI_SIZE in
+/// the environment) in a build with MPI: MPI is initialised (threads: funneled) for the
+/// object's life. A plain run, or a build without MPI, is one rank and never touches MPI.
+class Distributed {
+ public:
+  Distributed();
+  ~Distributed();
+  Distributed(const Distributed&) = delete;
+  Distributed& operator=(const Distributed&) = delete;
+  [[nodiscard]] int rank() const noexcept { return rank_; }
+  [[nodiscard]] int size() const noexcept { return size_; }
+  /// True when the build has MPI.
+  [[nodiscard]] static bool built_with_mpi() noexcept;
+
+ private:
+  int rank_ = 0, size_ = 1;
+  bool initialised_ = false;
+};
+
 /// Runs the sweep into `csv`: rows are appended as points finish, in point order, each with
 /// one write (a killed run leaves whole rows; a torn last line is dropped on resume). With
 /// `resume`, an existing file whose header is this sweep's keeps its rows and only the points
@@ -82,10 +101,15 @@ struct SweepOptions {
 /// message in `error` (the sweep goes on). Each point's job is built from `doc` with `base`
 /// then its values. Returns the number of points evaluated now. `hooks`: the phase "points"
 /// with progress per point; Ctrl-C stops it after the points running (Interrupted; the rows
-/// written stay). Results do not depend on the thread count.
+/// written stay). Results do not depend on the thread count. With a `world` of several
+/// ranks, rank 0 reads and writes the file and hands out points one at a time to whichever
+/// rank asks (itself included, on a second thread), so ranks of unequal speed stay busy;
+/// every rank evaluates one point at a time; the file is the single-process run's, row for
+/// row. The other ranks return 0.
 std::size_t run_sweep(const JobDocument& doc, const std::vector<Override>& base,
                       const SweepPlan& plan, const SweepOptions& options,
-                      const std::filesystem::path& csv, bool resume, const RunHooks& hooks = {});
+                      const std::filesystem::path& csv, bool resume, const RunHooks& hooks = {},
+                      const Distributed* world = nullptr);
 
 /// A sweep's CSV read back: the columns and the rows (cells as text). Throws InputError for
 /// a file that is not a sweep's.

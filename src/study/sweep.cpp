@@ -18,6 +18,7 @@
 #include <random>
 #include <set>
 
+#include "distributed.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/io.hpp"
@@ -167,6 +168,42 @@ void write_all(int fd, const std::string& text, const std::filesystem::path& fil
 double unit(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
 std::size_t below(std::mt19937_64& g, std::size_t n) {
   return static_cast<std::size_t>(g() % n);  // bias below n / 2^64: none that matters
+}
+
+// One point's CSV row (index, values, ok, error, metrics), its evaluation failing into the
+// error cell; cancelling throws Interrupted.
+std::string sweep_row(const JobDocument& doc, const std::vector<Override>& base,
+                      const SweepPlan& plan, const SweepOptions& options,
+                      const std::vector<std::string>& columns, std::size_t i,
+                      const RunHooks& inner) {
+  std::vector<Override> o = base;
+  for (std::size_t k = 0; k < plan.keys.size(); ++k)
+    o.push_back({plan.keys[k], plan.points[i][k], "--vary/--range"});
+  std::string error;
+  std::map<std::string, json> values;
+  try {
+    const Job job = doc.build(o);
+    std::vector<std::pair<std::string, json>> leaves;
+    flatten(evaluate(job, options.eval, options.cycles, inner), "", leaves);
+    for (auto& [k, v] : leaves) values.emplace(k, std::move(v));
+  } catch (const Interrupted&) {
+    throw;
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  std::string line = fmt::format("{}", i);
+  for (std::size_t k = 0; k < plan.keys.size(); ++k) {
+    line += ',';
+    line += cell(plan.points[i][k]);
+  }
+  line += error.empty() ? ",1," : ",0,";
+  line += cell(error);
+  for (std::size_t c = 3 + plan.keys.size(); c < columns.size(); ++c) {
+    const auto it = values.find(columns[c]);
+    line += ",";
+    if (error.empty() && it != values.end()) line += number_cell(it->second);
+  }
+  return line + "\n";
 }
 
 }  // namespace
@@ -421,9 +458,13 @@ std::string sweep_json(const SweepTable& t) {
   return json{{"columns", t.columns}, {"points", points}}.dump(2) + "\n";
 }
 
-std::size_t run_sweep(const JobDocument& doc, const std::vector<Override>& base,
-                      const SweepPlan& plan, const SweepOptions& options,
-                      const std::filesystem::path& csv, bool resume, const RunHooks& hooks) {
+// The sweep on this process: the file, and the points on local threads or, with a world of
+// several ranks, handed out over MPI (this is rank 0). `told`: set once the other ranks were
+// told to go.
+static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Override>& base,
+                                  const SweepPlan& plan, const SweepOptions& options,
+                                  const std::filesystem::path& csv, bool resume,
+                                  const RunHooks& hooks, const Distributed* world, bool& told) {
   const Job base_job = doc.build(base);
   const std::vector<std::string> columns = sweep_columns(plan, base_job, options.eval);
   std::string header;
@@ -494,35 +535,26 @@ std::size_t run_sweep(const JobDocument& doc, const std::vector<Override>& base,
   RunHooks inner;
   inner.cancel = hooks.cancel;
   const auto row_of = [&](std::size_t i) {
-    std::vector<Override> o = base;
-    for (std::size_t k = 0; k < plan.keys.size(); ++k)
-      o.push_back({plan.keys[k], plan.points[i][k], "--vary/--range"});
-    std::string error;
-    std::map<std::string, json> values;
-    try {
-      const Job job = doc.build(o);
-      std::vector<std::pair<std::string, json>> leaves;
-      flatten(evaluate(job, options.eval, options.cycles, inner), "", leaves);
-      for (auto& [k, v] : leaves) values.emplace(k, std::move(v));
-    } catch (const Interrupted&) {
-      throw;
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-    std::string line = fmt::format("{}", i);
-    for (std::size_t k = 0; k < plan.keys.size(); ++k) {
-      line += ',';
-      line += cell(plan.points[i][k]);
-    }
-    line += error.empty() ? ",1," : ",0,";
-    line += cell(error);
-    for (std::size_t c = 3 + plan.keys.size(); c < columns.size(); ++c) {
-      const auto it = values.find(columns[c]);
-      line += ",";
-      if (error.empty() && it != values.end()) line += number_cell(it->second);
-    }
-    return line + "\n";
+    return sweep_row(doc, base, plan, options, columns, i, inner);
   };
+  // Rows in point order: write every finished row that follows the written ones.
+  const auto accept = [&](std::size_t k, std::string line) {
+    finished.emplace(k, std::move(line));
+    ++evaluated;
+    while (!finished.empty() && finished.begin()->first == next) {
+      write_all(fd, finished.begin()->second, csv);
+      finished.erase(finished.begin());
+      ++next;
+    }
+    if (hooks.progress) hooks.progress(evaluated, todo.size());
+  };
+  if (world != nullptr) {
+    told = true;
+    (void)detail::agree_to_start(*world, true);
+    detail::distribute_points(*world, todo, row_of, accept, hooks);
+    hooks.check("interrupted: the rows written stay; --resume continues");
+    return evaluated;
+  }
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   arena.execute([&] {
     tbb::parallel_for(
@@ -537,21 +569,40 @@ std::size_t run_sweep(const JobDocument& doc, const std::vector<Override>& base,
               return;
             }
             const std::lock_guard<std::mutex> lock(mu);
-            finished.emplace(k, std::move(line));
-            ++evaluated;
-            // Rows in point order: write every finished row that follows the written ones.
-            while (!finished.empty() && finished.begin()->first == next) {
-              write_all(fd, finished.begin()->second, csv);
-              finished.erase(finished.begin());
-              ++next;
-            }
-            if (hooks.progress) hooks.progress(evaluated, todo.size());
+            accept(k, std::move(line));
           }
         },
         tbb::simple_partitioner());
   });
   hooks.check("interrupted: the rows written stay; --resume continues");
   return evaluated;
+}
+
+std::size_t run_sweep(const JobDocument& doc, const std::vector<Override>& base,
+                      const SweepPlan& plan, const SweepOptions& options,
+                      const std::filesystem::path& csv, bool resume, const RunHooks& hooks,
+                      const Distributed* world) {
+  const bool distributed = world != nullptr && world->size() > 1;
+  if (distributed && world->rank() != 0) {  // a worker: points in, rows out
+    const Job base_job = doc.build(base);
+    const std::vector<std::string> columns = sweep_columns(plan, base_job, options.eval);
+    if (!detail::agree_to_start(*world, false)) return 0;  // rank 0 could not start
+    RunHooks inner;
+    inner.cancel = hooks.cancel;
+    detail::distribute_points(
+        *world, {},
+        [&](std::size_t i) { return sweep_row(doc, base, plan, options, columns, i, inner); }, {},
+        hooks);
+    return 0;
+  }
+  bool told = false;  // rank 0 told the others whether to go
+  try {
+    return run_sweep_here(doc, base, plan, options, csv, resume, hooks,
+                          distributed ? world : nullptr, told);
+  } catch (...) {
+    if (distributed && !told) (void)detail::agree_to_start(*world, false);
+    throw;
+  }
 }
 
 }  // namespace trochomill

@@ -6,11 +6,13 @@ import json
 import pathlib
 import io
 import os
+import shutil
 import signal
 import subprocess
 import time
 
 import numpy as np
+import pytest
 from scipy.stats import qmc
 
 from conftest import CLI, run_cli
@@ -108,3 +110,41 @@ def test_bad_optimizations_exit_2(wagih, tmp_path):
         assert p.returncode == 2, (extra, p.stderr)
         assert message in p.stderr, (extra, p.stderr)
         assert not out.exists()
+
+
+MPIRUN = shutil.which("mpirun")
+# As root (CI) Open MPI wants both confirmations; shared memory between the two ranks and the
+# runtime's own connections on loopback only.
+MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+MPI_ARGS = ["-np", "2", "--oversubscribe", "--mca", "btl", "self,vader", "--mca",
+            "oob_tcp_if_include", "lo"]
+
+
+@pytest.mark.skipif(MPIRUN is None or os.environ.get("TROCHOMILL_MPI") != "ON",
+                    reason="no mpirun, or a build without MPI")
+def test_two_ranks_write_the_single_process_file_and_resume_it(pivkin, tmp_path):
+    args = ["sweep", str(pivkin), "--eval", "mechanism", "--range", "path.step=0.05:0.2",
+            "--range", "cutting.feed_per_tooth=0.02:0.08", "--samples", "40"]
+    single = tmp_path / "single.csv"
+    run_cli(*args, "--threads", "1", "-o", single)
+    mpi = tmp_path / "mpi.csv"
+    p = subprocess.run([MPIRUN, *MPI_ARGS, CLI, *args, "-o", str(mpi)], capture_output=True,
+                       text=True, env=MPI_ENV, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert mpi.read_text() == single.read_text()
+    # Stopped after 11 rows and in the middle of the next (a node lost mid-write), then
+    # resumed on two ranks: the same file again.
+    text = single.read_text()
+    cut = [i for i, c in enumerate(text) if c == "\n"][11] + 20
+    resumed = tmp_path / "resumed.csv"
+    resumed.write_text(text[:cut])
+    p = subprocess.run([MPIRUN, *MPI_ARGS, CLI, *args, "-o", str(resumed), "--resume"],
+                       capture_output=True, text=True, env=MPI_ENV, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert resumed.read_text() == single.read_text()
+    assert "(29 run now" in p.stdout, p.stdout
+    # A bad start on rank 0 (the file exists) ends every rank: exit 2, the message, no hang.
+    p = subprocess.run([MPIRUN, *MPI_ARGS, CLI, *args, "-o", str(mpi)], capture_output=True,
+                       text=True, env=MPI_ENV, timeout=120)
+    assert p.returncode == 2
+    assert "exists: --resume continues that sweep" in p.stderr
