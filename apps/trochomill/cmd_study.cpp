@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/report.hpp"
 #include "trochomill/study.hpp"
 
 namespace trochomill::cli {
@@ -125,7 +126,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
     struct Args {
       JobArgs job;
       std::vector<std::string> vars, maximize, minimize, subject_to;
-      std::string eval = "analyze", cycles, output, pareto, json;
+      std::string eval = "analyze", cycles, output, pareto, json, html;
       int max_evals = 300, population = 24;
       std::uint64_t seed = 1;
     };
@@ -154,8 +155,11 @@ void register_study_commands(CLI::App& app, int& exit_code) {
                     "one goal: the best job as TOML, ready for plan (required then)");
     cmd->add_option("--pareto", a->pareto, "several goals: the Pareto set as CSV (required then)");
     cmd->add_option("--json", a->json, "the result as JSON (- for stdout)");
+    cmd->add_option("--html", a->html,
+                    "the HTML report of the best job (one goal) or of the job with the Pareto "
+                    "set (several)");
     cmd->final_callback([a, &exit_code] {
-      check_outputs({&a->output, &a->pareto, &a->json}, {&a->job.file});
+      check_outputs({&a->output, &a->pareto, &a->json, &a->html}, {&a->job.file});
       std::vector<OptVariable> vars;
       for (const auto& v : a->vars) vars.push_back(parse_opt_variable(v));
       std::vector<Objective> goals;
@@ -184,6 +188,12 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       const JobDocument doc = JobDocument::load(a->job.file);
       const std::vector<Override> base = a->job.overrides();
       (void)doc.build(base);
+      // NLopt's methods are sequential: under mpirun rank 0 optimises, the others end at once.
+      const Distributed world;
+      if (world.rank() != 0) {
+        exit_code = 0;
+        return;
+      }
       const GuardedRun run(true);
       const OptimizeResult r = optimize(doc, base, vars, goals, cons, o, run.hooks());
       run.done();
@@ -236,6 +246,32 @@ void register_study_commands(CLI::App& app, int& exit_code) {
           out["pareto"].push_back(point_json(p));
         }
         write_file_atomic(a->pareto, csv);
+      }
+      if (!a->html.empty()) {
+        // The best job's report, or the base job's with the Pareto set.
+        const Job job = doc.build(best_overrides);
+        ReportRequest rq;
+        rq.job_file = a->job.file;
+        rq.job_text = to_toml(job);
+        rq.overrides = best_overrides;
+        rq.command = "trochomill optimize " + a->job.file;
+        ReportData d = build_report(job, plan_path(job).path, rq, run.hooks());
+        if (goals.size() > 1) {
+          ReportPareto p;
+          p.keys = r.keys;
+          for (const Objective& g : goals) {
+            p.goals.push_back(g.metric);
+            p.maximize.push_back(g.maximize);
+          }
+          for (const OptPoint& pt : r.pareto) {
+            p.values.push_back(pt.values);
+            std::vector<double> gv;
+            for (const Objective& g : goals) gv.push_back(pt.metrics.at(g.metric));
+            p.goal_values.push_back(std::move(gv));
+          }
+          d.pareto = std::move(p);
+        }
+        emit(a->html, report_html(d, run.hooks()));
       }
       if (!a->json.empty()) emit(a->json, out.dump(2) + "\n");
       if (a->json != "-") {

@@ -223,6 +223,15 @@ struct ReportMonitor {
   Spectrum spectrum;
   Spectrogram spectrogram;
 };
+/// A Pareto set of `optimize` shown in the report: per point the variables' values and the
+/// goals' values.
+struct ReportPareto {
+  std::vector<std::string> keys;   ///< the variables
+  std::vector<std::string> goals;  ///< the goals' metrics
+  std::vector<bool> maximize;      ///< per goal
+  std::vector<std::vector<std::string>> values;
+  std::vector<std::vector<double>> goal_values;
+};
 /// Everything a report shows; each optional part is drawn when present, and `notes` say why a
 /// default part is missing (e.g. no [material]: no forces).
 struct ReportData {
@@ -239,6 +248,7 @@ struct ReportData {
   std::optional<ReportSimulation> simulation;
   std::optional<ReportMonitor> monitor;
   std::optional<ReportStudy> study;
+  std::optional<ReportPareto> pareto;
   std::vector<std::string> notes;
 };
 /// What a report is asked to show besides the defaults, and what it records.

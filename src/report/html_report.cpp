@@ -540,6 +540,17 @@ std::string report_data_json(const ReportData& d, const RunHooks& hooks) {
   if (d.study) {
     doc["study"] = json::parse(study_json(d.study->varies, d.study->points));
   }
+  if (d.pareto) {
+    const ReportPareto& p = *d.pareto;
+    json points = json::array();
+    for (std::size_t i = 0; i < p.values.size(); ++i) {
+      json g = json::array();
+      for (const double v : p.goal_values[i]) g.push_back(number(v));
+      points.push_back({{"values", p.values[i]}, {"goals", g}});
+    }
+    doc["pareto"] = {
+        {"keys", p.keys}, {"goals", p.goals}, {"maximize", p.maximize}, {"points", points}};
+  }
   step(9);
   // "</" inside a script element would end it: JSON allows "<\/" for "</".
   std::string text = doc.dump(-1, ' ', false, json::error_handler_t::replace);

@@ -551,7 +551,11 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
   if (world != nullptr) {
     told = true;
     (void)detail::agree_to_start(*world, true);
-    detail::distribute_points(*world, todo, row_of, accept, hooks);
+    // Each rank evaluates one point at a time, on --threads threads (default all cores).
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    detail::distribute_points(
+        *world, todo, [&](std::size_t i) { return arena.execute([&] { return row_of(i); }); },
+        accept, hooks);
     hooks.check("interrupted: the rows written stay; --resume continues");
     return evaluated;
   }
@@ -589,10 +593,14 @@ std::size_t run_sweep(const JobDocument& doc, const std::vector<Override>& base,
     if (!detail::agree_to_start(*world, false)) return 0;  // rank 0 could not start
     RunHooks inner;
     inner.cancel = hooks.cancel;
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
     detail::distribute_points(
         *world, {},
-        [&](std::size_t i) { return sweep_row(doc, base, plan, options, columns, i, inner); }, {},
-        hooks);
+        [&](std::size_t i) {
+          return arena.execute(
+              [&] { return sweep_row(doc, base, plan, options, columns, i, inner); });
+        },
+        {}, hooks);
     return 0;
   }
   bool told = false;  // rank 0 told the others whether to go

@@ -373,6 +373,27 @@ test('the same command writes the same page, whatever the thread count', () => {
   assert.equal(strip(a), strip(c));
 });
 
+test('optimize --html shows the Pareto set it wrote', async () => {
+  const job = join(OUT, 'linear.toml');
+  writeFileSync(job, readFileSync(ex('wagih2023/trochoidal.toml'), 'utf8').replace('type = "trochoidal"', 'type = "linear"'));
+  const csv = join(OUT, 'pareto.csv'), html = join(OUT, 'pareto.html');
+  cli('optimize', job, '--var', 'cutting.feed_rate=100:2000', '--maximize', 'mrr_total_mm3_per_min', '--minimize', 'h_max_mm',
+    '--max-evals', '32', '--population', '8', '--pareto', csv, '--html', html);
+  const rows = readFileSync(csv, 'utf8').trim().split('\n').slice(1).map((l) => l.split(','));
+  const { page, problems } = await open(html);
+  assert.deepEqual(problems, []);
+  const ink = await canvasInk(page, 'pareto-front');
+  assert.ok(ink.share > 0.003 && ink.colours > 3, JSON.stringify(ink));
+  const cells = await page.evaluate(() => [...document.querySelectorAll('#pareto-table tr')].slice(1).map((r) => [...r.children].map((c) => c.textContent)));
+  assert.equal(cells.length, rows.length);
+  // The same points in the same order, the goals to the six digits the page shows.
+  cells.forEach((c, i) => {
+    assert.equal(c[0], rows[i][0]);
+    for (const g of [1, 2]) assert.ok(Math.abs(Number(c[g]) - Number(rows[i][g])) <= 5e-6 * Math.abs(Number(rows[i][g])), `${c[g]} ${rows[i][g]}`);
+  });
+  await page.close();
+});
+
 test('a job whose text holds "</script>" cannot break out of the page', async () => {
   const job = join(OUT, 'script-in-comment.toml');
   writeFileSync(job, readFileSync(ex('wagih2023/circular.toml'), 'utf8') + '\n# </script><script>document.title="broken"</script>\n');

@@ -826,9 +826,72 @@ function studyPart() {
   draw(preferred);
 }
 
+function paretoPart() {
+  const p = data.pareto;
+  if (!p) return;
+  const sec = section('pareto', 'Pareto set', `The feasible points of \`trochomill optimize\` that no other point beats in every goal (${p.goals.map((g, i) => `${p.maximize[i] ? 'max' : 'min'} ${g}`).join(', ')}), ${p.points.length} points. The job above is the study's base job.`);
+  if (p.goals.length >= 2) {
+    const pts = [...p.points].sort((a, b) => a.goals[0] - b.goals[0]);
+    const fig = figure(sec, 'pareto-front', `${p.goals[1]} against ${p.goals[0]}`, 'each point a job variant; hover for its values');
+    const xs = pts.map((q) => q.goals[0]), ys = pts.map((q) => q.goals[1]);
+    const u = new uPlot({
+      mode: 2, width: plotWidth(fig.plot), height: 320,
+      scales: { x: { time: false }, y: {} },
+      axes: [{ label: p.goals[0] }, { label: p.goals[1], size: 70 }],
+      series: [{}, { label: 'Pareto set', stroke: COLORS[0], fill: COLORS[0], facets: [{ scale: 'x', auto: true }, { scale: 'y', auto: true }],
+        paths: () => null, points: { show: false } }],
+      cursor: { drag: { x: true, y: true, uni: 30, setScale: true } },
+      legend: { live: false },
+      hooks: {
+        draw: [(uu) => { // the points, and the front through them
+          const c = uu.ctx;
+          c.save();
+          c.strokeStyle = COLORS[0];
+          c.fillStyle = COLORS[0];
+          c.beginPath();
+          pts.forEach((q, i) => {
+            const x = uu.valToPos(q.goals[0], 'x', true), y = uu.valToPos(q.goals[1], 'y', true);
+            if (i) c.lineTo(x, y); else c.moveTo(x, y);
+          });
+          c.stroke();
+          for (const q of pts) {
+            c.beginPath();
+            c.arc(uu.valToPos(q.goals[0], 'x', true), uu.valToPos(q.goals[1], 'y', true), 4 * uPlot.pxRatio, 0, 2 * Math.PI);
+            c.fill();
+          }
+          c.restore();
+        }],
+        setCursor: [(uu) => {
+          const { left, top } = uu.cursor;
+          if (left == null || left < 0) return;
+          let best = -1, bd = Infinity;
+          pts.forEach((q, i) => {
+            const d = Math.hypot(uu.valToPos(q.goals[0], 'x') - left, uu.valToPos(q.goals[1], 'y') - top);
+            if (d < bd) { bd = d; best = i; }
+          });
+          if (best >= 0 && bd < 20) {
+            const q = pts[best];
+            fig.readout.textContent = p.keys.map((k, i) => `${k} = ${q.values[i]}`).join(', ') + '; ' +
+              p.goals.map((g, i) => `${g} ${fmtNum(q.goals[i])}`).join(', ');
+          }
+        }],
+      },
+    }, [null, [xs, ys]], fig.plot);
+    register(fig, u);
+    addExports(fig, u, () => [{ label: 'Pareto set', color: COLORS[0] }]);
+  }
+  const table = el('table', { class: 'summary', id: 'pareto-table' },
+    el('tr', {}, ...[...p.keys, ...p.goals].map((k) => el('th', { text: k }))));
+  for (const q of p.points) {
+    table.append(el('tr', {}, ...q.values.map((v) => el('td', { text: v })),
+      ...q.goals.map((g) => el('td', { class: 'num', text: fmtNum(g) }))));
+  }
+  sec.append(table);
+}
+
 // ---- the page ------------------------------------------------------------------------------
 const parts = [headerPart, pathPart, engagementPart, wallsPart, mechanismPart, forcesPart, calibrationPart,
-  simulationPart, monitorPart, studyPart];
+  simulationPart, monitorPart, studyPart, paretoPart];
 for (const part of parts) {
   try {
     part();
