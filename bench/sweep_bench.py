@@ -21,8 +21,9 @@ CLI = sys.argv[1] if len(sys.argv) > 1 else "build/bin/trochomill"
 POINTS = int(sys.argv[2]) if len(sys.argv) > 2 else 64
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-MPI = ["mpirun", "-np", "2", "--oversubscribe", "--mca", "btl", "self,vader", "--mca",
-       "oob_tcp_if_include", "lo"]
+def mpirun(ranks):
+    return ["mpirun", "-np", str(ranks), "--oversubscribe", "--mca", "btl", "self,vader",
+            "--mca", "oob_tcp_if_include", "lo"]
 
 
 def timed(cmd):
@@ -33,8 +34,7 @@ def timed(cmd):
 
 def main():
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="trochomill-sweep-bench-"))
-    startup = min(timed([*MPI, CLI, "--version"]) for _ in range(3))
-    print(f"mpirun -np 2 start-up: {startup:.3f} s")
+
     cases = [
         ("analyze", [str(ROOT / "examples/wagih2023/elliptical.toml"), "--range",
                      "path.aspect_ratio=0.5:1.2", "--range", "path.step=0.5:1.5", "--samples",
@@ -44,15 +44,15 @@ def main():
                        "cutting.feed_per_tooth=0.02:0.08", "--samples", "400"], 400),
     ]
     for name, args, n in cases:
-        one, two = tmp / f"{name}-1.csv", tmp / f"{name}-2.csv"
-        t1 = timed([CLI, "sweep", *args, "--threads", "1", "-o", str(one)])
-        t2 = timed([*MPI, CLI, "sweep", *args, "-o", str(two)]) - startup
-        same = one.read_bytes() == two.read_bytes()
-        eff = t1 / (2 * t2)
-        print(f"{name}: {n} points, 1 process {t1:.2f} s ({1e3 * t1 / n:.1f} ms a point), "
-              f"2 ranks {t2:.2f} s (less start-up): efficiency {eff:.2f}, "
-              f"cost of the MPI layer {1e3 * (2 * t2 - t1) / n:.2f} ms a point; "
-              f"files identical: {same}")
+        plain, one, two = (tmp / f"{name}-{k}.csv" for k in ("plain", "1", "2"))
+        t0 = timed([CLI, "sweep", *args, "--threads", "1", "-o", str(plain)])
+        t1 = timed([*mpirun(1), CLI, "sweep", *args, "--threads", "1", "-o", str(one)])
+        t2 = timed([*mpirun(2), CLI, "sweep", *args, "--threads", "1", "-o", str(two)])
+        same = plain.read_bytes() == one.read_bytes() == two.read_bytes()
+        print(f"{name}: {n} points; one process without mpirun {t0:.2f} s ({1e3 * t0 / n:.1f} ms "
+              f"a point); mpirun -np 1 {t1:.2f} s, -np 2 {t2:.2f} s: efficiency T1 / (2 T2) "
+              f"{t1 / (2 * t2):.2f}; the MPI layer's cost (2 T2 - T1) / points "
+              f"{1e3 * (2 * t2 - t1) / n:.2f} ms a point; files identical: {same}")
 
 
 if __name__ == "__main__":
