@@ -85,7 +85,7 @@ struct ProcessMetrics {
                                              const RunHooks& hooks = {});
 /// The memory analyze_process will hold (bytes), before running it: its samples (one per
 /// tooth pass / steps_per_tooth over the whole path, about 400 bytes each as measured) and
-/// the process (20 MB).
+/// the process (its resident memory now, at least 20 MB: process_base_bytes).
 [[nodiscard]] double estimate_analysis_memory(const Job& job, const ToolPath& path);
 
 /// Sets the performance index of `m`: F_R,max from [measured] force_max, else the predicted

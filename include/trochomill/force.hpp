@@ -208,7 +208,7 @@ struct CalibrationResult {
 /// The memory calibrate_forces will hold (bytes), before running it: the chips of the window
 /// (simulated, or the fast source at its 500 steps per tooth pass), the model's force series,
 /// the solver's residuals and Jacobian (3 per model step), the measured record and its
-/// filtered copies, and the process (20 MB).
+/// filtered copies, and the process (its resident memory now, at least 20 MB: process_base_bytes).
 [[nodiscard]] double estimate_calibration_memory(const Job& job, const ToolPath& path,
                                                  const CalibrationOptions& options,
                                                  std::size_t measured_samples);

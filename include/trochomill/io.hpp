@@ -84,5 +84,9 @@ struct CsvOptions {
 
 /// The process's peak resident memory so far (bytes; Linux VmHWM), 0 where unknown.
 [[nodiscard]] std::size_t peak_memory_bytes();
+/// What a memory estimate counts for the process itself besides the work (bytes): its
+/// resident memory now (Linux VmRSS: the code and libraries loaded, the job, the path), at
+/// least 20 MB.
+[[nodiscard]] double process_base_bytes();
 
 }  // namespace trochomill

@@ -9,6 +9,7 @@
 #include "common/roots.hpp"
 #include "trochomill/analysis.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -176,7 +177,7 @@ ToothChip tooth_chip(const DenseCentre& c, const Tool& tool, double omega, doubl
 double estimate_analysis_memory(const Job& job, const ToolPath& path) {
   const double per_tooth_s = tooth_period_s(job.tool, job.cutting);
   const double samples = path.duration_s() / per_tooth_s * job.analysis.steps_per_tooth;
-  return 20e6 + samples * 400.0;
+  return process_base_bytes() + samples * 400.0;
 }
 
 ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHooks& hooks) {

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -319,6 +320,17 @@ std::size_t peak_memory_bytes() {
     }
   }
   return 0;
+}
+
+double process_base_bytes() {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("VmRSS:", 0) == 0) {
+      const double rss = static_cast<double>(std::strtoull(line.c_str() + 6, nullptr, 10)) * 1024;
+      return std::max(20e6, rss);
+    }
+  }
+  return 20e6;
 }
 
 }  // namespace trochomill

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/mechanism.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/signal.hpp"
@@ -112,7 +113,7 @@ double synth_signal_memory_bytes(const Job& job, const SynthOptions& o) {
   const double samples = (o.lead_s + starts[ncyc]) * o.rate_hz;
   // The signal and its two noise bands (8 bytes each) and the WAV's float32 (4): 28 bytes a
   // sample (measured: 23.7 at 2.6 M samples); and the process (20 MB).
-  return 20e6 + 28.0 * samples;
+  return process_base_bytes() + 28.0 * samples;
 }
 
 }  // namespace trochomill

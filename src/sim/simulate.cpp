@@ -15,6 +15,7 @@
 #include "sim/geometry.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/units.hpp"
 
@@ -670,7 +671,7 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
   const double cols = teeth * static_cast<double>(tool.segments());
   m.dense_map_bytes = steps * (cols * 12.0 + 8.0 * (4 + teeth));
   // What the process holds besides (its libraries, the job, the path; measured 20 MB).
-  m.base_bytes = 20e6 + static_cast<double>(path.segments().size()) * 400.0;
+  m.base_bytes = process_base_bytes() + static_cast<double>(path.segments().size()) * 400.0;
   return m;
 }
 
