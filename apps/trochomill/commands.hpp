@@ -14,7 +14,7 @@ void register_calibration_commands(CLI::App& app, int& exit_code);  // calibrate
 void register_signal_commands(CLI::App& app, int& exit_code);   // monitor, synth-signal, spectrum
 void register_tool_commands(CLI::App& app, int& exit_code);     // insert, topography, materials
 void register_surface_commands(CLI::App& app, int& exit_code);  // texture
-void register_study_commands(CLI::App& app, int& exit_code);  // sweep, optimize
+void register_study_commands(CLI::App& app, int& exit_code);    // sweep, optimize
 /// report; `argv` is recorded in the page.
 void register_report_commands(CLI::App& app, int& exit_code, int argc, char** argv);
 
