@@ -406,8 +406,8 @@ std::vector<std::string> sweep_columns(const SweepPlan& plan, const Job& base, S
   return cols;
 }
 
-SweepTable read_sweep_csv(const std::filesystem::path& csv) {
-  const std::string text = read_text_file(csv);
+// A sweep's CSV text (read_sweep_csv); `csv` names it in messages.
+static SweepTable parse_sweep_csv(const std::string& text, const std::filesystem::path& csv) {
   SweepTable t;
   std::size_t pos = 0;
   bool first = true;
@@ -433,6 +433,10 @@ SweepTable read_sweep_csv(const std::filesystem::path& csv) {
   }
   if (first) throw InputError(fmt::format("{}: empty, not a sweep's results", csv.string()));
   return t;
+}
+
+SweepTable read_sweep_csv(const std::filesystem::path& csv) {
+  return parse_sweep_csv(read_text_file(csv), csv);
 }
 
 std::string sweep_json(const SweepTable& t) {
@@ -489,7 +493,7 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
     const std::size_t keep = last == std::string::npos ? 0 : last + 1;
     if (keep < text.size()) std::filesystem::resize_file(csv, keep);
     if (keep > 0) {
-      const SweepTable t = read_sweep_csv(csv);
+      const SweepTable t = parse_sweep_csv(text.substr(0, keep), csv);  // read once
       if (t.columns != columns) {
         throw InputError(fmt::format(
             "{}: its columns are another sweep's (other keys or --eval); give another output",
