@@ -80,6 +80,46 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
       fmt::format("{} (--set {}={})", help, key, value));
 }
 
+FeedTargets FeedTargetArgs::resolve(const Job& job) const {
+  FeedTargets t = default_feed_targets(job);
+  t.h_max_mm = h_max_mm;
+  t.mrr_mm3_per_min = mrr_mm3_per_min;
+  t.feed_step_percent = feed_step_percent;
+  t.piece_mm = piece_mm;
+  if (min_feed) t.min_feed_mm_per_min = *min_feed;
+  if (max_feed) t.max_feed_mm_per_min = *max_feed;
+  if (air_feed) t.air_feed_mm_per_min = *air_feed;
+  return t;
+}
+
+void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
+  cmd->add_option("--h-max", a.h_max_mm,
+                  "target largest chip, mm (default: the job's feed per tooth)")
+      ->check(finite_above(0, 100));
+  cmd->add_option("--mrr", a.mrr_mm3_per_min,
+                  "cap on the removal rate, mm^3/min (the swept area times the slot depth)")
+      ->check(finite_above(0, 1e9));
+  cmd->add_option("--min-feed", a.min_feed,
+                  "slowest scheduled feed, mm/min (default: machine.min_feed, else a tenth of "
+                  "the job's feed)")
+      ->check(finite_above(0, 1e6));
+  cmd->add_option("--max-feed", a.max_feed,
+                  "fastest scheduled feed, mm/min (default: machine.max_feed, else three times "
+                  "the job's feed)")
+      ->check(finite_above(0, 1e6));
+  cmd->add_option("--air-feed", a.air_feed,
+                  "feed where the tool cuts nothing, mm/min (default: machine.air_feed, else "
+                  "the max feed)")
+      ->check(finite_in(0, 1e6));
+  cmd->add_option("--feed-step", a.feed_step_percent,
+                  "neighbouring pieces within this percent share the slower feed")
+      ->capture_default_str()
+      ->check(finite_in(0, 100));
+  cmd->add_option("--piece", a.piece_mm, "the longest piece fed alone, mm")
+      ->capture_default_str()
+      ->check(finite_above(0, 1e3));
+}
+
 ToolPath job_path(const Job& job, const std::string& gcode_file) {
   if (gcode_file.empty()) return plan_path(job).path;
   GcodeReadOptions ro = gcode_options(job.machine).read;

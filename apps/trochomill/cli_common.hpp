@@ -6,6 +6,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "trochomill/analysis.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
@@ -91,6 +93,19 @@ struct WindowArgs {
   [[nodiscard]] std::pair<double, double> resolve(const ToolPath& path) const;
 };
 void add_window_args(CLI::App* cmd, WindowArgs& w, const std::string& what);
+
+/// The feed schedule's flags (plan --feed-schedule, optimize-feed): the chip target, the
+/// removal cap and the feed limits over the job's [machine] ones.
+struct FeedTargetArgs {
+  std::optional<double> h_max_mm, mrr_mm3_per_min, min_feed, max_feed, air_feed;
+  double feed_step_percent = FeedTargets{}.feed_step_percent;
+  double piece_mm = FeedTargets{}.piece_mm;
+  /// The job's targets (default_feed_targets) with the flags given over them.
+  [[nodiscard]] FeedTargets resolve(const Job& job) const;
+};
+inline constexpr std::array<const char*, 7> kFeedTargetFlags = {
+    "--h-max", "--mrr", "--min-feed", "--max-feed", "--air-feed", "--feed-step", "--piece"};
+void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a);
 
 /// Signal-reading options shared by monitor and spectrum.
 struct SignalArgs {

@@ -92,8 +92,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       std::string out;
       std::optional<double> memory_gb;
       bool schedule = false;
-      FeedTargets targets;
-      std::optional<double> min_feed, max_feed;
+      FeedTargetArgs targets;
     };
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand("plan", "write the slot program of a job as G-code");
@@ -109,28 +108,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     cmd->add_flag("--feed-schedule", a->schedule,
                   "variable feed: each piece of the path fed so that its largest chip is the "
                   "target (--h-max), within --min-feed and --max-feed");
-    cmd->add_option("--h-max", a->targets.h_max_mm,
-                    "target largest chip, mm (default: the job's feed per tooth)")
-        ->check(finite_above(0, 100));
-    cmd->add_option("--min-feed", a->min_feed,
-                    "slowest scheduled feed, mm/min (default: machine.min_feed, else a tenth of "
-                    "the job's feed)")
-        ->check(finite_above(0, 1e6));
-    cmd->add_option("--max-feed", a->max_feed,
-                    "fastest scheduled feed, mm/min (default: machine.max_feed, else three times "
-                    "the job's feed)")
-        ->check(finite_above(0, 1e6));
-    cmd->add_option("--air-feed", a->targets.air_feed_mm_per_min,
-                    "feed where the tool cuts nothing, mm/min (default: machine.air_feed, else "
-                    "the max feed)")
-        ->check(finite_in(0, 1e6));
-    cmd->add_option("--feed-step", a->targets.feed_step_percent,
-                    "neighbouring pieces within this percent share the slower feed")
-        ->capture_default_str()
-        ->check(finite_in(0, 100));
-    cmd->add_option("--piece", a->targets.piece_mm, "the longest piece fed alone, mm")
-        ->capture_default_str()
-        ->check(finite_above(0, 1e3));
+    add_feed_target_args(cmd, a->targets);
     cmd->final_callback([a, cmd, &exit_code] {
       check_outputs({&a->out}, {&a->job.file});
       const Job job = a->job.load();
@@ -138,8 +116,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                    fmt::format("a {:g} mm slot at a {:g} mm step: raise [path] step or plan a "
                                "shorter slot",
                                job.slot.length_mm, job.path.step_mm));
-      for (const char* o :
-           {"--h-max", "--min-feed", "--max-feed", "--air-feed", "--feed-step", "--piece"}) {
+      for (const char* o : kFeedTargetFlags) {
         if (cmd->count(o) > 0 && !a->schedule) {
           throw InputError(fmt::format("{} is an option of --feed-schedule", o));
         }
@@ -147,16 +124,8 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       PlannedPath planned = plan_path(job);
       std::optional<FeedSchedule> fs;
       if (a->schedule) {
-        // The flags over the job's [machine] limits.
-        FeedTargets t = default_feed_targets(job);
-        t.h_max_mm = a->targets.h_max_mm;
-        t.feed_step_percent = a->targets.feed_step_percent;
-        t.piece_mm = a->targets.piece_mm;
-        if (a->min_feed) t.min_feed_mm_per_min = *a->min_feed;
-        if (a->max_feed) t.max_feed_mm_per_min = *a->max_feed;
-        if (cmd->count("--air-feed") > 0) t.air_feed_mm_per_min = a->targets.air_feed_mm_per_min;
         const GuardedRun run(true);
-        fs = schedule_feed(job, planned.path, t, run.hooks());
+        fs = schedule_feed(job, planned.path, a->targets.resolve(job), run.hooks());
         run.done();
         run.finish("interrupted: nothing was written");
         planned.path = fs->path;

@@ -15,6 +15,7 @@ void register_signal_commands(CLI::App& app, int& exit_code);   // monitor, synt
 void register_tool_commands(CLI::App& app, int& exit_code);     // insert, topography, materials
 void register_surface_commands(CLI::App& app, int& exit_code);  // texture
 void register_study_commands(CLI::App& app, int& exit_code);    // sweep, optimize
+void register_feed_commands(CLI::App& app, int& exit_code);     // optimize-feed
 /// report; `argv` is recorded in the page.
 void register_report_commands(CLI::App& app, int& exit_code, int argc, char** argv);
 

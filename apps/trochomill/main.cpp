@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
     cli::register_tool_commands(app, exit_code);
     cli::register_surface_commands(app, exit_code);
     cli::register_study_commands(app, exit_code);
+    cli::register_feed_commands(app, exit_code);
     cli::register_report_commands(app, exit_code, argc, argv);
     try {
       app.parse(argc, argv);  // the chosen command runs in its callback

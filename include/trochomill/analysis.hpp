@@ -97,6 +97,9 @@ void set_performance_index(const Job& job, ProcessMetrics& m,
 struct FeedTargets {
   /// The largest local chip (mm) each piece of the path is fed to; default: the job's f_z.
   std::optional<double> h_max_mm;
+  /// Cap on the removal rate (mm^3/min): the plan-view area swept into stock per minute times
+  /// the slot depth (the axial depth of cut). Unset: none.
+  std::optional<double> mrr_mm3_per_min;
   double min_feed_mm_per_min = 0;  ///< the slowest feed allowed (mm/min, > 0)
   double max_feed_mm_per_min = 0;  ///< the fastest feed allowed (mm/min, >= min)
   double air_feed_mm_per_min = 0;  ///< feed where the tool cuts nothing (0: the max feed)
@@ -110,7 +113,17 @@ struct FeedTargets {
 /// times and a tenth of the job's feed, and the max feed; the chip target unset (the job's f_z).
 [[nodiscard]] FeedTargets default_feed_targets(const Job& job);
 /// What limits a piece's feed.
-enum class FeedLimit { none, min_feed, max_feed, air };
+/// plunge: the piece descends into stock no earlier position touched (an axial chip the radial
+/// model does not hold) and keeps its programmed feed.
+enum class FeedLimit { none, mrr, min_feed, max_feed, air, plunge };
+/// A piece of a scheduled path: the part [from_mm, to_mm] of the input path's segment (arc
+/// length along it, mm), its feed (mm/min) and what limits it.
+struct FeedPiece {
+  std::size_t segment = 0;
+  double from_mm = 0, to_mm = 0;
+  double feed_mm_per_min = 0;
+  FeedLimit limit = FeedLimit::none;
+};
 /// A path with scheduled feeds and how it got them.
 struct FeedSchedule {
   ToolPath path;               ///< the same geometry in pieces, each at its feed
@@ -122,6 +135,8 @@ struct FeedSchedule {
   /// Per feed piece (before merging): its largest chip (mm), feed (mm/min) and limit.
   std::vector<double> piece_h_max_mm, piece_feed_mm_per_min;
   std::vector<FeedLimit> piece_limit;
+  /// The feed moves of the scheduled path as parts of the input's segments (after merging).
+  std::vector<FeedPiece> feed_pieces;
 };
 /// Schedules the feed along `path` so that the largest local chip of every piece is the
 /// target (Wagih 2023's h_max from the exact engagement, docs/models.md section 15): the

@@ -68,6 +68,29 @@ struct GcodeMove {
   bool path_started = false;  ///< false for the approach before the path starts (see read_gcode)
   std::string_view file;      ///< the file of the block (the program or a subroutine file)
   std::size_t line = 0;       ///< 1-based line in that file
+
+  // What rewrite_feeds needs of the block that made the move.
+  static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+  std::size_t source = 0;  ///< 0: the program itself, else a subroutine file it calls
+  /// A G0/G1/G2/G3 of the block's own words at a feed per minute (G94), without cutter
+  /// compensation or G53: its end and centre are words of the block, so it can be split.
+  bool plain = false;
+  int motion = -1;              ///< the motion mode: 0, 1, 2, 3 (-1: a canned cycle and the like)
+  std::uint64_t block_run = 0;  ///< the block execution that made it (a loop's passes differ)
+  std::size_t segment = npos;   ///< its segment in GcodeProgram::path (npos: none)
+  /// The block's frame: the output-frame position of program zero (mm), the turn of the
+  /// program's X/Y axes against the output frame's (rad, counter-clockwise), mm per program
+  /// unit (1 or 25.4), G91 and G90.1.
+  Vec3 program_zero_mm = Vec3::Zero();
+  double program_turn_rad = 0;
+  double unit_mm = 1;
+  bool incremental = false, ijk_absolute = false;
+  int feed_mode = 94;  ///< 94 per minute, 93 inverse time, 95 per revolution
+  /// The modal feed (mm/min; G95: mm/rev) before the block and after its F word, and the feed
+  /// settings counted (F words and modal restores) before the block and after it: a count that
+  /// grows between two moves' blocks means a block without motion set the feed.
+  double feed_before = 0, feed_word = 0;
+  std::uint64_t feed_events_before = 0, feed_events = 0;
 };
 
 /// The interpreter's setting: the language, where the machine's offsets and home are, the
@@ -119,6 +142,9 @@ struct GcodeProgramInfo {
   bool inch_units_seen = false;
   /// What the reader assumed (an offset, a home position) or ignored, each naming its line.
   std::vector<std::string> warnings;
+  /// Where the program first reads its own feed (#<_feed>), "file:line:column"; empty: never.
+  /// Its motion may then depend on its feeds (optimize-feed refuses it).
+  std::string feed_read_at;
   /// The job keys a trochomill program records in its header, `section.key = value` (TOML).
   std::vector<std::pair<std::string, std::string>> header_keys;
 };
@@ -161,5 +187,29 @@ struct GcodeOptions {
 /// header (not written by trochomill).
 [[nodiscard]] std::vector<std::string> header_mismatches(const Job& job, const GcodeProgram& prog,
                                                          const std::string& name);
+
+/// The new feeds of one move for rewrite_feeds: the move in pieces, each ending at a point of
+/// the move (output frame, mm; the last is the move's end) and fed at its feed (mm/min). Empty:
+/// the move keeps its feed.
+struct MoveFeeds {
+  std::vector<Vec3> ends_mm;
+  std::vector<double> feed_mm_per_min;
+};
+/// A program with its feeds rewritten.
+struct FeedRewrite {
+  std::string text;
+  std::size_t blocks_changed = 0;  ///< blocks whose F word or motion words changed
+  std::size_t lines_added = 0;     ///< lines of the pieces of split moves
+};
+/// Rewrites the feeds of `text`, a program read by read_gcode into `moves` (the trace, in
+/// order, one MoveFeeds each). The text stays as it was except: a plain move of a block run
+/// once (GcodeMove::plain) with several pieces is split into G1/G2/G3 lines in the block's own
+/// frame (units, G90/G91, G90.1/G91.1, the work offset and rotation), arcs as arcs with I J K;
+/// a block run more than once takes the slowest feed its runs need; F words are written only
+/// where the modal feed changes, and a kept move whose modal feed the rewrite would change gets
+/// an F word of its own. Throws InputError where that is not possible (a move of a called file
+/// that takes the caller's feed, a block run at different kept feeds).
+[[nodiscard]] FeedRewrite rewrite_feeds(std::string_view text, const std::vector<GcodeMove>& moves,
+                                        const std::vector<MoveFeeds>& feeds);
 
 }  // namespace trochomill

@@ -84,6 +84,12 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     throw InputError(fmt::format(
         "feed schedule: the feed limits must be 0 < min <= max (mm/min), got {} and {}", lo, hi));
   }
+  const std::optional<double> mrr_cap = targets.mrr_mm3_per_min;
+  if (mrr_cap && (!(*mrr_cap > 0) || !std::isfinite(*mrr_cap))) {
+    throw InputError(
+        fmt::format("feed schedule: the removal rate cap must be > 0 mm^3/min, got {}", *mrr_cap));
+  }
+  const double ap = job.slot.depth_mm;  // the axial depth of cut (mm)
   const double air = targets.air_feed_mm_per_min > 0 ? targets.air_feed_mm_per_min : hi;
   if (!(targets.piece_mm > 0) || !std::isfinite(targets.piece_mm)) {
     throw InputError("feed schedule: the piece length must be > 0 mm");
@@ -127,23 +133,44 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
   // fast piece that ends where the engagement rises makes the next one's first chip.
   struct PieceChips {
     std::vector<double> h_mm, allowed_feed;
+    std::vector<bool> plunge, by_mrr;
   };
   const double tiny = 1e-9 * h_target;
   auto piece_chips = [&](const EngagementSeries& e) {
     PieceChips c;
     c.h_mm.assign(pieces.size(), 0.0);
     c.allowed_feed.assign(pieces.size(), std::numeric_limits<double>::infinity());
+    c.plunge.assign(pieces.size(), false);
+    c.by_mrr.assign(pieces.size(), false);
     const auto& s = e.samples;
     const double R = 0.5 * job.tool.diameter_mm;
     for (std::size_t i = 1; i < s.size(); ++i) {
       const double h = radial_chip_mm(e, i, R);  // as the analysis counts it
       const double dt = s.t_s[i] - s.t_s[i - 1];
+      if (h == 0 && e.h_max_mm[i] > 0) {
+        // Descending into stock no earlier position touched: an axial chip the radial model
+        // does not hold, so the pieces keep their programmed feed.
+        for (std::size_t k = s.segment[i - 1]; k <= s.segment[i]; ++k) c.plunge[k] = true;
+        continue;
+      }
       if (!(h > tiny) || !(dt > 0)) continue;
       const double step_feed = (s.s_mm[i] - s.s_mm[i - 1]) / dt * 60.0;
-      const double allowed = step_feed * h_target / h;
-      for (const std::size_t k : {s.segment[i - 1], s.segment[i]}) {
+      double allowed = step_feed * h_target / h;
+      // The removal rate grows with the feed: the step's feed times cap / rate holds the cap.
+      const double mrr = e.swept_rate_mm2_per_s[i] * ap * 60.0;
+      bool by_mrr = false;
+      if (mrr_cap && mrr > 0 && step_feed * *mrr_cap / mrr < allowed) {
+        allowed = step_feed * *mrr_cap / mrr;
+        by_mrr = true;
+      }
+      // Every piece the step runs over shares its chip (a piece shorter than a step has no
+      // sample of its own).
+      for (std::size_t k = s.segment[i - 1]; k <= s.segment[i]; ++k) {
         c.h_mm[k] = std::max(c.h_mm[k], h);
-        c.allowed_feed[k] = std::min(c.allowed_feed[k], allowed);
+        if (allowed < c.allowed_feed[k]) {
+          c.allowed_feed[k] = allowed;
+          c.by_mrr[k] = by_mrr;
+        }
       }
     }
     return c;
@@ -172,6 +199,11 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     for (std::size_t k = 0; k < pieces.size(); ++k) {
       Piece& p = pieces[k];
       if (segs[p.segment].motion() == Motion::rapid) continue;
+      if (pc.plunge[k]) {
+        p.feed = segs[p.segment].speed_mm_per_min();
+        p.limit = FeedLimit::plunge;
+        continue;
+      }
       const bool cuts = std::isfinite(pc.allowed_feed[k]);
       double f = cuts ? pc.allowed_feed[k] : air;
       // The chip is proportional to the step only where the engaged arcs stay as they were:
@@ -179,7 +211,7 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
       // by lowering alone in the second half of the rounds (the chip ends at or below the
       // target instead of swinging about it).
       if (2 * it >= iterations) f = std::min(f, p.feed);
-      p.limit = cuts ? FeedLimit::none : FeedLimit::air;
+      p.limit = !cuts ? FeedLimit::air : pc.by_mrr[k] ? FeedLimit::mrr : FeedLimit::none;
       if (f > hi) {
         f = hi;
         if (p.limit == FeedLimit::none) p.limit = FeedLimit::max_feed;
@@ -193,6 +225,33 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     current = build(path, pieces);
     hooks.check("feed schedule interrupted");
   }
+  // Runs of feed pieces (across moves) within the step of the run's slowest share that feed:
+  // a program changes F only where the feed changes by more than the step.
+  {
+    const double step = 0.01 * targets.feed_step_percent;
+    std::size_t run = 0;
+    double run_feed = 0;
+    auto close_run = [&](std::size_t end) {
+      for (std::size_t k = run; k < end; ++k) {
+        if (segs[pieces[k].segment].motion() != Motion::rapid) pieces[k].feed = run_feed;
+      }
+    };
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      const Piece& p = pieces[k];
+      if (segs[p.segment].motion() == Motion::rapid) continue;
+      const bool joins = run_feed > 0 && p.limit != FeedLimit::plunge &&
+                         pieces[run].limit != FeedLimit::plunge &&
+                         std::abs(p.feed - run_feed) <= step * std::min(p.feed, run_feed);
+      if (joins) {
+        run_feed = std::min(run_feed, p.feed);
+        continue;
+      }
+      close_run(k);
+      run = k;
+      run_feed = p.feed;
+    }
+    close_run(pieces.size());
+  }
   // Merge neighbouring pieces of one segment whose feeds differ by less than the step: the
   // slower one's feed for both (the chip stays at or below the target).
   std::vector<Piece> merged;
@@ -200,7 +259,8 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     if (!merged.empty()) {
       Piece& q = merged.back();
       const double step = 0.01 * targets.feed_step_percent;
-      if (q.segment == p.segment && q.b_mm == p.a_mm &&
+      if (q.segment == p.segment && q.b_mm == p.a_mm && q.limit != FeedLimit::plunge &&
+          p.limit != FeedLimit::plunge &&
           std::abs(q.feed - p.feed) <= step * std::min(q.feed, p.feed)) {
         q.b_mm = p.b_mm;
         q.feed = std::min(q.feed, p.feed);
@@ -210,6 +270,10 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     merged.push_back(p);
   }
   out.path = build(path, merged);
+  for (const Piece& p : merged) {
+    if (segs[p.segment].motion() == Motion::rapid) continue;
+    out.feed_pieces.push_back({p.segment, p.a_mm, p.b_mm, p.feed, p.limit});
+  }
   out.time_after_s = out.path.duration_s();
   out.pieces = merged.size();
   return out;

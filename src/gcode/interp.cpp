@@ -416,6 +416,8 @@ class Interpreter {
     // Parameter settings take effect after the whole line is read, before it runs.
     for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
     for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
+    block_feed_events_ = feed_events_;
+    block_feed_before_ = feed_;
     execute();
   }
 
@@ -812,6 +814,10 @@ class Interpreter {
   }
 
   double named_value(const std::string& name, std::size_t at) {
+    if (name == "_feed" && prog_.info.feed_read_at.empty()) {
+      prog_.info.feed_read_at =
+          fmt::format("{}:{}:{}", sources_[cur_.source].name, cur_.line_no, col_of(at));
+    }
     if (const auto v = predefined(name)) return *v;
     if (const double* p = find_named(name)) return *p;
     fail(at, fmt::format("named parameter #<{}> is not defined", name));
@@ -1057,6 +1063,7 @@ class Interpreter {
       } else {
         feed_ = block_['f'] * unit_;  // a unit change later keeps the feed (as LinuxCNC)
         feed_given_ = true;
+        ++feed_events_;
       }
     }
     if (block_.has('s')) {
@@ -1338,6 +1345,7 @@ class Interpreter {
     absolute_ = m.absolute;
     arc_absolute_ = m.arc_absolute;
     feed_mode_ = m.feed_mode;
+    if (feed_ != m.feed) ++feed_events_;
     feed_ = m.feed;
     speed_ = m.speed;
     retract_r_ = m.retract_r;
@@ -1686,7 +1694,9 @@ class Interpreter {
       if (comp_moves()) {
         comp_line(target, motion_ == 0, column);
       } else {
+        plain_move_ = !g53 && (motion_ == 0 || feed_mode_ == FeedMode::per_minute);
         emit_line(target, motion_ == 0, column);
+        plain_move_ = false;
       }
       cur_pos_ = target;
       return;
@@ -1701,7 +1711,9 @@ class Interpreter {
       cur_pos_ = target;
       return;
     }
+    plain_move_ = feed_mode_ == FeedMode::per_minute;
     arc(target, column);
+    plain_move_ = false;
   }
 
   double feed_for(double length_mm, std::uint32_t column) {
@@ -1765,8 +1777,7 @@ class Interpreter {
     mv.start_mm = started_ ? out_pos_ : to_out(cur_pos_);
     mv.end_mm = end;
     mv.plane = plane_code();
-    mv.file = sources_[source].name;
-    mv.line = line;
+    describe(mv, source, line);
     if (!started_) {
       // The machine's position before the program is unknown: the first move in X or Y only
       // establishes where the path starts.
@@ -1786,10 +1797,11 @@ class Interpreter {
     }
     mv.feed_mm_per_min = f;
     mv.path_started = true;
-    trace(mv);
     if (length > 0) {
-      append(Segment::line(out_pos_, end, rapid ? Motion::rapid : Motion::feed, f), column);
+      mv.segment =
+          append(Segment::line(out_pos_, end, rapid ? Motion::rapid : Motion::feed, f), column);
     }
+    trace(mv);
     out_pos_ = end;
   }
 
@@ -1801,16 +1813,41 @@ class Interpreter {
     if (opt_.trace) opt_.trace(mv);
   }
 
-  void append(Segment seg, std::uint32_t column) {
+  // Appends a segment; returns its index in the path (npos: not kept, or of no length).
+  std::size_t append(Segment seg, std::uint32_t column) {
     if (!opt_.keep_path) {
       prog_.summary.add(seg);
-      return;
+      return GcodeMove::npos;
     }
+    const std::size_t n = prog_.path.segments().size();
     try {
       prog_.path.append(std::move(seg));
     } catch (const Error& e) {
       fail_at(column, e.what());
     }
+    return prog_.path.segments().size() > n ? n : GcodeMove::npos;
+  }
+
+  // What a move's block was and the frame its words were in (GcodeMove's rewrite fields).
+  void describe(GcodeMove& mv, std::size_t source, std::size_t line) const {
+    mv.file = sources_[source].name;
+    mv.line = line;
+    mv.source = source;
+    mv.plain = plain_move_;
+    mv.motion = motion_ == 0 ? 0 : motion_ == 10 ? 1 : motion_ == 20 ? 2 : motion_ == 30 ? 3 : -1;
+    mv.block_run = prog_.info.blocks_executed;
+    mv.program_zero_mm = to_out(Vec3::Zero());
+    mv.program_turn_rad = (rotation_ - out_rotation_) * kPi / 180.0;
+    mv.unit_mm = unit_;
+    mv.incremental = !absolute_;
+    mv.ijk_absolute = arc_absolute_;
+    mv.feed_mode = feed_mode_ == FeedMode::per_minute     ? 94
+                   : feed_mode_ == FeedMode::inverse_time ? 93
+                                                          : 95;
+    mv.feed_word = feed_;
+    mv.feed_before = block_feed_before_;
+    mv.feed_events_before = block_feed_events_;
+    mv.feed_events = feed_events_;
   }
 
   // An arc of the plane: centre (c1, c2) on its axes i1, i2 (normal in), radius and sweep (rad,
@@ -1965,8 +2002,7 @@ class Interpreter {
     mv.axis = dir_to_out(nrm);
     mv.sweep_rad = sweep;
     mv.plane = plane_code();
-    mv.file = sources_[source].name;
-    mv.line = line;
+    describe(mv, source, line);
     mv.feed_mm_per_min = f;
     if (!started_) {
       trace(mv);
@@ -1981,8 +2017,8 @@ class Interpreter {
     }
     note_feed(f);
     mv.path_started = true;
+    mv.segment = append(std::move(seg), column);
     trace(mv);
-    append(std::move(seg), column);
     out_pos_ = end;
   }
 
@@ -3542,6 +3578,11 @@ class Interpreter {
   bool absolute_ = true, arc_absolute_ = false;
   FeedMode feed_mode_ = FeedMode::per_minute;
   double feed_ = 0;  // mm/min (G95: mm/rev)
+  // Feed words and modal restores that set feed_, counted; the count and feed_ as the block
+  // being run started; whether the move being made is a plain G0..G3 of the block's words.
+  std::uint64_t feed_events_ = 0, block_feed_events_ = 0;
+  double block_feed_before_ = 0;
+  bool plain_move_ = false;
   bool feed_given_ = false;
   double inverse_f_ = -1;  // G93: this block's F
   double speed_ = 0;

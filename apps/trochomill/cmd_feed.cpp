@@ -1,0 +1,65 @@
+// optimize-feed: chip-load feed scheduling of any NC program the reader accepts, the program
+// rewritten with nothing changed but its feeds (feed.hpp).
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/feed.hpp"
+#include "trochomill/io.hpp"
+
+namespace trochomill::cli {
+
+void register_feed_commands(CLI::App& app, int& exit_code) {
+  struct Args {
+    std::string program, out, json;
+    std::vector<std::string> includes;
+    JobArgs job;
+    FeedTargetArgs targets;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "optimize-feed",
+      "rewrite the feeds of an NC program so every piece cuts the target chip (within the "
+      "removal cap and the machine's feed limits), nothing else changed");
+  cmd->add_option("PROGRAM", a->program, "NC program (G-code) to optimise")->required();
+  cmd->add_option("--job", a->job.file,
+                  "job file (TOML): tool, stock (the slot), cutting conditions, [machine] limits")
+      ->required();
+  cmd->add_option("--set", a->job.sets,
+                  "override a job key: section.key=value (repeatable), e.g. machine.max_feed=3000")
+      ->take_all();
+  cmd->add_option("-o,--output", a->out, "the rewritten program (- for stdout)")->required();
+  cmd->add_option("--json", a->json, "write the summary as JSON (- for stdout)");
+  cmd->add_option("-I,--include", a->includes,
+                  "folder searched for o<name> call's name.ngc (repeatable; the program's own "
+                  "folder is searched first)")
+      ->check(CLI::ExistingDirectory);
+  add_feed_target_args(cmd, a->targets);
+  cmd->final_callback([a, &exit_code] {
+    check_outputs({&a->out, &a->json}, {&a->program, &a->job.file});
+    if (!a->json.empty() && a->json == a->out) {
+      throw InputError("--json and --output are the same file: give each its own");
+    }
+    const Job job = a->job.load();
+    FeedOptimizeOptions opt;
+    opt.targets = a->targets.resolve(job);
+    opt.read = gcode_options(job.machine).read;
+    for (const auto& d : a->includes) opt.read.include_dirs.emplace_back(d);
+    const std::string text = read_text_file(a->program);
+    const GuardedRun run(true);
+    const FeedOptimizeResult r = optimize_feed(job, text, a->program, opt, run.hooks());
+    run.done();
+    run.finish("interrupted: nothing was written");
+    for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
+    emit(a->out, r.text);
+    if (!a->json.empty()) emit(a->json, feed_summary_json(r));
+    const std::string summary = feed_summary_text(r);
+    fmt::print(summary_to_stdout({&a->out, &a->json}) ? stdout : stderr, "{}", summary);
+    exit_code = 0;
+  });
+}
+
+}  // namespace trochomill::cli

@@ -1,0 +1,85 @@
+// Feed optimisation of NC programs: `trochomill optimize-feed`. The program is read by the
+// interpreter (gcode.hpp), its feed moves scheduled so the largest chip of every piece is the
+// target (analysis.hpp: schedule_feed, the exact engagement against the job's stock), the
+// program rewritten with the new feeds and nothing else changed (gcode.hpp: rewrite_feeds),
+// then read again: its motion must be the input's, and its chips are evaluated anew for the
+// summary.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "trochomill/analysis.hpp"
+#include "trochomill/gcode.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/progress.hpp"
+
+namespace trochomill {
+
+struct FeedOptimizeOptions {
+  /// The chip target, the removal cap and the feed limits (default_feed_targets(job)).
+  FeedTargets targets;
+  GcodeReadOptions read;  ///< how the program is read (gcode_options(job.machine).read)
+};
+
+/// Quantiles of a quantity over the cutting time (the time the tool cuts a chip > 0).
+struct CutQuantiles {
+  double p50 = 0, p90 = 0, p99 = 0, max = 0;
+};
+
+/// A block of the program where the chip stays above the target although its feed is at the
+/// machine's minimum.
+struct UnheldBlock {
+  std::string file;
+  std::size_t line = 0;
+  double h_max_mm = 0;         ///< its largest chip at the minimum feed (mm)
+  double feed_mm_per_min = 0;  ///< the minimum feed (mm/min)
+};
+
+struct FeedOptimizeResult {
+  std::string text;  ///< the rewritten program
+  FeedRewrite rewrite;
+  std::size_t moves = 0, moves_split = 0;
+  /// Programmed time (s) at the programmed feeds and rapid rate, and with the machine's
+  /// acceleration limit (path.hpp: estimate_time_s; equal when [machine] max_acceleration is
+  /// 0), before and after.
+  double time_before_s = 0, time_after_s = 0;
+  double time_before_accel_s = 0, time_after_accel_s = 0;
+  double cutting_time_before_s = 0, cutting_time_after_s = 0;  ///< time with a chip (s)
+  /// The largest local chip h_max (mm) and the removal rate (mm^3/min) over the cutting time,
+  /// before and after.
+  CutQuantiles h_before_mm, h_after_mm, mrr_before, mrr_after;
+  double h_target_mm = 0;  ///< the chip target (mm)
+  /// Shares (0..1) of the rewritten program's feed time held by the chip target, the removal
+  /// cap, the max and min feed, the air feed and plunges (kept at their programmed feed), and
+  /// kept (moves the rewrite does not feed: canned cycles, compensation, other files).
+  double share_target = 0, share_mrr = 0, share_max_feed = 0, share_min_feed = 0, share_air = 0,
+         share_plunge = 0, share_kept = 0;
+  double min_feed_after_mm_per_min = 0, max_feed_after_mm_per_min = 0;
+  std::vector<UnheldBlock> unheld;    ///< where the chip target cannot be held
+  std::vector<std::string> warnings;  ///< the reader's, for the input program
+  /// Per cutting sample of the rewritten program: time (s), feed (mm/min) and chip (mm), and
+  /// the same for the input (the report's before/after).
+  std::vector<double> t_before_s, feed_before, h_before, t_after_s, feed_after, h_after;
+};
+
+/// Optimises the feeds of `text` (a program named `name`; its folder is searched for
+/// subroutine files) for `job`. Throws InputError for a program the rewrite cannot keep
+/// safe (gcode.hpp: rewrite_feeds), bad targets, or a program that never cuts the stock;
+/// Error when the rewritten program's motion differs from the input's (it is not returned);
+/// `hooks.cancel` stops it with Interrupted.
+[[nodiscard]] FeedOptimizeResult optimize_feed(const Job& job, std::string_view text,
+                                               std::string_view name,
+                                               const FeedOptimizeOptions& options,
+                                               const RunHooks& hooks = {});
+
+/// The summary as JSON (times, chip and removal-rate quantiles before and after, the shares of
+/// feed time by limit, the blocks where the target cannot be held, the reader's warnings) and
+/// as text.
+[[nodiscard]] std::string feed_summary_json(const FeedOptimizeResult& r);
+[[nodiscard]] std::string feed_summary_text(const FeedOptimizeResult& r);
+
+}  // namespace trochomill

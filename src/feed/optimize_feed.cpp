@@ -1,0 +1,391 @@
+// Feed optimisation of NC programs (feed.hpp: optimize_feed): read, schedule, rewrite, read
+// again and check, evaluate.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <optional>
+
+#include "trochomill/engagement.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/feed.hpp"
+
+namespace trochomill {
+namespace {
+
+// A program read with its trace (the moves as the interpreter made them). The trace's file
+// names point into the interpreter, so they are kept here.
+struct Traced {
+  GcodeProgram program;
+  std::vector<GcodeMove> moves;
+  std::vector<std::string> files;  // by GcodeMove::source
+};
+
+Traced read_traced(std::string_view text, std::string_view name, GcodeReadOptions opt) {
+  Traced t;
+  opt.keep_path = true;
+  opt.trace = [&t](const GcodeMove& m) {
+    if (t.files.size() <= m.source) t.files.resize(m.source + 1);
+    if (t.files[m.source].empty()) t.files[m.source] = std::string(m.file);
+    t.moves.push_back(m);
+    t.moves.back().file = {};
+  };
+  t.program = read_gcode(text, name, opt);
+  for (GcodeMove& m : t.moves) m.file = t.files[m.source];
+  return t;
+}
+
+// Time-weighted quantiles of v over the samples with weight w > 0.
+CutQuantiles quantiles(const std::vector<double>& v, const std::vector<double>& w) {
+  CutQuantiles q;
+  std::vector<std::size_t> idx;
+  double total = 0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (w[i] > 0) {
+      idx.push_back(i);
+      total += w[i];
+    }
+  }
+  if (idx.empty()) return q;
+  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+  auto at = [&](double p) {
+    double acc = 0;
+    for (const std::size_t i : idx) {
+      acc += w[i];
+      if (acc >= p * total) return v[i];
+    }
+    return v[idx.back()];
+  };
+  q.p50 = at(0.5);
+  q.p90 = at(0.9);
+  q.p99 = at(0.99);
+  q.max = v[idx.back()];
+  return q;
+}
+
+// The chips of a path: per sample its time, feed, radial chip and removal rate, and the time
+// it stands for (the step before it where it cuts, else 0).
+struct Chips {
+  std::vector<double> t_s, feed, h_mm, mrr, cut_dt_s;
+  std::vector<std::size_t> segment;
+  double cutting_time_s = 0;
+};
+Chips chips_of(const Job& job, const ToolPath& path, const RunHooks& hooks) {
+  EngagementOptions eo;
+  eo.steps_per_tooth = 1;
+  eo.hooks = hooks;
+  const EngagementSeries e = compute_engagement(path, job, eo);
+  const auto& s = e.samples;
+  Chips c;
+  const double R = 0.5 * job.tool.diameter_mm;
+  const std::size_t n = s.size();
+  c.t_s.resize(n);
+  c.feed.resize(n);
+  c.h_mm.resize(n);
+  c.mrr.resize(n);
+  c.cut_dt_s.resize(n);
+  c.segment = s.segment;
+  const auto& segs = path.segments();
+  for (std::size_t i = 0; i < n; ++i) {
+    c.t_s[i] = s.t_s[i];
+    c.feed[i] = segs[s.segment[i]].speed_mm_per_min();
+    c.h_mm[i] = radial_chip_mm(e, i, R);
+    c.mrr[i] = e.swept_rate_mm2_per_s[i] * job.slot.depth_mm * 60.0;
+    const double dt = i > 0 ? s.t_s[i] - s.t_s[i - 1] : 0.0;
+    c.cut_dt_s[i] = c.h_mm[i] > 0 ? dt : 0.0;
+    c.cutting_time_s += c.cut_dt_s[i];
+  }
+  return c;
+}
+
+// The rewritten program's motion must be the input's: every input segment's end is reached in
+// order, and every new segment ends on the input segment it belongs to (1e-6 mm: the split
+// points are written to 1e-6 mm or finer). Returns the input segment of each new one.
+std::vector<std::size_t> check_motion(const ToolPath& before, const ToolPath& after) {
+  const auto& a = before.segments();
+  const auto& b = after.segments();
+  constexpr double tol = 2e-6;  // mm: the written places' rounding, 5e-7, twice over and more
+  std::vector<std::size_t> owner(b.size(), 0);
+  std::size_t j = 0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    const Segment& seg = a[k];
+    double along = 0;
+    for (;;) {
+      if (j >= b.size()) {
+        throw Error(
+            fmt::format("optimize-feed: the rewritten program ends before segment {} "
+                        "of the input ends (a rewrite fault; nothing was written)",
+                        k));
+      }
+      owner[j] = k;
+      const Segment& piece = b[j++];
+      along += piece.length_mm();
+      const bool last = (piece.end() - seg.end()).norm() <= tol &&
+                        along >= seg.length_mm() - 1e-4 * (1 + seg.length_mm());
+      const Vec3 on = seg.point_at(std::min(along, seg.length_mm()));
+      if ((piece.end() - on).norm() > 1e-4 * (1 + seg.length_mm()) && !last) {
+        throw Error(fmt::format(
+            "optimize-feed: the rewritten program leaves segment {} of the input by {:.3g} mm "
+            "(a rewrite fault; nothing was written)",
+            k, (piece.end() - on).norm()));
+      }
+      if ((seg.motion() == Motion::rapid) != (piece.motion() == Motion::rapid)) {
+        throw Error(
+            fmt::format("optimize-feed: segment {} changed between rapid and feed "
+                        "(a rewrite fault; nothing was written)",
+                        k));
+      }
+      if (last) break;
+    }
+  }
+  if (j != b.size()) {
+    throw Error(
+        "optimize-feed: the rewritten program moves beyond the input's end (a rewrite "
+        "fault; nothing was written)");
+  }
+  return owner;
+}
+
+}  // namespace
+
+FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::string_view name,
+                                 const FeedOptimizeOptions& options, const RunHooks& hooks) {
+  FeedOptimizeResult r;
+  hooks.begin("reading");
+  const Traced in = read_traced(text, name, options.read);
+  if (!in.program.info.feed_read_at.empty()) {
+    throw InputError(fmt::format(
+        "{}: the program reads its own feed (#<_feed>): its motion may change with the feeds, "
+        "so optimize-feed cannot rewrite them safely",
+        in.program.info.feed_read_at));
+  }
+  r.warnings = in.program.info.warnings;
+  r.moves = in.moves.size();
+  const ToolPath& path = in.program.path;
+  if (path.segments().empty()) throw InputError(fmt::format("{}: the program has no motion", name));
+
+  // The models work in the slot frame of the job's placement; the program is in the
+  // workpiece's (a rigid move: lengths, and so the pieces' places along the moves, agree).
+  const Placement placement = slot_placement(job);
+  const ToolPath slot_path = to_slot_frame(path, placement);
+  for (const std::string& w : header_mismatches(job, in.program, std::string(name))) {
+    r.warnings.push_back(w);
+  }
+  hooks.begin("scheduling");
+  const FeedSchedule fs = schedule_feed(job, slot_path, options.targets, hooks);
+  r.h_target_mm = options.targets.h_max_mm.value_or(job.cutting.feed_per_tooth_mm);
+
+  // Each move's pieces (the schedule's pieces of its segment).
+  std::vector<std::vector<const FeedPiece*>> of_segment(path.segments().size());
+  for (const FeedPiece& p : fs.feed_pieces) of_segment[p.segment].push_back(&p);
+  std::vector<MoveFeeds> feeds(in.moves.size());
+  for (std::size_t i = 0; i < in.moves.size(); ++i) {
+    const GcodeMove& m = in.moves[i];
+    if (m.segment == GcodeMove::npos || m.kind == GcodeMove::Kind::rapid) continue;
+    const Segment& seg = path.segments()[m.segment];
+    for (const FeedPiece* p : of_segment[m.segment]) {
+      const bool last = p == of_segment[m.segment].back();
+      feeds[i].ends_mm.push_back(last ? m.end_mm : seg.point_at(p->to_mm));
+      feeds[i].feed_mm_per_min.push_back(p->feed_mm_per_min);
+    }
+    if (feeds[i].ends_mm.size() > 1) ++r.moves_split;
+  }
+
+  hooks.begin("rewriting");
+  r.rewrite = rewrite_feeds(text, in.moves, feeds);
+  r.text = r.rewrite.text;
+
+  // Read the result again: its motion is the input's, its feeds within the limits.
+  hooks.begin("checking");
+  const Traced out = read_traced(r.text, name, options.read);
+  const std::vector<std::size_t> input_segment = check_motion(path, out.program.path);
+  const ToolPath& after = out.program.path;
+
+  // The limits by time: each new feed segment's time goes to the limit of the piece it lies
+  // in; a kept one (its feed not the schedule's) counts as kept.
+  const FeedTargets& t = options.targets;
+  double feed_time = 0;
+  std::map<FeedLimit, double> by_limit;
+  double kept_time = 0;
+  r.min_feed_after_mm_per_min = std::numeric_limits<double>::infinity();
+  // Per new segment: the limit of the schedule's piece it runs at (nullopt: kept).
+  std::vector<std::optional<FeedLimit>> limit_of(after.segments().size());
+  {
+    const auto& b = after.segments();
+    std::vector<double> along(path.segments().size(), 0.0);
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      const Segment& piece = b[j];
+      const std::size_t k = input_segment[j];
+      const double mid = along[k] + 0.5 * piece.length_mm();
+      along[k] += piece.length_mm();
+      if (piece.motion() == Motion::rapid) continue;
+      const double dt = piece.length_mm() / (piece.speed_mm_per_min() / 60.0);
+      feed_time += dt;
+      r.min_feed_after_mm_per_min = std::min(r.min_feed_after_mm_per_min, piece.speed_mm_per_min());
+      r.max_feed_after_mm_per_min = std::max(r.max_feed_after_mm_per_min, piece.speed_mm_per_min());
+      const FeedPiece* owner = nullptr;
+      for (const FeedPiece* p : of_segment[k]) {
+        if (mid >= p->from_mm - 1e-9 && mid <= p->to_mm + 1e-9) owner = p;
+      }
+      // Scheduled: at the piece's feed (a block run more than once may run slower, at the
+      // slowest feed its runs need); kept: at the feed the program gave it.
+      const bool scheduled = owner != nullptr &&
+                             piece.speed_mm_per_min() <= owner->feed_mm_per_min * (1 + 1e-9) + 1e-3;
+      if (scheduled) {
+        by_limit[owner->limit] += dt;
+        limit_of[j] = owner->limit;
+      } else {
+        kept_time += dt;
+      }
+    }
+  }
+  if (feed_time > 0) {
+    r.share_target = by_limit[FeedLimit::none] / feed_time;
+    r.share_mrr = by_limit[FeedLimit::mrr] / feed_time;
+    r.share_max_feed = by_limit[FeedLimit::max_feed] / feed_time;
+    r.share_min_feed = by_limit[FeedLimit::min_feed] / feed_time;
+    r.share_air = by_limit[FeedLimit::air] / feed_time;
+    r.share_plunge = by_limit[FeedLimit::plunge] / feed_time;
+    r.share_kept = kept_time / feed_time;
+  }
+  if (!std::isfinite(r.min_feed_after_mm_per_min)) r.min_feed_after_mm_per_min = 0;
+
+  // Times and chips before and after (the after from the program as written and read back).
+  r.time_before_s = path.duration_s();
+  r.time_after_s = after.duration_s();
+  r.time_before_accel_s = estimate_time_s(path, job.machine);
+  r.time_after_accel_s = estimate_time_s(after, job.machine);
+  hooks.begin("evaluating");
+  const Chips cb = chips_of(job, slot_path, hooks);
+  const Chips ca = chips_of(job, to_slot_frame(after, placement), hooks);
+  r.cutting_time_before_s = cb.cutting_time_s;
+  r.cutting_time_after_s = ca.cutting_time_s;
+  r.h_before_mm = quantiles(cb.h_mm, cb.cut_dt_s);
+  r.h_after_mm = quantiles(ca.h_mm, ca.cut_dt_s);
+  r.mrr_before = quantiles(cb.mrr, cb.cut_dt_s);
+  r.mrr_after = quantiles(ca.mrr, ca.cut_dt_s);
+  r.t_before_s = cb.t_s;
+  r.feed_before = cb.feed;
+  r.h_before = cb.h_mm;
+  r.t_after_s = ca.t_s;
+  r.feed_after = ca.feed;
+  r.h_after = ca.h_mm;
+
+  // Blocks where the chip stays above the target at the minimum feed.
+  std::map<std::size_t, std::size_t> move_of_segment;
+  for (std::size_t i = 0; i < in.moves.size(); ++i) {
+    if (in.moves[i].segment != GcodeMove::npos) move_of_segment[in.moves[i].segment] = i;
+  }
+  std::map<std::pair<std::size_t, std::size_t>, UnheldBlock> unheld;
+  for (std::size_t i = 0; i < ca.h_mm.size(); ++i) {
+    // 3 %: the schedule's own tolerance (docs/models.md section 15).
+    if (!(ca.h_mm[i] > r.h_target_mm * 1.03)) continue;
+    if (limit_of[ca.segment[i]] != FeedLimit::min_feed) continue;
+    const auto it = move_of_segment.find(input_segment[ca.segment[i]]);
+    if (it == move_of_segment.end()) continue;
+    const GcodeMove& m = in.moves[it->second];
+    UnheldBlock& u = unheld[{m.source, m.line}];
+    u.file = std::string(m.file);
+    u.line = m.line;
+    u.h_max_mm = std::max(u.h_max_mm, ca.h_mm[i]);
+    u.feed_mm_per_min = ca.feed[i];
+  }
+  for (auto& [key, u] : unheld) r.unheld.push_back(std::move(u));
+  return r;
+}
+
+}  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+nlohmann::ordered_json quantiles_json(const CutQuantiles& q) {
+  return {{"p50", q.p50}, {"p90", q.p90}, {"p99", q.p99}, {"max", q.max}};
+}
+
+}  // namespace
+
+std::string feed_summary_json(const FeedOptimizeResult& r) {
+  nlohmann::ordered_json unheld = nlohmann::ordered_json::array();
+  for (const UnheldBlock& u : r.unheld) {
+    unheld.push_back({{"file", u.file},
+                      {"line", u.line},
+                      {"h_max_mm", u.h_max_mm},
+                      {"feed_mm_per_min", u.feed_mm_per_min}});
+  }
+  const nlohmann::ordered_json j = {
+      {"h_target_mm", r.h_target_mm},
+      {"time_before_s", r.time_before_s},
+      {"time_after_s", r.time_after_s},
+      {"time_before_with_acceleration_s", r.time_before_accel_s},
+      {"time_after_with_acceleration_s", r.time_after_accel_s},
+      {"time_saved_percent", r.time_before_accel_s > 0
+                                 ? 100.0 * (1.0 - r.time_after_accel_s / r.time_before_accel_s)
+                                 : 0.0},
+      {"cutting_time_before_s", r.cutting_time_before_s},
+      {"cutting_time_after_s", r.cutting_time_after_s},
+      {"h_max_before_mm", quantiles_json(r.h_before_mm)},
+      {"h_max_after_mm", quantiles_json(r.h_after_mm)},
+      {"mrr_before_mm3_per_min", quantiles_json(r.mrr_before)},
+      {"mrr_after_mm3_per_min", quantiles_json(r.mrr_after)},
+      {"feed_after_min_mm_per_min", r.min_feed_after_mm_per_min},
+      {"feed_after_max_mm_per_min", r.max_feed_after_mm_per_min},
+      {"share_of_feed_time",
+       {{"chip_target", r.share_target},
+        {"mrr_cap", r.share_mrr},
+        {"max_feed", r.share_max_feed},
+        {"min_feed", r.share_min_feed},
+        {"air_feed", r.share_air},
+        {"plunge_kept", r.share_plunge},
+        {"kept", r.share_kept}}},
+      {"moves", r.moves},
+      {"moves_split", r.moves_split},
+      {"blocks_changed", r.rewrite.blocks_changed},
+      {"lines_added", r.rewrite.lines_added},
+      {"unheld", unheld},
+      {"warnings", r.warnings}};
+  return j.dump(2) + "\n";
+}
+
+std::string feed_summary_text(const FeedOptimizeResult& r) {
+  std::string s;
+  const auto pct = [](double a, double b) { return b > 0 ? 100.0 * (a / b - 1.0) : 0.0; };
+  s += fmt::format(
+      "time            {:10.3f} s -> {:10.3f} s ({:+.1f} %), with acceleration "
+      "{:.3f} s -> {:.3f} s ({:+.1f} %)\n",
+      r.time_before_s, r.time_after_s, pct(r.time_after_s, r.time_before_s), r.time_before_accel_s,
+      r.time_after_accel_s, pct(r.time_after_accel_s, r.time_before_accel_s));
+  s += fmt::format("cutting time    {:10.3f} s -> {:10.3f} s\n", r.cutting_time_before_s,
+                   r.cutting_time_after_s);
+  const auto q = [](const CutQuantiles& c, const char* f) {
+    return fmt::format(fmt::runtime(f), c.p50, c.p90, c.p99, c.max);
+  };
+  s += fmt::format("h_max (target {:.4f} mm), over the cutting time:\n", r.h_target_mm);
+  s += "  before        " + q(r.h_before_mm, "p50 {:.4f}  p90 {:.4f}  p99 {:.4f}  max {:.4f} mm\n");
+  s += "  after         " + q(r.h_after_mm, "p50 {:.4f}  p90 {:.4f}  p99 {:.4f}  max {:.4f} mm\n");
+  s += "MRR before      " +
+       q(r.mrr_before, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} mm^3/min\n");
+  s += "MRR after       " +
+       q(r.mrr_after, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} mm^3/min\n");
+  s += fmt::format("feeds after     {:.1f} .. {:.1f} mm/min\n", r.min_feed_after_mm_per_min,
+                   r.max_feed_after_mm_per_min);
+  s += fmt::format(
+      "feed time held by: chip target {:.1f} %, MRR cap {:.1f} %, max feed {:.1f} %, min feed "
+      "{:.1f} %, air feed {:.1f} %, plunges kept {:.1f} %, kept moves {:.1f} %\n",
+      100 * r.share_target, 100 * r.share_mrr, 100 * r.share_max_feed, 100 * r.share_min_feed,
+      100 * r.share_air, 100 * r.share_plunge, 100 * r.share_kept);
+  s += fmt::format("{} moves, {} split, {} blocks changed, {} lines added\n", r.moves,
+                   r.moves_split, r.rewrite.blocks_changed, r.rewrite.lines_added);
+  for (const UnheldBlock& u : r.unheld) {
+    s += fmt::format(
+        "cannot hold the target at {}:{}: h_max {:.4f} mm at the minimum feed {:g} "
+        "mm/min\n",
+        u.file, u.line, u.h_max_mm, u.feed_mm_per_min);
+  }
+  return s;
+}
+
+}  // namespace trochomill
