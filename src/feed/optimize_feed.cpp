@@ -206,7 +206,6 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
 
   // The limits by time: each new feed segment's time goes to the limit of the piece it lies
   // in; a kept one (its feed not the schedule's) counts as kept.
-  const FeedTargets& t = options.targets;
   double feed_time = 0;
   std::map<FeedLimit, double> by_limit;
   double kept_time = 0;
