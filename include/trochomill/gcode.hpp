@@ -205,11 +205,15 @@ struct FeedRewrite {
 /// order, one MoveFeeds each). The text stays as it was except: a plain move of a block run
 /// once (GcodeMove::plain) with several pieces is split into G1/G2/G3 lines in the block's own
 /// frame (units, G90/G91, G90.1/G91.1, the work offset and rotation), arcs as arcs with I J K;
-/// a block run more than once takes the slowest feed its runs need; F words are written only
+/// a block run more than once takes the slowest feed its runs need; coordinates are written
+/// with the places the dialect's controls read (LinuxCNC 9, Sinumerik 6, Fanuc and Grbl 4 in
+/// mm, one more in inch: rewrite_places); F words are written only
 /// where the modal feed changes, and a kept move whose modal feed the rewrite would change gets
 /// an F word of its own. Throws InputError where that is not possible (a move of a called file
 /// that takes the caller's feed, a block run at different kept feeds).
 [[nodiscard]] FeedRewrite rewrite_feeds(std::string_view text, const std::vector<GcodeMove>& moves,
-                                        const std::vector<MoveFeeds>& feeds);
+                                        const std::vector<MoveFeeds>& feeds, Dialect dialect);
+/// The coordinate places rewrite_feeds writes for a dialect (unit_mm: 1 mm or 25.4 inch).
+[[nodiscard]] int rewrite_places(Dialect dialect, double unit_mm);
 
 }  // namespace trochomill

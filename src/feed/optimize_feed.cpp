@@ -104,10 +104,9 @@ Chips chips_of(const Job& job, const ToolPath& path, const RunHooks& hooks) {
 // The rewritten program's motion must be the input's: every input segment's end is reached in
 // order, and every new segment ends on the input segment it belongs to (1e-6 mm: the split
 // points are written to 1e-6 mm or finer). Returns the input segment of each new one.
-std::vector<std::size_t> check_motion(const ToolPath& before, const ToolPath& after) {
+std::vector<std::size_t> check_motion(const ToolPath& before, const ToolPath& after, double tol) {
   const auto& a = before.segments();
   const auto& b = after.segments();
-  constexpr double tol = 2e-6;  // mm: the written places' rounding, 5e-7, twice over and more
   std::vector<std::size_t> owner(b.size(), 0);
   std::size_t j = 0;
   for (std::size_t k = 0; k < a.size(); ++k) {
@@ -126,7 +125,7 @@ std::vector<std::size_t> check_motion(const ToolPath& before, const ToolPath& af
       const bool last = (piece.end() - seg.end()).norm() <= tol &&
                         along >= seg.length_mm() - 1e-4 * (1 + seg.length_mm());
       const Vec3 on = seg.point_at(std::min(along, seg.length_mm()));
-      if ((piece.end() - on).norm() > 1e-4 * (1 + seg.length_mm()) && !last) {
+      if ((piece.end() - on).norm() > 1e-4 * (1 + seg.length_mm()) + 100 * tol && !last) {
         throw Error(fmt::format(
             "optimize-feed: the rewritten program leaves segment {} of the input by {:.3g} mm "
             "(a rewrite fault; nothing was written)",
@@ -195,13 +194,16 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   }
 
   hooks.begin("rewriting");
-  r.rewrite = rewrite_feeds(text, in.moves, feeds);
+  r.rewrite = rewrite_feeds(text, in.moves, feeds, options.read.dialect);
   r.text = r.rewrite.text;
 
   // Read the result again: its motion is the input's, its feeds within the limits.
   hooks.begin("checking");
   const Traced out = read_traced(r.text, name, options.read);
-  const std::vector<std::size_t> input_segment = check_motion(path, out.program.path);
+  // The written places' rounding, 0.5 10^-places program units, twice over (inch: more).
+  const double tol =
+      std::max(2e-6, 25.4 * std::pow(10.0, -rewrite_places(options.read.dialect, 1.0)));
+  const std::vector<std::size_t> input_segment = check_motion(path, out.program.path, tol);
   const ToolPath& after = out.program.path;
 
   // The limits by time: each new feed segment's time goes to the limit of the piece it lies

@@ -116,17 +116,51 @@ Vec3 to_program(const GcodeMove& m, const Vec3& p) {
   return Vec3(c * d.x() + s * d.y(), -s * d.x() + c * d.y(), d.z()) / m.unit_mm;
 }
 
-// The words of one piece of a split move from `from` to `to` (output frame, mm).
-std::string piece_words(const GcodeMove& m, const Vec3& from, const Vec3& to) {
-  const Vec3 a = to_program(m, from), b = to_program(m, to);
-  // Absolute words carry the point; incremental ones add up, so they keep more places.
-  const int places = m.incremental ? 9 : (m.unit_mm == 1.0 ? 6 : 7);
-  const Vec3 w = m.incremental ? Vec3(b - a) : b;
+// Coordinate places a dialect's controls read: LinuxCNC parses doubles (9 places keep a split
+// arc's centre, which the control moves onto the chord's bisector, within 1e-8 mm); Sinumerik
+// 6; Fanuc (8 digits a word at most) and Grbl (single precision) 4 in mm. Inch: one more.
+}  // namespace
+
+int rewrite_places(Dialect d, double unit_mm) {
+  const int mm = d == Dialect::linuxcnc ? 9 : d == Dialect::sinumerik ? 6 : 4;
+  return unit_mm == 1.0 ? mm : mm + 1;
+}
+
+namespace {
+
+double rounded(double v, int places) {
+  const double scale = std::pow(10.0, places);
+  return std::round(v * scale) / scale;
+}
+
+// The words of one piece of a split move from `from` to `to` (output frame, mm) at `places`;
+// the move's last piece (`last`) ends where the block ended, its words as precise as the
+// dialect allows (a value the program wrote comes back as written). Incremental words are
+// differences of the rounded positions from the move's start, so the pieces add up to the
+// move's own increment (no drift along the pieces).
+std::string piece_words(const GcodeMove& m, const Vec3& from, const Vec3& to, int places, bool last,
+                        Dialect dialect) {
+  const Vec3 a = to_program(m, from), b = to_program(m, to), s = to_program(m, m.start_mm);
+  // A Fanuc word has at most 8 digits: the exact end only where it fits.
+  auto end_number = [&](double v) {
+    std::string t = number(v, 9);
+    const auto digits =
+        std::count_if(t.begin(), t.end(), [](char c) { return c >= '0' && c <= '9'; });
+    return dialect == Dialect::fanuc && digits > 8 ? number(v, places) : t;
+  };
   std::string out;
   for (int k = 0; k < 3; ++k) {
     // Axes the move does not change are left out (their word would repeat the value).
     if (std::abs(b[k] - a[k]) <= 1e-12 * (1 + std::abs(b[k]))) continue;
-    out += fmt::format(" {}{}", static_cast<char>('X' + k), number(w[k], places));
+    std::string w;
+    if (!m.incremental) {
+      w = last ? end_number(b[k]) : number(b[k], places);
+    } else if (last) {
+      w = end_number(rounded(b[k] - s[k], 9) - rounded(a[k] - s[k], places));
+    } else {
+      w = number(rounded(b[k] - s[k], places) - rounded(a[k] - s[k], places), places);
+    }
+    out += fmt::format(" {}{}", static_cast<char>('X' + k), w);
   }
   if (m.kind == GcodeMove::Kind::arc) {
     const Vec3 c = to_program(m, m.centre_mm);
@@ -156,7 +190,7 @@ struct Block {
 }  // namespace
 
 FeedRewrite rewrite_feeds(std::string_view text, const std::vector<GcodeMove>& moves,
-                          const std::vector<MoveFeeds>& feeds) {
+                          const std::vector<MoveFeeds>& feeds, Dialect dialect) {
   if (feeds.size() != moves.size()) {
     throw Error("rewrite_feeds: one MoveFeeds per move is needed");
   }
@@ -294,7 +328,10 @@ FeedRewrite rewrite_feeds(std::string_view text, const std::vector<GcodeMove>& m
         cut.push_back(raw_span(w));
       }
     }
-    if (b.split) insert += piece_words(m, m.start_mm, mf.ends_mm.front());
+    const int places = rewrite_places(dialect, m.unit_mm);
+    if (b.split) {
+      insert += piece_words(m, m.start_mm, mf.ends_mm.front(), places, false, dialect);
+    }
     if (b.has_f) insert += " " + f_word;
     std::string edited(raw);
     const std::size_t at = norm.text.empty() ? raw.size() : norm.column[norm.text.size() - 1];
@@ -314,7 +351,8 @@ FeedRewrite rewrite_feeds(std::string_view text, const std::vector<GcodeMove>& m
     if (b.split) {
       const char* g = m.motion == 1 ? "G1" : m.motion == 2 ? "G2" : "G3";
       for (std::size_t k = 1; k < mf.ends_mm.size(); ++k) {
-        std::string piece = g + piece_words(m, mf.ends_mm[k - 1], mf.ends_mm[k]);
+        std::string piece = g + piece_words(m, mf.ends_mm[k - 1], mf.ends_mm[k], places,
+                                            k + 1 == mf.ends_mm.size(), dialect);
         if (differs(mf.feed_mm_per_min[k - 1], mf.feed_mm_per_min[k])) {
           piece += " F" + feed_number(mf.feed_mm_per_min[k], m.unit_mm);
         }
