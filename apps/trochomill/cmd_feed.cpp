@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <memory>
+#include <optional>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -16,6 +17,7 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
   struct Args {
     std::string program, out, json;
     std::vector<std::string> includes;
+    std::optional<double> force_n, power_w, torque_nm;
     JobArgs job;
     FeedTargetArgs targets;
   };
@@ -38,6 +40,13 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
                   "folder is searched first)")
       ->check(CLI::ExistingDirectory);
   add_feed_target_args(cmd, a->targets);
+  cmd->add_option("--force", a->force_n,
+                  "cap on the resultant cutting force, N (the job's [material] model)")
+      ->check(finite_above(0, 1e7));
+  cmd->add_option("--power", a->power_w, "cap on the spindle power, W ([material] model)")
+      ->check(finite_above(0, 1e8));
+  cmd->add_option("--torque", a->torque_nm, "cap on the spindle torque, N m ([material] model)")
+      ->check(finite_above(0, 1e6));
   cmd->final_callback([a, &exit_code] {
     check_outputs({&a->out, &a->json}, {&a->program, &a->job.file});
     if (!a->json.empty() && a->json == a->out) {
@@ -46,6 +55,9 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
     const Job job = a->job.load();
     FeedOptimizeOptions opt;
     opt.targets = a->targets.resolve(job);
+    opt.force_n = a->force_n;
+    opt.power_w = a->power_w;
+    opt.torque_nm = a->torque_nm;
     opt.read = gcode_options(job.machine).read;
     for (const auto& d : a->includes) opt.read.include_dirs.emplace_back(d);
     const std::string text = read_text_file(a->program);

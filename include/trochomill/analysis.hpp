@@ -93,6 +93,11 @@ struct ProcessMetrics {
 void set_performance_index(const Job& job, ProcessMetrics& m,
                            std::optional<double> predicted_force_max_n = std::nullopt);
 
+/// What limits a piece's feed.
+/// plunge: the piece descends into stock no earlier position touched (an axial chip the radial
+/// model does not hold) and keeps its programmed feed.
+/// force, power, torque: a cap of FeedTargets::caps.
+enum class FeedLimit { none, mrr, min_feed, max_feed, air, plunge, force, power, torque };
 /// What a feed schedule holds along a path (schedule_feed).
 struct FeedTargets {
   /// The largest local chip (mm) each piece of the path is fed to; default: the job's f_z.
@@ -108,14 +113,17 @@ struct FeedTargets {
   /// the slower feed, so the program changes F fewer times.
   double feed_step_percent = 5;
   int iterations = 12;  ///< rounds of engagement and rescaling (each a full engagement run)
+  /// Further caps, evaluated each round on the path as it is then (one segment per piece,
+  /// at the pieces' feeds): lowers `allowed` (mm/min, per piece) where a cap needs it and
+  /// sets that piece's `limit` (optimize-feed's force, power and torque caps from the force
+  /// model). Empty: none.
+  std::function<void(const ToolPath& pieces, std::vector<double>& allowed,
+                     std::vector<FeedLimit>& limit)>
+      caps;
 };
 /// The job's feed targets: the [machine] max_feed, min_feed and air_feed, where 0 gives three
 /// times and a tenth of the job's feed, and the max feed; the chip target unset (the job's f_z).
 [[nodiscard]] FeedTargets default_feed_targets(const Job& job);
-/// What limits a piece's feed.
-/// plunge: the piece descends into stock no earlier position touched (an axial chip the radial
-/// model does not hold) and keeps its programmed feed.
-enum class FeedLimit { none, mrr, min_feed, max_feed, air, plunge };
 /// A piece of a scheduled path: the part [from_mm, to_mm] of the input path's segment (arc
 /// length along it, mm), its feed (mm/min) and what limits it.
 struct FeedPiece {

@@ -22,6 +22,9 @@ namespace trochomill {
 struct FeedOptimizeOptions {
   /// The chip target, the removal cap and the feed limits (default_feed_targets(job)).
   FeedTargets targets;
+  /// Caps from the job's [material] force model (fast chips, force.hpp): the resultant force
+  /// on the workpiece (N), the spindle power (W) and torque (N m) held at or below them.
+  std::optional<double> force_n, power_w, torque_nm;
   GcodeReadOptions read;  ///< how the program is read (gcode_options(job.machine).read)
 };
 
@@ -52,12 +55,17 @@ struct FeedOptimizeResult {
   /// The largest local chip h_max (mm) and the removal rate (mm^3/min) over the cutting time,
   /// before and after.
   CutQuantiles h_before_mm, h_after_mm, mrr_before, mrr_after;
+  /// With a [material] force model: the resultant force (N), power (W) and torque (N m) over
+  /// the cutting steps, before and after (the fast chip source over the whole program).
+  bool forces = false;
+  CutQuantiles force_before_n, force_after_n, power_before_w, power_after_w, torque_before_nm,
+      torque_after_nm;
   double h_target_mm = 0;  ///< the chip target (mm)
   /// Shares (0..1) of the rewritten program's feed time held by the chip target, the removal
   /// cap, the max and min feed, the air feed and plunges (kept at their programmed feed), and
   /// kept (moves the rewrite does not feed: canned cycles, compensation, other files).
   double share_target = 0, share_mrr = 0, share_max_feed = 0, share_min_feed = 0, share_air = 0,
-         share_plunge = 0, share_kept = 0;
+         share_plunge = 0, share_kept = 0, share_force = 0, share_power = 0, share_torque = 0;
   double min_feed_after_mm_per_min = 0, max_feed_after_mm_per_min = 0;
   std::vector<UnheldBlock> unheld;    ///< where the chip target cannot be held
   std::vector<std::string> warnings;  ///< the reader's, for the input program

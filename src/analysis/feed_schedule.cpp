@@ -176,58 +176,10 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     return c;
   };
   const int iterations = std::max(1, targets.iterations);
-  for (int it = 0; it <= iterations; ++it) {
-    const EngagementSeries e = compute_engagement(current, job, eo);
-    const PieceChips pc = piece_chips(e);
-    const std::vector<double>& h = pc.h_mm;
-    if (it == 0) {
-      out.h_max_before_mm = *std::max_element(e.h_max_mm.begin(), e.h_max_mm.end());
-    }
-    if (it == iterations) {
-      out.h_max_after_mm = 0;
-      for (std::size_t k = 0; k < pieces.size(); ++k) {
-        if (segs[pieces[k].segment].motion() == Motion::rapid) continue;
-        out.h_max_after_mm = std::max(out.h_max_after_mm, h[k]);
-        out.piece_h_max_mm.push_back(h[k]);
-        out.piece_feed_mm_per_min.push_back(pieces[k].feed);
-        out.piece_limit.push_back(pieces[k].limit);
-      }
-      break;
-    }
-    // Each piece at the feed its chips allow, within the limits; a piece without a chip (air)
-    // at the air feed.
-    for (std::size_t k = 0; k < pieces.size(); ++k) {
-      Piece& p = pieces[k];
-      if (segs[p.segment].motion() == Motion::rapid) continue;
-      if (pc.plunge[k]) {
-        p.feed = segs[p.segment].speed_mm_per_min();
-        p.limit = FeedLimit::plunge;
-        continue;
-      }
-      const bool cuts = std::isfinite(pc.allowed_feed[k]);
-      double f = cuts ? pc.allowed_feed[k] : air;
-      // The chip is proportional to the step only where the engaged arcs stay as they were:
-      // the region behind the tool is scalloped by the earlier steps too, so the feeds settle
-      // by lowering alone in the second half of the rounds (the chip ends at or below the
-      // target instead of swinging about it).
-      if (2 * it >= iterations) f = std::min(f, p.feed);
-      p.limit = !cuts ? FeedLimit::air : pc.by_mrr[k] ? FeedLimit::mrr : FeedLimit::none;
-      if (f > hi) {
-        f = hi;
-        if (p.limit == FeedLimit::none) p.limit = FeedLimit::max_feed;
-      }
-      if (f < lo) {
-        f = lo;
-        p.limit = FeedLimit::min_feed;
-      }
-      p.feed = f;
-    }
-    current = build(path, pieces);
-    hooks.check("feed schedule interrupted");
-  }
   // Runs of feed pieces (across moves) within the step of the run's slowest share that feed:
-  // a program changes F only where the feed changes by more than the step.
-  {
+  // a program changes F only where the feed changes by more than the step. Applied in the
+  // rounds that only lower feeds, so the last evaluation sees the feeds the program gets.
+  auto share_runs = [&] {
     const double step = 0.01 * targets.feed_step_percent;
     std::size_t run = 0;
     double run_feed = 0;
@@ -251,19 +203,86 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
       run_feed = p.feed;
     }
     close_run(pieces.size());
+  };
+  // Rounds beyond `iterations` (lowering only) while a cap still binds above 1 % of a
+  // piece's feed: the caps' models (forces) answer the feed less than in proportion, so they
+  // settle from above more slowly than the chip.
+  constexpr int kCapRounds = 8;
+  for (int it = 0;; ++it) {
+    const EngagementSeries e = compute_engagement(current, job, eo);
+    const PieceChips pc = piece_chips(e);
+    const std::vector<double>& h = pc.h_mm;
+    if (it == 0) {
+      out.h_max_before_mm = *std::max_element(e.h_max_mm.begin(), e.h_max_mm.end());
+    }
+    // The caps evaluated on the path as it is: they lower the allowed feeds where needed.
+    std::vector<double> allowed = pc.allowed_feed;
+    std::vector<FeedLimit> cap_limit(pieces.size(), FeedLimit::none);
+    bool cap_over = false;
+    if (it >= iterations && targets.caps) {
+      targets.caps(current, allowed, cap_limit);
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        cap_over |= cap_limit[k] != FeedLimit::none && allowed[k] < 0.99 * pieces[k].feed &&
+                    pieces[k].feed > lo * (1 + 1e-9);
+      }
+    } else if (targets.caps) {
+      targets.caps(current, allowed, cap_limit);
+    }
+    if (it >= iterations && (!cap_over || it >= iterations + kCapRounds)) {
+      out.h_max_after_mm = 0;
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        if (segs[pieces[k].segment].motion() == Motion::rapid) continue;
+        out.h_max_after_mm = std::max(out.h_max_after_mm, h[k]);
+        out.piece_h_max_mm.push_back(h[k]);
+        out.piece_feed_mm_per_min.push_back(pieces[k].feed);
+        out.piece_limit.push_back(pieces[k].limit);
+      }
+      break;
+    }
+    // Each piece at the feed its chips allow, within the limits; a piece without a chip (air)
+    // at the air feed.
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      Piece& p = pieces[k];
+      if (segs[p.segment].motion() == Motion::rapid) continue;
+      if (pc.plunge[k]) {
+        p.feed = segs[p.segment].speed_mm_per_min();
+        p.limit = FeedLimit::plunge;
+        continue;
+      }
+      // A cap may bind where the radial chip is nil: a step whose chip was made in the piece
+      // before (the tool entering the stock from air).
+      const bool cuts = std::isfinite(pc.allowed_feed[k]) || std::isfinite(allowed[k]);
+      double f = cuts ? std::min(allowed[k], pc.allowed_feed[k]) : air;
+      // The chip is proportional to the step only where the engaged arcs stay as they were:
+      // the region behind the tool is scalloped by the earlier steps too, so the feeds settle
+      // by lowering alone in the second half of the rounds (the chip ends at or below the
+      // target instead of swinging about it).
+      if (2 * it >= iterations) f = std::min(f, p.feed);
+      p.limit = !cuts                             ? FeedLimit::air
+                : allowed[k] < pc.allowed_feed[k] ? cap_limit[k]
+                : pc.by_mrr[k]                    ? FeedLimit::mrr
+                                                  : FeedLimit::none;
+      if (f > hi) {
+        f = hi;
+        if (p.limit == FeedLimit::none) p.limit = FeedLimit::max_feed;
+      }
+      if (f < lo) {
+        f = lo;
+        p.limit = FeedLimit::min_feed;
+      }
+      p.feed = f;
+    }
+    if (2 * it >= iterations) share_runs();
+    current = build(path, pieces);
+    hooks.check("feed schedule interrupted");
   }
-  // Merge neighbouring pieces of one segment whose feeds differ by less than the step: the
-  // slower one's feed for both (the chip stays at or below the target).
+  // Merge neighbouring pieces of one segment at one feed (share_runs made them equal).
   std::vector<Piece> merged;
   for (const Piece& p : pieces) {
     if (!merged.empty()) {
       Piece& q = merged.back();
-      const double step = 0.01 * targets.feed_step_percent;
-      if (q.segment == p.segment && q.b_mm == p.a_mm && q.limit != FeedLimit::plunge &&
-          p.limit != FeedLimit::plunge &&
-          std::abs(q.feed - p.feed) <= step * std::min(q.feed, p.feed)) {
+      if (q.segment == p.segment && q.b_mm == p.a_mm && q.feed == p.feed) {
         q.b_mm = p.b_mm;
-        q.feed = std::min(q.feed, p.feed);
         continue;
       }
     }

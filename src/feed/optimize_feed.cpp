@@ -12,6 +12,7 @@
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/feed.hpp"
+#include "trochomill/force.hpp"
 
 namespace trochomill {
 namespace {
@@ -148,6 +149,102 @@ std::vector<std::size_t> check_motion(const ToolPath& before, const ToolPath& af
   return owner;
 }
 
+// The force model's series over a whole path (fast chips), at least 360 steps a revolution:
+// the peak of a short engagement arc falls between coarser steps (at the default 96 a cap
+// held at those steps was passed by 7 % at steps in between on Bergmann 2021's path; at 360
+// by 2 %). `phase_deg` turns every tooth by that angle (the spindle's angle when the program
+// starts, which no program fixes).
+ForceSeries path_forces(const Job& job, const ToolPath& path, const RunHooks& hooks,
+                        double phase_deg = 0) {
+  SimControl control;
+  control.hooks = hooks;
+  Job fine = job;
+  fine.forces.fast_steps_per_rev = std::max(fine.forces.fast_steps_per_rev, 360);
+  if (phase_deg != 0) {
+    std::vector<double>& a = fine.tool.tooth_angles_deg;
+    if (a.empty()) {
+      for (int k = 0; k < fine.tool.teeth; ++k) a.push_back(360.0 * k / fine.tool.teeth);
+    }
+    for (double& v : a) v = std::fmod(v + phase_deg, 360.0);
+    std::sort(a.begin(), a.end());
+  }
+  return job_forces(fine, path, 0.0, path.duration_s(), true, control).series;
+}
+
+// Quantiles of the force, power and torque over the steps that cut (force > 0), equally
+// weighted (the steps are equally spaced in time).
+void force_quantiles(const ForceSeries& f, CutQuantiles& force, CutQuantiles& power,
+                     CutQuantiles& torque) {
+  std::vector<double> fr(f.size()), w(f.size()), pw(f.size()), tq(f.size());
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    fr[i] = f.resultant_n(i);
+    w[i] = fr[i] > 0 ? 1.0 : 0.0;
+    pw[i] = std::abs(f.power_w[i]);
+    tq[i] = std::abs(f.torque_nm[i]);
+  }
+  force = quantiles(fr, w);
+  power = quantiles(pw, w);
+  torque = quantiles(tq, w);
+}
+
+// The force model's caps as a schedule's caps: each piece's largest resultant, power and
+// torque at its feed; a piece over a cap is allowed its feed times (cap / value)^(1 / (1 - m))
+// (the force grows with the chip as h^(1 - m) in Kienzle's and Bergmann's models; the linear
+// model's edge term makes it grow slower, which the rounds correct from above).
+std::function<void(const ToolPath&, std::vector<double>&, std::vector<FeedLimit>&)> force_caps(
+    const Job& job, const FeedOptimizeOptions& o, const RunHooks& hooks) {
+  if (!o.force_n && !o.power_w && !o.torque_nm) return {};
+  if (!job.material.model) {
+    throw InputError(
+        "optimize-feed: force, power and torque caps need the job's [material] force model "
+        "(a library name or coefficients)");
+  }
+  for (const auto& [cap, what] :
+       {std::pair{o.force_n, "force (N)"}, std::pair{o.power_w, "power (W)"},
+        std::pair{o.torque_nm, "torque (N m)"}}) {
+    if (cap && (!(*cap > 0) || !std::isfinite(*cap))) {
+      throw InputError(fmt::format("optimize-feed: the {} cap must be > 0, got {}", what, *cap));
+    }
+  }
+  const double m = std::clamp(job.material.m, 0.0, 0.9);
+  return [&job, o, hooks, m](const ToolPath& pieces, std::vector<double>& allowed,
+                             std::vector<FeedLimit>& limit) {
+    const auto& segs = pieces.segments();
+    std::vector<double> fr(segs.size(), 0.0), pw(segs.size(), 0.0), tq(segs.size(), 0.0);
+    // A step's chip was made since the tooth before passed: its force belongs to every piece
+    // the tool ran over in that tooth period (as the chip's, schedule_feed).
+    const double period_s = 60.0 / (job.cutting.spindle_speed_rpm * job.tool.teeth);
+    // At the spindle phase the model starts with (the program's start's at the machine is
+    // unknown: on a tool with few teeth and short engagement arcs the largest force of a
+    // piece depends on whether a tooth passes where the arc peaks, by up to 10 % on Bergmann
+    // 2021's two-insert mill).
+    const ForceSeries f = path_forces(job, pieces, hooks);
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const std::size_t k1 = pieces.segment_at_time(f.t_s[i]);
+      const std::size_t k0 = pieces.segment_at_time(f.t_s[i] - period_s);
+      for (std::size_t k = std::min(k0, k1); k <= k1; ++k) {
+        fr[k] = std::max(fr[k], f.resultant_n(i));
+        pw[k] = std::max(pw[k], std::abs(f.power_w[i]));
+        tq[k] = std::max(tq[k], std::abs(f.torque_nm[i]));
+      }
+    }
+    for (std::size_t k = 0; k < segs.size(); ++k) {
+      const double feed = segs[k].speed_mm_per_min();
+      auto apply = [&](const std::optional<double>& cap, double v, FeedLimit what) {
+        if (!cap || !(v > *cap)) return;
+        const double a = feed * std::pow(*cap / v, 1.0 / (1.0 - m));
+        if (a < allowed[k]) {
+          allowed[k] = a;
+          limit[k] = what;
+        }
+      };
+      apply(o.force_n, fr[k], FeedLimit::force);
+      apply(o.power_w, pw[k], FeedLimit::power);
+      apply(o.torque_nm, tq[k], FeedLimit::torque);
+    }
+  };
+}
+
 }  // namespace
 
 FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::string_view name,
@@ -174,7 +271,9 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
     r.warnings.push_back(w);
   }
   hooks.begin("scheduling");
-  const FeedSchedule fs = schedule_feed(job, slot_path, options.targets, hooks);
+  FeedTargets targets = options.targets;
+  targets.caps = force_caps(job, options, hooks);
+  const FeedSchedule fs = schedule_feed(job, slot_path, targets, hooks);
   r.h_target_mm = options.targets.h_max_mm.value_or(job.cutting.feed_per_tooth_mm);
 
   // Each move's pieces (the schedule's pieces of its segment).
@@ -251,6 +350,9 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
     r.share_air = by_limit[FeedLimit::air] / feed_time;
     r.share_plunge = by_limit[FeedLimit::plunge] / feed_time;
     r.share_kept = kept_time / feed_time;
+    r.share_force = by_limit[FeedLimit::force] / feed_time;
+    r.share_power = by_limit[FeedLimit::power] / feed_time;
+    r.share_torque = by_limit[FeedLimit::torque] / feed_time;
   }
   if (!std::isfinite(r.min_feed_after_mm_per_min)) r.min_feed_after_mm_per_min = 0;
 
@@ -268,6 +370,13 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   r.h_after_mm = quantiles(ca.h_mm, ca.cut_dt_s);
   r.mrr_before = quantiles(cb.mrr, cb.cut_dt_s);
   r.mrr_after = quantiles(ca.mrr, ca.cut_dt_s);
+  if (job.material.model) {
+    r.forces = true;
+    force_quantiles(path_forces(job, slot_path, hooks), r.force_before_n, r.power_before_w,
+                    r.torque_before_nm);
+    force_quantiles(path_forces(job, to_slot_frame(after, placement), hooks), r.force_after_n,
+                    r.power_after_w, r.torque_after_nm);
+  }
   r.t_before_s = cb.t_s;
   r.feed_before = cb.feed;
   r.h_before = cb.h_mm;
@@ -332,11 +441,20 @@ std::string feed_summary_json(const FeedOptimizeResult& r) {
       {"h_max_after_mm", quantiles_json(r.h_after_mm)},
       {"mrr_before_mm3_per_min", quantiles_json(r.mrr_before)},
       {"mrr_after_mm3_per_min", quantiles_json(r.mrr_after)},
+      {"force_before_n", r.forces ? quantiles_json(r.force_before_n) : nullptr},
+      {"force_after_n", r.forces ? quantiles_json(r.force_after_n) : nullptr},
+      {"power_before_w", r.forces ? quantiles_json(r.power_before_w) : nullptr},
+      {"power_after_w", r.forces ? quantiles_json(r.power_after_w) : nullptr},
+      {"torque_before_nm", r.forces ? quantiles_json(r.torque_before_nm) : nullptr},
+      {"torque_after_nm", r.forces ? quantiles_json(r.torque_after_nm) : nullptr},
       {"feed_after_min_mm_per_min", r.min_feed_after_mm_per_min},
       {"feed_after_max_mm_per_min", r.max_feed_after_mm_per_min},
       {"share_of_feed_time",
        {{"chip_target", r.share_target},
         {"mrr_cap", r.share_mrr},
+        {"force_cap", r.share_force},
+        {"power_cap", r.share_power},
+        {"torque_cap", r.share_torque},
         {"max_feed", r.share_max_feed},
         {"min_feed", r.share_min_feed},
         {"air_feed", r.share_air},
@@ -371,13 +489,29 @@ std::string feed_summary_text(const FeedOptimizeResult& r) {
        q(r.mrr_before, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} mm^3/min\n");
   s += "MRR after       " +
        q(r.mrr_after, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} mm^3/min\n");
+  if (r.forces) {
+    s += "F_R before      " +
+         q(r.force_before_n, "p50 {:.1f}  p90 {:.1f}  p99 {:.1f}  max {:.1f} N\n");
+    s += "F_R after       " +
+         q(r.force_after_n, "p50 {:.1f}  p90 {:.1f}  p99 {:.1f}  max {:.1f} N\n");
+    s += "power before    " +
+         q(r.power_before_w, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} W\n");
+    s += "power after     " +
+         q(r.power_after_w, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} W\n");
+    s += "torque before   " +
+         q(r.torque_before_nm, "p50 {:.2f}  p90 {:.2f}  p99 {:.2f}  max {:.2f} N m\n");
+    s += "torque after    " +
+         q(r.torque_after_nm, "p50 {:.2f}  p90 {:.2f}  p99 {:.2f}  max {:.2f} N m\n");
+  }
   s += fmt::format("feeds after     {:.1f} .. {:.1f} mm/min\n", r.min_feed_after_mm_per_min,
                    r.max_feed_after_mm_per_min);
   s += fmt::format(
-      "feed time held by: chip target {:.1f} %, MRR cap {:.1f} %, max feed {:.1f} %, min feed "
-      "{:.1f} %, air feed {:.1f} %, plunges kept {:.1f} %, kept moves {:.1f} %\n",
-      100 * r.share_target, 100 * r.share_mrr, 100 * r.share_max_feed, 100 * r.share_min_feed,
-      100 * r.share_air, 100 * r.share_plunge, 100 * r.share_kept);
+      "feed time held by: chip target {:.1f} %, MRR cap {:.1f} %, force cap {:.1f} %, power cap "
+      "{:.1f} %, torque cap {:.1f} %, max feed {:.1f} %, min feed {:.1f} %, air feed {:.1f} %, "
+      "plunges kept {:.1f} %, kept moves {:.1f} %\n",
+      100 * r.share_target, 100 * r.share_mrr, 100 * r.share_force, 100 * r.share_power,
+      100 * r.share_torque, 100 * r.share_max_feed, 100 * r.share_min_feed, 100 * r.share_air,
+      100 * r.share_plunge, 100 * r.share_kept);
   s += fmt::format("{} moves, {} split, {} blocks changed, {} lines added\n", r.moves,
                    r.moves_split, r.rewrite.blocks_changed, r.rewrite.lines_added);
   for (const UnheldBlock& u : r.unheld) {
