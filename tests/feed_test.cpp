@@ -300,3 +300,34 @@ TEST(OptimizeFeed, ForceAndTorqueCapsHold) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// With machine.max_acceleration the scheduled feeds are reachable: every feed segment of the
+// program as written slows within its length to the next one's feed and reaches its own from
+// the one before (v_k^2 <= v_next^2 + 2 a L_k; 1e-3 mm/min of F rounding allowed), and the
+// time with acceleration is the one reported.
+TEST(OptimizeFeed, FeedsAreReachableWithTheAcceleration) {
+  const Job job = test::wagih_job("trochoidal", {{"machine.max_acceleration", "50", {}}});
+  FeedOptimizeOptions o = options_60_1800(job);
+  const FeedOptimizeResult r = optimize_feed(job, program_of(job), "w.ngc", o);
+  const GcodeProgram out = read_gcode(r.text, "out.ngc", o.read);
+  const auto& s = out.path.segments();
+  std::size_t checked = 0;
+  for (std::size_t k = 1; k < s.size(); ++k) {
+    if (s[k].motion() == Motion::rapid || s[k - 1].motion() == Motion::rapid) continue;
+    const double a = 50, v0 = s[k - 1].speed_mm_per_min() / 60, v1 = s[k].speed_mm_per_min() / 60;
+    const double slack = 2 * 1e-3 / 60 * std::max(v0, v1);  // F written to 0.001 mm/min
+    EXPECT_LE(v0 * v0, v1 * v1 + 2 * a * s[k - 1].length_mm() + slack) << k;
+    EXPECT_LE(v1 * v1, v0 * v0 + 2 * a * s[k].length_mm() + slack) << k;
+    ++checked;
+  }
+  EXPECT_GT(checked, 100u);
+  EXPECT_GT(r.share_acceleration, 0.0);
+  EXPECT_NEAR(r.time_after_accel_s, estimate_time_s(out.path, job.machine),
+              1e-9 * r.time_after_accel_s);
+}
+
+}  // namespace
+}  // namespace trochomill

@@ -97,7 +97,20 @@ void set_performance_index(const Job& job, ProcessMetrics& m,
 /// plunge: the piece descends into stock no earlier position touched (an axial chip the radial
 /// model does not hold) and keeps its programmed feed.
 /// force, power, torque: a cap of FeedTargets::caps.
-enum class FeedLimit { none, mrr, min_feed, max_feed, air, plunge, force, power, torque };
+/// acceleration: lowered so the machine reaches it (and slows to the next piece's) within the
+/// piece at machine.max_acceleration.
+enum class FeedLimit {
+  none,
+  min_feed,
+  max_feed,
+  air,
+  plunge,
+  mrr,
+  force,
+  power,
+  torque,
+  acceleration
+};
 /// What a feed schedule holds along a path (schedule_feed).
 struct FeedTargets {
   /// The largest local chip (mm) each piece of the path is fed to; default: the job's f_z.

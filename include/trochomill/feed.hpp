@@ -65,7 +65,8 @@ struct FeedOptimizeResult {
   /// cap, the max and min feed, the air feed and plunges (kept at their programmed feed), and
   /// kept (moves the rewrite does not feed: canned cycles, compensation, other files).
   double share_target = 0, share_mrr = 0, share_max_feed = 0, share_min_feed = 0, share_air = 0,
-         share_plunge = 0, share_kept = 0, share_force = 0, share_power = 0, share_torque = 0;
+         share_plunge = 0, share_kept = 0, share_force = 0, share_power = 0, share_torque = 0,
+         share_acceleration = 0;
   double min_feed_after_mm_per_min = 0, max_feed_after_mm_per_min = 0;
   std::vector<UnheldBlock> unheld;    ///< where the chip target cannot be held
   std::vector<std::string> warnings;  ///< the reader's, for the input program

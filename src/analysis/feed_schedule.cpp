@@ -204,6 +204,34 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     }
     close_run(pieces.size());
   };
+  // Feeds the machine reaches with its acceleration (machine.max_acceleration, mm/s^2):
+  // backward, a piece slows within its own length to the next one's feed (the tool arrives
+  // where the chip grows at that feed); forward, a piece's feed is reached within its length
+  // from the one before. Both only lower feeds (a rapid between pieces breaks the chain).
+  const double accel = job.machine.max_acceleration_mm_per_s2;
+  auto reachable = [&] {
+    if (!(accel > 0)) return;
+    auto lower = [&](Piece& p, double v_mm_s) {
+      const double f = std::max(60.0 * v_mm_s, lo);
+      if (f < p.feed) {
+        p.feed = f;
+        if (p.limit != FeedLimit::plunge) p.limit = FeedLimit::acceleration;
+      }
+    };
+    auto feed_piece = [&](std::size_t k) {
+      return segs[pieces[k].segment].motion() != Motion::rapid;
+    };
+    for (std::size_t k = pieces.size(); k-- > 1;) {  // backward
+      if (!feed_piece(k) || !feed_piece(k - 1)) continue;
+      const double v = pieces[k].feed / 60.0, len = pieces[k - 1].b_mm - pieces[k - 1].a_mm;
+      lower(pieces[k - 1], std::sqrt(v * v + 2 * accel * len));
+    }
+    for (std::size_t k = 1; k < pieces.size(); ++k) {  // forward
+      if (!feed_piece(k) || !feed_piece(k - 1)) continue;
+      const double v = pieces[k - 1].feed / 60.0, len = pieces[k].b_mm - pieces[k].a_mm;
+      lower(pieces[k], std::sqrt(v * v + 2 * accel * len));
+    }
+  };
   // Rounds beyond `iterations` (lowering only) while a cap still binds above 1 % of a
   // piece's feed: the caps' models (forces) answer the feed less than in proportion, so they
   // settle from above more slowly than the chip.
@@ -272,7 +300,10 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
       }
       p.feed = f;
     }
-    if (2 * it >= iterations) share_runs();
+    if (2 * it >= iterations) {
+      share_runs();
+      reachable();
+    }
     current = build(path, pieces);
     hooks.check("feed schedule interrupted");
   }

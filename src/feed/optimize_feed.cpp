@@ -353,6 +353,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
     r.share_force = by_limit[FeedLimit::force] / feed_time;
     r.share_power = by_limit[FeedLimit::power] / feed_time;
     r.share_torque = by_limit[FeedLimit::torque] / feed_time;
+    r.share_acceleration = by_limit[FeedLimit::acceleration] / feed_time;
   }
   if (!std::isfinite(r.min_feed_after_mm_per_min)) r.min_feed_after_mm_per_min = 0;
 
@@ -455,6 +456,7 @@ std::string feed_summary_json(const FeedOptimizeResult& r) {
         {"force_cap", r.share_force},
         {"power_cap", r.share_power},
         {"torque_cap", r.share_torque},
+        {"acceleration", r.share_acceleration},
         {"max_feed", r.share_max_feed},
         {"min_feed", r.share_min_feed},
         {"air_feed", r.share_air},
@@ -507,11 +509,11 @@ std::string feed_summary_text(const FeedOptimizeResult& r) {
                    r.max_feed_after_mm_per_min);
   s += fmt::format(
       "feed time held by: chip target {:.1f} %, MRR cap {:.1f} %, force cap {:.1f} %, power cap "
-      "{:.1f} %, torque cap {:.1f} %, max feed {:.1f} %, min feed {:.1f} %, air feed {:.1f} %, "
-      "plunges kept {:.1f} %, kept moves {:.1f} %\n",
+      "{:.1f} %, torque cap {:.1f} %, acceleration {:.1f} %, max feed {:.1f} %, min feed {:.1f} "
+      "%, air feed {:.1f} %, plunges kept {:.1f} %, kept moves {:.1f} %\n",
       100 * r.share_target, 100 * r.share_mrr, 100 * r.share_force, 100 * r.share_power,
-      100 * r.share_torque, 100 * r.share_max_feed, 100 * r.share_min_feed, 100 * r.share_air,
-      100 * r.share_plunge, 100 * r.share_kept);
+      100 * r.share_torque, 100 * r.share_acceleration, 100 * r.share_max_feed,
+      100 * r.share_min_feed, 100 * r.share_air, 100 * r.share_plunge, 100 * r.share_kept);
   s += fmt::format("{} moves, {} split, {} blocks changed, {} lines added\n", r.moves,
                    r.moves_split, r.rewrite.blocks_changed, r.rewrite.lines_added);
   for (const UnheldBlock& u : r.unheld) {

@@ -363,3 +363,31 @@ def test_report_refuses_bad_requests(pivkin):
         tm.report(job, signal=np.zeros(1000), rate_hz=100000.0)
     with pytest.raises(tm.InputError, match="no \\[material\\] force model"):
         tm.report(job, parts=["forces"])
+
+
+def test_optimize_feed_is_the_cli(wagih, tmp_path):
+    """optimize_feed returns what `trochomill optimize-feed` writes: the same program and
+    summary; its series re-read: the after feeds within the limits, chips at most 3 % over
+    the target (docs/models.md section 15)."""
+    text = wagih.read_text().replace('dialect = "sinumerik"', 'dialect = "linuxcnc"')
+    job_file = tmp_path / "w.toml"
+    job_file.write_text(text)
+    prog = tmp_path / "w.ngc"
+    run_cli("plan", job_file, "-o", prog)
+    out = tmp_path / "fast.ngc"
+    summary = tmp_path / "s.json"
+    run_cli("optimize-feed", prog, "--job", job_file, "-o", out, "--json", summary,
+            "--max-feed", "1500")
+    job = tm.Job.from_toml(job_file)
+    r = tm.optimize_feed(str(prog), job, max_feed_mm_per_min=1500.0)
+    assert r["text"] == out.read_text()
+    cli = json.loads(summary.read_text())
+    assert r["time_after_s"] == pytest.approx(cli["time_after_s"], rel=1e-12)
+    assert r["time_after_s"] < 0.7 * r["time_before_s"]
+    after = r["after"]
+    cutting = after["h_max_mm"] > 0  # (rapids sample at the rapid rate)
+    assert after["feed_mm_per_min"][cutting].max() <= 1500.0
+    fz = job.feed_rate_mm_per_min / (job.spindle_speed_rpm * job.to_dict()["tool"]["teeth"])
+    assert after["h_max_mm"].max() <= 1.03 * fz
+    with pytest.raises(tm.InputError):
+        tm.optimize_feed(str(prog), job, h_max_mm=-1.0)

@@ -131,8 +131,17 @@ def keys() -> list[dict[str, str]]:
 def materials() -> list[dict[str, Any]]:
     """The materials library."""
 def schedule_feed(job: Job | Path, *, h_max_mm: float | None = None,
+                  mrr_mm3_per_min: float | None = None,
                   min_feed_mm_per_min: float | None = None,
                   max_feed_mm_per_min: float | None = None, air_feed_mm_per_min: float | None = None,
                   feed_step_percent: float = 5.0, piece_mm: float = 0.5,
                   progress: _Progress = None) -> dict[str, Any]:
     """"path" (the scheduled Path), times and chips before and after, per-piece arrays."""
+def optimize_feed(program: str, job: Job, *, h_max_mm: float | None = None,
+                  mrr_mm3_per_min: float | None = None, force_n: float | None = None,
+                  power_w: float | None = None, torque_nm: float | None = None,
+                  min_feed_mm_per_min: float | None = None,
+                  max_feed_mm_per_min: float | None = None, air_feed_mm_per_min: float | None = None,
+                  feed_step_percent: float = 5.0, piece_mm: float = 0.5,
+                  include_dirs: list[str] = ..., progress: _Progress = None) -> dict[str, Any]:
+    """The optimize-feed summary, "text" (the rewritten program), "before"/"after" series."""
