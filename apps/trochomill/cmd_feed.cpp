@@ -10,12 +10,13 @@
 #include "trochomill/error.hpp"
 #include "trochomill/feed.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/report.hpp"
 
 namespace trochomill::cli {
 
 void register_feed_commands(CLI::App& app, int& exit_code) {
   struct Args {
-    std::string program, out, json;
+    std::string program, out, json, html;
     std::vector<std::string> includes;
     std::optional<double> force_n, power_w, torque_nm;
     JobArgs job;
@@ -35,6 +36,9 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
       ->take_all();
   cmd->add_option("-o,--output", a->out, "the rewritten program (- for stdout)")->required();
   cmd->add_option("--json", a->json, "write the summary as JSON (- for stdout)");
+  cmd->add_option("--html", a->html,
+                  "the HTML report of the rewritten program, with feed, chip and force along "
+                  "the program before and after");
   cmd->add_option("-I,--include", a->includes,
                   "folder searched for o<name> call's name.ngc (repeatable; the program's own "
                   "folder is searched first)")
@@ -48,7 +52,7 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
   cmd->add_option("--torque", a->torque_nm, "cap on the spindle torque, N m ([material] model)")
       ->check(finite_above(0, 1e6));
   cmd->final_callback([a, &exit_code] {
-    check_outputs({&a->out, &a->json}, {&a->program, &a->job.file});
+    check_outputs({&a->out, &a->json, &a->html}, {&a->program, &a->job.file});
     if (!a->json.empty() && a->json == a->out) {
       throw InputError("--json and --output are the same file: give each its own");
     }
@@ -62,12 +66,29 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
     for (const auto& d : a->includes) opt.read.include_dirs.emplace_back(d);
     const std::string text = read_text_file(a->program);
     const GuardedRun run(true);
-    const FeedOptimizeResult r = optimize_feed(job, text, a->program, opt, run.hooks());
+    FeedOptimizeResult r = optimize_feed(job, text, a->program, opt, run.hooks());
+    std::string page;
+    if (!a->html.empty()) {
+      // The rewritten program's report (in the slot frame of the job's placement), with the
+      // before/after part.
+      GcodeReadOptions ro = opt.read;
+      const ToolPath path = to_slot_frame(read_gcode(r.text, a->out, ro).path, slot_placement(job));
+      ReportRequest rq;
+      rq.job_file = a->job.file;
+      rq.gcode_file = a->out;
+      rq.job_text = read_text_file(a->job.file);
+      rq.overrides = a->job.overrides();
+      rq.command = "trochomill optimize-feed " + a->program;
+      ReportData d = build_report(job, path, rq, run.hooks());
+      d.feed = r;
+      page = report_html(d, run.hooks());
+    }
     run.done();
     run.finish("interrupted: nothing was written");
     for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
     emit(a->out, r.text);
     if (!a->json.empty()) emit(a->json, feed_summary_json(r));
+    if (!a->html.empty()) emit(a->html, page);
     const std::string summary = feed_summary_text(r);
     fmt::print(summary_to_stdout({&a->out, &a->json}) ? stdout : stderr, "{}", summary);
     exit_code = 0;

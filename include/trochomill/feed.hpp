@@ -70,9 +70,14 @@ struct FeedOptimizeResult {
   double min_feed_after_mm_per_min = 0, max_feed_after_mm_per_min = 0;
   std::vector<UnheldBlock> unheld;    ///< where the chip target cannot be held
   std::vector<std::string> warnings;  ///< the reader's, for the input program
-  /// Per cutting sample of the rewritten program: time (s), feed (mm/min) and chip (mm), and
-  /// the same for the input (the report's before/after).
-  std::vector<double> t_before_s, feed_before, h_before, t_after_s, feed_after, h_after;
+  /// Per tooth-pass sample of the input and of the rewritten program: time (s), place along
+  /// the path (mm), feed (mm/min; NaN in rapids) and chip (mm) (the report's before/after).
+  std::vector<double> t_before_s, s_before_mm, feed_before, h_before;
+  std::vector<double> t_after_s, s_after_mm, feed_after, h_after;
+  /// With a [material] model: the resultant force (N) at every step of the fast chip source,
+  /// before and after, with their places along the path (mm).
+  std::vector<double> force_s_before_mm, force_before_series_n, force_s_after_mm,
+      force_after_series_n;
 };
 
 /// Optimises the feeds of `text` (a program named `name`; its folder is searched for

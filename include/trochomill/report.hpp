@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "trochomill/analysis.hpp"
+#include "trochomill/feed.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
@@ -249,6 +250,8 @@ struct ReportData {
   std::optional<ReportMonitor> monitor;
   std::optional<ReportStudy> study;
   std::optional<ReportPareto> pareto;
+  /// optimize-feed's result: feed, chip and force along the program before and after.
+  std::optional<FeedOptimizeResult> feed;
   std::vector<std::string> notes;
 };
 /// What a report is asked to show besides the defaults, and what it records.

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
+#include <tuple>
 
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
@@ -70,7 +71,7 @@ CutQuantiles quantiles(const std::vector<double>& v, const std::vector<double>& 
 // The chips of a path: per sample its time, feed, radial chip and removal rate, and the time
 // it stands for (the step before it where it cuts, else 0).
 struct Chips {
-  std::vector<double> t_s, feed, h_mm, mrr, cut_dt_s;
+  std::vector<double> t_s, s_mm, feed, h_mm, mrr, cut_dt_s;
   std::vector<std::size_t> segment;
   double cutting_time_s = 0;
 };
@@ -89,10 +90,13 @@ Chips chips_of(const Job& job, const ToolPath& path, const RunHooks& hooks) {
   c.mrr.resize(n);
   c.cut_dt_s.resize(n);
   c.segment = s.segment;
+  c.s_mm = s.s_mm;
   const auto& segs = path.segments();
   for (std::size_t i = 0; i < n; ++i) {
     c.t_s[i] = s.t_s[i];
-    c.feed[i] = segs[s.segment[i]].speed_mm_per_min();
+    const Segment& seg = segs[s.segment[i]];
+    c.feed[i] = seg.motion() == Motion::rapid ? std::numeric_limits<double>::quiet_NaN()
+                                              : seg.speed_mm_per_min();
     c.h_mm[i] = radial_chip_mm(e, i, R);
     c.mrr[i] = e.swept_rate_mm2_per_s[i] * job.slot.depth_mm * 60.0;
     const double dt = i > 0 ? s.t_s[i] - s.t_s[i - 1] : 0.0;
@@ -373,12 +377,31 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   r.mrr_after = quantiles(ca.mrr, ca.cut_dt_s);
   if (job.material.model) {
     r.forces = true;
-    force_quantiles(path_forces(job, slot_path, hooks), r.force_before_n, r.power_before_w,
-                    r.torque_before_nm);
-    force_quantiles(path_forces(job, to_slot_frame(after, placement), hooks), r.force_after_n,
-                    r.power_after_w, r.torque_after_nm);
+    const ForceSeries fb = path_forces(job, slot_path, hooks);
+    const ForceSeries fa = path_forces(job, to_slot_frame(after, placement), hooks);
+    force_quantiles(fb, r.force_before_n, r.power_before_w, r.torque_before_nm);
+    force_quantiles(fa, r.force_after_n, r.power_after_w, r.torque_after_nm);
+    const ToolPath after_slot = to_slot_frame(after, placement);
+    for (const auto& [f, p, at, v] :
+         {std::tuple{&fb, &slot_path, &r.force_s_before_mm, &r.force_before_series_n},
+          std::tuple{&fa, &after_slot, &r.force_s_after_mm, &r.force_after_series_n}}) {
+      at->resize(f->size());
+      v->resize(f->size());
+      for (std::size_t i = 0; i < f->size(); ++i) {
+        // The place at the step's time: along its segment at the segment's speed.
+        const std::size_t k = p->segment_at_time(f->t_s[i]);
+        const Segment& seg = p->segments()[k];
+        (*at)[i] =
+            std::min(p->segment_start_length_mm(k) +
+                         (f->t_s[i] - p->segment_start_time_s(k)) * seg.speed_mm_per_min() / 60.0,
+                     p->segment_start_length_mm(k) + seg.length_mm());
+        (*v)[i] = f->resultant_n(i);
+      }
+    }
   }
   r.t_before_s = cb.t_s;
+  r.s_before_mm = cb.s_mm;
+  r.s_after_mm = ca.s_mm;
   r.feed_before = cb.feed;
   r.h_before = cb.h_mm;
   r.t_after_s = ca.t_s;

@@ -552,6 +552,25 @@ std::string report_data_json(const ReportData& d, const RunHooks& hooks) {
     doc["pareto"] = {
         {"keys", p.keys}, {"goals", p.goals}, {"maximize", p.maximize}, {"points", points}};
   }
+  if (d.feed) {
+    const FeedOptimizeResult& f = *d.feed;
+    json part = {{"summary", json::parse(feed_summary_json(f))},
+                 {"before", series_block({{"s_mm", &f.s_before_mm},
+                                          {"t_s", &f.t_before_s},
+                                          {"feed_mm_per_min", &f.feed_before},
+                                          {"h_max_mm", &f.h_before}})},
+                 {"after", series_block({{"s_mm", &f.s_after_mm},
+                                         {"t_s", &f.t_after_s},
+                                         {"feed_mm_per_min", &f.feed_after},
+                                         {"h_max_mm", &f.h_after}})}};
+    if (f.forces && !f.force_s_before_mm.empty() && !f.force_s_after_mm.empty()) {
+      part["force_before"] =
+          series_block({{"s_mm", &f.force_s_before_mm}, {"f_n", &f.force_before_series_n}});
+      part["force_after"] =
+          series_block({{"s_mm", &f.force_s_after_mm}, {"f_n", &f.force_after_series_n}});
+    }
+    doc["feed"] = std::move(part);
+  }
   step(9);
   // "</" inside a script element would end it: JSON allows "<\/" for "</".
   std::string text = doc.dump(-1, ' ', false, json::error_handler_t::replace);

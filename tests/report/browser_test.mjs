@@ -394,6 +394,30 @@ test('optimize --html shows the Pareto set it wrote', async () => {
   await page.close();
 });
 
+test('optimize-feed --html shows feed, chip and force before and after', async () => {
+  // Bergmann 2021's slot (a [material] model: forces too), shortened, in LinuxCNC's language.
+  const job = join(OUT, 'bergmann-linuxcnc.toml');
+  writeFileSync(job, readFileSync(ex('bergmann2021/trochoidal.toml'), 'utf8').replace('dialect = "sinumerik"', 'dialect = "linuxcnc"'));
+  const prog = join(OUT, 'bergmann.ngc'), fast = join(OUT, 'bergmann-fast.ngc');
+  const html = join(OUT, 'optimize-feed.html'), summary = join(OUT, 'optimize-feed.json');
+  cli('plan', job, '--set', 'slot.length=1', '-o', prog);
+  cli('optimize-feed', prog, '--job', job, '--set', 'slot.length=1', '-o', fast, '--json', summary, '--html', html);
+  const s = JSON.parse(readFileSync(summary, 'utf8'));
+  const { page, problems } = await open(html);
+  assert.deepEqual(problems, []);
+  for (const id of ['feed-feed', 'feed-chip', 'feed-force']) {
+    const ink = await canvasInk(page, id);
+    assert.ok(ink.share > 0.003 && ink.colours > 3, `${id}: ${JSON.stringify(ink)}`);
+  }
+  // The page's data is the summary the command wrote, and its table shows it.
+  const data = await page.evaluate(() => window.trochomillReport.data.feed.summary);
+  assert.equal(data.time_after_s, s.time_after_s);
+  const cells = await page.evaluate(() => [...document.querySelectorAll('#feed-table tr')][1].textContent);
+  assert.match(cells, /h_max/);
+  assert.ok(cells.includes(String(Number(s.h_max_after_mm.max.toPrecision(4)))), `${cells} ${s.h_max_after_mm.max}`);
+  await page.close();
+});
+
 test('a job whose text holds "</script>" cannot break out of the page', async () => {
   const job = join(OUT, 'script-in-comment.toml');
   writeFileSync(job, readFileSync(ex('wagih2023/circular.toml'), 'utf8') + '\n# </script><script>document.title="broken"</script>\n');

@@ -889,9 +889,58 @@ function paretoPart() {
   sec.append(table);
 }
 
+// optimize-feed --html: feed, chip and force along the program before and after, over the
+// path length (the same place in both programs).
+function feedPart() {
+  const f = data.feed;
+  if (!f) return;
+  const s = f.summary;
+  const sec = section('feed', 'Feed optimisation', `\`trochomill optimize-feed\`: every piece fed so its largest chip is ${fmtNum(s.h_target_mm)} mm, within the caps and the machine's feed limits; time with acceleration ${fmtNum(s.time_before_with_acceleration_s)} s before, ${fmtNum(s.time_after_with_acceleration_s)} s after (${fmtNum(s.time_saved_percent, 3)} % saved). The sections above analyse the rewritten program.`);
+  const q = (k) => s[k] ? [s[k].p50, s[k].p90, s[k].p99, s[k].max] : null;
+  const rows = [['h_max (mm)', q('h_max_before_mm'), q('h_max_after_mm')],
+    ['removal rate (mm^3/min)', q('mrr_before_mm3_per_min'), q('mrr_after_mm3_per_min')],
+    ['resultant force (N)', q('force_before_n'), q('force_after_n')],
+    ['spindle power (W)', q('power_before_w'), q('power_after_w')],
+    ['spindle torque (N m)', q('torque_before_nm'), q('torque_after_nm')]].filter((r) => r[1]);
+  const table = el('table', { class: 'summary', id: 'feed-table' },
+    el('tr', {}, ...['over the cutting time', 'before p50', 'p90', 'p99', 'max', 'after p50', 'p90', 'p99', 'max'].map((k) => el('th', { text: k }))));
+  for (const [name, b, a] of rows) {
+    table.append(el('tr', {}, el('td', { text: name }), ...[...b, ...a].map((v) => el('td', { class: 'num', text: fmtNum(v, 4) }))));
+  }
+  sec.append(table);
+  const shares = Object.entries(s.share_of_feed_time).filter(([, v]) => v > 0)
+    .map(([k, v]) => `${k.replace(/_/g, ' ')} ${fmtNum(100 * v, 3)} %`).join(', ');
+  sec.append(el('p', { class: 'note', text: `Feed time held by: ${shares}.` }));
+  if (s.unheld.length) {
+    sec.append(el('p', { class: 'note', text: `Where the target cannot be held: ${s.unheld.map((u) => `${u.file}:${u.line} (h_max ${fmtNum(u.h_max_mm, 4)} mm at ${fmtNum(u.feed_mm_per_min)} mm/min)`).join('; ')}.` }));
+  }
+  const overlay = (id, title, caption, key, label, before, after, extra) => {
+    const fig = figure(sec, id, title, caption);
+    const j = joined([[before.s_mm, before[key]], [after.s_mm, after[key]]]);
+    linePlot(fig, { x: j[0], xLabel: 'path length (mm)', axes: { y: label },
+      series: [{ label: 'before', values: j[1], spanGaps: false }, { label: 'after', values: j[2], spanGaps: false }], draw: extra });
+  };
+  overlay('feed-feed', 'Feed along the program', 'before and after; gaps are rapids', 'feed_mm_per_min', 'feed (mm/min)', f.before, f.after);
+  overlay('feed-chip', 'Largest chip along the program', 'h_max at every tooth pass; the line is the target', 'h_max_mm', 'h_max (mm)', f.before, f.after,
+    (u) => {
+      const y = u.valToPos(s.h_target_mm, 'y', true), c = u.ctx;
+      c.save();
+      c.strokeStyle = '#d1242f';
+      c.setLineDash([6, 4]);
+      c.beginPath();
+      c.moveTo(u.bbox.left, y);
+      c.lineTo(u.bbox.left + u.bbox.width, y);
+      c.stroke();
+      c.restore();
+    });
+  if (f.force_before) {
+    overlay('feed-force', 'Resultant force along the program', 'the [material] model with the fast chip source', 'f_n', 'F_R (N)', f.force_before, f.force_after);
+  }
+}
+
 // ---- the page ------------------------------------------------------------------------------
 const parts = [headerPart, pathPart, engagementPart, wallsPart, mechanismPart, forcesPart, calibrationPart,
-  simulationPart, monitorPart, studyPart, paretoPart];
+  simulationPart, monitorPart, studyPart, paretoPart, feedPart];
 for (const part of parts) {
   try {
     part();
