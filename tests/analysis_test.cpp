@@ -300,19 +300,6 @@ TEST(Analysis, ToothLevelWallsOfLongStepsAndLowFeeds) {
 
 // ---- chip-load feed scheduling ----------------------------------------------------------------
 
-// Re-analysed independently (the engagement of the scheduled path as it is, pieces merged):
-// the largest chip of each move. The tolerance is the 3 %: the chip is proportional
-// to the feed only where the engaged arcs stay the same.
-std::vector<double> chips_per_segment(const Job& job, const ToolPath& path) {
-  const EngagementSeries e = compute_engagement(path, job);
-  std::vector<double> h(path.segments().size(), 0.0);
-  const double R = 0.5 * job.tool.diameter_mm;
-  for (std::size_t i = 1; i < e.samples.size(); ++i) {
-    h[e.samples.segment[i]] = std::max(h[e.samples.segment[i]], radial_chip_mm(e, i, R));
-  }
-  return h;
-}
-
 // Feed limits of the schedule tests: a tenth and three times the jobs' 600 mm/min.
 FeedTargets limits_60_1800() {
   FeedTargets t;
@@ -352,7 +339,7 @@ TEST(FeedSchedule, HoldsTheTargetChipOnTheWagihPaths) {
     FeedTargets t = limits_60_1800();
     t.feed_step_percent = 0;  // every piece at its own feed: the check is per piece
     const FeedSchedule fs = schedule_feed(job, path, t);
-    const std::vector<double> h = chips_per_segment(job, fs.path);
+    const std::vector<double> h = test::chips_per_segment(job, fs.path);
     const auto& seg = fs.path.segments();
     std::size_t held = 0, free = 0;
     for (std::size_t k = 0; k < seg.size(); ++k) {

@@ -36,17 +36,6 @@ std::string program_of(Job job) {
   return write_gcode(job, plan_path(job).path, gcode_options(job.machine).write);
 }
 
-// Each segment's largest radial chip over the samples in it (mm), in the slot frame.
-std::vector<double> chips_per_segment(const Job& job, const ToolPath& path) {
-  const EngagementSeries e = compute_engagement(path, job);
-  std::vector<double> h(path.segments().size(), 0.0);
-  const double R = 0.5 * job.tool.diameter_mm;
-  for (std::size_t i = 1; i < e.samples.size(); ++i) {
-    h[e.samples.segment[i]] = std::max(h[e.samples.segment[i]], radial_chip_mm(e, i, R));
-  }
-  return h;
-}
-
 // The input's motion in the output: every input segment's end is an output segment's end, in
 // order (1e-6 mm), and the lengths agree (1e-6 relative: split points lie on the moves to the
 // written 9 places).
@@ -77,7 +66,7 @@ TEST(OptimizeFeed, HoldsTheTargetOnTheWagihPrograms) {
     const GcodeProgram out = read_gcode(r.text, "out.ngc", o.read);
     expect_same_motion(in.path, out.path);
     const ToolPath slot = to_slot_frame(out.path, slot_placement(job));
-    const std::vector<double> h = chips_per_segment(job, slot);
+    const std::vector<double> h = test::chips_per_segment(job, slot);
     const auto& seg = slot.segments();
     std::size_t held = 0, free = 0;
     for (std::size_t k = 0; k < seg.size(); ++k) {
@@ -109,7 +98,7 @@ TEST(OptimizeFeed, AStraightFullSlotKeepsItsFeed) {
   const FeedOptimizeResult r = optimize_feed(job, text, "slot.ngc", o);
   const GcodeProgram out = read_gcode(r.text, "out.ngc", o.read);
   const ToolPath slot = to_slot_frame(out.path, slot_placement(job));
-  const std::vector<double> h = chips_per_segment(job, slot);
+  const std::vector<double> h = test::chips_per_segment(job, slot);
   std::size_t full = 0;
   for (std::size_t k = 0; k < h.size(); ++k) {
     if (std::abs(h[k] - 0.075) > 1e-6) continue;  // full cut: the chip is the step

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "trochomill/engagement.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 
@@ -106,6 +107,18 @@ inline double distance_to_polyline(const PathSamples& s, const Vec3& q, std::siz
   for (std::size_t i = std::min(hint, hi); i-- > lo;) consider(i);
   hint = best_i;
   return best;
+}
+
+// Each segment's largest radial chip over the engagement's samples in it (mm): the chip the
+// analysis counts (engagement.hpp: radial_chip_mm), per segment of the path.
+inline std::vector<double> chips_per_segment(const Job& job, const ToolPath& path) {
+  const EngagementSeries e = compute_engagement(path, job);
+  std::vector<double> h(path.segments().size(), 0.0);
+  const double R = 0.5 * job.tool.diameter_mm;
+  for (std::size_t i = 1; i < e.samples.size(); ++i) {
+    h[e.samples.segment[i]] = std::max(h[e.samples.segment[i]], radial_chip_mm(e, i, R));
+  }
+  return h;
 }
 
 }  // namespace trochomill::test
