@@ -43,8 +43,8 @@ struct UnheldBlock {
 };
 
 struct FeedOptimizeResult {
-  std::string text;  ///< the rewritten program
-  FeedRewrite rewrite;
+  std::string text;     ///< the rewritten program
+  FeedRewrite rewrite;  ///< its counts (its text moved to `text`)
   std::size_t moves = 0, moves_split = 0;
   /// Programmed time (s) at the programmed feeds and rapid rate, and with the machine's
   /// acceleration limit (path.hpp: estimate_time_s; equal when [machine] max_acceleration is

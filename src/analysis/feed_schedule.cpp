@@ -246,15 +246,11 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     // The caps evaluated on the path as it is: they lower the allowed feeds where needed.
     std::vector<double> allowed = pc.allowed_feed;
     std::vector<FeedLimit> cap_limit(pieces.size(), FeedLimit::none);
+    if (targets.caps) targets.caps(current, allowed, cap_limit);
     bool cap_over = false;
-    if (it >= iterations && targets.caps) {
-      targets.caps(current, allowed, cap_limit);
-      for (std::size_t k = 0; k < pieces.size(); ++k) {
-        cap_over |= cap_limit[k] != FeedLimit::none && allowed[k] < 0.99 * pieces[k].feed &&
-                    pieces[k].feed > lo * (1 + 1e-9);
-      }
-    } else if (targets.caps) {
-      targets.caps(current, allowed, cap_limit);
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      cap_over |= cap_limit[k] != FeedLimit::none && allowed[k] < 0.99 * pieces[k].feed &&
+                  pieces[k].feed > lo * (1 + 1e-9);
     }
     if (it >= iterations && (!cap_over || it >= iterations + kCapRounds)) {
       out.h_max_after_mm = 0;

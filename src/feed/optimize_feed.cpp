@@ -156,22 +156,12 @@ std::vector<std::size_t> check_motion(const ToolPath& before, const ToolPath& af
 // The force model's series over a whole path (fast chips), at least 360 steps a revolution:
 // the peak of a short engagement arc falls between coarser steps (at the default 96 a cap
 // held at those steps was passed by 7 % at steps in between on Bergmann 2021's path; at 360
-// by 2 %). `phase_deg` turns every tooth by that angle (the spindle's angle when the program
-// starts, which no program fixes).
-ForceSeries path_forces(const Job& job, const ToolPath& path, const RunHooks& hooks,
-                        double phase_deg = 0) {
+// by 2 %).
+ForceSeries path_forces(const Job& job, const ToolPath& path, const RunHooks& hooks) {
   SimControl control;
   control.hooks = hooks;
   Job fine = job;
   fine.forces.fast_steps_per_rev = std::max(fine.forces.fast_steps_per_rev, 360);
-  if (phase_deg != 0) {
-    std::vector<double>& a = fine.tool.tooth_angles_deg;
-    if (a.empty()) {
-      for (int k = 0; k < fine.tool.teeth; ++k) a.push_back(360.0 * k / fine.tool.teeth);
-    }
-    for (double& v : a) v = std::fmod(v + phase_deg, 360.0);
-    std::sort(a.begin(), a.end());
-  }
   return job_forces(fine, path, 0.0, path.duration_s(), true, control).series;
 }
 
@@ -298,7 +288,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
 
   hooks.begin("rewriting");
   r.rewrite = rewrite_feeds(text, in.moves, feeds, options.read.dialect);
-  r.text = r.rewrite.text;
+  r.text = std::move(r.rewrite.text);  // one copy of the program: `text`
 
   // Read the result again: its motion is the input's, its feeds within the limits.
   hooks.begin("checking");
@@ -368,7 +358,8 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   r.time_after_accel_s = estimate_time_s(after, job.machine);
   hooks.begin("evaluating");
   const Chips cb = chips_of(job, slot_path, hooks);
-  const Chips ca = chips_of(job, to_slot_frame(after, placement), hooks);
+  const ToolPath after_slot = to_slot_frame(after, placement);
+  const Chips ca = chips_of(job, after_slot, hooks);
   r.cutting_time_before_s = cb.cutting_time_s;
   r.cutting_time_after_s = ca.cutting_time_s;
   r.h_before_mm = quantiles(cb.h_mm, cb.cut_dt_s);
@@ -378,10 +369,9 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   if (job.material.model) {
     r.forces = true;
     const ForceSeries fb = path_forces(job, slot_path, hooks);
-    const ForceSeries fa = path_forces(job, to_slot_frame(after, placement), hooks);
+    const ForceSeries fa = path_forces(job, after_slot, hooks);
     force_quantiles(fb, r.force_before_n, r.power_before_w, r.torque_before_nm);
     force_quantiles(fa, r.force_after_n, r.power_after_w, r.torque_after_nm);
-    const ToolPath after_slot = to_slot_frame(after, placement);
     for (const auto& [f, p, at, v] :
          {std::tuple{&fb, &slot_path, &r.force_s_before_mm, &r.force_before_series_n},
           std::tuple{&fa, &after_slot, &r.force_s_after_mm, &r.force_after_series_n}}) {
@@ -515,19 +505,18 @@ std::string feed_summary_text(const FeedOptimizeResult& r) {
   s += "MRR after       " +
        q(r.mrr_after, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} mm^3/min\n");
   if (r.forces) {
-    s += "F_R before      " +
-         q(r.force_before_n, "p50 {:.1f}  p90 {:.1f}  p99 {:.1f}  max {:.1f} N\n");
-    s += "F_R after       " +
-         q(r.force_after_n, "p50 {:.1f}  p90 {:.1f}  p99 {:.1f}  max {:.1f} N\n");
-    s += "power before    " +
-         q(r.power_before_w, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} W\n");
-    s += "power after     " +
-         q(r.power_after_w, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} W\n");
-    s += "torque before   " +
-         q(r.torque_before_nm, "p50 {:.2f}  p90 {:.2f}  p99 {:.2f}  max {:.2f} N m\n");
-    s += "torque after    " +
-         q(r.torque_after_nm, "p50 {:.2f}  p90 {:.2f}  p99 {:.2f}  max {:.2f} N m\n");
+    for (const auto& [name, before, after, f] :
+         {std::tuple{"F_R", &r.force_before_n, &r.force_after_n,
+                     "p50 {:.1f}  p90 {:.1f}  p99 {:.1f}  max {:.1f} N\n"},
+          std::tuple{"power", &r.power_before_w, &r.power_after_w,
+                     "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} W\n"},
+          std::tuple{"torque", &r.torque_before_nm, &r.torque_after_nm,
+                     "p50 {:.2f}  p90 {:.2f}  p99 {:.2f}  max {:.2f} N m\n"}}) {
+      s += fmt::format("{:<16}", fmt::format("{} before", name)) + q(*before, f);
+      s += fmt::format("{:<16}", fmt::format("{} after", name)) + q(*after, f);
+    }
   }
+
   s += fmt::format("feeds after     {:.1f} .. {:.1f} mm/min\n", r.min_feed_after_mm_per_min,
                    r.max_feed_after_mm_per_min);
   s += fmt::format(
