@@ -141,9 +141,11 @@ SimTool sim_tool(const Job& job, const SimSettings& s) {
     const double ar = deg_to_rad(a);
     t.tooth_angle_rad.push_back(ar);
     // Runout as an axis offset e at `phase` from tooth 0: tooth k's cutting radius grows by
-    // e cos(angle_k - phase) (first order in e / R); axial runout tilts likewise.
+    // e cos(angle_k - phase) (first order in e / R); axial runout lowers its tip by
+    // e_ax cos(angle_k - phase): the tooth at the phase cuts the largest radius and sits
+    // lowest (docs/models.md section 4, as the analysis's tooth tracks).
     t.radial_offset_mm.push_back(job.tool.runout_radial_mm * std::cos(ar - phase));
-    t.axial_offset_mm.push_back(job.tool.runout_axial_mm * std::cos(ar - phase));
+    t.axial_offset_mm.push_back(-job.tool.runout_axial_mm * std::cos(ar - phase));
   }
   const double w = rpm_to_rad_per_s(spindle_speed_rpm(job));
   t.omega_rad_per_s = job.cutting.spindle_direction == SpindleDirection::cw ? -w : w;
@@ -154,7 +156,7 @@ SimTool sim_tool(const Job& job, const SimSettings& s) {
   }
   for (std::size_t k = 0; k < job.tool.insert_axial_mm.size() && k < t.axial_offset_mm.size();
        ++k) {
-    t.axial_offset_mm[k] += job.tool.insert_axial_mm[k];
+    t.axial_offset_mm[k] -= job.tool.insert_axial_mm[k];  // positive seating: lower
   }
   t.segment_mm = s.segment_mm;
   t.sub_segments = s.sub_segments;
