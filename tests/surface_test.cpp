@@ -11,6 +11,7 @@
 
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/job.hpp"
 
 namespace trochomill {
 namespace {
@@ -81,6 +82,89 @@ std::vector<double> sinusoid(double amplitude, double wavelength, double dx, std
 // peaks and valleys are samples): Ra = 2A/pi (the sampled mean of |sin| is cot(pi / 2N) / N,
 // 2e-7 above it for N = 2000 samples a half period), Rq = A/sqrt 2 (exact on whole periods),
 // Rp = Rv = A, Rz = Rt = 2A, Rsk = 0, Rku = 3/2, RSm = the wavelength; each to 1e-6 relative
+
+// A straight cut along +y at x = 0 with a dished end face (no runout, sharp corner): a tooth's
+// end edge passes a point (0, y) of the centre line when it points along +y (the point ahead,
+// r = y - c_y) or -y (behind, r = c_y - y), at the closed-form times omega t + alpha_k =
+// +-pi/2 (mod 2 pi); there the edge lies (R - r) tan(dish) above the tip. The floor is the
+// least over those passes, computed here from the times alone. The profile finds the passes
+// from samples 37 a revolution (interpolating in 5 degree steps): the crossing time's error
+// is third order in the step, the height's below 1e-9 mm (tolerance 1e-9 mm).
+TEST(Surface, FloorOfAStraightCutIsTheClosedForm) {
+  Tool tool;
+  tool.diameter_mm = 10;
+  tool.teeth = 4;
+  tool.tooth_angles_deg = {0, 90, 180, 270};
+  tool.dish_angle_deg = 1.5;
+  const double R = 5, omega = -2000 * 2 * std::numbers::pi / 60;  // cw, 2000 rpm
+  const double v = 0.075 * 4 * 2000 / 60;                         // f_z 0.075 mm: 10 mm/s
+  const double t_end = 3;
+  PathSamples s;
+  const int n = static_cast<int>(t_end * 2000 / 60 * 37);
+  for (int i = 0; i <= n; ++i) {
+    const double t = t_end * i / n;
+    s.t_s.push_back(t);
+    s.x_mm.push_back(0);
+    s.y_mm.push_back(v * t);
+    s.z_mm.push_back(-1);
+  }
+  // Off the lattice of pass centres (a point exactly at a corner's reach r = R is a tie of
+  // rounding between the two).
+  const double y0 = 10.0001234, dy = 0.0005;
+  const std::size_t points = 4001;
+  const FloorProfile f = floor_profile(s, tool, omega, 0.0, y0, dy, points);
+  ASSERT_EQ(f.z_mm.size(), points);
+  // The closed form: every pass's centre and direction.
+  std::vector<std::pair<double, double>> passes;  // (centre y, +1 ahead / -1 behind)
+  const double tan_dish = std::tan(1.5 * std::numbers::pi / 180);
+  for (double alpha : tool.tooth_angles_deg) {
+    alpha *= std::numbers::pi / 180;
+    for (const double dir : {1.0, -1.0}) {
+      // omega t + alpha = dir pi / 2 + 2 pi m, t in [0, t_end]
+      for (int m = -200; m <= 200; ++m) {
+        const double t = (dir * std::numbers::pi / 2 + 2 * std::numbers::pi * m - alpha) / omega;
+        if (t >= 0 && t <= t_end) passes.push_back({v * t, dir});
+      }
+    }
+  }
+  ASSERT_GT(passes.size(), 700u);
+  double lo = 1e9, hi = -1e9;
+  for (std::size_t j = 0; j < points; ++j) {
+    const double y = y0 + dy * static_cast<double>(j);
+    double z = std::numeric_limits<double>::infinity();
+    for (const auto& [c, dir] : passes) {
+      const double r = dir * (y - c);
+      if (r >= 0 && r <= R) z = std::min(z, -1 + (R - r) * tan_dish);
+    }
+    ASSERT_NEAR(f.z_mm[j], z, 1e-9) << y;
+    lo = std::min(lo, z);
+    hi = std::max(hi, z);
+  }
+  // Marks, no deeper than a feed per tooth of dish (the next pass ahead or behind is at most
+  // f_z away).
+  EXPECT_GT(hi - lo, 0.1 * 0.075 * tan_dish);
+  EXPECT_LE(hi - lo, 0.075 * tan_dish + 1e-12);
+}
+
+// Without a dish the end face is flat: on a trochoidal cut with a corner radius, radial and
+// axial runout, the middle of the floor is the lowest tooth's tip height everywhere, exactly
+// (the flat reaches R - rc from the axis; every point there is passed by every tooth).
+TEST(Surface, FloorOfAFlatEndFaceIsFlatAtTheLowestTooth) {
+  Job job =
+      load_job(test::example("wagih2023/trochoidal.toml"),
+               {parse_override("tool.dish_angle=0"), parse_override("tool.corner_radius=0.5"),
+                parse_override("tool.runout_radial=0.01"),
+                parse_override("tool.runout_axial=0.004"), parse_override("tool.runout_phase=30")});
+  const ToolPath path = plan_path(job).path;
+  const PathSamples s = sample_by_spindle_angle(path, 36, 2000);
+  const double omega = -2000 * 2 * std::numbers::pi / 60;
+  const FloorProfile f = floor_profile(s, job.tool, omega, 0.0, 4.0, 0.002, 5001);
+  double lowest = 0;  // -e_ax cos(alpha_k - 30 deg) at its least: the tooth at 0 degrees
+  for (const double a : job.tool.tooth_angles_deg) {
+    lowest = std::min(lowest, -0.004 * std::cos((a - 30) * std::numbers::pi / 180));
+  }
+  for (const double z : f.z_mm) ASSERT_EQ(z, -6.0 + lowest);
+}
 // (Rsk to 1e-9 absolute: odd moments cancel to rounding).
 TEST(Texture, SinusoidParametersMatchTheirClosedForms) {
   const double A = 0.002, lambda = 0.1, dx = lambda / 4000;

@@ -284,6 +284,15 @@ void bind_models(py::module_& m) {
         if (pm.periodic && pm.texture_left) walls["left"] = profile_arrays(*pm.texture_left);
         if (pm.periodic && pm.texture_right) walls["right"] = profile_arrays(*pm.texture_right);
         out["wall_texture_profiles"] = walls;
+        py::dict floor;  // the floor's lines, as the JSON reports their texture
+        const char* lines[] = {"left", "middle", "right"};
+        for (std::size_t k = 0; k < 3; ++k) {
+          if (!pm.texture_floor[k]) continue;
+          py::dict d = profile_arrays(*pm.texture_floor[k]);
+          d["line_x_mm"] = pm.floor[k].x_mm;
+          floor[lines[k]] = d;
+        }
+        out["floor_texture_profiles"] = floor;
         return out;
       },
       py::arg("job"), py::kw_only(), py::arg("memory_limit_gb") = py::none(),
@@ -296,7 +305,9 @@ _mm3_per_min; cycle_* keys None when the path has no steady cycle) and "series":
 arrays t_s, x_mm, y_mm, z_mm, engagement_deg, h_max_mm, mrr_mm3_per_min,
 radial_engagement_mm and the int32 array teeth_in_cut, one entry per sample;
 "wall_texture_profiles": per wall ("left", "right") the predicted R and W profiles the wall
-texture was evaluated on (x_mm along the feed, roughness_mm, waviness_mm).
+texture was evaluated on (x_mm along the feed, roughness_mm, waviness_mm);
+"floor_texture_profiles": the same for the floor's lines ("left", "middle", "right", beside
+each wall and in the middle, at x = line_x_mm across the slot).
 progress: None or callable(phase: str, done: int, total: int).)");
 
   m.def(

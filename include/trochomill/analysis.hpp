@@ -11,6 +11,7 @@
 // third of its cutting time as its window, and `periodic` is false.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <optional>
 #include <string>
@@ -68,6 +69,15 @@ struct ProcessMetrics {
   /// profile.
   std::optional<ProfileTexture> texture_left, texture_right;
   ImprintDensity imprint;
+  /// The floor along the slot (y) beside the left wall, in the middle and beside the right
+  /// wall (x = -(W/2 - D/4), 0, W/2 - D/4: where Wagih 2023 Section 3 measured the bottom's
+  /// Ra), left by the end edges over the whole program (surface.hpp floor_profile), between
+  /// half a tool radius inside the slot's ends and the tool centre's reach at the floor, and
+  /// each one's texture along the feed (ISO 21920-3 default cut-off for its Ra; absent where
+  /// less than three 0.8 mm cut-offs were cut). A flat end face (tool.dish_angle 0) without
+  /// axial runout leaves a flat floor (zero texture).
+  std::array<FloorProfile, 3> floor;
+  std::array<std::optional<ProfileTexture>, 3> texture_floor;
 
   // Performance index (Wagih Eq. 7): F_R,max from [measured] or the force model, Ra from
   // [measured] or the walls' predicted texture (the larger), W_max from [measured] or the

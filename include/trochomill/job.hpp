@@ -33,11 +33,12 @@ struct Tool {
   int teeth = 0;                       ///< number of teeth Z
   double helix_angle_deg = 0;          ///< helix angle (degrees)
   double corner_radius_mm = 0;         ///< corner radius (mm), 0 for a square end mill
-  double edge_radius_mm = 0;           ///< cutting-edge rounding radius r_e (mm)
-  double flute_length_mm = 0;          ///< flute length (mm); 0 = not given
-  double runout_radial_mm = 0;         ///< radial runout: axis offset e (mm)
-  double runout_axial_mm = 0;          ///< axial runout (mm)
-  double runout_phase_deg = 0;         ///< angle of the runout offset relative to tooth 0 (degrees)
+  double dish_angle_deg = 0;  ///< end edges' dish angle: rise from the corner to the axis (degrees)
+  double edge_radius_mm = 0;  ///< cutting-edge rounding radius r_e (mm)
+  double flute_length_mm = 0;   ///< flute length (mm); 0 = not given
+  double runout_radial_mm = 0;  ///< radial runout: axis offset e (mm)
+  double runout_axial_mm = 0;   ///< axial runout (mm)
+  double runout_phase_deg = 0;  ///< angle of the runout offset relative to tooth 0 (degrees)
   std::vector<double> tooth_angles_deg;  ///< tooth angular positions (degrees); Z equal pitches
                                          ///< when empty in the file (filled by load)
   int tool_number = 1;                   ///< T word for the tool change

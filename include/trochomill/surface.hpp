@@ -58,6 +58,25 @@ struct ImprintDensity {
                                                     double radius_mm, double half_width_mm,
                                                     double advance_mm, int points);
 
+/// The floor the teeth's end edges leave along the line x = x_mm (mm, the samples' frame):
+/// heights z_mm (mm) at y_from_mm + j dy_mm, the lowest any end edge passed each point at
+/// (NaN where none did: the point was not cut). Tooth k's end edge runs from the tool's axis
+/// (the centre plus the radial runout, docs/models.md section 4) out along the tooth's
+/// angle to its radius R_k (R plus its radial seating); at distance r from the axis it lies
+/// (R_k - rc - r) tan(dish) above the tooth's tip for r <= R_k - rc and on the corner arc
+/// of radius rc beyond; the tip at the sample's z less the axial runout's e_ax cos(alpha_k -
+/// lambda) and the axial seating. Between samples the centre moves linearly; a point is cut
+/// where an edge's direction passes it (found in steps of at most 5 degrees of spindle
+/// rotation, linear in between). `omega_rad_per_s` is the signed spindle speed (negative:
+/// clockwise seen from +z). Throws InputError on a bad grid or tool.
+struct FloorProfile {
+  double x_mm = 0, y_from_mm = 0, dy_mm = 0;
+  std::vector<double> z_mm;
+};
+[[nodiscard]] FloorProfile floor_profile(const PathSamples& samples, const Tool& tool,
+                                         double omega_rad_per_s, double x_mm, double y_from_mm,
+                                         double dy_mm, std::size_t points);
+
 // ---- surface texture of a profile (ISO 16610-21 filter, ISO 21920-2 parameters) ----------
 
 /// How the Gaussian filter treats the profile's ends, where its weighting function (+-lambda)

@@ -1,5 +1,6 @@
 // Process metrics of a slot program: see include/trochomill/analysis.hpp.
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -170,6 +171,78 @@ ToothChip tooth_chip(const DenseCentre& c, const Tool& tool, double omega, doubl
   const double disc = R * R - (ox * ox + oy * oy - tt * tt);
   out.translation_mm = disc >= 0 ? R - (tt + std::sqrt(disc)) : R;
   return out;
+}
+
+// The floor beside each wall and in the middle (ProcessMetrics::floor), from the whole
+// program's samples, and its texture: over a run-in, five cut-offs and a run-out in the middle
+// of the cut stretch (ISO 21920-3's traverse), 0.8 mm ones first and longer ones where the Ra
+// found asks for them and the slot holds them.
+void predict_floor(const Job& job, const PathSamples& s, double omega, ProcessMetrics& m) {
+  const double R = job.tool.radius_mm(), W = job.slot.width_mm, depth = job.slot.depth_mm;
+  double ylo = std::numeric_limits<double>::infinity(), yhi = -ylo;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s.z_mm[i] <= -depth + 1e-6) {
+      ylo = std::min(ylo, s.y_mm[i]);
+      yhi = std::max(yhi, s.y_mm[i]);
+    }
+  }
+  const double from = std::max(0.0, ylo) + 0.5 * R;
+  const double to = std::min(job.slot.length_mm, yhi) - 0.5 * R;
+  if (!(to - from >= 3 * 0.08)) return;  // a run-in, a sampling length and a run-out
+  const double beside = 0.5 * W - 0.5 * R;
+  const std::array<double, 3> xs = {-beside, 0.0, beside};
+  tbb::parallel_for(std::size_t{0}, xs.size(), [&](std::size_t k) {
+    // ISO 21920-3's default cut-off from Ra, found from the shortest (0.08 mm) up: the floor
+    // is computed over a run-in, five cut-offs and a run-out (7 lc) in the middle of the cut
+    // stretch, longer only when the Ra found asks for a longer cut-off.
+    for (double lc = 0.08;;) {
+      // ISO 21920-3 (as ISO 3274 before it): a lambda_s of 2.5 um up to the 0.8 mm cut-off
+      // 8 um at 2.5 mm and 25 um at 8 mm, sampled lambda_s / 5 apart (at most 2e5 points). Marks
+      // finer than lambda_s (dense imprints in the middle of a slot) are what an instrument
+      // filters out too.
+      const double ls = lc <= 0.8 ? 0.0025 : (lc <= 2.5 ? 0.008 : 0.025);
+      const double length = std::min(to - from, 7 * lc), mid = 0.5 * (from + to);
+      if (length < 3 * lc) return;  // not even a run-in, one sampling length and a run-out
+      const double dy = std::max(ls / 5, length / 2e5);
+      const auto points = static_cast<std::size_t>(std::floor(length / dy)) + 1;
+      m.floor[k] = floor_profile(s, job.tool, omega, xs[k], mid - 0.5 * length, dy, points);
+      // The longest run of cut points, heights above its lowest.
+      const std::vector<double>& z = m.floor[k].z_mm;
+      std::size_t best = 0, best_len = 0;
+      for (std::size_t i = 0; i < z.size();) {
+        std::size_t j = i;
+        while (j < z.size() && !std::isnan(z[j])) ++j;
+        if (j - i > best_len) {
+          best = i;
+          best_len = j - i;
+        }
+        i = j + 1;
+      }
+      if (static_cast<double>(best_len) * dy < 3 * lc) {
+        m.texture_floor[k].reset();
+        return;
+      }
+      std::vector<double> run(z.begin() + static_cast<std::ptrdiff_t>(best),
+                              z.begin() + static_cast<std::ptrdiff_t>(best + best_len));
+      const double lowest = *std::min_element(run.begin(), run.end());
+      for (double& v : run) v -= lowest;
+      ProfileFilterOptions o;
+      o.lambda_s_mm = ls;
+      m.texture_floor[k] = profile_texture(run, dy, lc, o);
+      const double wanted = default_cutoff_mm(m.texture_floor[k]->roughness.ra_mm);
+      if (wanted <= lc) {
+        m.texture_floor[k]->cutoff_source = "ISO 21920-3 default from Ra";
+        return;
+      }
+      if (7 * lc >= to - from) {
+        m.texture_floor[k]->cutoff_source = fmt::format(
+            "{:g} mm: the cut floor is too short for the {:g} mm ISO 21920-3 default from its Ra",
+            lc, wanted);
+        return;
+      }
+      lc = wanted;
+    }
+  });
 }
 
 }  // namespace
@@ -535,6 +608,8 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
       m.imprint = bottom_imprint_density(xs, R, 0.5 * W, advance, job.analysis.imprint_points);
     }
   }
+
+  predict_floor(job, s, omega, m);
 
   // Exact chip between adjacent teeth's tip trajectories, at the angle of each sample's
   // h_max where the previous tooth's circle bounds it (elsewhere the older surface does and

@@ -222,6 +222,9 @@ std::vector<Key> build_schema() {
              FIELD(tool.helix_angle_deg), "helix angle"),
       number("tool", "corner_radius", "mm", non_negative(), FIELD(tool.corner_radius_mm),
              "corner radius (0: square end mill; at most D/2)"),
+      number("tool", "dish_angle", "degrees", Range{0, 10, true, false}, FIELD(tool.dish_angle_deg),
+             "the end edges' dish (concavity) angle: each end edge rises by it from the corner "
+             "towards the axis (0: a flat end face; the floor's predicted texture)"),
       number("tool", "edge_radius", "mm", non_negative(), FIELD(tool.edge_radius_mm),
              "cutting-edge rounding radius r_e (below D/10)"),
       number("tool", "flute_length", "mm", non_negative(), FIELD(tool.flute_length_mm),

@@ -236,6 +236,9 @@ json walls_part(const ReportData& d) {
   if (m.texture_right && !m.texture_right->roughness_profile_mm.empty()) {
     out["texture_right"] = texture_profile(*m.texture_right);
   }
+  if (m.texture_floor[1] && !m.texture_floor[1]->roughness_profile_mm.empty()) {
+    out["texture_floor"] = texture_profile(*m.texture_floor[1]);
+  }
   return out;
 }
 

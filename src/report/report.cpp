@@ -23,18 +23,23 @@ struct Scalar {
   bool cycle = false;
 };
 
-// The walls' texture keys (left and right) and how to read one from a ProfileTexture.
+// The texture keys of the walls (left and right) and of the floor's middle, and how to read
+// one from a ProfileTexture.
 struct TextureKey {
   const char* left;
   const char* right;
+  const char* floor;
   double (*get)(const ProfileTexture&);
 };
 const TextureKey kTextureKeys[] = {
-    {"ra_left_mm", "ra_right_mm", [](const ProfileTexture& t) { return t.roughness.ra_mm; }},
-    {"rz_left_mm", "rz_right_mm", [](const ProfileTexture& t) { return t.roughness.rz_mm; }},
-    {"wa_left_mm", "wa_right_mm", [](const ProfileTexture& t) { return t.wa_mm; }},
-    {"wt_left_mm", "wt_right_mm", [](const ProfileTexture& t) { return t.wt_mm; }},
-    {"lambda_c_left_mm", "lambda_c_right_mm", [](const ProfileTexture& t) { return t.cutoff_mm; }},
+    {"ra_left_mm", "ra_right_mm", "ra_floor_mm",
+     [](const ProfileTexture& t) { return t.roughness.ra_mm; }},
+    {"rz_left_mm", "rz_right_mm", "rz_floor_mm",
+     [](const ProfileTexture& t) { return t.roughness.rz_mm; }},
+    {"wa_left_mm", "wa_right_mm", "wa_floor_mm", [](const ProfileTexture& t) { return t.wa_mm; }},
+    {"wt_left_mm", "wt_right_mm", "wt_floor_mm", [](const ProfileTexture& t) { return t.wt_mm; }},
+    {"lambda_c_left_mm", "lambda_c_right_mm", "lambda_c_floor_mm",
+     [](const ProfileTexture& t) { return t.cutoff_mm; }},
 };
 
 const std::vector<Scalar>& scalars() {
@@ -100,6 +105,16 @@ const std::vector<Scalar>& scalars() {
                    },
                    true});
     }
+    // The floor's texture (whole program): the middle's, and Ra beside each wall. NaN where
+    // too little of the line was cut.
+    auto floor = [](std::size_t k, double (*get)(const ProfileTexture&)) {
+      return [k, get](const ProcessMetrics& m) {
+        return m.texture_floor[k] ? get(*m.texture_floor[k]) : std::nan("");
+      };
+    };
+    for (const TextureKey& k : kTextureKeys) v.push_back({k.floor, floor(1, k.get)});
+    v.push_back({"ra_floor_left_mm", floor(0, kTextureKeys[0].get)});
+    v.push_back({"ra_floor_right_mm", floor(2, kTextureKeys[0].get)});
     return v;
   }();
   return s;
@@ -184,6 +199,17 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
   out += fmt::format("  h_max                {:.5f} mm at {:.4f} s (f_z {:.4g} mm)\n",
                      m.h_max_slot_mm, m.t_h_max_slot_s, m.feed_per_tooth_mm);
   out += fmt::format("  engagement max       {:.2f} deg\n", m.engagement_angle_max_slot_deg);
+  if (m.texture_floor[1]) {
+    const auto ra = [&](std::size_t k) {
+      return m.texture_floor[k] ? fmt::format("{:.3f}", 1000 * m.texture_floor[k]->roughness.ra_mm)
+                                : std::string("-");
+    };
+    out += fmt::format(
+        "  floor texture        Ra {} um, Rz {:.3f} um, Wt {:.3f} um in the middle (lambda_c {:g} "
+        "mm); Ra {} / {} um beside the left / right wall (end edges' dish {:g} deg)\n",
+        ra(1), 1000 * m.texture_floor[1]->roughness.rz_mm, 1000 * m.texture_floor[1]->wt_mm,
+        m.texture_floor[1]->cutoff_mm, ra(0), ra(2), job.tool.dish_angle_deg);
+  }
   if (!m.periodic) {
     out +=
         "  steady cycle         none (the path does not repeat with the step): whole-program "

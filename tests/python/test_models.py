@@ -32,12 +32,18 @@ def test_analyze_is_the_clis(wagih, overrides):
     result = tm.analyze(job)
     series = result.pop("series")
     walls = result.pop("wall_texture_profiles")
+    floor = result.pop("floor_texture_profiles")
     assert result == cli_json("analyze", wagih, *sets(overrides))
-    # The predicted walls' Ra is the mean |R| of the profile they were evaluated on.
+    # The predicted walls' and floor's Ra is the mean |R| of the profile they were evaluated on.
     for side in ("left", "right"):
         r = walls[side]["roughness_mm"]
         assert np.mean(np.abs(r)) == pytest.approx(result[f"ra_{side}_mm"], rel=1e-12)
         assert len(walls[side]["x_mm"]) == len(r) == len(walls[side]["waviness_mm"])
+    for line, key in (("left", "ra_floor_left_mm"), ("middle", "ra_floor_mm"),
+                      ("right", "ra_floor_right_mm")):
+        r = floor[line]["roughness_mm"]  # heights about their mean (ISO 21920-2)
+        assert np.mean(np.abs(r - np.mean(r))) == pytest.approx(result[key], rel=1e-9)
+    assert floor["middle"]["line_x_mm"] == 0.0
     csv = cli_csv("analyze", wagih, *sets(overrides))
     for name in ["t_s", "x_mm", "y_mm", "z_mm", "engagement_deg", "h_max_mm", "teeth_in_cut",
                  "mrr_mm3_per_min"]:
@@ -55,6 +61,7 @@ def test_analyze_a_job_without_a_steady_cycle(wagih):
     result = tm.analyze(job)
     assert result["cycle_h_max_mm"] is None
     result.pop("series")
+    result.pop("floor_texture_profiles")
     walls = result.pop("wall_texture_profiles")
     for side in ("left", "right"):  # profiles exactly where the JSON has a wall texture
         assert (side in walls) == (result[f"ra_{side}_mm"] is not None)

@@ -558,7 +558,7 @@ function engagementPart() {
 
 function wallsPart() {
   const w = data.walls;
-  const sec = section('walls', 'Walls and floor', 'Wall profiles along the feed over one period of the steady state: path level (envelope of the tool circles) and tooth level (envelope of the tooth tips), with their waviness; the predicted wall texture (ISO 16610-21 mean line); the floor imprint density (Wagih 2023 Figs. 21-22).');
+  const sec = section('walls', 'Walls and floor', 'Wall profiles along the feed over one period of the steady state: path level (envelope of the tool circles) and tooth level (envelope of the tooth tips), with their waviness; the predicted wall texture and the floor texture in the middle of the slot (ISO 16610-21 mean line); the floor imprint density (Wagih 2023 Figs. 21-22).');
   const cols = el('div', { class: 'columns' });
   sec.append(cols);
   for (const side of ['left', 'right']) {
@@ -569,12 +569,16 @@ function wallsPart() {
     linePlot(fig, { x: j[0], xLabel: 'y along the feed (mm)', axes: { y: 'wall x (mm)' }, height: 240,
       series: [{ label: 'path level', values: j[1], spanGaps: true }, { label: 'tooth level', values: j[2], spanGaps: true }] });
   }
-  for (const side of ['left', 'right']) {
+  for (const side of ['left', 'right', 'floor']) {
     const t = w[`texture_${side}`];
     if (!t) continue;
-    const fig = figure(cols, `texture-${side}`, `${side} wall texture`, `Ra ${fmtNum(t.ra_mm * 1000, 4)} µm, Rz ${fmtNum(t.rz_mm * 1000, 4)} µm, Wt ${fmtNum(t.wt_mm * 1000, 4)} µm; λc ${fmtNum(t.cutoff_mm)} mm (${t.cutoff_source})`);
-    linePlot(fig, { x: t.y_mm, xLabel: 'evaluation length (mm)', axes: { y: 'height (mm)' }, height: 240,
-      series: [{ label: 'primary profile', values: t.primary_mm }, { label: 'mean line (W)', values: t.mean_line_mm, width: 2 }] });
+    const title = side === 'floor' ? 'floor texture (middle of the slot, along the feed; the end edges\' passes)' : `${side} wall texture`;
+    const fig = figure(cols, `texture-${side}`, title, `Ra ${fmtNum(t.ra_mm * 1000, 4)} µm, Rz ${fmtNum(t.rz_mm * 1000, 4)} µm, Wt ${fmtNum(t.wt_mm * 1000, 4)} µm; λc ${fmtNum(t.cutoff_mm)} mm (${t.cutoff_source})`);
+    // The floor's marks are fractions of a micrometre: shown in µm (heights above its lowest).
+    const um = side === 'floor', k = um ? 1000 : 1;
+    linePlot(fig, { x: t.y_mm, xLabel: 'evaluation length (mm)', axes: { y: um ? 'height (µm)' : 'height (mm)' }, height: 240,
+      series: [{ label: 'primary profile', values: t.primary_mm.map((v) => (v == null ? v : v * k)) },
+        { label: 'mean line (W)', values: t.mean_line_mm.map((v) => (v == null ? v : v * k)), width: 2 }] });
   }
   if (w.imprint.x_mm.length) {
     const fig = figure(sec, 'imprint', 'Floor imprint density', 'tooth-pass circles crossing each line x = const, per mm of slot length');
