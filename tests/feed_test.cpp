@@ -279,6 +279,22 @@ TEST(OptimizeFeed, ForceAndTorqueCapsHold) {
   EXPECT_LE(fmax, *o.force_n * 1.03);
   EXPECT_LE(tmax, *o.torque_nm * 1.03);
   EXPECT_GT(r.share_force + r.share_torque, 0.0);  // the caps bind somewhere
+  // A cap the minimum feed cannot hold (a twentieth of the peak force with the minimum feed
+  // at half the programmed one: the force falls as h^(1 - m) at most, to over half) is
+  // refused with the blocks that break it, nothing returned.
+  FeedOptimizeOptions tight = o;
+  tight.torque_nm.reset();
+  tight.force_n = 0.05 * free_run.force_after_n.max;
+  tight.targets.min_feed_mm_per_min = 0.5 * feed_rate_mm_per_min(job);
+  try {
+    (void)optimize_feed(job, text, "b.ngc", tight);
+    ADD_FAILURE() << "an unreachable force cap was accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the force cap of"), std::string::npos) << what;
+    EXPECT_NE(what.find("cannot be held"), std::string::npos) << what;
+    EXPECT_NE(what.find("b.ngc:"), std::string::npos) << what;
+  }
   // Without a [material] model the caps are refused.
   Job bare = test::straight_job(10.0);
   FeedOptimizeOptions ob;

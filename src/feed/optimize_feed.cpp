@@ -366,15 +366,17 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   r.h_after_mm = quantiles(ca.h_mm, ca.cut_dt_s);
   r.mrr_before = quantiles(cb.mrr, cb.cut_dt_s);
   r.mrr_after = quantiles(ca.mrr, ca.cut_dt_s);
+  ForceSeries fa;  // the rewritten program's forces (with a model)
   if (job.material.model) {
     r.forces = true;
     const ForceSeries fb = path_forces(job, slot_path, hooks);
-    const ForceSeries fa = path_forces(job, after_slot, hooks);
+    fa = path_forces(job, after_slot, hooks);
     force_quantiles(fb, r.force_before_n, r.power_before_w, r.torque_before_nm);
     force_quantiles(fa, r.force_after_n, r.power_after_w, r.torque_after_nm);
     for (const auto& [f, p, at, v] :
          {std::tuple{&fb, &slot_path, &r.force_s_before_mm, &r.force_before_series_n},
-          std::tuple{&fa, &after_slot, &r.force_s_after_mm, &r.force_after_series_n}}) {
+          std::tuple{static_cast<const ForceSeries*>(&fa), &after_slot, &r.force_s_after_mm,
+                     &r.force_after_series_n}}) {
       at->resize(f->size());
       v->resize(f->size());
       for (std::size_t i = 0; i < f->size(); ++i) {
@@ -418,6 +420,83 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
     u.feed_mm_per_min = ca.feed[i];
   }
   for (auto& [key, u] : unheld) r.unheld.push_back(std::move(u));
+
+  // Caps the minimum feed cannot hold (a full slot whose edge forces alone exceed a force
+  // cap, say) are refused: a program above a hard cap is not written. 3 %: the schedule's
+  // tolerance, as for the chip.
+  struct Over {
+    const char* what;
+    const char* unit;
+    double cap;
+    std::map<std::pair<std::size_t, std::size_t>, double> blocks;  // (file, line) -> largest
+    double feed = 0;
+  };
+  std::vector<Over> overs;
+  auto block_of = [&](std::size_t after_segment) -> const GcodeMove* {
+    if (limit_of[after_segment] != FeedLimit::min_feed) return nullptr;
+    const auto it = move_of_segment.find(input_segment[after_segment]);
+    return it == move_of_segment.end() ? nullptr : &in.moves[it->second];
+  };
+  if (options.targets.mrr_mm3_per_min) {
+    Over o{"removal rate cap", "mm^3/min", *options.targets.mrr_mm3_per_min, {}, 0};
+    for (std::size_t i = 0; i < ca.mrr.size(); ++i) {
+      if (!(ca.mrr[i] > o.cap * 1.03)) continue;
+      if (const GcodeMove* m = block_of(ca.segment[i])) {
+        double& v = o.blocks[{m->source, m->line}];
+        v = std::max(v, ca.mrr[i]);
+        o.feed = ca.feed[i];
+      }
+    }
+    overs.push_back(std::move(o));
+  }
+  if (r.forces) {
+    const std::tuple<const char*, const char*, std::optional<double>, int> caps[] = {
+        {"force cap", "N", options.force_n, 0},
+        {"power cap", "W", options.power_w, 1},
+        {"torque cap", "N m", options.torque_nm, 2}};
+    for (const auto& [what, unit, cap, kind] : caps) {
+      if (!cap) continue;
+      Over o{what, unit, *cap, {}, 0};
+      for (std::size_t i = 0; i < fa.size(); ++i) {
+        const double v = kind == 0   ? fa.resultant_n(i)
+                         : kind == 1 ? std::abs(fa.power_w[i])
+                                     : std::abs(fa.torque_nm[i]);
+        if (!(v > *cap * 1.03)) continue;
+        const std::size_t k = after_slot.segment_at_time(fa.t_s[i]);
+        if (const GcodeMove* m = block_of(k)) {
+          double& b = o.blocks[{m->source, m->line}];
+          b = std::max(b, v);
+          o.feed = after_slot.segments()[k].speed_mm_per_min();
+        }
+      }
+      overs.push_back(std::move(o));
+    }
+  }
+  for (const Over& o : overs) {
+    if (o.blocks.empty()) continue;
+    std::string where;
+    std::size_t shown = 0;
+    for (const auto& [key, v] : o.blocks) {
+      if (shown++ == 8) {
+        where += fmt::format(" and {} more", o.blocks.size() - 8);
+        break;
+      }
+      const GcodeMove* m = nullptr;
+      for (const GcodeMove& mv : in.moves) {
+        if (mv.source == key.first && mv.line == key.second) {
+          m = &mv;
+          break;
+        }
+      }
+      where += fmt::format("{}{}:{} ({:.4g} {})", shown > 1 ? ", " : "", m ? m->file : "?",
+                           key.second, v, o.unit);
+    }
+    throw InputError(fmt::format(
+        "optimize-feed: the {} of {:g} {} cannot be held: at the minimum feed ({:g} mm/min) "
+        "the program still reaches more in {} block(s): {}; raise the cap or lower the minimum "
+        "feed (--min-feed, [machine] min_feed)",
+        o.what, o.cap, o.unit, o.feed, o.blocks.size(), where));
+  }
   return r;
 }
 
