@@ -335,6 +335,35 @@ TEST(Analysis, FloorAgainstAPointwiseSearch) {
   EXPECT_GT(m.texture_floor[2]->roughness.ra_mm, 2 * m.texture_floor[1]->roughness.ra_mm);
 }
 
+// Two levels of a full slot (2.5D): a pass at z = -1, a plunge outside the stock to z = -2
+// and a pass back. The second pass cuts the layer under the first: at every tooth pass inside
+// the slot its chip is the full slot's f_z exactly (as the first pass's, closed form as in
+// StraightFullImmersion), not the air the first pass left above it; the plunge from the first
+// level's end is outside the stock.
+TEST(Analysis, TwoLevelsEachCutTheirOwnLayer) {
+  const Job job = test::straight_job(10.0);
+  const GcodeProgram prog = read_gcode(
+      "G21 G90 G17 G94\nG0 X0 Y-10 Z5\nG1 Z-1 F600\nG1 Y50\nG1 Z-2\nG1 Y-10\nG0 Z5\nM2\n",
+      "levels.ngc");
+  EngagementOptions opt;
+  opt.steps_per_tooth = 1;
+  const EngagementSeries e = compute_engagement(prog.path, job, opt);
+  const PathSamples& s = e.samples;
+  std::size_t first = 0, second = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s.y_mm[i] < 5 || s.y_mm[i] > 35) continue;  // inside the slot, clear of its ends
+    if (std::abs(s.z_mm[i] + 1) < 1e-9) {
+      ++first;
+      EXPECT_NEAR(e.h_max_mm[i], 0.075, 1e-9) << s.y_mm[i];
+    } else if (std::abs(s.z_mm[i] + 2) < 1e-9) {
+      ++second;
+      EXPECT_NEAR(e.h_max_mm[i], 0.075, 1e-9) << s.y_mm[i];
+    }
+  }
+  EXPECT_GT(first, 300u);
+  EXPECT_GT(second, 300u);
+}
+
 TEST(Analysis, RejectsPathsThatNeverCut) {
   const Job job = test::straight_job(10.0);
   ToolPath p;

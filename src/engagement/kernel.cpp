@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <utility>
 
 #include "trochomill/engagement.hpp"
@@ -628,23 +629,73 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     by0 = std::min(by0, smp.y_mm[i]);
     by1 = std::max(by1, smp.y_mm[i]);
   }
-  Removed removed(R, bx0, by0, bx1, by1);
+  // The removed region per Z level (2.5D). A level is the height of horizontal cutting
+  // moves; its region holds the discs of the positions since the tool came down to it. A
+  // position deeper than the current level (a ramp, plunge or helix to the next one, or the
+  // next level's first pass) starts a new, empty region: the material under the level above
+  // is untouched, so the descent is a plunge (its feed kept) and the new level's first pass
+  // cuts a full chip. A horizontal move at a level above the current one (back up) continues
+  // that level's region, or a new one: without the deeper levels' discs it sees more stock
+  // than there is (a chip too thick, slower feeds: the safe side). One level (a slot, an entry
+  // helix down to it) is one region, as before levels. docs/models.md section 7.
+  constexpr double kLevelTol = 1e-4;  // mm: heights within it are one level
+  struct Level {
+    double z_mm;  // NaN until its first horizontal cutting position
+    std::unique_ptr<Removed> removed;
+  };
+  std::vector<Level> levels;
+  Removed* current = nullptr;
+  double current_z = std::numeric_limits<double>::quiet_NaN();
+  auto region_of = [&](std::size_t i) -> Removed* {
+    const double z = smp.z_mm[i];
+    const bool flat = std::abs(smp.tz[i]) < 1e-9;
+    const bool deeper = !std::isnan(current_z) && z < current_z - kLevelTol;
+    const bool higher = flat && !std::isnan(current_z) && z > current_z + kLevelTol;
+    if (!current || deeper || higher) {
+      Removed* found = nullptr;
+      if (higher) {
+        for (Level& l : levels) {
+          if (std::abs(l.z_mm - z) <= kLevelTol) found = l.removed.get();
+        }
+      }
+      if (!found) {
+        levels.push_back({std::numeric_limits<double>::quiet_NaN(),
+                          std::make_unique<Removed>(R, bx0, by0, bx1, by1)});
+        found = levels.back().removed.get();
+      }
+      current = found;
+      current_z = std::numeric_limits<double>::quiet_NaN();
+      for (Level& l : levels) {
+        if (l.removed.get() == current) current_z = l.z_mm;
+      }
+    }
+    if (flat && std::isnan(current_z)) {
+      current_z = z;
+      for (Level& l : levels) {
+        if (l.removed.get() == current) l.z_mm = z;
+      }
+    }
+    return current;
+  };
+  std::vector<Removed*> home(n, nullptr);  // each cutting position's region
   ChipQuery chip(R);
   std::vector<ArcSet> pending(n);  // exposed arcs of discs waiting for insertion (lag m)
   auto cutting = [&](std::size_t i) { return smp.z_mm[i] < 0; };
 
   for (std::size_t i = 0; i < n; ++i) {
     opt.hooks.step(i, n);
-    // The surface the previous tooth left: discs up to i - m.
+    if (cutting(i)) home[i] = region_of(i);
+    // The surface the previous tooth left: discs up to i - m, in their own regions.
     if (i >= static_cast<std::size_t>(m)) {
       const std::size_t k = i - m;
       if (cutting(k)) {
-        ArcSet e = m == 1 ? std::move(pending[k]) : removed.outside(smp.x_mm[k], smp.y_mm[k]);
-        removed.insert(smp.x_mm[k], smp.y_mm[k], std::move(e));
+        ArcSet e = m == 1 ? std::move(pending[k]) : home[k]->outside(smp.x_mm[k], smp.y_mm[k]);
+        home[k]->insert(smp.x_mm[k], smp.y_mm[k], std::move(e));
       }
     }
     if (!cutting(i)) continue;
     const double cx = smp.x_mm[i], cy = smp.y_mm[i];
+    const Removed& removed = *home[i];
     ArcSet free = removed.outside(cx, cy);
     if (m == 1) pending[i] = free;
     ArcSet eng =
