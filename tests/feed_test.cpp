@@ -109,6 +109,29 @@ TEST(OptimizeFeed, AStraightFullSlotKeepsItsFeed) {
   EXPECT_NEAR(r.h_after_mm.max, 0.075, 0.075 * 1e-4);
 }
 
+// A full slot cut in two levels (z = -1, then -2 after a plunge outside the stock): the second
+// level cuts the layer under the first, so inside the slot both keep the target feed (600
+// mm/min, f_z 0.075 mm); treated as one level the second ran at the air feed.
+TEST(OptimizeFeed, EachLevelOfA25DProgramKeepsItsChip) {
+  const Job job = test::straight_job(10.0);
+  const std::string text =
+      "G21 G90 G17 G94\nG0 X0 Y-10 Z5\nG1 Z-1 F600\nG1 Y50\nG1 Z-2\nG1 Y-10\nG0 Z5\nM2\n";
+  const FeedOptimizeOptions o = options_60_1800(job);
+  const FeedOptimizeResult r = optimize_feed(job, text, "levels.ngc", o);
+  const GcodeProgram out = read_gcode(r.text, "out.ngc", o.read);
+  std::size_t checked = 0;
+  for (const Segment& seg : out.path.segments()) {
+    const Vec3 a = seg.start(), b = seg.end();
+    if (seg.motion() != Motion::feed || a.z() != b.z() || a.z() >= 0) continue;
+    // The piece over the middle of the slot, far from the ends where the chip falls.
+    if (!(std::min(a.y(), b.y()) < 20 && std::max(a.y(), b.y()) > 20)) continue;
+    ++checked;
+    EXPECT_NEAR(seg.speed_mm_per_min(), 600.0, 1e-3) << a.z() << " " << a.y();
+  }
+  EXPECT_EQ(checked, 2u);  // one on each level
+  EXPECT_NEAR(r.h_after_mm.max, 0.075, 0.075 * 1e-4);
+}
+
 // A hand-written program with what CAM and people write: comments, N words, a standalone F,
 // an M-code line, a subroutine run twice, a loop, incremental and inch sections, R arcs. Only
 // F words and motion words of split blocks change; every other line is kept as it was; the
