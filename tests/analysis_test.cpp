@@ -364,6 +364,34 @@ TEST(Analysis, TwoLevelsEachCutTheirOwnLayer) {
   EXPECT_GT(second, 300u);
 }
 
+// With a [stock] box the stock is the box, not the slot: a pass along its edge at x = 12 (the
+// slot is |x| <= 5; the box reaches x = 10) takes a_e = 3 mm of a D = 10 mm tool: engaged
+// angle acos(1 - a_e/R) plus the disc model's trailing sliver asin(f_z / 2R) (1e-6 rad: the
+// rounding of the arcs' ends, as StraightFullImmersion's two slivers), chip f_z sin(acos(1 - a_e / R)) within f_z^2 / R (the closed forms
+// of a partial-immersion cut, as Engagement's tests for the slot); without the box the pass is
+// outside the stock and cuts nothing.
+TEST(Analysis, AStockBoxIsTheStock) {
+  const Job job = test::straight_job(
+      10.0, 4, {parse_override("stock.min=[-50, 0, -6]"), parse_override("stock.max=[10, 40, 0]")});
+  const GcodeProgram prog =
+      read_gcode("G21 G90 G17 G94\nG0 X12 Y-10 Z5\nG1 Z-2 F600\nG1 Y50\nG0 Z5\nM2\n", "edge.ngc");
+  EngagementOptions opt;
+  opt.steps_per_tooth = 1;
+  const EngagementSeries e = compute_engagement(prog.path, job, opt);
+  const double fz = 0.075, psi = std::acos(1 - 3.0 / 5.0);
+  std::size_t inside = 0;
+  for (std::size_t i = 0; i < e.samples.size(); ++i) {
+    const double y = e.samples.y_mm[i];
+    if (e.samples.z_mm[i] != -2 || y < 10 || y > 30) continue;
+    ++inside;
+    EXPECT_NEAR(e.engagement_angle_rad[i], psi + std::asin(fz / 10), 1e-6) << y;
+    EXPECT_NEAR(e.h_max_mm[i], fz * std::sin(psi), fz * fz / 5) << y;
+  }
+  EXPECT_GT(inside, 100u);
+  const EngagementSeries bare = compute_engagement(prog.path, test::straight_job(10.0), opt);
+  EXPECT_EQ(*std::max_element(bare.h_max_mm.begin(), bare.h_max_mm.end()), 0.0);
+}
+
 TEST(Analysis, RejectsPathsThatNeverCut) {
   const Job job = test::straight_job(10.0);
   ToolPath p;

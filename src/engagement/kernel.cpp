@@ -354,8 +354,8 @@ class Removed {
   double last_x_ = 0, last_y_ = 0;
 };
 
-// Angular set of the circle (cx, cy, R) inside the rectangle |x| <= hw, y0 <= y <= y1.
-ArcSet inside_rect(double cx, double cy, double R, double hw, double y0, double y1) {
+// Angular set of the circle (cx, cy, R) inside the rectangle x0 <= x <= x1, y0 <= y <= y1.
+ArcSet inside_rect(double cx, double cy, double R, double x0, double x1, double y0, double y1) {
   ArcSet s{{0.0, kTwoPi}};
   // Half-plane n.(p) <= c: cos(th - dir) <= (c - n.centre) / R.
   auto clip = [&](double dir, double limit) {
@@ -367,8 +367,8 @@ ArcSet inside_rect(double cx, double cy, double R, double hw, double y0, double 
     }
     subtract(s, dir, std::acos(k));
   };
-  clip(0.0, hw - cx);        // x <= hw
-  clip(kPi, hw + cx);        // -x <= hw
+  clip(0.0, x1 - cx);        // x <= x1
+  clip(kPi, cx - x0);        // -x <= -x0
   clip(0.5 * kPi, y1 - cy);  // y <= y1
   clip(1.5 * kPi, cy - y0);  // -y <= -y0
   return s;
@@ -596,7 +596,17 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     throw InputError(fmt::format("steps per tooth must be >= 1, got {}", opt.steps_per_tooth));
   }
   const double R = job.tool.radius_mm();
-  const double hw = 0.5 * job.slot.width_mm, L = job.slot.length_mm;
+  // The stock: the slot (|x| <= W/2, 0 <= y <= L, below z = 0), or the job's [stock] box
+  // (its x and y range, below its top).
+  const double hw = 0.5 * job.slot.width_mm;
+  double sx0 = -hw, sx1 = hw, sy0 = 0, sy1 = job.slot.length_mm, top = 0;
+  if (job.stock_min_mm && job.stock_max_mm) {
+    sx0 = (*job.stock_min_mm)[0];
+    sy0 = (*job.stock_min_mm)[1];
+    sx1 = (*job.stock_max_mm)[0];
+    sy1 = (*job.stock_max_mm)[1];
+    top = (*job.stock_max_mm)[2];
+  }
   const std::size_t n = smp.size();
   const int m = opt.steps_per_tooth;
   EngagementSeries out;
@@ -618,7 +628,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   double bx0 = 0, by0 = 0, bx1 = 0, by1 = 0;
   bool any = false;
   for (std::size_t i = 0; i < n; ++i) {
-    if (smp.z_mm[i] >= 0) continue;
+    if (smp.z_mm[i] >= top) continue;
     if (!any) {
       bx0 = bx1 = smp.x_mm[i];
       by0 = by1 = smp.y_mm[i];
@@ -680,7 +690,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   std::vector<Removed*> home(n, nullptr);  // each cutting position's region
   ChipQuery chip(R);
   std::vector<ArcSet> pending(n);  // exposed arcs of discs waiting for insertion (lag m)
-  auto cutting = [&](std::size_t i) { return smp.z_mm[i] < 0; };
+  auto cutting = [&](std::size_t i) { return smp.z_mm[i] < top; };
 
   for (std::size_t i = 0; i < n; ++i) {
     opt.hooks.step(i, n);
@@ -698,9 +708,9 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     const Removed& removed = *home[i];
     ArcSet free = removed.outside(cx, cy);
     if (m == 1) pending[i] = free;
-    ArcSet eng =
-        intersect(free, inside_rect(cx, cy, R, hw, 0.0,
-                                    opt.open_ahead ? std::numeric_limits<double>::infinity() : L));
+    ArcSet eng = intersect(
+        free, inside_rect(cx, cy, R, sx0, sx1, sy0,
+                          opt.open_ahead ? std::numeric_limits<double>::infinity() : sy1));
     double total = 0;
     for (const auto& a : eng) total += a.sweep_rad();
     out.engagement_angle_rad[i] = total;

@@ -495,8 +495,10 @@ std::vector<Key> build_schema() {
               "worker threads (0: all cores); results are the same for any count"),
       // [stock]
       custom("stock", "min", "array of numbers", "mm", "[x, y, z], below max", "the slot region",
-             "lower corner of the stock box (give min and max); by default the slot from y = 0 to "
-             "its length, 1 mm beside each wall, 0.5 mm below the floor, up to z = 0",
+             "lower corner of the stock box (give min and max): the simulation's workpiece and, "
+             "given, the engagement's stock (x, y range, below the top); by default the slot "
+             "from y = 0 to its length (1 mm beside each wall and 0.5 mm below the floor for "
+             "the simulation), up to z = 0",
              [](JobReader& r, Job& job) {
                const auto lo = r.number_array("stock", "min", Range{});
                const auto hi = r.number_array("stock", "max", Range{});
