@@ -72,132 +72,176 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
   for (const EndEdge& ed : edges) reach = std::max(reach, ed.reach_mm);
   reach += e;
   const std::size_t n = s.size();
-  for (std::size_t i = 0; i + 1 < n; ++i) {
-    const double dt = s.t_s[i + 1] - s.t_s[i];
-    if (!(dt > 0)) continue;
-    // Skip intervals whose tool cannot reach the line within the profile's y range.
-    const double xlo = std::min(s.x_mm[i], s.x_mm[i + 1]) - reach;
-    const double xhi = std::max(s.x_mm[i], s.x_mm[i + 1]) + reach;
-    const double ylo = std::min(s.y_mm[i], s.y_mm[i + 1]) - reach;
-    const double yhi = std::max(s.y_mm[i], s.y_mm[i + 1]) + reach;
-    if (x0 < xlo || x0 > xhi || yhi < y_from || ylo > y_to) continue;
-    const int m = std::max(1, static_cast<int>(std::ceil(std::abs(omega) * dt / max_step)));
-    for (int j = 0; j < m; ++j) {
-      const double fa = static_cast<double>(j) / m, fb = static_cast<double>(j + 1) / m;
-      const double ta = s.t_s[i] + fa * dt, tb = s.t_s[i] + fb * dt;
-      const V2 ca{s.x_mm[i] + fa * (s.x_mm[i + 1] - s.x_mm[i]),
-                  s.y_mm[i] + fa * (s.y_mm[i + 1] - s.y_mm[i])};
-      const V2 cb{s.x_mm[i] + fb * (s.x_mm[i + 1] - s.x_mm[i]),
-                  s.y_mm[i] + fb * (s.y_mm[i + 1] - s.y_mm[i])};
-      const double za = s.z_mm[i] + fa * (s.z_mm[i + 1] - s.z_mm[i]);
-      const double zb = s.z_mm[i] + fb * (s.z_mm[i + 1] - s.z_mm[i]);
-      const double pa = omega * ta, pb = omega * tb;
-      // The axis: the centre plus the runout offset turning with the spindle.
-      const V2 aa{ca.x + e * std::cos(pa + lambda), ca.y + e * std::sin(pa + lambda)};
-      const V2 ab{cb.x + e * std::cos(pb + lambda), cb.y + e * std::sin(pb + lambda)};
-      const double half = 0.5 * std::abs(pb - pa);
-      for (const EndEdge& ed : edges) {
-        const double tha = pa + ed.angle_rad, thb = pb + ed.angle_rad;
-        const V2 ua{std::cos(tha), std::sin(tha)}, ub{std::cos(thb), std::sin(thb)};
-        const double thm = 0.5 * (tha + thb);
-        const V2 um{std::cos(thm), std::sin(thm)};
-        // The region the edge sweeps lies in the hull of its ends and the tangents' meeting
-        // points (reach / cos(half the turn) along the middle direction); runout's axis arc
-        // bulges by at most e (1 - cos half), padded.
-        const double far = ed.reach_mm / std::cos(half);
-        const std::array<V2, 6> hull = {aa,
-                                        ab,
-                                        V2{aa.x + ed.reach_mm * ua.x, aa.y + ed.reach_mm * ua.y},
-                                        V2{ab.x + ed.reach_mm * ub.x, ab.y + ed.reach_mm * ub.y},
-                                        V2{aa.x + far * um.x, aa.y + far * um.y},
-                                        V2{ab.x + far * um.x, ab.y + far * um.y}};
-        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-        for (std::size_t p = 0; p < hull.size(); ++p) {
-          for (std::size_t q = p; q < hull.size(); ++q) {
-            const V2 A = hull[p], B = hull[q];
-            if ((A.x - x0) * (B.x - x0) > 0) continue;
-            if (A.x == B.x) {  // both on the line
-              lo = std::min({lo, A.y, B.y});
-              hi = std::max({hi, A.y, B.y});
-              continue;
+  struct Turn {
+    double c, s;  // cosine and sine of a fixed angle
+  };
+  const Turn runout_turn{std::cos(lambda), std::sin(lambda)};
+  std::vector<Turn> tooth_turn;
+  for (const EndEdge& ed : edges)
+    tooth_turn.push_back({std::cos(ed.angle_rad), std::sin(ed.angle_rad)});
+  // One sweep over the path: the passes of the edges' parts at least `inner` from the axis,
+  // over the points `todo` marks (all when empty).
+  auto sweep = [&](double inner, const std::vector<char>& todo) {
+    for (std::size_t i = 0; i + 1 < n; ++i) {
+      const double dt = s.t_s[i + 1] - s.t_s[i];
+      if (!(dt > 0)) continue;
+      // Skip intervals whose tool cannot reach the line within the profile's y range.
+      const double xlo = std::min(s.x_mm[i], s.x_mm[i + 1]) - reach;
+      const double xhi = std::max(s.x_mm[i], s.x_mm[i + 1]) + reach;
+      const double ylo = std::min(s.y_mm[i], s.y_mm[i + 1]) - reach;
+      const double yhi = std::max(s.y_mm[i], s.y_mm[i + 1]) + reach;
+      if (x0 < xlo || x0 > xhi || yhi < y_from || ylo > y_to) continue;
+      const int m = std::max(1, static_cast<int>(std::ceil(std::abs(omega) * dt / max_step)));
+      for (int j = 0; j < m; ++j) {
+        const double fa = static_cast<double>(j) / m, fb = static_cast<double>(j + 1) / m;
+        const double ta = s.t_s[i] + fa * dt, tb = s.t_s[i] + fb * dt;
+        const V2 ca{s.x_mm[i] + fa * (s.x_mm[i + 1] - s.x_mm[i]),
+                    s.y_mm[i] + fa * (s.y_mm[i + 1] - s.y_mm[i])};
+        const V2 cb{s.x_mm[i] + fb * (s.x_mm[i + 1] - s.x_mm[i]),
+                    s.y_mm[i] + fb * (s.y_mm[i + 1] - s.y_mm[i])};
+        const double za = s.z_mm[i] + fa * (s.z_mm[i + 1] - s.z_mm[i]);
+        const double zb = s.z_mm[i] + fb * (s.z_mm[i + 1] - s.z_mm[i]);
+        const double pa = omega * ta, pb = omega * tb;
+        // The spindle's direction at both ends and halfway (one sine and cosine each), the
+        // teeth's and the runout's turned from it by their fixed angles.
+        const V2 sa{std::cos(pa), std::sin(pa)}, sb{std::cos(pb), std::sin(pb)};
+        const double pm = 0.5 * (pa + pb);
+        const V2 sm{std::cos(pm), std::sin(pm)};
+        auto turned = [](V2 u, const Turn& t) {
+          return V2{u.x * t.c - u.y * t.s, u.x * t.s + u.y * t.c};
+        };
+        // The axis: the centre plus the runout offset turning with the spindle.
+        const V2 ra = turned(sa, runout_turn), rb = turned(sb, runout_turn);
+        const V2 aa{ca.x + e * ra.x, ca.y + e * ra.y};
+        const V2 ab{cb.x + e * rb.x, cb.y + e * rb.y};
+        const double half = 0.5 * std::abs(pb - pa);
+        for (std::size_t k = 0; k < edges.size(); ++k) {
+          const EndEdge& ed = edges[k];
+          const double tha = pa + ed.angle_rad;
+          const V2 ua = turned(sa, tooth_turn[k]), ub = turned(sb, tooth_turn[k]);
+          const V2 um = turned(sm, tooth_turn[k]);
+          // The region the edge sweeps lies in the hull of its ends and the tangents' meeting
+          // points (reach / cos(half the turn) along the middle direction); runout's axis arc
+          // bulges by at most e (1 - cos half), padded.
+          const double far = ed.reach_mm / std::cos(half);
+          const std::array<V2, 6> hull = {V2{aa.x + inner * ua.x, aa.y + inner * ua.y},
+                                          V2{ab.x + inner * ub.x, ab.y + inner * ub.y},
+                                          V2{aa.x + ed.reach_mm * ua.x, aa.y + ed.reach_mm * ua.y},
+                                          V2{ab.x + ed.reach_mm * ub.x, ab.y + ed.reach_mm * ub.y},
+                                          V2{aa.x + far * um.x, aa.y + far * um.y},
+                                          V2{ab.x + far * um.x, ab.y + far * um.y}};
+          double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+          for (std::size_t p = 0; p < hull.size(); ++p) {
+            for (std::size_t q = p; q < hull.size(); ++q) {
+              const V2 A = hull[p], B = hull[q];
+              if ((A.x - x0) * (B.x - x0) > 0) continue;
+              if (A.x == B.x) {  // both on the line
+                lo = std::min({lo, A.y, B.y});
+                hi = std::max({hi, A.y, B.y});
+                continue;
+              }
+              const double y = A.y + (x0 - A.x) / (B.x - A.x) * (B.y - A.y);
+              lo = std::min(lo, y);
+              hi = std::max(hi, y);
             }
-            const double y = A.y + (x0 - A.x) / (B.x - A.x) * (B.y - A.y);
-            lo = std::min(lo, y);
-            hi = std::max(hi, y);
           }
-        }
-        if (!(lo <= hi)) continue;
-        const double pad = e * half * half + 1e-9;
-        lo -= pad;
-        hi += pad;
-        if (hi < y_from || lo > y_to) continue;
-        const auto j0 = static_cast<std::size_t>(std::max(0.0, std::ceil((lo - y_from) / dy)));
-        const auto j1 = static_cast<std::size_t>(
-            std::min(static_cast<double>(points - 1), std::floor((hi - y_from) / dy)));
-        for (std::size_t q = j0; q <= j1 && q < points; ++q) {
-          const V2 p{x0, y_from + dy * static_cast<double>(q)};
-          const double ga = cross(ua, V2{p.x - aa.x, p.y - aa.y});
-          const double gb = cross(ub, V2{p.x - ab.x, p.y - ab.y});
-          // The edge's line passes the point where the cross product changes sign (at the
-          // step's start when it is zero there; a zero at the end is the next step's start).
-          const bool through = (ga < 0 && gb > 0) || (ga > 0 && gb < 0);
-          if (!(ga == 0 || through)) continue;
-          // The edge at a fraction of the step: the axis on the centre's chord plus the runout
-          // turning with the spindle, the direction turning evenly.
-          auto edge_at = [&](double u, V2& a, double& th) {
-            const double ph = pa + u * (pb - pa);
-            a = V2{ca.x + u * (cb.x - ca.x) + e * std::cos(ph + lambda),
-                   ca.y + u * (cb.y - ca.y) + e * std::sin(ph + lambda)};
-            th = ph + ed.angle_rad;
-          };
-          double u = 0, lo_u = 0, hi_u = 1, g_lo = ga, g_hi = gb;
-          V2 a = aa;
-          double th = tha;
-          if (ga != 0) {
-            // The secant's estimate first: a pass it puts well above the floor found so far
-            // (by more than its error, `slack`) or on the
-            // flat of a flat end face at a constant height (where the time does not matter)
-            // needs no more.
-            // (Without trigonometry: the axis on the chord between the step's ends, off the
-            // runout's arc by e (1 - cos half) <= 3e-6 mm for e <= 0.1 mm; the direction
-            // interpolated and normalised, off by third order in the step.)
-            u = ga / (ga - gb);
-            const V2 a0{aa.x + u * (ab.x - aa.x), aa.y + u * (ab.y - aa.y)};
-            V2 u0{ua.x + u * (ub.x - ua.x), ua.y + u * (ub.y - ua.y)};
-            const double norm = std::sqrt(u0.x * u0.x + u0.y * u0.y);
-            u0 = V2{u0.x / norm, u0.y / norm};
-            const double r0 = dot(u0, V2{p.x - a0.x, p.y - a0.y});
-            const double slack = e * half * half + 1e-6;
-            if (r0 < -slack || r0 > ed.reach_mm + slack) continue;
-            const double h0 = za + u * (zb - za) + ed.tip_dz_mm + rise(ed.reach_mm, r0);
-            if (h0 > f.z_mm[q] + slack) continue;
-            if (tan_dish == 0 && za == zb && r0 >= slack && r0 < ed.reach_mm - rc - slack) {
-              f.z_mm[q] = std::min(f.z_mm[q], za + ed.tip_dz_mm);
-              continue;
-            }
-            // The secant's zero, refined twice by regula falsi on the exact edge: the crossing
-            // time to rounding (one secant leaves a third-order error in the step).
-            for (int it = 0; it < 3; ++it) {
-              u = lo_u + (hi_u - lo_u) * g_lo / (g_lo - g_hi);
-              edge_at(u, a, th);
-              const double g = cross(V2{std::cos(th), std::sin(th)}, V2{p.x - a.x, p.y - a.y});
-              if (g == 0) break;
-              if ((g < 0) == (g_lo < 0)) {
-                lo_u = u;
-                g_lo = g;
-              } else {
-                hi_u = u;
-                g_hi = g;
+          if (!(lo <= hi)) continue;
+          const double pad = e * half * half + 1e-9;
+          lo -= pad;
+          hi += pad;
+          if (hi < y_from || lo > y_to) continue;
+          const auto j0 = static_cast<std::size_t>(std::max(0.0, std::ceil((lo - y_from) / dy)));
+          const auto j1 = static_cast<std::size_t>(
+              std::min(static_cast<double>(points - 1), std::floor((hi - y_from) / dy)));
+          for (std::size_t q = j0; q <= j1 && q < points; ++q) {
+            if (!todo.empty() && !todo[q]) continue;
+            const V2 p{x0, y_from + dy * static_cast<double>(q)};
+            const double ga = cross(ua, V2{p.x - aa.x, p.y - aa.y});
+            const double gb = cross(ub, V2{p.x - ab.x, p.y - ab.y});
+            // The edge's line passes the point where the cross product changes sign (at the
+            // step's start when it is zero there; a zero at the end is the next step's start).
+            const bool through = (ga < 0 && gb > 0) || (ga > 0 && gb < 0);
+            if (!(ga == 0 || through)) continue;
+            // The edge at a fraction of the step: the axis on the centre's chord plus the runout
+            // turning with the spindle, the direction turning evenly.
+            auto edge_at = [&](double u, V2& a, double& th) {
+              const double ph = pa + u * (pb - pa);
+              a = V2{ca.x + u * (cb.x - ca.x) + e * std::cos(ph + lambda),
+                     ca.y + u * (cb.y - ca.y) + e * std::sin(ph + lambda)};
+              th = ph + ed.angle_rad;
+            };
+            double u = 0, lo_u = 0, hi_u = 1, g_lo = ga, g_hi = gb;
+            V2 a = aa;
+            double th = tha;
+            if (ga != 0) {
+              // The secant's estimate first: a pass it puts well above the floor found so far
+              // (by more than its error, `slack`) or on the
+              // flat of a flat end face at a constant height (where the time does not matter)
+              // needs no more.
+              // (Without trigonometry: the axis on the chord between the step's ends, off the
+              // runout's arc by e (1 - cos half) <= 3e-6 mm for e <= 0.1 mm; the direction
+              // interpolated and normalised, off by third order in the step.)
+              u = ga / (ga - gb);
+              const V2 a0{aa.x + u * (ab.x - aa.x), aa.y + u * (ab.y - aa.y)};
+              V2 u0{ua.x + u * (ub.x - ua.x), ua.y + u * (ub.y - ua.y)};
+              const double norm = std::sqrt(u0.x * u0.x + u0.y * u0.y);
+              u0 = V2{u0.x / norm, u0.y / norm};
+              const double r0 = dot(u0, V2{p.x - a0.x, p.y - a0.y});
+              const double slack = e * half * half + 1e-6;
+              if (r0 < -slack || r0 > ed.reach_mm + slack) continue;
+              const double h0 = za + u * (zb - za) + ed.tip_dz_mm + rise(ed.reach_mm, r0);
+              if (h0 > f.z_mm[q] + slack) continue;
+              if (tan_dish == 0 && za == zb && r0 >= slack && r0 < ed.reach_mm - rc - slack) {
+                f.z_mm[q] = std::min(f.z_mm[q], za + ed.tip_dz_mm);
+                continue;
+              }
+              // The secant's zero, refined twice by regula falsi on the exact edge: the crossing
+              // time to rounding (one secant leaves a third-order error in the step).
+              for (int it = 0; it < 3; ++it) {
+                u = lo_u + (hi_u - lo_u) * g_lo / (g_lo - g_hi);
+                edge_at(u, a, th);
+                const double g = cross(V2{std::cos(th), std::sin(th)}, V2{p.x - a.x, p.y - a.y});
+                if (g == 0) break;
+                if ((g < 0) == (g_lo < 0)) {
+                  lo_u = u;
+                  g_lo = g;
+                } else {
+                  hi_u = u;
+                  g_hi = g;
+                }
               }
             }
+            const double r = dot(V2{std::cos(th), std::sin(th)}, V2{p.x - a.x, p.y - a.y});
+            if (r < 0 || r > ed.reach_mm) continue;  // behind the axis or beyond the corner
+            const double z = za + u * (zb - za) + ed.tip_dz_mm + rise(ed.reach_mm, r);
+            f.z_mm[q] = std::min(f.z_mm[q], z);
           }
-          const double r = dot(V2{std::cos(th), std::sin(th)}, V2{p.x - a.x, p.y - a.y});
-          if (r < 0 || r > ed.reach_mm) continue;  // behind the axis or beyond the corner
-          const double z = za + u * (zb - za) + ed.tip_dz_mm + rise(ed.reach_mm, r);
-          f.z_mm[q] = std::min(f.z_mm[q], z);
         }
       }
     }
+  };
+  // A dished edge is lowest at its corner: a pass of the part within `band` of the flat's end
+  // leaves at most band tan(dish) above the lowest tip, a pass further in more. So the outer
+  // band first, then everything only where that left the floor higher (or uncut): exact, and
+  // most points see only the band's passes (a fraction of the edge's sweep over the line).
+  double flat_end = std::numeric_limits<double>::infinity(), low_tip = flat_end, low_z = flat_end;
+  for (const EndEdge& ed : edges) {
+    flat_end = std::min(flat_end, ed.reach_mm - rc);
+    low_tip = std::min(low_tip, ed.tip_dz_mm);
+  }
+  for (const double z : s.z_mm) low_z = std::min(low_z, z);
+  const double band = 0.05 * R;
+  if (tan_dish > 0 && flat_end > band) {
+    sweep(flat_end - band, {});
+    std::vector<char> todo(points, 0);
+    bool any = false;
+    const double sure = low_z + low_tip + band * tan_dish;
+    for (std::size_t q = 0; q < points; ++q) {
+      if (!(f.z_mm[q] <= sure)) todo[q] = any = 1;
+    }
+    if (any) sweep(0.0, todo);
+  } else {
+    sweep(0.0, {});
   }
   for (double& z : f.z_mm) {
     if (std::isinf(z)) z = std::nan("");
