@@ -364,12 +364,44 @@ TEST(Analysis, TwoLevelsEachCutTheirOwnLayer) {
   EXPECT_GT(second, 300u);
 }
 
+// A lift inside a level and back (z = -1, up to -0.9 over the cut, down again): the level's
+// region is found again, so the pass back over what it cut is in air between y = 12 and 18
+// (up to the disc model's slivers; a lost region gave the full chip there) and cuts the full
+// chip again past its end at y = 20 (f_z, closed form).
+TEST(Analysis, BackFromALiftTheLevelIsWhereItWas) {
+  const Job job = test::straight_job(10.0);
+  const GcodeProgram prog = read_gcode(
+      "G21 G90 G17 G94\nG0 X0 Y-10 Z5\nG1 Z-1 F600\nG1 Y20\nG1 Z-0.9\nG1 Y10\nG1 Z-1\n"
+      "G1 Y50\nG0 Z5\nM2\n",
+      "lift.ngc");
+  EngagementOptions opt;
+  opt.steps_per_tooth = 1;
+  const EngagementSeries e = compute_engagement(prog.path, job, opt);
+  const PathSamples& s = e.samples;
+  bool lifted = false;  // past the lift: the pass back from y = 10 at z = -1
+  std::size_t air = 0, full = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    lifted = lifted || std::abs(s.z_mm[i] + 0.9) < 1e-9;
+    if (!lifted || std::abs(s.z_mm[i] + 1) > 1e-9) continue;
+    if (s.y_mm[i] > 12 && s.y_mm[i] < 18) {
+      ++air;
+      // Air, up to the slivers the first pass's discs leave at the walls: f_z^2 / 8R.
+      EXPECT_LE(e.h_max_mm[i], 0.075 * 0.075 / 40 * (1 + 1e-9)) << s.y_mm[i];
+    } else if (s.y_mm[i] > 25 && s.y_mm[i] < 35) {
+      ++full;
+      EXPECT_NEAR(e.h_max_mm[i], 0.075, 1e-9) << s.y_mm[i];
+    }
+  }
+  EXPECT_GT(air, 50u);
+  EXPECT_GT(full, 50u);
+}
+
 // With a [stock] box the stock is the box, not the slot: a pass along its edge at x = 12 (the
 // slot is |x| <= 5; the box reaches x = 10) takes a_e = 3 mm of a D = 10 mm tool: engaged
 // angle acos(1 - a_e/R) plus the disc model's trailing sliver asin(f_z / 2R) (1e-6 rad: the
-// rounding of the arcs' ends, as StraightFullImmersion's two slivers), chip f_z sin(acos(1 - a_e / R)) within f_z^2 / R (the closed forms
-// of a partial-immersion cut, as Engagement's tests for the slot); without the box the pass is
-// outside the stock and cuts nothing.
+// rounding of the arcs' ends, as StraightFullImmersion's two slivers), chip f_z sin(acos(1 - a_e /
+// R)) within f_z^2 / R (the closed forms of a partial-immersion cut, as Engagement's tests for the
+// slot); without the box the pass is outside the stock and cuts nothing.
 TEST(Analysis, AStockBoxIsTheStock) {
   const Job job = test::straight_job(
       10.0, 4, {parse_override("stock.min=[-50, 0, -6]"), parse_override("stock.max=[10, 40, 0]")});

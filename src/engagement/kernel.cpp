@@ -640,14 +640,13 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     by1 = std::max(by1, smp.y_mm[i]);
   }
   // The removed region per Z level (2.5D). A level is the height of horizontal cutting
-  // moves; its region holds the discs of the positions since the tool came down to it. A
-  // position deeper than the current level (a ramp, plunge or helix to the next one, or the
-  // next level's first pass) starts a new, empty region: the material under the level above
-  // is untouched, so the descent is a plunge (its feed kept) and the new level's first pass
-  // cuts a full chip. A horizontal move at a level above the current one (back up) continues
-  // that level's region, or a new one: without the deeper levels' discs it sees more stock
-  // than there is (a chip too thick, slower feeds: the safe side). One level (a slot, an entry
-  // helix down to it) is one region, as before levels. docs/models.md section 7.
+  // moves; its region holds the discs of the positions made in it. A ramp, plunge or helix
+  // below the current level starts a new, empty region (the material under the level is
+  // untouched: the descent is a plunge, its feed kept), which becomes the level it comes down
+  // to, or hands over to that level's region if it has one (back from a lift). A horizontal
+  // move at a new level starts an empty region too: without the other levels' discs it sees
+  // more stock than there is (a chip too thick, slower feeds: the safe side). One level (a
+  // slot, its entry helix) is one region, as before levels. docs/models.md section 7.
   constexpr double kLevelTol = 1e-4;  // mm: heights within it are one level
   struct Level {
     double z_mm;  // NaN until its first horizontal cutting position
@@ -658,33 +657,38 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   double current_z = std::numeric_limits<double>::quiet_NaN();
   auto region_of = [&](std::size_t i) -> Removed* {
     const double z = smp.z_mm[i];
-    const bool flat = std::abs(smp.tz[i]) < 1e-9;
-    const bool deeper = !std::isnan(current_z) && z < current_z - kLevelTol;
-    const bool higher = flat && !std::isnan(current_z) && z > current_z + kLevelTol;
-    if (!current || deeper || higher) {
-      Removed* found = nullptr;
-      if (higher) {
-        for (Level& l : levels) {
-          if (std::abs(l.z_mm - z) <= kLevelTol) found = l.removed.get();
-        }
+    auto start_region = [&](double level_z) {
+      levels.push_back({level_z, std::make_unique<Removed>(R, bx0, by0, bx1, by1)});
+      current = levels.back().removed.get();
+      current_z = level_z;
+    };
+    if (!current) {
+      start_region(std::numeric_limits<double>::quiet_NaN());
+    } else if (std::abs(smp.tz[i]) >= 1e-9) {
+      // Ramps, plunges, helices: below the current level they cut untouched stock.
+      if (!std::isnan(current_z) && z < current_z - kLevelTol) {
+        start_region(std::numeric_limits<double>::quiet_NaN());
       }
-      if (!found) {
-        levels.push_back({std::numeric_limits<double>::quiet_NaN(),
-                          std::make_unique<Removed>(R, bx0, by0, bx1, by1)});
-        found = levels.back().removed.get();
-      }
-      current = found;
-      current_z = std::numeric_limits<double>::quiet_NaN();
-      for (Level& l : levels) {
-        if (l.removed.get() == current) current_z = l.z_mm;
+      return current;
+    }
+    if (std::abs(smp.tz[i]) >= 1e-9) return current;  // the program's first position
+    // A horizontal move: its level's region if it has one (back from a lift, back up).
+    if (!std::isnan(current_z) && std::abs(z - current_z) <= kLevelTol) return current;
+    for (Level& l : levels) {
+      if (std::abs(l.z_mm - z) <= kLevelTol) {
+        current = l.removed.get();
+        current_z = l.z_mm;
+        return current;
       }
     }
-    if (flat && std::isnan(current_z)) {
+    if (std::isnan(current_z)) {  // the level a descent (or the start) came down to
       current_z = z;
       for (Level& l : levels) {
         if (l.removed.get() == current) l.z_mm = z;
       }
+      return current;
     }
+    start_region(z);
     return current;
   };
   std::vector<Removed*> home(n, nullptr);  // each cutting position's region
