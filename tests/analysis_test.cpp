@@ -335,6 +335,13 @@ TEST(Analysis, FloorAgainstAPointwiseSearch) {
   EXPECT_GT(m.texture_floor[2]->roughness.ra_mm, 2 * m.texture_floor[1]->roughness.ra_mm);
 }
 
+// The engagement of a program (G-code text) for a job, one sample a tooth pass.
+EngagementSeries program_engagement(const Job& job, const std::string& text) {
+  EngagementOptions opt;
+  opt.steps_per_tooth = 1;
+  return compute_engagement(read_gcode(text, "program.ngc").path, job, opt);
+}
+
 // Two levels of a full slot (2.5D): a pass at z = -1, a plunge outside the stock to z = -2
 // and a pass back. The second pass cuts the layer under the first: at every tooth pass inside
 // the slot its chip is the full slot's f_z exactly (as the first pass's, closed form as in
@@ -342,12 +349,8 @@ TEST(Analysis, FloorAgainstAPointwiseSearch) {
 // level's end is outside the stock.
 TEST(Analysis, TwoLevelsEachCutTheirOwnLayer) {
   const Job job = test::straight_job(10.0);
-  const GcodeProgram prog = read_gcode(
-      "G21 G90 G17 G94\nG0 X0 Y-10 Z5\nG1 Z-1 F600\nG1 Y50\nG1 Z-2\nG1 Y-10\nG0 Z5\nM2\n",
-      "levels.ngc");
-  EngagementOptions opt;
-  opt.steps_per_tooth = 1;
-  const EngagementSeries e = compute_engagement(prog.path, job, opt);
+  const EngagementSeries e = program_engagement(
+      job, "G21 G90 G17 G94\nG0 X0 Y-10 Z5\nG1 Z-1 F600\nG1 Y50\nG1 Z-2\nG1 Y-10\nG0 Z5\nM2\n");
   const PathSamples& s = e.samples;
   std::size_t first = 0, second = 0;
   for (std::size_t i = 0; i < s.size(); ++i) {
@@ -370,13 +373,10 @@ TEST(Analysis, TwoLevelsEachCutTheirOwnLayer) {
 // chip again past its end at y = 20 (f_z, closed form).
 TEST(Analysis, BackFromALiftTheLevelIsWhereItWas) {
   const Job job = test::straight_job(10.0);
-  const GcodeProgram prog = read_gcode(
+  const EngagementSeries e = program_engagement(
+      job,
       "G21 G90 G17 G94\nG0 X0 Y-10 Z5\nG1 Z-1 F600\nG1 Y20\nG1 Z-0.9\nG1 Y10\nG1 Z-1\n"
-      "G1 Y50\nG0 Z5\nM2\n",
-      "lift.ngc");
-  EngagementOptions opt;
-  opt.steps_per_tooth = 1;
-  const EngagementSeries e = compute_engagement(prog.path, job, opt);
+      "G1 Y50\nG0 Z5\nM2\n");
   const PathSamples& s = e.samples;
   bool lifted = false;  // past the lift: the pass back from y = 10 at z = -1
   std::size_t air = 0, full = 0;
@@ -405,11 +405,8 @@ TEST(Analysis, BackFromALiftTheLevelIsWhereItWas) {
 TEST(Analysis, AStockBoxIsTheStock) {
   const Job job = test::straight_job(
       10.0, 4, {parse_override("stock.min=[-50, 0, -6]"), parse_override("stock.max=[10, 40, 0]")});
-  const GcodeProgram prog =
-      read_gcode("G21 G90 G17 G94\nG0 X12 Y-10 Z5\nG1 Z-2 F600\nG1 Y50\nG0 Z5\nM2\n", "edge.ngc");
-  EngagementOptions opt;
-  opt.steps_per_tooth = 1;
-  const EngagementSeries e = compute_engagement(prog.path, job, opt);
+  const std::string edge = "G21 G90 G17 G94\nG0 X12 Y-10 Z5\nG1 Z-2 F600\nG1 Y50\nG0 Z5\nM2\n";
+  const EngagementSeries e = program_engagement(job, edge);
   const double fz = 0.075, psi = std::acos(1 - 3.0 / 5.0);
   std::size_t inside = 0;
   for (std::size_t i = 0; i < e.samples.size(); ++i) {
@@ -420,7 +417,7 @@ TEST(Analysis, AStockBoxIsTheStock) {
     EXPECT_NEAR(e.h_max_mm[i], fz * std::sin(psi), fz * fz / 5) << y;
   }
   EXPECT_GT(inside, 100u);
-  const EngagementSeries bare = compute_engagement(prog.path, test::straight_job(10.0), opt);
+  const EngagementSeries bare = program_engagement(test::straight_job(10.0), edge);
   EXPECT_EQ(*std::max_element(bare.h_max_mm.begin(), bare.h_max_mm.end()), 0.0);
 }
 
