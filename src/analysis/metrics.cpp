@@ -276,6 +276,13 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
     if (cutting[i]) m.cutting_time_total_s += dt_sample;
   }
   if (std::none_of(cutting.begin(), cutting.end(), [](char c) { return c != 0; })) {
+    if (job.stock_min_mm && job.stock_max_mm) {
+      const auto &lo = *job.stock_min_mm, &hi = *job.stock_max_mm;
+      throw InputError(fmt::format(
+          "analyze: the path never cuts the [stock] box ({:g} <= x <= {:g}, {:g} <= y <= {:g}, "
+          "z < {:g} mm)",
+          lo[0], hi[0], lo[1], hi[1], hi[2]));
+    }
     throw InputError(
         fmt::format("analyze: the path never cuts the slot (|x| <= {:g}, 0 <= y <= {:g}, z < 0 mm)",
                     0.5 * W, job.slot.length_mm));
