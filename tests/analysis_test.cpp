@@ -367,8 +367,9 @@ TEST(Analysis, TwoLevelsEachCutTheirOwnLayer) {
   EXPECT_GT(second, 300u);
 }
 
-// A lift inside a level and back (z = -1, up to -0.9 over the cut, down again): the level's
-// region is found again, so the pass back over what it cut is in air between y = 12 and 18
+// A lift inside a level and back (z = -1, up to -0.9 over the cut, down again): the link
+// move at -0.9 over what the level cut is in air, and back down the level's region is found
+// again, so the pass back over what it cut is in air between y = 12 and 18
 // (up to the disc model's slivers; a lost region gave the full chip there) and cuts the full
 // chip again past its end at y = 20 (f_z, closed form).
 TEST(Analysis, BackFromALiftTheLevelIsWhereItWas) {
@@ -379,8 +380,13 @@ TEST(Analysis, BackFromALiftTheLevelIsWhereItWas) {
       "G1 Y50\nG0 Z5\nM2\n");
   const PathSamples& s = e.samples;
   bool lifted = false;  // past the lift: the pass back from y = 10 at z = -1
-  std::size_t air = 0, full = 0;
+  std::size_t air = 0, full = 0, link = 0;
   for (std::size_t i = 0; i < s.size(); ++i) {
+    if (std::abs(s.z_mm[i] + 0.9) < 1e-9 && s.y_mm[i] > 12 && s.y_mm[i] < 18) {
+      // The link move above the level's cut: air too (its region starts from the level's).
+      ++link;
+      EXPECT_LE(e.h_max_mm[i], 0.075 * 0.075 / 40 * (1 + 1e-9)) << s.y_mm[i];
+    }
     lifted = lifted || std::abs(s.z_mm[i] + 0.9) < 1e-9;
     if (!lifted || std::abs(s.z_mm[i] + 1) > 1e-9) continue;
     if (s.y_mm[i] > 12 && s.y_mm[i] < 18) {
@@ -394,6 +400,7 @@ TEST(Analysis, BackFromALiftTheLevelIsWhereItWas) {
   }
   EXPECT_GT(air, 50u);
   EXPECT_GT(full, 50u);
+  EXPECT_GT(link, 50u);
 }
 
 // With a [stock] box the stock is the box, not the slot: a pass along its edge at x = 12 (the

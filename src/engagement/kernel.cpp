@@ -644,9 +644,9 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   // below the current level starts a new, empty region (the material under the level is
   // untouched: the descent is a plunge, its feed kept), which becomes the level it comes down
   // to, or hands over to that level's region if it has one (back from a lift). A horizontal
-  // move at a new level starts an empty region too: without the other levels' discs it sees
-  // more stock than there is (a chip too thick, slower feeds: the safe side). One level (a
-  // slot, its entry helix) is one region, as before levels. docs/models.md section 7.
+  // move at a new level above the current one starts from a copy of the current level's
+  // region. One level (a slot, its entry helix) is one region, as before levels.
+  // docs/models.md section 7.
   constexpr double kLevelTol = 1e-4;  // mm: heights within it are one level
   struct Level {
     double z_mm;  // NaN until its first horizontal cutting position
@@ -688,23 +688,42 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
       }
       return current;
     }
+    // A new level. Above the current one (a lift's link moves, a climb back up) it starts
+    // from the current level's discs, which removed its material too (the other levels' are
+    // not in it: more stock than there is, the safe side); below it, from nothing.
+    Removed* below = current_z < z ? current : nullptr;
     start_region(z);
+    if (below) *current = *below;
     return current;
   };
   std::vector<Removed*> home(n, nullptr);  // each cutting position's region
+  std::vector<char> above(n, 0);           // a ramp above its region's level: no disc
   ChipQuery chip(R);
   std::vector<ArcSet> pending(n);  // exposed arcs of discs waiting for insertion (lag m)
   auto cutting = [&](std::size_t i) { return smp.z_mm[i] < top; };
 
   for (std::size_t i = 0; i < n; ++i) {
     opt.hooks.step(i, n);
-    if (cutting(i)) home[i] = region_of(i);
+    if (cutting(i)) {
+      home[i] = region_of(i);
+      // A ramp or lift above its level queries the level (whose discs removed that material
+      // too) but adds no disc to it: the level's material under it is still there.
+      const double lz = [&] {
+        for (const Level& l : levels) {
+          if (l.removed.get() == home[i]) return l.z_mm;
+        }
+        return std::numeric_limits<double>::quiet_NaN();
+      }();
+      above[i] = std::abs(smp.tz[i]) >= 1e-9 && smp.z_mm[i] > lz + kLevelTol;
+    }
     // The surface the previous tooth left: discs up to i - m, in their own regions.
     if (i >= static_cast<std::size_t>(m)) {
       const std::size_t k = i - m;
       if (cutting(k)) {
-        ArcSet e = m == 1 ? std::move(pending[k]) : home[k]->outside(smp.x_mm[k], smp.y_mm[k]);
-        home[k]->insert(smp.x_mm[k], smp.y_mm[k], std::move(e));
+        if (!above[k]) {
+          ArcSet e = m == 1 ? std::move(pending[k]) : home[k]->outside(smp.x_mm[k], smp.y_mm[k]);
+          home[k]->insert(smp.x_mm[k], smp.y_mm[k], std::move(e));
+        }
       }
     }
     if (!cutting(i)) continue;
