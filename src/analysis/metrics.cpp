@@ -234,7 +234,7 @@ void predict_floor(const Job& job, const PathSamples& s, double omega, ProcessMe
         m.texture_floor[k]->cutoff_source = "ISO 21920-3 default from Ra";
         return;
       }
-      if (7 * lc >= to - from) {
+      if (3 * wanted > to - from) {  // not even a run-in, one length and a run-out of it
         m.texture_floor[k]->cutoff_source = fmt::format(
             "{:g} mm: the cut floor is too short for the {:g} mm ISO 21920-3 default from its Ra",
             lc, wanted);
