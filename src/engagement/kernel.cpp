@@ -708,13 +708,8 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
       home[i] = region_of(i);
       // A ramp or lift above its level queries the level (whose discs removed that material
       // too) but adds no disc to it: the level's material under it is still there.
-      const double lz = [&] {
-        for (const Level& l : levels) {
-          if (l.removed.get() == home[i]) return l.z_mm;
-        }
-        return std::numeric_limits<double>::quiet_NaN();
-      }();
-      above[i] = std::abs(smp.tz[i]) >= 1e-9 && smp.z_mm[i] > lz + kLevelTol;
+      // (region_of leaves the position's region current, current_z its level.)
+      above[i] = std::abs(smp.tz[i]) >= 1e-9 && smp.z_mm[i] > current_z + kLevelTol;
     }
     // The surface the previous tooth left: discs up to i - m, in their own regions.
     if (i >= static_cast<std::size_t>(m)) {
