@@ -507,6 +507,12 @@ TEST(Sim, ChipMapHdf5RoundTrip) {
   EXPECT_EQ(nonzero, r.chip_map.size());
   const auto file = std::filesystem::temp_directory_path() / "trochomill_chips_test.h5";
   write_chip_map_h5(file, m);
+  // The same map writes the same bytes (no time stamps in the file), a second later too.
+  const auto file2 = std::filesystem::temp_directory_path() / "trochomill_chips_test2.h5";
+  sleep(1);
+  write_chip_map_h5(file2, m);
+  EXPECT_EQ(test::read_file(file), test::read_file(file2));
+  std::filesystem::remove(file2);
   const ChipMapData back = read_chip_map_h5(file);
   std::filesystem::remove(file);
   EXPECT_EQ(back.teeth, 2u);
@@ -841,6 +847,119 @@ TEST(Sim, OutputsAreWrittenAsOneSet) {
 // The boards' material summaries: after random cuts, whenever a query says a stretch of rays
 // holds no material in a range, none of them does (checked ray by ray); and a range that
 // covers a ray's remaining material is always reported.
+// The envelope's X and Y boards against an independent reference: a polygon of 90 moves,
+// each 0.5 mm long and turned 10.5 degrees from the one before (two and a half loops, each
+// over the last, like a trochoid's), swept by an end mill with a 1 mm corner. Every corner lies on
+// one of the sweep's sample points, so its pieces are the moves themselves. On each ray the
+// material left must be the stock less the union, over the moves, of the points within the
+// contour's radius at the ray's height of the move: each such set on a line is an interval
+// (the distance to a segment is convex along the line), found here by golden section and bisection
+// (to 1e-16 mm). The sweep merges the moves' intervals row by row and skips moves its union already
+// covers: it must agree to 1e-9 mm (the pieces' closed forms round at about 1e-15 mm), the boards
+// must be the same bit for bit on one thread and on all, and the volume the same.
+TEST(Sim, EnvelopeRowsAreTheUnionOfTheMoves) {
+  const StockBox box{{-6, -4, -2}, {8, 12, 0}};
+  const double d = 0.05, z = -1.0;
+  ToolPath path;
+  std::vector<std::array<double, 4>> moves;  // (ax, ay, bx, by)
+  double x = 0, y = 0;
+  for (int k = 0; k < 90; ++k) {
+    const double a = deg_to_rad(10.5 * k);
+    const double nx = x + 0.5 * std::cos(a), ny = y + 0.5 * std::sin(a);
+    path.append(Segment::line(Vec3(x, y, z), Vec3(nx, ny, z), Motion::feed, 1200));
+    moves.push_back({x, y, nx, ny});
+    x = nx, y = ny;
+  }
+  SimTool tool = end_mill(0);
+  tool.radius_mm = 3;
+  tool.corner_radius_mm = 1;
+  TriDexel one(box, d), all(box, d);
+  double v_one = 0;
+  {
+    const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    v_one = sweep_envelope(path, tool, one, 0, path.duration_s());
+  }
+  const double v_all = sweep_envelope(path, tool, all, 0, path.duration_s());
+  EXPECT_EQ(v_one, v_all);
+  EXPECT_GT(v_all, 10.0);
+  // The points of the line {(t, across)} within r of segment A-B: [lo, hi] or nothing.
+  auto on_line = [](double ax, double ay, double bx, double by, double r,
+                    double across) -> std::optional<Interval> {
+    auto dist = [&](double t) {
+      const double ux = bx - ax, uy = by - ay, l2 = ux * ux + uy * uy;
+      const double s = std::clamp(((t - ax) * ux + (across - ay) * uy) / l2, 0.0, 1.0);
+      return std::hypot(t - ax - s * ux, across - ay - s * uy);
+    };
+    if (across < std::min(ay, by) - r || across > std::max(ay, by) + r) return std::nullopt;
+    double lo = std::min(ax, bx) - r - 1, hi = std::max(ax, bx) + r + 1;
+    for (int it = 0; it < 90; ++it) {  // 0.618^90 of 9 mm: below 1e-17 mm  // the convex distance's
+                                       // minimum (golden section)
+      const double m1 = lo + 0.382 * (hi - lo), m2 = lo + 0.618 * (hi - lo);
+      (dist(m1) < dist(m2) ? hi : lo) = dist(m1) < dist(m2) ? m2 : m1;
+    }
+    const double tm = 0.5 * (lo + hi);
+    if (dist(tm) > r) return std::nullopt;
+    auto root = [&](double in, double out) {
+      for (int it = 0; it < 64; ++it) {  // 2^-64 of 4 mm
+        const double m = 0.5 * (in + out);
+        (dist(m) <= r ? in : out) = m;
+      }
+      return 0.5 * (in + out);
+    };
+    return Interval{root(tm, tm - r - 1), root(tm, tm + r + 1)};
+  };
+  std::size_t rays = 0;
+  for (int b = 0; b < 2; ++b) {
+    const DexelBoard& board = all.boards[static_cast<std::size_t>(b)];
+    const DexelBoard& single = one.boards[static_cast<std::size_t>(b)];
+    for (int i = 0; i < board.count_u(); ++i) {
+      for (int j = 0; j < board.count_v(); ++j) {
+        const Dexel* got = board.find(i, j);
+        const Dexel* got1 = single.find(i, j);
+        ASSERT_EQ(got == nullptr, got1 == nullptr);
+        if (got != nullptr) {
+          ASSERT_TRUE(std::ranges::equal(
+              got->intervals(), got1->intervals(),
+              [](const Interval& p, const Interval& q) { return p.lo == q.lo && p.hi == q.hi; }))
+              << b << " " << i << " " << j;
+        }
+        if ((i + j) % 3 != 0) continue;  // a third of the rays against the reference
+        // Board 0: rays along x at (y, z) = (u, v); board 1: along y at (z, x) = (u, v).
+        const double h = (b == 0 ? board.v_of(j) : board.u_of(i)) - z;
+        const double across = b == 0 ? board.u_of(i) : board.v_of(j);
+        std::vector<Interval> cut;
+        const double r = tool.profile_radius(h);
+        if (h >= 0 && r > 0) {
+          for (const auto& m : moves) {
+            const auto iv = b == 0 ? on_line(m[0], m[1], m[2], m[3], r, across)
+                                   : on_line(m[1], m[0], m[3], m[2], r, across);
+            if (iv) cut.push_back(*iv);
+          }
+        }
+        std::sort(cut.begin(), cut.end(), [](auto& p, auto& q) { return p.lo < q.lo; });
+        std::vector<Interval> want;  // the stock along the ray less the union
+        double from = board.full().lo;
+        for (const Interval& c : cut) {
+          if (c.lo > from) want.push_back({from, std::min(c.lo, board.full().hi)});
+          from = std::max(from, c.hi);
+        }
+        if (from < board.full().hi) want.push_back({from, board.full().hi});
+        std::erase_if(want, [](const Interval& v) { return !(v.hi > v.lo); });
+        const std::vector<Interval> have =
+            got ? std::vector<Interval>(got->intervals().begin(), got->intervals().end())
+                : std::vector<Interval>{board.full()};
+        ASSERT_EQ(have.size(), want.size()) << b << " " << i << " " << j;
+        for (std::size_t q = 0; q < have.size(); ++q) {
+          EXPECT_NEAR(have[q].lo, want[q].lo, 1e-9) << b << " " << i << " " << j;
+          EXPECT_NEAR(have[q].hi, want[q].hi, 1e-9) << b << " " << i << " " << j;
+        }
+        ++rays;
+      }
+    }
+  }
+  EXPECT_GT(rays, 8000u);
+}
+
 TEST(Sim, BoardSummaryNeverHidesMaterial) {
   const StockBox box{{0, 0, 0}, {10, 7, 3}};
   DexelBoard board(0, box, 0.05);  // rays along x, 140 x 60 of them

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,11 @@ inline std::vector<std::filesystem::path> files_in(const std::filesystem::path& 
   }
   std::sort(out.begin(), out.end());
   return out;
+}
+// The whole file's bytes.
+inline std::string read_file(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 inline std::string first_line(const std::filesystem::path& p) {
   std::ifstream in(p);

@@ -61,6 +61,25 @@ struct SimTool {
   [[nodiscard]] int segment_at(double h) const;
 };
 
+/// A tool's contour with its constants taken once (the corner's top height, the flank's
+/// slope): the same numbers as SimTool's methods of the same names, without their
+/// trigonometry on every call (the simulation asks millions of times). Valid while the tool it
+/// was made from is unchanged.
+class Contour {
+ public:
+  explicit Contour(const SimTool& tool);
+  /// SimTool::profile_radius (mm; h in mm above the tip).
+  [[nodiscard]] double profile_radius(double h) const;
+  /// SimTool::heights_reaching (rho in mm).
+  [[nodiscard]] std::optional<Interval> heights_reaching(double rho) const;
+  /// SimTool::edge_sine.
+  [[nodiscard]] double edge_sine(double h) const;
+
+ private:
+  double radius_, rc_, rcen_, ht_, rt_, tan_lead_, sin_lead_, flank_ = 0;
+  bool cylindrical_;
+};
+
 /// One cell of an edge's structured grid: segment kappa along the edge, sub-segment tau
 /// inward from the outer edge across the face the chip meets (Bergmann 2021 Section 4.1).
 /// `normal` is the contour's outward normal d_n (the segment's radial direction); `facet` is

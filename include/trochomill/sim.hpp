@@ -113,14 +113,16 @@ class DexelBoard {
     const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d_ - 0.5)));
     return {i0, i1};
   }
-  /// The ray (i, j), created (as the full stock interval) if untouched.
+  /// The ray (i, j), created (as the full stock interval) if untouched. Threads may create
+  /// rays at once only in different tiles (kTile x kTile rays) and with the summary paused.
   Dexel& ray(int i, int j);
   /// The ray if it was ever touched, else nullptr (it then holds the full interval).
   [[nodiscard]] const Dexel* find(int i, int j) const;
   [[nodiscard]] Interval full() const noexcept { return full_; }
   /// Material volume represented by the board (mm^3): sum of lengths times d^2.
   [[nodiscard]] double volume_mm3() const;
-  [[nodiscard]] std::size_t tiles() const noexcept { return touched_; }
+  /// Tiles that were ever touched.
+  [[nodiscard]] std::size_t tiles() const noexcept;
   [[nodiscard]] std::size_t memory_bytes() const;
   /// Rays per tile side.
   static constexpr int kTile = 64;
@@ -162,7 +164,6 @@ class DexelBoard {
   double d_, u0_, v0_;
   int nu_, nv_, tu_ = 0, tv_ = 0;
   Interval full_;
-  std::size_t touched_ = 0;
   // Dense table of tile pointers (null: untouched), tu_ x tv_.
   std::vector<std::unique_ptr<Dexel[]>> tiles_;
   bool summarised_ = false, paused_ = false;

@@ -17,48 +17,60 @@ namespace trochomill {
 // The contour (see SimTool): corner arc about (R - rc, rc) from the face (angle phi = 0) to
 // phi_t = pi - kappa_r, at height h_t = rc (1 - cos phi_t) and radius r_t = R - rc + rc sin
 // phi_t; then the main edge, radius r_t - (h - h_t) cot kappa_r.
-double SimTool::profile_radius(double h) const {
+Contour::Contour(const SimTool& t)
+    : radius_(t.radius_mm),
+      rc_(t.corner_radius_mm),
+      rcen_(t.radius_mm - t.corner_radius_mm),
+      ht_(t.corner_radius_mm * (1 - std::cos(kPi - t.lead_rad))),
+      rt_(rcen_ + t.corner_radius_mm * std::sin(kPi - t.lead_rad)),
+      tan_lead_(std::tan(t.lead_rad)),
+      sin_lead_(std::sin(t.lead_rad)),
+      cylindrical_(t.lead_rad >= 0.5 * kPi - 1e-12) {
+  flank_ = profile_radius(ht_ + 1e-12);
+}
+
+double Contour::profile_radius(double h) const {
   if (h < 0) return -1;
-  const double rc = corner_radius_mm, rcen = radius_mm - rc;
-  const double ht = rc * (1 - std::cos(kPi - lead_rad));
-  if (h <= ht && rc > 0) {
-    const double dz = rc - h;
-    return rcen + std::sqrt(std::max(0.0, rc * rc - dz * dz));
+  if (h <= ht_ && rc_ > 0) {
+    const double dz = rc_ - h;
+    return rcen_ + std::sqrt(std::max(0.0, rc_ * rc_ - dz * dz));
   }
-  if (lead_rad >= 0.5 * kPi - 1e-12) return radius_mm;
-  const double rt = rcen + rc * std::sin(kPi - lead_rad);
-  const double r = rt - (h - ht) / std::tan(lead_rad);
+  if (cylindrical_) return radius_;
+  const double r = rt_ - (h - ht_) / tan_lead_;
   return r > 0 ? r : -1;
 }
 
-double SimTool::edge_sine(double h) const {
-  const double rc = corner_radius_mm;
-  const double ht = rc * (1 - std::cos(kPi - lead_rad));
-  if (h <= ht && rc > 0) {
-    const double c = std::clamp(1 - std::max(0.0, h) / rc, -1.0, 1.0);
+double Contour::edge_sine(double h) const {
+  if (h <= ht_ && rc_ > 0) {
+    const double c = std::clamp(1 - std::max(0.0, h) / rc_, -1.0, 1.0);
     return std::sqrt(std::max(0.0, 1 - c * c));  // sin phi
   }
-  return std::sin(lead_rad);
+  return sin_lead_;
 }
 
-std::optional<Interval> SimTool::heights_reaching(double rho) const {
-  const double rc = corner_radius_mm, rcen = radius_mm - rc;
-  const double ht = rc * (1 - std::cos(kPi - lead_rad));
-  if (rho > radius_mm) return std::nullopt;
-  double lo = 0, hi = ht;
-  if (rho > rcen) {  // on the arc: |rc - h| <= sqrt(rc^2 - q^2)
-    const double q = rho - rcen, sq = std::sqrt(std::max(0.0, rc * rc - q * q));
-    lo = rc - sq;
-    hi = std::min(ht, rc + sq);
+std::optional<Interval> Contour::heights_reaching(double rho) const {
+  if (rho > radius_) return std::nullopt;
+  double lo = 0, hi = ht_;
+  if (rho > rcen_) {  // on the arc: |rc - h| <= sqrt(rc^2 - q^2)
+    const double q = rho - rcen_, sq = std::sqrt(std::max(0.0, rc_ * rc_ - q * q));
+    lo = rc_ - sq;
+    hi = std::min(ht_, rc_ + sq);
   }
-  if (lead_rad >= 0.5 * kPi - 1e-12) {
-    if (rho <= profile_radius(ht + 1e-12) || rc == 0) hi = std::numeric_limits<double>::infinity();
+  if (cylindrical_) {
+    if (rho <= flank_ || rc_ == 0) hi = std::numeric_limits<double>::infinity();
   } else {
-    const double rt = rcen + rc * std::sin(kPi - lead_rad);
-    if (rho <= rt) hi = std::max(hi, ht + (rt - rho) * std::tan(lead_rad));
+    if (rho <= rt_) hi = std::max(hi, ht_ + (rt_ - rho) * tan_lead_);
   }
   if (!(hi >= lo)) return std::nullopt;
   return Interval{lo, hi};
+}
+
+double SimTool::profile_radius(double h) const { return Contour(*this).profile_radius(h); }
+
+double SimTool::edge_sine(double h) const { return Contour(*this).edge_sine(h); }
+
+std::optional<Interval> SimTool::heights_reaching(double rho) const {
+  return Contour(*this).heights_reaching(rho);
 }
 
 double SimTool::widest_height(double h0, double h1) const {

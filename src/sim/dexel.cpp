@@ -99,7 +99,6 @@ Dexel& DexelBoard::ray(int i, int j) {
   if (!tile) {
     tile = std::make_unique<Dexel[]>(kTile * kTile);
     for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = Dexel(full_);
-    ++touched_;
     if (summarised_ && !paused_) {
       // Every ray of the tile that exists holds the whole stock: all bins.
       auto sm = std::make_unique<Summary>();
@@ -114,7 +113,7 @@ Dexel& DexelBoard::ray(int i, int j) {
 }
 
 void DexelBoard::enable_summary() {
-  if (touched_ > 0) throw Error("DexelBoard::enable_summary: the board was already cut");
+  if (tiles() > 0) throw Error("DexelBoard::enable_summary: the board was already cut");
   summarised_ = true;
   bin_w_ = (full_.hi - full_.lo) / kBins;
   summaries_.resize(tiles_.size());
@@ -213,6 +212,11 @@ bool DexelBoard::may_hold(int i0, int i1, int j0, int j1, double lo, double hi) 
     }
   }
   return false;
+}
+
+std::size_t DexelBoard::tiles() const noexcept {
+  return static_cast<std::size_t>(
+      std::count_if(tiles_.begin(), tiles_.end(), [](const auto& t) { return t != nullptr; }));
 }
 
 const Dexel* DexelBoard::find(int i, int j) const {

@@ -218,6 +218,55 @@ double dist_to_piece(double px, double py, const Piece& p) {
   return std::sqrt(std::min(ax * ax + ay * ay, bx * bx + by * by));
 }
 
+// Pieces in runs of this many consecutive ones: a run's box bounds its pieces' reach on a
+// row, so that a row skips whole runs already inside what it removes.
+constexpr std::size_t kRun = 16;
+
+// The boxes (in plan) and tip heights of a run of pieces.
+struct Run {
+  std::size_t first = 0, last = 0;  // pieces [first, last)
+  std::array<double, 4> box{kInf, -kInf, kInf, -kInf};
+};
+
+// The union of a row's intervals, sorted and disjoint (intervals that touch are merged: a
+// dexel subtraction leaves nothing between them either way).
+class RowUnion {
+ public:
+  void clear() { v_.clear(); }
+  [[nodiscard]] bool covers(double lo, double hi) const {
+    for (const Interval& u : v_) {
+      if (u.lo <= lo && hi <= u.hi) return true;
+    }
+    return false;
+  }
+  void add(Interval a) {
+    std::size_t k = 0;
+    while (k < v_.size() && v_[k].hi < a.lo) ++k;
+    std::size_t e = k;
+    while (e < v_.size() && v_[e].lo <= a.hi) {
+      a.lo = std::min(a.lo, v_[e].lo), a.hi = std::max(a.hi, v_[e].hi);
+      ++e;
+    }
+    v_.erase(v_.begin() + static_cast<std::ptrdiff_t>(k),
+             v_.begin() + static_cast<std::ptrdiff_t>(e));
+    v_.insert(v_.begin() + static_cast<std::ptrdiff_t>(k), a);
+  }
+  [[nodiscard]] const std::vector<Interval>& intervals() const noexcept { return v_; }
+
+ private:
+  std::vector<Interval> v_;
+};
+
+// A box's reach within r on the line at `across` (its extent along the line grown by the
+// chord at its distance; a margin keeps it above the rounding of the exact pieces'): empty
+// when lo > hi.
+Interval box_on_line(double a_lo, double a_hi, double c_lo, double c_hi, double r, double across) {
+  const double dc = std::max({0.0, c_lo - across, across - c_hi});
+  if (!(r > dc)) return {kInf, -kInf};
+  const double w = std::sqrt(r * r - dc * dc) + 1e-9;
+  return {a_lo - w - 1e-9, a_hi + w + 1e-9};
+}
+
 }  // namespace
 
 double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
@@ -234,36 +283,80 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
           : *std::min_element(tool.axial_offset_mm.begin(), tool.axial_offset_mm.end());
   const double R = tool.radius_mm + r_off;
   const double top = work.box.hi[2];
+  const Contour contour(tool);
   // Chords within a quarter spacing of the path and at most 1 um: a chord of a curved path
   // falls short of the arc's outer side by its deviation, material the next cut would meet
   // as extra chip.
   const std::vector<Piece> pieces =
       pieces_of(path, t0_s, t1_s, std::min(0.05, d), std::min(0.25 * d, 0.001));
-  double volume = 0;
-  // The boards are independent: one task each. Their summaries are rebuilt after the burst.
+  const std::size_t np_all = pieces.size();
+  std::vector<std::array<double, 4>> boxes(np_all);
+  std::vector<double> tips(np_all), heights(np_all);
+  double tip_lo = kInf, tip_hi = -kInf;
+  for (std::size_t q = 0; q < np_all; ++q) {
+    boxes[q] = bbox(pieces[q]);
+    tips[q] = pieces[q].z + a_off;
+    heights[q] = std::min(tool.flute_length_mm, top - tips[q]);
+    if (heights[q] > 0) {
+      tip_lo = std::min(tip_lo, tips[q]);
+      tip_hi = std::max(tip_hi, tips[q] + heights[q]);
+    }
+  }
+  std::vector<Run> runs;
+  for (std::size_t q = 0; q < np_all; q += kRun) {
+    Run r;
+    r.first = q, r.last = std::min(np_all, q + kRun);
+    for (std::size_t k = r.first; k < r.last; ++k) {
+      r.box[0] = std::min(r.box[0], boxes[k][0]), r.box[1] = std::max(r.box[1], boxes[k][1]);
+      r.box[2] = std::min(r.box[2], boxes[k][2]), r.box[3] = std::max(r.box[3], boxes[k][3]);
+    }
+    runs.push_back(r);
+  }
+  // The work, in strips of whole tiles (each tile is only ever touched by one task: no two
+  // threads create or cut the same rays): the Z board's strips of columns along x, the X
+  // board's strips of rows along y, the Y board's along x.
+  struct Task {
+    int board, first, last;  // rows (X, Y boards) or columns (Z board) [first, last]
+  };
+  std::vector<Task> tasks;
+  if (tip_lo < tip_hi) {
+    for (int b = 0; b < 3; ++b) {
+      const DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
+      const int n = b == 1 ? board.count_v() : board.count_u();
+      for (int a = 0; a < n; a += DexelBoard::kTile) {
+        tasks.push_back({b, a, std::min(n, a + DexelBoard::kTile) - 1});
+      }
+    }
+  }
+  // The volume each task removed from the Z board, summed in task order: the same number for
+  // any thread count.
+  std::vector<double> volumes(tasks.size(), 0.0);
   for (auto& b : work.boards) b.pause_summary();
-  SharedProgress progress(hooks, 3 * pieces.size());
-  tbb::parallel_for(0, 3, [&](int bsel) {
+  SharedProgress progress(hooks, tasks.size());
+  tbb::parallel_for(std::size_t{0}, tasks.size(), [&](std::size_t t) {
+    if (hooks.cancelled()) return;
+    const Task task = tasks[t];
     std::vector<Interval> removed;
-    for (std::size_t q = 0; q < pieces.size(); ++q) {
-      if (hooks.cancelled()) break;
-      progress.add(1);
-      const Piece& p = pieces[q];
-      const double tip = p.z + a_off;
-      const double H = std::min(tool.flute_length_mm, top - tip);
-      if (!(H > 0)) continue;
-      // The start disc was inside the previous piece's capsule: only the rest is new (unless the
-      // tool went down since, when the previous piece left material below).
-      const bool skip_start =
-          q > 0 && !p.arc && !pieces[q - 1].arc && pieces[q - 1].z + a_off <= tip + 1e-9;
-      // The contour's smallest radius over the cutting height (unimodal: at an end).
-      const double flat =
-          std::max(0.0, std::min(tool.profile_radius(0), tool.profile_radius(H))) + r_off;
-      // Z board: rays along z at (x, y) = (u, v).
-      if (bsel == 2) {
-        DexelBoard& board = work.boards[2];
-        const auto bb = bbox(p);
-        const auto [i0, i1] = board.index_range(true, bb[0] - R, bb[1] + R);
+    if (task.board == 2) {
+      // Z board: rays along z at (x, y) = (u, v); each piece's region on the strip's columns,
+      // pieces in path order (a ray's cut depends on its distance to the piece).
+      DexelBoard& board = work.boards[2];
+      double volume = 0;
+      for (std::size_t q = 0; q < np_all; ++q) {
+        const Piece& p = pieces[q];
+        const double tip = tips[q], H = heights[q];
+        if (!(H > 0)) continue;
+        const auto& bb = boxes[q];
+        auto [i0, i1] = board.index_range(true, bb[0] - R, bb[1] + R);
+        i0 = std::max(i0, task.first), i1 = std::min(i1, task.last);
+        if (i0 > i1) continue;
+        // The start disc was inside the previous piece's capsule: only the rest is new (unless
+        // the tool went down since, when the previous piece left material below).
+        const bool skip_start =
+            q > 0 && !p.arc && !pieces[q - 1].arc && pieces[q - 1].z + a_off <= tip + 1e-9;
+        // The contour's smallest radius over the cutting height (unimodal: at an end).
+        const double flat =
+            std::max(0.0, std::min(contour.profile_radius(0), contour.profile_radius(H))) + r_off;
         Interval segs[6];
         for (int i = i0; i <= i1; ++i) {
           const double x = board.u_of(i);
@@ -282,7 +375,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
             const auto [j0, j1] = board.index_range(false, segs[k].lo, segs[k].hi);
             for (int j = j0; j <= j1; ++j) {
               const double rho = dist_to_piece(x, board.v_of(j), p);
-              const auto reach = tool.heights_reaching(rho - r_off);
+              const auto reach = contour.heights_reaching(rho - r_off);
               if (!reach) continue;
               removed.clear();
               board.subtract(i, j, tip + reach->lo, tip + std::min(H, reach->hi), removed);
@@ -291,53 +384,74 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
           }
         }
       }
+      volumes[t] = volume;
+    } else {
       // X board (rays along x at (y, z) = (u, v)) and Y board (rays along y at (z, x) = (u, v)):
-      // per layer, the piece's region of that height's radius on each row.
-      if (bsel < 2) {
-        const int b = bsel;
-        DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
-        const bool z_first = b == 1;
-        const auto [z0, z1] = z_first ? board.index_range(true, tip, tip + H)
-                                      : board.index_range(false, tip, tip + H);
-        const auto bb = bbox(p);
-        Interval segs[6];
-        for (int zl = z0; zl <= z1; ++zl) {
-          const double h = (z_first ? board.u_of(zl) : board.v_of(zl)) - tip;
-          if (h < 0 || h > H) continue;
-          const double Rh = tool.profile_radius(h) + r_off;
-          if (!(Rh > 0)) continue;
-          // Rows: board 0 over y, board 1 over x.
-          const auto [r0, r1] = b == 0 ? board.index_range(true, bb[2] - Rh, bb[3] + Rh)
-                                       : board.index_range(false, bb[0] - Rh, bb[1] + Rh);
-          for (int r = r0; r <= r1; ++r) {
-            const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
-            const double line = b == 0 ? board.u_of(i) : board.v_of(j);
-            int np = 0;
-            if (skip_start) {
-              const auto cap = b == 0 ? capsule_on_line(p.ax, p.ay, p.bx, p.by, Rh, line)
-                                      : capsule_on_line(p.ay, p.ax, p.by, p.bx, Rh, line);
-              if (!cap) continue;
-              np = minus(*cap,
-                         b == 0 ? capsule_on_line(p.ax, p.ay, p.ax, p.ay, Rh, line)
-                                : capsule_on_line(p.ay, p.ax, p.ay, p.ax, Rh, line),
-                         segs);
-            } else {
-              np = piece_on_line(p, Rh, line, b == 1, segs);
+      // per layer and row, the union of the pieces' regions of that height's radius on the row
+      // (each piece's exactly, as one subtraction each would remove), then one subtraction per
+      // interval of the union. Runs of pieces whose box's reach the union already covers are
+      // skipped whole.
+      const int b = task.board;
+      DexelBoard& board = work.boards[static_cast<std::size_t>(b)];
+      const bool z_first = b == 1;
+      const bool swap = b == 1;
+      const auto [z0, z1] = board.index_range(z_first, tip_lo, tip_hi);
+      std::vector<double> rh(np_all), run_r(runs.size());
+      RowUnion row;
+      Interval segs[6];
+      for (int zl = z0; zl <= z1; ++zl) {
+        const double z = z_first ? board.u_of(zl) : board.v_of(zl);
+        // Each piece's radius on this layer (-1: not cutting here), each run's largest.
+        bool any = false;
+        for (std::size_t q = 0; q < np_all; ++q) {
+          const double h = z - tips[q];
+          rh[q] = -1;
+          if (!(heights[q] > 0) || h < 0 || h > heights[q]) continue;
+          const double Rh = contour.profile_radius(h) + r_off;
+          if (Rh > 0) rh[q] = Rh, any = true;
+        }
+        if (!any) continue;
+        for (std::size_t g = 0; g < runs.size(); ++g) {
+          run_r[g] = -1;
+          for (std::size_t q = runs[g].first; q < runs[g].last; ++q) {
+            run_r[g] = std::max(run_r[g], rh[q]);
+          }
+        }
+        for (int r = task.first; r <= task.last; ++r) {
+          const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
+          const double line = b == 0 ? board.u_of(i) : board.v_of(j);
+          row.clear();
+          for (std::size_t g = 0; g < runs.size(); ++g) {
+            const auto& rb = runs[g].box;
+            const Interval reach = swap ? box_on_line(rb[2], rb[3], rb[0], rb[1], run_r[g], line)
+                                        : box_on_line(rb[0], rb[1], rb[2], rb[3], run_r[g], line);
+            if (reach.lo > reach.hi || row.covers(reach.lo, reach.hi)) continue;
+            for (std::size_t q = runs[g].first; q < runs[g].last; ++q) {
+              if (!(rh[q] > 0)) continue;
+              const auto& pb = boxes[q];
+              const Interval pr = swap ? box_on_line(pb[2], pb[3], pb[0], pb[1], rh[q], line)
+                                       : box_on_line(pb[0], pb[1], pb[2], pb[3], rh[q], line);
+              if (pr.lo > pr.hi || row.covers(pr.lo, pr.hi)) continue;
+              const int np = piece_on_line(pieces[q], rh[q], line, swap, segs);
+              for (int k = 0; k < np; ++k) row.add(segs[k]);
             }
-            for (int k = 0; k < np; ++k) {
-              if (board.find(i, j) == nullptr &&
-                  !(board.full().hi > segs[k].lo && board.full().lo < segs[k].hi)) {
-                continue;
-              }
-              removed.clear();
-              board.subtract(i, j, segs[k].lo, segs[k].hi, removed);
+          }
+          for (const Interval& v : row.intervals()) {
+            if (board.find(i, j) == nullptr &&
+                !(board.full().hi > v.lo && board.full().lo < v.hi)) {
+              continue;
             }
+            removed.clear();
+            board.subtract(i, j, v.lo, v.hi, removed);
           }
         }
       }
     }
+    progress.add(1);
   });
   for (auto& b : work.boards) b.resume_summary();
+  double volume = 0;
+  for (const double v : volumes) volume += v;
   return volume;
 }
 

@@ -95,6 +95,7 @@ class Stepper {
  public:
   Stepper(const SimTool& tool, const SimSettings& s, TriDexel& work)
       : tool_(tool),
+        contour_(tool),
         s_(s),
         work_(work),
         d_(work.boards[0].spacing()),
@@ -117,7 +118,7 @@ class Stepper {
     const double rmax = tool_.radius_mm + std::max(0.0, w.r_off);
     // The contour's smallest radius over the cutting height (it is unimodal: at an end).
     const double flat =
-        std::max(0.0, std::min(tool_.profile_radius(0), tool_.profile_radius(w.H))) + w.r_off;
+        std::max(0.0, std::min(contour_.profile_radius(0), contour_.profile_radius(w.H))) + w.r_off;
     // Rays nearer the centre than r_lo hold no material (annulus mode).
     const double r_lo = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, flat - w.r_in_drop);
     const double r_hi = rmax;
@@ -148,7 +149,7 @@ class Stepper {
           if (rho > rmax) continue;
           // The contour reaches rho only between these heights (the corner from below, a
           // lead angle from above).
-          const auto reach = tool_.heights_reaching(rho - w.r_off);
+          const auto reach = contour_.heights_reaching(rho - w.r_off);
           if (!reach) continue;
           const double hmin = reach->lo, hmax = reach->hi;
           const double th = std::atan2(dy, dx);
@@ -187,7 +188,8 @@ class Stepper {
               if (!(b > a)) continue;  // the piece only touches this segment
               A.seg_v[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg)] +=
                   (b - a) * d_ * d_;
-              if (note(A, k, a, (tool_.profile_radius(h) + w.r_off - rho) * tool_.edge_sine(h))) {
+              if (note(A, k, a,
+                       (contour_.profile_radius(h) + w.r_off - rho) * contour_.edge_sine(h))) {
                 // The engaged width: the pieces' extent along the segment.
                 extend(A, k, a, b);
               }
@@ -218,7 +220,7 @@ class Stepper {
       const double z = z_first ? board.u_of(zl) : board.v_of(zl);
       const double h = z - w.tip_z;
       if (h < 0 || h > w.H) continue;
-      const double R_h = tool_.profile_radius(h) + w.r_off;
+      const double R_h = contour_.profile_radius(h) + w.r_off;
       if (!(R_h > 0)) continue;
       const double r_in = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, R_h - w.r_in_drop);
       const double ah0 = w.a0 + h * kappa_, ah1 = w.a1 + h * kappa_;
@@ -267,7 +269,7 @@ class Stepper {
           A.removed_board += (p.hi - p.lo) * d_ * d_;
           // The piece's point nearest the centre: the perpendicular's foot, clamped.
           const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
-          if (note(A, k, h, (R_h - std::sqrt(perp * perp + t * t)) * tool_.edge_sine(h))) {
+          if (note(A, k, h, (R_h - std::sqrt(perp * perp + t * t)) * contour_.edge_sine(h))) {
             // One layer: a spacing of height.
             extend(A, k, h - 0.5 * d_, h + 0.5 * d_);
           }
@@ -309,6 +311,7 @@ class Stepper {
   }
 
   const SimTool& tool_;
+  const Contour contour_;  // the tool's contour, its constants taken once
   const SimSettings& s_;
   TriDexel& work_;
   double d_, kappa_;
