@@ -847,7 +847,7 @@ TEST(Sim, OutputsAreWrittenAsOneSet) {
 // The boards' material summaries: after random cuts, whenever a query says a stretch of rays
 // holds no material in a range, none of them does (checked ray by ray); and a range that
 // covers a ray's remaining material is always reported.
-// The envelope's X and Y boards against an independent reference: a polygon of 90 moves,
+// The envelope's boards against an independent reference: a polygon of 90 moves,
 // each 0.5 mm long and turned 10.5 degrees from the one before (two and a half loops, each
 // over the last, like a trochoid's), swept by an end mill with a 1 mm corner. Every corner lies on
 // one of the sweep's sample points, so its pieces are the moves themselves. On each ray the
@@ -958,6 +958,56 @@ TEST(Sim, EnvelopeRowsAreTheUnionOfTheMoves) {
     }
   }
   EXPECT_GT(rays, 8000u);
+  // The Z board: each ray cut from the tip up to where the contour reaches its distance from
+  // the nearest move (the nearer moves' height ranges hold the farther ones').
+  const DexelBoard& zb = all.boards[2];
+  std::size_t zrays = 0, corner = 0;
+  const double top = box.hi[2];
+  for (int i = 0; i < zb.count_u(); i += 2) {
+    for (int j = 0; j < zb.count_v(); j += 2) {
+      const double px = zb.u_of(i), py = zb.v_of(j);
+      double rho = 1e300;
+      for (const auto& m : moves) {
+        const double ux = m[2] - m[0], uy = m[3] - m[1];
+        const double s =
+            std::clamp(((px - m[0]) * ux + (py - m[1]) * uy) / (ux * ux + uy * uy), 0.0, 1.0);
+        rho = std::min(rho, std::hypot(px - m[0] - s * ux, py - m[1] - s * uy));
+      }
+      std::vector<Interval> want{zb.full()};
+      if (const auto reach = tool.heights_reaching(rho)) {
+        const double lo = z + reach->lo, hi = std::min(top, z + reach->hi);
+        if (hi > lo) {
+          want.clear();
+          if (lo > zb.full().lo) want.push_back({zb.full().lo, lo});
+          if (hi < zb.full().hi) want.push_back({hi, zb.full().hi});
+          corner += reach->lo > 0 ? 1 : 0;
+        }
+      }
+      const Dexel* got = zb.find(i, j);
+      const std::vector<Interval> have =
+          got ? std::vector<Interval>(got->intervals().begin(), got->intervals().end())
+              : std::vector<Interval>{zb.full()};
+      ASSERT_EQ(have.size(), want.size()) << i << " " << j << " " << rho;
+      for (std::size_t q = 0; q < have.size(); ++q) {
+        EXPECT_NEAR(have[q].lo, want[q].lo, 1e-9) << i << " " << j;
+        EXPECT_NEAR(have[q].hi, want[q].hi, 1e-9) << i << " " << j;
+      }
+      ++zrays;
+    }
+  }
+  EXPECT_GT(zrays, 10000u);
+  EXPECT_GT(corner, 1000u);  // rays under the corner's ring, cut part of the way only
+  for (int i = 0; i < zb.count_u(); ++i) {
+    for (int j = 0; j < zb.count_v(); ++j) {
+      const Dexel *a = zb.find(i, j), *b = one.boards[2].find(i, j);
+      ASSERT_EQ(a == nullptr, b == nullptr);
+      if (a != nullptr) {
+        ASSERT_TRUE(std::ranges::equal(a->intervals(), b->intervals(), [](auto& p, auto& q) {
+          return p.lo == q.lo && p.hi == q.hi;
+        }));
+      }
+    }
+  }
 }
 
 TEST(Sim, BoardSummaryNeverHidesMaterial) {

@@ -63,18 +63,6 @@ std::optional<Interval> capsule_on_line(double ax, double ay, double bx, double 
   return std::nullopt;
 }
 
-// [a] minus [b]: up to two intervals into out; returns how many.
-int minus(Interval a, std::optional<Interval> b, Interval* out) {
-  if (!b || b->hi <= a.lo || b->lo >= a.hi) {
-    out[0] = a;
-    return 1;
-  }
-  int n = 0;
-  if (a.lo < b->lo) out[n++] = {a.lo, b->lo};
-  if (b->hi < a.hi) out[n++] = {b->hi, a.hi};
-  return n;
-}
-
 double dist_to_segment(double px, double py, const Piece& p) {
   const double ux = p.bx - p.ax, uy = p.by - p.ay, l2 = ux * ux + uy * uy;
   double t = l2 > 0 ? ((px - p.ax) * ux + (py - p.ay) * uy) / l2 : 0.0;
@@ -267,6 +255,13 @@ Interval box_on_line(double a_lo, double a_hi, double c_lo, double c_hi, double 
   return {a_lo - w - 1e-9, a_hi + w + 1e-9};
 }
 
+// The distance from (x, y) to a box {x_lo, x_hi, y_lo, y_hi}: a lower bound of the distance to
+// anything inside it.
+double box_distance(const std::array<double, 4>& b, double x, double y) {
+  const double dx = std::max({0.0, b[0] - x, x - b[1]}), dy = std::max({0.0, b[2] - y, y - b[3]});
+  return std::sqrt(dx * dx + dy * dy);
+}
+
 }  // namespace
 
 double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
@@ -284,6 +279,11 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
   const double R = tool.radius_mm + r_off;
   const double top = work.box.hi[2];
   const Contour contour(tool);
+  // Within this distance of a piece its end face is flat and its flank reaches every height
+  // (cylindrical tools: the corner's centre circle; 0 otherwise: no shortcut).
+  const double flat_r = tool.lead_rad >= 0.5 * kPi - 1e-12
+                            ? std::max(0.0, tool.radius_mm - tool.corner_radius_mm) + r_off
+                            : -1.0;
   // Chords within a quarter spacing of the path and at most 1 um: a chord of a curved path
   // falls short of the arc's outer side by its deviation, material the next cut would meet
   // as extra chip.
@@ -302,16 +302,25 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       tip_hi = std::max(tip_hi, tips[q] + heights[q]);
     }
   }
+  // Runs of up to kRun pieces at one tip height (a run never spans a change of depth), and the
+  // groups of runs at one tip height (the Z board's cut depends on the tip).
   std::vector<Run> runs;
-  for (std::size_t q = 0; q < np_all; q += kRun) {
+  std::vector<std::size_t> group_start{0};  // runs [group_start[g], group_start[g + 1])
+  for (std::size_t q = 0; q < np_all;) {
     Run r;
-    r.first = q, r.last = std::min(np_all, q + kRun);
-    for (std::size_t k = r.first; k < r.last; ++k) {
-      r.box[0] = std::min(r.box[0], boxes[k][0]), r.box[1] = std::max(r.box[1], boxes[k][1]);
-      r.box[2] = std::min(r.box[2], boxes[k][2]), r.box[3] = std::max(r.box[3], boxes[k][3]);
+    r.first = q;
+    while (q < np_all && q - r.first < kRun && tips[q] == tips[r.first]) {
+      r.box[0] = std::min(r.box[0], boxes[q][0]), r.box[1] = std::max(r.box[1], boxes[q][1]);
+      r.box[2] = std::min(r.box[2], boxes[q][2]), r.box[3] = std::max(r.box[3], boxes[q][3]);
+      ++q;
+    }
+    r.last = q;
+    if (!runs.empty() && tips[r.first] != tips[runs.back().first]) {
+      group_start.push_back(runs.size());
     }
     runs.push_back(r);
   }
+  group_start.push_back(runs.size());
   // The work, in strips of whole tiles (each tile is only ever touched by one task: no two
   // threads create or cut the same rays): the Z board's strips of columns along x, the X
   // board's strips of rows along y, the Y board's along x.
@@ -338,48 +347,80 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
     const Task task = tasks[t];
     std::vector<Interval> removed;
     if (task.board == 2) {
-      // Z board: rays along z at (x, y) = (u, v); each piece's region on the strip's columns,
-      // pieces in path order (a ray's cut depends on its distance to the piece).
+      // Z board: rays along z at (x, y) = (u, v). A piece cuts a ray from its tip up to where
+      // the contour reaches the ray's distance from it; those height ranges are nested (the
+      // nearer, the larger), so the pieces at one tip cut what the nearest one cuts. Per
+      // column and tip: the union of the pieces' reach (radius R) on the column; within it,
+      // where a piece passes within the flat part of the end face (cylindrical tools: the
+      // contour reaches every height there), the whole height; elsewhere (the corner's ring)
+      // the nearest piece's distance, runs of pieces farther than the best found skipped.
       DexelBoard& board = work.boards[2];
       double volume = 0;
-      for (std::size_t q = 0; q < np_all; ++q) {
-        const Piece& p = pieces[q];
-        const double tip = tips[q], H = heights[q];
-        if (!(H > 0)) continue;
-        const auto& bb = boxes[q];
-        auto [i0, i1] = board.index_range(true, bb[0] - R, bb[1] + R);
-        i0 = std::max(i0, task.first), i1 = std::min(i1, task.last);
-        if (i0 > i1) continue;
-        // The start disc was inside the previous piece's capsule: only the rest is new (unless
-        // the tool went down since, when the previous piece left material below).
-        const bool skip_start =
-            q > 0 && !p.arc && !pieces[q - 1].arc && pieces[q - 1].z + a_off <= tip + 1e-9;
-        // The contour's smallest radius over the cutting height (unimodal: at an end).
-        const double flat =
-            std::max(0.0, std::min(contour.profile_radius(0), contour.profile_radius(H))) + r_off;
-        Interval segs[6];
-        for (int i = i0; i <= i1; ++i) {
-          const double x = board.u_of(i);
-          // In the frame of lines x = const: along y, across x.
-          int np = 0;
-          if (skip_start) {
-            // Within the corner's reach the depth depends on the distance, which this piece
-            // may bring nearer: only the start disc's flat part was finished.
-            const auto cap = capsule_on_line(p.ay, p.ax, p.by, p.bx, R, x);
-            if (!cap) continue;
-            np = minus(*cap, capsule_on_line(p.ay, p.ax, p.ay, p.ax, flat, x), segs);
-          } else {
-            np = piece_on_line(p, R, x, true, segs);
+      RowUnion reach_all, reach_flat;
+      Interval segs[6];
+      std::size_t hint = 0;
+      for (int i = task.first; i <= task.last; ++i) {
+        const double x = board.u_of(i);
+        for (std::size_t g = 0; g + 1 < group_start.size(); ++g) {
+          const std::size_t g0 = group_start[g], g1 = group_start[g + 1];
+          const double tip = tips[runs[g0].first], H = heights[runs[g0].first];
+          if (!(H > 0)) continue;
+          reach_all.clear(), reach_flat.clear();
+          for (std::size_t k = g0; k < g1; ++k) {
+            const auto& rb = runs[k].box;
+            const Interval ra = box_on_line(rb[2], rb[3], rb[0], rb[1], R, x);
+            if (ra.lo > ra.hi) continue;
+            const bool need_all = !reach_all.covers(ra.lo, ra.hi);
+            const Interval rf = box_on_line(rb[2], rb[3], rb[0], rb[1], flat_r, x);
+            const bool need_flat = rf.lo <= rf.hi && !reach_flat.covers(rf.lo, rf.hi);
+            if (!need_all && !need_flat) continue;
+            for (std::size_t q = runs[k].first; q < runs[k].last; ++q) {
+              const auto& pb = boxes[q];
+              if (need_all) {
+                const Interval pr = box_on_line(pb[2], pb[3], pb[0], pb[1], R, x);
+                if (pr.lo <= pr.hi && !reach_all.covers(pr.lo, pr.hi)) {
+                  const int n = piece_on_line(pieces[q], R, x, true, segs);
+                  for (int e = 0; e < n; ++e) reach_all.add(segs[e]);
+                }
+              }
+              if (need_flat) {
+                const Interval pr = box_on_line(pb[2], pb[3], pb[0], pb[1], flat_r, x);
+                if (pr.lo <= pr.hi && !reach_flat.covers(pr.lo, pr.hi)) {
+                  const int n = piece_on_line(pieces[q], flat_r, x, true, segs);
+                  for (int e = 0; e < n; ++e) reach_flat.add(segs[e]);
+                }
+              }
+            }
           }
-          for (int k = 0; k < np; ++k) {
-            const auto [j0, j1] = board.index_range(false, segs[k].lo, segs[k].hi);
+          const auto& flats = reach_flat.intervals();
+          std::size_t f = 0;
+          for (const Interval& v : reach_all.intervals()) {
+            const auto [j0, j1] = board.index_range(false, v.lo, v.hi);
             for (int j = j0; j <= j1; ++j) {
-              const double rho = dist_to_piece(x, board.v_of(j), p);
-              const auto reach = contour.heights_reaching(rho - r_off);
-              if (!reach) continue;
+              const double y = board.v_of(j);
+              while (f < flats.size() && flats[f].hi < y) ++f;
               removed.clear();
-              board.subtract(i, j, tip + reach->lo, tip + std::min(H, reach->hi), removed);
-              for (const Interval& v : removed) volume += (v.hi - v.lo) * d * d;
+              if (f < flats.size() && flats[f].lo <= y) {
+                board.subtract(i, j, tip, tip + H, removed);
+              } else {
+                // The nearest piece: the last ray's first, then every run not surely farther.
+                double best = kInf;
+                if (hint >= runs[g0].first && hint < runs[g1 - 1].last) {
+                  best = dist_to_piece(x, y, pieces[hint]);
+                }
+                for (std::size_t k = g0; k < g1; ++k) {
+                  if (box_distance(runs[k].box, x, y) > best + 1e-9) continue;
+                  for (std::size_t q = runs[k].first; q < runs[k].last; ++q) {
+                    if (box_distance(boxes[q], x, y) > best + 1e-9) continue;
+                    const double rho = dist_to_piece(x, y, pieces[q]);
+                    if (rho < best) best = rho, hint = q;
+                  }
+                }
+                const auto reach = contour.heights_reaching(best - r_off);
+                if (!reach) continue;
+                board.subtract(i, j, tip + reach->lo, tip + std::min(H, reach->hi), removed);
+              }
+              for (const Interval& p : removed) volume += (p.hi - p.lo) * d * d;
             }
           }
         }
