@@ -24,13 +24,28 @@ struct Piece {
   double ax, ay, bx, by, z;
   bool arc = false;
   double cx = 0, cy = 0, rho = 0, th0 = 0, th1 = 0;
+  // A chord's length and unit direction in the plan frame and in the swapped one ((y, x)),
+  // taken once (set by with_direction).
+  std::array<double, 3> dir{}, dir_swapped{};
 };
+
+// The length and unit direction of the segment (ax, ay)-(bx, by): {L, ux / L, uy / L}.
+std::array<double, 3> direction(double ax, double ay, double bx, double by) {
+  const double ux = bx - ax, uy = by - ay, L = std::hypot(ux, uy);
+  return L > 0 ? std::array<double, 3>{L, ux / L, uy / L} : std::array<double, 3>{0, 0, 0};
+}
+
+Piece with_direction(Piece p) {
+  p.dir = direction(p.ax, p.ay, p.bx, p.by);
+  p.dir_swapped = direction(p.ay, p.ax, p.by, p.bx);
+  return p;
+}
 
 // The offsets along a line of the points within r of the segment A-B (a capsule), in the
 // line's frame: the line is {(t, yl)}, the segment from (ax, ay) to (bx, by). Convex: one
 // interval, the hull of the two end discs' chords and the band's.
-std::optional<Interval> capsule_on_line(double ax, double ay, double bx, double by, double r,
-                                        double yl) {
+std::optional<Interval> capsule_on_line(double ax, double ay, double bx, double by,
+                                        const std::array<double, 3>& dir, double r, double yl) {
   double lo = kInf, hi = -kInf;
   auto disc = [&](double cx, double cy) {
     const double dy = yl - cy;
@@ -40,10 +55,10 @@ std::optional<Interval> capsule_on_line(double ax, double ay, double bx, double 
   };
   disc(ax, ay);
   disc(bx, by);
-  const double ux = bx - ax, uy = by - ay, L = std::hypot(ux, uy);
+  const double L = dir[0];
   if (L > 0) {
     // 0 <= (X - A).u <= L and |(X - A).n| <= r with X = (t, yl): linear in t.
-    const double ex = ux / L, ey = uy / L;
+    const double ex = dir[1], ey = dir[2];
     double t0 = -kInf, t1 = kInf;
     auto band = [&](double coef, double rest, double lo_v, double hi_v) {
       // lo_v <= coef t + rest <= hi_v
@@ -189,8 +204,8 @@ int piece_on_line(const Piece& p, double r, double yl, bool swap, Interval out[4
     return swap ? arc_on_line(p.cy, p.cx, p.rho, 0.5 * kPi - p.th1, 0.5 * kPi - p.th0, r, yl, out)
                 : arc_on_line(p.cx, p.cy, p.rho, p.th0, p.th1, r, yl, out);
   }
-  const auto cap = swap ? capsule_on_line(p.ay, p.ax, p.by, p.bx, r, yl)
-                        : capsule_on_line(p.ax, p.ay, p.bx, p.by, r, yl);
+  const auto cap = swap ? capsule_on_line(p.ay, p.ax, p.by, p.bx, p.dir_swapped, r, yl)
+                        : capsule_on_line(p.ax, p.ay, p.bx, p.by, p.dir, r, yl);
   if (!cap) return 0;
   out[0] = *cap;
   return 1;
@@ -287,8 +302,9 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
   // Chords within a quarter spacing of the path and at most 1 um: a chord of a curved path
   // falls short of the arc's outer side by its deviation, material the next cut would meet
   // as extra chip.
-  const std::vector<Piece> pieces =
+  std::vector<Piece> pieces =
       pieces_of(path, t0_s, t1_s, std::min(0.05, d), std::min(0.25 * d, 0.001));
+  for (Piece& p : pieces) p = with_direction(p);
   const std::size_t np_all = pieces.size();
   std::vector<std::array<double, 4>> boxes(np_all);
   std::vector<double> tips(np_all), heights(np_all);
@@ -437,9 +453,31 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       const bool z_first = b == 1;
       const bool swap = b == 1;
       const auto [z0, z1] = board.index_range(z_first, tip_lo, tip_hi);
-      std::vector<double> rh(np_all), run_r(runs.size());
+      std::vector<double> rh(np_all), run_r(runs.size()), prev_rh;
       RowUnion row;
       Interval segs[6];
+      // The strip's rows' unions (kept while the layers' radii stay the same: above the
+      // corner every layer has the same), the runs that reach the strip on this layer, and the
+      // pieces that shaped the last row's union (tried first on the next: neighbouring rows
+      // have nearly the same union, and the runs it covers are then skipped at once).
+      std::vector<std::vector<Interval>> unions(
+          static_cast<std::size_t>(task.last - task.first + 1));
+      std::vector<std::size_t> active, seed, next_seed;
+      const double strip_lo = b == 0 ? board.u_of(task.first) : board.v_of(task.first);
+      const double strip_hi = b == 0 ? board.u_of(task.last) : board.v_of(task.last);
+      bool have_prev = false;
+      auto try_piece = [&](std::size_t q, double line) {
+        const auto& pb = boxes[q];
+        const Interval pr = swap ? box_on_line(pb[2], pb[3], pb[0], pb[1], rh[q], line)
+                                 : box_on_line(pb[0], pb[1], pb[2], pb[3], rh[q], line);
+        if (pr.lo > pr.hi || row.covers(pr.lo, pr.hi)) return;
+        const int np = piece_on_line(pieces[q], rh[q], line, swap, segs);
+        bool grew = false;
+        for (int k = 0; k < np; ++k) {
+          if (!row.covers(segs[k].lo, segs[k].hi)) row.add(segs[k]), grew = true;
+        }
+        if (grew) next_seed.push_back(q);
+      };
       for (int zl = z0; zl <= z1; ++zl) {
         const double z = z_first ? board.u_of(zl) : board.v_of(zl);
         // Each piece's radius on this layer (-1: not cutting here), each run's largest.
@@ -451,33 +489,50 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
           const double Rh = contour.profile_radius(h) + r_off;
           if (Rh > 0) rh[q] = Rh, any = true;
         }
-        if (!any) continue;
-        for (std::size_t g = 0; g < runs.size(); ++g) {
-          run_r[g] = -1;
-          for (std::size_t q = runs[g].first; q < runs[g].last; ++q) {
-            run_r[g] = std::max(run_r[g], rh[q]);
+        if (!any) {
+          have_prev = false;
+          continue;
+        }
+        if (!have_prev || rh != prev_rh) {
+          active.clear();
+          for (std::size_t g = 0; g < runs.size(); ++g) {
+            run_r[g] = -1;
+            for (std::size_t q = runs[g].first; q < runs[g].last; ++q) {
+              run_r[g] = std::max(run_r[g], rh[q]);
+            }
+            const auto& rb = runs[g].box;
+            const double c_lo = swap ? rb[0] : rb[2], c_hi = swap ? rb[1] : rb[3];
+            if (run_r[g] > 0 && c_lo - run_r[g] <= strip_hi + 1e-9 &&
+                c_hi + run_r[g] >= strip_lo - 1e-9) {
+              active.push_back(g);
+            }
           }
+          for (int r = task.first; r <= task.last; ++r) {
+            const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
+            const double line = b == 0 ? board.u_of(i) : board.v_of(j);
+            row.clear();
+            next_seed.clear();
+            for (const std::size_t q : seed) {
+              if (rh[q] > 0) try_piece(q, line);
+            }
+            for (const std::size_t g : active) {
+              const auto& rb = runs[g].box;
+              const Interval reach = swap ? box_on_line(rb[2], rb[3], rb[0], rb[1], run_r[g], line)
+                                          : box_on_line(rb[0], rb[1], rb[2], rb[3], run_r[g], line);
+              if (reach.lo > reach.hi || row.covers(reach.lo, reach.hi)) continue;
+              for (std::size_t q = runs[g].first; q < runs[g].last; ++q) {
+                if (rh[q] > 0) try_piece(q, line);
+              }
+            }
+            unions[static_cast<std::size_t>(r - task.first)] = row.intervals();
+            seed.swap(next_seed);
+          }
+          prev_rh = rh;
+          have_prev = true;
         }
         for (int r = task.first; r <= task.last; ++r) {
           const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
-          const double line = b == 0 ? board.u_of(i) : board.v_of(j);
-          row.clear();
-          for (std::size_t g = 0; g < runs.size(); ++g) {
-            const auto& rb = runs[g].box;
-            const Interval reach = swap ? box_on_line(rb[2], rb[3], rb[0], rb[1], run_r[g], line)
-                                        : box_on_line(rb[0], rb[1], rb[2], rb[3], run_r[g], line);
-            if (reach.lo > reach.hi || row.covers(reach.lo, reach.hi)) continue;
-            for (std::size_t q = runs[g].first; q < runs[g].last; ++q) {
-              if (!(rh[q] > 0)) continue;
-              const auto& pb = boxes[q];
-              const Interval pr = swap ? box_on_line(pb[2], pb[3], pb[0], pb[1], rh[q], line)
-                                       : box_on_line(pb[0], pb[1], pb[2], pb[3], rh[q], line);
-              if (pr.lo > pr.hi || row.covers(pr.lo, pr.hi)) continue;
-              const int np = piece_on_line(pieces[q], rh[q], line, swap, segs);
-              for (int k = 0; k < np; ++k) row.add(segs[k]);
-            }
-          }
-          for (const Interval& v : row.intervals()) {
+          for (const Interval& v : unions[static_cast<std::size_t>(r - task.first)]) {
             if (board.find(i, j) == nullptr &&
                 !(board.full().hi > v.lo && board.full().lo < v.hi)) {
               continue;
