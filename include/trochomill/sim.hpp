@@ -266,7 +266,8 @@ struct HeightField {
 /// along chords within a quarter spacing of the path and 1 um, without teeth or time steps. Fast:
 /// the workpiece as that part of the cut leaves it, less the feed marks (about f_z^2 / 8R) the
 /// teeth would leave. Returns the volume removed from the Z board (mm^3).
-/// `hooks`: progress over the pieces (all boards); `hooks.cancel` stops it between pieces.
+/// Works in strips of whole tiles on every core; the result is the same for any thread count.
+/// `hooks`: progress over the strips (all boards); `hooks.cancel` stops it between strips.
 double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work, double t0_s,
                       double t1_s, const RunHooks& hooks = {});
 

@@ -223,7 +223,7 @@ double dist_to_piece(double px, double py, const Piece& p) {
 
 // Pieces in runs of this many consecutive ones: a run's box bounds its pieces' reach on a
 // row, so that a row skips whole runs already inside what it removes.
-constexpr std::size_t kRun = 16;
+constexpr std::size_t kRun = 8;
 
 // The boxes (in plan) and tip heights of a run of pieces.
 struct Run {
