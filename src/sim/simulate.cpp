@@ -216,29 +216,6 @@ class Stepper {
       flat_slicer.emplace(b == 0 ? SectorSlicer(w.a0, w.a1)
                                  : SectorSlicer(w.a0 - 0.5 * kPi, w.a1 - 0.5 * kPi));
     }
-    // The whole wedge first: the box of its sector over every height (the angles it sweeps
-    // along the helix, from the contour's narrowest less the drop out to its widest), grown by
-    // a spacing, holds every layer's box. When the summaries find nothing there, no layer has
-    // anything: the tooth is out of the cut (most of its turn), and its layers are not visited.
-    if (!s_.exhaustive && z0 <= z1) {
-      const double span_lo = kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_;
-      const double span_hi = kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1;
-      const double r_out = tool_.radius_mm + w.r_off;
-      const double narrowest =
-          std::min(contour_.profile_radius(0), contour_.profile_radius(w.H)) + w.r_off;
-      const double r_in = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, narrowest - w.r_in_drop);
-      const auto bx = span_hi - span_lo >= kPi ? std::array<double, 4>{-r_out, r_out, -r_out, r_out}
-                                               : annular_box(span_lo, span_hi, r_in, r_out);
-      const double x_lo = w.cx + bx[0] - d_, x_hi = w.cx + bx[1] + d_;
-      const double y_lo = w.cy + bx[2] - d_, y_hi = w.cy + bx[3] + d_;
-      if (b == 0) {
-        const auto [r0, r1] = board.index_range(true, y_lo, y_hi);
-        if (r0 > r1 || !board.may_hold(r0, r1, z0, z1, x_lo, x_hi)) return;
-      } else {
-        const auto [r0, r1] = board.index_range(false, x_lo, x_hi);
-        if (r0 > r1 || !board.may_hold(z0, z1, r0, r1, y_lo, y_hi)) return;
-      }
-    }
     for (int zl = z0; zl <= z1; ++zl) {
       const double z = z_first ? board.u_of(zl) : board.v_of(zl);
       const double h = z - w.tip_z;
