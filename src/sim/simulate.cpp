@@ -216,7 +216,21 @@ class Stepper {
       flat_slicer.emplace(b == 0 ? SectorSlicer(w.a0, w.a1)
                                  : SectorSlicer(w.a0 - 0.5 * kPi, w.a1 - 0.5 * kPi));
     }
+    // Layers in bundles of kBundle: the summaries are asked once for a bundle (the box of its
+    // sector from the narrowest layer's annulus to the widest layer's radius, grown by a
+    // spacing, holds each layer's box), and a bundle with nothing is skipped whole; the tooth
+    // is out of the cut most of its turn. A bundle is thin enough that its annulus stays
+    // about as narrow as a layer's (the whole wedge's would reach into the wall under the
+    // corner, where every layer's radius differs).
     for (int zl = z0; zl <= z1; ++zl) {
+      if (!s_.exhaustive && (zl == z0 || zl % kBundle == 0)) {
+        // Bundles aligned to kBundle layers: never across a tile (kTile is a multiple).
+        const int end = std::min(z1, (zl / kBundle + 1) * kBundle - 1);
+        if (!bundle_may_hold(b, board, w, zl, end)) {
+          zl = end;
+          continue;
+        }
+      }
       const double z = z_first ? board.u_of(zl) : board.v_of(zl);
       const double h = z - w.tip_z;
       if (h < 0 || h > w.H) continue;
@@ -276,6 +290,38 @@ class Stepper {
         }
       }
     }
+  }
+
+  static constexpr int kBundle = 16;
+  static_assert(DexelBoard::kTile % kBundle == 0);
+
+  // Whether the layers [l0, l1] of board b (0 or 1) may hold material in wedge w's sectors
+  // (false only when the summaries are sure they do not).
+  bool bundle_may_hold(int b, const DexelBoard& board, const Wedge& w, int l0, int l1) const {
+    const bool z_first = b == 1;
+    const double h0 = (z_first ? board.u_of(l0) : board.v_of(l0)) - w.tip_z;
+    const double h1 = (z_first ? board.u_of(l1) : board.v_of(l1)) - w.tip_z;
+    const double lo = std::max(0.0, h0), hi = std::min(w.H, h1);
+    if (!(hi >= lo)) return false;  // no layer of the bundle is on the edge
+    // The contour is unimodal: narrowest at an end of [lo, hi], widest at widest_height.
+    const double narrowest =
+        std::min(contour_.profile_radius(lo), contour_.profile_radius(hi)) + w.r_off;
+    const double widest = contour_.profile_radius(tool_.widest_height(lo, hi)) + w.r_off;
+    if (!(widest > 0)) return false;
+    const double r_in = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, narrowest - w.r_in_drop - d_);
+    const double span_lo = kappa_ >= 0 ? w.a0 + lo * kappa_ : w.a0 + hi * kappa_;
+    const double span_hi = kappa_ >= 0 ? w.a1 + hi * kappa_ : w.a1 + lo * kappa_;
+    const double r_out = widest + d_;
+    const auto bx = span_hi - span_lo >= kPi ? std::array<double, 4>{-r_out, r_out, -r_out, r_out}
+                                             : annular_box(span_lo, span_hi, r_in, r_out);
+    const double x_lo = w.cx + bx[0] - d_, x_hi = w.cx + bx[1] + d_;
+    const double y_lo = w.cy + bx[2] - d_, y_hi = w.cy + bx[3] + d_;
+    if (b == 0) {
+      const auto [r0, r1] = board.index_range(true, y_lo, y_hi);
+      return r0 <= r1 && board.may_hold(r0, r1, l0, l1, x_lo, x_hi);
+    }
+    const auto [r0, r1] = board.index_range(false, x_lo, x_hi);
+    return r0 <= r1 && board.may_hold(l0, l1, r0, r1, y_lo, y_hi);
   }
 
   // SimTool::edge_length_at with the constants taken once.
