@@ -242,6 +242,8 @@ class Stepper {
       const SectorSlicer slicer = flat_slicer ? *flat_slicer
                                   : b == 0    ? SectorSlicer(ah0, ah1)
                                               : SectorSlicer(ah0 - 0.5 * kPi, ah1 - 0.5 * kPi);
+      int sg_h = -1, sg_mid = -1;
+      double sine = 0;
       // Rows: board 0 over y (its u), board 1 over x (its v).
       const auto [r0, r1] = b == 0 ? board.index_range(true, w.cy + bx[2], w.cy + bx[3])
                                    : board.index_range(false, w.cx + bx[0], w.cx + bx[1]);
@@ -279,13 +281,19 @@ class Stepper {
         if (board.subtract(i, j, along_c + off->lo, along_c + off->hi, A.removed) > 0) {
           ++A.updates;
         }
+        if (A.removed.empty()) continue;
+        if (sg_h < 0) {  // the layer's segments and edge sine, once a layer cuts
+          sg_h = seg_of(h);
+          sg_mid = seg_of(0.5 * ((h - 0.5 * d_) + (h + 0.5 * d_)));
+          sine = contour_.edge_sine(h);
+        }
         for (const Interval& p : A.removed) {
           A.removed_board += (p.hi - p.lo) * d_ * d_;
           // The piece's point nearest the centre: the perpendicular's foot, clamped.
           const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
-          if (note(A, k, h, (R_h - std::sqrt(perp * perp + t * t)) * contour_.edge_sine(h))) {
+          if (note_at(A, k, sg_h, (R_h - std::sqrt(perp * perp + t * t)) * sine)) {
             // One layer: a spacing of height.
-            extend(A, k, h - 0.5 * d_, h + 0.5 * d_);
+            extend_at(A, k, sg_mid, h - 0.5 * d_, h + 0.5 * d_);
           }
         }
       }
@@ -342,15 +350,22 @@ class Stepper {
   // Records a chip (mm) of tooth k at height h above its tip. Chips thinner than
   // chip_sampling are slivers of the discretisation, not engagement: not recorded.
   bool note(BoardAcc& A, std::size_t k, double h, double chip) const {
+    return note_at(A, k, seg_of(h), chip);
+  }
+  // The same in segment sg (seg_of(h)).
+  bool note_at(BoardAcc& A, std::size_t k, int sg, double chip) const {
     if (chip < s_.chip_sampling_mm) return false;
-    double& v = A.seg_h[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(seg_of(h))];
+    double& v = A.seg_h[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg)];
     v = std::max(v, chip);
     return true;
   }
   // Extends the engaged part of tooth k's segment at the middle of [h0, h1] (heights above
   // the tip, clipped to the segment).
   void extend(BoardAcc& A, std::size_t k, double h0, double h1) const {
-    const int sg = seg_of(0.5 * (h0 + h1));
+    extend_at(A, k, seg_of(0.5 * (h0 + h1)), h0, h1);
+  }
+  // The same in segment sg (seg_of of the middle).
+  void extend_at(BoardAcc& A, std::size_t k, int sg, double h0, double h1) const {
     const std::size_t q = k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg);
     A.seg_lo[q] = std::min(A.seg_lo[q], std::max(h0, seg_bottom(sg)));
     A.seg_hi[q] = std::max(A.seg_hi[q], std::min(h1, seg_top(sg)));
