@@ -355,16 +355,54 @@ TEST(Analysis, TwoLevelsEachCutTheirOwnLayer) {
   std::size_t first = 0, second = 0;
   for (std::size_t i = 0; i < s.size(); ++i) {
     if (s.y_mm[i] < 5 || s.y_mm[i] > 35) continue;  // inside the slot, clear of its ends
+    // Each level removes its own 1 mm layer: v D a_p = 10 mm/s x 10 mm x 1 mm (the second
+    // pass's whole front was cut by the first down to z = -1, up to the first pass's disc
+    // union dipping f_z^2 / 8R = 1.4e-4 mm inside x = +-5 between its discs, where the
+    // front meets 2 mm: 10 x 1.4e-4 x 2 sides mm^3/s at most).
     if (std::abs(s.z_mm[i] + 1) < 1e-9) {
       ++first;
       EXPECT_NEAR(e.h_max_mm[i], 0.075, 1e-9) << s.y_mm[i];
+      EXPECT_NEAR(e.removal_rate_mm3_per_s[i], 100.0, 1e-9) << s.y_mm[i];
     } else if (std::abs(s.z_mm[i] + 2) < 1e-9) {
       ++second;
       EXPECT_NEAR(e.h_max_mm[i], 0.075, 1e-9) << s.y_mm[i];
+      EXPECT_NEAR(e.removal_rate_mm3_per_s[i], 100.0, 2.8e-3) << s.y_mm[i];
     }
   }
   EXPECT_GT(first, 300u);
   EXPECT_GT(second, 300u);
+}
+
+// The removal rate counts the stock over each part of the front: a pass at z = -1 along x = 0
+// (D = 10 mm), then one at z = -2 along x = 2 in a stock box wider than both. The second
+// pass's advancing half spans x = -3 to 7: up to x = 5 the first pass took the stock down to
+// z = -1 (1 mm left over it), beyond x = 5 it reaches the top (2 mm): at v = 10 mm/s the rate
+// is 10 (8 x 1 + 2 x 2) = 120 mm^3/s (the top less z would say 200). The first pass's region
+// is a union of discs f_z = 0.075 mm apart, its edge at x = 5 dipping by f_z^2 / 8R =
+// 1.4e-4 mm between them: 10 x 1.4e-4 mm^3/s at most.
+TEST(Analysis, TheRemovalRateCountsTheStockOverEachPart) {
+  const Job job = test::straight_job(
+      10.0, 4, {parse_override("stock.min=[-10, 0, -5]"), parse_override("stock.max=[10, 40, 0]")});
+  const EngagementSeries e = program_engagement(
+      job,
+      "G21 G90 G17 G94\nG0 X0 Y-10 Z5\nG1 Z-1 F600\nG1 Y50\nG1 X2\nG1 Z-2\nG1 Y-10\nG0 Z5\n"
+      "M2\n");
+  const PathSamples& s = e.samples;
+  std::size_t first = 0, second = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s.y_mm[i] < 10 || s.y_mm[i] > 30) continue;  // clear of the box's ends
+    if (std::abs(s.z_mm[i] + 1) < 1e-9) {
+      ++first;
+      // The first pass: the front from x = -5 to 5, 1 mm of stock.
+      EXPECT_NEAR(e.removal_rate_mm3_per_s[i], 100.0, 1e-9) << s.y_mm[i];
+    } else if (std::abs(s.z_mm[i] + 2) < 1e-9) {
+      ++second;
+      EXPECT_NEAR(e.removal_rate_mm3_per_s[i], 120.0, 1.5e-3) << s.y_mm[i];
+      EXPECT_NEAR(e.swept_rate_mm2_per_s[i], 100.0, 1e-9) << s.y_mm[i];
+    }
+  }
+  EXPECT_GT(first, 200u);
+  EXPECT_GT(second, 200u);
 }
 
 // A lift inside a level and back (z = -1, up to -0.9 over the cut, down again): the link

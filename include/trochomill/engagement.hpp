@@ -59,6 +59,11 @@ struct EngagementSeries {
   /// speed v times R times the integral of cos(phi - phi_v) over the engaged arcs where the
   /// circle advances (cos > 0). Times the axial depth it is the removal rate.
   std::vector<double> swept_rate_mm2_per_s;
+  /// Material removal rate (mm^3/s): the swept rate of each part of the engaged arcs times
+  /// the height of stock over it, from the position's height up to the nearest Z level
+  /// above whose region removed it, else the stock's top (z = 0, or the [stock] box's top),
+  /// at most the flute length.
+  std::vector<double> removal_rate_mm3_per_s;
 };
 
 /// The radial chip of sample i (mm): its h_max, or 0 where the tool descends into stock no

@@ -387,6 +387,18 @@ ArcSet intersect(const ArcSet& a, const ArcSet& b) {
   return out;
 }
 
+// The part of a not in b.
+ArcSet minus(const ArcSet& a, const ArcSet& b) {
+  ArcSet gaps;  // the complement of b in [0, 2 pi]
+  double from = 0;
+  for (const auto& q : b) {
+    if (q.start_rad > from) gaps.push_back({from, q.start_rad});
+    from = std::max(from, q.end_rad);
+  }
+  if (from < kTwoPi) gaps.push_back({from, kTwoPi});
+  return intersect(a, gaps);
+}
+
 // Joins an arc ending at 2 pi with one starting at 0 (an arc through +X).
 std::vector<AngleArc> join_wrap(ArcSet s) {
   if (s.size() >= 2 && s.front().start_rad <= kEps && s.back().end_rad >= kTwoPi - kEps) {
@@ -621,6 +633,9 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   out.h_max_angle_rad.assign(n, 0.0);
   out.teeth_in_cut.assign(n, 0);
   out.swept_rate_mm2_per_s.assign(n, 0.0);
+  out.removal_rate_mm3_per_s.assign(n, 0.0);
+  const double flute = job.tool.flute_length_mm > 0 ? job.tool.flute_length_mm
+                                                    : std::numeric_limits<double>::infinity();
 
   const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
                        (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
@@ -742,6 +757,28 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     }
     out.teeth_in_cut[i] = teeth;
     out.swept_rate_mm2_per_s[i] = swept_rate(smp, i, R, eng);
+    if (!eng.empty()) {
+      // The removal rate: each part of the engaged arcs sweeps stock from the position's
+      // height up to the nearest level above whose region removed it there, or up to the
+      // stock's top (at most the flute length).
+      const double z = smp.z_mm[i];
+      std::vector<const Level*> upper;
+      for (const Level& l : levels) {
+        if (!std::isnan(l.z_mm) && l.z_mm > z + kLevelTol && l.z_mm < top) upper.push_back(&l);
+      }
+      std::sort(upper.begin(), upper.end(),
+                [](const Level* a, const Level* b) { return a->z_mm < b->z_mm; });
+      ArcSet rest = eng;
+      double rate = 0;
+      for (const Level* l : upper) {
+        const ArcSet stock_above = l->removed->outside(cx, cy);
+        rate += swept_rate(smp, i, R, minus(rest, stock_above)) * std::min(flute, l->z_mm - z);
+        rest = intersect(rest, stock_above);
+        if (rest.empty()) break;
+      }
+      rate += swept_rate(smp, i, R, rest) * std::min(flute, top - z);
+      out.removal_rate_mm3_per_s[i] = rate;
+    }
     out.arcs[i] = join_wrap(std::move(eng));
   }
   return out;

@@ -98,7 +98,7 @@ Chips chips_of(const Job& job, const ToolPath& path, const RunHooks& hooks) {
     c.feed[i] = seg.motion() == Motion::rapid ? std::numeric_limits<double>::quiet_NaN()
                                               : seg.speed_mm_per_min();
     c.h_mm[i] = radial_chip_mm(e, i, R);
-    c.mrr[i] = e.swept_rate_mm2_per_s[i] * job.slot.depth_mm * 60.0;
+    c.mrr[i] = e.removal_rate_mm3_per_s[i] * 60.0;
     const double dt = i > 0 ? s.t_s[i] - s.t_s[i - 1] : 0.0;
     c.cut_dt_s[i] = c.h_mm[i] > 0 ? dt : 0.0;
     c.cutting_time_s += c.cut_dt_s[i];
