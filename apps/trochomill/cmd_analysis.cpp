@@ -43,7 +43,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       const ProcessMetrics m = analyze_with_forces(job, path, run.hooks());
       run.done();
       if (!a->json.empty()) emit(a->json, metrics_json(job, m));
-      if (!a->csv.empty()) emit(a->csv, series_csv(job, m.series));
+      if (!a->csv.empty()) emit(a->csv, series_csv(m.series));
       if (summary_to_stdout({&a->json, &a->csv})) {
         fmt::print("{}", metrics_text(a->job.file, a->gcode, job, m));
       }

@@ -132,11 +132,11 @@ MeasuredForces measured_of(
   return meas;
 }
 
-py::dict analyze_series(const Job& job, EngagementSeries&& e) {
+py::dict analyze_series(EngagementSeries&& e) {
   PathSamples& s = e.samples;
   std::vector<double> mrr(s.size());
   for (std::size_t i = 0; i < s.size(); ++i) {
-    mrr[i] = std::clamp(-s.z_mm[i], 0.0, job.slot.depth_mm) * e.swept_rate_mm2_per_s[i] * 60.0;
+    mrr[i] = e.removal_rate_mm3_per_s[i] * 60.0;
   }
   py::dict d;
   d["engagement_deg"] = to_array(degrees(e.engagement_angle_rad));
@@ -279,7 +279,7 @@ void bind_models(py::module_& m) {
         ProcessMetrics pm = run_released(
             [&](const RunHooks& h) { return analyze_with_forces(job, path, h); }, progress);
         py::dict out = from_json(metrics_json(job, pm));
-        out["series"] = analyze_series(job, std::move(pm.series));
+        out["series"] = analyze_series(std::move(pm.series));
         py::dict walls;  // the steady cycle's walls, as the JSON reports their texture
         if (pm.periodic && pm.texture_left) walls["left"] = profile_arrays(*pm.texture_left);
         if (pm.periodic && pm.texture_right) walls["right"] = profile_arrays(*pm.texture_right);

@@ -57,7 +57,7 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 
 /// The time series as CSV: t_s, x_mm, y_mm, z_mm, engaged angles (deg, "start:end" pairs
 /// separated by ';'), engagement_deg, h_max_mm, teeth_in_cut, mrr_mm3_per_min.
-[[nodiscard]] std::string series_csv(const Job& job, const EngagementSeries& e);
+[[nodiscard]] std::string series_csv(const EngagementSeries& e);
 
 /// One `--vary key=v1,v2,...` of a parameter study.
 [[nodiscard]] std::string study_table(const std::vector<Vary>& varies,

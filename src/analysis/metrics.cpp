@@ -294,11 +294,11 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   m.machining_time_s = path.duration_s();
   m.machining_time_accel_s = estimate_time_s(path, job.machine);
   m.slot_volume_mm3 = W * job.slot.length_mm * depth;
-  // What the program removes: the plan-view area the tool sweeps into stock times the depth
-  // it cuts at, sample by sample (a program need not clear the slot, or may cut it twice).
+  // What the program removes: the plan-view area the tool sweeps into stock times the stock's
+  // height over it, sample by sample (a program need not clear the slot, may cut it twice or
+  // at several levels: docs/models.md section 7, removal rate).
   for (std::size_t i = 0; i < n; ++i) {
-    m.removed_volume_mm3 +=
-        std::clamp(-s.z_mm[i], 0.0, depth) * e.swept_rate_mm2_per_s[i] * dt_sample;
+    m.removed_volume_mm3 += e.removal_rate_mm3_per_s[i] * dt_sample;
   }
   m.mrr_total_mm3_per_min = m.removed_volume_mm3 / m.machining_time_s * 60.0;
   m.feed_per_tooth_mm = job.cutting.feed_per_tooth_mm;
@@ -376,7 +376,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   for (std::size_t i = cf; i < cl; ++i) {
     const EngagementSeries& c = *cs;
     const double ap = std::clamp(-c.samples.z_mm[i], 0.0, depth);
-    swept += ap * c.swept_rate_mm2_per_s[i] * dt_sample;
+    swept += c.removal_rate_mm3_per_s[i] * dt_sample;
     if ((*ccut)[i]) {
       m.cutting_time_s += dt_sample;
       ap_sum += ap;

@@ -246,7 +246,7 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
   return out;
 }
 
-std::string series_csv(const Job& job, const EngagementSeries& e) {
+std::string series_csv(const EngagementSeries& e) {
   const PathSamples& s = e.samples;
   std::string out =
       "t_s,x_mm,y_mm,z_mm,engaged_arcs_deg,engagement_deg,h_max_mm,teeth_in_cut,"
@@ -259,11 +259,10 @@ std::string series_csv(const Job& job, const EngagementSeries& e) {
       fmt::format_to(std::back_inserter(arcs), "{:.4f}:{:.4f}", rad_to_deg(a.start_rad),
                      rad_to_deg(a.end_rad));
     }
-    const double ap = std::clamp(-s.z_mm[i], 0.0, job.slot.depth_mm);
     fmt::format_to(std::back_inserter(out),
                    "{:.6f},{:.6f},{:.6f},{:.6f},{},{:.4f},{:.7f},{},{:.3f}\n", s.t_s[i], s.x_mm[i],
                    s.y_mm[i], s.z_mm[i], arcs, rad_to_deg(e.engagement_angle_rad[i]), e.h_max_mm[i],
-                   e.teeth_in_cut[i], ap * e.swept_rate_mm2_per_s[i] * 60.0);
+                   e.teeth_in_cut[i], e.removal_rate_mm3_per_s[i] * 60.0);
   }
   return out;
 }
