@@ -1057,3 +1057,101 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// A closed box mesh (12 triangles, outward and counter-clockwise; the faces' diagonals run
+// through ray centres when the sides are whole multiples of the spacing).
+Mesh box_mesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+  Mesh m;
+  for (int k = 0; k < 8; ++k) {
+    m.vertices.push_back(
+        {(k & 1) ? hi[0] : lo[0], (k & 2) ? hi[1] : lo[1], (k & 4) ? hi[2] : lo[2]});
+  }
+  const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : f) {
+    m.triangles.push_back({q[0], q[1], q[2]});
+    m.triangles.push_back({q[0], q[2], q[3]});
+  }
+  return m;
+}
+
+// A box given as a mesh is the box: every ray of the three boards holds the same interval as
+// the box stock's (bit for bit: faces square to the rays are met at their exact height, and a
+// diagonal through a ray centre is taken by one of its two triangles, not both or neither).
+TEST(Sim, AMeshStockOfABoxIsTheBox) {
+  const StockBox box{{-1.0, 0.0, -0.5}, {1.0, 2.0, 0.5}};
+  const double d = 0.05;
+  const TriDexel from_mesh = stock_from_mesh(box_mesh(box.lo, box.hi), d);
+  const TriDexel plain(box, d);
+  for (std::size_t b = 0; b < 3; ++b) {
+    const DexelBoard& m = from_mesh.boards[b];
+    const DexelBoard& p = plain.boards[b];
+    ASSERT_EQ(m.count_u(), p.count_u());
+    ASSERT_EQ(m.count_v(), p.count_v());
+    EXPECT_EQ(m.volume_mm3(), p.volume_mm3()) << b;
+    for (int i = 0; i < m.count_u(); ++i) {
+      for (int j = 0; j < m.count_v(); ++j) {
+        const Dexel* r = m.find(i, j);
+        ASSERT_NE(r, nullptr);  // every ray is held
+        ASSERT_EQ(r->intervals().size(), 1u) << b << " " << i << " " << j;
+        EXPECT_EQ(r->intervals()[0].lo, p.full().lo);
+        EXPECT_EQ(r->intervals()[0].hi, p.full().hi);
+      }
+    }
+  }
+}
+
+// Two closed solids in one mesh: an octahedron |x| + |y| + |z| <= 1 (volume 4/3) and, apart
+// from it, a box with a box-shaped hole through it (its inner walls face inward): every board's
+// volume is the solids' (the midpoint rule over the rays: the octahedron's section lengths
+// are piecewise linear across the rays, its error under 2e-4 of the volume at 0.01 mm,
+// measured 1.8e-5 on each board), and rays through the hole are empty. A mesh with one triangle
+// missing is refused, naming a ray.
+TEST(Sim, AMeshStockHoldsWhatTheMeshEncloses) {
+  Mesh m;
+  const std::array<std::array<double, 3>, 6> v = {
+      {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}};
+  for (const auto& p : v) m.vertices.push_back(p);
+  for (const std::uint32_t x : {0u, 1u}) {
+    for (const std::uint32_t y : {2u, 3u}) {
+      for (const std::uint32_t z : {4u, 5u}) m.triangles.push_back({x, y, z});
+    }
+  }
+  auto add = [&m](const Mesh& o, bool inward) {
+    const auto base = static_cast<std::uint32_t>(m.vertices.size());
+    for (const auto& p : o.vertices) m.vertices.push_back(p);
+    for (auto t : o.triangles) {
+      if (inward) std::swap(t[1], t[2]);
+      m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+  };
+  add(box_mesh({2.0, -1.0, -1.0}, {4.0, 1.0, 1.0}), false);
+  add(box_mesh({2.5, -0.5, -1.0}, {3.5, 0.5, 1.0}), true);  // the hole, through along z
+  // Measured as a Z-board hole along z: its faces at z = -1, 1 coincide with the outer box's
+  // (the rays there cross four faces at two heights: in, in, out, out: no material).
+  const double volume = 4.0 / 3.0 + 2 * 2 * 2 - 1 * 1 * 2;
+  const TriDexel w = stock_from_mesh(m, 0.01);
+  for (std::size_t b = 0; b < 3; ++b) {
+    EXPECT_NEAR(w.boards[b].volume_mm3(), volume, 2e-4 * volume) << b;
+  }
+  const DexelBoard& z = w.boards[2];
+  const auto [i0, i1] = z.index_range(true, 2.6, 3.4);
+  const auto [j0, j1] = z.index_range(false, -0.4, 0.4);
+  for (int i = i0; i <= i1; ++i) {
+    for (int j = j0; j <= j1; ++j) EXPECT_TRUE(z.find(i, j)->intervals().empty()) << i << " " << j;
+  }
+  Mesh open = m;
+  open.triangles.erase(open.triangles.begin());
+  try {
+    (void)stock_from_mesh(open, 0.01);
+    ADD_FAILURE() << "an open mesh was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not closed"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace trochomill

@@ -23,6 +23,7 @@
 #include "trochomill/progress.hpp"
 #include "trochomill/settings/sim.hpp"
 #include "trochomill/surface.hpp"
+#include "trochomill/topography.hpp"
 
 namespace trochomill {
 
@@ -178,6 +179,20 @@ struct TriDexel {
   std::array<DexelBoard, 3> boards;
 };
 
+/// The box of a mesh's vertices (mm). Throws InputError for a mesh without triangles or with
+/// a coordinate that is not finite.
+[[nodiscard]] StockBox mesh_box(const Mesh& mesh);
+/// A stock given as a closed triangle mesh (mm, in the simulation's frame): three boards over
+/// its box, every ray cut to the mesh's inside (even-odd: the stretches between the 1st and
+/// 2nd crossings of its surface, the 3rd and 4th, ...). A ray through an edge or a vertex
+/// crosses it once: each point of the boards' plane belongs to one of the triangles that meet
+/// there (the rasteriser's top-left rule, on edge functions that are exact negatives of each
+/// other across an edge). Every ray is held (no untouched tiles; estimate_simulation_memory
+/// counts them). Throws InputError when a ray crosses the surface an odd number of times (an
+/// open mesh), naming the ray; `hooks.cancel` stops it with Interrupted.
+[[nodiscard]] TriDexel stock_from_mesh(const Mesh& mesh, double spacing_mm,
+                                       const RunHooks& hooks = {});
+
 /// One time step's results.
 struct SimStep {
   double t_s = 0;
@@ -297,8 +312,11 @@ struct JobSimulation {
 };
 /// Runs on `[simulation] threads` worker threads (0: all cores); the results are the same
 /// for any thread count.
+/// `stock_mesh`: the stock as a closed mesh in the path's frame (stock_from_mesh) instead of
+/// the job's box.
 [[nodiscard]] JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s,
-                                         double to_s, const SimControl& control = {});
+                                         double to_s, const SimControl& control = {},
+                                         const Mesh* stock_mesh = nullptr);
 
 /// What a job's simulation will hold in memory (bytes), estimated before running it: the
 /// boards' tiles over the region the tool visits up to the window's end, the per-step
@@ -314,7 +332,9 @@ struct MemoryEstimate {
     return boards_bytes + records_bytes + base_bytes + (with_map ? dense_map_bytes : 0.0);
   }
 };
+/// With `stock_mesh` the boards hold every ray of the mesh's box (stock_from_mesh).
 [[nodiscard]] MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path,
-                                                        double from_s, double to_s);
+                                                        double from_s, double to_s,
+                                                        const Mesh* stock_mesh = nullptr);
 
 }  // namespace trochomill

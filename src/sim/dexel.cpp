@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sim/geometry.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
 
@@ -271,6 +272,164 @@ TriDexel::TriDexel(const StockBox& b, double spacing_mm)
   // stretches be skipped without touching rays.
   boards[0].enable_summary();
   boards[1].enable_summary();
+}
+
+}  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// A point of a board's (u, v) plane.
+struct UV {
+  double u = 0, v = 0;
+};
+
+// The edge function of p against the edge a -> b (twice the signed area of a, b, p), computed
+// from the edge's lexicographically smaller end so that b -> a gives its exact negative: two
+// triangles that share an edge agree bit for bit on which side of it a point lies.
+double edge_fn(UV a, UV b, UV p) {
+  const bool swap = b.u < a.u || (b.u == a.u && b.v < a.v);
+  if (swap) std::swap(a, b);
+  const double e = (b.u - a.u) * (p.v - a.v) - (b.v - a.v) * (p.u - a.u);
+  return swap ? -e : e;
+}
+
+// The top-left rule for a counter-clockwise triangle: a point on the edge a -> b belongs to
+// the triangle when the edge runs downward, or runs leftward level. The neighbour across the
+// edge runs it the other way round, so exactly one of the two takes the point.
+bool takes_edge(UV a, UV b) { return b.v < a.v || (b.v == a.v && b.u < a.u); }
+
+}  // namespace
+
+StockBox mesh_box(const Mesh& mesh) {
+  using sim_detail::kInf;
+  if (mesh.triangles.empty()) throw InputError("the stock mesh has no triangles");
+  StockBox b;
+  b.lo = {kInf, kInf, kInf};
+  b.hi = {-kInf, -kInf, -kInf};
+  for (const auto& t : mesh.triangles) {
+    for (const std::uint32_t i : t) {
+      if (i >= mesh.vertices.size()) throw InputError("the stock mesh indexes a missing vertex");
+      const auto& p = mesh.vertices[i];
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (!std::isfinite(p[k]) || std::abs(p[k]) > 1e6) {
+          throw InputError(fmt::format(
+              "the stock mesh has a vertex coordinate {} (mm; finite, within 1 km)", p[k]));
+        }
+        b.lo[k] = std::min(b.lo[k], p[k]);
+        b.hi[k] = std::max(b.hi[k], p[k]);
+      }
+    }
+  }
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (!(b.hi[k] > b.lo[k])) {
+      throw InputError(fmt::format("the stock mesh is flat along {} (no volume)", "xyz"[k]));
+    }
+  }
+  return b;
+}
+
+TriDexel stock_from_mesh(const Mesh& mesh, double spacing_mm, const RunHooks& hooks) {
+  TriDexel work(mesh_box(mesh), spacing_mm);
+  std::vector<Interval> scratch;
+  for (int axis = 0; axis < 3; ++axis) {
+    DexelBoard& board = work.boards[static_cast<std::size_t>(axis)];
+    const auto a = static_cast<std::size_t>(axis), ua = static_cast<std::size_t>((axis + 1) % 3),
+               va = static_cast<std::size_t>((axis + 2) % 3);
+    const Interval full = board.full();
+    board.pause_summary();
+    // The triangles in the board's plane, counter-clockwise (flat ones, edge-on to the rays,
+    // are met by their neighbours' edges), with their u range.
+    struct Tri {
+      UV p[3];
+      double w[3];
+      double u_lo, u_hi;
+    };
+    std::vector<Tri> tris;
+    tris.reserve(mesh.triangles.size());
+    for (const auto& t : mesh.triangles) {
+      Tri tr{};
+      for (int k = 0; k < 3; ++k) {
+        const auto& q = mesh.vertices[t[static_cast<std::size_t>(k)]];
+        tr.p[k] = {q[ua], q[va]};
+        tr.w[k] = q[a];
+      }
+      const double area = edge_fn(tr.p[0], tr.p[1], tr.p[2]);
+      if (area == 0) continue;
+      if (area < 0) std::swap(tr.p[1], tr.p[2]), std::swap(tr.w[1], tr.w[2]);
+      tr.u_lo = std::min({tr.p[0].u, tr.p[1].u, tr.p[2].u});
+      tr.u_hi = std::max({tr.p[0].u, tr.p[1].u, tr.p[2].u});
+      tris.push_back(tr);
+    }
+    std::sort(tris.begin(), tris.end(), [](const Tri& x, const Tri& y) { return x.u_lo < y.u_lo; });
+    const int nu = board.count_u(), nv = board.count_v();
+    constexpr int kStrip = DexelBoard::kTile;
+    std::vector<std::vector<double>> hits(static_cast<std::size_t>(kStrip * nv));
+    std::size_t first = 0;  // the first triangle that may reach the strip (sorted by u_lo)
+    for (int i0 = 0; i0 < nu; i0 += kStrip) {
+      hooks.check("the stock mesh's dexels interrupted");
+      hooks.step(static_cast<std::size_t>(axis * nu + i0), static_cast<std::size_t>(3 * nu));
+      const int i1 = std::min(nu, i0 + kStrip);
+      const double strip_lo = board.u_of(i0), strip_hi = board.u_of(i1 - 1);
+      for (auto& h : hits) h.clear();
+      for (std::size_t q = first; q < tris.size() && tris[q].u_lo <= strip_hi; ++q) {
+        const Tri& t = tris[q];
+        if (t.u_hi < strip_lo) continue;
+        const auto [ti0, ti1] = board.index_range(true, t.u_lo, t.u_hi);
+        const int ri0 = std::max(ti0, i0), ri1 = std::min(ti1, i1 - 1);
+        const double v_lo = std::min({t.p[0].v, t.p[1].v, t.p[2].v});
+        const double v_hi = std::max({t.p[0].v, t.p[1].v, t.p[2].v});
+        const auto [rj0, rj1] = board.index_range(false, v_lo, v_hi);
+        const double area = edge_fn(t.p[0], t.p[1], t.p[2]);
+        for (int i = ri0; i <= ri1; ++i) {
+          for (int j = rj0; j <= rj1; ++j) {
+            const UV p{board.u_of(i), board.v_of(j)};
+            double e[3];
+            bool in = true;
+            for (int k = 0; k < 3 && in; ++k) {
+              const UV x = t.p[(k + 1) % 3], y = t.p[(k + 2) % 3];  // the edge facing vertex k
+              e[k] = edge_fn(x, y, p);
+              in = e[k] > 0 || (e[k] == 0 && takes_edge(x, y));
+            }
+            if (!in) continue;
+            // A face square to the rays (all its corners at one w) is met exactly there.
+            const double w = t.w[0] == t.w[1] && t.w[1] == t.w[2]
+                                 ? t.w[0]
+                                 : (e[0] * t.w[0] + e[1] * t.w[1] + e[2] * t.w[2]) / area;
+            hits[static_cast<std::size_t>((i - i0) * nv + j)].push_back(w);
+          }
+        }
+      }
+      while (first < tris.size() && tris[first].u_hi < strip_hi) ++first;
+      for (int i = i0; i < i1; ++i) {
+        for (int j = 0; j < nv; ++j) {
+          auto& h = hits[static_cast<std::size_t>((i - i0) * nv + j)];
+          if (h.size() % 2 != 0) {
+            throw InputError(fmt::format(
+                "the stock mesh is not closed: the ray along {} at {} = {:.6g} mm, {} = {:.6g} "
+                "mm crosses its surface {} times (an even number for a closed solid)",
+                "xyz"[a], "xyz"[ua], board.u_of(i), "xyz"[va], board.v_of(j), h.size()));
+          }
+          std::sort(h.begin(), h.end());
+          // The material is between crossings 1-2, 3-4, ...: cut the rest from the full ray.
+          double from = full.lo;
+          for (std::size_t k = 0; k < h.size(); k += 2) {
+            const double lo = std::clamp(h[k], full.lo, full.hi);
+            const double hi = std::clamp(h[k + 1], full.lo, full.hi);
+            if (!(hi > lo)) continue;
+            if (lo > from) (void)board.subtract(i, j, from, lo, scratch);
+            from = hi;
+            scratch.clear();
+          }
+          (void)board.ray(i, j);  // held even when the mesh fills it whole
+          if (full.hi > from) (void)board.subtract(i, j, from, full.hi, scratch);
+          scratch.clear();
+        }
+      }
+    }
+    board.resume_summary();
+  }
+  return work;
 }
 
 }  // namespace trochomill

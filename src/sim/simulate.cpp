@@ -614,13 +614,16 @@ std::pair<double, double> cycle_window(const ToolPath& path, int a, int b) {
 }
 
 JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double from_s,
-                                    double to_s, const SimControl& control) {
+                                    double to_s, const SimControl& control,
+                                    const Mesh* stock_mesh) {
   const SimSettings& s = job.simulation;
   if (!(from_s >= 0) || !(to_s > from_s)) {
     throw InputError(
         fmt::format("simulation window {} to {} s: need 0 <= from < to", from_s, to_s));
   }
-  TriDexel work(job_stock(job), s.resolution_mm);
+  if (stock_mesh) control.hooks.begin("stock: the mesh's dexels");
+  TriDexel work = stock_mesh ? stock_from_mesh(*stock_mesh, s.resolution_mm, control.hooks)
+                             : TriDexel(job_stock(job), s.resolution_mm);
   const SimTool tool = sim_tool(job, s);
   JobSimulation out;
   const auto clock = [] { return std::chrono::steady_clock::now(); };
@@ -660,7 +663,7 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
 }
 
 JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, double to_s,
-                           const SimControl& control) {
+                           const SimControl& control, const Mesh* stock_mesh) {
   // [simulation] threads: 0 = all cores. The results do not depend on it.
   const int threads = job.simulation.threads;
   if (threads < 0) {
@@ -668,13 +671,14 @@ JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, 
         fmt::format("[simulation] threads must be >= 0 (0: all cores), got {}", threads));
   }
   tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  return arena.execute([&] { return simulate_job_in_arena(job, path, from_s, to_s, control); });
+  return arena.execute(
+      [&] { return simulate_job_in_arena(job, path, from_s, to_s, control, stock_mesh); });
 }
 
 MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, double from_s,
-                                          double to_s) {
+                                          double to_s, const Mesh* stock_mesh) {
   const SimSettings& s = job.simulation;
-  const StockBox box = job_stock(job);
+  const StockBox box = stock_mesh ? mesh_box(*stock_mesh) : job_stock(job);
   const double d = s.resolution_mm;
   if (!(d > 0)) throw InputError(fmt::format("[simulation] resolution must be > 0 mm, got {}", d));
   // The region the tool visits up to the window's end: the path's box grown by the radius.
@@ -703,6 +707,13 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
                           static_cast<double>(sizeof(Dexel));
   MemoryEstimate m;
   m.boards_bytes = (tiles(ex, ey) + tiles(ey, ez) + tiles(ez, ex)) * per_tile;
+  if (stock_mesh) {
+    // Every ray of the mesh's box is held, and while one board is cut to the mesh, the
+    // crossings of a strip of rays (a vector each, two crossings).
+    const double bx = box.hi[0] - box.lo[0], by = box.hi[1] - box.lo[1], bz = box.hi[2] - box.lo[2];
+    m.boards_bytes = (tiles(by, bz) + tiles(bz, bx) + tiles(bx, by)) * per_tile +
+                     DexelBoard::kTile * std::max({bx, by, bz}) / d * (24.0 + 32.0);
+  }
   // The window's steps: one record each (its per-tooth removed volumes on the heap, a
   // malloc chunk of at least 32 bytes), and the time and path sample arrays of the run.
   const double steps = (to_s - from_s) * spindle_speed_rpm(job) / 60.0 * s.steps_per_rev;
