@@ -1223,3 +1223,63 @@ TEST_F(Cli, InsertAndTopography) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// optimize-feed's stock mesh: an STL box with --engine sim runs (the summary names the
+// simulation and its resolution; the output exists); without --engine sim, or with a face
+// missing, exit 2 with what to do, and nothing written.
+TEST_F(Cli, OptimizeFeedWithAStockMesh) {
+  const auto job = (dir_ / "job.toml").string(), prog = (dir_ / "p.ngc").string(),
+             stl = (dir_ / "stock.stl").string(), open_stl = (dir_ / "open.stl").string(),
+             out = (dir_ / "out.ngc").string();
+  std::ofstream(job) << "[tool]\ndiameter = 10\nteeth = 4\n[slot]\nwidth = 10\nlength = 20\n"
+                        "depth = 3\n[path]\ntype = \"linear\"\nstep = 1\n"
+                        "[cutting]\nfeed_rate = 600\nspindle_speed = 2000\n"
+                        "[machine]\ndialect = \"linuxcnc\"\n[simulation]\nresolution = 0.1\n"
+                        "steps_per_rev = 24\n";
+  std::ofstream(prog) << "G21 G90 G17 G94\nG0 X0 Y-8 Z5\nG1 Z-1 F600\nG1 Y12\nG0 Z5\nM2\n";
+  // An ASCII STL box x -8..8, y 0..10, z -3..0, two facets a face (outward).
+  const double lo[3] = {-8, 0, -3}, hi[3] = {8, 10, 0};
+  auto corner = [&](int k) {
+    return std::to_string((k & 1) ? hi[0] : lo[0]) + " " + std::to_string((k & 2) ? hi[1] : lo[1]) +
+           " " + std::to_string((k & 4) ? hi[2] : lo[2]);
+  };
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  auto stl_text = [&](int skip) {
+    std::string s = "solid stock\n";
+    int n = 0;
+    for (const auto& q : faces) {
+      for (const auto& t : {std::array{q[0], q[1], q[2]}, std::array{q[0], q[2], q[3]}}) {
+        if (n++ == skip) continue;
+        s += "facet normal 0 0 0\nouter loop\n";
+        for (const int k : t) s += "vertex " + corner(k) + "\n";
+        s += "endloop\nendfacet\n";
+      }
+    }
+    return s + "endsolid stock\n";
+  };
+  std::ofstream(stl) << stl_text(-1);
+  std::ofstream(open_stl) << stl_text(0);
+  const CliResult ok = run_cli("optimize-feed " + prog + " --job " + job + " -o " + out +
+                               " --engine sim --stock " + stl + " --rounds 2");
+  EXPECT_EQ(ok.code, 0) << ok.out;
+  EXPECT_NE(ok.out.find("the tri-dexel simulation at 0.1 mm, 24 steps/rev"), std::string::npos)
+      << ok.out;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  std::filesystem::remove(out);
+  const CliResult kernel =
+      run_cli("optimize-feed " + prog + " --job " + job + " -o " + out + " --stock " + stl);
+  EXPECT_EQ(kernel.code, 2) << kernel.out;
+  EXPECT_NE(kernel.out.find("--engine sim"), std::string::npos) << kernel.out;
+  const CliResult open = run_cli("optimize-feed " + prog + " --job " + job + " -o " + out +
+                                 " --engine sim --stock " + open_stl);
+  EXPECT_EQ(open.code, 2) << open.out;
+  EXPECT_NE(open.out.find("not closed"), std::string::npos) << open.out;
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+}  // namespace
+}  // namespace trochomill

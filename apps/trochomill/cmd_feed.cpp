@@ -18,7 +18,9 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
   struct Args {
     std::string program, out, json, html;
     std::vector<std::string> includes;
-    std::optional<double> force_n, power_w, torque_nm;
+    std::optional<double> force_n, power_w, torque_nm, memory_gb;
+    std::string engine = "kernel", stock;
+    std::optional<int> rounds;
     JobArgs job;
     FeedTargetArgs targets;
   };
@@ -51,8 +53,23 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
       ->check(finite_above(0, 1e8));
   cmd->add_option("--torque", a->torque_nm, "cap on the spindle torque, N m ([material] model)")
       ->check(finite_above(0, 1e6));
+  cmd->add_option("--engine", a->engine,
+                  "where the chips come from: kernel (the exact engagement, 2.5D programs: "
+                  "constant-Z levels with plunges, ramps and helices between them) or sim (the "
+                  "tri-dexel simulation at [simulation] resolution_mm and steps_per_rev: any "
+                  "3D motion)")
+      ->check(CLI::IsMember({"kernel", "sim"}));
+  cmd->add_option("--stock", a->stock,
+                  "the stock as a closed mesh (STL, PLY or OBJ; mm, the program's frame) "
+                  "instead of the job's [stock] box; with --engine sim")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--rounds", a->rounds,
+                  "rounds of evaluation and rescaling (default 12; each evaluates the whole "
+                  "program: with --engine sim a whole simulation)")
+      ->check(CLI::Range(1, 100));
+  add_memory_limit(cmd, a->memory_gb);
   cmd->final_callback([a, &exit_code] {
-    check_outputs({&a->out, &a->json, &a->html}, {&a->program, &a->job.file});
+    check_outputs({&a->out, &a->json, &a->html}, {&a->program, &a->job.file, &a->stock});
     if (!a->json.empty() && a->json == a->out) {
       throw InputError("--json and --output are the same file: give each its own");
     }
@@ -63,6 +80,17 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
     opt.power_w = a->power_w;
     opt.torque_nm = a->torque_nm;
     opt.read = gcode_options(job.machine).read;
+    opt.engine = a->engine == "sim" ? FeedEngine::sim : FeedEngine::kernel;
+    if (!a->stock.empty()) {
+      if (opt.engine != FeedEngine::sim) {
+        throw InputError(
+            "--stock: a stock mesh needs --engine sim (the engagement kernel's stock is the "
+            "job's [stock] box)");
+      }
+      opt.stock_mesh = std::make_shared<const Mesh>(read_mesh(a->stock));
+    }
+    if (a->rounds) opt.targets.iterations = *a->rounds;
+    opt.memory_limit_bytes = memory_limit_bytes(a->memory_gb);
     for (const auto& d : a->includes) opt.read.include_dirs.emplace_back(d);
     const std::string text = read_text_file(a->program);
     const GuardedRun run(true);

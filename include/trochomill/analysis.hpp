@@ -121,12 +121,34 @@ enum class FeedLimit {
   torque,
   acceleration
 };
+/// The chips along a path as a feed schedule reads them, per sample (one per tooth pass from
+/// the engagement kernel, one per time step from the simulation).
+struct PathChips {
+  std::vector<double> t_s;           ///< time (s)
+  std::vector<double> s_mm;          ///< place along the path (mm)
+  std::vector<std::size_t> segment;  ///< the path's segment there
+  /// Where the sample's chip began to be made (where the tooth before passed): time (s), place
+  /// along the path (mm) and segment. The chip is in proportion to the feed over that stretch.
+  std::vector<double> from_t_s, from_s_mm;
+  std::vector<std::size_t> from_segment;
+  std::vector<double> h_mm;           ///< the largest uncut chip thickness (mm; 0: none)
+  std::vector<double> mrr_mm3_per_s;  ///< the removal rate (mm^3/s)
+  /// Material removed without a chip on the side of the edge (an axial chip: a plunge into
+  /// stock no earlier position touched); the feed schedule keeps such pieces' feed.
+  std::vector<char> plunge;
+  [[nodiscard]] std::size_t size() const noexcept { return t_s.size(); }
+};
+/// The exact engagement kernel's chips (engagement.hpp), one sample per tooth pass: the
+/// radial chip (radial_chip_mm) and the removal rate per level (removal_rate_mm3_per_s).
+[[nodiscard]] PathChips kernel_chips(const Job& job, const ToolPath& path,
+                                     const RunHooks& hooks = {});
+
 /// What a feed schedule holds along a path (schedule_feed).
 struct FeedTargets {
   /// The largest local chip (mm) each piece of the path is fed to; default: the job's f_z.
   std::optional<double> h_max_mm;
-  /// Cap on the removal rate (mm^3/min): the plan-view area swept into stock per minute times
-  /// the slot depth (the axial depth of cut). Unset: none.
+  /// Cap on the removal rate (mm^3/min; PathChips::mrr_mm3_per_s: the kernel's counts the
+  /// stock over each part of the engaged arcs, level by level). Unset: none.
   std::optional<double> mrr_mm3_per_min;
   double min_feed_mm_per_min = 0;  ///< the slowest feed allowed (mm/min, > 0)
   double max_feed_mm_per_min = 0;  ///< the fastest feed allowed (mm/min, >= min)
@@ -143,6 +165,9 @@ struct FeedTargets {
   std::function<void(const ToolPath& pieces, std::vector<double>& allowed,
                      std::vector<FeedLimit>& limit)>
       caps;
+  /// The chips of the path as it is each round; empty: the engagement kernel (kernel_chips).
+  /// optimize-feed's `--engine sim` gives the tri-dexel simulation's.
+  std::function<PathChips(const ToolPath& pieces)> chips;
 };
 /// The job's feed targets: the [machine] max_feed, min_feed and air_feed, where 0 gives three
 /// times and a tenth of the job's feed, and the max feed; the chip target unset (the job's f_z).

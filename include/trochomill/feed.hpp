@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -16,8 +18,15 @@
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/progress.hpp"
+#include "trochomill/topography.hpp"
 
 namespace trochomill {
+
+/// Where optimize-feed's chips come from.
+enum class FeedEngine {
+  kernel,  ///< the exact engagement kernel: 2.5D programs, the job's [stock] box
+  sim      ///< the tri-dexel simulation at [simulation] resolution_mm and steps_per_rev: any motion
+};
 
 struct FeedOptimizeOptions {
   /// The chip target, the removal cap and the feed limits (default_feed_targets(job)).
@@ -26,7 +35,21 @@ struct FeedOptimizeOptions {
   /// on the workpiece (N), the spindle power (W) and torque (N m) held at or below them.
   std::optional<double> force_n, power_w, torque_nm;
   GcodeReadOptions read;  ///< how the program is read (gcode_options(job.machine).read)
+  FeedEngine engine = FeedEngine::kernel;
+  /// The stock as a closed mesh in the program's frame (mm; topography.hpp read_mesh), for
+  /// the simulation; unset: the job's [stock] box (or the slot region).
+  std::shared_ptr<const Mesh> stock_mesh;
+  /// The simulation's estimated memory (bytes) above which it is refused before it starts.
+  double memory_limit_bytes = std::numeric_limits<double>::infinity();
 };
+
+/// The tri-dexel simulation's chips over the whole of `path` (the slot frame), one sample per
+/// time step: the largest chip of the step's engaged edge segments (sim.hpp SimStep h_max_mm),
+/// made since the tooth before passed; the removal rate from the step's removed volume; a
+/// step that removes more than a dexel cube with no chip on the edge is a plunge.
+/// `stock_mesh` in the slot frame (null: the job's box). Throws Interrupted when cancelled.
+[[nodiscard]] PathChips simulated_chips(const Job& job, const ToolPath& path,
+                                        const Mesh* stock_mesh, const RunHooks& hooks = {});
 
 /// Quantiles of a quantity over the cutting time (the time the tool cuts a chip > 0).
 struct CutQuantiles {
@@ -60,7 +83,10 @@ struct FeedOptimizeResult {
   bool forces = false;
   CutQuantiles force_before_n, force_after_n, power_before_w, power_after_w, torque_before_nm,
       torque_after_nm;
-  double h_target_mm = 0;  ///< the chip target (mm)
+  double h_target_mm = 0;                  ///< the chip target (mm)
+  FeedEngine engine = FeedEngine::kernel;  ///< where the chips came from
+  double sim_resolution_mm = 0;            ///< with the simulation: its dexel spacing (mm)
+  int sim_steps_per_rev = 0;               ///< and its time steps per revolution
   /// Shares (0..1) of the rewritten program's feed time held by the chip target, the removal
   /// cap, the max and min feed, the air feed and plunges (kept at their programmed feed), and
   /// kept (moves the rewrite does not feed: canned cycles, compensation, other files).

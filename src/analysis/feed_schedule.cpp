@@ -56,6 +56,37 @@ ToolPath build(const ToolPath& path, const std::vector<Piece>& pieces) {
 
 }  // namespace
 
+PathChips kernel_chips(const Job& job, const ToolPath& path, const RunHooks& hooks) {
+  EngagementOptions eo;
+  eo.steps_per_tooth = 1;
+  eo.hooks = hooks;
+  const EngagementSeries e = compute_engagement(path, job, eo);
+  const auto& s = e.samples;
+  const double R = 0.5 * job.tool.diameter_mm;
+  const std::size_t n = s.size();
+  PathChips c;
+  c.t_s = s.t_s;
+  c.s_mm = s.s_mm;
+  c.segment = s.segment;
+  c.from_t_s.resize(n);
+  c.from_s_mm.resize(n);
+  c.from_segment.resize(n);
+  c.h_mm.resize(n);
+  c.mrr_mm3_per_s = e.removal_rate_mm3_per_s;
+  c.plunge.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    // One sample per tooth pass: the chip was made since the sample before.
+    const std::size_t a = i > 0 ? i - 1 : 0;
+    c.from_t_s[i] = s.t_s[a];
+    c.from_s_mm[i] = s.s_mm[a];
+    c.from_segment[i] = s.segment[a];
+    c.h_mm[i] = radial_chip_mm(e, i, R);  // as the analysis counts it
+    // Descending into stock no earlier position touched: an axial chip.
+    c.plunge[i] = i > 0 && c.h_mm[i] == 0 && e.h_max_mm[i] > 0;
+  }
+  return c;
+}
+
 FeedTargets default_feed_targets(const Job& job) {
   const Machine& m = job.machine;
   const double f = feed_rate_mm_per_min(job);
@@ -89,7 +120,6 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     throw InputError(
         fmt::format("feed schedule: the removal rate cap must be > 0 mm^3/min, got {}", *mrr_cap));
   }
-  const double ap = job.slot.depth_mm;  // the axial depth of cut (mm)
   const double air = targets.air_feed_mm_per_min > 0 ? targets.air_feed_mm_per_min : hi;
   if (!(targets.piece_mm > 0) || !std::isfinite(targets.piece_mm)) {
     throw InputError("feed schedule: the piece length must be > 0 mm");
@@ -121,9 +151,6 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
 
   FeedSchedule out;
   out.time_before_s = path.duration_s();
-  EngagementOptions eo;
-  eo.steps_per_tooth = 1;
-  eo.hooks = hooks;
   // The path as pieces: its segments are the pieces, so a sample's segment is its piece.
   ToolPath current = build(path, pieces);
   // Each piece's largest chip over its samples, and the feed each piece may run at: a chip
@@ -136,28 +163,25 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     std::vector<bool> plunge, by_mrr;
   };
   const double tiny = 1e-9 * h_target;
-  auto piece_chips = [&](const EngagementSeries& e) {
+  auto piece_chips = [&](const PathChips& e) {
     PieceChips c;
     c.h_mm.assign(pieces.size(), 0.0);
     c.allowed_feed.assign(pieces.size(), std::numeric_limits<double>::infinity());
     c.plunge.assign(pieces.size(), false);
     c.by_mrr.assign(pieces.size(), false);
-    const auto& s = e.samples;
-    const double R = 0.5 * job.tool.diameter_mm;
-    for (std::size_t i = 1; i < s.size(); ++i) {
-      const double h = radial_chip_mm(e, i, R);  // as the analysis counts it
-      const double dt = s.t_s[i] - s.t_s[i - 1];
-      if (h == 0 && e.h_max_mm[i] > 0) {
-        // Descending into stock no earlier position touched: an axial chip the radial model
-        // does not hold, so the pieces keep their programmed feed.
-        for (std::size_t k = s.segment[i - 1]; k <= s.segment[i]; ++k) c.plunge[k] = true;
+    for (std::size_t i = 0; i < e.size(); ++i) {
+      const double h = e.h_mm[i];
+      const double dt = e.t_s[i] - e.from_t_s[i];
+      if (e.plunge[i]) {
+        // An axial chip the radial model does not hold: the pieces keep their programmed feed.
+        for (std::size_t k = e.from_segment[i]; k <= e.segment[i]; ++k) c.plunge[k] = true;
         continue;
       }
       if (!(h > tiny) || !(dt > 0)) continue;
-      const double step_feed = (s.s_mm[i] - s.s_mm[i - 1]) / dt * 60.0;
+      const double step_feed = (e.s_mm[i] - e.from_s_mm[i]) / dt * 60.0;
       double allowed = step_feed * h_target / h;
       // The removal rate grows with the feed: the step's feed times cap / rate holds the cap.
-      const double mrr = e.swept_rate_mm2_per_s[i] * ap * 60.0;
+      const double mrr = e.mrr_mm3_per_s[i] * 60.0;
       bool by_mrr = false;
       if (mrr_cap && mrr > 0 && step_feed * *mrr_cap / mrr < allowed) {
         allowed = step_feed * *mrr_cap / mrr;
@@ -165,7 +189,7 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
       }
       // Every piece the step runs over shares its chip (a piece shorter than a step has no
       // sample of its own).
-      for (std::size_t k = s.segment[i - 1]; k <= s.segment[i]; ++k) {
+      for (std::size_t k = e.from_segment[i]; k <= e.segment[i]; ++k) {
         c.h_mm[k] = std::max(c.h_mm[k], h);
         if (allowed < c.allowed_feed[k]) {
           c.allowed_feed[k] = allowed;
@@ -174,6 +198,9 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
       }
     }
     return c;
+  };
+  auto chips_of = [&](const ToolPath& p) {
+    return targets.chips ? targets.chips(p) : kernel_chips(job, p, hooks);
   };
   const int iterations = std::max(1, targets.iterations);
   // Runs of feed pieces (across moves) within the step of the run's slowest share that feed:
@@ -237,11 +264,11 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
   // settle from above more slowly than the chip.
   constexpr int kCapRounds = 8;
   for (int it = 0;; ++it) {
-    const EngagementSeries e = compute_engagement(current, job, eo);
+    const PathChips e = chips_of(current);
     const PieceChips pc = piece_chips(e);
     const std::vector<double>& h = pc.h_mm;
     if (it == 0) {
-      out.h_max_before_mm = *std::max_element(e.h_max_mm.begin(), e.h_max_mm.end());
+      out.h_max_before_mm = e.size() > 0 ? *std::max_element(e.h_mm.begin(), e.h_mm.end()) : 0;
     }
     // The caps evaluated on the path as it is: they lower the allowed feeds where needed.
     std::vector<double> allowed = pc.allowed_feed;

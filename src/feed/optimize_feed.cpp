@@ -14,6 +14,7 @@
 #include "trochomill/error.hpp"
 #include "trochomill/feed.hpp"
 #include "trochomill/force.hpp"
+#include "trochomill/sim.hpp"
 
 namespace trochomill {
 namespace {
@@ -68,38 +69,30 @@ CutQuantiles quantiles(const std::vector<double>& v, const std::vector<double>& 
   return q;
 }
 
-// The chips of a path: per sample its time, feed, radial chip and removal rate, and the time
-// it stands for (the step before it where it cuts, else 0).
+// The chips of a path: per sample its time, feed, chip and removal rate, and the time it
+// stands for (the step before it where it cuts, else 0).
 struct Chips {
   std::vector<double> t_s, s_mm, feed, h_mm, mrr, cut_dt_s;
   std::vector<std::size_t> segment;
   double cutting_time_s = 0;
 };
-Chips chips_of(const Job& job, const ToolPath& path, const RunHooks& hooks) {
-  EngagementOptions eo;
-  eo.steps_per_tooth = 1;
-  eo.hooks = hooks;
-  const EngagementSeries e = compute_engagement(path, job, eo);
-  const auto& s = e.samples;
+Chips chips_of(const PathChips& e, const ToolPath& path) {
   Chips c;
-  const double R = 0.5 * job.tool.diameter_mm;
-  const std::size_t n = s.size();
-  c.t_s.resize(n);
+  const std::size_t n = e.size();
+  c.t_s = e.t_s;
+  c.s_mm = e.s_mm;
+  c.segment = e.segment;
+  c.h_mm = e.h_mm;
   c.feed.resize(n);
-  c.h_mm.resize(n);
   c.mrr.resize(n);
   c.cut_dt_s.resize(n);
-  c.segment = s.segment;
-  c.s_mm = s.s_mm;
   const auto& segs = path.segments();
   for (std::size_t i = 0; i < n; ++i) {
-    c.t_s[i] = s.t_s[i];
-    const Segment& seg = segs[s.segment[i]];
+    const Segment& seg = segs[e.segment[i]];
     c.feed[i] = seg.motion() == Motion::rapid ? std::numeric_limits<double>::quiet_NaN()
                                               : seg.speed_mm_per_min();
-    c.h_mm[i] = radial_chip_mm(e, i, R);
-    c.mrr[i] = e.removal_rate_mm3_per_s[i] * 60.0;
-    const double dt = i > 0 ? s.t_s[i] - s.t_s[i - 1] : 0.0;
+    c.mrr[i] = e.mrr_mm3_per_s[i] * 60.0;
+    const double dt = i > 0 ? e.t_s[i] - e.t_s[i - 1] : 0.0;
     c.cut_dt_s[i] = c.h_mm[i] > 0 ? dt : 0.0;
     c.cutting_time_s += c.cut_dt_s[i];
   }
@@ -239,7 +232,73 @@ std::function<void(const ToolPath&, std::vector<double>&, std::vector<FeedLimit>
   };
 }
 
+// The mesh moved into the slot frame of the job's placement (the program's frame is the
+// workpiece's).
+Mesh mesh_in_slot_frame(const Mesh& m, const Placement& placement) {
+  Mesh out = m;
+  for (auto& v : out.vertices) {
+    const Vec3 p = placement.to_slot(Vec3(v[0], v[1], v[2]));
+    v = {p.x(), p.y(), p.z()};
+  }
+  return out;
+}
+
 }  // namespace
+
+PathChips simulated_chips(const Job& job, const ToolPath& path, const Mesh* stock_mesh,
+                          const RunHooks& hooks) {
+  SimControl control;
+  control.hooks = hooks;
+  const JobSimulation js = simulate_job(job, path, 0.0, path.duration_s(), control, stock_mesh);
+  if (!js.result.complete) throw Interrupted("optimize-feed interrupted");
+  const auto& steps = js.result.steps;
+  const std::size_t n = steps.size();
+  const double period = tooth_period_s(job.tool, job.cutting);
+  const double d = job.simulation.resolution_mm;
+  PathChips c;
+  c.t_s.resize(n);
+  c.s_mm.resize(n);
+  c.segment.resize(n);
+  c.from_t_s.resize(n);
+  c.from_s_mm.resize(n);
+  c.from_segment.resize(n);
+  c.h_mm.resize(n);
+  c.mrr_mm3_per_s.resize(n);
+  c.plunge.assign(n, 0);
+  // The place along the path at time t (mm): along its segment at the segment's speed.
+  const auto place = [&path](double t, std::size_t& k) {
+    k = path.segment_at_time(t);
+    const Segment& seg = path.segments()[k];
+    return path.segment_start_length_mm(k) +
+           std::clamp((t - path.segment_start_time_s(k)) * seg.speed_mm_per_min() / 60.0, 0.0,
+                      seg.length_mm());
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const SimStep& st = steps[i];
+    c.t_s[i] = st.t_s;
+    c.s_mm[i] = place(st.t_s, c.segment[i]);
+    c.from_t_s[i] = std::max(0.0, st.t_s - period);
+    c.from_s_mm[i] = place(c.from_t_s[i], c.from_segment[i]);
+    c.h_mm[i] = st.h_max_mm;
+    double removed = 0;
+    for (const double v : st.removed_mm3) removed += v;
+    const double dt = i > 0 ? st.t_s - steps[i - 1].t_s : 0.0;
+    c.mrr_mm3_per_s[i] = dt > 0 ? removed / dt : 0.0;
+    // An axial chip: material removed with no chip on the edge (more than a dexel cube: a
+    // sliver of the grid is not a plunge), or, going down, a chip thicker than the tool moved
+    // sideways in the tooth period (and a dexel): the end face's cut, which the simulation's
+    // radial chip (docs/models.md section 11) counts as the radial depth of its rays. As with
+    // the kernel, such pieces keep their programmed feed.
+    const double descent = i > 0 ? steps[i - 1].tip_mm[2] - st.tip_mm[2] : 0.0;
+    const double sideways = std::hypot(st.tip_mm[0] - (i > 0 ? steps[i - 1].tip_mm[0] : 0.0),
+                                       st.tip_mm[1] - (i > 0 ? steps[i - 1].tip_mm[1] : 0.0));
+    const double per_tooth = dt > 0 ? sideways * period / dt : 0.0;
+    c.plunge[i] = (st.h_max_mm == 0 && removed > d * d * d) ||
+                  (descent > 1e-12 && st.h_max_mm > per_tooth + d);
+    if (c.plunge[i]) c.h_mm[i] = 0;
+  }
+  return c;
+}
 
 FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::string_view name,
                                  const FeedOptimizeOptions& options, const RunHooks& hooks) {
@@ -264,9 +323,43 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   for (const std::string& w : header_mismatches(job, in.program, std::string(name))) {
     r.warnings.push_back(w);
   }
+  // Where the chips come from: the kernel, or the simulation (the stock mesh, if any, in the
+  // slot frame), refused before it starts when its memory estimate passes the limit.
+  std::optional<Mesh> mesh;
+  if (options.stock_mesh) {
+    if (options.engine != FeedEngine::sim) {
+      throw InputError(
+          "optimize-feed: a stock mesh (--stock) needs the simulation (--engine sim): the "
+          "engagement kernel's stock is the job's [stock] box");
+    }
+    mesh = mesh_in_slot_frame(*options.stock_mesh, placement);
+  }
+  const Mesh* stock = mesh ? &*mesh : nullptr;
+  r.engine = options.engine;
+  if (options.engine == FeedEngine::sim) {
+    r.sim_resolution_mm = job.simulation.resolution_mm;
+    r.sim_steps_per_rev = job.simulation.steps_per_rev;
+    const MemoryEstimate est =
+        estimate_simulation_memory(job, slot_path, 0.0, slot_path.duration_s(), stock);
+    if (!(est.total(false) <= options.memory_limit_bytes)) {
+      throw InputError(fmt::format(
+          "optimize-feed --engine sim: the simulation's estimated memory {:.2f} GB (boards "
+          "{:.2f}, records {:.2f}) exceeds the limit of {:.2f} GB; coarsen [simulation] "
+          "resolution_mm (now {} mm) or steps_per_rev (now {}), or raise --memory-limit",
+          est.total(false) / 1e9, est.boards_bytes / 1e9, est.records_bytes / 1e9,
+          options.memory_limit_bytes / 1e9, job.simulation.resolution_mm,
+          job.simulation.steps_per_rev));
+    }
+  }
+  const auto path_chips = [&](const ToolPath& p) {
+    return options.engine == FeedEngine::sim ? simulated_chips(job, p, stock, hooks)
+                                             : kernel_chips(job, p, hooks);
+  };
+
   hooks.begin("scheduling");
   FeedTargets targets = options.targets;
   targets.caps = force_caps(job, options, hooks);
+  targets.chips = path_chips;
   const FeedSchedule fs = schedule_feed(job, slot_path, targets, hooks);
   r.h_target_mm = options.targets.h_max_mm.value_or(job.cutting.feed_per_tooth_mm);
 
@@ -357,9 +450,9 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   r.time_before_accel_s = estimate_time_s(path, job.machine);
   r.time_after_accel_s = estimate_time_s(after, job.machine);
   hooks.begin("evaluating");
-  const Chips cb = chips_of(job, slot_path, hooks);
+  const Chips cb = chips_of(path_chips(slot_path), slot_path);
   const ToolPath after_slot = to_slot_frame(after, placement);
-  const Chips ca = chips_of(job, after_slot, hooks);
+  const Chips ca = chips_of(path_chips(after_slot), after_slot);
   r.cutting_time_before_s = cb.cutting_time_s;
   r.cutting_time_after_s = ca.cutting_time_s;
   r.h_before_mm = quantiles(cb.h_mm, cb.cut_dt_s);
@@ -520,6 +613,13 @@ std::string feed_summary_json(const FeedOptimizeResult& r) {
                       {"feed_mm_per_min", u.feed_mm_per_min}});
   }
   const nlohmann::ordered_json j = {
+      {"engine", r.engine == FeedEngine::sim ? "sim" : "kernel"},
+      {"sim_resolution_mm", r.engine == FeedEngine::sim
+                                ? nlohmann::ordered_json(r.sim_resolution_mm)
+                                : nlohmann::ordered_json(nullptr)},
+      {"sim_steps_per_rev", r.engine == FeedEngine::sim
+                                ? nlohmann::ordered_json(r.sim_steps_per_rev)
+                                : nlohmann::ordered_json(nullptr)},
       {"h_target_mm", r.h_target_mm},
       {"time_before_s", r.time_before_s},
       {"time_after_s", r.time_after_s},
@@ -566,6 +666,10 @@ std::string feed_summary_json(const FeedOptimizeResult& r) {
 std::string feed_summary_text(const FeedOptimizeResult& r) {
   std::string s;
   const auto pct = [](double a, double b) { return b > 0 ? 100.0 * (a / b - 1.0) : 0.0; };
+  s += r.engine == FeedEngine::sim
+           ? fmt::format("chips from     the tri-dexel simulation at {:g} mm, {} steps/rev\n",
+                         r.sim_resolution_mm, r.sim_steps_per_rev)
+           : std::string("chips from     the exact engagement kernel\n");
   s += fmt::format(
       "time            {:10.3f} s -> {:10.3f} s ({:+.1f} %), with acceleration "
       "{:.3f} s -> {:.3f} s ({:+.1f} %)\n",
