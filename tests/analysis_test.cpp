@@ -336,8 +336,8 @@ TEST(Analysis, FloorAgainstAPointwiseSearch) {
 }
 
 // The engagement of a program (G-code text) for a job, one sample a tooth pass.
-EngagementSeries program_engagement(const Job& job, const std::string& text) {
-  EngagementOptions opt;
+EngagementSeries program_engagement(const Job& job, const std::string& text,
+                                    EngagementOptions opt = {}) {
   opt.steps_per_tooth = 1;
   return compute_engagement(read_gcode(text, "program.ngc").path, job, opt);
 }
@@ -403,6 +403,107 @@ TEST(Analysis, TheRemovalRateCountsTheStockOverEachPart) {
   }
   EXPECT_GT(first, 200u);
   EXPECT_GT(second, 200u);
+}
+
+// A level takes what every level below it removed: two pockets along y, at x = 0 down to
+// z = -2 and at x = 8 down to z = -3 (D = 10 mm: they removed x = -5 to 5 and 3 to 13), then
+// a pass at z = -1 along x = 4, its circle from x = -1 to 9 inside their union: no stock on
+// it, engagement 0 at every tooth pass clear of the ends (seeded with the last level alone it
+// met the first pocket's wall as stock: a full slot's chip on its left). The same when the
+// level z = -1 was cut before (elsewhere, x = -12) and is come back to after the pockets.
+TEST(Analysis, ALevelTakesWhatEveryLevelBelowRemoved) {
+  const Job job = test::straight_job(
+      10.0, 4,
+      {parse_override("stock.min=[-20, 0, -10]"), parse_override("stock.max=[20, 40, 0]")});
+  const std::string pockets =
+      "G0 X0 Y-10\nG1 Z-2 F600\nG1 Y50\nG0 Z5\nG0 X8 Y-10\nG1 Z-3\nG1 Y50\nG0 Z5\n";
+  for (const std::string before : {"", "G0 X-12 Y-10\nG1 Z-1 F600\nG1 Y50\nG0 Z5\n"}) {
+    const EngagementSeries e =
+        program_engagement(job, "G21 G90 G17 G94\nG0 Z5\n" + before + pockets +
+                                    "G0 X4 Y-10\nG1 Z-1\nG1 Y50\nG0 Z5\nM2\n");
+    const PathSamples& s = e.samples;
+    std::size_t checked = 0;
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      if (std::abs(s.x_mm[i] - 4) > 1e-9 || std::abs(s.z_mm[i] + 1) > 1e-9) continue;
+      if (s.y_mm[i] < 5 || s.y_mm[i] > 35) continue;
+      ++checked;
+      EXPECT_EQ(e.engagement_angle_rad[i], 0.0) << before.size() << " y " << s.y_mm[i];
+      EXPECT_EQ(e.h_max_mm[i], 0.0) << before.size() << " y " << s.y_mm[i];
+    }
+    EXPECT_GT(checked, 300u);
+  }
+}
+
+// A box mesh with the corners' heights given (x lo/hi, y lo/hi; bottom at z_bottom): a
+// closed solid of 12 triangles, outward.
+Mesh block_mesh(double x0, double x1, double y0, double y1, double z_bottom,
+                const std::array<double, 4>& top_z) {  // top at (x0,y0), (x1,y0), (x0,y1), (x1,y1)
+  Mesh m;
+  for (int k = 0; k < 8; ++k) {
+    const double x = (k & 1) ? x1 : x0, y = (k & 2) ? y1 : y0;
+    m.vertices.push_back({x, y, (k & 4) ? top_z[static_cast<std::size_t>(k & 3)] : z_bottom});
+  }
+  const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : f) {
+    m.triangles.push_back({q[0], q[1], q[2]});
+    m.triangles.push_back({q[0], q[2], q[3]});
+  }
+  return m;
+}
+
+// The stock as a mesh: the job's [stock] box given as 12 triangles gives the box's engagement
+// on the Wagih trochoidal path (every arc's ends from the circle's crossings with the faces'
+// edges instead of the box's closed form: 1e-9 rad and mm), and a block whose top slopes from
+// z = 0 at y = 0 to -4 at y = 40: a full slot at z = -1 meets stock only where the top is above
+// it, y < 10; at a tooth pass with the centre near y = 7 the engaged arcs are the front
+// half-circle's below y = 10 (y + 5 sin(phi) <= 10) and outside the disc a step back (closed
+// form), and past y = 15 nothing.
+TEST(Analysis, AStockMeshIsTheStock) {
+  Job job = test::wagih_job("trochoidal");
+  job.stock_min_mm = std::array<double, 3>{-10.0, -5.0, -8.0};
+  job.stock_max_mm = std::array<double, 3>{10.0, 40.0, 0.0};
+  const Mesh box = block_mesh(-10, 10, -5, 40, -8, {0, 0, 0, 0});
+  const PlannedPath planned = plan_path(job);
+  EngagementOptions o;
+  const EngagementSeries a = compute_engagement(planned.path, job, o);
+  o.stock_mesh = &box;
+  const EngagementSeries b = compute_engagement(planned.path, job, o);
+  ASSERT_EQ(a.samples.size(), b.samples.size());
+  std::size_t engaged = 0;
+  for (std::size_t i = 0; i < a.samples.size(); ++i) {
+    EXPECT_NEAR(a.engagement_angle_rad[i], b.engagement_angle_rad[i], 1e-9) << i;
+    EXPECT_NEAR(a.h_max_mm[i], b.h_max_mm[i], 1e-9) << i;
+    engaged += a.h_max_mm[i] > 0 ? 1 : 0;
+  }
+  EXPECT_GT(engaged, 1000u);
+
+  const Job slot = test::straight_job(10.0);
+  const Mesh slope = block_mesh(-10, 10, -5, 45, -8, {0.5, 0.5, -4.5, -4.5});  // z = -y / 10
+  EngagementOptions so;
+  so.stock_mesh = &slope;
+  const EngagementSeries e = program_engagement(
+      slot, "G21 G90 G17 G94\nG0 X0 Y-10 Z5\nG1 Z-1 F600\nG1 Y40\nG0 Z5\nM2\n", so);
+  std::size_t at7 = 0, beyond = 0;
+  for (std::size_t i = 0; i < e.samples.size(); ++i) {
+    if (std::abs(e.samples.z_mm[i] + 1) > 1e-9) continue;
+    const double y = e.samples.y_mm[i];
+    if (std::abs(y - 7) < 0.04) {
+      ++at7;
+      // Below y = 10 (the stock's ends) and outside the disc a step s back (the cut's ends,
+      // asin(s / 2R) below the horizontal on either side).
+      const double step = e.samples.y_mm[i] - e.samples.y_mm[i - 1];
+      EXPECT_NEAR(e.engagement_angle_rad[i], 2 * std::asin((10 - y) / 5) + 2 * std::asin(step / 10),
+                  1e-9)
+          << y;
+    }
+    if (y > 15.001) {
+      ++beyond;
+      EXPECT_EQ(e.engagement_angle_rad[i], 0.0) << y;
+    }
+  }
+  EXPECT_GE(at7, 1u);
+  EXPECT_GT(beyond, 100u);
 }
 
 // A lift inside a level and back (z = -1, up to -0.9 over the cut, down again): the link

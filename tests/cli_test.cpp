@@ -1227,9 +1227,9 @@ TEST_F(Cli, InsertAndTopography) {
 namespace trochomill {
 namespace {
 
-// optimize-feed's stock mesh: an STL box with --engine sim runs (the summary names the
-// simulation and its resolution; the output exists); without --engine sim, or with a face
-// missing, exit 2 with what to do, and nothing written.
+// optimize-feed's stock mesh: an STL box with --engine sim and with the kernel runs (the
+// summary names the engine, the simulation's resolution; the output exists); with a face
+// missing, exit 2 naming a line that crosses it an odd number of times, nothing written.
 TEST_F(Cli, OptimizeFeedWithAStockMesh) {
   const auto job = (dir_ / "job.toml").string(), prog = (dir_ / "p.ngc").string(),
              stl = (dir_ / "stock.stl").string(), open_stl = (dir_ / "open.stl").string(),
@@ -1272,13 +1272,16 @@ TEST_F(Cli, OptimizeFeedWithAStockMesh) {
   std::filesystem::remove(out);
   const CliResult kernel =
       run_cli("optimize-feed " + prog + " --job " + job + " -o " + out + " --stock " + stl);
-  EXPECT_EQ(kernel.code, 2) << kernel.out;
-  EXPECT_NE(kernel.out.find("--engine sim"), std::string::npos) << kernel.out;
-  const CliResult open = run_cli("optimize-feed " + prog + " --job " + job + " -o " + out +
-                                 " --engine sim --stock " + open_stl);
-  EXPECT_EQ(open.code, 2) << open.out;
-  EXPECT_NE(open.out.find("not closed"), std::string::npos) << open.out;
-  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_EQ(kernel.code, 0) << kernel.out;
+  EXPECT_NE(kernel.out.find("the exact engagement kernel"), std::string::npos) << kernel.out;
+  std::filesystem::remove(out);
+  for (const char* engine : {"kernel", "sim"}) {
+    const CliResult open = run_cli("optimize-feed " + prog + " --job " + job + " -o " + out +
+                                   " --engine " + engine + " --stock " + open_stl);
+    EXPECT_EQ(open.code, 2) << engine << open.out;
+    EXPECT_NE(open.out.find("not closed"), std::string::npos) << engine << open.out;
+    EXPECT_FALSE(std::filesystem::exists(out)) << engine;
+  }
 }
 
 }  // namespace

@@ -61,7 +61,7 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember({"kernel", "sim"}));
   cmd->add_option("--stock", a->stock,
                   "the stock as a closed mesh (STL, PLY or OBJ; mm, the program's frame) "
-                  "instead of the job's [stock] box; with --engine sim")
+                  "instead of the job's [stock] box")
       ->check(CLI::ExistingFile);
   cmd->add_option("--rounds", a->rounds,
                   "rounds of evaluation and rescaling (default 12; each evaluates the whole "
@@ -81,14 +81,7 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
     opt.torque_nm = a->torque_nm;
     opt.read = gcode_options(job.machine).read;
     opt.engine = a->engine == "sim" ? FeedEngine::sim : FeedEngine::kernel;
-    if (!a->stock.empty()) {
-      if (opt.engine != FeedEngine::sim) {
-        throw InputError(
-            "--stock: a stock mesh needs --engine sim (the engagement kernel's stock is the "
-            "job's [stock] box)");
-      }
-      opt.stock_mesh = std::make_shared<const Mesh>(read_mesh(a->stock));
-    }
+    if (!a->stock.empty()) opt.stock_mesh = std::make_shared<const Mesh>(read_mesh(a->stock));
     if (a->rounds) opt.targets.iterations = *a->rounds;
     opt.memory_limit_bytes = memory_limit_bytes(a->memory_gb);
     for (const auto& d : a->includes) opt.read.include_dirs.emplace_back(d);

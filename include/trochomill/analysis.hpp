@@ -140,8 +140,9 @@ struct PathChips {
 };
 /// The exact engagement kernel's chips (engagement.hpp), one sample per tooth pass: the
 /// radial chip (radial_chip_mm) and the removal rate per level (removal_rate_mm3_per_s).
+/// `stock_mesh`: the stock as a closed mesh in the path's frame (EngagementOptions).
 [[nodiscard]] PathChips kernel_chips(const Job& job, const ToolPath& path,
-                                     const RunHooks& hooks = {});
+                                     const RunHooks& hooks = {}, const Mesh* stock_mesh = nullptr);
 
 /// What a feed schedule holds along a path (schedule_feed).
 struct FeedTargets {

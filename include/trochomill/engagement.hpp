@@ -24,6 +24,7 @@
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/progress.hpp"
+#include "trochomill/topography.hpp"
 
 namespace trochomill {
 
@@ -41,6 +42,11 @@ struct EngagementOptions {
   /// slot, for slots too short to hold one.
   bool open_ahead = false;
   RunHooks hooks;  ///< progress over the samples; cancel throws Interrupted
+  /// The stock as a closed mesh in the path's frame (mm) instead of the job's box: at a
+  /// position's height z, the plan-view region where the solid lies between z and z plus the
+  /// flute length (at most its top); its top is the mesh's. Throws InputError for an open
+  /// mesh (a vertical line crossing it an odd number of times).
+  const Mesh* stock_mesh = nullptr;
 };
 
 /// Engagement along a path, structure of arrays (one entry per sample).

@@ -24,7 +24,7 @@ namespace trochomill {
 
 /// Where optimize-feed's chips come from.
 enum class FeedEngine {
-  kernel,  ///< the exact engagement kernel: 2.5D programs, the job's [stock] box
+  kernel,  ///< the exact engagement kernel: 2.5D programs
   sim      ///< the tri-dexel simulation at [simulation] resolution_mm and steps_per_rev: any motion
 };
 
@@ -36,8 +36,8 @@ struct FeedOptimizeOptions {
   std::optional<double> force_n, power_w, torque_nm;
   GcodeReadOptions read;  ///< how the program is read (gcode_options(job.machine).read)
   FeedEngine engine = FeedEngine::kernel;
-  /// The stock as a closed mesh in the program's frame (mm; topography.hpp read_mesh), for
-  /// the simulation; unset: the job's [stock] box (or the slot region).
+  /// The stock as a closed mesh in the program's frame (mm; topography.hpp read_mesh) for
+  /// either engine; unset: the job's [stock] box (or the slot region).
   std::shared_ptr<const Mesh> stock_mesh;
   /// The simulation's estimated memory (bytes) above which it is refused before it starts.
   double memory_limit_bytes = std::numeric_limits<double>::infinity();

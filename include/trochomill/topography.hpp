@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <vector>
 
 #include "trochomill/cutter.hpp"
@@ -30,6 +31,18 @@ struct Mesh {
 /// Writes a mesh, format by extension (.stl binary, .ply binary, .obj). Written to a
 /// temporary file and renamed. Throws InputError for an unknown extension, IoError on failure.
 void write_mesh(const std::filesystem::path& file, const Mesh& mesh);
+
+/// Where the line along `axis` (0 x, 1 y, 2 z) through (u, v) on the next two axes
+/// (cyclically: y z for x, z x for y, x y for z; mm) crosses the triangle (a, b, c): its
+/// coordinate along the axis (mm), or nothing when it misses or the triangle is edge-on to
+/// it. A line through an edge or a vertex of a closed surface crosses exactly one of the
+/// triangles meeting there (the rasteriser's top-left rule, on edge functions computed from
+/// each edge's lexicographically first end, so that the two triangles of an edge compute
+/// exact negatives); a face square to the line is met exactly at its height.
+[[nodiscard]] std::optional<double> line_crossing(const std::array<double, 3>& a,
+                                                  const std::array<double, 3>& b,
+                                                  const std::array<double, 3>& c, int axis,
+                                                  double u, double v);
 
 /// A synthetic insert edge for tests and examples: rake face (rake angle), honed edge
 /// (radius r_beta), flank (clearance angle), and with vb_mm > 0 a flank wear land of width VB

@@ -56,10 +56,12 @@ ToolPath build(const ToolPath& path, const std::vector<Piece>& pieces) {
 
 }  // namespace
 
-PathChips kernel_chips(const Job& job, const ToolPath& path, const RunHooks& hooks) {
+PathChips kernel_chips(const Job& job, const ToolPath& path, const RunHooks& hooks,
+                       const Mesh* stock_mesh) {
   EngagementOptions eo;
   eo.steps_per_tooth = 1;
   eo.hooks = hooks;
+  eo.stock_mesh = stock_mesh;
   const EngagementSeries e = compute_engagement(path, job, eo);
   const auto& s = e.samples;
   const double R = 0.5 * job.tool.diameter_mm;

@@ -12,12 +12,16 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <utility>
+#include <vector>
 
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/topography.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -205,6 +209,16 @@ class Removed {
   }
   [[nodiscard]] const Disc& disc(int j) const { return discs_[j]; }
 
+  // Adds another region's discs from its `from`-th on (the union of both), in the order they
+  // were inserted there. Returns how many discs the other region has.
+  std::size_t merge(const Removed& o, std::size_t from) {
+    for (std::size_t k = from; k < o.discs_.size(); ++k) {
+      const Disc& d = o.discs_[k];
+      insert(d.x, d.y, outside(d.x, d.y));
+    }
+    return o.discs_.size();
+  }
+
   // Inserts a disc whose circle's part outside R (before it) is `exposed`.
   void insert(double cx, double cy, ArcSet exposed) {
     cache_valid_ = false;
@@ -373,6 +387,198 @@ ArcSet inside_rect(double cx, double cy, double R, double x0, double x1, double 
   clip(1.5 * kPi, cy - y0);  // -y <= -y0
   return s;
 }
+
+// The stock as a closed mesh: at a tool tip height z0, the plan-view region where the vertical
+// line through a point meets the solid between z0 and z1 (the tool's reach). Its outline lies
+// on the projected edges of the triangles' parts between z0 and z1 (the sections at z0 and z1,
+// the faces' silhouettes between): the circle is split at its crossings with all of them and
+// each piece tested at its midpoint with the vertical line (line_crossing, even-odd).
+class MeshStock {
+ public:
+  MeshStock(const Mesh& mesh, double radius) : m_(mesh) {
+    double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+    top_ = -x0;
+    for (const auto& t : m_.triangles) {
+      Tri b{};
+      b.x0 = b.y0 = b.z0 = std::numeric_limits<double>::infinity();
+      b.x1 = b.y1 = b.z1 = -b.x0;
+      for (const std::uint32_t i : t) {
+        if (i >= m_.vertices.size()) throw InputError("the stock mesh indexes a missing vertex");
+        const auto& p = m_.vertices[i];
+        for (const double c : p) {
+          if (!std::isfinite(c) || std::abs(c) > 1e6) {
+            throw InputError(fmt::format(
+                "the stock mesh has a vertex coordinate {} (mm; finite, within 1 km)", c));
+          }
+        }
+        b.x0 = std::min(b.x0, p[0]), b.x1 = std::max(b.x1, p[0]);
+        b.y0 = std::min(b.y0, p[1]), b.y1 = std::max(b.y1, p[1]);
+        b.z0 = std::min(b.z0, p[2]), b.z1 = std::max(b.z1, p[2]);
+      }
+      x0 = std::min(x0, b.x0), x1 = std::max(x1, b.x1);
+      y0 = std::min(y0, b.y0), y1 = std::max(y1, b.y1);
+      top_ = std::max(top_, b.z1);
+      tris_.push_back(b);
+    }
+    if (tris_.empty()) throw InputError("the stock mesh has no triangles");
+    // Cells of the tool's radius, at most 1000 a side (a mesh far larger than the tool).
+    x0_ = x0, y0_ = y0;
+    cell_ = std::max({radius, (x1 - x0) / 1000.0, (y1 - y0) / 1000.0});
+    nx_ = static_cast<long>((x1 - x0) / cell_) + 1;
+    ny_ = static_cast<long>((y1 - y0) / cell_) + 1;
+    grid_.resize(static_cast<std::size_t>(nx_ * ny_));
+    for (std::size_t k = 0; k < tris_.size(); ++k) {
+      const Tri& b = tris_[k];
+      for (long j = cy(b.y0); j <= cy(b.y1); ++j) {
+        for (long i = cx(b.x0); i <= cx(b.x1); ++i) {
+          grid_[static_cast<std::size_t>(j * nx_ + i)].push_back(static_cast<std::uint32_t>(k));
+        }
+      }
+    }
+    stamp_.assign(tris_.size(), 0);
+  }
+  [[nodiscard]] double top() const noexcept { return top_; }
+
+  // The arcs of the circle (cx, cy, R) over the region of the stock between heights z0 and z1.
+  [[nodiscard]] ArcSet inside(double cx0, double cy0, double R, double z0, double z1) const {
+    std::vector<double> cut;
+    ++tick_;
+    for (long j = cy(cy0 - R); j <= cy(cy0 + R); ++j) {
+      for (long i = cx(cx0 - R); i <= cx(cx0 + R); ++i) {
+        for (const std::uint32_t k : grid_[static_cast<std::size_t>(j * nx_ + i)]) {
+          if (stamp_[k] == tick_) continue;
+          stamp_[k] = tick_;
+          const Tri& b = tris_[k];
+          if (b.z1 < z0 || b.z0 > z1 || b.x0 > cx0 + R || b.x1 < cx0 - R || b.y0 > cy0 + R ||
+              b.y1 < cy0 - R) {
+            continue;
+          }
+          crossings(k, cx0, cy0, R, z0, z1, cut);
+        }
+      }
+    }
+    std::sort(cut.begin(), cut.end());
+    ArcSet out;
+    auto at = [&](double th) {
+      return covered(cx0 + R * std::cos(th), cy0 + R * std::sin(th), z0, z1);
+    };
+    if (cut.empty()) {
+      if (at(0.0)) out.push_back({0.0, kTwoPi});
+      return out;
+    }
+    for (std::size_t q = 0; q < cut.size(); ++q) {
+      const double a = cut[q], b = q + 1 < cut.size() ? cut[q + 1] : cut[0] + kTwoPi;
+      if (b - a < 1e-12 || !at(0.5 * (a + b))) continue;
+      if (b <= kTwoPi) {
+        out.push_back({a, b});
+      } else {
+        out.push_back({a, kTwoPi});
+        out.push_back({0.0, b - kTwoPi});
+      }
+    }
+    std::sort(out.begin(), out.end(),
+              [](const AngleArc& x, const AngleArc& y) { return x.start_rad < y.start_rad; });
+    ArcSet merged;
+    for (const AngleArc& a : out) {
+      if (!merged.empty() && a.start_rad <= merged.back().end_rad) {
+        merged.back().end_rad = std::max(merged.back().end_rad, a.end_rad);
+      } else {
+        merged.push_back(a);
+      }
+    }
+    return merged;
+  }
+
+ private:
+  struct Tri {
+    double x0, x1, y0, y1, z0, z1;
+  };
+  [[nodiscard]] long cx(double x) const {
+    return std::clamp(static_cast<long>(std::floor((x - x0_) / cell_)), 0L, nx_ - 1);
+  }
+  [[nodiscard]] long cy(double y) const {
+    return std::clamp(static_cast<long>(std::floor((y - y0_) / cell_)), 0L, ny_ - 1);
+  }
+
+  // The angles where the circle crosses the projected edges of triangle k's part between z0
+  // and z1 (the triangle clipped by the two planes).
+  void crossings(std::size_t k, double cx0, double cy0, double R, double z0, double z1,
+                 std::vector<double>& cut) const {
+    std::array<double, 3> poly[6], next[6];
+    int n = 3;
+    for (int q = 0; q < 3; ++q) poly[q] = m_.vertices[m_.triangles[k][static_cast<std::size_t>(q)]];
+    auto clip = [&](double h, bool keep_above) {
+      int m = 0;
+      for (int q = 0; q < n; ++q) {
+        const auto& p = poly[q];
+        const auto& r = poly[(q + 1) % n];
+        const bool pin = keep_above ? p[2] >= h : p[2] <= h;
+        const bool rin = keep_above ? r[2] >= h : r[2] <= h;
+        if (pin) next[m++] = p;
+        if (pin != rin) {
+          const double t = (h - p[2]) / (r[2] - p[2]);
+          next[m++] = {p[0] + t * (r[0] - p[0]), p[1] + t * (r[1] - p[1]), h};
+        }
+      }
+      n = m;
+      std::copy(next, next + m, poly);
+    };
+    clip(z0, true);
+    if (n > 0) clip(z1, false);
+    for (int q = 0; q < n; ++q) {
+      const auto& p = poly[q];
+      const auto& r = poly[(q + 1) % n];
+      const double dx = r[0] - p[0], dy = r[1] - p[1];
+      const double a = dx * dx + dy * dy;
+      if (!(a > 0)) continue;
+      const double fx = p[0] - cx0, fy = p[1] - cy0;
+      const double b = 2 * (fx * dx + fy * dy), c = fx * fx + fy * fy - R * R;
+      const double disc = b * b - 4 * a * c;
+      if (disc < 0) continue;
+      const double sq = std::sqrt(disc);
+      for (const double t : {(-b - sq) / (2 * a), (-b + sq) / (2 * a)}) {
+        if (t < 0 || t > 1) continue;
+        cut.push_back(wrap(std::atan2(fy + t * dy, fx + t * dx)));
+      }
+    }
+  }
+
+  // Does the vertical line through (x, y) meet the solid between z0 and z1 (a stretch of
+  // positive length)?
+  [[nodiscard]] bool covered(double x, double y, double z0, double z1) const {
+    std::vector<double>& w = w_;
+    w.clear();
+    for (const std::uint32_t k : grid_[static_cast<std::size_t>(cy(y) * nx_ + cx(x))]) {
+      const Tri& b = tris_[k];
+      if (x < b.x0 || x > b.x1 || y < b.y0 || y > b.y1) continue;
+      const auto& t = m_.triangles[k];
+      if (const auto h =
+              line_crossing(m_.vertices[t[0]], m_.vertices[t[1]], m_.vertices[t[2]], 2, x, y)) {
+        w.push_back(*h);
+      }
+    }
+    if (w.size() % 2 != 0) {
+      throw InputError(fmt::format(
+          "the stock mesh is not closed: the vertical line at x = {:.6g}, y = {:.6g} mm "
+          "crosses its surface {} times (an even number for a closed solid)",
+          x, y, w.size()));
+    }
+    std::sort(w.begin(), w.end());
+    for (std::size_t q = 0; q < w.size(); q += 2) {
+      if (std::min(w[q + 1], z1) > std::max(w[q], z0)) return true;
+    }
+    return false;
+  }
+
+  const Mesh& m_;
+  std::vector<Tri> tris_;
+  double top_ = 0, x0_ = 0, y0_ = 0, cell_ = 1;
+  long nx_ = 1, ny_ = 1;
+  std::vector<std::vector<std::uint32_t>> grid_;
+  mutable std::vector<std::uint32_t> stamp_;
+  mutable std::uint32_t tick_ = 0;
+  mutable std::vector<double> w_;
+};
 
 ArcSet intersect(const ArcSet& a, const ArcSet& b) {
   ArcSet out;
@@ -612,7 +818,11 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   // (its x and y range, below its top).
   const double hw = 0.5 * job.slot.width_mm;
   double sx0 = -hw, sx1 = hw, sy0 = 0, sy1 = job.slot.length_mm, top = 0;
-  if (job.stock_min_mm && job.stock_max_mm) {
+  std::optional<MeshStock> mesh_stock;
+  if (opt.stock_mesh) {
+    mesh_stock.emplace(*opt.stock_mesh, R);
+    top = mesh_stock->top();
+  } else if (job.stock_min_mm && job.stock_max_mm) {
     sx0 = (*job.stock_min_mm)[0];
     sy0 = (*job.stock_min_mm)[1];
     sx1 = (*job.stock_max_mm)[0];
@@ -658,24 +868,43 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   // moves; its region holds the discs of the positions made in it. A ramp, plunge or helix
   // below the current level starts a new, empty region (the material under the level is
   // untouched: the descent is a plunge, its feed kept), which becomes the level it comes down
-  // to, or hands over to that level's region if it has one (back from a lift). A horizontal
-  // move at a new level above the current one starts from a copy of the current level's
-  // region. One level (a slot, its entry helix) is one region, as before levels.
+  // to, or hands over to that level's region if it has one (back from a lift). A level takes
+  // the discs of the levels below it when it is entered (enter). One level (a slot, its entry
+  // helix) is one region, as before levels.
   // docs/models.md section 7.
   constexpr double kLevelTol = 1e-4;  // mm: heights within it are one level
   struct Level {
     double z_mm;  // NaN until its first horizontal cutting position
     std::unique_ptr<Removed> removed;
+    std::vector<std::size_t> taken;  // per level below: how many of its discs this one holds
   };
   std::vector<Level> levels;
   Removed* current = nullptr;
   double current_z = std::numeric_limits<double>::quiet_NaN();
+  // A level entered (new, back to, or reached by a descent) takes the discs the levels below it
+  // within the flute length gained since it last took theirs: their passes removed its
+  // material too (a lift's link moves, a climb back up, a pass over pockets cut deeper).
+  auto enter = [&](Level& l) {
+    l.taken.resize(levels.size(), 0);
+    for (std::size_t j = 0; j < levels.size(); ++j) {
+      const Level& o = levels[j];
+      if (&o == &l || std::isnan(o.z_mm) || !(o.z_mm < l.z_mm - kLevelTol) ||
+          l.z_mm - o.z_mm > flute) {
+        continue;
+      }
+      l.taken[j] = l.removed->merge(*o.removed, l.taken[j]);
+    }
+    current = l.removed.get();
+    current_z = l.z_mm;
+    return current;
+  };
   auto region_of = [&](std::size_t i) -> Removed* {
     const double z = smp.z_mm[i];
-    auto start_region = [&](double level_z) {
-      levels.push_back({level_z, std::make_unique<Removed>(R, bx0, by0, bx1, by1)});
+    auto start_region = [&](double level_z) -> Level& {
+      levels.push_back({level_z, std::make_unique<Removed>(R, bx0, by0, bx1, by1), {}});
       current = levels.back().removed.get();
       current_z = level_z;
+      return levels.back();
     };
     if (!current) {
       start_region(std::numeric_limits<double>::quiet_NaN());
@@ -690,26 +919,18 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     // A horizontal move: its level's region if it has one (back from a lift, back up).
     if (!std::isnan(current_z) && std::abs(z - current_z) <= kLevelTol) return current;
     for (Level& l : levels) {
-      if (std::abs(l.z_mm - z) <= kLevelTol) {
-        current = l.removed.get();
-        current_z = l.z_mm;
-        return current;
-      }
+      if (std::abs(l.z_mm - z) <= kLevelTol) return enter(l);
     }
     if (std::isnan(current_z)) {  // the level a descent (or the start) came down to
-      current_z = z;
       for (Level& l : levels) {
-        if (l.removed.get() == current) l.z_mm = z;
+        if (l.removed.get() == current) {
+          l.z_mm = z;
+          return enter(l);
+        }
       }
-      return current;
     }
-    // A new level. Above the current one (a lift's link moves, a climb back up) it starts
-    // from the current level's discs, which removed its material too (the other levels' are
-    // not in it: more stock than there is, the safe side); below it, from nothing.
-    Removed* below = current_z < z ? current : nullptr;
-    start_region(z);
-    if (below) *current = *below;
-    return current;
+    // A new level.
+    return enter(start_region(z));
   };
   std::vector<Removed*> home(n, nullptr);  // each cutting position's region
   std::vector<char> above(n, 0);           // a ramp above its region's level: no disc
@@ -742,8 +963,10 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     ArcSet free = removed.outside(cx, cy);
     if (m == 1) pending[i] = free;
     ArcSet eng = intersect(
-        free, inside_rect(cx, cy, R, sx0, sx1, sy0,
-                          opt.open_ahead ? std::numeric_limits<double>::infinity() : sy1));
+        free, mesh_stock
+                  ? mesh_stock->inside(cx, cy, R, smp.z_mm[i], std::min(top, smp.z_mm[i] + flute))
+                  : inside_rect(cx, cy, R, sx0, sx1, sy0,
+                                opt.open_ahead ? std::numeric_limits<double>::infinity() : sy1));
     double total = 0;
     for (const auto& a : eng) total += a.sweep_rad();
     out.engagement_angle_rad[i] = total;

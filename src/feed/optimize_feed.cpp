@@ -326,14 +326,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   // Where the chips come from: the kernel, or the simulation (the stock mesh, if any, in the
   // slot frame), refused before it starts when its memory estimate passes the limit.
   std::optional<Mesh> mesh;
-  if (options.stock_mesh) {
-    if (options.engine != FeedEngine::sim) {
-      throw InputError(
-          "optimize-feed: a stock mesh (--stock) needs the simulation (--engine sim): the "
-          "engagement kernel's stock is the job's [stock] box");
-    }
-    mesh = mesh_in_slot_frame(*options.stock_mesh, placement);
-  }
+  if (options.stock_mesh) mesh = mesh_in_slot_frame(*options.stock_mesh, placement);
   const Mesh* stock = mesh ? &*mesh : nullptr;
   r.engine = options.engine;
   if (options.engine == FeedEngine::sim) {
@@ -353,7 +346,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   }
   const auto path_chips = [&](const ToolPath& p) {
     return options.engine == FeedEngine::sim ? simulated_chips(job, p, stock, hooks)
-                                             : kernel_chips(job, p, hooks);
+                                             : kernel_chips(job, p, hooks, stock);
   };
 
   hooks.begin("scheduling");

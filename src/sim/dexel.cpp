@@ -277,29 +277,6 @@ TriDexel::TriDexel(const StockBox& b, double spacing_mm)
 }  // namespace trochomill
 
 namespace trochomill {
-namespace {
-
-// A point of a board's (u, v) plane.
-struct UV {
-  double u = 0, v = 0;
-};
-
-// The edge function of p against the edge a -> b (twice the signed area of a, b, p), computed
-// from the edge's lexicographically smaller end so that b -> a gives its exact negative: two
-// triangles that share an edge agree bit for bit on which side of it a point lies.
-double edge_fn(UV a, UV b, UV p) {
-  const bool swap = b.u < a.u || (b.u == a.u && b.v < a.v);
-  if (swap) std::swap(a, b);
-  const double e = (b.u - a.u) * (p.v - a.v) - (b.v - a.v) * (p.u - a.u);
-  return swap ? -e : e;
-}
-
-// The top-left rule for a counter-clockwise triangle: a point on the edge a -> b belongs to
-// the triangle when the edge runs downward, or runs leftward level. The neighbour across the
-// edge runs it the other way round, so exactly one of the two takes the point.
-bool takes_edge(UV a, UV b) { return b.v < a.v || (b.v == a.v && b.u < a.u); }
-
-}  // namespace
 
 StockBox mesh_box(const Mesh& mesh) {
   using sim_detail::kInf;
@@ -338,27 +315,20 @@ TriDexel stock_from_mesh(const Mesh& mesh, double spacing_mm, const RunHooks& ho
                va = static_cast<std::size_t>((axis + 2) % 3);
     const Interval full = board.full();
     board.pause_summary();
-    // The triangles in the board's plane, counter-clockwise (flat ones, edge-on to the rays,
-    // are met by their neighbours' edges), with their u range.
+    // The triangles with their extent in the board's plane (sorted by u).
     struct Tri {
-      UV p[3];
-      double w[3];
-      double u_lo, u_hi;
+      const std::array<double, 3>* p[3];
+      double u_lo, u_hi, v_lo, v_hi;
     };
     std::vector<Tri> tris;
     tris.reserve(mesh.triangles.size());
     for (const auto& t : mesh.triangles) {
       Tri tr{};
-      for (int k = 0; k < 3; ++k) {
-        const auto& q = mesh.vertices[t[static_cast<std::size_t>(k)]];
-        tr.p[k] = {q[ua], q[va]};
-        tr.w[k] = q[a];
-      }
-      const double area = edge_fn(tr.p[0], tr.p[1], tr.p[2]);
-      if (area == 0) continue;
-      if (area < 0) std::swap(tr.p[1], tr.p[2]), std::swap(tr.w[1], tr.w[2]);
-      tr.u_lo = std::min({tr.p[0].u, tr.p[1].u, tr.p[2].u});
-      tr.u_hi = std::max({tr.p[0].u, tr.p[1].u, tr.p[2].u});
+      for (int k = 0; k < 3; ++k) tr.p[k] = &mesh.vertices[t[static_cast<std::size_t>(k)]];
+      tr.u_lo = std::min({(*tr.p[0])[ua], (*tr.p[1])[ua], (*tr.p[2])[ua]});
+      tr.u_hi = std::max({(*tr.p[0])[ua], (*tr.p[1])[ua], (*tr.p[2])[ua]});
+      tr.v_lo = std::min({(*tr.p[0])[va], (*tr.p[1])[va], (*tr.p[2])[va]});
+      tr.v_hi = std::max({(*tr.p[0])[va], (*tr.p[1])[va], (*tr.p[2])[va]});
       tris.push_back(tr);
     }
     std::sort(tris.begin(), tris.end(), [](const Tri& x, const Tri& y) { return x.u_lo < y.u_lo; });
@@ -377,26 +347,13 @@ TriDexel stock_from_mesh(const Mesh& mesh, double spacing_mm, const RunHooks& ho
         if (t.u_hi < strip_lo) continue;
         const auto [ti0, ti1] = board.index_range(true, t.u_lo, t.u_hi);
         const int ri0 = std::max(ti0, i0), ri1 = std::min(ti1, i1 - 1);
-        const double v_lo = std::min({t.p[0].v, t.p[1].v, t.p[2].v});
-        const double v_hi = std::max({t.p[0].v, t.p[1].v, t.p[2].v});
-        const auto [rj0, rj1] = board.index_range(false, v_lo, v_hi);
-        const double area = edge_fn(t.p[0], t.p[1], t.p[2]);
+        const auto [rj0, rj1] = board.index_range(false, t.v_lo, t.v_hi);
         for (int i = ri0; i <= ri1; ++i) {
           for (int j = rj0; j <= rj1; ++j) {
-            const UV p{board.u_of(i), board.v_of(j)};
-            double e[3];
-            bool in = true;
-            for (int k = 0; k < 3 && in; ++k) {
-              const UV x = t.p[(k + 1) % 3], y = t.p[(k + 2) % 3];  // the edge facing vertex k
-              e[k] = edge_fn(x, y, p);
-              in = e[k] > 0 || (e[k] == 0 && takes_edge(x, y));
+            if (const auto w =
+                    line_crossing(*t.p[0], *t.p[1], *t.p[2], axis, board.u_of(i), board.v_of(j))) {
+              hits[static_cast<std::size_t>((i - i0) * nv + j)].push_back(*w);
             }
-            if (!in) continue;
-            // A face square to the rays (all its corners at one w) is met exactly there.
-            const double w = t.w[0] == t.w[1] && t.w[1] == t.w[2]
-                                 ? t.w[0]
-                                 : (e[0] * t.w[0] + e[1] * t.w[1] + e[2] * t.w[2]) / area;
-            hits[static_cast<std::size_t>((i - i0) * nv + j)].push_back(w);
           }
         }
       }

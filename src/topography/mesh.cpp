@@ -98,6 +98,53 @@ void write_mesh(const std::filesystem::path& file, const Mesh& mesh) {
 
 namespace {
 
+// A point of the plane across a line.
+struct UV {
+  double u = 0, v = 0;
+};
+
+// The edge function of p against the edge a -> b (twice the signed area of a, b, p), computed
+// from the edge's lexicographically first end: b -> a gives its exact negative.
+double edge_fn(UV a, UV b, UV p) {
+  const bool swap = b.u < a.u || (b.u == a.u && b.v < a.v);
+  if (swap) std::swap(a, b);
+  const double e = (b.u - a.u) * (p.v - a.v) - (b.v - a.v) * (p.u - a.u);
+  return swap ? -e : e;
+}
+
+// The top-left rule for a counter-clockwise triangle: a point on the edge a -> b belongs to
+// the triangle when the edge runs downward, or runs leftward level. The neighbour across the
+// edge runs it the other way round, so exactly one of the two takes the point.
+bool takes_edge(UV a, UV b) { return b.v < a.v || (b.v == a.v && b.u < a.u); }
+
+}  // namespace
+
+std::optional<double> line_crossing(const std::array<double, 3>& a, const std::array<double, 3>& b,
+                                    const std::array<double, 3>& c, int axis, double u, double v) {
+  const auto k = static_cast<std::size_t>(axis), ku = static_cast<std::size_t>((axis + 1) % 3),
+             kv = static_cast<std::size_t>((axis + 2) % 3);
+  UV p[3] = {{a[ku], a[kv]}, {b[ku], b[kv]}, {c[ku], c[kv]}};
+  double w[3] = {a[k], b[k], c[k]};
+  double area = edge_fn(p[0], p[1], p[2]);
+  if (area == 0) return std::nullopt;
+  if (area < 0) {
+    std::swap(p[1], p[2]);
+    std::swap(w[1], w[2]);
+    area = -area;
+  }
+  const UV q{u, v};
+  double e[3];
+  for (int m = 0; m < 3; ++m) {
+    const UV x = p[(m + 1) % 3], y = p[(m + 2) % 3];  // the edge facing vertex m
+    e[m] = edge_fn(x, y, q);
+    if (!(e[m] > 0 || (e[m] == 0 && takes_edge(x, y)))) return std::nullopt;
+  }
+  if (w[0] == w[1] && w[1] == w[2]) return w[0];
+  return (e[0] * w[0] + e[1] * w[1] + e[2] * w[2]) / area;
+}
+
+namespace {
+
 using P2 = std::array<double, 2>;
 
 // The hone: the circle of radius r tangent to two faces through the corner c with outward
