@@ -434,24 +434,6 @@ TEST(Analysis, ALevelTakesWhatEveryLevelBelowRemoved) {
   }
 }
 
-// A box mesh with the corners' heights given (x lo/hi, y lo/hi; bottom at z_bottom): a
-// closed solid of 12 triangles, outward.
-Mesh block_mesh(double x0, double x1, double y0, double y1, double z_bottom,
-                const std::array<double, 4>& top_z) {  // top at (x0,y0), (x1,y0), (x0,y1), (x1,y1)
-  Mesh m;
-  for (int k = 0; k < 8; ++k) {
-    const double x = (k & 1) ? x1 : x0, y = (k & 2) ? y1 : y0;
-    m.vertices.push_back({x, y, (k & 4) ? top_z[static_cast<std::size_t>(k & 3)] : z_bottom});
-  }
-  const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : f) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
-
 // The stock as a mesh: the job's [stock] box given as 12 triangles gives the box's engagement
 // on the Wagih trochoidal path (every arc's ends from the circle's crossings with the faces'
 // edges instead of the box's closed form: 1e-9 rad and mm), and a block whose top slopes from
@@ -463,7 +445,7 @@ TEST(Analysis, AStockMeshIsTheStock) {
   Job job = test::wagih_job("trochoidal");
   job.stock_min_mm = std::array<double, 3>{-10.0, -5.0, -8.0};
   job.stock_max_mm = std::array<double, 3>{10.0, 40.0, 0.0};
-  const Mesh box = block_mesh(-10, 10, -5, 40, -8, {0, 0, 0, 0});
+  const Mesh box = test::block_mesh(-10, 10, -5, 40, -8, {0, 0, 0, 0});
   const PlannedPath planned = plan_path(job);
   EngagementOptions o;
   const EngagementSeries a = compute_engagement(planned.path, job, o);
@@ -479,7 +461,7 @@ TEST(Analysis, AStockMeshIsTheStock) {
   EXPECT_GT(engaged, 1000u);
 
   const Job slot = test::straight_job(10.0);
-  const Mesh slope = block_mesh(-10, 10, -5, 45, -8, {0.5, 0.5, -4.5, -4.5});  // z = -y / 10
+  const Mesh slope = test::block_mesh(-10, 10, -5, 45, -8, {0.5, 0.5, -4.5, -4.5});  // z = -y / 10
   EngagementOptions so;
   so.stock_mesh = &slope;
   const EngagementSeries e = program_engagement(

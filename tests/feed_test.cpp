@@ -363,22 +363,6 @@ TEST(OptimizeFeed, FeedsAreReachableWithTheAcceleration) {
 namespace trochomill {
 namespace {
 
-// A closed box mesh (12 triangles, outward).
-Mesh box_mesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
-  Mesh m;
-  for (int k = 0; k < 8; ++k) {
-    m.vertices.push_back(
-        {(k & 1) ? hi[0] : lo[0], (k & 2) ? hi[1] : lo[1], (k & 4) ? hi[2] : lo[2]});
-  }
-  const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : f) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
-
 // A stock mesh of two blocks with a 15 mm gap between them (y 15 to 30): a full slot through
 // both at z = -1. In the gap the tool (radius 5 mm) cuts nothing from y 20 to 25 and runs at
 // the air feed (the max feed here); in each block's middle it cuts a full slot's chip, f_z =
@@ -390,8 +374,8 @@ TEST(OptimizeFeed, AStockMeshIsTheStock) {
   const Job job = test::straight_job(
       10.0, 4, {{"simulation.resolution", "0.05", ""}, {"simulation.steps_per_rev", "40", ""}});
   const std::string text = "G21 G90 G17 G94\nG0 X0 Y-8 Z5\nG1 Z-1 F600\nG1 Y45\nG0 Z5\nM2\n";
-  auto mesh = std::make_shared<Mesh>(box_mesh({-8, 0, -3}, {8, 15, 0}));
-  const Mesh b = box_mesh({-8, 30, -3}, {8, 45, 0});
+  auto mesh = std::make_shared<Mesh>(test::box_mesh({-8, 0, -3}, {8, 15, 0}));
+  const Mesh b = test::box_mesh({-8, 30, -3}, {8, 45, 0});
   for (const auto& v : b.vertices) mesh->vertices.push_back(v);
   for (const auto& t : b.triangles) mesh->triangles.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
   auto feed_at = [](const GcodeProgram& out, double y) {

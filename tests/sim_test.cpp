@@ -1061,30 +1061,13 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
 namespace trochomill {
 namespace {
 
-// A closed box mesh (12 triangles, outward and counter-clockwise; the faces' diagonals run
-// through ray centres when the sides are whole multiples of the spacing).
-Mesh box_mesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
-  Mesh m;
-  for (int k = 0; k < 8; ++k) {
-    m.vertices.push_back(
-        {(k & 1) ? hi[0] : lo[0], (k & 2) ? hi[1] : lo[1], (k & 4) ? hi[2] : lo[2]});
-  }
-  const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : f) {
-    m.triangles.push_back({q[0], q[1], q[2]});
-    m.triangles.push_back({q[0], q[2], q[3]});
-  }
-  return m;
-}
-
 // A box given as a mesh is the box: every ray of the three boards holds the same interval as
 // the box stock's (bit for bit: faces square to the rays are met at their exact height, and a
 // diagonal through a ray centre is taken by one of its two triangles, not both or neither).
 TEST(Sim, AMeshStockOfABoxIsTheBox) {
   const StockBox box{{-1.0, 0.0, -0.5}, {1.0, 2.0, 0.5}};
   const double d = 0.05;
-  const TriDexel from_mesh = stock_from_mesh(box_mesh(box.lo, box.hi), d);
+  const TriDexel from_mesh = stock_from_mesh(test::box_mesh(box.lo, box.hi), d);
   const TriDexel plain(box, d);
   for (std::size_t b = 0; b < 3; ++b) {
     const DexelBoard& m = from_mesh.boards[b];
@@ -1128,8 +1111,8 @@ TEST(Sim, AMeshStockHoldsWhatTheMeshEncloses) {
       m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
     }
   };
-  add(box_mesh({2.0, -1.0, -1.0}, {4.0, 1.0, 1.0}), false);
-  add(box_mesh({2.5, -0.5, -1.0}, {3.5, 0.5, 1.0}), true);  // the hole, through along z
+  add(test::box_mesh({2.0, -1.0, -1.0}, {4.0, 1.0, 1.0}), false);
+  add(test::box_mesh({2.5, -0.5, -1.0}, {3.5, 0.5, 1.0}), true);  // the hole, through along z
   // Measured as a Z-board hole along z: its faces at z = -1, 1 coincide with the outer box's
   // (the rays there cross four faces at two heights: in, in, out, out: no material).
   const double volume = 4.0 / 3.0 + 2 * 2 * 2 - 1 * 1 * 2;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -14,8 +15,33 @@
 #include "trochomill/engagement.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/topography.hpp"
 
 namespace trochomill::test {
+
+// A block as a closed mesh of 12 triangles (outward, counter-clockwise seen from outside):
+// x from x0 to x1, y from y0 to y1, bottom at z_bottom, its top's corners at the heights
+// top_z (at (x0, y0), (x1, y0), (x0, y1), (x1, y1)): a box, or a block with a sloping top.
+// The faces' diagonals run through ray centres when the sides are whole multiples of a
+// dexel spacing.
+inline Mesh block_mesh(double x0, double x1, double y0, double y1, double z_bottom,
+                       const std::array<double, 4>& top_z) {
+  Mesh m;
+  for (int k = 0; k < 8; ++k) {
+    const double x = (k & 1) ? x1 : x0, y = (k & 2) ? y1 : y0;
+    m.vertices.push_back({x, y, (k & 4) ? top_z[static_cast<std::size_t>(k & 3)] : z_bottom});
+  }
+  const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : f) {
+    m.triangles.push_back({q[0], q[1], q[2]});
+    m.triangles.push_back({q[0], q[2], q[3]});
+  }
+  return m;
+}
+inline Mesh box_mesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+  return block_mesh(lo[0], hi[0], lo[1], hi[1], lo[2], {hi[2], hi[2], hi[2], hi[2]});
+}
 
 inline std::filesystem::path source_dir() { return TROCHOMILL_SOURCE_DIR; }
 inline std::filesystem::path example(const std::string& rel) {

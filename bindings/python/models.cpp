@@ -986,8 +986,19 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
          std::optional<double> power_w, std::optional<double> torque_nm,
          std::optional<double> min_feed_mm_per_min, std::optional<double> max_feed_mm_per_min,
          std::optional<double> air_feed_mm_per_min, double feed_step_percent, double piece_mm,
-         const std::vector<std::string>& include_dirs, const py::object& progress) {
+         const std::vector<std::string>& include_dirs, const std::string& engine,
+         const std::optional<std::string>& stock, std::optional<int> rounds,
+         const py::object& progress) {
         FeedOptimizeOptions o;
+        if (engine != "kernel" && engine != "sim") {
+          throw InputError(fmt::format(
+              "optimize_feed: engine must be \"kernel\" or \"sim\", got \"{}\"", engine));
+        }
+        o.engine = engine == "sim" ? FeedEngine::sim : FeedEngine::kernel;
+        if (stock) o.stock_mesh = std::make_shared<const Mesh>(read_mesh(*stock));
+        if (rounds && (*rounds < 1 || *rounds > 100)) {
+          throw InputError(fmt::format("optimize_feed: rounds must be 1 .. 100, got {}", *rounds));
+        }
         o.targets =
             feed_targets(pj.job, h_max_mm, mrr_mm3_per_min, min_feed_mm_per_min,
                          max_feed_mm_per_min, air_feed_mm_per_min, feed_step_percent, piece_mm);
@@ -996,6 +1007,7 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
         o.torque_nm = torque_nm;
         o.read = gcode_options(pj.job.machine).read;
         for (const std::string& d : include_dirs) o.read.include_dirs.emplace_back(d);
+        if (rounds) o.targets.iterations = *rounds;
         const std::string text = read_text_file(program);
         FeedOptimizeResult r = run_released(
             [&](const RunHooks& h) { return optimize_feed(pj.job, text, program, o, h); },
@@ -1019,11 +1031,15 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
       py::arg("min_feed_mm_per_min") = py::none(), py::arg("max_feed_mm_per_min") = py::none(),
       py::arg("air_feed_mm_per_min") = py::none(), py::arg("feed_step_percent") = 5.0,
       py::arg("piece_mm") = 0.5, py::arg("include_dirs") = std::vector<std::string>{},
+      py::arg("engine") = "kernel", py::arg("stock") = py::none(), py::arg("rounds") = py::none(),
       py::arg("progress") = py::none(),
       R"(Feed optimisation of an NC program, as `trochomill optimize-feed PROGRAM --job JOB`
 (docs/models.md section 15): program is the file's path, job a Job; the targets as
 schedule_feed's plus force_n (N), power_w (W) and torque_nm (N m) caps from the job's
-[material] model; include_dirs are searched for subroutine files. Returns the summary of
+[material] model; include_dirs are searched for subroutine files; engine "kernel" (the
+exact engagement, 2.5D programs) or "sim" (the tri-dexel simulation at the job's
+[simulation] resolution: any motion); stock a closed mesh file (STL, PLY, OBJ; mm, the
+program's frame) instead of the job's box; rounds of evaluation (default 12). Returns the summary of
 `--json` (times, quantiles of h_max, removal rate and forces before and after, shares of
 feed time by limit, blocks where the target cannot be held, warnings), "text" (the
 rewritten program) and "before"/"after": per cutting sample t_s, feed_mm_per_min and

@@ -398,3 +398,38 @@ def test_optimize_feed_is_the_cli(wagih, tmp_path):
     assert after["h_max_mm"].max() <= 1.03 * fz
     with pytest.raises(tm.InputError):
         tm.optimize_feed(str(prog), job, h_max_mm=-1.0)
+
+
+def test_optimize_feed_stock_mesh_and_engine(tmp_path):
+    """optimize_feed's engine and stock as the CLI's --engine and --stock: a block as an ASCII
+    STL (12 facets) ending at y = 10 under a straight slot: the same program as the CLI's with
+    either engine, the summary naming the engine; a bad engine is an InputError."""
+    job_file = tmp_path / "j.toml"
+    job_file.write_text(
+        "[tool]\ndiameter = 10\nteeth = 4\n[slot]\nwidth = 10\nlength = 20\ndepth = 3\n"
+        "[path]\ntype = \"linear\"\nstep = 1\n[cutting]\nfeed_rate = 600\n"
+        "spindle_speed = 2000\n[machine]\ndialect = \"linuxcnc\"\n[simulation]\n"
+        "resolution = 0.1\nsteps_per_rev = 24\n")
+    prog = tmp_path / "p.ngc"
+    prog.write_text("G21 G90 G17 G94\nG0 X0 Y-8 Z5\nG1 Z-1 F600\nG1 Y20\nG0 Z5\nM2\n")
+    lo, hi = (-8.0, 0.0, -3.0), (8.0, 10.0, 0.0)
+    corner = [(hi[0] if k & 1 else lo[0], hi[1] if k & 2 else lo[1], hi[2] if k & 4 else lo[2])
+              for k in range(8)]
+    facets = []
+    for q in [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]:
+        for t in [(q[0], q[1], q[2]), (q[0], q[2], q[3])]:
+            facets.append("facet normal 0 0 0\nouter loop\n" +
+                          "".join("vertex %g %g %g\n" % corner[k] for k in t) +
+                          "endloop\nendfacet\n")
+    stl = tmp_path / "stock.stl"
+    stl.write_text("solid s\n" + "".join(facets) + "endsolid s\n")
+    job = tm.Job.from_toml(job_file)
+    for engine in ["kernel", "sim"]:
+        out = tmp_path / ("out-%s.ngc" % engine)
+        run_cli("optimize-feed", prog, "--job", job_file, "-o", out, "--engine", engine,
+                "--stock", stl, "--rounds", "2")
+        r = tm.optimize_feed(str(prog), job, engine=engine, stock=str(stl), rounds=2)
+        assert r["engine"] == engine
+        assert r["text"] == out.read_text()
+    with pytest.raises(tm.InputError, match="engine"):
+        tm.optimize_feed(str(prog), job, engine="gpu")
