@@ -287,6 +287,61 @@ TEST(Sim, FullSlotChipPeaksAtFz) {
   EXPECT_GT(full, 100);
 }
 
+// A ball-nose end mill (R = rc = 5 mm, two teeth) in a full slot 1 mm deep: at height h above
+// the tip the contour radius is r(h) = sqrt(2 R h - h^2) and the edge's sine r(h) / R, so the
+// chip normal to the edge is at most f_z sin(phi) (the radial depth in a full slot is at most
+// f_z, at the front), 0.075 mm at the top for f_z = 0.125 mm, and every segment's largest
+// chip over the run reaches that of its lower end. The layers narrower than R / 2 are where the
+// closing wedges' sector alone left slivers between consecutive steps (the next teeth then
+// read 0.11-0.16 mm 0.1-0.2 mm above the tip); the strip closes them. Both spindle senses.
+// Tolerance: the sampled wedges, as the flat end mill's (f_z 2 pi nz / steps_per_rev ... as
+// below), plus a spacing's change of r(h) times the sine (the Z board reads a piece at its
+// widest point within the segment, up to one ray's rounding of rho): d sin(phi) at most.
+TEST(Sim, BallNoseChipIsFzTimesTheEdgeSine) {
+  for (const double sense : {-1.0, 1.0}) {
+    const double fz = 0.125, R = 5, d = 0.04, ap = 1;
+    StockBox box{{-7, -10, -2}, {7, -2, 0}};
+    TriDexel work(box, d);
+    SimSettings s;
+    s.steps_per_rev = 60;
+    SimTool tool = end_mill(0, 2, 2000);
+    tool.corner_radius_mm = R;
+    tool.omega_rad_per_s *= sense;
+    tool.segment_mm = 0.1;
+    const ToolPath p = line_path(0, -16, -4, -ap, fz * 2 * 2000);
+    const SimResult r = simulate(p, tool, s, work, 0, p.duration_s());
+    const int segs = tool.segments();
+    const double step_tol = fz * 2 * kTwoPi / s.steps_per_rev + fz * fz / (2 * R);
+    std::vector<double> seg_max(static_cast<std::size_t>(segs), 0.0);
+    int checked = 0;
+    for (const ChipEntry& c : r.chip_map) {
+      if (r.steps[c.step].tip_mm[1] < -8) continue;  // steady: the front in the stock since -15
+      const int sg = static_cast<int>(c.segment % static_cast<std::uint32_t>(segs));
+      const double top = std::min(ap, tool.height_at_length((sg + 1) * tool.segment_mm));
+      const double sine = tool.profile_radius(top) / R;
+      EXPECT_LT(c.h_mm, (fz + step_tol) * sine + d * sine + 1e-4)
+          << "sense " << sense << " segment " << sg << " step " << c.step;
+      seg_max[static_cast<std::size_t>(sg)] =
+          std::max(seg_max[static_cast<std::size_t>(sg)], static_cast<double>(c.h_mm));
+      ++checked;
+    }
+    EXPECT_GT(checked, 1000);
+    double hmax = 0;
+    for (int sg = 0; sg < segs; ++sg) {
+      const double top = tool.height_at_length((sg + 1) * tool.segment_mm);
+      if (top > ap) break;
+      const double bottom = tool.height_at_length(sg * tool.segment_mm);
+      const double sine = tool.profile_radius(bottom) / R;
+      // The lowest segments' chips are below chip_sampling's resolution or a ray apart.
+      if (bottom < 4 * d) continue;
+      EXPECT_GT(seg_max[static_cast<std::size_t>(sg)], (fz - step_tol) * sine - d * sine - 1e-4)
+          << "sense " << sense << " segment " << sg;
+      hmax = std::max(hmax, seg_max[static_cast<std::size_t>(sg)]);
+    }
+    EXPECT_NEAR(hmax, fz * tool.profile_radius(ap) / R, (step_tol + d) * 0.6 + 1e-4);
+  }
+}
+
 // Radial runout e (tooth 0 on the offset's side): tooth 0 cuts at R + e, tooth 1 at R - e,
 // so tooth 0's chip is the feed's f_z sin(a) plus 2e and tooth 1's minus 2e. Compared at
 // the front (a near 90 degrees) in a full slot with two straight teeth: the two teeth's

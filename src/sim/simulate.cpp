@@ -81,7 +81,24 @@ struct Wedge {
   double H;                      // cutting height above the tip
   double r_off;                  // the tooth's radial runout offset
   double r_in_drop;  // material lies only beyond profile + r_off - r_in_drop (kInf: anywhere)
+  // A closing wedge (about the previous centre, from the shared edge pa on; `run`) also takes
+  // the strip between the shared edge about the two centres: the points within `move` of the
+  // edge, on its far side, which lie within [a0, a1] only beyond the radius r_old. Ordinary
+  // wedges have move 0.
+  double move = 0;     // mm, the centre's move between the steps
+  double pa = 0;       // rad, the shared edge at height 0
+  bool up = true;      // the strip lies on the side of growing angles from pa
+  double drop = kInf;  // the annulus's drop (as r_in_drop, also when the search is exhaustive)
+  double r_old = 0;    // mm: at and beyond it [a0, a1] holds the strip
 };
+
+// A closing wedge's angle range at distance r (mm) from its centre: [a0, a1], widened where the
+// strip reaches beyond it (its points at r lie within asin(move / r) of the edge).
+std::pair<double, double> closing_angles(const Wedge& w, double r) {
+  if (!(w.move > 0) || r >= w.r_old) return {w.a0, w.a1};
+  const double ext = std::max(w.a1 - w.a0, r > w.move ? std::asin(w.move / r) : 0.5 * kPi);
+  return w.up ? std::pair{w.pa, w.pa + ext} : std::pair{w.pa - ext, w.pa};
+}
 
 // Accumulators of one board (merged in board order: the same numbers for any thread count).
 struct BoardAcc {
@@ -122,11 +139,23 @@ class Stepper {
     // Rays nearer the centre than r_lo hold no material (annulus mode).
     const double r_lo = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, flat - w.r_in_drop);
     const double r_hi = rmax;
-    const double span_lo = kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_;
-    const double span_hi = kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1;
+    // A closing wedge's strip beyond [a0, a1] where material may lie (nearer than r_old): the
+    // rays' angles then depend on their distance (closing_angles); searched within the sector
+    // as wide as the strip is at r0, and the disc of radius r0 about the centre.
+    const double r_mat = std::max(0.0, flat - w.drop);
+    const bool strip = w.move > 0 && r_mat < w.r_old;
+    const double r0 = strip ? std::min(w.r_old, std::max(r_mat, 4 * w.move)) : 0.0;
+    const bool disc = strip && r_mat < r0;
+    const auto [wa0, wa1] = strip ? closing_angles(w, r0) : std::pair{w.a0, w.a1};
+    const double span_lo = kappa_ >= 0 ? wa0 : wa0 + w.H * kappa_;
+    const double span_hi = kappa_ >= 0 ? wa1 + w.H * kappa_ : wa1;
     const bool wide = span_hi - span_lo >= kPi;
-    const auto bx = wide ? std::array<double, 4>{-r_hi, r_hi, -r_hi, r_hi}
-                         : annular_box(span_lo, span_hi, r_lo, r_hi);
+    auto bx = wide ? std::array<double, 4>{-r_hi, r_hi, -r_hi, r_hi}
+                   : annular_box(span_lo, span_hi, r_lo, r_hi);
+    if (disc) {
+      bx[0] = std::min(bx[0], -r0), bx[1] = std::max(bx[1], r0);
+      bx[2] = std::min(bx[2], -r0), bx[3] = std::max(bx[3], r0);
+    }
     const auto [i0, i1] = board.index_range(true, w.cx + bx[0], w.cx + bx[1]);
     std::array<Interval, 2> parts{};
     const SectorSlicer slicer(span_lo - 0.5 * kPi, span_hi - 0.5 * kPi);
@@ -134,7 +163,11 @@ class Stepper {
       const double dx = board.u_of(i) - w.cx;
       Interval chord{-kInf, kInf};
       if (!wide) {
-        const auto on = slicer.on_line(-dx, r_hi);
+        auto on = slicer.on_line(-dx, r_hi);
+        if (disc && std::abs(dx) < r0) {  // the hull with the disc's chord
+          const double c = std::sqrt(r0 * r0 - dx * dx);
+          on = on ? Interval{std::min(on->lo, -c), std::max(on->hi, c)} : Interval{-c, c};
+        }
         if (!on) continue;
         chord = *on;
       }
@@ -153,6 +186,7 @@ class Stepper {
           if (!reach) continue;
           const double hmin = reach->lo, hmax = reach->hi;
           const double th = std::atan2(dy, dx);
+          const auto [ra0, ra1] = strip ? closing_angles(w, rho) : std::pair{w.a0, w.a1};
           A.removed.clear();
           auto cut_h = [&](double h_lo, double h_hi) {
             h_lo = std::max(h_lo, hmin);
@@ -163,14 +197,14 @@ class Stepper {
             }
           };
           if (kappa_ == 0) {
-            if (contains_angle(w.a0, w.a1, th)) cut_h(0, w.H);
+            if (contains_angle(ra0, ra1, th)) cut_h(0, w.H);
           } else {
             // th + 2 pi m in [a0 + h kappa, a1 + h kappa]: h in [th' - a1, th' - a0] / kappa.
-            const double m0 = std::ceil((span_lo - th) / kTwoPi);
-            const double m1 = std::floor((span_hi - th) / kTwoPi);
+            const double m0 = std::ceil(((kappa_ >= 0 ? ra0 : ra0 + w.H * kappa_) - th) / kTwoPi);
+            const double m1 = std::floor(((kappa_ >= 0 ? ra1 + w.H * kappa_ : ra1) - th) / kTwoPi);
             for (double m = m0; m <= m1; m += 1) {
               const double tt = th + kTwoPi * m;
-              const double ha = (tt - w.a1) / kappa_, hb = (tt - w.a0) / kappa_;
+              const double ha = (tt - ra1) / kappa_, hb = (tt - ra0) / kappa_;
               cut_h(std::min(ha, hb), std::max(ha, hb));
             }
           }
@@ -244,6 +278,40 @@ class Stepper {
                                               : SectorSlicer(ah0 - 0.5 * kPi, ah1 - 0.5 * kPi);
       int sg_h = -1, sg_mid = -1;
       double sine = 0;
+      // Cuts [lo, hi] (offsets along the row from along_c, the row at distance perp from the
+      // centre) from ray (i, j) when its annulus part holds material, and records the chip.
+      auto cut_row = [&](int i, int j, double along_c, double perp, double lo, double hi) {
+        // Material can only be in the annulus part of the chord.
+        const int np = annulus_parts(perp, lo, hi, r_in, R_h, parts);
+        const Dexel* found = board.find(i, j);
+        bool any = false;
+        for (int q = 0; q < np && !any; ++q) {
+          any = has_material(found, board.full(), along_c + parts[static_cast<std::size_t>(q)].lo,
+                             along_c + parts[static_cast<std::size_t>(q)].hi);
+        }
+        if (!any) return;
+        A.removed.clear();
+        if (board.subtract(i, j, along_c + lo, along_c + hi, A.removed) > 0) ++A.updates;
+        if (A.removed.empty()) return;
+        if (sg_h < 0) {  // the layer's segments and edge sine, once a layer cuts
+          sg_h = seg_of(h);
+          sg_mid = seg_of(0.5 * ((h - 0.5 * d_) + (h + 0.5 * d_)));
+          sine = contour_.edge_sine(h);
+        }
+        for (const Interval& p : A.removed) {
+          A.removed_board += (p.hi - p.lo) * d_ * d_;
+          // The piece's point nearest the centre: the perpendicular's foot, clamped.
+          const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
+          if (note_at(A, k, sg_h, (R_h - std::sqrt(perp * perp + t * t)) * sine)) {
+            // One layer: a spacing of height.
+            extend_at(A, k, sg_mid, h - 0.5 * d_, h + 0.5 * d_);
+          }
+        }
+      };
+      // A closing wedge's strip, where material may lie within it nearer than r_old.
+      if (w.move > 0 && std::max(0.0, R_h - w.drop) < w.r_old) {
+        strip_rows(b, board, w, zl, w.pa + h * kappa_, R_h, cut_row);
+      }
       // Rows: board 0 over y (its u), board 1 over x (its v).
       const auto [r0, r1] = b == 0 ? board.index_range(true, w.cy + bx[2], w.cy + bx[3])
                                    : board.index_range(false, w.cx + bx[0], w.cx + bx[1]);
@@ -268,35 +336,55 @@ class Stepper {
           along_c = w.cy;
         }
         if (!off) continue;
-        // Material can only be in the annulus part of the chord.
-        const int np = annulus_parts(perp, off->lo, off->hi, r_in, R_h, parts);
-        const Dexel* found = board.find(i, j);
-        bool any = false;
-        for (int q = 0; q < np && !any; ++q) {
-          any = has_material(found, board.full(), along_c + parts[static_cast<std::size_t>(q)].lo,
-                             along_c + parts[static_cast<std::size_t>(q)].hi);
-        }
-        if (!any) continue;
-        A.removed.clear();
-        if (board.subtract(i, j, along_c + off->lo, along_c + off->hi, A.removed) > 0) {
-          ++A.updates;
-        }
-        if (A.removed.empty()) continue;
-        if (sg_h < 0) {  // the layer's segments and edge sine, once a layer cuts
-          sg_h = seg_of(h);
-          sg_mid = seg_of(0.5 * ((h - 0.5 * d_) + (h + 0.5 * d_)));
-          sine = contour_.edge_sine(h);
-        }
-        for (const Interval& p : A.removed) {
-          A.removed_board += (p.hi - p.lo) * d_ * d_;
-          // The piece's point nearest the centre: the perpendicular's foot, clamped.
-          const double t = std::clamp(0.0, p.lo - along_c, p.hi - along_c);
-          if (note_at(A, k, sg_h, (R_h - std::sqrt(perp * perp + t * t)) * sine)) {
-            // One layer: a spacing of height.
-            extend_at(A, k, sg_mid, h - 0.5 * d_, h + 0.5 * d_);
-          }
-        }
+        cut_row(i, j, along_c, perp, off->lo, off->hi);
       }
+    }
+  }
+
+  // The rows of board b (0 or 1) at layer zl crossing a closing wedge's strip at that layer
+  // (the shared edge at angle a, the contour radius R_h): the points w.c + t u + s v with
+  // u = (cos a, sin a), v its normal on the strip's side, t >= 0, 0 <= s <= move, within R_h of
+  // the centre. Each row's part of it, as cut_row(i, j, along_c, perp, lo, hi) wants it.
+  template <class CutRow>
+  void strip_rows(int b, const DexelBoard& board, const Wedge& w, int zl, double a, double R_h,
+                  CutRow& cut_row) const {
+    const double ux = std::cos(a), uy = std::sin(a);
+    const double vx = w.up ? -uy : uy, vy = w.up ? ux : -ux;
+    // The strip's extent across the rows: its corners, within the disc.
+    double lo_r = kInf, hi_r = -kInf;
+    for (const double t : {0.0, R_h}) {
+      for (const double sv : {0.0, w.move}) {
+        const double c = b == 0 ? t * uy + sv * vy : t * ux + sv * vx;
+        lo_r = std::min(lo_r, c), hi_r = std::max(hi_r, c);
+      }
+    }
+    lo_r = std::max(lo_r, -R_h), hi_r = std::min(hi_r, R_h);
+    if (!(hi_r > lo_r)) return;
+    const auto [r0, r1] = b == 0 ? board.index_range(true, w.cy + lo_r, w.cy + hi_r)
+                                 : board.index_range(false, w.cx + lo_r, w.cx + hi_r);
+    // Along the row (offset x from the centre's projection): f0 + f1 x within [lo, hi].
+    auto clip = [](double f0, double f1, double lo, double hi, double& x0, double& x1) {
+      if (std::abs(f1) < 1e-12) {
+        if (f0 < lo || f0 > hi) x1 = x0 - 1;  // empty
+        return;
+      }
+      const double p = (lo - f0) / f1, q = (hi - f0) / f1;
+      x0 = std::max(x0, std::min(p, q)), x1 = std::min(x1, std::max(p, q));
+    };
+    for (int r = r0; r <= r1; ++r) {
+      // Board 0: rows y = u along x; board 1: rows x = v along y.
+      const double perp = b == 0 ? board.u_of(r) - w.cy : board.v_of(r) - w.cx;
+      if (perp * perp >= R_h * R_h) continue;
+      const double half = std::sqrt(R_h * R_h - perp * perp);
+      double x0 = -half, x1 = half;
+      // t = q.u + x e.u and s = q.v + x e.v, with q the row's offset and e its direction.
+      const double qu = b == 0 ? perp * uy : perp * ux, eu = b == 0 ? ux : uy;
+      const double qv = b == 0 ? perp * vy : perp * vx, ev = b == 0 ? vx : vy;
+      clip(qu, eu, 0.0, kInf, x0, x1);
+      clip(qv, ev, 0.0, w.move, x0, x1);
+      if (!(x1 > x0)) continue;
+      const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
+      cut_row(i, j, b == 0 ? w.cx : w.cy, perp, x0, x1);
     }
   }
 
@@ -316,14 +404,19 @@ class Stepper {
         std::min(contour_.profile_radius(lo), contour_.profile_radius(hi)) + w.r_off;
     const double widest = contour_.profile_radius(tool_.widest_height(lo, hi)) + w.r_off;
     if (!(widest > 0)) return false;
-    const double r_in = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, narrowest - w.r_in_drop - d_);
+    // A closing wedge's strip lies within its move of the shared edge (from the centre out):
+    // the sector's box from the centre, grown by the move.
+    const bool strip = w.move > 0 && std::max(0.0, narrowest - w.drop) < w.r_old;
+    const double r_in =
+        std::isinf(w.r_in_drop) || strip ? 0.0 : std::max(0.0, narrowest - w.r_in_drop - d_);
     const double span_lo = kappa_ >= 0 ? w.a0 + lo * kappa_ : w.a0 + hi * kappa_;
     const double span_hi = kappa_ >= 0 ? w.a1 + hi * kappa_ : w.a1 + lo * kappa_;
     const double r_out = widest + d_;
     const auto bx = span_hi - span_lo >= kPi ? std::array<double, 4>{-r_out, r_out, -r_out, r_out}
                                              : annular_box(span_lo, span_hi, r_in, r_out);
-    const double x_lo = w.cx + bx[0] - d_, x_hi = w.cx + bx[1] + d_;
-    const double y_lo = w.cy + bx[2] - d_, y_hi = w.cy + bx[3] + d_;
+    const double grow = d_ + (strip ? w.move : 0.0);
+    const double x_lo = w.cx + bx[0] - grow, x_hi = w.cx + bx[1] + grow;
+    const double y_lo = w.cy + bx[2] - grow, y_hi = w.cy + bx[3] + grow;
     if (b == 0) {
       const auto [r0, r1] = board.index_range(true, y_lo, y_hi);
       return r0 <= r1 && board.may_hold(r0, r1, l0, l1, x_lo, x_hi);
@@ -511,6 +604,14 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         thin.cx = ps.x_mm[n - 1], thin.cy = ps.y_mm[n - 1];
         thin.a0 = tool.omega_rad_per_s < 0 ? pa - ext : pa;
         thin.a1 = tool.omega_rad_per_s < 0 ? pa : pa + ext;
+        // Below R / 2 (a layer narrower than the tool: a corner or ball, a lead angle) the
+        // sector leaves part of the sliver where material may lie: the strip takes it (the
+        // points within the move of the shared edge; closing_angles).
+        thin.move = moved;
+        thin.pa = pa;
+        thin.up = tool.omega_rad_per_s >= 0;
+        thin.drop = std::max(0.0, drop) + d;
+        thin.r_old = ext < 0.5 * kPi ? moved / std::sin(ext) : moved;
         if (ext > 0) wedges.push_back(thin), wedge_tooth.push_back(k);
       } else {
         // The whole sector about both this step's centre and the previous one: consecutive
