@@ -32,6 +32,15 @@ struct Mesh {
 /// temporary file and renamed. Throws InputError for an unknown extension, IoError on failure.
 void write_mesh(const std::filesystem::path& file, const Mesh& mesh);
 
+/// The box of the vertices a mesh's triangles use (mm).
+struct MeshBounds {
+  std::array<double, 3> lo{}, hi{};
+};
+/// A mesh used as a solid (a stock): its triangles' vertices' box. Throws InputError when it
+/// has no triangles, a triangle names a missing vertex, or a coordinate is not finite or lies
+/// beyond 1 km (1e6 mm).
+[[nodiscard]] MeshBounds mesh_bounds(const Mesh& mesh);
+
 /// Where the line along `axis` (0 x, 1 y, 2 z) through (u, v) on the next two axes
 /// (cyclically: y z for x, z x for y, x y for z; mm) crosses the triangle (a, b, c): its
 /// coordinate along the axis (mm), or nothing when it misses or the triangle is edge-on to

@@ -396,31 +396,21 @@ ArcSet inside_rect(double cx, double cy, double R, double x0, double x1, double 
 class MeshStock {
  public:
   MeshStock(const Mesh& mesh, double radius) : m_(mesh) {
-    double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
-    top_ = -x0;
+    const MeshBounds bounds = mesh_bounds(m_);  // checks every vertex a triangle uses
+    const double x0 = bounds.lo[0], y0 = bounds.lo[1], x1 = bounds.hi[0], y1 = bounds.hi[1];
+    top_ = bounds.hi[2];
     for (const auto& t : m_.triangles) {
       Tri b{};
       b.x0 = b.y0 = b.z0 = std::numeric_limits<double>::infinity();
       b.x1 = b.y1 = b.z1 = -b.x0;
       for (const std::uint32_t i : t) {
-        if (i >= m_.vertices.size()) throw InputError("the stock mesh indexes a missing vertex");
         const auto& p = m_.vertices[i];
-        for (const double c : p) {
-          if (!std::isfinite(c) || std::abs(c) > 1e6) {
-            throw InputError(fmt::format(
-                "the stock mesh has a vertex coordinate {} (mm; finite, within 1 km)", c));
-          }
-        }
         b.x0 = std::min(b.x0, p[0]), b.x1 = std::max(b.x1, p[0]);
         b.y0 = std::min(b.y0, p[1]), b.y1 = std::max(b.y1, p[1]);
         b.z0 = std::min(b.z0, p[2]), b.z1 = std::max(b.z1, p[2]);
       }
-      x0 = std::min(x0, b.x0), x1 = std::max(x1, b.x1);
-      y0 = std::min(y0, b.y0), y1 = std::max(y1, b.y1);
-      top_ = std::max(top_, b.z1);
       tris_.push_back(b);
     }
-    if (tris_.empty()) throw InputError("the stock mesh has no triangles");
     // Cells of the tool's radius, at most 1000 a side (a mesh far larger than the tool).
     x0_ = x0, y0_ = y0;
     cell_ = std::max({radius, (x1 - x0) / 1000.0, (y1 - y0) / 1000.0});
@@ -441,7 +431,8 @@ class MeshStock {
 
   // The arcs of the circle (cx, cy, R) over the region of the stock between heights z0 and z1.
   [[nodiscard]] ArcSet inside(double cx0, double cy0, double R, double z0, double z1) const {
-    std::vector<double> cut;
+    std::vector<double>& cut = cut_;  // the crossing angles, the buffer reused
+    cut.clear();
     ++tick_;
     for (long j = cy(cy0 - R); j <= cy(cy0 + R); ++j) {
       for (long i = cx(cx0 - R); i <= cx(cx0 + R); ++i) {
@@ -578,6 +569,7 @@ class MeshStock {
   mutable std::vector<std::uint32_t> stamp_;
   mutable std::uint32_t tick_ = 0;
   mutable std::vector<double> w_;
+  mutable std::vector<double> cut_;
 };
 
 ArcSet intersect(const ArcSet& a, const ArcSet& b) {

@@ -279,25 +279,10 @@ TriDexel::TriDexel(const StockBox& b, double spacing_mm)
 namespace trochomill {
 
 StockBox mesh_box(const Mesh& mesh) {
-  using sim_detail::kInf;
-  if (mesh.triangles.empty()) throw InputError("the stock mesh has no triangles");
+  const MeshBounds m = mesh_bounds(mesh);
   StockBox b;
-  b.lo = {kInf, kInf, kInf};
-  b.hi = {-kInf, -kInf, -kInf};
-  for (const auto& t : mesh.triangles) {
-    for (const std::uint32_t i : t) {
-      if (i >= mesh.vertices.size()) throw InputError("the stock mesh indexes a missing vertex");
-      const auto& p = mesh.vertices[i];
-      for (std::size_t k = 0; k < 3; ++k) {
-        if (!std::isfinite(p[k]) || std::abs(p[k]) > 1e6) {
-          throw InputError(fmt::format(
-              "the stock mesh has a vertex coordinate {} (mm; finite, within 1 km)", p[k]));
-        }
-        b.lo[k] = std::min(b.lo[k], p[k]);
-        b.hi[k] = std::max(b.hi[k], p[k]);
-      }
-    }
-  }
+  b.lo = m.lo;
+  b.hi = m.hi;
   for (std::size_t k = 0; k < 3; ++k) {
     if (!(b.hi[k] > b.lo[k])) {
       throw InputError(fmt::format("the stock mesh is flat along {} (no volume)", "xyz"[k]));

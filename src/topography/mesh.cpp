@@ -8,6 +8,7 @@
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <cmath>
+#include <limits>
 
 #include "contour.hpp"
 #include "trochomill/error.hpp"
@@ -118,6 +119,27 @@ double edge_fn(UV a, UV b, UV p) {
 bool takes_edge(UV a, UV b) { return b.v < a.v || (b.v == a.v && b.u < a.u); }
 
 }  // namespace
+
+MeshBounds mesh_bounds(const Mesh& mesh) {
+  if (mesh.triangles.empty()) throw InputError("the stock mesh has no triangles");
+  const double inf = std::numeric_limits<double>::infinity();
+  MeshBounds b{{inf, inf, inf}, {-inf, -inf, -inf}};
+  for (const auto& t : mesh.triangles) {
+    for (const std::uint32_t i : t) {
+      if (i >= mesh.vertices.size()) throw InputError("the stock mesh indexes a missing vertex");
+      const auto& p = mesh.vertices[i];
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (!std::isfinite(p[k]) || std::abs(p[k]) > 1e6) {
+          throw InputError(fmt::format(
+              "the stock mesh has a vertex coordinate {} (mm; finite, within 1 km)", p[k]));
+        }
+        b.lo[k] = std::min(b.lo[k], p[k]);
+        b.hi[k] = std::max(b.hi[k], p[k]);
+      }
+    }
+  }
+  return b;
+}
 
 std::optional<double> line_crossing(const std::array<double, 3>& a, const std::array<double, 3>& b,
                                     const std::array<double, 3>& c, int axis, double u, double v) {
