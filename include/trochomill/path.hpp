@@ -125,6 +125,9 @@ class ToolPath {
   [[nodiscard]] std::size_t segment_at_length(double s_mm) const;
   /// Index of the segment containing time t (s), clamped to the path.
   [[nodiscard]] std::size_t segment_at_time(double t_s) const;
+  /// Arc length (mm) reached at time t (s) at the programmed feeds: along the segment
+  /// containing t at its speed, clamped to that segment; its index through `segment` if given.
+  [[nodiscard]] double length_at_time_mm(double t_s, std::size_t* segment = nullptr) const;
   [[nodiscard]] Vec3 point_at_length(double s_mm) const;
 
  private:

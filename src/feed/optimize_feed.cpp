@@ -265,20 +265,12 @@ PathChips simulated_chips(const Job& job, const ToolPath& path, const Mesh* stoc
   c.h_mm.resize(n);
   c.mrr_mm3_per_s.resize(n);
   c.plunge.assign(n, 0);
-  // The place along the path at time t (mm): along its segment at the segment's speed.
-  const auto place = [&path](double t, std::size_t& k) {
-    k = path.segment_at_time(t);
-    const Segment& seg = path.segments()[k];
-    return path.segment_start_length_mm(k) +
-           std::clamp((t - path.segment_start_time_s(k)) * seg.speed_mm_per_min() / 60.0, 0.0,
-                      seg.length_mm());
-  };
   for (std::size_t i = 0; i < n; ++i) {
     const SimStep& st = steps[i];
     c.t_s[i] = st.t_s;
-    c.s_mm[i] = place(st.t_s, c.segment[i]);
+    c.s_mm[i] = path.length_at_time_mm(st.t_s, &c.segment[i]);
     c.from_t_s[i] = std::max(0.0, st.t_s - period);
-    c.from_s_mm[i] = place(c.from_t_s[i], c.from_segment[i]);
+    c.from_s_mm[i] = path.length_at_time_mm(c.from_t_s[i], &c.from_segment[i]);
     c.h_mm[i] = st.h_max_mm;
     double removed = 0;
     for (const double v : st.removed_mm3) removed += v;
@@ -466,13 +458,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
       at->resize(f->size());
       v->resize(f->size());
       for (std::size_t i = 0; i < f->size(); ++i) {
-        // The place at the step's time: along its segment at the segment's speed.
-        const std::size_t k = p->segment_at_time(f->t_s[i]);
-        const Segment& seg = p->segments()[k];
-        (*at)[i] =
-            std::min(p->segment_start_length_mm(k) +
-                         (f->t_s[i] - p->segment_start_time_s(k)) * seg.speed_mm_per_min() / 60.0,
-                     p->segment_start_length_mm(k) + seg.length_mm());
+        (*at)[i] = p->length_at_time_mm(f->t_s[i]);  // the place at the step's time
         (*v)[i] = f->resultant_n(i);
       }
     }

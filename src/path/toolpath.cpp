@@ -73,6 +73,14 @@ std::size_t ToolPath::segment_at_time(double t_s) const {
   return it == start_time_.begin() ? 0 : static_cast<std::size_t>(it - start_time_.begin()) - 1;
 }
 
+double ToolPath::length_at_time_mm(double t_s, std::size_t* segment) const {
+  const std::size_t k = segment_at_time(t_s);
+  if (segment != nullptr) *segment = k;
+  const Segment& seg = segments_[k];
+  return start_length_[k] +
+         std::clamp((t_s - start_time_[k]) * seg.speed_mm_per_min() / 60.0, 0.0, seg.length_mm());
+}
+
 Vec3 ToolPath::point_at_length(double s_mm) const {
   const std::size_t i = segment_at_length(s_mm);
   return segments_[i].point_at(s_mm - start_length_[i]);
