@@ -412,5 +412,67 @@ TEST(OptimizeFeed, AStockMeshIsTheStock) {
   for (const double y : {21.0, 22.5, 24.0}) EXPECT_NEAR(feed_at(kout, y), 600.0, 1e-3) << y;
 }
 
+// A ball nose (corner radius 5 mm = R) in a full slot 1 mm deep, target f_z = 0.075 mm: at the
+// top of the cut the edge is 3 mm from the axis and its sine is 3 / 5, so the chip normal to
+// the edge is 0.6 f_z and the target holds at f_z = 0.125 mm, 500 mm/min (two teeth, 2000
+// rpm). The simulation schedules that, within 10 % (a full slot's chip read to the 0.05 mm
+// grid, as above); the kernel, a square end mill of radius 5 mm, keeps 300 mm/min and says
+// so in a warning naming the level's line. A 0.5 mm corner under a 1 mm cut is a flank's cut
+// (no warning); with a 0.8 mm corner, a second level 0.5 mm under the first is named.
+TEST(OptimizeFeed, ACornerIsTheSimulations) {
+  const std::vector<Override> ball = {{"tool.corner_radius", "5.0", ""},
+                                      {"cutting.feed_rate", "300.0", ""},
+                                      {"simulation.resolution", "0.05", ""},
+                                      {"simulation.steps_per_rev", "40", ""}};
+  const Job job = test::straight_job(10.0, 2, ball);
+  const std::string text = "G21 G90 G17 G94\nG0 X0 Y-8 Z5\nG1 Z-1 F300\nG1 Y20\nG0 Z5\nM2\n";
+  auto corner_warning = [](const FeedOptimizeResult& r) {
+    std::string found;
+    for (const std::string& w : r.warnings) {
+      if (w.find("corner radius") != std::string::npos) found = w;
+    }
+    return found;
+  };
+  auto feed_at = [](const GcodeProgram& out, double y) {
+    for (const Segment& seg : out.path.segments()) {
+      const double a = std::min(seg.start().y(), seg.end().y()),
+                   e = std::max(seg.start().y(), seg.end().y());
+      if (seg.motion() == Motion::feed && seg.start().z() == seg.end().z() && a <= y && y <= e) {
+        return seg.speed_mm_per_min();
+      }
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  };
+  for (const FeedEngine engine : {FeedEngine::kernel, FeedEngine::sim}) {
+    const bool sim = engine == FeedEngine::sim;
+    FeedOptimizeOptions o = options_60_1800(job);
+    o.engine = engine;
+    if (sim) o.targets.iterations = 4;  // each round a whole simulation
+    const FeedOptimizeResult r = optimize_feed(job, text, "ball.ngc", o);
+    const GcodeProgram out = read_gcode(r.text, "out.ngc", o.read);
+    for (const double y : {6.0, 10.0, 14.0}) {
+      EXPECT_NEAR(feed_at(out, y), sim ? 500.0 : 300.0, sim ? 0.1 * 500.0 : 1e-3) << sim << y;
+    }
+    if (sim) {
+      EXPECT_EQ(corner_warning(r), "");
+    } else {
+      EXPECT_NE(corner_warning(r).find("ball.ngc:4: this level cuts 1 mm deep, within the "
+                                       "tool's 5 mm corner radius"),
+                std::string::npos)
+          << corner_warning(r);
+    }
+  }
+  // A flank's cut, and a shallow second level.
+  const FeedOptimizeOptions o = options_60_1800(job);
+  const Job small = test::straight_job(10.0, 2, {{"tool.corner_radius", "0.5", ""}});
+  EXPECT_EQ(corner_warning(optimize_feed(small, text, "ball.ngc", o)), "");
+  const Job bull = test::straight_job(10.0, 2, {{"tool.corner_radius", "0.8", ""}});
+  const std::string two =
+      "G21 G90 G17 G94\nG0 X0 Y-8 Z5\nG1 Z-1 F300\nG1 Y30\nG1 Z-1.5\nG1 Y-8\nG0 Z5\nM2\n";
+  EXPECT_NE(corner_warning(optimize_feed(bull, two, "two.ngc", o))
+                .find("two.ngc:6: this level cuts 0.5 mm deep, within the tool's 0.8 mm corner"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace trochomill

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numeric>
@@ -15,6 +16,8 @@
 #include "trochomill/feed.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/topography.hpp"
+#include "trochomill/units.hpp"
 
 namespace trochomill {
 namespace {
@@ -292,6 +295,52 @@ PathChips simulated_chips(const Job& job, const ToolPath& path, const Mesh* stoc
   return c;
 }
 
+namespace {
+
+// The kernel's tool is a square end mill of the full radius (docs/models.md section 7). Where
+// a level's cut (down from the stock's top, or from the next level above) is shallower than
+// the corner, the corner alone cuts: a narrower circle than the kernel's and a chip thinned by
+// the edge's sine, which only the simulation models. A note naming the shallowest such level.
+std::optional<std::string> corner_note(const Job& job, const std::vector<GcodeMove>& moves,
+                                       const ToolPath& slot_path, const Mesh* stock) {
+  const double rc = job.tool.corner_radius_mm;
+  if (!(rc > 0)) return std::nullopt;
+  const double lead =
+      job.tool.type == ToolType::insert_mill ? deg_to_rad(job.tool.lead_angle_deg) : 0.5 * kPi;
+  const double corner_h = rc * (1 - std::cos(kPi - lead));  // the corner arc's top (mm)
+  const double top = stock              ? mesh_bounds(*stock).hi[2]
+                     : job.stock_max_mm ? (*job.stock_max_mm)[2]
+                                        : 0.0;
+  // The levels (feed moves at one height below the top), with a move at each.
+  std::map<double, const GcodeMove*> levels;
+  for (const GcodeMove& m : moves) {
+    if (m.segment == GcodeMove::npos || m.kind == GcodeMove::Kind::rapid) continue;
+    const Segment& seg = slot_path.segments()[m.segment];
+    const double z = seg.start().z();
+    if (std::abs(seg.end().z() - z) > 1e-9 || !(z < top) || seg.length_mm() <= 0) continue;
+    levels.emplace(z, &m);
+  }
+  double shallowest = std::numeric_limits<double>::infinity();
+  const GcodeMove* at = nullptr;
+  for (auto it = levels.begin(); it != levels.end(); ++it) {
+    const auto above = std::next(it);
+    const double depth = (above == levels.end() ? top : std::min(top, above->first)) - it->first;
+    if (depth > 1e-6 && depth < corner_h - 1e-9 && depth < shallowest) {
+      shallowest = depth;
+      at = it->second;
+    }
+  }
+  if (at == nullptr) return std::nullopt;
+  return fmt::format(
+      "{}:{}: this level cuts {:.4g} mm deep, within the tool's {:.4g} mm corner radius: the "
+      "kernel takes the tool as a square end mill of radius {:.4g} mm (its circle and radial "
+      "chip), so the feeds there follow that tool; --engine sim models the corner (its "
+      "narrower circle and thinner chip)",
+      at->file, at->line, shallowest, rc, job.tool.radius_mm());
+}
+
+}  // namespace
+
 FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::string_view name,
                                  const FeedOptimizeOptions& options, const RunHooks& hooks) {
   FeedOptimizeResult r;
@@ -335,6 +384,9 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
           options.memory_limit_bytes / 1e9, job.simulation.resolution_mm,
           job.simulation.steps_per_rev));
     }
+  }
+  if (options.engine == FeedEngine::kernel) {
+    if (auto w = corner_note(job, in.moves, slot_path, stock)) r.warnings.push_back(*w);
   }
   const auto path_chips = [&](const ToolPath& p) {
     return options.engine == FeedEngine::sim ? simulated_chips(job, p, stock, hooks)
