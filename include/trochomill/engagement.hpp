@@ -29,7 +29,8 @@
 namespace trochomill {
 
 /// One engaged arc of the tool circle: angles (rad) counter-clockwise from +X, from
-/// start to end (end > start, end - start <= 2 pi).
+/// start to end (start in [0, 2 pi], end > start, end - start <= 2 pi: an arc across 0 ends
+/// past 2 pi).
 struct AngleArc {
   double start_rad = 0;
   double end_rad = 0;
