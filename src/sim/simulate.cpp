@@ -144,7 +144,12 @@ class Stepper {
     // as wide as the strip is at r0, and the disc of radius r0 about the centre.
     const double r_mat = std::max(0.0, flat - w.drop);
     const bool strip = w.move > 0 && r_mat < w.r_old;
-    const double r0 = strip ? std::min(w.r_old, std::max(r_mat, 4 * w.move)) : 0.0;
+    // r0 balances the disc's area (pi r0^2) against the widened sector's (about r_hi^2 move /
+    // 2 r0): the rays searched, not the ones cut, which closing_angles decides.
+    const double r0 =
+        strip ? std::min(w.r_old,
+                         std::max({r_mat, 4 * w.move, std::cbrt(r_hi * r_hi * w.move / (2 * kPi))}))
+              : 0.0;
     const bool disc = strip && r_mat < r0;
     const auto [wa0, wa1] = strip ? closing_angles(w, r0) : std::pair{w.a0, w.a1};
     const double span_lo = kappa_ >= 0 ? wa0 : wa0 + w.H * kappa_;
@@ -310,7 +315,7 @@ class Stepper {
       };
       // A closing wedge's strip, where material may lie within it nearer than r_old.
       if (w.move > 0 && std::max(0.0, R_h - w.drop) < w.r_old) {
-        strip_rows(b, board, w, zl, w.pa + h * kappa_, R_h, cut_row);
+        strip_rows(b, board, w, zl, w.pa + h * kappa_, R_h, r_in, cut_row);
       }
       // Rows: board 0 over y (its u), board 1 over x (its v).
       const auto [r0, r1] = b == 0 ? board.index_range(true, w.cy + bx[2], w.cy + bx[3])
@@ -344,13 +349,16 @@ class Stepper {
   // The rows of board b (0 or 1) at layer zl crossing a closing wedge's strip at that layer
   // (the shared edge at angle a, the contour radius R_h): the points w.c + t u + s v with
   // u = (cos a, sin a), v its normal on the strip's side, t >= 0, 0 <= s <= move, within R_h of
-  // the centre. Each row's part of it, as cut_row(i, j, along_c, perp, lo, hi) wants it.
+  // the centre. Each row's part of it, as cut_row(i, j, along_c, perp, lo, hi) wants it;
+  // only where material may lie, at r_in or more from the centre (t >= sqrt(r_in^2 - move^2)).
   template <class CutRow>
   void strip_rows(int b, const DexelBoard& board, const Wedge& w, int zl, double a, double R_h,
-                  CutRow& cut_row) const {
+                  double r_in, CutRow& cut_row) const {
     const double ux = std::cos(a), uy = std::sin(a);
     const double vx = w.up ? -uy : uy, vy = w.up ? ux : -ux;
-    // The strip's extent across the rows: its corners, within the disc.
+    const double t_min = r_in > w.move ? std::sqrt(r_in * r_in - w.move * w.move) : 0.0;
+    // The strip's extent across the rows: its corners, within the disc. (From t = 0: a row
+    // along the strip's edge through the centre stays a row of it whatever the rounding.)
     double lo_r = kInf, hi_r = -kInf;
     for (const double t : {0.0, R_h}) {
       for (const double sv : {0.0, w.move}) {
@@ -380,7 +388,7 @@ class Stepper {
       // t = q.u + x e.u and s = q.v + x e.v, with q the row's offset and e its direction.
       const double qu = b == 0 ? perp * uy : perp * ux, eu = b == 0 ? ux : uy;
       const double qv = b == 0 ? perp * vy : perp * vx, ev = b == 0 ? vx : vy;
-      clip(qu, eu, 0.0, kInf, x0, x1);
+      clip(qu, eu, t_min, kInf, x0, x1);
       clip(qv, ev, 0.0, w.move, x0, x1);
       if (!(x1 > x0)) continue;
       const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
