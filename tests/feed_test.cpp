@@ -332,6 +332,20 @@ TEST(OptimizeFeed, ForceAndTorqueCapsHold) {
 namespace trochomill {
 namespace {
 
+// The feed (mm/min) of the program's feed move at height z (mm, start and end) over y (mm);
+// NaN when none passes there.
+double feed_at(const GcodeProgram& out, double y, double z) {
+  for (const Segment& seg : out.path.segments()) {
+    const double a = std::min(seg.start().y(), seg.end().y()),
+                 e = std::max(seg.start().y(), seg.end().y());
+    if (seg.motion() == Motion::feed && seg.start().z() == z && seg.end().z() == z && a <= y &&
+        y <= e) {
+      return seg.speed_mm_per_min();
+    }
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
 // With machine.max_acceleration the scheduled feeds are reachable: every feed segment of the
 // program as written slows within its length to the next one's feed and reaches its own from
 // the one before (v_k^2 <= v_next^2 + 2 a L_k; 1e-3 mm/min of F rounding allowed), and the
@@ -378,17 +392,6 @@ TEST(OptimizeFeed, AStockMeshIsTheStock) {
   const Mesh b = test::box_mesh({-8, 30, -3}, {8, 45, 0});
   for (const auto& v : b.vertices) mesh->vertices.push_back(v);
   for (const auto& t : b.triangles) mesh->triangles.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
-  auto feed_at = [](const GcodeProgram& out, double y) {
-    for (const Segment& seg : out.path.segments()) {
-      const double a = std::min(seg.start().y(), seg.end().y()),
-                   e = std::max(seg.start().y(), seg.end().y());
-      if (seg.motion() == Motion::feed && seg.start().z() == -1 && seg.end().z() == -1 && a <= y &&
-          y <= e) {
-        return seg.speed_mm_per_min();
-      }
-    }
-    return std::numeric_limits<double>::quiet_NaN();
-  };
   for (const FeedEngine engine : {FeedEngine::kernel, FeedEngine::sim}) {
     const bool sim = engine == FeedEngine::sim;
     FeedOptimizeOptions o = options_60_1800(job);
@@ -399,9 +402,9 @@ TEST(OptimizeFeed, AStockMeshIsTheStock) {
     const FeedOptimizeResult r = optimize_feed(job, text, "gap.ngc", o);
     EXPECT_EQ(r.engine, engine);
     const GcodeProgram out = read_gcode(r.text, "out.ngc", o.read);
-    for (const double y : {21.0, 22.5, 24.0}) EXPECT_NEAR(feed_at(out, y), 1800.0, 1e-3) << y;
+    for (const double y : {21.0, 22.5, 24.0}) EXPECT_NEAR(feed_at(out, y, -1.0), 1800.0, 1e-3) << y;
     for (const double y : {7.5, 37.5}) {
-      EXPECT_NEAR(feed_at(out, y), 600.0, sim ? 0.12 * 600.0 : 1e-3) << sim << " " << y;
+      EXPECT_NEAR(feed_at(out, y, -1.0), 600.0, sim ? 0.12 * 600.0 : 1e-3) << sim << " " << y;
     }
     EXPECT_LE(r.h_after_mm.max, 0.075 * (sim ? 1.12 : 1.03)) << sim;
   }
@@ -409,7 +412,7 @@ TEST(OptimizeFeed, AStockMeshIsTheStock) {
   const FeedOptimizeOptions k = options_60_1800(job);
   const GcodeProgram kout =
       read_gcode(optimize_feed(job, text, "gap.ngc", k).text, "k.ngc", k.read);
-  for (const double y : {21.0, 22.5, 24.0}) EXPECT_NEAR(feed_at(kout, y), 600.0, 1e-3) << y;
+  for (const double y : {21.0, 22.5, 24.0}) EXPECT_NEAR(feed_at(kout, y, -1.0), 600.0, 1e-3) << y;
 }
 
 // A ball nose (corner radius 5 mm = R) in a full slot 1 mm deep, target f_z = 0.075 mm: at the
@@ -433,16 +436,6 @@ TEST(OptimizeFeed, ACornerIsTheSimulations) {
     }
     return found;
   };
-  auto feed_at = [](const GcodeProgram& out, double y) {
-    for (const Segment& seg : out.path.segments()) {
-      const double a = std::min(seg.start().y(), seg.end().y()),
-                   e = std::max(seg.start().y(), seg.end().y());
-      if (seg.motion() == Motion::feed && seg.start().z() == seg.end().z() && a <= y && y <= e) {
-        return seg.speed_mm_per_min();
-      }
-    }
-    return std::numeric_limits<double>::quiet_NaN();
-  };
   for (const FeedEngine engine : {FeedEngine::kernel, FeedEngine::sim}) {
     const bool sim = engine == FeedEngine::sim;
     FeedOptimizeOptions o = options_60_1800(job);
@@ -451,7 +444,7 @@ TEST(OptimizeFeed, ACornerIsTheSimulations) {
     const FeedOptimizeResult r = optimize_feed(job, text, "ball.ngc", o);
     const GcodeProgram out = read_gcode(r.text, "out.ngc", o.read);
     for (const double y : {6.0, 10.0, 14.0}) {
-      EXPECT_NEAR(feed_at(out, y), sim ? 500.0 : 300.0, sim ? 0.1 * 500.0 : 1e-3) << sim << y;
+      EXPECT_NEAR(feed_at(out, y, -1.0), sim ? 500.0 : 300.0, sim ? 0.1 * 500.0 : 1e-3) << sim << y;
     }
     if (sim) {
       EXPECT_EQ(corner_warning(r), "");

@@ -84,6 +84,11 @@ struct EngagementSeries {
   return plunging ? 0.0 : e.h_max_mm[i];
 }
 
+/// The top of the stock the engagement kernel cuts (mm): the stock mesh's highest vertex when
+/// one is given, else the job's [stock] box top, else the slot's top surface, 0. Throws
+/// InputError for a mesh without triangles or with a coordinate that is not finite.
+[[nodiscard]] double stock_top_mm(const Job& job, const Mesh* stock_mesh);
+
 /// Engagement at every sample of `path`, sampled every tooth pass / steps_per_tooth
 /// (time step 60 / (n Z steps_per_tooth) s). Throws InputError for bad options.
 [[nodiscard]] EngagementSeries compute_engagement(const ToolPath& path, const Job& job,

@@ -398,7 +398,6 @@ class MeshStock {
   MeshStock(const Mesh& mesh, double radius) : m_(mesh) {
     const MeshBounds bounds = mesh_bounds(m_);  // checks every vertex a triangle uses
     const double x0 = bounds.lo[0], y0 = bounds.lo[1], x1 = bounds.hi[0], y1 = bounds.hi[1];
-    top_ = bounds.hi[2];
     for (const auto& t : m_.triangles) {
       Tri b{};
       b.x0 = b.y0 = b.z0 = std::numeric_limits<double>::infinity();
@@ -427,8 +426,6 @@ class MeshStock {
     }
     stamp_.assign(tris_.size(), 0);
   }
-  [[nodiscard]] double top() const noexcept { return top_; }
-
   // The arcs of the circle (cx, cy, R) over the region of the stock between heights z0 and z1.
   [[nodiscard]] ArcSet inside(double cx0, double cy0, double R, double z0, double z1) const {
     std::vector<double>& cut = cut_;  // the crossing angles, the buffer reused
@@ -563,7 +560,7 @@ class MeshStock {
 
   const Mesh& m_;
   std::vector<Tri> tris_;
-  double top_ = 0, x0_ = 0, y0_ = 0, cell_ = 1;
+  double x0_ = 0, y0_ = 0, cell_ = 1;
   long nx_ = 1, ny_ = 1;
   std::vector<std::vector<std::uint32_t>> grid_;
   mutable std::vector<std::uint32_t> stamp_;
@@ -800,6 +797,12 @@ double swept_rate(const PathSamples& s, std::size_t i, double R, const ArcSet& e
 
 }  // namespace
 
+double stock_top_mm(const Job& job, const Mesh* stock_mesh) {
+  if (stock_mesh) return mesh_bounds(*stock_mesh).hi[2];
+  if (job.stock_max_mm) return (*job.stock_max_mm)[2];
+  return 0.0;
+}
+
 EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
                                     const EngagementOptions& opt) {
   if (opt.steps_per_tooth < 1) {
@@ -809,17 +812,16 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   // The stock: the slot (|x| <= W/2, 0 <= y <= L, below z = 0), or the job's [stock] box
   // (its x and y range, below its top).
   const double hw = 0.5 * job.slot.width_mm;
-  double sx0 = -hw, sx1 = hw, sy0 = 0, sy1 = job.slot.length_mm, top = 0;
+  double sx0 = -hw, sx1 = hw, sy0 = 0, sy1 = job.slot.length_mm;
+  const double top = stock_top_mm(job, opt.stock_mesh);
   std::optional<MeshStock> mesh_stock;
   if (opt.stock_mesh) {
     mesh_stock.emplace(*opt.stock_mesh, R);
-    top = mesh_stock->top();
   } else if (job.stock_min_mm && job.stock_max_mm) {
     sx0 = (*job.stock_min_mm)[0];
     sy0 = (*job.stock_min_mm)[1];
     sx1 = (*job.stock_max_mm)[0];
     sy1 = (*job.stock_max_mm)[1];
-    top = (*job.stock_max_mm)[2];
   }
   const std::size_t n = smp.size();
   const int m = opt.steps_per_tooth;

@@ -308,9 +308,7 @@ std::optional<std::string> corner_note(const Job& job, const std::vector<GcodeMo
   const double lead =
       job.tool.type == ToolType::insert_mill ? deg_to_rad(job.tool.lead_angle_deg) : 0.5 * kPi;
   const double corner_h = rc * (1 - std::cos(kPi - lead));  // the corner arc's top (mm)
-  const double top = stock              ? mesh_bounds(*stock).hi[2]
-                     : job.stock_max_mm ? (*job.stock_max_mm)[2]
-                                        : 0.0;
+  const double top = stock_top_mm(job, stock);
   // The levels (feed moves at one height below the top), with a move at each.
   std::map<double, const GcodeMove*> levels;
   for (const GcodeMove& m : moves) {

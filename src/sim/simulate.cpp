@@ -92,6 +92,12 @@ struct Wedge {
   double r_old = 0;    // mm: at and beyond it [a0, a1] holds the strip
 };
 
+// Whether a closing wedge takes its strip on a layer whose edge lies at `radius` (mm) from its
+// centre: where the layer's material (beyond radius - drop) may lie nearer than r_old.
+bool needs_strip(const Wedge& w, double radius) {
+  return w.move > 0 && std::max(0.0, radius - w.drop) < w.r_old;
+}
+
 // A closing wedge's angle range at distance r (mm) from its centre: [a0, a1], widened where the
 // strip reaches beyond it (its points at r lie within asin(move / r) of the edge).
 std::pair<double, double> closing_angles(const Wedge& w, double r) {
@@ -143,7 +149,7 @@ class Stepper {
     // rays' angles then depend on their distance (closing_angles); searched within the sector
     // as wide as the strip is at r0, and the disc of radius r0 about the centre.
     const double r_mat = std::max(0.0, flat - w.drop);
-    const bool strip = w.move > 0 && r_mat < w.r_old;
+    const bool strip = needs_strip(w, flat);
     // r0 balances the disc's area (pi r0^2) against the widened sector's (about r_hi^2 move /
     // 2 r0): the rays searched, not the ones cut, which closing_angles decides.
     const double r0 =
@@ -314,7 +320,7 @@ class Stepper {
         }
       };
       // A closing wedge's strip, where material may lie within it nearer than r_old.
-      if (w.move > 0 && std::max(0.0, R_h - w.drop) < w.r_old) {
+      if (needs_strip(w, R_h)) {
         strip_rows(b, board, w, zl, w.pa + h * kappa_, R_h, r_in, cut_row);
       }
       // Rows: board 0 over y (its u), board 1 over x (its v).
@@ -414,7 +420,7 @@ class Stepper {
     if (!(widest > 0)) return false;
     // A closing wedge's strip lies within its move of the shared edge (from the centre out):
     // the sector's box from the centre, grown by the move.
-    const bool strip = w.move > 0 && std::max(0.0, narrowest - w.drop) < w.r_old;
+    const bool strip = needs_strip(w, narrowest);
     const double r_in =
         std::isinf(w.r_in_drop) || strip ? 0.0 : std::max(0.0, narrowest - w.r_in_drop - d_);
     const double span_lo = kappa_ >= 0 ? w.a0 + lo * kappa_ : w.a0 + hi * kappa_;
