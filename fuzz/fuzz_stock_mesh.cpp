@@ -29,10 +29,9 @@ void check_boards(const TriDexel& work) {
     const Interval full = b.full();
     for (int i = 0; i < b.count_u(); ++i) {
       for (int j = 0; j < b.count_v(); ++j) {
-        const Dexel* ray = b.find(i, j);
-        if (ray == nullptr) continue;
+        if (!b.touched(i, j)) continue;
         double last = -INFINITY;
-        for (const Interval& v : ray->intervals()) {
+        for (const Interval& v : b.intervals(i, j)) {
           // Sorted, disjoint, non-empty and within the box along the ray.
           if (!(v.lo < v.hi) || !(v.lo > last) || v.lo < full.lo || v.hi > full.hi) std::abort();
           last = v.hi;

@@ -49,13 +49,23 @@ TEST(Sim, DexelSubtract) {
 
 // Random subtractions against a plain reference (intervals rebuilt in a fresh vector each
 // time): the in-place, inline-first dexel holds exactly the same intervals (the arithmetic is
-// the same min/max on the same doubles: exact equality) and reports the same removed pieces.
-TEST(Sim, DexelMatchesAReferenceUnderRandomCuts) {
+// the same min/max on the same doubles: exact equality) and reports the same removed pieces,
+// with one inline interval (the Z board's) and two (the X and Y boards'), through copies and
+// moves between inline and heap storage.
+template <std::uint32_t N>
+void dexel_matches_a_reference() {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> pos(-1, 11), len(0, 3);
+  std::size_t on_heap = 0;
   for (int trial = 0; trial < 200; ++trial) {
-    Dexel d({0, 10});
+    BasicDexel<N> d({0, 10});
     std::vector<Interval> ref{{0, 10}};
+    auto same = [&](const BasicDexel<N>& x) {
+      const auto iv = x.intervals();
+      return std::ranges::equal(iv, ref, [](const Interval& p, const Interval& q) {
+        return p.lo == q.lo && p.hi == q.hi;
+      });
+    };
     for (int op = 0; op < 12; ++op) {
       const double a = pos(rng), b = a + len(rng);
       std::vector<Interval> got, want, next;
@@ -79,16 +89,26 @@ TEST(Sim, DexelMatchesAReferenceUnderRandomCuts) {
         EXPECT_EQ(got[k].lo, want[k].lo);
         EXPECT_EQ(got[k].hi, want[k].hi);
       }
-      const auto iv = d.intervals();
-      ASSERT_EQ(iv.size(), ref.size());
-      for (std::size_t k = 0; k < ref.size(); ++k) {
-        EXPECT_EQ(iv[k].lo, ref[k].lo);
-        EXPECT_EQ(iv[k].hi, ref[k].hi);
-      }
-      const Dexel copy = d;  // copies keep the intervals
-      ASSERT_EQ(copy.intervals().size(), ref.size());
+      ASSERT_TRUE(same(d)) << N << " " << trial << " " << op;
+      on_heap += d.heap_bytes() > 0 ? 1 : 0;
+      const BasicDexel<N> copy = d;  // copies keep the intervals
+      ASSERT_TRUE(same(copy));
+      BasicDexel<N> moved(std::move(d));  // so do moves, and assignments of either
+      ASSERT_TRUE(same(moved));
+      BasicDexel<N> other({-5, -4});
+      other = copy;
+      ASSERT_TRUE(same(other));
+      d = std::move(moved);
+      ASSERT_TRUE(same(d));
     }
   }
+  EXPECT_GT(on_heap, 100u) << N;  // the heap's storage was exercised
+}
+
+TEST(Sim, DexelMatchesAReferenceUnderRandomCuts) {
+  dexel_matches_a_reference<1>();
+  dexel_matches_a_reference<2>();
+  static_assert(sizeof(BasicDexel<1>) == 24 && sizeof(BasicDexel<2>) == 40);
 }
 
 // A square end mill (R 5 mm, two teeth) along a straight line through a box.
@@ -549,8 +569,8 @@ TEST(Sim, TheThreeBoardsAgreeOnTheMachinedSlot) {
   const int zl = static_cast<int>((-0.5 - box.lo[2]) / d);
   for (int j = 0; j < yb.count_v(); ++j) {
     const double x = yb.v_of(j);
-    const Dexel* ray = yb.find(zl, j);
-    const double len = ray ? ray->length() : yb.full().hi - yb.full().lo;
+    double len = 0;
+    for (const Interval& v : yb.intervals(zl, j)) len += v.hi - v.lo;
     if (std::abs(x) < R - d) {
       EXPECT_NEAR(len, 0.0, 1e-9) << x;
     }
@@ -983,15 +1003,12 @@ TEST(Sim, EnvelopeRowsAreTheUnionOfTheMoves) {
     const DexelBoard& single = one.boards[static_cast<std::size_t>(b)];
     for (int i = 0; i < board.count_u(); ++i) {
       for (int j = 0; j < board.count_v(); ++j) {
-        const Dexel* got = board.find(i, j);
-        const Dexel* got1 = single.find(i, j);
-        ASSERT_EQ(got == nullptr, got1 == nullptr);
-        if (got != nullptr) {
-          ASSERT_TRUE(std::ranges::equal(
-              got->intervals(), got1->intervals(),
-              [](const Interval& p, const Interval& q) { return p.lo == q.lo && p.hi == q.hi; }))
-              << b << " " << i << " " << j;
-        }
+        const auto got = board.intervals(i, j);
+        ASSERT_EQ(board.touched(i, j), single.touched(i, j));
+        ASSERT_TRUE(std::ranges::equal(
+            got, single.intervals(i, j),
+            [](const Interval& p, const Interval& q) { return p.lo == q.lo && p.hi == q.hi; }))
+            << b << " " << i << " " << j;
         if ((i + j) % 3 != 0) continue;  // a third of the rays against the reference
         // Board 0: rays along x at (y, z) = (u, v); board 1: along y at (z, x) = (u, v).
         const double h = (b == 0 ? board.v_of(j) : board.u_of(i)) - z;
@@ -1014,9 +1031,7 @@ TEST(Sim, EnvelopeRowsAreTheUnionOfTheMoves) {
         }
         if (from < board.full().hi) want.push_back({from, board.full().hi});
         std::erase_if(want, [](const Interval& v) { return !(v.hi > v.lo); });
-        const std::vector<Interval> have =
-            got ? std::vector<Interval>(got->intervals().begin(), got->intervals().end())
-                : std::vector<Interval>{board.full()};
+        const std::vector<Interval> have(got.begin(), got.end());
         ASSERT_EQ(have.size(), want.size()) << b << " " << i << " " << j;
         for (std::size_t q = 0; q < have.size(); ++q) {
           EXPECT_NEAR(have[q].lo, want[q].lo, 1e-9) << b << " " << i << " " << j;
@@ -1052,10 +1067,8 @@ TEST(Sim, EnvelopeRowsAreTheUnionOfTheMoves) {
           corner += reach->lo > 0 ? 1 : 0;
         }
       }
-      const Dexel* got = zb.find(i, j);
-      const std::vector<Interval> have =
-          got ? std::vector<Interval>(got->intervals().begin(), got->intervals().end())
-              : std::vector<Interval>{zb.full()};
+      const auto got = zb.intervals(i, j);
+      const std::vector<Interval> have(got.begin(), got.end());
       ASSERT_EQ(have.size(), want.size()) << i << " " << j << " " << rho;
       for (std::size_t q = 0; q < have.size(); ++q) {
         EXPECT_NEAR(have[q].lo, want[q].lo, 1e-9) << i << " " << j;
@@ -1068,13 +1081,10 @@ TEST(Sim, EnvelopeRowsAreTheUnionOfTheMoves) {
   EXPECT_GT(corner, 1000u);  // rays under the corner's ring, cut part of the way only
   for (int i = 0; i < zb.count_u(); ++i) {
     for (int j = 0; j < zb.count_v(); ++j) {
-      const Dexel *a = zb.find(i, j), *b = one.boards[2].find(i, j);
-      ASSERT_EQ(a == nullptr, b == nullptr);
-      if (a != nullptr) {
-        ASSERT_TRUE(std::ranges::equal(a->intervals(), b->intervals(), [](auto& p, auto& q) {
-          return p.lo == q.lo && p.hi == q.hi;
-        }));
-      }
+      ASSERT_EQ(zb.touched(i, j), one.boards[2].touched(i, j));
+      ASSERT_TRUE(
+          std::ranges::equal(zb.intervals(i, j), one.boards[2].intervals(i, j),
+                             [](auto& p, auto& q) { return p.lo == q.lo && p.hi == q.hi; }));
     }
   }
 }
@@ -1107,12 +1117,8 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
     bool any = false;
     for (int i = i0; i <= i1; ++i) {
       for (int j = j0; j <= j1; ++j) {
-        const Dexel* d = board.find(i, j);
-        if (d == nullptr) {
-          any = any || (hi > 0 && lo < 10);
-          continue;
-        }
-        for (const Interval& v : d->intervals()) any = any || (v.hi > lo && v.lo < hi);
+        // Untouched rays: the whole stock, [0, 10].
+        for (const Interval& v : board.intervals(i, j)) any = any || (v.hi > lo && v.lo < hi);
       }
     }
     const bool may = board.may_hold(i0, i1, j0, j1, lo, hi);
@@ -1146,11 +1152,11 @@ TEST(Sim, AMeshStockOfABoxIsTheBox) {
     EXPECT_EQ(m.volume_mm3(), p.volume_mm3()) << b;
     for (int i = 0; i < m.count_u(); ++i) {
       for (int j = 0; j < m.count_v(); ++j) {
-        const Dexel* r = m.find(i, j);
-        ASSERT_NE(r, nullptr);  // every ray is held
-        ASSERT_EQ(r->intervals().size(), 1u) << b << " " << i << " " << j;
-        EXPECT_EQ(r->intervals()[0].lo, p.full().lo);
-        EXPECT_EQ(r->intervals()[0].hi, p.full().hi);
+        ASSERT_TRUE(m.touched(i, j));  // every ray is held
+        const auto r = m.intervals(i, j);
+        ASSERT_EQ(r.size(), 1u) << b << " " << i << " " << j;
+        EXPECT_EQ(r[0].lo, p.full().lo);
+        EXPECT_EQ(r[0].hi, p.full().hi);
       }
     }
   }
@@ -1193,7 +1199,8 @@ TEST(Sim, AMeshStockHoldsWhatTheMeshEncloses) {
   const auto [i0, i1] = z.index_range(true, 2.6, 3.4);
   const auto [j0, j1] = z.index_range(false, -0.4, 0.4);
   for (int i = i0; i <= i1; ++i) {
-    for (int j = j0; j <= j1; ++j) EXPECT_TRUE(z.find(i, j)->intervals().empty()) << i << " " << j;
+    for (int j = j0; j <= j1; ++j)
+      EXPECT_TRUE(z.touched(i, j) && z.intervals(i, j).empty()) << i << " " << j;
   }
   Mesh open = m;
   open.triangles.erase(open.triangles.begin());

@@ -54,35 +54,44 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m);
 /// Reads a file written by write_chip_map_h5. Throws Error.
 [[nodiscard]] ChipMapData read_chip_map_h5(const std::filesystem::path& path);
 
-/// A dexel: sorted, disjoint material intervals along one ray. Up to two intervals (the
-/// common cases: a ray through the floor, or across the slot with a wall on each side) are
-/// stored inline; more go to the heap.
-class Dexel {
+/// A dexel: sorted, disjoint material intervals along one ray. Up to N intervals are stored
+/// inline (the common cases: one on a ray through the floor, two on a ray across the slot with
+/// a wall on each side); more go to the heap, whose pointer shares the inline storage (a dexel
+/// is 16 N + 8 bytes).
+template <std::uint32_t N>
+class BasicDexel {
+  static_assert(N >= 1);
+
  public:
-  Dexel() = default;
-  explicit Dexel(Interval full) : in_{full, {}}, n_(1) {}
-  Dexel(const Dexel& o);
-  Dexel& operator=(const Dexel& o);
-  Dexel(Dexel&&) noexcept = default;
-  Dexel& operator=(Dexel&&) noexcept = default;
-  ~Dexel() = default;
+  BasicDexel() noexcept : heap_(nullptr) {}
+  explicit BasicDexel(Interval full) noexcept : n_(1) { in_[0] = full; }
+  BasicDexel(const BasicDexel& o);
+  BasicDexel& operator=(const BasicDexel& o);
+  BasicDexel(BasicDexel&& o) noexcept;
+  BasicDexel& operator=(BasicDexel&& o) noexcept;
+  ~BasicDexel() {
+    if (cap_ > 0) delete[] heap_;
+  }
   [[nodiscard]] std::span<const Interval> intervals() const noexcept {
-    return {heap_ ? heap_.get() : in_, n_};
+    return {cap_ > 0 ? heap_ : in_, n_};
   }
   /// Removes [a, b] and appends the removed pieces to `removed` (in order). Returns the
   /// removed length (mm).
   double subtract(double a, double b, std::vector<Interval>& removed);
   [[nodiscard]] double length() const;
-  /// Heap bytes held (0 for an inline interval).
-  [[nodiscard]] std::size_t heap_bytes() const noexcept {
-    return heap_ ? cap_ * sizeof(Interval) : 0;
-  }
+  /// Heap bytes held (0 while the intervals are inline).
+  [[nodiscard]] std::size_t heap_bytes() const noexcept { return cap_ * sizeof(Interval); }
 
  private:
-  Interval in_[2]{};
+  union {
+    Interval in_[N];
+    Interval* heap_;  // while cap_ > 0
+  };
   std::uint32_t n_ = 0, cap_ = 0;
-  std::unique_ptr<Interval[]> heap_;
 };
+
+/// The dexel of the X and Y boards (two inline intervals).
+using Dexel = BasicDexel<2>;
 
 /// The stock: an axis-aligned box (mm).
 struct StockBox {
@@ -95,7 +104,9 @@ struct StockBox {
 /// One board: rays along `axis` (0 x, 1 y, 2 z) on a square grid of spacing `d` over the
 /// two other axes (u = axis + 1, v = axis + 2, cyclically), ray (i, j) at u = u0 + (i + 1/2) d,
 /// v = v0 + (j + 1/2) d. Sparse: rays live in tiles of 64 x 64 created on first touch;
-/// untouched rays hold the whole stock interval implicitly.
+/// untouched rays hold the whole stock interval implicitly. A ray holds one interval inline on
+/// the Z board (a ray through the floor: 24 bytes) and two on the X and Y boards (a ray
+/// across the slot: 40 bytes); more go to the heap.
 class DexelBoard {
  public:
   DexelBoard(int axis, const StockBox& box, double spacing_mm);
@@ -114,17 +125,29 @@ class DexelBoard {
     const int i1 = std::min(count - 1, static_cast<int>(std::floor((hi - o) / d_ - 0.5)));
     return {i0, i1};
   }
-  /// The ray (i, j), created (as the full stock interval) if untouched. Threads may create
-  /// rays at once only in different tiles (kTile x kTile rays) and with the summary paused.
-  Dexel& ray(int i, int j);
-  /// The ray if it was ever touched, else nullptr (it then holds the full interval).
-  [[nodiscard]] const Dexel* find(int i, int j) const;
+  /// Creates the tile of ray (i, j) (kTile x kTile rays, each the full stock interval) if
+  /// untouched. Threads may create tiles at once only different ones and with the summary
+  /// paused.
+  void touch(int i, int j);
+  /// Whether ray (i, j) was ever touched (untouched, it holds the full interval).
+  [[nodiscard]] bool touched(int i, int j) const noexcept {
+    return axis_ == 2 ? tiles1_[tile_index(i, j)] != nullptr : tiles2_[tile_index(i, j)] != nullptr;
+  }
+  /// The material of ray (i, j): its intervals (mm along the axis), the full interval when
+  /// untouched. Valid until the ray is next cut.
+  [[nodiscard]] std::span<const Interval> intervals(int i, int j) const noexcept {
+    const std::size_t t = tile_index(i, j);
+    if (axis_ == 2) return tiles1_[t] ? tiles1_[t][in_tile(i, j)].intervals() : full_span();
+    return tiles2_[t] ? tiles2_[t][in_tile(i, j)].intervals() : full_span();
+  }
   [[nodiscard]] Interval full() const noexcept { return full_; }
   /// Material volume represented by the board (mm^3): sum of lengths times d^2.
   [[nodiscard]] double volume_mm3() const;
   /// Tiles that were ever touched.
   [[nodiscard]] std::size_t tiles() const noexcept;
   [[nodiscard]] std::size_t memory_bytes() const;
+  /// The bytes of one held ray on the board along `axis` (without its heap).
+  [[nodiscard]] static std::size_t ray_bytes(int axis) noexcept;
   /// Rays per tile side.
   static constexpr int kTile = 64;
   /// Bins along the ray axis of a tile's material summary.
@@ -138,7 +161,7 @@ class DexelBoard {
   /// from the rays (cheaper than keeping it through many cuts).
   void pause_summary();
   void resume_summary();
-  /// Removes [a, b] from ray (i, j) (as Dexel::subtract), keeping the summary.
+  /// Removes [a, b] from ray (i, j) (as BasicDexel::subtract), keeping the summary.
   double subtract(int i, int j, double a, double b, std::vector<Interval>& removed);
   /// False only when no ray (i, j), i in [i0, i1], j in [j0, j1], holds material in [lo, hi]
   /// (by the summary: exact to a bin); always true without one.
@@ -149,7 +172,17 @@ class DexelBoard {
     std::array<std::uint16_t, kBins> count{};      // rays with material in each bin
     std::array<std::uint64_t, kBins / 64> mask{};  // bins with a non-zero count
   };
-  [[nodiscard]] std::array<std::uint64_t, kBins / 64> bins_of(const Dexel& d) const;
+  [[nodiscard]] std::array<std::uint64_t, kBins / 64> bins_of(
+      std::span<const Interval> intervals) const;
+  [[nodiscard]] std::span<const Interval> full_span() const noexcept { return {&full_, 1}; }
+  // Runs f on the board's tile table (tiles1_ on the Z board, tiles2_ on the others).
+  template <class Self, class F>
+  static decltype(auto) on_tiles(Self& self, F&& f) {
+    return self.axis_ == 2 ? f(self.tiles1_) : f(self.tiles2_);
+  }
+  template <class Tiles>
+  double subtract_in(Tiles& tiles, int i, int j, double a, double b,
+                     std::vector<Interval>& removed);
   [[nodiscard]] int bin_of(double x) const noexcept;
   // A ray's place in its tile: the board's inner loops run along u on the X board (rows of a
   // layer) and along v on the others, and those neighbours are kept adjacent in memory.
@@ -165,11 +198,13 @@ class DexelBoard {
   double d_, u0_, v0_;
   int nu_, nv_, tu_ = 0, tv_ = 0;
   Interval full_;
-  // Dense table of tile pointers (null: untouched), tu_ x tv_.
-  std::vector<std::unique_ptr<Dexel[]>> tiles_;
+  // Dense tables of tile pointers (null: untouched), tu_ x tv_: the Z board's in tiles1_, the
+  // others' in tiles2_ (the other table empty).
+  std::vector<std::unique_ptr<BasicDexel<1>[]>> tiles1_;
+  std::vector<std::unique_ptr<BasicDexel<2>[]>> tiles2_;
   bool summarised_ = false, paused_ = false;
   double bin_w_ = 1;
-  std::vector<std::unique_ptr<Summary>> summaries_;  // parallel to tiles_
+  std::vector<std::unique_ptr<Summary>> summaries_;  // parallel to the tile table
 };
 
 /// The three boards over one stock.

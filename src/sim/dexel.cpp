@@ -10,21 +10,55 @@
 
 namespace trochomill {
 
-Dexel::Dexel(const Dexel& o) : in_{o.in_[0], o.in_[1]}, n_(o.n_), cap_(o.cap_) {
-  if (o.heap_) {
-    heap_ = std::make_unique<Interval[]>(cap_);
-    std::copy(o.heap_.get(), o.heap_.get() + n_, heap_.get());
+template <std::uint32_t N>
+BasicDexel<N>::BasicDexel(const BasicDexel& o) : n_(o.n_), cap_(o.cap_) {
+  if (o.cap_ > 0) {
+    heap_ = new Interval[cap_];
+    std::copy(o.heap_, o.heap_ + n_, heap_);
+  } else {
+    std::copy(o.in_, o.in_ + o.n_, in_);
   }
 }
 
-Dexel& Dexel::operator=(const Dexel& o) {
-  if (this != &o) *this = Dexel(o);
+template <std::uint32_t N>
+BasicDexel<N>& BasicDexel<N>::operator=(const BasicDexel& o) {
+  if (this != &o) *this = BasicDexel(o);
   return *this;
 }
 
-double Dexel::subtract(double a, double b, std::vector<Interval>& removed) {
+template <std::uint32_t N>
+BasicDexel<N>::BasicDexel(BasicDexel&& o) noexcept : n_(o.n_), cap_(o.cap_) {
+  if (cap_ > 0) {
+    heap_ = o.heap_;
+    o.heap_ = nullptr;
+    o.cap_ = 0;
+    o.n_ = 0;
+  } else {
+    std::copy(o.in_, o.in_ + o.n_, in_);
+  }
+}
+
+template <std::uint32_t N>
+BasicDexel<N>& BasicDexel<N>::operator=(BasicDexel&& o) noexcept {
+  if (this == &o) return *this;
+  if (cap_ > 0) delete[] heap_;
+  n_ = o.n_;
+  cap_ = o.cap_;
+  if (cap_ > 0) {
+    heap_ = o.heap_;
+    o.heap_ = nullptr;
+    o.cap_ = 0;
+    o.n_ = 0;
+  } else {
+    std::copy(o.in_, o.in_ + o.n_, in_);
+  }
+  return *this;
+}
+
+template <std::uint32_t N>
+double BasicDexel<N>::subtract(double a, double b, std::vector<Interval>& removed) {
   if (!(b > a) || n_ == 0) return 0.0;
-  Interval* v = heap_ ? heap_.get() : in_;
+  Interval* v = cap_ > 0 ? heap_ : in_;
   if (b <= v[0].lo || a >= v[n_ - 1].hi) return 0.0;
   // Intervals [first, last) overlap (a, b); at most the first and the last keep a piece.
   std::uint32_t first = 0;
@@ -43,14 +77,15 @@ double Dexel::subtract(double a, double b, std::vector<Interval>& removed) {
   if (v[first].lo < a) keep[nk++] = {v[first].lo, a};
   if (v[last - 1].hi > b) keep[nk++] = {b, v[last - 1].hi};
   const std::uint32_t n_new = n_ - (last - first) + static_cast<std::uint32_t>(nk);
-  const std::uint32_t cap_now = heap_ ? cap_ : 2;
+  const std::uint32_t cap_now = cap_ > 0 ? cap_ : N;
   if (n_new > cap_now) {  // grow into the heap: only a split of the widest case
     const std::uint32_t cap = std::max<std::uint32_t>(4, 2 * n_new);
-    auto h = std::make_unique<Interval[]>(cap);
-    std::copy(v, v + first, h.get());
-    std::copy(keep, keep + nk, h.get() + first);
-    std::copy(v + last, v + n_, h.get() + first + nk);
-    heap_ = std::move(h);
+    auto* h = new Interval[cap];
+    std::copy(v, v + first, h);
+    std::copy(keep, keep + nk, h + first);
+    std::copy(v + last, v + n_, h + first + nk);
+    if (cap_ > 0) delete[] heap_;  // v is no longer read: the inline storage becomes heap_
+    heap_ = h;
     cap_ = cap;
   } else {  // in place: shift the tail
     const std::uint32_t to = first + static_cast<std::uint32_t>(nk);
@@ -65,11 +100,15 @@ double Dexel::subtract(double a, double b, std::vector<Interval>& removed) {
   return cut;
 }
 
-double Dexel::length() const {
+template <std::uint32_t N>
+double BasicDexel<N>::length() const {
   double s = 0;
   for (const Interval& v : intervals()) s += v.hi - v.lo;
   return s;
 }
+
+template class BasicDexel<1>;
+template class BasicDexel<2>;
 
 DexelBoard::DexelBoard(int axis, const StockBox& box, double spacing_mm)
     : axis_(axis), d_(spacing_mm) {
@@ -90,16 +129,20 @@ DexelBoard::DexelBoard(int axis, const StockBox& box, double spacing_mm)
   nv_ = static_cast<int>(nv);
   tu_ = (nu_ + kTile - 1) / kTile;
   tv_ = (nv_ + kTile - 1) / kTile;
-  tiles_.resize(static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_));
+  on_tiles(*this, [&](auto& tiles) {
+    tiles.resize(static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_));
+  });
   full_ = {box.lo[static_cast<std::size_t>(axis)], box.hi[static_cast<std::size_t>(axis)]};
 }
 
-Dexel& DexelBoard::ray(int i, int j) {
+void DexelBoard::touch(int i, int j) {
   const std::size_t t = tile_index(i, j);
-  auto& tile = tiles_[t];
-  if (!tile) {
-    tile = std::make_unique<Dexel[]>(kTile * kTile);
-    for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = Dexel(full_);
+  on_tiles(*this, [&](auto& tiles) {
+    auto& tile = tiles[t];
+    if (tile) return;
+    using D = typename std::remove_reference_t<decltype(tile)>::element_type;
+    tile = std::make_unique<D[]>(kTile * kTile);
+    for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = D(full_);
     if (summarised_ && !paused_) {
       // Every ray of the tile that exists holds the whole stock: all bins.
       auto sm = std::make_unique<Summary>();
@@ -109,15 +152,14 @@ Dexel& DexelBoard::ray(int i, int j) {
       sm->mask.fill(~std::uint64_t{0});
       summaries_[t] = std::move(sm);
     }
-  }
-  return tile[in_tile(i, j)];
+  });
 }
 
 void DexelBoard::enable_summary() {
   if (tiles() > 0) throw Error("DexelBoard::enable_summary: the board was already cut");
   summarised_ = true;
   bin_w_ = (full_.hi - full_.lo) / kBins;
-  summaries_.resize(tiles_.size());
+  summaries_.resize(static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_));
 }
 
 void DexelBoard::pause_summary() { paused_ = summarised_; }
@@ -125,28 +167,30 @@ void DexelBoard::pause_summary() { paused_ = summarised_; }
 void DexelBoard::resume_summary() {
   if (!paused_) return;
   paused_ = false;
-  for (int ti = 0; ti < tu_; ++ti) {
-    for (int tj = 0; tj < tv_; ++tj) {
-      const std::size_t t = tile_index(ti * kTile, tj * kTile);
-      if (!tiles_[t]) continue;
-      auto sm = std::make_unique<Summary>();
-      for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
-        for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
-          const auto m = bins_of(tiles_[t][in_tile(ti * kTile + a, tj * kTile + b)]);
-          for (std::size_t w = 0; w < m.size(); ++w) {
-            std::uint64_t bits = m[w];
-            sm->mask[w] |= bits;
-            while (bits != 0) {
-              const int bit = __builtin_ctzll(bits);
-              bits &= bits - 1;
-              ++sm->count[w * 64 + static_cast<std::size_t>(bit)];
+  on_tiles(*this, [&](auto& tiles) {
+    for (int ti = 0; ti < tu_; ++ti) {
+      for (int tj = 0; tj < tv_; ++tj) {
+        const std::size_t t = tile_index(ti * kTile, tj * kTile);
+        if (!tiles[t]) continue;
+        auto sm = std::make_unique<Summary>();
+        for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
+          for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
+            const auto m = bins_of(tiles[t][in_tile(ti * kTile + a, tj * kTile + b)].intervals());
+            for (std::size_t w = 0; w < m.size(); ++w) {
+              std::uint64_t bits = m[w];
+              sm->mask[w] |= bits;
+              while (bits != 0) {
+                const int bit = __builtin_ctzll(bits);
+                bits &= bits - 1;
+                ++sm->count[w * 64 + static_cast<std::size_t>(bit)];
+              }
             }
           }
         }
+        summaries_[t] = std::move(sm);
       }
-      summaries_[t] = std::move(sm);
     }
-  }
+  });
 }
 
 int DexelBoard::bin_of(double x) const noexcept {
@@ -154,9 +198,10 @@ int DexelBoard::bin_of(double x) const noexcept {
   return static_cast<int>(std::clamp(b, 0.0, static_cast<double>(kBins - 1)));
 }
 
-std::array<std::uint64_t, DexelBoard::kBins / 64> DexelBoard::bins_of(const Dexel& d) const {
+std::array<std::uint64_t, DexelBoard::kBins / 64> DexelBoard::bins_of(
+    std::span<const Interval> intervals) const {
   std::array<std::uint64_t, kBins / 64> m{};
-  for (const Interval& v : d.intervals()) {
+  for (const Interval& v : intervals) {
     // Bins the interval overlaps (a bin touched only at its edge holds none of it).
     const int b0 = bin_of(v.lo);
     int b1 = bin_of(v.hi);
@@ -170,13 +215,16 @@ std::array<std::uint64_t, DexelBoard::kBins / 64> DexelBoard::bins_of(const Dexe
   return m;
 }
 
-double DexelBoard::subtract(int i, int j, double a, double b, std::vector<Interval>& removed) {
-  Dexel& d = ray(i, j);
+template <class Tiles>
+double DexelBoard::subtract_in(Tiles& tiles, int i, int j, double a, double b,
+                               std::vector<Interval>& removed) {
+  touch(i, j);
+  auto& d = tiles[tile_index(i, j)][in_tile(i, j)];
   if (!summarised_ || paused_) return d.subtract(a, b, removed);
-  const auto before = bins_of(d);
+  const auto before = bins_of(d.intervals());
   const double cut = d.subtract(a, b, removed);
   if (cut > 0) {
-    const auto after = bins_of(d);
+    const auto after = bins_of(d.intervals());
     Summary& sm = *summaries_[tile_index(i, j)];
     for (std::size_t w = 0; w < before.size(); ++w) {
       std::uint64_t gone = before[w] & ~after[w];
@@ -191,6 +239,10 @@ double DexelBoard::subtract(int i, int j, double a, double b, std::vector<Interv
   return cut;
 }
 
+double DexelBoard::subtract(int i, int j, double a, double b, std::vector<Interval>& removed) {
+  return on_tiles(*this, [&](auto& tiles) { return subtract_in(tiles, i, j, a, b, removed); });
+}
+
 bool DexelBoard::may_hold(int i0, int i1, int j0, int j1, double lo, double hi) const {
   if (!summarised_ || paused_) return true;
   if (!(hi > full_.lo && lo < full_.hi)) return false;
@@ -198,7 +250,7 @@ bool DexelBoard::may_hold(int i0, int i1, int j0, int j1, double lo, double hi) 
   for (int ti = std::max(0, i0) / kTile; ti <= std::min(nu_ - 1, i1) / kTile; ++ti) {
     for (int tj = std::max(0, j0) / kTile; tj <= std::min(nv_ - 1, j1) / kTile; ++tj) {
       const std::size_t t = tile_index(ti * kTile, tj * kTile);
-      if (!tiles_[t]) return true;  // untouched: the whole stock
+      if (!touched(ti * kTile, tj * kTile)) return true;  // untouched: the whole stock
       const Summary& sm = *summaries_[t];
       for (int b = b0; b <= b1;) {
         const auto w = static_cast<std::size_t>(b / 64);
@@ -216,47 +268,52 @@ bool DexelBoard::may_hold(int i0, int i1, int j0, int j1, double lo, double hi) 
 }
 
 std::size_t DexelBoard::tiles() const noexcept {
-  return static_cast<std::size_t>(
-      std::count_if(tiles_.begin(), tiles_.end(), [](const auto& t) { return t != nullptr; }));
-}
-
-const Dexel* DexelBoard::find(int i, int j) const {
-  const auto& tile = tiles_[tile_index(i, j)];
-  if (!tile) return nullptr;
-  return &tile[in_tile(i, j)];
+  return on_tiles(*this, [](const auto& tiles) {
+    return static_cast<std::size_t>(
+        std::count_if(tiles.begin(), tiles.end(), [](const auto& t) { return t != nullptr; }));
+  });
 }
 
 double DexelBoard::volume_mm3() const {
   // Untouched rays: the full interval; touched tiles: their rays (tiles past the board's
   // edge hold rays that do not exist: skipped).
   double touched_rays = 0, len = 0;
-  for (int ti = 0; ti < tu_; ++ti) {
-    for (int tj = 0; tj < tv_; ++tj) {
-      const auto& tile = tiles_[tile_index(ti * kTile, tj * kTile)];
-      if (!tile) continue;
-      for (int a = 0; a < kTile; ++a) {
-        for (int b = 0; b < kTile; ++b) {
-          const int i = ti * kTile + a, j = tj * kTile + b;
-          if (i >= nu_ || j >= nv_) continue;
-          touched_rays += 1;
-          len += tile[in_tile(i, j)].length();
+  on_tiles(*this, [&](const auto& tiles) {
+    for (int ti = 0; ti < tu_; ++ti) {
+      for (int tj = 0; tj < tv_; ++tj) {
+        const auto& tile = tiles[tile_index(ti * kTile, tj * kTile)];
+        if (!tile) continue;
+        for (int a = 0; a < kTile; ++a) {
+          for (int b = 0; b < kTile; ++b) {
+            const int i = ti * kTile + a, j = tj * kTile + b;
+            if (i >= nu_ || j >= nv_) continue;
+            touched_rays += 1;
+            len += tile[in_tile(i, j)].length();
+          }
         }
       }
     }
-  }
+  });
   const double all = static_cast<double>(nu_) * static_cast<double>(nv_);
   return ((all - touched_rays) * (full_.hi - full_.lo) + len) * d_ * d_;
 }
 
 std::size_t DexelBoard::memory_bytes() const {
-  std::size_t b = tiles_.size() * (sizeof(tiles_[0]) + (summarised_ ? sizeof(summaries_[0]) : 0));
+  const std::size_t table = static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_);
+  std::size_t b = table * (sizeof(tiles1_[0]) + (summarised_ ? sizeof(summaries_[0]) : 0));
   for (const auto& sm : summaries_) b += sm ? sizeof(Summary) : 0;
-  for (const auto& tile : tiles_) {
-    if (!tile) continue;
-    b += sizeof(Dexel) * kTile * kTile;
-    for (int q = 0; q < kTile * kTile; ++q) b += tile[static_cast<std::size_t>(q)].heap_bytes();
-  }
+  on_tiles(*this, [&](const auto& tiles) {
+    for (const auto& tile : tiles) {
+      if (!tile) continue;
+      b += sizeof(tile[0]) * kTile * kTile;
+      for (int q = 0; q < kTile * kTile; ++q) b += tile[static_cast<std::size_t>(q)].heap_bytes();
+    }
+  });
   return b;
+}
+
+std::size_t DexelBoard::ray_bytes(int axis) noexcept {
+  return axis == 2 ? sizeof(BasicDexel<1>) : sizeof(BasicDexel<2>);
 }
 
 TriDexel::TriDexel(const StockBox& b, double spacing_mm)
@@ -363,7 +420,7 @@ TriDexel stock_from_mesh(const Mesh& mesh, double spacing_mm, const RunHooks& ho
             from = hi;
             scratch.clear();
           }
-          (void)board.ray(i, j);  // held even when the mesh fills it whole
+          board.touch(i, j);  // held even when the mesh fills it whole
           if (full.hi > from) (void)board.subtract(i, j, from, full.hi, scratch);
           scratch.clear();
         }

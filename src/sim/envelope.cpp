@@ -533,8 +533,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
         for (int r = task.first; r <= task.last; ++r) {
           const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
           for (const Interval& v : unions[static_cast<std::size_t>(r - task.first)]) {
-            if (board.find(i, j) == nullptr &&
-                !(board.full().hi > v.lo && board.full().lo < v.hi)) {
+            if (!board.touched(i, j) && !(board.full().hi > v.lo && board.full().lo < v.hi)) {
               continue;
             }
             removed.clear();

@@ -21,6 +21,13 @@ std::vector<int> strided(int n, int stride) {
   return out;
 }
 
+// The top of the Z board's ray (i, j) (mm): its highest material, the stock's bottom when
+// it holds none.
+double top_of(const DexelBoard& zb, int i, int j) {
+  const std::span<const Interval> ray = zb.intervals(i, j);
+  return ray.empty() ? zb.full().lo : ray.back().hi;
+}
+
 }  // namespace
 
 std::vector<WallPoint> wall_profiles(const TriDexel& work, double centre_x_mm, int levels) {
@@ -29,13 +36,12 @@ std::vector<WallPoint> wall_profiles(const TriDexel& work, double centre_x_mm, i
   const int stride = std::max(1, xb.count_v() / std::max(1, levels));
   for (const int k : strided(xb.count_v(), stride)) {
     for (int i = 0; i < xb.count_u(); ++i) {
-      const Dexel* ray = xb.find(i, k);
-      if (ray == nullptr) continue;
+      if (!xb.touched(i, k)) continue;
       // The slot's walls: the material boundaries nearest the centre line on either side
       // (the stock's edge where the cut runs out of it); no wall where material crosses it.
       double left = xb.full().lo, right = xb.full().hi;
       bool solid = false;
-      for (const Interval& v : ray->intervals()) {
+      for (const Interval& v : xb.intervals(i, k)) {
         if (v.hi <= centre_x_mm) left = v.hi;
         if (v.lo >= centre_x_mm) {
           right = v.lo;
@@ -56,14 +62,10 @@ std::vector<FloorPoint> floor_profiles(const TriDexel& work, int rows) {
   const int stride = std::max(1, zb.count_v() / std::max(1, rows));
   for (const int j : strided(zb.count_v(), stride)) {
     bool any = false;
-    for (int i = 0; i < zb.count_u() && !any; ++i) any = zb.find(i, j) != nullptr;
+    for (int i = 0; i < zb.count_u() && !any; ++i) any = zb.touched(i, j);
     if (!any) continue;
     for (int i = 0; i < zb.count_u(); ++i) {
-      const Dexel* ray = zb.find(i, j);
-      const double top =
-          ray == nullptr ? zb.full().hi
-                         : (ray->intervals().empty() ? zb.full().lo : ray->intervals().back().hi);
-      out.push_back({zb.u_of(i), zb.v_of(j), top});
+      out.push_back({zb.u_of(i), zb.v_of(j), top_of(zb, i, j)});
     }
   }
   return out;
@@ -83,10 +85,7 @@ HeightField surface_height_field(const TriDexel& work, double step_mm) {
   f.bottom_mm = zb.full().lo;
   for (std::size_t a = 0; a < cols.size(); ++a) {
     for (std::size_t b = 0; b < rows.size(); ++b) {
-      const Dexel* ray = zb.find(cols[a], rows[b]);
-      f.z_mm[a * rows.size() + b] =
-          ray == nullptr ? zb.full().hi
-                         : (ray->intervals().empty() ? zb.full().lo : ray->intervals().back().hi);
+      f.z_mm[a * rows.size() + b] = top_of(zb, cols[a], rows[b]);
     }
   }
   return f;
@@ -100,11 +99,7 @@ HeightMap floor_height_map(const TriDexel& work, double x_from_mm, double x_to_m
   for (int i = 0; i < zb.count_u(); ++i) {
     if (zb.u_of(i) >= x_from_mm && zb.u_of(i) <= x_to_mm) c0 = std::min(c0, i), c1 = i;
   }
-  auto top = [&](int i, int j) {
-    const Dexel* ray = zb.find(i, j);
-    return ray == nullptr ? zb.full().hi
-                          : (ray->intervals().empty() ? zb.full().lo : ray->intervals().back().hi);
-  };
+  auto top = [&](int i, int j) { return top_of(zb, i, j); };
   // The longest run of rows cut across the whole range.
   int best0 = 0, best_n = 0;
   for (int j = 0, run0 = 0, run = 0; j < zb.count_v() && c1 >= c0; ++j) {

@@ -64,11 +64,9 @@ std::array<double, 4> annular_box(double a0, double a1, double r_in, double r_ou
   return AngleSpan(a0, a1).box(std::max(0.0, r_in), r_out);
 }
 
-// Whether a ray (nullptr: untouched, the full stock interval `full`) holds material in
-// (lo, hi).
-bool has_material(const Dexel* ray, Interval full, double lo, double hi) {
-  if (ray == nullptr) return full.hi > lo && full.lo < hi;
-  for (const Interval& v : ray->intervals()) {
+// Whether a ray's intervals hold material in (lo, hi).
+bool has_material(std::span<const Interval> ray, double lo, double hi) {
+  for (const Interval& v : ray) {
     if (v.hi > lo && v.lo < hi) return true;
     if (v.lo >= hi) break;
   }
@@ -188,7 +186,7 @@ class Stepper {
                                                 w.cy + parts[static_cast<std::size_t>(q)].hi);
         for (int j = j0; j <= j1; ++j) {
           // Most rays the wedge crosses were emptied long ago: skip them first.
-          if (!has_material(board.find(i, j), board.full(), w.tip_z, w.tip_z + w.H)) continue;
+          if (!has_material(board.intervals(i, j), w.tip_z, w.tip_z + w.H)) continue;
           const double dy = board.v_of(j) - w.cy, rho = std::sqrt(dx * dx + dy * dy);
           if (rho > rmax) continue;
           // The contour reaches rho only between these heights (the corner from below, a
@@ -294,10 +292,10 @@ class Stepper {
       auto cut_row = [&](int i, int j, double along_c, double perp, double lo, double hi) {
         // Material can only be in the annulus part of the chord.
         const int np = annulus_parts(perp, lo, hi, r_in, R_h, parts);
-        const Dexel* found = board.find(i, j);
+        const std::span<const Interval> found = board.intervals(i, j);
         bool any = false;
         for (int q = 0; q < np && !any; ++q) {
-          any = has_material(found, board.full(), along_c + parts[static_cast<std::size_t>(q)].lo,
+          any = has_material(found, along_c + parts[static_cast<std::size_t>(q)].lo,
                              along_c + parts[static_cast<std::size_t>(q)].hi);
         }
         if (!any) return;
@@ -818,15 +816,21 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
   auto tiles = [&](double a, double b) {
     return (std::ceil(a / tile) + 1) * (std::ceil(b / tile) + 1);
   };
-  const double per_tile = static_cast<double>(DexelBoard::kTile * DexelBoard::kTile) *
-                          static_cast<double>(sizeof(Dexel));
+  // A tile's rays (the X board's over y and z, the Y board's over z and x, the Z board's
+  // over x and y).
+  auto per_tile = [](int axis) {
+    return static_cast<double>(DexelBoard::kTile * DexelBoard::kTile) *
+           static_cast<double>(DexelBoard::ray_bytes(axis));
+  };
   MemoryEstimate m;
-  m.boards_bytes = (tiles(ex, ey) + tiles(ey, ez) + tiles(ez, ex)) * per_tile;
+  m.boards_bytes =
+      tiles(ey, ez) * per_tile(0) + tiles(ez, ex) * per_tile(1) + tiles(ex, ey) * per_tile(2);
   if (stock_mesh) {
     // Every ray of the mesh's box is held, and while one board is cut to the mesh, the
     // crossings of a strip of rays (a vector each, two crossings).
     const double bx = box.hi[0] - box.lo[0], by = box.hi[1] - box.lo[1], bz = box.hi[2] - box.lo[2];
-    m.boards_bytes = (tiles(by, bz) + tiles(bz, bx) + tiles(bx, by)) * per_tile +
+    m.boards_bytes = tiles(by, bz) * per_tile(0) + tiles(bz, bx) * per_tile(1) +
+                     tiles(bx, by) * per_tile(2) +
                      DexelBoard::kTile * std::max({bx, by, bz}) / d * (24.0 + 32.0);
   }
   // The window's steps: one record each (its per-tooth removed volumes on the heap, a
