@@ -2,7 +2,8 @@
 // parallel in the CLI; here the per-core rate is measured):
 //  - Sim/WagihCycleWindow: 0.1 s of a steady trochoid cycle (Wagih's example, 6 mm deep,
 //    35 degree helix, 0.02 mm dexels, 600 steps per revolution) after the envelope pre-roll
-//    and a revolution with the teeth (untimed); counters: dexel updates per second
+//    and a revolution with the teeth (untimed), continuing that revolution's call (its
+//    SimCarry: the annulus searched from the first step); counters: dexel updates per second
 //    (subtractions that removed material) and steps per second.
 //  - Sim/BergmannEnvelope: the envelope sweep of the first 10 s of the Bergmann case at
 //    0.01 mm.
@@ -47,9 +48,12 @@ void SimWagihCycleWindow(benchmark::State& state) {
     (void)sweep_envelope(path, tool, work, 0, from + 0.47);
     SimControl lead;
     lead.envelope_before = true;
-    (void)simulate(path, tool, job.simulation, work, from + 0.47, from + 0.5, lead);
+    const SimCarry carry =
+        simulate(path, tool, job.simulation, work, from + 0.47, from + 0.5, lead).carry;
+    SimControl window;
+    window.after = &carry;  // the window continues the lead revolution, as the CLI's does
     state.ResumeTiming();
-    const SimResult r = simulate(path, tool, job.simulation, work, from + 0.5, from + 0.6);
+    const SimResult r = simulate(path, tool, job.simulation, work, from + 0.5, from + 0.6, window);
     updates += static_cast<double>(r.dexel_updates);
     steps += static_cast<double>(r.steps.size());
   }

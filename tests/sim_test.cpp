@@ -782,6 +782,60 @@ TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
   EXPECT_GT(a.removed_mm3, 1.0);
 }
 
+// A window continuing the call before it (SimControl::after, its SimCarry) searches only the
+// annulus from its first step; alone, its first revolution (and two steps) searches whole
+// sectors. The wedges' shapes are each call's own, so the results are the same bit for bit
+// (volumes, update counts, the chip map's h, w and v) with or without the carry: the rays the
+// carry leaves out hold no material. A carry from another time is refused.
+TEST(Sim, AWindowContinuesTheCallBeforeIt) {
+  const Job job = load_job(
+      test::example("wagih2023/trochoidal.toml"),
+      {parse_override("slot.depth=0.5"), parse_override("slot.length=8"),
+       parse_override("tool.teeth=3"), parse_override("tool.tooth_angles=[0, 110, 235]"),
+       parse_override("tool.runout_radial=0.01"), parse_override("tool.runout_axial=0.005"),
+       parse_override("cutting.feed_rate=1200"), parse_override("simulation.resolution=0.05"),
+       parse_override("simulation.steps_per_rev=72")});
+  const ToolPath path = plan_path(job).path;
+  const auto [from, to] = cycle_window(path, 3, 4);
+  const SimTool tool = sim_tool(job, job.simulation);
+  const double rev = kTwoPi / std::abs(tool.omega_rad_per_s);
+  SimResult lead[2], win[2];
+  for (int k = 0; k < 2; ++k) {
+    TriDexel w(job_stock(job), 0.05);
+    (void)sweep_envelope(path, tool, w, 0, from);
+    SimControl c;
+    c.envelope_before = true;
+    lead[k] = simulate(path, tool, job.simulation, w, from, from + rev, c);
+    SimControl cw;
+    if (k == 1) cw.after = &lead[k].carry;
+    win[k] = simulate(path, tool, job.simulation, w, from + rev, to, cw);
+  }
+  const std::size_t n = win[0].steps.size(), spr = 72;
+  ASSERT_GT(n, 3 * spr);
+  EXPECT_EQ(lead[1].carry.t_s, from + rev);
+  EXPECT_EQ(lead[1].carry.steps, lead[1].steps.size());
+  EXPECT_EQ(win[0].annulus_steps, n - (spr + 2));  // settled after a revolution and two steps
+  EXPECT_EQ(win[1].annulus_steps, n);
+  EXPECT_EQ(win[1].carry.steps, lead[1].steps.size() + n);
+  EXPECT_EQ(win[0].removed_by_board_mm3, win[1].removed_by_board_mm3);
+  EXPECT_EQ(win[0].dexel_updates, win[1].dexel_updates);
+  ASSERT_EQ(win[0].chip_map.size(), win[1].chip_map.size());
+  for (std::size_t q = 0; q < win[0].chip_map.size(); ++q) {
+    const ChipEntry &a = win[0].chip_map[q], &b = win[1].chip_map[q];
+    ASSERT_EQ(a.step, b.step);
+    ASSERT_EQ(a.segment, b.segment);
+    ASSERT_EQ(a.h_mm, b.h_mm);
+    ASSERT_EQ(a.w_mm, b.w_mm);
+    ASSERT_EQ(a.v_mm3, b.v_mm3);
+  }
+  EXPECT_GT(win[0].removed_mm3, 1.0);
+  // A carry that ended elsewhere.
+  TriDexel w(job_stock(job), 0.05);
+  SimControl wrong;
+  wrong.after = &lead[1].carry;
+  EXPECT_THROW((void)simulate(path, tool, job.simulation, w, from + 2 * rev, to, wrong), Error);
+}
+
 // The edge's structured grid: segments equidistant along the edge (the corner arc's quarter
 // circle, pi rc / 2, then the flank), their widths summing to the edge's length, heights
 // rising, the contour radius and its outward normal (unit; (sin phi, 0, -cos phi) on the

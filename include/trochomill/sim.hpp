@@ -246,6 +246,19 @@ struct ChipEntry {
   float v_mm3 = 0;            ///< volume the segment removed in the step (Z board)
 };
 
+/// What a simulate() call knows at its end about where material can still lie (the path
+/// length swept in its last revolution of steps, the steps since the depth last changed), for
+/// a call that continues it (SimControl::after).
+struct SimCarry {
+  double t_s = 0;                ///< the time the call's last step ended at (s)
+  int steps_per_rev = 0;         ///< the steps per revolution it ran at
+  std::size_t steps = 0;         ///< steps since the first call of the chain
+  std::size_t level_steps = 0;   ///< steps since the depth last changed
+  bool envelope_before = false;  ///< the chain's first call started after the envelope
+  double cum_now_mm = 0;         ///< path length since the chain's start (mm)
+  std::vector<double> cum_mm;    ///< path length at the last steps_per_rev + 4 steps (a ring)
+};
+
 struct SimResult {
   std::vector<SimStep> steps;
   std::vector<ChipEntry> chip_map;
@@ -254,6 +267,10 @@ struct SimResult {
   std::array<double, 3> removed_by_board_mm3{};
   std::uint64_t dexel_updates = 0;  ///< ray-interval subtractions that removed material
   bool complete = true;             ///< false when cancelled: the steps computed so far
+  /// Steps whose wedges searched only the annulus where material can lie (the others the
+  /// whole sector: a call's first revolution, unless it continues one or follows the envelope).
+  std::size_t annulus_steps = 0;
+  SimCarry carry;  ///< for a call continuing this one on the same workpiece
 };
 
 /// Progress and cancellation of a running simulation.
@@ -266,6 +283,12 @@ struct SimControl {
   /// The tool's envelope was swept (sweep_envelope) up to the call's start: the wedges may
   /// search only the annulus from the first step (docs/models.md section 11).
   bool envelope_before = false;
+  /// The call continues the one that left this carry (its SimResult::carry), on the same
+  /// path, tool and workpiece from the time that one ended: the wedges search only the annulus
+  /// from the first step, as one call over both would. The results are those of the call
+  /// without it, bit for bit (the wedges' shapes are each call's own; only the search knows
+  /// more). Throws Error when the carry ended at another time or steps per revolution.
+  const SimCarry* after = nullptr;
   /// Chip map entries to reserve up front (MemoryEstimate::chip_entries); 0: grow as needed.
   std::size_t reserve_chip_entries = 0;
 };

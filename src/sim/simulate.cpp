@@ -539,11 +539,31 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   // length since) away, so material lies beyond the contour + r_off_j - D_j: the annulus is
   // narrowed by the best such j (usually the previous tooth: about f_z instead of the feed
   // per revolution).
+  //
+  // A call continuing another (control.after) knows what that one knew: the steps are counted
+  // over the chain (g), so the search is the annulus from the first step. The wedges' shapes
+  // stay each call's own (the whole sectors of its first revolution): the results do not
+  // depend on the carry, only the work does.
   const auto spr = static_cast<std::size_t>(s.steps_per_rev);
   const std::size_t ring_n = spr + 4;
   std::vector<double> cum(ring_n, 0.0);  // path length up to the last ring_n steps
   double cum_now = 0;
   std::size_t level_steps = 0;  // steps since the depth last changed
+  std::size_t base = 0;         // the chain's steps before this call
+  bool chain_enveloped = control.envelope_before;
+  if (const SimCarry* c = control.after) {
+    if (c->t_s != t0_s || c->steps_per_rev != s.steps_per_rev || c->cum_mm.size() != ring_n) {
+      throw Error(fmt::format(
+          "simulate: the carry ended at {} s with {} steps per revolution; this call starts at "
+          "{} s with {}",
+          c->t_s, c->steps_per_rev, t0_s, s.steps_per_rev));
+    }
+    cum = c->cum_mm;
+    cum_now = c->cum_now_mm;
+    level_steps = c->level_steps;
+    base = c->steps;
+    chain_enveloped = c->envelope_before;
+  }
   struct Lag {
     std::size_t steps;  // how many steps ago (rounded up, plus the wedge's span)
     double dr;          // r_off_k - r_off_j
@@ -565,24 +585,31 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   }
   const double min_core = 0.5 * tool.radius_mm;
   const std::size_t every = std::max<std::size_t>(1, ps.size() / 200);
+  std::size_t done = 0;  // the steps taken
   for (std::size_t n = 1; n < ps.size(); ++n) {
     if (control.hooks.cancelled()) {
       res.complete = false;
       break;
     }
+    const std::size_t g = base + n;  // the step over the chain
     if (control.hooks.progress && n % every == 0) control.hooks.progress(n, ps.size() - 1);
     const std::array<double, 3> c{ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
     const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
     cum_now += moved;
-    cum[n % ring_n] = cum_now;
+    cum[g % ring_n] = cum_now;
     level_steps = std::abs(ps.z_mm[n] - ps.z_mm[n - 1]) > 1e-9 ? 0 : level_steps + 1;
-    const bool settled = n > spr + 2 && level_steps >= spr + 2;
+    const bool settled = g > spr + 2 && level_steps >= spr + 2;
     // With the envelope swept up to t0 nothing is left within the contour of the centre at t0,
     // so from the start nothing nearer the present centre than the contour less the path
     // since t0 (at constant depth since t0).
-    const bool enveloped = control.envelope_before && level_steps + 1 >= n;
-    const double D = settled ? cum_now - cum[(n - spr) % ring_n] : enveloped ? cum_now : kInf;
+    const bool enveloped = chain_enveloped && level_steps + 1 >= g;
+    const double D = settled ? cum_now - cum[(g - spr) % ring_n] : enveloped ? cum_now : kInf;
     const bool annulus = D + d < min_core;
+    // The shapes: this call's own first revolution takes whole sectors (as without a carry).
+    const bool own = (n > spr + 2 && level_steps >= spr + 2) ||
+                     (control.envelope_before && level_steps + 1 >= n);
+    const bool closing = annulus && own;  // a wedge and its closing wedge (else two sectors)
+    res.annulus_steps += annulus ? 1 : 0;
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
     const double ta = times[n - 1], tb = times[n];
     wedges.clear();
@@ -598,11 +625,13 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       const double H = std::min(tool.flute_length_mm, top - w.tip_z);
       w.H = H > 0 ? H : 0.0;
       if (!(w.H > 0)) continue;
+      double drop = D;
       if (annulus) {
-        double drop = D;
         for (const Lag& l : lags[k]) {
-          if (n >= l.steps + 1) drop = std::min(drop, l.dr + cum_now - cum[(n - l.steps) % ring_n]);
+          if (g >= l.steps + 1) drop = std::min(drop, l.dr + cum_now - cum[(g - l.steps) % ring_n]);
         }
+      }
+      if (closing) {
         w.r_in_drop = s.exhaustive ? kInf : std::max(0.0, drop) + d;
         w.cx = c[0], w.cy = c[1];
         wedges.push_back(w), wedge_tooth.push_back(k);
@@ -629,10 +658,14 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         // The whole sector about both this step's centre and the previous one: consecutive
         // steps then share their edges exactly (no sliver at any radius).
         // The current centre first: its chips are the ones measured; the previous centre's
-        // sector only takes the slivers in between.
-        w.r_in_drop = kInf;
+        // sector only takes the slivers in between. Continuing a chain, the search is still
+        // the annulus: about the previous centre, material lies beyond the contour less the
+        // drop and the move.
+        const bool search = annulus && !s.exhaustive;
+        w.r_in_drop = search ? std::max(0.0, drop) + d : kInf;
         w.cx = c[0], w.cy = c[1];
         wedges.push_back(w), wedge_tooth.push_back(k);
+        w.r_in_drop = search ? std::max(0.0, drop) + moved + d : kInf;
         w.cx = ps.x_mm[n - 1], w.cy = ps.y_mm[n - 1];
         wedges.push_back(w), wedge_tooth.push_back(k);
       }
@@ -692,8 +725,16 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     }
     st.h_mean_mm = st.engaged_segments > 0 ? sum / st.engaged_segments : 0.0;
     res.steps.push_back(std::move(st));
+    done = n;
   }
   res.removed_mm3 = res.removed_by_board_mm3[2];
+  res.carry.t_s = times[done];
+  res.carry.steps_per_rev = s.steps_per_rev;
+  res.carry.steps = base + done;
+  res.carry.level_steps = level_steps;
+  res.carry.envelope_before = chain_enveloped;
+  res.carry.cum_now_mm = cum_now;
+  res.carry.cum_mm = std::move(cum);
   return res;
 }
 
@@ -743,6 +784,7 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
   const auto since = [](auto t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   };
+  SimCarry carry;
   if (from_s > 0) {
     // The envelope up to one revolution before the window, then that revolution with the
     // teeth (not recorded): the window's first teeth meet the feed marks of the ones before.
@@ -757,7 +799,7 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
     lead.envelope_before = lead_from > 0;
     lead.hooks = control.hooks;
     lead.hooks.begin("pre-roll: last revolution");
-    (void)simulate(path, tool, s, work, lead_from, from_s, lead);
+    carry = simulate(path, tool, s, work, lead_from, from_s, lead).carry;
     out.pre_roll_s = from_s;
     out.pre_roll_wall_s = since(t0);
   }
@@ -767,7 +809,10 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
   } else {
     const auto t1 = clock();
     control.hooks.begin("window");
-    out.result = simulate(path, tool, s, work, from_s, to_s, control);
+    // The window continues the lead revolution: its search is the annulus from the start.
+    SimControl window = control;
+    if (from_s > 0) window.after = &carry;
+    out.result = simulate(path, tool, s, work, from_s, to_s, window);
     out.window_wall_s = since(t1);
   }
   for (const auto& b : work.boards) out.memory_bytes += b.memory_bytes();
