@@ -365,6 +365,10 @@ struct JobSimulation {
   double pre_roll_s = 0;       ///< programmed time before the window (s)
   double pre_roll_wall_s = 0;  ///< wall time of the pre-roll (s)
   double window_wall_s = 0;    ///< wall time of the window (s)
+  /// Processor time of the process in each phase (s, all threads), and the threads it ran
+  /// on: a phase's utilisation is its processor time / (wall time x threads).
+  double pre_roll_cpu_s = 0, window_cpu_s = 0;
+  int threads = 1;
   std::size_t memory_bytes = 0;
   std::unique_ptr<TriDexel> work;  ///< the workpiece after the window
 };

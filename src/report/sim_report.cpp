@@ -145,6 +145,15 @@ std::string height_field_stl(const HeightField& f) {
 }  // namespace trochomill
 
 namespace trochomill {
+namespace {
+
+// The share of the threads' time a phase kept busy: processor time / (wall time x threads),
+// 0 for a phase that did not run.
+double utilisation(double cpu_s, double wall_s, int threads) {
+  return wall_s > 0 && threads > 0 ? cpu_s / (wall_s * threads) : 0.0;
+}
+
+}  // namespace
 
 std::string simulation_json(const Job& job, const JobSimulation& js, double from_s, double to_s,
                             double wall_s, double memory_estimate_bytes) {
@@ -160,6 +169,11 @@ std::string simulation_json(const Job& job, const JobSimulation& js, double from
       {"wall_time_s", wall_s},
       {"pre_roll_wall_s", js.pre_roll_wall_s},
       {"window_wall_s", js.window_wall_s},
+      {"threads", js.threads},
+      {"pre_roll_cpu_s", js.pre_roll_cpu_s},
+      {"window_cpu_s", js.window_cpu_s},
+      {"pre_roll_utilisation", utilisation(js.pre_roll_cpu_s, js.pre_roll_wall_s, js.threads)},
+      {"window_utilisation", utilisation(js.window_cpu_s, js.window_wall_s, js.threads)},
       {"dexel_updates_per_s",
        js.window_wall_s > 0 ? static_cast<double>(r.dexel_updates) / js.window_wall_s : 0.0},
       {"from_s", from_s},

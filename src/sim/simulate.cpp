@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <limits>
 #include <optional>
 #include <utility>
@@ -784,11 +785,15 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
   const auto since = [](auto t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   };
+  // The process's processor time (s, all threads), for each phase's utilisation.
+  const auto cpu = [] { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; };
+  out.threads = tbb::this_task_arena::max_concurrency();
   SimCarry carry;
   if (from_s > 0) {
     // The envelope up to one revolution before the window, then that revolution with the
     // teeth (not recorded): the window's first teeth meet the feed marks of the ones before.
     const auto t0 = clock();
+    const double c0 = cpu();
     const double rev = kTwoPi / std::abs(tool.omega_rad_per_s);
     const double lead_from = std::max(0.0, from_s - rev);
     if (lead_from > 0) {
@@ -802,18 +807,21 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
     carry = simulate(path, tool, s, work, lead_from, from_s, lead).carry;
     out.pre_roll_s = from_s;
     out.pre_roll_wall_s = since(t0);
+    out.pre_roll_cpu_s = cpu() - c0;
   }
   if (control.hooks.cancelled()) {  // stopped before the window
     out.result.complete = false;
     out.result.segments_per_tooth = tool.segments();
   } else {
     const auto t1 = clock();
+    const double c1 = cpu();
     control.hooks.begin("window");
     // The window continues the lead revolution: its search is the annulus from the start.
     SimControl window = control;
     if (from_s > 0) window.after = &carry;
     out.result = simulate(path, tool, s, work, from_s, to_s, window);
     out.window_wall_s = since(t1);
+    out.window_cpu_s = cpu() - c1;
   }
   for (const auto& b : work.boards) out.memory_bytes += b.memory_bytes();
   out.work = std::make_unique<TriDexel>(std::move(work));

@@ -137,7 +137,8 @@ def test_simulate_is_the_clis(bergmann, tmp_path):
     out = tmp_path / "sim"
     cli = cli_json("simulate", bergmann, *sets(SMALL_SIM), "--cycles", "1:2", "--out", out)
     timing = ("wall_time_s", "window_wall_s", "pre_roll_wall_s", "dexel_updates_per_s",
-              "memory_mb", "memory_peak_mb", "memory_estimate_mb")
+              "memory_mb", "memory_peak_mb", "memory_estimate_mb", "pre_roll_cpu_s",
+              "window_cpu_s", "pre_roll_utilisation", "window_utilisation", "threads")
     # The memory estimate includes the dense chip map the module returns (as --out's HDF5).
     assert without(result, "series", "chip_map", "surface", "floor", "floor_note", *timing) == \
         without(cli, *timing)
