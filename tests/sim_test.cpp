@@ -748,8 +748,10 @@ step = 5.0
 // starting from the envelope swept up to the window (so the annulus applies from the first
 // step, bounded by the path since): bit-identical removed volumes, chip maps and update
 // counts (the rays left out hold no material, so nothing else changes).
-TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
-  const Job job = load_job(
+// Wagih's trochoid 0.5 mm deep with three unequally pitched teeth, radial and axial runout,
+// 0.05 mm dexels and 72 steps per revolution.
+Job runout_trochoid_job() {
+  return load_job(
       test::example("wagih2023/trochoidal.toml"),
       {parse_override("slot.depth=0.5"), parse_override("slot.length=8"),
        parse_override("tool.teeth=3"), parse_override("tool.tooth_angles=[0, 110, 235]"),
@@ -757,6 +759,10 @@ TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
        parse_override("tool.runout_phase=30"), parse_override("cutting.feed_rate=1200"),
        parse_override("simulation.resolution=0.05"),
        parse_override("simulation.steps_per_rev=72")});
+}
+
+TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
+  const Job job = runout_trochoid_job();
   const ToolPath path = plan_path(job).path;
   const auto [from, to] = cycle_window(path, 3, 4);
   const SimTool tool = sim_tool(job, job.simulation);
@@ -788,13 +794,7 @@ TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
 // (volumes, update counts, the chip map's h, w and v) with or without the carry: the rays the
 // carry leaves out hold no material. A carry from another time is refused.
 TEST(Sim, AWindowContinuesTheCallBeforeIt) {
-  const Job job = load_job(
-      test::example("wagih2023/trochoidal.toml"),
-      {parse_override("slot.depth=0.5"), parse_override("slot.length=8"),
-       parse_override("tool.teeth=3"), parse_override("tool.tooth_angles=[0, 110, 235]"),
-       parse_override("tool.runout_radial=0.01"), parse_override("tool.runout_axial=0.005"),
-       parse_override("cutting.feed_rate=1200"), parse_override("simulation.resolution=0.05"),
-       parse_override("simulation.steps_per_rev=72")});
+  const Job job = runout_trochoid_job();
   const ToolPath path = plan_path(job).path;
   const auto [from, to] = cycle_window(path, 3, 4);
   const SimTool tool = sim_tool(job, job.simulation);

@@ -27,15 +27,8 @@ BasicDexel<N>& BasicDexel<N>::operator=(const BasicDexel& o) {
 }
 
 template <std::uint32_t N>
-BasicDexel<N>::BasicDexel(BasicDexel&& o) noexcept : n_(o.n_), cap_(o.cap_) {
-  if (cap_ > 0) {
-    heap_ = o.heap_;
-    o.heap_ = nullptr;
-    o.cap_ = 0;
-    o.n_ = 0;
-  } else {
-    std::copy(o.in_, o.in_ + o.n_, in_);
-  }
+BasicDexel<N>::BasicDexel(BasicDexel&& o) noexcept : heap_(nullptr) {
+  *this = std::move(o);
 }
 
 template <std::uint32_t N>
