@@ -46,7 +46,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       const auto [from, to] = a->window.resolve(path);
       // Refuse before starting when the estimate passes the limit.
       const MemoryEstimate est = estimate_simulation_memory(job, path, from, to);
-      const double need = est.total(!a->out.empty());
+      const double need = est.total(false) + (a->out.empty() ? 0.0 : est.map_writer_bytes);
       if (a->stl_step_mm && !(*a->stl_step_mm > 0)) {  // bad input refused before the run
         throw InputError(fmt::format("--stl-step must be > 0 mm, got {}", *a->stl_step_mm));
       }
@@ -58,7 +58,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
             "resolution (now {} mm), shorten the window (--cycles, --from/--to) or raise "
             "--memory-limit",
             need / 1e9, est.boards_bytes / 1e9, est.records_bytes / 1e9, est.base_bytes / 1e9,
-            a->out.empty() ? 0.0 : est.dense_map_bytes / 1e9, limit / 1e9,
+            a->out.empty() ? 0.0 : est.map_writer_bytes / 1e9, limit / 1e9,
             a->memory_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
       }
       // Ctrl-C stops after the current step; what was computed is written, marked incomplete.

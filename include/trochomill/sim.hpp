@@ -347,6 +347,13 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
 /// The result's chip map made dense (the HDF5 layout, see ChipMapData).
 [[nodiscard]] ChipMapData chip_map_data(const SimResult& r, const SimTool& tool,
                                         const SimSettings& s);
+/// Writes the result's chip map as write_chip_map_h5(path, chip_map_data(r, tool, s)) does (the
+/// same datasets and values), made dense 1024 steps at a time: the memory of one such block
+/// instead of the whole dense map. Throws Error.
+void write_chip_map_h5(const std::filesystem::path& path, const SimResult& r, const SimTool& tool,
+                       const SimSettings& s);
+/// The heights above the tip of the middles of the first `segments` edge segments (mm).
+[[nodiscard]] std::vector<double> segment_heights_mm(const SimTool& tool, std::size_t segments);
 
 /// The job's stock: `[stock]` min / max, or the slot region (y from 0 to the slot length: the
 /// slot runs through the workpiece) with a 1 mm margin beside the walls (x) and 0.5 mm below
@@ -382,14 +389,16 @@ struct JobSimulation {
 
 /// What a job's simulation will hold in memory (bytes), estimated before running it: the
 /// boards' tiles over the region the tool visits up to the window's end, the per-step
-/// records and the sparse chip map, and the dense chip map the HDF5 output needs.
+/// records and the sparse chip map, and the dense chip map (whole, as the Python module
+/// returns it, or the HDF5 writer's blocks).
 struct MemoryEstimate {
-  double boards_bytes = 0;     ///< the dexel tiles of the region the tool visits
-  double records_bytes = 0;    ///< per-step records, sample arrays and the sparse chip map
-  double dense_map_bytes = 0;  ///< the HDF5 chip map (only with an output folder)
-  double base_bytes = 0;       ///< the process besides: libraries, job, path
-  double chip_entries = 0;     ///< expected engaged (segment, step) pairs
-  /// The whole, with or without the HDF5 map (bytes).
+  double boards_bytes = 0;      ///< the dexel tiles of the region the tool visits
+  double records_bytes = 0;     ///< per-step records, sample arrays and the sparse chip map
+  double dense_map_bytes = 0;   ///< the whole chip map made dense (chip_map_data)
+  double map_writer_bytes = 0;  ///< writing chips.h5 (write_chip_map_h5 from a SimResult)
+  double base_bytes = 0;        ///< the process besides: libraries, job, path
+  double chip_entries = 0;      ///< expected engaged (segment, step) pairs
+  /// The whole, with or without the whole dense map (bytes).
   [[nodiscard]] double total(bool with_map) const {
     return boards_bytes + records_bytes + base_bytes + (with_map ? dense_map_bytes : 0.0);
   }

@@ -231,8 +231,7 @@ std::string write_simulation_outputs(const std::filesystem::path& dir, const Job
        [&](const fs::path& p) {
          write_file_atomic(p, sim_series_csv(r, tool.tooth_angle_rad.size()));
        }},
-      {"chips.h5",
-       [&](const fs::path& p) { write_chip_map_h5(p, chip_map_data(r, tool, job.simulation)); }},
+      {"chips.h5", [&](const fs::path& p) { write_chip_map_h5(p, r, tool, job.simulation); }},
       {"walls.csv",
        [&](const fs::path& p) {
          write_file_atomic(p, wall_profiles_csv(wall_profiles(*js.work, 0.0)));

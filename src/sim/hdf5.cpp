@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 #include <hdf5.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -36,38 +38,134 @@ void check(herr_t status, const char* what) {
   if (status < 0) throw Error(fmt::format("HDF5: cannot write {}", what));
 }
 
-void write_dataset(hid_t file, const char* name, hid_t mem_type, hid_t file_type,
-                   const std::vector<hsize_t>& dims, const void* data, const char* unit,
-                   bool compress = false) {
-  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose,
-               "a dataspace");
-  Handle props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "dataset properties");
-  // No modification times in the object headers: the same simulation writes the same bytes.
-  check(H5Pset_obj_track_times(props, false), name);
-  bool empty = false;
-  for (const hsize_t d : dims) empty = empty || d == 0;
-  if (compress && !empty) {
-    std::vector<hsize_t> chunk = dims;
-    chunk[0] = std::min<hsize_t>(dims[0], 1024);
-    check(H5Pset_chunk(props, static_cast<int>(chunk.size()), chunk.data()), name);
-    check(H5Pset_deflate(props, 4), name);
-  }
-  Handle set(H5Dcreate2(file, name, file_type, space, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose,
-             name);
-  if (!empty) check(H5Dwrite(set, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
-  Handle str(H5Tcopy(H5T_C_S1), H5Tclose, "a string type");
-  const std::string u = unit;
-  check(H5Tset_size(str, u.size() + 1), name);
-  Handle aspace(H5Screate(H5S_SCALAR), H5Sclose, "an attribute space");
-  Handle attr(H5Acreate2(set, "unit", str, aspace, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, "unit");
-  check(H5Awrite(attr, str, u.c_str()), name);
-}
-
 void write_attr(hid_t obj, const char* name, double v) {
   Handle space(H5Screate(H5S_SCALAR), H5Sclose, "an attribute space");
   Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
               name);
   check(H5Awrite(attr, H5T_NATIVE_DOUBLE, &v), name);
+}
+
+}  // namespace
+
+namespace {
+
+// What a chip map file holds besides its per-step rows.
+struct MapHeader {
+  std::size_t steps = 0, teeth = 0, segments_per_tooth = 0;
+  double resolution_mm = 0;
+  int steps_per_rev = 0;
+  bool complete = true;
+  std::vector<double> segment_height_mm;
+};
+
+// Rows [first, first + count) of the per-step datasets, dense, row-major.
+struct MapBlock {
+  std::vector<double> t_s, tip_mm, removed_mm3;
+  std::vector<float> h_mm, w_mm, v_mm3;
+};
+
+// Steps per block written (and the compressed datasets' chunk rows).
+constexpr std::size_t kBlockSteps = 1024;
+
+// A dataset of `dims` whose rows are written block by block (rows along the first dimension).
+class RowDataset {
+ public:
+  RowDataset(hid_t file, const char* name, hid_t mem_type, hid_t file_type,
+             std::vector<hsize_t> dims, const char* unit, bool compress)
+      : name_(name), mem_type_(mem_type), dims_(std::move(dims)) {
+    Handle space(H5Screate_simple(static_cast<int>(dims_.size()), dims_.data(), nullptr), H5Sclose,
+                 "a dataspace");
+    Handle props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "dataset properties");
+    // No modification times in the object headers: the same simulation writes the same bytes.
+    check(H5Pset_obj_track_times(props, false), name);
+    bool empty = false;
+    for (const hsize_t d : dims_) empty = empty || d == 0;
+    if (compress && !empty) {
+      std::vector<hsize_t> chunk = dims_;
+      chunk[0] = std::min<hsize_t>(dims_[0], kBlockSteps);
+      check(H5Pset_chunk(props, static_cast<int>(chunk.size()), chunk.data()), name);
+      check(H5Pset_deflate(props, 4), name);
+    }
+    set_ = H5Dcreate2(file, name, file_type, space, H5P_DEFAULT, props, H5P_DEFAULT);
+    if (set_ < 0) throw Error(fmt::format("HDF5: cannot create {}", name));
+    Handle str(H5Tcopy(H5T_C_S1), H5Tclose, "a string type");
+    const std::string u = unit;
+    check(H5Tset_size(str, u.size() + 1), name);
+    Handle aspace(H5Screate(H5S_SCALAR), H5Sclose, "an attribute space");
+    Handle attr(H5Acreate2(set_, "unit", str, aspace, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, "unit");
+    check(H5Awrite(attr, str, u.c_str()), name);
+  }
+  RowDataset(const RowDataset&) = delete;
+  RowDataset& operator=(const RowDataset&) = delete;
+  ~RowDataset() { H5Dclose(set_); }
+  // Writes rows [first, first + count) from `data` (count rows of the other dimensions).
+  void write_rows(hsize_t first, hsize_t count, const void* data) {
+    if (count == 0) return;
+    std::vector<hsize_t> start(dims_.size(), 0), size = dims_;
+    start[0] = first;
+    size[0] = count;
+    Handle file_space(H5Dget_space(set_), H5Sclose, name_);
+    check(H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start.data(), nullptr, size.data(),
+                              nullptr),
+          name_);
+    Handle mem_space(H5Screate_simple(static_cast<int>(size.size()), size.data(), nullptr),
+                     H5Sclose, "a dataspace");
+    check(H5Dwrite(set_, mem_type_, mem_space, file_space, H5P_DEFAULT, data), name_);
+  }
+
+ private:
+  const char* name_;
+  hid_t mem_type_;
+  std::vector<hsize_t> dims_;
+  hid_t set_ = -1;
+};
+
+// Writes a chip map file atomically, its per-step rows `kBlockSteps` at a time from
+// fill(first, count, block), which sizes and fills the block's arrays.
+void write_map(const std::filesystem::path& path, const MapHeader& m,
+               const std::function<void(std::size_t, std::size_t, MapBlock&)>& fill) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by exceptions
+  const std::size_t cols = m.teeth * m.segments_per_tooth;
+  // Written beside the target and renamed into place: never a half-written file.
+  write_file_atomic(path, [&](const std::filesystem::path& tmp) {
+    Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
+                tmp.c_str());
+    const hsize_t n = m.steps;
+    {
+      RowDataset t(file, "t_s", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n}, "s", false);
+      RowDataset tip(file, "tip_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, 3}, "mm", false);
+      RowDataset removed(file, "removed_mm3", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, m.teeth},
+                         "mm^3", false);
+      RowDataset h(file, "h_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, "mm", true);
+      RowDataset w(file, "w_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, "mm", true);
+      RowDataset v(file, "v_mm3", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, "mm^3", true);
+      MapBlock b;
+      for (std::size_t first = 0; first < m.steps; first += kBlockSteps) {
+        const std::size_t count = std::min(kBlockSteps, m.steps - first);
+        fill(first, count, b);
+        if (b.t_s.size() != count || b.tip_mm.size() != 3 * count ||
+            b.removed_mm3.size() != count * m.teeth || b.h_mm.size() != count * cols ||
+            b.w_mm.size() != count * cols || b.v_mm3.size() != count * cols) {
+          throw Error("write_chip_map_h5: inconsistent chip map block sizes");
+        }
+        t.write_rows(first, count, b.t_s.data());
+        tip.write_rows(first, count, b.tip_mm.data());
+        removed.write_rows(first, count, b.removed_mm3.data());
+        h.write_rows(first, count, b.h_mm.data());
+        w.write_rows(first, count, b.w_mm.data());
+        v.write_rows(first, count, b.v_mm3.data());
+      }
+      RowDataset heights(file, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE,
+                         {m.segment_height_mm.size()}, "mm", false);
+      heights.write_rows(0, m.segment_height_mm.size(), m.segment_height_mm.data());
+    }
+    write_attr(file, "teeth", static_cast<double>(m.teeth));
+    write_attr(file, "segments_per_tooth", static_cast<double>(m.segments_per_tooth));
+    write_attr(file, "resolution_mm", m.resolution_mm);
+    write_attr(file, "steps_per_rev", static_cast<double>(m.steps_per_rev));
+    write_attr(file, "complete", m.complete ? 1.0 : 0.0);
+    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "the file");
+  });
 }
 
 }  // namespace
@@ -80,30 +178,59 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) 
       m.removed_mm3.size() != steps * m.teeth) {
     throw Error("write_chip_map_h5: inconsistent chip map sizes");
   }
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by exceptions
-  // Written beside the target and renamed into place: never a half-written file.
-  write_file_atomic(path, [&](const std::filesystem::path& tmp) {
-    Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
-                tmp.c_str());
-    const hsize_t n = steps;
-    write_dataset(file, "t_s", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n}, m.t_s.data(), "s");
-    write_dataset(file, "tip_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, 3}, m.tip_mm.data(), "mm");
-    write_dataset(file, "removed_mm3", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, m.teeth},
-                  m.removed_mm3.data(), "mm^3");
-    write_dataset(file, "h_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.h_mm.data(), "mm",
-                  true);
-    write_dataset(file, "w_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.w_mm.data(), "mm",
-                  true);
-    write_dataset(file, "v_mm3", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, m.v_mm3.data(),
-                  "mm^3", true);
-    write_dataset(file, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE,
-                  {m.segment_height_mm.size()}, m.segment_height_mm.data(), "mm");
-    write_attr(file, "teeth", static_cast<double>(m.teeth));
-    write_attr(file, "segments_per_tooth", static_cast<double>(m.segments_per_tooth));
-    write_attr(file, "resolution_mm", m.resolution_mm);
-    write_attr(file, "steps_per_rev", static_cast<double>(m.steps_per_rev));
-    write_attr(file, "complete", m.complete ? 1.0 : 0.0);
-    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "the file");
+  const MapHeader header{steps,           m.teeth,    m.segments_per_tooth, m.resolution_mm,
+                         m.steps_per_rev, m.complete, m.segment_height_mm};
+  write_map(path, header, [&](std::size_t first, std::size_t count, MapBlock& b) {
+    auto rows = [&](const auto& all, std::size_t width, auto& out) {
+      out.assign(all.begin() + static_cast<std::ptrdiff_t>(first * width),
+                 all.begin() + static_cast<std::ptrdiff_t>((first + count) * width));
+    };
+    rows(m.t_s, 1, b.t_s);
+    rows(m.tip_mm, 3, b.tip_mm);
+    rows(m.removed_mm3, m.teeth, b.removed_mm3);
+    rows(m.h_mm, cols, b.h_mm);
+    rows(m.w_mm, cols, b.w_mm);
+    rows(m.v_mm3, cols, b.v_mm3);
+  });
+}
+
+void write_chip_map_h5(const std::filesystem::path& path, const SimResult& r, const SimTool& tool,
+                       const SimSettings& s) {
+  MapHeader header;
+  header.steps = r.steps.size();
+  header.teeth = tool.tooth_angle_rad.size();
+  header.segments_per_tooth = static_cast<std::size_t>(r.segments_per_tooth);
+  header.resolution_mm = s.resolution_mm;
+  header.steps_per_rev = s.steps_per_rev;
+  header.complete = r.complete;
+  header.segment_height_mm = segment_heights_mm(tool, header.segments_per_tooth);
+  const std::size_t cols = header.teeth * header.segments_per_tooth;
+  std::size_t q = 0;  // the next chip map entry (they are in step order)
+  write_map(path, header, [&](std::size_t first, std::size_t count, MapBlock& b) {
+    b.t_s.clear();
+    b.tip_mm.clear();
+    b.removed_mm3.clear();
+    for (std::size_t n = first; n < first + count; ++n) {
+      const SimStep& st = r.steps[n];
+      b.t_s.push_back(st.t_s);
+      b.tip_mm.insert(b.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
+      for (std::size_t k = 0; k < header.teeth; ++k) {
+        b.removed_mm3.push_back(k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
+      }
+    }
+    b.h_mm.assign(count * cols, 0.0f);
+    b.w_mm.assign(count * cols, 0.0f);
+    b.v_mm3.assign(count * cols, 0.0f);
+    for (; q < r.chip_map.size() && r.chip_map[q].step < first + count; ++q) {
+      const ChipEntry& c = r.chip_map[q];
+      if (c.step < first || c.segment >= cols) {
+        throw Error("write_chip_map_h5: the chip map's entries are not in step order");
+      }
+      const std::size_t at = (c.step - first) * cols + c.segment;
+      b.h_mm[at] = c.h_mm;
+      b.w_mm[at] = c.w_mm;
+      b.v_mm3[at] = c.v_mm3;
+    }
   });
 }
 

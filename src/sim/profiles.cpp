@@ -153,11 +153,17 @@ ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSett
     m.w_mm[c.step * cols + c.segment] = c.w_mm;
     m.v_mm3[c.step * cols + c.segment] = c.v_mm3;
   }
-  for (std::size_t g = 0; g < m.segments_per_tooth; ++g) {
-    m.segment_height_mm.push_back(
-        tool.height_at_length((static_cast<double>(g) + 0.5) * tool.segment_mm));
-  }
+  m.segment_height_mm = segment_heights_mm(tool, m.segments_per_tooth);
   return m;
+}
+
+std::vector<double> segment_heights_mm(const SimTool& tool, std::size_t segments) {
+  std::vector<double> h;
+  h.reserve(segments);
+  for (std::size_t g = 0; g < segments; ++g) {
+    h.push_back(tool.height_at_length((static_cast<double>(g) + 0.5) * tool.segment_mm));
+  }
+  return h;
 }
 
 }  // namespace trochomill

@@ -917,6 +917,9 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
   // The HDF5 chip map is dense: h, w and v as float per step and edge segment of every tooth.
   const double cols = teeth * static_cast<double>(tool.segments());
   m.dense_map_bytes = steps * (cols * 12.0 + 8.0 * (4 + teeth));
+  // The HDF5 writer makes 1024 steps dense at a time; the deflate filter holds about as much
+  // again while it compresses those rows' chunks.
+  m.map_writer_bytes = 2.0 * std::min(steps, 1024.0) * (cols * 12.0 + 8.0 * (4 + teeth));
   // What the process holds besides (its libraries, the job, the path; measured 20 MB).
   m.base_bytes = process_base_bytes() + static_cast<double>(path.segments().size()) * 400.0;
   return m;
