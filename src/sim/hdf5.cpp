@@ -45,10 +45,6 @@ void write_attr(hid_t obj, const char* name, double v) {
   check(H5Awrite(attr, H5T_NATIVE_DOUBLE, &v), name);
 }
 
-}  // namespace
-
-namespace {
-
 // What a chip map file holds besides its per-step rows.
 struct MapHeader {
   std::size_t steps = 0, teeth = 0, segments_per_tooth = 0;
@@ -72,22 +68,10 @@ class RowDataset {
  public:
   RowDataset(hid_t file, const char* name, hid_t mem_type, hid_t file_type,
              std::vector<hsize_t> dims, const char* unit, bool compress)
-      : name_(name), mem_type_(mem_type), dims_(std::move(dims)) {
-    Handle space(H5Screate_simple(static_cast<int>(dims_.size()), dims_.data(), nullptr), H5Sclose,
-                 "a dataspace");
-    Handle props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "dataset properties");
-    // No modification times in the object headers: the same simulation writes the same bytes.
-    check(H5Pset_obj_track_times(props, false), name);
-    bool empty = false;
-    for (const hsize_t d : dims_) empty = empty || d == 0;
-    if (compress && !empty) {
-      std::vector<hsize_t> chunk = dims_;
-      chunk[0] = std::min<hsize_t>(dims_[0], kBlockSteps);
-      check(H5Pset_chunk(props, static_cast<int>(chunk.size()), chunk.data()), name);
-      check(H5Pset_deflate(props, 4), name);
-    }
-    set_ = H5Dcreate2(file, name, file_type, space, H5P_DEFAULT, props, H5P_DEFAULT);
-    if (set_ < 0) throw Error(fmt::format("HDF5: cannot create {}", name));
+      : name_(name),
+        mem_type_(mem_type),
+        dims_(std::move(dims)),
+        set_(create(file, name, file_type, dims_, compress), H5Dclose, name) {
     Handle str(H5Tcopy(H5T_C_S1), H5Tclose, "a string type");
     const std::string u = unit;
     check(H5Tset_size(str, u.size() + 1), name);
@@ -97,7 +81,7 @@ class RowDataset {
   }
   RowDataset(const RowDataset&) = delete;
   RowDataset& operator=(const RowDataset&) = delete;
-  ~RowDataset() { H5Dclose(set_); }
+  ~RowDataset() = default;
   // Writes rows [first, first + count) from `data` (count rows of the other dimensions).
   void write_rows(hsize_t first, hsize_t count, const void* data) {
     if (count == 0) return;
@@ -114,10 +98,29 @@ class RowDataset {
   }
 
  private:
+  // The dataset (its id, or -1), chunked and deflated when `compress` and not empty.
+  static hid_t create(hid_t file, const char* name, hid_t file_type,
+                      const std::vector<hsize_t>& dims, bool compress) {
+    Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose,
+                 "a dataspace");
+    Handle props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "dataset properties");
+    // No modification times in the object headers: the same simulation writes the same bytes.
+    check(H5Pset_obj_track_times(props, false), name);
+    bool empty = false;
+    for (const hsize_t d : dims) empty = empty || d == 0;
+    if (compress && !empty) {
+      std::vector<hsize_t> chunk = dims;
+      chunk[0] = std::min<hsize_t>(dims[0], kBlockSteps);
+      check(H5Pset_chunk(props, static_cast<int>(chunk.size()), chunk.data()), name);
+      check(H5Pset_deflate(props, 4), name);
+    }
+    return H5Dcreate2(file, name, file_type, space, H5P_DEFAULT, props, H5P_DEFAULT);
+  }
+
   const char* name_;
   hid_t mem_type_;
   std::vector<hsize_t> dims_;
-  hid_t set_ = -1;
+  Handle set_;
 };
 
 // Writes a chip map file atomically, its per-step rows `kBlockSteps` at a time from
