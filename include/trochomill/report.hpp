@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "trochomill/analysis.hpp"
@@ -89,6 +90,10 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 /// The simulation's per-step series: t_s, x_mm, y_mm, z_mm, removed_tooth<k>_mm3, h_max_mm,
 /// h_mean_mm, engaged_segments.
 [[nodiscard]] std::string sim_series_csv(const SimResult& r, std::size_t teeth);
+/// Whether a summary key (simulate's, forces', chips') is a measurement of the run itself
+/// (wall and processor times, rates, utilisation, threads, peak memory, the memory estimate),
+/// which differs from run to run with the same input.
+[[nodiscard]] bool is_run_measurement(std::string_view key);
 /// `simulate`'s summary: the window, removed volume, h_max, updates, wall times (s) and
 /// memory (MB; `memory_estimate_bytes` as estimated before the run).
 [[nodiscard]] std::string simulation_json(const Job& job, const JobSimulation& js, double from_s,

@@ -50,12 +50,7 @@ std::vector<std::size_t> all_indices(std::size_t n) {
 // estimate that starts from the process's resident size) differ from run to run: a report
 // leaves them out, so the same command writes the same page.
 json without_measurements(json j) {
-  for (const char* k :
-       {"wall_time_s", "pre_roll_wall_s", "window_wall_s", "dexel_updates_per_s", "memory_peak_mb",
-        "memory_estimate_mb", "chips_wall_s", "forces_wall_s", "pre_roll_cpu_s", "window_cpu_s",
-        "pre_roll_utilisation", "window_utilisation", "threads"}) {
-    j.erase(k);
-  }
+  for (auto it = j.begin(); it != j.end();) it = is_run_measurement(it.key()) ? j.erase(it) : ++it;
   return j;
 }
 

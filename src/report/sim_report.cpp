@@ -155,6 +155,15 @@ double utilisation(double cpu_s, double wall_s, int threads) {
 
 }  // namespace
 
+bool is_run_measurement(std::string_view key) {
+  static constexpr std::string_view keys[] = {
+      "wall_time_s",    "pre_roll_wall_s",    "window_wall_s",        "dexel_updates_per_s",
+      "memory_peak_mb", "memory_estimate_mb", "chips_wall_s",         "forces_wall_s",
+      "pre_roll_cpu_s", "window_cpu_s",       "pre_roll_utilisation", "window_utilisation",
+      "threads"};
+  return std::find(std::begin(keys), std::end(keys), key) != std::end(keys);
+}
+
 std::string simulation_json(const Job& job, const JobSimulation& js, double from_s, double to_s,
                             double wall_s, double memory_estimate_bytes) {
   const SimResult& r = js.result;

@@ -1,5 +1,5 @@
-// The simulation's per-segment chip map in HDF5 (libhdf5's C API), readable with h5py or
-// MATLAB (sim.hpp).
+// The simulation's per-segment chip map made dense, and in HDF5 (libhdf5's C API),
+// readable with h5py or MATLAB (sim.hpp).
 #include <fmt/format.h>
 #include <hdf5.h>
 
@@ -171,6 +171,50 @@ void write_map(const std::filesystem::path& path, const MapHeader& m,
   });
 }
 
+// A simulation's chip map header.
+MapHeader header_of(const SimResult& r, const SimTool& tool, const SimSettings& s) {
+  MapHeader h;
+  h.steps = r.steps.size();
+  h.teeth = tool.tooth_angle_rad.size();
+  h.segments_per_tooth = static_cast<std::size_t>(r.segments_per_tooth);
+  h.resolution_mm = s.resolution_mm;
+  h.steps_per_rev = s.steps_per_rev;
+  h.complete = r.complete;
+  h.segment_height_mm = segment_heights_mm(tool, h.segments_per_tooth);
+  return h;
+}
+
+// Steps [first, first + count) of a simulation made dense into `b`; `q` is the next chip map
+// entry (they are in step order), advanced past the block's.
+void dense_rows(const SimResult& r, const MapHeader& h, std::size_t first, std::size_t count,
+                std::size_t& q, MapBlock& b) {
+  const std::size_t cols = h.teeth * h.segments_per_tooth;
+  b.t_s.clear();
+  b.tip_mm.clear();
+  b.removed_mm3.clear();
+  for (std::size_t n = first; n < first + count; ++n) {
+    const SimStep& st = r.steps[n];
+    b.t_s.push_back(st.t_s);
+    b.tip_mm.insert(b.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
+    for (std::size_t k = 0; k < h.teeth; ++k) {
+      b.removed_mm3.push_back(k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
+    }
+  }
+  b.h_mm.assign(count * cols, 0.0f);
+  b.w_mm.assign(count * cols, 0.0f);
+  b.v_mm3.assign(count * cols, 0.0f);
+  for (; q < r.chip_map.size() && r.chip_map[q].step < first + count; ++q) {
+    const ChipEntry& c = r.chip_map[q];
+    if (c.step < first || c.segment >= cols) {
+      throw Error("chip map: the entries are not in step order");
+    }
+    const std::size_t at = (c.step - first) * cols + c.segment;
+    b.h_mm[at] = c.h_mm;
+    b.w_mm[at] = c.w_mm;
+    b.v_mm3[at] = c.v_mm3;
+  }
+}
+
 }  // namespace
 
 void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) {
@@ -199,42 +243,41 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) 
 
 void write_chip_map_h5(const std::filesystem::path& path, const SimResult& r, const SimTool& tool,
                        const SimSettings& s) {
-  MapHeader header;
-  header.steps = r.steps.size();
-  header.teeth = tool.tooth_angle_rad.size();
-  header.segments_per_tooth = static_cast<std::size_t>(r.segments_per_tooth);
-  header.resolution_mm = s.resolution_mm;
-  header.steps_per_rev = s.steps_per_rev;
-  header.complete = r.complete;
-  header.segment_height_mm = segment_heights_mm(tool, header.segments_per_tooth);
-  const std::size_t cols = header.teeth * header.segments_per_tooth;
-  std::size_t q = 0;  // the next chip map entry (they are in step order)
+  const MapHeader header = header_of(r, tool, s);
+  std::size_t q = 0;  // the next chip map entry
   write_map(path, header, [&](std::size_t first, std::size_t count, MapBlock& b) {
-    b.t_s.clear();
-    b.tip_mm.clear();
-    b.removed_mm3.clear();
-    for (std::size_t n = first; n < first + count; ++n) {
-      const SimStep& st = r.steps[n];
-      b.t_s.push_back(st.t_s);
-      b.tip_mm.insert(b.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
-      for (std::size_t k = 0; k < header.teeth; ++k) {
-        b.removed_mm3.push_back(k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
-      }
-    }
-    b.h_mm.assign(count * cols, 0.0f);
-    b.w_mm.assign(count * cols, 0.0f);
-    b.v_mm3.assign(count * cols, 0.0f);
-    for (; q < r.chip_map.size() && r.chip_map[q].step < first + count; ++q) {
-      const ChipEntry& c = r.chip_map[q];
-      if (c.step < first || c.segment >= cols) {
-        throw Error("write_chip_map_h5: the chip map's entries are not in step order");
-      }
-      const std::size_t at = (c.step - first) * cols + c.segment;
-      b.h_mm[at] = c.h_mm;
-      b.w_mm[at] = c.w_mm;
-      b.v_mm3[at] = c.v_mm3;
-    }
+    dense_rows(r, header, first, count, q, b);
   });
+}
+
+ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSettings& s) {
+  MapHeader header = header_of(r, tool, s);
+  MapBlock b;
+  std::size_t q = 0;
+  dense_rows(r, header, 0, header.steps, q, b);
+  ChipMapData m;
+  m.teeth = header.teeth;
+  m.segments_per_tooth = header.segments_per_tooth;
+  m.resolution_mm = header.resolution_mm;
+  m.steps_per_rev = header.steps_per_rev;
+  m.complete = header.complete;
+  m.t_s = std::move(b.t_s);
+  m.tip_mm = std::move(b.tip_mm);
+  m.removed_mm3 = std::move(b.removed_mm3);
+  m.h_mm = std::move(b.h_mm);
+  m.w_mm = std::move(b.w_mm);
+  m.v_mm3 = std::move(b.v_mm3);
+  m.segment_height_mm = std::move(header.segment_height_mm);
+  return m;
+}
+
+std::vector<double> segment_heights_mm(const SimTool& tool, std::size_t segments) {
+  std::vector<double> h;
+  h.reserve(segments);
+  for (std::size_t g = 0; g < segments; ++g) {
+    h.push_back(tool.height_at_length((static_cast<double>(g) + 0.5) * tool.segment_mm));
+  }
+  return h;
 }
 
 ChipMapData read_chip_map_h5(const std::filesystem::path& path) {

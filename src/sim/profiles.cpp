@@ -130,42 +130,6 @@ HeightMap floor_height_map(const TriDexel& work, double x_from_mm, double x_to_m
   return m;
 }
 
-ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSettings& s) {
-  ChipMapData m;
-  m.teeth = tool.tooth_angle_rad.size();
-  m.segments_per_tooth = static_cast<std::size_t>(r.segments_per_tooth);
-  m.resolution_mm = s.resolution_mm;
-  m.steps_per_rev = s.steps_per_rev;
-  m.complete = r.complete;
-  const std::size_t cols = m.teeth * m.segments_per_tooth;
-  m.h_mm.assign(r.steps.size() * cols, 0.0f);
-  m.w_mm.assign(r.steps.size() * cols, 0.0f);
-  m.v_mm3.assign(r.steps.size() * cols, 0.0f);
-  for (const SimStep& st : r.steps) {
-    m.t_s.push_back(st.t_s);
-    m.tip_mm.insert(m.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
-    for (std::size_t k = 0; k < m.teeth; ++k) {
-      m.removed_mm3.push_back(k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
-    }
-  }
-  for (const ChipEntry& c : r.chip_map) {
-    m.h_mm[c.step * cols + c.segment] = c.h_mm;
-    m.w_mm[c.step * cols + c.segment] = c.w_mm;
-    m.v_mm3[c.step * cols + c.segment] = c.v_mm3;
-  }
-  m.segment_height_mm = segment_heights_mm(tool, m.segments_per_tooth);
-  return m;
-}
-
-std::vector<double> segment_heights_mm(const SimTool& tool, std::size_t segments) {
-  std::vector<double> h;
-  h.reserve(segments);
-  for (std::size_t g = 0; g < segments; ++g) {
-    h.push_back(tool.height_at_length((static_cast<double>(g) + 0.5) * tool.segment_mm));
-  }
-  return h;
-}
-
 }  // namespace trochomill
 
 namespace trochomill {

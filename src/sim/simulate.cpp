@@ -599,16 +599,21 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     cum_now += moved;
     cum[g % ring_n] = cum_now;
     level_steps = std::abs(ps.z_mm[n] - ps.z_mm[n - 1]) > 1e-9 ? 0 : level_steps + 1;
-    const bool settled = g > spr + 2 && level_steps >= spr + 2;
-    // With the envelope swept up to t0 nothing is left within the contour of the centre at t0,
-    // so from the start nothing nearer the present centre than the contour less the path
-    // since t0 (at constant depth since t0).
-    const bool enveloped = chain_enveloped && level_steps + 1 >= g;
-    const double D = settled ? cum_now - cum[(g - spr) % ring_n] : enveloped ? cum_now : kInf;
+    // Settled: a revolution (and two steps) at this depth within the `steps` counted.
+    auto settled_in = [&](std::size_t steps) { return steps > spr + 2 && level_steps >= spr + 2; };
+    // Enveloped: the envelope swept up to the start of the `steps` counted (all at this depth)
+    // left nothing within the contour of the centre there, so nothing nearer the present centre
+    // than the contour less the path since.
+    auto enveloped_in = [&](bool after_envelope, std::size_t steps) {
+      return after_envelope && level_steps + 1 >= steps;
+    };
+    const bool settled = settled_in(g);
+    const double D = settled                            ? cum_now - cum[(g - spr) % ring_n]
+                     : enveloped_in(chain_enveloped, g) ? cum_now
+                                                        : kInf;
     const bool annulus = D + d < min_core;
     // The shapes: this call's own first revolution takes whole sectors (as without a carry).
-    const bool own = (n > spr + 2 && level_steps >= spr + 2) ||
-                     (control.envelope_before && level_steps + 1 >= n);
+    const bool own = settled_in(n) || enveloped_in(control.envelope_before, n);
     const bool closing = annulus && own;  // a wedge and its closing wedge (else two sectors)
     res.annulus_steps += annulus ? 1 : 0;
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
