@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <csignal>
@@ -860,13 +861,13 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   EXPECT_EQ(files_in(tmp), 0u) << "the temporary program was left behind";
   EXPECT_NE(read_file(log).find("interrupted"), std::string::npos) << read_file(log);
 
-  // 2. A simulation long enough to be interrupted (about a minute), Ctrl-C once it has used
-  // 2 s of CPU: the run stops at the next step and writes what it computed, marked
-  // incomplete, exit 130. The --out folder then holds the whole set of files and no staging
-  // folder.
+  // 2. A simulation long enough to be interrupted (minutes), from the path's start (no
+  // pre-roll: it records from its first step), Ctrl-C once it has used 2 s of CPU: the run
+  // stops at the next step and writes what it computed, marked incomplete, exit 130. The
+  // --out folder then holds the whole set of files and no staging folder.
   const auto out = dir_ / "sim";
   const std::string json = (dir_ / "s.json").string();
-  pid = spawn_cli("simulate " + ex + " --cycles 2:8 --set simulation.resolution=0.02 --json " +
+  pid = spawn_cli("simulate " + ex + " --from 0 --to 30 --set simulation.resolution=0.02 --json " +
                       json + " --out " + out.string(),
                   log, tmp.string());
   ASSERT_GT(pid, 0);
@@ -881,6 +882,15 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   for (const char* f : {"series.csv", "chips.h5", "walls.csv", "floor.csv", "surface.stl"}) {
     EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
   }
+  // The series and the chip map were streamed as the steps came: every step computed is in
+  // both, and the map says it is incomplete.
+  const auto steps = j["steps"].get<std::size_t>();
+  EXPECT_GT(steps, 0u);
+  const std::string series = read_file(out / "series.csv");
+  EXPECT_EQ(static_cast<std::size_t>(std::count(series.begin(), series.end(), '\n')), steps + 1);
+  const ChipMapData map = read_chip_map_h5(out / "chips.h5");
+  EXPECT_EQ(map.t_s.size(), steps);
+  EXPECT_FALSE(map.complete);
   // floor.x3p too when the run got as far as cutting the floor across the slot; if not, the
   // note says why.
   const bool floor = std::filesystem::exists(out / "floor.x3p");

@@ -15,6 +15,7 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -990,6 +991,103 @@ TEST(Sim, OutputsAreWrittenAsOneSet) {
   }
   EXPECT_NE(read_file(dir / "series.csv"), "an earlier run\n");
   std::filesystem::remove_all(dir);
+}
+
+// A simulation whose records go to a sink and are not kept hands the sink exactly the records a
+// kept run holds (every field bit for bit, each step's chip entries in order), keeps none, and
+// counts the same steps and h_max. The outputs streamed into SimulationOutputs as the steps come
+// are the bytes write_simulation_outputs writes from the kept run.
+TEST(Sim, StreamedRecordsAreTheKeptOnes) {
+  const Job job = small_wagih_job();
+  const ToolPath path = plan_path(job).path;
+  const auto [from, to] = cycle_window(path, 2, 3);
+  const JobSimulation kept = simulate_job(job, path, from, to);
+  struct Collect final : SimSink {
+    void take(const SimStep& st, std::span<const ChipEntry> chips) override {
+      for (const ChipEntry& c : chips) EXPECT_EQ(c.step, steps.size());
+      steps.push_back(st);
+      entries.insert(entries.end(), chips.begin(), chips.end());
+    }
+    std::vector<SimStep> steps;
+    std::vector<ChipEntry> entries;
+  } got;
+  SimControl c;
+  c.keep_records = false;
+  c.sink = &got;
+  const JobSimulation streamed = simulate_job(job, path, from, to, c);
+  const SimResult &k = kept.result, &r = streamed.result;
+  EXPECT_TRUE(r.steps.empty());
+  EXPECT_TRUE(r.chip_map.empty());
+  ASSERT_GT(k.steps.size(), 1000u);
+  ASSERT_GT(k.chip_map.size(), 1000u);
+  EXPECT_EQ(k.step_count, k.steps.size());
+  EXPECT_EQ(r.step_count, k.steps.size());
+  double h_max = 0;
+  for (const SimStep& st : k.steps) h_max = std::max(h_max, st.h_max_mm);
+  EXPECT_GT(h_max, 0.0);
+  EXPECT_EQ(k.h_max_mm, h_max);
+  EXPECT_EQ(r.h_max_mm, h_max);
+  EXPECT_EQ(r.removed_by_board_mm3, k.removed_by_board_mm3);
+  EXPECT_EQ(r.dexel_updates, k.dexel_updates);
+  ASSERT_EQ(got.steps.size(), k.steps.size());
+  for (std::size_t n = 0; n < k.steps.size(); ++n) {
+    const SimStep &a = got.steps[n], &b = k.steps[n];
+    ASSERT_EQ(a.t_s, b.t_s) << n;
+    ASSERT_EQ(a.tip_mm, b.tip_mm) << n;
+    ASSERT_EQ(a.removed_mm3, b.removed_mm3) << n;
+    ASSERT_EQ(a.h_max_mm, b.h_max_mm) << n;
+    ASSERT_EQ(a.h_mean_mm, b.h_mean_mm) << n;
+    ASSERT_EQ(a.engaged_segments, b.engaged_segments) << n;
+  }
+  ASSERT_EQ(got.entries.size(), k.chip_map.size());
+  for (std::size_t q = 0; q < k.chip_map.size(); ++q) {
+    const ChipEntry &a = got.entries[q], &b = k.chip_map[q];
+    ASSERT_EQ(a.step, b.step) << q;
+    ASSERT_EQ(a.segment, b.segment) << q;
+    ASSERT_EQ(a.h_mm, b.h_mm) << q;
+    ASSERT_EQ(a.w_mm, b.w_mm) << q;
+    ASSERT_EQ(a.v_mm3, b.v_mm3) << q;
+  }
+
+  const auto base =
+      std::filesystem::temp_directory_path() / ("trochomill_stream_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(base);
+  const std::string note = write_simulation_outputs(base / "kept", job, kept, std::nullopt);
+  SimulationOutputs out(base / "streamed", job);
+  c.sink = &out;
+  const JobSimulation js = simulate_job(job, path, from, to, c);
+  EXPECT_EQ(out.finish(js, std::nullopt), note);
+  for (const char* f : {"series.csv", "chips.h5", "walls.csv", "floor.csv", "surface.stl"}) {
+    const std::string a = test::read_file(base / "kept" / f);
+    EXPECT_GT(a.size(), 1000u) << f;
+    EXPECT_TRUE(a == test::read_file(base / "streamed" / f)) << f;
+  }
+  const ChipMapData m = read_chip_map_h5(base / "streamed" / "chips.h5");
+  EXPECT_EQ(m.t_s.size(), k.steps.size());
+  EXPECT_TRUE(m.complete);
+  std::filesystem::remove_all(base);
+}
+
+// The path is sampled a block of 65,536 steps at a time: over more than two blocks every step's
+// tip is where the path is at the step's time (the path sampled at all those times at once).
+TEST(Sim, StepsFollowThePathAcrossSampleBlocks) {
+  const StockBox box{{-8, -10, -2}, {8, 30, 0}};
+  SimSettings s;
+  s.steps_per_rev = 4000;  // 200,000 steps per second at 3000 rpm
+  const SimTool tool = end_mill(0);
+  const ToolPath p = line_path(0, -16, 20, -1, 0.1 * 2 * 3000);
+  TriDexel work(box, 0.5);
+  const SimResult r = simulate(p, tool, s, work, 0, 0.7);
+  ASSERT_GT(r.steps.size(), 2u * 65536u + 1000u);
+  std::vector<double> times;
+  for (const SimStep& st : r.steps) times.push_back(st.t_s);
+  const PathSamples at = sample_at_times(p, times);
+  for (std::size_t n = 0; n < r.steps.size(); ++n) {
+    ASSERT_EQ(r.steps[n].tip_mm[0], at.x_mm[n]) << n;
+    ASSERT_EQ(r.steps[n].tip_mm[1], at.y_mm[n]) << n;
+    ASSERT_EQ(r.steps[n].tip_mm[2], at.z_mm[n]) << n;
+  }
+  EXPECT_GT(r.removed_mm3, 0.0);
 }
 
 // The boards' material summaries: after random cuts, whenever a query says a stretch of rays

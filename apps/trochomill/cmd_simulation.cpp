@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <memory>
+#include <optional>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -46,18 +47,19 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       const auto [from, to] = a->window.resolve(path);
       // Refuse before starting when the estimate passes the limit.
       const MemoryEstimate est = estimate_simulation_memory(job, path, from, to);
-      const double need = est.total(false) + (a->out.empty() ? 0.0 : est.map_writer_bytes);
+      // The records are not kept: the outputs stream as the steps are made.
+      const double need = est.streamed(!a->out.empty());
       if (a->stl_step_mm && !(*a->stl_step_mm > 0)) {  // bad input refused before the run
         throw InputError(fmt::format("--stl-step must be > 0 mm, got {}", *a->stl_step_mm));
       }
       const double limit = memory_limit_bytes(a->memory_gb);
       if (need > limit) {
         throw InputError(fmt::format(
-            "simulate: estimated memory {:.2f} GB (boards {:.2f}, records {:.2f}, process "
+            "simulate: estimated memory {:.2f} GB (boards {:.2f}, path samples {:.2f}, process "
             "{:.2f}, HDF5 map {:.2f}) exceeds the limit of {:.2f} GB ({}); coarsen [simulation] "
             "resolution (now {} mm), shorten the window (--cycles, --from/--to) or raise "
             "--memory-limit",
-            need / 1e9, est.boards_bytes / 1e9, est.records_bytes / 1e9, est.base_bytes / 1e9,
+            need / 1e9, est.boards_bytes / 1e9, est.stream_bytes / 1e9, est.base_bytes / 1e9,
             a->out.empty() ? 0.0 : est.map_writer_bytes / 1e9, limit / 1e9,
             a->memory_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
       }
@@ -66,7 +68,9 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       const GuardedRun run(true);
       SimControl control;
       control.hooks = run.hooks();
-      control.reserve_chip_entries = static_cast<std::size_t>(est.chip_entries);
+      control.keep_records = false;  // series.csv and chips.h5 are written as the steps come
+      std::optional<SimulationOutputs> outputs;
+      if (!a->out.empty()) control.sink = &outputs.emplace(a->out, job);
       const auto t_start = std::chrono::steady_clock::now();
       const JobSimulation js = simulate_job(job, path, from, to, control);
       const double wall =
@@ -74,9 +78,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       RunHooks writing = control.hooks;
       if (!js.result.complete) writing.cancel = nullptr;  // the first Ctrl-C stopped the run
       std::string note;
-      if (!a->out.empty()) {
-        note = write_simulation_outputs(a->out, job, js, a->stl_step_mm, writing);
-      }
+      if (outputs) note = outputs->finish(js, a->stl_step_mm, writing);
       run.done();
       if (!a->json.empty()) emit(a->json, simulation_json(job, js, from, to, wall, need));
       if (a->json != "-") fmt::print("{}", simulation_text(a->job.file, job, js, from, to, wall));

@@ -90,6 +90,9 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 /// The simulation's per-step series: t_s, x_mm, y_mm, z_mm, removed_tooth<k>_mm3, h_max_mm,
 /// h_mean_mm, engaged_segments.
 [[nodiscard]] std::string sim_series_csv(const SimResult& r, std::size_t teeth);
+/// sim_series_csv's header line, and one step's row appended to `csv` (the series streamed).
+[[nodiscard]] std::string sim_series_header(std::size_t teeth);
+void append_sim_series_row(std::string& csv, const SimStep& step, std::size_t teeth);
 /// Whether a summary key (simulate's, forces', chips') is a measurement of the run itself
 /// (wall and processor times, rates, utilisation, threads, peak memory, the memory estimate),
 /// which differs from run to run with the same input.
@@ -105,16 +108,31 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 /// across the slot less the tool's corner radius and a spacing at each wall, cut below half
 /// the depth. Throws InputError when the window left no floor cut across the slot.
 [[nodiscard]] HeightMap simulated_floor(const Job& job, const JobSimulation& js);
-/// Writes series.csv, chips.h5, walls.csv, floor.csv, surface.stl (grid step `stl_step_mm`,
-/// or default_surface_step_mm) and floor.x3p (the slot's floor as a height map at the dexel
-/// spacing: floor_height_map across the slot less the tool's corner radius and a spacing at
-/// each wall, cut below half the depth) into `dir` (created) as one set: they are made in a
-/// staging folder inside `dir`, then each is renamed into place. When the window left no
-/// floor cut across the slot, floor.x3p is not written (an earlier run's is removed: the set
-/// stays one run's) and the reason is returned; otherwise the result is empty. `hooks`: the
-/// phase "writing outputs" with progress per file; when cancelled between files the staging
-/// folder is removed and Interrupted thrown: `dir` then holds none of this run's files (those
-/// of an earlier run stay as they were).
+/// simulate's --out set, written as one set: series.csv and chips.h5 as the steps are made
+/// (this is the SimSink for SimControl::sink: a whole program's records never sit in memory),
+/// then by `finish` walls.csv, floor.csv, surface.stl (grid step `stl_step_mm`, or
+/// default_surface_step_mm) and floor.x3p (the slot's floor as a height map at the dexel
+/// spacing: simulated_floor) from the workpiece. Everything is made in a staging folder inside
+/// `dir` (created) and renamed into place by `finish`; when the window left no floor cut across
+/// the slot, floor.x3p is not written (an earlier run's is removed: the set stays one run's)
+/// and `finish` returns the reason (otherwise empty). A simulation stopped early (Ctrl-C) is
+/// finished as well: chips.h5 then says complete = 0. `hooks`: the phase "writing outputs"
+/// with progress per file; when cancelled between files `finish` throws Interrupted. Destroyed
+/// unfinished (an error, a cancel), the staging folder is removed: `dir` then holds none of
+/// this run's files (those of an earlier run stay as they were). Throws IoError or Error.
+class SimulationOutputs final : public SimSink {
+ public:
+  SimulationOutputs(const std::filesystem::path& dir, const Job& job);
+  ~SimulationOutputs() override;
+  void take(const SimStep& step, std::span<const ChipEntry> chips) override;
+  [[nodiscard]] std::string finish(const JobSimulation& js, std::optional<double> stl_step_mm,
+                                   const RunHooks& hooks = {});
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+/// The set of SimulationOutputs from a simulation whose records were kept (replayed into it).
 [[nodiscard]] std::string write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
                                                    const JobSimulation& js,
                                                    std::optional<double> stl_step_mm,

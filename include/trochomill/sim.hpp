@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -260,8 +261,10 @@ struct SimCarry {
 };
 
 struct SimResult {
-  std::vector<SimStep> steps;
-  std::vector<ChipEntry> chip_map;
+  std::vector<SimStep> steps;       ///< empty when not kept (SimControl::keep_records)
+  std::vector<ChipEntry> chip_map;  ///< likewise
+  std::size_t step_count = 0;       ///< the steps taken, kept or not
+  double h_max_mm = 0;              ///< the largest SimStep::h_max_mm of those steps
   int segments_per_tooth = 0;
   double removed_mm3 = 0;  ///< Z board
   std::array<double, 3> removed_by_board_mm3{};
@@ -271,6 +274,18 @@ struct SimResult {
   /// whole sector: a call's first revolution, unless it continues one or follows the envelope).
   std::size_t annulus_steps = 0;
   SimCarry carry;  ///< for a call continuing this one on the same workpiece
+};
+
+/// Takes a simulation's records as they are made (SimControl::sink): each step in order,
+/// with its chip map entries (their `step` the step's index in the call). Whatever `take`
+/// throws stops the simulation and passes on.
+class SimSink {
+ public:
+  SimSink() = default;
+  SimSink(const SimSink&) = delete;
+  SimSink& operator=(const SimSink&) = delete;
+  virtual ~SimSink() = default;
+  virtual void take(const SimStep& step, std::span<const ChipEntry> chips) = 0;
 };
 
 /// Progress and cancellation of a running simulation.
@@ -291,6 +306,13 @@ struct SimControl {
   const SimCarry* after = nullptr;
   /// Chip map entries to reserve up front (MemoryEstimate::chip_entries); 0: grow as needed.
   std::size_t reserve_chip_entries = 0;
+  /// Each step's record and chip entries go to the sink as they are made (for outputs
+  /// streamed to files).
+  SimSink* sink = nullptr;
+  /// Keep every step's record and the chip map in SimResult::steps and chip_map. Without
+  /// them (a sink takes them, or only the totals are wanted) the memory does not grow with
+  /// the steps: a whole program fits (MemoryEstimate::streamed).
+  bool keep_records = true;
 };
 
 /// Simulates the path from t0 to t1 (s) on the workpiece (modified in place).
@@ -355,6 +377,29 @@ void write_chip_map_h5(const std::filesystem::path& path, const SimResult& r, co
 /// The heights above the tip of the middles of the first `segments` edge segments (mm).
 [[nodiscard]] std::vector<double> segment_heights_mm(const SimTool& tool, std::size_t segments);
 
+/// Hands a result's kept steps to `sink` in order, each with its chip map entries, as
+/// simulate would have (SimControl::sink). Throws Error when the entries are not in step
+/// order or name a step beyond the steps.
+void replay(const SimResult& r, SimSink& sink);
+
+/// Writes a chip map file (write_chip_map_h5's datasets and attributes) as the steps come: a
+/// SimSink that makes 1024 steps dense at a time and appends them to extendible datasets, so
+/// that a whole program's map is written in the memory of one block. `finish` writes the
+/// segment heights and the attributes and closes the file; a writer destroyed unfinished leaves
+/// it without them (write to a staging path). Throws Error when HDF5 fails.
+class ChipMapWriter final : public SimSink {
+ public:
+  ChipMapWriter(const std::filesystem::path& path, const SimTool& tool, const SimSettings& s);
+  ~ChipMapWriter() override;
+  void take(const SimStep& step, std::span<const ChipEntry> chips) override;
+  /// `complete`: the simulation ran to its end (the file's attribute "complete").
+  void finish(bool complete);
+
+ private:
+  struct File;
+  std::unique_ptr<File> file_;
+};
+
 /// The job's stock: `[stock]` min / max, or the slot region (y from 0 to the slot length: the
 /// slot runs through the workpiece) with a 1 mm margin beside the walls (x) and 0.5 mm below
 /// the floor, up to the top face z = 0.
@@ -395,12 +440,18 @@ struct MemoryEstimate {
   double boards_bytes = 0;      ///< the dexel tiles of the region the tool visits
   double records_bytes = 0;     ///< per-step records, sample arrays and the sparse chip map
   double dense_map_bytes = 0;   ///< the whole chip map made dense (chip_map_data)
-  double map_writer_bytes = 0;  ///< writing chips.h5 (write_chip_map_h5 from a SimResult)
-  double base_bytes = 0;        ///< the process besides: libraries, job, path
-  double chip_entries = 0;      ///< expected engaged (segment, step) pairs
+  double map_writer_bytes = 0;  ///< writing chips.h5 (write_chip_map_h5, ChipMapWriter)
+  /// Without kept records (SimControl::keep_records false): one block of path samples.
+  double stream_bytes = 0;
+  double base_bytes = 0;    ///< the process besides: libraries, job, path
+  double chip_entries = 0;  ///< expected engaged (segment, step) pairs
   /// The whole, with or without the whole dense map (bytes).
   [[nodiscard]] double total(bool with_map) const {
     return boards_bytes + records_bytes + base_bytes + (with_map ? dense_map_bytes : 0.0);
+  }
+  /// The whole when the records are not kept, with or without a ChipMapWriter (bytes).
+  [[nodiscard]] double streamed(bool with_writer) const {
+    return boards_bytes + stream_bytes + base_bytes + (with_writer ? map_writer_bytes : 0.0);
   }
 };
 /// With `stock_mesh` the boards hold every ray of the mesh's box (stock_from_mesh).

@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <initializer_list>
 #include <iterator>
@@ -21,19 +23,26 @@
 
 namespace trochomill {
 
-std::string sim_series_csv(const SimResult& r, std::size_t teeth) {
+std::string sim_series_header(std::size_t teeth) {
   std::string csv = "t_s,x_mm,y_mm,z_mm";
   for (std::size_t k = 0; k < teeth; ++k) csv += fmt::format(",removed_tooth{}_mm3", k);
   csv += ",h_max_mm,h_mean_mm,engaged_segments\n";
+  return csv;
+}
+
+void append_sim_series_row(std::string& csv, const SimStep& st, std::size_t teeth) {
   auto out = std::back_inserter(csv);
-  for (const SimStep& st : r.steps) {
-    fmt::format_to(out, "{:.7f},{:.5f},{:.5f},{:.5f}", st.t_s, st.tip_mm[0], st.tip_mm[1],
-                   st.tip_mm[2]);
-    for (std::size_t k = 0; k < teeth; ++k) {
-      fmt::format_to(out, ",{:.6g}", k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
-    }
-    fmt::format_to(out, ",{:.6f},{:.6f},{}\n", st.h_max_mm, st.h_mean_mm, st.engaged_segments);
+  fmt::format_to(out, "{:.7f},{:.5f},{:.5f},{:.5f}", st.t_s, st.tip_mm[0], st.tip_mm[1],
+                 st.tip_mm[2]);
+  for (std::size_t k = 0; k < teeth; ++k) {
+    fmt::format_to(out, ",{:.6g}", k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
   }
+  fmt::format_to(out, ",{:.6f},{:.6f},{}\n", st.h_max_mm, st.h_mean_mm, st.engaged_segments);
+}
+
+std::string sim_series_csv(const SimResult& r, std::size_t teeth) {
+  std::string csv = sim_series_header(teeth);
+  for (const SimStep& st : r.steps) append_sim_series_row(csv, st, teeth);
   return csv;
 }
 
@@ -167,13 +176,12 @@ bool is_run_measurement(std::string_view key) {
 std::string simulation_json(const Job& job, const JobSimulation& js, double from_s, double to_s,
                             double wall_s, double memory_estimate_bytes) {
   const SimResult& r = js.result;
-  double h_max = 0;
-  for (const auto& st : r.steps) h_max = std::max(h_max, st.h_max_mm);
+  const double h_max = r.h_max_mm;
   const nlohmann::json j = {
       {"removed_volume_mm3", r.removed_mm3},
       {"removed_volume_by_board_mm3", r.removed_by_board_mm3},
       {"h_max_mm", h_max},
-      {"steps", r.steps.size()},
+      {"steps", r.step_count},
       {"dexel_updates", r.dexel_updates},
       {"wall_time_s", wall_s},
       {"pre_roll_wall_s", js.pre_roll_wall_s},
@@ -199,12 +207,11 @@ std::string simulation_json(const Job& job, const JobSimulation& js, double from
 std::string simulation_text(const std::string& job_file, const Job& job, const JobSimulation& js,
                             double from_s, double to_s, double wall_s) {
   const SimResult& r = js.result;
-  double h_max = 0;
-  for (const auto& st : r.steps) h_max = std::max(h_max, st.h_max_mm);
+  const double h_max = r.h_max_mm;
   return fmt::format(
       "{}: {:.4f} to {:.4f} s, {} steps at {} per rev, {:g} mm dexels: removed "
       "{:.4f} mm^3, h_max {:.5f} mm, {} dexel updates, {:.2f} s, {:.1f} MB{}\n",
-      job_file, from_s, to_s, r.steps.size(), job.simulation.steps_per_rev,
+      job_file, from_s, to_s, r.step_count, job.simulation.steps_per_rev,
       job.simulation.resolution_mm, r.removed_mm3, h_max, r.dexel_updates, wall_s,
       static_cast<double>(js.memory_bytes) / 1048576.0,
       r.complete ? "" : " (interrupted: incomplete)");
@@ -216,17 +223,87 @@ HeightMap simulated_floor(const Job& job, const JobSimulation& js) {
   return floor_height_map(*js.work, -half, half, -0.5 * job.slot.depth_mm);
 }
 
-std::string write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
-                                     const JobSimulation& js, std::optional<double> stl_step_mm,
-                                     const RunHooks& hooks) {
+// The set being written: the staging folder inside the output folder, and the two files
+// streamed into it as the steps come.
+struct SimulationOutputs::State {
+  State(std::filesystem::path dir_, const Job& job_)
+      : dir(std::move(dir_)),
+        job(job_),
+        tool(sim_tool(job_, job_.simulation)),
+        teeth(tool.tooth_angle_rad.size()),
+        stage(dir / fmt::format(".trochomill-partial-{}", static_cast<long>(::getpid()))) {}
+  std::filesystem::path dir;
+  const Job& job;
+  SimTool tool;
+  std::size_t teeth;
+  std::filesystem::path stage;
+  std::unique_ptr<std::ofstream> series;
+  std::unique_ptr<PendingFile> series_pending;
+  std::string rows;  // series.csv rows not yet written
+  std::unique_ptr<ChipMapWriter> chips;
+  std::size_t steps = 0;
+  double first_t_s = 0, last_t_s = 0;  // the steps' times (s)
+  bool finished = false;
+
+  void flush_rows() {
+    series->write(rows.data(), static_cast<std::streamsize>(rows.size()));
+    if (!*series) {
+      throw IoError(
+          fmt::format("cannot write '{}': write failed", (stage / "series.csv").string()));
+    }
+    rows.clear();
+  }
+};
+
+SimulationOutputs::SimulationOutputs(const std::filesystem::path& dir, const Job& job)
+    : s_(std::make_unique<State>(dir, job)) {
   namespace fs = std::filesystem;
   fs::create_directories(dir);
-  const SimResult& r = js.result;
-  const SimTool tool = sim_tool(job, job.simulation);
-  const fs::path stage = dir / fmt::format(".trochomill-partial-{}", static_cast<long>(::getpid()));
   std::error_code ec;
-  fs::remove_all(stage, ec);
-  fs::create_directory(stage);
+  fs::remove_all(s_->stage, ec);
+  fs::create_directory(s_->stage);
+  try {
+    const fs::path series = s_->stage / "series.csv";
+    s_->series_pending = std::make_unique<PendingFile>(series);
+    s_->series = std::make_unique<std::ofstream>(series, std::ios::binary | std::ios::trunc);
+    if (!*s_->series) {
+      throw IoError(fmt::format("cannot write '{}': {}", series.string(), std::strerror(errno)));
+    }
+    s_->rows = sim_series_header(s_->teeth);
+    s_->chips = std::make_unique<ChipMapWriter>(s_->stage / "chips.h5", s_->tool, job.simulation);
+  } catch (...) {
+    s_->series.reset();
+    s_->chips.reset();
+    fs::remove_all(s_->stage, ec);
+    throw;
+  }
+}
+
+SimulationOutputs::~SimulationOutputs() {
+  if (s_->finished) return;
+  // Unfinished (an error, or stopped while finishing): none of this run's files stay.
+  s_->series.reset();
+  s_->chips.reset();
+  std::error_code ec;
+  std::filesystem::remove_all(s_->stage, ec);
+}
+
+void SimulationOutputs::take(const SimStep& step, std::span<const ChipEntry> chips) {
+  if (s_->finished) throw Error("SimulationOutputs: a step after finish");
+  if (s_->steps++ == 0) s_->first_t_s = step.t_s;
+  s_->last_t_s = step.t_s;
+  append_sim_series_row(s_->rows, step, s_->teeth);
+  if (s_->rows.size() >= (std::size_t{1} << 20)) s_->flush_rows();
+  s_->chips->take(step, chips);
+}
+
+std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<double> stl_step_mm,
+                                      const RunHooks& hooks) {
+  namespace fs = std::filesystem;
+  if (s_->finished) throw Error("SimulationOutputs: finished twice");
+  const Job& job = s_->job;
+  const fs::path& dir = s_->dir;
+  const fs::path& stage = s_->stage;
   // The floor as a height map, when the window left one across the slot.
   std::optional<HeightMap> floor;
   std::string floor_note;
@@ -238,9 +315,13 @@ std::string write_simulation_outputs(const std::filesystem::path& dir, const Job
   std::vector<std::pair<const char*, std::function<void(const fs::path&)>>> outputs{{
       {"series.csv",
        [&](const fs::path& p) {
-         write_file_atomic(p, sim_series_csv(r, tool.tooth_angle_rad.size()));
+         s_->flush_rows();
+         s_->series->close();
+         if (s_->series->fail()) {
+           throw IoError(fmt::format("cannot write '{}': write failed", p.string()));
+         }
        }},
-      {"chips.h5", [&](const fs::path& p) { write_chip_map_h5(p, r, tool, job.simulation); }},
+      {"chips.h5", [&](const fs::path&) { s_->chips->finish(js.result.complete); }},
       {"walls.csv",
        [&](const fs::path& p) {
          write_file_atomic(p, wall_profiles_csv(wall_profiles(*js.work, 0.0)));
@@ -262,39 +343,40 @@ std::string write_simulation_outputs(const std::filesystem::path& dir, const Job
       info.model = "tri-dexel simulation";
       info.comment = fmt::format(
           "{}; {:g} mm dexels, {} steps per revolution, t {:.4f} to {:.4f} s", floor->description,
-          job.simulation.resolution_mm, job.simulation.steps_per_rev,
-          js.result.steps.empty() ? 0.0 : js.result.steps.front().t_s,
-          js.result.steps.empty() ? 0.0 : js.result.steps.back().t_s);
+          job.simulation.resolution_mm, job.simulation.steps_per_rev, s_->first_t_s, s_->last_t_s);
       write_x3p(p, *floor, info);
     });
   }
   const char* stopped = "interrupted: --out not written (no file of this run is in it)";
   hooks.begin("writing outputs");
-  try {
-    for (std::size_t k = 0; k < outputs.size(); ++k) {
-      hooks.check(stopped);
-      if (hooks.progress) hooks.progress(k, outputs.size());
-      outputs[k].second(stage / outputs[k].first);
-    }
+  for (std::size_t k = 0; k < outputs.size(); ++k) {
     hooks.check(stopped);
-    if (hooks.progress) hooks.progress(outputs.size(), outputs.size());
-  } catch (...) {
-    fs::remove_all(stage, ec);
-    throw;
+    if (hooks.progress) hooks.progress(k, outputs.size());
+    outputs[k].second(stage / outputs[k].first);
   }
+  hooks.check(stopped);
+  if (hooks.progress) hooks.progress(outputs.size(), outputs.size());
   // The set is complete: each file is renamed into place.
+  std::error_code ec;
   for (const auto& [name, write] : outputs) {
     fs::rename(stage / name, dir / name, ec);
     if (ec) {
-      const std::string msg =
-          fmt::format("cannot write '{}': {}", (dir / name).string(), ec.message());
-      fs::remove_all(stage, ec);
-      throw IoError(msg);
+      throw IoError(fmt::format("cannot write '{}': {}", (dir / name).string(), ec.message()));
     }
   }
+  s_->finished = true;
+  s_->series_pending.reset();
   fs::remove(stage, ec);
   if (!floor) fs::remove(dir / "floor.x3p", ec);  // an earlier run's: not this set's
   return floor_note;
+}
+
+std::string write_simulation_outputs(const std::filesystem::path& dir, const Job& job,
+                                     const JobSimulation& js, std::optional<double> stl_step_mm,
+                                     const RunHooks& hooks) {
+  SimulationOutputs out(dir, job);
+  replay(js.result, out);
+  return out.finish(js, stl_step_mm, hooks);
 }
 
 }  // namespace trochomill

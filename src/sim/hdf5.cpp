@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -47,7 +48,7 @@ void write_attr(hid_t obj, const char* name, double v) {
 
 // What a chip map file holds besides its per-step rows.
 struct MapHeader {
-  std::size_t steps = 0, teeth = 0, segments_per_tooth = 0;
+  std::size_t teeth = 0, segments_per_tooth = 0;
   double resolution_mm = 0;
   int steps_per_rev = 0;
   bool complete = true;
@@ -63,15 +64,16 @@ struct MapBlock {
 // Steps per block written (and the compressed datasets' chunk rows).
 constexpr std::size_t kBlockSteps = 1024;
 
-// A dataset of `dims` whose rows are written block by block (rows along the first dimension).
+// A dataset whose rows (along the first dimension; `width` the others) are appended block by
+// block: extendible, chunked `kBlockSteps` rows at a time, deflated when `compress`.
 class RowDataset {
  public:
   RowDataset(hid_t file, const char* name, hid_t mem_type, hid_t file_type,
-             std::vector<hsize_t> dims, const char* unit, bool compress)
+             std::vector<hsize_t> width, const char* unit, bool compress)
       : name_(name),
         mem_type_(mem_type),
-        dims_(std::move(dims)),
-        set_(create(file, name, file_type, dims_, compress), H5Dclose, name) {
+        width_(std::move(width)),
+        set_(create(file, name, file_type, width_, compress), H5Dclose, name) {
     Handle str(H5Tcopy(H5T_C_S1), H5Tclose, "a string type");
     const std::string u = unit;
     check(H5Tset_size(str, u.size() + 1), name);
@@ -82,12 +84,14 @@ class RowDataset {
   RowDataset(const RowDataset&) = delete;
   RowDataset& operator=(const RowDataset&) = delete;
   ~RowDataset() = default;
-  // Writes rows [first, first + count) from `data` (count rows of the other dimensions).
-  void write_rows(hsize_t first, hsize_t count, const void* data) {
+  // Appends `count` rows from `data` (row-major).
+  void append(hsize_t count, const void* data) {
     if (count == 0) return;
-    std::vector<hsize_t> start(dims_.size(), 0), size = dims_;
-    start[0] = first;
-    size[0] = count;
+    std::vector<hsize_t> start(width_.size() + 1, 0), size{count}, dims{rows_ + count};
+    start[0] = rows_;
+    size.insert(size.end(), width_.begin(), width_.end());
+    dims.insert(dims.end(), width_.begin(), width_.end());
+    check(H5Dset_extent(set_, dims.data()), name_);
     Handle file_space(H5Dget_space(set_), H5Sclose, name_);
     check(H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start.data(), nullptr, size.data(),
                               nullptr),
@@ -95,127 +99,178 @@ class RowDataset {
     Handle mem_space(H5Screate_simple(static_cast<int>(size.size()), size.data(), nullptr),
                      H5Sclose, "a dataspace");
     check(H5Dwrite(set_, mem_type_, mem_space, file_space, H5P_DEFAULT, data), name_);
+    rows_ += count;
   }
 
  private:
-  // The dataset (its id, or -1), chunked and deflated when `compress` and not empty.
+  // The dataset (its id, or -1): no rows yet, up to any number.
   static hid_t create(hid_t file, const char* name, hid_t file_type,
-                      const std::vector<hsize_t>& dims, bool compress) {
-    Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose,
+                      const std::vector<hsize_t>& width, bool compress) {
+    std::vector<hsize_t> dims{0}, max{H5S_UNLIMITED}, chunk{kBlockSteps};
+    for (const hsize_t w : width) {
+      dims.push_back(w), max.push_back(w), chunk.push_back(std::max<hsize_t>(w, 1));
+    }
+    Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), max.data()), H5Sclose,
                  "a dataspace");
     Handle props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "dataset properties");
     // No modification times in the object headers: the same simulation writes the same bytes.
     check(H5Pset_obj_track_times(props, false), name);
-    bool empty = false;
-    for (const hsize_t d : dims) empty = empty || d == 0;
-    if (compress && !empty) {
-      std::vector<hsize_t> chunk = dims;
-      chunk[0] = std::min<hsize_t>(dims[0], kBlockSteps);
-      check(H5Pset_chunk(props, static_cast<int>(chunk.size()), chunk.data()), name);
-      check(H5Pset_deflate(props, 4), name);
-    }
+    check(H5Pset_chunk(props, static_cast<int>(chunk.size()), chunk.data()), name);
+    if (compress) check(H5Pset_deflate(props, 4), name);
     return H5Dcreate2(file, name, file_type, space, H5P_DEFAULT, props, H5P_DEFAULT);
   }
 
   const char* name_;
   hid_t mem_type_;
-  std::vector<hsize_t> dims_;
+  std::vector<hsize_t> width_;
+  hsize_t rows_ = 0;
   Handle set_;
 };
 
-// Writes a chip map file atomically, its per-step rows `kBlockSteps` at a time from
-// fill(first, count, block), which sizes and fills the block's arrays.
-void write_map(const std::filesystem::path& path, const MapHeader& m,
-               const std::function<void(std::size_t, std::size_t, MapBlock&)>& fill) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by exceptions
-  const std::size_t cols = m.teeth * m.segments_per_tooth;
-  // Written beside the target and renamed into place: never a half-written file.
-  write_file_atomic(path, [&](const std::filesystem::path& tmp) {
-    Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
-                tmp.c_str());
-    const hsize_t n = m.steps;
-    {
-      RowDataset t(file, "t_s", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n}, "s", false);
-      RowDataset tip(file, "tip_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, 3}, "mm", false);
-      RowDataset removed(file, "removed_mm3", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {n, m.teeth},
-                         "mm^3", false);
-      RowDataset h(file, "h_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, "mm", true);
-      RowDataset w(file, "w_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, "mm", true);
-      RowDataset v(file, "v_mm3", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {n, cols}, "mm^3", true);
-      MapBlock b;
-      for (std::size_t first = 0; first < m.steps; first += kBlockSteps) {
-        const std::size_t count = std::min(kBlockSteps, m.steps - first);
-        fill(first, count, b);
-        if (b.t_s.size() != count || b.tip_mm.size() != 3 * count ||
-            b.removed_mm3.size() != count * m.teeth || b.h_mm.size() != count * cols ||
-            b.w_mm.size() != count * cols || b.v_mm3.size() != count * cols) {
-          throw Error("write_chip_map_h5: inconsistent chip map block sizes");
-        }
-        t.write_rows(first, count, b.t_s.data());
-        tip.write_rows(first, count, b.tip_mm.data());
-        removed.write_rows(first, count, b.removed_mm3.data());
-        h.write_rows(first, count, b.h_mm.data());
-        w.write_rows(first, count, b.w_mm.data());
-        v.write_rows(first, count, b.v_mm3.data());
-      }
-      RowDataset heights(file, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE,
-                         {m.segment_height_mm.size()}, "mm", false);
-      heights.write_rows(0, m.segment_height_mm.size(), m.segment_height_mm.data());
-    }
-    write_attr(file, "teeth", static_cast<double>(m.teeth));
-    write_attr(file, "segments_per_tooth", static_cast<double>(m.segments_per_tooth));
-    write_attr(file, "resolution_mm", m.resolution_mm);
-    write_attr(file, "steps_per_rev", static_cast<double>(m.steps_per_rev));
-    write_attr(file, "complete", m.complete ? 1.0 : 0.0);
-    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "the file");
-  });
+// Opens a new HDF5 file at `path` (its id, or -1); HDF5's errors are thrown, not printed.
+hid_t create_file(const std::filesystem::path& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  return H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
 }
 
-// A simulation's chip map header.
-MapHeader header_of(const SimResult& r, const SimTool& tool, const SimSettings& s) {
+// A chip map file being written: its per-step datasets, appended a block at a time, then the
+// segment heights and the attributes.
+class MapFile {
+ public:
+  MapFile(const std::filesystem::path& path, std::size_t teeth, std::size_t cols)
+      : teeth_(teeth),
+        cols_(cols),
+        file_(create_file(path), H5Fclose, path.c_str()),
+        t_(file_, "t_s", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {}, "s", false),
+        tip_(file_, "tip_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {3}, "mm", false),
+        removed_(file_, "removed_mm3", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {teeth}, "mm^3", false),
+        h_(file_, "h_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {cols}, "mm", true),
+        w_(file_, "w_mm", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {cols}, "mm", true),
+        v_(file_, "v_mm3", H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, {cols}, "mm^3", true) {}
+  // Appends the block's rows.
+  void append(const MapBlock& b) {
+    const std::size_t count = b.t_s.size();
+    if (b.tip_mm.size() != 3 * count || b.removed_mm3.size() != count * teeth_ ||
+        b.h_mm.size() != count * cols_ || b.w_mm.size() != count * cols_ ||
+        b.v_mm3.size() != count * cols_) {
+      throw Error("write_chip_map_h5: inconsistent chip map block sizes");
+    }
+    t_.append(count, b.t_s.data());
+    tip_.append(count, b.tip_mm.data());
+    removed_.append(count, b.removed_mm3.data());
+    h_.append(count, b.h_mm.data());
+    w_.append(count, b.w_mm.data());
+    v_.append(count, b.v_mm3.data());
+  }
+  // The segment heights and the attributes, and the file flushed.
+  void finish(const MapHeader& m) {
+    RowDataset heights(file_, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {}, "mm",
+                       false);
+    heights.append(m.segment_height_mm.size(), m.segment_height_mm.data());
+    write_attr(file_, "teeth", static_cast<double>(m.teeth));
+    write_attr(file_, "segments_per_tooth", static_cast<double>(m.segments_per_tooth));
+    write_attr(file_, "resolution_mm", m.resolution_mm);
+    write_attr(file_, "steps_per_rev", static_cast<double>(m.steps_per_rev));
+    write_attr(file_, "complete", m.complete ? 1.0 : 0.0);
+    check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "the file");
+  }
+
+ private:
+  std::size_t teeth_, cols_;
+  Handle file_;  // closed after the datasets (members are destroyed in reverse order)
+  RowDataset t_, tip_, removed_, h_, w_, v_;
+};
+
+// A chip map header for `tool` and the settings (no steps counted).
+MapHeader header_of(const SimTool& tool, const SimSettings& s) {
   MapHeader h;
-  h.steps = r.steps.size();
   h.teeth = tool.tooth_angle_rad.size();
-  h.segments_per_tooth = static_cast<std::size_t>(r.segments_per_tooth);
+  h.segments_per_tooth = static_cast<std::size_t>(tool.segments());
   h.resolution_mm = s.resolution_mm;
   h.steps_per_rev = s.steps_per_rev;
-  h.complete = r.complete;
   h.segment_height_mm = segment_heights_mm(tool, h.segments_per_tooth);
   return h;
 }
 
-// Steps [first, first + count) of a simulation made dense into `b`; `q` is the next chip map
-// entry (they are in step order), advanced past the block's.
-void dense_rows(const SimResult& r, const MapHeader& h, std::size_t first, std::size_t count,
-                std::size_t& q, MapBlock& b) {
+// Appends a step's dense row to `b`: its time, tip and removed volumes, and the h, w and v of
+// every segment (0 where not engaged).
+void add_row(MapBlock& b, const MapHeader& h, const SimStep& st, std::span<const ChipEntry> chips) {
   const std::size_t cols = h.teeth * h.segments_per_tooth;
-  b.t_s.clear();
-  b.tip_mm.clear();
-  b.removed_mm3.clear();
-  for (std::size_t n = first; n < first + count; ++n) {
-    const SimStep& st = r.steps[n];
-    b.t_s.push_back(st.t_s);
-    b.tip_mm.insert(b.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
-    for (std::size_t k = 0; k < h.teeth; ++k) {
-      b.removed_mm3.push_back(k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
-    }
+  b.t_s.push_back(st.t_s);
+  b.tip_mm.insert(b.tip_mm.end(), st.tip_mm.begin(), st.tip_mm.end());
+  for (std::size_t k = 0; k < h.teeth; ++k) {
+    b.removed_mm3.push_back(k < st.removed_mm3.size() ? st.removed_mm3[k] : 0.0);
   }
-  b.h_mm.assign(count * cols, 0.0f);
-  b.w_mm.assign(count * cols, 0.0f);
-  b.v_mm3.assign(count * cols, 0.0f);
-  for (; q < r.chip_map.size() && r.chip_map[q].step < first + count; ++q) {
-    const ChipEntry& c = r.chip_map[q];
-    if (c.step < first || c.segment >= cols) {
-      throw Error("chip map: the entries are not in step order");
+  const std::size_t row = b.h_mm.size();
+  b.h_mm.resize(row + cols, 0.0f);
+  b.w_mm.resize(row + cols, 0.0f);
+  b.v_mm3.resize(row + cols, 0.0f);
+  for (const ChipEntry& c : chips) {
+    if (c.segment >= cols) {
+      throw Error(fmt::format("chip map: segment {} of {}", c.segment, cols));
     }
-    const std::size_t at = (c.step - first) * cols + c.segment;
-    b.h_mm[at] = c.h_mm;
-    b.w_mm[at] = c.w_mm;
-    b.v_mm3[at] = c.v_mm3;
+    b.h_mm[row + c.segment] = c.h_mm;
+    b.w_mm[row + c.segment] = c.w_mm;
+    b.v_mm3[row + c.segment] = c.v_mm3;
   }
 }
 
+void clear(MapBlock& b) {
+  b.t_s.clear(), b.tip_mm.clear(), b.removed_mm3.clear();
+  b.h_mm.clear(), b.w_mm.clear(), b.v_mm3.clear();
+}
+
 }  // namespace
+
+void replay(const SimResult& r, SimSink& sink) {
+  std::size_t q = 0;  // the next chip map entry
+  for (std::size_t n = 0; n < r.steps.size(); ++n) {
+    const std::size_t q0 = q;
+    while (q < r.chip_map.size() && r.chip_map[q].step == n) ++q;
+    if (q < r.chip_map.size() && r.chip_map[q].step < n) {
+      throw Error("chip map: the entries are not in step order");
+    }
+    sink.take(r.steps[n], std::span<const ChipEntry>(r.chip_map).subspan(q0, q - q0));
+  }
+  if (q < r.chip_map.size()) {
+    throw Error(fmt::format("chip map: an entry of step {} beyond the {} steps", r.chip_map[q].step,
+                            r.steps.size()));
+  }
+}
+
+struct ChipMapWriter::File {
+  File(const std::filesystem::path& path, const SimTool& tool, const SimSettings& s)
+      : header(header_of(tool, s)),
+        map(path, header.teeth, header.teeth * header.segments_per_tooth),
+        pending(path) {}
+  MapHeader header;
+  MapFile map;
+  PendingFile pending;  // removed if the process is stopped while it is written
+  MapBlock block;
+};
+
+ChipMapWriter::ChipMapWriter(const std::filesystem::path& path, const SimTool& tool,
+                             const SimSettings& s)
+    : file_(std::make_unique<File>(path, tool, s)) {}
+
+ChipMapWriter::~ChipMapWriter() = default;
+
+void ChipMapWriter::take(const SimStep& step, std::span<const ChipEntry> chips) {
+  if (!file_) throw Error("ChipMapWriter: a step after finish");
+  add_row(file_->block, file_->header, step, chips);
+  if (file_->block.t_s.size() == kBlockSteps) {
+    file_->map.append(file_->block);
+    clear(file_->block);
+  }
+}
+
+void ChipMapWriter::finish(bool complete) {
+  if (!file_) throw Error("ChipMapWriter: finished twice");
+  file_->map.append(file_->block);
+  file_->header.complete = complete;
+  file_->map.finish(file_->header);
+  file_.reset();
+}
 
 void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) {
   const std::size_t steps = m.t_s.size();
@@ -225,49 +280,62 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m) 
       m.removed_mm3.size() != steps * m.teeth) {
     throw Error("write_chip_map_h5: inconsistent chip map sizes");
   }
-  const MapHeader header{steps,           m.teeth,    m.segments_per_tooth, m.resolution_mm,
-                         m.steps_per_rev, m.complete, m.segment_height_mm};
-  write_map(path, header, [&](std::size_t first, std::size_t count, MapBlock& b) {
-    auto rows = [&](const auto& all, std::size_t width, auto& out) {
-      out.assign(all.begin() + static_cast<std::ptrdiff_t>(first * width),
-                 all.begin() + static_cast<std::ptrdiff_t>((first + count) * width));
-    };
-    rows(m.t_s, 1, b.t_s);
-    rows(m.tip_mm, 3, b.tip_mm);
-    rows(m.removed_mm3, m.teeth, b.removed_mm3);
-    rows(m.h_mm, cols, b.h_mm);
-    rows(m.w_mm, cols, b.w_mm);
-    rows(m.v_mm3, cols, b.v_mm3);
+  const MapHeader header{m.teeth,         m.segments_per_tooth, m.resolution_mm,
+                         m.steps_per_rev, m.complete,           m.segment_height_mm};
+  write_file_atomic(path, [&](const std::filesystem::path& tmp) {
+    MapFile file(tmp, m.teeth, cols);
+    MapBlock b;
+    for (std::size_t first = 0; first < steps; first += kBlockSteps) {
+      const std::size_t count = std::min(kBlockSteps, steps - first);
+      auto rows = [&](const auto& all, std::size_t width, auto& out) {
+        out.assign(all.begin() + static_cast<std::ptrdiff_t>(first * width),
+                   all.begin() + static_cast<std::ptrdiff_t>((first + count) * width));
+      };
+      rows(m.t_s, 1, b.t_s);
+      rows(m.tip_mm, 3, b.tip_mm);
+      rows(m.removed_mm3, m.teeth, b.removed_mm3);
+      rows(m.h_mm, cols, b.h_mm);
+      rows(m.w_mm, cols, b.w_mm);
+      rows(m.v_mm3, cols, b.v_mm3);
+      file.append(b);
+    }
+    file.finish(header);
   });
 }
 
 void write_chip_map_h5(const std::filesystem::path& path, const SimResult& r, const SimTool& tool,
                        const SimSettings& s) {
-  const MapHeader header = header_of(r, tool, s);
-  std::size_t q = 0;  // the next chip map entry
-  write_map(path, header, [&](std::size_t first, std::size_t count, MapBlock& b) {
-    dense_rows(r, header, first, count, q, b);
+  write_file_atomic(path, [&](const std::filesystem::path& tmp) {
+    ChipMapWriter writer(tmp, tool, s);
+    replay(r, writer);
+    writer.finish(r.complete);
   });
 }
 
 ChipMapData chip_map_data(const SimResult& r, const SimTool& tool, const SimSettings& s) {
-  MapHeader header = header_of(r, tool, s);
-  MapBlock b;
-  std::size_t q = 0;
-  dense_rows(r, header, 0, header.steps, q, b);
+  // The whole run as one block.
+  struct Rows final : SimSink {
+    explicit Rows(MapHeader h) : header(std::move(h)) {}
+    void take(const SimStep& step, std::span<const ChipEntry> chips) override {
+      add_row(block, header, step, chips);
+    }
+    MapHeader header;
+    MapBlock block;
+  } rows(header_of(tool, s));
+  replay(r, rows);
   ChipMapData m;
-  m.teeth = header.teeth;
-  m.segments_per_tooth = header.segments_per_tooth;
-  m.resolution_mm = header.resolution_mm;
-  m.steps_per_rev = header.steps_per_rev;
-  m.complete = header.complete;
-  m.t_s = std::move(b.t_s);
-  m.tip_mm = std::move(b.tip_mm);
-  m.removed_mm3 = std::move(b.removed_mm3);
-  m.h_mm = std::move(b.h_mm);
-  m.w_mm = std::move(b.w_mm);
-  m.v_mm3 = std::move(b.v_mm3);
-  m.segment_height_mm = std::move(header.segment_height_mm);
+  m.teeth = rows.header.teeth;
+  m.segments_per_tooth = rows.header.segments_per_tooth;
+  m.resolution_mm = rows.header.resolution_mm;
+  m.steps_per_rev = rows.header.steps_per_rev;
+  m.complete = r.complete;
+  m.t_s = std::move(rows.block.t_s);
+  m.tip_mm = std::move(rows.block.tip_mm);
+  m.removed_mm3 = std::move(rows.block.removed_mm3);
+  m.h_mm = std::move(rows.block.h_mm);
+  m.w_mm = std::move(rows.block.w_mm);
+  m.v_mm3 = std::move(rows.block.v_mm3);
+  m.segment_height_mm = std::move(rows.header.segment_height_mm);
   return m;
 }
 

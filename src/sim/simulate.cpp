@@ -29,6 +29,9 @@ using sim_detail::contains_angle;
 using sim_detail::kInf;
 using sim_detail::SectorSlicer;
 
+// Steps whose path samples are taken at a time (simulate; 5.8 MB of samples).
+constexpr std::size_t kSampleBlock = std::size_t{1} << 16;
+
 // An angle range [a0, a1] with its cosines and sines and the axes it crosses, taken once:
 // the bounding boxes of its annular sectors then cost no trigonometry.
 struct AngleSpan {
@@ -505,13 +508,27 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   if (!(t1_s > t0_s))
     throw InputError(fmt::format("simulate: empty window {} to {} s", t0_s, t1_s));
   const double dt = kTwoPi / (std::abs(tool.omega_rad_per_s) * s.steps_per_rev);
-  std::vector<double> times;
   // Steps of dt from t0; the last one (shorter) ends exactly at t1, so that consecutive calls
   // (the pre-roll, then the window) sweep every angle once.
   const auto nsteps = static_cast<std::size_t>(std::ceil((t1_s - t0_s) / dt - 1e-9));
-  for (std::size_t q = 0; q < nsteps; ++q) times.push_back(t0_s + static_cast<double>(q) * dt);
-  times.push_back(t1_s);
-  const PathSamples ps = sample_at_times(path, times);
+  auto time_at = [&](std::size_t q) {
+    return q < nsteps ? t0_s + static_cast<double>(q) * dt : t1_s;
+  };
+  // The path sampled at the step times a block at a time (a whole program has tens of
+  // millions of steps): samples [block0, block0 + kSampleBlock] while the steps' ends lie in
+  // it; each step reads its own and the previous one.
+  std::size_t block0 = 0;
+  PathSamples ps;
+  std::vector<double> block_times;
+  auto sample_block = [&](std::size_t first) {
+    block0 = first;
+    block_times.clear();
+    for (std::size_t q = first; q <= std::min(nsteps, first + kSampleBlock); ++q) {
+      block_times.push_back(time_at(q));
+    }
+    ps = sample_at_times(path, block_times);
+  };
+  sample_block(0);
   const std::size_t nz = tool.tooth_angle_rad.size();
   const double d = work.boards[0].spacing();
   const double top = work.box.hi[2];
@@ -519,7 +536,8 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   const int segs = stepper.segs();
 
   SimResult res;
-  if (control.reserve_chip_entries > 0) {
+  const bool keep = control.keep_records;
+  if (keep && control.reserve_chip_entries > 0) {
     // One record per step, the chip map as estimated (estimate_simulation_memory): no
     // doubling of either on the way, so the memory used is what was estimated.
     res.steps.reserve(nsteps);
@@ -585,20 +603,24 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     }
   }
   const double min_core = 0.5 * tool.radius_mm;
-  const std::size_t every = std::max<std::size_t>(1, ps.size() / 200);
-  std::size_t done = 0;  // the steps taken
-  for (std::size_t n = 1; n < ps.size(); ++n) {
+  const std::size_t every = std::max<std::size_t>(1, (nsteps + 1) / 200);
+  std::size_t done = 0;               // the steps taken
+  std::vector<ChipEntry> step_chips;  // this step's chip map entries
+  for (std::size_t n = 1; n <= nsteps; ++n) {
     if (control.hooks.cancelled()) {
       res.complete = false;
       break;
     }
     const std::size_t g = base + n;  // the step over the chain
-    if (control.hooks.progress && n % every == 0) control.hooks.progress(n, ps.size() - 1);
-    const std::array<double, 3> c{ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
-    const double moved = std::hypot(ps.x_mm[n] - ps.x_mm[n - 1], ps.y_mm[n] - ps.y_mm[n - 1]);
+    if (control.hooks.progress && n % every == 0) control.hooks.progress(n, nsteps);
+    if (n > block0 + kSampleBlock) sample_block(n - 1);
+    const std::size_t i = n - block0;  // this step's end in the block; i - 1 its start
+    const std::array<double, 3> c{ps.x_mm[i], ps.y_mm[i], ps.z_mm[i]};
+    const std::array<double, 2> prev{ps.x_mm[i - 1], ps.y_mm[i - 1]};
+    const double moved = std::hypot(c[0] - prev[0], c[1] - prev[1]);
     cum_now += moved;
     cum[g % ring_n] = cum_now;
-    level_steps = std::abs(ps.z_mm[n] - ps.z_mm[n - 1]) > 1e-9 ? 0 : level_steps + 1;
+    level_steps = std::abs(c[2] - ps.z_mm[i - 1]) > 1e-9 ? 0 : level_steps + 1;
     // Settled: a revolution (and two steps) at this depth within the `steps` counted.
     auto settled_in = [&](std::size_t steps) { return steps > spr + 2 && level_steps >= spr + 2; };
     // Enveloped: the envelope swept up to the start of the `steps` counted (all at this depth)
@@ -617,12 +639,12 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     const bool closing = annulus && own;  // a wedge and its closing wedge (else two sectors)
     res.annulus_steps += annulus ? 1 : 0;
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
-    const double ta = times[n - 1], tb = times[n];
+    const double ta = time_at(n - 1), tb = time_at(n);
     wedges.clear();
     wedge_tooth.clear();
     for (std::size_t k = 0; k < nz; ++k) {
       Wedge w{};
-      w.tip_z = ps.z_mm[n] + tool.axial_offset_mm[k];
+      w.tip_z = c[2] + tool.axial_offset_mm[k];
       const double pa = tool.tooth_angle_rad[k] + tool.omega_rad_per_s * ta;
       const double pb = tool.tooth_angle_rad[k] + tool.omega_rad_per_s * tb;
       w.a0 = std::min(pa, pb);
@@ -648,7 +670,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         // closes it at every radius above R / 2: all the annulus.
         const double ext = 2 * moved / tool.radius_mm;
         Wedge thin = w;
-        thin.cx = ps.x_mm[n - 1], thin.cy = ps.y_mm[n - 1];
+        thin.cx = prev[0], thin.cy = prev[1];
         thin.a0 = tool.omega_rad_per_s < 0 ? pa - ext : pa;
         thin.a1 = tool.omega_rad_per_s < 0 ? pa : pa + ext;
         // Below R / 2 (a layer narrower than the tool: a corner or ball, a lead angle) the
@@ -672,7 +694,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         w.cx = c[0], w.cy = c[1];
         wedges.push_back(w), wedge_tooth.push_back(k);
         w.r_in_drop = search ? std::max(0.0, drop) + moved + d : kInf;
-        w.cx = ps.x_mm[n - 1], w.cy = ps.y_mm[n - 1];
+        w.cx = prev[0], w.cy = prev[1];
         wedges.push_back(w), wedge_tooth.push_back(k);
       }
     }
@@ -714,14 +736,15 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     st.tip_mm = c;
     st.removed_mm3 = bacc[2].removed_tooth;
     double sum = 0;
+    step_chips.clear();
     for (std::size_t q = 0; q < seg_h.size(); ++q) {
       const double h = seg_h[q];
       if (h > 0) {
         st.h_max_mm = std::max(st.h_max_mm, h);
         sum += h;
         ++st.engaged_segments;
-        res.chip_map.push_back(
-            {static_cast<std::uint32_t>(res.steps.size()), static_cast<std::uint32_t>(q),
+        step_chips.push_back(
+            {static_cast<std::uint32_t>(res.step_count), static_cast<std::uint32_t>(q),
              static_cast<float>(h),
              static_cast<float>(seg_hi[q] > seg_lo[q] ? stepper.edge_length(seg_hi[q]) -
                                                             stepper.edge_length(seg_lo[q])
@@ -730,11 +753,17 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       }
     }
     st.h_mean_mm = st.engaged_segments > 0 ? sum / st.engaged_segments : 0.0;
-    res.steps.push_back(std::move(st));
+    res.h_max_mm = std::max(res.h_max_mm, st.h_max_mm);
+    ++res.step_count;
+    if (control.sink) control.sink->take(st, step_chips);
+    if (keep) {
+      res.chip_map.insert(res.chip_map.end(), step_chips.begin(), step_chips.end());
+      res.steps.push_back(std::move(st));
+    }
     done = n;
   }
   res.removed_mm3 = res.removed_by_board_mm3[2];
-  res.carry.t_s = times[done];
+  res.carry.t_s = time_at(done);
   res.carry.steps_per_rev = s.steps_per_rev;
   res.carry.steps = base + done;
   res.carry.level_steps = level_steps;
@@ -806,6 +835,7 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
       (void)sweep_envelope(path, tool, work, 0, lead_from, control.hooks);
     }
     SimControl lead;
+    lead.keep_records = false;  // not recorded: only the workpiece it leaves and its carry
     lead.envelope_before = lead_from > 0;
     lead.hooks = control.hooks;
     lead.hooks.begin("pre-roll: last revolution");
@@ -897,8 +927,9 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
   const SimTool tool = sim_tool(job, s);
   const double teeth = static_cast<double>(tool.tooth_angle_rad.size());
   const double heap_chunk = std::max(32.0, 16.0 * std::ceil((8.0 * teeth + 8.0) / 16.0));
-  m.records_bytes = steps * (static_cast<double>(sizeof(SimStep)) + heap_chunk +
-                             8.0 * (1 + 10));  // times, and PathSamples' ten arrays
+  // The path sampled a block of steps at a time: the times and PathSamples' ten arrays.
+  m.stream_bytes = static_cast<double>(kSampleBlock + 1) * 8.0 * (1 + 10);
+  m.records_bytes = m.stream_bytes + steps * (static_cast<double>(sizeof(SimStep)) + heap_chunk);
   // The chip map: one entry per engaged segment and step. Teeth in the cut from the exact 2D
   // engagement of the path (per tooth pass, the slot's stock), times the segments along the
   // edge within the depth of cut (the stock's top down to the deepest tip in the window).

@@ -34,15 +34,86 @@ constexpr const char* kData = "bindata/data.bin";
 constexpr double kMaxPoints = 268435456.0;
 constexpr std::uint64_t kMaxXmlBytes = 256ull << 20;
 
-std::string md5_hex(const void* data, std::size_t size) {
-  md5_ctx ctx;
-  md5_init(&ctx);
-  md5_update(&ctx, size, static_cast<const std::uint8_t*>(data));
+std::string hex_digest(md5_ctx& ctx) {
   std::uint8_t digest[MD5_DIGEST_SIZE];
   md5_digest(&ctx, MD5_DIGEST_SIZE, digest);
   std::string hex;
   for (const std::uint8_t b : digest) hex += fmt::format("{:02x}", b);
   return hex;
+}
+
+std::string md5_hex(const void* data, std::size_t size) {
+  md5_ctx ctx;
+  md5_init(&ctx);
+  md5_update(&ctx, size, static_cast<const std::uint8_t*>(data));
+  return hex_digest(ctx);
+}
+
+// The point data: the heights in metres (little-endian doubles), made as they are read, for
+// the digest and for the archive (libzip reads them through `read_data`): a large map is never
+// held twice.
+struct PointData {
+  const std::vector<double>* z_mm = nullptr;
+  std::uint64_t at = 0;  // the next byte libzip reads
+  zip_error_t error{};
+  [[nodiscard]] std::uint64_t bytes() const { return z_mm->size() * sizeof(double); }
+  // Bytes [from, from + n) of the data into `out`.
+  void copy(std::uint64_t from, std::uint64_t n, std::uint8_t* out) const {
+    while (n > 0) {
+      const double m = (*z_mm)[from / sizeof(double)] / 1000.0;
+      std::uint8_t b[sizeof(double)];
+      std::memcpy(b, &m, sizeof m);
+      const std::uint64_t off = from % sizeof(double);
+      const std::uint64_t k = std::min<std::uint64_t>(sizeof(double) - off, n);
+      std::memcpy(out, b + off, k);
+      out += k, from += k, n -= k;
+    }
+  }
+  [[nodiscard]] std::string md5() const {
+    md5_ctx ctx;
+    md5_init(&ctx);
+    std::vector<std::uint8_t> block(1 << 16);
+    for (std::uint64_t from = 0; from < bytes(); from += block.size()) {
+      const std::uint64_t n = std::min<std::uint64_t>(block.size(), bytes() - from);
+      copy(from, n, block.data());
+      md5_update(&ctx, n, block.data());
+    }
+    return hex_digest(ctx);
+  }
+};
+
+// libzip's source callback over PointData.
+zip_int64_t read_data(void* state, void* buf, zip_uint64_t len, zip_source_cmd_t cmd) {
+  auto* d = static_cast<PointData*>(state);
+  switch (cmd) {
+    case ZIP_SOURCE_OPEN:
+      d->at = 0;
+      return 0;
+    case ZIP_SOURCE_READ: {
+      const std::uint64_t n = std::min<std::uint64_t>(len, d->bytes() - d->at);
+      d->copy(d->at, n, static_cast<std::uint8_t*>(buf));
+      d->at += n;
+      return static_cast<zip_int64_t>(n);
+    }
+    case ZIP_SOURCE_CLOSE:
+    case ZIP_SOURCE_FREE:
+      return 0;
+    case ZIP_SOURCE_STAT: {
+      auto* st = static_cast<zip_stat_t*>(buf);
+      zip_stat_init(st);
+      st->size = d->bytes();
+      st->valid |= ZIP_STAT_SIZE;
+      return sizeof(zip_stat_t);
+    }
+    case ZIP_SOURCE_ERROR:
+      return zip_error_to_data(&d->error, buf, len);
+    case ZIP_SOURCE_SUPPORTS:
+      return zip_source_make_command_bitmap(ZIP_SOURCE_OPEN, ZIP_SOURCE_READ, ZIP_SOURCE_CLOSE,
+                                            ZIP_SOURCE_STAT, ZIP_SOURCE_ERROR, ZIP_SOURCE_FREE, -1);
+    default:
+      zip_error_set(&d->error, ZIP_ER_OPNOTSUPP, 0);
+      return -1;
+  }
 }
 
 std::string utc_date() {
@@ -91,9 +162,9 @@ void write_x3p(const std::filesystem::path& file, const HeightMap& map, const X3
   if (static_cast<double>(map.nx) * static_cast<double>(map.ny) > kMaxPoints) {
     throw InputError(fmt::format("X3P: {} x {} points is past the limit of 2^28", map.nx, map.ny));
   }
-  std::vector<double> data(map.z_mm.size());
-  for (std::size_t i = 0; i < data.size(); ++i) data[i] = map.z_mm[i] / 1000.0;
-  const std::size_t bytes = data.size() * sizeof(double);
+  PointData data;
+  data.z_mm = &map.z_mm;
+  zip_error_init(&data.error);
 
   pugi::xml_document doc;
   auto decl = doc.append_child(pugi::node_declaration);
@@ -144,7 +215,7 @@ void write_x3p(const std::filesystem::path& file, const HeightMap& map, const X3
   text(dim, "SizeZ", "1");
   auto link = r3.append_child("DataLink");
   text(link, "PointDataLink", kData);
-  text(link, "MD5ChecksumPointData", md5_hex(data.data(), bytes));
+  text(link, "MD5ChecksumPointData", data.md5());
   text(root.append_child("Record4"), "ChecksumFile", "md5checksum.hex");
   std::ostringstream xml;
   doc.save(xml, "  ", pugi::format_default, pugi::encoding_utf8);
@@ -156,8 +227,7 @@ void write_x3p(const std::filesystem::path& file, const HeightMap& map, const X3
   if (!z) {
     throw IoError(fmt::format("cannot write '{}': {}", file.string(), zip_error_text(err)));
   }
-  auto add = [&](const char* name, const void* p, std::size_t n) {
-    zip_source_t* src = zip_source_buffer(z.get(), p, n, 0);
+  auto add = [&](const char* name, zip_source_t* src) {
     if (src == nullptr)
       throw IoError(fmt::format("'{}': {}", file.string(), zip_strerror(z.get())));
     const zip_int64_t idx = zip_file_add(z.get(), name, src, ZIP_FL_ENC_UTF_8 | ZIP_FL_OVERWRITE);
@@ -168,13 +238,16 @@ void write_x3p(const std::filesystem::path& file, const HeightMap& map, const X3
     // A fixed time stamp: the same map gives the same archive.
     zip_file_set_mtime(z.get(), static_cast<zip_uint64_t>(idx), 315532800, 0);  // 1980-01-01
   };
-  add("main.xml", main_xml.data(), main_xml.size());
-  add(kData, data.data(), bytes);
-  add("md5checksum.hex", checksum.data(), checksum.size());
+  add("main.xml", zip_source_buffer(z.get(), main_xml.data(), main_xml.size(), 0));
+  add(kData, zip_source_function(z.get(), read_data, &data));
+  add("md5checksum.hex", zip_source_buffer(z.get(), checksum.data(), checksum.size(), 0));
   if (zip_close(z.get()) != 0) {
-    throw IoError(fmt::format("cannot write '{}': {}", file.string(), zip_strerror(z.get())));
+    const std::string why = zip_strerror(z.get());
+    zip_error_fini(&data.error);
+    throw IoError(fmt::format("cannot write '{}': {}", file.string(), why));
   }
   (void)z.release();  // closed: nothing to discard
+  zip_error_fini(&data.error);
 }
 
 namespace {
