@@ -109,7 +109,7 @@ void dexel_matches_a_reference() {
 TEST(Sim, DexelMatchesAReferenceUnderRandomCuts) {
   dexel_matches_a_reference<1>();
   dexel_matches_a_reference<2>();
-  static_assert(sizeof(BasicDexel<1>) == 24 && sizeof(BasicDexel<2>) == 40);
+  static_assert(sizeof(BasicDexel<1>) == 16 && sizeof(BasicDexel<2>) == 32);
 }
 
 // A square end mill (R 5 mm, two teeth) along a straight line through a box.

@@ -2,6 +2,7 @@
 // forces over it (from the simulation's chips or the fast analytic source).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -56,12 +57,13 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       if (need > limit) {
         throw InputError(fmt::format(
             "simulate: estimated memory {:.2f} GB (boards {:.2f}, path samples {:.2f}, process "
-            "{:.2f}, HDF5 map {:.2f}) exceeds the limit of {:.2f} GB ({}); coarsen [simulation] "
+            "{:.2f}, outputs {:.2f}) exceeds the limit of {:.2f} GB ({}); coarsen [simulation] "
             "resolution (now {} mm), shorten the window (--cycles, --from/--to) or raise "
             "--memory-limit",
             need / 1e9, est.boards_bytes / 1e9, est.stream_bytes / 1e9, est.base_bytes / 1e9,
-            a->out.empty() ? 0.0 : est.map_writer_bytes / 1e9, limit / 1e9,
-            a->memory_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
+            a->out.empty() ? 0.0 : std::max(est.map_writer_bytes, est.outputs_bytes) / 1e9,
+            limit / 1e9, a->memory_gb ? "--memory-limit" : "75 % of RAM",
+            job.simulation.resolution_mm));
       }
       // Ctrl-C stops after the current step; what was computed is written, marked incomplete.
       // A Ctrl-C during the output writing leaves --out without any file of this run.

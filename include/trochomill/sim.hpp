@@ -11,8 +11,10 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -55,40 +57,75 @@ void write_chip_map_h5(const std::filesystem::path& path, const ChipMapData& m);
 /// Reads a file written by write_chip_map_h5. Throws Error.
 [[nodiscard]] ChipMapData read_chip_map_h5(const std::filesystem::path& path);
 
-/// A dexel: sorted, disjoint material intervals along one ray. Up to N intervals are stored
-/// inline (the common cases: one on a ray through the floor, two on a ray across the slot with
-/// a wall on each side); more go to the heap, whose pointer shares the inline storage (a dexel
-/// is 16 N + 8 bytes).
+/// A dexel: sorted, disjoint material intervals along one ray, in 16 N bytes. Up to N
+/// intervals are stored inline (the common cases: one on a ray through the floor, two on a
+/// ray across the slot with a wall on each side); more go to a heap block. The first inline
+/// interval's `lo` tells which: a material end is never a NaN, so a NaN with kSpillTag's bits
+/// there means "spilled" (its low 32 bits the count, the next 8 bytes the block's address); an
+/// unused inline slot past the first holds a NaN `lo`. An empty dexel is a spilled one with
+/// no block.
 template <std::uint32_t N>
 class BasicDexel {
   static_assert(N >= 1);
 
  public:
-  BasicDexel() noexcept : heap_(nullptr) {}
-  explicit BasicDexel(Interval full) noexcept : n_(1) { in_[0] = full; }
+  BasicDexel() noexcept { spill(nullptr, 0); }
+  explicit BasicDexel(Interval full) noexcept {
+    in_[0] = full;
+    for (std::uint32_t k = 1; k < N; ++k) in_[k] = {kUnused, kUnused};
+  }
   BasicDexel(const BasicDexel& o);
   BasicDexel& operator=(const BasicDexel& o);
   BasicDexel(BasicDexel&& o) noexcept;
   BasicDexel& operator=(BasicDexel&& o) noexcept;
   ~BasicDexel() {
-    if (cap_ > 0) delete[] heap_;
+    if (spilled()) delete[] block();
   }
   [[nodiscard]] std::span<const Interval> intervals() const noexcept {
-    return {cap_ > 0 ? heap_ : in_, n_};
+    if (spilled()) return {block() + 1, spill_count()};
+    std::uint32_t k = 1;
+    while (k < N && !std::isnan(in_[k].lo)) ++k;
+    return {in_, k};
   }
   /// Removes [a, b] and appends the removed pieces to `removed` (in order). Returns the
   /// removed length (mm).
   double subtract(double a, double b, std::vector<Interval>& removed);
   [[nodiscard]] double length() const;
   /// Heap bytes held (0 while the intervals are inline).
-  [[nodiscard]] std::size_t heap_bytes() const noexcept { return cap_ * sizeof(Interval); }
+  [[nodiscard]] std::size_t heap_bytes() const noexcept {
+    const Interval* b = spilled() ? block() : nullptr;
+    return b ? (capacity(b) + 1) * sizeof(Interval) : 0;
+  }
 
  private:
-  union {
-    Interval in_[N];
-    Interval* heap_;  // while cap_ > 0
-  };
-  std::uint32_t n_ = 0, cap_ = 0;
+  // A quiet NaN's bits with the top of the payload set: the spilled state's tag.
+  static constexpr std::uint64_t kSpillTag = 0x7FFC'0000'0000'0000ULL;
+  static constexpr std::uint64_t kTagMask = 0xFFFF'FFFF'0000'0000ULL;
+  static constexpr double kUnused = std::numeric_limits<double>::quiet_NaN();
+  [[nodiscard]] std::uint64_t word0() const noexcept {
+    std::uint64_t w;
+    std::memcpy(&w, &in_[0].lo, sizeof w);
+    return w;
+  }
+  [[nodiscard]] bool spilled() const noexcept { return (word0() & kTagMask) == kSpillTag; }
+  [[nodiscard]] std::uint32_t spill_count() const noexcept {
+    return static_cast<std::uint32_t>(word0());
+  }
+  // The heap block: its first element holds the capacity (in lo), the intervals follow.
+  [[nodiscard]] Interval* block() const noexcept {
+    Interval* b;
+    std::memcpy(&b, &in_[0].hi, sizeof b);
+    return b;
+  }
+  [[nodiscard]] static std::uint32_t capacity(const Interval* b) noexcept {
+    return static_cast<std::uint32_t>(b[0].lo);
+  }
+  void spill(Interval* b, std::uint32_t n) noexcept {
+    const std::uint64_t w = kSpillTag | n;
+    std::memcpy(&in_[0].lo, &w, sizeof w);
+    std::memcpy(&in_[0].hi, &b, sizeof b);
+  }
+  Interval in_[N];
 };
 
 /// The dexel of the X and Y boards (two inline intervals).
@@ -106,8 +143,8 @@ struct StockBox {
 /// two other axes (u = axis + 1, v = axis + 2, cyclically), ray (i, j) at u = u0 + (i + 1/2) d,
 /// v = v0 + (j + 1/2) d. Sparse: rays live in tiles of 64 x 64 created on first touch;
 /// untouched rays hold the whole stock interval implicitly. A ray holds one interval inline on
-/// the Z board (a ray through the floor: 24 bytes) and two on the X and Y boards (a ray
-/// across the slot: 40 bytes); more go to the heap.
+/// the Z board (a ray through the floor: 16 bytes) and two on the X and Y boards (a ray
+/// across the slot: 32 bytes); more go to the heap.
 class DexelBoard {
  public:
   DexelBoard(int axis, const StockBox& box, double spacing_mm);
@@ -443,15 +480,20 @@ struct MemoryEstimate {
   double map_writer_bytes = 0;  ///< writing chips.h5 (write_chip_map_h5, ChipMapWriter)
   /// Without kept records (SimControl::keep_records false): one block of path samples.
   double stream_bytes = 0;
+  /// The largest of the outputs made from the workpiece at the end (SimulationOutputs: the
+  /// floor's height map, the surface's mesh).
+  double outputs_bytes = 0;
   double base_bytes = 0;    ///< the process besides: libraries, job, path
   double chip_entries = 0;  ///< expected engaged (segment, step) pairs
   /// The whole, with or without the whole dense map (bytes).
   [[nodiscard]] double total(bool with_map) const {
     return boards_bytes + records_bytes + base_bytes + (with_map ? dense_map_bytes : 0.0);
   }
-  /// The whole when the records are not kept, with or without a ChipMapWriter (bytes).
-  [[nodiscard]] double streamed(bool with_writer) const {
-    return boards_bytes + stream_bytes + base_bytes + (with_writer ? map_writer_bytes : 0.0);
+  /// The whole when the records are not kept, with or without the outputs (SimulationOutputs:
+  /// its ChipMapWriter, then the largest output made at the end) (bytes).
+  [[nodiscard]] double streamed(bool with_outputs) const {
+    return boards_bytes + stream_bytes + base_bytes +
+           (with_outputs ? std::max(map_writer_bytes, outputs_bytes) : 0.0);
   }
 };
 /// With `stock_mesh` the boards hold every ray of the mesh's box (stock_from_mesh).

@@ -312,6 +312,9 @@ std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<dou
   } catch (const InputError& e) {
     floor_note = fmt::format("floor.x3p not written: {}", e.what());
   }
+  // The streamed files are closed first; then the floor's height map (the largest output:
+  // released once written), then the others one at a time.
+  const bool have_floor = floor.has_value();
   std::vector<std::pair<const char*, std::function<void(const fs::path&)>>> outputs{{
       {"series.csv",
        [&](const fs::path& p) {
@@ -322,21 +325,8 @@ std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<dou
          }
        }},
       {"chips.h5", [&](const fs::path&) { s_->chips->finish(js.result.complete); }},
-      {"walls.csv",
-       [&](const fs::path& p) {
-         write_file_atomic(p, wall_profiles_csv(wall_profiles(*js.work, 0.0)));
-       }},
-      {"floor.csv",
-       [&](const fs::path& p) {
-         write_file_atomic(p, floor_profiles_csv(floor_profiles(*js.work)));
-       }},
-      {"surface.stl",
-       [&](const fs::path& p) {
-         const double step = stl_step_mm ? *stl_step_mm : default_surface_step_mm(*js.work);
-         write_file_atomic(p, height_field_stl(surface_height_field(*js.work, step)));
-       }},
   }};
-  if (floor) {
+  if (have_floor) {
     outputs.emplace_back("floor.x3p", [&](const fs::path& p) {
       X3pInfo info;
       info.creator = fmt::format("trochomill {}", kVersion);
@@ -345,8 +335,19 @@ std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<dou
           "{}; {:g} mm dexels, {} steps per revolution, t {:.4f} to {:.4f} s", floor->description,
           job.simulation.resolution_mm, job.simulation.steps_per_rev, s_->first_t_s, s_->last_t_s);
       write_x3p(p, *floor, info);
+      floor.reset();
     });
   }
+  outputs.emplace_back("walls.csv", [&](const fs::path& p) {
+    write_file_atomic(p, wall_profiles_csv(wall_profiles(*js.work, 0.0)));
+  });
+  outputs.emplace_back("floor.csv", [&](const fs::path& p) {
+    write_file_atomic(p, floor_profiles_csv(floor_profiles(*js.work)));
+  });
+  outputs.emplace_back("surface.stl", [&](const fs::path& p) {
+    const double step = stl_step_mm ? *stl_step_mm : default_surface_step_mm(*js.work);
+    write_file_atomic(p, height_field_stl(surface_height_field(*js.work, step)));
+  });
   const char* stopped = "interrupted: --out not written (no file of this run is in it)";
   hooks.begin("writing outputs");
   for (std::size_t k = 0; k < outputs.size(); ++k) {
@@ -367,7 +368,7 @@ std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<dou
   s_->finished = true;
   s_->series_pending.reset();
   fs::remove(stage, ec);
-  if (!floor) fs::remove(dir / "floor.x3p", ec);  // an earlier run's: not this set's
+  if (!have_floor) fs::remove(dir / "floor.x3p", ec);  // an earlier run's: not this set's
   return floor_note;
 }
 

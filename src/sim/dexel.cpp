@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "sim/geometry.hpp"
 #include "trochomill/error.hpp"
@@ -11,13 +12,17 @@
 namespace trochomill {
 
 template <std::uint32_t N>
-BasicDexel<N>::BasicDexel(const BasicDexel& o) : n_(o.n_), cap_(o.cap_) {
-  if (o.cap_ > 0) {
-    heap_ = new Interval[cap_];
-    std::copy(o.heap_, o.heap_ + n_, heap_);
-  } else {
-    std::copy(o.in_, o.in_ + o.n_, in_);
+BasicDexel<N>::BasicDexel(const BasicDexel& o) {
+  const Interval* b = o.spilled() ? o.block() : nullptr;
+  if (b == nullptr) {  // inline, or empty: the bytes are the state
+    std::memcpy(static_cast<void*>(in_), o.in_, sizeof in_);
+    return;
   }
+  const std::uint32_t n = o.spill_count(), cap = capacity(b);
+  auto* h = new Interval[cap + 1];
+  h[0] = b[0];
+  std::copy(b + 1, b + 1 + n, h + 1);
+  spill(h, n);
 }
 
 template <std::uint32_t N>
@@ -27,37 +32,34 @@ BasicDexel<N>& BasicDexel<N>::operator=(const BasicDexel& o) {
 }
 
 template <std::uint32_t N>
-BasicDexel<N>::BasicDexel(BasicDexel&& o) noexcept : heap_(nullptr) {
-  *this = std::move(o);
+BasicDexel<N>::BasicDexel(BasicDexel&& o) noexcept {
+  std::memcpy(static_cast<void*>(in_), o.in_, sizeof in_);
+  o.spill(nullptr, 0);
 }
 
 template <std::uint32_t N>
 BasicDexel<N>& BasicDexel<N>::operator=(BasicDexel&& o) noexcept {
   if (this == &o) return *this;
-  if (cap_ > 0) delete[] heap_;
-  n_ = o.n_;
-  cap_ = o.cap_;
-  if (cap_ > 0) {
-    heap_ = o.heap_;
-    o.heap_ = nullptr;
-    o.cap_ = 0;
-    o.n_ = 0;
-  } else {
-    std::copy(o.in_, o.in_ + o.n_, in_);
-  }
+  if (spilled()) delete[] block();
+  std::memcpy(static_cast<void*>(in_), o.in_, sizeof in_);
+  o.spill(nullptr, 0);
   return *this;
 }
 
 template <std::uint32_t N>
 double BasicDexel<N>::subtract(double a, double b, std::vector<Interval>& removed) {
-  if (!(b > a) || n_ == 0) return 0.0;
-  Interval* v = cap_ > 0 ? heap_ : in_;
-  if (b <= v[0].lo || a >= v[n_ - 1].hi) return 0.0;
+  if (!(b > a)) return 0.0;
+  const bool sp = spilled();
+  Interval* const blk = sp ? block() : nullptr;
+  const std::uint32_t n = sp ? spill_count() : static_cast<std::uint32_t>(intervals().size());
+  if (n == 0) return 0.0;
+  Interval* v = sp ? blk + 1 : in_;
+  if (b <= v[0].lo || a >= v[n - 1].hi) return 0.0;
   // Intervals [first, last) overlap (a, b); at most the first and the last keep a piece.
   std::uint32_t first = 0;
-  while (first < n_ && v[first].hi <= a) ++first;
+  while (first < n && v[first].hi <= a) ++first;
   std::uint32_t last = first;
-  while (last < n_ && v[last].lo < b) ++last;
+  while (last < n && v[last].lo < b) ++last;
   if (first == last) return 0.0;
   double cut = 0;
   for (std::uint32_t k = first; k < last; ++k) {
@@ -69,27 +71,34 @@ double BasicDexel<N>::subtract(double a, double b, std::vector<Interval>& remove
   int nk = 0;
   if (v[first].lo < a) keep[nk++] = {v[first].lo, a};
   if (v[last - 1].hi > b) keep[nk++] = {b, v[last - 1].hi};
-  const std::uint32_t n_new = n_ - (last - first) + static_cast<std::uint32_t>(nk);
-  const std::uint32_t cap_now = cap_ > 0 ? cap_ : N;
+  const std::uint32_t n_new = n - (last - first) + static_cast<std::uint32_t>(nk);
+  const std::uint32_t cap_now = sp ? capacity(blk) : N;
   if (n_new > cap_now) {  // grow into the heap: only a split of the widest case
     const std::uint32_t cap = std::max<std::uint32_t>(4, 2 * n_new);
-    auto* h = new Interval[cap];
-    std::copy(v, v + first, h);
-    std::copy(keep, keep + nk, h + first);
-    std::copy(v + last, v + n_, h + first + nk);
-    if (cap_ > 0) delete[] heap_;  // v is no longer read: the inline storage becomes heap_
-    heap_ = h;
-    cap_ = cap;
-  } else {  // in place: shift the tail
-    const std::uint32_t to = first + static_cast<std::uint32_t>(nk);
-    if (to <= last) {
-      std::copy(v + last, v + n_, v + to);
-    } else {
-      std::copy_backward(v + last, v + n_, v + n_new);
-    }
-    std::copy(keep, keep + nk, v + first);
+    auto* h = new Interval[cap + 1];
+    h[0] = {static_cast<double>(cap), 0.0};
+    std::copy(v, v + first, h + 1);
+    std::copy(keep, keep + nk, h + 1 + first);
+    std::copy(v + last, v + n, h + 1 + first + nk);
+    delete[] blk;  // v is no longer read (inline, it is overwritten by the tag)
+    spill(h, n_new);
+    return cut;
   }
-  n_ = n_new;
+  // In place: shift the tail.
+  const std::uint32_t to = first + static_cast<std::uint32_t>(nk);
+  if (to <= last) {
+    std::copy(v + last, v + n, v + to);
+  } else {
+    std::copy_backward(v + last, v + n, v + n_new);
+  }
+  std::copy(keep, keep + nk, v + first);
+  if (sp) {
+    spill(blk, n_new);
+  } else if (n_new == 0) {
+    spill(nullptr, 0);
+  } else {
+    for (std::uint32_t k = n_new; k < N; ++k) in_[k] = {kUnused, kUnused};
+  }
   return cut;
 }
 

@@ -956,6 +956,13 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
   // The HDF5 writer makes 1024 steps dense at a time; the deflate filter holds about as much
   // again while it compresses those rows' chunks.
   m.map_writer_bytes = 2.0 * std::min(steps, 1024.0) * (cols * 12.0 + 8.0 * (4 + teeth));
+  // The outputs made from the workpiece at the end, one at a time: the floor as a height map
+  // at the spacing over the region visited (floor.x3p), or the machined surface's mesh (at
+  // most about 4 million triangles of 50 bytes, over a height field of half as many points).
+  const double zb_cells =
+      std::ceil((box.hi[0] - box.lo[0]) / d) * std::ceil((box.hi[1] - box.lo[1]) / d);
+  m.outputs_bytes = std::max(std::ceil(ex / d) * std::ceil(ey / d) * 8.0,
+                             std::min(4e6, 2.0 * zb_cells) * 50.0 + std::min(2e6, zb_cells) * 8.0);
   // What the process holds besides (its libraries, the job, the path; measured 20 MB).
   m.base_bytes = process_base_bytes() + static_cast<double>(path.segments().size()) * 400.0;
   return m;

@@ -95,6 +95,7 @@ json evaluate(const Job& job, SweepEval eval, const std::optional<std::pair<int,
     const JobForces f = job_forces(job, path, window.first, window.second, true, control);
     return json::parse(force_summary_json(job, f, window.first, window.second));
   }
+  control.keep_records = false;  // only the summary is read
   const JobSimulation js = simulate_job(job, path, window.first, window.second, control);
   if (!js.result.complete) throw Interrupted("interrupted");
   return json::parse(simulation_json(job, js, window.first, window.second, 0, 0));
