@@ -794,6 +794,12 @@ TEST(Sim, AnnulusSearchFindsAllTheMaterial) {
   EXPECT_GT(a.removed_mm3, 1.0);
 }
 
+// Two chip map entries equal in every field, bit for bit.
+bool same_entry(const ChipEntry& a, const ChipEntry& b) {
+  return a.step == b.step && a.segment == b.segment && a.h_mm == b.h_mm && a.w_mm == b.w_mm &&
+         a.v_mm3 == b.v_mm3;
+}
+
 // A window continuing the call before it (SimControl::after, its SimCarry) searches only the
 // annulus from its first step; alone, its first revolution (and two steps) searches whole
 // sectors. The wedges' shapes are each call's own, so the results are the same bit for bit
@@ -827,12 +833,7 @@ TEST(Sim, AWindowContinuesTheCallBeforeIt) {
   EXPECT_EQ(win[0].dexel_updates, win[1].dexel_updates);
   ASSERT_EQ(win[0].chip_map.size(), win[1].chip_map.size());
   for (std::size_t q = 0; q < win[0].chip_map.size(); ++q) {
-    const ChipEntry &a = win[0].chip_map[q], &b = win[1].chip_map[q];
-    ASSERT_EQ(a.step, b.step);
-    ASSERT_EQ(a.segment, b.segment);
-    ASSERT_EQ(a.h_mm, b.h_mm);
-    ASSERT_EQ(a.w_mm, b.w_mm);
-    ASSERT_EQ(a.v_mm3, b.v_mm3);
+    ASSERT_TRUE(same_entry(win[0].chip_map[q], win[1].chip_map[q])) << q;
   }
   EXPECT_GT(win[0].removed_mm3, 1.0);
   // A carry that ended elsewhere.
@@ -1041,12 +1042,7 @@ TEST(Sim, StreamedRecordsAreTheKeptOnes) {
   }
   ASSERT_EQ(got.entries.size(), k.chip_map.size());
   for (std::size_t q = 0; q < k.chip_map.size(); ++q) {
-    const ChipEntry &a = got.entries[q], &b = k.chip_map[q];
-    ASSERT_EQ(a.step, b.step) << q;
-    ASSERT_EQ(a.segment, b.segment) << q;
-    ASSERT_EQ(a.h_mm, b.h_mm) << q;
-    ASSERT_EQ(a.w_mm, b.w_mm) << q;
-    ASSERT_EQ(a.v_mm3, b.v_mm3) << q;
+    ASSERT_TRUE(same_entry(got.entries[q], k.chip_map[q])) << q;
   }
 
   const auto base =
