@@ -61,9 +61,8 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
             "resolution (now {} mm), shorten the window (--cycles, --from/--to) or raise "
             "--memory-limit",
             need / 1e9, est.boards_bytes / 1e9, est.stream_bytes / 1e9, est.base_bytes / 1e9,
-            a->out.empty() ? 0.0 : std::max(est.map_writer_bytes, est.outputs_bytes) / 1e9,
-            limit / 1e9, a->memory_gb ? "--memory-limit" : "75 % of RAM",
-            job.simulation.resolution_mm));
+            a->out.empty() ? 0.0 : est.writing_bytes() / 1e9, limit / 1e9,
+            a->memory_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
       }
       // Ctrl-C stops after the current step; what was computed is written, marked incomplete.
       // A Ctrl-C during the output writing leaves --out without any file of this run.

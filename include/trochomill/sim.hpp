@@ -325,6 +325,9 @@ class SimSink {
   virtual void take(const SimStep& step, std::span<const ChipEntry> chips) = 0;
 };
 
+/// Sets `step_count` and `h_max_mm` from the kept steps (for records made outside simulate).
+void tally_steps(SimResult& r);
+
 /// Progress and cancellation of a running simulation.
 struct SimControl {
   /// Phases ("pre-roll: envelope", "pre-roll: last revolution", "window") and progress in
@@ -489,11 +492,12 @@ struct MemoryEstimate {
   [[nodiscard]] double total(bool with_map) const {
     return boards_bytes + records_bytes + base_bytes + (with_map ? dense_map_bytes : 0.0);
   }
-  /// The whole when the records are not kept, with or without the outputs (SimulationOutputs:
-  /// its ChipMapWriter, then the largest output made at the end) (bytes).
+  /// What SimulationOutputs holds at its largest: its ChipMapWriter during the run, then the
+  /// largest output made at the end (bytes).
+  [[nodiscard]] double writing_bytes() const { return std::max(map_writer_bytes, outputs_bytes); }
+  /// The whole when the records are not kept, with or without the outputs (bytes).
   [[nodiscard]] double streamed(bool with_outputs) const {
-    return boards_bytes + stream_bytes + base_bytes +
-           (with_outputs ? std::max(map_writer_bytes, outputs_bytes) : 0.0);
+    return boards_bytes + stream_bytes + base_bytes + (with_outputs ? writing_bytes() : 0.0);
   }
 };
 /// With `stock_mesh` the boards hold every ray of the mesh's box (stock_from_mesh).

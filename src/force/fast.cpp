@@ -285,8 +285,7 @@ SimResult FastChipSource::chips(const SimTool& tool) const {
   for (const auto& p : parts) total += p.size();
   r.chip_map.reserve(total);
   for (const auto& p : parts) r.chip_map.insert(r.chip_map.end(), p.begin(), p.end());
-  r.step_count = r.steps.size();
-  for (const SimStep& st : r.steps) r.h_max_mm = std::max(r.h_max_mm, st.h_max_mm);
+  tally_steps(r);
   r.complete = true;
   return r;
 }

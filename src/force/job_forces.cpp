@@ -1,7 +1,6 @@
 // Job-level forces: edge grid with the job's topography, chip source, forces (force.hpp).
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -50,10 +49,7 @@ JobForces job_forces(const Job& job, const ToolPath& path, double from_s, double
     t1 = clock::now();
     out.series = src.forces(tool, grid, model, &out.chips.steps);
     out.chips.segments_per_tooth = tool.segments();
-    out.chips.step_count = out.chips.steps.size();
-    for (const SimStep& st : out.chips.steps) {
-      out.chips.h_max_mm = std::max(out.chips.h_max_mm, st.h_max_mm);
-    }
+    tally_steps(out.chips);
   } else {
     out.chips = simulate_job(job, path, from_s, to_s, control).result;
     t1 = clock::now();

@@ -773,6 +773,12 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   return res;
 }
 
+void tally_steps(SimResult& r) {
+  r.step_count = r.steps.size();
+  r.h_max_mm = 0;
+  for (const SimStep& st : r.steps) r.h_max_mm = std::max(r.h_max_mm, st.h_max_mm);
+}
+
 StockBox job_stock(const Job& job) {
   StockBox b;
   if (job.stock_min_mm && job.stock_max_mm) {
