@@ -46,6 +46,12 @@ TEST(Sim, DexelSubtract) {
   EXPECT_EQ(removed[2].hi, 4);
   EXPECT_DOUBLE_EQ(d.subtract(0, 100, removed), 7.0);
   EXPECT_TRUE(d.intervals().empty());
+  // A default dexel is empty (a spilled state with no block): no intervals, no length, and
+  // nothing removed from it (clang's UBSan once caught an offset applied to its null block).
+  const Dexel empty;
+  EXPECT_TRUE(empty.intervals().empty());
+  EXPECT_EQ(empty.length(), 0.0);
+  EXPECT_EQ(Dexel().subtract(0, 1, removed), 0.0);
 }
 
 // Random subtractions against a plain reference (intervals rebuilt in a fresh vector each

@@ -82,7 +82,10 @@ class BasicDexel {
     if (spilled()) delete[] block();
   }
   [[nodiscard]] std::span<const Interval> intervals() const noexcept {
-    if (spilled()) return {block() + 1, spill_count()};
+    if (spilled()) {  // an empty dexel has no block (no pointer arithmetic on null)
+      const Interval* b = block();
+      return b ? std::span<const Interval>{b + 1, spill_count()} : std::span<const Interval>{};
+    }
     std::uint32_t k = 1;
     while (k < N && !std::isnan(in_[k].lo)) ++k;
     return {in_, k};
