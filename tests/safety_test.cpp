@@ -239,8 +239,11 @@ CanonRun run_rs274(const std::string& rs274, const std::filesystem::path& dir,
                    const std::string& code) {
   const auto prog = dir / "p.ngc", out = dir / "canon.txt";
   std::ofstream(prog) << code;
-  const std::string cmd = fmt::format("'{}' -t '{}' -g '{}' > '{}' 2>&1 < /dev/null", rs274,
-                                      (dir / "tool.tbl").string(), prog.string(), out.string());
+  // HOME: LinuxCNC 2.9's interpreter keeps its tool data in $HOME/.tool.mmap, truncated and
+  // rewritten by every run; other tests run rs274 at the same time (ctest -j).
+  const std::string cmd =
+      fmt::format("HOME='{}' '{}' -t '{}' -g '{}' > '{}' 2>&1 < /dev/null", dir.string(), rs274,
+                  (dir / "tool.tbl").string(), prog.string(), out.string());
   (void)std::system(cmd.c_str());
   CanonRun run;
   std::ifstream in(out);

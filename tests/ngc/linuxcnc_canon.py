@@ -26,6 +26,9 @@ except ImportError:
 
 IN = 25.4  # the module reports inches
 TMP = tempfile.TemporaryDirectory()  # the parameter file LinuxCNC reads and writes; removed at exit
+# LinuxCNC 2.9's interpreter keeps its tool data in $HOME/.tool.mmap, truncated and rewritten
+# by every run: runs at once (the tests run in parallel) would share it. Each run its own.
+os.environ["HOME"] = TMP.name
 
 
 class Canon:
