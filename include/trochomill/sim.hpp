@@ -297,8 +297,13 @@ struct SimCarry {
   std::size_t level_steps = 0;   ///< steps since the depth last changed
   bool envelope_before = false;  ///< the chain's first call started after the envelope
   double cum_now_mm = 0;         ///< path length since the chain's start (mm)
-  std::vector<double> cum_mm;    ///< path length at the last steps_per_rev + 4 steps (a ring)
+  /// Path length (mm) and the centre's x and y (mm) at the last steps_per_rev + 4 +
+  /// kSimRingSlack steps (rings indexed by the chain's step modulo their size).
+  std::vector<double> cum_mm, x_mm, y_mm;
 };
+
+/// Steps the rings of SimCarry keep beyond a revolution and four.
+inline constexpr std::size_t kSimRingSlack = 16;
 
 struct SimResult {
   std::vector<SimStep> steps;       ///< empty when not kept (SimControl::keep_records)

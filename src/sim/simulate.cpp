@@ -92,7 +92,24 @@ struct Wedge {
   bool up = true;      // the strip lies on the side of growing angles from pa
   double drop = kInf;  // the annulus's drop (as r_in_drop, also when the search is exhaustive)
   double r_old = 0;    // mm: at and beyond it [a0, a1] holds the strip
+  // Along a direction u the drop is at most (dir_x, dir_y).u + dir_c (mm; dir_c infinite: no
+  // such bound): see drop_toward.
+  double dir_x = 0, dir_y = 0, dir_c = kInf;
 };
+
+// The largest (x, y).u over the unit vectors u at angles [a0, a1] (rad): |(x, y)| when the
+// range holds its direction, else at an end (the dot product is unimodal around the circle).
+double max_dot(double x, double y, double a0, double a1) {
+  if (a1 - a0 >= kTwoPi || contains_angle(a0, a1, std::atan2(y, x))) return std::hypot(x, y);
+  return std::max(x * std::cos(a0) + y * std::sin(a0), x * std::cos(a1) + y * std::sin(a1));
+}
+
+// The wedge's r_in_drop over the angles [a0, a1] (rad): within it, material lies only beyond
+// the contour + r_off less this (mm; <= 0: nowhere within the contour).
+double drop_toward(const Wedge& w, double a0, double a1, double d) {
+  if (std::isinf(w.dir_c) || std::isinf(w.r_in_drop)) return w.r_in_drop;
+  return std::min(w.r_in_drop, max_dot(w.dir_x, w.dir_y, a0, a1) + w.dir_c + d);
+}
 
 // Whether a closing wedge takes its strip on a layer whose edge lies at `radius` (mm) from its
 // centre: where the layer's material (beyond radius - drop) may lie nearer than r_old.
@@ -144,14 +161,20 @@ class Stepper {
     // The contour's smallest radius over the cutting height (it is unimodal: at an end).
     const double flat =
         std::max(0.0, std::min(contour_.profile_radius(0), contour_.profile_radius(w.H))) + w.r_off;
-    // Rays nearer the centre than r_lo hold no material (annulus mode).
-    const double r_lo = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, flat - w.r_in_drop);
-    const double r_hi = rmax;
     // A closing wedge's strip beyond [a0, a1] where material may lie (nearer than r_old): the
     // rays' angles then depend on their distance (closing_angles); searched within the sector
     // as wide as the strip is at r0, and the disc of radius r0 about the centre.
     const double r_mat = std::max(0.0, flat - w.drop);
     const bool strip = needs_strip(w, flat);
+    // Rays nearer the centre than r_lo hold no material (annulus mode): the drop toward the
+    // sector's angles at all heights (without a strip, whose angles are wider); none or less
+    // than nothing, and the wedge has nothing to cut.
+    const double drop = strip ? w.r_in_drop
+                              : drop_toward(w, kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_,
+                                            kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1, d_);
+    if (!(drop > 0)) return;
+    const double r_lo = std::isinf(drop) ? 0.0 : std::max(0.0, flat - drop);
+    const double r_hi = rmax;
     // r0 balances the disc's area (pi r0^2) against the widened sector's (about r_hi^2 move /
     // 2 r0): the rays searched, not the ones cut, which closing_angles decides.
     const double r0 =
@@ -283,8 +306,13 @@ class Stepper {
       if (h < 0 || h > w.H) continue;
       const double R_h = contour_.profile_radius(h) + w.r_off;
       if (!(R_h > 0)) continue;
-      const double r_in = std::isinf(w.r_in_drop) ? 0.0 : std::max(0.0, R_h - w.r_in_drop);
       const double ah0 = w.a0 + h * kappa_, ah1 = w.a1 + h * kappa_;
+      // A closing wedge's strip, where material may lie within it nearer than r_old; else the
+      // drop toward this layer's angles (none or less: nothing on this layer).
+      const bool strip = needs_strip(w, R_h);
+      const double drop = strip ? w.r_in_drop : drop_toward(w, ah0, ah1, d_);
+      if (!(drop > 0)) continue;
+      const double r_in = std::isinf(drop) ? 0.0 : std::max(0.0, R_h - drop);
       const auto bx = flat_span ? flat_span->box(r_in, R_h) : annular_box(ah0, ah1, r_in, R_h);
       const SectorSlicer slicer = flat_slicer ? *flat_slicer
                                   : b == 0    ? SectorSlicer(ah0, ah1)
@@ -321,8 +349,7 @@ class Stepper {
           }
         }
       };
-      // A closing wedge's strip, where material may lie within it nearer than r_old.
-      if (needs_strip(w, R_h)) {
+      if (strip) {
         strip_rows(b, board, w, zl, w.pa + h * kappa_, R_h, r_in, cut_row);
       }
       // Rows: board 0 over y (its u), board 1 over x (its v).
@@ -448,6 +475,10 @@ class Stepper {
     return st_ + (h - ht_) * inv_sin_;
   }
   [[nodiscard]] int segs() const noexcept { return segs_; }
+  // The contour's smallest radius over heights [0, H] (mm; unimodal: at an end).
+  [[nodiscard]] double narrowest(double H) const {
+    return std::max(0.0, std::min(contour_.profile_radius(0), contour_.profile_radius(H)));
+  }
 
  private:
   int seg_of(double h) const {
@@ -564,20 +595,25 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   // stay each call's own (the whole sectors of its first revolution): the results do not
   // depend on the carry, only the work does.
   const auto spr = static_cast<std::size_t>(s.steps_per_rev);
-  const std::size_t ring_n = spr + 4;
+  const std::size_t ring_n = spr + 4 + kSimRingSlack;
   std::vector<double> cum(ring_n, 0.0);  // path length up to the last ring_n steps
+  // The centre at the last ring_n steps (the chain's start at its step 0).
+  std::vector<double> ring_x(ring_n, ps.x_mm[0]), ring_y(ring_n, ps.y_mm[0]);
   double cum_now = 0;
   std::size_t level_steps = 0;  // steps since the depth last changed
   std::size_t base = 0;         // the chain's steps before this call
   bool chain_enveloped = control.envelope_before;
   if (const SimCarry* c = control.after) {
-    if (c->t_s != t0_s || c->steps_per_rev != s.steps_per_rev || c->cum_mm.size() != ring_n) {
+    if (c->t_s != t0_s || c->steps_per_rev != s.steps_per_rev || c->cum_mm.size() != ring_n ||
+        c->x_mm.size() != ring_n || c->y_mm.size() != ring_n) {
       throw Error(fmt::format(
           "simulate: the carry ended at {} s with {} steps per revolution; this call starts at "
           "{} s with {}",
           c->t_s, c->steps_per_rev, t0_s, s.steps_per_rev));
     }
     cum = c->cum_mm;
+    ring_x = c->x_mm;
+    ring_y = c->y_mm;
     cum_now = c->cum_now_mm;
     level_steps = c->level_steps;
     base = c->steps;
@@ -603,6 +639,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     }
   }
   const double min_core = 0.5 * tool.radius_mm;
+  const double step_angle = kTwoPi / static_cast<double>(spr);  // rad swept per step
   const std::size_t every = std::max<std::size_t>(1, (nsteps + 1) / 200);
   std::size_t done = 0;               // the steps taken
   std::vector<ChipEntry> step_chips;  // this step's chip map entries
@@ -620,6 +657,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     const double moved = std::hypot(c[0] - prev[0], c[1] - prev[1]);
     cum_now += moved;
     cum[g % ring_n] = cum_now;
+    ring_x[g % ring_n] = c[0], ring_y[g % ring_n] = c[1];
     level_steps = std::abs(c[2] - ps.z_mm[i - 1]) > 1e-9 ? 0 : level_steps + 1;
     // Settled: a revolution (and two steps) at this depth within the `steps` counted.
     auto settled_in = [&](std::size_t steps) { return steps > spr + 2 && level_steps >= spr + 2; };
@@ -659,9 +697,38 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
           if (g >= l.steps + 1) drop = std::min(drop, l.dr + cum_now - cum[(g - l.steps) % ring_n]);
         }
       }
+      // Along a direction: the tooth j that gives the least drop swept these angles
+      // l.steps ago about the centre p_j then, so along u what it left lies beyond its contour
+      // less (c - p_j).u (less than the path since where the path turns), up to |c - p_j|^2 /
+      // R_j and the spread of the centres over the steps whose wedges swept a point near u
+      // (kw either side; docs/models.md section 11).
+      double dir_c = kInf, pj_x = 0, pj_y = 0;
+      if (closing && !s.exhaustive) {
+        const Lag* best = nullptr;
+        double best_drop = kInf;
+        for (const Lag& l : lags[k]) {
+          if (g < l.steps + 1) continue;
+          const double dj = l.dr + cum_now - cum[(g - l.steps) % ring_n];
+          if (dj < best_drop) best_drop = dj, best = &l;
+        }
+        if (best != nullptr) {
+          const std::size_t gj = g - best->steps;
+          pj_x = ring_x[gj % ring_n], pj_y = ring_y[gj % ring_n];
+          const double dist = std::hypot(c[0] - pj_x, c[1] - pj_y) + moved;
+          const double r_j = stepper.narrowest(w.H) + w.r_off - best->dr;
+          const double kw = std::ceil(2 * dist / (r_j * step_angle)) + 5;
+          if (r_j > 4 * dist && kw <= static_cast<double>(kSimRingSlack) &&
+              static_cast<double>(gj) >= kw) {
+            const auto kws = static_cast<std::size_t>(kw);
+            const double spread = cum[std::min(g, gj + kws) % ring_n] - cum[(gj - kws) % ring_n];
+            if (r_j > 4 * (dist + spread)) dir_c = best->dr + spread + 2 * dist * dist / r_j;
+          }
+        }
+      }
       if (closing) {
         w.r_in_drop = s.exhaustive ? kInf : std::max(0.0, drop) + d;
         w.cx = c[0], w.cy = c[1];
+        w.dir_x = c[0] - pj_x, w.dir_y = c[1] - pj_y, w.dir_c = dir_c;
         wedges.push_back(w), wedge_tooth.push_back(k);
         // The wedge is taken about this step's centre; the previous step's was about the
         // previous centre, so their shared edge (at pa) is offset by the move between steps
@@ -671,6 +738,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         const double ext = 2 * moved / tool.radius_mm;
         Wedge thin = w;
         thin.cx = prev[0], thin.cy = prev[1];
+        thin.dir_x = prev[0] - pj_x, thin.dir_y = prev[1] - pj_y;
         thin.a0 = tool.omega_rad_per_s < 0 ? pa - ext : pa;
         thin.a1 = tool.omega_rad_per_s < 0 ? pa : pa + ext;
         // Below R / 2 (a layer narrower than the tool: a corner or ball, a lead angle) the
@@ -770,6 +838,8 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   res.carry.envelope_before = chain_enveloped;
   res.carry.cum_now_mm = cum_now;
   res.carry.cum_mm = std::move(cum);
+  res.carry.x_mm = std::move(ring_x);
+  res.carry.y_mm = std::move(ring_y);
   return res;
 }
 
