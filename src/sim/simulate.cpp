@@ -292,6 +292,11 @@ class Stepper {
     // is out of the cut most of its turn. A bundle is thin enough that its annulus stays
     // about as narrow as a layer's (the whole wedge's would reach into the wall under the
     // corner, where every layer's radius differs).
+    // The drop toward the wedge's angles: without a helix the same on every layer. An
+    // ordinary wedge (no strip) with nothing beyond its contour on any layer is done.
+    const double span_drop = drop_toward(w, kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_,
+                                         kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1, d_);
+    if (!(w.move > 0) && !(span_drop > 0)) return;
     for (int zl = z0; zl <= z1; ++zl) {
       if (!s_.exhaustive && (zl == z0 || zl % kBundle == 0)) {
         // Bundles aligned to kBundle layers: never across a tile (kTile is a multiple).
@@ -310,7 +315,9 @@ class Stepper {
       // A closing wedge's strip, where material may lie within it nearer than r_old; else the
       // drop toward this layer's angles (none or less: nothing on this layer).
       const bool strip = needs_strip(w, R_h);
-      const double drop = strip ? w.r_in_drop : drop_toward(w, ah0, ah1, d_);
+      const double drop = strip         ? w.r_in_drop
+                          : kappa_ == 0 ? span_drop
+                                        : drop_toward(w, ah0, ah1, d_);
       if (!(drop > 0)) continue;
       const double r_in = std::isinf(drop) ? 0.0 : std::max(0.0, R_h - drop);
       const auto bx = flat_span ? flat_span->box(r_in, R_h) : annular_box(ah0, ah1, r_in, R_h);
