@@ -159,8 +159,7 @@ class Stepper {
     DexelBoard& board = work_.boards[2];
     const double rmax = tool_.radius_mm + std::max(0.0, w.r_off);
     // The contour's smallest radius over the cutting height (it is unimodal: at an end).
-    const double flat =
-        std::max(0.0, std::min(contour_.profile_radius(0), contour_.profile_radius(w.H))) + w.r_off;
+    const double flat = narrowest(w.H) + w.r_off;
     // A closing wedge's strip beyond [a0, a1] where material may lie (nearer than r_old): the
     // rays' angles then depend on their distance (closing_angles); searched within the sector
     // as wide as the strip is at r0, and the disc of radius r0 about the centre.
@@ -169,9 +168,7 @@ class Stepper {
     // Rays nearer the centre than r_lo hold no material (annulus mode): the drop toward the
     // sector's angles at all heights (without a strip, whose angles are wider); none or less
     // than nothing, and the wedge has nothing to cut.
-    const double drop = strip ? w.r_in_drop
-                              : drop_toward(w, kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_,
-                                            kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1, d_);
+    const double drop = strip ? w.r_in_drop : span_drop(w);
     if (!(drop > 0)) return;
     const double r_lo = std::isinf(drop) ? 0.0 : std::max(0.0, flat - drop);
     const double r_hi = rmax;
@@ -294,9 +291,8 @@ class Stepper {
     // corner, where every layer's radius differs).
     // The drop toward the wedge's angles: without a helix the same on every layer. An
     // ordinary wedge (no strip) with nothing beyond its contour on any layer is done.
-    const double span_drop = drop_toward(w, kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_,
-                                         kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1, d_);
-    if (!(w.move > 0) && !(span_drop > 0)) return;
+    const double all_drop = span_drop(w);
+    if (!(w.move > 0) && !(all_drop > 0)) return;
     for (int zl = z0; zl <= z1; ++zl) {
       if (!s_.exhaustive && (zl == z0 || zl % kBundle == 0)) {
         // Bundles aligned to kBundle layers: never across a tile (kTile is a multiple).
@@ -316,7 +312,7 @@ class Stepper {
       // drop toward this layer's angles (none or less: nothing on this layer).
       const bool strip = needs_strip(w, R_h);
       const double drop = strip         ? w.r_in_drop
-                          : kappa_ == 0 ? span_drop
+                          : kappa_ == 0 ? all_drop
                                         : drop_toward(w, ah0, ah1, d_);
       if (!(drop > 0)) continue;
       const double r_in = std::isinf(drop) ? 0.0 : std::max(0.0, R_h - drop);
@@ -485,6 +481,11 @@ class Stepper {
   // The contour's smallest radius over heights [0, H] (mm; unimodal: at an end).
   [[nodiscard]] double narrowest(double H) const {
     return std::max(0.0, std::min(contour_.profile_radius(0), contour_.profile_radius(H)));
+  }
+  // The wedge's drop toward its angles at all heights [0, H] (with a helix they turn).
+  [[nodiscard]] double span_drop(const Wedge& w) const {
+    return drop_toward(w, kappa_ >= 0 ? w.a0 : w.a0 + w.H * kappa_,
+                       kappa_ >= 0 ? w.a1 + w.H * kappa_ : w.a1, d_);
   }
 
  private:
@@ -699,9 +700,14 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       w.H = H > 0 ? H : 0.0;
       if (!(w.H > 0)) continue;
       double drop = D;
+      const Lag* best = nullptr;  // the tooth giving the least drop
       if (annulus) {
+        double best_drop = kInf;
         for (const Lag& l : lags[k]) {
-          if (g >= l.steps + 1) drop = std::min(drop, l.dr + cum_now - cum[(g - l.steps) % ring_n]);
+          if (g < l.steps + 1) continue;
+          const double dj = l.dr + cum_now - cum[(g - l.steps) % ring_n];
+          drop = std::min(drop, dj);
+          if (dj < best_drop) best_drop = dj, best = &l;
         }
       }
       // Along a direction: the tooth j that gives the least drop swept these angles
@@ -711,13 +717,6 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       // (kw either side; docs/models.md section 11).
       double dir_c = kInf, pj_x = 0, pj_y = 0;
       if (closing && !s.exhaustive) {
-        const Lag* best = nullptr;
-        double best_drop = kInf;
-        for (const Lag& l : lags[k]) {
-          if (g < l.steps + 1) continue;
-          const double dj = l.dr + cum_now - cum[(g - l.steps) % ring_n];
-          if (dj < best_drop) best_drop = dj, best = &l;
-        }
         if (best != nullptr) {
           const std::size_t gj = g - best->steps;
           pj_x = ring_x[gj % ring_n], pj_y = ring_y[gj % ring_n];
