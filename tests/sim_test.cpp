@@ -1273,6 +1273,20 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
     const double a = x(rng);
     (void)board.subtract(ri(rng), rj(rng), a, a + len(rng), removed);
   }
+  // Cuts ending on the bins' edges (the stock's 10 mm in 256 bins) or a few ulps either side:
+  // where a bin rule that is not monotone in x, or an edge rule unlike the query's, would
+  // hide material (queries below end there too).
+  std::uniform_int_distribution<int> edge(0, DexelBoard::kBins), ulps(-3, 3);
+  auto near_edge = [&] {
+    double v = 10.0 * edge(rng) / DexelBoard::kBins;
+    const int n = ulps(rng);
+    for (int q = 0; q < std::abs(n); ++q) v = std::nextafter(v, n > 0 ? 11.0 : -1.0);
+    return v;
+  };
+  for (int k = 0; k < 20000; ++k) {
+    const double a = near_edge(), b = near_edge();
+    (void)board.subtract(ri(rng), rj(rng), std::min(a, b), std::max(a, b), removed);
+  }
   // Half the cuts with the upkeep paused, then rebuilt: the same guarantee.
   board.pause_summary();
   for (int k = 0; k < 10000; ++k) {
@@ -1281,11 +1295,15 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
   }
   board.resume_summary();
   int empty = 0;
-  for (int q = 0; q < 4000; ++q) {
+  for (int q = 0; q < 8000; ++q) {
     const int i0 = ri(rng), j0 = rj(rng);
     const int i1 = std::min(board.count_u() - 1, i0 + 5),
               j1 = std::min(board.count_v() - 1, j0 + 2);
-    const double lo = x(rng), hi = lo + 0.3 * len(rng);
+    double lo = x(rng), hi = lo + 0.3 * len(rng);
+    if (q % 2 == 1) {  // a stretch between two bins' edges (give or take ulps)
+      lo = near_edge(), hi = near_edge();
+      if (lo > hi) std::swap(lo, hi);
+    }
     bool any = false;
     for (int i = i0; i <= i1; ++i) {
       for (int j = j0; j <= j1; ++j) {

@@ -224,7 +224,13 @@ class DexelBoard {
   template <class Tiles>
   double subtract_in(Tiles& tiles, int i, int j, double a, double b,
                      std::vector<Interval>& removed);
-  [[nodiscard]] int bin_of(double x) const noexcept;
+  // The bin holding x (mm along the rays), clamped to the board: a multiply and a
+  // truncation, monotone in x, so the bins from an interval's ends hold every bin a point of
+  // it falls in (the summary stays conservative; an end on a bin's edge may mark that bin).
+  [[nodiscard]] int bin_of(double x) const noexcept {
+    return static_cast<int>(
+        std::clamp((x - full_.lo) * bins_per_mm_, 0.0, static_cast<double>(kBins - 1)));
+  }
   // A ray's place in its tile: the board's inner loops run along u on the X board (rows of a
   // layer) and along v on the others, and those neighbours are kept adjacent in memory.
   [[nodiscard]] std::size_t in_tile(int i, int j) const noexcept {
@@ -244,7 +250,7 @@ class DexelBoard {
   std::vector<std::unique_ptr<BasicDexel<1>[]>> tiles1_;
   std::vector<std::unique_ptr<BasicDexel<2>[]>> tiles2_;
   bool summarised_ = false, paused_ = false;
-  double bin_w_ = 1;
+  double bins_per_mm_ = 1;                           // kBins over the stock's extent along the rays
   std::vector<std::unique_ptr<Summary>> summaries_;  // parallel to the tile table
 };
 

@@ -160,7 +160,7 @@ void DexelBoard::touch(int i, int j) {
 void DexelBoard::enable_summary() {
   if (tiles() > 0) throw Error("DexelBoard::enable_summary: the board was already cut");
   summarised_ = true;
-  bin_w_ = (full_.hi - full_.lo) / kBins;
+  bins_per_mm_ = kBins / (full_.hi - full_.lo);
   summaries_.resize(static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_));
 }
 
@@ -195,19 +195,12 @@ void DexelBoard::resume_summary() {
   });
 }
 
-int DexelBoard::bin_of(double x) const noexcept {
-  const double b = std::floor((x - full_.lo) / bin_w_);
-  return static_cast<int>(std::clamp(b, 0.0, static_cast<double>(kBins - 1)));
-}
-
 std::array<std::uint64_t, DexelBoard::kBins / 64> DexelBoard::bins_of(
     std::span<const Interval> intervals) const {
   std::array<std::uint64_t, kBins / 64> m{};
   for (const Interval& v : intervals) {
-    // Bins the interval overlaps (a bin touched only at its edge holds none of it).
-    const int b0 = bin_of(v.lo);
-    int b1 = bin_of(v.hi);
-    if (b1 > b0 && full_.lo + b1 * bin_w_ >= v.hi) --b1;
+    // The bins of its ends and those between (bin_of is monotone: every point's bin).
+    const int b0 = bin_of(v.lo), b1 = bin_of(v.hi);
     for (int w = b0 / 64; w <= b1 / 64; ++w) {
       const int lo = w == b0 / 64 ? b0 % 64 : 0, hi = w == b1 / 64 ? b1 % 64 : 63;
       const std::uint64_t upto = hi == 63 ? ~std::uint64_t{0} : (std::uint64_t{1} << (hi + 1)) - 1;
@@ -223,13 +216,17 @@ double DexelBoard::subtract_in(Tiles& tiles, int i, int j, double a, double b,
   touch(i, j);
   auto& d = tiles[tile_index(i, j)][in_tile(i, j)];
   if (!summarised_ || paused_) return d.subtract(a, b, removed);
-  const auto before = bins_of(d.intervals());
+  const std::size_t first = removed.size();
   const double cut = d.subtract(a, b, removed);
   if (cut > 0) {
+    // The ray's bins before the cut are its bins after it and the removed pieces' (an
+    // interval's bins are those of its pieces, which meet end to end, and bin_of is
+    // monotone): the pieces' bins the ray no longer holds lost it.
+    const auto cut_bins = bins_of(std::span<const Interval>(removed).subspan(first));
     const auto after = bins_of(d.intervals());
     Summary& sm = *summaries_[tile_index(i, j)];
-    for (std::size_t w = 0; w < before.size(); ++w) {
-      std::uint64_t gone = before[w] & ~after[w];
+    for (std::size_t w = 0; w < cut_bins.size(); ++w) {
+      std::uint64_t gone = cut_bins[w] & ~after[w];
       while (gone != 0) {
         const int bit = __builtin_ctzll(gone);
         gone &= gone - 1;
