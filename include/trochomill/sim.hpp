@@ -328,8 +328,9 @@ struct SimResult {
 };
 
 /// Takes a simulation's records as they are made (SimControl::sink): each step in order,
-/// with its chip map entries (their `step` the step's index in the call). Whatever `take`
-/// throws stops the simulation and passes on.
+/// with its chip map entries (their `step` the step's index in the call), one call at a time,
+/// possibly from a worker thread of the simulation. Whatever `take` throws stops the
+/// simulation and passes on.
 class SimSink {
  public:
   SimSink() = default;
@@ -346,8 +347,8 @@ void tally_steps(SimResult& r);
 struct SimControl {
   /// Phases ("pre-roll: envelope", "pre-roll: last revolution", "window") and progress in
   /// each (pieces of path or steps). When `hooks.cancel` turns true (e.g. from a SIGINT
-  /// handler) the simulation stops after the current step and returns what it has, with
-  /// `complete = false` (no exception).
+  /// handler) the simulation stops after the steps under way (a few hundred at most) and
+  /// returns what it has, with `complete = false` (no exception).
   RunHooks hooks;
   /// The tool's envelope was swept (sweep_envelope) up to the call's start: the wedges may
   /// search only the annulus from the first step (docs/models.md section 11).

@@ -2,7 +2,7 @@
 // removed piece assigned to the edge segment that removed it (include/trochomill/sim.hpp,
 // docs/models.md section 11).
 #include <fmt/format.h>
-#include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -132,6 +132,35 @@ struct BoardAcc {
   std::uint64_t updates = 0;
   std::vector<Interval> removed;
 };
+
+// One step on its way through the pipeline (simulate): its wedges (per tooth, and centre),
+// then each board's accumulators.
+struct StepWork {
+  std::size_t n = 0;          // the step (from 1 in the call)
+  double tb = 0;              // s, its end
+  std::array<double, 3> c{};  // mm, the centre at its end
+  std::vector<Wedge> wedges;
+  std::vector<std::size_t> tooth;  // each wedge's tooth
+  std::array<BoardAcc, 3> acc;
+};
+
+// Steps through the pipeline together, and how many batches are in flight at most: enough
+// that every board's stage has one to work on.
+struct Batch {
+  std::vector<StepWork> steps;
+  std::size_t count = 0;  // the steps it holds (the first `count` of steps)
+};
+constexpr std::size_t kSimBatches = 6;
+// The accumulators a batch holds at most (bytes): it has up to 32 steps, at least one.
+constexpr std::size_t kSimBatchBytes = std::size_t{1} << 20;
+// A step's bytes in flight (its wedges and three boards' accumulators), for `teeth` teeth of
+// `segs` segments each.
+std::size_t step_work_bytes(std::size_t teeth, std::size_t segs) {
+  return 3 * (4 * teeth * segs + teeth) * sizeof(double) + 2 * teeth * sizeof(Wedge);
+}
+std::size_t batch_steps(std::size_t teeth, std::size_t segs) {
+  return std::clamp<std::size_t>(kSimBatchBytes / step_work_bytes(teeth, segs), 1, 32);
+}
 
 class Stepper {
  public:
@@ -583,9 +612,6 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     res.chip_map.reserve(control.reserve_chip_entries);
   }
   res.segments_per_tooth = segs;
-  std::array<BoardAcc, 3> bacc;
-  std::vector<Wedge> wedges;  // this step's, per tooth (and centre)
-  std::vector<std::size_t> wedge_tooth;
   // The last revolution: within it every tooth swept every angle, so (at constant depth)
   // nothing is left nearer a tooth's centre than its profile less the path length D since
   // (at least the largest move) and one spacing; the wedges then only look at that annulus.
@@ -651,13 +677,11 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   const std::size_t every = std::max<std::size_t>(1, (nsteps + 1) / 200);
   std::size_t done = 0;               // the steps taken
   std::vector<ChipEntry> step_chips;  // this step's chip map entries
-  for (std::size_t n = 1; n <= nsteps; ++n) {
-    if (control.hooks.cancelled()) {
-      res.complete = false;
-      break;
-    }
+  // Step n's wedges (and its time and centre) into sw: in step order (the rings of path
+  // lengths and centres move on).
+  auto make_step = [&](std::size_t n, StepWork& sw) {
     const std::size_t g = base + n;  // the step over the chain
-    if (control.hooks.progress && n % every == 0) control.hooks.progress(n, nsteps);
+    sw.n = n;
     if (n > block0 + kSampleBlock) sample_block(n - 1);
     const std::size_t i = n - block0;  // this step's end in the block; i - 1 its start
     const std::array<double, 3> c{ps.x_mm[i], ps.y_mm[i], ps.z_mm[i]};
@@ -686,6 +710,10 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     res.annulus_steps += annulus ? 1 : 0;
     // Spindle angles from the step times (the path samples clamp at its end: a dwell there).
     const double ta = time_at(n - 1), tb = time_at(n);
+    sw.tb = tb;
+    sw.c = c;
+    std::vector<Wedge>& wedges = sw.wedges;
+    std::vector<std::size_t>& wedge_tooth = sw.tooth;
     wedges.clear();
     wedge_tooth.clear();
     for (std::size_t k = 0; k < nz; ++k) {
@@ -772,28 +800,12 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         wedges.push_back(w), wedge_tooth.push_back(k);
       }
     }
-    for (auto& A : bacc) {
-      A.seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
-      A.seg_lo.assign(nz * static_cast<std::size_t>(segs), kInf);
-      A.seg_v.assign(nz * static_cast<std::size_t>(segs), 0.0);
-      A.seg_hi.assign(nz * static_cast<std::size_t>(segs), -kInf);
-      A.removed_tooth.assign(nz, 0.0);
-      A.removed_board = 0;
-      A.updates = 0;
-    }
-    // The three boards are independent pictures of the workpiece: updated in parallel, each
-    // with its own accumulators (merged in board order: the same numbers for any thread
-    // count).
-    tbb::parallel_for(0, 3, [&](int b) {
-      BoardAcc& A = bacc[static_cast<std::size_t>(b)];
-      for (std::size_t q = 0; q < wedges.size(); ++q) {
-        if (b == 2) {
-          stepper.z_board(wedge_tooth[q], wedges[q], A);
-        } else {
-          stepper.xy_board(b, wedge_tooth[q], wedges[q], A);
-        }
-      }
-    });
+  };
+  // The records of a step whose boards are cut, in step order.
+  auto finish_step = [&](StepWork& sw) {
+    const std::array<BoardAcc, 3>& bacc = sw.acc;
+    const double tb = sw.tb;
+    const std::array<double, 3>& c = sw.c;
     std::vector<double> seg_h(nz * static_cast<std::size_t>(segs), 0.0), seg_lo(seg_h.size(), kInf),
         seg_hi(seg_h.size(), -kInf);
     for (std::size_t b = 0; b < 3; ++b) {
@@ -834,8 +846,72 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       res.chip_map.insert(res.chip_map.end(), step_chips.begin(), step_chips.end());
       res.steps.push_back(std::move(st));
     }
-    done = n;
-  }
+    done = sw.n;
+    if (control.hooks.progress && done % every == 0) control.hooks.progress(done, nsteps);
+  };
+  // Board b's cuts of a step: its wedges in order, into the board's own accumulators.
+  auto cut_board = [&](int b, StepWork& sw) {
+    BoardAcc& A = sw.acc[static_cast<std::size_t>(b)];
+    A.seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
+    A.seg_lo.assign(nz * static_cast<std::size_t>(segs), kInf);
+    A.seg_v.assign(nz * static_cast<std::size_t>(segs), 0.0);
+    A.seg_hi.assign(nz * static_cast<std::size_t>(segs), -kInf);
+    A.removed_tooth.assign(nz, 0.0);
+    A.removed_board = 0;
+    A.updates = 0;
+    for (std::size_t q = 0; q < sw.wedges.size(); ++q) {
+      if (b == 2) {
+        stepper.z_board(sw.tooth[q], sw.wedges[q], A);
+      } else {
+        stepper.xy_board(b, sw.tooth[q], sw.wedges[q], A);
+      }
+    }
+  };
+  // The steps go through a pipeline in batches: their wedges (in step order), then each
+  // board's cuts (a stage per board, each in step order: the three boards are independent
+  // pictures of the workpiece), then the records (in step order, each board's accumulators
+  // merged in board order: the same numbers for any thread count). The boards of consecutive
+  // batches overlap, so the cores have work without a barrier at every step. A batch's slot
+  // is free again when it is taken: at most `kSimBatches` are in flight, and they finish in
+  // order.
+  const std::size_t per_batch = batch_steps(nz, static_cast<std::size_t>(segs));
+  std::vector<Batch> batches(kSimBatches);
+  for (Batch& bt : batches) bt.steps.resize(per_batch);
+  std::size_t next = 1, produced = 0;
+  auto board_stage = [&](int b) {
+    return tbb::make_filter<Batch*, Batch*>(tbb::filter_mode::serial_in_order,
+                                            [&cut_board, b](Batch* bt) {
+                                              for (std::size_t q = 0; q < bt->count; ++q) {
+                                                cut_board(b, bt->steps[q]);
+                                              }
+                                              return bt;
+                                            });
+  };
+  tbb::parallel_pipeline(
+      kSimBatches,
+      tbb::make_filter<void, Batch*>(tbb::filter_mode::serial_in_order,
+                                     [&](tbb::flow_control& fc) -> Batch* {
+                                       Batch& bt = batches[produced % kSimBatches];
+                                       bt.count = 0;
+                                       while (bt.count < per_batch && next <= nsteps &&
+                                              res.complete) {
+                                         if (control.hooks.cancelled()) {
+                                           res.complete = false;
+                                           break;
+                                         }
+                                         make_step(next++, bt.steps[bt.count++]);
+                                       }
+                                       if (bt.count == 0) {
+                                         fc.stop();
+                                         return nullptr;
+                                       }
+                                       ++produced;
+                                       return &bt;
+                                     }) &
+          board_stage(0) & board_stage(1) & board_stage(2) &
+          tbb::make_filter<Batch*, void>(tbb::filter_mode::serial_in_order, [&](Batch* bt) {
+            for (std::size_t q = 0; q < bt->count; ++q) finish_step(bt->steps[q]);
+          }));
   res.removed_mm3 = res.removed_by_board_mm3[2];
   res.carry.t_s = time_at(done);
   res.carry.steps_per_rev = s.steps_per_rev;
@@ -1009,8 +1085,13 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
   const SimTool tool = sim_tool(job, s);
   const double teeth = static_cast<double>(tool.tooth_angle_rad.size());
   const double heap_chunk = std::max(32.0, 16.0 * std::ceil((8.0 * teeth + 8.0) / 16.0));
-  // The path sampled a block of steps at a time: the times and PathSamples' ten arrays.
-  m.stream_bytes = static_cast<double>(kSampleBlock + 1) * 8.0 * (1 + 10);
+  // The path sampled a block of steps at a time: the times and PathSamples' ten arrays; and
+  // the batches of steps in flight.
+  const auto segs = static_cast<std::size_t>(tool.segments());
+  const auto nz = tool.tooth_angle_rad.size();
+  m.stream_bytes =
+      static_cast<double>(kSampleBlock + 1) * 8.0 * (1 + 10) +
+      static_cast<double>(kSimBatches * batch_steps(nz, segs) * step_work_bytes(nz, segs));
   m.records_bytes = m.stream_bytes + steps * (static_cast<double>(sizeof(SimStep)) + heap_chunk);
   // The chip map: one entry per engaged segment and step. Teeth in the cut from the exact 2D
   // engagement of the path (per tooth pass, the slot's stock), times the segments along the
