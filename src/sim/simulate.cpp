@@ -277,7 +277,7 @@ class Stepper {
             // the contour is widest: each segment the piece spans takes it there (exact: no
             // sampling needed), times the edge's sine for the thickness normal to the edge.
             const double h_lo = p.lo - w.tip_z, h_hi = p.hi - w.tip_z;
-            for (int sg = seg_of(h_lo); sg <= seg_of(h_hi); ++sg) {
+            for (int sg = seg_of(h_lo), sg1 = seg_of(h_hi); sg <= sg1; ++sg) {
               const double a = std::max(h_lo, seg_bottom(sg));
               const double h = tool_.widest_height(a, std::min(h_hi, seg_top(sg)));
               const double b = std::min(h_hi, seg_top(sg));
@@ -518,9 +518,21 @@ class Stepper {
   }
 
  private:
+  // The segment holding height h: floor(edge length / segment length), clamped. Away from the
+  // segments' bounds (their heights) the bounds decide it: the edge's length grows at least
+  // as fast as the height (slope >= 1), so a height more than kBoundSlack from a bound lies on
+  // the same side of it by length too, far beyond the length's rounding; nearer, the length
+  // decides (an arc cosine on the corner).
   int seg_of(double h) const {
+    const auto inner0 = bounds_.begin() + 1, inner1 = bounds_.end() - 1;
+    const auto sg = static_cast<int>(std::upper_bound(inner0, inner1, h) - inner0);
+    if ((sg == 0 || h - seg_bottom(sg) > kBoundSlack) &&
+        (sg == segs_ - 1 || seg_top(sg) - h > kBoundSlack)) {
+      return sg;
+    }
     return std::clamp(static_cast<int>(edge_length(h) / tool_.segment_mm), 0, segs_ - 1);
   }
+  static constexpr double kBoundSlack = 1e-9;  // mm
   // The segment's height range.
   double seg_bottom(int sg) const { return bounds_[static_cast<std::size_t>(sg)]; }
   double seg_top(int sg) const { return bounds_[static_cast<std::size_t>(sg) + 1]; }
