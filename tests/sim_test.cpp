@@ -16,6 +16,7 @@
 #include <optional>
 #include <random>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -956,6 +957,31 @@ TEST(Sim, CancelKeepsWhatWasComputed) {
   for (std::size_t n = 0; n < part.result.steps.size(); ++n) {
     ASSERT_EQ(part.result.steps[n].h_max_mm, whole.result.steps[n].h_max_mm);
   }
+}
+
+// What a sink throws stops the simulation and comes out of it, the sink called no more: the
+// steps go through a pipeline in batches (several in flight), and none is taken after the
+// throw.
+TEST(Sim, WhatTheSinkThrowsStopsTheSimulation) {
+  const Job job = small_wagih_job();
+  const ToolPath path = plan_path(job).path;
+  const auto [from, to] = cycle_window(path, 2, 3);
+  struct Full final : SimSink {
+    void take(const SimStep&, std::span<const ChipEntry>) override {
+      if (++calls == 500) throw std::runtime_error("the sink is full");
+    }
+    std::size_t calls = 0;
+  } full;
+  SimControl c;
+  c.keep_records = false;
+  c.sink = &full;
+  try {
+    (void)simulate_job(job, path, from, to, c);
+    ADD_FAILURE() << "simulate did not throw";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "the sink is full");
+  }
+  EXPECT_EQ(full.calls, 500u);
 }
 
 // simulate's --out is written as one set: cancelled between files, the folder holds none of
