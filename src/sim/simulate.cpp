@@ -813,13 +813,16 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
       }
     }
   };
-  // The records of a step whose boards are cut, in step order.
+  // The records of a step whose boards are cut, in step order (one stage at a time: the
+  // merged segments' buffers are reused).
+  std::vector<double> seg_h, seg_lo, seg_hi;
   auto finish_step = [&](StepWork& sw) {
     const std::array<BoardAcc, 3>& bacc = sw.acc;
     const double tb = sw.tb;
     const std::array<double, 3>& c = sw.c;
-    std::vector<double> seg_h(nz * static_cast<std::size_t>(segs), 0.0), seg_lo(seg_h.size(), kInf),
-        seg_hi(seg_h.size(), -kInf);
+    seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
+    seg_lo.assign(seg_h.size(), kInf);
+    seg_hi.assign(seg_h.size(), -kInf);
     for (std::size_t b = 0; b < 3; ++b) {
       for (std::size_t q = 0; q < seg_h.size(); ++q) {
         seg_h[q] = std::max(seg_h[q], bacc[b].seg_h[q]);
