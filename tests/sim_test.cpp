@@ -4,6 +4,7 @@
 #include "trochomill/sim.hpp"
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 #include <tbb/global_control.h>
 #include <unistd.h>
 
@@ -21,6 +22,7 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/geometry.hpp"
 #include "test_util.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
@@ -1429,4 +1431,81 @@ TEST(Sim, AMeshStockHoldsWhatTheMeshEncloses) {
 }
 
 }  // namespace
+}  // namespace trochomill
+
+namespace trochomill {
+
+// The X and Y boards' row check done for a layer's rows at once with Highway's vectors
+// (sim_detail::row_chords) against the scalar pieces it replaces (SectorSlicer::on_line and
+// annulus_parts), row by row, on every vector target this processor runs: the same bits, or
+// the simulation's results would depend on the processor. Sectors of every kind (about the
+// axes, across 0 and pi, ending on multiples of pi), rows through the centre, inner radii
+// from none to beyond the outer.
+TEST(Sim, RowChordsAreTheScalarRowsOnEveryTarget) {
+  using sim_detail::annulus_parts;
+  using sim_detail::RowChords;
+  using sim_detail::SectorSlicer;
+  std::mt19937_64 rng(20261203);
+  std::uniform_real_distribution<double> U(0, 1);
+  const auto bits = [](double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  };
+  std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  ASSERT_FALSE(targets.empty());
+  std::size_t rows = 0, chords = 0, split = 0;
+  for (const int64_t target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    for (int c = 0; c < 2000; ++c) {
+      // Ends on the multiples of pi / 2 a fifth of the time each.
+      auto angle = [&] {
+        return U(rng) < 0.2 ? std::floor(U(rng) * 8 - 4) * 0.5 * kPi : (U(rng) * 4 - 2) * kPi;
+      };
+      const double a0 = angle();
+      const double a1 = a0 + (U(rng) < 0.2 ? 0.5 * kPi : U(rng) * 0.99 * kPi);
+      const SectorSlicer slicer(a0, a1);
+      const double d = 0.005 * (1 + std::floor(U(rng) * 4));
+      const double origin = -5 + 10 * U(rng), R = 8 * U(rng) + 0.01;
+      const double r_in = U(rng) < 0.2 ? 0.0 : R * 1.1 * U(rng);
+      const int r0 = static_cast<int>(U(rng) * 100);
+      const int n = 1 + static_cast<int>(U(rng) * 2.5 * R / d);
+      // A row through the centre in half the cases.
+      const int mid = r0 + static_cast<int>(U(rng) * n);
+      const double centre = U(rng) < 0.5 ? origin + (mid + 0.5) * d : origin + U(rng) * n * d;
+      const bool negate = U(rng) < 0.5;
+      RowChords out;
+      sim_detail::row_chords(slicer.coeffs(), origin, d, r0, n, centre, negate, R, r_in, out);
+      for (int k = 0; k < n; ++k) {
+        const auto q = static_cast<std::size_t>(k);
+        const double perp = (origin + (r0 + k + 0.5) * d) - centre;
+        ASSERT_EQ(bits(out.perp[q]), bits(perp));
+        const auto on = slicer.on_line(negate ? -perp : perp, R);
+        std::array<Interval, 2> parts{};
+        const int np = on ? annulus_parts(perp, on->lo, on->hi, r_in, R, parts) : 0;
+        // The vectors keep the near part and the far one apart (the scalar code packs them);
+        // an empty part is (inf, -inf).
+        std::vector<Interval> got;
+        if (out.a_lo[q] < out.a_hi[q]) got.push_back({out.a_lo[q], out.a_hi[q]});
+        if (out.b_lo[q] < out.b_hi[q]) got.push_back({out.b_lo[q], out.b_hi[q]});
+        ASSERT_EQ(static_cast<int>(got.size()), np) << "target " << hwy::TargetName(target);
+        for (int p = 0; p < np; ++p) {
+          ASSERT_EQ(bits(got[static_cast<std::size_t>(p)].lo), bits(parts[p].lo));
+          ASSERT_EQ(bits(got[static_cast<std::size_t>(p)].hi), bits(parts[p].hi));
+        }
+        if (np > 0) {  // the chord itself is only read where a part holds material
+          ASSERT_EQ(bits(out.lo[q]), bits(on->lo));
+          ASSERT_EQ(bits(out.hi[q]), bits(on->hi));
+        }
+        ++rows, chords += on ? 1 : 0, split += np == 2 ? 1 : 0;
+      }
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  // The cases reached what they are for: many rows, most with a chord, some split in two.
+  EXPECT_GT(rows, 100'000U);
+  EXPECT_GT(chords, rows / 4);
+  EXPECT_GT(split, 1000U);
+}
+
 }  // namespace trochomill

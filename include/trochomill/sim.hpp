@@ -157,6 +157,9 @@ class DexelBoard {
   [[nodiscard]] int count_v() const noexcept { return nv_; }
   [[nodiscard]] double u_of(int i) const noexcept { return u0_ + (i + 0.5) * d_; }
   [[nodiscard]] double v_of(int j) const noexcept { return v0_ + (j + 0.5) * d_; }
+  /// The grid's origin along u and v (mm): u_of(i) = u0 + (i + 1/2) d.
+  [[nodiscard]] double u0() const noexcept { return u0_; }
+  [[nodiscard]] double v0() const noexcept { return v0_; }
   /// The indices of the rays along u (`along_u`) or v whose coordinate lies in [lo, hi] (mm),
   /// clipped to the board (empty when first > second).
   [[nodiscard]] std::pair<int, int> index_range(bool along_u, double lo, double hi) const {
@@ -180,6 +183,16 @@ class DexelBoard {
     const std::size_t t = tile_index(i, j);
     if (axis_ == 2) return tiles1_[t] ? tiles1_[t][in_tile(i, j)].intervals() : full_span();
     return tiles2_[t] ? tiles2_[t][in_tile(i, j)].intervals() : full_span();
+  }
+  /// Asks the processor to fetch ray (i, j) into its caches (a hint: nothing changes), so
+  /// that rays looked at one after the other do not wait for memory one at a time.
+  void prefetch(int i, int j) const noexcept {
+    const std::size_t t = tile_index(i, j);
+    if (axis_ == 2) {
+      if (tiles1_[t]) __builtin_prefetch(&tiles1_[t][in_tile(i, j)]);
+    } else if (tiles2_[t]) {
+      __builtin_prefetch(&tiles2_[t][in_tile(i, j)]);
+    }
   }
   [[nodiscard]] Interval full() const noexcept { return full_; }
   /// Material volume represented by the board (mm^3): sum of lengths times d^2.

@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 
+#include "sim/rows.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/units.hpp"
 
@@ -27,12 +28,13 @@ inline bool contains_angle(double a0, double a1, double alpha) {
 // The angles' sines and cosines are taken once per sector, the lines then cost no trigonometry.
 class SectorSlicer {
  public:
-  SectorSlicer(double a0, double a1)
-      : has0_(contains_angle(a0, a1, 0.0)), has_pi_(contains_angle(a0, a1, kPi)) {
+  SectorSlicer(double a0, double a1) {
+    c_.has0 = contains_angle(a0, a1, 0.0);
+    c_.has_pi = contains_angle(a0, a1, kPi);
     // Split at the multiples of pi (sin a = 0); each piece keeps lines on its sine's side.
     const double cut = (std::floor(a0 / kPi) + 1) * kPi;
-    set(piece_[0], a0, std::min(a1, cut));
-    set(piece_[1], cut, a1);
+    set(c_.piece[0], a0, std::min(a1, cut));
+    set(c_.piece[1], cut, a1);
   }
 
   [[nodiscard]] std::optional<Interval> on_line(double dy, double r) const {
@@ -40,10 +42,10 @@ class SectorSlicer {
     const double w = std::sqrt(r * r - dy * dy);
     double lo = kInf, hi = -kInf;
     if (dy == 0) {
-      if (has0_) lo = std::min(lo, 0.0), hi = std::max(hi, w);
-      if (has_pi_) lo = std::min(lo, -w), hi = std::max(hi, 0.0);
+      if (c_.has0) lo = std::min(lo, 0.0), hi = std::max(hi, w);
+      if (c_.has_pi) lo = std::min(lo, -w), hi = std::max(hi, 0.0);
     } else {
-      for (const Piece& p : piece_) {
+      for (const SlicerCoeffs::Piece& p : c_.piece) {
         if (!p.valid || p.s * dy <= 0) continue;
         for (int e = 0; e < 2; ++e) {
           const double sa = p.sin[e], ca = p.cos[e];
@@ -63,21 +65,18 @@ class SectorSlicer {
     return std::nullopt;
   }
 
+  // The constants (row_chords takes them for many lines at once).
+  [[nodiscard]] const SlicerCoeffs& coeffs() const noexcept { return c_; }
+
  private:
-  struct Piece {
-    bool valid = false;
-    double s = 0;  // sine at the piece's middle
-    double sin[2]{}, cos[2]{};
-  };
-  static void set(Piece& p, double p0, double p1) {
+  static void set(SlicerCoeffs::Piece& p, double p0, double p1) {
     p.valid = p1 > p0;
     if (!p.valid) return;
     p.s = std::sin(0.5 * (p0 + p1));
     p.sin[0] = std::sin(p0), p.cos[0] = std::cos(p0);
     p.sin[1] = std::sin(p1), p.cos[1] = std::cos(p1);
   }
-  bool has0_, has_pi_;
-  Piece piece_[2];
+  SlicerCoeffs c_;
 };
 
 // The parts of [lo, hi] (offsets along a line at distance p from the centre) whose distance

@@ -27,6 +27,8 @@ namespace {
 using sim_detail::annulus_parts;
 using sim_detail::contains_angle;
 using sim_detail::kInf;
+using sim_detail::row_chords;
+using sim_detail::RowChords;
 using sim_detail::SectorSlicer;
 
 // Steps whose path samples are taken at a time (simulate; 5.8 MB of samples).
@@ -352,17 +354,8 @@ class Stepper {
       int sg_h = -1, sg_mid = -1;
       double sine = 0;
       // Cuts [lo, hi] (offsets along the row from along_c, the row at distance perp from the
-      // centre) from ray (i, j) when its annulus part holds material, and records the chip.
-      auto cut_row = [&](int i, int j, double along_c, double perp, double lo, double hi) {
-        // Material can only be in the annulus part of the chord.
-        const int np = annulus_parts(perp, lo, hi, r_in, R_h, parts);
-        const std::span<const Interval> found = board.intervals(i, j);
-        bool any = false;
-        for (int q = 0; q < np && !any; ++q) {
-          any = has_material(found, along_c + parts[static_cast<std::size_t>(q)].lo,
-                             along_c + parts[static_cast<std::size_t>(q)].hi);
-        }
-        if (!any) return;
+      // centre) from ray (i, j) and records the chip.
+      auto cut = [&](int i, int j, double along_c, double perp, double lo, double hi) {
         A.removed.clear();
         if (board.subtract(i, j, along_c + lo, along_c + hi, A.removed) > 0) ++A.updates;
         if (A.removed.empty()) return;
@@ -381,6 +374,18 @@ class Stepper {
           }
         }
       };
+      // The same when the ray's annulus part holds material (only there can it lie).
+      auto cut_row = [&](int i, int j, double along_c, double perp, double lo, double hi) {
+        const int np = annulus_parts(perp, lo, hi, r_in, R_h, parts);
+        const std::span<const Interval> found = board.intervals(i, j);
+        for (int q = 0; q < np; ++q) {
+          if (has_material(found, along_c + parts[static_cast<std::size_t>(q)].lo,
+                           along_c + parts[static_cast<std::size_t>(q)].hi)) {
+            cut(i, j, along_c, perp, lo, hi);
+            return;
+          }
+        }
+      };
       if (strip) {
         strip_rows(b, board, w, zl, w.pa + h * kappa_, R_h, r_in, cut_row);
       }
@@ -394,21 +399,34 @@ class Stepper {
                                  : board.may_hold(zl, zl, r0, r1, w.cy + bx[2], w.cy + bx[3]);
         if (!hold) continue;
       }
-      for (int r = r0; r <= r1; ++r) {
-        const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
-        std::optional<Interval> off;
-        double along_c = 0, perp = 0;
-        if (b == 0) {  // line y = u: offsets along x
-          perp = board.u_of(i) - w.cy;
-          off = slicer.on_line(perp, R_h);
-          along_c = w.cx;
-        } else {  // line x = v: rotate by -90 degrees, (x, y) -> (y, -x)
-          perp = board.v_of(j) - w.cx;
-          off = slicer.on_line(-perp, R_h);
-          along_c = w.cy;
+      if (r0 > r1) continue;
+      // The rows' chords and annulus parts, all at once (vectorised; board 0's rows y = u
+      // along x, board 1's x = v along y, turned by -90 degrees: (x, y) -> (y, -x)); then
+      // the rays that may hold material, fetched together; then each checked and cut in
+      // row order.
+      RowChords& rc = rows_[static_cast<std::size_t>(b)];
+      const int n = r1 - r0 + 1;
+      row_chords(slicer.coeffs(), b == 0 ? board.u0() : board.v0(), d_, r0, n, b == 0 ? w.cy : w.cx,
+                 b == 1, R_h, r_in, rc);
+      const double along_c = b == 0 ? w.cx : w.cy;
+      std::vector<int>& near = near_[static_cast<std::size_t>(b)];
+      near.clear();
+      for (int q = 0; q < n; ++q) {
+        const auto u = static_cast<std::size_t>(q);
+        if (!(rc.a_lo[u] < rc.a_hi[u]) && !(rc.b_lo[u] < rc.b_hi[u])) continue;
+        board.prefetch(b == 0 ? r0 + q : zl, b == 0 ? zl : r0 + q);
+        near.push_back(q);
+      }
+      for (const int q : near) {
+        const auto u = static_cast<std::size_t>(q);
+        const int i = b == 0 ? r0 + q : zl, j = b == 0 ? zl : r0 + q;
+        const std::span<const Interval> found = board.intervals(i, j);
+        if ((rc.a_lo[u] < rc.a_hi[u] &&
+             has_material(found, along_c + rc.a_lo[u], along_c + rc.a_hi[u])) ||
+            (rc.b_lo[u] < rc.b_hi[u] &&
+             has_material(found, along_c + rc.b_lo[u], along_c + rc.b_hi[u]))) {
+          cut(i, j, along_c, rc.perp[u], rc.lo[u], rc.hi[u]);
         }
-        if (!off) continue;
-        cut_row(i, j, along_c, perp, off->lo, off->hi);
       }
     }
   }
@@ -568,6 +586,10 @@ class Stepper {
   int segs_;
   double rc_, ht_, st_, inv_sin_;
   std::vector<double> bounds_;  // segment boundaries' heights
+  // Per X/Y board (its stage runs one step at a time): a layer's rows and those that may
+  // hold material.
+  std::array<RowChords, 2> rows_;
+  std::array<std::vector<int>, 2> near_;
 };
 
 }  // namespace

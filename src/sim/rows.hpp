@@ -1,0 +1,42 @@
+// The rows of one layer crossing an annular sector, all at once (src/sim/, not public): the
+// X and Y boards' row check in the time-stepped simulation, vectorised with Google Highway
+// (its dynamic dispatch picks the widest vectors the processor has at run time). Every lane
+// does the scalar code's operations in the same order (no fused multiply-add, the same
+// comparisons for min and max), so the results are the same bits on every target.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace trochomill::sim_detail {
+
+// A thin sector's constants (SectorSlicer): its pieces between the multiples of pi.
+struct SlicerCoeffs {
+  struct Piece {
+    bool valid = false;
+    double s = 0;  // sine at the piece's middle
+    double sin[2]{}, cos[2]{};
+  };
+  bool has0 = false, has_pi = false;  // whether the range holds the angles 0 and pi
+  Piece piece[2];
+};
+
+// The rows' chords and annulus parts (mm, offsets along the row from the centre's
+// projection), one entry per row. A row's part is empty when its lo is not below its hi; a
+// row with both parts empty holds nothing the sector can cut.
+struct RowChords {
+  std::vector<double> perp, lo, hi, a_lo, a_hi, b_lo, b_hi;
+  // Makes room for n rows (the vectors' lanes, a whole number of vectors).
+  void reserve_rows(std::size_t n);
+};
+
+// Rows r0 .. r0 + n - 1 of a board whose rows lie at origin + (r + 1/2) d (mm): each row's
+// distance from the centre perp = (origin + (r + 1/2) d) - centre, the sector's chord on the
+// line at signed distance (negate ? -perp : perp) within radius R (SectorSlicer::on_line),
+// and the parts of that chord at distances in [r_in, R] from the centre (annulus_parts): the
+// part on the near side, then the far one (one part, the whole span, when r_in is below the
+// row's distance).
+void row_chords(const SlicerCoeffs& sector, double origin, double d, int r0, int n, double centre,
+                bool negate, double R, double r_in, RowChords& out);
+
+}  // namespace trochomill::sim_detail
