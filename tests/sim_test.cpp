@@ -1508,4 +1508,83 @@ TEST(Sim, RowChordsAreTheScalarRowsOnEveryTarget) {
   EXPECT_GT(split, 1000U);
 }
 
+// The row check's vectorised look at the rays (sim_detail::rays_maybe) never passes over a
+// ray with material in a row's parts, and finds material exactly where the intervals have it
+// for the rays it reads (one or two inline intervals; spilled and emptied rays are left to
+// the caller, flagged): rays of both X and Y boards cut at random into 0-4 intervals, parts
+// at random (some empty, some touching a ray's ends), runs of every length up to a tile's
+// edge, on every vector target.
+TEST(Sim, RaysMaybeIsTheIntervalsOnEveryTarget) {
+  using sim_detail::kInf;
+  using sim_detail::RowChords;
+  std::mt19937_64 rng(3122026);
+  std::uniform_real_distribution<double> U(0, 1);
+  const StockBox box{{0, 0, 0}, {10, 6.4, 6.4}};
+  std::size_t inline_rays = 0, flagged = 0, with_material = 0;
+  for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    for (int axis = 0; axis < 2; ++axis) {
+      DexelBoard board(axis, box, 0.1);  // 64 x 64 rays: one tile
+      std::vector<Interval> removed;
+      for (int i = 0; i < 64; ++i) {
+        for (int j = 0; j < 64; ++j) {
+          const int cuts = static_cast<int>(U(rng) * 4);
+          for (int c = 0; c < cuts; ++c) {
+            const double a = U(rng) * 10;
+            (void)board.subtract(i, j, a, a + U(rng) * 3, removed);
+          }
+          if (U(rng) < 0.05) (void)board.subtract(i, j, -1, 11, removed);  // emptied
+        }
+      }
+      for (int t = 0; t < 400; ++t) {
+        const int layer = static_cast<int>(U(rng) * 64), r0 = static_cast<int>(U(rng) * 64);
+        const int count = 1 + static_cast<int>(U(rng) * (64 - r0));
+        RowChords rc;
+        rc.reserve_rows(static_cast<std::size_t>(count) + 64);
+        const double along = U(rng) * 4;
+        for (int k = 0; k < count; ++k) {
+          const auto u = static_cast<std::size_t>(k);
+          auto part = [&](double& lo, double& hi) {
+            lo = U(rng) * 8 - along, hi = lo + U(rng) * 2;
+            if (U(rng) < 0.3) lo = kInf, hi = -kInf;  // no part
+          };
+          part(rc.a_lo[u], rc.a_hi[u]);
+          part(rc.b_lo[u], rc.b_hi[u]);
+        }
+        const int i = axis == 0 ? r0 : layer, j = axis == 0 ? layer : r0;
+        const Dexel* rays = board.row_rays(i, j);
+        ASSERT_NE(rays, nullptr);
+        sim_detail::rays_maybe(reinterpret_cast<const double*>(rays), count, 0, along, rc);
+        for (int k = 0; k < count; ++k) {
+          const auto u = static_cast<std::size_t>(k);
+          const auto found =
+              board.intervals(axis == 0 ? r0 + k : layer, axis == 0 ? layer : r0 + k);
+          bool any = false;
+          for (const Interval& v : found) {
+            for (const auto& [lo, hi] :
+                 {std::pair{rc.a_lo[u], rc.a_hi[u]}, std::pair{rc.b_lo[u], rc.b_hi[u]}}) {
+              any = any || (lo < hi && v.hi > along + lo && v.lo < along + hi);
+            }
+          }
+          ASSERT_TRUE(rc.maybe[u] == 0.0 || rc.maybe[u] == 1.0);
+          if (any) {
+            ASSERT_EQ(rc.maybe[u], 1.0) << hwy::TargetName(target);
+          }
+          // Inline rays (one or two intervals, not spilled): the answer is exact.
+          if (!found.empty() && found.size() <= 2 &&
+              static_cast<const void*>(found.data()) == static_cast<const void*>(&rays[k])) {
+            ++inline_rays;
+            ASSERT_EQ(rc.maybe[u] == 1.0, any) << hwy::TargetName(target);
+          }
+          flagged += rc.maybe[u] == 1.0 ? 1 : 0, with_material += any ? 1 : 0;
+        }
+      }
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  EXPECT_GT(inline_rays, 10'000U);
+  EXPECT_GT(with_material, inline_rays / 10);
+  EXPECT_LT(with_material, flagged + 1);
+}
+
 }  // namespace trochomill

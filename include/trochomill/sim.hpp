@@ -184,6 +184,14 @@ class DexelBoard {
     if (axis_ == 2) return tiles1_[t] ? tiles1_[t][in_tile(i, j)].intervals() : full_span();
     return tiles2_[t] ? tiles2_[t][in_tile(i, j)].intervals() : full_span();
   }
+  /// The X or Y board's rays (i, j), (i + 1, j), ... (X board) or (i, j), (i, j + 1), ... (Y
+  /// board) as they lie in memory, to the edge of their tile (kTile - i % kTile or
+  /// kTile - j % kTile of them): null when the tile is untouched. For the simulation's row
+  /// check, which reads their inline words a row of rays at a time.
+  [[nodiscard]] const Dexel* row_rays(int i, int j) const noexcept {
+    const std::size_t t = tile_index(i, j);
+    return axis_ != 2 && tiles2_[t] ? &tiles2_[t][in_tile(i, j)] : nullptr;
+  }
   /// Asks the processor to fetch ray (i, j) into its caches (a hint: nothing changes), so
   /// that rays looked at one after the other do not wait for memory one at a time.
   void prefetch(int i, int j) const noexcept {

@@ -94,6 +94,45 @@ void RowChordsImpl(const SlicerCoeffs& sector, double origin, double d, int r0, 
   }
 }
 
+void RaysMaybeImpl(const double* HWY_RESTRICT rays, int count, int first, double along,
+                   RowChords& out) {
+  const hn::ScalableTag<double> df;
+  const std::size_t N = hn::Lanes(df);
+  const auto va = hn::Set(df, along);
+  const auto one = hn::Set(df, 1.0);
+  // Overlap of [lo, hi] with (p_lo, p_hi): NaN bounds (an unused interval) never overlap.
+  const auto overlaps = [](auto lo, auto hi, auto p_lo, auto p_hi) {
+    return hn::And(hn::Gt(hi, p_lo), hn::Lt(lo, p_hi));
+  };
+  const auto n = static_cast<std::size_t>(count), f = static_cast<std::size_t>(first);
+  std::size_t k = 0;
+  for (; k + N <= n; k += N) {
+    decltype(hn::Zero(df)) lo0, hi0, lo1, hi1;
+    hn::LoadInterleaved4(df, rays + 4 * k, lo0, hi0, lo1, hi1);
+    const auto a_lo = hn::Add(va, hn::LoadU(df, out.a_lo.data() + f + k));
+    const auto a_hi = hn::Add(va, hn::LoadU(df, out.a_hi.data() + f + k));
+    const auto b_lo = hn::Add(va, hn::LoadU(df, out.b_lo.data() + f + k));
+    const auto b_hi = hn::Add(va, hn::LoadU(df, out.b_hi.data() + f + k));
+    const auto in_a = hn::Or(overlaps(lo0, hi0, a_lo, a_hi), overlaps(lo1, hi1, a_lo, a_hi));
+    const auto in_b = hn::Or(overlaps(lo0, hi0, b_lo, b_hi), overlaps(lo1, hi1, b_lo, b_hi));
+    const auto maybe = hn::Or(hn::IsNaN(lo0), hn::Or(in_a, in_b));
+    hn::StoreU(hn::IfThenElseZero(maybe, one), df, out.maybe.data() + f + k);
+  }
+  // The last rays, fewer than a vector: the same test one at a time (reading no further).
+  for (; k < n; ++k) {
+    const double* r = rays + 4 * k;
+    const double a_lo = along + out.a_lo[f + k], a_hi = along + out.a_hi[f + k];
+    const double b_lo = along + out.b_lo[f + k], b_hi = along + out.b_hi[f + k];
+    const auto ov = [](double lo, double hi, double p_lo, double p_hi) {
+      return hi > p_lo && lo < p_hi;
+    };
+    const bool maybe = std::isnan(r[0]) || ov(r[0], r[1], a_lo, a_hi) ||
+                       ov(r[2], r[3], a_lo, a_hi) || ov(r[0], r[1], b_lo, b_hi) ||
+                       ov(r[2], r[3], b_lo, b_hi);
+    out.maybe[f + k] = maybe ? 1.0 : 0.0;
+  }
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace trochomill::sim_detail
 HWY_AFTER_NAMESPACE();
@@ -102,15 +141,22 @@ HWY_AFTER_NAMESPACE();
 namespace trochomill::sim_detail {
 
 HWY_EXPORT(RowChordsImpl);
+HWY_EXPORT(RaysMaybeImpl);
 
 void RowChords::reserve_rows(std::size_t n) {
   if (perp.size() >= n) return;
-  for (std::vector<double>* v : {&perp, &lo, &hi, &a_lo, &a_hi, &b_lo, &b_hi}) v->resize(n);
+  for (std::vector<double>* v : {&perp, &lo, &hi, &a_lo, &a_hi, &b_lo, &b_hi, &maybe}) {
+    v->resize(n);
+  }
 }
 
 void row_chords(const SlicerCoeffs& sector, double origin, double d, int r0, int n, double centre,
                 bool negate, double R, double r_in, RowChords& out) {
   HWY_DYNAMIC_DISPATCH(RowChordsImpl)(sector, origin, d, r0, n, centre, negate, R, r_in, out);
+}
+
+void rays_maybe(const double* rays, int count, int first, double along, RowChords& out) {
+  HWY_DYNAMIC_DISPATCH(RaysMaybeImpl)(rays, count, first, along, out);
 }
 
 }  // namespace trochomill::sim_detail

@@ -26,6 +26,9 @@ struct SlicerCoeffs {
 // row with both parts empty holds nothing the sector can cut.
 struct RowChords {
   std::vector<double> perp, lo, hi, a_lo, a_hi, b_lo, b_hi;
+  // rays_maybe's answer: 1 where the row's ray may hold material in its parts, 0 where it
+  // surely does not.
+  std::vector<double> maybe;
   // Makes room for n rows (the vectors' lanes, a whole number of vectors).
   void reserve_rows(std::size_t n);
 };
@@ -38,5 +41,13 @@ struct RowChords {
 // row's distance).
 void row_chords(const SlicerCoeffs& sector, double origin, double d, int r0, int n, double centre,
                 bool negate, double R, double r_in, RowChords& out);
+
+// Whether the rays of rows first .. first + count - 1 may hold material in their parts: the
+// rays' inline words as BasicDexel<2> lays them out (four doubles a ray: two intervals, the
+// second's bounds NaN when unused; a spilled or empty ray's first word a NaN tag), `count`
+// rays one after the other; a part is (along + a_lo, along + a_hi) and the same with b. 1 in
+// out.maybe where a part overlaps an inline interval or the ray is spilled (the caller
+// looks at those itself), else 0: exactly where has_material finds nothing.
+void rays_maybe(const double* rays, int count, int first, double along, RowChords& out);
 
 }  // namespace trochomill::sim_detail

@@ -11,6 +11,7 @@
 #include <ctime>
 #include <limits>
 #include <optional>
+#include <type_traits>
 #include <utility>
 
 #include "sim/geometry.hpp"
@@ -27,6 +28,7 @@ namespace {
 using sim_detail::annulus_parts;
 using sim_detail::contains_angle;
 using sim_detail::kInf;
+using sim_detail::rays_maybe;
 using sim_detail::row_chords;
 using sim_detail::RowChords;
 using sim_detail::SectorSlicer;
@@ -402,23 +404,25 @@ class Stepper {
       if (r0 > r1) continue;
       // The rows' chords and annulus parts, all at once (vectorised; board 0's rows y = u
       // along x, board 1's x = v along y, turned by -90 degrees: (x, y) -> (y, -x)); then
-      // the rays that may hold material, fetched together; then each checked and cut in
-      // row order.
+      // whether each row's ray may hold material in its parts, the rays of a tile read a
+      // vector at a time; then those rays checked and cut in row order.
       RowChords& rc = rows_[static_cast<std::size_t>(b)];
       const int n = r1 - r0 + 1;
       row_chords(slicer.coeffs(), b == 0 ? board.u0() : board.v0(), d_, r0, n, b == 0 ? w.cy : w.cx,
                  b == 1, R_h, r_in, rc);
       const double along_c = b == 0 ? w.cx : w.cy;
-      std::vector<int>& near = near_[static_cast<std::size_t>(b)];
-      near.clear();
+      for (int q = 0; q < n;) {
+        const int r = r0 + q, run = std::min(n - q, DexelBoard::kTile - r % DexelBoard::kTile);
+        if (const Dexel* rays = board.row_rays(b == 0 ? r : zl, b == 0 ? zl : r)) {
+          rays_maybe(reinterpret_cast<const double*>(rays), run, q, along_c, rc);
+        } else {  // an untouched tile: its rays hold the stock, the scalar check decides
+          std::fill_n(rc.maybe.begin() + q, run, 1.0);
+        }
+        q += run;
+      }
       for (int q = 0; q < n; ++q) {
         const auto u = static_cast<std::size_t>(q);
-        if (!(rc.a_lo[u] < rc.a_hi[u]) && !(rc.b_lo[u] < rc.b_hi[u])) continue;
-        board.prefetch(b == 0 ? r0 + q : zl, b == 0 ? zl : r0 + q);
-        near.push_back(q);
-      }
-      for (const int q : near) {
-        const auto u = static_cast<std::size_t>(q);
+        if (rc.maybe[u] == 0) continue;
         const int i = b == 0 ? r0 + q : zl, j = b == 0 ? zl : r0 + q;
         const std::span<const Interval> found = board.intervals(i, j);
         if ((rc.a_lo[u] < rc.a_hi[u] &&
@@ -586,10 +590,10 @@ class Stepper {
   int segs_;
   double rc_, ht_, st_, inv_sin_;
   std::vector<double> bounds_;  // segment boundaries' heights
-  // Per X/Y board (its stage runs one step at a time): a layer's rows and those that may
-  // hold material.
+  // Per X/Y board (its stage runs one step at a time): a layer's rows.
   std::array<RowChords, 2> rows_;
-  std::array<std::vector<int>, 2> near_;
+  static_assert(sizeof(Dexel) == 4 * sizeof(double) && std::is_standard_layout_v<Dexel>,
+                "rays_maybe reads a ray's inline words as four doubles");
 };
 
 }  // namespace
