@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "sim/geometry.hpp"
+#include "sim/rows.hpp"
 #include "test_util.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"

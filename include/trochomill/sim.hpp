@@ -192,16 +192,6 @@ class DexelBoard {
     const std::size_t t = tile_index(i, j);
     return axis_ != 2 && tiles2_[t] ? &tiles2_[t][in_tile(i, j)] : nullptr;
   }
-  /// Asks the processor to fetch ray (i, j) into its caches (a hint: nothing changes), so
-  /// that rays looked at one after the other do not wait for memory one at a time.
-  void prefetch(int i, int j) const noexcept {
-    const std::size_t t = tile_index(i, j);
-    if (axis_ == 2) {
-      if (tiles1_[t]) __builtin_prefetch(&tiles1_[t][in_tile(i, j)]);
-    } else if (tiles2_[t]) {
-      __builtin_prefetch(&tiles2_[t][in_tile(i, j)]);
-    }
-  }
   [[nodiscard]] Interval full() const noexcept { return full_; }
   /// Material volume represented by the board (mm^3): sum of lengths times d^2.
   [[nodiscard]] double volume_mm3() const;

@@ -8,7 +8,6 @@
 #include <limits>
 #include <optional>
 
-#include "sim/rows.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/units.hpp"
 
@@ -21,6 +20,18 @@ inline bool contains_angle(double a0, double a1, double alpha) {
   const double m = std::ceil((a0 - alpha) / kTwoPi);
   return alpha + m * kTwoPi <= a1;
 }
+
+// A thin sector's constants (SectorSlicer's, which row_chords takes for many lines at once): its
+// pieces between the multiples of pi.
+struct SlicerCoeffs {
+  struct Piece {
+    bool valid = false;
+    double s = 0;  // sine at the piece's middle
+    double sin[2]{}, cos[2]{};
+  };
+  bool has0 = false, has_pi = false;  // whether the range holds the angles 0 and pi
+  Piece piece[2];
+};
 
 // The offsets x (along the line) of the points of the thin sector {t (cos a, sin a): 0 <= t
 // <= r, a in [a0, a1]} (a1 - a0 < pi) on lines at signed distance dy from the centre, parallel

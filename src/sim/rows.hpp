@@ -8,18 +8,9 @@
 #include <cstddef>
 #include <vector>
 
-namespace trochomill::sim_detail {
+#include "sim/geometry.hpp"
 
-// A thin sector's constants (SectorSlicer): its pieces between the multiples of pi.
-struct SlicerCoeffs {
-  struct Piece {
-    bool valid = false;
-    double s = 0;  // sine at the piece's middle
-    double sin[2]{}, cos[2]{};
-  };
-  bool has0 = false, has_pi = false;  // whether the range holds the angles 0 and pi
-  Piece piece[2];
-};
+namespace trochomill::sim_detail {
 
 // The rows' chords and annulus parts (mm, offsets along the row from the centre's
 // projection), one entry per row. A row's part is empty when its lo is not below its hi; a

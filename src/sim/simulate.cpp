@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "sim/geometry.hpp"
+#include "sim/rows.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
