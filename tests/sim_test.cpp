@@ -58,6 +58,39 @@ TEST(Sim, DexelSubtract) {
   EXPECT_EQ(Dexel().subtract(0, 1, removed), 0.0);
 }
 
+// A dexel split beyond its inline intervals moves to the heap, and back inline (its block
+// freed) once cuts leave few enough: the intervals are the same either way.
+TEST(Sim, DexelComesBackInlineWhenCutsJoinItAgain) {
+  std::vector<Interval> removed;
+  Dexel d({0, 10});
+  (void)d.subtract(2, 3, removed);
+  EXPECT_EQ(d.heap_bytes(), 0U);  // two intervals: inline
+  (void)d.subtract(5, 6, removed);
+  ASSERT_EQ(d.intervals().size(), 3U);
+  EXPECT_GT(d.heap_bytes(), 0U);        // three: spilled
+  (void)d.subtract(1.5, 5.5, removed);  // [0, 1.5] and [6, 10] left
+  ASSERT_EQ(d.intervals().size(), 2U);
+  EXPECT_EQ(d.heap_bytes(), 0U);
+  EXPECT_EQ(d.intervals()[0].lo, 0);
+  EXPECT_EQ(d.intervals()[0].hi, 1.5);
+  EXPECT_EQ(d.intervals()[1].lo, 6);
+  EXPECT_EQ(d.intervals()[1].hi, 10);
+  // Inline again, it splits and spills again, and a spilled one emptied holds no block.
+  (void)d.subtract(7, 8, removed);
+  EXPECT_GT(d.heap_bytes(), 0U);
+  (void)d.subtract(-1, 11, removed);
+  EXPECT_TRUE(d.intervals().empty());
+  EXPECT_EQ(d.heap_bytes(), 0U);
+  // The Z board's dexel (one inline interval) likewise.
+  BasicDexel<1> z({0, 10});
+  (void)z.subtract(4, 5, removed);
+  EXPECT_GT(z.heap_bytes(), 0U);
+  (void)z.subtract(3, 10, removed);
+  ASSERT_EQ(z.intervals().size(), 1U);
+  EXPECT_EQ(z.heap_bytes(), 0U);
+  EXPECT_EQ(z.intervals()[0].hi, 3);
+}
+
 // Random subtractions against a plain reference (intervals rebuilt in a fresh vector each
 // time): the in-place, inline-first dexel holds exactly the same intervals (the arithmetic is
 // the same min/max on the same doubles: exact equality) and reports the same removed pieces,

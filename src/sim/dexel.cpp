@@ -92,8 +92,16 @@ double BasicDexel<N>::subtract(double a, double b, std::vector<Interval>& remove
     std::copy_backward(v + last, v + n, v + n_new);
   }
   std::copy(keep, keep + nk, v + first);
-  if (sp) {
+  if (sp && n_new > N) {
     spill(blk, n_new);
+  } else if (sp) {  // few enough again: back inline, the block freed (or none when empty)
+    if (n_new == 0) {
+      spill(nullptr, 0);
+    } else {
+      std::copy(v, v + n_new, in_);  // v is in the block: in_ does not overlap it
+      for (std::uint32_t k = n_new; k < N; ++k) in_[k] = {kUnused, kUnused};
+    }
+    delete[] blk;
   } else if (n_new == 0) {
     spill(nullptr, 0);
   } else {
