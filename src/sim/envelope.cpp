@@ -457,12 +457,19 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       RowUnion row;
       Interval segs[6];
       // The strip's rows' unions (kept while the layers' radii stay the same: above the
-      // corner every layer has the same), the runs that reach the strip on this layer, and the
-      // pieces that shaped the last row's union (tried first on the next: neighbouring rows
-      // have nearly the same union, and the runs it covers are then skipped at once).
+      // corner every layer has the same), the runs that reach the strip on this layer, and a
+      // few pieces whose intervals covered the last row's union (tried first on the next:
+      // neighbouring rows have nearly the same union, and the runs it covers are then skipped
+      // at once; next_seeds).
       std::vector<std::vector<Interval>> unions(
           static_cast<std::size_t>(task.last - task.first + 1));
-      std::vector<std::size_t> active, seed, next_seed;
+      std::vector<std::size_t> active, seed;
+      // The pieces' intervals that grew the row's union (their union is the row's).
+      struct Grown {
+        double lo, hi;
+        std::size_t q;
+      };
+      std::vector<Grown> grown;
       const double strip_lo = b == 0 ? board.u_of(task.first) : board.v_of(task.first);
       const double strip_hi = b == 0 ? board.u_of(task.last) : board.v_of(task.last);
       bool have_prev = false;
@@ -472,11 +479,32 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
                                  : box_on_line(pb[0], pb[1], pb[2], pb[3], rh[q], line);
         if (pr.lo > pr.hi || row.covers(pr.lo, pr.hi)) return;
         const int np = piece_on_line(pieces[q], rh[q], line, swap, segs);
-        bool grew = false;
         for (int k = 0; k < np; ++k) {
-          if (!row.covers(segs[k].lo, segs[k].hi)) row.add(segs[k]), grew = true;
+          if (!row.covers(segs[k].lo, segs[k].hi)) {
+            row.add(segs[k]);
+            grown.push_back({segs[k].lo, segs[k].hi, q});
+          }
         }
-        if (grew) next_seed.push_back(q);
+      };
+      // The next row's seeds: few pieces whose intervals cover the row's union (greedy: from
+      // each part's start, the grown interval reaching farthest), so that on the next row,
+      // nearly the same, they build most of the union at once and the runs inside it are
+      // skipped whole.
+      auto next_seeds = [&]() {
+        seed.clear();
+        for (const Interval& u : row.intervals()) {
+          double at = u.lo;
+          for (;;) {
+            const Grown* best = nullptr;
+            for (const Grown& g : grown) {
+              if (g.lo <= at && g.hi > at && (!best || g.hi > best->hi)) best = &g;
+            }
+            if (!best) break;
+            if (std::find(seed.begin(), seed.end(), best->q) == seed.end()) seed.push_back(best->q);
+            at = best->hi;
+            if (at >= u.hi) break;
+          }
+        }
       };
       for (int zl = z0; zl <= z1; ++zl) {
         const double z = z_first ? board.u_of(zl) : board.v_of(zl);
@@ -511,7 +539,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
             const int i = b == 0 ? r : zl, j = b == 0 ? zl : r;
             const double line = b == 0 ? board.u_of(i) : board.v_of(j);
             row.clear();
-            next_seed.clear();
+            grown.clear();
             for (const std::size_t q : seed) {
               if (rh[q] > 0) try_piece(q, line);
             }
@@ -525,7 +553,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
               }
             }
             unions[static_cast<std::size_t>(r - task.first)] = row.intervals();
-            seed.swap(next_seed);
+            next_seeds();
           }
           prev_rh = rh;
           have_prev = true;
