@@ -337,6 +337,23 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
     runs.push_back(r);
   }
   group_start.push_back(runs.size());
+  // The groups by tip height (ties in path order), each group's tip and cutting height, and
+  // each run's and piece's group: a layer's cutting groups are then found by a search, not a pass
+  // over every piece (a plunge's pieces each have their own tip).
+  const std::size_t n_groups = group_start.size() - 1;
+  std::vector<double> group_tip(n_groups), group_height(n_groups);
+  std::vector<std::size_t> by_tip(n_groups), run_group(runs.size()), piece_group(np_all);
+  for (std::size_t g = 0; g < n_groups; ++g) {
+    group_tip[g] = tips[runs[group_start[g]].first];
+    group_height[g] = heights[runs[group_start[g]].first];
+    by_tip[g] = g;
+    for (std::size_t k = group_start[g]; k < group_start[g + 1]; ++k) {
+      run_group[k] = g;
+      for (std::size_t q = runs[k].first; q < runs[k].last; ++q) piece_group[q] = g;
+    }
+  }
+  std::stable_sort(by_tip.begin(), by_tip.end(),
+                   [&](std::size_t a, std::size_t c) { return group_tip[a] < group_tip[c]; });
   // The work, in strips of whole tiles (each tile is only ever touched by one task: no two
   // threads create or cut the same rays): the Z board's strips of columns along x, the X
   // board's strips of rows along y, the Y board's along x.
@@ -453,7 +470,10 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       const bool z_first = b == 1;
       const bool swap = b == 1;
       const auto [z0, z1] = board.index_range(z_first, tip_lo, tip_hi);
-      std::vector<double> rh(np_all), run_r(runs.size()), prev_rh;
+      // Each group's radius on the layer (-1: not cutting there), and the layer's cutting groups
+      // with their radii (in tip order) and the last layer's.
+      std::vector<double> gr(n_groups, -1.0);
+      std::vector<std::pair<std::size_t, double>> cutting, prev_cutting;
       RowUnion row;
       Interval segs[6];
       // The strip's rows' unions (kept while the layers' radii stay the same: above the
@@ -473,12 +493,12 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       const double strip_lo = b == 0 ? board.u_of(task.first) : board.v_of(task.first);
       const double strip_hi = b == 0 ? board.u_of(task.last) : board.v_of(task.last);
       bool have_prev = false;
-      auto try_piece = [&](std::size_t q, double line) {
+      auto try_piece = [&](std::size_t q, double rq, double line) {
         const auto& pb = boxes[q];
-        const Interval pr = swap ? box_on_line(pb[2], pb[3], pb[0], pb[1], rh[q], line)
-                                 : box_on_line(pb[0], pb[1], pb[2], pb[3], rh[q], line);
+        const Interval pr = swap ? box_on_line(pb[2], pb[3], pb[0], pb[1], rq, line)
+                                 : box_on_line(pb[0], pb[1], pb[2], pb[3], rq, line);
         if (pr.lo > pr.hi || row.covers(pr.lo, pr.hi)) return;
-        const int np = piece_on_line(pieces[q], rh[q], line, swap, segs);
+        const int np = piece_on_line(pieces[q], rq, line, swap, segs);
         for (int k = 0; k < np; ++k) {
           if (!row.covers(segs[k].lo, segs[k].hi)) {
             row.add(segs[k]);
@@ -508,31 +528,31 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
       };
       for (int zl = z0; zl <= z1; ++zl) {
         const double z = z_first ? board.u_of(zl) : board.v_of(zl);
-        // Each piece's radius on this layer (-1: not cutting here), each run's largest.
-        bool any = false;
-        for (std::size_t q = 0; q < np_all; ++q) {
-          const double h = z - tips[q];
-          rh[q] = -1;
-          if (!(heights[q] > 0) || h < 0 || h > heights[q]) continue;
+        // The groups cutting on this layer (tips within a flute length below it) and their
+        // radii.
+        for (const auto& [g, r] : cutting) gr[g] = -1;
+        cutting.clear();
+        const auto first =
+            std::lower_bound(by_tip.begin(), by_tip.end(), z - tool.flute_length_mm - 1e-9,
+                             [&](std::size_t g, double tip) { return group_tip[g] < tip; });
+        for (auto it = first; it != by_tip.end() && group_tip[*it] <= z; ++it) {
+          const std::size_t g = *it;
+          const double h = z - group_tip[g];
+          if (!(group_height[g] > 0) || h < 0 || h > group_height[g]) continue;
           const double Rh = contour.profile_radius(h) + r_off;
-          if (Rh > 0) rh[q] = Rh, any = true;
+          if (Rh > 0) gr[g] = Rh, cutting.emplace_back(g, Rh);
         }
-        if (!any) {
+        if (cutting.empty()) {
           have_prev = false;
           continue;
         }
-        if (!have_prev || rh != prev_rh) {
+        if (!have_prev || cutting != prev_cutting) {
           active.clear();
-          for (std::size_t g = 0; g < runs.size(); ++g) {
-            run_r[g] = -1;
-            for (std::size_t q = runs[g].first; q < runs[g].last; ++q) {
-              run_r[g] = std::max(run_r[g], rh[q]);
-            }
-            const auto& rb = runs[g].box;
-            const double c_lo = swap ? rb[0] : rb[2], c_hi = swap ? rb[1] : rb[3];
-            if (run_r[g] > 0 && c_lo - run_r[g] <= strip_hi + 1e-9 &&
-                c_hi + run_r[g] >= strip_lo - 1e-9) {
-              active.push_back(g);
+          for (const auto& [g, r] : cutting) {
+            for (std::size_t k = group_start[g]; k < group_start[g + 1]; ++k) {
+              const auto& rb = runs[k].box;
+              const double c_lo = swap ? rb[0] : rb[2], c_hi = swap ? rb[1] : rb[3];
+              if (c_lo - r <= strip_hi + 1e-9 && c_hi + r >= strip_lo - 1e-9) active.push_back(k);
             }
           }
           for (int r = task.first; r <= task.last; ++r) {
@@ -541,21 +561,20 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
             row.clear();
             grown.clear();
             for (const std::size_t q : seed) {
-              if (rh[q] > 0) try_piece(q, line);
+              if (const double rq = gr[piece_group[q]]; rq > 0) try_piece(q, rq, line);
             }
-            for (const std::size_t g : active) {
-              const auto& rb = runs[g].box;
-              const Interval reach = swap ? box_on_line(rb[2], rb[3], rb[0], rb[1], run_r[g], line)
-                                          : box_on_line(rb[0], rb[1], rb[2], rb[3], run_r[g], line);
+            for (const std::size_t k : active) {
+              const auto& rb = runs[k].box;
+              const double rk = gr[run_group[k]];
+              const Interval reach = swap ? box_on_line(rb[2], rb[3], rb[0], rb[1], rk, line)
+                                          : box_on_line(rb[0], rb[1], rb[2], rb[3], rk, line);
               if (reach.lo > reach.hi || row.covers(reach.lo, reach.hi)) continue;
-              for (std::size_t q = runs[g].first; q < runs[g].last; ++q) {
-                if (rh[q] > 0) try_piece(q, line);
-              }
+              for (std::size_t q = runs[k].first; q < runs[k].last; ++q) try_piece(q, rk, line);
             }
             unions[static_cast<std::size_t>(r - task.first)] = row.intervals();
             next_seeds();
           }
-          prev_rh = rh;
+          prev_cutting = cutting;
           have_prev = true;
         }
         for (int r = task.first; r <= task.last; ++r) {
