@@ -1,5 +1,6 @@
 // Dexels, sparse dexel boards and the tri-dexel workpiece (include/trochomill/sim.hpp).
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -177,29 +178,29 @@ void DexelBoard::pause_summary() { paused_ = summarised_; }
 void DexelBoard::resume_summary() {
   if (!paused_) return;
   paused_ = false;
+  // The tiles' summaries in parallel: each is its tile's alone.
   on_tiles(*this, [&](auto& tiles) {
-    for (int ti = 0; ti < tu_; ++ti) {
-      for (int tj = 0; tj < tv_; ++tj) {
-        const std::size_t t = tile_index(ti * kTile, tj * kTile);
-        if (!tiles[t]) continue;
-        auto sm = std::make_unique<Summary>();
-        for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
-          for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
-            const auto m = bins_of(tiles[t][in_tile(ti * kTile + a, tj * kTile + b)].intervals());
-            for (std::size_t w = 0; w < m.size(); ++w) {
-              std::uint64_t bits = m[w];
-              sm->mask[w] |= bits;
-              while (bits != 0) {
-                const int bit = __builtin_ctzll(bits);
-                bits &= bits - 1;
-                ++sm->count[w * 64 + static_cast<std::size_t>(bit)];
-              }
+    tbb::parallel_for(0, tu_ * tv_, [&](int k) {
+      const int ti = k / tv_, tj = k % tv_;
+      const std::size_t t = tile_index(ti * kTile, tj * kTile);
+      if (!tiles[t]) return;
+      auto sm = std::make_unique<Summary>();
+      for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
+        for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
+          const auto m = bins_of(tiles[t][in_tile(ti * kTile + a, tj * kTile + b)].intervals());
+          for (std::size_t w = 0; w < m.size(); ++w) {
+            std::uint64_t bits = m[w];
+            sm->mask[w] |= bits;
+            while (bits != 0) {
+              const int bit = __builtin_ctzll(bits);
+              bits &= bits - 1;
+              ++sm->count[w * 64 + static_cast<std::size_t>(bit)];
             }
           }
         }
-        summaries_[t] = std::move(sm);
       }
-    }
+      summaries_[t] = std::move(sm);
+    });
   });
 }
 
