@@ -150,12 +150,14 @@ struct StepWork {
 };
 
 // Steps through the pipeline together, and how many batches are in flight at most: enough
-// that every board's stage has one to work on.
+// that the boards' uneven work (one board's cuts heavy while another's are light, by turns
+// along the cut) evens out before a stage waits (docs/PERFORMANCE.md: on the Bergmann arc, 6
+// in flight left the two cores idle 12 % of the window, 24 about 2 %).
 struct Batch {
   std::vector<StepWork> steps;
   std::size_t count = 0;  // the steps it holds (the first `count` of steps)
 };
-constexpr std::size_t kSimBatches = 6;
+constexpr std::size_t kSimBatches = 24;
 // The accumulators a batch holds at most (bytes): it has up to 32 steps, at least one.
 constexpr std::size_t kSimBatchBytes = std::size_t{1} << 20;
 // A step's bytes in flight (its wedges and three boards' accumulators), for `teeth` teeth of
