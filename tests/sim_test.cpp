@@ -1382,6 +1382,101 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
   EXPECT_GT(empty, 100);  // the summary does find empty stretches
 }
 
+// Packed tiles (DexelBoard::pack_settled) hold what their rays held. Two boards take the same
+// cuts; one packs after each period, the other never. Tiles cut to one level all over (a
+// floor), emptied (rays across a slot) or left uneven, on the board's inner and edge tiles
+// (140 x 75 rays: tiles of 64, 64 and 12 rays by 64 and 11): every ray the same bit for bit, the
+// same touched rays, the summary's answers the same (kept through packing, rebuilt from the
+// packed interval after a pause); a cut that removes nothing leaves a tile packed, one that
+// removes something brings it back; the arrays' bytes are what packing reports freed.
+TEST(Sim, PackedTilesHoldWhatTheirRaysHeld) {
+  for (const int axis : {2, 0}) {
+    // 140 x 75 rays on either board (u along x and v along y on the Z board; y and z on X).
+    const StockBox box =
+        axis == 2 ? StockBox{{0, 0, 0}, {7, 3.75, 3}} : StockBox{{0, 0, 0}, {3, 7, 3.75}};
+    DexelBoard packed(axis, box, 0.05), plain(axis, box, 0.05);
+    if (axis == 0) packed.enable_summary(), plain.enable_summary();
+    ASSERT_EQ(packed.count_u(), 140);
+    ASSERT_EQ(packed.count_v(), 75);
+    const Interval full = packed.full();
+    std::vector<Interval> removed;
+    auto cut = [&](int i, int j, double a, double b) {
+      removed.clear();
+      const double r1 = packed.subtract(i, j, a, b, removed);
+      removed.clear();
+      const double r2 = plain.subtract(i, j, a, b, removed);
+      ASSERT_EQ(r1, r2) << i << " " << j;
+    };
+    auto same = [&] {
+      for (int i = 0; i < packed.count_u(); ++i) {
+        for (int j = 0; j < packed.count_v(); ++j) {
+          ASSERT_EQ(packed.touched(i, j), plain.touched(i, j)) << i << " " << j;
+          ASSERT_TRUE(std::ranges::equal(
+              packed.intervals(i, j), plain.intervals(i, j),
+              [](const Interval& p, const Interval& q) { return p.lo == q.lo && p.hi == q.hi; }))
+              << axis << " " << i << " " << j;
+        }
+      }
+      // Volumes summed in another order (a packed tile's rays as one product): to 1e-12
+      // relative, far below a ray's d^2 times a spacing.
+      EXPECT_NEAR(packed.volume_mm3(), plain.volume_mm3(), 1e-12 * plain.volume_mm3());
+    };
+    const double mid = 0.5 * (full.lo + full.hi);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> x(full.lo, full.hi);
+    for (int i = 0; i < packed.count_u(); ++i) {
+      for (int j = 0; j < packed.count_v(); ++j) {
+        if (i < 64) {
+          cut(i, j, mid, full.hi + 1);  // a floor at mid: uniform tiles
+        } else if (i < 128 && j < 64) {
+          cut(i, j, full.lo - 1, full.hi + 1);  // emptied
+        } else if (i >= 128) {
+          cut(i, j, mid, full.hi + 1);  // the edge tiles (12 rays across), a floor
+          if (i == 130 && j == 70) cut(i, j, mid - 0.1, mid);  // one ray lower, same start
+        } else {
+          const double a = x(rng);
+          cut(i, j, a, a + 0.5);  // uneven
+        }
+      }
+    }
+    const std::size_t bytes = packed.memory_bytes();
+    EXPECT_EQ(packed.pack_settled(), 0U);  // cut in this period: nothing settled yet
+    const std::size_t freed = packed.pack_settled();
+    EXPECT_EQ(packed.memory_bytes(), bytes - freed);
+    // Packed: the floor's two tiles, the emptied one and the edge's (2, 0) (its tile (2, 1)
+    // holds the ray apart); not the uneven tile (1, 1).
+    EXPECT_EQ(packed.packed_tiles(), 4U);
+    EXPECT_EQ(freed, 4 * packed.ray_bytes(axis) * DexelBoard::kTile * DexelBoard::kTile);
+    same();
+    // The summary's answers (X board) over random stretches: the same on both boards.
+    auto same_summary = [&] {
+      if (axis != 0) return;
+      std::uniform_int_distribution<int> ri(0, packed.count_u() - 1), rj(0, packed.count_v() - 1);
+      int empty = 0;
+      for (int q = 0; q < 4000; ++q) {
+        const int i0 = ri(rng), j0 = rj(rng);
+        const double lo = x(rng), hi = lo + 0.2;
+        const bool m = packed.may_hold(i0, i0 + 3, j0, j0 + 3, lo, hi);
+        ASSERT_EQ(m, plain.may_hold(i0, i0 + 3, j0, j0 + 3, lo, hi)) << i0 << " " << j0;
+        empty += m ? 0 : 1;
+      }
+      EXPECT_GT(empty, 100);
+    };
+    same_summary();
+    packed.pause_summary(), plain.pause_summary();
+    packed.resume_summary(), plain.resume_summary();
+    same_summary();
+    // Cuts that remove nothing keep the tiles packed; one that removes brings its tile back.
+    cut(10, 10, mid + 0.1, full.hi);  // above the floor
+    cut(70, 10, full.lo, full.hi);    // an emptied ray
+    EXPECT_EQ(packed.packed_tiles(), 4U);
+    cut(10, 10, mid - 0.2, mid - 0.1);
+    EXPECT_EQ(packed.packed_tiles(), 3U);
+    same();
+    same_summary();
+  }
+}
+
 }  // namespace
 }  // namespace trochomill
 

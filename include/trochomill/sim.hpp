@@ -175,17 +175,30 @@ class DexelBoard {
   /// untouched. Threads may create tiles at once only different ones and with the summary
   /// paused.
   void touch(int i, int j);
-  /// Whether ray (i, j) was ever touched (untouched, it holds the full interval).
+  /// Whether ray (i, j) was ever touched (untouched, it holds the full interval; a packed
+  /// tile's rays count as touched).
   [[nodiscard]] bool touched(int i, int j) const noexcept {
-    return axis_ == 2 ? tiles1_[tile_index(i, j)] != nullptr : tiles2_[tile_index(i, j)] != nullptr;
+    const std::size_t t = tile_index(i, j);
+    return (axis_ == 2 ? tiles1_[t] != nullptr : tiles2_[t] != nullptr) || packed_[t] != 0;
   }
   /// The material of ray (i, j): its intervals (mm along the axis), the full interval when
-  /// untouched. Valid until the ray is next cut.
+  /// untouched, the tile's one interval (or none) when packed. Valid until the ray is next
+  /// cut or its tile packed.
   [[nodiscard]] std::span<const Interval> intervals(int i, int j) const noexcept {
     const std::size_t t = tile_index(i, j);
-    if (axis_ == 2) return tiles1_[t] ? tiles1_[t][in_tile(i, j)].intervals() : full_span();
-    return tiles2_[t] ? tiles2_[t][in_tile(i, j)].intervals() : full_span();
+    if (axis_ == 2) return tiles1_[t] ? tiles1_[t][in_tile(i, j)].intervals() : fill_span(t);
+    return tiles2_[t] ? tiles2_[t][in_tile(i, j)].intervals() : fill_span(t);
   }
+  /// Packs the tiles cut before the last call and not since whose rays all hold the same one
+  /// interval (or nothing), none on the heap: their arrays are freed and their rays read that
+  /// interval, until a cut that removes material from one of them brings the array back.
+  /// Nothing a ray holds changes, so a simulation's numbers are the same with or without it;
+  /// the machined region behind the tool (the floor under a slot, the emptied rays across it)
+  /// then costs a few bytes per tile. Returns the bytes freed. Not with other threads cutting
+  /// the board.
+  std::size_t pack_settled();
+  /// Tiles packed now (their rays held as one interval or none).
+  [[nodiscard]] std::size_t packed_tiles() const noexcept;
   /// The X or Y board's rays (i, j), (i + 1, j), ... (X board) or (i, j), (i, j + 1), ... (Y
   /// board) as they lie in memory, to the edge of their tile (kTile - i % kTile or
   /// kTile - j % kTile of them): null when the tile is untouched. For the simulation's row
@@ -228,7 +241,13 @@ class DexelBoard {
   };
   [[nodiscard]] std::array<std::uint64_t, kBins / 64> bins_of(
       std::span<const Interval> intervals) const;
-  [[nodiscard]] std::span<const Interval> full_span() const noexcept { return {&full_, 1}; }
+  // What a tile without an array holds on each ray: the full interval (untouched) or its
+  // packed interval (none when fill_n_ is 0).
+  [[nodiscard]] std::span<const Interval> fill_span(std::size_t t) const noexcept {
+    return {&fill_[t], fill_n_[t]};
+  }
+  // The rays of tile t that exist (tiles at the board's far edges hold fewer).
+  [[nodiscard]] int rays_in_tile(std::size_t t) const noexcept;
   // Runs f on the board's tile table (tiles1_ on the Z board, tiles2_ on the others).
   template <class Self, class F>
   static decltype(auto) on_tiles(Self& self, F&& f) {
@@ -262,6 +281,12 @@ class DexelBoard {
   // others' in tiles2_ (the other table empty).
   std::vector<std::unique_ptr<BasicDexel<1>[]>> tiles1_;
   std::vector<std::unique_ptr<BasicDexel<2>[]>> tiles2_;
+  // Per tile: what its rays hold without an array (fill_span), whether it is packed, and the
+  // period it last lost material in (periods end at each pack_settled).
+  std::vector<Interval> fill_;
+  std::vector<std::uint8_t> fill_n_, packed_;
+  std::vector<std::uint32_t> cut_period_;
+  std::uint32_t period_ = 1;
   bool summarised_ = false, paused_ = false;
   double bins_per_mm_ = 1;                           // kBins over the stock's extent along the rays
   std::vector<std::unique_ptr<Summary>> summaries_;  // parallel to the tile table

@@ -140,10 +140,19 @@ DexelBoard::DexelBoard(int axis, const StockBox& box, double spacing_mm)
   nv_ = static_cast<int>(nv);
   tu_ = (nu_ + kTile - 1) / kTile;
   tv_ = (nv_ + kTile - 1) / kTile;
-  on_tiles(*this, [&](auto& tiles) {
-    tiles.resize(static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_));
-  });
+  const std::size_t n_tiles = static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_);
+  on_tiles(*this, [&](auto& tiles) { tiles.resize(n_tiles); });
   full_ = {box.lo[static_cast<std::size_t>(axis)], box.hi[static_cast<std::size_t>(axis)]};
+  fill_.assign(n_tiles, full_);
+  fill_n_.assign(n_tiles, 1);
+  packed_.assign(n_tiles, 0);
+  cut_period_.assign(n_tiles, 0);
+}
+
+int DexelBoard::rays_in_tile(std::size_t t) const noexcept {
+  const int ti = static_cast<int>(t / static_cast<std::size_t>(tv_));
+  const int tj = static_cast<int>(t % static_cast<std::size_t>(tv_));
+  return std::min(kTile, nu_ - ti * kTile) * std::min(kTile, nv_ - tj * kTile);
 }
 
 void DexelBoard::touch(int i, int j) {
@@ -153,13 +162,17 @@ void DexelBoard::touch(int i, int j) {
     if (tile) return;
     using D = typename std::remove_reference_t<decltype(tile)>::element_type;
     tile = std::make_unique<D[]>(kTile * kTile);
+    if (packed_[t]) {  // back from packed: every ray its interval (or none); the summary holds
+      const D fill = fill_n_[t] ? D(fill_[t]) : D();
+      for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = fill;
+      packed_[t] = 0, fill_[t] = full_, fill_n_[t] = 1;
+      return;
+    }
     for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = D(full_);
     if (summarised_ && !paused_) {
       // Every ray of the tile that exists holds the whole stock: all bins.
       auto sm = std::make_unique<Summary>();
-      const int ti = i / kTile, tj = j / kTile;
-      const int rays = std::min(kTile, nu_ - ti * kTile) * std::min(kTile, nv_ - tj * kTile);
-      sm->count.fill(static_cast<std::uint16_t>(rays));
+      sm->count.fill(static_cast<std::uint16_t>(rays_in_tile(t)));
       sm->mask.fill(~std::uint64_t{0});
       summaries_[t] = std::move(sm);
     }
@@ -183,8 +196,22 @@ void DexelBoard::resume_summary() {
     tbb::parallel_for(0, tu_ * tv_, [&](int k) {
       const int ti = k / tv_, tj = k % tv_;
       const std::size_t t = tile_index(ti * kTile, tj * kTile);
-      if (!tiles[t]) return;
+      if (!tiles[t] && !packed_[t]) return;
       auto sm = std::make_unique<Summary>();
+      if (!tiles[t]) {  // packed: every ray its one interval (or none)
+        const auto m = bins_of(fill_span(t));
+        for (std::size_t w = 0; w < m.size(); ++w) {
+          sm->mask[w] = m[w];
+          for (int bit = 0; bit < 64; ++bit) {
+            if ((m[w] >> bit) & 1) {
+              sm->count[w * 64 + static_cast<std::size_t>(bit)] =
+                  static_cast<std::uint16_t>(rays_in_tile(t));
+            }
+          }
+        }
+        summaries_[t] = std::move(sm);
+        return;
+      }
       for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
         for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
           const auto m = bins_of(tiles[t][in_tile(ti * kTile + a, tj * kTile + b)].intervals());
@@ -222,11 +249,17 @@ std::array<std::uint64_t, DexelBoard::kBins / 64> DexelBoard::bins_of(
 template <class Tiles>
 double DexelBoard::subtract_in(Tiles& tiles, int i, int j, double a, double b,
                                std::vector<Interval>& removed) {
+  const std::size_t t = tile_index(i, j);
+  if (!tiles[t] && packed_[t]) {
+    // A packed tile comes back only for a cut that removes something (the dexel's own test).
+    if (!(b > a) || fill_n_[t] == 0 || b <= fill_[t].lo || a >= fill_[t].hi) return 0.0;
+  }
   touch(i, j);
-  auto& d = tiles[tile_index(i, j)][in_tile(i, j)];
-  if (!summarised_ || paused_) return d.subtract(a, b, removed);
+  auto& d = tiles[t][in_tile(i, j)];
   const std::size_t first = removed.size();
   const double cut = d.subtract(a, b, removed);
+  if (cut > 0) cut_period_[t] = period_;
+  if (!summarised_ || paused_) return cut;
   if (cut > 0) {
     // The ray's bins before the cut are its bins after it and the removed pieces' (an
     // interval's bins are those of its pieces, which meet end to end, and bin_of is
@@ -275,6 +308,47 @@ bool DexelBoard::may_hold(int i0, int i1, int j0, int j1, double lo, double hi) 
   return false;
 }
 
+std::size_t DexelBoard::pack_settled() {
+  std::size_t freed = 0;
+  on_tiles(*this, [&](auto& tiles) {
+    for (std::size_t t = 0; t < tiles.size(); ++t) {
+      auto& tile = tiles[t];
+      if (!tile || cut_period_[t] + 1 != period_) continue;
+      // Uniform: every ray that exists holds the same one interval, or none, inline.
+      const int ti = static_cast<int>(t / static_cast<std::size_t>(tv_));
+      const int tj = static_cast<int>(t % static_cast<std::size_t>(tv_));
+      std::span<const Interval> first;
+      bool same = true, have = false;
+      for (int a = 0; same && a < kTile && ti * kTile + a < nu_; ++a) {
+        for (int b = 0; same && b < kTile && tj * kTile + b < nv_; ++b) {
+          const auto& d = tile[in_tile(ti * kTile + a, tj * kTile + b)];
+          const auto iv = d.intervals();
+          if (iv.size() > 1 || d.heap_bytes() > 0) {
+            same = false;
+          } else if (!have) {
+            first = iv, have = true;
+          } else {
+            same = iv.size() == first.size() &&
+                   (iv.empty() || (iv[0].lo == first[0].lo && iv[0].hi == first[0].hi));
+          }
+        }
+      }
+      if (!same || !have) continue;
+      fill_n_[t] = static_cast<std::uint8_t>(first.size());
+      fill_[t] = first.empty() ? full_ : first[0];
+      packed_[t] = 1;
+      freed += sizeof(tile[0]) * kTile * kTile;
+      tile.reset();
+    }
+  });
+  ++period_;
+  return freed;
+}
+
+std::size_t DexelBoard::packed_tiles() const noexcept {
+  return static_cast<std::size_t>(std::count(packed_.begin(), packed_.end(), std::uint8_t{1}));
+}
+
 std::size_t DexelBoard::tiles() const noexcept {
   return on_tiles(*this, [](const auto& tiles) {
     return static_cast<std::size_t>(
@@ -289,7 +363,13 @@ double DexelBoard::volume_mm3() const {
   on_tiles(*this, [&](const auto& tiles) {
     for (int ti = 0; ti < tu_; ++ti) {
       for (int tj = 0; tj < tv_; ++tj) {
-        const auto& tile = tiles[tile_index(ti * kTile, tj * kTile)];
+        const std::size_t t = tile_index(ti * kTile, tj * kTile);
+        const auto& tile = tiles[t];
+        if (!tile && packed_[t]) {
+          touched_rays += rays_in_tile(t);
+          if (fill_n_[t]) len += rays_in_tile(t) * (fill_[t].hi - fill_[t].lo);
+          continue;
+        }
         if (!tile) continue;
         for (int a = 0; a < kTile; ++a) {
           for (int b = 0; b < kTile; ++b) {
@@ -308,7 +388,9 @@ double DexelBoard::volume_mm3() const {
 
 std::size_t DexelBoard::memory_bytes() const {
   const std::size_t table = static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_);
-  std::size_t b = table * (sizeof(tiles1_[0]) + (summarised_ ? sizeof(summaries_[0]) : 0));
+  std::size_t b =
+      table * (sizeof(tiles1_[0]) + (summarised_ ? sizeof(summaries_[0]) : 0) + sizeof(fill_[0]) +
+               sizeof(fill_n_[0]) + sizeof(packed_[0]) + sizeof(cut_period_[0]));
   for (const auto& sm : summaries_) b += sm ? sizeof(Summary) : 0;
   on_tiles(*this, [&](const auto& tiles) {
     for (const auto& tile : tiles) {

@@ -922,14 +922,19 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   std::vector<Batch> batches(kSimBatches);
   for (Batch& bt : batches) bt.steps.resize(per_batch);
   std::size_t next = 1, produced = 0;
+  // Each board packs its settled tiles (DexelBoard::pack_settled) once a revolution, in its
+  // own stage: the machined region behind the tool then costs a few bytes a tile.
+  const auto pack_every = static_cast<std::size_t>(s.steps_per_rev);
   auto board_stage = [&](int b) {
-    return tbb::make_filter<Batch*, Batch*>(tbb::filter_mode::serial_in_order,
-                                            [&cut_board, b](Batch* bt) {
-                                              for (std::size_t q = 0; q < bt->count; ++q) {
-                                                cut_board(b, bt->steps[q]);
-                                              }
-                                              return bt;
-                                            });
+    return tbb::make_filter<Batch*, Batch*>(
+        tbb::filter_mode::serial_in_order, [&cut_board, &work, b, pack_every](Batch* bt) {
+          for (std::size_t q = 0; q < bt->count; ++q) cut_board(b, bt->steps[q]);
+          const std::size_t n0 = bt->steps[0].n, n1 = bt->steps[bt->count - 1].n;
+          if (n1 / pack_every != (n0 - 1) / pack_every) {
+            (void)work.boards[static_cast<std::size_t>(b)].pack_settled();
+          }
+          return bt;
+        });
   };
   tbb::parallel_pipeline(
       kSimBatches,
