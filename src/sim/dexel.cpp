@@ -162,13 +162,15 @@ void DexelBoard::touch(int i, int j) {
     if (tile) return;
     using D = typename std::remove_reference_t<decltype(tile)>::element_type;
     tile = std::make_unique<D[]>(kTile * kTile);
-    if (packed_[t]) {  // back from packed: every ray its interval (or none); the summary holds
-      const D fill = fill_n_[t] ? D(fill_[t]) : D();
-      for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = fill;
-      packed_[t] = 0, fill_[t] = full_, fill_n_[t] = 1;
+    // Every ray what the tile held without its array: the full interval, or the packed one
+    // (or none).
+    const D fill = fill_n_[t] ? D(fill_[t]) : D();
+    for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = fill;
+    fill_[t] = full_, fill_n_[t] = 1;
+    if (packed_[t]) {  // back from packed: its summary still holds
+      packed_[t] = 0;
       return;
     }
-    for (int q = 0; q < kTile * kTile; ++q) tile[static_cast<std::size_t>(q)] = D(full_);
     if (summarised_ && !paused_) {
       // Every ray of the tile that exists holds the whole stock: all bins.
       auto sm = std::make_unique<Summary>();
@@ -198,31 +200,25 @@ void DexelBoard::resume_summary() {
       const std::size_t t = tile_index(ti * kTile, tj * kTile);
       if (!tiles[t] && !packed_[t]) return;
       auto sm = std::make_unique<Summary>();
-      if (!tiles[t]) {  // packed: every ray its one interval (or none)
-        const auto m = bins_of(fill_span(t));
+      // Counts `rays` more rays holding material in the bins of `intervals`.
+      auto add = [&](std::span<const Interval> intervals, int rays) {
+        const auto m = bins_of(intervals);
         for (std::size_t w = 0; w < m.size(); ++w) {
-          sm->mask[w] = m[w];
-          for (int bit = 0; bit < 64; ++bit) {
-            if ((m[w] >> bit) & 1) {
-              sm->count[w * 64 + static_cast<std::size_t>(bit)] =
-                  static_cast<std::uint16_t>(rays_in_tile(t));
-            }
+          std::uint64_t bits = m[w];
+          sm->mask[w] |= bits;
+          while (bits != 0) {
+            const int bit = __builtin_ctzll(bits);
+            bits &= bits - 1;
+            sm->count[w * 64 + static_cast<std::size_t>(bit)] += static_cast<std::uint16_t>(rays);
           }
         }
-        summaries_[t] = std::move(sm);
-        return;
-      }
-      for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
-        for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
-          const auto m = bins_of(tiles[t][in_tile(ti * kTile + a, tj * kTile + b)].intervals());
-          for (std::size_t w = 0; w < m.size(); ++w) {
-            std::uint64_t bits = m[w];
-            sm->mask[w] |= bits;
-            while (bits != 0) {
-              const int bit = __builtin_ctzll(bits);
-              bits &= bits - 1;
-              ++sm->count[w * 64 + static_cast<std::size_t>(bit)];
-            }
+      };
+      if (!tiles[t]) {
+        add(fill_span(t), rays_in_tile(t));  // packed: every ray its one interval (or none)
+      } else {
+        for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
+          for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
+            add(tiles[t][in_tile(ti * kTile + a, tj * kTile + b)].intervals(), 1);
           }
         }
       }
