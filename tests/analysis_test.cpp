@@ -161,6 +161,49 @@ TEST(Analysis, SteadyStateMrrEqualsSweptArea) {
   }
 }
 
+// The steady cycle at small steps, every family: the path runs along +Y on a loop's side (and
+// on a circular family's advance), where the point one step further comes by one step of
+// path later; the finder once took that (0.01 s, twice a full slot's removal rate at step
+// 0.1). The cycle found is the planner's (same tolerance as SteadyStateMrrEqualsSweptArea),
+// and no cycle removes more than a full slot D a_p v_f. Step 0.001 (the smallest the planner
+// accepts) on a small tool (D 1 mm in a 2 mm slot), so that the slot holds many cycles.
+TEST(Analysis, SteadyCycleAtSmallSteps) {
+  struct Case {
+    double step;
+    std::vector<std::string> extra;
+  };
+  const std::vector<std::string> small_tool = {"tool.diameter=1", "slot.width=2", "slot.depth=1",
+                                               "slot.length=1.2", "path.linear_distance=0.1"};
+  const std::vector<Case> cases = {{0.001, small_tool},
+                                   {0.01, small_tool},
+                                   {0.05, {"slot.length=3", "path.linear_distance=1"}},
+                                   {0.1, {"slot.length=3", "path.linear_distance=1"}},
+                                   {0.15, {"slot.length=3", "path.linear_distance=1"}}};
+  for (const std::string type : {"trochoidal", "circular", "elliptical", "linear-elliptical"}) {
+    for (const Case& c : cases) {
+      if (c.step < 0.005 && type != "trochoidal") continue;  // 10 s each: one family is enough
+      std::vector<Override> ov = {parse_override("path.step=" + std::to_string(c.step))};
+      for (const std::string& e : c.extra) ov.push_back(parse_override(e));
+      const Job job = test::wagih_job(type, ov);
+      const PlannedPath pp = plan_path(job);
+      const ProcessMetrics m = analyze_process(job, pp.path);
+      ASSERT_TRUE(m.periodic) << type << " " << c.step;
+      // Tangent refinement: below curvature * spacing^2 (2 * 0.075^2 = 0.011 mm on the small
+      // tool).
+      EXPECT_NEAR(m.path_length_per_cycle_mm, pp.info.cycle_length_mm, 0.012)
+          << type << " " << c.step;
+      const double full_slot = job.tool.diameter_mm * job.slot.depth_mm * 600.0;
+      EXPECT_LT(m.mrr_mm3_per_min, full_slot) << type << " " << c.step;
+      // W s a_p / T_c with T_c the cycle's length at 10 mm/s (the definition, exact).
+      EXPECT_NEAR(
+          m.mrr_mm3_per_min,
+          job.slot.width_mm * c.step * job.slot.depth_mm / (pp.info.cycle_length_mm / 10) * 60,
+          0.012 / pp.info.cycle_length_mm * m.mrr_mm3_per_min)
+          << type << " " << c.step;
+    }
+  }
+}
+
 // Convergence with the sampling step, 1, 2, 4, 8 samples per tooth pass: the steady MRR
 // integrated from the swept area approaches W s a_p / T_c less the wall scallops (see
 // SteadyStateMrrEqualsSweptArea), the cutting time and

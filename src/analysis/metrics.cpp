@@ -6,6 +6,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
+#include <optional>
 
 #include "common/roots.hpp"
 #include "trochomill/analysis.hpp"
@@ -22,6 +24,84 @@ struct Window {
   double t0_s = 0, duration_s = 0, length_mm = 0;
   bool periodic = false;
 };
+
+// How far the point q (mm) lies from the centre path at time t (s), less what the samples
+// cannot resolve: between two samples on one path segment, the distance to the cubic Hermite
+// interpolation on positions and unit tangents times the chord (exact at the samples,
+// O(h^4 kappa^3) between them, e.g. below 1e-9 mm at h = f_z); across a corner of the
+// program (a chorded arc, another feed), the distance to the chord between the samples less
+// its sag, at most h |turn| / 4. nullopt outside the samples or at a sharp corner (> 45 deg).
+std::optional<double> path_deviation_mm(const PathSamples& s, double t,
+                                        const std::array<double, 3>& q) {
+  const auto it = std::upper_bound(s.t_s.begin(), s.t_s.end(), t);
+  if (it == s.t_s.begin() || it == s.t_s.end()) return std::nullopt;
+  const auto j = static_cast<std::size_t>(it - s.t_s.begin()), i = j - 1;
+  if (!(s.t_s[j] > s.t_s[i])) return std::nullopt;
+  const double h = s.s_mm[j] - s.s_mm[i];
+  if (s.segment[i] == s.segment[j]) {
+    const double f = (t - s.t_s[i]) / (s.t_s[j] - s.t_s[i]);
+    const double h00 = (1 + 2 * f) * (1 - f) * (1 - f), h10 = f * (1 - f) * (1 - f);
+    const double h01 = f * f * (3 - 2 * f), h11 = f * f * (f - 1);
+    const double x = h00 * s.x_mm[i] + h10 * h * s.tx[i] + h01 * s.x_mm[j] + h11 * h * s.tx[j];
+    const double y = h00 * s.y_mm[i] + h10 * h * s.ty[i] + h01 * s.y_mm[j] + h11 * h * s.ty[j];
+    const double z = h00 * s.z_mm[i] + h10 * h * s.tz[i] + h01 * s.z_mm[j] + h11 * h * s.tz[j];
+    return std::sqrt((x - q[0]) * (x - q[0]) + (y - q[1]) * (y - q[1]) + (z - q[2]) * (z - q[2]));
+  }
+  const double cosang =
+      std::clamp(s.tx[i] * s.tx[j] + s.ty[i] * s.ty[j] + s.tz[i] * s.tz[j], -1.0, 1.0);
+  const double turn = std::acos(cosang);
+  if (turn > 0.25 * std::numbers::pi) return std::nullopt;
+  const double ex = s.x_mm[j] - s.x_mm[i], ey = s.y_mm[j] - s.y_mm[i], ez = s.z_mm[j] - s.z_mm[i];
+  const double ee = ex * ex + ey * ey + ez * ez;
+  const double u =
+      ee > 0
+          ? std::clamp(
+                ((q[0] - s.x_mm[i]) * ex + (q[1] - s.y_mm[i]) * ey + (q[2] - s.z_mm[i]) * ez) / ee,
+                0.0, 1.0)
+          : 0.0;
+  const double dx = s.x_mm[i] + u * ex - q[0], dy = s.y_mm[i] + u * ey - q[1],
+               dz = s.z_mm[i] + u * ez - q[2];
+  return std::max(0.0, std::sqrt(dx * dx + dy * dy + dz * dz) - 0.25 * h * turn);
+}
+
+// Whether the cutting part of the path [c0, c1] repeats itself shifted by (0, step, 0) after
+// `period` seconds, checked sample by sample over a stretch around sample i0 that holds at least
+// one period and a full turn (2 pi) of the tangent: a true cycle passes everywhere; a shorter
+// candidate (one step of path along a loop's side) leaves the shifted path as soon as the
+// path bends. The tolerance is a quarter step (the candidate's offset turned by the bend is
+// up to twice the step away) and at most 0.01 mm (a program's coordinate rounding, a few um,
+// passes).
+bool repeats_with_period(const PathSamples& s, std::size_t c0, std::size_t c1, std::size_t i0,
+                         double period, double step_mm) {
+  const double tol = std::min(0.01, 0.25 * step_mm);
+  // The stretch to check: a full turn of the tangent from i0, and at least one period.
+  double turned = 0, span = period;
+  for (std::size_t i = i0 + 1; i <= c1; ++i) {
+    turned += std::abs(std::atan2(s.tx[i - 1] * s.ty[i] - s.ty[i - 1] * s.tx[i],
+                                  s.tx[i - 1] * s.tx[i] + s.ty[i - 1] * s.ty[i]));
+    if (turned >= kTwoPi) {
+      span = std::max(span, s.t_s[i] - s.t_s[i0]);
+      break;
+    }
+  }
+  if (turned < kTwoPi) return false;  // no full loop left to check against
+  // Centred on i0 within the cutting part, the shifted copy inside it too.
+  const double lo = s.t_s[c0], hi = s.t_s[c1] - period;
+  if (hi - lo < span) return false;
+  const double from = std::clamp(s.t_s[i0] - 0.5 * span, lo, hi - span), to = from + span;
+  std::size_t checked = 0, total = 0;
+  for (auto i = static_cast<std::size_t>(std::lower_bound(s.t_s.begin(), s.t_s.end(), from) -
+                                         s.t_s.begin());
+       i < s.size() && s.t_s[i] <= to; ++i) {
+    const auto d =
+        path_deviation_mm(s, s.t_s[i] + period, {s.x_mm[i], s.y_mm[i] + step_mm, s.z_mm[i]});
+    ++total;
+    if (!d) continue;
+    if (*d > tol) return false;
+    ++checked;
+  }
+  return checked > 0 && 2 * checked >= total;  // most of the stretch checked
+}
 
 Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, double step_mm,
                    bool trochoidal) {
@@ -45,7 +125,11 @@ Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, 
         break;
       }
     }
-    // The same point one step further along +Y, passed in the same direction.
+    // The same point one step further along +Y, passed in the same direction: every
+    // approach to it is a candidate period, the shortest one the path repeats itself over
+    // is the cycle (docs/models.md section 7, the steady cycle). A nearer approach after a
+    // short stretch of path is no cycle: where the path runs along +Y (a loop's side, a
+    // circular family's advance) the shifted point comes by one step later on the same pass.
     const double tx = s.x_mm[i0], ty = s.y_mm[i0] + step_mm;
     double spacing = 0;
     for (std::size_t i = i0 + 1; i < std::min(n, i0 + 64); ++i) {
@@ -53,31 +137,39 @@ Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, 
     }
     std::size_t best = n;
     double best_d = std::numeric_limits<double>::infinity();
+    const auto try_candidate = [&](std::size_t j) -> std::optional<Window> {
+      if (s.z_mm[j] >= 0) return std::nullopt;
+      // Refine along the tangent: the point is reached at t + (target - p).t / v.
+      const double v = (s.s_mm[j] - s.s_mm[j - 1]) / (s.t_s[j] - s.t_s[j - 1]);
+      const double ds = (tx - s.x_mm[j]) * s.tx[j] + (ty - s.y_mm[j]) * s.ty[j];
+      const double period = s.t_s[j] + ds / v - s.t_s[i0];
+      if (!(period > 0) || !repeats_with_period(s, c0, c1, i0, period, step_mm)) {
+        return std::nullopt;
+      }
+      Window w;
+      w.first = i0;
+      w.last = j;
+      w.t0_s = s.t_s[i0];
+      w.duration_s = period;
+      w.length_mm = s.s_mm[j] + ds - s.s_mm[i0];
+      w.periodic = true;
+      return w;
+    };
     for (std::size_t i = i0 + 1; i < n; ++i) {
-      // A cycle is longer than its advance: skip the first 1.5 s of path, where a straight
-      // move along +Y (a circular family's advance) would reach the shifted point.
-      if (s.s_mm[i] - s.s_mm[i0] < 1.5 * step_mm) continue;
       const double d = std::hypot(s.x_mm[i] - tx, s.y_mm[i] - ty);
       const double dir = s.tx[i] * s.tx[i0] + s.ty[i] * s.ty[i0];
       if (d <= spacing + 1e-9 && dir > 0.9 && d < best_d) {
         best = i;
         best_d = d;
       } else if (best < n && d > 2 * spacing + 1e-9) {
-        break;  // past the nearest approach
+        // Past the nearest approach: a candidate.
+        if (auto w = try_candidate(best)) return *w;
+        best = n;
+        best_d = std::numeric_limits<double>::infinity();
       }
     }
-    if (best < n && s.z_mm[best] < 0) {
-      // Refine along the tangent: the point is reached at t + (target - p).t / v.
-      const double v = (s.s_mm[best] - s.s_mm[best - 1]) / (s.t_s[best] - s.t_s[best - 1]);
-      const double ds = (tx - s.x_mm[best]) * s.tx[best] + (ty - s.y_mm[best]) * s.ty[best];
-      Window w;
-      w.first = i0;
-      w.last = best;
-      w.t0_s = s.t_s[i0];
-      w.duration_s = s.t_s[best] + ds / v - s.t_s[i0];
-      w.length_mm = s.s_mm[best] + ds - s.s_mm[i0];
-      w.periodic = true;
-      return w;
+    if (best < n) {
+      if (auto w = try_candidate(best)) return *w;
     }
   }
   // The middle third of the cutting time.
@@ -396,6 +488,29 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   m.mrr_swept_mm3_per_min = m.cycle_time_s > 0 ? swept / m.cycle_time_s * 60.0 : 0.0;
   m.mrr_mm3_per_min = w.periodic ? W * job.path.step_mm * m.axial_depth_mm / m.cycle_time_s * 60.0
                                  : m.mrr_swept_mm3_per_min;
+  // A bound no cycle can pass: the tool sweeps at most its diameter times the depth at the
+  // fastest feed of the cycle (a full slot). A rate above it is a wrong cycle, not a result
+  // (1e-6 for rounding of the window's ends).
+  {
+    double v_max = 0;
+    const PathSamples& q = cs->samples;
+    for (std::size_t i = std::max<std::size_t>(cf, 1); i < std::min(cl + 1, q.size()); ++i) {
+      if (q.t_s[i] > q.t_s[i - 1]) {
+        v_max = std::max(v_max, (q.s_mm[i] - q.s_mm[i - 1]) / (q.t_s[i] - q.t_s[i - 1]));
+      }
+    }
+    if (v_max == 0) v_max = feed;  // a window shorter than a sample: the programmed feed
+    const double full_slot = 2 * R * depth * v_max * 60.0;
+    if (m.mrr_mm3_per_min > full_slot * (1 + 1e-6) ||
+        m.mrr_swept_mm3_per_min > full_slot * (1 + 1e-6)) {
+      throw Error(fmt::format(
+          "analyze: the steady cycle found ({:.6g} s, {:.6g} mm of path from t = {:.6g} s) removes "
+          "{:.6g} mm^3/min, more than a full slot at the cycle's fastest feed (D a_p v_f = "
+          "{:.6g} mm^3/min): no result is given for a cycle that cannot be; please report the job",
+          m.cycle_time_s, m.path_length_per_cycle_mm, m.cycle_start_s, m.mrr_mm3_per_min,
+          full_slot));
+    }
+  }
 
   const EngagementSeries& ce = *cs;
   const PathSamples& q = ce.samples;
