@@ -1075,6 +1075,17 @@ TEST_F(Cli, TextureOfX3pSurfacesAndProfiles) {
   }
 }
 
+// simulate --out makes its folder as mkdir does: a missing parent is bad input (exit 2), and
+// nothing is made (a mistyped path once made every folder on it silently).
+TEST_F(Cli, SimulateOutMakesOnlyTheLastFolder) {
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  const CliResult r =
+      run_cli("simulate " + ex + " --cycles 3:4 --out " + (dir_ / "a" / "b" / "c").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("its parent"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "a"));
+}
+
 TEST_F(Cli, SimulateWritesItsOutputs) {
   const std::string ex = test::example("wagih2023/trochoidal.toml");
   const std::string out = (dir_ / "sim").string();

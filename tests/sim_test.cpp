@@ -1129,6 +1129,7 @@ TEST(Sim, StreamedRecordsAreTheKeptOnes) {
   const auto base =
       std::filesystem::temp_directory_path() / ("trochomill_stream_" + std::to_string(::getpid()));
   std::filesystem::remove_all(base);
+  std::filesystem::create_directory(base);  // the outputs make only their own folder
   const std::string note = write_simulation_outputs(base / "kept", job, kept, std::nullopt);
   SimulationOutputs out(base / "streamed", job);
   c.sink = &out;

@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -306,6 +307,9 @@ void install_interrupt_handler() {
   sa.sa_handler = on_interrupt;
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
+  // A write past the file size limit (ulimit -f) fails with EFBIG and is reported as any
+  // failed write, instead of the signal ending the process with a half-written output.
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 struct GuardedRun::Bar {

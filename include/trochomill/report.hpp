@@ -113,13 +113,15 @@ void append_sim_series_row(std::string& csv, const SimStep& step, std::size_t te
 /// then by `finish` walls.csv, floor.csv, surface.stl (grid step `stl_step_mm`, or
 /// default_surface_step_mm) and floor.x3p (the slot's floor as a height map at the dexel
 /// spacing: simulated_floor) from the workpiece. Everything is made in a staging folder inside
-/// `dir` (created) and renamed into place by `finish`; when the window left no floor cut across
+/// `dir` (made if missing, as mkdir: its parent must exist, else InputError; removed again
+/// when the run fails) and renamed into place by `finish`; when the window left no floor cut across
 /// the slot, floor.x3p is not written (an earlier run's is removed: the set stays one run's)
 /// and `finish` returns the reason (otherwise empty). A simulation stopped early (Ctrl-C) is
 /// finished as well: chips.h5 then says complete = 0. `hooks`: the phase "writing outputs"
 /// with progress per file; when cancelled between files `finish` throws Interrupted. Destroyed
 /// unfinished (an error, a cancel), the staging folder is removed: `dir` then holds none of
-/// this run's files (those of an earlier run stay as they were). Throws IoError or Error.
+/// this run's files (those of an earlier run stay as they were). Throws IoError (naming the
+/// file under `dir`, with the system's reason) or Error.
 class SimulationOutputs final : public SimSink {
  public:
   SimulationOutputs(const std::filesystem::path& dir, const Job& job);

@@ -116,7 +116,7 @@ void write_file_atomic(const fs::path& path, const std::function<void(const fs::
       out.flush();
       if (!out) {
         fs::remove(tmp, ec);
-        throw IoError("cannot write '" + path.string() + "': write failed");
+        throw IoError("cannot write '" + path.string() + "': " + std::strerror(errno));
       }
     }
     fs::remove(tmp, ec);
@@ -146,10 +146,10 @@ void write_text_atomic(
     if (!out) throw IoError("cannot write '" + path.string() + "': " + std::strerror(errno));
     produce([&](std::string_view piece) {
       out.write(piece.data(), static_cast<std::streamsize>(piece.size()));
-      if (!out) throw IoError("cannot write '" + path.string() + "': write failed");
+      if (!out) throw IoError("cannot write '" + path.string() + "': " + std::strerror(errno));
     });
     out.flush();
-    if (!out) throw IoError("cannot write '" + path.string() + "': write failed");
+    if (!out) throw IoError("cannot write '" + path.string() + "': " + std::strerror(errno));
   });
 }
 

@@ -244,12 +244,31 @@ struct SimulationOutputs::State {
   std::size_t steps = 0;
   double first_t_s = 0, last_t_s = 0;  // the steps' times (s)
   bool finished = false;
+  bool made_dir = false;  // `dir` was made for this run: removed again if it fails
+
+  // A failed write names the file where it would have been, not the staging folder.
+  [[noreturn]] void rethrow_named(const IoError& e) const {
+    std::string what = e.what();
+    const std::string from = stage.string(), to = dir.string();
+    for (std::size_t p = 0; (p = what.find(from, p)) != std::string::npos; p += to.size()) {
+      what.replace(p, from.size(), to);
+    }
+    throw IoError(what);
+  }
+  // Unfinished: none of this run's files stay, nor the folder when this run made it.
+  void discard() noexcept {
+    series.reset();
+    chips.reset();
+    std::error_code ec;
+    std::filesystem::remove_all(stage, ec);
+    if (made_dir) std::filesystem::remove(dir, ec);  // only if empty
+  }
 
   void flush_rows() {
     series->write(rows.data(), static_cast<std::streamsize>(rows.size()));
     if (!*series) {
-      throw IoError(
-          fmt::format("cannot write '{}': write failed", (stage / "series.csv").string()));
+      throw IoError(fmt::format("cannot write '{}': {}", (stage / "series.csv").string(),
+                                std::strerror(errno)));
     }
     rows.clear();
   }
@@ -258,10 +277,30 @@ struct SimulationOutputs::State {
 SimulationOutputs::SimulationOutputs(const std::filesystem::path& dir, const Job& job)
     : s_(std::make_unique<State>(dir, job)) {
   namespace fs = std::filesystem;
-  fs::create_directories(dir);
   std::error_code ec;
+  // The folder is made as mkdir makes one: its parent must be there (a mistyped path is not
+  // made silently).
+  const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
+    throw IoError(
+        fmt::format("cannot write the folder '{}': a file of that name is there", dir.string()));
+  }
+  if (!fs::is_directory(dir, ec)) {
+    if (!fs::is_directory(parent, ec)) {
+      throw InputError(fmt::format(
+          "output folder '{}': its parent '{}' does not exist (only the last folder is made)",
+          dir.string(), parent.string()));
+    }
+    if (!fs::create_directory(dir, ec) && ec) {
+      throw IoError(fmt::format("cannot make the folder '{}': {}", dir.string(), ec.message()));
+    }
+    s_->made_dir = true;
+  }
   fs::remove_all(s_->stage, ec);
-  fs::create_directory(s_->stage);
+  if (!fs::create_directory(s_->stage, ec) && ec) {
+    s_->discard();
+    throw IoError(fmt::format("cannot write in '{}': {}", dir.string(), ec.message()));
+  }
   try {
     const fs::path series = s_->stage / "series.csv";
     s_->series_pending = std::make_unique<PendingFile>(series);
@@ -271,21 +310,17 @@ SimulationOutputs::SimulationOutputs(const std::filesystem::path& dir, const Job
     }
     s_->rows = sim_series_header(s_->teeth);
     s_->chips = std::make_unique<ChipMapWriter>(s_->stage / "chips.h5", s_->tool, job.simulation);
+  } catch (const IoError& e) {
+    s_->discard();
+    s_->rethrow_named(e);
   } catch (...) {
-    s_->series.reset();
-    s_->chips.reset();
-    fs::remove_all(s_->stage, ec);
+    s_->discard();
     throw;
   }
 }
 
 SimulationOutputs::~SimulationOutputs() {
-  if (s_->finished) return;
-  // Unfinished (an error, or stopped while finishing): none of this run's files stay.
-  s_->series.reset();
-  s_->chips.reset();
-  std::error_code ec;
-  std::filesystem::remove_all(s_->stage, ec);
+  if (!s_->finished) s_->discard();
 }
 
 void SimulationOutputs::take(const SimStep& step, std::span<const ChipEntry> chips) {
@@ -293,8 +328,12 @@ void SimulationOutputs::take(const SimStep& step, std::span<const ChipEntry> chi
   if (s_->steps++ == 0) s_->first_t_s = step.t_s;
   s_->last_t_s = step.t_s;
   append_sim_series_row(s_->rows, step, s_->teeth);
-  if (s_->rows.size() >= (std::size_t{1} << 20)) s_->flush_rows();
-  s_->chips->take(step, chips);
+  try {
+    if (s_->rows.size() >= (std::size_t{1} << 20)) s_->flush_rows();
+    s_->chips->take(step, chips);
+  } catch (const IoError& e) {
+    s_->rethrow_named(e);
+  }
 }
 
 std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<double> stl_step_mm,
@@ -321,7 +360,7 @@ std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<dou
          s_->flush_rows();
          s_->series->close();
          if (s_->series->fail()) {
-           throw IoError(fmt::format("cannot write '{}': write failed", p.string()));
+           throw IoError(fmt::format("cannot write '{}': {}", p.string(), std::strerror(errno)));
          }
        }},
       {"chips.h5", [&](const fs::path&) { s_->chips->finish(js.result.complete); }},
@@ -353,7 +392,11 @@ std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<dou
   for (std::size_t k = 0; k < outputs.size(); ++k) {
     hooks.check(stopped);
     if (hooks.progress) hooks.progress(k, outputs.size());
-    outputs[k].second(stage / outputs[k].first);
+    try {
+      outputs[k].second(stage / outputs[k].first);
+    } catch (const IoError& e) {
+      s_->rethrow_named(e);
+    }
   }
   hooks.check(stopped);
   if (hooks.progress) hooks.progress(outputs.size(), outputs.size());

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -241,13 +242,22 @@ void write_wav(const std::string& path, const Signal& s) {
     throw InputError(fmt::format("WAV needs a whole-number rate, got {} Hz", s.rate_hz));
   }
   SNDFILE* f = sf_open(path.c_str(), SFM_WRITE, &info);
-  if (f == nullptr) throw Error(fmt::format("{}: cannot write: {}", path, sf_strerror(nullptr)));
+  if (f == nullptr) {
+    throw IoError(fmt::format("cannot write '{}': {}", path, sf_strerror(nullptr)));
+  }
   // No PEAK chunk: it carries the writing time, and the same signal must give the same bytes.
   sf_command(f, SFC_SET_ADD_PEAK_CHUNK, nullptr, SF_FALSE);
   const sf_count_t n = static_cast<sf_count_t>(s.samples.size());
+  errno = 0;
   const sf_count_t put = sf_writef_double(f, s.samples.data(), n);
+  const int err = errno;
+  const std::string why = put != n ? sf_strerror(f) : std::string();
   const int rc = sf_close(f);
-  if (put != n || rc != 0) throw Error(fmt::format("{}: write failed", path));
+  if (put != n || rc != 0) {
+    throw IoError(
+        fmt::format("cannot write '{}': {}", path,
+                    err != 0 ? std::strerror(err) : (why.empty() ? "write failed" : why)));
+  }
 }
 
 }  // namespace trochomill

@@ -17,11 +17,60 @@
 namespace trochomill {
 namespace {
 
+// Why HDF5's last call failed, from its error stack: the system's message where the file
+// driver gave one ("File too large", "No space left on device"), else the innermost entry.
+std::string hdf5_reason() {
+  std::string reason;
+  H5Ewalk2(
+      H5E_DEFAULT, H5E_WALK_UPWARD,
+      [](unsigned, const H5E_error2_t* e, void* out) -> herr_t {
+        auto& r = *static_cast<std::string*>(out);
+        if (e->desc == nullptr) return 0;
+        const std::string d = e->desc;
+        const std::string key = "error message = '";
+        const auto k = d.find(key);
+        if (k != std::string::npos) {
+          const auto end = d.find('\'', k + key.size());
+          r = d.substr(k + key.size(),
+                       end == std::string::npos ? std::string::npos : end - k - key.size());
+          return 1;  // the system's reason: the walk stops
+        }
+        if (r.empty()) r = d;
+        return 0;
+      },
+      &reason);
+  return reason;
+}
+
+// HDF5 is set up once, before its first call: errors thrown, not printed, and no clean-up
+// of its own at exit. A file whose write failed (a full disk, the file size limit) cannot be
+// closed (HDF5 keeps it open to flush it), and HDF5's exit handler then crashed flushing it
+// again after the temporary file was gone; the files that were written are closed by their
+// handles before that.
+// HDF5's error reporting is per thread (a thread-safe build): each thread that writes turns
+// the printing off for itself.
+void init_hdf5() {
+  static const bool once = [] {
+    H5dont_atexit();
+    return true;
+  }();
+  (void)once;
+  thread_local const bool quiet = [] {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    return true;
+  }();
+  (void)quiet;
+}
+
 // Closes an HDF5 handle when it goes out of scope.
 class Handle {
  public:
   Handle(hid_t id, herr_t (*close)(hid_t), const char* what) : id_(id), close_(close) {
-    if (id_ < 0) throw Error(fmt::format("HDF5: cannot create {}", what));
+    if (id_ < 0) {
+      const std::string why = hdf5_reason();
+      throw IoError(why.empty() ? fmt::format("HDF5: cannot create {}", what)
+                                : fmt::format("HDF5: cannot create {}: {}", what, why));
+    }
   }
   Handle(const Handle&) = delete;
   Handle& operator=(const Handle&) = delete;
@@ -36,7 +85,11 @@ class Handle {
 };
 
 void check(herr_t status, const char* what) {
-  if (status < 0) throw Error(fmt::format("HDF5: cannot write {}", what));
+  if (status < 0) {
+    const std::string why = hdf5_reason();
+    throw IoError(why.empty() ? fmt::format("HDF5: cannot write {}", what)
+                              : fmt::format("HDF5: cannot write {}: {}", what, why));
+  }
 }
 
 void write_attr(hid_t obj, const char* name, double v) {
@@ -87,6 +140,7 @@ class RowDataset {
   // Appends `count` rows from `data` (row-major).
   void append(hsize_t count, const void* data) {
     if (count == 0) return;
+    init_hdf5();  // this thread's errors thrown, not printed
     std::vector<hsize_t> start(width_.size() + 1, 0), size{count}, dims{rows_ + count};
     start[0] = rows_;
     size.insert(size.end(), width_.begin(), width_.end());
@@ -129,7 +183,7 @@ class RowDataset {
 
 // Opens a new HDF5 file at `path` (its id, or -1); HDF5's errors are thrown, not printed.
 hid_t create_file(const std::filesystem::path& path) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  init_hdf5();
   return H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
 }
 
@@ -164,6 +218,7 @@ class MapFile {
   }
   // The segment heights and the attributes, and the file flushed.
   void finish(const MapHeader& m) {
+    init_hdf5();
     RowDataset heights(file_, "segment_height_mm", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, {}, "mm",
                        false);
     heights.append(m.segment_height_mm.size(), m.segment_height_mm.data());
@@ -239,19 +294,35 @@ void replay(const SimResult& r, SimSink& sink) {
 }
 
 struct ChipMapWriter::File {
-  File(const std::filesystem::path& path, const SimTool& tool, const SimSettings& s)
-      : header(header_of(tool, s)),
-        map(path, header.teeth, header.teeth * header.segments_per_tooth),
-        pending(path) {}
+  File(const std::filesystem::path& path_, const SimTool& tool, const SimSettings& s)
+      : path(path_),
+        header(header_of(tool, s)),
+        map(path_, header.teeth, header.teeth * header.segments_per_tooth),
+        pending(path_) {}
+  std::filesystem::path path;
   MapHeader header;
   MapFile map;
   PendingFile pending;  // removed if the process is stopped while it is written
   MapBlock block;
 };
 
+namespace {
+// A failed write names the file: "cannot write 'chips.h5': HDF5: cannot write h_mm: File too
+// large".
+template <class F>
+void naming(const std::filesystem::path& path, F&& f) {
+  try {
+    f();
+  } catch (const IoError& e) {
+    throw IoError(fmt::format("cannot write '{}': {}", path.string(), e.what()));
+  }
+}
+}  // namespace
+
 ChipMapWriter::ChipMapWriter(const std::filesystem::path& path, const SimTool& tool,
-                             const SimSettings& s)
-    : file_(std::make_unique<File>(path, tool, s)) {}
+                             const SimSettings& s) {
+  naming(path, [&] { file_ = std::make_unique<File>(path, tool, s); });
+}
 
 ChipMapWriter::~ChipMapWriter() = default;
 
@@ -259,16 +330,18 @@ void ChipMapWriter::take(const SimStep& step, std::span<const ChipEntry> chips) 
   if (!file_) throw Error("ChipMapWriter: a step after finish");
   add_row(file_->block, file_->header, step, chips);
   if (file_->block.t_s.size() == kBlockSteps) {
-    file_->map.append(file_->block);
+    naming(file_->path, [&] { file_->map.append(file_->block); });
     clear(file_->block);
   }
 }
 
 void ChipMapWriter::finish(bool complete) {
   if (!file_) throw Error("ChipMapWriter: finished twice");
-  file_->map.append(file_->block);
-  file_->header.complete = complete;
-  file_->map.finish(file_->header);
+  naming(file_->path, [&] {
+    file_->map.append(file_->block);
+    file_->header.complete = complete;
+    file_->map.finish(file_->header);
+  });
   file_.reset();
 }
 
@@ -350,6 +423,7 @@ std::vector<double> segment_heights_mm(const SimTool& tool, std::size_t segments
 
 ChipMapData read_chip_map_h5(const std::filesystem::path& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  init_hdf5();
   Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, path.c_str());
   ChipMapData m;
   auto dims_of = [&](const char* name) {
