@@ -17,6 +17,7 @@
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
 
 namespace trochomill {
 namespace {
@@ -86,6 +87,49 @@ TEST(OptimizeFeed, HoldsTheTargetOnTheWagihPrograms) {
     EXPECT_LT(r.time_after_s, 0.7 * r.time_before_s) << type;
     EXPECT_NEAR(r.time_after_s, out.path.duration_s(), 1e-9 * r.time_after_s);
     EXPECT_LE(r.h_after_mm.max, 0.075 * 1.03) << type;
+  }
+}
+
+// Descents into the stock (a helix, a ramp, a plunge below its top) keep their programmed feed
+// or go slower: the radial chip the model schedules by leaves out the end edges' cut and the
+// hole's full engagement (the helix of the Pivkin example once went from F477 to F2865). Each
+// entry type of the Pivkin job: every rewritten piece that descends and ends below z = 0 (the
+// stock's top) runs at most at the input move's feed; the summary counts the moves (the ramp
+// on a shallower, shorter slot: the kernel's engagement down the full 21 mm ramp takes a
+// minute).
+TEST(OptimizeFeed, DescentsIntoTheStockNeverSpeedUp) {
+  for (const char* entry : {"helix", "ramp", "plunge"}) {
+    std::vector<Override> ov = {parse_override(std::string("path.entry=") + entry)};
+    if (std::string(entry) == "ramp") {  // the kernel's engagement down a long ramp is slow
+      ov.push_back(parse_override("slot.depth=1"));
+      ov.push_back(parse_override("slot.length=10"));
+    }
+    const Job job =
+        parse_job(read_text_file(test::example("pivkin2025/trochoidal.toml")), "pivkin.toml", ov);
+    const std::string text = program_of(job);
+    const FeedOptimizeOptions o = options_60_1800(job);
+    const FeedOptimizeResult r = optimize_feed(job, text, "entry.ngc", o);
+    const GcodeProgram in = read_gcode(text, "in.ngc", o.read);
+    const GcodeProgram out = read_gcode(r.text, "out.ngc", o.read);
+    expect_same_motion(in.path, out.path);
+    // Each output piece against the input move it lies on (the motion is the input's: the
+    // pieces of a move end at its end).
+    const auto& a = in.path.segments();
+    std::size_t j = 0, descending = 0;
+    for (const Segment& piece : out.path.segments()) {
+      ASSERT_LT(j, a.size()) << entry;
+      if (piece.motion() != Motion::rapid && piece.end().z() < piece.start().z() - 1e-9 &&
+          piece.end().z() < -1e-9) {
+        ++descending;
+        // F is written to 0.001 mm/min.
+        EXPECT_LE(piece.speed_mm_per_min(), a[j].speed_mm_per_min() + 1e-3)
+            << entry << ": a descent at z " << piece.end().z();
+      }
+      if ((a[j].end() - piece.end()).norm() <= 1e-6) ++j;
+    }
+    EXPECT_GT(descending, 0u) << entry;
+    EXPECT_GT(r.moves_descending, 0u) << entry;
+    EXPECT_NE(feed_summary_text(r).find("descents into the stock"), std::string::npos) << entry;
   }
 }
 

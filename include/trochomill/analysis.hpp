@@ -169,7 +169,16 @@ struct FeedTargets {
   /// The chips of the path as it is each round; empty: the engagement kernel (kernel_chips).
   /// optimize-feed's `--engine sim` gives the tri-dexel simulation's.
   std::function<PathChips(const ToolPath& pieces)> chips;
+  /// The stock's top (mm, the path's frame): a piece that descends (a helix, ramp or plunge)
+  /// below it keeps its programmed feed or goes slower, never faster: its chip includes the
+  /// end edges' and the hole's full engagement, which the radial chip does not hold. Unset:
+  /// the job's (engagement.hpp: stock_top_mm without a mesh).
+  std::optional<double> stock_top_mm;
 };
+/// Whether the part [from_mm, to_mm] of a segment (arc length, mm) descends and ends below
+/// `top_mm` (mm): a descent into the stock, whose feed schedule_feed never raises.
+[[nodiscard]] bool piece_descends_below(const Segment& seg, double from_mm, double to_mm,
+                                        double top_mm);
 /// The job's feed targets: the [machine] max_feed, min_feed and air_feed, where 0 gives three
 /// times and a tenth of the job's feed, and the max feed; the chip target unset (the job's f_z).
 [[nodiscard]] FeedTargets default_feed_targets(const Job& job);

@@ -69,6 +69,10 @@ struct FeedOptimizeResult {
   std::string text;     ///< the rewritten program
   FeedRewrite rewrite;  ///< its counts (its text moved to `text`)
   std::size_t moves = 0, moves_split = 0;
+  /// Moves the model cannot judge, each kept at its programmed feed or slower: descents into
+  /// the stock (a helix, ramp or plunge below its top) and axial chips (material removed
+  /// with no radial chip).
+  std::size_t moves_descending = 0, moves_axial = 0;
   /// Programmed time (s) at the programmed feeds and rapid rate, and with the machine's
   /// acceleration limit (path.hpp: estimate_time_s; equal when [machine] max_acceleration is
   /// 0), before and after.
@@ -88,7 +92,8 @@ struct FeedOptimizeResult {
   double sim_resolution_mm = 0;            ///< with the simulation: its dexel spacing (mm)
   int sim_steps_per_rev = 0;               ///< and its time steps per revolution
   /// Shares (0..1) of the rewritten program's feed time held by the chip target, the removal
-  /// cap, the max and min feed, the air feed and plunges (kept at their programmed feed), and
+  /// cap, the max and min feed, the air feed, descents and plunges (kept at their programmed
+  /// feed or slower), and
   /// kept (moves the rewrite does not feed: canned cycles, compensation, other files).
   double share_target = 0, share_mrr = 0, share_max_feed = 0, share_min_feed = 0, share_air = 0,
          share_plunge = 0, share_kept = 0, share_force = 0, share_power = 0, share_torque = 0,

@@ -56,6 +56,12 @@ ToolPath build(const ToolPath& path, const std::vector<Piece>& pieces) {
 
 }  // namespace
 
+bool piece_descends_below(const Segment& seg, double from_mm, double to_mm, double top_mm) {
+  const double z0 = seg.point_at(from_mm).z(), z1 = seg.point_at(to_mm).z();
+  // 1e-9 mm: a level move's rounding is no descent; a piece ending at the top does not cut.
+  return z1 < z0 - 1e-9 && z1 < top_mm - 1e-9;
+}
+
 PathChips kernel_chips(const Job& job, const ToolPath& path, const RunHooks& hooks,
                        const Mesh* stock_mesh) {
   EngagementOptions eo;
@@ -149,6 +155,16 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
       const double b = j + 1 == n ? len : len * static_cast<double>(j + 1) / static_cast<double>(n);
       pieces.push_back({k, a, b, seg.speed_mm_per_min(), FeedLimit::none});
     }
+  }
+
+  // Descents below the stock's top (a helix, ramp or plunge into material): never faster than
+  // programmed (FeedTargets::stock_top_mm).
+  const double top = targets.stock_top_mm ? *targets.stock_top_mm : stock_top_mm(job, nullptr);
+  std::vector<char> descends(pieces.size(), 0);
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const Segment& seg = segs[pieces[k].segment];
+    if (seg.motion() == Motion::rapid) continue;
+    descends[k] = piece_descends_below(seg, pieces[k].a_mm, pieces[k].b_mm, top) ? 1 : 0;
   }
 
   FeedSchedule out;
@@ -322,6 +338,10 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
       if (f < lo) {
         f = lo;
         p.limit = FeedLimit::min_feed;
+      }
+      if (descends[k] && f >= segs[p.segment].speed_mm_per_min()) {
+        f = segs[p.segment].speed_mm_per_min();
+        p.limit = FeedLimit::plunge;
       }
       p.feed = f;
     }

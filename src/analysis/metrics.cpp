@@ -66,8 +66,8 @@ std::optional<double> path_deviation_mm(const PathSamples& s, double t,
 
 // Whether the cutting part of the path [c0, c1] repeats itself shifted by (0, step, 0) after
 // `period` seconds, checked sample by sample over a stretch around sample i0 that holds at least
-// one period and a full turn (2 pi) of the tangent: a true cycle passes everywhere; a shorter
-// candidate (one step of path along a loop's side) leaves the shifted path as soon as the
+// one period and a full turn (2 pi) of the tangent, from i0 on: a true cycle passes everywhere; a
+// shorter candidate (one step of path along a loop's side) leaves the shifted path as soon as the
 // path bends. The tolerance is a quarter step (the candidate's offset turned by the bend is
 // up to twice the step away) and at most 0.01 mm (a program's coordinate rounding, a few um,
 // passes).
@@ -85,10 +85,11 @@ bool repeats_with_period(const PathSamples& s, std::size_t c0, std::size_t c1, s
     }
   }
   if (turned < kTwoPi) return false;  // no full loop left to check against
-  // Centred on i0 within the cutting part, the shifted copy inside it too.
+  // From i0 on (the cycle starts there; before it may lie an entry), within the cutting part,
+  // the shifted copy inside it too.
   const double lo = s.t_s[c0], hi = s.t_s[c1] - period;
   if (hi - lo < span) return false;
-  const double from = std::clamp(s.t_s[i0] - 0.5 * span, lo, hi - span), to = from + span;
+  const double from = std::clamp(s.t_s[i0], lo, hi - span), to = from + span;
   std::size_t checked = 0, total = 0;
   for (auto i = static_cast<std::size_t>(std::lower_bound(s.t_s.begin(), s.t_s.end(), from) -
                                          s.t_s.begin());
@@ -113,63 +114,69 @@ Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, 
     c0 = std::min(c0, i);
     c1 = i;
   }
-  const double t_mid = 0.5 * (s.t_s[c0] + s.t_s[c1]);
-  std::size_t mid = c0;
-  while (mid < c1 && s.t_s[mid] < t_mid) ++mid;
-  if (trochoidal && step_mm > 0) {
-    // Start of cutting at or after the middle (else the middle sample itself).
-    std::size_t i0 = mid;
-    for (std::size_t i = std::max<std::size_t>(mid, 1); i <= c1; ++i) {
-      if (cutting[i] && !cutting[i - 1]) {
-        i0 = i;
-        break;
+  // The cycle is looked for from the middle of the cutting time on, then later (a long entry,
+  // a ramp down a deep slot, may take the first half).
+  for (const double at : {0.5, 0.7, 0.85}) {
+    if (!(trochoidal && step_mm > 0)) break;
+    const double t_mid = s.t_s[c0] + at * (s.t_s[c1] - s.t_s[c0]);
+    std::size_t mid = c0;
+    while (mid < c1 && s.t_s[mid] < t_mid) ++mid;
+    {
+      // Start of cutting at or after the middle (else the middle sample itself).
+      std::size_t i0 = mid;
+      for (std::size_t i = std::max<std::size_t>(mid, 1); i <= c1; ++i) {
+        if (cutting[i] && !cutting[i - 1]) {
+          i0 = i;
+          break;
+        }
       }
-    }
-    // The same point one step further along +Y, passed in the same direction: every
-    // approach to it is a candidate period, the shortest one the path repeats itself over
-    // is the cycle (docs/models.md section 7, the steady cycle). A nearer approach after a
-    // short stretch of path is no cycle: where the path runs along +Y (a loop's side, a
-    // circular family's advance) the shifted point comes by one step later on the same pass.
-    const double tx = s.x_mm[i0], ty = s.y_mm[i0] + step_mm;
-    double spacing = 0;
-    for (std::size_t i = i0 + 1; i < std::min(n, i0 + 64); ++i) {
-      spacing = std::max(spacing, std::hypot(s.x_mm[i] - s.x_mm[i - 1], s.y_mm[i] - s.y_mm[i - 1]));
-    }
-    std::size_t best = n;
-    double best_d = std::numeric_limits<double>::infinity();
-    const auto try_candidate = [&](std::size_t j) -> std::optional<Window> {
-      if (s.z_mm[j] >= 0) return std::nullopt;
-      // Refine along the tangent: the point is reached at t + (target - p).t / v.
-      const double v = (s.s_mm[j] - s.s_mm[j - 1]) / (s.t_s[j] - s.t_s[j - 1]);
-      const double ds = (tx - s.x_mm[j]) * s.tx[j] + (ty - s.y_mm[j]) * s.ty[j];
-      const double period = s.t_s[j] + ds / v - s.t_s[i0];
-      if (!(period > 0) || !repeats_with_period(s, c0, c1, i0, period, step_mm)) {
-        return std::nullopt;
+      // The same point one step further along +Y, passed in the same direction: every
+      // approach to it is a candidate period, the shortest one the path repeats itself over
+      // is the cycle (docs/models.md section 7, the steady cycle). A nearer approach after a
+      // short stretch of path is no cycle: where the path runs along +Y (a loop's side, a
+      // circular family's advance) the shifted point comes by one step later on the same pass.
+      const double tx = s.x_mm[i0], ty = s.y_mm[i0] + step_mm;
+      double spacing = 0;
+      for (std::size_t i = i0 + 1; i < std::min(n, i0 + 64); ++i) {
+        spacing =
+            std::max(spacing, std::hypot(s.x_mm[i] - s.x_mm[i - 1], s.y_mm[i] - s.y_mm[i - 1]));
       }
-      Window w;
-      w.first = i0;
-      w.last = j;
-      w.t0_s = s.t_s[i0];
-      w.duration_s = period;
-      w.length_mm = s.s_mm[j] + ds - s.s_mm[i0];
-      w.periodic = true;
-      return w;
-    };
-    for (std::size_t i = i0 + 1; i < n; ++i) {
-      const double d = std::hypot(s.x_mm[i] - tx, s.y_mm[i] - ty);
-      const double dir = s.tx[i] * s.tx[i0] + s.ty[i] * s.ty[i0];
-      if (d <= spacing + 1e-9 && dir > 0.9 && d < best_d) {
-        best = i;
-        best_d = d;
-      } else if (best < n && d > 2 * spacing + 1e-9) {
-        // Past the nearest approach: a candidate.
+      std::size_t best = n;
+      double best_d = std::numeric_limits<double>::infinity();
+      const auto try_candidate = [&](std::size_t j) -> std::optional<Window> {
+        if (s.z_mm[j] >= 0) return std::nullopt;
+        // Refine along the tangent: the point is reached at t + (target - p).t / v.
+        const double v = (s.s_mm[j] - s.s_mm[j - 1]) / (s.t_s[j] - s.t_s[j - 1]);
+        const double ds = (tx - s.x_mm[j]) * s.tx[j] + (ty - s.y_mm[j]) * s.ty[j];
+        const double period = s.t_s[j] + ds / v - s.t_s[i0];
+        if (!(period > 0) || !repeats_with_period(s, c0, c1, i0, period, step_mm)) {
+          return std::nullopt;
+        }
+        Window w;
+        w.first = i0;
+        w.last = j;
+        w.t0_s = s.t_s[i0];
+        w.duration_s = period;
+        w.length_mm = s.s_mm[j] + ds - s.s_mm[i0];
+        w.periodic = true;
+        return w;
+      };
+      for (std::size_t i = i0 + 1; i < n; ++i) {
+        const double d = std::hypot(s.x_mm[i] - tx, s.y_mm[i] - ty);
+        const double dir = s.tx[i] * s.tx[i0] + s.ty[i] * s.ty[i0];
+        if (d <= spacing + 1e-9 && dir > 0.9 && d < best_d) {
+          best = i;
+          best_d = d;
+        } else if (best < n && d > 2 * spacing + 1e-9) {
+          // Past the nearest approach: a candidate.
+          if (auto w = try_candidate(best)) return *w;
+          best = n;
+          best_d = std::numeric_limits<double>::infinity();
+        }
+      }
+      if (best < n) {
         if (auto w = try_candidate(best)) return *w;
-        best = n;
-        best_d = std::numeric_limits<double>::infinity();
       }
-    }
-    if (best < n) {
-      if (auto w = try_candidate(best)) return *w;
     }
   }
   // The middle third of the cutting time.

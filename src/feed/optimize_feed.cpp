@@ -393,6 +393,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
 
   hooks.begin("scheduling");
   FeedTargets targets = options.targets;
+  targets.stock_top_mm = stock_top_mm(job, stock);
   targets.caps = force_caps(job, options, hooks);
   targets.chips = path_chips;
   const FeedSchedule fs = schedule_feed(job, slot_path, targets, hooks);
@@ -412,6 +413,15 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
       feeds[i].feed_mm_per_min.push_back(p->feed_mm_per_min);
     }
     if (feeds[i].ends_mm.size() > 1) ++r.moves_split;
+    // What the model cannot judge: a descent into the stock, an axial chip (the schedule's
+    // plunge limit on a move that does not descend).
+    const Segment& in_slot = slot_path.segments()[m.segment];
+    if (piece_descends_below(in_slot, 0.0, in_slot.length_mm(), *targets.stock_top_mm)) {
+      ++r.moves_descending;
+    } else if (std::any_of(of_segment[m.segment].begin(), of_segment[m.segment].end(),
+                           [](const FeedPiece* p) { return p->limit == FeedLimit::plunge; })) {
+      ++r.moves_axial;
+    }
   }
 
   hooks.begin("rewriting");
@@ -685,6 +695,8 @@ std::string feed_summary_json(const FeedOptimizeResult& r) {
         {"kept", r.share_kept}}},
       {"moves", r.moves},
       {"moves_split", r.moves_split},
+      {"moves_descending_into_stock", r.moves_descending},
+      {"moves_axial_chip", r.moves_axial},
       {"blocks_changed", r.rewrite.blocks_changed},
       {"lines_added", r.rewrite.lines_added},
       {"unheld", unheld},
@@ -734,12 +746,18 @@ std::string feed_summary_text(const FeedOptimizeResult& r) {
   s += fmt::format(
       "feed time held by: chip target {:.1f} %, MRR cap {:.1f} %, force cap {:.1f} %, power cap "
       "{:.1f} %, torque cap {:.1f} %, acceleration {:.1f} %, max feed {:.1f} %, min feed {:.1f} "
-      "%, air feed {:.1f} %, plunges kept {:.1f} %, kept moves {:.1f} %\n",
+      "%, air feed {:.1f} %, descents and plunges kept {:.1f} %, kept moves {:.1f} %\n",
       100 * r.share_target, 100 * r.share_mrr, 100 * r.share_force, 100 * r.share_power,
       100 * r.share_torque, 100 * r.share_acceleration, 100 * r.share_max_feed,
       100 * r.share_min_feed, 100 * r.share_air, 100 * r.share_plunge, 100 * r.share_kept);
   s += fmt::format("{} moves, {} split, {} blocks changed, {} lines added\n", r.moves,
                    r.moves_split, r.rewrite.blocks_changed, r.rewrite.lines_added);
+  if (r.moves_descending + r.moves_axial > 0) {
+    s += fmt::format(
+        "not judged by the model, kept at their programmed feed or slower: {} descents into the "
+        "stock (helix, ramp, plunge), {} moves with an axial chip\n",
+        r.moves_descending, r.moves_axial);
+  }
   for (const UnheldBlock& u : r.unheld) {
     s += fmt::format(
         "cannot hold the target at {}:{}: h_max {:.4f} mm at the minimum feed {:g} "
