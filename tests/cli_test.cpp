@@ -1075,6 +1075,27 @@ TEST_F(Cli, TextureOfX3pSurfacesAndProfiles) {
   }
 }
 
+// A program that loops without end is stopped by the memory its path takes while it is read
+// (a quarter of --memory-limit), exit 2 naming the line, in every command that keeps the path
+// (it once grew until std::bad_alloc, several GB); check-gcode streams it to its block limit.
+TEST_F(Cli, AnEndlessProgramStopsEveryCommandThatReadsIt) {
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  const std::string ngc = (dir_ / "endless.ngc").string();
+  std::ofstream(ngc) << "G21 G90\nF600\n#1=0\no100 while [1]\nG1 X[#1] Y0 Z-1\n"
+                        "#1=[#1+0.001]\no100 endwhile\nM2\n";
+  const std::string limit = " --memory-limit 0.2";
+  for (const std::string& cmd :
+       {"analyze " + ex + " --gcode " + ngc, "path " + ex + " --gcode " + ngc + " --csv /dev/null",
+        "simulate " + ex + " --gcode " + ngc, "forces " + ex + " --fast --gcode " + ngc,
+        "optimize-feed " + ngc + " --job " + ex + " -o " + (dir_ / "o.ngc").string()}) {
+    const CliResult r = run_cli(cmd + limit);
+    EXPECT_EQ(r.code, 2) << cmd << "\n" << r.out;
+    EXPECT_NE(r.out.find("endless.ngc:5: the program's path holds"), std::string::npos)
+        << cmd << "\n" << r.out;
+    EXPECT_NE(r.out.find("loop without end"), std::string::npos) << cmd;
+  }
+}
+
 // simulate --out makes its folder as mkdir does: a missing parent is bad input (exit 2), and
 // nothing is made (a mistyped path once made every folder on it silently).
 TEST_F(Cli, SimulateOutMakesOnlyTheLastFolder) {

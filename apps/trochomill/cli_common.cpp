@@ -121,9 +121,12 @@ void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
       ->check(finite_above(0, 1e3));
 }
 
-ToolPath job_path(const Job& job, const std::string& gcode_file) {
+ToolPath job_path(const Job& job, const std::string& gcode_file,
+                  std::optional<double> memory_gb) {
   if (gcode_file.empty()) return plan_path(job).path;
   GcodeReadOptions ro = gcode_options(job.machine).read;
+  // Reading leaves the most of the memory to the work on the path (samples, chips).
+  ro.max_path_bytes = kPathShareOfMemory * memory_limit_bytes(memory_gb);
   const GcodeProgram prog = read_gcode_file(gcode_file, ro);
   for (const std::string& w : prog.info.warnings) fmt::print(stderr, "warning: {}\n", w);
   const std::vector<std::string> differ = header_mismatches(job, prog, gcode_file);
@@ -365,9 +368,7 @@ double memory_limit_bytes(std::optional<double> limit_gb) {
   if (limit_gb && !(*limit_gb > 0)) {
     throw InputError(fmt::format("--memory-limit must be > 0 GB, got {}", *limit_gb));
   }
-  return limit_gb ? *limit_gb * 1e9
-                  : 0.75 * static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
-                        static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  return limit_gb ? *limit_gb * 1e9 : default_memory_limit_bytes();
 }
 
 void check_memory(const char* command, double need_bytes, std::optional<double> limit_gb,

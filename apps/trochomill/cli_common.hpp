@@ -65,7 +65,9 @@ void check_memory(const char* command, double need_bytes, std::optional<double> 
                   const std::string& advice);
 /// The job's planned path, or the NC program's when one is given (turned into the slot frame
 /// by the job's placement; a warning on stderr for each header key that disagrees).
-[[nodiscard]] ToolPath job_path(const Job& job, const std::string& gcode_file);
+/// `memory_gb`: the command's --memory-limit (a quarter of it for the program's path as read).
+[[nodiscard]] ToolPath job_path(const Job& job, const std::string& gcode_file,
+                                std::optional<double> memory_gb = std::nullopt);
 
 /// Checks a command's outputs before any work: none is one of the inputs (`plan -o job.toml`
 /// would overwrite the job), none is a directory, each one's directory exists. "-" (stdout)

@@ -33,7 +33,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->json, &a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
-      const ToolPath path = job_path(job, a->gcode);
+      const ToolPath path = job_path(job, a->gcode, a->memory_gb);
       check_memory("analyze", estimate_analysis_memory(job, path), a->memory_gb,
                    fmt::format("{:.0f} s of program at {:g} rpm, {} samples per tooth pass: "
                                "lower [analysis] steps_per_tooth or analyse a shorter program",

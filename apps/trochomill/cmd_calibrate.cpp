@@ -110,7 +110,7 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
     if (a->cutoff_hz) o.cutoff_hz = *a->cutoff_hz;
     if (a->max_shift_s) o.max_shift_s = *a->max_shift_s;
     const MeasuredForces meas = read_measured_forces(a->measured, fmt_in);
-    const ToolPath path = job_path(job, a->gcode);
+    const ToolPath path = job_path(job, a->gcode, a->memory_gb);
     if (!a->window.given()) {
       o.from_s = std::max(0.0, meas.t_s.front());
       o.to_s = std::min(path.duration_s(), meas.t_s.back());

@@ -84,6 +84,7 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
     if (!a->stock.empty()) opt.stock_mesh = std::make_shared<const Mesh>(read_mesh(a->stock));
     if (a->rounds) opt.targets.iterations = *a->rounds;
     opt.memory_limit_bytes = memory_limit_bytes(a->memory_gb);
+    opt.read.max_path_bytes = kPathShareOfMemory * opt.memory_limit_bytes;
     for (const auto& d : a->includes) opt.read.include_dirs.emplace_back(d);
     const std::string text = read_text_file(a->program);
     const GuardedRun run(true);

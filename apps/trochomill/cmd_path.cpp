@@ -178,7 +178,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
-      const ToolPath tp = job_path(job, a->gcode);
+      const ToolPath tp = job_path(job, a->gcode, a->memory_gb);
       // The samples and tooth tracks in memory (the CSV is written as it is made): 80 bytes a
       // sample, 24 per tooth, 10 % for the vectors' slack, 30 MB for the process (measured:
       // 190 bytes a sample with 4 teeth).

@@ -90,7 +90,7 @@ void register_report_commands(CLI::App& app, int& exit_code, int argc, char** ar
       doc = JobDocument::load(a->job.file);
       r.document = &*doc;
     }
-    ToolPath path = job_path(job, a->gcode);
+    ToolPath path = job_path(job, a->gcode, a->memory_gb);
     if (a->window.given()) r.window_s = a->window.resolve(path);
     const std::optional<double> limit_gb = a->memory_gb;
     r.check_simulation_memory = [limit_gb, &job](double need) {

@@ -44,7 +44,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       check_outputs({&a->json}, {&a->job.file, &a->gcode});
       check_output_dir(a->out, "--out");
       const Job job = a->job.load();
-      const ToolPath path = job_path(job, a->gcode);
+      const ToolPath path = job_path(job, a->gcode, a->memory_gb);
       const auto [from, to] = a->window.resolve(path);
       // Refuse before starting when the estimate passes the limit.
       const MemoryEstimate est = estimate_simulation_memory(job, path, from, to);
@@ -112,7 +112,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->json, &a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
-      const ToolPath path = job_path(job, a->gcode);
+      const ToolPath path = job_path(job, a->gcode, a->memory_gb);
       const auto [from, to] = a->window.resolve(path);
       if (!job.material.model) {
         throw InputError(fmt::format(

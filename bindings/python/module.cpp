@@ -11,6 +11,7 @@
 
 #include "common.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/version.hpp"
 
 namespace trochomill::python {
@@ -99,7 +100,8 @@ py::dict sample_dict(const ToolPath& path, PathSamples&& s) {
 PyPath read_program(const py::object& program, const py::object& job_obj) {
   std::shared_ptr<const PyJob> job;
   if (!job_obj.is_none()) job = std::make_shared<const PyJob>(job_obj.cast<const PyJob&>());
-  const GcodeReadOptions ro = job ? gcode_options(job->job.machine).read : GcodeReadOptions{};
+  GcodeReadOptions ro = job ? gcode_options(job->job.machine).read : GcodeReadOptions{};
+  ro.max_path_bytes = kPathShareOfMemory * default_memory_limit_bytes();  // an endless loop
   PyPath p;
   GcodeProgram prog;
   const bool is_file = py::isinstance(program, py::module_::import("os").attr("PathLike")) ||
@@ -159,9 +161,7 @@ void check_memory(const char* what, double need_bytes, std::optional<double> lim
   if (limit_gb && !(*limit_gb > 0 && std::isfinite(*limit_gb))) {
     throw InputError(fmt::format("memory_limit_gb must be a finite number > 0, got {}", *limit_gb));
   }
-  const double limit = limit_gb ? *limit_gb * 1e9
-                                : 0.75 * static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
-                                      static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double limit = limit_gb ? *limit_gb * 1e9 : default_memory_limit_bytes();
   if (!(need_bytes <= limit)) {
     throw InputError(fmt::format(
         "{}: estimated memory {:.2f} GB exceeds the limit of {:.2f} GB ({}): {}; or raise "

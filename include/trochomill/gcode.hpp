@@ -125,6 +125,10 @@ struct GcodeReadOptions {
   /// program is then read in memory for its text alone.
   bool keep_path = true;
   std::uint64_t max_blocks = 200'000'000;  ///< interpreted blocks before "infinite loop?" stops
+  /// The most memory (bytes) the kept path (and the trace's moves, when traced) may take
+  /// while it is read; past it the reader stops with InputError naming the line ("does the
+  /// program loop without end?"), before the process runs out. 0: no limit.
+  double max_path_bytes = 0;
   int max_call_depth = 64;                 ///< nested subroutine calls
   /// Called for every canonical move, in order (check-gcode --trace); may be empty.
   std::function<void(const GcodeMove&)> trace;
@@ -159,8 +163,12 @@ struct GcodeProgram {
 /// axis words are allowed and ignored). Errors name file:line:column.
 [[nodiscard]] std::map<int, ToolTableEntry> read_tool_table(const std::filesystem::path& file);
 
+/// The share of the memory limit a program's path may take as it is read (the rest is the
+/// work on it: samples, chips; GcodeReadOptions::max_path_bytes).
+inline constexpr double kPathShareOfMemory = 0.25;
 /// `[machine]` as the writer's and the reader's options: the dialect, arc output and tolerance
-/// the writer uses, the rapid rate the reader gives G0 moves. The one place the machine's
+/// the writer uses, the rapid rate the reader gives G0 moves, a quarter of the default memory
+/// limit (io.hpp) for the path as read. The one place the machine's
 /// settings become G-code options.
 struct GcodeOptions {
   GcodeWriteOptions write;

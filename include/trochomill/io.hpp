@@ -84,6 +84,8 @@ struct CsvOptions {
 
 /// The process's peak resident memory so far (bytes; Linux VmHWM), 0 where unknown.
 [[nodiscard]] std::size_t peak_memory_bytes();
+/// The memory limit when none is given (bytes): 75 % of the machine's RAM.
+[[nodiscard]] double default_memory_limit_bytes();
 /// What a memory estimate counts for the process itself besides the work (bytes): its
 /// resident memory now (Linux VmRSS: the code and libraries loaded, the job, the path), at
 /// least 20 MB.

@@ -322,6 +322,11 @@ std::size_t peak_memory_bytes() {
   return 0;
 }
 
+double default_memory_limit_bytes() {
+  return 0.75 * static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
+         static_cast<double>(sysconf(_SC_PAGE_SIZE));
+}
+
 double process_base_bytes() {
   std::ifstream in("/proc/self/status");
   for (std::string line; std::getline(in, line);) {

@@ -1820,6 +1820,20 @@ class Interpreter {
       return GcodeMove::npos;
     }
     const std::size_t n = prog_.path.segments().size();
+    if (opt_.max_path_bytes > 0 && (n & 0x3ff) == 0) {
+      // Checked every 1024 moves: the path's segments and the trace's moves as held.
+      const double per_move =
+          static_cast<double>(sizeof(Segment)) + (opt_.trace ? sizeof(GcodeMove) + 64.0 : 0.0);
+      const double held = static_cast<double>(n) * per_move;
+      if (held > opt_.max_path_bytes) {
+        fail_at(0, fmt::format("the program's path holds {} moves ({:.2f} GB) after {} blocks, "
+                               "past the {:.2f} GB the memory limit leaves for reading it: does "
+                               "the program loop without end? (a long program that does not: "
+                               "raise the memory limit)",
+                               n, held / 1e9, prog_.info.blocks_executed,
+                               opt_.max_path_bytes / 1e9));
+      }
+    }
     try {
       prog_.path.append(std::move(seg));
     } catch (const Error& e) {

@@ -10,6 +10,7 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/units.hpp"
 #include "trochomill/version.hpp"
 
@@ -376,6 +377,7 @@ GcodeOptions gcode_options(const Machine& machine) {
     o.read.g30_position_mm = Vec3((*v)[0], (*v)[1], (*v)[2]);
   o.read.home_z_mm = machine.safe_z_mm;
   o.read.tool_table = machine.tool_table;
+  o.read.max_path_bytes = kPathShareOfMemory * default_memory_limit_bytes();
   return o;
 }
 
