@@ -1096,6 +1096,35 @@ TEST_F(Cli, AnEndlessProgramStopsEveryCommandThatReadsIt) {
   }
 }
 
+// `-` is standard output for optimize's -o and --pareto and calibrate's --write too (they
+// once wrote a file named "-"), the summary line then on stderr; a failed write to standard
+// output (a full disk behind it) exits 1.
+TEST_F(Cli, DashIsStandardOutputEverywhere) {
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  const std::string in_dir = "cd " + dir_.string() + " && ";
+  const std::string cli = std::string(TROCHOMILL_CLI);
+  const auto run_in_dir = [&](const std::string& args) {
+    const std::string cmd = in_dir + cli + " " + args + " 2>/dev/null";
+    FILE* p = popen(cmd.c_str(), "r");
+    std::string out;
+    std::array<char, 4096> buf{};
+    while (p != nullptr && std::fgets(buf.data(), buf.size(), p) != nullptr) out += buf.data();
+    const int status = p != nullptr ? pclose(p) : -1;
+    return CliResult{WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+  };
+  const std::string var = " --var path.step=0.5:1 --maximize cycle_mrr_mm3_per_min";
+  CliResult r = run_in_dir("optimize " + ex + var + " --max-evals 10 -o -");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("[path]"), std::string::npos) << r.out;  // the best job, as TOML
+  EXPECT_EQ(r.out.find("best of"), std::string::npos) << r.out;  // the summary on stderr
+  r = run_in_dir("optimize " + ex + var +
+                 " --minimize h_max_mm --max-evals 20 --population 8 --pareto -");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.out.rfind("path.step,cycle_mrr_mm3_per_min,h_max_mm\n", 0), 0u) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "-"));
+  EXPECT_EQ(run_cli("analyze " + ex + " --json - > /dev/full").code, 1);
+}
+
 // simulate --out makes its folder as mkdir does: a missing parent is bad input (exit 2), and
 // nothing is made (a mistyped path once made every folder on it silently).
 TEST_F(Cli, SimulateOutMakesOnlyTheLastFolder) {

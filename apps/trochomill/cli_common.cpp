@@ -172,10 +172,18 @@ void check_output_dir(const std::string& dir, const std::string& option) {
   }
 }
 
+namespace {
+// A failed write to standard output (a full disk behind `>`, a closed pipe) is a failed write.
+void check_stdout(bool ok) {
+  if (!ok || std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+    throw IoError(fmt::format("cannot write to standard output: {}", std::strerror(errno)));
+  }
+}
+}  // namespace
+
 void emit(const std::string& target, const std::string& text) {
   if (target == "-") {
-    std::fwrite(text.data(), 1, text.size(), stdout);
-    std::fflush(stdout);
+    check_stdout(std::fwrite(text.data(), 1, text.size(), stdout) == text.size());
   } else {
     write_file_atomic(target, text);
   }
@@ -184,8 +192,10 @@ void emit(const std::string& target, const std::string& text) {
 void emit_stream(const std::string& target,
                  const std::function<void(const std::function<void(std::string_view)>&)>& produce) {
   if (target == "-") {
-    produce([](std::string_view piece) { std::fwrite(piece.data(), 1, piece.size(), stdout); });
-    std::fflush(stdout);
+    produce([](std::string_view piece) {
+      if (std::fwrite(piece.data(), 1, piece.size(), stdout) != piece.size()) check_stdout(false);
+    });
+    check_stdout(true);
     return;
   }
   write_text_atomic(target, produce);

@@ -58,7 +58,7 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
       ->check(finite_in(0, 1e9));
   cmd->add_option("--cycles", a->window.cycles, "A:B: the model window as trochoid cycles");
   cmd->add_option("--json", a->json, "write the result as JSON (- for stdout)");
-  cmd->add_option("--write", a->write, "write the [material] block to this file");
+  cmd->add_option("--write", a->write, "write the [material] block to this file (- for stdout)");
   cmd->final_callback([a, &exit_code] {
     check_outputs({&a->json, &a->write}, {&a->job.file, &a->measured, &a->mean, &a->gcode});
     const Job job = a->job.load();
@@ -69,9 +69,9 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
     if (!a->mean.empty()) {
       const MeanForceFit f = fit_mean_forces(job, read_mean_forces(a->mean));
       const std::string block = mean_force_toml(f);
-      if (!a->write.empty()) write_file_atomic(a->write, block);
+      if (!a->write.empty()) emit(a->write, block);
       if (!a->json.empty()) emit(a->json, mean_force_json(f));
-      if (a->json != "-") fmt::print("{}", block);
+      if (a->json != "-" && a->write != "-") fmt::print("{}", block);
       return;
     }
     ForceCsvFormat fmt_in;
@@ -128,9 +128,9 @@ void register_calibration_commands(CLI::App& app, int& exit_code) {
     run.done();
     for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
     const std::string block = material_toml(r);
-    if (!a->write.empty()) write_file_atomic(a->write, block);
+    if (!a->write.empty()) emit(a->write, block);
     if (!a->json.empty()) emit(a->json, calibration_json(r));
-    if (a->json != "-") fmt::print("{}", calibration_text(a->measured, r));
+    if (a->json != "-" && a->write != "-") fmt::print("{}", calibration_text(a->measured, r));
     run.finish("interrupted: the outputs were written in full");
   });
 }

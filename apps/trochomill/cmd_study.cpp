@@ -152,8 +152,9 @@ void register_study_commands(CLI::App& app, int& exit_code) {
         ->check(CLI::Range(8, 100000));
     cmd->add_option("--seed", a->seed, "seed of the evolution (ISRES, NSGA-II)");
     cmd->add_option("-o,--output", a->output,
-                    "one goal: the best job as TOML, ready for plan (required then)");
-    cmd->add_option("--pareto", a->pareto, "several goals: the Pareto set as CSV (required then)");
+                    "one goal: the best job as TOML, ready for plan, - for stdout (required then)");
+    cmd->add_option("--pareto", a->pareto,
+                    "several goals: the Pareto set as CSV, - for stdout (required then)");
     cmd->add_option("--json", a->json, "the result as JSON (- for stdout)");
     cmd->add_option("--html", a->html,
                     "the HTML report of the best job (one goal) or of the job with the Pareto "
@@ -221,7 +222,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
         }
         out["best"] = point_json(*r.best);
         const Job best = doc.build(best_overrides);
-        write_file_atomic(a->output,
+        emit(a->output,
                           fmt::format("# The best variant of {} found by trochomill optimize ({} "
                                       "evaluations, {}).\n",
                                       a->job.file, r.evaluations, r.method) +
@@ -245,7 +246,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
           }
           out["pareto"].push_back(point_json(p));
         }
-        write_file_atomic(a->pareto, csv);
+        emit(a->pareto, csv);
       }
       if (!a->html.empty()) {
         // The best job's report, or the base job's with the Pareto set.
@@ -274,17 +275,21 @@ void register_study_commands(CLI::App& app, int& exit_code) {
         emit(a->html, report_html(d, run.hooks()));
       }
       if (!a->json.empty()) emit(a->json, out.dump(2) + "\n");
-      if (a->json != "-") {
+      // The summary line: on stdout, or on stderr when an output is standard output.
+      const bool to_stdout =
+          a->json == "-" || a->output == "-" || a->pareto == "-" || a->html == "-";
+      {
+        std::FILE* const sink = to_stdout ? stderr : stdout;
         if (r.best) {
           std::string line;
           for (std::size_t k = 0; k < r.keys.size(); ++k) {
             line += fmt::format("{}{} = {}", k ? ", " : "", r.keys[k], r.best->values[k]);
           }
-          fmt::print("{}: best of {} evaluations: {}; {} = {:.6g} -> {}\n", a->job.file,
+          fmt::print(sink, "{}: best of {} evaluations: {}; {} = {:.6g} -> {}\n", a->job.file,
                      r.evaluations, line, goals[0].metric, r.best->metrics.at(goals[0].metric),
                      a->output);
         } else {
-          fmt::print("{}: {} Pareto points of {} evaluations -> {}\n", a->job.file, r.pareto.size(),
+          fmt::print(sink, "{}: {} Pareto points of {} evaluations -> {}\n", a->job.file, r.pareto.size(),
                      r.evaluations, a->pareto);
         }
       }

@@ -4,12 +4,22 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdio>
 #include <exception>
+#include <string>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/version.hpp"
+
+namespace {
+// The last word on stderr: a failure to print it (stderr on a full disk) changes nothing, it
+// must not throw out of main.
+void say(const std::string& text) noexcept {
+  (void)!std::fwrite(text.data(), 1, text.size(), stderr);
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   namespace cli = trochomill::cli;
@@ -43,14 +53,14 @@ int main(int argc, char** argv) {
     // The library's own message is "interrupted"; a command that stopped while writing says
     // what it wrote.
     const std::string what = e.what();
-    fmt::print(stderr, "\n{}\n",
-               what == "interrupted" ? std::string("interrupted: nothing was written") : what);
+    say("\n" + (what == "interrupted" ? std::string("interrupted: nothing was written") : what) +
+        "\n");
     return 130;
   } catch (const trochomill::InputError& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
+    say(std::string("error: ") + e.what() + "\n");
     return 2;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
+    say(std::string("error: ") + e.what() + "\n");
     return 1;
   }
 }
