@@ -1091,7 +1091,8 @@ TEST_F(Cli, AnEndlessProgramStopsEveryCommandThatReadsIt) {
     const CliResult r = run_cli(cmd + limit);
     EXPECT_EQ(r.code, 2) << cmd << "\n" << r.out;
     EXPECT_NE(r.out.find("endless.ngc:5: the program's path holds"), std::string::npos)
-        << cmd << "\n" << r.out;
+        << cmd << "\n"
+        << r.out;
     EXPECT_NE(r.out.find("loop without end"), std::string::npos) << cmd;
   }
 }
@@ -1115,7 +1116,7 @@ TEST_F(Cli, DashIsStandardOutputEverywhere) {
   const std::string var = " --var path.step=0.5:1 --maximize cycle_mrr_mm3_per_min";
   CliResult r = run_in_dir("optimize " + ex + var + " --max-evals 10 -o -");
   EXPECT_EQ(r.code, 0);
-  EXPECT_NE(r.out.find("[path]"), std::string::npos) << r.out;  // the best job, as TOML
+  EXPECT_NE(r.out.find("[path]"), std::string::npos) << r.out;   // the best job, as TOML
   EXPECT_EQ(r.out.find("best of"), std::string::npos) << r.out;  // the summary on stderr
   r = run_in_dir("optimize " + ex + var +
                  " --minimize h_max_mm --max-evals 20 --population 8 --pareto -");
@@ -1123,6 +1124,31 @@ TEST_F(Cli, DashIsStandardOutputEverywhere) {
   EXPECT_EQ(r.out.rfind("path.step,cycle_mrr_mm3_per_min,h_max_mm\n", 0), 0u) << r.out;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "-"));
   EXPECT_EQ(run_cli("analyze " + ex + " --json - > /dev/full").code, 1);
+}
+
+// A study whose every point failed is a failed study (exit 2; report writes nothing); one
+// whose points partly failed exits 0 and counts them on stderr. Each point's error names the
+// option it came from (--vary, not --set).
+TEST_F(Cli, AStudyWhoseEveryPointFailedFails) {
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  const std::string csv = (dir_ / "sw.csv").string();
+  CliResult r = run_cli("sweep " + ex + " --vary path.step=20,30 -o " + csv);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("every point failed (2 of 2"), std::string::npos) << r.out;
+  std::filesystem::remove(csv);
+  r = run_cli("sweep " + ex + " --vary path.step=1,30 --set slot.length=4 -o " + csv);
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("1 of 2 points failed"), std::string::npos) << r.out;
+  const std::string html = (dir_ / "r.html").string();
+  r = run_cli("report " + ex + " --vary path.step=20,30 -o " + html);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--vary (path.step)"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(html));
+  r = run_cli("compare " + ex + " --vary path.step=1,30 --set slot.length=4");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("compare: 1 of 2 points failed (the first: --vary (path.step)"),
+            std::string::npos)
+      << r.out;
 }
 
 // simulate --out makes its folder as mkdir does: a missing parent is bad input (exit 2), and

@@ -121,8 +121,7 @@ void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
       ->check(finite_above(0, 1e3));
 }
 
-ToolPath job_path(const Job& job, const std::string& gcode_file,
-                  std::optional<double> memory_gb) {
+ToolPath job_path(const Job& job, const std::string& gcode_file, std::optional<double> memory_gb) {
   if (gcode_file.empty()) return plan_path(job).path;
   GcodeReadOptions ro = gcode_options(job.machine).read;
   // Reading leaves the most of the memory to the work on the path (samples, chips).
@@ -372,6 +371,18 @@ void GuardedRun::done() const {
 
 void GuardedRun::finish(const char* what) const {
   if (g_interrupted.load()) throw Interrupted(what);
+}
+
+void print_failed_points(const char* command, const std::vector<StudyPoint>& points) {
+  std::size_t failed = 0;
+  const StudyPoint* first = nullptr;
+  for (const StudyPoint& p : points) {
+    if (p.ok) continue;
+    if (failed++ == 0) first = &p;
+  }
+  if (failed == 0) return;
+  fmt::print(stderr, "{}: {} of {} points failed (the first: {})\n", command, failed, points.size(),
+             first->error);
 }
 
 double memory_limit_bytes(std::optional<double> limit_gb) {

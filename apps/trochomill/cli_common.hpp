@@ -156,6 +156,9 @@ class GuardedRun {
 /// The memory limit of a long run (bytes): `--memory-limit` GB (> 0, else InputError), or 75 %
 /// of the machine's RAM.
 [[nodiscard]] double memory_limit_bytes(std::optional<double> limit_gb);
+/// A study's points that failed, counted on stderr with the first one's error (nothing when
+/// none failed).
+void print_failed_points(const char* command, const std::vector<StudyPoint>& points);
 /// Adds --memory-limit (GB).
 void add_memory_limit(CLI::App* cmd, std::optional<double>& limit_gb);
 

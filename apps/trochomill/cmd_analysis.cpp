@@ -92,6 +92,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       if (std::none_of(points.begin(), points.end(), [](const StudyPoint& p) { return p.ok; })) {
         throw InputError("compare: every point of the grid failed (see the table)");
       }
+      print_failed_points("compare", points);
       exit_code = 0;
     });
   }

@@ -111,13 +111,26 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       }
       const SweepTable t = read_sweep_csv(a->output);
       std::size_t failed = 0;
-      for (const auto& row : t.rows) failed += row[1 + plan.keys.size()] == "0" ? 1 : 0;
+      std::string first_error;
+      for (const auto& row : t.rows) {
+        if (row[1 + plan.keys.size()] != "0") continue;
+        if (failed++ == 0) first_error = row[2 + plan.keys.size()];
+      }
       if (!a->json.empty()) emit(a->json, sweep_json(t));
       if (a->json != "-") {
         fmt::print("{}: {} points ({} run now, {} failed) -> {}\n", a->job.file, plan.points.size(),
                    n, failed, a->output);
       }
       run.finish("interrupted: the rows written stay; --resume continues");
+      // Some points failed: said on stderr (exit 0); every point: a failed study (exit 2).
+      if (failed > 0 && failed == t.rows.size()) {
+        throw InputError(fmt::format("sweep: every point failed ({} of {}; the first: {})", failed,
+                                     t.rows.size(), first_error));
+      }
+      if (failed > 0) {
+        fmt::print(stderr, "sweep: {} of {} points failed (rows with ok = 0; the first: {})\n",
+                   failed, t.rows.size(), first_error);
+      }
       exit_code = 0;
     });
   }
@@ -222,11 +235,10 @@ void register_study_commands(CLI::App& app, int& exit_code) {
         }
         out["best"] = point_json(*r.best);
         const Job best = doc.build(best_overrides);
-        emit(a->output,
-                          fmt::format("# The best variant of {} found by trochomill optimize ({} "
-                                      "evaluations, {}).\n",
-                                      a->job.file, r.evaluations, r.method) +
-                              to_toml(best));
+        emit(a->output, fmt::format("# The best variant of {} found by trochomill optimize ({} "
+                                    "evaluations, {}).\n",
+                                    a->job.file, r.evaluations, r.method) +
+                            to_toml(best));
       } else {
         if (r.pareto.empty()) {
           throw InputError(
@@ -289,8 +301,8 @@ void register_study_commands(CLI::App& app, int& exit_code) {
                      r.evaluations, line, goals[0].metric, r.best->metrics.at(goals[0].metric),
                      a->output);
         } else {
-          fmt::print(sink, "{}: {} Pareto points of {} evaluations -> {}\n", a->job.file, r.pareto.size(),
-                     r.evaluations, a->pareto);
+          fmt::print(sink, "{}: {} Pareto points of {} evaluations -> {}\n", a->job.file,
+                     r.pareto.size(), r.evaluations, a->pareto);
         }
       }
       run.finish("interrupted");

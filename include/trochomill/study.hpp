@@ -22,8 +22,9 @@ struct SweepRange {
   std::string key;
   double lo = 0, hi = 0;
 };
-/// Parses "section.key=lo:hi" (lo < hi, finite). Throws InputError.
-[[nodiscard]] SweepRange parse_range(const std::string& text);
+/// Parses "section.key=lo:hi" (lo < hi, finite). Throws InputError, its message starting with
+/// `what` (the option the text came from: "--range", "--var").
+[[nodiscard]] SweepRange parse_range(const std::string& text, std::string_view what = "--range");
 
 enum class Sampler {
   sobol,  ///< Sobol's low-discrepancy sequence (Joe and Kuo's directions; first point skipped)

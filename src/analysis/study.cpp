@@ -74,7 +74,7 @@ std::vector<StudyPoint> run_study(const JobDocument& doc, const std::vector<Over
       rest /= varies[k].values.size();
     }
     for (std::size_t k = 0; k < varies.size(); ++k) {
-      ov.push_back(Override{varies[k].key, varies[k].values[idx[k]], {}});
+      ov.push_back(Override{varies[k].key, varies[k].values[idx[k]], "--vary"});
     }
     points[p].overrides = std::move(ov);
   }

@@ -162,7 +162,7 @@ OptVariable parse_opt_variable(const std::string& text) {
   if (!k) throw InputError(fmt::format("--var {}: no such job key (see `trochomill keys`)", v.key));
   const std::string rest = text.substr(eq + 1);
   if (rest.find(':') != std::string::npos && rest.find(',') == std::string::npos) {
-    const SweepRange r = parse_range(text);
+    const SweepRange r = parse_range(text, "--var");
     if (k->type != "number" && k->type != "integer") {
       throw InputError(
           fmt::format("--var {}: the key is {}, not a number: give its choices as {}=a,b,...",

@@ -229,12 +229,12 @@ std::vector<std::string> metric_names(const Job& base, SweepEval eval) {
   return {cols.begin() + 3, cols.end()};  // after index, ok, error
 }
 
-SweepRange parse_range(const std::string& text) {
+SweepRange parse_range(const std::string& text, std::string_view what) {
   const auto eq = text.find('=');
   const auto colon = text.find(':', eq == std::string::npos ? 0 : eq);
   SweepRange r;
   if (eq == std::string::npos || colon == std::string::npos) {
-    throw InputError(fmt::format("--range '{}': expected section.key=lo:hi", text));
+    throw InputError(fmt::format("{} '{}': expected section.key=lo:hi", what, text));
   }
   r.key = trim(text.substr(0, eq));
   const std::string a = trim(text.substr(eq + 1, colon - eq - 1)), b = trim(text.substr(colon + 1));
@@ -245,7 +245,7 @@ SweepRange parse_range(const std::string& text) {
   if (a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0' || !std::isfinite(r.lo) ||
       !std::isfinite(r.hi) || !(r.lo < r.hi)) {
     throw InputError(
-        fmt::format("--range '{}': expected section.key=lo:hi with finite numbers lo < hi", text));
+        fmt::format("{} '{}': expected section.key=lo:hi with finite numbers lo < hi", what, text));
   }
   return r;
 }
