@@ -140,6 +140,16 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                    a->targets.h_max_mm.value_or(job.cutting.feed_per_tooth_mm), fs->time_before_s,
                    fs->time_after_s, 100.0 * (fs->time_after_s / fs->time_before_s - 1.0),
                    fs->pieces);
+        if (const auto& m = fs->missed) {
+          const double target = a->targets.h_max_mm.value_or(job.cutting.feed_per_tooth_mm);
+          const Vec3 at = slot_placement(job).to_work(m->at_mm);
+          fmt::print(stderr,
+                     "warning: feed schedule: the target {:g} mm is missed by more than 3 % on {} "
+                     "pieces; the worst, h_max {:.5f} mm ({:+.1f} %), at X{:.3f} Y{:.3f} Z{:.3f} "
+                     "({:.3f} s into the program) runs at {:g} mm/min, held by {}\n",
+                     target, m->pieces, m->h_max_mm, 100.0 * (m->h_max_mm / target - 1.0), at.x(),
+                     at.y(), at.z(), m->at_s, m->feed_mm_per_min, describe(m->limit));
+        }
       }
       if (a->out != "-") {
         fmt::print(

@@ -203,7 +203,21 @@ struct FeedSchedule {
   std::vector<FeedLimit> piece_limit;
   /// The feed moves of the scheduled path as parts of the input's segments (after merging).
   std::vector<FeedPiece> feed_pieces;
+  /// Where the chip target is missed by more than 3 % (the schedule's tolerance): the pieces
+  /// over it, the worst one's chip (mm), where it starts (mm, the path's frame; s of the
+  /// scheduled path), its feed (mm/min) and what held that feed. none: no piece over.
+  struct Missed {
+    std::size_t pieces = 0;
+    double h_max_mm = 0;
+    Vec3 at_mm = Vec3::Zero();
+    double at_s = 0;
+    double feed_mm_per_min = 0;
+    FeedLimit limit = FeedLimit::none;
+  };
+  std::optional<Missed> missed;
 };
+/// What a FeedLimit means, in words ("the chip target", "the max feed", ...).
+[[nodiscard]] const char* describe(FeedLimit limit) noexcept;
 /// Schedules the feed along `path` so that the largest local chip of every piece is the
 /// target (Wagih 2023's h_max from the exact engagement, docs/models.md section 15): the
 /// chip grows in proportion to the feed per tooth where the engaged arcs stay the same, so

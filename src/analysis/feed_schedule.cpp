@@ -56,6 +56,32 @@ ToolPath build(const ToolPath& path, const std::vector<Piece>& pieces) {
 
 }  // namespace
 
+const char* describe(FeedLimit limit) noexcept {
+  switch (limit) {
+    case FeedLimit::none:
+      return "the chip target";
+    case FeedLimit::min_feed:
+      return "the min feed";
+    case FeedLimit::max_feed:
+      return "the max feed";
+    case FeedLimit::air:
+      return "the air feed";
+    case FeedLimit::plunge:
+      return "a descent or plunge keeping its feed";
+    case FeedLimit::mrr:
+      return "the removal rate cap";
+    case FeedLimit::force:
+      return "the force cap";
+    case FeedLimit::power:
+      return "the power cap";
+    case FeedLimit::torque:
+      return "the torque cap";
+    case FeedLimit::acceleration:
+      return "the acceleration";
+  }
+  return "?";
+}
+
 bool piece_descends_below(const Segment& seg, double from_mm, double to_mm, double top_mm) {
   const double z0 = seg.point_at(from_mm).z(), z1 = seg.point_at(to_mm).z();
   // 1e-9 mm: a level move's rounding is no descent; a piece ending at the top does not cut.
@@ -301,6 +327,19 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
       out.h_max_after_mm = 0;
       for (std::size_t k = 0; k < pieces.size(); ++k) {
         if (segs[pieces[k].segment].motion() == Motion::rapid) continue;
+        // 3 %: the schedule's tolerance (docs/models.md section 15).
+        if (h[k] > 1.03 * h_target) {
+          if (!out.missed) out.missed = FeedSchedule::Missed{};
+          FeedSchedule::Missed& ms = *out.missed;
+          ++ms.pieces;
+          if (h[k] > ms.h_max_mm) {
+            ms.h_max_mm = h[k];
+            ms.at_mm = segs[pieces[k].segment].point_at(pieces[k].a_mm);
+            ms.at_s = current.segment_start_time_s(k);
+            ms.feed_mm_per_min = pieces[k].feed;
+            ms.limit = pieces[k].limit;
+          }
+        }
         out.h_max_after_mm = std::max(out.h_max_after_mm, h[k]);
         out.piece_h_max_mm.push_back(h[k]);
         out.piece_feed_mm_per_min.push_back(pieces[k].feed);

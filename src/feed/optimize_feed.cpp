@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
@@ -181,8 +182,10 @@ void force_quantiles(const ForceSeries& f, CutQuantiles& force, CutQuantiles& po
 // torque at its feed; a piece over a cap is allowed its feed times (cap / value)^(1 / (1 - m))
 // (the force grows with the chip as h^(1 - m) in Kienzle's and Bergmann's models; the linear
 // model's edge term makes it grow slower, which the rounds correct from above).
+// `where`: the program's block ("file:line") at a length along the path (mm).
 std::function<void(const ToolPath&, std::vector<double>&, std::vector<FeedLimit>&)> force_caps(
-    const Job& job, const FeedOptimizeOptions& o, const RunHooks& hooks) {
+    const Job& job, const FeedOptimizeOptions& o, const RunHooks& hooks,
+    std::function<std::string(double)> where) {
   if (!o.force_n && !o.power_w && !o.torque_nm) return {};
   if (!job.material.model) {
     throw InputError(
@@ -197,8 +200,9 @@ std::function<void(const ToolPath&, std::vector<double>&, std::vector<FeedLimit>
     }
   }
   const double m = std::clamp(job.material.m, 0.0, 0.9);
-  return [&job, o, hooks, m](const ToolPath& pieces, std::vector<double>& allowed,
-                             std::vector<FeedLimit>& limit) {
+  auto first_round = std::make_shared<bool>(true);
+  return [&job, o, hooks, m, first_round, where](
+             const ToolPath& pieces, std::vector<double>& allowed, std::vector<FeedLimit>& limit) {
     const auto& segs = pieces.segments();
     std::vector<double> fr(segs.size(), 0.0), pw(segs.size(), 0.0), tq(segs.size(), 0.0);
     // A step's chip was made since the tooth before passed: its force belongs to every piece
@@ -231,6 +235,42 @@ std::function<void(const ToolPath&, std::vector<double>&, std::vector<FeedLimit>
       apply(o.force_n, fr[k], FeedLimit::force);
       apply(o.power_w, pw[k], FeedLimit::power);
       apply(o.torque_nm, tq[k], FeedLimit::torque);
+    }
+    // A cap the minimum feed cannot hold is refused at once (the rounds would only creep down
+    // to the minimum feed, each a force run over the whole program). The power law's feed is
+    // an upper bound on the one needed: the models' edge forces fall slower with the feed.
+    if (*first_round) {
+      *first_round = false;
+      const double lo = o.targets.min_feed_mm_per_min;
+      std::size_t worst = segs.size();
+      for (std::size_t k = 0; k < segs.size(); ++k) {
+        if (limit[k] != FeedLimit::force && limit[k] != FeedLimit::power &&
+            limit[k] != FeedLimit::torque) {
+          continue;
+        }
+        if (allowed[k] < lo * (1 - 1e-9) && (worst == segs.size() || allowed[k] < allowed[worst])) {
+          worst = k;
+        }
+      }
+      if (worst < segs.size()) {
+        const FeedLimit w = limit[worst];
+        const char* what = w == FeedLimit::force   ? "force"
+                           : w == FeedLimit::power ? "power"
+                                                   : "torque";
+        const double cap = w == FeedLimit::force   ? *o.force_n
+                           : w == FeedLimit::power ? *o.power_w
+                                                   : *o.torque_nm;
+        const double value = w == FeedLimit::force   ? fr[worst]
+                             : w == FeedLimit::power ? pw[worst]
+                                                     : tq[worst];
+        const char* unit = w == FeedLimit::force ? "N" : w == FeedLimit::power ? "W" : "N m";
+        throw InputError(fmt::format(
+            "{}: the {} cap of {:g} {} cannot be held at the minimum feed of {:g} mm/min: the "
+            "model gives {:.4g} {} at {:g} mm/min and would need {:.3g} mm/min or less; raise "
+            "the cap or lower the minimum feed (machine.min_feed)",
+            where(pieces.segment_start_length_mm(worst)), what, cap, unit, lo, value, unit,
+            segs[worst].speed_mm_per_min(), allowed[worst]));
+      }
     }
   };
 }
@@ -394,7 +434,14 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   hooks.begin("scheduling");
   FeedTargets targets = options.targets;
   targets.stock_top_mm = stock_top_mm(job, stock);
-  targets.caps = force_caps(job, options, hooks);
+  targets.caps = force_caps(job, options, hooks, [&](double s_mm) {
+    // The pieces subdivide the program's moves: a length along them is one along the path.
+    const std::size_t k = slot_path.segment_at_length(s_mm);
+    for (const GcodeMove& mv : in.moves) {
+      if (mv.segment == k) return fmt::format("{}:{}", mv.file, mv.line);
+    }
+    return std::string(name);
+  });
   targets.chips = path_chips;
   const FeedSchedule fs = schedule_feed(job, slot_path, targets, hooks);
   r.h_target_mm = options.targets.h_max_mm.value_or(job.cutting.feed_per_tooth_mm);
