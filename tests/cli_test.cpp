@@ -20,6 +20,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <regex>
+#include <set>
 #include <sstream>
 
 #include "test_util.hpp"
@@ -1149,6 +1151,53 @@ TEST_F(Cli, AStudyWhoseEveryPointFailedFails) {
   EXPECT_NE(r.out.find("compare: 1 of 2 points failed (the first: --vary (path.step)"),
             std::string::npos)
       << r.out;
+}
+
+// Messages a new user met: a mistyped command is named with the nearest one; a binary file
+// given as a table is said to be one (its bytes were echoed back); a G28 position must be a
+// number; every job key a command's help names ("[section] key" or "section.key") exists.
+TEST_F(Cli, MessagesNameWhatIsWrong) {
+  CliResult r = run_cli("simulte x");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("unknown command 'simulte'; did you mean 'simulate'?"), std::string::npos)
+      << r.out;
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  r = run_cli("calibrate " + ex + " --measured " + std::string(TROCHOMILL_CLI));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find(":1:1: byte 0x7f is not text"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("ELF"), std::string::npos) << r.out;
+  const std::string ngc = (dir_ / "g.ngc").string();
+  std::ofstream(ngc) << "G28\nM2\n";
+  EXPECT_EQ(run_cli("check-gcode " + ngc + " --g28 nan,0,0").code, 2);
+  // The keys, and every key named in a help text.
+  const auto keys = nlohmann::json::parse(run_cli("keys --json").out);
+  std::set<std::string> names, sections;
+  for (const auto& k : keys) {
+    names.insert(k["section"].get<std::string>() + "." + k["key"].get<std::string>());
+    sections.insert(k["section"].get<std::string>());
+  }
+  const std::string top = run_cli("--help").out;
+  const std::regex sub(R"(\n  ([a-z-]+)  )"), dotted(R"(\b([a-z_]+)\.([a-z_0-9]+)\b)"),
+      bracketed(R"(\[([a-z_]+)\] ([a-z_0-9]+))");
+  std::size_t commands = 0;
+  for (auto it = std::sregex_iterator(top.begin(), top.end(), sub); it != std::sregex_iterator();
+       ++it) {
+    const std::string cmd = (*it)[1];
+    const std::string help = run_cli(cmd + " --help").out;
+    ++commands;
+    for (const std::regex* re : {&dotted, &bracketed}) {
+      for (auto m = std::sregex_iterator(help.begin(), help.end(), *re);
+           m != std::sregex_iterator(); ++m) {
+        const std::string section = (*m)[1], key = (*m)[2];
+        // Phrases such as "[stock] box" or "[machine] limits" name a section, not a key.
+        static const std::set<std::string> phrases = {"box", "limits", "block", "settings"};
+        if (sections.count(section) == 0 || phrases.count(key) > 0) continue;
+        EXPECT_TRUE(names.count(section + "." + key) > 0)
+            << cmd << " --help names " << section << "." << key << ", no such key";
+      }
+    }
+  }
+  EXPECT_GT(commands, 15u);
 }
 
 // simulate --out makes its folder as mkdir does: a missing parent is bad input (exit 2), and

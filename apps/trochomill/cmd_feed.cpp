@@ -56,7 +56,7 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
   cmd->add_option("--engine", a->engine,
                   "where the chips come from: kernel (the exact engagement, 2.5D programs: "
                   "constant-Z levels with plunges, ramps and helices between them) or sim (the "
-                  "tri-dexel simulation at [simulation] resolution_mm and steps_per_rev: any "
+                  "tri-dexel simulation at [simulation] resolution and steps_per_rev: any "
                   "3D motion)")
       ->check(CLI::IsMember({"kernel", "sim"}));
   cmd->add_option("--stock", a->stock,

@@ -270,10 +270,12 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                     "repeatable)");
     cmd->add_option("--g28", a->g28, "G28 position in machine coordinates, X,Y,Z mm")
         ->delimiter(',')
-        ->expected(3);
+        ->expected(3)
+        ->check(finite_in(-1e6, 1e6));
     cmd->add_option("--g30", a->g30, "G30 position in machine coordinates, X,Y,Z mm")
         ->delimiter(',')
-        ->expected(3);
+        ->expected(3)
+        ->check(finite_in(-1e6, 1e6));
     cmd->add_option("--peck-clearance", a->read.peck_clearance_mm,
                     "G73/G83 retract between pecks, mm")
         ->capture_default_str()

@@ -245,6 +245,26 @@ bool parse_number(const std::string& f, double& v) {
 }  // namespace
 
 CsvTable parse_csv(std::string_view text, std::string_view source, const CsvOptions& o) {
+  // A binary file is said to be one, not echoed back: a control byte other than tab, CR and
+  // LF names its line and column.
+  {
+    std::size_t line = 1, column = 1;
+    for (const char ch : text) {
+      const auto c = static_cast<unsigned char>(ch);
+      if (c == '\n') {
+        ++line;
+        column = 1;
+        continue;
+      }
+      if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7f) {
+        throw InputError(fmt::format(
+            "{}:{}:{}: byte 0x{:02x} is not text: a CSV table is text (numbers separated by "
+            "commas, semicolons or tabs)",
+            source, line, column, c));
+      }
+      ++column;
+    }
+  }
   CsvTable t;
   std::vector<std::size_t> index;  // selected field of each output column
   bool first = true;

@@ -417,7 +417,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
       throw InputError(fmt::format(
           "optimize-feed --engine sim: the simulation's estimated memory {:.2f} GB (boards "
           "{:.2f}, records {:.2f}) exceeds the limit of {:.2f} GB; coarsen [simulation] "
-          "resolution_mm (now {} mm) or steps_per_rev (now {}), or raise --memory-limit",
+          "resolution (now {} mm) or steps_per_rev (now {}), or raise --memory-limit",
           est.total(false) / 1e9, est.boards_bytes / 1e9, est.records_bytes / 1e9,
           options.memory_limit_bytes / 1e9, job.simulation.resolution_mm,
           job.simulation.steps_per_rev));
