@@ -840,7 +840,8 @@ std::size_t files_in(const std::filesystem::path& dir) {
   return n;
 }
 
-// Ctrl-C: a long run stops at the library's next check (exit 130); during output writing no
+// Ctrl-C: a long run stops at the library's next check (exit 130, SIGTERM 143); during output
+// writing no
 // half-written file is left, whether a long run was under way (the staging of --out) or not
 // (the handler removes the temporary file and ends the process).
 TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
@@ -916,6 +917,17 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
       << read_file(log);
   EXPECT_FALSE(std::filesystem::exists(ajson));
   EXPECT_EQ(files_in(dir_), 5u);  // tmp, log, fifo, sim, s.json
+
+  // 4. SIGTERM (a batch system's stop, `kill`) is Ctrl-C with exit 143.
+  pid = spawn_cli(
+      "analyze " + ex + " --set slot.length=2000 --set analysis.steps_per_tooth=8 --json " + ajson,
+      log, tmp.string());
+  ASSERT_GT(pid, 0);
+  wait_for_cpu(pid, 2.0);
+  ::kill(pid, SIGTERM);
+  EXPECT_EQ(exit_code_of(pid), 143) << read_file(log);
+  EXPECT_FALSE(std::filesystem::exists(ajson));
+  EXPECT_EQ(files_in(tmp), 0u);
 }
 
 // texture: a measured CSV profile (heights in um) of a short sinusoid on a long one gives the

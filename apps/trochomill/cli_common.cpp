@@ -303,22 +303,36 @@ namespace {
 
 std::atomic<bool> g_interrupted{false};
 std::atomic<int> g_guarded{0};  // GuardedRuns alive (the library polls g_interrupted)
+std::atomic<int> g_signal{0};   // the first stopping signal (SIGINT, SIGTERM)
 
-void on_interrupt(int) {
+void on_interrupt(int sig) {
+  int none = 0;
+  g_signal.compare_exchange_strong(none, sig);
   if (g_guarded.load() > 0 && !g_interrupted.exchange(true)) return;  // the library stops
   remove_pending_files();
   static const char msg[] = "\ninterrupted\n";
-  (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
-  ::_exit(130);
+  static const char term[] = "\nterminated\n";
+  if (sig == SIGTERM) {
+    (void)!::write(STDERR_FILENO, term, sizeof term - 1);
+  } else {
+    (void)!::write(STDERR_FILENO, msg, sizeof msg - 1);
+  }
+  ::_exit(128 + sig);
 }
 
 }  // namespace
+
+int interrupted_exit_code() {
+  const int sig = g_signal.load();
+  return 128 + (sig != 0 ? sig : SIGINT);
+}
 
 void install_interrupt_handler() {
   struct sigaction sa {};
   sa.sa_handler = on_interrupt;
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);  // the same, exit 143 (a batch system's stop, `kill`)
   // A write past the file size limit (ulimit -f) fails with EFBIG and is reported as any
   // failed write, instead of the signal ending the process with a half-written output.
   std::signal(SIGXFSZ, SIG_IGN);

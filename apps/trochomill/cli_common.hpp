@@ -128,7 +128,10 @@ void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required,
 /// Ctrl-C for the whole process (main installs it first). Outside a GuardedRun it removes
 /// the temporary file of any output being written and ends the process (exit 130); inside one
 /// it raises the flag the library polls, and a second Ctrl-C ends the process as outside.
+/// SIGTERM is handled the same way, with exit 143.
 void install_interrupt_handler();
+/// The exit status of a run the user stopped: 130 for Ctrl-C, 143 for SIGTERM.
+[[nodiscard]] int interrupted_exit_code();
 
 /// A long run: Ctrl-C raises the flag its hooks carry (the library stops at the next check) and
 /// a progress bar with the phase's name and ETA is shown on a terminal.

@@ -85,7 +85,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       if (a->json != "-") fmt::print("{}", simulation_text(a->job.file, job, js, from, to, wall));
       if (!note.empty()) fmt::print(stderr, "simulate: {}\n", note);
       run.finish("interrupted: the outputs were written in full");
-      exit_code = js.result.complete ? 0 : 130;
+      exit_code = js.result.complete ? 0 : interrupted_exit_code();
     });
   }
   // forces
@@ -147,7 +147,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
         fmt::print("{}", force_summary_text(job, jf, from, to));
       }
       run.finish("interrupted: the outputs were written in full");
-      exit_code = jf.chips.complete ? 0 : 130;
+      exit_code = jf.chips.complete ? 0 : interrupted_exit_code();
     });
   }
 }

@@ -1,6 +1,7 @@
 // trochomill command-line interface: builds the app from the command groups (one file each,
 // commands.hpp), runs the chosen command and maps failures to exit codes: 0 success, 2 bad
-// input (arguments, job file, NC program, signal), 1 runtime failure, 130 interrupted.
+// input (arguments, job file, NC program, signal), 1 runtime failure, 130 interrupted (Ctrl-C), 143
+// terminated (SIGTERM).
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -94,7 +95,7 @@ int main(int argc, char** argv) {
     const std::string what = e.what();
     say("\n" + (what == "interrupted" ? std::string("interrupted: nothing was written") : what) +
         "\n");
-    return 130;
+    return cli::interrupted_exit_code();
   } catch (const trochomill::InputError& e) {
     say(std::string("error: ") + e.what() + "\n");
     return 2;
