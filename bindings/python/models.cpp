@@ -343,12 +343,19 @@ progress: None or callable(phase: str, done: int, total: int).)");
         // metric of the points that ran (NaN where a point failed or has no value).
         py::dict cols;
         const py::module_ tomllib = py::module_::import("tomllib");
+        // One entry per point, keyed by name: the value that took effect (the last override
+        // of the key: a job's own override of a varied key comes before the study's), None
+        // where a point has none. Appending every override of the key once gave a column
+        // longer than the table, its rows shifted against the metrics.
         for (const Vary& v : varies) {
           py::list col;
           for (const StudyPoint& p : points) {
+            const Override* last = nullptr;
             for (const Override& o : p.overrides) {
-              if (o.key == v.key) col.append(tomllib.attr("loads")("v = " + o.value)["v"]);
+              if (o.key == v.key) last = &o;
             }
+            col.append(last != nullptr ? tomllib.attr("loads")("v = " + last->value)["v"]
+                                       : py::object(py::none()));
           }
           cols[py::str(v.key)] = py::module_::import("numpy").attr("asarray")(col);
         }

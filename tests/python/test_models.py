@@ -90,6 +90,21 @@ def test_compare_columns_are_the_clis_points(wagih):
             np.testing.assert_array_equal(one[key], col, err_msg=key)  # NaN where None
 
 
+def test_compare_columns_are_keyed_by_name(wagih):
+    # A job that sets a varied key itself: each point holds both overrides, the study's last;
+    # every column is one entry a point (its key appended twice once shifted the rows).
+    job = tm.Job.from_toml(wagih, set={"slot.length": 8.0, "path.step": 0.9})
+    cols = tm.compare(job, {"path.step": [0.8, 1.0], "path.aspect_ratio": [1.0, 1.2]})
+    n = len(cols["ok"])
+    assert n == 4
+    for key, col in cols.items():
+        assert len(col) == n, key
+    assert list(cols["path.step"]) == [0.8, 0.8, 1.0, 1.0]
+    cli = cli_json("compare", wagih, "--set", "slot.length=8.0", "--set", "path.step=0.9",
+                   "--vary", "path.step=0.8,1.0", "--vary", "path.aspect_ratio=1.0,1.2")
+    assert list(cols["cycle_time_s"]) == [p["metrics"]["cycle_time_s"] for p in cli["points"]]
+
+
 def test_compare_records_a_failed_point(wagih):
     cols = tm.compare(tm.Job.from_toml(wagih, set={"slot.length": 8.0}), {"path.step": [1.0, -1.0]})
     assert list(cols["ok"]) == [True, False]
