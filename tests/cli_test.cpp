@@ -930,6 +930,38 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   EXPECT_EQ(files_in(tmp), 0u);
 }
 
+// Two sweeps of one output at once: the second refuses to start (the first holds the file's
+// lock), where both once wrote the same rows; a file that holds a point twice is refused by
+// --resume, where it was accepted.
+TEST_F(Cli, ASweepLocksItsOutputAndResumeChecksIt) {
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  const std::string csv = (dir_ / "sw.csv").string(), log = (dir_ / "log").string();
+  const std::string tmp = dir_.string();
+  const std::string study =
+      " --vary path.step=0.5,0.55,0.6,0.65,0.7,0.75,0.8,0.85,0.9,0.95,1 "
+      "--threads 1 --set slot.length=100 -o " +
+      csv;
+  const pid_t first = spawn_cli("sweep " + ex + study, log, tmp);
+  ASSERT_GT(first, 0);
+  // Waits (up to 60 s) for the first sweep's header: it holds the lock by then.
+  for (int i = 0; i < 600 && !(std::filesystem::exists(csv) && std::filesystem::file_size(csv) > 0);
+       ++i) {
+    ::usleep(100000);
+  }
+  const CliResult second = run_cli("sweep " + ex + study + " --resume");
+  EXPECT_EQ(second.code, 2) << second.out;
+  EXPECT_NE(second.out.find("another sweep is writing it"), std::string::npos) << second.out;
+  EXPECT_EQ(exit_code_of(first), 0) << read_file(log);
+  // A point twice in the file: refused.
+  const std::string text = read_file(csv);
+  const auto second_line = text.find('\n') + 1;
+  const std::string row = text.substr(second_line, text.find('\n', second_line) + 1 - second_line);
+  std::ofstream(csv, std::ios::app) << row;
+  const CliResult again = run_cli("sweep " + ex + study + " --resume");
+  EXPECT_EQ(again.code, 2) << again.out;
+  EXPECT_NE(again.out.find("point 0 is in it twice"), std::string::npos) << again.out;
+}
+
 // texture: a measured CSV profile (heights in um) of a short sinusoid on a long one gives the
 // closed forms (Ra = 2A/pi to 1e-4, the long wave's Wt = 2B T(4 mm) to 1e-3, RSm the short
 // wavelength), the same numbers as the library on the same samples; a job's walls are

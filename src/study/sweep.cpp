@@ -3,6 +3,7 @@
 // point order as points finish, resumable.
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/file.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
@@ -485,6 +486,26 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
         fmt::format("{} exists: --resume continues that sweep, or remove the file to start again",
                     csv.string()));
   }
+  // The output is locked while this sweep writes it: a second sweep of the same file (a
+  // --resume started twice) refuses to start instead of writing the same rows again.
+  const int fd = ::open(csv.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    throw IoError(
+        fmt::format("{}: cannot open for writing: {}", csv.string(), std::strerror(errno)));
+  }
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    if (errno == EWOULDBLOCK) {
+      throw InputError(fmt::format(
+          "{}: another sweep is writing it (it holds the file's lock); wait for it to end, or "
+          "give another output",
+          csv.string()));
+    }
+    throw IoError(fmt::format("{}: cannot lock: {}", csv.string(), std::strerror(errno)));
+  }
   if (exists) {
     // Drop a torn last line (a run killed while writing it).
     const std::string text = read_text_file(csv);
@@ -512,19 +533,16 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
                 csv.string(), i, plan.keys[k], row[1 + k], plan.points[i][k]));
           }
         }
+        if (done[i]) {
+          throw InputError(fmt::format(
+              "{}: point {} is in it twice (two runs wrote it at once?): remove the repeated "
+              "rows, or start again",
+              csv.string(), i));
+        }
         done[i] = true;
       }
     }
   }
-  const int fd = ::open(csv.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    throw IoError(
-        fmt::format("{}: cannot open for writing: {}", csv.string(), std::strerror(errno)));
-  }
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
   if (std::filesystem::file_size(csv) == 0) write_all(fd, header, csv);
 
   std::vector<std::size_t> todo;
