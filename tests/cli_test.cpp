@@ -918,7 +918,21 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   EXPECT_FALSE(std::filesystem::exists(ajson));
   EXPECT_EQ(files_in(dir_), 5u);  // tmp, log, fifo, sim, s.json
 
-  // 4. SIGTERM (a batch system's stop, `kill`) is Ctrl-C with exit 143.
+  // 4. optimize (one goal: NLopt) stops at its next evaluation, exit 130, nothing written
+  // (Ctrl-C inside NLopt's callback once became "nlopt failure", exit 1).
+  const std::string best = (dir_ / "best.toml").string();
+  pid = spawn_cli("optimize " + test::example("wagih2023/elliptical.toml").string() +
+                      " --var path.aspect_ratio=0.5:1.2 --var path.step=0.5:1.5 --maximize "
+                      "cycle_mrr_mm3_per_min -o " +
+                      best,
+                  log, tmp.string());
+  ASSERT_GT(pid, 0);
+  wait_for_cpu(pid, 1.0);
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(exit_code_of(pid), 130) << read_file(log);
+  EXPECT_FALSE(std::filesystem::exists(best));
+
+  // 5. SIGTERM (a batch system's stop, `kill`) is Ctrl-C with exit 143.
   pid = spawn_cli(
       "analyze " + ex + " --set slot.length=2000 --set analysis.steps_per_tooth=8 --json " + ajson,
       log, tmp.string());

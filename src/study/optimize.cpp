@@ -40,6 +40,9 @@ class Evaluator {
     inner_.cancel = hooks.cancel;
   }
 
+  // The evaluations planned (progress is counted against them).
+  void set_total(std::size_t total) { total_ = total; }
+
   // The TOML value of variable k at x (a number, or a choice index's value).
   std::string value(std::size_t k, double x) const {
     const OptVariable& v = vars_[k];
@@ -75,7 +78,9 @@ class Evaluator {
     }
     const std::lock_guard<std::mutex> lock(mu_);
     const auto [it, fresh] = cache_.emplace(values, std::move(p));
-    if (fresh && hooks_.progress) hooks_.progress(cache_.size(), 0);
+    // Progress against the planned evaluations (a cached point is no new one; a bound the
+    // optimiser may stop short of).
+    if (fresh && hooks_.progress) hooks_.progress(cache_.size(), std::max(total_, cache_.size()));
     return it->second;
   }
 
@@ -104,6 +109,7 @@ class Evaluator {
   RunHooks inner_;
   std::mutex mu_;
   std::map<std::vector<std::string>, OptPoint> cache_;
+  std::size_t total_ = 0;
 };
 
 // The objective's value to minimise (maximise: its negative); a failed point's penalty.
@@ -244,6 +250,9 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
       (vars[k].choices.empty() ? numeric : choice).push_back(k);
     }
     std::vector<std::size_t> pick(choice.size(), 0);
+    std::size_t combinations = 1;
+    for (const std::size_t c : choice) combinations *= vars[c].choices.size();
+    ev.set_total(combinations * static_cast<std::size_t>(numeric.empty() ? 1 : o.max_evaluations));
     for (;;) {
       // x over every variable: choices fixed at this combination.
       std::vector<double> full(vars.size(), 0.0);
@@ -277,15 +286,25 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
         obj.values = [&](const std::vector<double>& xs) { return values_at(xs); };
         std::vector<Ctx> cons;
         for (const Constraint& c : constraints) cons.push_back({&ev, &g, &c, obj.values});
+        // Ctrl-C inside a callback stops NLopt as a forced stop (any other exception there
+        // became "nlopt failure", exit 1); the check after the run then says interrupted.
         const auto f = [](unsigned dim, const double* xs, double*, void* data) -> double {
           auto* ctx = static_cast<Ctx*>(data);
-          const OptPoint& p = ctx->ev->at(ctx->values(std::vector<double>(xs, xs + dim)));
-          return p.metrics.empty() ? kPenalty : goal(p, *ctx->g);
+          try {
+            const OptPoint& p = ctx->ev->at(ctx->values(std::vector<double>(xs, xs + dim)));
+            return p.metrics.empty() ? kPenalty : goal(p, *ctx->g);
+          } catch (const Interrupted&) {
+            throw nlopt::forced_stop();
+          }
         };
         const auto gfun = [](unsigned dim, const double* xs, double*, void* data) -> double {
           auto* ctx = static_cast<Ctx*>(data);
-          const OptPoint& p = ctx->ev->at(ctx->values(std::vector<double>(xs, xs + dim)));
-          return p.metrics.empty() ? kPenalty : Evaluator::violation(p, *ctx->c);
+          try {
+            const OptPoint& p = ctx->ev->at(ctx->values(std::vector<double>(xs, xs + dim)));
+            return p.metrics.empty() ? kPenalty : Evaluator::violation(p, *ctx->c);
+          } catch (const Interrupted&) {
+            throw nlopt::forced_stop();
+          }
         };
         const auto run = [&](nlopt::algorithm alg, int evals) {
           nlopt::opt opt(alg, static_cast<unsigned>(n));
@@ -321,7 +340,9 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
         if (best) {
           for (std::size_t i = 0; i < n; ++i) x[i] = std::stod(best->values[numeric[i]]);
         }
+        hooks.check("interrupted");
         run(nlopt::LN_COBYLA, o.max_evaluations - global);
+        hooks.check("interrupted");
       }
       hooks.check("interrupted");
       std::size_t c = choice.size();
@@ -339,6 +360,7 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
     r.method = "pagmo NSGA-II (infeasible points penalised)";
     const int pop = std::max(8, (o.population + 3) / 4 * 4);
     const int generations = std::max(1, o.max_evaluations / pop - 1);
+    ev.set_total(static_cast<std::size_t>(pop) * static_cast<std::size_t>(generations + 1));
     pagmo::problem prob{ParetoProblem{&ev, &vars, &goals}};
     pagmo::population population(prob, static_cast<pagmo::population::size_type>(pop),
                                  static_cast<unsigned>(o.seed));
