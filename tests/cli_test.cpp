@@ -1204,6 +1204,17 @@ TEST_F(Cli, AStudyWhoseEveryPointFailedFails) {
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("--vary (path.step)"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(html));
+  // A simulating sweep checks each point's memory estimate against its share of the limit
+  // before it starts (it checked none).
+  std::filesystem::remove(csv);
+  r = run_cli("sweep " + test::example("bergmann2021/trochoidal.toml").string() +
+              " --vary path.step=0.3,0.4 --eval simulate --cycles 3:4 --threads 2 "
+              "--memory-limit 0.1 -o " +
+              csv);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("exceeds this point's share of the memory limit, 0.05 GB"),
+            std::string::npos)
+      << r.out;
   r = run_cli("compare " + ex + " --vary path.step=1,30 --set slot.length=4");
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("compare: 1 of 2 points failed (the first: --vary (path.step)"),

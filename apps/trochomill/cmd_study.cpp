@@ -46,6 +46,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       std::uint64_t seed = 1;
       int threads = 0;
       bool resume = false;
+      std::optional<double> memory_gb;
     };
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand(
@@ -76,6 +77,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
         ->check(CLI::Range(0, 4096));
     cmd->add_flag("--resume", a->resume,
                   "continue the sweep in OUTPUT: its rows stay, only the points missing run");
+    add_memory_limit(cmd, a->memory_gb);
     cmd->final_callback([a, &exit_code] {
       if (a->output == "-") throw InputError("sweep: -o needs a file (rows are appended to it)");
       check_outputs({&a->json}, {&a->job.file, &a->output});
@@ -89,6 +91,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       SweepOptions o;
       o.eval = parse_sweep_eval(a->eval);
       o.threads = a->threads;
+      o.memory_limit_bytes = memory_limit_bytes(a->memory_gb);
       if (!a->cycles.empty()) {
         if (o.eval != SweepEval::forces && o.eval != SweepEval::simulate) {
           throw InputError("sweep: --cycles is for --eval forces or simulate");
@@ -142,6 +145,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       std::string eval = "analyze", cycles, output, pareto, json, html;
       int max_evals = 300, population = 24;
       std::uint64_t seed = 1;
+      std::optional<double> memory_gb;
     };
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand(
@@ -157,6 +161,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
                     "a constraint METRIC<=VALUE or METRIC>=VALUE (repeatable), e.g. "
                     "h_max_mm<=0.05");
     cmd->add_option("--eval", a->eval, "analyze (default), mechanism, forces or simulate");
+    add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("--cycles", a->cycles, "forces and simulate: the window A:B of cycles");
     cmd->add_option("--max-evals", a->max_evals,
                     "evaluations per combination of choices (one goal) or in all (several)")
@@ -190,6 +195,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       }
       OptimizeOptions o;
       o.eval = parse_sweep_eval(a->eval);
+      o.memory_limit_bytes = memory_limit_bytes(a->memory_gb);
       o.max_evaluations = a->max_evals;
       o.population = a->population;
       o.seed = a->seed;

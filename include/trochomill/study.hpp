@@ -55,9 +55,11 @@ enum class SweepEval { analyze, mechanism, forces, simulate };
 
 /// The metrics of one point: the numbers of the evaluation's JSON document (as the sweep's
 /// columns; null figures left out). Throws what the evaluation throws.
+/// `memory_limit_bytes` (> 0): a simulation whose memory estimate passes it is refused
+/// (InputError) before it starts.
 [[nodiscard]] std::map<std::string, double> point_metrics(
     const Job& job, SweepEval eval, const std::optional<std::pair<int, int>>& cycles,
-    const RunHooks& hooks = {});
+    const RunHooks& hooks = {}, double memory_limit_bytes = 0);
 /// The metric names an evaluation gives (the sweep's metric columns).
 [[nodiscard]] std::vector<std::string> metric_names(const Job& base, SweepEval eval);
 
@@ -68,6 +70,9 @@ struct SweepOptions {
   /// cycle analyze finds).
   std::optional<std::pair<int, int>> cycles;
   int threads = 0;  ///< points evaluated at once (0: all cores)
+  /// The memory the points in flight may take together (bytes; 0: no limit): each
+  /// simulation is refused before it starts when its estimate passes its share.
+  double memory_limit_bytes = 0;
 };
 
 /// The columns of a sweep's CSV: index, the plan's keys, ok, error, then the metrics of the
@@ -154,6 +159,9 @@ struct OptimizeOptions {
   int max_evaluations = 300;                  ///< per choice combination
   std::uint64_t seed = 1;
   int population = 24;  ///< NSGA-II's population (two or more objectives; a multiple of 4)
+  /// The memory an evaluation may take (bytes; 0: no limit): a simulation whose estimate
+  /// passes it is refused before it starts (the point fails, saying so).
+  double memory_limit_bytes = 0;
 };
 /// One evaluated point.
 struct OptPoint {

@@ -67,7 +67,7 @@ class Evaluator {
     std::vector<Override> o = base_;
     for (std::size_t k = 0; k < vars_.size(); ++k) o.push_back({vars_[k].key, values[k], "--var"});
     try {
-      p.metrics = point_metrics(doc_.build(o), o_.eval, o_.cycles, inner_);
+      p.metrics = point_metrics(doc_.build(o), o_.eval, o_.cycles, inner_, o_.memory_limit_bytes);
       p.feasible = true;
       for (const Constraint& c : constraints_) p.feasible = p.feasible && violation(p, c) <= 0;
     } catch (const Interrupted&) {

@@ -65,7 +65,7 @@ void flatten(const json& j, const std::string& prefix,
 
 // The document of one evaluation.
 json evaluate(const Job& job, SweepEval eval, const std::optional<std::pair<int, int>>& cycles,
-              const RunHooks& hooks) {
+              const RunHooks& hooks, double memory_limit_bytes) {
   if (eval == SweepEval::mechanism) {
     const bool wear = job.tool.flank_wear_mm > 0;
     const MechanismCurve c = mechanism_curve(job, job.mechanism, wear);
@@ -97,6 +97,17 @@ json evaluate(const Job& job, SweepEval eval, const std::optional<std::pair<int,
     return json::parse(force_summary_json(job, f, window.first, window.second));
   }
   control.keep_records = false;  // only the summary is read
+  if (memory_limit_bytes > 0) {
+    const double need =
+        estimate_simulation_memory(job, path, window.first, window.second).total(false);
+    if (!(need <= memory_limit_bytes)) {
+      throw InputError(fmt::format(
+          "simulate: the estimated memory {:.2f} GB exceeds this point's share of the memory "
+          "limit, {:.2f} GB: coarsen [simulation] resolution (now {} mm), shorten the window, "
+          "or run fewer points at once",
+          need / 1e9, memory_limit_bytes / 1e9, job.simulation.resolution_mm));
+    }
+  }
   const JobSimulation js = simulate_job(job, path, window.first, window.second, control);
   if (!js.result.complete) throw Interrupted("interrupted");
   return json::parse(simulation_json(job, js, window.first, window.second, 0, 0));
@@ -184,7 +195,12 @@ std::string sweep_row(const JobDocument& doc, const std::vector<Override>& base,
   try {
     const Job job = doc.build(o);
     std::vector<std::pair<std::string, json>> leaves;
-    flatten(evaluate(job, options.eval, options.cycles, inner), "", leaves);
+    // The points in flight share the limit.
+    const int in_flight =
+        options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+    flatten(evaluate(job, options.eval, options.cycles, inner,
+                     options.memory_limit_bytes / std::max(1, in_flight)),
+            "", leaves);
     for (auto& [k, v] : leaves) values.emplace(k, std::move(v));
   } catch (const Interrupted&) {
     throw;
@@ -210,9 +226,9 @@ std::string sweep_row(const JobDocument& doc, const std::vector<Override>& base,
 
 std::map<std::string, double> point_metrics(const Job& job, SweepEval eval,
                                             const std::optional<std::pair<int, int>>& cycles,
-                                            const RunHooks& hooks) {
+                                            const RunHooks& hooks, double memory_limit_bytes) {
   std::vector<std::pair<std::string, json>> leaves;
-  flatten(evaluate(job, eval, cycles, hooks), "", leaves);
+  flatten(evaluate(job, eval, cycles, hooks, memory_limit_bytes), "", leaves);
   std::map<std::string, double> out;
   for (const auto& [k, v] : leaves) {
     if (v.is_boolean()) {
