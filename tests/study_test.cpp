@@ -94,9 +94,9 @@ class SweepRun : public ::testing::Test {
   fs::path dir_;
 };
 
-// Each row holds what `compare` gives the same point (the same evaluation, printed to 17
-// digits: equal to the last bit); a point whose job is invalid records why and the sweep
-// goes on.
+// Each row holds what `compare` gives the same point (the same evaluation, printed in its
+// shortest round-trip form: equal to the last bit); a point whose job is invalid records why and
+// the sweep goes on.
 TEST_F(SweepRun, RowsAreTheAnalysisOfEachPointAndFailuresAreRecorded) {
   const JobDocument doc = JobDocument::load(test::example("wagih2023/elliptical.toml"));
   const SweepPlan plan =

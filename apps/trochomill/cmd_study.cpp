@@ -259,7 +259,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
           for (const auto& v : p.values)
             csv += v.find(',') == std::string::npos ? v + "," : "\"" + v + "\",";
           for (std::size_t g = 0; g < goals.size(); ++g) {
-            csv += fmt::format("{:.17g}{}", p.metrics.at(goals[g].metric),
+            csv += fmt::format("{}{}", p.metrics.at(goals[g].metric),
                                g + 1 < goals.size() ? "," : "\n");
           }
           out["pareto"].push_back(point_json(p));

@@ -159,7 +159,7 @@ std::string number_cell(const json& v) {
   if (v.is_boolean()) return v.get<bool>() ? "1" : "0";
   if (v.is_number_integer() || v.is_number_unsigned()) return v.dump();
   const double d = v.get<double>();
-  return std::isfinite(d) ? fmt::format("{:.17g}", d) : std::string();
+  return std::isfinite(d) ? fmt::format("{}", d) : std::string();
 }
 
 void write_all(int fd, const std::string& text, const std::filesystem::path& file) {
