@@ -325,6 +325,12 @@ TEST_F(Cli, NumericFlagsAreFiniteAndInRange) {
       {"calibrate " + bergmann + " --measured x.csv --max-shift nan", "--max-shift: must be"},
       {"synth-signal " + wagih + " -o x.wav --rate 1e9", "--rate: must be a finite number"},
       {"path " + wagih + " --dt inf", "--dt: must be a finite"},
+      {"check-gcode " + ngc + " --g28 nan,0,0", "--g28: must be a finite number"},
+      {"check-gcode " + ngc + " --g30 0,inf,0", "--g30: must be a finite number"},
+      {"sweep " + wagih + " --vary path.step=1,2 -o s.csv --memory-limit 0",
+       "--memory-limit: must be a finite number in (0"},
+      {"optimize " + wagih + " --var path.step=2:1 --maximize h_max_mm -o b.toml",
+       "--var 'path.step=2:1': expected section.key=lo:hi"},
   };
   for (const auto& [args, message] : cases) {
     const CliResult r = run_cli(args);
