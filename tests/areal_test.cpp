@@ -3,11 +3,14 @@
 // refused when malformed.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
 #include <zip.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -389,6 +392,40 @@ std::string replaced(std::string s, const std::string& from, const std::string& 
   EXPECT_NE(at, std::string::npos) << from;
   if (at != std::string::npos) s.replace(at, from.size(), to);
   return s;
+}
+
+// A write that fails (past the file size limit, as a full disk fails it): IoError naming the
+// file, and nothing left in its folder. In a child process, whose limit alone is set.
+TEST(X3p, AFailedWriteNamesTheFileAndLeavesNothing) {
+  const fs::path dir = scratch("full");
+  fs::create_directories(dir);
+  const fs::path file = dir / "floor.x3p";
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-0.05, 0.05);
+  const HeightMap m = map_of(300, 300, 0.01, 0.01, [&](double, double) { return u(rng); });
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit lim{64 * 1024, 64 * 1024};  // the map is 720 kB of doubles, compressed
+    (void)::setrlimit(RLIMIT_FSIZE, &lim);
+    int code = 3;
+    try {
+      write_x3p(file, m, dated("2026-12-04T12:00:00+00:00", "the test"));
+      code = 4;  // written: the limit did not bite
+    } catch (const IoError& e) {
+      code = std::string(e.what()).find(file.string()) != std::string::npos ? 0 : 5;
+    } catch (...) {
+      code = 6;
+    }
+    ::_exit(code);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "3: no error, 4: written, 5: the file not named, 6: "
+                                       "another exception";
+  EXPECT_TRUE(fs::is_empty(dir)) << "a partial archive or temporary file was left";
 }
 
 // Written and read back: the same grid, heights to within one rounding (mm to m and back),
