@@ -192,6 +192,13 @@ TEST(Optimize, FindsTheLargestFeedWhoseChipStaysBelowTheLimit) {
   EXPECT_NEAR(feed, 600.0, 0.005 * 600.0);
   EXPECT_NEAR(rpm, 3000.0, 0.005 * 3000.0);
   EXPECT_LE(r.evaluations, 100u);
+  // Settings as a control takes them: the feed to 0.001 mm/min, the speed to 0.1 rpm (no
+  // 600.30000000000004 in best.toml).
+  for (const auto& [value, places] :
+       {std::pair{r.best->values[0], 3u}, std::pair{r.best->values[1], 1u}}) {
+    const auto dot = value.find('.');
+    EXPECT_TRUE(dot == std::string::npos || value.size() - dot - 1 <= places) << value;
+  }
   std::vector<Override> best = base;
   best.push_back({"cutting.feed_rate", r.best->values[0], ""});
   best.push_back({"cutting.spindle_speed", r.best->values[1], ""});

@@ -52,7 +52,23 @@ class Evaluator {
       return v.choices[i];
     }
     x = std::clamp(x, v.lo, v.hi);
-    return v.integer ? fmt::format("{}", std::llround(x)) : fmt::format("{:.12g}", x);
+    if (v.integer) return fmt::format("{}", std::llround(x));
+    // A setting as a program or a control takes it (best.toml is ready for plan): mm to the
+    // 4 decimals the programs are written with, mm/min to the 0.001 of their F words,
+    // degrees to 0.0001, rpm to 0.1; other keys to 6 significant digits. The point
+    // evaluated is the one written, and no 0.30000000000000004 reaches the job.
+    const JobKey* jk = find_key(v.key);
+    const std::string unit = jk != nullptr ? jk->unit : std::string();
+    const int places = unit == "mm"        ? 4
+                       : unit == "mm/min"  ? 3
+                       : unit == "degrees" ? 4
+                       : unit == "rpm"     ? 1
+                                           : -1;
+    if (places < 0) return fmt::format("{}", std::stod(fmt::format("{:.6g}", x)));
+    const double step = std::pow(10.0, -places);
+    const double r = std::clamp(std::round(x / step) * step, v.lo, v.hi);
+    // The shortest text of the rounded value (0.9995, not 0.99950000000000006).
+    return fmt::format("{}", std::stod(fmt::format("{:.{}f}", r, places)));
   }
 
   const OptPoint& at(const std::vector<std::string>& values) {
