@@ -221,6 +221,22 @@ TEST(Areal, FormRemovalTakesOutPlanesAndPolynomials) {
             std::string::npos);
 }
 
+// The default nesting index fits the map: a flat 0.05 mm map (a coarse simulation's floor)
+// has Sa 0, whose ISO 21920-3 default (0.08 mm) is shorter than two spacings: the nearest
+// cut-off it admits (0.25 mm) is taken and said (it was an error); a map too small for any
+// ISO cut-off says so and asks for one.
+TEST(Areal, TheDefaultNestingIndexFitsTheMap) {
+  const HeightMap m = map_of(101, 101, 0.05, 0.05, [](double, double) { return 0.0; });
+  const ArealTexture t = areal_texture(m, filters({}, std::nullopt));
+  EXPECT_EQ(t.l_mm, 0.25);
+  EXPECT_NE(t.l_source.find("the nearest ISO 21920-3 cut-off this map admits"), std::string::npos)
+      << t.l_source;
+  const HeightMap tiny = map_of(5, 5, 0.05, 0.05, [](double, double) { return 0.0; });
+  EXPECT_NE(message_of([&] { (void)areal_texture(tiny, filters({}, std::nullopt)); })
+                .find("admits none of ISO 21920-3's cut-offs"),
+            std::string::npos);
+}
+
 TEST(Areal, BadMapsAndNestingIndicesAreRefused) {
   HeightMap m = map_of(10, 10, 0.01, 0.01, [](double, double) { return 0.0; });
   EXPECT_NE(message_of([&] { (void)gaussian_filter_areal(m, 0.015); }).find("two sample spacings"),

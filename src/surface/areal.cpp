@@ -13,6 +13,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <cstdint>
@@ -761,12 +762,49 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
   } else {
     // ISO 21920-3's profile table on the S-L surface's Sa, iterated from 0.8 mm as for a
     // profile (ISO 25178-3 leaves the nesting index to the specification).
-    t.l_mm = 0.8;
+    // The series is bounded by the map: two sample spacings at least (a 0.05 mm simulated
+    // floor resolves no 0.08 mm cut-off), the shorter side at most, longer than the S-filter;
+    // where Sa's default lies outside, the nearest cut-off the map admits is taken, and said.
+    const double finest = std::max(map.dx_mm, map.dy_mm);
+    const auto admits = [&](double l) {
+      return l >= 2 * finest && l <= shorter && (!o.s_mm || l > *o.s_mm);
+    };
+    const std::array<double, 5> series = {0.08, 0.25, 0.8, 2.5, 8.0};
+    const auto nearest = [&](double l) {  // the admitted series value nearest to l (log scale)
+      double best = 0;
+      for (const double c : series) {
+        if (admits(c) && (best == 0 || std::abs(std::log(c / l)) < std::abs(std::log(best / l)))) {
+          best = c;
+        }
+      }
+      return best;
+    };
+    t.l_mm = nearest(0.8);
+    if (t.l_mm == 0) {
+      throw InputError(fmt::format(
+          "L-filter: the map ({} x {} points, {:g} x {:g} mm apart) admits none of ISO "
+          "21920-3's cut-offs (0.08 .. 8 mm: at least two sample spacings, at most its shorter "
+          "side of {:g} mm); give one (--lambda-c)",
+          map.nx, map.ny, map.dx_mm, map.dy_mm, shorter));
+    }
     t.l_source = "ISO 21920-3 default from Sa";
     for (int k = 0;; ++k) {
       sl = sl_of(t.l_mm);
       const double next = default_cutoff_mm(parameters_of(sl, false, scale).sa_mm);
       if (next == t.l_mm) break;
+      if (!admits(next)) {
+        // The nearest the map admits instead (evaluated again, unless it is this one).
+        const double instead = nearest(next);
+        t.l_source = fmt::format(
+            "the nearest ISO 21920-3 cut-off this map admits: the default from Sa, {:g} mm, is "
+            "{} (sample spacing {:g} mm, shorter side {:g} mm)",
+            next, next < t.l_mm ? "shorter than two sample spacings" : "longer than the map",
+            finest, shorter);
+        if (instead == t.l_mm) break;
+        t.l_mm = instead;
+        sl = sl_of(t.l_mm);
+        break;
+      }
       if (k == 3) {
         t.l_source = "ISO 21920-3 default from Sa (Sa lies at a boundary of its table)";
         break;
