@@ -232,8 +232,9 @@ TEST(Areal, TheDefaultNestingIndexFitsTheMap) {
   EXPECT_NE(t.l_source.find("the nearest ISO 21920-3 cut-off this map admits"), std::string::npos)
       << t.l_source;
   const HeightMap tiny = map_of(5, 5, 0.05, 0.05, [](double, double) { return 0.0; });
-  EXPECT_NE(message_of([&] { (void)areal_texture(tiny, filters({}, std::nullopt)); })
-                .find("admits none of ISO 21920-3's cut-offs"),
+  EXPECT_NE(message_of([&] {
+              (void)areal_texture(tiny, filters({}, std::nullopt));
+            }).find("admits none of ISO 21920-3's cut-offs"),
             std::string::npos);
 }
 

@@ -258,6 +258,19 @@ TEST(Texture, FilterEnds) {
   }
 }
 
+// The default cut-off fits the profile: a smooth wall (Ra 6 nm: the table's 0.08 mm) sampled
+// every 0.05 mm (a coarse simulation's walls) resolves no 0.08 mm cut-off, so the nearest
+// that fits, 0.25 mm, is taken and said (it was an error).
+TEST(Texture, TheDefaultCutOffFitsTheProfile) {
+  std::vector<double> z;
+  for (int i = 0; i < 800; ++i) z.push_back(1e-5 * std::sin(2 * std::numbers::pi * i * 0.05 / 0.3));
+  const ProfileTexture t = profile_texture(z, 0.05);
+  EXPECT_EQ(t.cutoff_mm, 0.25);
+  EXPECT_NE(t.cutoff_source.find("the nearest ISO 21920-3 cut-off this profile admits"),
+            std::string::npos)
+      << t.cutoff_source;
+}
+
 TEST(Texture, BadInputIsRefusedWithTheReason) {
   const std::vector<double> z(100, 0.0);
   auto message = [](auto&& f) {

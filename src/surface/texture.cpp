@@ -333,19 +333,44 @@ ProfileTexture choose_and_evaluate(std::optional<double> cutoff, const Evaluate&
     t.cutoff_source = "given";
     return t;
   }
+  // From 0.8 mm along the table; where Ra's cut-off does not fit the profile (fewer than two
+  // samples a cut-off, less than three cut-offs of profile), the series' cut-off nearest to it
+  // that fits is taken, and the note says why.
   double lc = 0.8;
+  std::optional<ProfileTexture> t = evaluate(lc);
   for (int k = 0; k < 4; ++k) {
-    ProfileTexture t = evaluate(lc);
-    const double next = default_cutoff_mm(t.roughness.ra_mm);
+    const double next = default_cutoff_mm(t->roughness.ra_mm);
     if (next == lc) {
-      t.cutoff_source = "ISO 21920-3 default from Ra";
-      return t;
+      t->cutoff_source = "ISO 21920-3 default from Ra";
+      return *t;
     }
-    lc = next;
+    try {
+      t = evaluate(next);
+      lc = next;
+    } catch (const InputError& e) {
+      // The series' values from `next` towards `lc` (exclusive): the first that fits.
+      std::vector<double> between;
+      for (const double c : {0.08, 0.25, 0.8, 2.5, 8.0}) {
+        if ((c > next && c < lc) || (c < next && c > lc)) between.push_back(c);
+      }
+      if (next > lc) std::reverse(between.begin(), between.end());
+      for (const double c : between) {
+        try {
+          t = evaluate(c);
+          lc = c;
+          break;
+        } catch (const InputError&) {
+        }
+      }
+      t->cutoff_source = fmt::format(
+          "the nearest ISO 21920-3 cut-off this profile admits: the default from Ra, {:g} mm, "
+          "does not fit it ({})",
+          next, e.what());
+      return *t;
+    }
   }
-  ProfileTexture t = evaluate(lc);
-  t.cutoff_source = "ISO 21920-3 default from Ra (Ra lies at a boundary of its table)";
-  return t;
+  t->cutoff_source = "ISO 21920-3 default from Ra (Ra lies at a boundary of its table)";
+  return *t;
 }
 
 // A cut-off the sampling resolves (the default one too: a coarse profile may not resolve it).
