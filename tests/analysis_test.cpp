@@ -2,7 +2,6 @@
 // independently integrated swept area, wall waviness against the analytic envelope of the
 // trochoid, convergence with the sampling step, G-code against the job that wrote it.
 #include "trochomill/analysis.hpp"
-#include "trochomill/io.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,6 +10,7 @@
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/mechanism.hpp"
 #include "trochomill/units.hpp"
 

@@ -129,7 +129,7 @@ struct GcodeReadOptions {
   /// while it is read; past it the reader stops with InputError naming the line ("does the
   /// program loop without end?"), before the process runs out. 0: no limit.
   double max_path_bytes = 0;
-  int max_call_depth = 64;                 ///< nested subroutine calls
+  int max_call_depth = 64;  ///< nested subroutine calls
   /// Called for every canonical move, in order (check-gcode --trace); may be empty.
   std::function<void(const GcodeMove&)> trace;
   /// Polled every 64k blocks; true stops the reader with Interrupted (Ctrl-C).

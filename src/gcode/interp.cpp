@@ -1826,12 +1826,12 @@ class Interpreter {
           static_cast<double>(sizeof(Segment)) + (opt_.trace ? sizeof(GcodeMove) + 64.0 : 0.0);
       const double held = static_cast<double>(n) * per_move;
       if (held > opt_.max_path_bytes) {
-        fail_at(0, fmt::format("the program's path holds {} moves ({:.2f} GB) after {} blocks, "
-                               "past the {:.2f} GB the memory limit leaves for reading it: does "
-                               "the program loop without end? (a long program that does not: "
-                               "raise the memory limit)",
-                               n, held / 1e9, prog_.info.blocks_executed,
-                               opt_.max_path_bytes / 1e9));
+        fail_at(0,
+                fmt::format("the program's path holds {} moves ({:.2f} GB) after {} blocks, "
+                            "past the {:.2f} GB the memory limit leaves for reading it: does "
+                            "the program loop without end? (a long program that does not: "
+                            "raise the memory limit)",
+                            n, held / 1e9, prog_.info.blocks_executed, opt_.max_path_bytes / 1e9));
       }
     }
     try {
