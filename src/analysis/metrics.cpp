@@ -25,6 +25,22 @@ struct Window {
   bool periodic = false;
 };
 
+// Cubic Hermite interpolation between samples i and i + 1 of a path at fraction f: positions
+// and unit tangents times the chord h (exact at the samples, O(h^4 kappa^3) between them).
+struct Hermite {
+  double h00, h10, h01, h11;
+  explicit Hermite(double f)
+      : h00((1 + 2 * f) * (1 - f) * (1 - f)),
+        h10(f * (1 - f) * (1 - f)),
+        h01(f * f * (3 - 2 * f)),
+        h11(f * f * (f - 1)) {}
+  // One coordinate: positions p and tangent components t of the samples i and i + 1.
+  [[nodiscard]] double at(const std::vector<double>& p, const std::vector<double>& t, std::size_t i,
+                          double h) const {
+    return h00 * p[i] + h10 * h * t[i] + h01 * p[i + 1] + h11 * h * t[i + 1];
+  }
+};
+
 // How far the point q (mm) lies from the centre path at time t (s), less what the samples
 // cannot resolve: between two samples on one path segment, the distance to the cubic Hermite
 // interpolation on positions and unit tangents times the chord (exact at the samples,
@@ -39,12 +55,9 @@ std::optional<double> path_deviation_mm(const PathSamples& s, double t,
   if (!(s.t_s[j] > s.t_s[i])) return std::nullopt;
   const double h = s.s_mm[j] - s.s_mm[i];
   if (s.segment[i] == s.segment[j]) {
-    const double f = (t - s.t_s[i]) / (s.t_s[j] - s.t_s[i]);
-    const double h00 = (1 + 2 * f) * (1 - f) * (1 - f), h10 = f * (1 - f) * (1 - f);
-    const double h01 = f * f * (3 - 2 * f), h11 = f * f * (f - 1);
-    const double x = h00 * s.x_mm[i] + h10 * h * s.tx[i] + h01 * s.x_mm[j] + h11 * h * s.tx[j];
-    const double y = h00 * s.y_mm[i] + h10 * h * s.ty[i] + h01 * s.y_mm[j] + h11 * h * s.ty[j];
-    const double z = h00 * s.z_mm[i] + h10 * h * s.tz[i] + h01 * s.z_mm[j] + h11 * h * s.tz[j];
+    const Hermite w((t - s.t_s[i]) / (s.t_s[j] - s.t_s[i]));
+    const double x = w.at(s.x_mm, s.tx, i, h), y = w.at(s.y_mm, s.ty, i, h),
+                 z = w.at(s.z_mm, s.tz, i, h);
     return std::sqrt((x - q[0]) * (x - q[0]) + (y - q[1]) * (y - q[1]) + (z - q[2]) * (z - q[2]));
   }
   const double cosang =
@@ -66,25 +79,27 @@ std::optional<double> path_deviation_mm(const PathSamples& s, double t,
 
 // Whether the cutting part of the path [c0, c1] repeats itself shifted by (0, step, 0) after
 // `period` seconds, checked sample by sample over a stretch around sample i0 that holds at least
-// one period and a full turn (2 pi) of the tangent, from i0 on: a true cycle passes everywhere; a
-// shorter candidate (one step of path along a loop's side) leaves the shifted path as soon as the
-// path bends. The tolerance is a quarter step (the candidate's offset turned by the bend is
-// up to twice the step away) and at most 0.01 mm (a program's coordinate rounding, a few um,
-// passes).
-bool repeats_with_period(const PathSamples& s, std::size_t c0, std::size_t c1, std::size_t i0,
-                         double period, double step_mm) {
-  const double tol = std::min(0.01, 0.25 * step_mm);
-  // The stretch to check: a full turn of the tangent from i0, and at least one period.
-  double turned = 0, span = period;
+// one period and a full turn (2 pi) of the tangent (turn_s: full_turn_s), from i0 on: a true cycle
+// passes everywhere; a shorter candidate (one step of path along a loop's side) leaves the shifted
+// path as soon as the path bends. The tolerance is a quarter step (the candidate's offset turned by
+// the bend is up to twice the step away) and at most 0.01 mm (a program's coordinate rounding, a
+// few um, passes). The time (s) the tangent takes from sample i0 to turn by 2 pi in all (nullopt:
+// it does not within the cutting part, up to c1).
+std::optional<double> full_turn_s(const PathSamples& s, std::size_t i0, std::size_t c1) {
+  double turned = 0;
   for (std::size_t i = i0 + 1; i <= c1; ++i) {
     turned += std::abs(std::atan2(s.tx[i - 1] * s.ty[i] - s.ty[i - 1] * s.tx[i],
                                   s.tx[i - 1] * s.tx[i] + s.ty[i - 1] * s.ty[i]));
-    if (turned >= kTwoPi) {
-      span = std::max(span, s.t_s[i] - s.t_s[i0]);
-      break;
-    }
+    if (turned >= kTwoPi) return s.t_s[i] - s.t_s[i0];
   }
-  if (turned < kTwoPi) return false;  // no full loop left to check against
+  return std::nullopt;
+}
+
+bool repeats_with_period(const PathSamples& s, std::size_t c0, std::size_t c1, std::size_t i0,
+                         double turn_s, double period, double step_mm) {
+  const double tol = std::min(0.01, 0.25 * step_mm);
+  // The stretch to check: a full turn of the tangent from i0, and at least one period.
+  const double span = std::max(period, turn_s);
   // From i0 on (the cycle starts there; before it may lie an entry), within the cutting part,
   // the shifted copy inside it too.
   const double lo = s.t_s[c0], hi = s.t_s[c1] - period;
@@ -117,66 +132,65 @@ Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, 
   // The cycle is looked for from the middle of the cutting time on, then later (a long entry,
   // a ramp down a deep slot, may take the first half).
   for (const double at : {0.5, 0.7, 0.85}) {
-    if (!(trochoidal && step_mm > 0)) break;
+    if (!trochoidal || !(step_mm > 0)) break;  // no period to look for
     const double t_mid = s.t_s[c0] + at * (s.t_s[c1] - s.t_s[c0]);
     std::size_t mid = c0;
     while (mid < c1 && s.t_s[mid] < t_mid) ++mid;
-    {
-      // Start of cutting at or after the middle (else the middle sample itself).
-      std::size_t i0 = mid;
-      for (std::size_t i = std::max<std::size_t>(mid, 1); i <= c1; ++i) {
-        if (cutting[i] && !cutting[i - 1]) {
-          i0 = i;
-          break;
-        }
+    // Start of cutting at or after the middle (else the middle sample itself).
+    std::size_t i0 = mid;
+    for (std::size_t i = std::max<std::size_t>(mid, 1); i <= c1; ++i) {
+      if (cutting[i] && !cutting[i - 1]) {
+        i0 = i;
+        break;
       }
-      // The same point one step further along +Y, passed in the same direction: every
-      // approach to it is a candidate period, the shortest one the path repeats itself over
-      // is the cycle (docs/models.md section 7, the steady cycle). A nearer approach after a
-      // short stretch of path is no cycle: where the path runs along +Y (a loop's side, a
-      // circular family's advance) the shifted point comes by one step later on the same pass.
-      const double tx = s.x_mm[i0], ty = s.y_mm[i0] + step_mm;
-      double spacing = 0;
-      for (std::size_t i = i0 + 1; i < std::min(n, i0 + 64); ++i) {
-        spacing =
-            std::max(spacing, std::hypot(s.x_mm[i] - s.x_mm[i - 1], s.y_mm[i] - s.y_mm[i - 1]));
+    }
+    // The same point one step further along +Y, passed in the same direction: every
+    // approach to it is a candidate period, the shortest one the path repeats itself over
+    // is the cycle (docs/models.md section 8, the steady cycle). A nearer approach after a
+    // short stretch of path is no cycle: where the path runs along +Y (a loop's side, a
+    // circular family's advance) the shifted point comes by one step later on the same pass.
+    const double tx = s.x_mm[i0], ty = s.y_mm[i0] + step_mm;
+    double spacing = 0;
+    for (std::size_t i = i0 + 1; i < std::min(n, i0 + 64); ++i) {
+      spacing = std::max(spacing, std::hypot(s.x_mm[i] - s.x_mm[i - 1], s.y_mm[i] - s.y_mm[i - 1]));
+    }
+    std::size_t best = n;
+    double best_d = std::numeric_limits<double>::infinity();
+    const std::optional<double> turn_s = full_turn_s(s, i0, c1);  // once per start
+    const auto try_candidate = [&](std::size_t j) -> std::optional<Window> {
+      if (s.z_mm[j] >= 0) return std::nullopt;
+      // Refine along the tangent: the point is reached at t + (target - p).t / v.
+      const double v = (s.s_mm[j] - s.s_mm[j - 1]) / (s.t_s[j] - s.t_s[j - 1]);
+      const double ds = (tx - s.x_mm[j]) * s.tx[j] + (ty - s.y_mm[j]) * s.ty[j];
+      const double period = s.t_s[j] + ds / v - s.t_s[i0];
+      if (!(period > 0) || !turn_s ||
+          !repeats_with_period(s, c0, c1, i0, *turn_s, period, step_mm)) {
+        return std::nullopt;
       }
-      std::size_t best = n;
-      double best_d = std::numeric_limits<double>::infinity();
-      const auto try_candidate = [&](std::size_t j) -> std::optional<Window> {
-        if (s.z_mm[j] >= 0) return std::nullopt;
-        // Refine along the tangent: the point is reached at t + (target - p).t / v.
-        const double v = (s.s_mm[j] - s.s_mm[j - 1]) / (s.t_s[j] - s.t_s[j - 1]);
-        const double ds = (tx - s.x_mm[j]) * s.tx[j] + (ty - s.y_mm[j]) * s.ty[j];
-        const double period = s.t_s[j] + ds / v - s.t_s[i0];
-        if (!(period > 0) || !repeats_with_period(s, c0, c1, i0, period, step_mm)) {
-          return std::nullopt;
-        }
-        Window w;
-        w.first = i0;
-        w.last = j;
-        w.t0_s = s.t_s[i0];
-        w.duration_s = period;
-        w.length_mm = s.s_mm[j] + ds - s.s_mm[i0];
-        w.periodic = true;
-        return w;
-      };
-      for (std::size_t i = i0 + 1; i < n; ++i) {
-        const double d = std::hypot(s.x_mm[i] - tx, s.y_mm[i] - ty);
-        const double dir = s.tx[i] * s.tx[i0] + s.ty[i] * s.ty[i0];
-        if (d <= spacing + 1e-9 && dir > 0.9 && d < best_d) {
-          best = i;
-          best_d = d;
-        } else if (best < n && d > 2 * spacing + 1e-9) {
-          // Past the nearest approach: a candidate.
-          if (auto w = try_candidate(best)) return *w;
-          best = n;
-          best_d = std::numeric_limits<double>::infinity();
-        }
-      }
-      if (best < n) {
+      Window w;
+      w.first = i0;
+      w.last = j;
+      w.t0_s = s.t_s[i0];
+      w.duration_s = period;
+      w.length_mm = s.s_mm[j] + ds - s.s_mm[i0];
+      w.periodic = true;
+      return w;
+    };
+    for (std::size_t i = i0 + 1; i < n; ++i) {
+      const double d = std::hypot(s.x_mm[i] - tx, s.y_mm[i] - ty);
+      const double dir = s.tx[i] * s.tx[i0] + s.ty[i] * s.ty[i0];
+      if (d <= spacing + 1e-9 && dir > 0.9 && d < best_d) {
+        best = i;
+        best_d = d;
+      } else if (best < n && d > 2 * spacing + 1e-9) {
+        // Past the nearest approach: a candidate.
         if (auto w = try_candidate(best)) return *w;
+        best = n;
+        best_d = std::numeric_limits<double>::infinity();
       }
+    }
+    if (best < n) {
+      if (auto w = try_candidate(best)) return *w;
     }
   }
   // The middle third of the cutting time.
@@ -208,10 +222,8 @@ struct DenseCentre {
     const auto i = static_cast<std::size_t>(uc);
     const double f = uc - static_cast<double>(i);
     const double h = p.s_mm[i + 1] - p.s_mm[i];
-    const double h00 = (1 + 2 * f) * (1 - f) * (1 - f), h10 = f * (1 - f) * (1 - f);
-    const double h01 = f * f * (3 - 2 * f), h11 = f * f * (f - 1);
-    return {h00 * p.x_mm[i] + h10 * h * p.tx[i] + h01 * p.x_mm[i + 1] + h11 * h * p.tx[i + 1],
-            h00 * p.y_mm[i] + h10 * h * p.ty[i] + h01 * p.y_mm[i + 1] + h11 * h * p.ty[i + 1]};
+    const Hermite w(f);
+    return {w.at(p.x_mm, p.tx, i, h), w.at(p.y_mm, p.ty, i, h)};
   }
 };
 
