@@ -56,6 +56,9 @@ void write_text_atomic(
 
 /// `s` without the leading and trailing characters in `chars`.
 [[nodiscard]] std::string trim(std::string_view s, std::string_view chars = " \t");
+/// `s` with every `from` replaced by `to` (a temporary path in a message by the one the user
+/// named).
+[[nodiscard]] std::string replace_all(std::string s, std::string_view from, std::string_view to);
 /// "a,b,c" -> {"a", "b", "c"}: split at `sep`, each item trimmed (empty items kept, for the
 /// caller to refuse).
 [[nodiscard]] std::vector<std::string> split_trimmed(std::string_view s, char sep = ',');

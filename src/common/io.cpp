@@ -66,11 +66,7 @@ void run_writer(const std::function<void(const fs::path&)>& write, const fs::pat
     write(tmp);
   } catch (const Error& e) {
     fs::remove(tmp, ec);
-    std::string what = e.what();
-    for (std::size_t p = 0; (p = what.find(tmp.string(), p)) != std::string::npos;) {
-      what.replace(p, tmp.string().size(), path.string());
-      p += path.string().size();
-    }
+    const std::string what = replace_all(e.what(), tmp.string(), path.string());
     if (dynamic_cast<const InputError*>(&e) != nullptr) throw InputError(what);
     throw IoError(what);
   } catch (...) {
@@ -202,6 +198,14 @@ std::string trim(std::string_view s, std::string_view chars) {
   if (b == std::string_view::npos) return {};
   const auto e = s.find_last_not_of(chars);
   return std::string(s.substr(b, e - b + 1));
+}
+
+std::string replace_all(std::string s, std::string_view from, std::string_view to) {
+  if (from.empty()) return s;
+  for (std::size_t p = 0; (p = s.find(from, p)) != std::string::npos; p += to.size()) {
+    s.replace(p, from.size(), to);
+  }
+  return s;
 }
 
 std::vector<std::string> split_trimmed(std::string_view s, char sep) {

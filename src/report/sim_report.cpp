@@ -248,12 +248,7 @@ struct SimulationOutputs::State {
 
   // A failed write names the file where it would have been, not the staging folder.
   [[noreturn]] void rethrow_named(const IoError& e) const {
-    std::string what = e.what();
-    const std::string from = stage.string(), to = dir.string();
-    for (std::size_t p = 0; (p = what.find(from, p)) != std::string::npos; p += to.size()) {
-      what.replace(p, from.size(), to);
-    }
-    throw IoError(what);
+    throw IoError(replace_all(e.what(), stage.string(), dir.string()));
   }
   // Unfinished: none of this run's files stay, nor the folder when this run made it.
   void discard() noexcept {
