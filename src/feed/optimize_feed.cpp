@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -222,19 +223,33 @@ std::function<void(const ToolPath&, std::vector<double>&, std::vector<FeedLimit>
         tq[k] = std::max(tq[k], std::abs(f.torque_nm[i]));
       }
     }
+    // The caps: what each limits, its name and unit for messages, its value per piece.
+    struct Cap {
+      FeedLimit limit;
+      const char *what, *unit;
+      std::optional<double> cap;
+      const std::vector<double>* value;
+    };
+    const std::array<Cap, 3> caps = {{{FeedLimit::force, "force", "N", o.force_n, &fr},
+                                      {FeedLimit::power, "power", "W", o.power_w, &pw},
+                                      {FeedLimit::torque, "torque", "N m", o.torque_nm, &tq}}};
+    const auto cap_of = [&](FeedLimit l) -> const Cap* {
+      for (const Cap& c : caps) {
+        if (c.limit == l) return &c;
+      }
+      return nullptr;
+    };
     for (std::size_t k = 0; k < segs.size(); ++k) {
       const double feed = segs[k].speed_mm_per_min();
-      auto apply = [&](const std::optional<double>& cap, double v, FeedLimit what) {
-        if (!cap || !(v > *cap)) return;
-        const double a = feed * std::pow(*cap / v, 1.0 / (1.0 - m));
+      for (const Cap& c : caps) {
+        const double v = (*c.value)[k];
+        if (!c.cap || !(v > *c.cap)) continue;
+        const double a = feed * std::pow(*c.cap / v, 1.0 / (1.0 - m));
         if (a < allowed[k]) {
           allowed[k] = a;
-          limit[k] = what;
+          limit[k] = c.limit;
         }
-      };
-      apply(o.force_n, fr[k], FeedLimit::force);
-      apply(o.power_w, pw[k], FeedLimit::power);
-      apply(o.torque_nm, tq[k], FeedLimit::torque);
+      }
     }
     // A cap the minimum feed cannot hold is refused at once (the rounds would only creep down
     // to the minimum feed, each a force run over the whole program). The power law's feed is
@@ -244,32 +259,19 @@ std::function<void(const ToolPath&, std::vector<double>&, std::vector<FeedLimit>
       const double lo = o.targets.min_feed_mm_per_min;
       std::size_t worst = segs.size();
       for (std::size_t k = 0; k < segs.size(); ++k) {
-        if (limit[k] != FeedLimit::force && limit[k] != FeedLimit::power &&
-            limit[k] != FeedLimit::torque) {
-          continue;
-        }
-        if (allowed[k] < lo * (1 - 1e-9) && (worst == segs.size() || allowed[k] < allowed[worst])) {
+        if (cap_of(limit[k]) != nullptr && allowed[k] < lo * (1 - 1e-9) &&
+            (worst == segs.size() || allowed[k] < allowed[worst])) {
           worst = k;
         }
       }
       if (worst < segs.size()) {
-        const FeedLimit w = limit[worst];
-        const char* what = w == FeedLimit::force   ? "force"
-                           : w == FeedLimit::power ? "power"
-                                                   : "torque";
-        const double cap = w == FeedLimit::force   ? *o.force_n
-                           : w == FeedLimit::power ? *o.power_w
-                                                   : *o.torque_nm;
-        const double value = w == FeedLimit::force   ? fr[worst]
-                             : w == FeedLimit::power ? pw[worst]
-                                                     : tq[worst];
-        const char* unit = w == FeedLimit::force ? "N" : w == FeedLimit::power ? "W" : "N m";
+        const Cap& c = *cap_of(limit[worst]);
         throw InputError(fmt::format(
             "{}: the {} cap of {:g} {} cannot be held at the minimum feed of {:g} mm/min: the "
             "model gives {:.4g} {} at {:g} mm/min and would need {:.3g} mm/min or less; raise "
             "the cap or lower the minimum feed (machine.min_feed)",
-            where(pieces.segment_start_length_mm(worst)), what, cap, unit, lo, value, unit,
-            segs[worst].speed_mm_per_min(), allowed[worst]));
+            where(pieces.segment_start_length_mm(worst)), c.what, *c.cap, c.unit, lo,
+            (*c.value)[worst], c.unit, segs[worst].speed_mm_per_min(), allowed[worst]));
       }
     }
   };
@@ -434,13 +436,16 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   hooks.begin("scheduling");
   FeedTargets targets = options.targets;
   targets.stock_top_mm = stock_top_mm(job, stock);
+  // The move that made each segment of the path.
+  std::map<std::size_t, std::size_t> move_of_segment;
+  for (std::size_t i = 0; i < in.moves.size(); ++i) {
+    if (in.moves[i].segment != GcodeMove::npos) move_of_segment[in.moves[i].segment] = i;
+  }
   targets.caps = force_caps(job, options, hooks, [&](double s_mm) {
     // The pieces subdivide the program's moves: a length along them is one along the path.
-    const std::size_t k = slot_path.segment_at_length(s_mm);
-    for (const GcodeMove& mv : in.moves) {
-      if (mv.segment == k) return fmt::format("{}:{}", mv.file, mv.line);
-    }
-    return std::string(name);
+    const auto it = move_of_segment.find(slot_path.segment_at_length(s_mm));
+    if (it == move_of_segment.end()) return std::string(name);
+    return fmt::format("{}:{}", in.moves[it->second].file, in.moves[it->second].line);
   });
   targets.chips = path_chips;
   const FeedSchedule fs = schedule_feed(job, slot_path, targets, hooks);
@@ -580,10 +585,6 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   r.h_after = ca.h_mm;
 
   // Blocks where the chip stays above the target at the minimum feed.
-  std::map<std::size_t, std::size_t> move_of_segment;
-  for (std::size_t i = 0; i < in.moves.size(); ++i) {
-    if (in.moves[i].segment != GcodeMove::npos) move_of_segment[in.moves[i].segment] = i;
-  }
   std::map<std::pair<std::size_t, std::size_t>, UnheldBlock> unheld;
   for (std::size_t i = 0; i < ca.h_mm.size(); ++i) {
     // 3 %: the schedule's own tolerance (docs/models.md section 15).
