@@ -5,7 +5,6 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -14,6 +13,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/version.hpp"
 
 namespace {
@@ -23,39 +23,15 @@ void say(const std::string& text) noexcept {
   (void)!std::fwrite(text.data(), 1, text.size(), stderr);
 }
 
-// Edit distance (insertions, deletions, substitutions, transpositions of neighbours).
-std::size_t distance(const std::string& a, const std::string& b) {
-  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
-  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      d[i][j] = std::min(
-          {d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
-        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-      }
-    }
-  }
-  return d[a.size()][b.size()];
-}
-
 // A first word that is no command: said so, with the nearest command when one is close.
 bool unknown_command(CLI::App& app, const std::string& word) {
   if (word.empty() || word[0] == '-') return false;
-  std::string best;
-  std::size_t best_d = std::string::npos;
+  std::vector<std::string> names;
   for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
     if (sub->get_name() == word) return false;
-    const std::size_t dd = distance(word, sub->get_name());
-    if (dd < best_d) {
-      best_d = dd;
-      best = sub->get_name();
-    }
+    names.push_back(sub->get_name());
   }
-  std::string msg = "error: unknown command '" + word + "'";
-  if (best_d <= std::max<std::size_t>(2, word.size() / 3)) msg += "; did you mean '" + best + "'?";
-  say(msg + " (trochomill --help lists the commands)\n");
+  say("error: unknown command '" + word + "'" + trochomill::did_you_mean(word, names) + "\n");
   return true;
 }
 }  // namespace

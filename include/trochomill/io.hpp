@@ -59,6 +59,10 @@ void write_text_atomic(
 /// `s` with every `from` replaced by `to` (a temporary path in a message by the one the user
 /// named).
 [[nodiscard]] std::string replace_all(std::string s, std::string_view from, std::string_view to);
+/// For a word that is none of `candidates`: "; did you mean 'X'?" when one is within a third
+/// of its length (at least 2) in edit distance, else " (known: a, b, ...)" listing them.
+[[nodiscard]] std::string did_you_mean(std::string_view word,
+                                       const std::vector<std::string>& candidates);
 /// "a,b,c" -> {"a", "b", "c"}: split at `sep`, each item trimmed (empty items kept, for the
 /// caller to refuse).
 [[nodiscard]] std::vector<std::string> split_trimmed(std::string_view s, char sep = ',');

@@ -17,42 +17,13 @@
 #include <string_view>
 #include <vector>
 
+#include "trochomill/io.hpp"
+
 namespace trochomill::job_detail {
 
-inline std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    cur[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t sub = prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, sub});
-    }
-    std::swap(prev, cur);
-  }
-  return prev[b.size()];
-}
-
+// The nearest candidate to a mistyped word (io.hpp: did_you_mean).
 inline std::string suggestion(std::string_view word, const std::vector<std::string>& candidates) {
-  std::string best;
-  std::size_t best_d = std::numeric_limits<std::size_t>::max();
-  const std::size_t limit = std::max<std::size_t>(2, word.size() / 3);
-  for (const auto& c : candidates) {
-    // The distance is at least the difference in length: a candidate that far off cannot be
-    // suggested, so the quadratic distance is not computed (long garbage keys stay cheap).
-    const std::size_t gap =
-        word.size() > c.size() ? word.size() - c.size() : c.size() - word.size();
-    if (gap > limit) continue;
-    const std::size_t d = edit_distance(word, c);
-    if (d < best_d) {
-      best_d = d;
-      best = c;
-    }
-  }
-  if (best_d <= limit) return fmt::format("; did you mean '{}'?", best);
-  std::string all;
-  for (const auto& c : candidates) all += (all.empty() ? "" : ", ") + c;
-  return fmt::format(" (known: {})", all);
+  return did_you_mean(word, candidates);
 }
 
 inline std::string fmt_num(double v) { return fmt::format("{:g}", v); }
