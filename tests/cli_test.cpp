@@ -42,14 +42,19 @@ struct CliResult {
   std::string out;
 };
 
-CliResult run_cli(const std::string& args) {
-  const std::string cmd = std::string(TROCHOMILL_CLI) + " " + args + " 2>&1";
+// A shell command's exit status and standard output.
+CliResult run_command(const std::string& cmd) {
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf{};
   while (p != nullptr && std::fgets(buf.data(), buf.size(), p) != nullptr) out += buf.data();
   const int status = p != nullptr ? pclose(p) : -1;
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+// The CLI with these arguments, stderr merged into the output.
+CliResult run_cli(const std::string& args) {
+  return run_command(std::string(TROCHOMILL_CLI) + " " + args + " 2>&1");
 }
 
 std::string first_line_of(const std::string& path) {
@@ -1170,14 +1175,8 @@ TEST_F(Cli, DashIsStandardOutputEverywhere) {
   const std::string ex = test::example("wagih2023/trochoidal.toml");
   const std::string in_dir = "cd " + dir_.string() + " && ";
   const std::string cli = std::string(TROCHOMILL_CLI);
-  const auto run_in_dir = [&](const std::string& args) {
-    const std::string cmd = in_dir + cli + " " + args + " 2>/dev/null";
-    FILE* p = popen(cmd.c_str(), "r");
-    std::string out;
-    std::array<char, 4096> buf{};
-    while (p != nullptr && std::fgets(buf.data(), buf.size(), p) != nullptr) out += buf.data();
-    const int status = p != nullptr ? pclose(p) : -1;
-    return CliResult{WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+  const auto run_in_dir = [&](const std::string& args) {  // stdout alone, in dir_
+    return run_command(in_dir + cli + " " + args + " 2>/dev/null");
   };
   const std::string var = " --var path.step=0.5:1 --maximize cycle_mrr_mm3_per_min";
   CliResult r = run_in_dir("optimize " + ex + var + " --max-evals 10 -o -");
