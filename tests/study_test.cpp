@@ -210,6 +210,27 @@ TEST(Optimize, FindsTheLargestFeedWhoseChipStaysBelowTheLimit) {
   EXPECT_EQ(again.flat_keys, job.flat_keys);
 }
 
+// A range narrower than a setting's rounding (0.0001 mm) keeps its points inside it (they
+// were rounded out of it and NLopt refused its own bounds); a study whose every point fails
+// says the first point's error.
+TEST(Optimize, ANarrowRangeStaysInsideAndFailuresAreSaid) {
+  const JobDocument doc = JobDocument::load(test::example("wagih2023/trochoidal.toml"));
+  OptimizeOptions o;
+  o.max_evaluations = 10;
+  const OptimizeResult r = optimize(doc, {}, {parse_opt_variable("path.step=0.50001:0.50002")},
+                                    {{"cycle_mrr_mm3_per_min", true}}, {}, o);
+  ASSERT_TRUE(r.best);
+  const double step = std::stod(r.best->values[0]);
+  EXPECT_GE(step, 0.50001);
+  EXPECT_LE(step, 0.50002);
+  const OptimizeResult bad =
+      optimize(doc, {}, {parse_opt_variable("path.aspect_ratio=1.1:1.2")},
+               {{"cycle_mrr_mm3_per_min", true}}, {}, o);
+  EXPECT_FALSE(bad.best);
+  EXPECT_EQ(bad.failed, bad.evaluations);
+  EXPECT_NE(bad.first_error.find("elliptical family"), std::string::npos) << bad.first_error;
+}
+
 // Two goals pulling apart (removal rate up, chip down): every point of the Pareto set is
 // feasible and none dominates another.
 TEST(Optimize, ParetoSetIsNonDominated) {

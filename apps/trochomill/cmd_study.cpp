@@ -18,6 +18,22 @@
 namespace trochomill::cli {
 namespace {
 
+// Why an optimisation found nothing: the points failed (the first one's error), or none held
+// the constraints.
+std::string no_feasible_point(const OptimizeResult& r) {
+  if (r.failed == r.evaluations && r.failed > 0) {
+    return fmt::format("optimize: every one of the {} points evaluated failed (the first: {})",
+                       r.evaluations, r.first_error);
+  }
+  return fmt::format(
+      "optimize: no feasible point in {} evaluations ({} failed): loosen the constraints or "
+      "widen the variables",
+      r.evaluations, r.failed);
+}
+
+}  // namespace
+namespace {
+
 // "A:B" trochoid cycles for forces and simulate.
 std::pair<int, int> parse_cycles(const std::string& text) {
   const auto colon = text.find(':');
@@ -230,12 +246,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
           {"method", r.method}, {"evaluations", r.evaluations}, {"variables", r.keys}};
       std::vector<Override> best_overrides = base;
       if (goals.size() == 1) {
-        if (!r.best) {
-          throw InputError(fmt::format(
-              "optimize: no feasible point in {} evaluations: loosen the constraints or widen "
-              "the variables",
-              r.evaluations));
-        }
+        if (!r.best) throw InputError(no_feasible_point(r));
         for (std::size_t k = 0; k < r.keys.size(); ++k) {
           best_overrides.push_back({r.keys[k], r.best->values[k], "--var"});
         }
@@ -246,10 +257,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
                                     a->job.file, r.evaluations, r.method) +
                             to_toml(best));
       } else {
-        if (r.pareto.empty()) {
-          throw InputError(
-              fmt::format("optimize: no feasible point in {} evaluations", r.evaluations));
-        }
+        if (r.pareto.empty()) throw InputError(no_feasible_point(r));
         std::string csv;
         for (const auto& k : r.keys) csv += k + ",";
         for (std::size_t g = 0; g < goals.size(); ++g)

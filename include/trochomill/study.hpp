@@ -175,6 +175,8 @@ struct OptimizeResult {
   std::optional<OptPoint> best;   ///< one objective: the best feasible point
   std::vector<OptPoint> pareto;   ///< two or more: the feasible non-dominated points
   std::size_t evaluations = 0;    ///< distinct points evaluated
+  std::size_t failed = 0;         ///< of them, the points whose evaluation failed
+  std::string first_error;        ///< the first failed point's error (in evaluation order)
   std::string method;
 };
 /// One objective: for each combination of the choice variables, NLopt's ISRES (global,

@@ -64,11 +64,11 @@ class Evaluator {
                        : unit == "degrees" ? 4
                        : unit == "rpm"     ? 1
                                            : -1;
-    if (places < 0) return fmt::format("{}", std::stod(fmt::format("{:.6g}", x)));
-    const double step = std::pow(10.0, -places);
-    const double r = std::clamp(std::round(x / step) * step, v.lo, v.hi);
-    // The shortest text of the rounded value (0.9995, not 0.99950000000000006).
-    return fmt::format("{}", std::stod(fmt::format("{:.{}f}", r, places)));
+    // The shortest text of the rounded value (0.9995, not 0.99950000000000006); a range
+    // narrower than the rounding keeps x itself (its shortest text), so the point stays in it.
+    const double r =
+        std::stod(places < 0 ? fmt::format("{:.6g}", x) : fmt::format("{:.{}f}", x, places));
+    return fmt::format("{}", r >= v.lo && r <= v.hi ? r : x);
   }
 
   const OptPoint& at(const std::vector<std::string>& values) {
@@ -397,6 +397,10 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
     });
   }
   r.evaluations = ev.all().size();
+  for (const OptPoint* p : ev.all()) {
+    if (p->error.empty()) continue;
+    if (r.failed++ == 0) r.first_error = p->error;
+  }
   return r;
 }
 
