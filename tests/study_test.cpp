@@ -223,9 +223,8 @@ TEST(Optimize, ANarrowRangeStaysInsideAndFailuresAreSaid) {
   const double step = std::stod(r.best->values[0]);
   EXPECT_GE(step, 0.50001);
   EXPECT_LE(step, 0.50002);
-  const OptimizeResult bad =
-      optimize(doc, {}, {parse_opt_variable("path.aspect_ratio=1.1:1.2")},
-               {{"cycle_mrr_mm3_per_min", true}}, {}, o);
+  const OptimizeResult bad = optimize(doc, {}, {parse_opt_variable("path.aspect_ratio=1.1:1.2")},
+                                      {{"cycle_mrr_mm3_per_min", true}}, {}, o);
   EXPECT_FALSE(bad.best);
   EXPECT_EQ(bad.failed, bad.evaluations);
   EXPECT_NE(bad.first_error.find("elliptical family"), std::string::npos) << bad.first_error;
