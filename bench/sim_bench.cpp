@@ -24,6 +24,7 @@
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/sim/dexel.hpp"
 
 namespace {
 

@@ -1,7 +1,8 @@
 # The layer check (cmake -P): every #include of a module's sources (src/<module>/) and public
 # header (include/trochomill/<module>.hpp) names only the module itself or a module it declares,
 # directly or through others (trochomill_module(... DEPENDS ...) in CMakeLists.txt). Headers of
-# include/trochomill/ belong to their module; units, error, io, progress and version to common; the
+# include/trochomill/ belong to their module (<module>.hpp, and include/trochomill/<module>/*.hpp
+# for a module's further public headers); units, error, io, progress and version to common; the
 # settings headers to job, which aggregates them. A wrong-way include fails the build here.
 cmake_minimum_required(VERSION 3.20)
 include(${DATA})
@@ -27,6 +28,8 @@ function(module_of include out)
   elseif(include MATCHES "^trochomill/(units|error|io|progress|version)\\.hpp$")
     set(m common)
   elseif(include MATCHES "^trochomill/([a-z_]+)\\.hpp$")
+    set(m ${CMAKE_MATCH_1})
+  elseif(include MATCHES "^trochomill/([a-z_]+)/")
     set(m ${CMAKE_MATCH_1})
   elseif(include MATCHES "^([a-z_]+)/")
     if(CMAKE_MATCH_1 IN_LIST MODULES)
@@ -55,6 +58,8 @@ foreach(m IN LISTS MODULES)
   if(EXISTS ${ROOT}/include/trochomill/${m}.hpp)
     list(APPEND files ${ROOT}/include/trochomill/${m}.hpp)
   endif()
+  file(GLOB more ${ROOT}/include/trochomill/${m}/*.hpp)  # a module's further public headers
+  list(APPEND files ${more})
   if(m STREQUAL "common")
     foreach(h units error io progress)
       if(EXISTS ${ROOT}/include/trochomill/${h}.hpp)

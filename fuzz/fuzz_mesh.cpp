@@ -6,7 +6,7 @@
 
 #include "fuzz_common.hpp"
 #include "trochomill/error.hpp"
-#include "trochomill/topography.hpp"
+#include "trochomill/geometry.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace trochomill;

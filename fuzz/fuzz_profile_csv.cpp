@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include "trochomill/error.hpp"
-#include "trochomill/surface.hpp"
+#include "trochomill/texture.hpp"
 
 namespace {
 

@@ -14,10 +14,11 @@
 
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/geometry.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/sim.hpp"
-#include "trochomill/topography.hpp"
+#include "trochomill/sim/dexel.hpp"
 #include "trochomill/units.hpp"
 
 namespace {
@@ -70,7 +71,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size < 1 + 3 * nv) return 0;
   Mesh m;
   for (std::size_t k = 0; k < nv; ++k) {
-    std::array<double, 3> p{};
+    Vec3 p = Vec3::Zero();
     for (std::size_t c = 0; c < 3; ++c) {
       p[c] = static_cast<std::int8_t>(data[1 + 3 * k + c]) / 16.0;
     }
@@ -87,7 +88,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   try {
     // A pass through the mesh's middle height, across it and round a half circle back.
-    const MeshBounds b = mesh_bounds(m);
+    const Box3 b = mesh_bounds(m);
     const double z = 0.5 * (b.lo[2] + b.hi[2]);
     ToolPath path;
     path.append(Segment::line(Vec3(-10, 0, z), Vec3(0, 0, z), Motion::feed, 600));

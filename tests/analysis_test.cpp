@@ -492,8 +492,8 @@ TEST(Analysis, ALevelTakesWhatEveryLevelBelowRemoved) {
 // form), and past y = 15 nothing.
 TEST(Analysis, AStockMeshIsTheStock) {
   Job job = test::wagih_job("trochoidal");
-  job.stock_min_mm = std::array<double, 3>{-10.0, -5.0, -8.0};
-  job.stock_max_mm = std::array<double, 3>{10.0, 40.0, 0.0};
+  job.stock_min_mm = Vec3(-10.0, -5.0, -8.0);
+  job.stock_max_mm = Vec3(10.0, 40.0, 0.0);
   const Mesh box = test::block_mesh(-10, 10, -5, 40, -8, {0, 0, 0, 0});
   const PlannedPath planned = plan_path(job);
   EngagementOptions o;
@@ -579,7 +579,7 @@ TEST(Analysis, BackFromALiftTheLevelIsWhereItWas) {
 // rounding of the arcs' ends, as StraightFullImmersion's two slivers), chip f_z sin(acos(1 - a_e /
 // R)) within f_z^2 / R (the closed forms of a partial-immersion cut, as Engagement's tests for the
 // slot); without the box the pass is outside the stock and cuts nothing.
-TEST(Analysis, AStockBoxIsTheStock) {
+TEST(Analysis, ABox3IsTheStock) {
   const Job job = test::straight_job(
       10.0, 4, {parse_override("stock.min=[-50, 0, -6]"), parse_override("stock.max=[10, 40, 0]")});
   const std::string edge = "G21 G90 G17 G94\nG0 X12 Y-10 Z5\nG1 Z-2 F600\nG1 Y50\nG0 Z5\nM2\n";

@@ -2,6 +2,7 @@
 // slot against the swept volume (converging with the spacing, the three boards agreeing),
 // the chip of a straight partial-immersion cut against f_z sin(phi).
 #include "trochomill/sim.hpp"
+#include "trochomill/sim/dexel.hpp"
 
 #include <gtest/gtest.h>
 #include <hwy/targets.h>
@@ -22,7 +23,7 @@
 #include <string_view>
 #include <vector>
 
-#include "sim/geometry.hpp"
+#include "sim/plane.hpp"
 #include "sim/rows.hpp"
 #include "test_util.hpp"
 #include "trochomill/engagement.hpp"
@@ -187,7 +188,7 @@ TEST(Sim, StraightSlotRemovesTheSweptVolume) {
   const double want = 10.0 * 30.0 + 0.5 * kPi * 25.0;
   double prev_err = 1e9;
   for (const double d : {0.1, 0.05}) {
-    StockBox box{{-8, -10, -2}, {8, 30, 0}};
+    Box3 box{{-8, -10, -2}, {8, 30, 0}};
     TriDexel work(box, d);
     SimSettings s;
     s.steps_per_rev = 60;
@@ -226,7 +227,7 @@ TEST(Sim, EnvelopeSweepRemovesTheSweptVolume) {
     const double want = (10.0 * 1.0 - 2 * rc * rc * (1 - kPi / 4)) * 6 * kPi;
     const double d = 0.05;
     const double bound = 58 * 1.0 * d / 2 + 58 * 1.0 * 0.001;
-    const StockBox box{{-12, 0, -2}, {12, 12, 0}};
+    const Box3 box{{-12, 0, -2}, {12, 12, 0}};
     ToolPath p;
     p.append(Segment::arc_xy(0, 0, 6, 0, kPi, -1, -1, Motion::feed, 1200));
     SimTool tool = end_mill(0);
@@ -274,7 +275,7 @@ TEST(Sim, EnvelopeSweepRemovesTheSweptVolume) {
 // tooth path) plus 2e-4 mm for the dexels' sampling across the wedge at d = 0.02 mm.
 TEST(Sim, PartialImmersionChipIsFzSinPhi) {
   const double R = 5, ae = 1, fz = 0.1, d = 0.02;
-  StockBox box{{R - ae, -2, -1}, {R + 2, 12, 0}};
+  Box3 box{{R - ae, -2, -1}, {R + 2, 12, 0}};
   TriDexel work(box, d);
   SimSettings s;
   s.steps_per_rev = 120;
@@ -308,7 +309,7 @@ TEST(Sim, PartialImmersionChipIsFzSinPhi) {
 // taken about different centres, which the next tooth met with a doubled chip.)
 TEST(Sim, FullSlotChipPeaksAtFz) {
   const double fz = 0.075, R = 5, d = 0.04;
-  StockBox box{{-6, -10, -1}, {6, -4, 0}};
+  Box3 box{{-6, -10, -1}, {6, -4, 0}};
   TriDexel work(box, d);
   SimSettings s;
   s.steps_per_rev = 120;
@@ -364,7 +365,7 @@ TEST(Sim, FullSlotChipPeaksAtFz) {
 TEST(Sim, BallNoseChipIsFzTimesTheEdgeSine) {
   for (const double sense : {-1.0, 1.0}) {
     const double fz = 0.125, R = 5, d = 0.04, ap = 1;
-    StockBox box{{-7, -10, -2}, {7, -2, 0}};
+    Box3 box{{-7, -10, -2}, {7, -2, 0}};
     TriDexel work(box, d);
     SimSettings s;
     s.steps_per_rev = 60;
@@ -426,7 +427,7 @@ TEST(Sim, BallNoseChipIsFzTimesTheEdgeSine) {
 // largest chips differ by 4e within 2e-4 mm (the wedges' sampling; both see the same feed).
 TEST(Sim, RadialRunoutSplitsTheChips) {
   const double fz = 0.1, e = 0.01, d = 0.02;
-  StockBox box{{-6, -10, -0.2}, {6, -4, 0}};
+  Box3 box{{-6, -10, -0.2}, {6, -4, 0}};
   TriDexel work(box, d);
   SimSettings s;
   s.steps_per_rev = 120;
@@ -452,7 +453,7 @@ TEST(Sim, RadialRunoutSplitsTheChips) {
 // tan 30 / 5 mm = 0.104 rad) to within two steps.
 TEST(Sim, HelixLagsEngagementAlongTheAxis) {
   const double d = 0.02, rpm = 3000;
-  StockBox box{{4, -1, -1}, {6, 1, 0}};  // a block the stationary tool reaches on its +x side
+  Box3 box{{4, -1, -1}, {6, 1, 0}};  // a block the stationary tool reaches on its +x side
   TriDexel work(box, d);
   SimSettings s;
   s.steps_per_rev = 360;
@@ -577,7 +578,7 @@ TEST(Sim, TrochoidChipMatchesTheAnalysisKernel) {
 // ray is cut from the tip up) and the X board is cut at every level above it and at none below.
 TEST(Sim, TheThreeBoardsAgreeOnTheMachinedSlot) {
   const double d = 0.05, R = 5, fz = 0.2;
-  const StockBox box{{-8, -10, -2}, {8, 10, 0}};
+  const Box3 box{{-8, -10, -2}, {8, 10, 0}};
   TriDexel work(box, d);
   SimSettings s;
   s.steps_per_rev = 60;
@@ -626,7 +627,7 @@ TEST(Sim, TheThreeBoardsAgreeOnTheMachinedSlot) {
 
 // The chip map through HDF5 and back: every value identical (float32 stored as float32).
 TEST(Sim, ChipMapHdf5RoundTrip) {
-  const StockBox box{{-8, -10, -2}, {8, 10, 0}};
+  const Box3 box{{-8, -10, -2}, {8, 10, 0}};
   TriDexel work(box, 0.1);
   SimSettings s;
   s.steps_per_rev = 60;
@@ -672,7 +673,7 @@ TEST(Sim, ChipMapHdf5RoundTrip) {
 // (trapezoidal over the grid cells, which the two triangles per cell integrate exactly) to
 // float precision (1e-6 relative: the STL stores float32).
 TEST(Sim, SurfaceStlIsAClosedSolidOfTheHeightFieldsVolume) {
-  const StockBox box{{-8, -10, -2}, {8, 10, 0}};
+  const Box3 box{{-8, -10, -2}, {8, 10, 0}};
   TriDexel work(box, 0.1);
   SimSettings s;
   s.steps_per_rev = 60;
@@ -755,7 +756,7 @@ step = 5.0
   EXPECT_NEAR(tool.profile_radius(0.0), R, 1e-12);
   EXPECT_NEAR(tool.profile_radius(1.0), R - 1.0, 1e-12);
   EXPECT_NEAR(tool.edge_sine(0.5), std::sqrt(0.5), 1e-12);
-  const StockBox box{{-10, -5, -2}, {10, 5, 0}};
+  const Box3 box{{-10, -5, -2}, {10, 5, 0}};
   TriDexel work(box, d);
   const ToolPath p = line_path(0, -20, 20, -1, fz * 2 * 1000);
   const SimResult r = simulate(p, tool, s, work, 0, p.duration_s());
@@ -1149,7 +1150,7 @@ TEST(Sim, StreamedRecordsAreTheKeptOnes) {
 // The path is sampled a block of 65,536 steps at a time: over more than two blocks every step's
 // tip is where the path is at the step's time (the path sampled at all those times at once).
 TEST(Sim, StepsFollowThePathAcrossSampleBlocks) {
-  const StockBox box{{-8, -10, -2}, {8, 30, 0}};
+  const Box3 box{{-8, -10, -2}, {8, 30, 0}};
   SimSettings s;
   s.steps_per_rev = 4000;  // 200,000 steps per second at 3000 rpm
   const SimTool tool = end_mill(0);
@@ -1182,7 +1183,7 @@ TEST(Sim, StepsFollowThePathAcrossSampleBlocks) {
 // covers: it must agree to 1e-9 mm (the pieces' closed forms round at about 1e-15 mm), the boards
 // must be the same bit for bit on one thread and on all, and the volume the same.
 TEST(Sim, EnvelopeRowsAreTheUnionOfTheMoves) {
-  const StockBox box{{-6, -4, -2}, {8, 12, 0}};
+  const Box3 box{{-6, -4, -2}, {8, 12, 0}};
   const double d = 0.05, z = -1.0;
   ToolPath path;
   std::vector<std::array<double, 4>> moves;  // (ax, ay, bx, by)
@@ -1325,7 +1326,7 @@ TEST(Sim, EnvelopeRowsAreTheUnionOfTheMoves) {
 }
 
 TEST(Sim, BoardSummaryNeverHidesMaterial) {
-  const StockBox box{{0, 0, 0}, {10, 7, 3}};
+  const Box3 box{{0, 0, 0}, {10, 7, 3}};
   DexelBoard board(0, box, 0.05);  // rays along x, 140 x 60 of them
   board.enable_summary();
   std::mt19937 rng(3);
@@ -1393,8 +1394,7 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
 TEST(Sim, PackedTilesHoldWhatTheirRaysHeld) {
   for (const int axis : {2, 0}) {
     // 140 x 75 rays on either board (u along x and v along y on the Z board; y and z on X).
-    const StockBox box =
-        axis == 2 ? StockBox{{0, 0, 0}, {7, 3.75, 3}} : StockBox{{0, 0, 0}, {3, 7, 3.75}};
+    const Box3 box = axis == 2 ? Box3{{0, 0, 0}, {7, 3.75, 3}} : Box3{{0, 0, 0}, {3, 7, 3.75}};
     DexelBoard packed(axis, box, 0.05), plain(axis, box, 0.05);
     if (axis == 0) packed.enable_summary(), plain.enable_summary();
     ASSERT_EQ(packed.count_u(), 140);
@@ -1488,7 +1488,7 @@ namespace {
 // the box stock's (bit for bit: faces square to the rays are met at their exact height, and a
 // diagonal through a ray centre is taken by one of its two triangles, not both or neither).
 TEST(Sim, AMeshStockOfABoxIsTheBox) {
-  const StockBox box{{-1.0, 0.0, -0.5}, {1.0, 2.0, 0.5}};
+  const Box3 box{{-1.0, 0.0, -0.5}, {1.0, 2.0, 0.5}};
   const double d = 0.05;
   const TriDexel from_mesh = stock_from_mesh(test::box_mesh(box.lo, box.hi), d);
   const TriDexel plain(box, d);
@@ -1520,7 +1520,7 @@ TEST(Sim, AMeshStockHoldsWhatTheMeshEncloses) {
   Mesh m;
   const std::array<std::array<double, 3>, 6> v = {
       {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}};
-  for (const auto& p : v) m.vertices.push_back(p);
+  for (const auto& p : v) m.vertices.emplace_back(p[0], p[1], p[2]);
   for (const std::uint32_t x : {0u, 1u}) {
     for (const std::uint32_t y : {2u, 3u}) {
       for (const std::uint32_t z : {4u, 5u}) m.triangles.push_back({x, y, z});
@@ -1649,7 +1649,7 @@ TEST(Sim, RaysMaybeIsTheIntervalsOnEveryTarget) {
   using sim_detail::RowChords;
   std::mt19937_64 rng(3122026);
   std::uniform_real_distribution<double> U(0, 1);
-  const StockBox box{{0, 0, 0}, {10, 6.4, 6.4}};
+  const Box3 box{{0, 0, 0}, {10, 6.4, 6.4}};
   std::size_t inline_rays = 0, flagged = 0, with_material = 0;
   for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
     hwy::SetSupportedTargetsForTest(target);

@@ -39,7 +39,7 @@ inline Mesh block_mesh(double x0, double x1, double y0, double y1, double z_bott
   }
   return m;
 }
-inline Mesh box_mesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+inline Mesh box_mesh(const Vec3& lo, const Vec3& hi) {
   return block_mesh(lo[0], hi[0], lo[1], hi[1], lo[2], {hi[2], hi[2], hi[2], hi[2]});
 }
 

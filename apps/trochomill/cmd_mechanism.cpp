@@ -7,7 +7,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "trochomill/mechanism.hpp"
-#include "trochomill/report.hpp"
+#include "trochomill/report/mechanism.hpp"
 
 namespace trochomill::cli {
 namespace {

@@ -13,7 +13,7 @@
 #include "commands.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
-#include "trochomill/report.hpp"
+#include "trochomill/report/signal.hpp"
 #include "trochomill/signal.hpp"
 
 namespace trochomill::cli {

@@ -12,7 +12,8 @@
 #include "commands.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
-#include "trochomill/report.hpp"
+#include "trochomill/report/force.hpp"
+#include "trochomill/report/job.hpp"
 #include "trochomill/topography.hpp"
 
 namespace trochomill::cli {

@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "trochomill/geometry.hpp"
 #include "trochomill/settings/sim.hpp"
 
 namespace trochomill {
@@ -65,9 +66,9 @@ struct SimTool {
 /// slope): the same numbers as SimTool's methods of the same names, without their
 /// trigonometry on every call (the simulation asks millions of times). Valid while the tool it
 /// was made from is unchanged.
-class Contour {
+class ToolContour {
  public:
-  explicit Contour(const SimTool& tool);
+  explicit ToolContour(const SimTool& tool);
   /// SimTool::profile_radius (mm; h in mm above the tip).
   [[nodiscard]] double profile_radius(double h) const;
   /// SimTool::heights_reaching (rho in mm).
@@ -95,9 +96,9 @@ struct EdgeCell {
   double width_mm = 0;  ///< w_s: the segment's length along the edge
   double depth_mm = 0;  ///< the sub-segment's middle, inward from the edge (projected)
   /// Unit normal in the tooth's frame (radial out, cutting direction, axial up).
-  std::array<double, 3> normal{};
+  Vec3 normal = Vec3::Zero();
   /// The sub-segment's unit surface normal d_c, same frame.
-  std::array<double, 3> facet{0.0, 1.0, 0.0};
+  Vec3 facet = Vec3(0.0, 1.0, 0.0);
   double proj_mm = 0;      ///< Delta_proj at its outer end: inward distance from the outer edge
   double proj_end_mm = 0;  ///< Delta_proj at its inner end
   double para_mm = 0;      ///< w_j: its length along the surface (Delta_para difference)

@@ -21,10 +21,10 @@
 #include <cstddef>
 #include <vector>
 
+#include "trochomill/geometry.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/progress.hpp"
-#include "trochomill/topography.hpp"
 
 namespace trochomill {
 

@@ -16,9 +16,9 @@
 
 #include "trochomill/analysis.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/geometry.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/progress.hpp"
-#include "trochomill/topography.hpp"
 
 namespace trochomill {
 
@@ -36,7 +36,7 @@ struct FeedOptimizeOptions {
   std::optional<double> force_n, power_w, torque_nm;
   GcodeReadOptions read;  ///< how the program is read (gcode_options(job.machine).read)
   FeedEngine engine = FeedEngine::kernel;
-  /// The stock as a closed mesh in the program's frame (mm; topography.hpp read_mesh) for
+  /// The stock as a closed mesh in the program's frame (mm; geometry.hpp read_mesh) for
   /// either engine; unset: the job's [stock] box (or the slot region).
   std::shared_ptr<const Mesh> stock_mesh;
   /// The simulation's estimated memory (bytes) above which it is refused before it starts.

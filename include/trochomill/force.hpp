@@ -64,9 +64,9 @@ class SegmentForces {
   };
   Material m_;
   int tau_ = 1;
-  std::vector<Sub> subs_;                     // [kappa * tau + j]
-  std::vector<std::array<double, 3>> d_n_;    // contour normal per kappa
-  std::vector<std::array<double, 3>> along_;  // up the edge per kappa
+  std::vector<Sub> subs_;    // [kappa * tau + j]
+  std::vector<Vec3> d_n_;    // contour normal per kappa
+  std::vector<Vec3> along_;  // up the edge per kappa
 };
 
 /// Forces of a chip record (SimResult::steps and chip_map, from `simulate` or `fast_chips`):

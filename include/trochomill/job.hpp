@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "trochomill/geometry.hpp"
 #include "trochomill/settings/analysis.hpp"
 #include "trochomill/settings/force.hpp"
 #include "trochomill/settings/mechanism.hpp"
@@ -135,7 +136,7 @@ struct Job {
   ForceSettings forces;
   TopographySettings topography;
   /// `[stock]` min / max corners (mm); absent: the slot region with a 1 mm margin (sim.hpp).
-  std::optional<std::array<double, 3>> stock_min_mm, stock_max_mm;
+  std::optional<Vec3> stock_min_mm, stock_max_mm;
   // The original document, flattened `section.key = value` (TOML syntax), after overrides:
   // written into the G-code header so a program records the job that produced it.
   std::vector<std::pair<std::string, std::string>> flat_keys;

@@ -4,17 +4,16 @@
 // Frame: slot along +Y, width along X centred on x = 0, top face z = 0 (mm).
 #pragma once
 
-#include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <limits>
+#include <utility>
 #include <vector>
 
+#include "trochomill/geometry.hpp"
 #include "trochomill/job.hpp"
 
 namespace trochomill {
-
-using Vec3 = Eigen::Vector3d;
 
 enum class Motion { rapid, feed };
 
@@ -183,13 +182,13 @@ struct ToothTracks {
 /// The path's axis-aligned bounding box (mm): segment end points, curves sampled every
 /// quarter degree of parameter (an arc of radius r is then within r (1 - cos(pi/1440)) =
 /// 2.4e-6 r of it).
-struct BoundingBox {
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
-  Vec3 hi = Vec3::Constant(-std::numeric_limits<double>::infinity());
-};
-[[nodiscard]] BoundingBox bounding_box(const ToolPath& path);
+[[nodiscard]] Box3 bounding_box(const ToolPath& path);
 /// Grows `box` by one segment (as bounding_box does).
-void extend(BoundingBox& box, const Segment& segment);
+void extend(Box3& box, const Segment& segment);
+
+/// The time window (s) of trochoid cycles [a, b) of the path (its cycle marks; b may be the
+/// number of cycles: then to the path's end). Throws InputError for a bad range.
+[[nodiscard]] std::pair<double, double> cycle_window(const ToolPath& path, int a, int b);
 
 /// A path's totals accumulated segment by segment, without keeping the segments (a long NC
 /// program read as a stream): the same sums as ToolPath's length_mm, feed_length_mm and
@@ -197,7 +196,7 @@ void extend(BoundingBox& box, const Segment& segment);
 struct PathSummary {
   std::size_t segments = 0;
   double length_mm = 0, feed_length_mm = 0, duration_s = 0;
-  BoundingBox box;
+  Box3 box;
   void add(const Segment& segment);
 };
 /// The summary of a whole path.

@@ -16,42 +16,10 @@
 #include <vector>
 
 #include "trochomill/cutter.hpp"
+#include "trochomill/geometry.hpp"
 #include "trochomill/job.hpp"
 
 namespace trochomill {
-
-struct Mesh {
-  std::vector<std::array<double, 3>> vertices;          ///< mm
-  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< counter-clockwise seen from outside
-};
-
-/// Reads a triangle mesh (STL ascii/binary, PLY, OBJ; by content, through assimp), all its
-/// meshes merged, identical vertices joined. Throws InputError naming the file.
-[[nodiscard]] Mesh read_mesh(const std::filesystem::path& file);
-/// Writes a mesh, format by extension (.stl binary, .ply binary, .obj). Written to a
-/// temporary file and renamed. Throws InputError for an unknown extension, IoError on failure.
-void write_mesh(const std::filesystem::path& file, const Mesh& mesh);
-
-/// The box of the vertices a mesh's triangles use (mm).
-struct MeshBounds {
-  std::array<double, 3> lo{}, hi{};
-};
-/// A mesh used as a solid (a stock): its triangles' vertices' box. Throws InputError when it
-/// has no triangles, a triangle names a missing vertex, or a coordinate is not finite or lies
-/// beyond 1 km (1e6 mm).
-[[nodiscard]] MeshBounds mesh_bounds(const Mesh& mesh);
-
-/// Where the line along `axis` (0 x, 1 y, 2 z) through (u, v) on the next two axes
-/// (cyclically: y z for x, z x for y, x y for z; mm) crosses the triangle (a, b, c): its
-/// coordinate along the axis (mm), or nothing when it misses or the triangle is edge-on to
-/// it. A line through an edge or a vertex of a closed surface crosses exactly one of the
-/// triangles meeting there (the rasteriser's top-left rule, on edge functions computed from
-/// each edge's lexicographically first end, so that the two triangles of an edge compute
-/// exact negatives); a face square to the line is met exactly at its height.
-[[nodiscard]] std::optional<double> line_crossing(const std::array<double, 3>& a,
-                                                  const std::array<double, 3>& b,
-                                                  const std::array<double, 3>& c, int axis,
-                                                  double u, double v);
 
 /// A synthetic insert edge for tests and examples: rake face (rake angle), honed edge
 /// (radius r_beta), flank (clearance angle), and with vb_mm > 0 a flank wear land of width VB

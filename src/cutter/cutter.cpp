@@ -17,7 +17,7 @@ namespace trochomill {
 // The contour (see SimTool): corner arc about (R - rc, rc) from the face (angle phi = 0) to
 // phi_t = pi - kappa_r, at height h_t = rc (1 - cos phi_t) and radius r_t = R - rc + rc sin
 // phi_t; then the main edge, radius r_t - (h - h_t) cot kappa_r.
-Contour::Contour(const SimTool& t)
+ToolContour::ToolContour(const SimTool& t)
     : radius_(t.radius_mm),
       rc_(t.corner_radius_mm),
       rcen_(t.radius_mm - t.corner_radius_mm),
@@ -29,7 +29,7 @@ Contour::Contour(const SimTool& t)
   flank_ = profile_radius(ht_ + 1e-12);
 }
 
-double Contour::profile_radius(double h) const {
+double ToolContour::profile_radius(double h) const {
   if (h < 0) return -1;
   if (h <= ht_ && rc_ > 0) {
     const double dz = rc_ - h;
@@ -40,7 +40,7 @@ double Contour::profile_radius(double h) const {
   return r > 0 ? r : -1;
 }
 
-double Contour::edge_sine(double h) const {
+double ToolContour::edge_sine(double h) const {
   if (h <= ht_ && rc_ > 0) {
     const double c = std::clamp(1 - std::max(0.0, h) / rc_, -1.0, 1.0);
     return std::sqrt(std::max(0.0, 1 - c * c));  // sin phi
@@ -48,7 +48,7 @@ double Contour::edge_sine(double h) const {
   return sin_lead_;
 }
 
-std::optional<Interval> Contour::heights_reaching(double rho) const {
+std::optional<Interval> ToolContour::heights_reaching(double rho) const {
   if (rho > radius_) return std::nullopt;
   double lo = 0, hi = ht_;
   if (rho > rcen_) {  // on the arc: |rc - h| <= sqrt(rc^2 - q^2)
@@ -65,12 +65,12 @@ std::optional<Interval> Contour::heights_reaching(double rho) const {
   return Interval{lo, hi};
 }
 
-double SimTool::profile_radius(double h) const { return Contour(*this).profile_radius(h); }
+double SimTool::profile_radius(double h) const { return ToolContour(*this).profile_radius(h); }
 
-double SimTool::edge_sine(double h) const { return Contour(*this).edge_sine(h); }
+double SimTool::edge_sine(double h) const { return ToolContour(*this).edge_sine(h); }
 
 std::optional<Interval> SimTool::heights_reaching(double rho) const {
-  return Contour(*this).heights_reaching(rho);
+  return ToolContour(*this).heights_reaching(rho);
 }
 
 double SimTool::widest_height(double h0, double h1) const {

@@ -21,7 +21,7 @@
 
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
-#include "trochomill/topography.hpp"
+#include "trochomill/geometry.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -396,7 +396,7 @@ ArcSet inside_rect(double cx, double cy, double R, double x0, double x1, double 
 class MeshStock {
  public:
   MeshStock(const Mesh& mesh, double radius) : m_(mesh) {
-    const MeshBounds bounds = mesh_bounds(m_);  // checks every vertex a triangle uses
+    const Box3 bounds = mesh_bounds(m_);  // checks every vertex a triangle uses
     const double x0 = bounds.lo[0], y0 = bounds.lo[1], x1 = bounds.hi[0], y1 = bounds.hi[1];
     for (const auto& t : m_.triangles) {
       Tri b{};
@@ -492,7 +492,7 @@ class MeshStock {
   // and z1 (the triangle clipped by the two planes).
   void crossings(std::size_t k, double cx0, double cy0, double R, double z0, double z1,
                  std::vector<double>& cut) const {
-    std::array<double, 3> poly[6], next[6];
+    Vec3 poly[6], next[6];
     int n = 3;
     for (int q = 0; q < 3; ++q) poly[q] = m_.vertices[m_.triangles[k][static_cast<std::size_t>(q)]];
     auto clip = [&](double h, bool keep_above) {

@@ -18,7 +18,7 @@
 #include "trochomill/feed.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/sim.hpp"
-#include "trochomill/topography.hpp"
+#include "trochomill/geometry.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {

@@ -510,8 +510,8 @@ std::vector<Key> build_schema() {
                  } else if (!((*hi)[0] > (*lo)[0] && (*hi)[1] > (*lo)[1] && (*hi)[2] > (*lo)[2])) {
                    r.problem("stock", "max", "every coordinate of max must exceed min's");
                  } else {
-                   job.stock_min_mm = std::array<double, 3>{(*lo)[0], (*lo)[1], (*lo)[2]};
-                   job.stock_max_mm = std::array<double, 3>{(*hi)[0], (*hi)[1], (*hi)[2]};
+                   job.stock_min_mm = Vec3((*lo)[0], (*lo)[1], (*lo)[2]);
+                   job.stock_max_mm = Vec3((*hi)[0], (*hi)[1], (*hi)[2]);
                  }
                }
              }),

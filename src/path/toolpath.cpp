@@ -90,11 +90,8 @@ Vec3 ToolPath::point_at_length(double s_mm) const {
 
 namespace trochomill {
 
-void extend(BoundingBox& b, const Segment& seg) {
-  auto add = [&](const Vec3& p) {
-    b.lo = b.lo.cwiseMin(p);
-    b.hi = b.hi.cwiseMax(p);
-  };
+void extend(Box3& b, const Segment& seg) {
+  auto add = [&](const Vec3& p) { b.extend(p); };
   add(seg.start());
   add(seg.end());
   if (seg.kind() == Segment::Kind::curve) {
@@ -103,8 +100,8 @@ void extend(BoundingBox& b, const Segment& seg) {
   }
 }
 
-BoundingBox bounding_box(const ToolPath& path) {
-  BoundingBox b;
+Box3 bounding_box(const ToolPath& path) {
+  Box3 b;
   for (const auto& seg : path.segments()) extend(b, seg);
   return b;
 }
@@ -116,6 +113,19 @@ void PathSummary::add(const Segment& seg) {
   if (seg.motion() == Motion::feed) feed_length_mm += seg.length_mm();
   duration_s += seg.length_mm() / (seg.speed_mm_per_min() / 60.0);
   extend(box, seg);
+}
+
+std::pair<double, double> cycle_window(const ToolPath& path, int a, int b) {
+  const auto& marks = path.cycles();
+  const int n = static_cast<int>(marks.size());
+  if (n == 0) throw InputError("cycles: the path has no cycle marks (a planned trochoid has)");
+  if (a < 0 || b <= a || b > n) {
+    throw InputError(
+        fmt::format("cycles {}:{}: need 0 <= A < B <= {} (the path's cycles)", a, b, n));
+  }
+  const double t0 = marks[static_cast<std::size_t>(a)].start_time_s;
+  const double t1 = b < n ? marks[static_cast<std::size_t>(b)].start_time_s : path.duration_s();
+  return {t0, t1};
 }
 
 PathSummary summarize(const ToolPath& path) {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "trochomill/report.hpp"
+#include "trochomill/report/force.hpp"
 
 namespace trochomill {
 

@@ -4,7 +4,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 
-#include "trochomill/report.hpp"
+#include "trochomill/report/mechanism.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {

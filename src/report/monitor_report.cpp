@@ -5,7 +5,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 
-#include "trochomill/report.hpp"
+#include "trochomill/report/signal.hpp"
 
 namespace trochomill {
 

@@ -5,7 +5,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 
-#include "trochomill/report.hpp"
+#include "trochomill/report/path.hpp"
 
 namespace trochomill {
 
@@ -45,7 +45,7 @@ std::string path_samples_csv(const PathSamples& s, const ToothTracks& tr) {
 std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
                              double time_with_acceleration_s) {
   const PathSummary sum = prog.path.empty() ? prog.summary : summarize(prog.path);
-  const BoundingBox& b = sum.box;
+  const Box3& b = sum.box;
   const nlohmann::json j = {
       {"file", file},
       {"lines", prog.info.lines},
@@ -69,7 +69,7 @@ std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
 std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
                              double time_with_acceleration_s, double max_acceleration_mm_per_s2) {
   const PathSummary sum = prog.path.empty() ? prog.summary : summarize(prog.path);
-  const BoundingBox& b = sum.box;
+  const Box3& b = sum.box;
   std::string out = fmt::format("{}: {} lines, {} blocks run, {} segments\n", file, prog.info.lines,
                                 prog.info.blocks_executed, sum.segments);
   out += fmt::format("  path length   {:.4f} mm ({:.4f} mm at feed)\n", sum.length_mm,

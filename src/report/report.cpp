@@ -1,5 +1,7 @@
 // JSON, CSV and table output of the analysis, and the parameter study (see report.hpp).
-#include "trochomill/report.hpp"
+#include "trochomill/report/analysis.hpp"
+#include "trochomill/report/job.hpp"
+#include "trochomill/report/texture.hpp"
 
 #include <fmt/format.h>
 

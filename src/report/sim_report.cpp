@@ -18,7 +18,8 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
-#include "trochomill/report.hpp"
+#include "trochomill/report/force.hpp"
+#include "trochomill/report/sim.hpp"
 #include "trochomill/version.hpp"
 
 namespace trochomill {

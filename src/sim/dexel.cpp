@@ -6,9 +6,10 @@
 #include <cmath>
 #include <cstring>
 
-#include "sim/geometry.hpp"
+#include "sim/plane.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/sim/dexel.hpp"
 
 namespace trochomill {
 
@@ -121,8 +122,7 @@ double BasicDexel<N>::length() const {
 template class BasicDexel<1>;
 template class BasicDexel<2>;
 
-DexelBoard::DexelBoard(int axis, const StockBox& box, double spacing_mm)
-    : axis_(axis), d_(spacing_mm) {
+DexelBoard::DexelBoard(int axis, const Box3& box, double spacing_mm) : axis_(axis), d_(spacing_mm) {
   if (!(spacing_mm > 0)) {
     throw InputError(fmt::format("dexel spacing must be > 0 mm, got {}", spacing_mm));
   }
@@ -402,7 +402,7 @@ std::size_t DexelBoard::ray_bytes(int axis) noexcept {
   return axis == 2 ? sizeof(BasicDexel<1>) : sizeof(BasicDexel<2>);
 }
 
-TriDexel::TriDexel(const StockBox& b, double spacing_mm)
+TriDexel::TriDexel(const Box3& b, double spacing_mm)
     : box(b),
       boards{DexelBoard(0, b, spacing_mm), DexelBoard(1, b, spacing_mm),
              DexelBoard(2, b, spacing_mm)} {
@@ -421,11 +421,8 @@ TriDexel::TriDexel(const StockBox& b, double spacing_mm)
 
 namespace trochomill {
 
-StockBox mesh_box(const Mesh& mesh) {
-  const MeshBounds m = mesh_bounds(mesh);
-  StockBox b;
-  b.lo = m.lo;
-  b.hi = m.hi;
+Box3 mesh_box(const Mesh& mesh) {
+  const Box3 b = mesh_bounds(mesh);
   for (std::size_t k = 0; k < 3; ++k) {
     if (!(b.hi[k] > b.lo[k])) {
       throw InputError(fmt::format("the stock mesh is flat along {} (no volume)", "xyz"[k]));
@@ -445,7 +442,7 @@ TriDexel stock_from_mesh(const Mesh& mesh, double spacing_mm, const RunHooks& ho
     board.pause_summary();
     // The triangles with their extent in the board's plane (sorted by u).
     struct Tri {
-      const std::array<double, 3>* p[3];
+      const Vec3* p[3];
       double u_lo, u_hi, v_lo, v_hi;
     };
     std::vector<Tri> tris;

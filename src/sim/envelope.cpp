@@ -8,9 +8,10 @@
 #include <limits>
 #include <optional>
 
-#include "sim/geometry.hpp"
+#include "sim/plane.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/sim/dexel.hpp"
 
 namespace trochomill {
 namespace {
@@ -293,7 +294,7 @@ double sweep_envelope(const ToolPath& path, const SimTool& tool, TriDexel& work,
           : *std::min_element(tool.axial_offset_mm.begin(), tool.axial_offset_mm.end());
   const double R = tool.radius_mm + r_off;
   const double top = work.box.hi[2];
-  const Contour contour(tool);
+  const ToolContour contour(tool);
   // Within this distance of a piece its end face is flat and its flank reaches every height
   // (cylindrical tools: the corner's centre circle; 0 otherwise: no shortcut).
   const double flat_r = tool.lead_rad >= 0.5 * kPi - 1e-12

@@ -8,6 +8,7 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/sim/dexel.hpp"
 
 namespace trochomill {
 

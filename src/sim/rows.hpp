@@ -8,7 +8,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "sim/geometry.hpp"
+#include "sim/plane.hpp"
 
 namespace trochomill::sim_detail {
 

@@ -14,12 +14,13 @@
 #include <type_traits>
 #include <utility>
 
-#include "sim/geometry.hpp"
+#include "sim/plane.hpp"
 #include "sim/rows.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/sim/dexel.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -586,7 +587,7 @@ class Stepper {
   }
 
   const SimTool& tool_;
-  const Contour contour_;  // the tool's contour, its constants taken once
+  const ToolContour contour_;  // the tool's contour, its constants taken once
   const SimSettings& s_;
   TriDexel& work_;
   double d_, kappa_;
@@ -863,7 +864,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     }
     SimStep st;
     st.t_s = tb;
-    st.tip_mm = c;
+    st.tip_mm = Vec3(c[0], c[1], c[2]);
     st.removed_mm3 = bacc[2].removed_tooth;
     double sum = 0;
     step_chips.clear();
@@ -980,8 +981,8 @@ void tally_steps(SimResult& r) {
   for (const SimStep& st : r.steps) r.h_max_mm = std::max(r.h_max_mm, st.h_max_mm);
 }
 
-StockBox job_stock(const Job& job) {
-  StockBox b;
+Box3 job_stock(const Job& job) {
+  Box3 b;
   if (job.stock_min_mm && job.stock_max_mm) {
     b.lo = *job.stock_min_mm;
     b.hi = *job.stock_max_mm;
@@ -996,18 +997,10 @@ StockBox job_stock(const Job& job) {
   return b;
 }
 
-std::pair<double, double> cycle_window(const ToolPath& path, int a, int b) {
-  const auto& marks = path.cycles();
-  const int n = static_cast<int>(marks.size());
-  if (n == 0) throw InputError("--cycles: the path has no cycle marks (a planned trochoid has)");
-  if (a < 0 || b <= a || b > n) {
-    throw InputError(
-        fmt::format("--cycles {}:{}: need 0 <= A < B <= {} (the path's cycles)", a, b, n));
-  }
-  const double t0 = marks[static_cast<std::size_t>(a)].start_time_s;
-  const double t1 = b < n ? marks[static_cast<std::size_t>(b)].start_time_s : path.duration_s();
-  return {t0, t1};
-}
+JobSimulation::JobSimulation() = default;
+JobSimulation::~JobSimulation() = default;
+JobSimulation::JobSimulation(JobSimulation&&) noexcept = default;
+JobSimulation& JobSimulation::operator=(JobSimulation&&) noexcept = default;
 
 JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double from_s,
                                     double to_s, const SimControl& control,
@@ -1086,7 +1079,7 @@ JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, 
 MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, double from_s,
                                           double to_s, const Mesh* stock_mesh) {
   const SimSettings& s = job.simulation;
-  const StockBox box = stock_mesh ? mesh_box(*stock_mesh) : job_stock(job);
+  const Box3 box = stock_mesh ? mesh_box(*stock_mesh) : job_stock(job);
   const double d = s.resolution_mm;
   if (!(d > 0)) throw InputError(fmt::format("[simulation] resolution must be > 0 mm, got {}", d));
   // The region the tool visits up to the window's end: the path's box grown by the radius.

@@ -1,5 +1,5 @@
 // Slot walls as envelopes (of circles, or of tooth-tip polylines) on a y grid, and the
-// bottom imprint density. See include/trochomill/surface.hpp.
+// bottom imprint density, and the texture of a wall (include/trochomill/surface.hpp).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -162,6 +162,20 @@ ImprintDensity bottom_imprint_density(const std::vector<double>& cx, double R, d
   }
   for (auto& c : d.crossings_per_mm) c /= advance;
   return d;
+}
+
+ProfileTexture wall_texture(const WallProfile& wall, bool left, std::optional<double> cutoff_mm) {
+  if (wall.x_mm.size() < 3) {
+    throw InputError(fmt::format("wall texture: the {} wall's profile has {} points (3 or more)",
+                                 left ? "left" : "right", wall.x_mm.size()));
+  }
+  std::vector<double> z(wall.x_mm.begin(), wall.x_mm.end() - 1);
+  if (!left) {
+    for (double& v : z) v = -v;
+  }
+  const double dy =
+      (wall.y_mm.back() - wall.y_mm.front()) / static_cast<double>(wall.y_mm.size() - 1);
+  return periodic_profile_texture(z, dy, cutoff_mm);
 }
 
 }  // namespace trochomill

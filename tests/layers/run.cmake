@@ -22,3 +22,11 @@ if(rc EQUAL 0 OR NOT err MATCHES "src/path/wrong.cpp: includes \"trochomill/forc
   message(FATAL_ERROR "a wrong-way include passed the layer check (rc ${rc}):\n${err}")
 endif()
 message(STATUS "the layer check refuses src/path -> force")
+# A module's further public headers (include/trochomill/<module>/) belong to it too.
+file(WRITE ${WORK}/tree/src/path/wrong.cpp "#include \"trochomill/sim/dexel.hpp\"\n")
+execute_process(COMMAND ${CMAKE_COMMAND} -DDATA=${DATA} -DROOT=${WORK}/tree
+                -DSTAMP=${WORK}/wrong2.stamp -P ${check} RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "src/path/wrong.cpp: includes \"trochomill/sim/dexel.hpp\" \\(module sim\\)")
+  message(FATAL_ERROR "an include of sim/dexel.hpp from path passed the layer check (rc ${rc}):\n${err}")
+endif()
+message(STATUS "the layer check refuses src/path -> sim/dexel.hpp")

@@ -1,6 +1,6 @@
 // Areal surface texture: the ISO 16610-61 Gaussian filter (separable, FFT convolution with
 // FFTW), the F-operator (least-squares plane or polynomial) and the ISO 25178-2 field
-// parameters (surface.hpp; docs/models.md section "Surface texture").
+// parameters (texture.hpp; docs/models.md section "Surface texture").
 //
 // Determinism: every line (row or column) is filtered by the same FFTW plan (FFTW_ESTIMATE,
 // made once per size) on its own buffer, so a line's result does not depend on which thread
@@ -22,9 +22,9 @@
 #include <mutex>
 #include <numbers>
 
-#include "surface/gaussian.hpp"
+#include "texture/gaussian.hpp"
 #include "trochomill/error.hpp"
-#include "trochomill/surface.hpp"
+#include "trochomill/texture.hpp"
 
 namespace trochomill {
 

@@ -1,5 +1,5 @@
 // The ISO 16610-21 Gaussian weighting function, shared by the profile and the areal filters
-// (texture.cpp, areal.cpp); internal to the surface module.
+// (profile.cpp, areal.cpp); internal to the texture module.
 #pragma once
 
 #include <cstddef>

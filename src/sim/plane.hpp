@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "trochomill/sim.hpp"
+#include "trochomill/sim/dexel.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill::sim_detail {

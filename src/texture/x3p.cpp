@@ -1,6 +1,6 @@
 // X3P (ISO 5436-2, the openGPS XML schema): a zip archive (libzip) holding main.xml
 // (pugixml), the point data (bindata/data.bin) and md5checksum.hex (MD5 by nettle).
-// Lengths in the file are metres; trochomill's are mm (surface.hpp).
+// Lengths in the file are metres; trochomill's are mm (texture.hpp).
 #include <fmt/format.h>
 #include <nettle/md5.h>
 #include <zip.h>
@@ -19,7 +19,7 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
-#include "trochomill/surface.hpp"
+#include "trochomill/texture.hpp"
 
 static_assert(std::endian::native == std::endian::little,
               "X3P binary data is little-endian; this build assumes a little-endian machine");

@@ -1,5 +1,5 @@
 // Surface texture of a profile: the ISO 16610-21 Gaussian filter and the ISO 21920-2 profile
-// parameters (surface.hpp; docs/models.md section "Surface texture").
+// parameters (texture.hpp; docs/models.md section "Surface texture").
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -7,10 +7,10 @@
 #include <numbers>
 #include <optional>
 
-#include "surface/gaussian.hpp"
+#include "texture/gaussian.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
-#include "trochomill/surface.hpp"
+#include "trochomill/texture.hpp"
 
 namespace trochomill {
 
@@ -433,20 +433,6 @@ ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm, 
     }
     return texture_of(std::move(r), std::move(wl), dx_mm, lc, 5, half);
   });
-}
-
-ProfileTexture wall_texture(const WallProfile& wall, bool left, std::optional<double> cutoff_mm) {
-  if (wall.x_mm.size() < 3) {
-    throw InputError(fmt::format("wall texture: the {} wall's profile has {} points (3 or more)",
-                                 left ? "left" : "right", wall.x_mm.size()));
-  }
-  std::vector<double> z(wall.x_mm.begin(), wall.x_mm.end() - 1);
-  if (!left) {
-    for (double& v : z) v = -v;
-  }
-  const double dy =
-      (wall.y_mm.back() - wall.y_mm.front()) / static_cast<double>(wall.y_mm.size() - 1);
-  return periodic_profile_texture(z, dy, cutoff_mm);
 }
 
 ProfileTexture profile_texture(const std::vector<double>& raw_z_mm, double dx_mm,

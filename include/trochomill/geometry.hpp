@@ -1,0 +1,161 @@
+// Geometry every module shares, at the bottom of the module graph: the point type, the
+// axis-aligned box, triangle meshes and their files (STL, PLY, OBJ through assimp), and planar
+// contours of lines and circular arcs with their orientation, area, distance and offsets (the
+// offsets through Clipper, Debian's libpolyclipping). All lengths mm, angles rad unless a
+// name says otherwise.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <vector>
+
+namespace trochomill {
+
+/// A point or a direction in space (mm).
+using Vec3 = Eigen::Vector3d;
+/// A point or a direction in the plane (mm).
+using Vec2 = Eigen::Vector2d;
+
+/// An axis-aligned box (mm). Default-constructed it is empty (lo = +inf, hi = -inf), so that
+/// extending it by points gives their box.
+struct Box3 {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 hi = Vec3::Constant(-std::numeric_limits<double>::infinity());
+
+  /// Whether the box holds no point (lo > hi along some axis).
+  [[nodiscard]] bool empty() const { return !(lo.array() <= hi.array()).all(); }
+  /// hi - lo (mm); zero for an empty box.
+  [[nodiscard]] Vec3 size_mm() const { return empty() ? Vec3::Zero() : Vec3(hi - lo); }
+  [[nodiscard]] double volume_mm3() const { return size_mm().prod(); }
+  [[nodiscard]] bool contains(const Vec3& p) const {
+    return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+  }
+  void extend(const Vec3& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void extend(const Box3& b) {
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Triangle meshes
+
+struct Mesh {
+  std::vector<Vec3> vertices;                           ///< mm
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< counter-clockwise seen from outside
+};
+
+/// Reads a triangle mesh (STL ascii/binary, PLY, OBJ; by content, through assimp), all its
+/// meshes merged, identical vertices joined. Throws InputError naming the file.
+[[nodiscard]] Mesh read_mesh(const std::filesystem::path& file);
+/// Writes a mesh, format by extension (.stl binary, .ply binary, .obj). Written to a
+/// temporary file and renamed. Throws InputError for an unknown extension, IoError on failure.
+void write_mesh(const std::filesystem::path& file, const Mesh& mesh);
+
+/// A mesh used as a solid (a stock): the box of the vertices its triangles use (mm). Throws
+/// InputError when it has no triangles, a triangle names a missing vertex, or a coordinate is
+/// not finite or lies beyond 1 km (1e6 mm).
+[[nodiscard]] Box3 mesh_bounds(const Mesh& mesh);
+
+/// Where the line along `axis` (0 x, 1 y, 2 z) through (u, v) on the next two axes
+/// (cyclically: y z for x, z x for y, x y for z; mm) crosses the triangle (a, b, c): its
+/// coordinate along the axis (mm), or nothing when it misses or the triangle is edge-on to
+/// it. A line through an edge or a vertex of a closed surface crosses exactly one of the
+/// triangles meeting there (the rasteriser's top-left rule, on edge functions computed from
+/// each edge's lexicographically first end, so that the two triangles of an edge compute
+/// exact negatives); a face square to the line is met exactly at its height.
+[[nodiscard]] std::optional<double> line_crossing(const Vec3& a, const Vec3& b, const Vec3& c,
+                                                  int axis, double u, double v);
+
+// ---------------------------------------------------------------------------------------------
+// Planar contours
+
+/// One piece of a planar contour: a straight line from `start` to `end`, or a circular arc
+/// from `start` to `end` about `centre`, counter-clockwise when `ccw` (mm). An arc whose start
+/// and end coincide is a full circle.
+struct ContourPiece {
+  Vec2 start = Vec2::Zero(), end = Vec2::Zero();
+  std::optional<Vec2> centre;  ///< none: a line
+  bool ccw = true;
+
+  [[nodiscard]] static ContourPiece line(const Vec2& a, const Vec2& b) { return {a, b, {}, true}; }
+  [[nodiscard]] static ContourPiece arc(const Vec2& a, const Vec2& b, const Vec2& centre,
+                                        bool ccw) {
+    return {a, b, centre, ccw};
+  }
+  [[nodiscard]] bool is_arc() const noexcept { return centre.has_value(); }
+  /// The arc's radius (mm): |start - centre|; 0 for a line.
+  [[nodiscard]] double radius_mm() const;
+  /// The arc's signed sweep (rad): positive counter-clockwise, in (0, 2 pi] or [-2 pi, 0);
+  /// 0 for a line.
+  [[nodiscard]] double sweep_rad() const;
+  [[nodiscard]] double length_mm() const;
+  /// The point at the fraction t in [0, 1] of the piece's length.
+  [[nodiscard]] Vec2 point_at(double t) const;
+  /// The unit tangent (direction of travel) at the fraction t.
+  [[nodiscard]] Vec2 tangent_at(double t) const;
+  /// The shortest distance from p to the piece (mm), exact.
+  [[nodiscard]] double distance_mm(const Vec2& p) const;
+  /// The same piece run the other way.
+  [[nodiscard]] ContourPiece reversed() const;
+};
+
+/// A chain of pieces, each starting where the previous one ends; closed when the last ends
+/// where the first starts. Orientation of a closed contour: counter-clockwise (positive area)
+/// or clockwise.
+struct Contour {
+  std::vector<ContourPiece> pieces;
+  bool closed = false;
+
+  /// A polyline through the points (mm); closed joins the last point to the first.
+  [[nodiscard]] static Contour polyline(const std::vector<Vec2>& points, bool closed);
+  /// A circle of radius r_mm about c, counter-clockwise (two half arcs).
+  [[nodiscard]] static Contour circle(const Vec2& c, double r_mm);
+
+  [[nodiscard]] double length_mm() const;
+  /// The signed area enclosed (mm^2), arcs exact: positive when counter-clockwise. Throws
+  /// std::logic_error for an open contour.
+  [[nodiscard]] double signed_area_mm2() const;
+  [[nodiscard]] bool counter_clockwise() const { return signed_area_mm2() > 0; }
+  /// The contour run the other way.
+  [[nodiscard]] Contour reversed() const;
+  /// The shortest distance from p to the contour (mm), exact.
+  [[nodiscard]] double distance_mm(const Vec2& p) const;
+  /// Points along the contour whose chords stay within `tolerance_mm` of it (arcs split into
+  /// equal chords of sagitta <= tolerance; lines kept whole); a closed contour does not repeat
+  /// its first point.
+  [[nodiscard]] std::vector<Vec2> points(double tolerance_mm) const;
+  /// Throws InputError unless every piece is finite and starts within `gap_mm` of where the
+  /// previous one ends (and, when closed, the last ends within gap_mm of the first's start).
+  void check(double gap_mm) const;
+};
+
+/// The region inside closed contours by the even-odd rule (an island inside a boundary is a
+/// hole, whatever their orientations), grown by `distance_mm` (shrunk when negative), with
+/// round corners, as closed polylines: outer boundaries counter-clockwise, holes clockwise,
+/// in a deterministic order (by area, largest first, then by lowest point). Every vertex lies
+/// within `tolerance_mm` of the exact offset (the arcs of the input and of the rounded
+/// corners are chords of sagitta <= tolerance / 2). Computed with Clipper on a 1 nm grid.
+/// Throws InputError for an open contour, a non-finite point or a tolerance outside
+/// [1e-5, 10] mm.
+[[nodiscard]] std::vector<Contour> offset_region(const std::vector<Contour>& closed,
+                                                 double distance_mm, double tolerance_mm);
+
+/// The region within `distance_mm` (> 0) of a contour, open or closed: a slot of width
+/// 2 distance_mm along an open contour, with round ends; a ring along a closed one. Same
+/// output and tolerance as offset_region.
+[[nodiscard]] std::vector<Contour> offset_curve(const Contour& contour, double distance_mm,
+                                                double tolerance_mm);
+
+/// The area of a region given as its closed contours with orientation (mm^2): the sum of their
+/// signed areas (outer boundaries counter-clockwise, holes clockwise, as offset_region gives).
+[[nodiscard]] double region_area_mm2(const std::vector<Contour>& contours);
+
+}  // namespace trochomill

@@ -1,0 +1,36 @@
+// The analysis's outputs: process metrics (JSON, text), the engagement series (CSV) and the
+// parameter study `compare` (table, JSON, CSV). Part of the report module (trochomill/report.hpp
+// includes every part).
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "trochomill/analysis.hpp"
+
+namespace trochomill {
+
+/// The analysis as a JSON document (keys carry their units: _mm, _s, _deg, _mm3_per_min).
+[[nodiscard]] std::string metrics_json(const Job& job, const ProcessMetrics& m);
+/// `analyze`'s summary; `gcode`: the program analysed (empty: the planned path).
+[[nodiscard]] std::string metrics_text(const std::string& job_file, const std::string& gcode,
+                                       const Job& job, const ProcessMetrics& m);
+
+/// The time series as CSV: t_s, x_mm, y_mm, z_mm, engaged angles (deg, "start:end" pairs
+/// separated by ';'), engagement_deg, h_max_mm, teeth_in_cut, mrr_mm3_per_min.
+[[nodiscard]] std::string series_csv(const EngagementSeries& e);
+
+/// One `--vary key=v1,v2,...` of a parameter study.
+[[nodiscard]] std::string study_table(const std::vector<Vary>& varies,
+                                      const std::vector<StudyPoint>& points);
+[[nodiscard]] std::string study_json(const std::vector<Vary>& varies,
+                                     const std::vector<StudyPoint>& points);
+[[nodiscard]] std::string study_csv(const std::vector<Vary>& varies,
+                                    const std::vector<StudyPoint>& points);
+
+}  // namespace trochomill
