@@ -16,6 +16,7 @@
 #include <fstream>
 #include <map>
 
+#include "trochomill/app.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
@@ -82,15 +83,8 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
 }
 
 FeedTargets FeedTargetArgs::resolve(const Job& job) const {
-  FeedTargets t = default_feed_targets(job);
-  t.h_max_mm = h_max_mm;
-  t.mrr_mm3_per_min = mrr_mm3_per_min;
-  t.feed_step_percent = feed_step_percent;
-  t.piece_mm = piece_mm;
-  if (min_feed) t.min_feed_mm_per_min = *min_feed;
-  if (max_feed) t.max_feed_mm_per_min = *max_feed;
-  if (air_feed) t.air_feed_mm_per_min = *air_feed;
-  return t;
+  return feed_targets(
+      job, {h_max_mm, mrr_mm3_per_min, feed_step_percent, piece_mm, min_feed, max_feed, air_feed});
 }
 
 void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
@@ -235,25 +229,11 @@ bool summary_to_stdout(std::initializer_list<const std::string*> outputs) {
 }
 
 std::pair<double, double> WindowArgs::resolve(const ToolPath& path) const {
-  if (!cycles.empty()) {
-    if (from_s || to_s) throw InputError("give --cycles or --from/--to, not both");
-    const auto colon = cycles.find(':');
-    char* e1 = nullptr;
-    char* e2 = nullptr;
-    const std::string a = cycles.substr(0, colon);
-    const std::string b = colon == std::string::npos ? "" : cycles.substr(colon + 1);
-    const long long ca = std::strtoll(a.c_str(), &e1, 10), cb = std::strtoll(b.c_str(), &e2, 10);
-    if (colon == std::string::npos || a.empty() || b.empty() || *e1 != '\0' || *e2 != '\0') {
-      throw InputError(fmt::format("--cycles '{}': expected A:B, e.g. 3:4", cycles));
-    }
-    const long long count = static_cast<long long>(path.cycles().size());
-    if (count > 0 && (ca < 0 || cb <= ca || cb > count)) {  // before any narrowing
-      throw InputError(
-          fmt::format("--cycles '{}': need 0 <= A < B <= {} (the path's cycles)", cycles, count));
-    }
-    return cycle_window(path, static_cast<int>(ca), static_cast<int>(cb));
-  }
-  return {from_s.value_or(0.0), to_s.value_or(path.duration_s())};
+  WindowRequest r;
+  if (!cycles.empty()) r.cycles = parse_cycle_range(cycles, "--cycles");
+  r.from_s = from_s;
+  r.to_s = to_s;
+  return resolve_window(path, r, {"--cycles", "--from", "--to"});
 }
 
 void add_window_args(CLI::App* cmd, WindowArgs& w, const std::string& what) {
@@ -400,22 +380,12 @@ void print_failed_points(const char* command, const std::vector<StudyPoint>& poi
 }
 
 double memory_limit_bytes(std::optional<double> limit_gb) {
-  if (limit_gb && !(*limit_gb > 0)) {
-    throw InputError(fmt::format("--memory-limit must be > 0 GB, got {}", *limit_gb));
-  }
-  return limit_gb ? *limit_gb * 1e9 : default_memory_limit_bytes();
+  return trochomill::memory_limit_bytes(limit_gb, "--memory-limit");
 }
 
 void check_memory(const char* command, double need_bytes, std::optional<double> limit_gb,
                   const std::string& advice) {
-  const double limit = memory_limit_bytes(limit_gb);
-  if (!(need_bytes <= limit)) {
-    throw InputError(fmt::format(
-        "{}: estimated memory {:.2f} GB exceeds the limit of {:.2f} GB ({}): {}; or raise "
-        "--memory-limit",
-        command, need_bytes / 1e9, limit / 1e9, limit_gb ? "--memory-limit" : "75 % of RAM",
-        advice));
-  }
+  trochomill::check_memory(command, need_bytes, limit_gb, "--memory-limit", advice);
 }
 
 void add_memory_limit(CLI::App* cmd, std::optional<double>& limit_gb) {

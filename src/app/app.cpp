@@ -1,0 +1,89 @@
+// The application layer shared by the CLI and the Python module (app.hpp).
+#include "trochomill/app.hpp"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+
+#include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
+
+namespace trochomill {
+
+std::pair<double, double> resolve_window(const ToolPath& path, const WindowRequest& r,
+                                         const WindowNames& names) {
+  if (r.cycles) {
+    if (r.from_s || r.to_s) {
+      throw InputError(
+          fmt::format("give {} or {}/{}, not both", names.cycles, names.from, names.to));
+    }
+    const auto [a, b] = *r.cycles;
+    const long long count = static_cast<long long>(path.cycles().size());
+    if (count == 0) {
+      throw InputError(
+          fmt::format("{}: the path has no cycle marks (a planned trochoid has)", names.cycles));
+    }
+    if (a < 0 || b <= a || b > count) {  // before any narrowing
+      throw InputError(fmt::format("{} '{}:{}': need 0 <= A < B <= {} (the path's cycles)",
+                                   names.cycles, a, b, count));
+    }
+    return cycle_window(path, static_cast<int>(a), static_cast<int>(b));
+  }
+  for (const auto& [name, v] : {std::pair{&names.from, r.from_s}, std::pair{&names.to, r.to_s}}) {
+    if (v && !(std::isfinite(*v) && *v >= 0 && *v <= 1e9)) {
+      throw InputError(fmt::format("{} must be a finite time in [0, 1e9] s, got {}", *name, *v));
+    }
+  }
+  const double from = r.from_s.value_or(0.0), to = r.to_s.value_or(path.duration_s());
+  if (r.given() && !(to > from)) {
+    throw InputError(fmt::format("the window {} to {} s is empty: {} must be after {}", from, to,
+                                 names.to, names.from));
+  }
+  return {from, to};
+}
+
+std::pair<long long, long long> parse_cycle_range(std::string_view text, std::string_view option) {
+  const auto colon = text.find(':');
+  const auto number = [](std::string_view s, long long& v) {
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    return !s.empty() && ec == std::errc{} && end == s.data() + s.size();
+  };
+  long long a = 0, b = 0;
+  if (colon == std::string_view::npos || !number(text.substr(0, colon), a) ||
+      !number(text.substr(colon + 1), b)) {
+    throw InputError(fmt::format("{} '{}': expected A:B, e.g. 3:4", option, text));
+  }
+  return {a, b};
+}
+
+double memory_limit_bytes(std::optional<double> limit_gb, std::string_view option) {
+  if (limit_gb && !(*limit_gb > 0 && std::isfinite(*limit_gb))) {
+    throw InputError(fmt::format("{} must be a finite number > 0 (GB), got {}", option, *limit_gb));
+  }
+  return limit_gb ? *limit_gb * 1e9 : default_memory_limit_bytes();
+}
+
+void check_memory(std::string_view what, double need_bytes, std::optional<double> limit_gb,
+                  std::string_view option, std::string_view advice) {
+  const double limit = memory_limit_bytes(limit_gb, option);
+  if (!(need_bytes <= limit)) {
+    throw InputError(fmt::format(
+        "{}: estimated memory {:.2f} GB exceeds the limit of {:.2f} GB ({}): {}; or raise {}", what,
+        need_bytes / 1e9, limit / 1e9, limit_gb ? option : "75 % of RAM", advice, option));
+  }
+}
+
+FeedTargets feed_targets(const Job& job, const FeedTargetRequest& r) {
+  FeedTargets t = default_feed_targets(job);
+  t.h_max_mm = r.h_max_mm;
+  t.mrr_mm3_per_min = r.mrr_mm3_per_min;
+  if (r.feed_step_percent) t.feed_step_percent = *r.feed_step_percent;
+  if (r.piece_mm) t.piece_mm = *r.piece_mm;
+  if (r.min_feed_mm_per_min) t.min_feed_mm_per_min = *r.min_feed_mm_per_min;
+  if (r.max_feed_mm_per_min) t.max_feed_mm_per_min = *r.max_feed_mm_per_min;
+  if (r.air_feed_mm_per_min) t.air_feed_mm_per_min = *r.air_feed_mm_per_min;
+  return t;
+}
+
+}  // namespace trochomill

@@ -1,0 +1,107 @@
+// The application layer: windows, memory limits and feed targets as the CLI and the Python
+// module resolve them, with the caller's option names in every message.
+#include "trochomill/app.hpp"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <string>
+
+#include "test_util.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
+
+using namespace trochomill;
+
+namespace {
+
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+// A window by cycles is the cycle marks' times; by times it is the times; none is the path.
+TEST(App, WindowsResolveToTheCyclesOrTheTimes) {
+  const Job job = load_job(test::example("wagih2023/trochoidal.toml"));
+  const ToolPath path = plan_path(job).path;
+  const auto& marks = path.cycles();
+  ASSERT_GT(marks.size(), 5u);
+  WindowRequest r;
+  r.cycles = std::pair{3LL, 5LL};
+  const auto [a, b] = resolve_window(path, r);
+  EXPECT_EQ(a, marks[3].start_time_s);
+  EXPECT_EQ(b, marks[5].start_time_s);
+  r.cycles = std::pair{0LL, static_cast<long long>(marks.size())};
+  EXPECT_EQ(resolve_window(path, r).second, path.duration_s());  // the last runs to the end
+  EXPECT_EQ(resolve_window(path, {}), (std::pair{0.0, path.duration_s()}));
+  EXPECT_EQ(resolve_window(path, {std::nullopt, 2.0, 7.5}), (std::pair{2.0, 7.5}));
+}
+
+// Each broken rule names the caller's option: the CLI's flags, Python's arguments.
+TEST(App, WindowErrorsNameTheCallersOptions) {
+  const Job job = load_job(test::example("wagih2023/trochoidal.toml"));
+  const ToolPath path = plan_path(job).path;
+  const WindowNames cli{"--cycles", "--from", "--to"};
+  WindowRequest both;
+  both.cycles = std::pair{1LL, 2LL};
+  both.from_s = 1.0;
+  EXPECT_EQ(message_of([&] { (void)resolve_window(path, both, cli); }),
+            "give --cycles or --from/--to, not both");
+  EXPECT_EQ(message_of([&] { (void)resolve_window(path, both); }),
+            "give cycles or from_s/to_s, not both");
+  WindowRequest huge;
+  huge.cycles = std::pair{99999999999LL, 1LL};  // beyond int: refused before any narrowing
+  EXPECT_NE(message_of([&] {
+              (void)resolve_window(path, huge, cli);
+            }).find("--cycles '99999999999:1': need 0 <= A < B <= "),
+            std::string::npos);
+  EXPECT_EQ(message_of([&] {
+              (void)resolve_window(path, {std::nullopt, -1.0, {}}, cli);
+            }),
+            "--from must be a finite time in [0, 1e9] s, got -1");
+  EXPECT_NE(message_of([&] {
+              (void)resolve_window(path, {std::nullopt, 5.0, 5.0}, cli);
+            }).find("--to must be after --from"),
+            std::string::npos);
+  EXPECT_EQ(parse_cycle_range("3:4", "--cycles"), (std::pair{3LL, 4LL}));
+  for (const char* bad : {"3", "3:", ":4", "a:4", "3:4x", "3 :4"}) {
+    EXPECT_EQ(message_of([&] { (void)parse_cycle_range(bad, "--cycles"); }),
+              std::string("--cycles '") + bad + "': expected A:B, e.g. 3:4");
+  }
+}
+
+TEST(App, MemoryChecksNameTheLimitAndItsSource) {
+  EXPECT_EQ(memory_limit_bytes(2.5, "--memory-limit"), 2.5e9);
+  EXPECT_EQ(memory_limit_bytes(std::nullopt, "--memory-limit"), default_memory_limit_bytes());
+  EXPECT_EQ(message_of([] { (void)memory_limit_bytes(0.0, "memory_limit_gb"); }),
+            "memory_limit_gb must be a finite number > 0 (GB), got 0");
+  EXPECT_NO_THROW(check_memory("simulate", 1e9, 1.0, "--memory-limit", "coarser"));
+  EXPECT_EQ(message_of([] { check_memory("simulate", 3e9, 1.0, "--memory-limit", "coarser"); }),
+            "simulate: estimated memory 3.00 GB exceeds the limit of 1.00 GB (--memory-limit): "
+            "coarser; or raise --memory-limit");
+  EXPECT_NE(message_of([] {
+              check_memory("plan", 1e18, std::nullopt, "memory_limit_gb", "x");
+            }).find("(75 % of RAM): x; or raise memory_limit_gb"),
+            std::string::npos);
+}
+
+// Given targets replace the job's; absent ones keep default_feed_targets'.
+TEST(App, FeedTargetsGoOverTheJobs) {
+  const Job job = load_job(test::example("wagih2023/trochoidal.toml"));
+  const FeedTargets d = default_feed_targets(job);
+  FeedTargetRequest r;
+  r.h_max_mm = 0.05;
+  r.max_feed_mm_per_min = 900;
+  const FeedTargets t = feed_targets(job, r);
+  EXPECT_EQ(t.h_max_mm, 0.05);
+  EXPECT_EQ(t.max_feed_mm_per_min, 900);
+  EXPECT_EQ(t.min_feed_mm_per_min, d.min_feed_mm_per_min);
+  EXPECT_EQ(t.piece_mm, d.piece_mm);
+  EXPECT_EQ(t.feed_step_percent, d.feed_step_percent);
+}
