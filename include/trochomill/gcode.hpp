@@ -32,14 +32,6 @@ struct GcodeWriteOptions {
 [[nodiscard]] std::string write_gcode(const Job& job, const ToolPath& path,
                                       const GcodeWriteOptions& options);
 
-/// One circular arc (or line) of a fit, in the XY plane at constant z (mm, rad).
-struct FitArc {
-  bool is_line = false;
-  Vec3 start, end;
-  double cx = 0, cy = 0, radius_mm = 0;
-  double sweep_rad = 0;  ///< signed, positive = counter-clockwise
-};
-
 /// Fits a planar (z = const) curve segment with tangent-continuous biarcs whose deviation
 /// from the curve is at most tolerance_mm. Returns the arcs in order.
 [[nodiscard]] std::vector<FitArc> fit_biarcs(const Segment& curve, double tolerance_mm);

@@ -154,6 +154,37 @@ struct Contour {
 [[nodiscard]] std::vector<Contour> offset_curve(const Contour& contour, double distance_mm,
                                                 double tolerance_mm);
 
+// ---------------------------------------------------------------------------------------------
+// Fitting curves with arcs
+
+/// One circular arc (or line) of a fit, in the XY plane at constant z (mm, rad).
+struct FitArc {
+  bool is_line = false;
+  Vec3 start, end;
+  double cx = 0, cy = 0, radius_mm = 0;
+  double sweep_rad = 0;  ///< signed, positive = counter-clockwise
+};
+/// A planar curve (z = const) by a parameter u: its point (mm) and unit tangent in the
+/// direction of travel (zero where it has none).
+class PlanarCurve {
+ public:
+  virtual ~PlanarCurve() = default;
+  [[nodiscard]] virtual Vec3 point(double u) const = 0;
+  [[nodiscard]] virtual Vec3 unit_tangent(double u) const = 0;
+};
+/// Tangent-continuous biarcs through the curve from u0 to u1 (split first into `pieces` equal
+/// spans of u, each halved until its biarc stays within 0.8 tolerance_mm of the curve at 24
+/// interior samples). The last arc ends exactly where the curve ends. Throws Error when a
+/// span cannot be fitted after 30 halvings (a feature below the tolerance).
+[[nodiscard]] std::vector<FitArc> fit_biarcs(const PlanarCurve& curve, double u0, double u1,
+                                             int pieces, double tolerance_mm);
+/// The end points of chords through the curve from u0 to u1 within tolerance_mm (the start
+/// not included).
+[[nodiscard]] std::vector<Vec3> fit_chords(const PlanarCurve& curve, double u0, double u1,
+                                           int pieces, double tolerance_mm);
+/// A fit's arc as a contour piece.
+[[nodiscard]] ContourPiece to_piece(const FitArc& arc);
+
 /// The area of a region given as its closed contours with orientation (mm^2): the sum of their
 /// signed areas (outer boundaries counter-clockwise, holes clockwise, as offset_region gives).
 [[nodiscard]] double region_area_mm2(const std::vector<Contour>& contours);

@@ -1,8 +1,5 @@
-// Biarc and chord fitting of planar curves within a deviation tolerance. Each piece
-// [u_a, u_b] gets the equal-tangent-length biarc through its end points with the curve's end
-// tangents; if the curve strays from it by more than the tolerance (checked at interior
-// samples, with a safety margin) the piece is halved. The result is tangent-continuous.
-#include <array>
+// Biarc and chord fits of a path's curve segments (gcode.hpp): the segment as a PlanarCurve
+// for the geometry module's fitters.
 #include <cmath>
 
 #include "trochomill/error.hpp"
@@ -11,141 +8,21 @@
 namespace trochomill {
 namespace {
 
-constexpr int kCheckSamples = 24;  // interior samples per piece for the deviation check
-constexpr double kSafety = 0.8;    // accept a piece below 0.8 * tolerance at the samples
-constexpr int kMaxDepth = 30;
+// A curve segment in its plane z = const, run from u0 to u1.
+class SegmentCurve final : public PlanarCurve {
+ public:
+  explicit SegmentCurve(const Segment& s) : s_(s) {}
+  [[nodiscard]] Vec3 point(double u) const override { return s_.point_u(u); }
+  [[nodiscard]] Vec3 unit_tangent(double u) const override {
+    Vec3 d = s_.derivative_u(u) * (s_.u1() >= s_.u0() ? 1.0 : -1.0);
+    d.z() = 0;
+    const double n = d.norm();
+    return n > 0 ? Vec3(d / n) : Vec3::Zero();
+  }
 
-double cross2(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
-
-// Arc from A with unit tangent T to B (planar, z = A.z).
-FitArc arc_from_tangent(const Vec3& A, const Vec3& T, const Vec3& B) {
-  FitArc arc;
-  arc.start = A;
-  arc.end = B;
-  const double cx = B.x() - A.x(), cy = B.y() - A.y();
-  const double chord2 = cx * cx + cy * cy;
-  const double nc = cross2(T.x(), T.y(), cx, cy);  // left normal n = (-Ty, Tx): n.c = T x c
-  if (std::abs(nc) <= 1e-12 * std::max(1.0, chord2)) {
-    arc.is_line = true;
-    return arc;
-  }
-  const double rho = chord2 / (2.0 * nc);  // signed radius, > 0 turns left (ccw)
-  arc.cx = A.x() - rho * T.y();
-  arc.cy = A.y() + rho * T.x();
-  arc.radius_mm = std::abs(rho);
-  arc.sweep_rad = 2.0 * std::atan2(nc, T.x() * cx + T.y() * cy);
-  return arc;
-}
-
-double distance_to_arc(const FitArc& arc, const Vec3& p) {
-  if (arc.is_line) {
-    const Vec3 d = arc.end - arc.start;
-    const double L2 = d.x() * d.x() + d.y() * d.y();
-    double t =
-        L2 > 0 ? ((p.x() - arc.start.x()) * d.x() + (p.y() - arc.start.y()) * d.y()) / L2 : 0;
-    t = std::clamp(t, 0.0, 1.0);
-    return std::hypot(p.x() - arc.start.x() - t * d.x(), p.y() - arc.start.y() - t * d.y());
-  }
-  const double a0 = std::atan2(arc.start.y() - arc.cy, arc.start.x() - arc.cx);
-  const double ap = std::atan2(p.y() - arc.cy, p.x() - arc.cx);
-  double rel = ap - a0;  // angle from the start in the arc's direction
-  if (arc.sweep_rad >= 0) {
-    rel = std::fmod(rel, 2 * M_PI);
-    if (rel < 0) rel += 2 * M_PI;
-  } else {
-    rel = std::fmod(-rel, 2 * M_PI);
-    if (rel < 0) rel += 2 * M_PI;
-  }
-  if (rel <= std::abs(arc.sweep_rad)) {
-    return std::abs(std::hypot(p.x() - arc.cx, p.y() - arc.cy) - arc.radius_mm);
-  }
-  return std::min(std::hypot(p.x() - arc.start.x(), p.y() - arc.start.y()),
-                  std::hypot(p.x() - arc.end.x(), p.y() - arc.end.y()));
-}
-
-Vec3 unit_tangent(const Segment& c, double u) {
-  Vec3 d = c.derivative_u(u) * (c.u1() >= c.u0() ? 1.0 : -1.0);
-  d.z() = 0;
-  const double n = d.norm();
-  return n > 0 ? Vec3(d / n) : Vec3::Zero();
-}
-
-// The equal-tangent-length biarc through P0 (tangent T0) and P1 (tangent T1).
-bool biarc(const Vec3& P0, const Vec3& T0, const Vec3& P1, const Vec3& T1, FitArc& a1, FitArc& a2) {
-  const Vec3 v = P1 - P0;
-  const Vec3 t = T0 + T1;
-  const double vt = v.dot(t), vv = v.dot(v), tt = t.dot(t);
-  double d;
-  const double denom = 4.0 - tt;  // = 2 - 2 T0.T1 >= 0
-  if (denom <= 1e-12) {
-    if (std::abs(vt) <= 1e-15) return false;
-    d = vv / (2.0 * vt);
-  } else {
-    d = (-vt + std::sqrt(vt * vt + denom * vv)) / denom;
-  }
-  if (!(d > 0) || !std::isfinite(d)) return false;
-  const Vec3 J = 0.5 * ((P0 + d * T0) + (P1 - d * T1));
-  a1 = arc_from_tangent(P0, T0, J);
-  // Second arc: from J to P1 with the tangent that arrives along T1; build it backwards.
-  FitArc back = arc_from_tangent(P1, -T1, J);
-  a2 = back;
-  a2.start = J;
-  a2.end = P1;
-  a2.sweep_rad = -back.sweep_rad;
-  return true;
-}
-
-void fit_piece(const Segment& c, double ua, double ub, double tol, int depth,
-               std::vector<FitArc>& out) {
-  const Vec3 P0 = c.point_u(ua), P1 = c.point_u(ub);
-  const Vec3 T0 = unit_tangent(c, ua), T1 = unit_tangent(c, ub);
-  FitArc a1, a2;
-  bool ok = T0.squaredNorm() > 0 && T1.squaredNorm() > 0 && biarc(P0, T0, P1, T1, a1, a2);
-  // A biarc arc turning 135 degrees or more over a piece this short is a loop, however close
-  // the curve's samples lie to it: halve the piece instead.
-  ok = ok && std::abs(a1.sweep_rad) < 0.75 * M_PI && std::abs(a2.sweep_rad) < 0.75 * M_PI;
-  if (ok) {
-    for (int k = 1; k < kCheckSamples && ok; ++k) {
-      const Vec3 p = c.point_u(ua + (ub - ua) * k / kCheckSamples);
-      ok = std::min(distance_to_arc(a1, p), distance_to_arc(a2, p)) <= kSafety * tol;
-    }
-  }
-  if (ok || depth >= kMaxDepth) {
-    if (!ok) {
-      throw Error("biarc fit did not converge: the curve has a feature below the tolerance");
-    }
-    out.push_back(a1);
-    out.push_back(a2);
-    return;
-  }
-  const double um = 0.5 * (ua + ub);
-  fit_piece(c, ua, um, tol, depth + 1, out);
-  fit_piece(c, um, ub, tol, depth + 1, out);
-}
-
-double chord_deviation(const Segment& c, double ua, double ub) {
-  const Vec3 A = c.point_u(ua), B = c.point_u(ub);
-  const Vec3 d = B - A;
-  const double L2 = d.squaredNorm();
-  double dev = 0;
-  for (int k = 1; k < kCheckSamples; ++k) {
-    const Vec3 p = c.point_u(ua + (ub - ua) * k / kCheckSamples);
-    const double t = L2 > 0 ? std::clamp((p - A).dot(d) / L2, 0.0, 1.0) : 0.0;
-    dev = std::max(dev, (p - A - t * d).norm());
-  }
-  return dev;
-}
-
-void chord_piece(const Segment& c, double ua, double ub, double tol, int depth,
-                 std::vector<Vec3>& out) {
-  if (chord_deviation(c, ua, ub) <= kSafety * tol || depth >= kMaxDepth) {
-    out.push_back(c.point_u(ub));
-    return;
-  }
-  const double um = 0.5 * (ua + ub);
-  chord_piece(c, ua, um, tol, depth + 1, out);
-  chord_piece(c, um, ub, tol, depth + 1, out);
-}
+ private:
+  const Segment& s_;
+};
 
 // Initial pieces: at most a quarter turn each, so every biarc spans a gentle piece.
 int initial_pieces(const Segment& c) {
@@ -159,27 +36,16 @@ std::vector<FitArc> fit_biarcs(const Segment& curve, double tolerance_mm) {
   if (curve.kind() != Segment::Kind::curve || !curve.is_flat_xy()) {
     throw Error("fit_biarcs needs a curve in a plane z = const");
   }
-  std::vector<FitArc> out;
-  const int n = initial_pieces(curve);
-  const double u0 = curve.u0(), du = (curve.u1() - curve.u0()) / n;
-  for (int i = 0; i < n; ++i)
-    fit_piece(curve, u0 + du * i, u0 + du * (i + 1), tolerance_mm, 0, out);
   // Exact end points: the last arc ends where the curve ends.
-  return out;
+  return fit_biarcs(SegmentCurve(curve), curve.u0(), curve.u1(), initial_pieces(curve),
+                    tolerance_mm);
 }
 
 std::vector<Vec3> fit_chords(const Segment& curve, double tolerance_mm) {
   if (!(tolerance_mm > 0)) throw InputError("arc tolerance must be > 0 mm");
-  std::vector<Vec3> out;
-  if (curve.kind() == Segment::Kind::line) {
-    out.push_back(curve.end());
-    return out;
-  }
-  const int n = initial_pieces(curve);
-  const double u0 = curve.u0(), du = (curve.u1() - curve.u0()) / n;
-  for (int i = 0; i < n; ++i)
-    chord_piece(curve, u0 + du * i, u0 + du * (i + 1), tolerance_mm, 0, out);
-  return out;
+  if (curve.kind() == Segment::Kind::line) return {curve.end()};
+  return fit_chords(SegmentCurve(curve), curve.u0(), curve.u1(), initial_pieces(curve),
+                    tolerance_mm);
 }
 
 }  // namespace trochomill
