@@ -7,6 +7,7 @@
 namespace trochomill::cli {
 
 void register_path_commands(CLI::App& app, int& exit_code);         // plan, path, check-gcode
+void register_geometry_commands(CLI::App& app, int& exit_code);     // check-drawing
 void register_analysis_commands(CLI::App& app, int& exit_code);     // analyze, compare
 void register_mechanism_commands(CLI::App& app, int& exit_code);    // mechanism, recommend
 void register_simulation_commands(CLI::App& app, int& exit_code);   // simulate, forces

@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", std::string("trochomill ") + trochomill::kVersion);
     app.require_subcommand(1);
     cli::register_path_commands(app, exit_code);
+    cli::register_geometry_commands(app, exit_code);
     cli::register_analysis_commands(app, exit_code);
     cli::register_mechanism_commands(app, exit_code);
     cli::register_simulation_commands(app, exit_code);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "trochomill/report/analysis.hpp"
+#include "trochomill/report/drawing.hpp"
 #include "trochomill/report/force.hpp"
 #include "trochomill/report/html.hpp"
 #include "trochomill/report/job.hpp"

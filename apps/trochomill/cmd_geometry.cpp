@@ -1,0 +1,44 @@
+// check-drawing: a CAD drawing's contours as trochomill reads them.
+#include <fmt/format.h>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/geometry/drawing.hpp"
+#include "trochomill/report/drawing.hpp"
+
+namespace trochomill::cli {
+
+void register_geometry_commands(CLI::App& app, int& exit_code) {
+  struct Args {
+    std::string file, json;
+    std::vector<std::string> layers;
+    DrawingOptions options;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "check-drawing",
+      "read a DXF drawing as trochomill does and list its contours (layer, open or closed, "
+      "orientation, length, area, the entities chained)");
+  cmd->add_option("FILE", a->file, "DXF file")->required();
+  cmd->add_option("--layer", a->layers, "read only this layer (repeatable)");
+  cmd->add_option("--join-tolerance", a->options.join_tolerance_mm,
+                  "ends closer than this are one point, mm")
+      ->capture_default_str()
+      ->check(finite_above(0, 100));
+  cmd->add_option("--arc-tolerance", a->options.arc_tolerance_mm,
+                  "splines and ellipses become arcs within this, mm")
+      ->capture_default_str()
+      ->check(finite_above(0, 100));
+  cmd->add_option("--json", a->json, "write the report as JSON (- for stdout)");
+  cmd->final_callback([a, &exit_code] {
+    check_outputs({&a->json}, {&a->file});
+    a->options.layers = a->layers;
+    const Drawing d = read_dxf(a->file, a->options);
+    if (!a->json.empty()) emit(a->json, drawing_json(d));
+    if (summary_to_stdout({&a->json})) fmt::print("{}", drawing_text(d));
+    exit_code = 0;
+  });
+}
+
+}  // namespace trochomill::cli

@@ -1,0 +1,433 @@
+// DXF drawings through libdxflib: entities into pieces (splines and ellipses fitted with
+// biarcs), the unit from $INSUNITS, then chained into contours (geometry/drawing.hpp).
+#include <dxflib/dl_creationadapter.h>
+#include <dxflib/dl_dxf.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "trochomill/error.hpp"
+#include "trochomill/geometry/drawing.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+// $INSUNITS: mm per unit and the unit's name; nothing for a code trochomill does not know.
+std::optional<std::pair<double, const char*>> insunits(int code) {
+  switch (code) {
+    case 0:
+      return std::pair{1.0, "unitless (read as mm)"};
+    case 1:
+      return std::pair{25.4, "in"};
+    case 2:
+      return std::pair{304.8, "ft"};
+    case 4:
+      return std::pair{1.0, "mm"};
+    case 5:
+      return std::pair{10.0, "cm"};
+    case 6:
+      return std::pair{1000.0, "m"};
+    case 8:
+      return std::pair{25.4e-6, "microinch"};
+    case 9:
+      return std::pair{0.0254, "mil"};
+    case 10:
+      return std::pair{914.4, "yd"};
+    case 13:
+      return std::pair{1e-3, "micron"};
+    case 14:
+      return std::pair{100.0, "dm"};
+    default:
+      return std::nullopt;
+  }
+}
+
+// A NURBS curve in the plane (de Boor on homogeneous points), its tangent by central
+// differences over a millionth of the parameter range.
+class Nurbs final : public PlanarCurve {
+ public:
+  Nurbs(int degree, std::vector<double> knots, std::vector<Vec3> ctrl, std::vector<double> w)
+      : p_(degree), u_(std::move(knots)), c_(std::move(ctrl)), w_(std::move(w)) {}
+  [[nodiscard]] double u0() const { return u_[static_cast<std::size_t>(p_)]; }
+  [[nodiscard]] double u1() const { return u_[c_.size()]; }
+  [[nodiscard]] Vec3 point(double u) const override {
+    u = std::clamp(u, u0(), u1());
+    // The knot span: u in [U_k, U_k+1), the last span closed at its end.
+    std::size_t k = static_cast<std::size_t>(p_);
+    while (k + 1 < c_.size() && u >= u_[k + 1]) ++k;
+    std::vector<Eigen::Vector3d> d(static_cast<std::size_t>(p_) + 1);  // (w x, w y, w)
+    for (std::size_t j = 0; j <= static_cast<std::size_t>(p_); ++j) {
+      const std::size_t i = k - static_cast<std::size_t>(p_) + j;
+      d[j] = Eigen::Vector3d(w_[i] * c_[i].x(), w_[i] * c_[i].y(), w_[i]);
+    }
+    for (int r = 1; r <= p_; ++r) {
+      for (int j = p_; j >= r; --j) {
+        const std::size_t i = k - static_cast<std::size_t>(p_) + static_cast<std::size_t>(j);
+        const double den = u_[i + static_cast<std::size_t>(p_ - r) + 1] - u_[i];
+        const double a = den > 0 ? (u - u_[i]) / den : 0.0;
+        d[static_cast<std::size_t>(j)] =
+            (1 - a) * d[static_cast<std::size_t>(j - 1)] + a * d[static_cast<std::size_t>(j)];
+      }
+    }
+    const Eigen::Vector3d& q = d[static_cast<std::size_t>(p_)];
+    return Vec3(q.x() / q.z(), q.y() / q.z(), c_.front().z());
+  }
+  [[nodiscard]] Vec3 unit_tangent(double u) const override {
+    const double h = 1e-6 * (u1() - u0());
+    const double a = std::max(u0(), u - h), b = std::min(u1(), u + h);
+    Vec3 t = point(b) - point(a);
+    t.z() = 0;
+    const double n = t.norm();
+    return n > 0 ? Vec3(t / n) : Vec3::Zero();
+  }
+
+ private:
+  int p_;
+  std::vector<double> u_;
+  std::vector<Vec3> c_;
+  std::vector<double> w_;
+};
+
+// An elliptical arc: c + M cos t + m sin t, t from t0 to t1.
+class EllipseCurve final : public PlanarCurve {
+ public:
+  EllipseCurve(Vec3 c, Vec3 major, Vec3 minor) : c_(c), a_(major), b_(minor) {}
+  [[nodiscard]] Vec3 point(double t) const override {
+    return c_ + a_ * std::cos(t) + b_ * std::sin(t);
+  }
+  [[nodiscard]] Vec3 unit_tangent(double t) const override {
+    const Vec3 d = -a_ * std::sin(t) + b_ * std::cos(t);
+    const double n = d.norm();
+    return n > 0 ? Vec3(d / n) : Vec3::Zero();
+  }
+
+ private:
+  Vec3 c_, a_, b_;
+};
+
+class Reader final : public DL_CreationAdapter {
+ public:
+  Reader(std::string source, const DrawingOptions& o) : src_(std::move(source)), o_(o) {}
+
+  std::vector<DrawnPiece> pieces;
+  std::vector<std::string> problems;
+  std::optional<int> insunits_code;
+  std::vector<std::string> seen_layers;  ///< of every entity, chosen or not
+
+  void setVariableInt(const std::string& key, int value, int) override {
+    if (key == "$INSUNITS") insunits_code = value;
+  }
+  void addBlock(const DL_BlockData&) override {
+    flush();
+    in_block_ = true;
+  }
+  void endBlock() override {
+    flush();
+    in_block_ = false;
+  }
+  // A spline is whole at its entity's end; a polyline's vertices may follow as entities of
+  // their own (POLYLINE ... VERTEX ... SEQEND): it is whole when the next entity begins.
+  void endEntity() override {
+    if (spline_) finish_spline();
+  }
+  void endSequence() override { flush(); }
+
+  void addLine(const DL_LineData& d) override {
+    if (!begin("LINE")) return;
+    if (d.z1 != d.z2)
+      return problem("a line out of the XY plane (its ends at z {} and {})", d.z1, d.z2);
+    add(ContourPiece::line(xy(d.x1, d.y1), xy(d.x2, d.y2)));
+  }
+  void addArc(const DL_ArcData& d) override {
+    if (!begin("ARC")) return;
+    if (!(d.radius > 0)) return problem("an arc of radius {}", d.radius);
+    const double a0 = deg_to_rad(d.angle1), a1 = deg_to_rad(d.angle2);
+    const Vec2 c = xy(d.cx, d.cy);
+    const double r = d.radius;
+    const Vec2 s = c + r * dir(a0), e = c + r * dir(a1);
+    add(ContourPiece::arc(s, e, c, true));
+  }
+  void addCircle(const DL_CircleData& d) override {
+    if (!begin("CIRCLE")) return;
+    if (!(d.radius > 0)) return problem("a circle of radius {}", d.radius);
+    const Vec2 c = xy(d.cx, d.cy);
+    const Vec2 a = c + Vec2(d.radius, 0), b = c - Vec2(d.radius, 0);
+    add(ContourPiece::arc(a, b, c, true));
+    add(ContourPiece::arc(b, a, c, true));
+  }
+  void addPolyline(const DL_PolylineData& d) override {
+    if (!begin("POLYLINE")) return;
+    if (d.flags & (16 | 64)) return problem("a polygon mesh or polyface (not a 2D polyline)");
+    poly_ = Poly{};
+    poly_->closed = (d.flags & 1) != 0;
+  }
+  void addVertex(const DL_VertexData& d) override {
+    if (!poly_) return;
+    poly_->v.push_back({xy(d.x, d.y), d.bulge, d.z});
+  }
+  void addSpline(const DL_SplineData& d) override {
+    if (!begin("SPLINE")) return;
+    spline_ = Spline{};
+    spline_->degree = static_cast<int>(d.degree);
+    spline_->fit = d.nFit;
+  }
+  void addKnot(const DL_KnotData& d) override {
+    if (spline_) spline_->knots.push_back(d.k);
+  }
+  void addControlPoint(const DL_ControlPointData& d) override {
+    if (spline_) {
+      spline_->ctrl.emplace_back(d.x, d.y, d.z);
+      spline_->w.push_back(d.w);
+    }
+  }
+  void addEllipse(const DL_EllipseData& d) override {
+    if (!begin("ELLIPSE")) return;
+    if (!(d.ratio > 0 && d.ratio <= 1)) return problem("an ellipse of axis ratio {}", d.ratio);
+    const Vec2 c = xy(d.cx, d.cy), m = xy(d.mx, d.my);
+    if (!(m.norm() > 0)) return problem("an ellipse with no major axis");
+    // The minor axis: the major turned a quarter counter-clockwise, scaled by the ratio.
+    const Vec2 minor = d.ratio * Vec2(-m.y(), m.x());
+    const double t0 = d.angle1;
+    double t1 = d.angle2;
+    while (t1 <= t0) t1 += kTwoPi;
+    const EllipseCurve curve(Vec3(c.x(), c.y(), 0), Vec3(m.x(), m.y(), 0),
+                             Vec3(minor.x(), minor.y(), 0));
+    fit(curve, t0, t1, std::max(1, static_cast<int>(std::ceil((t1 - t0) / (0.5 * kPi)))));
+  }
+  void addInsert(const DL_InsertData& d) override {
+    if (!begin("INSERT")) return;
+    problem("an INSERT of block '{}': blocks are not read (explode the block in the CAD tool)",
+            d.name);
+  }
+
+  void flush() {
+    if (poly_) finish_polyline();
+    if (spline_) finish_spline();
+  }
+
+ private:
+  struct Poly {
+    struct V {
+      Vec2 p;
+      double bulge, z;
+    };
+    std::vector<V> v;
+    bool closed = false;
+  };
+  struct Spline {
+    int degree = 0;
+    unsigned fit = 0;
+    std::vector<double> knots, w;
+    std::vector<Vec3> ctrl;
+  };
+
+  template <typename... A>
+  void problem(fmt::format_string<A...> f, A&&... a) {
+    problems.push_back(fmt::format("{}: {} on layer '{}': {}", src_, entity_, layer_,
+                                   fmt::format(f, std::forward<A>(a)...)));
+  }
+
+  // Starts an entity: its name for messages, its layer, its plane. False: skip it.
+  bool begin(const char* kind) {
+    flush();
+    if (in_block_) return false;
+    const DL_Attributes& at = getAttributes();
+    entity_ = fmt::format("{} #{:X}", kind, at.getHandle() < 0 ? 0 : at.getHandle());
+    layer_ = at.getLayer();
+    seen_layers.push_back(layer_);
+    const double* z = getExtrusion()->getDirection();
+    mirrored_ = false;
+    if (std::abs(z[0]) > 1e-9 || std::abs(z[1]) > 1e-9 || z[2] == 0) {
+      problem("out of the XY plane (its extrusion is ({}, {}, {}))", z[0], z[1], z[2]);
+      return false;
+    }
+    mirrored_ = z[2] < 0;  // the entity's own x runs along -X
+    if (!o_.layers.empty() &&
+        std::none_of(o_.layers.begin(), o_.layers.end(),
+                     [&](const std::string& l) { return same_name(l, layer_); })) {
+      return false;
+    }
+    return true;
+  }
+
+  // Points in the entity's own coordinates; add() takes pieces into the drawing's (mm).
+  static Vec2 xy(double x, double y) { return {x, y}; }
+  static Vec2 dir(double a) { return {std::cos(a), std::sin(a)}; }
+  // A piece from the entity's coordinates into the drawing's: mirrored (x -> -x, turning the
+  // other way) when the entity's extrusion is -Z, scaled to mm.
+  void add(ContourPiece p) {
+    const auto place = [&](Vec2& v) { v = unit_ * Vec2(mirrored_ ? -v.x() : v.x(), v.y()); };
+    place(p.start);
+    place(p.end);
+    if (p.centre) place(*p.centre);
+    if (mirrored_) p.ccw = !p.ccw;
+    if (p.start == p.end && !p.is_arc()) return;  // a zero-length line joins nothing
+    pieces.push_back({p, layer_, entity_});
+  }
+
+  // Biarcs within the arc tolerance (in the entity's units: the tolerance divided by the unit).
+  void fit(const PlanarCurve& c, double u0, double u1, int n) {
+    try {
+      for (const FitArc& a : fit_biarcs(c, u0, u1, n, o_.arc_tolerance_mm / unit_)) {
+        add(to_piece(a));
+      }
+    } catch (const Error& e) {
+      problem("cannot be fitted with arcs within {} mm ({})", o_.arc_tolerance_mm, e.what());
+    }
+  }
+
+  void finish_polyline() {
+    Poly p = std::move(*poly_);
+    poly_.reset();
+    for (std::size_t i = 1; i < p.v.size(); ++i) {
+      if (p.v[i].z != p.v[0].z) return problem("a polyline out of the XY plane");
+    }
+    const std::size_t n = p.v.size();
+    const std::size_t segs = p.closed ? n : (n == 0 ? 0 : n - 1);
+    for (std::size_t i = 0; i < segs; ++i) {
+      const auto &a = p.v[i], &b = p.v[(i + 1) % n];
+      if (a.bulge == 0 || (a.p - b.p).norm() == 0) {
+        add(ContourPiece::line(a.p, b.p));
+        continue;
+      }
+      // bulge = tan(sweep / 4); the centre off the chord's middle along its left normal by
+      // (d / 2) / tan(sweep / 2) (negative: to the right).
+      const double th = 4 * std::atan(a.bulge);
+      const Vec2 ch = b.p - a.p;
+      const double d = ch.norm();
+      const Vec2 left(-ch.y() / d, ch.x() / d);
+      const Vec2 c = 0.5 * (a.p + b.p) + left * (0.5 * d / std::tan(0.5 * th));
+      add(ContourPiece::arc(a.p, b.p, c, th > 0));
+    }
+  }
+
+  void finish_spline() {
+    Spline s = std::move(*spline_);
+    spline_.reset();
+    const std::size_t nc = s.ctrl.size();
+    if (nc == 0 && s.fit > 0) {
+      return problem(
+          "a spline given by fit points only; save it with its control points (or as a polyline)");
+    }
+    if (s.degree < 1 || nc < static_cast<std::size_t>(s.degree) + 1 ||
+        s.knots.size() != nc + static_cast<std::size_t>(s.degree) + 1) {
+      return problem(
+          "a spline of degree {} with {} control points and {} knots (need "
+          "degree >= 1, degree + 1 control points or more, control points + degree "
+          "+ 1 knots)",
+          s.degree, nc, s.knots.size());
+    }
+    for (std::size_t i = 0; i < nc; ++i) {
+      if (!(s.w[i] > 0) || !std::isfinite(s.w[i])) {
+        return problem("control point {} has the weight {} (need > 0)", i + 1, s.w[i]);
+      }
+      if (s.ctrl[i].z() != s.ctrl[0].z()) return problem("a spline out of the XY plane");
+    }
+    for (std::size_t i = 1; i < s.knots.size(); ++i) {
+      if (!(s.knots[i] >= s.knots[i - 1])) return problem("its knots decrease at knot {}", i + 1);
+    }
+    const Nurbs curve(s.degree, s.knots, s.ctrl, s.w);
+    if (!(curve.u1() > curve.u0())) return problem("its knots span no parameter range");
+    fit(curve, curve.u0(), curve.u1(), static_cast<int>(std::max<std::size_t>(4, nc)));
+  }
+
+  static bool same_name(const std::string& a, const std::string& b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+             return std::tolower(static_cast<unsigned char>(x)) ==
+                    std::tolower(static_cast<unsigned char>(y));
+           });
+  }
+
+  std::string src_;
+  const DrawingOptions& o_;
+  bool in_block_ = false, mirrored_ = false;
+  std::string entity_, layer_;
+  std::optional<Poly> poly_;
+  std::optional<Spline> spline_;
+
+ public:
+  double unit_ = 1;
+};
+
+// The unit first ($INSUNITS is in the header, before any entity; a second pass is cheap).
+void read_units(const std::string& text, Drawing& d, const std::string& source) {
+  struct Units final : public DL_CreationAdapter {
+    std::optional<int> code;
+    void setVariableInt(const std::string& key, int value, int) override {
+      if (key == "$INSUNITS") code = value;
+    }
+  } u;
+  std::istringstream in(text);
+  DL_Dxf().in(in, &u);
+  if (!u.code) u.code = 0;
+  const auto unit = insunits(*u.code);
+  if (!unit) {
+    throw InputError(fmt::format(
+        "{}: $INSUNITS {} is a unit trochomill does not read (0 unitless, 1 in, 2 ft, 4 mm, "
+        "5 cm, 6 m, 8 microinch, 9 mil, 10 yd, 13 micron, 14 dm)",
+        source, *u.code));
+  }
+  d.mm_per_unit = unit->first;
+  d.units = unit->second;
+}
+
+}  // namespace
+
+Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& options) {
+  const std::string source = file.string();
+  std::ifstream f(file, std::ios::binary);
+  if (!f) throw InputError(fmt::format("{}: cannot open the DXF file", source));
+  std::stringstream buf;
+  buf << f.rdbuf();
+  const std::string text = buf.str();
+  if (!(options.arc_tolerance_mm > 0) || !(options.join_tolerance_mm > 0)) {
+    throw InputError("drawing: the arc and join tolerances must be > 0 mm");
+  }
+  Drawing d;
+  d.file = file;
+  read_units(text, d, source);
+  Reader r(source, options);
+  r.unit_ = d.mm_per_unit;
+  std::istringstream in(text);
+  DL_Dxf dxf;
+  dxf.in(in, &r);
+  r.flush();
+  if (!r.problems.empty()) throw InputError(r.problems);
+  std::vector<std::string>& seen = r.seen_layers;
+  std::sort(seen.begin(), seen.end());
+  seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+  if (r.pieces.empty() && options.layers.empty()) {
+    throw InputError(fmt::format("{}: no line, arc or curve in it (is it a DXF file?)", source));
+  }
+  for (const DrawnPiece& p : r.pieces) d.layers.push_back(p.layer);
+  std::sort(d.layers.begin(), d.layers.end());
+  d.layers.erase(std::unique(d.layers.begin(), d.layers.end()), d.layers.end());
+  for (const std::string& want : options.layers) {
+    const bool found = std::any_of(d.layers.begin(), d.layers.end(), [&](const std::string& l) {
+      return l.size() == want.size() &&
+             std::equal(l.begin(), l.end(), want.begin(), [](char x, char y) {
+               return std::tolower(static_cast<unsigned char>(x)) ==
+                      std::tolower(static_cast<unsigned char>(y));
+             });
+    });
+    if (!found) {
+      throw InputError(fmt::format(
+          "{}: no line, arc or curve on layer '{}' (the layers with entities: {})", source, want,
+          seen.empty() ? std::string("none") : fmt::format("{}", fmt::join(seen, ", "))));
+    }
+  }
+  try {
+    d.contours = chain_pieces(std::move(r.pieces), options.join_tolerance_mm);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", source, e.what()));
+  }
+  return d;
+}
+
+}  // namespace trochomill
