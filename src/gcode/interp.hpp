@@ -1,7 +1,8 @@
 // The RS274/NGC interpreter (private to src/gcode): its state as one struct, InterpState, and
 // the class that runs a program line by line, Interpreter. Its parts are in files by concern
 // as LinuxCNC splits its own (interp_read, interp_convert, interp_cycles, interp_o_word, ...):
-//  - interp.cpp: the driver: lines, messages, a line and its block in LinuxCNC's order.
+//  - interp.cpp: the driver: lines, messages, a line and its block in LinuxCNC's order;
+//  - interp_expr.cpp: values: numbers, parameters, [expressions], functions.
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -132,7 +133,7 @@ class Interpreter : private InterpState {
   void execute();
   void end_program() { ended_ = true; }
 
-  // ---- interp.cpp: values: numbers, parameters, [expressions], functions
+  // ---- interp_expr.cpp: values: numbers, parameters, [expressions], functions
   double read_number(std::size_t& i);
   double checked(double v, std::size_t at) const;
   double read_value(std::size_t& i);
