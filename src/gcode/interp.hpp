@@ -2,7 +2,8 @@
 // the class that runs a program line by line, Interpreter. Its parts are in files by concern
 // as LinuxCNC splits its own (interp_read, interp_convert, interp_cycles, interp_o_word, ...):
 //  - interp.cpp: the driver: lines, messages, a line and its block in LinuxCNC's order;
-//  - interp_expr.cpp: values: numbers, parameters, [expressions], functions.
+//  - interp_expr.cpp: values: numbers, parameters, [expressions], functions;
+//  - interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73.
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -155,7 +156,7 @@ class Interpreter : private InterpState {
   std::optional<double> predefined(const std::string& name) const;
   void set_named(const std::string& name, double v, std::uint32_t column);
 
-  // ---- interp.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73
+  // ---- interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73
   void read_block(std::size_t i);
   static char upper(char c) { return static_cast<char>(c - 'a' + 'A'); }
   void check_fanuc_write(int index, std::size_t at, double v) const;
