@@ -3,7 +3,8 @@
 // as LinuxCNC splits its own (interp_read, interp_convert, interp_cycles, interp_o_word, ...):
 //  - interp.cpp: the driver: lines, messages, a line and its block in LinuxCNC's order;
 //  - interp_expr.cpp: values: numbers, parameters, [expressions], functions;
-//  - interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73.
+//  - interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73;
+//  - interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30.
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -172,7 +173,7 @@ class Interpreter : private InterpState {
   void save_modal(ModalSave& m) const;
   void restore_modal(const ModalSave& m);
 
-  // ---- interp.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30
+  // ---- interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30
   // Parameters of a coordinate system n (1 = G54 .. 9 = G59.3): X at 5201 + 20 n, R at 5210 +
   // 20 n. G92: 5211-5213, enabled at 5210. G28: 5161-5163, G30: 5181-5183. All mm.
   static std::size_t sys_param(int n, int axis) {
