@@ -4,7 +4,8 @@
 //  - interp.cpp: the driver: lines, messages, a line and its block in LinuxCNC's order;
 //  - interp_expr.cpp: values: numbers, parameters, [expressions], functions;
 //  - interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73;
-//  - interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30.
+//  - interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30;
+//  - interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49).
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -193,7 +194,7 @@ class Interpreter : private InterpState {
   void note_given(int n) { system_warned_[static_cast<std::size_t>(n - 1)] = true; }
   void home_move(int g, std::uint32_t column);
 
-  // ---- interp.cpp: the tool table and tool length offsets (G43, G43.1, G49)
+  // ---- interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49)
   void tool_length_offset(int g);
   void note_tool_length(const char* what);
 
