@@ -5,7 +5,8 @@
 //  - interp_expr.cpp: values: numbers, parameters, [expressions], functions;
 //  - interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73;
 //  - interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30;
-//  - interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49).
+//  - interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49);
+//  - interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace.
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -198,7 +199,7 @@ class Interpreter : private InterpState {
   void tool_length_offset(int g);
   void note_tool_length(const char* what);
 
-  // ---- interp.cpp: motion: end points, feeds, lines and arcs into the path and the trace
+  // ---- interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace
   Vec3 ends(bool g53);
   void move(bool g53, std::uint32_t column);
   double feed_for(double length_mm, std::uint32_t column);
