@@ -6,7 +6,8 @@
 //  - interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73;
 //  - interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30;
 //  - interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49);
-//  - interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace.
+//  - interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace;
+//  - interp_cutcomp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue.
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -220,7 +221,7 @@ class Interpreter : private InterpState {
   void put_arc(const Vec3& from, const ArcData& d, double axial, double f, std::uint32_t column,
                std::size_t source, std::size_t line, bool xy, const Vec3* exact_end = nullptr);
 
-  // ---- interp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue
+  // ---- interp_cutcomp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue
   // (its state, below: LinuxCNC keeps it in its setup too)
   enum class CompSide { off, left, right };
 
