@@ -7,7 +7,8 @@
 //  - interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30;
 //  - interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49);
 //  - interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace;
-//  - interp_cutcomp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue.
+//  - interp_cutcomp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue;
+//  - interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89).
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -264,7 +265,7 @@ class Interpreter : private InterpState {
   [[noreturn]] void concave_after_stop(std::uint32_t column) const;
   void comp_arc(const Vec3& p, std::uint32_t column);
 
-  // ---- interp.cpp: canned cycles (G73 G74 G76 G81-G89)
+  // ---- interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89)
   void canned_cycle(int g, std::uint32_t column);
   [[nodiscard]] ArcData plane_axes() const;
   void note_fanuc_shift(const std::string& name);
