@@ -8,7 +8,8 @@
 //  - interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49);
 //  - interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace;
 //  - interp_cutcomp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue;
-//  - interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89).
+//  - interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89);
+//  - interp_macro.cpp: Fanuc Macro B (GOTO, IF, WHILE, G65) and subprograms (M98/M99).
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -271,7 +272,7 @@ class Interpreter : private InterpState {
   void note_fanuc_shift(const std::string& name);
   void line_to(const Vec3& target, bool rapid, std::uint32_t column);
 
-  // ---- interp.cpp: Fanuc Macro B (GOTO, IF, WHILE, G65) and subprograms (M98/M99)
+  // ---- interp_macro.cpp: Fanuc Macro B (GOTO, IF, WHILE, G65) and subprograms (M98/M99)
   bool fanuc_statement(std::size_t i);
   void fanuc_end(std::size_t i) const;
   std::string loop_id(std::size_t& i);
