@@ -9,7 +9,8 @@
 //  - interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace;
 //  - interp_cutcomp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue;
 //  - interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89);
-//  - interp_macro.cpp: Fanuc Macro B (GOTO, IF, WHILE, G65) and subprograms (M98/M99).
+//  - interp_macro.cpp: Fanuc Macro B (GOTO, IF, WHILE, G65) and subprograms (M98/M99);
+//  - interp_oword.cpp: O-words: subroutines, calls, if, loops.
 // interp_types.hpp has the data types they share.
 #pragma once
 
@@ -285,7 +286,7 @@ class Interpreter : private InterpState {
   static void index_programs(Source& src);
   Frame program_frame(double n, std::uint32_t column);
 
-  // ---- interp.cpp: O-words: subroutines, calls, if, loops
+  // ---- interp_oword.cpp: O-words: subroutines, calls, if, loops
   bool o_statement(std::size_t i);
   void run_after_program_number();
   std::optional<double> o_value(std::size_t& i);
