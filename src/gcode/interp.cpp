@@ -89,7 +89,7 @@ GcodeProgram Interpreter::run() {
     fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
                            frames_.back().label));
   }
-  dequeue();  // compensated moves still waiting run as they are
+  comp_.dequeue();  // compensated moves still waiting run as they are
   prog_.info.lines = std::max(prog_.info.lines, main_lines_);
   if (prog_.path.empty() && prog_.summary.segments == 0) {
     throw InputError(
@@ -215,7 +215,7 @@ void Interpreter::execute() {
       continue;
     }
     if (g == 610 || g == 611 || g == 640) {
-      refuse_with_comp(column, fmt::format("{} (path control mode)", code_name('G', g)));
+      comp_.refuse(column, fmt::format("{} (path control mode)", code_name('G', g)));
       continue;  // path blending: no effect on the path
     }
     if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
@@ -226,7 +226,7 @@ void Interpreter::execute() {
     if (it == kGroupOf.end()) unsupported_g(g, column);
     const auto k = static_cast<std::size_t>(it->group);
     if (it->group == kRetract) {
-      refuse_with_comp(column, fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
+      comp_.refuse(column, fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
     }
     // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
     if (it->group == kMotion && (code[k] == 800 || g == 800) && code[k] != g) {
@@ -298,7 +298,7 @@ void Interpreter::execute() {
         spindle_dir_ = 0;
         break;
       case 60:
-        refuse_with_comp(column, "M6 (a tool change)");
+        comp_.refuse(column, "M6 (a tool change)");
         tool_loaded_ = tool_selected_;
         break;
       case 70:
@@ -318,7 +318,7 @@ void Interpreter::execute() {
       case 670:
       case 680:
         // Outputs wait for motion to stop, which a compensated path cannot (LinuxCNC).
-        refuse_with_comp(column, fmt::format("{} (a motion output)", code_name('M', m)));
+        comp_.refuse(column, fmt::format("{} (a motion output)", code_name('M', m)));
         break;
       case 980: {
         if (!fanuc_) {
@@ -380,7 +380,7 @@ void Interpreter::execute() {
   }
   if (dwell >= 0 && !block_.has('p')) fail_at(block_.g.front().column, "G4 needs P (seconds)");
   if (plane >= 0) {
-    if (plane != 170) refuse_with_comp(block_.g.front().column, "a plane change (G18/G19)");
+    if (plane != 170) comp_.refuse(block_.g.front().column, "a plane change (G18/G19)");
     plane_ = plane == 170 ? Plane::xy : plane == 180 ? Plane::zx : Plane::yz;
   }
   if (units >= 0) {
@@ -388,16 +388,16 @@ void Interpreter::execute() {
     if (unit_ != 1.0) prog_.info.inch_units_seen = true;
   }
   if (comp == 400) {
-    comp_stop();
+    comp_.stop();
   } else if (comp >= 0) {
-    comp_start(comp, comp_col);
+    comp_.start(comp, comp_col);
   }
   if (tool_length >= 0) {
-    refuse_with_comp(tool_length_col, "a tool length offset change (G43/G43.1/G49)");
+    comp_.refuse(tool_length_col, "a tool length offset change (G43/G43.1/G49)");
     tool_length_offset(tool_length);
   }
   if (system >= 0) {
-    refuse_with_comp(system_col, "a coordinate system change (G54-G59.3)");
+    comp_.refuse(system_col, "a coordinate system change (G54-G59.3)");
     select_system(system);
   }
   if (distance >= 0) absolute_ = distance == 900;
@@ -405,7 +405,7 @@ void Interpreter::execute() {
   if (retract >= 0) retract_r_ = retract == 990;
   if (group0 >= 0) {
     if (group0 != 100) {
-      refuse_with_comp(group0_col, fmt::format("{}", code_name('G', group0)));
+      comp_.refuse(group0_col, fmt::format("{}", code_name('G', group0)));
     }
     non_modal(group0, group0_col);
   }
@@ -429,10 +429,10 @@ void Interpreter::execute() {
     }
     ++prog_.info.motion_blocks;
     if (motion_ >= 730) {
-      refuse_with_comp(motion >= 0        ? motion_col
-                       : block_.g.empty() ? 0
-                                          : block_.g.front().column,
-                       "a canned cycle");
+      comp_.refuse(motion >= 0        ? motion_col
+                   : block_.g.empty() ? 0
+                                      : block_.g.front().column,
+                   "a canned cycle");
       canned_cycle(motion_, motion >= 0 ? motion_col
                                         : block_.col(block_.has('x')   ? 'x'
                                                      : block_.has('y') ? 'y'
@@ -454,8 +454,8 @@ void Interpreter::execute() {
   }
   check_unused(group0, dwell, tool_length, comp > 400);
   if (stop || pause) {
-    comp_flush_at_stop(block_.m.front().column);
-    if (stop) comp_side_ = CompSide::off, comp_first_ = true;
+    comp_.flush_at_stop(block_.m.front().column);
+    if (stop) comp_.turn_off();
   }
   if (stop) end_program();
   if (pending_m98_ && !ended_) subprogram_call();

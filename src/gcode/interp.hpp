@@ -119,6 +119,77 @@ struct InterpState {
   GcodeProgram prog_;
 };
 
+class Interpreter;
+
+// Cutter radius compensation (G41/G42, G41.1/G42.1, G40) as LinuxCNC runs it
+// (interp_cutcomp.cpp): its own state and the queue of moves that wait for their corner. It
+// reads the interpreter's block and modal state and emits its moves through the interpreter.
+class CutterComp {
+ public:
+  explicit CutterComp(Interpreter& interp) : interp_(interp) {}
+
+  [[nodiscard]] bool on() const { return side_ != Side::off; }
+  [[nodiscard]] bool moves() const { return on() && radius_ > 0; }
+  // The position LinuxCNC reports as #<_x> #<_y> #<_z>: the tool centre while compensation
+  // runs (Fanuc's #5041-#5043 too).
+  [[nodiscard]] const Vec3& current() const;
+  void refuse(std::uint32_t column, const std::string& what) const;
+  void start(int g, std::uint32_t column);
+  void stop();
+  void flush_at_stop(std::uint32_t column);
+  // Off without a move, as the program ends (M2, M30).
+  void turn_off() {
+    side_ = Side::off;
+    first_ = true;
+  }
+  void line(const Vec3& p, bool rapid, std::uint32_t column);
+  void arc(const Vec3& p, std::uint32_t column);
+  void dequeue();
+  // The move right after G40 must be straight (the tool is not at the programmed point).
+  [[nodiscard]] bool arc_not_allowed() const { return arc_not_allowed_; }
+  void allow_arcs() { arc_not_allowed_ = false; }
+
+ private:
+  enum class Side { off, left, right };
+
+  struct QueuedMove {
+    GcodeMove::Kind kind = GcodeMove::Kind::feed;
+    Vec3 end = Vec3::Zero();    // program mm
+    double d1 = 0, d2 = 0;      // lines: the direction the end may not turn against
+    double c1 = 0, c2 = 0;      // arcs: the centre
+    int turn = 0;               // arcs: turns, positive counterclockwise (LinuxCNC's)
+    double original_sweep = 0;  // arcs: the sweep as queued (rad); 0: never checked
+    double feed = 0;            // mm/min
+    std::size_t source = 0, line = 0;
+    std::uint32_t column = 0;
+  };
+
+  static constexpr double kConcaveTol = 0.05;  // rad, LinuxCNC's TOLERANCE_CONCAVE_CORNER
+
+  [[nodiscard]] bool left() const { return side_ == Side::left; }
+  // The tool is inside an arc of this turning sense: left of a counterclockwise one.
+  [[nodiscard]] bool inside(int turn) const { return left() ? turn > 0 : turn < 0; }
+  static double find_turn(double x1, double y1, double cx, double cy, int turn, double x2,
+                          double y2);
+  void enqueue(QueuedMove q, std::uint32_t column);
+  void set_endpoint(double x, double y);
+  void move_endpoint_and_flush(double x, double y, std::uint32_t column);
+  [[noreturn]] void gouge(std::uint32_t column, const char* what) const;
+  [[noreturn]] void concave_after_stop(std::uint32_t column) const;
+
+  Interpreter& interp_;
+  Side side_ = Side::off;
+  double radius_ = 0;  // mm
+  bool first_ = true;  // the next move starts compensation
+  bool arc_not_allowed_ = false;
+  bool fanuc_warned_ = false;
+  Vec3 centre_ = Vec3::Zero();   // the tool centre (program mm)
+  Vec3 emitted_ = Vec3::Zero();  // where the last compensated move to run ends (program mm)
+  std::vector<QueuedMove> queue_;
+  std::array<double, 2> endpoint_{};  // where the last queued XY move starts
+  bool endpoint_valid_ = false;
+};
+
 // The interpreter: one program read line by line into a GcodeProgram. Its parts, by concern,
 // are in the files named below.
 class Interpreter : private InterpState {
@@ -224,49 +295,6 @@ class Interpreter : private InterpState {
   void put_arc(const Vec3& from, const ArcData& d, double axial, double f, std::uint32_t column,
                std::size_t source, std::size_t line, bool xy, const Vec3* exact_end = nullptr);
 
-  // ---- interp_cutcomp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue
-  // (its state, below: LinuxCNC keeps it in its setup too)
-  enum class CompSide { off, left, right };
-
-  struct QueuedMove {
-    GcodeMove::Kind kind = GcodeMove::Kind::feed;
-    Vec3 end = Vec3::Zero();    // program mm
-    double d1 = 0, d2 = 0;      // lines: the direction the end may not turn against
-    double c1 = 0, c2 = 0;      // arcs: the centre
-    int turn = 0;               // arcs: turns, positive counterclockwise (LinuxCNC's)
-    double original_sweep = 0;  // arcs: the sweep as queued (rad); 0: never checked
-    double feed = 0;            // mm/min
-    std::size_t source = 0, line = 0;
-    std::uint32_t column = 0;
-  };
-
-  static constexpr double kConcaveTol = 0.05;  // rad, LinuxCNC's TOLERANCE_CONCAVE_CORNER
-
-  [[nodiscard]] bool comp_on() const { return comp_side_ != CompSide::off; }
-  [[nodiscard]] bool comp_moves() const { return comp_on() && comp_radius_ > 0; }
-  [[nodiscard]] bool left() const { return comp_side_ == CompSide::left; }
-  // The tool is inside an arc of this turning sense: left of a counterclockwise one.
-  [[nodiscard]] bool inside(int turn) const { return left() ? turn > 0 : turn < 0; }
-  // The position LinuxCNC reports as #<_x> #<_y> #<_z>: the tool centre while compensation
-  // runs (Fanuc's #5041-#5043 too).
-  [[nodiscard]] const Vec3& current() const {
-    return comp_moves() && !comp_first_ ? comp_cur_ : cur_pos_;
-  }
-  void refuse_with_comp(std::uint32_t column, const std::string& what) const;
-  static double find_turn(double x1, double y1, double cx, double cy, int turn, double x2,
-                          double y2);
-  void comp_start(int g, std::uint32_t column);
-  void comp_stop();
-  void comp_flush_at_stop(std::uint32_t column);
-  void enqueue(QueuedMove q, std::uint32_t column);
-  void set_endpoint(double x, double y);
-  void dequeue();
-  void move_endpoint_and_flush(double x, double y, std::uint32_t column);
-  void comp_line(const Vec3& p, bool rapid, std::uint32_t column);
-  [[noreturn]] void gouge(std::uint32_t column, const char* what) const;
-  [[noreturn]] void concave_after_stop(std::uint32_t column) const;
-  void comp_arc(const Vec3& p, std::uint32_t column);
-
   // ---- interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89)
   void canned_cycle(int g, std::uint32_t column);
   [[nodiscard]] ArcData plane_axes() const;
@@ -310,17 +338,10 @@ class Interpreter : private InterpState {
   void return_from_sub();
   std::pair<std::size_t, std::size_t> find_sub(const std::string& label, std::size_t at);
 
-  // Cutter radius compensation.
-  CompSide comp_side_ = CompSide::off;
-  double comp_radius_ = 0;  // mm
-  bool comp_first_ = true;  // the next move starts compensation
-  bool arc_not_allowed_ = false;
-  bool comp_fanuc_warned_ = false;
-  Vec3 comp_cur_ = Vec3::Zero();  // the tool centre (program mm)
-  Vec3 emitted_ = Vec3::Zero();   // where the last compensated move to run ends (program mm)
-  std::vector<QueuedMove> queue_;
-  std::array<double, 2> endpoint_{};  // where the last queued XY move starts
-  bool endpoint_valid_ = false;
+  // Cutter radius compensation: its queue and state; it reads the block and the modal state
+  // and emits its moves through the interpreter.
+  CutterComp comp_{*this};
+  friend class CutterComp;
 };
 
 // The interpreter's entry point (read_gcode, reader.cpp).

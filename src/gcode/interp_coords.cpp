@@ -208,7 +208,7 @@ void Interpreter::g10(std::uint32_t column) {
             fmt::format("G10 L{} P{:g}: P is 0 (the active system) or 1 .. 9", l, pv));
   }
   if (n == 0) n = system_;
-  if (n == system_) refuse_with_comp(column, "a change of the active system's origin (G10)");
+  if (n == system_) comp_.refuse(column, "a change of the active system's origin (G10)");
   // The machine position stays; the active system's coordinates follow the new origin.
   const Vec3 machine = to_machine_tip(cur_pos_);
   const double r = block_.has('r') ? block_['r'] : params_[sys_param(n, 9)];

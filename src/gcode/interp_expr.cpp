@@ -357,7 +357,7 @@ double Interpreter::read_parameter(std::size_t& i) {
   if (fanuc_) return fanuc_variable(index);
   if (index >= 5420 && index <= 5428) {
     // The current position in the active system (A B C U V W: 0).
-    if (comp_on()) {
+    if (comp_.on()) {
       fail(at, fmt::format("#{} (the current position) cannot be read with cutter radius "
                            "compensation on (#<_x> #<_y> #<_z> give the tool centre)",
                            index));
@@ -370,7 +370,7 @@ double Interpreter::read_parameter(std::size_t& i) {
 // Fanuc's system variables that describe the position; #0 is always vacant.
 double Interpreter::fanuc_variable(int index) const {
   if (index >= 5001 && index <= 5003) return cur_pos_[index - 5001] / unit_;
-  if (index >= 5041 && index <= 5043) return current()[index - 5041] / unit_;
+  if (index >= 5041 && index <= 5043) return comp_.current()[index - 5041] / unit_;
   if (index >= 5021 && index <= 5023) return to_machine_tip(cur_pos_)[index - 5021] / unit_;
   return params_[static_cast<std::size_t>(index)];
 }
@@ -421,9 +421,9 @@ double Interpreter::named_value(const std::string& name, std::size_t at) {
 std::optional<double> Interpreter::predefined(const std::string& name) const {
   if (name.empty() || name[0] != '_') return std::nullopt;
   const double u = unit_;
-  if (name == "_x") return current().x() / u;
-  if (name == "_y") return current().y() / u;
-  if (name == "_z") return current().z() / u;
+  if (name == "_x") return comp_.current().x() / u;
+  if (name == "_y") return comp_.current().y() / u;
+  if (name == "_z") return comp_.current().z() / u;
   if (name == "_abs_x" || name == "_abs_y" || name == "_abs_z") {
     const Vec3 m = to_machine_tip(cur_pos_);
     return (name == "_abs_x" ? m.x() : name == "_abs_y" ? m.y() : m.z()) / u;

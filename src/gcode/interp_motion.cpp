@@ -41,12 +41,12 @@ void Interpreter::move(bool g53, std::uint32_t column) {
   if (g53 && motion_ != 0 && motion_ != 10) {
     fail_at(column, "G53 moves need G0 or G1 (a straight move in machine coordinates)");
   }
-  if (g53) refuse_with_comp(column, "G53 (a move in machine coordinates)");
+  if (g53) comp_.refuse(column, "G53 (a move in machine coordinates)");
   const Vec3 target = ends(g53);
   if (motion_ <= 10) {
-    arc_not_allowed_ = false;
-    if (comp_moves()) {
-      comp_line(target, motion_ == 0, column);
+    comp_.allow_arcs();
+    if (comp_.moves()) {
+      comp_.line(target, motion_ == 0, column);
     } else {
       plain_move_ = !g53 && (motion_ == 0 || feed_mode_ == FeedMode::per_minute);
       emit_line(target, motion_ == 0, column);
@@ -55,13 +55,13 @@ void Interpreter::move(bool g53, std::uint32_t column) {
     cur_pos_ = target;
     return;
   }
-  if (arc_not_allowed_) {
+  if (comp_.arc_not_allowed()) {
     fail_at(column,
             "the move right after cutter compensation ends (G40) must be straight, "
             "not an arc (the tool is a radius away from the programmed point)");
   }
-  if (comp_moves()) {
-    comp_arc(target, column);
+  if (comp_.moves()) {
+    comp_.arc(target, column);
     cur_pos_ = target;
     return;
   }
