@@ -16,7 +16,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -183,7 +182,7 @@ void Interpreter::run_line(std::string_view raw) {
   execute();
 }
 
-// ---- the block ----------------------------------------------------------------------------
+// ---- running the block, in LinuxCNC's order -----------------------------------------------
 
 void Interpreter::execute() {
   pending_m98_.reset();
@@ -194,61 +193,26 @@ void Interpreter::execute() {
       return;
     }
   }
-  // Words no milling program of ours uses: refused by name.
-  for (const char c : std::string_view("abcuvw")) {
-    if (block_.has(c)) {
-      fail_at(block_.col(c),
-              fmt::format("rotary axis {} is not supported (3-axis programs only)", upper(c)));
-    }
-  }
-  for (const char c : std::string_view("xyzijkrq")) {
-    if (block_.has(c)) check_range(c);
-  }
-  // G codes by modal group (two of one group are an error).
-  std::array<int, kGroups> code;
-  code.fill(-1);
-  std::array<std::uint32_t, kGroups> col{};
-  bool g53 = false;
-  for (const auto& [g, column] : block_.g) {
-    if (g == 530) {
-      g53 = true;
-      continue;
-    }
-    if (g == 610 || g == 611 || g == 640) {
-      comp_.refuse(column, fmt::format("{} (path control mode)", code_name('G', g)));
-      continue;  // path blending: no effect on the path
-    }
-    if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
-    // G76 is Fanuc's fine boring cycle; LinuxCNC's is lathe threading.
-    if (g == 760 && !fanuc_) unsupported_g(g, column);
-    const auto it = std::find_if(kGroupOf.begin(), kGroupOf.end(),
-                                 [g = g](const GroupOf& e) { return e.code10 == g; });
-    if (it == kGroupOf.end()) unsupported_g(g, column);
-    const auto k = static_cast<std::size_t>(it->group);
-    if (it->group == kRetract) {
-      comp_.refuse(column, fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
-    }
-    // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
-    if (it->group == kMotion && (code[k] == 800 || g == 800) && code[k] != g) {
-      if (code[k] < 0 || code[k] == 800) {
-        code[k] = g;
-        col[k] = column;
-      }
-      continue;
-    }
-    if (code[k] >= 0) {
-      fail_at(column, fmt::format("two {} codes in one block", kGroupNames[k]));
-    }
-    code[k] = g;
-    col[k] = column;
-  }
-  const int motion = code[kMotion], group0 = code[kGroup0], plane = code[kPlane],
-            units = code[kUnits], distance = code[kDistance], arc_distance = code[kArcDistance],
-            feed_mode = code[kFeedMode], tool_length = code[kToolLength], system = code[kSystem],
-            retract = code[kRetract], comp = code[kComp], dwell = code[kDwell];
-  const std::uint32_t motion_col = col[kMotion], group0_col = col[kGroup0], comp_col = col[kComp],
-                      tool_length_col = col[kToolLength], system_col = col[kSystem];
+  check_words();
+  const BlockCodes codes = group_codes();
   // Feed mode, F, S, T, M, then the G groups in LinuxCNC's order.
+  set_feed_speed_tool(codes[kFeedMode]);
+  bool stop = false, pause = false;
+  run_m_codes(stop, pause);
+  set_modes(codes);
+  run_motion(codes);
+  check_unused(codes[kGroup0], codes[kDwell], codes[kToolLength], codes[kComp] > 400);
+  if (stop || pause) {
+    comp_.flush_at_stop(block_.m.front().column);
+    if (stop) comp_.turn_off();
+  }
+  if (stop) end_program();
+  if (pending_m98_ && !ended_) subprogram_call();
+  if (pending_m99_ && !ended_) subprogram_return();
+}
+
+// Feed mode, F, S and T.
+void Interpreter::set_feed_speed_tool(int feed_mode) {
   if (feed_mode >= 0) {
     feed_mode_ = feed_mode == 930   ? FeedMode::inverse_time
                  : feed_mode == 950 ? FeedMode::per_rev
@@ -276,7 +240,10 @@ void Interpreter::execute() {
     }
     tool_selected_ = block_['t'];
   }
-  bool stop = false, pause = false;
+}
+
+// The M codes: stop and pause set for the end of the block, M98/M99 noted for it.
+void Interpreter::run_m_codes(bool& stop, bool& pause) {
   for (const auto& [m, column] : block_.m) {
     switch (m) {
       case 0:
@@ -378,6 +345,17 @@ void Interpreter::execute() {
         fail_at(column, fmt::format("unsupported M-code {}", code_name('M', m)));
     }
   }
+}
+
+// G4's P, then the G groups that set a mode or an offset, in LinuxCNC's order: plane, units,
+// cutter compensation, tool length, coordinate system, distance modes, retract mode, group 0.
+void Interpreter::set_modes(const BlockCodes& codes) {
+  const int plane = codes[kPlane], units = codes[kUnits], distance = codes[kDistance],
+            arc_distance = codes[kArcDistance], tool_length = codes[kToolLength],
+            system = codes[kSystem], retract = codes[kRetract], comp = codes[kComp],
+            group0 = codes[kGroup0], dwell = codes[kDwell];
+  const std::uint32_t group0_col = codes.col[kGroup0], comp_col = codes.col[kComp],
+                      tool_length_col = codes.col[kToolLength], system_col = codes.col[kSystem];
   if (dwell >= 0 && !block_.has('p')) fail_at(block_.g.front().column, "G4 needs P (seconds)");
   if (plane >= 0) {
     if (plane != 170) comp_.refuse(block_.g.front().column, "a plane change (G18/G19)");
@@ -409,6 +387,13 @@ void Interpreter::execute() {
     }
     non_modal(group0, group0_col);
   }
+}
+
+// The motion mode, then the move or the canned cycle of the block's axis words.
+void Interpreter::run_motion(const BlockCodes& codes) {
+  const int motion = codes[kMotion], group0 = codes[kGroup0];
+  const std::uint32_t motion_col = codes.col[kMotion];
+  const bool g53 = codes.g53;
   if (motion >= 0) {
     if (motion == 800) {
       motion_ = -1;
@@ -452,14 +437,6 @@ void Interpreter::execute() {
     cycle_il_flag_ = false;
     cycle_motion_ = -1;  // the next cycle is a first one (its Z and R again)
   }
-  check_unused(group0, dwell, tool_length, comp > 400);
-  if (stop || pause) {
-    comp_.flush_at_stop(block_.m.front().column);
-    if (stop) comp_.turn_off();
-  }
-  if (stop) end_program();
-  if (pending_m98_ && !ended_) subprogram_call();
-  if (pending_m99_ && !ended_) subprogram_return();
 }
 
 GcodeProgram interpret_gcode(std::string_view text, std::string_view source_name,

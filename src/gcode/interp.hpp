@@ -210,6 +210,10 @@ class Interpreter : private InterpState {
   void count_block();
   void run_line(std::string_view raw);
   void execute();
+  void set_feed_speed_tool(int feed_mode);
+  void run_m_codes(bool& stop, bool& pause);
+  void set_modes(const BlockCodes& codes);
+  void run_motion(const BlockCodes& codes);
   void end_program() { ended_ = true; }
 
   // ---- interp_expr.cpp: values: numbers, parameters, [expressions], functions
@@ -241,6 +245,8 @@ class Interpreter : private InterpState {
   // A length word in mm.
   double len(char c) const { return block_[c] * unit_; }
   void check_range(char c) const;
+  void check_words() const;
+  BlockCodes group_codes() const;
   void check_unused(int group0, int dwell, int tool_length, bool comp_word) const;
   [[noreturn]] void unsupported_g(int g, std::uint32_t column) const;
   ModalSave& push_sub_saved() {

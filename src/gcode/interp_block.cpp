@@ -1,8 +1,10 @@
-// The interpreter's blocks: a line's words read into a Block, checked (coordinates in range,
-// Fanuc's read-only variables, the words no code uses, unsupported codes named); the modal
-// state M70-M73 save and restore.
+// The interpreter's blocks: a line's words read into a Block, its G codes sorted into their
+// modal groups, checked (coordinates in range, Fanuc's read-only variables, the words no code
+// uses, unsupported codes named); the modal state M70-M73 save and restore.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -114,6 +116,63 @@ void Interpreter::check_range(char c) const {
     fail_at(block_.col(c), fmt::format("{}{:g} is beyond +-1e6 mm, what trochomill represents",
                                        upper(c), block_[c]));
   }
+}
+
+// The block's words before its codes run: rotary axes refused, coordinates in range.
+void Interpreter::check_words() const {
+  // Words no milling program of ours uses: refused by name.
+  for (const char c : std::string_view("abcuvw")) {
+    if (block_.has(c)) {
+      fail_at(block_.col(c),
+              fmt::format("rotary axis {} is not supported (3-axis programs only)", upper(c)));
+    }
+  }
+  for (const char c : std::string_view("xyzijkrq")) {
+    if (block_.has(c)) check_range(c);
+  }
+}
+
+// The block's G codes by modal group; G53 apart, the codes of no effect on the path skipped.
+BlockCodes Interpreter::group_codes() const {
+  // G codes by modal group (two of one group are an error).
+  std::array<int, kGroups> code;
+  code.fill(-1);
+  std::array<std::uint32_t, kGroups> col{};
+  bool g53 = false;
+  for (const auto& [g, column] : block_.g) {
+    if (g == 530) {
+      g53 = true;
+      continue;
+    }
+    if (g == 610 || g == 611 || g == 640) {
+      comp_.refuse(column, fmt::format("{} (path control mode)", code_name('G', g)));
+      continue;  // path blending: no effect on the path
+    }
+    if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
+    // G76 is Fanuc's fine boring cycle; LinuxCNC's is lathe threading.
+    if (g == 760 && !fanuc_) unsupported_g(g, column);
+    const auto it = std::find_if(kGroupOf.begin(), kGroupOf.end(),
+                                 [g = g](const GroupOf& e) { return e.code10 == g; });
+    if (it == kGroupOf.end()) unsupported_g(g, column);
+    const auto k = static_cast<std::size_t>(it->group);
+    if (it->group == kRetract) {
+      comp_.refuse(column, fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
+    }
+    // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
+    if (it->group == kMotion && (code[k] == 800 || g == 800) && code[k] != g) {
+      if (code[k] < 0 || code[k] == 800) {
+        code[k] = g;
+        col[k] = column;
+      }
+      continue;
+    }
+    if (code[k] >= 0) {
+      fail_at(column, fmt::format("two {} codes in one block", kGroupNames[k]));
+    }
+    code[k] = g;
+    col[k] = column;
+  }
+  return {code, col, g53};
 }
 
 // Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).

@@ -121,6 +121,14 @@ inline constexpr std::array<GroupOf, 63> kGroupOf{{
     {980, kRetract},     {990, kRetract},    {400, kComp},       {410, kComp},
     {411, kComp},        {420, kComp},       {421, kComp},
 }};
+// A block's G codes by modal group (x10, -1: none of the group), their columns, and G53.
+struct BlockCodes {
+  std::array<int, kGroups> code;
+  std::array<std::uint32_t, kGroups> col;
+  bool g53 = false;
+  [[nodiscard]] int operator[](GroupIndex g) const { return code[g]; }
+};
+
 // An O-word line of a file, found by the index (one pass over the file, made when the program
 // first needs to jump).
 struct OLine {
