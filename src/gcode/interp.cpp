@@ -11,6 +11,8 @@
 //    G89 with G98/G99 and L.
 // Positions are kept in program coordinates (mm) as the interpreter keeps them; each move is
 // turned into the output frame (the job's work coordinate system) when it is emitted.
+// This file is the driver: the program's lines read, messages, each line's block run in
+// LinuxCNC's order; interp.hpp names the files of the other parts.
 #include "interp.hpp"
 
 #include <fmt/format.h>

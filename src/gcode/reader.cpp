@@ -1,4 +1,4 @@
-// Reading NC programs: the interpreter's entry point (the language is interp.hpp's), the
+// Reading NC programs: the interpreter's entry point (the language: interp.hpp), the
 // header keys trochomill writes into its programs, and their check against a job.
 #include <fmt/format.h>
 
