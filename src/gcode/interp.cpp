@@ -11,3691 +11,439 @@
 //    G89 with G98/G99 and L.
 // Positions are kept in program coordinates (mm) as the interpreter keeps them; each move is
 // turned into the output frame (the job's work coordinate system) when it is emitted.
+// This file is the driver: the program's lines read, messages, each line's block run in
+// LinuxCNC's order; interp.hpp names the files of the other parts.
+#include "interp.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
-#include <charconv>
 #include <cmath>
-#include <deque>
-#include <fstream>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
-#include <optional>
-#include <unordered_map>
+#include <string>
+#include <string_view>
+#include <utility>
 
 #include "ngc_lexer.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
-#include "trochomill/io.hpp"
-#include "trochomill/units.hpp"
 
-namespace trochomill {
-namespace {
+namespace trochomill::gcode_detail {
 
-constexpr int kMaxParameter = 5602;  // #1 .. #5601, as LinuxCNC
-constexpr double kTolEqual = 1e-6;   // EQ/NE/LE/GE compare within this (LinuxCNC's TOLERANCE_EQUAL)
-constexpr double kMaxCoordinate = 1e6;  // mm: beyond this a move is refused (1 km)
-constexpr int kMaxNesting = 200;        // brackets, signs and # in one value
-
-enum class Plane { xy, zx, yz };
-enum class FeedMode { per_minute, inverse_time, per_rev };
-
-// The keywords after an O label.
-enum class OKind {
-  none,
-  sub,
-  endsub,
-  call,
-  ret,
-  if_,
-  elseif,
-  else_,
-  endif,
-  while_,
-  endwhile,
-  do_,
-  repeat,
-  endrepeat,
-  brk,
-  cont
-};
-
-struct OKeyword {
-  std::string_view name;
-  OKind kind;
-};
-constexpr std::array<OKeyword, 15> kOKeywords{{{"sub", OKind::sub},
-                                               {"endsub", OKind::endsub},
-                                               {"call", OKind::call},
-                                               {"return", OKind::ret},
-                                               {"if", OKind::if_},
-                                               {"elseif", OKind::elseif},
-                                               {"else", OKind::else_},
-                                               {"endif", OKind::endif},
-                                               {"while", OKind::while_},
-                                               {"endwhile", OKind::endwhile},
-                                               {"do", OKind::do_},
-                                               {"repeat", OKind::repeat},
-                                               {"endrepeat", OKind::endrepeat},
-                                               {"break", OKind::brk},
-                                               {"continue", OKind::cont}}};
-
-// The modal groups of G codes (LinuxCNC's, as the block checks them) and their codes (x10).
-enum GroupIndex {
-  kMotion,
-  kGroup0,
-  kPlane,
-  kUnits,
-  kDistance,
-  kArcDistance,
-  kFeedMode,
-  kToolLength,
-  kSystem,
-  kRetract,
-  kComp,
-  kDwell,
-  kGroups
-};
-constexpr std::array<const char*, kGroups> kGroupNames{"motion",
-                                                       "non-modal (G10 G28 G30 G52 G92)",
-                                                       "plane",
-                                                       "units",
-                                                       "distance mode",
-                                                       "arc distance mode",
-                                                       "feed mode",
-                                                       "tool length",
-                                                       "coordinate system",
-                                                       "retract mode",
-                                                       "cutter compensation",
-                                                       "dwell"};
-struct GroupOf {
-  int code10;
-  GroupIndex group;
-};
-constexpr std::array<GroupOf, 63> kGroupOf{{
-    {0, kMotion},        {10, kMotion},      {20, kMotion},      {30, kMotion},
-    {730, kMotion},      {740, kMotion},     {760, kMotion},     {800, kMotion},
-    {810, kMotion},      {820, kMotion},     {830, kMotion},     {840, kMotion},
-    {850, kMotion},      {860, kMotion},     {870, kMotion},     {880, kMotion},
-    {890, kMotion},      {40, kDwell},       {100, kGroup0},     {280, kGroup0},
-    {281, kGroup0},      {300, kGroup0},     {301, kGroup0},     {520, kGroup0},
-    {920, kGroup0},      {921, kGroup0},     {922, kGroup0},     {923, kGroup0},
-    {170, kPlane},       {180, kPlane},      {190, kPlane},      {200, kUnits},
-    {210, kUnits},       {700, kUnits},      {710, kUnits},      {7000, kUnits},
-    {7100, kUnits},      {900, kDistance},   {910, kDistance},   {901, kArcDistance},
-    {911, kArcDistance}, {930, kFeedMode},   {940, kFeedMode},   {950, kFeedMode},
-    {430, kToolLength},  {431, kToolLength}, {490, kToolLength}, {540, kSystem},
-    {550, kSystem},      {560, kSystem},     {570, kSystem},     {580, kSystem},
-    {590, kSystem},      {591, kSystem},     {592, kSystem},     {593, kSystem},
-    {980, kRetract},     {990, kRetract},    {400, kComp},       {410, kComp},
-    {411, kComp},        {420, kComp},       {421, kComp},
-}};
-// An O-word line of a file, found by the index (one pass over the file, made when the program
-// first needs to jump).
-struct OLine {
-  std::size_t offset = 0;  // of the line's first character
-  std::size_t line_no = 0;
-  std::string label;
-  OKind kind = OKind::none;
-};
-
-struct Source {
-  std::string owned;  // the text of a subroutine file (the main program's is the caller's)
-  std::string_view text;
-  std::string name;
-  bool indexed = false;
-  std::vector<OLine> olines;
-  // Fanuc: program number -> the line after its O line (made on the first M98/G65).
-  std::optional<std::map<long, std::pair<std::size_t, std::size_t>>> programs;
-};
-
-// Where the interpreter reads next.
-struct Cursor {
-  std::size_t source = 0;
-  std::size_t offset = 0;   // of the next line
-  std::size_t line_no = 0;  // of the line before it (the next line is line_no + 1)
-};
-
-// An open if or loop of the running frame.
-struct Control {
-  OKind kind = OKind::if_;  // if_, while_, do_, repeat
-  std::string label;
-  Cursor start;          // while: its own line; do/repeat: the line after it
-  bool taken = false;    // if: a branch ran
-  double remaining = 0;  // repeat: passes left
-};
-
-struct Frame {
-  std::string label;                      // the subroutine ("" at the top)
-  Cursor ret;                             // where the call returns to
-  std::array<double, 34> saved_locals{};  // #1..#30 (Fanuc #1..#33) of the caller
-  bool new_locals = true;                 // false: Fanuc M98 (the caller's locals)
-  Cursor start;                           // Fanuc: the subprogram's first line (L repeats)
-  double repeats = 1;                     // Fanuc M98 L
-  std::vector<std::pair<std::string, double>> locals;  // named local parameters
-  std::vector<Control> controls;
-  bool restore_modal = false;  // M73 in the subroutine
-};
-
-// The modal state M70 saves and M72 restores (LinuxCNC's list, what matters to motion).
-struct ModalSave {
-  bool valid = false;
-  Plane plane = Plane::xy;
-  double unit = 1;
-  bool absolute = true, arc_absolute = false;
-  FeedMode feed_mode = FeedMode::per_minute;
-  double feed = 0, speed = 0;
-  bool retract_r = false;
-  int system = 1;
-};
-
-// One block's words: letters with values and columns, G and M codes, parameter settings.
-struct Block {
-  std::array<double, 26> value{};
-  std::array<std::uint32_t, 26> column{};
-  std::uint32_t present = 0;  // bit per letter
-  struct Code {
-    int code10;  // G90.1 -> 901
-    std::uint32_t column;
-  };
-  std::vector<Code> g, m;
-  struct NumberedSet {
-    int index;
-    double value;
-  };
-  struct NamedSet {
-    std::string name;
-    double value;
-    std::uint32_t column;
-  };
-  std::vector<NumberedSet> numbered;
-  std::vector<NamedSet> named;
-
-  void clear() {
-    present = 0;
-    g.clear();
-    m.clear();
-    numbered.clear();
-    named.clear();
+Interpreter::Interpreter(std::string_view text, std::string_view name, const GcodeReadOptions& opt)
+    : InterpState(opt) {
+  Source main;
+  main.text = text;
+  main.name = std::string(name);
+  sources_.push_back(std::move(main));
+  params_.assign(kMaxParameter, 0.0);
+  if (fanuc_) {
+    // Fanuc's local and common variables start vacant.
+    const double vacant = std::numeric_limits<double>::quiet_NaN();
+    params_[0] = vacant;
+    for (std::size_t p = 1; p <= 33; ++p) params_[p] = vacant;
+    for (std::size_t p = 100; p <= 199; ++p) params_[p] = vacant;
+    for (std::size_t p = 500; p <= 999; ++p) params_[p] = vacant;
   }
-  [[nodiscard]] bool has(char c) const { return (present >> (c - 'a')) & 1U; }
-  [[nodiscard]] double operator[](char c) const { return value[static_cast<std::size_t>(c - 'a')]; }
-  [[nodiscard]] std::uint32_t col(char c) const {
-    return column[static_cast<std::size_t>(c - 'a')];
-  }
-  [[nodiscard]] bool has_axis() const { return has('x') || has('y') || has('z'); }
-};
-
-// The index past a normalised line's block delete '/' and line number "n123" (the statement's
-// start), as every scan of the lines reads it.
-// A cheap filter for the line scans (O-words, N labels, Fanuc program numbers): whether the
-// first character the line normaliser keeps may be one of `letters`. Blanks, carriage returns
-// and block delete are skipped; a comment may come first (then the line is normalised).
-bool may_start_with(std::string_view raw, std::string_view letters) {
-  const std::size_t first = raw.find_first_not_of(" \t\r/");
-  return first != std::string_view::npos &&
-         (raw[first] == '(' || letters.find(raw[first]) != std::string_view::npos);
+  frames_.emplace_back();
+  init_offsets();
 }
 
-std::size_t past_line_number(const std::string& t) {
-  std::size_t k = 0;
-  if (k < t.size() && t[k] == '/') ++k;
-  if (k < t.size() && t[k] == 'n') {
-    ++k;
-    while (k < t.size() && ((t[k] >= '0' && t[k] <= '9') || t[k] == '.')) ++k;
+GcodeProgram Interpreter::run() {
+  if (!opt_.tool_table.empty()) {
+    for (const auto& [n, t] : read_tool_table(opt_.tool_table)) tools_[n] = t;
   }
-  return k;
-}
-
-int code10(double v) { return static_cast<int>(std::lround(v * 10.0)); }
-std::string code_name(char letter, int c10) {
-  return c10 % 10 == 0 ? fmt::format("{}{}", letter, c10 / 10)
-                       : fmt::format("{}{}.{}", letter, c10 / 10, c10 % 10);
-}
-
-void rotate(double& x, double& y, double deg) {
-  if (deg == 0) return;
-  const double t = deg * kPi / 180.0, c = std::cos(t), s = std::sin(t);
-  const double rx = x * c - y * s;
-  y = x * s + y * c;
-  x = rx;
-}
-
-class Interpreter {
- public:
-  Interpreter(std::string_view text, std::string_view name, const GcodeReadOptions& opt)
-      : opt_(opt) {
-    Source main;
-    main.text = text;
-    main.name = std::string(name);
-    sources_.push_back(std::move(main));
-    params_.assign(kMaxParameter, 0.0);
-    if (fanuc_) {
-      // Fanuc's local and common variables start vacant.
-      const double vacant = std::numeric_limits<double>::quiet_NaN();
-      params_[0] = vacant;
-      for (std::size_t p = 1; p <= 33; ++p) params_[p] = vacant;
-      for (std::size_t p = 100; p <= 199; ++p) params_[p] = vacant;
-      for (std::size_t p = 500; p <= 999; ++p) params_[p] = vacant;
-    }
-    frames_.emplace_back();
-    init_offsets();
+  if (opt_.keep_path) {
+    // About a segment a line: room up front spares the copies of a growing path.
+    const std::string_view t = sources_[0].text;
+    prog_.path.reserve(static_cast<std::size_t>(std::count(t.begin(), t.end(), '\n')) + 1);
   }
-
-  GcodeProgram run() {
-    if (!opt_.tool_table.empty()) {
-      for (const auto& [n, t] : read_tool_table(opt_.tool_table)) tools_[n] = t;
-    }
-    if (opt_.keep_path) {
-      // About a segment a line: room up front spares the copies of a growing path.
-      const std::string_view t = sources_[0].text;
-      prog_.path.reserve(static_cast<std::size_t>(std::count(t.begin(), t.end(), '\n')) + 1);
-    }
-    // A program between '%' lines: the first non-blank line '%' opens it, the next one ends it.
-    bool percent_open = false, first = true;
-    while (!ended_) {
-      std::string_view raw;
-      if (!next_line(raw)) break;
-      if (first) {
-        std::string_view t = raw;
-        while (!t.empty() && (t.front() == ' ' || t.front() == '\t')) t.remove_prefix(1);
-        while (!t.empty() && (t.back() == ' ' || t.back() == '\t' || t.back() == '\r')) {
-          t.remove_suffix(1);
-        }
-        if (t.empty()) continue;
-        first = false;
-        if (t == "%") {
-          percent_open = true;
-          continue;
-        }
-      } else if (percent_open && cur_.source == 0) {
-        std::string_view t = raw;
-        while (!t.empty() && (t.back() == ' ' || t.back() == '\t' || t.back() == '\r')) {
-          t.remove_suffix(1);
-        }
-        if (t == "%") break;
+  // A program between '%' lines: the first non-blank line '%' opens it, the next one ends it.
+  bool percent_open = false, first = true;
+  while (!ended_) {
+    std::string_view raw;
+    if (!next_line(raw)) break;
+    if (first) {
+      std::string_view t = raw;
+      while (!t.empty() && (t.front() == ' ' || t.front() == '\t')) t.remove_prefix(1);
+      while (!t.empty() && (t.back() == ' ' || t.back() == '\t' || t.back() == '\r')) {
+        t.remove_suffix(1);
       }
-      run_line(raw);
+      if (t.empty()) continue;
+      first = false;
+      if (t == "%") {
+        percent_open = true;
+        continue;
+      }
+    } else if (percent_open && cur_.source == 0) {
+      std::string_view t = raw;
+      while (!t.empty() && (t.back() == ' ' || t.back() == '\t' || t.back() == '\r')) {
+        t.remove_suffix(1);
+      }
+      if (t == "%") break;
     }
-    if (frames_.size() > 1) {
-      fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
-                             frames_.back().label));
-    }
-    dequeue();  // compensated moves still waiting run as they are
-    prog_.info.lines = std::max(prog_.info.lines, main_lines_);
-    if (prog_.path.empty() && prog_.summary.segments == 0) {
-      throw InputError(
-          fmt::format("{}: the program has no motion (no G0/G1/G2/G3 moves)", sources_[0].name));
-    }
-    return std::move(prog_);
+    run_line(raw);
   }
-
- private:
-  // ---- reading lines ------------------------------------------------------------------------
-
-  bool next_line(std::string_view& raw) {
-    Source& src = sources_[cur_.source];
-    if (cur_.offset >= src.text.size()) {
-      if (cur_.source == 0) return false;
-      // A subroutine file ran out: only an error when its subroutine has not returned.
-      fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
-                             frames_.back().label));
-    }
-    std::size_t end = src.text.find('\n', cur_.offset);
-    if (end == std::string_view::npos) end = src.text.size();
-    raw = src.text.substr(cur_.offset, end - cur_.offset);
-    line_offset_ = cur_.offset;
-    cur_.offset = end == src.text.size() ? end : end + 1;
-    ++cur_.line_no;
-    if (cur_.source == 0) main_lines_ = std::max(main_lines_, cur_.line_no);
-    return true;
+  if (frames_.size() > 1) {
+    fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
+                           frames_.back().label));
   }
-
-  [[noreturn]] void fail_at(std::uint32_t column, const std::string& what) const {
-    const Source& src = sources_[cur_.source];
-    if (column == 0) throw InputError(fmt::format("{}:{}: {}", src.name, cur_.line_no, what));
-    throw InputError(fmt::format("{}:{}:{}: {}", src.name, cur_.line_no, column, what));
+  comp_.dequeue();  // compensated moves still waiting run as they are
+  prog_.info.lines = std::max(prog_.info.lines, main_lines_);
+  if (prog_.path.empty() && prog_.summary.segments == 0) {
+    throw InputError(
+        fmt::format("{}: the program has no motion (no G0/G1/G2/G3 moves)", sources_[0].name));
   }
-  // The column of text index i of the current line.
-  [[nodiscard]] std::uint32_t col_of(std::size_t i) const {
-    return line_.column[std::min(i, line_.column.size() - 1)];
+  return std::move(prog_);
+}
+
+// ---- reading lines ------------------------------------------------------------------------
+
+bool Interpreter::next_line(std::string_view& raw) {
+  Source& src = sources_[cur_.source];
+  if (cur_.offset >= src.text.size()) {
+    if (cur_.source == 0) return false;
+    // A subroutine file ran out: only an error when its subroutine has not returned.
+    fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
+                           frames_.back().label));
   }
-  [[noreturn]] void fail(std::size_t i, const std::string& what) const { fail_at(col_of(i), what); }
+  std::size_t end = src.text.find('\n', cur_.offset);
+  if (end == std::string_view::npos) end = src.text.size();
+  raw = src.text.substr(cur_.offset, end - cur_.offset);
+  line_offset_ = cur_.offset;
+  cur_.offset = end == src.text.size() ? end : end + 1;
+  ++cur_.line_no;
+  if (cur_.source == 0) main_lines_ = std::max(main_lines_, cur_.line_no);
+  return true;
+}
 
-  void warn(const std::string& what) {
-    if (prog_.info.warnings.size() < 100) {
-      prog_.info.warnings.push_back(
-          fmt::format("{}:{}: {}", sources_[cur_.source].name, cur_.line_no, what));
-    }
+void Interpreter::fail_at(std::uint32_t column, const std::string& what) const {
+  const Source& src = sources_[cur_.source];
+  if (column == 0) throw InputError(fmt::format("{}:{}: {}", src.name, cur_.line_no, what));
+  throw InputError(fmt::format("{}:{}:{}: {}", src.name, cur_.line_no, column, what));
+}
+
+void Interpreter::warn(const std::string& what) {
+  if (prog_.info.warnings.size() < 100) {
+    prog_.info.warnings.push_back(
+        fmt::format("{}:{}: {}", sources_[cur_.source].name, cur_.line_no, what));
   }
+}
 
-  void count_block() {
-    ++prog_.info.blocks_executed;
-    if (prog_.info.blocks_executed > opt_.max_blocks) {
-      fail_at(0, fmt::format("stopped after {} blocks: does the program loop without end? "
-                             "(the limit is the reader's max_blocks, check-gcode --max-blocks)",
-                             opt_.max_blocks));
-    }
-    if ((prog_.info.blocks_executed & 0xffff) == 0 && opt_.cancel && opt_.cancel()) {
-      throw Interrupted("reading the NC program was interrupted");
-    }
+void Interpreter::count_block() {
+  ++prog_.info.blocks_executed;
+  if (prog_.info.blocks_executed > opt_.max_blocks) {
+    fail_at(0, fmt::format("stopped after {} blocks: does the program loop without end? "
+                           "(the limit is the reader's max_blocks, check-gcode --max-blocks)",
+                           opt_.max_blocks));
   }
+  if ((prog_.info.blocks_executed & 0xffff) == 0 && opt_.cancel && opt_.cancel()) {
+    throw Interrupted("reading the NC program was interrupted");
+  }
+}
 
-  // ---- one line -----------------------------------------------------------------------------
+// ---- one line -----------------------------------------------------------------------------
 
-  void run_line(std::string_view raw) {
-    ngc::normalise(raw, line_);
-    if (line_.error_column != 0) fail_at(line_.error_column, line_.error);
-    const std::string& s = line_.text;
-    std::size_t i = 0;
-    if (i < s.size() && s[i] == '/') ++i;  // block delete: the switch is off, the block runs
-    if (i < s.size() && s[i] == 'n') {     // line number
+void Interpreter::run_line(std::string_view raw) {
+  ngc::normalise(raw, line_);
+  if (line_.error_column != 0) fail_at(line_.error_column, line_.error);
+  const std::string& s = line_.text;
+  std::size_t i = 0;
+  if (i < s.size() && s[i] == '/') ++i;  // block delete: the switch is off, the block runs
+  if (i < s.size() && s[i] == 'n') {     // line number
+    std::size_t j = i + 1;
+    while (j < s.size() && ((s[j] >= '0' && s[j] <= '9') || s[j] == '.')) ++j;
+    if (j == i + 1) fail(i, "'N' needs a line number after it");
+    i = j;
+  }
+  if (fanuc_) {
+    if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
+      // A program number: the start of a (sub)program; the rest of the line runs.
       std::size_t j = i + 1;
-      while (j < s.size() && ((s[j] >= '0' && s[j] <= '9') || s[j] == '.')) ++j;
-      if (j == i + 1) fail(i, "'N' needs a line number after it");
+      while (j < s.size() && s[j] >= '0' && s[j] <= '9') ++j;
+      if (j == i + 1) fail(i, "'O' needs a program number after it");
       i = j;
     }
-    if (fanuc_) {
-      if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
-        // A program number: the start of a (sub)program; the rest of the line runs.
-        std::size_t j = i + 1;
-        while (j < s.size() && s[j] >= '0' && s[j] <= '9') ++j;
-        if (j == i + 1) fail(i, "'O' needs a program number after it");
-        i = j;
-      }
-      if (fanuc_statement(i)) return;
-    } else if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
-      if (line_.comment_column != 0 && line_.comment_column < col_of(i)) {
-        fail(i, "an O-word must start its line (a comment comes before it)");
-      }
-      if (o_statement(i)) return;
+    if (fanuc_statement(i)) return;
+  } else if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
+    if (line_.comment_column != 0 && line_.comment_column < col_of(i)) {
+      fail(i, "an O-word must start its line (a comment comes before it)");
     }
-    if (i >= s.size()) return;  // blank or comment only: (MSG, ...) and the like do not move
-    count_block();
-    read_block(i);
-    // Parameter settings take effect after the whole line is read, before it runs.
-    for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
-    for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
-    block_feed_events_ = feed_events_;
-    block_feed_before_ = feed_;
-    execute();
+    if (o_statement(i)) return;
   }
+  if (i >= s.size()) return;  // blank or comment only: (MSG, ...) and the like do not move
+  count_block();
+  read_block(i);
+  // Parameter settings take effect after the whole line is read, before it runs.
+  for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
+  for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
+  block_feed_events_ = feed_events_;
+  block_feed_before_ = feed_;
+  execute();
+}
 
-  // ---- values and expressions ----------------------------------------------------------------
+// ---- running the block, in LinuxCNC's order -----------------------------------------------
 
-  double read_number(std::size_t& i) {
-    const std::string& s = line_.text;
-    const std::size_t at = i;
-    bool neg = false;
-    if (i < s.size() && (s[i] == '+' || s[i] == '-')) {
-      neg = s[i] == '-';
-      ++i;
+void Interpreter::execute() {
+  pending_m98_.reset();
+  pending_m99_ = false;
+  for (const auto& gc : block_.g) {
+    if (gc.code10 == 650) {
+      macro_call(gc.column);
+      return;
     }
-    const char* b = s.data() + i;
-    const char* e = s.data() + s.size();
-    double v = 0;
-    auto [ptr, ec] = std::from_chars(b, e, v, std::chars_format::fixed);
-    if (ec == std::errc::result_out_of_range) {
-      if (word_ != 0) {
-        fail(word_at_, fmt::format("'{}' has a number too large to represent", upper(word_)));
-      }
-      fail(at, "a number too large to represent");
-    }
-    if (ec != std::errc() || ptr == b) {
-      if (word_ != 0 && at == word_at_ + 1) {
-        fail(word_at_, fmt::format("'{}' needs a number after it", upper(word_)));
-      }
-      if (i < s.size()) {
-        fail(i, fmt::format("expected a number, found {}", ngc::shown(s[i])));
-      }
-      fail(i, "expected a number at the end of the line");
-    }
-    i = static_cast<std::size_t>(ptr - s.data());
-    return neg ? -v : v;
   }
-
-  double checked(double v, std::size_t at) const {
-    if (std::isnan(v) && !fanuc_) fail(at, "the calculation gives 'not a number'");
-    if (std::isinf(v)) fail(at, "the calculation gives infinity");
-    return v;
+  check_words();
+  const BlockCodes codes = group_codes();
+  // Feed mode, F, S, T, M, then the G groups in LinuxCNC's order.
+  set_feed_speed_tool(codes[kFeedMode]);
+  bool stop = false, pause = false;
+  run_m_codes(stop, pause);
+  set_modes(codes);
+  run_motion(codes);
+  check_unused(codes[kGroup0], codes[kDwell], codes[kToolLength], codes[kComp] > 400);
+  if (stop || pause) {
+    comp_.flush_at_stop(block_.m.front().column);
+    if (stop) comp_.turn_off();
   }
+  if (stop) end_program();
+  if (pending_m98_ && !ended_) subprogram_call();
+  if (pending_m99_ && !ended_) subprogram_return();
+}
 
-  // A real value: number, #parameter, [expression], unary function, or -value / +value.
-  double read_value(std::size_t& i) {
-    const std::string& s = line_.text;
-    if (i >= s.size()) fail(i, "expected a value at the end of the line");
-    // Brackets, signs and # nest by recursion: bounded, so no line can exhaust the stack.
-    struct Depth {
-      int& d;
-      explicit Depth(int& x) : d(++x) {}
-      ~Depth() { --d; }
-    } depth(depth_);
-    if (depth_ > kMaxNesting) {
-      fail(i, fmt::format("the expression nests deeper than {} levels", kMaxNesting));
-    }
-    const std::size_t at = i;
-    const char c = s[i];
-    const char c1 = i + 1 < s.size() ? s[i + 1] : '\0';
-    double v;
-    if (c == '[') {
-      v = read_expression(i);
-    } else if (c == '#') {
-      v = read_parameter(i);
-    } else if ((c == '+' || c == '-') && c1 != '\0' && !(c1 >= '0' && c1 <= '9') && c1 != '.') {
-      ++i;
-      v = read_value(i);
-      if (c == '-') v = -v;
-    } else if (c >= 'a' && c <= 'z') {
-      if (word_ != 0 && at == word_at_ + 1 && !function_follows(i)) {
-        fail(word_at_, fmt::format("'{}' needs a number after it", upper(word_)));
-      }
-      v = read_function(i);
+// Feed mode, F, S and T.
+void Interpreter::set_feed_speed_tool(int feed_mode) {
+  if (feed_mode >= 0) {
+    feed_mode_ = feed_mode == 930   ? FeedMode::inverse_time
+                 : feed_mode == 950 ? FeedMode::per_rev
+                                    : FeedMode::per_minute;
+  }
+  inverse_f_ = -1;
+  if (block_.has('f')) {
+    if (block_['f'] < 0) fail_at(block_.col('f'), "feed F must be >= 0");
+    if (feed_mode_ == FeedMode::inverse_time) {
+      inverse_f_ = block_['f'];
     } else {
-      v = read_number(i);
+      feed_ = block_['f'] * unit_;  // a unit change later keeps the feed (as LinuxCNC)
+      feed_given_ = true;
+      ++feed_events_;
     }
-    return checked(v, at);
   }
-
-  // An expression "[ ... ]" with LinuxCNC's precedence, left to right within a level.
-  double read_expression(std::size_t& i) {
-    const std::size_t open = i;
-    ++i;  // '['
-    double v = read_binary(i, 1);
-    if (i >= line_.text.size() || line_.text[i] != ']') {
-      if (i >= line_.text.size()) fail(open, "'[' is not closed on this line");
-      fail(i, fmt::format("expected an operator or ']', found {}", ngc::shown(line_.text[i])));
-    }
-    ++i;
-    return v;
+  if (block_.has('s')) {
+    if (block_['s'] < 0) fail_at(block_.col('s'), "spindle speed S must be >= 0");
+    speed_ = block_['s'];
+    prog_.info.max_spindle_rpm = std::max(prog_.info.max_spindle_rpm, speed_);
   }
-
-  enum class Op { none, pow, mul, div, mod, add, sub, eq, ne, gt, ge, lt, le, and_, or_, xor_ };
-  // LinuxCNC: ** > * / MOD > + - > comparisons > AND OR XOR. Fanuc (Macro B): * / AND MOD >
-  // + - OR XOR > comparisons, AND OR XOR bitwise on whole numbers.
-  int precedence(Op op) const {
-    if (fanuc_) {
-      switch (op) {
-        case Op::pow:
-          return 6;
-        case Op::mul:
-        case Op::div:
-        case Op::mod:
-        case Op::and_:
-          return 5;
-        case Op::add:
-        case Op::sub:
-        case Op::or_:
-        case Op::xor_:
-          return 4;
-        case Op::none:
-          return 0;
-        default:
-          return 3;
-      }
+  if (block_.has('t')) {
+    if (block_['t'] < 0 || block_['t'] != std::floor(block_['t'])) {
+      fail_at(block_.col('t'), "tool number T must be a whole number >= 0");
     }
-    switch (op) {
-      case Op::pow:
-        return 6;
-      case Op::mul:
-      case Op::div:
-      case Op::mod:
-        return 5;
-      case Op::add:
-      case Op::sub:
-        return 4;
-      case Op::eq:
-      case Op::ne:
-      case Op::gt:
-      case Op::ge:
-      case Op::lt:
-      case Op::le:
-        return 3;
-      case Op::and_:
-      case Op::or_:
-      case Op::xor_:
-        return 2;
-      case Op::none:
+    tool_selected_ = block_['t'];
+  }
+}
+
+// The M codes: stop and pause set for the end of the block, M98/M99 noted for it.
+void Interpreter::run_m_codes(bool& stop, bool& pause) {
+  for (const auto& [m, column] : block_.m) {
+    switch (m) {
+      case 0:
+      case 10:
+      case 600:
+        pause = true;  // the program goes on when the operator resumes
         break;
-    }
-    return 0;
-  }
-
-  // The operator at i (without consuming it), and its length.
-  Op peek_op(std::size_t i, std::size_t& len) const {
-    const std::string_view s = std::string_view(line_.text).substr(i);
-    struct Name {
-      std::string_view text;
-      Op op;
-    };
-    static constexpr std::array<Name, 15> kOps{{{"**", Op::pow},
-                                                {"*", Op::mul},
-                                                {"/", Op::div},
-                                                {"mod", Op::mod},
-                                                {"+", Op::add},
-                                                {"-", Op::sub},
-                                                {"eq", Op::eq},
-                                                {"ne", Op::ne},
-                                                {"gt", Op::gt},
-                                                {"ge", Op::ge},
-                                                {"lt", Op::lt},
-                                                {"le", Op::le},
-                                                {"and", Op::and_},
-                                                {"or", Op::or_},
-                                                {"xor", Op::xor_}}};
-    for (const Name& n : kOps) {
-      if (s.substr(0, n.text.size()) == n.text) {
-        len = n.text.size();
-        return n.op;
-      }
-    }
-    len = 0;
-    return Op::none;
-  }
-
-  double read_binary(std::size_t& i, int min_prec) {
-    double left = read_value(i);
-    for (;;) {
-      std::size_t len = 0;
-      const Op op = peek_op(i, len);
-      if (op == Op::none || precedence(op) < min_prec) return left;
-      const std::size_t at = i;
-      i += len;
-      const double right = read_binary(i, precedence(op) + 1);
-      left = checked(apply(op, left, right, at), at);
-    }
-  }
-
-  double apply(Op op, double a, double b, std::size_t at) const {
-    if (fanuc_) {
-      // A vacant variable (NaN here) is "null": equal only to another null, 0 elsewhere.
-      const bool na = std::isnan(a), nb = std::isnan(b);
-      if (op == Op::eq && (na || nb)) return na && nb ? 1 : 0;
-      if (op == Op::ne && (na || nb)) return na && nb ? 0 : 1;
-      if (na) a = 0;
-      if (nb) b = 0;
-      if (op == Op::and_ || op == Op::or_ || op == Op::xor_) {
-        if (std::abs(a) > 2e9 || std::abs(b) > 2e9 || a != std::floor(a) || b != std::floor(b)) {
-          fail(at, "AND, OR and XOR take whole numbers (Fanuc: bit by bit)");
-        }
-        const auto x = static_cast<long long>(a), y = static_cast<long long>(b);
-        return static_cast<double>(op == Op::and_ ? (x & y) : op == Op::or_ ? (x | y) : (x ^ y));
-      }
-    }
-    switch (op) {
-      case Op::pow:
-        if (a < 0 && std::floor(b) != b) fail(at, "a negative number to a non-integer power");
-        return std::pow(a, b);
-      case Op::mul:
-        return a * b;
-      case Op::div:
-        if (b == 0) fail(at, "division by zero");
-        return a / b;
-      case Op::mod: {
-        if (b == 0) fail(at, "MOD by zero");
-        double r = std::fmod(a, b);
-        if (r < 0) r += std::abs(b);
-        return r;
-      }
-      case Op::add:
-        return a + b;
-      case Op::sub:
-        return a - b;
-      case Op::eq:
-        return std::abs(a - b) < kTolEqual ? 1 : 0;
-      case Op::ne:
-        return std::abs(a - b) >= kTolEqual ? 1 : 0;
-      case Op::gt:
-        return a > b ? 1 : 0;
-      case Op::ge:
-        return (std::abs(a - b) < kTolEqual || a >= b) ? 1 : 0;
-      case Op::lt:
-        return a < b ? 1 : 0;
-      case Op::le:
-        return (std::abs(a - b) < kTolEqual || a <= b) ? 1 : 0;
-      case Op::and_:
-        return (a != 0 && b != 0) ? 1 : 0;
-      case Op::or_:
-        return (a != 0 || b != 0) ? 1 : 0;
-      case Op::xor_:
-        return ((a != 0) != (b != 0)) ? 1 : 0;
-      case Op::none:
-        break;
-    }
-    return a;
-  }
-
-  [[nodiscard]] static double zero_if_vacant(double v) { return std::isnan(v) ? 0.0 : v; }
-
-  // A function name and '[' at i (else the letter is the next word: "X F100").
-  bool function_follows(std::size_t i) const {
-    const std::string& s = line_.text;
-    std::size_t j = i;
-    while (j < s.size() && s[j] >= 'a' && s[j] <= 'z') ++j;
-    return j > i + 1 && j < s.size() && s[j] == '[';
-  }
-
-  double read_function(std::size_t& i) {
-    const std::string& s = line_.text;
-    const std::size_t at = i;
-    std::size_t j = i;
-    while (j < s.size() && s[j] >= 'a' && s[j] <= 'z') ++j;
-    const std::string_view name = std::string_view(s).substr(i, j - i);
-    static constexpr std::array<std::string_view, 14> kNames{
-        "abs", "acos", "asin",  "atan", "cos",  "exp", "fix",
-        "fup", "ln",   "round", "sin",  "sqrt", "tan", "exists"};
-    if (std::find(kNames.begin(), kNames.end(), name) == kNames.end()) {
-      fail(at, fmt::format("unknown function '{}' (ABS ACOS ASIN ATAN COS EXISTS EXP FIX FUP LN "
-                           "ROUND SIN SQRT TAN)",
-                           name));
-    }
-    i = j;
-    if (i >= s.size() || s[i] != '[') {
-      fail(i, fmt::format("{} needs its argument in [ ]", name));
-    }
-    if (name == "exists") {
-      // EXISTS[#<name>]: 1 when the named parameter is defined.
-      ++i;
-      if (s.compare(i, 2, "#<") != 0) fail(i, "EXISTS needs a named parameter: EXISTS[#<name>]");
-      const std::size_t close = s.find('>', i);
-      if (close == std::string::npos) fail(i, "the parameter name has no closing '>'");
-      const std::string pname = s.substr(i + 2, close - i - 2);
-      i = close + 1;
-      if (i >= s.size() || s[i] != ']') fail(i, "expected ']' after EXISTS's parameter");
-      ++i;
-      return find_named(pname) != nullptr ? 1 : 0;
-    }
-    if (name == "atan" && fanuc_) {
-      // Fanuc writes ATAN[y]/[x] or ATAN[y,x].
-      const std::size_t comma = line_.text.find(',', i);
-      const std::size_t close = line_.text.find(']', i);
-      if (comma != std::string::npos && comma < close) {
-        ++i;
-        const double yy = zero_if_vacant(read_binary(i, 1));
-        ++i;  // ','
-        const double xx = zero_if_vacant(read_binary(i, 1));
-        if (i >= s.size() || s[i] != ']') fail(i, "ATAN is written ATAN[y,x]");
-        ++i;
-        return std::atan2(yy, xx) * 180.0 / kPi;
-      }
-    }
-    const double x = zero_if_vacant(read_expression(i));
-    if (name == "atan") {
-      // ATAN[y]/[x]: degrees, the quadrant from both signs.
-      if (i >= s.size() || s[i] != '/') fail(i, "ATAN is written ATAN[y]/[x]");
-      ++i;
-      if (i >= s.size() || s[i] != '[') fail(i, "ATAN is written ATAN[y]/[x]");
-      const double xx = read_expression(i);
-      return std::atan2(x, zero_if_vacant(xx)) * 180.0 / kPi;
-    }
-    if (name == "abs") return std::abs(x);
-    if (name == "acos" || name == "asin") {
-      if (x < -1 || x > 1) fail(at, fmt::format("{} of {:g}, outside -1 .. 1", name, x));
-      return (name == "acos" ? std::acos(x) : std::asin(x)) * 180.0 / kPi;
-    }
-    if (name == "cos") return std::cos(x * kPi / 180.0);
-    if (name == "sin") return std::sin(x * kPi / 180.0);
-    if (name == "tan") return std::tan(x * kPi / 180.0);
-    if (name == "exp") return std::exp(x);
-    if (name == "fix") return std::floor(x);
-    if (name == "fup") return std::ceil(x);
-    if (name == "ln") {
-      if (x <= 0) fail(at, fmt::format("LN of {:g}, which is not > 0", x));
-      return std::log(x);
-    }
-    if (name == "round") {
-      if (std::abs(x) > 2e9) fail(at, fmt::format("ROUND of {:g}, beyond +-2e9", x));
-      return static_cast<double>(static_cast<int>(x + (x < 0 ? -0.5 : 0.5)));
-    }
-    // sqrt
-    if (x < 0) fail(at, fmt::format("SQRT of {:g}, which is negative", x));
-    return std::sqrt(x);
-  }
-
-  // '#' then a number/expression (numbered) or <name>.
-  double read_parameter(std::size_t& i) {
-    const std::size_t at = i;
-    ++i;
-    if (i < line_.text.size() && line_.text[i] == '<') {
-      const std::string name = read_name(i);
-      return named_value(name, at);
-    }
-    const int index = parameter_index(read_value(i), at);
-    if (fanuc_) return fanuc_variable(index);
-    if (index >= 5420 && index <= 5428) {
-      // The current position in the active system (A B C U V W: 0).
-      if (comp_on()) {
-        fail(at, fmt::format("#{} (the current position) cannot be read with cutter radius "
-                             "compensation on (#<_x> #<_y> #<_z> give the tool centre)",
-                             index));
-      }
-      return index <= 5422 ? cur_pos_[index - 5420] / unit_ : 0.0;
-    }
-    return params_[static_cast<std::size_t>(index)];
-  }
-
-  // Fanuc's system variables that describe the position; #0 is always vacant.
-  double fanuc_variable(int index) const {
-    if (index >= 5001 && index <= 5003) return cur_pos_[index - 5001] / unit_;
-    if (index >= 5041 && index <= 5043) return current()[index - 5041] / unit_;
-    if (index >= 5021 && index <= 5023) return to_machine_tip(cur_pos_)[index - 5021] / unit_;
-    return params_[static_cast<std::size_t>(index)];
-  }
-
-  int parameter_index(double v, std::size_t at) const {
-    if (fanuc_ && std::isnan(v)) fail(at, "a variable number that is vacant (#0)");
-    if (fanuc_ && v == 0) return 0;  // #0: vacant, read only
-    const double r = std::round(v);
-    if (std::abs(v - r) > 1e-4) fail(at, fmt::format("parameter number {:g} is not whole", v));
-    if (r < 1 || r >= kMaxParameter) {
-      fail(at, fmt::format("parameter number {:g} is outside 1 .. {}", r, kMaxParameter - 1));
-    }
-    return static_cast<int>(r);
-  }
-
-  // At '<': the name up to '>' (blanks already removed, lower case).
-  std::string read_name(std::size_t& i) {
-    const std::size_t close = line_.text.find('>', i);
-    if (close == std::string::npos) fail(i, "the parameter name has no closing '>'");
-    if (close == i + 1) fail(i, "an empty parameter name");
-    std::string name = line_.text.substr(i + 1, close - i - 1);
-    i = close + 1;
-    return name;
-  }
-
-  double* find_named(const std::string& name) {
-    if (!name.empty() && name[0] == '_') {
-      auto it = globals_.find(name);
-      return it == globals_.end() ? nullptr : &it->second;
-    }
-    for (auto& [k, v] : frames_.back().locals) {
-      if (k == name) return &v;
-    }
-    return nullptr;
-  }
-
-  double named_value(const std::string& name, std::size_t at) {
-    if (name == "_feed" && prog_.info.feed_read_at.empty()) {
-      prog_.info.feed_read_at =
-          fmt::format("{}:{}:{}", sources_[cur_.source].name, cur_.line_no, col_of(at));
-    }
-    if (const auto v = predefined(name)) return *v;
-    if (const double* p = find_named(name)) return *p;
-    fail(at, fmt::format("named parameter #<{}> is not defined", name));
-  }
-
-  // LinuxCNC's read-only named parameters (the ones that describe motion).
-  std::optional<double> predefined(const std::string& name) const {
-    if (name.empty() || name[0] != '_') return std::nullopt;
-    const double u = unit_;
-    if (name == "_x") return current().x() / u;
-    if (name == "_y") return current().y() / u;
-    if (name == "_z") return current().z() / u;
-    if (name == "_abs_x" || name == "_abs_y" || name == "_abs_z") {
-      const Vec3 m = to_machine_tip(cur_pos_);
-      return (name == "_abs_x" ? m.x() : name == "_abs_y" ? m.y() : m.z()) / u;
-    }
-    if (name == "_value") return value_;
-    if (name == "_value_returned") return value_returned_ ? 1 : 0;
-    if (name == "_line") return static_cast<double>(cur_.line_no);
-    if (name == "_metric") return u == 1 ? 1 : 0;
-    if (name == "_imperial") return u == 1 ? 0 : 1;
-    if (name == "_absolute") return absolute_ ? 1 : 0;
-    if (name == "_incremental") return absolute_ ? 0 : 1;
-    if (name == "_inverse_time") return feed_mode_ == FeedMode::inverse_time ? 1 : 0;
-    if (name == "_units_per_minute") return feed_mode_ == FeedMode::per_minute ? 1 : 0;
-    if (name == "_units_per_rev") return feed_mode_ == FeedMode::per_rev ? 1 : 0;
-    if (name == "_feed") return feed_ / u;  // program units
-    if (name == "_rpm") return speed_;
-    if (name == "_current_tool") return tool_loaded_;
-    if (name == "_selected_tool") return tool_selected_;
-    if (name == "_tool_offset") return tool_z_ / u;
-    if (name == "_coord_system") {
-      static constexpr std::array<int, 9> kCodes{540, 550, 560, 570, 580, 590, 591, 592, 593};
-      return kCodes[static_cast<std::size_t>(system_ - 1)];
-    }
-    if (name == "_plane") return plane_ == Plane::xy ? 170 : plane_ == Plane::zx ? 180 : 190;
-    if (name == "_motion_mode") return motion_ < 0 ? 800 : motion_;
-    if (name == "_ijk_absolute_mode") return arc_absolute_ ? 1 : 0;
-    if (name == "_retract_r_plane") return retract_r_ ? 1 : 0;
-    if (name == "_retract_old_z") return retract_r_ ? 0 : 1;
-    if (name == "_call_level") return static_cast<double>(frames_.size() - 1);
-    if (name == "_spindle_on") return spindle_on_ ? 1 : 0;
-    if (name == "_ccomp") return 400;
-    return std::nullopt;
-  }
-
-  void set_named(const std::string& name, double v, std::uint32_t column) {
-    if (predefined(name)) {
-      fail_at(column,
-              fmt::format("#<{}> is read-only (one of LinuxCNC's predefined parameters)", name));
-    }
-    if (double* p = find_named(name)) {
-      *p = v;
-    } else if (name[0] == '_') {
-      globals_.emplace(name, v);
-    } else {
-      frames_.back().locals.emplace_back(name, v);
-    }
-  }
-
-  // ---- the block ----------------------------------------------------------------------------
-
-  void read_block(std::size_t i) {
-    block_.clear();
-    const std::string& s = line_.text;
-    while (i < s.size()) {
-      const char c = s[i];
-      const std::size_t at = i;
-      if (c == '#') {
-        // #n = value or #<name> = value
-        ++i;
-        std::string name;
-        int index = 0;
-        if (i < s.size() && s[i] == '<') {
-          name = read_name(i);
-        } else {
-          index = parameter_index(read_value(i), at);
-        }
-        if (i >= s.size() || s[i] != '=') {
-          fail(i, "a parameter on its own is not a word: write #1 = value to set it");
-        }
-        ++i;
-        // Fanuc: the right side is an expression without brackets (#1 = #1 + 1).
-        const double v = fanuc_ ? read_binary(i, 1) : read_value(i);
-        if (fanuc_ && name.empty()) check_fanuc_write(index, at, v);
-        if (name.empty()) {
-          block_.numbered.push_back({index, v});
-        } else {
-          block_.named.push_back({std::move(name), v, col_of(at)});
-        }
-        continue;
-      }
-      if (c < 'a' || c > 'z') {
-        fail(i, fmt::format("unexpected character {} (expected a word such as G1 or X10)",
-                            ngc::shown(c)));
-      }
-      ++i;
-      char letter = c;
-      // Sinumerik's radius "CR=5".
-      if (c == 'c' && s.compare(i, 2, "r=") == 0) {
-        i += 2;
-        letter = 'r';
-      }
-      if (i >= s.size()) fail(at, fmt::format("'{}' needs a number after it", upper(c)));
-      word_ = c;
-      word_at_ = at;
-      const std::size_t value_at = i;
-      const double v = read_value(i);
-      word_ = 0;
-      if (fanuc_) {
-        if (std::isnan(v)) continue;  // a word whose variable is vacant is not there
-        if (std::string_view("xyzijkrq").find(letter) != std::string_view::npos &&
-            !decimal_warned_) {
-          const std::string_view lit = std::string_view(s).substr(value_at, i - value_at);
-          const bool plain =
-              !lit.empty() && lit.find_first_not_of("+-0123456789") == std::string_view::npos;
-          if (plain) {
-            decimal_warned_ = true;
-            warn(
-                fmt::format("{}{} has no decimal point: taken as {} {} (calculator-type input); "
-                            "a control set to least-increment input reads {:g} {}",
-                            upper(letter), lit, lit, unit_name(),
-                            v * (unit_ == 1.0 ? 0.001 : 0.0001), unit_name()));
-          }
-        }
-      }
-      if (letter == 'g' || letter == 'm') {
-        // Every code is below 1000 (G59.3, M199): anything larger is no code (and would not
-        // fit the tenths it is compared in).
-        if (!(std::abs(v) < 1e4)) fail(at, fmt::format("{}{:g} is not a code", upper(letter), v));
-        (letter == 'g' ? block_.g : block_.m).push_back({code10(v), col_of(at)});
-        continue;
-      }
-      if (letter == 'o') fail(at, "an O-word must start its line");
-      if (letter == 'e') fail(at, "unsupported word 'E'");
-      const auto k = static_cast<std::size_t>(letter - 'a');
-      if (block_.has(letter)) {
-        fail(at, fmt::format("two {} words in one block", upper(letter)));
-      }
-      block_.present |= 1U << k;
-      block_.value[k] = v;
-      block_.column[k] = col_of(at);
-    }
-  }
-
-  static char upper(char c) { return static_cast<char>(c - 'a' + 'A'); }
-
-  void check_fanuc_write(int index, std::size_t at, double v) const {
-    if (index == 0) fail(at, "#0 is always vacant: it cannot be set");
-    if (index == 3000) {
-      fail(at, fmt::format("the program raised alarm #3000 = {:g}{}", v,
-                           line_.comment.empty() ? "" : " (" + line_.comment + ")"));
-    }
-    if (index >= 5001 && index <= 5043) {
-      fail(at, fmt::format("#{} is a position the control keeps: read only", index));
-    }
-  }
-
-  // A length word in mm.
-  double len(char c) const { return block_[c] * unit_; }
-
-  void check_range(char c) const {
-    if (std::abs(block_[c]) * unit_ > kMaxCoordinate) {
-      fail_at(block_.col(c), fmt::format("{}{:g} is beyond +-1e6 mm, what trochomill represents",
-                                         upper(c), block_[c]));
-    }
-  }
-
-  void execute() {
-    pending_m98_.reset();
-    pending_m99_ = false;
-    for (const auto& gc : block_.g) {
-      if (gc.code10 == 650) {
-        macro_call(gc.column);
-        return;
-      }
-    }
-    // Words no milling program of ours uses: refused by name.
-    for (const char c : std::string_view("abcuvw")) {
-      if (block_.has(c)) {
-        fail_at(block_.col(c),
-                fmt::format("rotary axis {} is not supported (3-axis programs only)", upper(c)));
-      }
-    }
-    for (const char c : std::string_view("xyzijkrq")) {
-      if (block_.has(c)) check_range(c);
-    }
-    // G codes by modal group (two of one group are an error).
-    std::array<int, kGroups> code;
-    code.fill(-1);
-    std::array<std::uint32_t, kGroups> col{};
-    bool g53 = false;
-    for (const auto& [g, column] : block_.g) {
-      if (g == 530) {
-        g53 = true;
-        continue;
-      }
-      if (g == 610 || g == 611 || g == 640) {
-        refuse_with_comp(column, fmt::format("{} (path control mode)", code_name('G', g)));
-        continue;  // path blending: no effect on the path
-      }
-      if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
-      // G76 is Fanuc's fine boring cycle; LinuxCNC's is lathe threading.
-      if (g == 760 && !fanuc_) unsupported_g(g, column);
-      const auto it = std::find_if(kGroupOf.begin(), kGroupOf.end(),
-                                   [g = g](const GroupOf& e) { return e.code10 == g; });
-      if (it == kGroupOf.end()) unsupported_g(g, column);
-      const auto k = static_cast<std::size_t>(it->group);
-      if (it->group == kRetract) {
-        refuse_with_comp(column, fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
-      }
-      // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
-      if (it->group == kMotion && (code[k] == 800 || g == 800) && code[k] != g) {
-        if (code[k] < 0 || code[k] == 800) {
-          code[k] = g;
-          col[k] = column;
-        }
-        continue;
-      }
-      if (code[k] >= 0) {
-        fail_at(column, fmt::format("two {} codes in one block", kGroupNames[k]));
-      }
-      code[k] = g;
-      col[k] = column;
-    }
-    const int motion = code[kMotion], group0 = code[kGroup0], plane = code[kPlane],
-              units = code[kUnits], distance = code[kDistance], arc_distance = code[kArcDistance],
-              feed_mode = code[kFeedMode], tool_length = code[kToolLength], system = code[kSystem],
-              retract = code[kRetract], comp = code[kComp], dwell = code[kDwell];
-    const std::uint32_t motion_col = col[kMotion], group0_col = col[kGroup0], comp_col = col[kComp],
-                        tool_length_col = col[kToolLength], system_col = col[kSystem];
-    // Feed mode, F, S, T, M, then the G groups in LinuxCNC's order.
-    if (feed_mode >= 0) {
-      feed_mode_ = feed_mode == 930   ? FeedMode::inverse_time
-                   : feed_mode == 950 ? FeedMode::per_rev
-                                      : FeedMode::per_minute;
-    }
-    inverse_f_ = -1;
-    if (block_.has('f')) {
-      if (block_['f'] < 0) fail_at(block_.col('f'), "feed F must be >= 0");
-      if (feed_mode_ == FeedMode::inverse_time) {
-        inverse_f_ = block_['f'];
-      } else {
-        feed_ = block_['f'] * unit_;  // a unit change later keeps the feed (as LinuxCNC)
-        feed_given_ = true;
-        ++feed_events_;
-      }
-    }
-    if (block_.has('s')) {
-      if (block_['s'] < 0) fail_at(block_.col('s'), "spindle speed S must be >= 0");
-      speed_ = block_['s'];
-      prog_.info.max_spindle_rpm = std::max(prog_.info.max_spindle_rpm, speed_);
-    }
-    if (block_.has('t')) {
-      if (block_['t'] < 0 || block_['t'] != std::floor(block_['t'])) {
-        fail_at(block_.col('t'), "tool number T must be a whole number >= 0");
-      }
-      tool_selected_ = block_['t'];
-    }
-    bool stop = false, pause = false;
-    for (const auto& [m, column] : block_.m) {
-      switch (m) {
-        case 0:
-        case 10:
-        case 600:
-          pause = true;  // the program goes on when the operator resumes
-          break;
-        case 20:
-        case 300:
-          stop = true;
-          break;
-        case 30:
-        case 40:
-          spindle_on_ = true;
-          spindle_dir_ = m == 30 ? 1 : -1;
-          break;
-        case 50:
-          spindle_on_ = false;
-          spindle_dir_ = 0;
-          break;
-        case 60:
-          refuse_with_comp(column, "M6 (a tool change)");
-          tool_loaded_ = tool_selected_;
-          break;
-        case 70:
-        case 80:
-        case 90:
-        case 480:
-        case 490:
-        case 500:
-        case 510:
-        case 520:
-        case 530:
-        case 620:
-        case 630:
-        case 640:
-        case 650:
-        case 660:
-        case 670:
-        case 680:
-          // Outputs wait for motion to stop, which a compensated path cannot (LinuxCNC).
-          refuse_with_comp(column, fmt::format("{} (a motion output)", code_name('M', m)));
-          break;
-        case 980: {
-          if (!fanuc_) {
-            fail_at(column,
-                    "M98 is Fanuc's subprogram call: read the program with the fanuc "
-                    "dialect, or call an o-word subroutine");
-          }
-          if (!block_.has('p')) fail_at(column, "M98 needs the program number in P");
-          double prog = block_['p'], times = block_.has('l') ? block_['l'] : 1;
-          if (prog < 0 || prog != std::floor(prog) || prog > 99999999) {
-            fail_at(block_.col('p'), "M98 P must be a program number");
-          }
-          if (!block_.has('l') && prog > 9999) {  // P<times 4 digits><program 4 digits>
-            times = std::floor(prog / 10000);
-            prog = std::fmod(prog, 10000);
-          }
-          if (times < 0 || times != std::floor(times) || times > 9999) {
-            fail_at(column, "M98's repeat count L must be a whole number 0 .. 9999");
-          }
-          pending_m98_ = std::make_pair(prog, times);
-          break;
-        }
-        case 990:
-          if (!fanuc_) {
-            fail_at(column,
-                    "M99 is Fanuc's subprogram return: read the program with the fanuc "
-                    "dialect, or end an o-word subroutine with endsub");
-          }
-          pending_m99_ = true;
-          m99_p_ = block_.has('p') ? block_['p'] : -1;
-          break;
-        case 610:
-          if (!block_.has('q')) fail_at(column, "M61 needs the tool number in Q");
-          tool_loaded_ = block_['q'];
-          break;
-        case 700:
-          save_modal(saved_);
-          break;
-        case 710:
-          saved_.valid = false;
-          break;
-        case 720:
-          if (!saved_.valid) fail_at(column, "M72 without a state saved by M70");
-          restore_modal(saved_);
-          break;
-        case 730:
-          if (frames_.size() < 2) fail_at(column, "M73 is for subroutines (it restores at return)");
-          save_modal(frames_.back().restore_modal ? sub_saved_.back() : push_sub_saved());
-          frames_.back().restore_modal = true;
-          break;
-        default:
-          if (m >= 1000 && m <= 1990 && m % 10 == 0) {
-            warn(fmt::format("{} (a user M-code) was ignored: it runs a program of the machine's",
-                             code_name('M', m)));
-            break;
-          }
-          fail_at(column, fmt::format("unsupported M-code {}", code_name('M', m)));
-      }
-    }
-    if (dwell >= 0 && !block_.has('p')) fail_at(block_.g.front().column, "G4 needs P (seconds)");
-    if (plane >= 0) {
-      if (plane != 170) refuse_with_comp(block_.g.front().column, "a plane change (G18/G19)");
-      plane_ = plane == 170 ? Plane::xy : plane == 180 ? Plane::zx : Plane::yz;
-    }
-    if (units >= 0) {
-      unit_ = (units == 200 || units == 700 || units == 7000) ? 25.4 : 1.0;
-      if (unit_ != 1.0) prog_.info.inch_units_seen = true;
-    }
-    if (comp == 400) {
-      comp_stop();
-    } else if (comp >= 0) {
-      comp_start(comp, comp_col);
-    }
-    if (tool_length >= 0) {
-      refuse_with_comp(tool_length_col, "a tool length offset change (G43/G43.1/G49)");
-      tool_length_offset(tool_length);
-    }
-    if (system >= 0) {
-      refuse_with_comp(system_col, "a coordinate system change (G54-G59.3)");
-      select_system(system);
-    }
-    if (distance >= 0) absolute_ = distance == 900;
-    if (arc_distance >= 0) arc_absolute_ = arc_distance == 901;
-    if (retract >= 0) retract_r_ = retract == 990;
-    if (group0 >= 0) {
-      if (group0 != 100) {
-        refuse_with_comp(group0_col, fmt::format("{}", code_name('G', group0)));
-      }
-      non_modal(group0, group0_col);
-    }
-    if (motion >= 0) {
-      if (motion == 800) {
-        motion_ = -1;
-        cycle_il_flag_ = false;
-      } else {
-        motion_ = motion;
-      }
-    }
-    const bool axis_used_by_group0 =
-        group0 == 100 || group0 == 280 || group0 == 300 || group0 == 520 || group0 == 920;
-    if (block_.has_axis() && !axis_used_by_group0) {
-      if (motion == 800) {
-        fail_at(motion_col, "G80 cancels the motion mode: it cannot take axis words");
-      }
-      if (motion_ < 0) {
-        const char first = block_.has('x') ? 'x' : block_.has('y') ? 'y' : 'z';
-        fail_at(block_.col(first), "axis words without a motion mode (G0/G1/G2/G3)");
-      }
-      ++prog_.info.motion_blocks;
-      if (motion_ >= 730) {
-        refuse_with_comp(motion >= 0        ? motion_col
-                         : block_.g.empty() ? 0
-                                            : block_.g.front().column,
-                         "a canned cycle");
-        canned_cycle(motion_, motion >= 0 ? motion_col
-                                          : block_.col(block_.has('x')   ? 'x'
-                                                       : block_.has('y') ? 'y'
-                                                                         : 'z'));
-      } else {
-        move(g53, motion >= 0 ? motion_col
-                              : block_.col(block_.has('x')   ? 'x'
-                                           : block_.has('y') ? 'y'
-                                                             : 'z'));
-      }
-    } else if (motion >= 20 && motion <= 30 && !axis_used_by_group0) {
-      fail_at(motion_col, "arc without an end point");
-    } else if (g53) {
-      fail_at(block_.g.front().column, "G53 needs axis words (a move in machine coordinates)");
-    }
-    if (motion_ < 730) {
-      cycle_il_flag_ = false;
-      cycle_motion_ = -1;  // the next cycle is a first one (its Z and R again)
-    }
-    check_unused(group0, dwell, tool_length, comp > 400);
-    if (stop || pause) {
-      comp_flush_at_stop(block_.m.front().column);
-      if (stop) comp_side_ = CompSide::off, comp_first_ = true;
-    }
-    if (stop) end_program();
-    if (pending_m98_ && !ended_) subprogram_call();
-    if (pending_m99_ && !ended_) subprogram_return();
-  }
-
-  // Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).
-  void check_unused(int group0, int dwell, int tool_length, bool comp_word) const {
-    const bool moved = block_.has_axis() && group0 != 100 && group0 != 920 && group0 != 520;
-    const bool cycle = moved && motion_ >= 730;
-    const bool arc = moved && (motion_ == 20 || motion_ == 30);
-    bool m61 = false;
-    for (const auto& mc : block_.m) m61 = m61 || mc.code10 == 610;
-    auto refuse = [&](char c, const char* users) {
-      fail_at(block_.col(c), fmt::format("{} word with no {} to use it", upper(c), users));
-    };
-    const bool q_cycle = cycle && (motion_ == 730 || motion_ == 830 ||
-                                   (fanuc_ && (motion_ == 760 || motion_ == 870)));
-    if (block_.has('q') && !q_cycle && !m61) refuse('q', "G73, G83 or M61");
-    const bool m98 = pending_m98_.has_value();
-    // LinuxCNC takes no L with G74 (its check lists G73 and G76-G89).
-    const bool l_cycle = cycle && (fanuc_ || motion_ != 740);
-    if (block_.has('l') && !l_cycle && group0 != 100 && !m98) {
-      refuse('l', "G10 or canned cycle other than G74");
-    }
-    if (block_.has('r') && !arc && !cycle && group0 != 100) {
-      refuse('r', "G2/G3, canned cycle or G10");
-    }
-    const bool g87 = cycle && motion_ == 870 && !fanuc_;
-    for (const char c : std::string_view("ijk")) {
-      if (block_.has(c) && !arc && !g87) refuse(c, "G2/G3 or G87");
-    }
-    if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_) {
-      refuse('p', "G2/G3, G4, G10 or canned cycle");
-    }
-    if (block_.has('h') && tool_length != 430) refuse('h', "G43");
-    // D alone: LinuxCNC refuses it; Sinumerik's "T1 D1" (its tool offset) is tolerated, as its
-    // other words are, and Fanuc's D is an offset register.
-    if (block_.has('d') && !comp_word && opt_.dialect == Dialect::linuxcnc && !block_.has('t')) {
-      refuse('d', "G41/G42 (or G41.1/G42.1)");
-    }
-  }
-
-  [[noreturn]] void unsupported_g(int g, std::uint32_t column) const {
-    const std::string name = code_name('G', g);
-    if (g == 330 || g == 331) {
-      fail_at(column, fmt::format("{} (threading) is not supported on a milling path", name));
-    }
-    if (g >= 380 && g <= 385) fail_at(column, fmt::format("{} (probing) is not supported", name));
-    if (g == 50 || g == 51 || g == 52 || g == 53) {
-      fail_at(column, fmt::format("{} (splines) is not supported", name));
-    }
-    if (g == 760) {
-      fail_at(column,
-              "G76 is LinuxCNC's lathe threading cycle, not supported on a milling path "
-              "(Fanuc's fine boring G76: read with the fanuc dialect)");
-    }
-    if (g == 70 || g == 80 || g == 960) {
-      fail_at(column, fmt::format("{} is a lathe mode, not supported", name));
-    }
-    fail_at(column, fmt::format("unsupported G-code {}", name));
-  }
-
-  // ---- modal state changes ------------------------------------------------------------------
-
-  ModalSave& push_sub_saved() {
-    sub_saved_.emplace_back();
-    return sub_saved_.back();
-  }
-
-  void save_modal(ModalSave& m) const {
-    m.valid = true;
-    m.plane = plane_;
-    m.unit = unit_;
-    m.absolute = absolute_;
-    m.arc_absolute = arc_absolute_;
-    m.feed_mode = feed_mode_;
-    m.feed = feed_;
-    m.speed = speed_;
-    m.retract_r = retract_r_;
-    m.system = system_;
-  }
-  void restore_modal(const ModalSave& m) {
-    plane_ = m.plane;
-    unit_ = m.unit;
-    absolute_ = m.absolute;
-    arc_absolute_ = m.arc_absolute;
-    feed_mode_ = m.feed_mode;
-    if (feed_ != m.feed) ++feed_events_;
-    feed_ = m.feed;
-    speed_ = m.speed;
-    retract_r_ = m.retract_r;
-    if (m.system != system_) select_system(m.system == 1 ? 540 : 540 + (m.system - 1) * 10);
-  }
-
-  // Parameters of a coordinate system n (1 = G54 .. 9 = G59.3): X at 5201 + 20 n, R at 5210 +
-  // 20 n. G92: 5211-5213, enabled at 5210. G28: 5161-5163, G30: 5181-5183. All mm.
-  static std::size_t sys_param(int n, int axis) {
-    return static_cast<std::size_t>(5201 + 20 * n + axis);
-  }
-
-  void init_offsets() {
-    if (opt_.work_system < 1 || opt_.work_system > 9) {
-      throw InputError(
-          fmt::format("work system {} is outside 1 (G54) .. 9 (G59.3)", opt_.work_system));
-    }
-    for (int n = 1; n <= 9; ++n) {
-      const auto& o = opt_.work_offsets_mm[static_cast<std::size_t>(n - 1)];
-      for (int a = 0; a < 3; ++a) params_[sys_param(n, a)] = o ? (*o)[a] : 0.0;
-      params_[sys_param(n, 9)] = opt_.work_rotation_deg[static_cast<std::size_t>(n - 1)];
-    }
-    system_ = opt_.work_system;
-    params_[5220] = system_;
-    out_origin_ = Vec3(params_[sys_param(system_, 0)], params_[sys_param(system_, 1)],
-                       params_[sys_param(system_, 2)]);
-    out_rotation_ = params_[sys_param(system_, 9)];
-    load_system();
-    // G28 / G30 positions: given, or X0 Y0 of the output frame at home_z above it.
-    auto home = [&](const std::optional<Vec3>& given, std::size_t p) {
-      const Vec3 h = given ? *given : out_origin_ + Vec3(0, 0, opt_.home_z_mm);
-      for (int a = 0; a < 3; ++a) params_[p + static_cast<std::size_t>(a)] = h[a];
-      return given.has_value();
-    };
-    g28_given_ = home(opt_.g28_position_mm, 5161);
-    g30_given_ = home(opt_.g30_position_mm, 5181);
-  }
-
-  void load_system() {
-    origin_ = Vec3(params_[sys_param(system_, 0)], params_[sys_param(system_, 1)],
-                   params_[sys_param(system_, 2)]);
-    rotation_ = params_[sys_param(system_, 9)];
-  }
-
-  // Machine position of the tool tip for program coordinates p.
-  [[nodiscard]] Vec3 to_machine_tip(const Vec3& p) const {
-    double x = p.x() + g92_.x(), y = p.y() + g92_.y();
-    rotate(x, y, rotation_);
-    return Vec3(x + origin_.x(), y + origin_.y(), p.z() + g92_.z() + origin_.z());
-  }
-  // Program coordinates of a machine tip position (LinuxCNC's find_relative without the tool).
-  [[nodiscard]] Vec3 from_machine_tip(const Vec3& m) const {
-    double x = m.x() - origin_.x(), y = m.y() - origin_.y();
-    rotate(x, y, -rotation_);
-    return Vec3(x - g92_.x(), y - g92_.y(), m.z() - origin_.z() - g92_.z());
-  }
-  // The output frame (the job's work system as the program started) of program coordinates.
-  [[nodiscard]] Vec3 to_out(const Vec3& p) const {
-    const Vec3 m = to_machine_tip(p);
-    double x = m.x() - out_origin_.x(), y = m.y() - out_origin_.y();
-    rotate(x, y, -out_rotation_);
-    return Vec3(x, y, m.z() - out_origin_.z());
-  }
-  // A direction (no translation) from program to output frame.
-  [[nodiscard]] Vec3 dir_to_out(const Vec3& d) const {
-    double x = d.x(), y = d.y();
-    rotate(x, y, rotation_ - out_rotation_);
-    return Vec3(x, y, d.z());
-  }
-
-  void note_system_used(int n) {
-    if (n != opt_.work_system && !opt_.work_offsets_mm[static_cast<std::size_t>(n - 1)] &&
-        !system_warned_[static_cast<std::size_t>(n - 1)]) {
-      system_warned_[static_cast<std::size_t>(n - 1)] = true;
-      static constexpr std::array<std::string_view, 9> kNames{
-          "G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
-      warn(
-          fmt::format("{} is used but its offset is not given ([machine] work_offsets): "
-                      "assumed equal to {}'s",
-                      kNames[static_cast<std::size_t>(n - 1)],
-                      kNames[static_cast<std::size_t>(opt_.work_system - 1)]));
-      // Unknown offsets are taken as the output system's (a program moving between systems on
-      // one part then keeps its geometry).
-      for (int a = 0; a < 3; ++a)
-        params_[sys_param(n, a)] = params_[sys_param(opt_.work_system, a)];
-    }
-  }
-
-  void select_system(int g) {
-    static constexpr std::array<int, 9> kCodes{540, 550, 560, 570, 580, 590, 591, 592, 593};
-    const int n = static_cast<int>(std::find(kCodes.begin(), kCodes.end(), g) - kCodes.begin()) + 1;
-    if (n == system_) return;
-    note_system_used(n);
-    const Vec3 machine = to_machine_tip(cur_pos_);
-    system_ = n;
-    params_[5220] = n;
-    load_system();
-    cur_pos_ = from_machine_tip(machine);
-  }
-
-  void tool_length_offset(int g) {
-    double z = 0;
-    if (g == 430) {
-      double h = tool_loaded_;
-      if (block_.has('h')) h = block_['h'];
-      if (h < 0 || h != std::floor(h) || h > 1e6) {
-        fail_at(block_.col('h'), "H must be a whole number 0 .. 1e6");
-      }
-      const auto it = tools_.find(static_cast<int>(h));
-      unknown_tool_ = -1;
-      if (it != tools_.end()) {
-        z = it->second.length_mm;
-      } else if (h != 0) {
-        unknown_tool_ = h;  // named if a machine-coordinate move needs the length
-      }
-    } else if (g == 431) {
-      unknown_tool_ = -1;
-      if (!block_.has('z')) fail_at(block_.g.front().column, "G43.1 needs the length in Z");
-      z = len('z');
-      block_.present &= ~(1U << ('z' - 'a'));  // the Z word was the offset, not a move
-    }
-    if (g == 490) unknown_tool_ = -1;
-    // The spindle does not move: the controlled point's program Z takes the change.
-    cur_pos_.z() += tool_z_ - z;
-    tool_z_ = z;
-  }
-
-  void non_modal(int g, std::uint32_t column) {
-    switch (g) {
-      case 100:
-        g10(column);
-        break;
-      case 280:
+      case 20:
       case 300:
-        home_move(g, column);
+        stop = true;
         break;
-      case 281:
-      case 301: {
-        // Store the current machine position (of the spindle's gauge line, as LinuxCNC) as
-        // the G28 / G30 position.
-        const Vec3 m = to_machine_tip(cur_pos_) + Vec3(0, 0, tool_z_);
-        const std::size_t p = g == 281 ? 5161 : 5181;
-        for (int a = 0; a < 3; ++a) params_[p + static_cast<std::size_t>(a)] = m[a];
-        (g == 281 ? g28_given_ : g30_given_) = true;
+      case 30:
+      case 40:
+        spindle_on_ = true;
+        spindle_dir_ = m == 30 ? 1 : -1;
+        break;
+      case 50:
+        spindle_on_ = false;
+        spindle_dir_ = 0;
+        break;
+      case 60:
+        comp_.refuse(column, "M6 (a tool change)");
+        tool_loaded_ = tool_selected_;
+        break;
+      case 70:
+      case 80:
+      case 90:
+      case 480:
+      case 490:
+      case 500:
+      case 510:
+      case 520:
+      case 530:
+      case 620:
+      case 630:
+      case 640:
+      case 650:
+      case 660:
+      case 670:
+      case 680:
+        // Outputs wait for motion to stop, which a compensated path cannot (LinuxCNC).
+        comp_.refuse(column, fmt::format("{} (a motion output)", code_name('M', m)));
+        break;
+      case 980: {
+        if (!fanuc_) {
+          fail_at(column,
+                  "M98 is Fanuc's subprogram call: read the program with the fanuc "
+                  "dialect, or call an o-word subroutine");
+        }
+        if (!block_.has('p')) fail_at(column, "M98 needs the program number in P");
+        double prog = block_['p'], times = block_.has('l') ? block_['l'] : 1;
+        if (prog < 0 || prog != std::floor(prog) || prog > 99999999) {
+          fail_at(block_.col('p'), "M98 P must be a program number");
+        }
+        if (!block_.has('l') && prog > 9999) {  // P<times 4 digits><program 4 digits>
+          times = std::floor(prog / 10000);
+          prog = std::fmod(prog, 10000);
+        }
+        if (times < 0 || times != std::floor(times) || times > 9999) {
+          fail_at(column, "M98's repeat count L must be a whole number 0 .. 9999");
+        }
+        pending_m98_ = std::make_pair(prog, times);
         break;
       }
-      case 920: {
-        // G92: offsets so that the current point has the given coordinates.
-        if (!block_.has_axis()) fail_at(column, "G92 needs at least one axis word");
-        for (int a = 0; a < 3; ++a) {
-          const char c = static_cast<char>('x' + a);
-          if (!block_.has(c)) continue;
-          g92_[a] = cur_pos_[a] + g92_[a] - len(c);
-          cur_pos_[a] = len(c);
-          params_[5211 + static_cast<std::size_t>(a)] = g92_[a];
+      case 990:
+        if (!fanuc_) {
+          fail_at(column,
+                  "M99 is Fanuc's subprogram return: read the program with the fanuc "
+                  "dialect, or end an o-word subroutine with endsub");
         }
-        params_[5210] = 1;
+        pending_m99_ = true;
+        m99_p_ = block_.has('p') ? block_['p'] : -1;
         break;
-      }
-      case 520: {
-        // G52: a local offset, given directly.
-        for (int a = 0; a < 3; ++a) {
-          const char c = static_cast<char>('x' + a);
-          if (!block_.has(c)) continue;
-          cur_pos_[a] += g92_[a] - len(c);
-          g92_[a] = len(c);
-          params_[5211 + static_cast<std::size_t>(a)] = g92_[a];
-        }
-        params_[5210] = 1;
+      case 610:
+        if (!block_.has('q')) fail_at(column, "M61 needs the tool number in Q");
+        tool_loaded_ = block_['q'];
         break;
-      }
-      case 921:
-      case 922:
-        cur_pos_ += g92_;
-        g92_.setZero();
-        params_[5210] = 0;
-        if (g == 921) {
-          for (std::size_t p = 5211; p <= 5219; ++p) params_[p] = 0;
-        }
+      case 700:
+        save_modal(saved_);
         break;
-      case 923:
-        params_[5210] = 1;
-        for (int a = 0; a < 3; ++a) {
-          const double o = params_[5211 + static_cast<std::size_t>(a)];
-          cur_pos_[a] += g92_[a] - o;
-          g92_[a] = o;
-        }
+      case 710:
+        saved_.valid = false;
+        break;
+      case 720:
+        if (!saved_.valid) fail_at(column, "M72 without a state saved by M70");
+        restore_modal(saved_);
+        break;
+      case 730:
+        if (frames_.size() < 2) fail_at(column, "M73 is for subroutines (it restores at return)");
+        save_modal(frames_.back().restore_modal ? sub_saved_.back() : push_sub_saved());
+        frames_.back().restore_modal = true;
         break;
       default:
-        break;
+        if (m >= 1000 && m <= 1990 && m % 10 == 0) {
+          warn(fmt::format("{} (a user M-code) was ignored: it runs a program of the machine's",
+                           code_name('M', m)));
+          break;
+        }
+        fail_at(column, fmt::format("unsupported M-code {}", code_name('M', m)));
     }
   }
+}
 
-  void g10(std::uint32_t column) {
-    if (!block_.has('l')) fail_at(column, "G10 needs L (L1 tool table, L2 or L20 work offsets)");
-    const double lv = block_['l'];
-    if (lv != std::floor(lv) || lv < 0 || lv > 100) {
-      fail_at(block_.col('l'), fmt::format("G10 L{:g}: L is 1, 2, 10, 11 or 20", lv));
+// G4's P, then the G groups that set a mode or an offset, in LinuxCNC's order: plane, units,
+// cutter compensation, tool length, coordinate system, distance modes, retract mode, group 0.
+void Interpreter::set_modes(const BlockCodes& codes) {
+  const int plane = codes[kPlane], units = codes[kUnits], distance = codes[kDistance],
+            arc_distance = codes[kArcDistance], tool_length = codes[kToolLength],
+            system = codes[kSystem], retract = codes[kRetract], comp = codes[kComp],
+            group0 = codes[kGroup0], dwell = codes[kDwell];
+  const std::uint32_t group0_col = codes.col[kGroup0], comp_col = codes.col[kComp],
+                      tool_length_col = codes.col[kToolLength], system_col = codes.col[kSystem];
+  if (dwell >= 0 && !block_.has('p')) fail_at(block_.g.front().column, "G4 needs P (seconds)");
+  if (plane >= 0) {
+    if (plane != 170) comp_.refuse(block_.g.front().column, "a plane change (G18/G19)");
+    plane_ = plane == 170 ? Plane::xy : plane == 180 ? Plane::zx : Plane::yz;
+  }
+  if (units >= 0) {
+    unit_ = (units == 200 || units == 700 || units == 7000) ? 25.4 : 1.0;
+    if (unit_ != 1.0) prog_.info.inch_units_seen = true;
+  }
+  if (comp == 400) {
+    comp_.stop();
+  } else if (comp >= 0) {
+    comp_.start(comp, comp_col);
+  }
+  if (tool_length >= 0) {
+    comp_.refuse(tool_length_col, "a tool length offset change (G43/G43.1/G49)");
+    tool_length_offset(tool_length);
+  }
+  if (system >= 0) {
+    comp_.refuse(system_col, "a coordinate system change (G54-G59.3)");
+    select_system(system);
+  }
+  if (distance >= 0) absolute_ = distance == 900;
+  if (arc_distance >= 0) arc_absolute_ = arc_distance == 901;
+  if (retract >= 0) retract_r_ = retract == 990;
+  if (group0 >= 0) {
+    if (group0 != 100) {
+      comp_.refuse(group0_col, fmt::format("{}", code_name('G', group0)));
     }
-    const int l = static_cast<int>(lv);
-    if (l == 1 || l == 10 || l == 11) {
-      // Tool table entries: the length matters only to machine-coordinate moves.
-      if (!block_.has('p')) fail_at(column, fmt::format("G10 L{} needs the tool number in P", l));
-      const double tool = block_['p'];
-      if (tool < 0 || tool != std::floor(tool) || tool > 1e6) {
-        fail_at(block_.col('p'),
-                fmt::format("G10 L{} P{:g}: P is a tool number 0 .. 1e6", l, tool));
-      }
-      ToolTableEntry& t = tools_[static_cast<int>(tool)];
-      if (l == 1) {
-        if (block_.has('z')) t.length_mm = len('z');
-        if (block_.has('r')) t.diameter_mm = 2 * len('r');
-      } else {
-        // L10/L11: the length so that the current point would be at the given Z.
-        if (block_.has('z')) t.length_mm = cur_pos_.z() + tool_z_ - len('z');
-      }
-      return;
-    }
-    if (l != 2 && l != 20) {
-      fail_at(block_.col('l'), fmt::format("G10 L{} is not supported (L1 L2 L10 L11 L20 are)", l));
-    }
-    if (!block_.has('p'))
-      fail_at(column, fmt::format("G10 L{} needs the coordinate system in P", l));
-    const double pv = block_['p'];
-    const bool in_range = pv >= 0 && pv <= 9.0001;  // checked before the conversion
-    int n = in_range ? static_cast<int>(pv + 0.0001) : -1;
-    if (!in_range || std::abs(pv - n) > 1e-4) {
-      fail_at(block_.col('p'),
-              fmt::format("G10 L{} P{:g}: P is 0 (the active system) or 1 .. 9", l, pv));
-    }
-    if (n == 0) n = system_;
-    if (n == system_) refuse_with_comp(column, "a change of the active system's origin (G10)");
-    // The machine position stays; the active system's coordinates follow the new origin.
-    const Vec3 machine = to_machine_tip(cur_pos_);
-    const double r = block_.has('r') ? block_['r'] : params_[sys_param(n, 9)];
-    if (block_.has('r')) {
-      if (l == 20) fail_at(block_.col('r'), "R is not allowed in G10 L20");
-      params_[sys_param(n, 9)] = r;
-    }
-    if (l == 2) {
-      for (int a = 0; a < 3; ++a) {
-        const char c = static_cast<char>('x' + a);
-        if (block_.has(c)) params_[sys_param(n, a)] = len(c);
-      }
+    non_modal(group0, group0_col);
+  }
+}
+
+// The motion mode, then the move or the canned cycle of the block's axis words.
+void Interpreter::run_motion(const BlockCodes& codes) {
+  const int motion = codes[kMotion], group0 = codes[kGroup0];
+  const std::uint32_t motion_col = codes.col[kMotion];
+  const bool g53 = codes.g53;
+  if (motion >= 0) {
+    if (motion == 800) {
+      motion_ = -1;
+      cycle_il_flag_ = false;
     } else {
-      // L20: the origin such that the current point has the given coordinates in system n.
-      // The current point in system n (without G92, as LinuxCNC's find_current_in_system).
-      Vec3 in_n = machine;
-      in_n.x() -= params_[sys_param(n, 0)];
-      in_n.y() -= params_[sys_param(n, 1)];
-      in_n.z() -= params_[sys_param(n, 2)];
-      double cx = in_n.x(), cy = in_n.y();
-      rotate(cx, cy, -r);
-      double x = block_.has('x') ? len('x') : cx, y = block_.has('y') ? len('y') : cy;
-      double ox = cx, oy = cy;
-      rotate(ox, oy, r);
-      rotate(x, y, r);
-      params_[sys_param(n, 0)] += ox - x;
-      params_[sys_param(n, 1)] += oy - y;
-      if (block_.has('z')) params_[sys_param(n, 2)] += in_n.z() - len('z');
-    }
-    note_given(n);
-    if (n == system_) {
-      load_system();
-      cur_pos_ = from_machine_tip(machine);
+      motion_ = motion;
     }
   }
-
-  // A system set by G10 is known: no warning when it is selected later.
-  void note_given(int n) { system_warned_[static_cast<std::size_t>(n - 1)] = true; }
-
-  // G28 / G30: rapid to the waypoint (the axis words, in the current mode), then to the stored
-  // position for those axes (all three when none is given).
-  void home_move(int g, std::uint32_t column) {
-    const bool given = g == 280 ? g28_given_ : g30_given_;
-    if (!given && !home_warned_) {
-      home_warned_ = true;
-      const std::size_t p = g == 280 ? 5161 : 5181;
-      const Vec3 h(params_[p], params_[p + 1], params_[p + 2]);
-      const Vec3 o = to_out(from_machine_tip(h));
-      warn(
-          fmt::format("{}: the machine's {} position is not given ([machine] {}_position): "
-                      "assumed X{:g} Y{:g} Z{:g} in the program's frame",
-                      code_name('G', g), g == 280 ? "G28" : "G30", g == 280 ? "g28" : "g30", o.x(),
-                      o.y(), o.z()));
+  const bool axis_used_by_group0 =
+      group0 == 100 || group0 == 280 || group0 == 300 || group0 == 520 || group0 == 920;
+  if (block_.has_axis() && !axis_used_by_group0) {
+    if (motion == 800) {
+      fail_at(motion_col, "G80 cancels the motion mode: it cannot take axis words");
+    }
+    if (motion_ < 0) {
+      const char first = block_.has('x') ? 'x' : block_.has('y') ? 'y' : 'z';
+      fail_at(block_.col(first), "axis words without a motion mode (G0/G1/G2/G3)");
     }
     ++prog_.info.motion_blocks;
-    note_tool_length(g == 280 ? "G28" : "G30");
-    const Vec3 waypoint = ends(false);
-    emit_line(waypoint, true, column);
-    cur_pos_ = waypoint;
-    const std::size_t p = g == 280 ? 5161 : 5181;
-    // The stored position is of the gauge line: the tip is the tool length below it.
-    const Vec3 home = from_machine_tip(Vec3(params_[p], params_[p + 1], params_[p + 2] - tool_z_));
-    Vec3 target = cur_pos_;
-    const bool any = block_.has_axis();
-    for (int a = 0; a < 3; ++a) {
-      if (!any || block_.has(static_cast<char>('x' + a))) target[a] = home[a];
-    }
-    emit_line(target, true, column, !any);
-    cur_pos_ = target;
-  }
-
-  // A move in machine coordinates with G43 on a tool the table does not have: say so once.
-  void note_tool_length(const char* what) {
-    if (unknown_tool_ < 0 || tool_warned_) return;
-    tool_warned_ = true;
-    warn(
-        fmt::format("{} with G43 H{:g}: tool {:g} is not in the tool table (--tool-table, "
-                    "[machine] tool_table); its length is taken as 0",
-                    what, unknown_tool_, unknown_tool_));
-  }
-
-  // The end point of a move in program coordinates (mm): the axis words in the distance mode,
-  // or G53's machine coordinates.
-  Vec3 ends(bool g53) {
-    Vec3 t = cur_pos_;
-    if (g53) {
-      note_tool_length("G53");
-      const Vec3 m = to_machine_tip(cur_pos_) + Vec3(0, 0, tool_z_);
-      Vec3 target_machine = m;
-      for (int a = 0; a < 3; ++a) {
-        const char c = static_cast<char>('x' + a);
-        if (block_.has(c)) target_machine[a] = len(c);
-      }
-      target_machine.z() -= tool_z_;
-      return from_machine_tip(target_machine);
-    }
-    for (int a = 0; a < 3; ++a) {
-      const char c = static_cast<char>('x' + a);
-      if (block_.has(c)) t[a] = absolute_ ? len(c) : cur_pos_[a] + len(c);
-    }
-    return t;
-  }
-
-  // ---- motion -------------------------------------------------------------------------------
-
-  void move(bool g53, std::uint32_t column) {
-    if (g53 && motion_ != 0 && motion_ != 10) {
-      fail_at(column, "G53 moves need G0 or G1 (a straight move in machine coordinates)");
-    }
-    if (g53) refuse_with_comp(column, "G53 (a move in machine coordinates)");
-    const Vec3 target = ends(g53);
-    if (motion_ <= 10) {
-      arc_not_allowed_ = false;
-      if (comp_moves()) {
-        comp_line(target, motion_ == 0, column);
-      } else {
-        plain_move_ = !g53 && (motion_ == 0 || feed_mode_ == FeedMode::per_minute);
-        emit_line(target, motion_ == 0, column);
-        plain_move_ = false;
-      }
-      cur_pos_ = target;
-      return;
-    }
-    if (arc_not_allowed_) {
-      fail_at(column,
-              "the move right after cutter compensation ends (G40) must be straight, "
-              "not an arc (the tool is a radius away from the programmed point)");
-    }
-    if (comp_moves()) {
-      comp_arc(target, column);
-      cur_pos_ = target;
-      return;
-    }
-    plain_move_ = feed_mode_ == FeedMode::per_minute;
-    arc(target, column);
-    plain_move_ = false;
-  }
-
-  double feed_for(double length_mm, std::uint32_t column) {
-    double f = 0;
-    switch (feed_mode_) {
-      case FeedMode::per_minute:
-        if (!(feed_ > 0)) {
-          fail_at(column, feed_given_ ? "feed move at F0: program a feed F > 0 (mm/min)"
-                                      : "feed move with no feed rate: program F before G1/G2/G3");
-        }
-        f = feed_;
-        break;
-      case FeedMode::inverse_time:
-        if (inverse_f_ < 0) {
-          fail_at(column, "inverse-time feed (G93): every feed move needs its own F");
-        }
-        if (!(inverse_f_ > 0)) fail_at(column, "inverse-time feed F0: the move would never end");
-        f = length_mm * inverse_f_;  // the move takes 1/F minutes
-        break;
-      case FeedMode::per_rev:
-        if (!(feed_ > 0)) fail_at(column, "feed per revolution (G95) with no feed F > 0");
-        if (!(speed_ > 0)) {
-          fail_at(column, "feed per revolution (G95) with the spindle speed S0: program S");
-        }
-        f = feed_ * speed_;
-        break;
-    }
-    return f;
-  }
-
-  void note_feed(double f) {
-    if (!(f > 0)) return;
-    if (prog_.info.min_feed_mm_per_min == 0 || f < prog_.info.min_feed_mm_per_min) {
-      prog_.info.min_feed_mm_per_min = f;
-    }
-    prog_.info.max_feed_mm_per_min = std::max(prog_.info.max_feed_mm_per_min, f);
-  }
-
-  void check_target(const Vec3& out, std::uint32_t column) const {
-    if (!(out.cwiseAbs().maxCoeff() <= kMaxCoordinate)) {
-      fail_at(column, fmt::format("the move reaches X{:g} Y{:g} Z{:g} mm, beyond +-1e6 mm "
-                                  "(incremental moves add up)",
-                                  out.x(), out.y(), out.z()));
-    }
-  }
-
-  // A straight move to program position `target`. `starts` marks a move that fixes every axis
-  // (G28 without axis words): it starts the path like an XY move.
-  void emit_line(const Vec3& target, bool rapid, std::uint32_t column, bool starts = false) {
-    put_line(to_out(target), rapid, -1, column, cur_.source, cur_.line_no,
-             starts || block_.has('x') || block_.has('y'));
-  }
-
-  // A straight move to `end` (output frame) at feed f (mm/min; < 0: the feed mode's), made by
-  // line `line` of source `source`. `xy` marks a move that fixes X and Y (it starts the path).
-  void put_line(const Vec3& end, bool rapid, double f, std::uint32_t column, std::size_t source,
-                std::size_t line, bool xy) {
-    check_target(end, column);
-    GcodeMove mv;
-    mv.kind = rapid ? GcodeMove::Kind::rapid : GcodeMove::Kind::feed;
-    mv.start_mm = started_ ? out_pos_ : to_out(cur_pos_);
-    mv.end_mm = end;
-    mv.plane = plane_code();
-    describe(mv, source, line);
-    if (!started_) {
-      // The machine's position before the program is unknown: the first move in X or Y only
-      // establishes where the path starts.
-      mv.feed_mm_per_min = rapid ? opt_.rapid_rate_mm_per_min : 0;
-      if (!rapid) mv.feed_mm_per_min = f >= 0 ? f : feed_for((end - mv.start_mm).norm(), column);
-      trace(mv);
-      out_pos_ = end;
-      started_ = xy;
-      return;
-    }
-    const double length = (end - out_pos_).norm();
-    if (rapid) {
-      f = opt_.rapid_rate_mm_per_min;
+    if (motion_ >= 730) {
+      comp_.refuse(motion >= 0        ? motion_col
+                   : block_.g.empty() ? 0
+                                      : block_.g.front().column,
+                   "a canned cycle");
+      canned_cycle(motion_, motion >= 0 ? motion_col
+                                        : block_.col(block_.has('x')   ? 'x'
+                                                     : block_.has('y') ? 'y'
+                                                                       : 'z'));
     } else {
-      if (f < 0) f = feed_for(length, column);
-      note_feed(f);
+      move(g53, motion >= 0 ? motion_col
+                            : block_.col(block_.has('x')   ? 'x'
+                                         : block_.has('y') ? 'y'
+                                                           : 'z'));
     }
-    mv.feed_mm_per_min = f;
-    mv.path_started = true;
-    if (length > 0) {
-      mv.segment =
-          append(Segment::line(out_pos_, end, rapid ? Motion::rapid : Motion::feed, f), column);
-    }
-    trace(mv);
-    out_pos_ = end;
+  } else if (motion >= 20 && motion <= 30 && !axis_used_by_group0) {
+    fail_at(motion_col, "arc without an end point");
+  } else if (g53) {
+    fail_at(block_.g.front().column, "G53 needs axis words (a move in machine coordinates)");
   }
-
-  [[nodiscard]] const char* unit_name() const { return unit_ == 1.0 ? "mm" : "in"; }
-
-  int plane_code() const { return plane_ == Plane::xy ? 17 : plane_ == Plane::zx ? 18 : 19; }
-
-  void trace(const GcodeMove& mv) const {
-    if (opt_.trace) opt_.trace(mv);
+  if (motion_ < 730) {
+    cycle_il_flag_ = false;
+    cycle_motion_ = -1;  // the next cycle is a first one (its Z and R again)
   }
-
-  // Appends a segment; returns its index in the path (npos: not kept, or of no length).
-  std::size_t append(Segment seg, std::uint32_t column) {
-    if (!opt_.keep_path) {
-      prog_.summary.add(seg);
-      return GcodeMove::npos;
-    }
-    const std::size_t n = prog_.path.segments().size();
-    if (opt_.max_path_bytes > 0 && (n & 0x3ff) == 0) {
-      // Checked every 1024 moves: the path's segments and the trace's moves as held.
-      const double per_move =
-          static_cast<double>(sizeof(Segment)) + (opt_.trace ? sizeof(GcodeMove) + 64.0 : 0.0);
-      const double held = static_cast<double>(n) * per_move;
-      if (held > opt_.max_path_bytes) {
-        fail_at(0,
-                fmt::format("the program's path holds {} moves ({:.2f} GB) after {} blocks, "
-                            "past the {:.2f} GB the memory limit leaves for reading it: does "
-                            "the program loop without end? (a long program that does not: "
-                            "raise the memory limit)",
-                            n, held / 1e9, prog_.info.blocks_executed, opt_.max_path_bytes / 1e9));
-      }
-    }
-    try {
-      prog_.path.append(std::move(seg));
-    } catch (const Error& e) {
-      fail_at(column, e.what());
-    }
-    return prog_.path.segments().size() > n ? n : GcodeMove::npos;
-  }
-
-  // What a move's block was and the frame its words were in (GcodeMove's rewrite fields).
-  void describe(GcodeMove& mv, std::size_t source, std::size_t line) const {
-    mv.file = sources_[source].name;
-    mv.line = line;
-    mv.source = source;
-    mv.plain = plain_move_;
-    mv.motion = motion_ == 0 ? 0 : motion_ == 10 ? 1 : motion_ == 20 ? 2 : motion_ == 30 ? 3 : -1;
-    mv.block_run = prog_.info.blocks_executed;
-    mv.program_zero_mm = to_out(Vec3::Zero());
-    mv.program_turn_rad = (rotation_ - out_rotation_) * kPi / 180.0;
-    mv.unit_mm = unit_;
-    mv.incremental = !absolute_;
-    mv.ijk_absolute = arc_absolute_;
-    mv.feed_mode = feed_mode_ == FeedMode::per_minute     ? 94
-                   : feed_mode_ == FeedMode::inverse_time ? 93
-                                                          : 95;
-    mv.feed_word = feed_;
-    mv.feed_before = block_feed_before_;
-    mv.feed_events_before = block_feed_events_;
-    mv.feed_events = feed_events_;
-  }
-
-  // An arc of the plane: centre (c1, c2) on its axes i1, i2 (normal in), radius and sweep (rad,
-  // positive counterclockwise, with P's extra turns).
-  struct ArcData {
-    int i1 = 0, i2 = 1, in = 2;
-    double c1 = 0, c2 = 0, rad = 0, sweep = 0;
-  };
-
-  // The arc of this block's words from `from` to `target` (program mm): its centre from I J K
-  // (moved onto the chord's bisector) or R, its sweep with P turns.
-  ArcData arc_data(const Vec3& from, const Vec3& target, std::uint32_t column) const {
-    const double u = unit_;
-    // The plane: e1, e2 span it, n = e1 x e2 (G17: XY/Z, G18: ZX/Y, G19: YZ/X); positive
-    // angles turn from e1 to e2 (G3).
-    int i1 = 0, i2 = 1, in = 2;
-    char o1 = 'i', o2 = 'j';
-    if (plane_ == Plane::zx) {
-      i1 = 2;
-      i2 = 0;
-      in = 1;
-      o1 = 'k';
-      o2 = 'i';
-    } else if (plane_ == Plane::yz) {
-      i1 = 1;
-      i2 = 2;
-      in = 0;
-      o1 = 'j';
-      o2 = 'k';
-    }
-    const double s1 = from[i1], s2 = from[i2], t1 = target[i1], t2 = target[i2];
-    const bool ccw = motion_ == 30;
-    double c1, c2;
-    if (block_.has('r')) {
-      const double rr = len('r');
-      const double dx = t1 - s1, dy = t2 - s2, chord = std::hypot(dx, dy);
-      if (chord <= 1e-12) fail_at(column, "an R-form arc cannot be a full circle (end = start)");
-      if (std::abs(rr) * 2 < chord - opt_.arc_radius_tolerance_mm) {
-        fail_at(column, fmt::format("arc radius R{:g} is smaller than half the chord ({:.4f} {})",
-                                    block_['r'], 0.5 * chord / u, unit_name()));
-      }
-      const double h = std::sqrt(std::max(0.0, rr * rr - 0.25 * chord * chord));
-      // Centre left of the chord for a ccw arc of <= 180 degrees, right for cw; R < 0 flips.
-      double side = ccw ? 1.0 : -1.0;
-      if (rr < 0) side = -side;
-      c1 = 0.5 * (s1 + t1) - side * h * dy / chord;
-      c2 = 0.5 * (s2 + t2) + side * h * dx / chord;
-    } else {
-      if (!block_.has(o1) && !block_.has(o2)) {
-        fail_at(column,
-                fmt::format("arc needs its centre ({} or {} for the G{} plane) or a radius R",
-                            upper(o1), upper(o2), plane_code()));
-      }
-      const double d1 = block_.has(o1) ? len(o1) : 0.0, d2 = block_.has(o2) ? len(o2) : 0.0;
-      c1 = arc_absolute_ ? d1 : s1 + d1;
-      c2 = arc_absolute_ ? d2 : s2 + d2;
-      const double r0 = std::hypot(s1 - c1, s2 - c2), r1 = std::hypot(t1 - c1, t2 - c2);
-      if (std::abs(r0 - r1) > opt_.arc_radius_tolerance_mm) {
-        fail_at(
-            column,
-            fmt::format("arc radius to the end ({:.4f} {}) differs from the radius to the start "
-                        "({:.4f} {}) by more than {:g} mm",
-                        r1 / u, unit_name(), r0 / u, unit_name(), opt_.arc_radius_tolerance_mm));
-      }
-      // Move the centre onto the chord's bisector so both radii agree exactly.
-      const double mx = 0.5 * (s1 + t1), my = 0.5 * (s2 + t2);
-      const double dx = t1 - s1, dy = t2 - s2, L2 = dx * dx + dy * dy;
-      if (L2 > 0) {
-        const double k = ((c1 - mx) * dx + (c2 - my) * dy) / L2;
-        c1 -= k * dx;
-        c2 -= k * dy;
-      }
-    }
-    const double rad = std::hypot(s1 - c1, s2 - c2);
-    if (rad <= 1e-9) fail_at(column, "arc radius is zero");
-    const double a0 = std::atan2(s2 - c2, s1 - c1), a1 = std::atan2(t2 - c2, t1 - c1);
-    double sweep;
-    const bool full = std::hypot(t1 - s1, t2 - s2) <= 1e-9;
-    if (ccw) {
-      sweep = full ? kTwoPi : std::fmod(a1 - a0 + 2 * kTwoPi, kTwoPi);
-      if (sweep <= 0) sweep += kTwoPi;
-    } else {
-      sweep = full ? -kTwoPi : -std::fmod(a0 - a1 + 2 * kTwoPi, kTwoPi);
-      if (sweep >= 0) sweep -= kTwoPi;
-    }
-    if (block_.has('p')) {
-      const double p = block_['p'];
-      if (p < 1 || std::abs(p - std::round(p)) > 1e-9) {
-        fail_at(block_.col('p'), "arc turns P must be a whole number >= 1");
-      }
-      if (p > 1e4) fail_at(block_.col('p'), "arc turns P beyond 10000");
-      sweep += (ccw ? 1.0 : -1.0) * kTwoPi * (std::round(p) - 1.0);
-    }
-    ArcData d;
-    d.i1 = i1;
-    d.i2 = i2;
-    d.in = in;
-    d.c1 = c1;
-    d.c2 = c2;
-    d.rad = rad;
-    d.sweep = sweep;
-    return d;
-  }
-
-  void arc(const Vec3& target, std::uint32_t column) {
-    const ArcData d = arc_data(cur_pos_, target, column);
-    // A circle or helix: its length in closed form gives the feed (G93) before the segment is
-    // made once, at that feed.
-    const double length = std::hypot(d.rad * d.sweep, target[d.in] - cur_pos_[d.in]);
-    const double f = feed_for(length, column);
-    const Vec3 from = cur_pos_;
-    cur_pos_ = target;
-    put_arc(from, d, target[d.in], f, column, cur_.source, cur_.line_no,
-            block_.has('x') || block_.has('y'));
-  }
-
-  // An arc from `from` (program mm) about d's centre through d.sweep, ending at `axial` along
-  // the plane's normal, at feed f (mm/min), made by line `line` of source `source`. With
-  // `exact_end` (program mm) the arc ends there: a radius at the end that differs from the one
-  // at the start (cutter compensation's corners, rounding) becomes a drift spread along it, as
-  // a control runs such an arc as a spiral.
-  void put_arc(const Vec3& from, const ArcData& d, double axial, double f, std::uint32_t column,
-               std::size_t source, std::size_t line, bool xy, const Vec3* exact_end = nullptr) {
-    const int i1 = d.i1, i2 = d.i2, in = d.in;
-    const double rad = d.rad, sweep = d.sweep;
-    const double a0 = std::atan2(from[i2] - d.c2, from[i1] - d.c1);
-    Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero(), nrm = Vec3::Zero();
-    e1[i1] = 1;
-    e2[i2] = 1;
-    nrm[in] = 1;
-    Vec3 c = Vec3::Zero();
-    c[i1] = d.c1;
-    c[i2] = d.c2;
-    c[in] = from[in];
-    const Vec3 A = rad * (std::cos(a0) * e1 + std::sin(a0) * e2);
-    const Vec3 B = rad * (-std::sin(a0) * e1 + std::cos(a0) * e2);
-    Vec3 V = nrm * ((axial - from[in]) / sweep);
-    if (exact_end != nullptr) {
-      const Vec3 miss = *exact_end - (c + A * std::cos(sweep) + B * std::sin(sweep) + V * sweep);
-      if (miss.norm() > 1e-9) V += miss / sweep;
-    }
-    const Vec3 c_out = to_out(c), A_out = dir_to_out(A), B_out = dir_to_out(B),
-               V_out = dir_to_out(V);
-    Segment seg = Segment::curve(c_out, A_out, B_out, V_out, 0.0, sweep, Motion::feed, f);
-    const Vec3 end = seg.end();
-    check_target(end, column);
-    GcodeMove mv;
-    mv.kind = GcodeMove::Kind::arc;
-    mv.start_mm = started_ ? out_pos_ : to_out(from);
-    mv.end_mm = end;
-    mv.centre_mm = c_out;
-    mv.axis = dir_to_out(nrm);
-    mv.sweep_rad = sweep;
-    mv.plane = plane_code();
-    describe(mv, source, line);
-    mv.feed_mm_per_min = f;
-    if (!started_) {
-      trace(mv);
-      out_pos_ = end;
-      started_ = xy;
-      return;
-    }
-    if ((seg.start() - out_pos_).norm() > 1e-9) {
-      fail_at(column,
-              "an arc that starts where the tool is not (right after a tool length change "
-              "G43/G49 or the end of cutter compensation G40): program a straight move first");
-    }
-    note_feed(f);
-    mv.path_started = true;
-    mv.segment = append(std::move(seg), column);
-    trace(mv);
-    out_pos_ = end;
-  }
-
-  // ---- cutter radius compensation (G41/G42, G41.1/G42.1, G40) -------------------------------
-  // LinuxCNC's algorithm (docs/gcode.md): the tool centre runs a radius beside the programmed
-  // contour in the XY plane. Each compensated move waits in a queue until the next one shows
-  // the corner between them: a concave corner moves the waiting move's end back to where the
-  // two offset contours meet, a convex one adds an arc about the programmed corner. Positions
-  // are program mm; cur_pos_ stays the programmed point, comp_cur_ is the tool centre.
-
-  enum class CompSide { off, left, right };
-
-  struct QueuedMove {
-    GcodeMove::Kind kind = GcodeMove::Kind::feed;
-    Vec3 end = Vec3::Zero();    // program mm
-    double d1 = 0, d2 = 0;      // lines: the direction the end may not turn against
-    double c1 = 0, c2 = 0;      // arcs: the centre
-    int turn = 0;               // arcs: turns, positive counterclockwise (LinuxCNC's)
-    double original_sweep = 0;  // arcs: the sweep as queued (rad); 0: never checked
-    double feed = 0;            // mm/min
-    std::size_t source = 0, line = 0;
-    std::uint32_t column = 0;
-  };
-
-  static constexpr double kConcaveTol = 0.05;  // rad, LinuxCNC's TOLERANCE_CONCAVE_CORNER
-
-  [[nodiscard]] bool comp_on() const { return comp_side_ != CompSide::off; }
-  [[nodiscard]] bool comp_moves() const { return comp_on() && comp_radius_ > 0; }
-  [[nodiscard]] bool left() const { return comp_side_ == CompSide::left; }
-  // The tool is inside an arc of this turning sense: left of a counterclockwise one.
-  [[nodiscard]] bool inside(int turn) const { return left() ? turn > 0 : turn < 0; }
-
-  // The position LinuxCNC reports as #<_x> #<_y> #<_z>: the tool centre while compensation
-  // runs (Fanuc's #5041-#5043 too).
-  [[nodiscard]] const Vec3& current() const {
-    return comp_moves() && !comp_first_ ? comp_cur_ : cur_pos_;
-  }
-
-  void refuse_with_comp(std::uint32_t column, const std::string& what) const {
-    if (comp_on()) {
-      fail_at(column,
-              fmt::format("{} with cutter radius compensation on: cancel it with G40 first", what));
-    }
-  }
-
-  // LinuxCNC's find_turn: the sweep (rad) from (x1, y1) to (x2, y2) about (cx, cy), `turn`
-  // circles counterclockwise (negative: clockwise); 0 for turn 0.
-  static double find_turn(double x1, double y1, double cx, double cy, int turn, double x2,
-                          double y2) {
-    if (turn == 0) return 0.0;
-    double a = std::atan2(y1 - cy, x1 - cx), b = std::atan2(y2 - cy, x2 - cx);
-    if (turn > 0) {
-      if (b <= a) b += kTwoPi;
-      return b - a + (turn - 1) * kTwoPi;
-    }
-    if (a <= b) a += kTwoPi;
-    return b - a + (turn + 1) * kTwoPi;
-  }
-
-  void comp_start(int g, std::uint32_t column) {
-    if (plane_ != Plane::xy) {
-      fail_at(column, "cutter radius compensation is supported in the XY plane (G17) only");
-    }
-    if (comp_on()) {
-      fail_at(column, "G41/G42 while cutter radius compensation is on: cancel it with G40 first");
-    }
-    CompSide side = (g == 410 || g == 411) ? CompSide::left : CompSide::right;
-    double radius = 0;
-    const std::string name = code_name('G', g);
-    if (g == 411 || g == 421) {
-      if (!block_.has('d')) fail_at(column, fmt::format("{} needs the tool diameter in D", name));
-      radius = 0.5 * len('d');
-    } else {
-      double tool = tool_loaded_;
-      if (block_.has('d')) {
-        tool = block_['d'];
-        if (tool < 0 || tool != std::floor(tool) || tool > 1e6) {
-          fail_at(block_.col('d'), fmt::format("{} D{:g}: D is a tool number 0 .. 1e6 (its "
-                                               "diameter in the tool table sets the offset)",
-                                               name, tool));
-        }
-      }
-      if (fanuc_ && !comp_fanuc_warned_) {
-        comp_fanuc_warned_ = true;
-        warn(
-            fmt::format("{} read with LinuxCNC's rules: D is a tool of the tool table (half "
-                        "its diameter is the offset) and corners follow LinuxCNC; a Fanuc "
-                        "control reads D as an offset register and starts up by its own type",
-                        name));
-      }
-      if (tool == 0) {
-        warn(
-            fmt::format("{} with no tool loaded (M6) and no D: the offset is 0, the path is "
-                        "not compensated",
-                        name));
-      } else {
-        const auto it = tools_.find(static_cast<int>(tool));
-        if (it == tools_.end()) {
-          fail_at(block_.has('d') ? block_.col('d') : column,
-                  fmt::format("{}: tool {:g} is not in the tool table (--tool-table, [machine] "
-                              "tool_table); its diameter sets the offset",
-                              name, tool));
-        }
-        radius = 0.5 * it->second.diameter_mm;
-      }
-    }
-    if (radius < 0) {  // a negative diameter offsets to the other side (LinuxCNC)
-      radius = -radius;
-      side = side == CompSide::left ? CompSide::right : CompSide::left;
-    }
-    comp_side_ = side;
-    comp_radius_ = radius;
-    comp_first_ = true;
-  }
-
-  void comp_stop() {
-    if (comp_moves() && !comp_first_) {
-      move_endpoint_and_flush(comp_cur_.x(), comp_cur_.y(), block_.g.front().column);
-      dequeue();
-      arc_not_allowed_ = true;  // the tool is not at the programmed point
-    }
-    comp_side_ = CompSide::off;
-    comp_first_ = true;
-  }
-
-  // A program stop (M0 M1 M2 M30 M60): the waiting moves run to where they are.
-  void comp_flush_at_stop(std::uint32_t column) {
-    if (queue_.empty()) return;
-    move_endpoint_and_flush(comp_cur_.x(), comp_cur_.y(), column);
-    dequeue();
-  }
-
-  void enqueue(QueuedMove q, std::uint32_t column) {
-    q.source = cur_.source;
-    q.line = cur_.line_no;
-    q.column = column;
-    queue_.push_back(q);
-  }
-
-  void set_endpoint(double x, double y) {
-    endpoint_[0] = x;
-    endpoint_[1] = y;
-    endpoint_valid_ = true;
-  }
-
-  // The waiting moves run (in the order queued), from where the last one ended.
-  void dequeue() {
-    endpoint_valid_ = false;
-    for (const QueuedMove& q : queue_) {
-      if (q.kind == GcodeMove::Kind::arc) {
-        ArcData d;
-        d.c1 = q.c1;
-        d.c2 = q.c2;
-        d.rad = std::hypot(emitted_.x() - q.c1, emitted_.y() - q.c2);
-        d.sweep = find_turn(emitted_.x(), emitted_.y(), q.c1, q.c2, q.turn, q.end.x(), q.end.y());
-        put_arc(emitted_, d, q.end.z(), q.feed, q.column, q.source, q.line, true, &q.end);
-      } else {
-        put_line(to_out(q.end), q.kind == GcodeMove::Kind::rapid, q.feed, q.column, q.source,
-                 q.line, true);
-      }
-      emitted_ = q.end;
-    }
-    queue_.clear();
-  }
-
-  // Every waiting move now ends at (x, y): a move that would have to turn back (the corner
-  // is deeper than the move is long) or an arc that would have to sweep further gouges.
-  void move_endpoint_and_flush(double x, double y, std::uint32_t column) {
-    if (queue_.empty()) return;
-    for (QueuedMove& q : queue_) {
-      if (q.kind == GcodeMove::Kind::arc) {
-        const double r1 = std::hypot(q.end.x() - q.c1, q.end.y() - q.c2);
-        const double r2 = std::hypot(x - q.c1, y - q.c2);
-        const double l2 = find_turn(endpoint_[0], endpoint_[1], q.c1, q.c2, q.turn, x, y);
-        if (std::abs(r1 - r2) > 0.01 * unit_) {
-          fail_at(column, fmt::format("cutter compensation cannot end the arc of line {} on its "
-                                      "circle (radius {:.4f} against {:.4f} mm)",
-                                      q.line, r1, r2));
-        }
-        if (q.original_sweep != 0 && endpoint_valid_ &&
-            std::abs(l2) > std::abs(q.original_sweep) + 0.0254) {
-          fail_at(column, fmt::format("the arc of line {} meets a concave corner the "
-                                      "compensated tool cannot reach without gouging",
-                                      q.line));
-        }
-      } else if (endpoint_valid_ && q.d1 * (x - endpoint_[0]) + q.d2 * (y - endpoint_[1]) < 0) {
-        fail_at(column,
-                fmt::format("the move of line {} meets a concave corner the compensated tool "
-                            "cannot reach without gouging (the corner is deeper than the move "
-                            "is long)",
-                            q.line));
-      }
-      q.end.x() = x;
-      q.end.y() = y;
-    }
-    dequeue();
-    set_endpoint(x, y);
-  }
-
-  // A G0/G1 move to programmed p with compensation on (LinuxCNC's convert_straight_comp1/2).
-  void comp_line(const Vec3& p, bool rapid, std::uint32_t column) {
-    const double r = comp_radius_;
-    QueuedMove q;
-    q.kind = rapid ? GcodeMove::Kind::rapid : GcodeMove::Kind::feed;
-    const Vec3 c = comp_first_ ? cur_pos_ : comp_cur_;
-    q.feed = rapid ? 0 : feed_for((p - c).norm(), column);
-    if (comp_first_) {
-      // The entry move: to a radius beside the programmed end, square to the move.
-      const double distance = std::hypot(p.x() - c.x(), p.y() - c.y());
-      if (distance <= r) {
-        fail_at(column, fmt::format("the move that starts cutter compensation ({:.4f} mm in XY) "
-                                    "must be longer than the tool radius ({:.4f} mm)",
-                                    distance, r));
-      }
-      const double alpha = std::atan2(p.y() - c.y(), p.x() - c.x()) + (left() ? kPi / 2 : -kPi / 2);
-      q.end = Vec3(p.x() + r * std::cos(alpha), p.y() + r * std::sin(alpha), p.z());
-      q.d1 = std::cos(alpha);
-      q.d2 = std::sin(alpha);
-      set_endpoint(c.x(), c.y());
-      emitted_ = c;
-      enqueue(q, column);
-      comp_first_ = false;
-      comp_cur_ = q.end;
-      return;
-    }
-    const Vec3 op = cur_pos_;
-    if (p.x() == op.x() && p.y() == op.y()) {  // no XY motion: waits with the move before
-      q.end = Vec3(c.x(), c.y(), p.z());
-      enqueue(q, column);
-      comp_cur_.z() = p.z();
-      return;
-    }
-    double theta = std::atan2(c.y() - op.y(), c.x() - op.x());
-    double alpha = std::atan2(p.y() - op.y(), p.x() - op.x());
-    double beta = 0, gamma = 0;
-    if (left()) {
-      if (theta < alpha) theta += kTwoPi;
-      beta = theta - alpha - kPi / 2;
-      gamma = kPi / 2;
-    } else {
-      if (alpha < theta) alpha += kTwoPi;
-      beta = alpha - theta - kPi / 2;
-      gamma = -kPi / 2;
-    }
-    const double ex = p.x() + r * std::cos(alpha + gamma), ey = p.y() + r * std::sin(alpha + gamma);
-    const double mx = op.x() + r * std::cos(alpha + gamma),
-                 my = op.y() + r * std::sin(alpha + gamma);
-    bool concave = beta < -kConcaveTol || beta > kPi + kConcaveTol;
-    if (!concave && beta > kPi - kConcaveTol && !queue_.empty() &&
-        queue_.front().kind == GcodeMove::Kind::arc &&
-        ((!left() && queue_.front().turn > 0) || (left() && queue_.front().turn < 0))) {
-      concave = true;  // over a round top, then down beside it: stay outside ("h" shape)
-    }
-    if (!concave && beta > kConcaveTol) {
-      // Convex: around the programmed corner on an arc (a rapid goes straight).
-      move_endpoint_and_flush(c.x(), c.y(), column);
-      QueuedMove corner;
-      corner.end = Vec3(mx, my, c.z());
-      corner.feed = q.feed;
-      if (rapid) {
-        corner.kind = GcodeMove::Kind::rapid;
-      } else {
-        corner.kind = GcodeMove::Kind::arc;
-        corner.c1 = op.x();
-        corner.c2 = op.y();
-        corner.turn = left() ? -1 : 1;
-      }
-      enqueue(corner, column);
-      dequeue();
-      set_endpoint(mx, my);
-    } else if (concave) {
-      if (queue_.empty()) concave_after_stop(column);
-      if (queue_.front().kind != GcodeMove::Kind::arc) {
-        // Line to line: back along the move before to where the offset lines cross.
-        const double half = (beta + kPi) / 2;
-        if (half == 0) fail_at(column, "a zero-degree inside corner cannot be compensated");
-        const double retreat = r / std::tan(half);
-        move_endpoint_and_flush(c.x() + retreat * std::cos(theta + gamma),
-                                c.y() + retreat * std::sin(theta + gamma), column);
-      } else {
-        // Arc to line: along the compensated arc to where it meets the offset line.
-        const QueuedMove& prev = queue_.front();
-        const double oldrad = std::hypot(prev.c2 - prev.end.y(), prev.c1 - prev.end.x());
-        const double base = std::atan2(p.y() - op.y(), p.x() - op.x());
-        const double th = prev.turn > 0 ? base + kPi / 2 : base - kPi / 2;
-        const double phi = std::atan2(prev.c2 - op.y(), prev.c1 - op.x());
-        const bool in = inside(prev.turn);
-        const double uncomp = in ? oldrad + r : oldrad - r;
-        const double d = uncomp * std::cos(th - phi);
-        const double l = (in ? d - r : d + r) / oldrad;
-        if (l > 1.0 || l < -1.0) gouge(column, "an arc and a straight move");
-        const double sign = (prev.turn > 0) == in ? -1.0 : 1.0;
-        const double angle = sign * std::acos(l) + th + kPi;
-        move_endpoint_and_flush(prev.c1 + oldrad * std::cos(angle),
-                                prev.c2 + oldrad * std::sin(angle), column);
-      }
-    } else {
-      // Straight on (or tangent from an arc).
-      dequeue();
-      set_endpoint(c.x(), c.y());
-    }
-    q.end = Vec3(ex, ey, p.z());
-    q.d1 = p.x() - op.x();
-    q.d2 = p.y() - op.y();
-    enqueue(q, column);
-    comp_cur_ = q.end;
-  }
-
-  [[noreturn]] void gouge(std::uint32_t column, const char* what) const {
-    fail_at(column, fmt::format("{} make a corner the compensated tool cannot fit in without "
-                                "gouging (a tool radius of {:.4f} mm)",
-                                what, comp_radius_));
-  }
-
-  [[noreturn]] void concave_after_stop(std::uint32_t column) const {
-    fail_at(column,
-            "a concave corner right after a program stop (M0/M1/M60) with cutter compensation "
-            "on: the move before the stop is done, the tool would gouge the corner");
-  }
-
-  // A G2/G3 move to programmed p with compensation on (LinuxCNC's convert_arc_comp1/2).
-  void comp_arc(const Vec3& p, std::uint32_t column) {
-    const double r = comp_radius_;
-    const bool ccw = motion_ == 30;
-    const Vec3 op = cur_pos_;
-    const ArcData a = arc_data(op, p, column);
-    const int turns = block_.has('p') ? static_cast<int>(std::round(block_['p'])) : 1;
-    const int turn = ccw ? turns : -turns;
-    const double f = feed_for(std::hypot(a.rad * a.sweep, p.z() - op.z()), column);
-    const double arc_radius = std::hypot(a.c1 - p.x(), a.c2 - p.y());
-    const bool in = inside(turn);
-    if (in && arc_radius <= r) {
-      fail_at(column, fmt::format("the tool radius ({:.4f} mm) is not less than the radius of "
-                                  "the arc it runs inside ({:.4f} mm)",
-                                  r, arc_radius));
-    }
-    QueuedMove q;
-    q.kind = GcodeMove::Kind::arc;
-    q.feed = f;
-    q.turn = turn;
-    q.c1 = a.c1;
-    q.c2 = a.c2;
-    if (comp_first_) {
-      // The entry arc: tangent to the tool where it stands, through the offset end point.
-      const Vec3 c = cur_pos_;
-      if (std::hypot(p.x() - c.x(), p.y() - c.y()) <= r) {
-        fail_at(column, fmt::format("the arc that starts cutter compensation must end farther "
-                                    "than the tool radius ({:.4f} mm) from where it starts",
-                                    r));
-      }
-      const double gamma =
-          in ? std::atan2(a.c2 - p.y(), a.c1 - p.x()) : std::atan2(p.y() - a.c2, p.x() - a.c1);
-      const double ex = p.x() + r * std::cos(gamma), ey = p.y() + r * std::sin(gamma);
-      const double b_len = std::hypot(c.y() - ey, c.x() - ex) / 2;
-      const double ab = std::atan2(a.c2 - ey, a.c1 - ex);
-      const double ang = std::atan2(c.y() - ey, c.x() - ex) - ab;
-      if (std::abs(std::cos(ang)) < kTolEqual) {
-        fail_at(column,
-                "the arc that starts cutter compensation has no arc through the tool's "
-                "position and the offset end point");
-      }
-      const double c_len = b_len / std::cos(ang);
-      q.c1 = ex + c_len * std::cos(ab);
-      q.c2 = ey + c_len * std::sin(ab);
-      q.end = Vec3(ex, ey, p.z());
-      q.original_sweep = find_turn(c.x(), c.y(), q.c1, q.c2, turn, ex, ey);
-      comp_first_ = false;
-      emitted_ = c;
-      enqueue(q, column);
-      comp_cur_ = q.end;
-      return;
-    }
-    const Vec3 c = comp_cur_;
-    double theta = std::atan2(c.y() - op.y(), c.x() - op.x());
-    theta = left() ? theta - kPi / 2 : theta + kPi / 2;
-    double delta = std::atan2(a.c2 - op.y(), a.c1 - op.x());
-    const double alpha = ccw ? delta - kPi / 2 : delta + kPi / 2;
-    double beta = left() ? theta - alpha : alpha - theta;
-    beta = beta > 1.5 * kPi ? beta - kTwoPi : beta < -kPi / 2 ? beta + kTwoPi : beta;
-    double gamma;
-    if ((left() && ccw) || (!left() && !ccw)) {
-      gamma = std::atan2(a.c2 - p.y(), a.c1 - p.x());  // the tool inside the arc
-    } else {
-      gamma = std::atan2(p.y() - a.c2, p.x() - a.c1);
-      delta += kPi;
-    }
-    const double ex = p.x() + r * std::cos(gamma), ey = p.y() + r * std::sin(gamma);
-    q.end = Vec3(ex, ey, p.z());
-    q.original_sweep = find_turn(op.x(), op.y(), a.c1, a.c2, turn, p.x(), p.y());
-    if (beta < -kConcaveTol || beta > kPi + kConcaveTol ||
-        (std::abs(beta - kPi) < kConcaveTol && !in)) {
-      // Concave.
-      if (queue_.empty()) concave_after_stop(column);
-      if (queue_.front().kind != GcodeMove::Kind::arc) {
-        // Line to arc: back along the line to where it meets the offset arc.
-        const double cy = arc_radius * std::sin(beta - kPi / 2);
-        const double from_centre = in ? arc_radius - r : arc_radius + r;
-        const double l = (in ? cy + r : cy - r) / from_centre;
-        if (l > 1.0 || l < -1.0) gouge(column, "a straight move and an arc");
-        double angle;
-        if (in) {
-          angle = turn > 0 ? theta + std::asin(l) : theta - std::asin(l);
-        } else {
-          angle = turn > 0 ? theta + kPi - std::asin(l) : theta + kPi + std::asin(l);
-        }
-        move_endpoint_and_flush(a.c1 + from_centre * std::cos(angle),
-                                a.c2 + from_centre * std::sin(angle), column);
-      } else {
-        // Arc to arc: where the two offset circles cross.
-        const QueuedMove& prev = queue_.front();
-        const double oldrad = std::hypot(prev.c2 - prev.end.y(), prev.c1 - prev.end.x());
-        const double newrad = in ? arc_radius - r : arc_radius + r;
-        const double cc = std::hypot(prev.c2 - a.c2, prev.c1 - a.c1);
-        if (oldrad == 0 || cc == 0) {
-          fail_at(column,
-                  "an arc after an arc about the same centre makes no corner to "
-                  "compensate (the arcs share their centre)");
-        }
-        const double k = (oldrad * oldrad + cc * cc - newrad * newrad) / (2 * oldrad * cc);
-        if (k > 1.0 || k < -1.0) gouge(column, "two arcs");
-        const double pullback = std::acos(k);
-        const double dir_cc = std::atan2(a.c2 - prev.c2, a.c1 - prev.c1);
-        const bool plus = inside(prev.turn) == (turn > 0);
-        const double dir = plus ? dir_cc + pullback : dir_cc - pullback;
-        move_endpoint_and_flush(prev.c1 + oldrad * std::cos(dir), prev.c2 + oldrad * std::sin(dir),
-                                column);
-      }
-    } else if (beta > kConcaveTol) {
-      // Convex: around the programmed corner on an arc first.
-      const double mx = op.x() + r * std::cos(delta), my = op.y() + r * std::sin(delta);
-      dequeue();
-      QueuedMove corner;
-      corner.kind = GcodeMove::Kind::arc;
-      corner.end = Vec3(mx, my, c.z());
-      corner.c1 = op.x();
-      corner.c2 = op.y();
-      corner.turn = left() ? -1 : 1;
-      corner.feed = f;
-      enqueue(corner, column);
-      dequeue();
-      set_endpoint(mx, my);
-    } else {
-      dequeue();  // tangent
-      set_endpoint(c.x(), c.y());
-    }
-    enqueue(q, column);
-    comp_cur_ = q.end;
-  }
-
-  // ---- canned cycles ------------------------------------------------------------------------
-  // LinuxCNC's cycles in every plane: the hole's position on the plane's axes (i1, i2), the
-  // drilling along its normal (in; Z in G17, Y in G18, X in G19), R and the bottom on it.
-
-  void canned_cycle(int g, std::uint32_t column) {
-    const ArcData ax = plane_axes();
-    const int i1 = ax.i1, i2 = ax.i2, in = ax.in;
-    const char w1 = static_cast<char>('x' + i1), w2 = static_cast<char>('x' + i2),
-               wn = static_cast<char>('x' + in);
-    const std::string name = code_name('G', g);
-    if (feed_mode_ == FeedMode::inverse_time) {
-      fail_at(column, "canned cycles cannot run in inverse-time feed (G93)");
-    }
-    const bool first = g != cycle_motion_;
-    if (first && !block_.has(wn)) {
-      fail_at(column, fmt::format("{} needs {} (the bottom of the hole) in its first block", name,
-                                  upper(wn)));
-    }
-    cycle_motion_ = g;
-    const double bottom_word = block_.has(wn) ? len(wn) : cycle_z_;
-    if (block_.has('r')) {
-      cycle_r_ = len('r');
-    } else if (first) {
-      fail_at(column, fmt::format("{} needs R (the retract plane)", name));
-    }
-    double current = cur_pos_[in];
-    double old;
-    if (cycle_il_flag_) {
-      old = cycle_il_;
-    } else {
-      old = cycle_il_ = current;
-      cycle_il_flag_ = true;
-    }
-    double r, bottom, a, b, da = 0, db = 0;
-    if (absolute_) {
-      r = cycle_r_;
-      bottom = bottom_word;
-      a = block_.has(w1) ? len(w1) : cur_pos_[i1];
-      b = block_.has(w2) ? len(w2) : cur_pos_[i2];
-    } else {
-      if (block_.has(w1)) da = len(w1);
-      if (block_.has(w2)) db = len(w2);
-      r = cycle_r_ + old;
-      bottom = r + bottom_word;
-      a = cur_pos_[i1];
-      b = cur_pos_[i2];
-    }
-    const bool back_bore_fanuc = fanuc_ && g == 870;
-    if (r < bottom && !back_bore_fanuc) {
-      fail_at(column, fmt::format("the R plane ({:g}) is below the bottom {} ({:g})", r / unit_,
-                                  upper(wn), bottom / unit_));
-    }
-    double q = 0;
-    if (g == 730 || g == 830) {
-      if (block_.has('q')) {
-        cycle_q_ = len('q');
-      } else if (cycle_q_ <= 0 || first) {
-        fail_at(column, fmt::format("{} needs Q (the peck depth)", name));
-      }
-      q = cycle_q_;
-      if (q <= 0) fail_at(block_.col('q'), "the peck depth Q must be > 0");
-    }
-    if (g == 760 || back_bore_fanuc) {
-      if (block_.has('q')) cycle_q_ = len('q');
-      q = cycle_q_;  // the shift off the bore's wall (0: none)
-      if (q < 0) fail_at(block_.col('q'), fmt::format("{}'s shift Q must be >= 0", name));
-      note_fanuc_shift(name);
-    }
-    if (g == 820 || g == 860 || g == 880 || g == 890) {
-      if (block_.has('p')) {
-        cycle_p_ = block_['p'];
-      } else if (first) {
-        fail_at(column, fmt::format("{} needs P (the dwell, s)", name));
-      }
-    } else if ((g == 740 || g == 840 || g == 760) && block_.has('p')) {
-      cycle_p_ = block_['p'];
-    }
-    // The spindle the cycle needs (dwells take time the path does not model).
-    if ((g == 840 || g == 740) && !fanuc_) {
-      if (spindle_dir_ == 0) fail_at(column, fmt::format("{} with the spindle stopped", name));
-      if (g == 840 && spindle_dir_ < 0) {
-        fail_at(column, "G84 (right-hand tapping) with the spindle turning counterclockwise (M4)");
-      }
-      if (g == 740 && spindle_dir_ > 0) {
-        fail_at(column, "G74 (left-hand tapping) with the spindle turning clockwise (M3)");
-      }
-    }
-    if ((g == 860 || g == 870 || g == 880) && spindle_dir_ == 0 && !fanuc_) {
-      fail_at(column, fmt::format("{} with the spindle stopped (M3 or M4 first)", name));
-    }
-    // G87: the offset to pass the bar through the hole, and the top of the back bore.
-    double o1 = 0, o2 = 0, middle = 0;
-    if (g == 870 && !fanuc_) {
-      const char l1 = static_cast<char>('i' + i1), l2 = static_cast<char>('i' + i2),
-                 ln = static_cast<char>('i' + in);
-      for (const char c : {l1, l2, ln}) {
-        if (first && !block_.has(c)) {
-          fail_at(column, fmt::format("G87 needs {} in its first block (I J K: the offset along "
-                                      "the plane's axes, the top of the back bore)",
-                                      upper(c)));
-        }
-      }
-      const std::size_t k1 = static_cast<std::size_t>(i1), k2 = static_cast<std::size_t>(i2),
-                        kn = static_cast<std::size_t>(in);
-      for (const std::size_t k : {k1, k2, kn}) {
-        const char c = static_cast<char>('i' + k);
-        if (block_.has(c)) cycle_ijk_[k] = len(c);
-      }
-      o1 = cycle_ijk_[k1];
-      o2 = cycle_ijk_[k2];
-      middle = absolute_ ? cycle_ijk_[kn] : bottom + cycle_ijk_[kn];
-    }
-    int repeats = 1;
-    if (block_.has('l')) {
-      const double l = block_['l'];
-      if (l < 0 || l != std::floor(l) || l > 1e6) {
-        fail_at(block_.col('l'), "the repeat count L must be a whole number 0 .. 1e6");
-      }
-      repeats = static_cast<int>(l);
-    }
-    auto at = [&](double pa, double pb, double pn) {
-      Vec3 v = Vec3::Zero();
-      v[i1] = pa;
-      v[i2] = pb;
-      v[in] = pn;
-      return v;
-    };
-    // Below the R plane: rapid straight up to it first.
-    if (old < r) {
-      line_to(at(cur_pos_[i1], cur_pos_[i2], r), true, column);
-      old = r;
-      current = r;
-    }
-    const double clear = retract_r_ ? r : old;
-    // Fanuc's shifted cycles: the shift is along the plane's first axis (+X in G17).
-    const double s1 = q;
-    for (int k = 0; k < repeats; ++k) {
-      a += da;
-      b += db;
-      if (back_bore_fanuc) {
-        // At the initial level: orient, shift, rapid down to R (the bore's bottom), shift
-        // back, feed up to the bottom word (the bore's top), orient, shift, rapid out.
-        line_to(at(a, b, current), true, column);
-        line_to(at(a + s1, b, current), true, column);
-        line_to(at(a + s1, b, r), true, column);
-        line_to(at(a, b, r), true, column);
-        line_to(at(a, b, bottom), false, column);
-        line_to(at(a + s1, b, bottom), true, column);
-        line_to(at(a + s1, b, old), true, column);
-        line_to(at(a, b, old), true, column);
-        continue;
-      }
-      if (k == 0 && current > r) {
-        line_to(at(a, b, current), true, column);
-        line_to(at(a, b, r), true, column);
-      } else {
-        line_to(at(a, b, clear), true, column);
-        if (clear > r) line_to(at(a, b, r), true, column);
-      }
-      switch (g) {
-        case 810:
-        case 820:
-        case 860:
-          line_to(at(a, b, bottom), false, column);
-          line_to(at(a, b, clear), true, column);
-          break;
-        case 850:
-          line_to(at(a, b, bottom), false, column);
-          line_to(at(a, b, r), false, column);
-          line_to(at(a, b, clear), true, column);
-          break;
-        case 890:
-          line_to(at(a, b, bottom), false, column);
-          line_to(at(a, b, clear), false, column);
-          break;
-        case 740:
-        case 840:
-          // In at the feed, the spindle reversed, out at the feed (Fanuc: out to R, then a
-          // rapid to the initial level).
-          line_to(at(a, b, bottom), false, column);
-          if (fanuc_) {
-            line_to(at(a, b, r), false, column);
-            if (clear > r) line_to(at(a, b, clear), true, column);
-          } else {
-            line_to(at(a, b, clear), false, column);
-          }
-          break;
-        case 760:
-          // Fanuc's fine boring: in at the feed, the spindle oriented, shifted off the wall,
-          // out at rapid, shifted back.
-          line_to(at(a, b, bottom), false, column);
-          line_to(at(a + s1, b, bottom), true, column);
-          line_to(at(a + s1, b, clear), true, column);
-          line_to(at(a, b, clear), true, column);
-          break;
-        case 870:
-          // LinuxCNC's back boring: through the hole at the offset with the spindle oriented,
-          // over to the axis, feed up to the top of the bore and back down, out at the offset.
-          line_to(at(a + o1, b + o2, r), true, column);
-          line_to(at(a + o1, b + o2, bottom), true, column);
-          line_to(at(a, b, bottom), true, column);
-          line_to(at(a, b, middle), false, column);
-          line_to(at(a, b, bottom), false, column);
-          line_to(at(a + o1, b + o2, bottom), true, column);
-          line_to(at(a + o1, b + o2, clear), true, column);
-          line_to(at(a, b, clear), true, column);
-          break;
-        case 880:
-          // In at the feed; the program stops and the operator retracts by hand: modelled as
-          // a rapid to the clear plane, named in a warning.
-          line_to(at(a, b, bottom), false, column);
-          if (!g88_warned_) {
-            g88_warned_ = true;
-            warn(
-                "G88 stops the program for the operator to retract the spindle by hand: "
-                "modelled as a rapid straight out to the clear plane");
-          }
-          line_to(at(a, b, clear), true, column);
-          break;
-        case 730:
-        case 830: {
-          const double back = opt_.peck_clearance_mm;
-          for (double depth = r - q; depth > bottom; depth -= q) {
-            line_to(at(a, b, depth), false, column);
-            if (g == 830) {
-              line_to(at(a, b, r), true, column);
-              line_to(at(a, b, depth + back), true, column);
-            } else {
-              line_to(at(a, b, depth + back), true, column);
-            }
-          }
-          line_to(at(a, b, bottom), false, column);
-          line_to(at(a, b, clear), true, column);
-          break;
-        }
-        default:
-          break;
-      }
-    }
-    cur_pos_ = at(a, b, back_bore_fanuc ? old : clear);
-    cycle_z_ = bottom_word;
-  }
-
-  // The plane's axes: i1, i2 on it, in along its normal.
-  [[nodiscard]] ArcData plane_axes() const {
-    ArcData d;
-    if (plane_ == Plane::zx) {
-      d.i1 = 2;
-      d.i2 = 0;
-      d.in = 1;
-    } else if (plane_ == Plane::yz) {
-      d.i1 = 1;
-      d.i2 = 2;
-      d.in = 0;
-    }
-    return d;
-  }
-
-  void note_fanuc_shift(const std::string& name) {
-    if (shift_warned_) return;
-    shift_warned_ = true;
-    warn(
-        fmt::format("{}: the shift Q off the bore's wall goes along +{} (Fanuc's parameter "
-                    "5101 RD1 = RD2 = 0; the machine's own setting may differ)",
-                    name,
-                    plane_ == Plane::xy   ? 'X'
-                    : plane_ == Plane::zx ? 'Z'
-                                          : 'Y'));
-  }
-
-  void line_to(const Vec3& target, bool rapid, std::uint32_t column) {
-    emit_line(target, rapid, column, true);
-    cur_pos_ = target;
-  }
-
-  // ---- Fanuc Macro B --------------------------------------------------------------------------
-
-  // GOTO, IF [..] GOTO / THEN, WHILE [..] DO m, DO m, END m at i: true when the line was one.
-  bool fanuc_statement(std::size_t i) {
-    const std::string& s = line_.text;
-    const std::string_view rest = std::string_view(s).substr(std::min(i, s.size()));
-    auto starts = [&](std::string_view w) { return rest.substr(0, w.size()) == w; };
-    auto digit_at = [&](std::size_t k) {
-      return k < rest.size() && rest[k] >= '0' && rest[k] <= '9';
-    };
-    const std::size_t at = i;
-    if (starts("goto")) {
-      count_block();
-      i += 4;
-      const double n = read_value(i);
-      fanuc_end(i);
-      goto_label(n, at);
-      return true;
-    }
-    if (starts("if[")) {
-      count_block();
-      i += 2;
-      const double c = zero_if_vacant(read_expression(i));
-      const std::string_view after = std::string_view(s).substr(i);
-      if (after.substr(0, 4) == "goto") {
-        i += 4;
-        const double n = read_value(i);
-        fanuc_end(i);
-        if (c != 0) goto_label(n, at);
-        return true;
-      }
-      if (after.substr(0, 4) == "then") {
-        i += 4;
-        read_block(i);
-        if (block_.present != 0 || !block_.g.empty() || !block_.m.empty() ||
-            block_.numbered.empty()) {
-          fail(i, "IF [..] THEN takes a variable assignment (#1 = ...)");
-        }
-        if (c != 0) {
-          for (const auto& p : block_.numbered)
-            params_[static_cast<std::size_t>(p.index)] = p.value;
-        }
-        return true;
-      }
-      fail(i, "IF [condition] is followed by GOTO n or THEN #i = value");
-    }
-    if (starts("while[")) {
-      count_block();
-      i += 5;
-      const double c = zero_if_vacant(read_expression(i));
-      if (std::string_view(s).substr(i, 2) != "do")
-        fail(i, "WHILE [condition] DO m: DO is missing");
-      i += 2;
-      const std::string label = loop_id(i);
-      Control* open = find_control(label);
-      const bool here = open != nullptr && open->kind == OKind::while_ &&
-                        open->start.offset == line_offset_ && open->start.source == cur_.source;
-      if (c != 0) {
-        if (!here)
-          open_control(OKind::while_, label, {cur_.source, line_offset_, cur_.line_no - 1});
-        return true;
-      }
-      if (here) pop_to(label);
-      skip_past_end(label, at);
-      return true;
-    }
-    if (starts("do") && digit_at(2)) {
-      count_block();
-      i += 2;
-      open_control(OKind::do_, loop_id(i), cur_);
-      return true;
-    }
-    if (starts("end") && digit_at(3)) {
-      count_block();
-      i += 3;
-      const std::string label = loop_id(i);
-      Control* ctl = find_control(label);
-      if (ctl == nullptr) fail(at, fmt::format("END {} without its WHILE .. DO {}", label, label));
-      cur_ = ctl->start;
-      return true;
-    }
-    return false;
-  }
-
-  void fanuc_end(std::size_t i) const {
-    if (i < line_.text.size()) {
-      fail(i, fmt::format("unexpected {} after the statement", ngc::shown(line_.text[i])));
-    }
-  }
-
-  // The m of DO m / END m (1 .. 3 on a Fanuc; any whole number here).
-  std::string loop_id(std::size_t& i) {
-    const std::size_t j0 = i;
-    while (i < line_.text.size() && line_.text[i] >= '0' && line_.text[i] <= '9') ++i;
-    if (i == j0) fail(i, "DO and END need their loop number (DO 1 .. END 1)");
-    std::string id = line_.text.substr(j0, i - j0);
-    fanuc_end(i);
-    return id;
-  }
-
-  // After a false WHILE: on after its END m.
-  void skip_past_end(const std::string& label, std::size_t at) {
-    const Source& src = sources_[cur_.source];
-    ngc::Line l;
-    std::size_t off = cur_.offset, no = cur_.line_no;
-    while (off < src.text.size()) {
-      std::size_t end = src.text.find('\n', off);
-      if (end == std::string_view::npos) end = src.text.size();
-      ++no;
-      ngc::normalise(src.text.substr(off, end - off), l);
-      const std::string& t = l.text;
-      const std::size_t k = past_line_number(t);
-      off = end == src.text.size() ? end : end + 1;
-      if (t.compare(k, std::string::npos, "end" + label) == 0) {
-        cur_.offset = off;
-        cur_.line_no = no;
-        return;
-      }
-    }
-    fail(at, fmt::format("WHILE .. DO {} has no END {} below it", label, label));
-  }
-
-  // GOTO n: the block numbered N n, searched forward from here, then from the file's start.
-  void goto_label(double n, std::size_t at) {
-    if (std::isnan(n) || n < 0 || n != std::floor(n) || n > 99999) {
-      fail(at, "GOTO needs a sequence number 0 .. 99999");
-    }
-    const Source& src = sources_[cur_.source];
-    ngc::Line l;
-    for (int pass = 0; pass < 2; ++pass) {
-      std::size_t off = pass == 0 ? cur_.offset : 0, no = pass == 0 ? cur_.line_no : 0;
-      const std::size_t stop = pass == 0 ? src.text.size() : cur_.offset;
-      while (off < stop) {
-        std::size_t end = src.text.find('\n', off);
-        if (end == std::string_view::npos) end = src.text.size();
-        ++no;
-        const std::string_view raw = src.text.substr(off, end - off);
-        if (may_start_with(raw, "nN")) {
-          ngc::normalise(raw, l);
-          std::size_t k = l.text.empty() || l.text[0] != '/' ? 0 : 1;
-          if (k < l.text.size() && l.text[k] == 'n') {
-            double v = 0;
-            const char* b = l.text.data() + k + 1;
-            auto [ptr, ec] =
-                std::from_chars(b, l.text.data() + l.text.size(), v, std::chars_format::fixed);
-            if (ec == std::errc() && ptr != b && v == n) {
-              cur_.offset = off;
-              cur_.line_no = no - 1;
-              return;
-            }
-          }
-        }
-        off = end == src.text.size() ? end : end + 1;
-      }
-    }
-    fail(at, fmt::format("GOTO {:g}: no block N{:g} in {}", n, n, src.name));
-  }
-
-  // G65 P<program> L<times> with arguments A B C I J K D E F H M Q R S T U V W X Y Z: a call
-  // with its own local variables #1 .. #26 (Fanuc's argument specification I).
-  void macro_call(std::uint32_t column) {
-    if (!fanuc_)
-      fail_at(column, "G65 is Fanuc's macro call: read the program with the fanuc dialect");
-    if (block_.g.size() > 1 || !block_.m.empty()) {
-      fail_at(column, "G65 takes its arguments only: no other G or M code in its block");
-    }
-    if (!block_.has('p')) fail_at(column, "G65 needs the program number in P");
-    static constexpr std::array<std::pair<char, int>, 21> kArgs{
-        {{'a', 1},  {'b', 2},  {'c', 3},  {'i', 4},  {'j', 5},  {'k', 6},  {'d', 7},
-         {'e', 8},  {'f', 9},  {'h', 11}, {'m', 13}, {'q', 17}, {'r', 18}, {'s', 19},
-         {'t', 20}, {'u', 21}, {'v', 22}, {'w', 23}, {'x', 24}, {'y', 25}, {'z', 26}}};
-    std::array<double, 34> args;
-    args.fill(std::numeric_limits<double>::quiet_NaN());
-    for (const auto& [c, n] : kArgs) {
-      if (block_.has(c)) args[static_cast<std::size_t>(n)] = block_[c];
-    }
-    const double times = block_.has('l') ? block_['l'] : 1;
-    if (times < 0 || times != std::floor(times) || times > 9999) {
-      fail_at(block_.col('l'), "G65's repeat count L must be a whole number 0 .. 9999");
-    }
-    if (times == 0) return;
-    Frame f = program_frame(block_['p'], column);
-    f.new_locals = true;
-    f.repeats = times;
-    for (std::size_t p = 1; p <= 33; ++p) {
-      f.saved_locals[p] = params_[p];
-      params_[p] = args[p];
-    }
-    enter(std::move(f));
-  }
-
-  void subprogram_call() {
-    const auto [prog, times] = *pending_m98_;
-    if (times == 0) return;
-    Frame f = program_frame(prog, block_.col('p'));
-    f.new_locals = false;  // M98: the caller's local variables
-    f.repeats = times;
-    enter(std::move(f));
-  }
-
-  void enter(Frame f) {
-    if (static_cast<int>(frames_.size()) > opt_.max_call_depth) {
-      fail_at(0, fmt::format("subprogram calls nested deeper than {} (recursion without end?)",
-                             opt_.max_call_depth));
-    }
-    const Cursor start = f.start;
-    frames_.push_back(std::move(f));
-    cur_ = start;
-  }
-
-  void subprogram_return() {
-    if (frames_.size() < 2) {
-      warn("M99 in the main program repeats it on the machine: it was read once");
-      end_program();
-      return;
-    }
-    Frame& f = frames_.back();
-    if (f.repeats > 1) {
-      f.repeats -= 1;
-      cur_ = f.start;
-      f.controls.clear();
-      return;
-    }
-    const double p = m99_p_;
-    return_from_sub();
-    if (p >= 0) goto_label(p, 0);
-  }
-
-  // Every "O<n>" line of a source: where its program's first line starts.
-  static void index_programs(Source& src) {
-    src.programs.emplace();
-    const std::string_view t = src.text;
-    ngc::Line l;
-    std::size_t off = 0, no = 0;
-    while (off < t.size()) {
-      std::size_t end = t.find('\n', off);
-      if (end == std::string_view::npos) end = t.size();
-      ++no;
-      const std::string_view raw = t.substr(off, end - off);
-      off = end == t.size() ? end : end + 1;
-      if (!may_start_with(raw, "oO:")) continue;
-      ngc::normalise(raw, l);
-      if (l.text.size() < 2) continue;
-      long v = 0;
-      auto [ptr, ec] = std::from_chars(l.text.data() + 1, l.text.data() + l.text.size(), v);
-      if (ec == std::errc() && ptr != l.text.data() + 1)
-        src.programs->emplace(v, std::make_pair(off, no));
-    }
-  }
-
-  // The frame of a call to program O<n>: in the loaded files, else a file O<n> (O0010,
-  // O10, with .nc, .ngc or none) in the program's folder or the include folders.
-  Frame program_frame(double n, std::uint32_t column) {
-    if (n < 0 || n != std::floor(n) || n > 99999999) {
-      fail_at(column, fmt::format("P{:g} is not a program number", n));
-    }
-    const auto number = static_cast<long>(n);
-    auto find_in = [&](std::size_t si) -> std::optional<Cursor> {
-      Source& src = sources_[si];
-      if (!src.programs) index_programs(src);
-      const auto it = src.programs->find(number);
-      if (it == src.programs->end()) return std::nullopt;
-      return Cursor{si, it->second.first, it->second.second};
-    };
-    Frame f;
-    f.label = fmt::format("O{:04d}", number);
-    f.ret = cur_;
-    for (std::size_t si = 0; si < sources_.size(); ++si) {
-      if (auto c = find_in(si)) {
-        f.start = *c;
-        return f;
-      }
-    }
-    std::vector<std::filesystem::path> dirs;
-    const std::filesystem::path main(sources_[0].name);
-    dirs.push_back(main.has_parent_path() ? main.parent_path() : std::filesystem::path("."));
-    dirs.insert(dirs.end(), opt_.include_dirs.begin(), opt_.include_dirs.end());
-    for (const auto& d : dirs) {
-      for (const std::string& stem : {fmt::format("O{:04d}", number), fmt::format("O{}", number)}) {
-        for (const char* ext : {"", ".nc", ".ngc"}) {
-          const std::filesystem::path file = d / (stem + ext);
-          std::error_code ec;
-          if (!std::filesystem::is_regular_file(file, ec)) continue;
-          Source src;
-          src.owned = read_text_file(file);
-          src.name = file.string();
-          sources_.push_back(std::move(src));
-          sources_.back().text = sources_.back().owned;
-          if (auto c = find_in(sources_.size() - 1)) {
-            f.start = *c;
-            return f;
-          }
-          f.start = Cursor{sources_.size() - 1, 0, 0};  // a file of the program's body alone
-          return f;
-        }
-      }
-    }
-    fail_at(column, fmt::format("program O{:04d} is not in the program nor a file O{:04d}(.nc) "
-                                "in its folder or the include folders",
-                                number, number));
-  }
-
-  // ---- O-words ------------------------------------------------------------------------------
-
-  // At 'o' (or ':'): an O-word statement (true) or a Fanuc/plain program number (false, the
-  // rest of the line is a block).
-  bool o_statement(std::size_t i) {
-    const std::string& s = line_.text;
-    const std::size_t at = i;
-    ++i;
-    std::string label;
-    bool computed = false;
-    if (i < s.size() && s[i] == '<') {
-      label = read_name(i);
-    } else if (i < s.size() && s[i] == '[') {
-      const double v = read_expression(i);
-      label = fmt::format("{:g}", v);
-      computed = true;
-    } else {
-      const std::size_t j0 = i;
-      while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
-      if (i == j0) fail(at, "'O' needs a number or <name> after it");
-      label = s.substr(j0, i - j0);
-      // Strip leading zeros: o0100 and o100 are one label.
-      const std::size_t nz = label.find_first_not_of('0');
-      label = nz == std::string::npos ? "0" : label.substr(nz);
-    }
-    const std::size_t kw_at = i;
-    std::size_t j = i;
-    while (j < s.size() && s[j] >= 'a' && s[j] <= 'z') ++j;
-    const std::string_view kw = std::string_view(s).substr(i, j - i);
-    OKind kind = OKind::none;
-    for (const OKeyword& k : kOKeywords) {
-      if (kw == k.name) kind = k.kind;
-    }
-    if (kind == OKind::none) {
-      if (kw.empty() && (j >= s.size() || s[at] == ':')) return true;  // program number "O1234"
-      if (kw.empty() && s[at] == 'o') {
-        // "O1000 G0 X1": a program number before a block (Fanuc): the block runs.
-        line_.text.erase(0, j);
-        line_.column.erase(line_.column.begin(),
-                           line_.column.begin() + static_cast<std::ptrdiff_t>(j));
-        run_after_program_number();
-        return true;
-      }
-      fail(kw_at, fmt::format("unknown O-word keyword '{}' (sub endsub call return if elseif "
-                              "else endif while endwhile do repeat endrepeat break continue)",
-                              kw));
-    }
-    // The statements that jump by label are found by the index of O-word lines, which knows
-    // written labels only: a computed label calls, and ':' (Fanuc's program number) is no
-    // statement.
-    if (s[at] == ':') {
-      fail(at, "':' starts a program number (Fanuc's O); an O-word statement starts with O");
-    }
-    if (computed && kind != OKind::call) {
-      fail(at, fmt::format("a computed O label (o[...]) is for call only, not {}", kw));
-    }
-    i = j;
-    count_block();
-    o_word(kind, label, i, at);
-    return true;
-  }
-
-  void run_after_program_number() {
-    std::size_t i = 0;
-    if (line_.text.empty()) return;
-    count_block();
-    read_block(i);
-    for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
-    for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
-    execute();
-  }
-
-  // An optional [condition] / [value] after a keyword.
-  std::optional<double> o_value(std::size_t& i) {
-    if (i >= line_.text.size()) return std::nullopt;
-    if (line_.text[i] != '[') {
-      fail(i, fmt::format("expected [expression] here, found {}", ngc::shown(line_.text[i])));
-    }
-    return read_expression(i);
-  }
-  double o_required(std::size_t& i, std::string_view what) {
-    if (i >= line_.text.size()) fail(i, fmt::format("{} needs [expression]", what));
-    return *o_value(i);
-  }
-  void o_end(std::size_t i) {
-    if (i < line_.text.size()) {
-      fail(i, fmt::format("unexpected {} after the O-word", ngc::shown(line_.text[i])));
-    }
-  }
-
-  // The O-word lines of a source (built once).
-  void index(Source& src) {
-    if (src.indexed) return;
-    src.indexed = true;
-    ngc::Line l;
-    std::size_t off = 0, no = 0;
-    const std::string_view t = src.text;
-    while (off < t.size()) {
-      std::size_t end = t.find('\n', off);
-      if (end == std::string_view::npos) end = t.size();
-      ++no;
-      const std::string_view raw = t.substr(off, end - off);
-      if (may_start_with(raw, "oOnN")) {
-        ngc::normalise(raw, l);
-        const std::string& s = l.text;
-        std::size_t i = past_line_number(s);
-        if (l.error_column == 0 && i < s.size() && s[i] == 'o') {
-          OLine ol;
-          ol.offset = off;
-          ol.line_no = no;
-          ++i;
-          if (i < s.size() && s[i] == '<') {
-            const std::size_t close = s.find('>', i);
-            if (close != std::string::npos) {
-              ol.label = s.substr(i + 1, close - i - 1);
-              i = close + 1;
-            }
-          } else {
-            const std::size_t j0 = i;
-            while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
-            ol.label = s.substr(j0, i - j0);
-            const std::size_t nz = ol.label.find_first_not_of('0');
-            ol.label = nz == std::string::npos ? "0" : ol.label.substr(nz);
-          }
-          std::size_t j = i;
-          while (j < s.size() && s[j] >= 'a' && s[j] <= 'z') ++j;
-          const std::string_view kw = std::string_view(s).substr(i, j - i);
-          for (const OKeyword& k : kOKeywords) {
-            if (kw == k.name) ol.kind = k.kind;
-          }
-          if (ol.kind != OKind::none && !ol.label.empty()) src.olines.push_back(std::move(ol));
-        }
-      }
-      off = end == t.size() ? end : end + 1;
-    }
-  }
-
-  // The index in the running source's O-lines of the line just read.
-  std::size_t this_oline() {
-    Source& src = sources_[cur_.source];
-    index(src);
-    const auto it =
-        std::lower_bound(src.olines.begin(), src.olines.end(), line_offset_,
-                         [](const OLine& o, std::size_t off) { return o.offset < off; });
-    if (it == src.olines.end() || it->offset != line_offset_) {
-      // The index reads lines as the interpreter does; a line it missed is a reader bug.
-      throw Error(
-          fmt::format("{}:{}: this O-word line is not in the reader's index (a bug of "
-                      "trochomill's: please report it with the program)",
-                      src.name, cur_.line_no));
-    }
-    return static_cast<std::size_t>(it - src.olines.begin());
-  }
-
-  // The next O-line after `from` with this label and one of the kinds; fails naming `what`.
-  std::size_t find_forward(std::size_t from, const std::string& label,
-                           std::initializer_list<OKind> kinds, std::string_view what,
-                           std::size_t at) {
-    const Source& src = sources_[cur_.source];
-    for (std::size_t k = from + 1; k < src.olines.size(); ++k) {
-      const OLine& o = src.olines[k];
-      if (o.label != label) continue;
-      if (std::find(kinds.begin(), kinds.end(), o.kind) != kinds.end()) return k;
-    }
-    fail(at, fmt::format("o{} has no matching {} below it", show_label(label), what));
-  }
-
-  static std::string show_label(const std::string& label) {
-    const bool number = !label.empty() && std::all_of(label.begin(), label.end(),
-                                                      [](char c) { return c >= '0' && c <= '9'; });
-    return number ? label : "<" + label + ">";
-  }
-
-  // Continue reading at O-line k of the running source (that line itself, or the one after).
-  void jump(std::size_t k, bool after) {
-    const Source& src = sources_[cur_.source];
-    const OLine& o = src.olines[k];
-    if (!after) {
-      cur_.offset = o.offset;
-      cur_.line_no = o.line_no - 1;
-      return;
-    }
-    const std::size_t end = src.text.find('\n', o.offset);
-    cur_.offset = end == std::string_view::npos ? src.text.size() : end + 1;
-    cur_.line_no = o.line_no;
-  }
-
-  // Opens an if or loop of the running frame.
-  Control& open_control(OKind kind, const std::string& label, const Cursor& start) {
-    Control ctl;
-    ctl.kind = kind;
-    ctl.label = label;
-    ctl.start = start;
-    frames_.back().controls.push_back(ctl);
-    return frames_.back().controls.back();
-  }
-
-  // The open `kind` labelled `label`, or an error: "o<label> <what> without its <opener>".
-  Control& open_of(OKind kind, const std::string& label, std::string_view what,
-                   std::string_view opener, std::size_t at) {
-    Control* ctl = find_control(label);
-    if (ctl == nullptr || ctl->kind != kind) {
-      fail(at, fmt::format("o{} {} without its {}", show_label(label), what, opener));
-    }
-    return *ctl;
-  }
-
-  Control* find_control(const std::string& label) {
-    auto& cs = frames_.back().controls;
-    for (auto it = cs.rbegin(); it != cs.rend(); ++it) {
-      if (it->label == label) return &*it;
-    }
-    return nullptr;
-  }
-
-  void pop_to(const std::string& label) {
-    auto& cs = frames_.back().controls;
-    while (!cs.empty() && cs.back().label != label) cs.pop_back();
-    if (!cs.empty()) cs.pop_back();
-  }
-
-  void o_word(OKind kind, const std::string& label, std::size_t i, std::size_t at) {
-    switch (kind) {
-      case OKind::sub: {
-        o_end(i);
-        // A definition met in the flow: skip its body.
-        const std::size_t k = this_oline();
-        jump(find_forward(k, label, {OKind::endsub}, "endsub", at), true);
-        return;
-      }
-      case OKind::endsub:
-      case OKind::ret: {
-        const std::optional<double> v = o_value(i);
-        o_end(i);
-        if (frames_.size() < 2 || frames_.back().label != label) {
-          if (kind == OKind::endsub && frames_.size() < 2) {
-            fail(at, fmt::format("o{} endsub without its sub", show_label(label)));
-          }
-          fail(at, fmt::format(
-                       "o{} {} outside subroutine o{}", show_label(label),
-                       kind == OKind::ret ? "return" : "endsub",
-                       show_label(frames_.back().label.empty() ? label : frames_.back().label)));
-        }
-        value_returned_ = v.has_value();
-        value_ = v.value_or(0.0);
-        return_from_sub();
-        return;
-      }
-      case OKind::call:
-        call(label, i, at);
-        return;
-      case OKind::if_: {
-        const double c = o_required(i, "if");
-        o_end(i);
-        open_control(OKind::if_, label, cur_).taken = c != 0;
-        if (c == 0) {
-          const std::size_t k = this_oline();
-          jump(find_forward(k, label, {OKind::elseif, OKind::else_, OKind::endif},
-                            "elseif, else or endif", at),
-               false);
-        }
-        return;
-      }
-      case OKind::elseif:
-      case OKind::else_: {
-        Control* ctl =
-            &open_of(OKind::if_, label, kind == OKind::else_ ? "else" : "elseif", "if", at);
-        const std::size_t k = this_oline();
-        if (ctl->taken) {
-          jump(find_forward(k, label, {OKind::endif}, "endif", at), false);
-          return;
-        }
-        if (kind == OKind::else_) {
-          o_end(i);
-          ctl->taken = true;
-          return;
-        }
-        const double c = o_required(i, "elseif");
-        o_end(i);
-        if (c != 0) {
-          ctl->taken = true;
-        } else {
-          jump(find_forward(k, label, {OKind::elseif, OKind::else_, OKind::endif},
-                            "elseif, else or endif", at),
-               false);
-        }
-        return;
-      }
-      case OKind::endif: {
-        o_end(i);
-        (void)open_of(OKind::if_, label, "endif", "if", at);
-        pop_to(label);
-        return;
-      }
-      case OKind::while_: {
-        Control* open = find_control(label);
-        if (open != nullptr && open->kind == OKind::do_) {
-          // The end of a do loop.
-          const double c = o_required(i, "while");
-          o_end(i);
-          if (c != 0) {
-            cur_ = open->start;
-          } else {
-            pop_to(label);
-          }
-          return;
-        }
-        const double c = o_required(i, "while");
-        o_end(i);
-        const bool here = open != nullptr && open->kind == OKind::while_ &&
-                          open->start.offset == line_offset_ && open->start.source == cur_.source;
-        if (c != 0) {
-          if (!here) {
-            open_control(OKind::while_, label, {cur_.source, line_offset_, cur_.line_no - 1});
-          }
-          return;
-        }
-        if (here) pop_to(label);
-        const std::size_t k = this_oline();
-        jump(find_forward(k, label, {OKind::endwhile}, "endwhile", at), true);
-        return;
-      }
-      case OKind::endwhile: {
-        o_end(i);
-        cur_ =
-            open_of(OKind::while_, label, "endwhile", "while", at).start;  // its condition decides
-        return;
-      }
-      case OKind::do_: {
-        o_end(i);
-        open_control(OKind::do_, label, cur_);
-        return;
-      }
-      case OKind::repeat: {
-        const double n = o_required(i, "repeat");
-        o_end(i);
-        if (n >= 1) {
-          open_control(OKind::repeat, label, cur_).remaining = std::floor(n);
-          return;
-        }
-        const std::size_t k = this_oline();
-        jump(find_forward(k, label, {OKind::endrepeat}, "endrepeat", at), true);
-        return;
-      }
-      case OKind::endrepeat: {
-        o_end(i);
-        end_repeat_pass(open_of(OKind::repeat, label, "endrepeat", "repeat", at), label);
-        return;
-      }
-      case OKind::brk:
-      case OKind::cont: {
-        o_end(i);
-        Control* ctl = find_control(label);
-        if (ctl == nullptr || (ctl->kind != OKind::while_ && ctl->kind != OKind::do_)) {
-          fail(at, fmt::format("o{} {} outside a while or do loop o{} (LinuxCNC's break and "
-                               "continue work in those, not in repeat)",
-                               show_label(label), kind == OKind::brk ? "break" : "continue",
-                               show_label(label)));
-        }
-        const std::size_t k = this_oline();
-        if (kind == OKind::brk) {
-          const OKind closing = ctl->kind == OKind::while_ ? OKind::endwhile
-                                : ctl->kind == OKind::do_  ? OKind::while_
-                                                           : OKind::endrepeat;
-          const std::size_t e = find_forward(k, label, {closing}, "loop end", at);
-          pop_to(label);
-          jump(e, true);
-        } else if (ctl->kind == OKind::while_) {
-          cur_ = ctl->start;
-        } else if (ctl->kind == OKind::do_) {
-          jump(find_forward(k, label, {OKind::while_}, "while", at), false);
-        } else {
-          end_repeat_pass(*ctl, label);
-        }
-        return;
-      }
-      case OKind::none:
-        break;
-    }
-  }
-
-  void end_repeat_pass(Control& ctl, const std::string& label) {
-    ctl.remaining -= 1;
-    if (ctl.remaining >= 1) {
-      cur_ = ctl.start;
-      return;
-    }
-    // Done: continue after the endrepeat.
-    const std::size_t k = this_oline();
-    const Source& src = sources_[cur_.source];
-    std::size_t e = k;
-    if (src.olines[k].kind != OKind::endrepeat) {
-      e = find_forward(k, label, {OKind::endrepeat}, "endrepeat", 0);
-    }
-    pop_to(label);
-    jump(e, true);
-  }
-
-  void call(const std::string& label, std::size_t i, std::size_t at) {
-    // Arguments: [expr] [expr] ... into #1 .. #30.
-    std::array<double, 31> args{};
-    int n = 0;
-    while (i < line_.text.size()) {
-      if (line_.text[i] != '[') {
-        fail(i, fmt::format("a call's arguments are [expressions], found {}",
-                            ngc::shown(line_.text[i])));
-      }
-      if (n == 30) fail(i, "more than 30 arguments");
-      args[static_cast<std::size_t>(++n)] = read_expression(i);
-    }
-    if (static_cast<int>(frames_.size()) > opt_.max_call_depth) {
-      fail(at, fmt::format("subroutine calls nested deeper than {} (recursion without end?)",
-                           opt_.max_call_depth));
-    }
-    const auto [src, k] = find_sub(label, at);
-    Frame f;
-    f.label = label;
-    f.ret = cur_;
-    for (std::size_t p = 1; p <= 30; ++p) {
-      f.saved_locals[p] = params_[p];
-      params_[p] = args[p];
-    }
-    frames_.push_back(std::move(f));
-    cur_.source = src;
-    jump(k, true);
-  }
-
-  void return_from_sub() {
-    Frame& f = frames_.back();
-    if (f.new_locals) {
-      for (std::size_t p = 1; p <= (fanuc_ ? 33U : 30U); ++p) params_[p] = f.saved_locals[p];
-    }
-    const bool restore = f.restore_modal;
-    cur_ = f.ret;
-    frames_.pop_back();
-    if (restore) {
-      restore_modal(sub_saved_.back());
-      sub_saved_.pop_back();
-    }
-  }
-
-  // The source and O-line of `o<label> sub`: the running file, then the loaded ones, then
-  // label.ngc on the search path.
-  std::pair<std::size_t, std::size_t> find_sub(const std::string& label, std::size_t at) {
-    auto in = [&](std::size_t s) -> std::optional<std::size_t> {
-      index(sources_[s]);
-      const auto& ol = sources_[s].olines;
-      for (std::size_t k = 0; k < ol.size(); ++k) {
-        if (ol[k].kind == OKind::sub && ol[k].label == label) return k;
-      }
-      return std::nullopt;
-    };
-    if (auto k = in(cur_.source)) return {cur_.source, *k};
-    for (std::size_t s = 0; s < sources_.size(); ++s) {
-      if (auto k = in(s)) return {s, *k};
-    }
-    const bool number =
-        std::all_of(label.begin(), label.end(), [](char c) { return c >= '0' && c <= '9'; });
-    std::vector<std::filesystem::path> dirs;
-    const std::filesystem::path main(sources_[0].name);
-    if (main.has_parent_path()) {
-      dirs.push_back(main.parent_path());
-    } else {
-      dirs.emplace_back(".");
-    }
-    dirs.insert(dirs.end(), opt_.include_dirs.begin(), opt_.include_dirs.end());
-    if (!number && label.find('/') == std::string::npos) {
-      for (const auto& d : dirs) {
-        const std::filesystem::path file = d / (label + ".ngc");
-        std::error_code ec;
-        if (!std::filesystem::is_regular_file(file, ec)) continue;
-        Source s;
-        s.owned = read_text_file(file);
-        s.name = file.string();
-        sources_.push_back(std::move(s));
-        Source& added = sources_.back();
-        added.text = added.owned;
-        if (auto k = in(sources_.size() - 1)) return {sources_.size() - 1, *k};
-        fail(at, fmt::format("{} does not define o<{}> sub", file.string(), label));
-      }
-    }
-    std::string where;
-    for (const auto& d : dirs) where += (where.empty() ? "" : ", ") + d.string();
-    fail(at, fmt::format("subroutine o{} is not defined in the program{}", show_label(label),
-                         number ? "" : fmt::format(" nor found as {}.ngc in {}", label, where)));
-  }
-
-  void end_program() { ended_ = true; }
-
-  // Cutter radius compensation.
-  CompSide comp_side_ = CompSide::off;
-  double comp_radius_ = 0;  // mm
-  bool comp_first_ = true;  // the next move starts compensation
-  bool arc_not_allowed_ = false;
-  bool comp_fanuc_warned_ = false;
-  Vec3 comp_cur_ = Vec3::Zero();  // the tool centre (program mm)
-  Vec3 emitted_ = Vec3::Zero();   // where the last compensated move to run ends (program mm)
-  std::vector<QueuedMove> queue_;
-  std::array<double, 2> endpoint_{};  // where the last queued XY move starts
-  bool endpoint_valid_ = false;
-
-  // ---- state --------------------------------------------------------------------------------
-
-  GcodeReadOptions opt_;
-  bool fanuc_ = opt_.dialect == Dialect::fanuc;  // Fanuc with Macro B
-  bool decimal_warned_ = false;
-  std::optional<std::pair<double, double>> pending_m98_;  // P, L of this block's M98
-  bool pending_m99_ = false;
-  double m99_p_ = -1;
-  std::deque<Source> sources_;
-  Cursor cur_;
-  std::size_t line_offset_ = 0;  // of the line being run
-  std::size_t main_lines_ = 0;
-  ngc::Line line_;
-  Block block_;
-  int depth_ = 0;  // nesting of read_value
-  char word_ = 0;  // the word whose value is being read (for messages)
-  std::size_t word_at_ = 0;
-  std::vector<double> params_;
-  std::unordered_map<std::string, double> globals_;
-  std::vector<Frame> frames_;
-  ModalSave saved_;
-  std::vector<ModalSave> sub_saved_;
-  double value_ = 0;
-  bool value_returned_ = false;
-
-  // Modal state (lengths in mm).
-  int motion_ = -1;  // 0, 10, 20, 30, 730, 810 .. 890; -1 = none / G80
-  Plane plane_ = Plane::xy;
-  double unit_ = 1.0;
-  bool absolute_ = true, arc_absolute_ = false;
-  FeedMode feed_mode_ = FeedMode::per_minute;
-  double feed_ = 0;  // mm/min (G95: mm/rev)
-  // Feed words and modal restores that set feed_, counted; the count and feed_ as the block
-  // being run started; whether the move being made is a plain G0..G3 of the block's words.
-  std::uint64_t feed_events_ = 0, block_feed_events_ = 0;
-  double block_feed_before_ = 0;
-  bool plain_move_ = false;
-  bool feed_given_ = false;
-  double inverse_f_ = -1;  // G93: this block's F
-  double speed_ = 0;
-  bool spindle_on_ = false;
-  int spindle_dir_ = 0;  // 1 clockwise (M3), -1 counterclockwise (M4), 0 stopped
-  // G99 (retract to R) until G98: LinuxCNC's interpreter starts so (its setup leaves the mode
-  // at its first value, R_PLANE); Fanuc starts in G98.
-  bool retract_r_ = opt_.dialect != Dialect::fanuc;
-  double tool_loaded_ = 0, tool_selected_ = 0;
-  double tool_z_ = 0;  // active tool length offset (mm)
-  std::map<int, ToolTableEntry> tools_ = opt_.tools;
-  // Coordinate systems.
-  int system_ = 1;
-  Vec3 origin_ = Vec3::Zero();
-  double rotation_ = 0;
-  Vec3 g92_ = Vec3::Zero();
-  Vec3 out_origin_ = Vec3::Zero();
-  double out_rotation_ = 0;
-  bool g28_given_ = false, g30_given_ = false, home_warned_ = false, tool_warned_ = false;
-  double unknown_tool_ = -1;  // the H of an active G43 whose tool the table lacks
-  std::array<bool, 9> system_warned_{};
-  // Canned cycles.
-  int cycle_motion_ = -1;
-  double cycle_r_ = 0, cycle_z_ = 0, cycle_q_ = 0, cycle_p_ = 0, cycle_il_ = 0;
-  std::array<double, 3> cycle_ijk_{};  // G87's I J K (mm)
-  bool g88_warned_ = false, shift_warned_ = false;
-  bool cycle_il_flag_ = false;
-  // Position.
-  Vec3 cur_pos_ = Vec3::Zero();  // program coordinates (mm)
-  Vec3 out_pos_ = Vec3::Zero();  // output frame, the path's end
-  bool started_ = false;
-  bool ended_ = false;
-  GcodeProgram prog_;
-};
-
-}  // namespace
+}
 
 GcodeProgram interpret_gcode(std::string_view text, std::string_view source_name,
                              const GcodeReadOptions& options) {
   return Interpreter(text, source_name, options).run();
 }
 
-std::map<int, ToolTableEntry> read_tool_table(const std::filesystem::path& file) {
-  const std::string text = read_text_file(file);
-  std::map<int, ToolTableEntry> out;
-  std::size_t off = 0, no = 0;
-  while (off < text.size()) {
-    std::size_t end = text.find('\n', off);
-    if (end == std::string::npos) end = text.size();
-    ++no;
-    std::string_view line(text.data() + off, end - off);
-    off = end + 1;
-    if (const auto sc = line.find(';'); sc != std::string_view::npos) line = line.substr(0, sc);
-    std::optional<int> tool;
-    ToolTableEntry e;
-    std::size_t i = 0;
-    auto fail = [&](std::size_t col, const std::string& what) {
-      throw InputError(fmt::format("{}:{}:{}: {}", file.string(), no, col + 1, what));
-    };
-    while (i < line.size()) {
-      const char c = line[i];
-      if (c == ' ' || c == '\t' || c == '\r') {
-        ++i;
-        continue;
-      }
-      const char L = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-      if (std::string_view("TPXYZABCUVWDIJQ").find(L) == std::string_view::npos) {
-        fail(i, fmt::format("unexpected {} in a tool table line (T P X Y Z ... D I J Q words)",
-                            ngc::shown(c)));
-      }
-      const std::size_t at = i++;
-      const char* b = line.data() + i;
-      const char* e2 = line.data() + line.size();
-      double v = 0;
-      bool neg = false;
-      if (b < e2 && (*b == '+' || *b == '-')) {
-        neg = *b == '-';
-        ++b;
-      }
-      auto [ptr, ec] = std::from_chars(b, e2, v, std::chars_format::fixed);
-      if (ec != std::errc() || ptr == b || !std::isfinite(v)) {
-        fail(at, fmt::format("'{}' needs a number after it", L));
-      }
-      if (neg) v = -v;
-      i = static_cast<std::size_t>(ptr - line.data());
-      if (L == 'T') {
-        if (v < 0 || v != std::floor(v) || v > 1e6) fail(at, "T must be a whole number >= 0");
-        tool = static_cast<int>(v);
-      } else if (L == 'Z') {
-        if (std::abs(v) > 1e4) fail(at, "a tool length beyond +-1e4 mm");
-        e.length_mm = v;
-      } else if (L == 'D') {
-        if (v < 0 || v > 1e4) fail(at, "a tool diameter outside 0 .. 1e4 mm");
-        e.diameter_mm = v;
-      }
-    }
-    if (tool) out[*tool] = e;
-  }
-  return out;
-}
-
-}  // namespace trochomill
+}  // namespace trochomill::gcode_detail

@@ -1,4 +1,4 @@
-// Reading NC programs: the interpreter's entry point (the language is interp.cpp's), the
+// Reading NC programs: the interpreter's entry point (the language: interp.hpp), the
 // header keys trochomill writes into its programs, and their check against a job.
 #include <fmt/format.h>
 
@@ -11,16 +11,13 @@
 #include <map>
 #include <optional>
 
+#include "interp.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
-
-// The interpreter (interp.cpp).
-GcodeProgram interpret_gcode(std::string_view text, std::string_view source_name,
-                             const GcodeReadOptions& options);
 
 std::vector<std::pair<std::string, std::string>> gcode_header_keys(std::string_view text) {
   // The leading block of comment lines (and '%', O numbers, blank lines): "(k.e = v)" or
@@ -59,7 +56,7 @@ std::vector<std::pair<std::string, std::string>> gcode_header_keys(std::string_v
 GcodeProgram read_gcode(std::string_view text, std::string_view source_name,
                         const GcodeReadOptions& options) {
   if (!(options.rapid_rate_mm_per_min > 0)) throw InputError("rapid rate must be > 0 mm/min");
-  GcodeProgram prog = interpret_gcode(text, source_name, options);
+  GcodeProgram prog = gcode_detail::interpret_gcode(text, source_name, options);
   prog.info.header_keys = gcode_header_keys(text);
   return prog;
 }

@@ -1,0 +1,261 @@
+// The interpreter's blocks: a line's words read into a Block, its G codes sorted into their
+// modal groups, checked (coordinates in range, Fanuc's read-only variables, the words no code
+// uses, unsupported codes named); the modal state M70-M73 save and restore.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "interp.hpp"
+#include "ngc_lexer.hpp"
+#include "trochomill/gcode.hpp"
+
+namespace trochomill::gcode_detail {
+
+void Interpreter::read_block(std::size_t i) {
+  block_.clear();
+  const std::string& s = line_.text;
+  while (i < s.size()) {
+    const char c = s[i];
+    const std::size_t at = i;
+    if (c == '#') {
+      // #n = value or #<name> = value
+      ++i;
+      std::string name;
+      int index = 0;
+      if (i < s.size() && s[i] == '<') {
+        name = read_name(i);
+      } else {
+        index = parameter_index(read_value(i), at);
+      }
+      if (i >= s.size() || s[i] != '=') {
+        fail(i, "a parameter on its own is not a word: write #1 = value to set it");
+      }
+      ++i;
+      // Fanuc: the right side is an expression without brackets (#1 = #1 + 1).
+      const double v = fanuc_ ? read_binary(i, 1) : read_value(i);
+      if (fanuc_ && name.empty()) check_fanuc_write(index, at, v);
+      if (name.empty()) {
+        block_.numbered.push_back({index, v});
+      } else {
+        block_.named.push_back({std::move(name), v, col_of(at)});
+      }
+      continue;
+    }
+    if (c < 'a' || c > 'z') {
+      fail(i, fmt::format("unexpected character {} (expected a word such as G1 or X10)",
+                          ngc::shown(c)));
+    }
+    ++i;
+    char letter = c;
+    // Sinumerik's radius "CR=5".
+    if (c == 'c' && s.compare(i, 2, "r=") == 0) {
+      i += 2;
+      letter = 'r';
+    }
+    if (i >= s.size()) fail(at, fmt::format("'{}' needs a number after it", upper(c)));
+    word_ = c;
+    word_at_ = at;
+    const std::size_t value_at = i;
+    const double v = read_value(i);
+    word_ = 0;
+    if (fanuc_) {
+      if (std::isnan(v)) continue;  // a word whose variable is vacant is not there
+      if (std::string_view("xyzijkrq").find(letter) != std::string_view::npos && !decimal_warned_) {
+        const std::string_view lit = std::string_view(s).substr(value_at, i - value_at);
+        const bool plain =
+            !lit.empty() && lit.find_first_not_of("+-0123456789") == std::string_view::npos;
+        if (plain) {
+          decimal_warned_ = true;
+          warn(
+              fmt::format("{}{} has no decimal point: taken as {} {} (calculator-type input); "
+                          "a control set to least-increment input reads {:g} {}",
+                          upper(letter), lit, lit, unit_name(), v * (unit_ == 1.0 ? 0.001 : 0.0001),
+                          unit_name()));
+        }
+      }
+    }
+    if (letter == 'g' || letter == 'm') {
+      // Every code is below 1000 (G59.3, M199): anything larger is no code (and would not
+      // fit the tenths it is compared in).
+      if (!(std::abs(v) < 1e4)) fail(at, fmt::format("{}{:g} is not a code", upper(letter), v));
+      (letter == 'g' ? block_.g : block_.m).push_back({code10(v), col_of(at)});
+      continue;
+    }
+    if (letter == 'o') fail(at, "an O-word must start its line");
+    if (letter == 'e') fail(at, "unsupported word 'E'");
+    const auto k = static_cast<std::size_t>(letter - 'a');
+    if (block_.has(letter)) {
+      fail(at, fmt::format("two {} words in one block", upper(letter)));
+    }
+    block_.present |= 1U << k;
+    block_.value[k] = v;
+    block_.column[k] = col_of(at);
+  }
+}
+
+void Interpreter::check_fanuc_write(int index, std::size_t at, double v) const {
+  if (index == 0) fail(at, "#0 is always vacant: it cannot be set");
+  if (index == 3000) {
+    fail(at, fmt::format("the program raised alarm #3000 = {:g}{}", v,
+                         line_.comment.empty() ? "" : " (" + line_.comment + ")"));
+  }
+  if (index >= 5001 && index <= 5043) {
+    fail(at, fmt::format("#{} is a position the control keeps: read only", index));
+  }
+}
+
+void Interpreter::check_range(char c) const {
+  if (std::abs(block_[c]) * unit_ > kMaxCoordinate) {
+    fail_at(block_.col(c), fmt::format("{}{:g} is beyond +-1e6 mm, what trochomill represents",
+                                       upper(c), block_[c]));
+  }
+}
+
+// The block's words before its codes run: rotary axes refused, coordinates in range.
+void Interpreter::check_words() const {
+  // Words no milling program of ours uses: refused by name.
+  for (const char c : std::string_view("abcuvw")) {
+    if (block_.has(c)) {
+      fail_at(block_.col(c),
+              fmt::format("rotary axis {} is not supported (3-axis programs only)", upper(c)));
+    }
+  }
+  for (const char c : std::string_view("xyzijkrq")) {
+    if (block_.has(c)) check_range(c);
+  }
+}
+
+// The block's G codes by modal group; G53 apart, the codes of no effect on the path skipped.
+BlockCodes Interpreter::group_codes() const {
+  // G codes by modal group (two of one group are an error).
+  std::array<int, kGroups> code;
+  code.fill(-1);
+  std::array<std::uint32_t, kGroups> col{};
+  bool g53 = false;
+  for (const auto& [g, column] : block_.g) {
+    if (g == 530) {
+      g53 = true;
+      continue;
+    }
+    if (g == 610 || g == 611 || g == 640) {
+      comp_.refuse(column, fmt::format("{} (path control mode)", code_name('G', g)));
+      continue;  // path blending: no effect on the path
+    }
+    if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
+    // G76 is Fanuc's fine boring cycle; LinuxCNC's is lathe threading.
+    if (g == 760 && !fanuc_) unsupported_g(g, column);
+    const auto it = std::find_if(kGroupOf.begin(), kGroupOf.end(),
+                                 [g = g](const GroupOf& e) { return e.code10 == g; });
+    if (it == kGroupOf.end()) unsupported_g(g, column);
+    const auto k = static_cast<std::size_t>(it->group);
+    if (it->group == kRetract) {
+      comp_.refuse(column, fmt::format("{} (canned cycle retract mode)", code_name('G', g)));
+    }
+    // G80 beside another motion code: the other one is the mode (LinuxCNC reads "G80 G0").
+    if (it->group == kMotion && (code[k] == 800 || g == 800) && code[k] != g) {
+      if (code[k] < 0 || code[k] == 800) {
+        code[k] = g;
+        col[k] = column;
+      }
+      continue;
+    }
+    if (code[k] >= 0) {
+      fail_at(column, fmt::format("two {} codes in one block", kGroupNames[k]));
+    }
+    code[k] = g;
+    col[k] = column;
+  }
+  return {code, col, g53};
+}
+
+// Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).
+void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp_word) const {
+  const bool moved = block_.has_axis() && group0 != 100 && group0 != 920 && group0 != 520;
+  const bool cycle = moved && motion_ >= 730;
+  const bool arc = moved && (motion_ == 20 || motion_ == 30);
+  bool m61 = false;
+  for (const auto& mc : block_.m) m61 = m61 || mc.code10 == 610;
+  auto refuse = [&](char c, const char* users) {
+    fail_at(block_.col(c), fmt::format("{} word with no {} to use it", upper(c), users));
+  };
+  const bool q_cycle =
+      cycle && (motion_ == 730 || motion_ == 830 || (fanuc_ && (motion_ == 760 || motion_ == 870)));
+  if (block_.has('q') && !q_cycle && !m61) refuse('q', "G73, G83 or M61");
+  const bool m98 = pending_m98_.has_value();
+  // LinuxCNC takes no L with G74 (its check lists G73 and G76-G89).
+  const bool l_cycle = cycle && (fanuc_ || motion_ != 740);
+  if (block_.has('l') && !l_cycle && group0 != 100 && !m98) {
+    refuse('l', "G10 or canned cycle other than G74");
+  }
+  if (block_.has('r') && !arc && !cycle && group0 != 100) {
+    refuse('r', "G2/G3, canned cycle or G10");
+  }
+  const bool g87 = cycle && motion_ == 870 && !fanuc_;
+  for (const char c : std::string_view("ijk")) {
+    if (block_.has(c) && !arc && !g87) refuse(c, "G2/G3 or G87");
+  }
+  if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_) {
+    refuse('p', "G2/G3, G4, G10 or canned cycle");
+  }
+  if (block_.has('h') && tool_length != 430) refuse('h', "G43");
+  // D alone: LinuxCNC refuses it; Sinumerik's "T1 D1" (its tool offset) is tolerated, as its
+  // other words are, and Fanuc's D is an offset register.
+  if (block_.has('d') && !comp_word && opt_.dialect == Dialect::linuxcnc && !block_.has('t')) {
+    refuse('d', "G41/G42 (or G41.1/G42.1)");
+  }
+}
+
+void Interpreter::unsupported_g(int g, std::uint32_t column) const {
+  const std::string name = code_name('G', g);
+  if (g == 330 || g == 331) {
+    fail_at(column, fmt::format("{} (threading) is not supported on a milling path", name));
+  }
+  if (g >= 380 && g <= 385) fail_at(column, fmt::format("{} (probing) is not supported", name));
+  if (g == 50 || g == 51 || g == 52 || g == 53) {
+    fail_at(column, fmt::format("{} (splines) is not supported", name));
+  }
+  if (g == 760) {
+    fail_at(column,
+            "G76 is LinuxCNC's lathe threading cycle, not supported on a milling path "
+            "(Fanuc's fine boring G76: read with the fanuc dialect)");
+  }
+  if (g == 70 || g == 80 || g == 960) {
+    fail_at(column, fmt::format("{} is a lathe mode, not supported", name));
+  }
+  fail_at(column, fmt::format("unsupported G-code {}", name));
+}
+
+void Interpreter::save_modal(ModalSave& m) const {
+  m.valid = true;
+  m.plane = plane_;
+  m.unit = unit_;
+  m.absolute = absolute_;
+  m.arc_absolute = arc_absolute_;
+  m.feed_mode = feed_mode_;
+  m.feed = feed_;
+  m.speed = speed_;
+  m.retract_r = retract_r_;
+  m.system = system_;
+}
+
+void Interpreter::restore_modal(const ModalSave& m) {
+  plane_ = m.plane;
+  unit_ = m.unit;
+  absolute_ = m.absolute;
+  arc_absolute_ = m.arc_absolute;
+  feed_mode_ = m.feed_mode;
+  if (feed_ != m.feed) ++feed_events_;
+  feed_ = m.feed;
+  speed_ = m.speed;
+  retract_r_ = m.retract_r;
+  if (m.system != system_) select_system(m.system == 1 ? 540 : 540 + (m.system - 1) * 10);
+}
+
+}  // namespace trochomill::gcode_detail

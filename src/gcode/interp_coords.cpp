@@ -1,0 +1,280 @@
+// The interpreter's coordinate systems: G54-G59.3 and their parameters, G10 L2/L20, G92 and
+// G52, G28/G30; program, machine and output coordinates.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+#include "interp.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/gcode.hpp"
+
+namespace trochomill::gcode_detail {
+
+void Interpreter::init_offsets() {
+  if (opt_.work_system < 1 || opt_.work_system > 9) {
+    throw InputError(
+        fmt::format("work system {} is outside 1 (G54) .. 9 (G59.3)", opt_.work_system));
+  }
+  for (int n = 1; n <= 9; ++n) {
+    const auto& o = opt_.work_offsets_mm[static_cast<std::size_t>(n - 1)];
+    for (int a = 0; a < 3; ++a) params_[sys_param(n, a)] = o ? (*o)[a] : 0.0;
+    params_[sys_param(n, 9)] = opt_.work_rotation_deg[static_cast<std::size_t>(n - 1)];
+  }
+  system_ = opt_.work_system;
+  params_[5220] = system_;
+  out_origin_ = Vec3(params_[sys_param(system_, 0)], params_[sys_param(system_, 1)],
+                     params_[sys_param(system_, 2)]);
+  out_rotation_ = params_[sys_param(system_, 9)];
+  load_system();
+  // G28 / G30 positions: given, or X0 Y0 of the output frame at home_z above it.
+  auto home = [&](const std::optional<Vec3>& given, std::size_t p) {
+    const Vec3 h = given ? *given : out_origin_ + Vec3(0, 0, opt_.home_z_mm);
+    for (int a = 0; a < 3; ++a) params_[p + static_cast<std::size_t>(a)] = h[a];
+    return given.has_value();
+  };
+  g28_given_ = home(opt_.g28_position_mm, 5161);
+  g30_given_ = home(opt_.g30_position_mm, 5181);
+}
+
+void Interpreter::load_system() {
+  origin_ = Vec3(params_[sys_param(system_, 0)], params_[sys_param(system_, 1)],
+                 params_[sys_param(system_, 2)]);
+  rotation_ = params_[sys_param(system_, 9)];
+}
+
+// Machine position of the tool tip for program coordinates p.
+Vec3 Interpreter::to_machine_tip(const Vec3& p) const {
+  double x = p.x() + g92_.x(), y = p.y() + g92_.y();
+  rotate(x, y, rotation_);
+  return Vec3(x + origin_.x(), y + origin_.y(), p.z() + g92_.z() + origin_.z());
+}
+
+// Program coordinates of a machine tip position (LinuxCNC's find_relative without the tool).
+Vec3 Interpreter::from_machine_tip(const Vec3& m) const {
+  double x = m.x() - origin_.x(), y = m.y() - origin_.y();
+  rotate(x, y, -rotation_);
+  return Vec3(x - g92_.x(), y - g92_.y(), m.z() - origin_.z() - g92_.z());
+}
+
+// The output frame (the job's work system as the program started) of program coordinates.
+Vec3 Interpreter::to_out(const Vec3& p) const {
+  const Vec3 m = to_machine_tip(p);
+  double x = m.x() - out_origin_.x(), y = m.y() - out_origin_.y();
+  rotate(x, y, -out_rotation_);
+  return Vec3(x, y, m.z() - out_origin_.z());
+}
+
+// A direction (no translation) from program to output frame.
+Vec3 Interpreter::dir_to_out(const Vec3& d) const {
+  double x = d.x(), y = d.y();
+  rotate(x, y, rotation_ - out_rotation_);
+  return Vec3(x, y, d.z());
+}
+
+void Interpreter::note_system_used(int n) {
+  if (n != opt_.work_system && !opt_.work_offsets_mm[static_cast<std::size_t>(n - 1)] &&
+      !system_warned_[static_cast<std::size_t>(n - 1)]) {
+    system_warned_[static_cast<std::size_t>(n - 1)] = true;
+    static constexpr std::array<std::string_view, 9> kNames{"G54", "G55",   "G56",   "G57",  "G58",
+                                                            "G59", "G59.1", "G59.2", "G59.3"};
+    warn(
+        fmt::format("{} is used but its offset is not given ([machine] work_offsets): "
+                    "assumed equal to {}'s",
+                    kNames[static_cast<std::size_t>(n - 1)],
+                    kNames[static_cast<std::size_t>(opt_.work_system - 1)]));
+    // Unknown offsets are taken as the output system's (a program moving between systems on
+    // one part then keeps its geometry).
+    for (int a = 0; a < 3; ++a) params_[sys_param(n, a)] = params_[sys_param(opt_.work_system, a)];
+  }
+}
+
+void Interpreter::select_system(int g) {
+  static constexpr std::array<int, 9> kCodes{540, 550, 560, 570, 580, 590, 591, 592, 593};
+  const int n = static_cast<int>(std::find(kCodes.begin(), kCodes.end(), g) - kCodes.begin()) + 1;
+  if (n == system_) return;
+  note_system_used(n);
+  const Vec3 machine = to_machine_tip(cur_pos_);
+  system_ = n;
+  params_[5220] = n;
+  load_system();
+  cur_pos_ = from_machine_tip(machine);
+}
+
+void Interpreter::non_modal(int g, std::uint32_t column) {
+  switch (g) {
+    case 100:
+      g10(column);
+      break;
+    case 280:
+    case 300:
+      home_move(g, column);
+      break;
+    case 281:
+    case 301: {
+      // Store the current machine position (of the spindle's gauge line, as LinuxCNC) as
+      // the G28 / G30 position.
+      const Vec3 m = to_machine_tip(cur_pos_) + Vec3(0, 0, tool_z_);
+      const std::size_t p = g == 281 ? 5161 : 5181;
+      for (int a = 0; a < 3; ++a) params_[p + static_cast<std::size_t>(a)] = m[a];
+      (g == 281 ? g28_given_ : g30_given_) = true;
+      break;
+    }
+    case 920: {
+      // G92: offsets so that the current point has the given coordinates.
+      if (!block_.has_axis()) fail_at(column, "G92 needs at least one axis word");
+      for (int a = 0; a < 3; ++a) {
+        const char c = static_cast<char>('x' + a);
+        if (!block_.has(c)) continue;
+        g92_[a] = cur_pos_[a] + g92_[a] - len(c);
+        cur_pos_[a] = len(c);
+        params_[5211 + static_cast<std::size_t>(a)] = g92_[a];
+      }
+      params_[5210] = 1;
+      break;
+    }
+    case 520: {
+      // G52: a local offset, given directly.
+      for (int a = 0; a < 3; ++a) {
+        const char c = static_cast<char>('x' + a);
+        if (!block_.has(c)) continue;
+        cur_pos_[a] += g92_[a] - len(c);
+        g92_[a] = len(c);
+        params_[5211 + static_cast<std::size_t>(a)] = g92_[a];
+      }
+      params_[5210] = 1;
+      break;
+    }
+    case 921:
+    case 922:
+      cur_pos_ += g92_;
+      g92_.setZero();
+      params_[5210] = 0;
+      if (g == 921) {
+        for (std::size_t p = 5211; p <= 5219; ++p) params_[p] = 0;
+      }
+      break;
+    case 923:
+      params_[5210] = 1;
+      for (int a = 0; a < 3; ++a) {
+        const double o = params_[5211 + static_cast<std::size_t>(a)];
+        cur_pos_[a] += g92_[a] - o;
+        g92_[a] = o;
+      }
+      break;
+    default:
+      break;
+  }
+}
+
+void Interpreter::g10(std::uint32_t column) {
+  if (!block_.has('l')) fail_at(column, "G10 needs L (L1 tool table, L2 or L20 work offsets)");
+  const double lv = block_['l'];
+  if (lv != std::floor(lv) || lv < 0 || lv > 100) {
+    fail_at(block_.col('l'), fmt::format("G10 L{:g}: L is 1, 2, 10, 11 or 20", lv));
+  }
+  const int l = static_cast<int>(lv);
+  if (l == 1 || l == 10 || l == 11) {
+    // Tool table entries: the length matters only to machine-coordinate moves.
+    if (!block_.has('p')) fail_at(column, fmt::format("G10 L{} needs the tool number in P", l));
+    const double tool = block_['p'];
+    if (tool < 0 || tool != std::floor(tool) || tool > 1e6) {
+      fail_at(block_.col('p'), fmt::format("G10 L{} P{:g}: P is a tool number 0 .. 1e6", l, tool));
+    }
+    ToolTableEntry& t = tools_[static_cast<int>(tool)];
+    if (l == 1) {
+      if (block_.has('z')) t.length_mm = len('z');
+      if (block_.has('r')) t.diameter_mm = 2 * len('r');
+    } else {
+      // L10/L11: the length so that the current point would be at the given Z.
+      if (block_.has('z')) t.length_mm = cur_pos_.z() + tool_z_ - len('z');
+    }
+    return;
+  }
+  if (l != 2 && l != 20) {
+    fail_at(block_.col('l'), fmt::format("G10 L{} is not supported (L1 L2 L10 L11 L20 are)", l));
+  }
+  if (!block_.has('p')) fail_at(column, fmt::format("G10 L{} needs the coordinate system in P", l));
+  const double pv = block_['p'];
+  const bool in_range = pv >= 0 && pv <= 9.0001;  // checked before the conversion
+  int n = in_range ? static_cast<int>(pv + 0.0001) : -1;
+  if (!in_range || std::abs(pv - n) > 1e-4) {
+    fail_at(block_.col('p'),
+            fmt::format("G10 L{} P{:g}: P is 0 (the active system) or 1 .. 9", l, pv));
+  }
+  if (n == 0) n = system_;
+  if (n == system_) comp_.refuse(column, "a change of the active system's origin (G10)");
+  // The machine position stays; the active system's coordinates follow the new origin.
+  const Vec3 machine = to_machine_tip(cur_pos_);
+  const double r = block_.has('r') ? block_['r'] : params_[sys_param(n, 9)];
+  if (block_.has('r')) {
+    if (l == 20) fail_at(block_.col('r'), "R is not allowed in G10 L20");
+    params_[sys_param(n, 9)] = r;
+  }
+  if (l == 2) {
+    for (int a = 0; a < 3; ++a) {
+      const char c = static_cast<char>('x' + a);
+      if (block_.has(c)) params_[sys_param(n, a)] = len(c);
+    }
+  } else {
+    // L20: the origin such that the current point has the given coordinates in system n.
+    // The current point in system n (without G92, as LinuxCNC's find_current_in_system).
+    Vec3 in_n = machine;
+    in_n.x() -= params_[sys_param(n, 0)];
+    in_n.y() -= params_[sys_param(n, 1)];
+    in_n.z() -= params_[sys_param(n, 2)];
+    double cx = in_n.x(), cy = in_n.y();
+    rotate(cx, cy, -r);
+    double x = block_.has('x') ? len('x') : cx, y = block_.has('y') ? len('y') : cy;
+    double ox = cx, oy = cy;
+    rotate(ox, oy, r);
+    rotate(x, y, r);
+    params_[sys_param(n, 0)] += ox - x;
+    params_[sys_param(n, 1)] += oy - y;
+    if (block_.has('z')) params_[sys_param(n, 2)] += in_n.z() - len('z');
+  }
+  note_given(n);
+  if (n == system_) {
+    load_system();
+    cur_pos_ = from_machine_tip(machine);
+  }
+}
+
+// G28 / G30: rapid to the waypoint (the axis words, in the current mode), then to the stored
+// position for those axes (all three when none is given).
+void Interpreter::home_move(int g, std::uint32_t column) {
+  const bool given = g == 280 ? g28_given_ : g30_given_;
+  if (!given && !home_warned_) {
+    home_warned_ = true;
+    const std::size_t p = g == 280 ? 5161 : 5181;
+    const Vec3 h(params_[p], params_[p + 1], params_[p + 2]);
+    const Vec3 o = to_out(from_machine_tip(h));
+    warn(
+        fmt::format("{}: the machine's {} position is not given ([machine] {}_position): "
+                    "assumed X{:g} Y{:g} Z{:g} in the program's frame",
+                    code_name('G', g), g == 280 ? "G28" : "G30", g == 280 ? "g28" : "g30", o.x(),
+                    o.y(), o.z()));
+  }
+  ++prog_.info.motion_blocks;
+  note_tool_length(g == 280 ? "G28" : "G30");
+  const Vec3 waypoint = ends(false);
+  emit_line(waypoint, true, column);
+  cur_pos_ = waypoint;
+  const std::size_t p = g == 280 ? 5161 : 5181;
+  // The stored position is of the gauge line: the tip is the tool length below it.
+  const Vec3 home = from_machine_tip(Vec3(params_[p], params_[p + 1], params_[p + 2] - tool_z_));
+  Vec3 target = cur_pos_;
+  const bool any = block_.has_axis();
+  for (int a = 0; a < 3; ++a) {
+    if (!any || block_.has(static_cast<char>('x' + a))) target[a] = home[a];
+  }
+  emit_line(target, true, column, !any);
+  cur_pos_ = target;
+}
+
+}  // namespace trochomill::gcode_detail

@@ -1,0 +1,375 @@
+// The interpreter's motion: a move's end point, its feed, straight moves and arcs turned into
+// the output frame, appended to the path and traced (GcodeMove).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+
+#include "interp.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/gcode.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill::gcode_detail {
+
+// The end point of a move in program coordinates (mm): the axis words in the distance mode,
+// or G53's machine coordinates.
+Vec3 Interpreter::ends(bool g53) {
+  Vec3 t = cur_pos_;
+  if (g53) {
+    note_tool_length("G53");
+    const Vec3 m = to_machine_tip(cur_pos_) + Vec3(0, 0, tool_z_);
+    Vec3 target_machine = m;
+    for (int a = 0; a < 3; ++a) {
+      const char c = static_cast<char>('x' + a);
+      if (block_.has(c)) target_machine[a] = len(c);
+    }
+    target_machine.z() -= tool_z_;
+    return from_machine_tip(target_machine);
+  }
+  for (int a = 0; a < 3; ++a) {
+    const char c = static_cast<char>('x' + a);
+    if (block_.has(c)) t[a] = absolute_ ? len(c) : cur_pos_[a] + len(c);
+  }
+  return t;
+}
+
+void Interpreter::move(bool g53, std::uint32_t column) {
+  if (g53 && motion_ != 0 && motion_ != 10) {
+    fail_at(column, "G53 moves need G0 or G1 (a straight move in machine coordinates)");
+  }
+  if (g53) comp_.refuse(column, "G53 (a move in machine coordinates)");
+  const Vec3 target = ends(g53);
+  if (motion_ <= 10) {
+    comp_.allow_arcs();
+    if (comp_.moves()) {
+      comp_.line(target, motion_ == 0, column);
+    } else {
+      plain_move_ = !g53 && (motion_ == 0 || feed_mode_ == FeedMode::per_minute);
+      emit_line(target, motion_ == 0, column);
+      plain_move_ = false;
+    }
+    cur_pos_ = target;
+    return;
+  }
+  if (comp_.arc_not_allowed()) {
+    fail_at(column,
+            "the move right after cutter compensation ends (G40) must be straight, "
+            "not an arc (the tool is a radius away from the programmed point)");
+  }
+  if (comp_.moves()) {
+    comp_.arc(target, column);
+    cur_pos_ = target;
+    return;
+  }
+  plain_move_ = feed_mode_ == FeedMode::per_minute;
+  arc(target, column);
+  plain_move_ = false;
+}
+
+double Interpreter::feed_for(double length_mm, std::uint32_t column) {
+  double f = 0;
+  switch (feed_mode_) {
+    case FeedMode::per_minute:
+      if (!(feed_ > 0)) {
+        fail_at(column, feed_given_ ? "feed move at F0: program a feed F > 0 (mm/min)"
+                                    : "feed move with no feed rate: program F before G1/G2/G3");
+      }
+      f = feed_;
+      break;
+    case FeedMode::inverse_time:
+      if (inverse_f_ < 0) {
+        fail_at(column, "inverse-time feed (G93): every feed move needs its own F");
+      }
+      if (!(inverse_f_ > 0)) fail_at(column, "inverse-time feed F0: the move would never end");
+      f = length_mm * inverse_f_;  // the move takes 1/F minutes
+      break;
+    case FeedMode::per_rev:
+      if (!(feed_ > 0)) fail_at(column, "feed per revolution (G95) with no feed F > 0");
+      if (!(speed_ > 0)) {
+        fail_at(column, "feed per revolution (G95) with the spindle speed S0: program S");
+      }
+      f = feed_ * speed_;
+      break;
+  }
+  return f;
+}
+
+void Interpreter::note_feed(double f) {
+  if (!(f > 0)) return;
+  if (prog_.info.min_feed_mm_per_min == 0 || f < prog_.info.min_feed_mm_per_min) {
+    prog_.info.min_feed_mm_per_min = f;
+  }
+  prog_.info.max_feed_mm_per_min = std::max(prog_.info.max_feed_mm_per_min, f);
+}
+
+void Interpreter::check_target(const Vec3& out, std::uint32_t column) const {
+  if (!(out.cwiseAbs().maxCoeff() <= kMaxCoordinate)) {
+    fail_at(column, fmt::format("the move reaches X{:g} Y{:g} Z{:g} mm, beyond +-1e6 mm "
+                                "(incremental moves add up)",
+                                out.x(), out.y(), out.z()));
+  }
+}
+
+// A straight move to program position `target`. `starts` marks a move that fixes every axis
+// (G28 without axis words): it starts the path like an XY move.
+void Interpreter::emit_line(const Vec3& target, bool rapid, std::uint32_t column, bool starts) {
+  put_line(to_out(target), rapid, -1, column, cur_.source, cur_.line_no,
+           starts || block_.has('x') || block_.has('y'));
+}
+
+// A straight move to `end` (output frame) at feed f (mm/min; < 0: the feed mode's), made by
+// line `line` of source `source`. `xy` marks a move that fixes X and Y (it starts the path).
+void Interpreter::put_line(const Vec3& end, bool rapid, double f, std::uint32_t column,
+                           std::size_t source, std::size_t line, bool xy) {
+  check_target(end, column);
+  GcodeMove mv;
+  mv.kind = rapid ? GcodeMove::Kind::rapid : GcodeMove::Kind::feed;
+  mv.start_mm = started_ ? out_pos_ : to_out(cur_pos_);
+  mv.end_mm = end;
+  mv.plane = plane_code();
+  describe(mv, source, line);
+  if (!started_) {
+    // The machine's position before the program is unknown: the first move in X or Y only
+    // establishes where the path starts.
+    mv.feed_mm_per_min = rapid ? opt_.rapid_rate_mm_per_min : 0;
+    if (!rapid) mv.feed_mm_per_min = f >= 0 ? f : feed_for((end - mv.start_mm).norm(), column);
+    trace(mv);
+    out_pos_ = end;
+    started_ = xy;
+    return;
+  }
+  const double length = (end - out_pos_).norm();
+  if (rapid) {
+    f = opt_.rapid_rate_mm_per_min;
+  } else {
+    if (f < 0) f = feed_for(length, column);
+    note_feed(f);
+  }
+  mv.feed_mm_per_min = f;
+  mv.path_started = true;
+  if (length > 0) {
+    mv.segment =
+        append(Segment::line(out_pos_, end, rapid ? Motion::rapid : Motion::feed, f), column);
+  }
+  trace(mv);
+  out_pos_ = end;
+}
+
+// Appends a segment; returns its index in the path (npos: not kept, or of no length).
+std::size_t Interpreter::append(Segment seg, std::uint32_t column) {
+  if (!opt_.keep_path) {
+    prog_.summary.add(seg);
+    return GcodeMove::npos;
+  }
+  const std::size_t n = prog_.path.segments().size();
+  if (opt_.max_path_bytes > 0 && (n & 0x3ff) == 0) {
+    // Checked every 1024 moves: the path's segments and the trace's moves as held.
+    const double per_move =
+        static_cast<double>(sizeof(Segment)) + (opt_.trace ? sizeof(GcodeMove) + 64.0 : 0.0);
+    const double held = static_cast<double>(n) * per_move;
+    if (held > opt_.max_path_bytes) {
+      fail_at(0, fmt::format("the program's path holds {} moves ({:.2f} GB) after {} blocks, "
+                             "past the {:.2f} GB the memory limit leaves for reading it: does "
+                             "the program loop without end? (a long program that does not: "
+                             "raise the memory limit)",
+                             n, held / 1e9, prog_.info.blocks_executed, opt_.max_path_bytes / 1e9));
+    }
+  }
+  try {
+    prog_.path.append(std::move(seg));
+  } catch (const Error& e) {
+    fail_at(column, e.what());
+  }
+  return prog_.path.segments().size() > n ? n : GcodeMove::npos;
+}
+
+// What a move's block was and the frame its words were in (GcodeMove's rewrite fields).
+void Interpreter::describe(GcodeMove& mv, std::size_t source, std::size_t line) const {
+  mv.file = sources_[source].name;
+  mv.line = line;
+  mv.source = source;
+  mv.plain = plain_move_;
+  mv.motion = motion_ == 0 ? 0 : motion_ == 10 ? 1 : motion_ == 20 ? 2 : motion_ == 30 ? 3 : -1;
+  mv.block_run = prog_.info.blocks_executed;
+  mv.program_zero_mm = to_out(Vec3::Zero());
+  mv.program_turn_rad = (rotation_ - out_rotation_) * kPi / 180.0;
+  mv.unit_mm = unit_;
+  mv.incremental = !absolute_;
+  mv.ijk_absolute = arc_absolute_;
+  mv.feed_mode = feed_mode_ == FeedMode::per_minute     ? 94
+                 : feed_mode_ == FeedMode::inverse_time ? 93
+                                                        : 95;
+  mv.feed_word = feed_;
+  mv.feed_before = block_feed_before_;
+  mv.feed_events_before = block_feed_events_;
+  mv.feed_events = feed_events_;
+}
+
+// The arc of this block's words from `from` to `target` (program mm): its centre from I J K
+// (moved onto the chord's bisector) or R, its sweep with P turns.
+ArcData Interpreter::arc_data(const Vec3& from, const Vec3& target, std::uint32_t column) const {
+  const double u = unit_;
+  // The plane: e1, e2 span it, n = e1 x e2 (G17: XY/Z, G18: ZX/Y, G19: YZ/X); positive
+  // angles turn from e1 to e2 (G3).
+  int i1 = 0, i2 = 1, in = 2;
+  char o1 = 'i', o2 = 'j';
+  if (plane_ == Plane::zx) {
+    i1 = 2;
+    i2 = 0;
+    in = 1;
+    o1 = 'k';
+    o2 = 'i';
+  } else if (plane_ == Plane::yz) {
+    i1 = 1;
+    i2 = 2;
+    in = 0;
+    o1 = 'j';
+    o2 = 'k';
+  }
+  const double s1 = from[i1], s2 = from[i2], t1 = target[i1], t2 = target[i2];
+  const bool ccw = motion_ == 30;
+  double c1, c2;
+  if (block_.has('r')) {
+    const double rr = len('r');
+    const double dx = t1 - s1, dy = t2 - s2, chord = std::hypot(dx, dy);
+    if (chord <= 1e-12) fail_at(column, "an R-form arc cannot be a full circle (end = start)");
+    if (std::abs(rr) * 2 < chord - opt_.arc_radius_tolerance_mm) {
+      fail_at(column, fmt::format("arc radius R{:g} is smaller than half the chord ({:.4f} {})",
+                                  block_['r'], 0.5 * chord / u, unit_name()));
+    }
+    const double h = std::sqrt(std::max(0.0, rr * rr - 0.25 * chord * chord));
+    // Centre left of the chord for a ccw arc of <= 180 degrees, right for cw; R < 0 flips.
+    double side = ccw ? 1.0 : -1.0;
+    if (rr < 0) side = -side;
+    c1 = 0.5 * (s1 + t1) - side * h * dy / chord;
+    c2 = 0.5 * (s2 + t2) + side * h * dx / chord;
+  } else {
+    if (!block_.has(o1) && !block_.has(o2)) {
+      fail_at(column, fmt::format("arc needs its centre ({} or {} for the G{} plane) or a radius R",
+                                  upper(o1), upper(o2), plane_code()));
+    }
+    const double d1 = block_.has(o1) ? len(o1) : 0.0, d2 = block_.has(o2) ? len(o2) : 0.0;
+    c1 = arc_absolute_ ? d1 : s1 + d1;
+    c2 = arc_absolute_ ? d2 : s2 + d2;
+    const double r0 = std::hypot(s1 - c1, s2 - c2), r1 = std::hypot(t1 - c1, t2 - c2);
+    if (std::abs(r0 - r1) > opt_.arc_radius_tolerance_mm) {
+      fail_at(column,
+              fmt::format("arc radius to the end ({:.4f} {}) differs from the radius to the start "
+                          "({:.4f} {}) by more than {:g} mm",
+                          r1 / u, unit_name(), r0 / u, unit_name(), opt_.arc_radius_tolerance_mm));
+    }
+    // Move the centre onto the chord's bisector so both radii agree exactly.
+    const double mx = 0.5 * (s1 + t1), my = 0.5 * (s2 + t2);
+    const double dx = t1 - s1, dy = t2 - s2, L2 = dx * dx + dy * dy;
+    if (L2 > 0) {
+      const double k = ((c1 - mx) * dx + (c2 - my) * dy) / L2;
+      c1 -= k * dx;
+      c2 -= k * dy;
+    }
+  }
+  const double rad = std::hypot(s1 - c1, s2 - c2);
+  if (rad <= 1e-9) fail_at(column, "arc radius is zero");
+  const double a0 = std::atan2(s2 - c2, s1 - c1), a1 = std::atan2(t2 - c2, t1 - c1);
+  double sweep;
+  const bool full = std::hypot(t1 - s1, t2 - s2) <= 1e-9;
+  if (ccw) {
+    sweep = full ? kTwoPi : std::fmod(a1 - a0 + 2 * kTwoPi, kTwoPi);
+    if (sweep <= 0) sweep += kTwoPi;
+  } else {
+    sweep = full ? -kTwoPi : -std::fmod(a0 - a1 + 2 * kTwoPi, kTwoPi);
+    if (sweep >= 0) sweep -= kTwoPi;
+  }
+  if (block_.has('p')) {
+    const double p = block_['p'];
+    if (p < 1 || std::abs(p - std::round(p)) > 1e-9) {
+      fail_at(block_.col('p'), "arc turns P must be a whole number >= 1");
+    }
+    if (p > 1e4) fail_at(block_.col('p'), "arc turns P beyond 10000");
+    sweep += (ccw ? 1.0 : -1.0) * kTwoPi * (std::round(p) - 1.0);
+  }
+  ArcData d;
+  d.i1 = i1;
+  d.i2 = i2;
+  d.in = in;
+  d.c1 = c1;
+  d.c2 = c2;
+  d.rad = rad;
+  d.sweep = sweep;
+  return d;
+}
+
+void Interpreter::arc(const Vec3& target, std::uint32_t column) {
+  const ArcData d = arc_data(cur_pos_, target, column);
+  // A circle or helix: its length in closed form gives the feed (G93) before the segment is
+  // made once, at that feed.
+  const double length = std::hypot(d.rad * d.sweep, target[d.in] - cur_pos_[d.in]);
+  const double f = feed_for(length, column);
+  const Vec3 from = cur_pos_;
+  cur_pos_ = target;
+  put_arc(from, d, target[d.in], f, column, cur_.source, cur_.line_no,
+          block_.has('x') || block_.has('y'));
+}
+
+// An arc from `from` (program mm) about d's centre through d.sweep, ending at `axial` along
+// the plane's normal, at feed f (mm/min), made by line `line` of source `source`. With
+// `exact_end` (program mm) the arc ends there: a radius at the end that differs from the one
+// at the start (cutter compensation's corners, rounding) becomes a drift spread along it, as
+// a control runs such an arc as a spiral.
+void Interpreter::put_arc(const Vec3& from, const ArcData& d, double axial, double f,
+                          std::uint32_t column, std::size_t source, std::size_t line, bool xy,
+                          const Vec3* exact_end) {
+  const int i1 = d.i1, i2 = d.i2, in = d.in;
+  const double rad = d.rad, sweep = d.sweep;
+  const double a0 = std::atan2(from[i2] - d.c2, from[i1] - d.c1);
+  Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero(), nrm = Vec3::Zero();
+  e1[i1] = 1;
+  e2[i2] = 1;
+  nrm[in] = 1;
+  Vec3 c = Vec3::Zero();
+  c[i1] = d.c1;
+  c[i2] = d.c2;
+  c[in] = from[in];
+  const Vec3 A = rad * (std::cos(a0) * e1 + std::sin(a0) * e2);
+  const Vec3 B = rad * (-std::sin(a0) * e1 + std::cos(a0) * e2);
+  Vec3 V = nrm * ((axial - from[in]) / sweep);
+  if (exact_end != nullptr) {
+    const Vec3 miss = *exact_end - (c + A * std::cos(sweep) + B * std::sin(sweep) + V * sweep);
+    if (miss.norm() > 1e-9) V += miss / sweep;
+  }
+  const Vec3 c_out = to_out(c), A_out = dir_to_out(A), B_out = dir_to_out(B), V_out = dir_to_out(V);
+  Segment seg = Segment::curve(c_out, A_out, B_out, V_out, 0.0, sweep, Motion::feed, f);
+  const Vec3 end = seg.end();
+  check_target(end, column);
+  GcodeMove mv;
+  mv.kind = GcodeMove::Kind::arc;
+  mv.start_mm = started_ ? out_pos_ : to_out(from);
+  mv.end_mm = end;
+  mv.centre_mm = c_out;
+  mv.axis = dir_to_out(nrm);
+  mv.sweep_rad = sweep;
+  mv.plane = plane_code();
+  describe(mv, source, line);
+  mv.feed_mm_per_min = f;
+  if (!started_) {
+    trace(mv);
+    out_pos_ = end;
+    started_ = xy;
+    return;
+  }
+  if ((seg.start() - out_pos_).norm() > 1e-9) {
+    fail_at(column,
+            "an arc that starts where the tool is not (right after a tool length change "
+            "G43/G49 or the end of cutter compensation G40): program a straight move first");
+  }
+  note_feed(f);
+  mv.path_started = true;
+  mv.segment = append(std::move(seg), column);
+  trace(mv);
+  out_pos_ = end;
+}
+
+}  // namespace trochomill::gcode_detail
