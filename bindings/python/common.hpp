@@ -1,6 +1,7 @@
 // What the Python module's files share: the job and path objects Python holds, arrays handed
-// to numpy without a copy, JSON text as Python objects, and long calls that release the GIL
-// and stop on Ctrl-C.
+// to numpy without a copy, JSON text as Python objects, the arguments and results several
+// functions share (common.cpp), long calls that release the GIL and stop on Ctrl-C, and the
+// registration of each part of the module.
 #pragma once
 
 #include <pybind11/numpy.h>
@@ -20,9 +21,11 @@
 #include <vector>
 
 #include "trochomill/error.hpp"
+#include "trochomill/force.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/progress.hpp"
+#include "trochomill/texture.hpp"
 
 namespace trochomill::python {
 
@@ -77,6 +80,9 @@ py::array_t<T> to_array(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
 /// A Python value (bool, int, float, str, a list of them) in TOML syntax, for the job key
 /// `key` (named when the value's type cannot be one).
 [[nodiscard]] std::string toml_value(const py::handle& v, const std::string& key);
+/// "section.key" = value as an override, the value in TOML syntax; a key without a section is
+/// refused.
+[[nodiscard]] Override make_override(const std::string& key, const py::handle& value);
 /// {"section.key": value} (None: none) as overrides; a key without a section is refused.
 [[nodiscard]] std::vector<Override> overrides_of(const py::object& set);
 /// JSON text (the CLI's --json documents) as Python objects (json.loads).
@@ -86,6 +92,31 @@ py::array_t<T> to_array(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
 /// throws InputError naming `what` and `advice` when `need_bytes` passes it.
 void check_memory(const char* what, double need_bytes, std::optional<double> limit_gb,
                   const std::string& advice);
+
+/// The path of an argument: a Path as it is, a Job's planned path.
+[[nodiscard]] ToolPath path_of(const py::object& job_or_path);
+/// A time window: cycles=(A, B) (trochoid cycles A inclusive to B exclusive, from 0), or
+/// from_s / to_s (s of programmed time), or the whole path.
+[[nodiscard]] std::pair<double, double> window_of(const ToolPath& path, const py::object& cycles,
+                                                  std::optional<double> from_s,
+                                                  std::optional<double> to_s);
+/// Radians as degrees.
+[[nodiscard]] std::vector<double> degrees(const std::vector<double>& rad);
+/// A 1-D float64 array, every value finite (`what` names it in the message).
+[[nodiscard]] std::vector<double> finite_vector(
+    const py::array_t<double, py::array::c_style | py::array::forcecast>& a, const char* what);
+/// Measured forces from t_s (n,) increasing and f_n (n, 3), every value finite.
+[[nodiscard]] MeasuredForces measured_of(
+    const py::array_t<double, py::array::c_style | py::array::forcecast>& t_s,
+    const py::array_t<double, py::array::c_style | py::array::forcecast>& f_n);
+/// A profile texture's evaluated R and W profiles: x_mm (along the input), roughness_mm,
+/// waviness_mm (the profiles are moved out of `t`).
+[[nodiscard]] py::dict profile_arrays(ProfileTexture& t);
+/// The monitor's settings without a job file: the defaults with `keys` applied, as the CLI's
+/// `monitor` without --job (only the sections that stand alone may be set).
+[[nodiscard]] MonitorSettings monitor_settings_without_job(const std::vector<Override>& keys);
+/// Wall-clock seconds since `t0`.
+[[nodiscard]] double seconds_since(std::chrono::steady_clock::time_point t0);
 
 /// Runs `work(hooks)` on a worker thread while the calling thread, with the GIL released,
 /// waits; every 50 ms it takes the GIL to run Python's signal handlers, and a
@@ -162,7 +193,21 @@ auto run_released(F&& work, const py::object& progress = py::none())
   return std::move(*st->result);
 }
 
-void bind_job_and_path(py::module_& m);
-void bind_models(py::module_& m);
+// Each part of the module registers its classes and functions; module.cpp calls them in the
+// module's order (the order of its attributes). The CLI's command groups name the files.
+void bind_job(py::module_& m);           // module.cpp: Job
+void bind_path(py::module_& m);          // module.cpp: Path, plan, read_gcode
+void bind_analysis(py::module_& m);      // bind_analysis.cpp: analyze
+void bind_study(py::module_& m);         // bind_study.cpp: compare
+void bind_mechanism(py::module_& m);     // bind_mechanism.cpp: mechanism, recommend
+void bind_simulation(py::module_& m);    // bind_simulation.cpp: simulate, forces, calibrate
+void bind_report(py::module_& m);        // bind_report.cpp: report
+void bind_monitor(py::module_& m);       // bind_signal.cpp: monitor
+void bind_bench(py::module_& m);         // bind_bench.cpp: _analyze_seconds, _monitor_filters
+void bind_texture(py::module_& m);       // bind_texture.cpp: texture_profile, texture_areal
+void bind_spectrum(py::module_& m);      // bind_signal.cpp: spectrum
+void bind_tool(py::module_& m);          // bind_tool.cpp: keys, materials
+void bind_feed(py::module_& m);          // bind_feed.cpp: schedule_feed, optimize_feed
+void bind_synth_signal(py::module_& m);  // bind_signal.cpp: synth_signal
 
 }  // namespace trochomill::python

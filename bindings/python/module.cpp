@@ -1,12 +1,11 @@
 // The `trochomill` Python module: exceptions, the job, paths and NC programs. The models are
-// bound in models.cpp. Units as at the CLI: mm, s, mm/min, rpm, degrees, N; every array and
-// key carries its unit in its name.
+// bound in bind_<domain>.cpp, one file per domain as the CLI's command groups. Units as at
+// the CLI: mm, s, mm/min, rpm, degrees, N; every array and key carries its unit in its name.
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 #include <unistd.h>
 
-#include <cmath>
 #include <filesystem>
 
 #include "common.hpp"
@@ -16,43 +15,7 @@
 
 namespace trochomill::python {
 
-std::string toml_value(const py::handle& v, const std::string& key) {
-  if (py::isinstance<py::bool_>(v)) return v.cast<bool>() ? "true" : "false";
-  if (py::isinstance<py::str>(v)) {
-    return py::module_::import("json").attr("dumps")(v).cast<std::string>();
-  }
-  if (PyIndex_Check(v.ptr()) != 0) return py::str(py::int_(py::reinterpret_borrow<py::object>(v)));
-  if (PyFloat_Check(v.ptr()) != 0 || py::hasattr(v, "__float__")) {
-    const double d = v.cast<double>();
-    if (std::isnan(d)) return "nan";
-    if (std::isinf(d)) return d > 0 ? "inf" : "-inf";
-    std::string out = fmt::format("{}", d);
-    if (out.find_first_of(".e") == std::string::npos) out += ".0";
-    return out;
-  }
-  if (py::isinstance<py::sequence>(v) || py::isinstance<py::array>(v)) {
-    std::string out = "[";
-    bool first = true;
-    for (const py::handle item : v) {
-      out += (first ? "" : ", ") + toml_value(item, key);
-      first = false;
-    }
-    return out + "]";
-  }
-  throw InputError(
-      fmt::format("{}: a {} cannot be a job value (allowed: bool, int, float, str "
-                  "and lists of them)",
-                  key, py::str(py::type::of(v).attr("__name__")).cast<std::string>()));
-}
-
 namespace {
-
-Override make_override(const std::string& key, const py::handle& value) {
-  if (key.find('.') == std::string::npos) {
-    throw InputError(fmt::format("'{}': a job key is section.key, e.g. path.step", key));
-  }
-  return Override{key, toml_value(value, key), ""};
-}
 
 PyJob job_from_document(JobDocument doc, std::vector<Override> overrides) {
   PyJob j;
@@ -131,46 +94,7 @@ PyPath read_program(const py::object& program, const py::object& job_obj) {
 
 }  // namespace
 
-std::vector<Override> overrides_of(const py::object& set) {
-  std::vector<Override> out;
-  if (set.is_none()) return out;
-  for (const auto& [k, v] : set.cast<py::dict>()) {
-    out.push_back(make_override(py::str(k).cast<std::string>(), v));
-  }
-  return out;
-}
-
-const PyJob& job_of(const py::object& job_or_path, const char* function) {
-  if (py::isinstance<PyJob>(job_or_path)) return job_or_path.cast<const PyJob&>();
-  if (py::isinstance<PyPath>(job_or_path)) {
-    const PyPath& p = job_or_path.cast<const PyPath&>();
-    if (p.job) return *p.job;
-    throw InputError(fmt::format(
-        "{}: this program was read without a job; read_gcode(program, job=...) gives it one",
-        function));
-  }
-  throw py::type_error(fmt::format("{}: expected a Job or a Path", function));
-}
-
-py::object from_json(const std::string& text) {
-  return py::module_::import("json").attr("loads")(text);
-}
-
-void check_memory(const char* what, double need_bytes, std::optional<double> limit_gb,
-                  const std::string& advice) {
-  if (limit_gb && !(*limit_gb > 0 && std::isfinite(*limit_gb))) {
-    throw InputError(fmt::format("memory_limit_gb must be a finite number > 0, got {}", *limit_gb));
-  }
-  const double limit = limit_gb ? *limit_gb * 1e9 : default_memory_limit_bytes();
-  if (!(need_bytes <= limit)) {
-    throw InputError(fmt::format(
-        "{}: estimated memory {:.2f} GB exceeds the limit of {:.2f} GB ({}): {}; or raise "
-        "memory_limit_gb",
-        what, need_bytes / 1e9, limit / 1e9, limit_gb ? "memory_limit_gb" : "75 % of RAM", advice));
-  }
-}
-
-void bind_job_and_path(py::module_& m) {
+void bind_job(py::module_& m) {
   py::class_<PyJob, std::shared_ptr<PyJob>>(
       m, "Job", R"(A job: tool, slot, path, cutting conditions, machine, material and settings.
 
@@ -249,7 +173,9 @@ Units: mm, s, mm/min, rpm, degrees (`trochomill keys` lists every key with its u
         return fmt::format("<trochomill.Job {} ({} overrides)>", j.doc->source(),
                            j.overrides.size());
       });
+}
 
+void bind_path(py::module_& m) {
   py::class_<PyPath, std::shared_ptr<PyPath>>(m, "Path", R"(A tool-centre path (mm, s).
 
 Planned from a job (plan) in the slot's frame, or read from an NC program (read_gcode): in
@@ -385,6 +311,19 @@ PYBIND11_MODULE(_trochomill, m) {
       error(e.what());
     }
   });
-  tp::bind_job_and_path(m);
-  tp::bind_models(m);
+  tp::bind_job(m);
+  tp::bind_path(m);
+  // The models, in the order the module has always registered them (its attributes' order).
+  tp::bind_analysis(m);      // analyze
+  tp::bind_study(m);         // compare
+  tp::bind_mechanism(m);     // mechanism, recommend
+  tp::bind_simulation(m);    // simulate, forces, calibrate
+  tp::bind_report(m);        // report
+  tp::bind_monitor(m);       // monitor
+  tp::bind_bench(m);         // _analyze_seconds, _monitor_filters
+  tp::bind_texture(m);       // texture_profile, texture_areal
+  tp::bind_spectrum(m);      // spectrum
+  tp::bind_tool(m);          // keys, materials
+  tp::bind_feed(m);          // schedule_feed, optimize_feed
+  tp::bind_synth_signal(m);  // synth_signal
 }

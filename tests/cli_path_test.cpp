@@ -1,0 +1,172 @@
+// The CLI's path commands: plan (with a feed schedule) writes G-code that check-gcode reads,
+// check-gcode takes the machine from a job, path's CSV, and optimize-feed with a stock mesh.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_util.hpp"
+#include "test_util.hpp"
+#include "trochomill/io.hpp"
+
+namespace trochomill {
+namespace {
+
+using test::Cli;
+using test::CliResult;
+using test::run_cli;
+
+// plan --feed-schedule: the same path (length to the writer's rounding) at varying feeds,
+// faster than at the constant one, read back by check-gcode; its options need the flag.
+TEST_F(Cli, PlanWithAFeedScheduleWritesTheSamePathFaster) {
+  const auto ex = test::example("wagih2023/trochoidal.toml").string();
+  const auto plain = (dir_ / "plain.ngc").string(), fast = (dir_ / "fast.ngc").string();
+  ASSERT_EQ(run_cli("plan " + ex + " -o " + plain).code, 0);
+  const CliResult r = run_cli("plan " + ex + " -o " + fast + " --feed-schedule --max-feed 1500");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("feed schedule: h_max 0.07500 ->"), std::string::npos) << r.out;
+  const auto a = nlohmann::json::parse(run_cli("check-gcode " + plain + " --json -").out);
+  const auto b = nlohmann::json::parse(run_cli("check-gcode " + fast + " --json -").out);
+  // The writer rounds to 1e-4 mm (4 decimals): lengths agree within 1e-4 relative.
+  EXPECT_NEAR(b["path_length_mm"].get<double>(), a["path_length_mm"].get<double>(),
+              1e-4 * a["path_length_mm"].get<double>());
+  EXPECT_LT(b["time_s"].get<double>(), 0.7 * a["time_s"].get<double>());
+  EXPECT_LE(b["feed_max_mm_per_min"].get<double>(), 1500.0);
+  EXPECT_GE(b["feed_min_mm_per_min"].get<double>(), 60.0);
+  const CliResult e = run_cli("plan " + ex + " -o " + fast + " --max-feed 900");
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.out.find("--max-feed is an option of --feed-schedule"), std::string::npos) << e.out;
+}
+
+TEST_F(Cli, PlanWritesGcodeThatCheckGcodeReads) {
+  const auto ex = test::example("wagih2023/elliptical.toml").string();
+  const auto out = (dir_ / "e.ngc").string();
+  const CliResult r = run_cli("plan " + ex + " -o " + out + " --dialect linuxcnc");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("elliptical"), std::string::npos);
+  const CliResult c = run_cli("check-gcode " + out + " --json -");
+  ASSERT_EQ(c.code, 0) << c.out;
+  const auto j = nlohmann::json::parse(c.out);
+  EXPECT_GT(j["path_length_mm"].get<double>(), 500.0);
+  // The tool centre stays within |x| <= a = 5 mm and reaches the slot depth.
+  EXPECT_NEAR(j["bbox_min_mm"][0].get<double>(), -5.0, 1e-4);
+  EXPECT_NEAR(j["bbox_max_mm"][0].get<double>(), 5.0, 1e-4);
+  EXPECT_NEAR(j["bbox_min_mm"][2].get<double>(), -6.0, 1e-12);
+  EXPECT_EQ(j["spindle_max_rpm"].get<double>(), 2000.0);
+}
+
+// check-gcode --job takes the machine from the job: its G55 origin, G28 position and tool
+// table; a flag given overrides the job.
+TEST_F(Cli, CheckGcodeTakesTheMachineFromAJob) {
+  const auto ex = test::example("wagih2023/elliptical.toml").string();
+  const auto tbl = (dir_ / "t.tbl").string();
+  write_file_atomic(tbl, "T3 P3 Z40 D8\n");
+  const auto f = (dir_ / "m.ngc").string();
+  // In G55 (origin X100 in machine coordinates), the output frame G54 (origin 0): X5 in G55 is
+  // X105 in G54; a G41 D3 circle of radius 20 run inside with tool 3 (8 mm) has radius 16.
+  write_file_atomic(f,
+                    "G21 G17 G90 G94\nG55 G0 X5 Y-20 Z2\nF300\nG41 D3\nG1 X5 Y0\n"
+                    "G3 X5 Y0 I20 J0\nG40\nG1 X5 Y-20\nG28\nM2\n");
+  const std::string sets =
+      " --set machine.origin_g54=[0,0,0] --set machine.origin_g55=[100,0,0]"
+      " --set machine.g28_position=[0,0,50] --set machine.tool_table=" +
+      tbl;
+  const CliResult r = run_cli("check-gcode " + f + " --json - --job " + ex + sets);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  // The circle's tool centre: x from 105 + 4 to 105 + 36 (16 mm about (125, 0)); G28 ends at
+  // the machine's 0, 0, 50 (1e-9 mm: sums of the words).
+  EXPECT_NEAR(j["bbox_max_mm"][0].get<double>(), 141.0, 1e-9);
+  EXPECT_NEAR(j["bbox_max_mm"][2].get<double>(), 50.0, 1e-9);
+  EXPECT_NEAR(j["bbox_min_mm"][0].get<double>(), 0.0, 1e-9);
+  // The flag over the job: G55's origin given on the command line.
+  const CliResult o =
+      run_cli("check-gcode " + f + " --json - --job " + ex + sets + " --offset G55=200,0,0");
+  ASSERT_EQ(o.code, 0) << o.out;
+  EXPECT_NEAR(nlohmann::json::parse(o.out)["bbox_max_mm"][0].get<double>(), 241.0, 1e-9);
+  // --set without --job is an error that says so.
+  const CliResult e = run_cli("check-gcode " + f + " --set machine.dialect=fanuc");
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.out.find("--set needs --job"), std::string::npos) << e.out;
+}
+
+TEST_F(Cli, PathCsvHasToothTracks) {
+  const auto ex = test::example("wagih2023/trochoidal.toml").string();
+  const auto csv = (dir_ / "p.csv").string();
+  const CliResult r = run_cli("path " + ex + " --csv " + csv + " --steps-per-rev 12");
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream in(csv);
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header.rfind("t_s,s_mm,x_mm,y_mm,z_mm", 0), 0u);
+  EXPECT_NE(header.find("tooth3_y_mm"), std::string::npos);
+  std::size_t rows = 0;
+  for (std::string line; std::getline(in, line);) ++rows;
+  // 12 samples per revolution at 2000 rpm: dt = 2.5 ms over the whole program.
+  const double duration = 64.957;  // s, the planned program (checked to 1 ms below)
+  EXPECT_NEAR(static_cast<double>(rows), duration / 0.0025, 2.0);
+  EXPECT_EQ(run_cli("path " + ex + " --dt 0.1 --ds 0.1").code, 2);  // exclusive options
+}
+
+// optimize-feed's stock mesh: an STL box with --engine sim and with the kernel runs (the
+// summary names the engine, the simulation's resolution; the output exists); with a face
+// missing, exit 2 naming a line that crosses it an odd number of times, nothing written.
+TEST_F(Cli, OptimizeFeedWithAStockMesh) {
+  const auto job = (dir_ / "job.toml").string(), prog = (dir_ / "p.ngc").string(),
+             stl = (dir_ / "stock.stl").string(), open_stl = (dir_ / "open.stl").string(),
+             out = (dir_ / "out.ngc").string();
+  std::ofstream(job) << "[tool]\ndiameter = 10\nteeth = 4\n[slot]\nwidth = 10\nlength = 20\n"
+                        "depth = 3\n[path]\ntype = \"linear\"\nstep = 1\n"
+                        "[cutting]\nfeed_rate = 600\nspindle_speed = 2000\n"
+                        "[machine]\ndialect = \"linuxcnc\"\n[simulation]\nresolution = 0.1\n"
+                        "steps_per_rev = 24\n";
+  std::ofstream(prog) << "G21 G90 G17 G94\nG0 X0 Y-8 Z5\nG1 Z-1 F600\nG1 Y12\nG0 Z5\nM2\n";
+  // An ASCII STL box x -8..8, y 0..10, z -3..0, two facets a face (outward).
+  const double lo[3] = {-8, 0, -3}, hi[3] = {8, 10, 0};
+  auto corner = [&](int k) {
+    return std::to_string((k & 1) ? hi[0] : lo[0]) + " " + std::to_string((k & 2) ? hi[1] : lo[1]) +
+           " " + std::to_string((k & 4) ? hi[2] : lo[2]);
+  };
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  auto stl_text = [&](int skip) {
+    std::string s = "solid stock\n";
+    int n = 0;
+    for (const auto& q : faces) {
+      for (const auto& t : {std::array{q[0], q[1], q[2]}, std::array{q[0], q[2], q[3]}}) {
+        if (n++ == skip) continue;
+        s += "facet normal 0 0 0\nouter loop\n";
+        for (const int k : t) s += "vertex " + corner(k) + "\n";
+        s += "endloop\nendfacet\n";
+      }
+    }
+    return s + "endsolid stock\n";
+  };
+  std::ofstream(stl) << stl_text(-1);
+  std::ofstream(open_stl) << stl_text(0);
+  const CliResult ok = run_cli("optimize-feed " + prog + " --job " + job + " -o " + out +
+                               " --engine sim --stock " + stl + " --rounds 2");
+  EXPECT_EQ(ok.code, 0) << ok.out;
+  EXPECT_NE(ok.out.find("the tri-dexel simulation at 0.1 mm, 24 steps/rev"), std::string::npos)
+      << ok.out;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  std::filesystem::remove(out);
+  const CliResult kernel =
+      run_cli("optimize-feed " + prog + " --job " + job + " -o " + out + " --stock " + stl);
+  EXPECT_EQ(kernel.code, 0) << kernel.out;
+  EXPECT_NE(kernel.out.find("the exact engagement kernel"), std::string::npos) << kernel.out;
+  std::filesystem::remove(out);
+  for (const char* engine : {"kernel", "sim"}) {
+    const CliResult open = run_cli("optimize-feed " + prog + " --job " + job + " -o " + out +
+                                   " --engine " + engine + " --stock " + open_stl);
+    EXPECT_EQ(open.code, 2) << engine << open.out;
+    EXPECT_NE(open.out.find("not closed"), std::string::npos) << engine << open.out;
+    EXPECT_FALSE(std::filesystem::exists(out)) << engine;
+  }
+}
+
+}  // namespace
+}  // namespace trochomill
