@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common.hpp"
+#include "trochomill/app.hpp"
 #include "trochomill/feed.hpp"
 #include "trochomill/io.hpp"
 
@@ -25,15 +26,9 @@ FeedTargets feed_targets(const Job& job, std::optional<double> h_max_mm,
                          std::optional<double> max_feed_mm_per_min,
                          std::optional<double> air_feed_mm_per_min, double feed_step_percent,
                          double piece_mm) {
-  FeedTargets t = default_feed_targets(job);
-  t.h_max_mm = h_max_mm;
-  t.mrr_mm3_per_min = mrr_mm3_per_min;
-  if (min_feed_mm_per_min) t.min_feed_mm_per_min = *min_feed_mm_per_min;
-  if (max_feed_mm_per_min) t.max_feed_mm_per_min = *max_feed_mm_per_min;
-  if (air_feed_mm_per_min) t.air_feed_mm_per_min = *air_feed_mm_per_min;
-  t.feed_step_percent = feed_step_percent;
-  t.piece_mm = piece_mm;
-  return t;
+  return trochomill::feed_targets(
+      job, {h_max_mm, mrr_mm3_per_min, feed_step_percent, piece_mm, min_feed_mm_per_min,
+            max_feed_mm_per_min, air_feed_mm_per_min});
 }
 
 }  // namespace

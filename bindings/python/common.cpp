@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "trochomill/app.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/units.hpp"
 
@@ -88,16 +89,7 @@ py::object from_json(const std::string& text) {
 
 void check_memory(const char* what, double need_bytes, std::optional<double> limit_gb,
                   const std::string& advice) {
-  if (limit_gb && !(*limit_gb > 0 && std::isfinite(*limit_gb))) {
-    throw InputError(fmt::format("memory_limit_gb must be a finite number > 0, got {}", *limit_gb));
-  }
-  const double limit = limit_gb ? *limit_gb * 1e9 : default_memory_limit_bytes();
-  if (!(need_bytes <= limit)) {
-    throw InputError(fmt::format(
-        "{}: estimated memory {:.2f} GB exceeds the limit of {:.2f} GB ({}): {}; or raise "
-        "memory_limit_gb",
-        what, need_bytes / 1e9, limit / 1e9, limit_gb ? "memory_limit_gb" : "75 % of RAM", advice));
-  }
+  trochomill::check_memory(what, need_bytes, limit_gb, "memory_limit_gb", advice);
 }
 
 ToolPath path_of(const py::object& job_or_path) {
@@ -107,22 +99,11 @@ ToolPath path_of(const py::object& job_or_path) {
 
 std::pair<double, double> window_of(const ToolPath& path, const py::object& cycles,
                                     std::optional<double> from_s, std::optional<double> to_s) {
-  if (!cycles.is_none()) {
-    if (from_s || to_s) throw InputError("give cycles or from_s/to_s, not both");
-    const auto ab = cycles.cast<std::pair<long long, long long>>();
-    const long long count = static_cast<long long>(path.cycles().size());
-    if (ab.first < 0 || ab.second <= ab.first || ab.second > count) {
-      throw InputError(fmt::format("cycles ({}, {}): need 0 <= A < B <= {} (the path's cycles)",
-                                   ab.first, ab.second, count));
-    }
-    return cycle_window(path, static_cast<int>(ab.first), static_cast<int>(ab.second));
-  }
-  for (const auto& [name, v] : {std::pair{"from_s", from_s}, std::pair{"to_s", to_s}}) {
-    if (v && !(std::isfinite(*v) && *v >= 0 && *v <= 1e9)) {
-      throw InputError(fmt::format("{} must be a finite time in [0, 1e9] s, got {}", name, *v));
-    }
-  }
-  return {from_s.value_or(0.0), to_s.value_or(path.duration_s())};
+  WindowRequest r;
+  if (!cycles.is_none()) r.cycles = cycles.cast<std::pair<long long, long long>>();
+  r.from_s = from_s;
+  r.to_s = to_s;
+  return resolve_window(path, r, {"cycles", "from_s", "to_s"});
 }
 
 std::vector<double> degrees(const std::vector<double>& rad) {
