@@ -224,7 +224,7 @@ TEST(Forces, NoMaterialModelIsAClearError) {
 // 1 mm deep, 2 teeth, no helix, f_z 0.1 mm, Bergmann's coefficients). Over four revolutions
 // in steady cut the mean forces agree within 3 % and the peak resultant within 4 %: the
 // simulation's engaged widths come from rays 0.01 mm apart on 0.05 mm segments (its mean
-// width is below the segment's, sim_test), and its chips are sampled per step at the
+// width is below the segment's, sim_chip_test), and its chips are sampled per step at the
 // chip-sampling resolution; the fast source is exact on a straight path.
 TEST(Forces, FastChipsAgreeWithTheSimulationOnAStraightCut) {
   const Job job = half_immersion({parse_override("material.name=inconel718-bergmann2021"),
