@@ -115,8 +115,8 @@ struct Machine {
   /// For reading programs: the origins of G54, G55, ... G59.3 (index 0 .. 8) in machine
   /// coordinates (mm), the G28 and G30 positions (mm, machine coordinates) and a LinuxCNC tool
   /// table (G43's lengths). Unset: the reader assumes and says so (docs/gcode.md).
-  std::array<std::optional<std::array<double, 3>>, 9> origins_mm;
-  std::optional<std::array<double, 3>> g28_position_mm, g30_position_mm;
+  std::array<std::optional<Vec3>, 9> origins_mm;
+  std::optional<Vec3> g28_position_mm, g30_position_mm;
   std::filesystem::path tool_table;
 };
 

@@ -115,15 +115,14 @@ Key custom(const char* section, const char* key, const char* type, const char* u
 }
 
 // A [machine] key [x, y, z] in machine coordinates (mm).
-Key machine_position(const char* key, const char* doc,
-                     std::optional<std::array<double, 3>>& (*field)(Job&)) {
+Key machine_position(const char* key, const char* doc, std::optional<Vec3>& (*field)(Job&)) {
   return custom("machine", key, "array of numbers", "mm", "[x, y, z], within +-1e6", "none", doc,
                 [key, field](JobReader& r, Job& job) {
                   if (auto v = r.number_array("machine", key, Range{-1e6, 1e6})) {
                     if (v->size() != 3) {
                       r.problem("machine", key, "give [x, y, z] in mm");
                     } else {
-                      field(job) = std::array<double, 3>{(*v)[0], (*v)[1], (*v)[2]};
+                      field(job) = Vec3((*v)[0], (*v)[1], (*v)[2]);
                     }
                   }
                 });
