@@ -17,8 +17,8 @@
 #include "trochomill/error.hpp"
 #include "trochomill/feed.hpp"
 #include "trochomill/force.hpp"
-#include "trochomill/sim.hpp"
 #include "trochomill/geometry.hpp"
+#include "trochomill/sim.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {

@@ -1,8 +1,4 @@
 // JSON, CSV and table output of the analysis, and the parameter study (see report.hpp).
-#include "trochomill/report/analysis.hpp"
-#include "trochomill/report/job.hpp"
-#include "trochomill/report/texture.hpp"
-
 #include <fmt/format.h>
 
 #include <cmath>
@@ -12,6 +8,9 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
+#include "trochomill/report/analysis.hpp"
+#include "trochomill/report/job.hpp"
+#include "trochomill/report/texture.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {

@@ -1,4 +1,6 @@
 // Dexels, sparse dexel boards and the tri-dexel workpiece (include/trochomill/sim.hpp).
+#include "trochomill/sim/dexel.hpp"
+
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
@@ -9,7 +11,6 @@
 #include "sim/plane.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/sim.hpp"
-#include "trochomill/sim/dexel.hpp"
 
 namespace trochomill {
 

@@ -14,7 +14,6 @@
 
 namespace trochomill {
 
-
 namespace {
 
 using P2 = std::array<double, 2>;
