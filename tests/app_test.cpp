@@ -13,18 +13,7 @@
 
 using namespace trochomill;
 
-namespace {
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "no error";
-}
-
-}  // namespace
+namespace {}  // namespace
 
 // A window by cycles is the cycle marks' times; by times it is the times; none is the path.
 TEST(App, WindowsResolveToTheCyclesOrTheTimes) {
@@ -51,27 +40,27 @@ TEST(App, WindowErrorsNameTheCallersOptions) {
   WindowRequest both;
   both.cycles = std::pair{1LL, 2LL};
   both.from_s = 1.0;
-  EXPECT_EQ(message_of([&] { (void)resolve_window(path, both, cli); }),
+  EXPECT_EQ(test::message_of([&] { (void)resolve_window(path, both, cli); }),
             "give --cycles or --from/--to, not both");
-  EXPECT_EQ(message_of([&] { (void)resolve_window(path, both); }),
+  EXPECT_EQ(test::message_of([&] { (void)resolve_window(path, both); }),
             "give cycles or from_s/to_s, not both");
   WindowRequest huge;
   huge.cycles = std::pair{99999999999LL, 1LL};  // beyond int: refused before any narrowing
-  EXPECT_NE(message_of([&] {
+  EXPECT_NE(test::message_of([&] {
               (void)resolve_window(path, huge, cli);
             }).find("--cycles '99999999999:1': need 0 <= A < B <= "),
             std::string::npos);
-  EXPECT_EQ(message_of([&] {
+  EXPECT_EQ(test::message_of([&] {
               (void)resolve_window(path, {std::nullopt, -1.0, {}}, cli);
             }),
             "--from must be a finite time in [0, 1e9] s, got -1");
-  EXPECT_NE(message_of([&] {
+  EXPECT_NE(test::message_of([&] {
               (void)resolve_window(path, {std::nullopt, 5.0, 5.0}, cli);
             }).find("--to must be after --from"),
             std::string::npos);
   EXPECT_EQ(parse_cycle_range("3:4", "--cycles"), (std::pair{3LL, 4LL}));
   for (const char* bad : {"3", "3:", ":4", "a:4", "3:4x", "3 :4"}) {
-    EXPECT_EQ(message_of([&] { (void)parse_cycle_range(bad, "--cycles"); }),
+    EXPECT_EQ(test::message_of([&] { (void)parse_cycle_range(bad, "--cycles"); }),
               std::string("--cycles '") + bad + "': expected A:B, e.g. 3:4");
   }
 }
@@ -79,13 +68,14 @@ TEST(App, WindowErrorsNameTheCallersOptions) {
 TEST(App, MemoryChecksNameTheLimitAndItsSource) {
   EXPECT_EQ(memory_limit_bytes(2.5, "--memory-limit"), 2.5e9);
   EXPECT_EQ(memory_limit_bytes(std::nullopt, "--memory-limit"), default_memory_limit_bytes());
-  EXPECT_EQ(message_of([] { (void)memory_limit_bytes(0.0, "memory_limit_gb"); }),
+  EXPECT_EQ(test::message_of([] { (void)memory_limit_bytes(0.0, "memory_limit_gb"); }),
             "memory_limit_gb must be a finite number > 0 (GB), got 0");
   EXPECT_NO_THROW(check_memory("simulate", 1e9, 1.0, "--memory-limit", "coarser"));
-  EXPECT_EQ(message_of([] { check_memory("simulate", 3e9, 1.0, "--memory-limit", "coarser"); }),
-            "simulate: estimated memory 3.00 GB exceeds the limit of 1.00 GB (--memory-limit): "
-            "coarser; or raise --memory-limit");
-  EXPECT_NE(message_of([] {
+  EXPECT_EQ(
+      test::message_of([] { check_memory("simulate", 3e9, 1.0, "--memory-limit", "coarser"); }),
+      "simulate: estimated memory 3.00 GB exceeds the limit of 1.00 GB (--memory-limit): "
+      "coarser; or raise --memory-limit");
+  EXPECT_NE(test::message_of([] {
               check_memory("plan", 1e18, std::nullopt, "memory_limit_gb", "x");
             }).find("(75 % of RAM): x; or raise memory_limit_gb"),
             std::string::npos);

@@ -57,15 +57,6 @@ X3pInfo dated(const std::string& date, const std::string& creator = "") {
   return i;
 }
 
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "no error";
-}
-
 // z = A sin(2 pi x / lambda) over 40 whole periods of 2000 samples: the discrete means of
 // |sin| and sin^2 over whole periods are 2/pi to (pi/2N)^2/6 = 1e-7 and exactly 1/2, so Sa =
 // 2A/pi and Sq = A/sqrt 2 to 1e-6; the crest and trough are samples: Sp = Sv = A. Sdr from the
@@ -215,7 +206,7 @@ TEST(Areal, FormRemovalTakesOutPlanesAndPolynomials) {
   });
   const ArealParameters p = areal_parameters(remove_form(tilt, FormRemoval::plane), false);
   EXPECT_NEAR(p.sq_mm / (0.001 / std::sqrt(2.0)), 1.0, 0.02);  // the wave, not the tilt
-  EXPECT_NE(message_of([&] {
+  EXPECT_NE(test::message_of([&] {
               (void)remove_form(m, FormRemoval::polynomial, 9);
             }).find("degree must be 1 to 6"),
             std::string::npos);
@@ -232,7 +223,7 @@ TEST(Areal, TheDefaultNestingIndexFitsTheMap) {
   EXPECT_NE(t.l_source.find("the nearest ISO 21920-3 cut-off this map admits"), std::string::npos)
       << t.l_source;
   const HeightMap tiny = map_of(5, 5, 0.05, 0.05, [](double, double) { return 0.0; });
-  EXPECT_NE(message_of([&] {
+  EXPECT_NE(test::message_of([&] {
               (void)areal_texture(tiny, filters({}, std::nullopt));
             }).find("admits none of ISO 21920-3's cut-offs"),
             std::string::npos);
@@ -240,21 +231,23 @@ TEST(Areal, TheDefaultNestingIndexFitsTheMap) {
 
 TEST(Areal, BadMapsAndNestingIndicesAreRefused) {
   HeightMap m = map_of(10, 10, 0.01, 0.01, [](double, double) { return 0.0; });
-  EXPECT_NE(message_of([&] { (void)gaussian_filter_areal(m, 0.015); }).find("two sample spacings"),
-            std::string::npos);
-  EXPECT_NE(message_of([&] { (void)areal_texture(m, filters({}, 0.5)); }).find("shorter side"),
-            std::string::npos);
-  EXPECT_NE(message_of([&] {
+  EXPECT_NE(
+      test::message_of([&] { (void)gaussian_filter_areal(m, 0.015); }).find("two sample spacings"),
+      std::string::npos);
+  EXPECT_NE(
+      test::message_of([&] { (void)areal_texture(m, filters({}, 0.5)); }).find("shorter side"),
+      std::string::npos);
+  EXPECT_NE(test::message_of([&] {
               (void)areal_texture(m, filters(0.05, 0.04));
             }).find("longer than the S-filter"),
             std::string::npos);
   m.z_mm[23] = std::nan("");
-  EXPECT_NE(message_of([&] { (void)areal_parameters(m); }).find("column 3, row 2"),
+  EXPECT_NE(test::message_of([&] { (void)areal_parameters(m); }).find("column 3, row 2"),
             std::string::npos);
   m.z_mm.pop_back();
-  EXPECT_NE(message_of([&] { (void)areal_parameters(m); }).find("99 heights for 10 x 10"),
+  EXPECT_NE(test::message_of([&] { (void)areal_parameters(m); }).find("99 heights for 10 x 10"),
             std::string::npos);
-  EXPECT_NE(message_of([&] {
+  EXPECT_NE(test::message_of([&] {
               (void)gaussian_filter_areal(
                   map_of(10, 10, 1e-9, 1e-9, [](double, double) { return 0.0; }), 1.0);
             }).find("(limit 5e+07)"),
@@ -361,9 +354,10 @@ TEST(Areal, CompareSurfacesAlignsAShiftedTiltedCopy) {
   const SurfaceComparison near = compare_surfaces(measured, predicted, 0.03);
   EXPECT_FALSE(std::abs(near.shift_x_mm - 0.07) < 1e-9 && std::abs(near.shift_y_mm + 0.05) < 1e-9);
   EXPECT_GT(near.rms_difference_mm, 1e-5);
-  EXPECT_NE(
-      message_of([&] { (void)compare_surfaces(measured, predicted, -1.0); }).find("largest shift"),
-      std::string::npos);
+  EXPECT_NE(test::message_of([&] {
+              (void)compare_surfaces(measured, predicted, -1.0);
+            }).find("largest shift"),
+            std::string::npos);
 }
 
 // ---- X3P ---------------------------------------------------------------------------------
@@ -535,7 +529,7 @@ TEST(X3p, MalformedFilesAreRefusedWithTheReason) {
   const auto e = read_zip(good);
   const std::string xml = e[0].second, bin = e[1].second;
   auto refused = [&](const std::string& what) {
-    const std::string m = message_of([&] { (void)read_x3p(bad); });
+    const std::string m = test::message_of([&] { (void)read_x3p(bad); });
     if (m.find(what) != std::string::npos) return true;
     ADD_FAILURE() << "expected '" << what << "' in: " << m;
     return false;
@@ -574,7 +568,7 @@ TEST(X3p, MalformedFilesAreRefusedWithTheReason) {
   unchecked.erase(s, xml.find("</MD5ChecksumPointData>") + 23 - s);
   write_zip(bad, {{"main.xml", unchecked}, {"bindata/data.bin", nan_bin}});
   EXPECT_TRUE(refused("point 7 (column 2, row 1) is not measured (NaN)"));
-  EXPECT_NE(message_of([&] { (void)read_x3p(scratch("missing.x3p")); }).find("cannot read"),
+  EXPECT_NE(test::message_of([&] { (void)read_x3p(scratch("missing.x3p")); }).find("cannot read"),
             std::string::npos);
   fs::remove_all(good.parent_path());
 }

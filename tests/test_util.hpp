@@ -8,11 +8,13 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <string>
 #include <vector>
 
 #include "trochomill/engagement.hpp"
+#include "trochomill/error.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/topography.hpp"
@@ -41,6 +43,16 @@ inline Mesh block_mesh(double x0, double x1, double y0, double y1, double z_bott
 }
 inline Mesh box_mesh(const Vec3& lo, const Vec3& hi) {
   return block_mesh(lo[0], hi[0], lo[1], hi[1], lo[2], {hi[2], hi[2], hi[2], hi[2]});
+}
+
+// The message of the InputError f throws ("no error" when it throws none).
+inline std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
 }
 
 inline std::filesystem::path source_dir() { return TROCHOMILL_SOURCE_DIR; }

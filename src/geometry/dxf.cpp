@@ -18,6 +18,14 @@
 namespace trochomill {
 namespace {
 
+// Layer names compare as DXF compares them: letters in either case.
+bool same_name(const std::string& a, const std::string& b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) ==
+                  std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
 // $INSUNITS: mm per unit and the unit's name; nothing for a code trochomill does not know.
 std::optional<std::pair<double, const char*>> insunits(int code) {
   switch (code) {
@@ -337,13 +345,6 @@ class Reader final : public DL_CreationAdapter {
     fit(curve, curve.u0(), curve.u1(), static_cast<int>(std::max<std::size_t>(4, nc)));
   }
 
-  static bool same_name(const std::string& a, const std::string& b) {
-    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
-             return std::tolower(static_cast<unsigned char>(x)) ==
-                    std::tolower(static_cast<unsigned char>(y));
-           });
-  }
-
   std::string src_;
   const DrawingOptions& o_;
   bool in_block_ = false, mirrored_ = false;
@@ -409,13 +410,8 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   std::sort(d.layers.begin(), d.layers.end());
   d.layers.erase(std::unique(d.layers.begin(), d.layers.end()), d.layers.end());
   for (const std::string& want : options.layers) {
-    const bool found = std::any_of(d.layers.begin(), d.layers.end(), [&](const std::string& l) {
-      return l.size() == want.size() &&
-             std::equal(l.begin(), l.end(), want.begin(), [](char x, char y) {
-               return std::tolower(static_cast<unsigned char>(x)) ==
-                      std::tolower(static_cast<unsigned char>(y));
-             });
-    });
+    const bool found = std::any_of(d.layers.begin(), d.layers.end(),
+                                   [&](const std::string& l) { return same_name(l, want); });
     if (!found) {
       throw InputError(fmt::format(
           "{}: no line, arc or curve on layer '{}' (the layers with entities: {})", source, want,
