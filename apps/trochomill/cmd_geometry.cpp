@@ -25,7 +25,7 @@ void register_geometry_commands(CLI::App& app, int& exit_code) {
   cmd->add_option("--join-tolerance", a->options.join_tolerance_mm,
                   "ends closer than this are one point, mm")
       ->capture_default_str()
-      ->check(finite_above(0, 100));
+      ->check(finite_in(1e-6, 100));
   cmd->add_option("--arc-tolerance", a->options.arc_tolerance_mm,
                   "splines and ellipses become arcs within this, mm")
       ->capture_default_str()

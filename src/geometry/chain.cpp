@@ -52,8 +52,19 @@ std::string at(const Vec2& v) { return fmt::format("({:.6g}, {:.6g}) mm", v.x(),
 }  // namespace
 
 std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces, double join_mm) {
-  if (!(join_mm > 0 && std::isfinite(join_mm))) {
-    throw InputError(fmt::format("join tolerance {} mm: need a finite number > 0", join_mm));
+  // From 1 nm: the ends' grid cells (coordinates / join_mm) then stay far inside 64 bits.
+  if (!(join_mm >= 1e-6 && join_mm <= 100)) {
+    throw InputError(fmt::format("join tolerance {} mm: allowed 1e-6 to 100 mm", join_mm));
+  }
+  for (const DrawnPiece& d : pieces) {
+    for (const Vec2* v : {&d.piece.start, &d.piece.end}) {
+      if (!(std::abs(v->x()) <= 1e9 && std::abs(v->y()) <= 1e9)) {
+        throw InputError(
+            fmt::format("{} on layer '{}': the point ({}, {}) mm is not finite or "
+                        "beyond 1000 km",
+                        d.entity, d.layer, v->x(), v->y()));
+      }
+    }
   }
   const std::vector<std::vector<End>> partners = partners_of(pieces, join_mm);
   for (End e = 0; e < partners.size(); ++e) {

@@ -36,7 +36,7 @@ struct Drawing {
 };
 
 struct DrawingOptions {
-  /// Ends of pieces closer than this are one point (mm).
+  /// Ends of pieces closer than this are one point (mm, 1e-6 to 100).
   double join_tolerance_mm = 0.01;
   /// Splines and ellipses become biarcs within this of the curve (mm).
   double arc_tolerance_mm = 0.002;
