@@ -34,7 +34,7 @@ void register_geometry_commands(CLI::App& app, int& exit_code) {
   cmd->final_callback([a, &exit_code] {
     check_outputs({&a->json}, {&a->file});
     a->options.layers = a->layers;
-    const Drawing d = read_dxf(a->file, a->options);
+    const Drawing d = read_drawing(a->file, a->options);
     if (!a->json.empty()) emit(a->json, drawing_json(d));
     if (summary_to_stdout({&a->json})) fmt::print("{}", drawing_text(d));
     exit_code = 0;

@@ -426,4 +426,13 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   return d;
 }
 
+Drawing read_drawing(const std::filesystem::path& file, const DrawingOptions& options) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".dxf") return read_dxf(file, options);
+  throw InputError(fmt::format("{}: a drawing must be a .dxf file (got '{}')", file.string(),
+                               ext.empty() ? std::string("no extension") : ext));
+}
+
 }  // namespace trochomill

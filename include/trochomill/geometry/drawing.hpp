@@ -63,4 +63,9 @@ struct DrawingOptions {
 /// asked for (with the layers it has), a branch or a gap (chain_pieces).
 [[nodiscard]] Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& options);
 
+/// Reads a drawing by its file's extension (letters in either case): ".dxf" (read_dxf).
+/// Throws InputError naming the file and the extensions allowed for any other.
+[[nodiscard]] Drawing read_drawing(const std::filesystem::path& file,
+                                   const DrawingOptions& options);
+
 }  // namespace trochomill
