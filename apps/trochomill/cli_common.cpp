@@ -17,6 +17,7 @@
 #include <map>
 
 #include "trochomill/app.hpp"
+#include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
@@ -116,7 +117,7 @@ void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
 }
 
 ToolPath job_path(const Job& job, const std::string& gcode_file, std::optional<double> memory_gb) {
-  if (gcode_file.empty()) return plan_path(job).path;
+  if (gcode_file.empty()) return plan_slot(job).path;
   GcodeReadOptions ro = gcode_options(job.machine).read;
   // Reading leaves the most of the memory to the work on the path (samples, chips).
   ro.max_path_bytes = kPathShareOfMemory * memory_limit_bytes(memory_gb);

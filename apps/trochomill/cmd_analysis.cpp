@@ -82,7 +82,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       inner.cancel = run.hooks().cancel;
       const auto points = run_study(
           doc, base, varies, a->threads,
-          [&inner](const Job& job) { return analyze_with_forces(job, plan_path(job).path, inner); },
+          [&inner](const Job& job) { return analyze_with_forces(job, plan_slot(job).path, inner); },
           run.hooks());
       run.done();
       if (!a->json.empty()) emit(a->json, study_json(varies, points));

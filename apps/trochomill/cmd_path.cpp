@@ -121,7 +121,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
           throw InputError(fmt::format("{} is an option of --feed-schedule", o));
         }
       }
-      PlannedPath planned = plan_path(job);
+      PlannedPath planned = plan_slot(job);
       std::optional<FeedSchedule> fs;
       if (a->schedule) {
         const GuardedRun run(true);

@@ -282,7 +282,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
         rq.job_text = to_toml(job);
         rq.overrides = best_overrides;
         rq.command = "trochomill optimize " + a->job.file;
-        ReportData d = build_report(job, plan_path(job).path, rq, run.hooks());
+        ReportData d = build_report(job, plan_slot(job).path, rq, run.hooks());
         if (goals.size() > 1) {
           ReportPareto p;
           p.keys = r.keys;

@@ -191,7 +191,7 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       job.file = a->source;
       job.sets = a->sets;
       const Job j = job.load();
-      const ToolPath path = plan_path(j).path;
+      const ToolPath path = plan_slot(j).path;
       const ProcessMetrics m = sides.empty() ? ProcessMetrics{} : analyze_process(j, path);
       for (const bool left : sides) {
         const WallProfile& w = left ? m.walls_tooth.left : m.walls_tooth.right;

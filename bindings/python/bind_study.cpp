@@ -38,7 +38,7 @@ void bind_study(py::module_& m) {
               return run_study(
                   *job.doc, job.overrides, varies, threads,
                   [&inner](const Job& j) {
-                    return analyze_with_forces(j, plan_path(j).path, inner);
+                    return analyze_with_forces(j, plan_slot(j).path, inner);
                   },
                   h);
             },

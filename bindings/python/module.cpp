@@ -10,6 +10,7 @@
 
 #include "common.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/engagement.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/version.hpp"
 
@@ -261,7 +262,7 @@ the job's slot frame when read with a job, else in the program's work frame.)")
                      fmt::format("a {:g} mm slot at a {:g} mm step: raise path.step or plan a "
                                  "shorter slot",
                                  job.job.slot.length_mm, job.job.path.step_mm));
-        PlannedPath planned = plan_path(job.job);
+        PlannedPath planned = plan_slot(job.job);
         PyPath p;
         p.path = std::move(planned.path);
         p.cycles = planned.info.cycles;

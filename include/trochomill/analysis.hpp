@@ -40,6 +40,11 @@ struct ProcessMetrics {
   double t_h_max_slot_s = 0;                 ///< when it occurs (s from program start)
   double engagement_angle_max_slot_deg = 0;  ///< largest engagement over the program (deg)
   double cutting_time_total_s = 0;           ///< time with the tool advancing into stock (s)
+  Vec3 h_max_slot_at_mm = Vec3::Zero();      ///< the tool centre where h_max_slot occurs (mm)
+  /// The largest chip after the entry (from the first cycle mark; the whole program without
+  /// marks) and where (mm).
+  double h_max_after_entry_mm = 0;
+  Vec3 h_max_after_entry_at_mm = Vec3::Zero();
 
   // Steady-state cycle (or window).
   bool periodic = false;

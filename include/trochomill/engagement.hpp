@@ -98,4 +98,12 @@ struct EngagementSeries {
 [[nodiscard]] EngagementSeries compute_engagement(const PathSamples& samples, const Job& job,
                                                   const EngagementOptions& options);
 
+/// The largest radial chip (mm, radial_chip_mm) the engagement kernel finds on `path` from
+/// `from_mm` of its length to its end: the judge of plan_slot.
+[[nodiscard]] double kernel_chip_from_mm(const Job& job, const ToolPath& path, double from_mm);
+
+/// The job's slot program (path.hpp plan_path) with the engagement kernel as the judge of a
+/// slot along a curve: every caller that plans from a job plans through this.
+[[nodiscard]] PlannedPath plan_slot(const Job& job);
+
 }  // namespace trochomill

@@ -185,6 +185,11 @@ class PlanarCurve {
 /// A fit's arc as a contour piece.
 [[nodiscard]] ContourPiece to_piece(const FitArc& arc);
 
+/// Where the contour crosses or touches itself (mm), if it does: its pieces as chords within
+/// 1e-4 mm, every pair that is not consecutive along the contour tested (a sweep in x); the
+/// first crossing found in the contour's order. None for a simple contour.
+[[nodiscard]] std::optional<Vec2> contour_self_crossing(const Contour& contour);
+
 /// The area of a region given as its closed contours with orientation (mm^2): the sum of their
 /// signed areas (outer boundaries counter-clockwise, holes clockwise, as offset_region gives).
 [[nodiscard]] double region_area_mm2(const std::vector<Contour>& contours);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "trochomill/geometry.hpp"
+#include "trochomill/geometry/drawing.hpp"
 #include "trochomill/settings/analysis.hpp"
 #include "trochomill/settings/force.hpp"
 #include "trochomill/settings/mechanism.hpp"
@@ -61,6 +62,20 @@ struct Slot {
   double origin_x_mm = 0;  ///< workpiece X of the slot frame's origin (mm)
   double origin_y_mm = 0;  ///< workpiece Y of the slot frame's origin (mm)
   double angle_deg = 0;    ///< direction of the slot's +Y in the workpiece, from +Y (degrees)
+  /// `[slot] along`: the drawing's layer (or SVG id) whose one contour is the slot's
+  /// centreline; empty: the straight slot of length_mm along +Y.
+  std::string along;
+  /// That contour (mm, the drawing's frame = the workpiece's; set by the job reader from
+  /// `[geometry] file`); length_mm is then its length. Shared: a job is copied often.
+  std::shared_ptr<const DrawnContour> centreline;
+  [[nodiscard]] bool curved() const noexcept { return centreline != nullptr; }
+};
+
+/// `[geometry]`: the drawing the part's contours come from.
+struct GeometrySource {
+  std::string file;                  ///< as written in the job (relative to the job file)
+  std::filesystem::path path;        ///< resolved against the job file's folder
+  double join_tolerance_mm = 0.01;   ///< ends closer than this are one point (mm)
 };
 
 enum class PathType { linear, trochoidal, circular, elliptical, linear_elliptical };
@@ -123,6 +138,7 @@ struct Machine {
 struct Job {
   std::string source;  ///< file name the job came from (for messages)
   Tool tool;
+  GeometrySource geometry;
   Slot slot;
   PathSpec path;
   Cutting cutting;

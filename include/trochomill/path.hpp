@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -253,9 +254,17 @@ struct PlannedPath {
 /// and the program text), and the process (30 MB); within a factor of 2 of the measured peak.
 [[nodiscard]] double estimate_plan_memory(const Job& job);
 
+/// The largest chip (mm) a path makes from `from_mm` of its length to its end: the judge a
+/// slot along a curve holds its steps to (engagement.hpp plan_slot passes the exact engagement
+/// kernel's).
+using ChipJudge = std::function<double(const Job& job, const ToolPath& path, double from_mm)>;
+
 /// Plans the whole slot program of the job: entry to depth, the family's cycles until the
 /// slot end is cleared, and the exit. Throws InputError when the geometry is infeasible.
-[[nodiscard]] PlannedPath plan_path(const Job& job);
+/// A slot along a drawing's contour ([slot] along) needs `judge` (throws Error without one):
+/// each cycle's step is the one whose steady chip in a ring of the bend's curvature equals
+/// the straight slot's at [path] step (docs/models.md, "Slots along a curve").
+[[nodiscard]] PlannedPath plan_path(const Job& job, const ChipJudge& judge = {});
 
 /// Effective feed rate (mm/min) and spindle speed (rpm) of the job's cutting conditions.
 [[nodiscard]] double feed_rate_mm_per_min(const Job& job);

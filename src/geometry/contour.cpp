@@ -206,3 +206,42 @@ double region_area_mm2(const std::vector<Contour>& contours) {
 }
 
 }  // namespace trochomill
+
+namespace trochomill {
+
+std::optional<Vec2> contour_self_crossing(const Contour& contour) {
+  std::vector<Vec2> pts = contour.points(1e-4);
+  if (contour.closed && !pts.empty()) pts.push_back(pts.front());
+  const std::size_t n = pts.size() < 2 ? 0 : pts.size() - 1;  // chords i: pts[i] -> pts[i+1]
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  const auto lo_x = [&](std::size_t i) { return std::min(pts[i].x(), pts[i + 1].x()); };
+  const auto hi_x = [&](std::size_t i) { return std::max(pts[i].x(), pts[i + 1].x()); };
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return lo_x(a) < lo_x(b) || (lo_x(a) == lo_x(b) && a < b);
+  });
+  const auto cross = [](const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); };
+  std::optional<std::pair<std::size_t, Vec2>> first;
+  for (std::size_t oi = 0; oi < n; ++oi) {
+    const std::size_t i = order[oi];
+    for (std::size_t oj = oi + 1; oj < n && lo_x(order[oj]) <= hi_x(i); ++oj) {
+      const std::size_t j = order[oj];
+      const std::size_t a = std::min(i, j), b = std::max(i, j);
+      if (b == a + 1 || (contour.closed && a == 0 && b == n - 1)) continue;  // consecutive
+      const Vec2 p = pts[a], r = pts[a + 1] - p, q = pts[b], s = pts[b + 1] - q;
+      if (std::min(p.y(), pts[a + 1].y()) > std::max(q.y(), pts[b + 1].y()) ||
+          std::max(p.y(), pts[a + 1].y()) < std::min(q.y(), pts[b + 1].y())) {
+        continue;
+      }
+      const double den = cross(r, s);
+      if (den == 0) continue;  // parallel chords: a touch along a line is caught by its ends
+      const double t = cross(q - p, s) / den, u = cross(q - p, r) / den;
+      if (t < 0 || t > 1 || u < 0 || u > 1) continue;
+      if (!first || a < first->first) first = {a, p + t * r};
+    }
+  }
+  if (first) return first->second;
+  return std::nullopt;
+}
+
+}  // namespace trochomill

@@ -275,11 +275,49 @@ std::vector<Key> build_schema() {
       number("tool", "flank_wear", "mm", non_negative(), FIELD(tool.flank_wear_mm),
              "flank wear land VB_B (0: new tool); the mechanism commands then use the "
              "wear-corrected K_re"),
+      // [geometry]
+      custom("geometry", "file", "string", "", "a .dxf or .svg file", "none",
+             "the drawing the part's contours come from (relative to the job file)",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.string("geometry", "file")) {
+                 if (v->empty()) {
+                   r.problem("geometry", "file", "give the drawing's file name");
+                 } else {
+                   job.geometry.file = *v;
+                 }
+               }
+             }),
+      number("geometry", "join_tolerance", "mm", Range{1e-6, 100},
+             FIELD(geometry.join_tolerance_mm),
+             "ends of the drawing's lines, arcs and curves closer than this are one point"),
       // [slot]
       number("slot", "width", "mm", positive(), FIELD(slot.width_mm),
              "slot width W along X, >= D (> D for the trochoidal families)", true),
-      number("slot", "length", "mm", positive(), FIELD(slot.length_mm), "slot length along +Y",
-             true),
+      custom("slot", "along", "string", "", "a layer (or SVG id) of [geometry] file", "none",
+             "the slot's centreline: the one open or closed contour on this layer of the "
+             "drawing (the slot is every point within W/2 of it); none: a straight slot along +Y",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.string("slot", "along")) {
+                 if (v->empty()) {
+                   r.problem("slot", "along", "give the drawing's layer (or SVG id)");
+                 } else {
+                   job.slot.along = *v;
+                 }
+               }
+             }),
+      custom("slot", "length", "number", "mm", "> 0", "required (none with along)",
+             "slot length along +Y (a slot along a drawing's contour has the contour's length)",
+             [](JobReader& r, Job& job) {
+               const bool along = r.has("slot", "along");
+               if (along && r.has("slot", "length")) {
+                 r.problem("slot", "length",
+                           "a slot along a drawing's contour has the contour's length; remove "
+                           "[slot] length (or along)");
+                 return;
+               }
+               job.slot.length_mm =
+                   r.number("slot", "length", "mm", positive(), 0.0, !along).value_or(0.0);
+             }),
       number("slot", "depth", "mm", positive(), FIELD(slot.depth_mm),
              "slot depth a_p below the top face z = 0", true),
       number("slot", "origin_x", "mm", Range{-kMaxLengthMm, kMaxLengthMm}, FIELD(slot.origin_x_mm),
@@ -671,6 +709,92 @@ void check_settings_rules(JobReader& r, const Job& job) {
   }
 }
 
+// `[slot] along`: the drawing read (relative to the job file), its one contour on the layer
+// the centreline, checked for what a slot along it needs: no corner, no bend tighter than
+// W/2, no crossing of itself. The slot's length becomes the contour's and, without a [stock]
+// box, the stock is the box around the slot (1 mm beside it, 0.5 mm below its floor).
+void check_centreline(JobReader& r, Job& job) {
+  Slot& slot = job.slot;
+  if (slot.along.empty()) return;
+  if (job.geometry.file.empty()) {
+    r.problem("slot", "along", "names a layer of a drawing: give [geometry] file");
+    return;
+  }
+  for (const char* key : {"origin_x", "origin_y", "angle"}) {
+    if (r.has("slot", key)) {
+      r.problem("slot", key,
+                "places a straight slot; a slot along a drawing's contour is where the drawing "
+                "puts it (move the contour in the drawing)");
+    }
+  }
+  if (!r.problems().empty()) return;
+  const std::filesystem::path file(job.geometry.file);
+  job.geometry.path =
+      file.is_absolute() ? file : std::filesystem::path(r.source()).parent_path() / file;
+  DrawingOptions options;
+  options.join_tolerance_mm = job.geometry.join_tolerance_mm;
+  options.arc_tolerance_mm = job.machine.arc_tolerance_mm;
+  options.layers = {slot.along};
+  Drawing drawing;
+  try {
+    drawing = read_drawing(job.geometry.path, options);
+  } catch (const InputError& e) {
+    r.problem("geometry", "file", e.what());
+    return;
+  }
+  if (drawing.contours.size() != 1) {
+    r.problem("slot", "along",
+              fmt::format("layer '{}' of {} holds {} contours; a slot's centreline is one (put "
+                          "the others on other layers)",
+                          slot.along, job.geometry.file, drawing.contours.size()));
+    return;
+  }
+  DrawnContour centre = std::move(drawing.contours.front());
+  const Contour& c = centre.contour;
+  const double half_width = 0.5 * slot.width_mm;
+  const auto where = [](const Vec2& p) { return fmt::format("({:.4f}, {:.4f})", p.x(), p.y()); };
+  for (std::size_t i = 0; i < c.pieces.size(); ++i) {
+    const ContourPiece& p = c.pieces[i];
+    if (p.is_arc() && p.radius_mm() < half_width) {
+      r.problem("slot", "along",
+                fmt::format("the arc from {} to {} of layer '{}' bends on a radius of {} mm, "
+                            "tighter than the slot's half width ({} mm): the inner wall would "
+                            "fold; widen the bend to at least W/2",
+                            where(p.start), where(p.end), slot.along, fmt_num(p.radius_mm()),
+                            fmt_num(half_width)));
+    }
+    // Tangent turns between pieces: the loops follow the centreline's normal, which a corner
+    // breaks. Drawings' chained entities meet within 0.06 degrees (1e-3 rad) when tangent.
+    if (i + 1 < c.pieces.size() || c.closed) {
+      const ContourPiece& q = c.pieces[(i + 1) % c.pieces.size()];
+      const Vec2 t0 = p.tangent_at(1), t1 = q.tangent_at(0);
+      const double turn = std::atan2(t0.x() * t1.y() - t0.y() * t1.x(), t0.dot(t1));
+      if (std::abs(turn) > 1e-3) {
+        r.problem("slot", "along",
+                  fmt::format("layer '{}' has a corner at {} (the direction turns by {:.3g} "
+                              "degrees): a slot's centreline must be smooth; round the corner "
+                              "with an arc of radius at least W/2 = {} mm",
+                              slot.along, where(p.end), turn * 180 / M_PI, fmt_num(half_width)));
+      }
+    }
+  }
+  if (const auto cross = contour_self_crossing(c)) {
+    r.problem("slot", "along",
+              fmt::format("layer '{}' crosses itself at {}: a slot's centreline must not",
+                          slot.along, where(*cross)));
+  }
+  if (!r.problems().empty()) return;
+  slot.length_mm = c.length_mm();
+  if (!job.stock_min_mm) {
+    Box3 box;
+    for (const Vec2& p : c.points(1e-3)) box.extend(Vec3(p.x(), p.y(), 0));
+    const double m = half_width + 1.0;
+    job.stock_min_mm = Vec3(box.lo.x() - m, box.lo.y() - m, -slot.depth_mm - 0.5);
+    job.stock_max_mm = Vec3(box.hi.x() + m, box.hi.y() + m, 0);
+  }
+  slot.centreline = std::make_shared<const DrawnContour>(std::move(centre));
+}
+
 // What a program and the models can represent (beyond each key's own range): coordinates
 // are written with 4 decimals (0.0001 mm), F with 4, S in whole rpm; counts of cycles must
 // fit the planner. A value outside is refused with the reason, never written rounded to 0.
@@ -834,6 +958,7 @@ void check_rules(JobReader& r, Job& job) {
 
   check_settings_rules(r, job);
   check_material(r, job.material);
+  check_centreline(r, job);
   check_representable(r, job);
 }
 

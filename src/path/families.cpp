@@ -18,70 +18,13 @@
 #include <limits>
 
 #include "trochomill/error.hpp"
+#include "families.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/units.hpp"
 
-namespace trochomill {
-namespace {
+namespace trochomill::path_detail {
 
-// The planner's counts (cycles, passes, spans) from a ratio, computed in double and checked
-// before the conversion: a step tiny against the slot would overflow an int (and the path
-// would hold billions of segments). The limit is far above any real slot (a 1 m slot at a
-// 0.001 mm step is 1e6 cycles).
-constexpr double kMaxCount = 1e7;
-int checked_count(double n) {
-  if (!(n <= kMaxCount)) {
-    throw InputError(fmt::format(
-        "[path] step: the slot would need {:.4g} cycles or passes (limit {:g}); raise [path] step "
-        "or shorten [slot] length",
-        n, kMaxCount));
-  }
-  return static_cast<int>(n);
-}
 
-// Builds segments in the climb/cw frame and mirrors x on the way into the path when asked.
-class Builder {
- public:
-  Builder(ToolPath& path, bool mirror) : path_(path), mirror_(mirror) {}
-
-  [[nodiscard]] Vec3 here() const { return here_; }
-  void start_at(const Vec3& p) { here_ = p; }
-
-  void line_to(const Vec3& p, Motion m, double speed) {
-    path_.append(Segment::line(flip(here_), flip(p), m, speed));
-    here_ = p;
-  }
-  void curve(const Vec3& c, const Vec3& a, const Vec3& b, const Vec3& v, double u0, double u1,
-             double speed) {
-    const Segment seg =
-        Segment::curve(flip(c), flip(a), flip(b), flip(v), u0, u1, Motion::feed, speed);
-    here_ = c + a * std::cos(u1) + b * std::sin(u1) + v * u1;
-    path_.append(seg);
-  }
-  void arc_xy(double cx, double cy, double r, double start, double sweep, double z0, double z1,
-              double speed) {
-    const Vec3 c(cx, cy, z0);
-    const Vec3 a(r * std::cos(start), r * std::sin(start), 0);
-    const Vec3 b(-r * std::sin(start), r * std::cos(start), 0);
-    const Vec3 v(0, 0, (z1 - z0) / sweep);
-    curve(c, a, b, v, 0.0, sweep, speed);
-  }
-  void mark_cycle() { path_.mark_cycle(); }
-
- private:
-  [[nodiscard]] Vec3 flip(const Vec3& p) const { return mirror_ ? Vec3(-p.x(), p.y(), p.z()) : p; }
-  ToolPath& path_;
-  bool mirror_;
-  Vec3 here_ = Vec3::Zero();
-};
-
-struct Geometry {
-  double R = 0, W = 0, a = 0, b = 0, s = 0, d = 0, L = 0, zf = 0;
-  double feed = 0, entry_feed = 0, rapid = 0, safe_z = 0, clearance = 0;
-  PathType type = PathType::trochoidal;
-};
-
-// One cycle of a trochoidal family starting at (-a, y, zf) in the climb/cw frame.
 void emit_cycle(Builder& bld, const Geometry& g, double y) {
   const Vec3 ax(-g.a, 0, 0), by(0, g.b, 0), drift(0, g.s / kTwoPi, 0);
   switch (g.type) {
@@ -103,6 +46,12 @@ void emit_cycle(Builder& bld, const Geometry& g, double y) {
       throw Error("emit_cycle: the linear family has no cycles");
   }
 }
+
+}  // namespace trochomill::path_detail
+
+namespace trochomill {
+using namespace path_detail;
+namespace {
 
 // The envelope's centre points are at most this far apart along the path (mm).
 constexpr double kEnvelopeSample = 0.1;
@@ -363,9 +312,7 @@ SlotGeometry slot_geometry(const Job& job) {
   return g;
 }
 
-namespace {
-
-Geometry make_geometry(const Job& job) {
+Geometry path_detail::make_geometry(const Job& job) {
   Geometry g;
   g.type = job.path.type;
   const SlotGeometry sg = slot_geometry(job);
@@ -384,6 +331,8 @@ Geometry make_geometry(const Job& job) {
   g.clearance = std::min(job.path.clearance_mm, job.machine.safe_z_mm);
   return g;
 }
+
+namespace {
 
 PlannedPath plan_linear(const Job& job, const Geometry& g, bool mirror) {
   PlannedPath out;
@@ -466,13 +415,17 @@ double estimate_plan_memory(const Job& job) {
   return 30e6 + cycles * per_cycle;
 }
 
-PlannedPath plan_path(const Job& job) {
+PlannedPath plan_path(const Job& job, const ChipJudge& judge) {
   const Geometry g = make_geometry(job);
   if (!(g.feed > 0)) throw InputError("[cutting]: the feed rate must be > 0 mm/min");
   // Orbit direction: climb with a cw spindle is the clockwise orbit; each of conventional
   // and a ccw spindle mirrors it.
   const bool mirror = (job.path.direction == Direction::conventional) !=
                       (job.cutting.spindle_direction == SpindleDirection::ccw);
+  if (job.slot.curved()) {
+    if (!judge) throw Error("plan_path: a slot along a curve needs a chip judge (plan_slot)");
+    return plan_along_curve(job, g, mirror, judge);
+  }
   if (g.type == PathType::linear) return plan_linear(job, g, mirror);
   if (!(g.a > 0)) {
     throw InputError(

@@ -203,7 +203,7 @@ ReportData build_report(Job job, ToolPath path, ReportRequest r, const RunHooks&
     st.varies = r.varies;
     st.points = run_study(
         *r.document, r.overrides, r.varies, 0,
-        [&inner](const Job& j) { return analyze_with_forces(j, plan_path(j).path, inner); }, hooks);
+        [&inner](const Job& j) { return analyze_with_forces(j, plan_slot(j).path, inner); }, hooks);
     d.study = std::move(st);
   }
   return d;

@@ -200,6 +200,17 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
   out += fmt::format("  h_max                {:.5f} mm at {:.4f} s (f_z {:.4g} mm)\n",
                      m.h_max_slot_mm, m.t_h_max_slot_s, m.feed_per_tooth_mm);
   out += fmt::format("  engagement max       {:.2f} deg\n", m.engagement_angle_max_slot_deg);
+  if (job.slot.curved()) {
+    out += fmt::format(
+        "  along '{}'           h_max {:.5f} mm at ({:.3f}, {:.3f}); after the entry {:.5f} mm at "
+        "({:.3f}, {:.3f})\n",
+        job.slot.along, m.h_max_slot_mm, m.h_max_slot_at_mm.x(), m.h_max_slot_at_mm.y(),
+        m.h_max_after_entry_mm, m.h_max_after_entry_at_mm.x(), m.h_max_after_entry_at_mm.y());
+    out +=
+        "  steady cycle         none (a slot along a curve: each cycle's step follows the "
+        "bend): whole-program figures only\n";
+    return out;
+  }
   if (m.texture_floor[1]) {
     const auto ra = [&](std::size_t k) {
       return m.texture_floor[k] ? fmt::format("{:.3f}", 1000 * m.texture_floor[k]->roughness.ra_mm)
