@@ -195,9 +195,15 @@ class Reader {
     static constexpr std::pair<const char*, double> kNames[] = {
         {"mm", 1.0}, {"cm", 10.0}, {"in", 25.4}, {"pt", 25.4 / 72}, {"pc", 25.4 / 6}};
     for (const auto& [name, mm] : kNames) {
-      if (sx == sy && std::abs(d.mm_per_unit - mm) <= 1e-12 * mm) d.units = name;
+      if (sx == sy && std::abs(d.mm_per_unit - mm) <= 1e-12 * mm) {
+        d.units = name;
+        d.mm_per_unit = mm;  // 1, not 0.9999999999999999 (210mm into 210 units)
+      }
     }
-    if (sx == sy && std::abs(d.mm_per_unit - kMmPerPx) <= 1e-12) d.units = "px (96 per in)";
+    if (sx == sy && std::abs(d.mm_per_unit - kMmPerPx) <= 1e-12) {
+      d.units = "px (96 per in)";
+      d.mm_per_unit = kMmPerPx;
+    }
     // x_mm = (tx + sx (x - vb_x)) mm/px; y_mm = (height - ty - sy (y - vb_y)) mm/px.
     const double k = kMmPerPx;
     return Affine{k * sx, 0, 0, -k * sy, k * (tx - sx * vb[0]), k * (height - ty + sy * vb[1])};
