@@ -3,11 +3,17 @@
 #include "trochomill/geometry.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 
+#include "test_util.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/geometry/drawing.hpp"
 #include "trochomill/units.hpp"
 
 using namespace trochomill;
@@ -35,6 +41,38 @@ double largest_deviation(const std::vector<Contour>& out, const std::vector<Cont
     }
   }
   return worst;
+}
+
+// An SVG document written to a file of its own in the temporary directory.
+std::filesystem::path svg_file(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("trochomill-geometry-svg-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto file = dir / name;
+  std::ofstream(file, std::ios::binary) << text;
+  return file;
+}
+
+// The contour that begins with the element `entity` ("rect #a"); fails the test when none does.
+const DrawnContour& contour_of(const Drawing& d, const std::string& entity) {
+  for (const DrawnContour& c : d.contours) {
+    if (!c.entities.empty() && c.entities.front() == entity) return c;
+  }
+  ADD_FAILURE() << "no contour of " << entity;
+  static const DrawnContour none;
+  return none;
+}
+
+// The box of a contour from chords within a nanometre of it.
+std::pair<Vec2, Vec2> box_of(const Contour& c) {
+  Vec2 lo = Vec2::Constant(1e300), hi = Vec2::Constant(-1e300);
+  for (const Vec2& p : c.points(1e-6)) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  return {lo, hi};
+}
+
+std::size_t arcs_in(const Contour& c) {
+  return static_cast<std::size_t>(std::count_if(c.pieces.begin(), c.pieces.end(),
+                                                [](const ContourPiece& p) { return p.is_arc(); }));
 }
 
 double perimeter(const std::vector<Contour>& cs) {
@@ -240,4 +278,290 @@ TEST(Geometry, BadContoursAreRefusedWithWhatIsWrong) {
         << e.what();
   }
   EXPECT_NO_THROW(gap.check(0.02));
+}
+
+// ---------------------------------------------------------------------------------------------
+// SVG drawings (read_svg). Lines and circular arcs are exact, so their lengths and areas match
+// the closed forms to rounding (1e-9 relative). Curves fitted with biarcs lie within the arc
+// tolerance (0.002 mm) of the curve, so their area moves by at most perimeter x tolerance and
+// their length by far less (second order); those bounds are the tolerances used.
+
+constexpr const char* kSvgHead =
+    R"svg(<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="100mm" viewBox="0 0 200 100">)svg";
+
+TEST(Geometry, SvgShapesMeasureAsTheirClosedForms) {
+  const auto file = svg_file("shapes.svg", std::string(kSvgHead) + R"svg(
+  <rect id="rounded" x="10" y="10" width="30" height="20" rx="5"/>
+  <rect id="oval" x="50" y="10" width="30" height="20" rx="20" ry="4"/>
+  <circle id="round" cx="100" cy="50" r="10"/>
+  <ellipse id="egg" cx="150" cy="50" rx="8" ry="4"/>
+  <polygon id="tri" points="10,90 40,90 10,60"/>
+  <polyline id="zig" points="100 90 110 80 120 90"/>
+  <line id="bar" x1="150" y1="80" x2="190" y2="80"/>
+</svg>)svg");
+  const Drawing d = read_svg(file, DrawingOptions{});
+  EXPECT_EQ(d.units, "mm");
+  EXPECT_NEAR(d.mm_per_unit, 1, 1e-12);
+  ASSERT_EQ(d.contours.size(), 7u);
+  const double tol = DrawingOptions{}.arc_tolerance_mm;
+
+  // A rounded rectangle: w h - (4 - pi) r^2, drawn clockwise on the screen: clockwise.
+  const Contour& rounded = contour_of(d, "rect #rounded").contour;
+  EXPECT_TRUE(rounded.closed);
+  EXPECT_NEAR(rounded.signed_area_mm2(), -(600 - (4 - kPi) * 25), 1e-9 * 600);
+  EXPECT_NEAR(rounded.length_mm(), 2 * 20 + 2 * 10 + 10 * kPi, 1e-9 * 100);
+  EXPECT_EQ(arcs_in(rounded), 4u);
+  // y mirrored about the page's bottom edge (100 mm): y 10..30 on the screen is 70..90.
+  const auto [lo, hi] = box_of(rounded);
+  EXPECT_NEAR(lo.x(), 10, 1e-9);
+  EXPECT_NEAR(lo.y(), 70, 1e-9);
+  EXPECT_NEAR(hi.x(), 40, 1e-9);
+  EXPECT_NEAR(hi.y(), 90, 1e-9);
+
+  // rx beyond half the width is clamped to 15: w h - (4 - pi) rx ry, corners as biarcs.
+  const Contour& oval = contour_of(d, "rect #oval").contour;
+  EXPECT_NEAR(std::abs(oval.signed_area_mm2()), 600 - (4 - kPi) * 15 * 4, oval.length_mm() * tol);
+
+  const Contour& round = contour_of(d, "circle #round").contour;
+  EXPECT_NEAR(round.signed_area_mm2(), -100 * kPi, 1e-9 * 314);
+  EXPECT_NEAR(round.length_mm(), 20 * kPi, 1e-9 * 63);
+  EXPECT_EQ(arcs_in(round), 2u);
+  EXPECT_EQ(round.pieces.size(), 2u);
+
+  const Contour& egg = contour_of(d, "ellipse #egg").contour;
+  EXPECT_NEAR(std::abs(egg.signed_area_mm2()), kPi * 8 * 4, egg.length_mm() * tol);
+
+  // A triangle drawn counter-clockwise on the screen stays counter-clockwise.
+  const Contour& tri = contour_of(d, "polygon #tri").contour;
+  EXPECT_NEAR(tri.signed_area_mm2(), 450, 1e-9 * 450);
+
+  const DrawnContour& zig = contour_of(d, "polyline #zig");
+  EXPECT_FALSE(zig.contour.closed);
+  EXPECT_NEAR(zig.contour.length_mm(), 2 * std::sqrt(200.0), 1e-12);
+  const Contour& bar = contour_of(d, "line #bar").contour;
+  EXPECT_NEAR(bar.length_mm(), 40, 1e-12);
+  EXPECT_NEAR(bar.pieces.front().start.y(), 20, 1e-12);
+  EXPECT_EQ(zig.layer, "0");
+}
+
+TEST(Geometry, SvgPathCommandsDrawWhatTheyDescribe) {
+  const auto file = svg_file("paths.svg", std::string(kSvgHead) + R"svg(
+  <path id="semi" d="M10 30 A10 10 0 0 1 30 30 Z"/>
+  <path id="small-radii" d="M40 30 a 1 1 0 0 1 20 0 z"/>
+  <path id="flat" d="M70 30 A 0 5 0 0 1 90 30"/>
+  <path id="box" d="m 100 10 h 20 v 10 h -20 z"/>
+  <path id="parabola" d="M130 30 Q 140 10 150 30 Z"/>
+  <path id="numbers" d="M160,30l1.5e1-0 0-.5-14.5.0z"/>
+  <path id="cubic-abs" d="M10 60 C 15 50 20 50 25 60 S 35 70 40 60 Q 45 55 50 60 T 60 60 A 5 3 30 1 0 70 60"/>
+  <path id="cubic-rel" d="m10 70c5-10 10-10 15 0s10 10 15 0q5-5 10 0t10 0a5,3,30,1,0,10,0"/>
+  <path id="cubic-full" d="M10 80 C 15 70 20 70 25 80 C 30 90 35 90 40 80 Q 45 75 50 80 Q 55 85 60 80 A 5 3 30 1 0 70 80"/>
+  <path id="flags" d="M100 60a10 10 0 00 20 0"/>
+  <path id="flags-spaced" d="M100 80 a 10 10 0 0 0 20 0"/>
+</svg>)svg");
+  const Drawing d = read_svg(file, DrawingOptions{});
+  const double tol = DrawingOptions{}.arc_tolerance_mm;
+  // A half circle over its diameter (sweep 1: clockwise on the screen, above the chord).
+  const Contour& semi = contour_of(d, "path #semi").contour;
+  EXPECT_NEAR(semi.signed_area_mm2(), -50 * kPi, 1e-9 * 157);
+  EXPECT_NEAR(semi.length_mm(), 20 + 10 * kPi, 1e-9 * 51);
+  // The top: y 30 - 10 on the screen, 80 mm up (box_of's chords stray 1e-6 mm inside).
+  EXPECT_NEAR(box_of(semi).second.y(), 80, 1e-6);
+  // Radii too small for the chord are scaled up (F.6.6): the same half circle.
+  EXPECT_NEAR(contour_of(d, "path #small-radii").contour.signed_area_mm2(), -50 * kPi, 1e-9 * 157);
+  // A zero radius: a line.
+  const Contour& flat = contour_of(d, "path #flat").contour;
+  EXPECT_EQ(arcs_in(flat), 0u);
+  EXPECT_NEAR(flat.length_mm(), 20, 1e-12);
+  EXPECT_NEAR(contour_of(d, "path #box").contour.signed_area_mm2(), -200, 1e-9 * 200);
+  // A parabola over its chord: 2/3 base x height (20 x 10).
+  EXPECT_NEAR(std::abs(contour_of(d, "path #parabola").contour.signed_area_mm2()), 400.0 / 3,
+              60 * tol);
+  // "1.5e1-0 0-.5-14.5.0": numbers without separators; a trapezoid of sides 15 and 14.5,
+  // 0.5 high.
+  EXPECT_NEAR(std::abs(contour_of(d, "path #numbers").contour.signed_area_mm2()),
+              0.5 * (15 + 14.5) * 0.5, 1e-9);
+  // Relative commands and the reflected control points of S and T draw what the absolute
+  // ones with explicit control points do (10 mm lower); the same fit: lengths to rounding.
+  const Contour& abs = contour_of(d, "path #cubic-abs").contour;
+  const Contour& rel = contour_of(d, "path #cubic-rel").contour;
+  const Contour& full = contour_of(d, "path #cubic-full").contour;
+  EXPECT_NEAR(abs.length_mm(), rel.length_mm(), 1e-9);
+  EXPECT_NEAR(abs.length_mm(), full.length_mm(), 1e-9);
+  EXPECT_NEAR(abs.pieces.back().end.x(), 70, 1e-12);
+  EXPECT_NEAR(rel.pieces.back().end.y(), 30, 1e-12);
+  // Flags written without separators: the same arc (a half circle of radius 10).
+  EXPECT_NEAR(contour_of(d, "path #flags").contour.length_mm(), 10 * kPi, 1e-9);
+  EXPECT_NEAR(contour_of(d, "path #flags-spaced").contour.length_mm(), 10 * kPi, 1e-9);
+}
+
+TEST(Geometry, SvgTransformsAndViewportsGiveMillimetres) {
+  // A viewBox of 10 x 10 in one inch: a user unit is 2.54 mm.
+  const Drawing inch = read_svg(svg_file("inch.svg", R"svg(<svg xmlns="http://www.w3.org/2000/svg"
+      width="1in" height="1in" viewBox="0 0 10 10"><circle cx="5" cy="5" r="1"/></svg>)svg"),
+                                DrawingOptions{});
+  EXPECT_NEAR(inch.mm_per_unit, 2.54, 1e-12);
+  EXPECT_EQ(inch.units, "user unit of 2.54 mm (viewBox)");
+  ASSERT_EQ(inch.contours.size(), 1u);
+  EXPECT_NEAR(std::abs(inch.contours[0].contour.signed_area_mm2()), kPi * 2.54 * 2.54, 1e-9);
+  EXPECT_NEAR(box_of(inch.contours[0].contour).first.x(), 4 * 2.54, 1e-9);
+
+  // No viewBox, unitless sizes: px at 96 per inch; y mirrored about the height (100 px).
+  const Drawing px = read_svg(svg_file("px.svg", R"svg(<svg width="100" height="100">
+      <rect width="96" height="96"/></svg>)svg"),
+                              DrawingOptions{});
+  EXPECT_EQ(px.units, "px (96 per in)");
+  EXPECT_NEAR(std::abs(px.contours.at(0).contour.signed_area_mm2()), 25.4 * 25.4, 1e-9);
+  EXPECT_NEAR(box_of(px.contours.at(0).contour).first.y(), 4 * 25.4 / 96, 1e-12);
+
+  // xMidYMid meet: a 10 x 10 viewBox in 20 mm x 10 mm is 1 mm a unit, centred (5 mm in);
+  // with "none" it is stretched twice as wide: a circle of 5 becomes a 10 x 5 ellipse.
+  const std::string wide = R"svg(<svg xmlns="http://www.w3.org/2000/svg" width="20mm" height="10mm"
+      viewBox="0 0 10 10" )svg";
+  const Drawing meet =
+      read_svg(svg_file("meet.svg", wide + R"svg(><rect width="10" height="10"/></svg>)svg"),
+               DrawingOptions{});
+  EXPECT_NEAR(box_of(meet.contours.at(0).contour).first.x(), 5, 1e-12);
+  EXPECT_NEAR(box_of(meet.contours.at(0).contour).second.x(), 15, 1e-12);
+  const Drawing none = read_svg(svg_file("none.svg", wide + R"svg(preserveAspectRatio="none">
+      <circle cx="5" cy="5" r="5"/></svg>)svg"),
+                                DrawingOptions{});
+  const Contour& stretched = none.contours.at(0).contour;
+  EXPECT_NEAR(std::abs(stretched.signed_area_mm2()), kPi * 10 * 5,
+              stretched.length_mm() * DrawingOptions{}.arc_tolerance_mm);
+  EXPECT_GT(stretched.pieces.size(), 2u);  // biarcs, not the two half circles
+
+  // Nested groups: rotate(90) then translate(50, 50): the 20 x 10 rectangle stands at x 40..50,
+  // y 50..70 on the screen (30..50 in mm, y up), still clockwise. A list "matrix(...)
+  // scale(2)" scales first: a circle stays a circle (exact arcs). A skew keeps the area; a
+  // mirror turns the orientation round (as the picture shows it).
+  const Drawing t = read_svg(svg_file("transforms.svg", std::string(kSvgHead) + R"svg(
+  <g transform="translate(50,50)"><g transform="rotate(90)">
+    <rect id="turned" width="20" height="10"/></g></g>
+  <circle id="scaled" transform="matrix(1 0 0 1 5 0) scale(2)" cx="10" cy="10" r="1"/>
+  <rect id="skewed" transform="translate(100 10) skewX(45)" width="10" height="10"/>
+  <rect id="mirrored" transform="translate(170 10) scale(-1, 1)" width="10" height="10"/>
+  <g transform="rotate(90 150 50)"><circle id="about" cx="160" cy="50" r="2"/></g>
+</svg>)svg"),
+                             DrawingOptions{});
+  const Contour& turned = contour_of(t, "rect #turned").contour;
+  const auto [lo, hi] = box_of(turned);
+  EXPECT_NEAR(lo.x(), 40, 1e-9);
+  EXPECT_NEAR(lo.y(), 30, 1e-9);
+  EXPECT_NEAR(hi.x(), 50, 1e-9);
+  EXPECT_NEAR(hi.y(), 50, 1e-9);
+  EXPECT_NEAR(turned.signed_area_mm2(), -200, 1e-9 * 200);
+  const Contour& scaled = contour_of(t, "circle #scaled").contour;
+  EXPECT_EQ(arcs_in(scaled), 2u);
+  EXPECT_NEAR(std::abs(scaled.signed_area_mm2()), 4 * kPi, 1e-9);
+  EXPECT_NEAR(scaled.pieces.front().centre->x(), 25, 1e-12);
+  EXPECT_NEAR(scaled.pieces.front().centre->y(), 80, 1e-12);
+  EXPECT_NEAR(std::abs(contour_of(t, "rect #skewed").contour.signed_area_mm2()), 100, 1e-9);
+  EXPECT_NEAR(contour_of(t, "rect #mirrored").contour.signed_area_mm2(), 100, 1e-9);
+  // rotate(90 150 50): the circle at (160, 50) turns to (150, 60) on the screen, 40 mm up.
+  const Contour& about = contour_of(t, "circle #about").contour;
+  EXPECT_NEAR(about.pieces.front().centre->x(), 150, 1e-9);
+  EXPECT_NEAR(about.pieces.front().centre->y(), 40, 1e-9);
+}
+
+TEST(Geometry, SvgLayersAndIdsChooseWhatIsRead) {
+  // Inkscape's namespace under another prefix; a layer's label beats the ids of groups in it.
+  const auto file = svg_file("layers.svg", R"svg(<?xml version="1.0" encoding="UTF-8"?>
+<svg xmlns="http://www.w3.org/2000/svg" xmlns:ink="http://www.inkscape.org/namespaces/inkscape"
+     width="100mm" height="100mm" viewBox="0 0 100 100">
+  <g ink:groupmode="layer" ink:label="Pocket" id="layer1">
+    <g id="inner"><circle id="hole" cx="20" cy="20" r="5"/></g>
+    <rect id="outline" x="40" y="10" width="20" height="20"/>
+  </g>
+  <g id="parts"><g><circle cx="70" cy="70" r="5"/></g></g>
+  <circle cx="10" cy="90" r="2"/>
+  <g style="fill:none;display: none"><circle id="hidden" cx="50" cy="50" r="3"/></g>
+  <defs><circle id="defined" cx="50" cy="50" r="3"/></defs>
+  <symbol id="sym"><circle cx="50" cy="50" r="3"/></symbol>
+  <text id="label" x="5" y="5">a</text>
+</svg>)svg");
+  const Drawing all = read_svg(file, DrawingOptions{});
+  EXPECT_EQ(all.layers, (std::vector<std::string>{"0", "Pocket", "parts"}));
+  ASSERT_EQ(all.contours.size(), 4u);
+  EXPECT_EQ(contour_of(all, "circle #hole").layer, "Pocket");
+  EXPECT_EQ(all.contours[2].layer, "parts");
+  EXPECT_EQ(all.contours[2].entities.front(), "circle (line 8)");
+  const auto chosen = [&](std::vector<std::string> names) {
+    DrawingOptions o;
+    o.layers = std::move(names);
+    return read_svg(file, o).contours.size();
+  };
+  EXPECT_EQ(chosen({"Pocket"}), 2u);
+  EXPECT_EQ(chosen({"hole"}), 1u);
+  EXPECT_EQ(chosen({"inner"}), 1u);  // a group's id: what it holds
+  EXPECT_EQ(chosen({"0", "parts"}), 2u);
+  const std::string missing = test::message_of([&] { (void)chosen({"Pocket", "nope"}); });
+  EXPECT_NE(missing.find("no line, arc or curve in an element with the id or on the layer 'nope' "
+                         "(the layers with shapes: 0, Pocket, parts; the ids: hole, inner, "
+                         "layer1, outline, parts)"),
+            std::string::npos)
+      << missing;
+  for (const char* skipped : {"hidden", "defined", "label"}) {
+    EXPECT_NE(test::message_of([&] { (void)chosen({skipped}); }).find("no line, arc or curve"),
+              std::string::npos)
+        << skipped;
+  }
+}
+
+TEST(Geometry, SvgBadInputIsRefusedWithWhatIsWrong) {
+  const struct {
+    const char* name;
+    const char* text;
+    const char* expect;
+  } cases[] = {
+      {"not-xml", "<svg><path d=\"M0 0 L 10", "not-xml.svg:1:15: not an SVG file (XML: "},
+      {"html", "<html><body/></html>", "the root element is <html>, not <svg>"},
+      {"bad-command", "<svg>\n<path id=\"p\" d=\"M0 0 L 10 10 x\"/></svg>",
+       "path #p on layer '0': bad d at character 14 ('x'): expected a path command"},
+      {"no-moveto", "<svg><path d=\"L 0 0\"/></svg>",
+       "path (line 1) on layer '0': bad d at character 1 ('L'): expected a moveto"},
+      {"short", "<svg><path d=\"M 0 0 10\"/></svg>",
+       "bad d at its end (character 9): expected a number"},
+      {"flag", "<svg><path d=\"M0 0 A 1 1 0 2 1 3 3\"/></svg>",
+       "bad d at character 14 ('2'): expected a flag (0 or 1)"},
+      {"huge-number", "<svg><path d=\"M0 0 L 1e400 1\"/></svg>",
+       "bad d at character 8 ('1'): expected a finite number"},
+      {"far", "<svg><path id=\"far\" d=\"M0 0 L 1e13 1\"/></svg>",
+       "path #far on layer '0': a point or radius (2645833333333.3335, -0.26458333333333334) mm "
+       "not finite or beyond 1000 km"},
+      {"transform", "<svg><g transform=\"rotate(1 2)\"><path d=\"M0 0 1 1\"/></g></svg>",
+       "bad transform at character 1 ('r'): expected rotate(angle [cx cy])"},
+      {"unit", "<svg width=\"10em\" viewBox=\"0 0 1 1\"><path d=\"M0 0 L 1 1\"/></svg>",
+       "<svg> width=\"10em\" (line 1): expected a unit of mm, cm, in, pt, pc, px, Q or none"},
+      {"negative-width", "<svg width=\"-10mm\"><path d=\"M0 0 L 1 1\"/></svg>",
+       "<svg> width=\"-10mm\" (line 1): expected a length > 0 (it is negative)"},
+      {"viewbox", "<svg viewBox=\"0 0 0 1\"><path d=\"M0 0 L 1 1\"/></svg>",
+       "viewBox=\"0 0 0 1\" (line 1): expected a width and a height > 0"},
+      {"use", "<svg><use href=\"#a\"/></svg>", "use (line 1) on layer '0': a <use> of '#a'"},
+      {"negative", "<svg><rect width=\"-1\" height=\"3\"/></svg>", "a negative width (-1)"},
+      {"odd-points", "<svg><polygon points=\"1 2 3\"/></svg>", "expected a y coordinate"},
+      {"gap", "<svg><path d=\"M0 0 L 10 0\"/><path d=\"M10.05 0 L 20 0\"/></svg>",
+       "gap.svg: layer '0': a gap of 0.0132292 mm"},
+      {"nothing", "<svg><text>a</text></svg>", "nothing.svg: no line, arc or curve in it"},
+  };
+  for (const auto& c : cases) {
+    const auto file = svg_file(std::string(c.name) + ".svg", c.text);
+    const std::string m = test::message_of([&] { (void)read_svg(file, DrawingOptions{}); });
+    EXPECT_NE(m.find(c.expect), std::string::npos) << c.name << ": " << m;
+    EXPECT_EQ(m.rfind(file.string(), 0), 0u) << c.name << ": starts with the file: " << m;
+  }
+  // Deep nesting is walked without recursion.
+  std::string deep = "<svg>";
+  for (int i = 0; i < 100000; ++i) deep += "<g>";
+  deep += "<path d=\"M0 0 L 1 0\"/>";
+  for (int i = 0; i < 100000; ++i) deep += "</g>";
+  EXPECT_EQ(read_svg(svg_file("deep.svg", deep + "</svg>"), DrawingOptions{}).contours.size(), 1u);
+  // read_drawing takes .svg in either case; other extensions are named.
+  EXPECT_EQ(
+      read_drawing(svg_file("upper.SVG", "<svg><path d=\"M0 0 H 1\"/></svg>"), DrawingOptions{})
+          .contours.size(),
+      1u);
+  EXPECT_NE(test::message_of([] {
+              (void)read_drawing("a.png", DrawingOptions{});
+            }).find("a drawing must be a .dxf or .svg file (got '.png')"),
+            std::string::npos);
 }

@@ -18,16 +18,17 @@ void register_geometry_commands(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "check-drawing",
-      "read a DXF drawing as trochomill does and list its contours (layer, open or closed, "
+      "read a DXF or SVG drawing as trochomill does and list its contours (layer, open or closed, "
       "orientation, length, area, the entities chained)");
-  cmd->add_option("FILE", a->file, "DXF file")->required();
-  cmd->add_option("--layer", a->layers, "read only this layer (repeatable)");
+  cmd->add_option("FILE", a->file, "DXF or SVG file")->required();
+  cmd->add_option("--layer", a->layers,
+                  "read only this layer (SVG: or the element or group of this id; repeatable)");
   cmd->add_option("--join-tolerance", a->options.join_tolerance_mm,
                   "ends closer than this are one point, mm")
       ->capture_default_str()
       ->check(finite_in(1e-6, 100));
   cmd->add_option("--arc-tolerance", a->options.arc_tolerance_mm,
-                  "splines and ellipses become arcs within this, mm")
+                  "splines, ellipses and Bezier curves become arcs within this, mm")
       ->capture_default_str()
       ->check(finite_above(0, 100));
   cmd->add_option("--json", a->json, "write the report as JSON (- for stdout)");

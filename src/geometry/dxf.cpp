@@ -431,8 +431,9 @@ Drawing read_drawing(const std::filesystem::path& file, const DrawingOptions& op
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".dxf") return read_dxf(file, options);
-  throw InputError(fmt::format("{}: a drawing must be a .dxf file (got '{}')", file.string(),
-                               ext.empty() ? std::string("no extension") : ext));
+  if (ext == ".svg") return read_svg(file, options);
+  throw InputError(fmt::format("{}: a drawing must be a .dxf or .svg file (got '{}')",
+                               file.string(), ext.empty() ? std::string("no extension") : ext));
 }
 
 }  // namespace trochomill

@@ -1,8 +1,8 @@
-// Drawings from CAD: the lines, arcs and curves of a DXF file (through Debian's libdxflib)
-// chained into planar contours, open or closed, each with the layer and the entities it came
-// from. Curves that are not arcs (splines, ellipses) become tangent-continuous biarcs within
-// a tolerance. Lengths mm (the file's units converted by its $INSUNITS). Part of the geometry
-// module.
+// Drawings from CAD: the lines, arcs and curves of a DXF file (through Debian's libdxflib) or
+// an SVG file (through pugixml) chained into planar contours, open or closed, each with the
+// layer and the entities it came from. Curves that are not arcs (splines, ellipses, Béziers)
+// become tangent-continuous biarcs within a tolerance. Lengths mm (the file's units converted:
+// DXF's $INSUNITS, SVG's viewBox and width). Part of the geometry module.
 #pragma once
 
 #include <filesystem>
@@ -17,7 +17,9 @@ namespace trochomill {
 struct DrawnPiece {
   ContourPiece piece;
   std::string layer;
-  std::string entity;  ///< for messages: "LINE #2F" (DXF: the kind and its handle)
+  /// For messages: "LINE #2F" (DXF: the kind and its handle), "path #slot1" or
+  /// "circle (line 12)" (SVG: the element and its id, or its line when it has none).
+  std::string entity;
 };
 
 /// A chained contour with where it came from.
@@ -31,8 +33,8 @@ struct Drawing {
   std::filesystem::path file;
   std::vector<DrawnContour> contours;  ///< in the order of their first entity in the file
   std::vector<std::string> layers;     ///< every layer holding a piece, sorted
-  double mm_per_unit = 1;              ///< the file's unit ($INSUNITS; 1 when unitless)
-  std::string units;                   ///< "mm", "in", ... or "unitless (read as mm)"
+  double mm_per_unit = 1;  ///< the file's unit ($INSUNITS; 1 when unitless; SVG: user unit)
+  std::string units;       ///< "mm", "in", ..., "unitless (read as mm)" or "px (96 per in)"
 };
 
 struct DrawingOptions {
@@ -63,7 +65,30 @@ struct DrawingOptions {
 /// asked for (with the layers it has), a branch or a gap (chain_pieces).
 [[nodiscard]] Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& options);
 
-/// Reads a drawing by its file's extension (letters in either case): ".dxf" (read_dxf).
+/// Reads an SVG file (SVG 1.1 and 2, through pugixml): `path` (every command, absolute and
+/// relative), `line`, `polyline`, `polygon`, `rect` (with rounded corners), `circle` and
+/// `ellipse`, through the transforms of the elements and their groups. Lengths in mm: the
+/// root's viewBox into its width and height (mm, cm, in, pt, pc, Q, px at 96 per in; no unit:
+/// px), preserveAspectRatio as SVG scales; without a viewBox a user unit is 1 px = 25.4/96 mm.
+/// SVG's y points down, a drawing's up: y is mirrored about the page's bottom edge (its
+/// height, from the height attribute or the viewBox; y -> -y when it has neither), so the
+/// origin is the page's bottom-left corner and contours turn as the picture shows them (a
+/// rectangle drawn clockwise on the screen is clockwise). Circular arcs (round after the
+/// transform) stay exact arcs; Béziers, elliptical arcs and circles squeezed into ellipses
+/// become biarcs within the arc tolerance. The layer of an element: the inkscape:label of
+/// its nearest enclosing Inkscape layer (a g of inkscape:groupmode "layer"), else the id of
+/// its nearest enclosing g that has one, else "0"; DrawingOptions::layers names match a
+/// layer, the id of the element or the id of an enclosing group. Elements inside defs,
+/// clipPath, mask, symbol, marker and pattern, hidden ones (display none) and text are
+/// skipped; a `use` is refused (unlink the clone in the editor). Throws InputError naming
+/// the file and the element (its id, or its line) for what it cannot read: not XML (with
+/// line:column), a root that is not svg, bad path data or transforms (with the character),
+/// an unknown unit, a negative size, a point beyond 1000 km, nothing on a layer or id asked
+/// for (with the layers and ids it has), a branch or a gap (chain_pieces).
+[[nodiscard]] Drawing read_svg(const std::filesystem::path& file, const DrawingOptions& options);
+
+/// Reads a drawing by its file's extension (letters in either case): ".dxf" (read_dxf) or
+/// ".svg" (read_svg).
 /// Throws InputError naming the file and the extensions allowed for any other.
 [[nodiscard]] Drawing read_drawing(const std::filesystem::path& file,
                                    const DrawingOptions& options);

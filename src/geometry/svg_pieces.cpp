@@ -1,0 +1,125 @@
+// The SVG reader's pieces (svg_syntax.hpp): user-space lines, Béziers and elliptical arcs mapped
+// into mm (y up) through an element's transform; circles (round after the transform) as exact
+// arcs, the rest as biarcs within the arc tolerance (fit_biarcs).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "geometry/svg_syntax.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill::svg {
+namespace {
+
+constexpr double kFarMm = 1e9;  // points beyond 1000 km are absurd (as chain_pieces)
+constexpr std::size_t kMaxPieces = 2'000'000;
+
+bool far(const Vec2& p) { return !(std::abs(p.x()) <= kFarMm && std::abs(p.y()) <= kFarMm); }
+double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+Vec3 lift(const Vec2& p) { return {p.x(), p.y(), 0}; }
+
+// A cubic Bézier (mm). Where its derivative vanishes (a control point on its end) the
+// tangent is the chord over a millionth of the parameter either side.
+class Bezier final : public PlanarCurve {
+ public:
+  explicit Bezier(std::array<Vec2, 4> p) : p_(p) {}
+  [[nodiscard]] Vec3 point(double t) const override {
+    const double s = 1 - t;
+    return lift(s * s * s * p_[0] + 3 * s * s * t * p_[1] + 3 * s * t * t * p_[2] +
+                t * t * t * p_[3]);
+  }
+  [[nodiscard]] Vec3 unit_tangent(double t) const override {
+    const double s = 1 - t;
+    Vec2 d =
+        3 * s * s * (p_[1] - p_[0]) + 6 * s * t * (p_[2] - p_[1]) + 3 * t * t * (p_[3] - p_[2]);
+    const double size = (p_[1] - p_[0]).norm() + (p_[2] - p_[1]).norm() + (p_[3] - p_[2]).norm();
+    if (!(d.norm() > 1e-9 * size)) {
+      const Vec3 q = point(std::min(1.0, t + 1e-6)) - point(std::max(0.0, t - 1e-6));
+      d = Vec2(q.x(), q.y());
+    }
+    const double n = d.norm();
+    return n > 0 ? lift(d / n) : Vec3::Zero();
+  }
+
+ private:
+  std::array<Vec2, 4> p_;
+};
+
+// An ellipse c + a cos t + b sin t (mm), t increasing.
+class Ellipse final : public PlanarCurve {
+ public:
+  Ellipse(Vec2 c, Vec2 a, Vec2 b) : c_(c), a_(a), b_(b) {}
+  [[nodiscard]] Vec3 point(double t) const override {
+    return lift(c_ + a_ * std::cos(t) + b_ * std::sin(t));
+  }
+  [[nodiscard]] Vec3 unit_tangent(double t) const override {
+    const Vec2 d = -a_ * std::sin(t) + b_ * std::cos(t);
+    const double n = d.norm();
+    return n > 0 ? lift(d / n) : Vec3::Zero();
+  }
+
+ private:
+  Vec2 c_, a_, b_;
+};
+
+}  // namespace
+
+PieceSink::PieceSink(const Affine& m, double tolerance_mm, std::vector<DrawnPiece>& out,
+                     std::string layer, std::string entity)
+    : m_(m), tol_(tolerance_mm), out_(out), layer_(std::move(layer)), entity_(std::move(entity)) {}
+
+void PieceSink::line(const Vec2& p0, const Vec2& p1) { add(ContourPiece::line(m_(p0), m_(p1))); }
+void PieceSink::cubic(const Vec2& p0, const Vec2& p1, const Vec2& p2, const Vec2& p3) {
+  const std::array<Vec2, 4> p{m_(p0), m_(p1), m_(p2), m_(p3)};
+  for (const Vec2& q : p) check(q);
+  if (p[0] == p[1] && p[1] == p[2] && p[2] == p[3]) return;
+  fit(Bezier(p), 0, 1, 2);
+}
+void PieceSink::ellipse(const Vec2& c, const Vec2& a, const Vec2& b, double t0, double t1,
+                        const Vec2& p0, const Vec2& p1) {
+  const Vec2 cm = m_(c), am = m_.linear(a), bm = m_.linear(b), s = m_(p0), e = m_(p1);
+  check(cm);
+  check(am);
+  check(bm);
+  if (s == e) return;  // an arc too short to tell from a full circle
+  const double la = am.norm(), lb = bm.norm();
+  // A circle in mm (a circle under a uniform scale, or an ellipse squeezed round): an arc.
+  if (std::abs(am.dot(bm)) <= 1e-9 * la * lb && std::abs(la - lb) <= 1e-9 * std::max(la, lb)) {
+    return add(ContourPiece::arc(s, e, cm, (cross(am, bm) > 0) == (t1 > t0)));
+  }
+  const int n = std::max(1, static_cast<int>(std::ceil(std::abs(t1 - t0) / (0.5 * kPi))));
+  // Decreasing t: the same ellipse with b turned round, at -t (increasing).
+  if (t1 >= t0) return fit(Ellipse(cm, am, bm), t0, t1, n);
+  fit(Ellipse(cm, am, -bm), -t0, -t1, n);
+}
+
+void PieceSink::check(const Vec2& p) {
+  if (far(p)) {
+    throw Problem{
+        fmt::format("a point or radius ({}, {}) mm not finite or beyond 1000 km", p.x(), p.y())};
+  }
+}
+void PieceSink::add(const ContourPiece& p) {
+  check(p.start);
+  check(p.end);
+  if (p.start == p.end && !p.is_arc()) return;  // a zero-length line joins nothing
+  if (out_.size() >= kMaxPieces) {
+    throw InputError(fmt::format("more than {} lines and arcs: not read", kMaxPieces));
+  }
+  out_.push_back({p, layer_, entity_});
+  ++added;
+}
+void PieceSink::fit(const PlanarCurve& c, double u0, double u1, int n) {
+  try {
+    for (const FitArc& a : fit_biarcs(c, u0, u1, n, tol_)) add(to_piece(a));
+  } catch (const InputError&) {
+    throw;
+  } catch (const Error& e) {
+    throw Problem{fmt::format("cannot be fitted with arcs within {} mm ({})", tol_, e.what())};
+  }
+}
+
+}  // namespace trochomill::svg
