@@ -73,9 +73,9 @@ struct Slot {
 
 /// `[geometry]`: the drawing the part's contours come from.
 struct GeometrySource {
-  std::string file;                  ///< as written in the job (relative to the job file)
-  std::filesystem::path path;        ///< resolved against the job file's folder
-  double join_tolerance_mm = 0.01;   ///< ends closer than this are one point (mm)
+  std::string file;                 ///< as written in the job (relative to the job file)
+  std::filesystem::path path;       ///< resolved against the job file's folder
+  double join_tolerance_mm = 0.01;  ///< ends closer than this are one point (mm)
 };
 
 enum class PathType { linear, trochoidal, circular, elliptical, linear_elliptical };

@@ -57,7 +57,8 @@ class Centreline {
       sigma = length_;
     }
     const auto it = std::upper_bound(start_.begin(), start_.end(), sigma);
-    const std::size_t i = it == start_.begin() ? 0 : static_cast<std::size_t>(it - start_.begin()) - 1;
+    const std::size_t i =
+        it == start_.begin() ? 0 : static_cast<std::size_t>(it - start_.begin()) - 1;
     const ContourPiece& piece = c_.pieces[i];
     const double len = piece.length_mm();
     const double t = len > 0 ? std::clamp((sigma - start_[i]) / len, 0.0, 1.0) : 0.0;
@@ -124,15 +125,15 @@ class Mapped final : public PlanarCurve {
 
 // Appends the biarcs of every segment of `local` (planned from y = 0) carried onto the
 // centreline from arc length `base`, at height z and the segments' feed.
-void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, double base,
-                   double z, double tolerance_mm) {
+void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, double base, double z,
+                   double tolerance_mm) {
   for (const Segment& seg : local.segments()) {
     const Mapped m(seg, c, base, z);
     // Quarter turns of a curve's parameter, lines whole, then halved until within tolerance.
-    const int pieces = seg.kind() == Segment::Kind::curve
-                           ? std::max(1, static_cast<int>(std::ceil(std::abs(seg.u1() - seg.u0()) /
-                                                                    (0.5 * kPi))))
-                           : 1;
+    const int pieces =
+        seg.kind() == Segment::Kind::curve
+            ? std::max(1, static_cast<int>(std::ceil(std::abs(seg.u1() - seg.u0()) / (0.5 * kPi))))
+            : 1;
     const double u0 = seg.kind() == Segment::Kind::curve ? seg.u0() : 0.0;
     const double u1 = seg.kind() == Segment::Kind::curve ? seg.u1() : 1.0;
     Vec3 from = out.empty() ? m.point(u0) : out.segments().back().end();
@@ -141,8 +142,8 @@ void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, do
         out.append(Segment::line(from, a.end, Motion::feed, seg.speed_mm_per_min()));
       } else {
         const double start = std::atan2(from.y() - a.cy, from.x() - a.cx);
-        out.append(Segment::arc_xy(a.cx, a.cy, a.radius_mm, start, a.sweep_rad, z, z,
-                                   Motion::feed, seg.speed_mm_per_min()));
+        out.append(Segment::arc_xy(a.cx, a.cy, a.radius_mm, start, a.sweep_rad, z, z, Motion::feed,
+                                   seg.speed_mm_per_min()));
       }
       from = out.segments().back().end();
     }
@@ -156,8 +157,7 @@ ToolPath local_cycle(const Geometry& g, double s, bool mirror, bool circle) {
   Builder bld(local, mirror);
   bld.start_at(Vec3(-g.a, 0, 0));
   if (circle) {
-    bld.curve(Vec3(0, 0, 0), Vec3(-g.a, 0, 0), Vec3(0, g.a, 0), Vec3::Zero(), 0.0, kTwoPi,
-              g.feed);
+    bld.curve(Vec3(0, 0, 0), Vec3(-g.a, 0, 0), Vec3(0, g.a, 0), Vec3::Zero(), 0.0, kTwoPi, g.feed);
   } else {
     Geometry gk = g;
     gk.s = s;
@@ -182,8 +182,8 @@ double ring_chip_mm(const Job& job, const ChipJudge& judge, const Geometry& g, b
     const Vec2 centre(kappa > 0 ? -r : r, 0);
     const double a0 = kappa > 0 ? 0.0 : kPi, a1 = a0 + (kappa > 0 ? sweep : -sweep);
     ring.pieces.push_back(ContourPiece::arc(centre + r * Vec2(std::cos(a0), std::sin(a0)),
-                                            centre + r * Vec2(std::cos(a1), std::sin(a1)),
-                                            centre, kappa > 0));
+                                            centre + r * Vec2(std::cos(a1), std::sin(a1)), centre,
+                                            kappa > 0));
   }
   const Centreline c(ring);
   ToolPath path;
@@ -217,7 +217,9 @@ class StepRule {
     if (it != cache_.end()) return it->second;
     // The steps a slot allows: above a hundredth of the job's and below the diameter.
     const double lo = 0.01 * g_.s, hi = std::min(1.5 * g_.s, 1.95 * g_.R);
-    auto f = [&](double s) { return ring_chip_mm(job_, judge_, g_, mirror_, kappa, s, tol_) - target_; };
+    auto f = [&](double s) {
+      return ring_chip_mm(job_, judge_, g_, mirror_, kappa, s, tol_) - target_;
+    };
     double s0 = g_.s, f0 = f(s0);
     // First guess: the step outside the bend at the wall stretched back to the straight one.
     double s1 = std::clamp(g_.s / (1 + std::abs(kappa) * 0.5 * g_.W), lo, hi), f1 = f(s1);
@@ -307,8 +309,8 @@ void emit_curve_entry(ToolPath& out, const Geometry& g, const PathSpec& spec, co
       const double sweep = dir * kTwoPi * turns, start = end - sweep;
       const Vec2 h0 = c + r * Vec2(std::cos(start), std::sin(start));
       line(at(h0, g.safe_z), at(h0, z_top), Motion::rapid, g.rapid);
-      out.append(Segment::arc_xy(c.x(), c.y(), r, start, sweep, z_top, g.zf, Motion::feed,
-                                 g.entry_feed));
+      out.append(
+          Segment::arc_xy(c.x(), c.y(), r, start, sweep, z_top, g.zf, Motion::feed, g.entry_feed));
       out.append(Segment::arc_xy(c.x(), c.y(), r, end, dir * kTwoPi, g.zf, g.zf, Motion::feed,
                                  g.entry_feed));
       line(out.segments().back().end(), at(p, g.zf), Motion::feed, g.entry_feed);

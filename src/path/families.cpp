@@ -11,6 +11,8 @@
 // the width (less the wall scallop bound). Envelopes are evaluated on the sampled cycle-0
 // centre path; sampling under-estimates the front and over-estimates the rear, so both
 // choices err towards cutting the whole slot.
+#include "families.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -18,12 +20,10 @@
 #include <limits>
 
 #include "trochomill/error.hpp"
-#include "families.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill::path_detail {
-
 
 void emit_cycle(Builder& bld, const Geometry& g, double y) {
   const Vec3 ax(-g.a, 0, 0), by(0, g.b, 0), drift(0, g.s / kTwoPi, 0);
