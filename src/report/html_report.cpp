@@ -127,6 +127,35 @@ json path_part(const ReportData& d) {
   }
   const auto idx = all_indices(s.size());
   const SlotGeometry g = slot_geometry(d.job);
+  // The slot's outline: the rectangle of a straight slot; the region within W/2 of a curved
+  // one's centreline (its boundaries, each closed, null between them), and its box.
+  json outline_x = json::array(), outline_y = json::array();
+  double x_min = -0.5 * d.job.slot.width_mm, x_max = 0.5 * d.job.slot.width_mm, y_min = 0.0,
+         y_max = d.job.slot.length_mm;
+  if (d.job.slot.curved()) {
+    Box3 box;
+    for (const Contour& c :
+         offset_curve(d.job.slot.centreline->contour, 0.5 * d.job.slot.width_mm, 0.01)) {
+      const std::vector<Vec2> pts = c.points(0.01);
+      if (!outline_x.empty()) {
+        outline_x.push_back(nullptr);
+        outline_y.push_back(nullptr);
+      }
+      for (std::size_t k = 0; k <= pts.size() && !pts.empty(); ++k) {
+        const Vec2& q = pts[k % pts.size()];
+        outline_x.push_back(number(q.x()));
+        outline_y.push_back(number(q.y()));
+        box.extend(Vec3(q.x(), q.y(), 0));
+      }
+    }
+    x_min = box.lo.x();
+    x_max = box.hi.x();
+    y_min = box.lo.y();
+    y_max = box.hi.y();
+  } else {
+    outline_x = {number(x_min), number(x_max), number(x_max), number(x_min), number(x_min)};
+    outline_y = {number(y_min), number(y_min), number(y_max), number(y_max), number(y_min)};
+  }
   // The samples are uniform in time but the last (at the end): t_i = i dt, the last T.
   json out = {{"dt_s", s.size() > 1 ? number(s.t_s[1] - s.t_s[0]) : json(0.0)},
               {"samples", s.size()},
@@ -138,11 +167,15 @@ json path_part(const ReportData& d) {
               {"tool_radius_mm", number(g.tool_radius_mm)},
               {"teeth", d.job.tool.teeth},
               {"slot",
-               {{"x_min_mm", number(-0.5 * d.job.slot.width_mm)},
-                {"x_max_mm", number(0.5 * d.job.slot.width_mm)},
-                {"y_min_mm", 0.0},
-                {"y_max_mm", number(d.job.slot.length_mm)},
+               {{"x_min_mm", number(x_min)},
+                {"x_max_mm", number(x_max)},
+                {"y_min_mm", number(y_min)},
+                {"y_max_mm", number(y_max)},
+                {"width_mm", number(d.job.slot.width_mm)},
+                {"length_mm", number(d.job.slot.length_mm)},
+                {"along", d.job.slot.along},
                 {"depth_mm", number(d.job.slot.depth_mm)}}},
+              {"outline", {{"x_mm", outline_x}, {"y_mm", outline_y}}},
               {"cycle_from_s", number(d.metrics.cycle_start_s)},
               {"cycle_to_s", number(d.metrics.cycle_start_s + d.metrics.cycle_time_s)},
               {"periodic", d.metrics.periodic}};

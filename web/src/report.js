@@ -419,7 +419,7 @@ function headerPart() {
 function pathPart() {
   const p = data.path;
   const sec = section('path', 'Tool path', 'Top view of the slot (mm): the tool-centre path (rapids dashed), the entry, the steady cycle highlighted, and the tool disc at the time of the slider.');
-  const fig = figure(sec, 'path-top', 'Path, top view', `slot ${fmtNum(p.slot.x_max_mm - p.slot.x_min_mm)} x ${fmtNum(p.slot.y_max_mm - p.slot.y_min_mm)} mm, tool radius ${fmtNum(p.tool_radius_mm)} mm; ${p.samples} samples every ${fmtNum(p.dt_s, 4)} s`);
+  const fig = figure(sec, 'path-top', 'Path, top view', `${p.slot.along ? `slot ${fmtNum(p.slot.width_mm)} mm wide along '${p.slot.along}' (${fmtNum(p.slot.length_mm)} mm)` : `slot ${fmtNum(p.slot.width_mm)} x ${fmtNum(p.slot.length_mm)} mm`}, tool radius ${fmtNum(p.tool_radius_mm)} mm; ${p.samples} samples every ${fmtNum(p.dt_s, 4)} s`);
   const n = p.samples;
   // Uniform in time, the last sample at the path's end.
   p.t_s = Array.from({ length: n }, (_, i) => (i === n - 1 ? p.duration_s : i * p.dt_s));
@@ -438,8 +438,8 @@ function pathPart() {
     cycle[0].push(inCycle ? x : null); cycle[1].push(inCycle ? y : null);
   }
   const sl = p.slot;
-  const outline = [[sl.x_min_mm, sl.x_max_mm, sl.x_max_mm, sl.x_min_mm, sl.x_min_mm],
-    [sl.y_min_mm, sl.y_min_mm, sl.y_max_mm, sl.y_max_mm, sl.y_min_mm]];
+  // The slot's boundaries (a rectangle, or the region along a drawing's contour), null between.
+  const outline = [p.outline.x_mm, p.outline.y_mm];
   const disc = (cx, cy) => {
     const xs = [], ys = [];
     for (let k = 0; k <= 72; k++) {
