@@ -1,10 +1,16 @@
 // Benchmarks of the foundation: planning and writing a 100 mm elliptical slot (100 cycles),
-// and reading G-code (throughput in bytes per second).
+// reading G-code (throughput in bytes per second), planning a slot along a 1 m curve and
+// reading a 10 MB drawing.
 #include <benchmark/benchmark.h>
+#include <fmt/format.h>
 
+#include <filesystem>
+#include <fstream>
 #include <string>
 
+#include "trochomill/engagement.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/geometry/drawing.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 
@@ -64,3 +70,60 @@ BENCHMARK(BM_ReadGcode)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 }  // namespace
 
 BENCHMARK_MAIN();
+
+// A slot along a 1 m centreline (bench/data/meander.dxf: five 160 mm legs, four U-turns of
+// radius 20 mm), W 12, D 8, step 1 mm, 6 mm deep in three levels: planned with the engagement
+// kernel judging the bends' steps, and written as G-code (its size in bytes).
+void BM_PlanCurvedSlot1m(benchmark::State& state) {
+  const std::string dir = std::string(TROCHOMILL_SOURCE_DIR) + "/bench/data/";
+  std::string text = "[geometry]\nfile = \"" + dir +
+                     "meander.dxf\"\n[tool]\ndiameter = 8.0\nteeth = 3\n[slot]\nalong = "
+                     "\"MEANDER\"\nwidth = 12.0\ndepth = 6.0\nmax_step_down = 2.0\n[cutting]\n"
+                     "feed_rate = 900.0\nspindle_speed = 6000.0\n[machine]\ndialect = "
+                     "\"linuxcnc\"\n[path]\ntype = \"trochoidal\"\nstep = 1.0\nentry = \"helix\"\n";
+  const trochomill::Job job = trochomill::parse_job(text, dir + "meander.toml");
+  trochomill::GcodeWriteOptions opt;
+  opt.dialect = trochomill::Dialect::linuxcnc;
+  std::size_t bytes = 0, cycles = 0;
+  for (auto _ : state) {
+    const auto p = trochomill::plan_slot(job);
+    const std::string code = trochomill::write_gcode(job, p.path, opt);
+    bytes = code.size();
+    cycles = static_cast<std::size_t>(p.info.cycles);
+    benchmark::DoNotOptimize(code.data());
+  }
+  state.counters["cycles"] = static_cast<double>(cycles);
+  state.counters["gcode_bytes"] = static_cast<double>(bytes);
+}
+BENCHMARK(BM_PlanCurvedSlot1m)->Unit(benchmark::kMillisecond);
+
+// Reading a 10 MB DXF: 100,000 polylines of four lines and a bulge each (R12 text, written
+// here), chained into closed contours.
+void BM_ReadDxf10MB(benchmark::State& state) {
+  const std::string file =
+      (std::filesystem::temp_directory_path() / "trochomill-bench-10mb.dxf").string();
+  {
+    std::string t =
+        "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n0\nSECTION\n2\n"
+        "ENTITIES\n";
+    for (int k = 0; t.size() < 10'000'000; ++k) {
+      const double x = (k % 300) * 10.0, y = (k / 300) * 10.0;
+      t += fmt::format(
+          "0\nLWPOLYLINE\n8\nL{}\n90\n4\n70\n1\n10\n{}\n20\n{}\n10\n{}\n20\n{}\n42\n0.25\n10\n{}\n"
+          "20\n{}\n10\n{}\n20\n{}\n",
+          k % 7, x, y, x + 6, y, x + 6, y + 6, x, y + 6);
+    }
+    t += "0\nENDSEC\n0\nEOF\n";
+    std::ofstream(file, std::ios::binary) << t;
+    state.counters["bytes"] = static_cast<double>(t.size());
+  }
+  std::size_t contours = 0;
+  for (auto _ : state) {
+    const auto d = trochomill::read_drawing(file, trochomill::DrawingOptions{});
+    contours = d.contours.size();
+    benchmark::DoNotOptimize(contours);
+  }
+  state.counters["contours"] = static_cast<double>(contours);
+  std::filesystem::remove(file);
+}
+BENCHMARK(BM_ReadDxf10MB)->Unit(benchmark::kMillisecond);

@@ -133,6 +133,57 @@ TEST(CurvedSlot, ALineArcLineStaysInsideAndHoldsTheStraightChip) {
   EXPECT_NEAR(end_reach, a - job.machine.arc_tolerance_mm, 1e-3);
 }
 
+// Depth levels: the deepest cut is the depth, ceil(depth / max_step_down) levels of equal
+// depth, each entered by its ramp no steeper than entry_angle, and linked above the stock.
+TEST(CurvedSlot, LevelsOfEqualDepthEachEnteredByItsRamp) {
+  const std::vector<Override> ov = {parse_override("slot.depth=7"),
+                                    parse_override("slot.max_step_down=2.5"),
+                                    parse_override("path.entry_angle=4")};
+  const Job job = load_job(test::example("curves/bend.toml"), ov);
+  const PlannedPath pp = plan_slot(job);
+  EXPECT_EQ(pp.info.levels, 3);  // ceil(7 / 2.5)
+  double deepest = 0;
+  std::vector<double> floors;  // the z of each level's cycles
+  double steepest_deg = 0;
+  for (const Segment& seg : pp.path.segments()) {
+    deepest = std::min({deepest, seg.start().z(), seg.end().z()});
+    if (seg.motion() != Motion::feed) {
+      // Rapids only above the top face or above a level already cut (in the slot).
+      continue;
+    }
+    const Vec3 d = seg.end() - seg.start();
+    const double run = std::hypot(d.x(), d.y());
+    if (seg.kind() == Segment::Kind::line && d.z() < 0 && run > 1e-9) {
+      steepest_deg = std::max(steepest_deg, std::atan2(-d.z(), run) * 180 / M_PI);
+    }
+  }
+  for (const CycleMark& m : pp.path.cycles()) {
+    const double z = pp.path.segments()[m.first_segment].start().z();
+    if (floors.empty() || std::abs(floors.back() - z) > 1e-9) floors.push_back(z);
+  }
+  EXPECT_NEAR(deepest, -7.0, 1e-12);
+  ASSERT_EQ(floors.size(), 3u);
+  for (std::size_t l = 0; l < 3; ++l) {
+    EXPECT_NEAR(floors[l], -7.0 * static_cast<double>(l + 1) / 3, 1e-12);
+  }
+  EXPECT_LE(steepest_deg, 4.0 + 1e-9);
+  EXPECT_GT(steepest_deg, 3.0);  // the ramp legs are as steep as allowed, nearly
+  // Rapids never go below the clearance above the level cut before (the first: the top face).
+  double level_top = 0;
+  for (const Segment& seg : pp.path.segments()) {
+    if (seg.motion() == Motion::rapid) {
+      EXPECT_GE(std::min(seg.start().z(), seg.end().z()), level_top - 1e-9);
+    } else if (seg.start().z() < level_top - 1e-9 && seg.end().z() == seg.start().z()) {
+      level_top = std::min(level_top, seg.start().z());
+    }
+  }
+  // A straight slot is cut at its whole depth: the key is refused there.
+  const std::string m = test::message_of(
+      [] { (void)test::wagih_job("trochoidal", {parse_override("slot.max_step_down=1")}); });
+  EXPECT_NE(m.find("levels are planned for a slot along a drawing's contour"), std::string::npos)
+      << m;
+}
+
 TEST(CurvedSlot, CentrelinesASlotCannotFollowAreRefused) {
   const std::string base = "[geometry]\nfile = \"" +
                            (test::source_dir() / "tests/data/dxf/bad-centrelines.dxf").string() +

@@ -68,6 +68,9 @@ struct Slot {
   /// That contour (mm, the drawing's frame = the workpiece's; set by the job reader from
   /// `[geometry] file`); length_mm is then its length. Shared: a job is copied often.
   std::shared_ptr<const DrawnContour> centreline;
+  /// `[slot] max_step_down` (mm): the depth of each level; 0: the whole depth in one level.
+  /// Levels are planned for slots along a contour.
+  double max_step_down_mm = 0;
   [[nodiscard]] bool curved() const noexcept { return centreline != nullptr; }
 };
 

@@ -242,6 +242,7 @@ struct PlanInfo {
   int cycles = 0;                 ///< number of cycles (passes for linear)
   double cycle_length_mm = 0;     ///< length of one steady-state cycle
   bool closed_start = false;      ///< slot starts inside material (helix/ramp/plunge entry)
+  int levels = 1;                 ///< depth levels (a slot along a contour: [slot] max_step_down)
 };
 
 struct PlannedPath {

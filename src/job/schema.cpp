@@ -305,6 +305,20 @@ std::vector<Key> build_schema() {
                  }
                }
              }),
+      custom("slot", "max_step_down", "number", "mm", "> 0", "the whole depth",
+             "a slot along a contour is cut in levels of equal depth, each at most this deep, "
+             "each entered by [path] entry",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.number("slot", "max_step_down", "mm", positive())) {
+                 if (!r.has("slot", "along")) {
+                   r.problem("slot", "max_step_down",
+                             "levels are planned for a slot along a drawing's contour ([slot] "
+                             "along); a straight slot is cut at its whole depth");
+                 } else {
+                   job.slot.max_step_down_mm = *v;
+                 }
+               }
+             }),
       custom("slot", "length", "number", "mm", "> 0", "required (none with along)",
              "slot length along +Y (a slot along a drawing's contour has the contour's length)",
              [](JobReader& r, Job& job) {

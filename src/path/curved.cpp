@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "families.hpp"
 #include "trochomill/error.hpp"
@@ -251,11 +252,15 @@ class StepRule {
 
 // Entry to depth at the centreline's start C (its tangent t, right normal n), arriving at the
 // first cycle's start p (on the orbit, a from C). The tool starts at safe z above.
+// `z_top`: where feeding starts (the clearance above the top face, or above the level cut
+// before). A path that already holds moves is joined by a rapid at safe z.
 void emit_curve_entry(ToolPath& out, const Geometry& g, const PathSpec& spec, const Vec2& c,
-                      const Vec2& t, const Vec2& p, bool mirror) {
-  const double z_top = g.clearance;
+                      const Vec2& t, const Vec2& p, bool mirror, double z_top) {
   auto at = [](const Vec2& q, double z) { return Vec3(q.x(), q.y(), z); };
   auto line = [&](const Vec3& a, const Vec3& b, Motion m, double speed) {
+    if (!out.empty() && (out.segments().back().end() - a).norm() > 1e-12) {
+      out.append(Segment::line(out.segments().back().end(), a, Motion::rapid, g.rapid));
+    }
     out.append(Segment::line(a, b, m, speed));
   };
   switch (spec.entry) {
@@ -309,6 +314,7 @@ void emit_curve_entry(ToolPath& out, const Geometry& g, const PathSpec& spec, co
       const double sweep = dir * kTwoPi * turns, start = end - sweep;
       const Vec2 h0 = c + r * Vec2(std::cos(start), std::sin(start));
       line(at(h0, g.safe_z), at(h0, z_top), Motion::rapid, g.rapid);
+      if (!(turns > 0)) break;
       out.append(
           Segment::arc_xy(c.x(), c.y(), r, start, sweep, z_top, g.zf, Motion::feed, g.entry_feed));
       out.append(Segment::arc_xy(c.x(), c.y(), r, end, dir * kTwoPi, g.zf, g.zf, Motion::feed,
@@ -328,11 +334,16 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
   const double tol = job.machine.arc_tolerance_mm;
   PlannedPath out;
   if (g0.type == PathType::linear) {
-    // W = D (or passes across): the tool centre on the centreline, one pass per stepover.
+    // W = D: the tool centre on the centreline.
     if (g0.a > 0) {
       throw InputError(
           "[path] type = \"linear\" along a drawing's contour needs W = D (a slot as wide as "
           "the tool); use a trochoidal family for a wider slot");
+    }
+    if (job.path.entry == EntryType::helix || job.path.entry == EntryType::ramp) {
+      throw InputError(
+          "[path] entry: a linear slot along a contour (W = D) has no room beside its start for "
+          "a helix or a ramp; use entry = \"plunge\" or \"outside\"");
     }
   } else if (!(g0.a > tol)) {
     throw InputError(fmt::format("[slot] width: a {} path needs a slot wider than the tool",
@@ -351,59 +362,68 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
   const Centreline::Frame f0 = c.at(0);
   const Vec2 p0 = f0.p + (mirror ? g.a : -g.a) * f0.n;  // the first cycle's start
 
-  if (g.type == PathType::linear) {
-    emit_curve_entry(out.path, g, job.path, f0.p, f0.t, f0.p, mirror);
-    const Segment seg = Segment::line(Vec3(0, 0, 0), Vec3(0, L, 0), Motion::feed, g.feed);
-    ToolPath local;
-    local.append(seg);
-    out.path.mark_cycle();
-    append_mapped(out.path, local, c, 0.0, g.zf, tol);
-    const Vec3 e = out.path.segments().back().end();
-    out.path.append(Segment::line(e, Vec3(e.x(), e.y(), g.safe_z), Motion::rapid, g.rapid));
-    out.info.cycles = 1;
-    out.info.cycle_length_mm = L;
-    out.info.closed_start = job.path.entry != EntryType::outside;
-    return out;
+  // Levels of equal depth, each at most max_step_down; each entered from the clearance above
+  // the level before (cut already, so the tool descends into air there) and left at safe z.
+  const double depth = -g.zf;
+  const double step_down = job.slot.max_step_down_mm > 0 ? job.slot.max_step_down_mm : depth;
+  const int levels = checked_count(std::ceil(depth / step_down - 1e-9));
+  std::optional<StepRule> rule;
+  if (g.type != PathType::linear) {
+    (void)checked_count(std::ceil(L / (0.01 * g.s)));
+    rule.emplace(job, judge, g, mirror, tol);
   }
-
-  (void)checked_count(std::ceil(L / (0.01 * g.s)));
-  StepRule rule(job, judge, g, mirror, tol);
-  emit_curve_entry(out.path, g, job.path, f0.p, f0.t, p0, mirror);
-  // The start cap: a whole orbit circle about C(0) (with the tool it covers the round end);
-  // it widens the entry's bore to the slot, so the cycles (the marks) start after it.
-  append_mapped(out.path, local_cycle(g, 0, mirror, true), c, 0.0, g.zf, tol);
   const double reach = g.a + g.b + g.R;  // how far along a cycle's cut reaches
-  double sigma = 0;
   int cycles = 0;
   double steady_length = 0;
-  while (sigma < L - 1e-9) {
-    double s = g.s;
-    for (double kappa : c.curvatures(sigma - reach, sigma + g.s + reach)) {
-      s = std::min(s, rule.step(kappa));
+  for (int level = 1; level <= levels; ++level) {
+    Geometry gl = g;
+    gl.zf = -depth * level / levels;
+    const double z_top = level == 1 ? g.clearance : -depth * (level - 1) / levels + g.clearance;
+    if (g.type == PathType::linear) {
+      emit_curve_entry(out.path, gl, job.path, f0.p, f0.t, f0.p, mirror, z_top);
+      ToolPath local;
+      local.append(Segment::line(Vec3(0, 0, 0), Vec3(0, L, 0), Motion::feed, g.feed));
+      out.path.mark_cycle();
+      append_mapped(out.path, local, c, 0.0, gl.zf, tol);
+      ++cycles;
+      steady_length = L;
+    } else {
+      emit_curve_entry(out.path, gl, job.path, f0.p, f0.t, p0, mirror, z_top);
+      // The start cap: a whole orbit circle about C(0) (with the tool it covers the round
+      // end); it widens the entry's bore to the slot, so the cycles (the marks) start after it.
+      append_mapped(out.path, local_cycle(g, 0, mirror, true), c, 0.0, gl.zf, tol);
+      double sigma = 0;
+      while (sigma < L - 1e-9) {
+        double s = g.s;
+        for (double kappa : c.curvatures(sigma - reach, sigma + g.s + reach)) {
+          s = std::min(s, rule->step(kappa));
+        }
+        s = std::min(s, L - sigma);
+        out.path.mark_cycle();
+        const double before = out.path.length_mm();
+        append_mapped(out.path, local_cycle(g, s, mirror, false), c, sigma, gl.zf, tol);
+        if (std::abs(s - g.s) < 1e-12) steady_length = out.path.length_mm() - before;
+        sigma += s;
+        ++cycles;
+        (void)checked_count(cycles);
+      }
+      if (!c.closed()) {
+        // The end cap at C(L).
+        out.path.mark_cycle();
+        append_mapped(out.path, local_cycle(g, 0, mirror, true), c, L, gl.zf, tol);
+        ++cycles;
+      }
     }
-    s = std::min(s, L - sigma);
-    out.path.mark_cycle();
-    const double before = out.path.length_mm();
-    append_mapped(out.path, local_cycle(g, s, mirror, false), c, sigma, g.zf, tol);
-    if (std::abs(s - g.s) < 1e-12) steady_length = out.path.length_mm() - before;
-    sigma += s;
-    ++cycles;
-    (void)checked_count(cycles);
+    const Vec3 e = out.path.segments().back().end();
+    out.path.append(Segment::line(e, Vec3(e.x(), e.y(), g.safe_z), Motion::rapid, g.rapid));
   }
-  if (!c.closed()) {
-    // The end cap at C(L).
-    out.path.mark_cycle();
-    append_mapped(out.path, local_cycle(g, 0, mirror, true), c, L, g.zf, tol);
-    ++cycles;
-  }
-  const Vec3 e = out.path.segments().back().end();
-  out.path.append(Segment::line(e, Vec3(e.x(), e.y(), g.safe_z), Motion::rapid, g.rapid));
   out.info.trochoid_radius_mm = g.a;
   out.info.semi_axis_feed_mm = g.b;
   out.info.first_cycle_y_mm = 0;
   out.info.cycles = cycles;
   out.info.cycle_length_mm = steady_length;
   out.info.closed_start = job.path.entry != EntryType::outside;
+  out.info.levels = levels;
   return out;
 }
 

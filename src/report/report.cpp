@@ -183,6 +183,12 @@ std::string metrics_json(const Job& job, const ProcessMetrics& m) {
               {"slot_depth_mm", job.slot.depth_mm},
               {"feed_rate_mm_per_min", feed_rate_mm_per_min(job)},
               {"spindle_speed_rpm", spindle_speed_rpm(job)}};
+  if (job.slot.curved()) j["job"]["slot_along"] = job.slot.along;
+  // Where the largest chip is (the tool centre, mm), and the largest after the entry.
+  const auto point = [](const Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
+  j["h_max_at_mm"] = point(m.h_max_slot_at_mm);
+  j["h_max_after_entry_mm"] = m.h_max_after_entry_mm;
+  j["h_max_after_entry_at_mm"] = point(m.h_max_after_entry_at_mm);
   return j.dump(2) + "\n";
 }
 
