@@ -130,10 +130,10 @@ void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, do
                    double tolerance_mm) {
   for (const Segment& seg : local.segments()) {
     const Mapped m(seg, c, base, z);
-    // Quarter turns of a curve's parameter, lines whole, then halved until within tolerance.
+    // Half turns of a curve's parameter, lines whole, then halved until within tolerance.
     const int pieces =
         seg.kind() == Segment::Kind::curve
-            ? std::max(1, static_cast<int>(std::ceil(std::abs(seg.u1() - seg.u0()) / (0.5 * kPi))))
+            ? std::max(1, static_cast<int>(std::ceil(std::abs(seg.u1() - seg.u0()) / kPi)))
             : 1;
     const double u0 = seg.kind() == Segment::Kind::curve ? seg.u0() : 0.0;
     const double u1 = seg.kind() == Segment::Kind::curve ? seg.u1() : 1.0;
@@ -166,6 +166,28 @@ ToolPath local_cycle(const Geometry& g, double s, bool mirror, bool circle) {
     emit_cycle(bld, gk, 0.0);
   }
   return local;
+}
+
+// How far the family's cycles reach behind their start and beyond their end past what the
+// slot's round ends allow (mm): a point (x, y) of a cycle from C(sigma) lies y past C(0) or
+// C(L) when the cycle starts there, and is in the slot when within a of that end, so it
+// needs -y (behind) or y (beyond) at most sqrt(a^2 - x^2). The cycle without drift (its
+// largest reach either way; a drift only moves it forward), every segment at 256 points.
+std::pair<double, double> end_overshoot_mm(const Geometry& g, bool mirror) {
+  const ToolPath local = local_cycle(g, 0.0, mirror, false);
+  double back = 0, front = 0;
+  for (const Segment& seg : local.segments()) {
+    const bool curve = seg.kind() == Segment::Kind::curve;
+    const double u0 = curve ? seg.u0() : 0.0, u1 = curve ? seg.u1() : 1.0;
+    for (int k = 0; k <= 256; ++k) {
+      const Vec3 p = seg.point_u(u0 + (u1 - u0) * k / 256);
+      const double allow = std::sqrt(std::max(0.0, g.a * g.a - p.x() * p.x()));
+      back = std::max(back, -p.y() - allow);
+      front = std::max(front, p.y() - allow);
+    }
+  }
+  // A margin for the points between the samples (1e-6 of the orbit).
+  return {back > 0 ? back + 1e-6 * g.a : 0.0, front > 0 ? front + 1e-6 * g.a : 0.0};
 }
 
 // The steady-state chip (mm) of the family in a ring of curvature kappa at step s: the largest
@@ -392,21 +414,48 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
       // The start cap: a whole orbit circle about C(0) (with the tool it covers the round
       // end); it widens the entry's bore to the slot, so the cycles (the marks) start after it.
       append_mapped(out.path, local_cycle(g, 0, mirror, true), c, 0.0, gl.zf, tol);
-      double sigma = 0;
-      while (sigma < L - 1e-9) {
+      // Near the ends of an open centreline, cycles that would reach past the round ends
+      // (elliptical with b > a, linear-elliptical's wall moves) give way to circular cycles,
+      // whose circles about the centreline stay within a of it; equal steps up to the
+      // family's first cycle and from its last.
+      const auto [back, front] = c.closed() ? std::pair{0.0, 0.0} : end_overshoot_mm(g, mirror);
+      double sigma_first = back, sigma_end = L - front;
+      if (sigma_end < sigma_first) sigma_first = sigma_end = L;  // too short: circles only
+      Geometry circles = g;
+      circles.type = PathType::circular;
+      circles.b = g.a;
+      const auto step_at = [&](double sigma) {
         double s = g.s;
         for (double kappa : c.curvatures(sigma - reach, sigma + g.s + reach)) {
           s = std::min(s, rule->step(kappa));
         }
-        s = std::min(s, L - sigma);
+        return s;
+      };
+      const auto emit = [&](const Geometry& gc, double sigma, double s) {
         out.path.mark_cycle();
         const double before = out.path.length_mm();
-        append_mapped(out.path, local_cycle(g, s, mirror, false), c, sigma, gl.zf, tol);
-        if (std::abs(s - g.s) < 1e-12) steady_length = out.path.length_mm() - before;
-        sigma += s;
+        append_mapped(out.path, local_cycle(gc, s, mirror, false), c, sigma, gl.zf, tol);
+        if (gc.type == g.type && std::abs(s - g.s) < 1e-12) {
+          steady_length = out.path.length_mm() - before;
+        }
         ++cycles;
         (void)checked_count(cycles);
+      };
+      const auto equal_circles = [&](double from, double to) {
+        if (!(to - from > 1e-9)) return;
+        const int n = checked_count(std::ceil((to - from) / step_at(from) - 1e-9));
+        for (int k = 0; k < n; ++k) {
+          emit(circles, from + (to - from) * k / n, (to - from) / n);
+        }
+      };
+      equal_circles(0.0, sigma_first);
+      double sigma = sigma_first;
+      while (sigma < sigma_end - 1e-9) {
+        const double s = std::min(step_at(sigma), sigma_end - sigma);
+        emit(g, sigma, s);
+        sigma += s;
       }
+      equal_circles(sigma_end, L);
       if (!c.closed()) {
         // The end cap at C(L).
         out.path.mark_cycle();
