@@ -243,7 +243,8 @@ TEST(CurvedSlot, CentrelinesASlotCannotFollowAreRefused) {
     return m.find(part) != std::string::npos;
   };
   std::string m = message("along = \"TIGHT\"\n");
-  EXPECT_TRUE(has(m, "bends on a radius of 4 mm, tighter than the slot's half width (6 mm)")) << m;
+  EXPECT_TRUE(has(m, "bends on a radius of 4 mm at (")) << m;
+  EXPECT_TRUE(has(m, "(the tightest of 2 arcs), tighter than the slot's half width (6 mm)")) << m;
   m = message("along = \"CORNER\"\n");
   EXPECT_TRUE(has(m, "has a corner at (30.0000, 100.0000)")) << m;
   EXPECT_TRUE(has(m, "turns by 90 degrees")) << m;

@@ -767,16 +767,25 @@ void check_centreline(JobReader& r, Job& job) {
   const Contour& c = centre.contour;
   const double half_width = 0.5 * slot.width_mm;
   const auto where = [](const Vec2& p) { return fmt::format("({:.4f}, {:.4f})", p.x(), p.y()); };
+  // The tightest bend (one message, however many arcs are too tight).
+  const ContourPiece* tightest = nullptr;
+  int too_tight = 0;
+  for (const ContourPiece& p : c.pieces) {
+    if (p.is_arc() && p.radius_mm() < half_width) {
+      ++too_tight;
+      if (tightest == nullptr || p.radius_mm() < tightest->radius_mm()) tightest = &p;
+    }
+  }
+  if (tightest != nullptr) {
+    r.problem("slot", "along",
+              fmt::format("layer '{}' bends on a radius of {} mm at {} (the tightest of {} "
+                          "arcs), tighter than the slot's half width ({} mm): the inner wall "
+                          "would fold; widen the bend to at least W/2",
+                          slot.along, fmt_num(tightest->radius_mm()),
+                          where(tightest->point_at(0.5)), too_tight, fmt_num(half_width)));
+  }
   for (std::size_t i = 0; i < c.pieces.size(); ++i) {
     const ContourPiece& p = c.pieces[i];
-    if (p.is_arc() && p.radius_mm() < half_width) {
-      r.problem("slot", "along",
-                fmt::format("the arc from {} to {} of layer '{}' bends on a radius of {} mm, "
-                            "tighter than the slot's half width ({} mm): the inner wall would "
-                            "fold; widen the bend to at least W/2",
-                            where(p.start), where(p.end), slot.along, fmt_num(p.radius_mm()),
-                            fmt_num(half_width)));
-    }
     // Tangent turns between pieces: the loops follow the centreline's normal, which a corner
     // breaks. Drawings' chained entities meet within 0.06 degrees (1e-3 rad) when tangent.
     if (i + 1 < c.pieces.size() || c.closed) {

@@ -186,8 +186,10 @@ std::pair<double, double> end_overshoot_mm(const Geometry& g, bool mirror) {
       front = std::max(front, p.y() - allow);
     }
   }
-  // A margin for the points between the samples (1e-6 of the orbit).
-  return {back > 0 ? back + 1e-6 * g.a : 0.0, front > 0 ? front + 1e-6 * g.a : 0.0};
+  // Rounding (1e-9 of the orbit: a trochoid's circle touches the allowance exactly) is no
+  // overshoot; a real one gets a margin for the points between the samples (1e-6 of it).
+  const double eps = 1e-9 * g.a;
+  return {back > eps ? back + 1e-6 * g.a : 0.0, front > eps ? front + 1e-6 * g.a : 0.0};
 }
 
 // The steady-state chip (mm) of the family in a ring of curvature kappa at step s: the largest

@@ -59,6 +59,9 @@ CASES = {
     # job, tool radius mm, depth mm, closed-form area mm^2
     "ring": (4.0, 3.0, math.pi * ((30 + 6) ** 2 - (30 - 6) ** 2)),
     "bend": (4.0, 3.0, (40 + math.pi * 20 / 2 + 30) * 12 + math.pi * 6 ** 2),
+    # The SVG's centreline: its length as trochomill reads it (the Bezier's biarcs, within
+    # 0.001 mm; check-drawing), the tube formula as for the bend.
+    "s-curve": (4.0, 3.0, 117.3574 * 12 + math.pi * 6 ** 2),
 }
 for name, (radius, depth, area) in CASES.items():
     job = os.path.join(ROOT, "examples", "curves", name + ".toml")
