@@ -209,5 +209,6 @@ void bind_spectrum(py::module_& m);      // bind_signal.cpp: spectrum
 void bind_tool(py::module_& m);          // bind_tool.cpp: keys, materials
 void bind_feed(py::module_& m);          // bind_feed.cpp: schedule_feed, optimize_feed
 void bind_synth_signal(py::module_& m);  // bind_signal.cpp: synth_signal
+void bind_geometry(py::module_& m);      // bind_geometry.cpp: read_drawing
 
 }  // namespace trochomill::python

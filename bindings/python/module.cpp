@@ -327,4 +327,5 @@ PYBIND11_MODULE(_trochomill, m) {
   tp::bind_tool(m);          // keys, materials
   tp::bind_feed(m);          // schedule_feed, optimize_feed
   tp::bind_synth_signal(m);  // synth_signal
+  tp::bind_geometry(m);      // read_drawing
 }

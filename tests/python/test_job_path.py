@@ -159,3 +159,27 @@ def test_gcode_errors_name_line_and_column(tmp_path):
         tm.read_gcode("G21 G90\nG1 X1 Y2 Q\nM2\n")
     with pytest.raises(tm.InputError, match="read without a job"):
         tm.read_gcode("G21 G90 G1 X1 F100\nG1 X2\nM2\n").gcode()
+
+
+def test_a_drawing_reads_as_check_drawing_reads_it():
+    root = pathlib.Path(__file__).resolve().parents[2]
+    for name, layers in (("examples/curves/part.dxf", None), ("examples/curves/s-curve.svg", ["SLOT"])):
+        file = str(root / name)
+        d = tm.read_drawing(file, layers=layers)
+        args = ["check-drawing", file] + sum((["--layer", l] for l in layers or []), [])
+        assert d == cli_json(*args)
+    ring = [c for c in tm.read_drawing(str(root / "examples/curves/part.dxf"))["contours"]
+            if c["layer"] == "RING"][0]
+    # The circle of radius 30 mm: its length and area in closed form (1e-9: arcs are exact).
+    assert ring["length_mm"] == pytest.approx(2 * np.pi * 30, rel=1e-9)
+    with pytest.raises(tm.InputError) as e:
+        tm.read_drawing(str(root / "examples/curves/part.dxf"), layers=["NOPE"])
+    assert "no line, arc or curve on layer 'NOPE'" in str(e.value)
+
+
+def test_a_slot_along_a_curve_plans_as_the_cli_plans_it():
+    root = pathlib.Path(__file__).resolve().parents[2]
+    job = tm.Job.from_toml(root / "examples/curves/bend.toml")
+    path = tm.plan(job)
+    cli = run_cli("plan", str(root / "examples/curves/bend.toml"), "-o", "-").stdout
+    assert path.gcode() == cli

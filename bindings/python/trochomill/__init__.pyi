@@ -126,6 +126,10 @@ def texture_areal(z_mm: npt.ArrayLike, dx_mm: float, dy_mm: float, *, s_mm: floa
 def spectrum(samples: npt.ArrayLike, rate_hz: float, *, nfft: int = 4096,
              spectrogram: bool = False) -> dict[str, Any]:
     """f_hz and psd_per_hz arrays (and "spectrogram": t_s, f_hz, db)."""
+def read_drawing(file: str, *, layers: list[str] | None = None,
+                 join_tolerance_mm: float = 0.01,
+                 arc_tolerance_mm: float = 0.002) -> dict[str, Any]:
+    """A DXF or SVG drawing as `check-drawing --json` reports it: unit, layers, contours."""
 def keys() -> list[dict[str, str]]:
     """Every job key: section, key, type, unit, allowed, default, doc."""
 def materials() -> list[dict[str, Any]]:
