@@ -1,8 +1,10 @@
 // Chaining a drawing's pieces into contours (geometry/drawing.hpp).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <tuple>
 #include <unordered_map>
 
 #include "trochomill/error.hpp"
@@ -18,32 +20,67 @@ const Vec2& end_point(const std::vector<DrawnPiece>& p, End e) {
   return e % 2 == 0 ? p[e / 2].piece.start : p[e / 2].piece.end;
 }
 
-// The ends within `tol` of each end, from a grid of cells `tol` wide (same layer only).
-std::vector<std::vector<End>> partners_of(const std::vector<DrawnPiece>& p, double tol) {
-  const auto key = [tol](const Vec2& v, long dx, long dy) {
-    const auto ix = static_cast<std::int64_t>(std::floor(v.x() / tol)) + dx;
-    const auto iy = static_cast<std::int64_t>(std::floor(v.y() / tol)) + dy;
-    return static_cast<std::uint64_t>(ix) * 0x9E3779B97F4A7C15ULL ^ static_cast<std::uint64_t>(iy);
-  };
-  std::unordered_multimap<std::uint64_t, End> grid;
-  grid.reserve(2 * p.size());
-  for (End e = 0; e < 2 * p.size(); ++e) grid.emplace(key(end_point(p, e), 0, 0), e);
-  std::vector<std::vector<End>> out(2 * p.size());
-  for (End e = 0; e < 2 * p.size(); ++e) {
-    const Vec2& a = end_point(p, e);
-    for (long dx = -1; dx <= 1; ++dx) {
-      for (long dy = -1; dy <= 1; ++dy) {
-        const auto [lo, hi] = grid.equal_range(key(a, dx, dy));
-        for (auto it = lo; it != hi; ++it) {
-          const End f = it->second;
-          if (f / 2 == e / 2 || p[f / 2].layer != p[e / 2].layer) continue;
-          if ((end_point(p, f) - a).norm() <= tol) out[e].push_back(f);
-        }
+// The ends within `tol` of each end (same layer only), in compressed rows: the partners of
+// end e are list[first[e] .. first[e + 1]). Found through the ends sorted by layer and grid
+// cell: cells 2 tol wide, so an end's partners lie in its cell or the next one towards the
+// half of the cell it is in, along x and y: two runs of the sorted ends, each found by one
+// binary search (the cells of one column, y next to y, are consecutive).
+struct Partners {
+  std::vector<std::size_t> first;
+  std::vector<End> list;
+  [[nodiscard]] std::size_t count(End e) const { return first[e + 1] - first[e]; }
+};
+
+Partners partners_of(const std::vector<DrawnPiece>& p, double tol) {
+  // Layers as numbers (pieces of one layer mostly come together: compare with the last).
+  std::vector<std::uint32_t> layer(p.size());
+  {
+    std::unordered_map<std::string, std::uint32_t> ids;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (i > 0 && p[i].layer == p[i - 1].layer) {
+        layer[i] = layer[i - 1];
+      } else {
+        layer[i] = ids.emplace(p[i].layer, static_cast<std::uint32_t>(ids.size())).first->second;
       }
     }
-    std::sort(out[e].begin(), out[e].end());
-    out[e].erase(std::unique(out[e].begin(), out[e].end()), out[e].end());
   }
+  using Key = std::tuple<std::uint32_t, std::int64_t, std::int64_t>;  // layer, cell x, cell y
+  const double size = 2 * tol;
+  const std::size_t n = 2 * p.size();
+  std::vector<std::pair<Key, End>> cells(n);
+  for (End e = 0; e < n; ++e) {
+    const Vec2& v = end_point(p, e);
+    cells[e] = {Key{layer[e / 2], static_cast<std::int64_t>(std::floor(v.x() / size)),
+                    static_cast<std::int64_t>(std::floor(v.y() / size))},
+                e};
+  }
+  std::sort(cells.begin(), cells.end());
+  Partners out;
+  out.first.reserve(n + 1);
+  std::vector<End> mine;
+  for (End e = 0; e < n; ++e) {
+    out.first.push_back(out.list.size());
+    const Vec2& a = end_point(p, e);
+    const double cx = a.x() / size, cy = a.y() / size;
+    const auto ix = static_cast<std::int64_t>(std::floor(cx));
+    const auto iy = static_cast<std::int64_t>(std::floor(cy));
+    const std::int64_t ox = cx - static_cast<double>(ix) < 0.5 ? -1 : 1;
+    const std::int64_t oy = cy - static_cast<double>(iy) < 0.5 ? -1 : 1;
+    mine.clear();
+    for (const std::int64_t x : {ix, ix + ox}) {
+      const Key lo{layer[e / 2], x, std::min(iy, iy + oy)};
+      const Key hi{layer[e / 2], x, std::max(iy, iy + oy)};
+      auto it = std::lower_bound(cells.begin(), cells.end(), lo,
+                                 [](const auto& c, const Key& k) { return c.first < k; });
+      for (; it != cells.end() && it->first <= hi; ++it) {
+        const End f = it->second;
+        if (f / 2 != e / 2 && (end_point(p, f) - a).norm() <= tol) mine.push_back(f);
+      }
+    }
+    std::sort(mine.begin(), mine.end());
+    out.list.insert(out.list.end(), mine.begin(), mine.end());
+  }
+  out.first.push_back(out.list.size());
   return out;
 }
 
@@ -66,19 +103,21 @@ std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces, double jo
       }
     }
   }
-  const std::vector<std::vector<End>> partners = partners_of(pieces, join_mm);
-  for (End e = 0; e < partners.size(); ++e) {
-    if (partners[e].size() >= 2) {
+  const Partners partners = partners_of(pieces, join_mm);
+  for (End e = 0; e < 2 * pieces.size(); ++e) {
+    if (partners.count(e) >= 2) {
       std::string names = pieces[e / 2].entity;
-      for (const End f : partners[e]) names += ", " + pieces[f / 2].entity;
+      for (std::size_t k = partners.first[e]; k < partners.first[e + 1]; ++k) {
+        names += ", " + pieces[partners.list[k] / 2].entity;
+      }
       throw InputError(fmt::format(
           "layer '{}': a branch at {}: the ends of {} meet there (a contour may not fork)",
           pieces[e / 2].layer, at(end_point(pieces, e)), names));
     }
   }
   const auto partner = [&](End e) -> std::optional<End> {
-    if (partners[e].empty()) return std::nullopt;
-    return partners[e].front();
+    if (partners.count(e) == 0) return std::nullopt;
+    return partners.list[partners.first[e]];
   };
   std::vector<char> used(pieces.size(), 0);
   std::vector<DrawnContour> out;
