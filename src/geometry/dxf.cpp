@@ -13,6 +13,7 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/geometry/drawing.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -382,11 +383,7 @@ void read_units(const std::string& text, Drawing& d, const std::string& source) 
 
 Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& options) {
   const std::string source = file.string();
-  std::ifstream f(file, std::ios::binary);
-  if (!f) throw InputError(fmt::format("{}: cannot open the DXF file", source));
-  std::stringstream buf;
-  buf << f.rdbuf();
-  const std::string text = buf.str();
+  const std::string text = read_drawing_text(file, "DXF");
   if (!(options.arc_tolerance_mm > 0) || !(options.join_tolerance_mm > 0)) {
     throw InputError("drawing: the arc and join tolerances must be > 0 mm");
   }
@@ -424,6 +421,30 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
     throw InputError(fmt::format("{}: {}", source, e.what()));
   }
   return d;
+}
+
+std::string read_drawing_text(const std::filesystem::path& file, std::string_view kind) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(file, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    throw InputError(
+        fmt::format("{}: cannot open the {} file: it does not exist", file.string(), kind));
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    throw InputError(fmt::format("{}: not a {} file (a folder or a device)", file.string(), kind));
+  }
+  const std::uintmax_t size = std::filesystem::file_size(file, ec);
+  constexpr std::uintmax_t kMaxBytes = 1ULL << 30;
+  if (!ec && size > kMaxBytes) {
+    throw InputError(fmt::format("{}: {:.3g} GB, more than the 1 GB a drawing may have",
+                                 file.string(), static_cast<double>(size) / 1e9));
+  }
+  try {
+    return read_text_file(file);
+  } catch (const Error& e) {
+    throw InputError(
+        fmt::format("{}: cannot open the {} file ({})", file.string(), kind, e.what()));
+  }
 }
 
 Drawing read_drawing(const std::filesystem::path& file, const DrawingOptions& options) {

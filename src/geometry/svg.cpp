@@ -477,11 +477,7 @@ class Reader {
 
 Drawing read_svg(const std::filesystem::path& file, const DrawingOptions& options) {
   const std::string source = file.string();
-  std::ifstream f(file, std::ios::binary);
-  if (!f) throw InputError(fmt::format("{}: cannot open the SVG file", source));
-  std::stringstream buf;
-  buf << f.rdbuf();
-  const std::string text = buf.str();
+  const std::string text = read_drawing_text(file, "SVG");
   if (!(options.arc_tolerance_mm > 0) || !(options.join_tolerance_mm > 0)) {
     throw InputError("drawing: the arc and join tolerances must be > 0 mm");
   }

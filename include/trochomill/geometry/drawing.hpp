@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "trochomill/geometry.hpp"
@@ -54,6 +55,12 @@ struct DrawingOptions {
 /// closer than 10 join_mm: a drawing that was meant to join).
 [[nodiscard]] std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces,
                                                      double join_mm);
+
+/// A drawing file's text for its reader (`kind`: "DXF", "SVG"): a regular file of at most
+/// 1 GB (a device, a folder or a larger file is refused before reading: about 40 bytes of
+/// pieces per byte of drawing would not fit). Throws InputError naming the file.
+[[nodiscard]] std::string read_drawing_text(const std::filesystem::path& file,
+                                            std::string_view kind);
 
 /// Reads a DXF file: LINE, ARC, CIRCLE, LWPOLYLINE and POLYLINE (with bulges), SPLINE (NURBS,
 /// from its control points, knots and weights), ELLIPSE (and elliptical arcs), in the XY plane
