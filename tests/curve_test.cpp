@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <string>
 
@@ -264,6 +265,17 @@ TEST(CurvedSlot, CentrelinesASlotCannotFollowAreRefused) {
   text.insert(text.find("width = 12.0"), "along = \"TWO\"\n");
   m = test::message_of([&] { (void)parse_job(text, "bad.toml"); });
   EXPECT_TRUE(has(m, "give [geometry] file")) << m;
+  // A drawing that is a device (endless) or a folder is refused before it is read.
+  const auto dir = std::filesystem::temp_directory_path() / "trochomill-curve-test";
+  std::filesystem::create_directories(dir);
+  std::filesystem::remove(dir / "zero.dxf");
+  std::filesystem::create_symlink("/dev/zero", dir / "zero.dxf");
+  m = test::message_of([&] { (void)read_drawing(dir / "zero.dxf", DrawingOptions{}); });
+  EXPECT_TRUE(has(m, "zero.dxf: not a DXF file (a folder or a device)")) << m;
+  std::filesystem::create_directories(dir / "folder.svg");
+  m = test::message_of([&] { (void)read_drawing(dir / "folder.svg", DrawingOptions{}); });
+  EXPECT_TRUE(has(m, "folder.svg: not a SVG file (a folder or a device)")) << m;
+  std::filesystem::remove_all(dir);
   // A straight slot still needs its length.
   text = base.substr(base.find("[tool]"));
   m = test::message_of([&] { (void)parse_job(text, "bad.toml"); });
