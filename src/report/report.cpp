@@ -208,9 +208,9 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
   out += fmt::format("  engagement max       {:.2f} deg\n", m.engagement_angle_max_slot_deg);
   if (job.slot.curved()) {
     out += fmt::format(
-        "  along '{}'           h_max {:.5f} mm at ({:.3f}, {:.3f}); after the entry {:.5f} mm at "
+        "  {:<21}h_max {:.5f} mm at ({:.3f}, {:.3f}); after the entry {:.5f} mm at "
         "({:.3f}, {:.3f})\n",
-        job.slot.along, m.h_max_slot_mm, m.h_max_slot_at_mm.x(), m.h_max_slot_at_mm.y(),
+        fmt::format("along '{}'", job.slot.along), m.h_max_slot_mm, m.h_max_slot_at_mm.x(), m.h_max_slot_at_mm.y(),
         m.h_max_after_entry_mm, m.h_max_after_entry_at_mm.x(), m.h_max_after_entry_at_mm.y());
     out +=
         "  steady cycle         none (a slot along a curve: each cycle's step follows the "
