@@ -229,6 +229,64 @@ TEST(CurvedSlot, LevelsOfEqualDepthEachEnteredByItsRamp) {
       << m;
 }
 
+// The finishing allowance and pass: the cycles stay the allowance inside the orbit, the pass
+// runs along the walls at full depth a from the centreline, round the slot counter-clockwise
+// for climb (material on the right) and clockwise for conventional.
+TEST(CurvedSlot, AFinishingPassRunsAlongTheWallsAfterTheAllowance) {
+  for (const std::string direction : {"climb", "conventional"}) {
+    const Job job = load_job(
+        test::example("curves/bend.toml"),
+        {parse_override("slot.finish_allowance=0.2"), parse_override("slot.finish_pass=true"),
+         parse_override("path.direction=" + direction)});
+    const PlannedPath pp = plan_slot(job);
+    const Contour& centre = job.slot.centreline->contour;
+    const double a = 0.5 * (job.slot.width_mm - job.tool.diameter_mm);
+    const double tol = job.machine.arc_tolerance_mm;
+    // The pass: from its mark; the cycles: up to the rapids before its lead-in (down at the
+    // centreline's start, out to the wall).
+    const auto& segs = pp.path.segments();
+    const std::size_t finish = pp.path.cycles().back().first_segment;
+    std::size_t lead_in = finish;
+    while (lead_in > 0 && segs[lead_in - 1].motion() == Motion::feed) --lead_in;
+    ToolPath rough, pass;
+    for (std::size_t i = 0; i < segs.size(); ++i) {
+      const Segment& seg = segs[i];
+      if (i < lead_in) {
+        rough.append(seg);
+      } else if (i < finish) {
+        continue;
+      } else if (seg.motion() == Motion::feed) {
+        pass.append(seg);
+      } else {
+        break;  // the rapid up after the pass
+      }
+    }
+    const double z = -job.slot.depth_mm;
+    EXPECT_LE(farthest_from_centreline_mm(rough, centre, z), a - 0.2 + 1e-6) << direction;
+    // The pass: every point a - t from the centreline (the biarcs within t of it: 2 t).
+    double lo = 1e9, hi = 0, area2 = 0;
+    for (const Segment& seg : pass.segments()) {
+      const int n = std::max(1, static_cast<int>(std::ceil(seg.length_mm() / 0.05)));
+      for (int k = 0; k < n; ++k) {
+        const Vec3 p = seg.point_at(seg.length_mm() * k / n);
+        const Vec3 q = seg.point_at(seg.length_mm() * (k + 1) / n);
+        area2 += p.x() * q.y() - q.x() * p.y();
+        const double d = centre.distance_mm(Vec2(p.x(), p.y()));
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
+      }
+    }
+    EXPECT_LE(hi, a + 1e-6) << direction;
+    EXPECT_GE(lo, a - 2 * tol) << direction;
+    // The region the pass goes round: the slot less the walls' band, L (W - D) + pi a^2 for
+    // the tube of the bend (0.5 %: its chords every 0.05 mm and the tolerance).
+    const double area = 0.5 * area2;
+    const double expected = job.slot.length_mm * 2 * (a - tol) + M_PI * (a - tol) * (a - tol);
+    EXPECT_NEAR(std::abs(area) / expected, 1.0, 0.005) << direction;
+    EXPECT_EQ(area > 0, direction == "climb") << direction << " " << area;
+  }
+}
+
 TEST(CurvedSlot, CentrelinesASlotCannotFollowAreRefused) {
   const std::string base = "[geometry]\nfile = \"" +
                            (test::source_dir() / "tests/data/dxf/bad-centrelines.dxf").string() +

@@ -71,6 +71,10 @@ struct Slot {
   /// `[slot] max_step_down` (mm): the depth of each level; 0: the whole depth in one level.
   /// Levels are planned for slots along a contour.
   double max_step_down_mm = 0;
+  /// `[slot] finish_allowance` (mm): the walls' stock the cycles leave (their orbit narrowed
+  /// by it); `finish_pass`: one pass along the walls at full depth after the levels.
+  double finish_allowance_mm = 0;
+  bool finish_pass = false;
   [[nodiscard]] bool curved() const noexcept { return centreline != nullptr; }
 };
 

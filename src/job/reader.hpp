@@ -184,6 +184,16 @@ class JobReader {
     return n->value<std::string>().value_or("");
   }
 
+  std::optional<bool> boolean(const std::string& section, const std::string& key) {
+    const toml::node* n = find(section, key);
+    if (n == nullptr) return std::nullopt;
+    if (!n->is_boolean()) {
+      problem(section, key, fmt::format("expected true or false, got {}", type_name(*n)));
+      return std::nullopt;
+    }
+    return n->value<bool>().value_or(false);
+  }
+
   std::optional<std::vector<std::string>> string_array(const std::string& section,
                                                        const std::string& key) {
     const toml::node* n = find(section, key);

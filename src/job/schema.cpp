@@ -319,6 +319,32 @@ std::vector<Key> build_schema() {
                  }
                }
              }),
+      custom("slot", "finish_allowance", "number", "mm", ">= 0, below (W - D) / 2", "0",
+             "a slot along a contour: the stock its cycles leave on the walls (their orbit "
+             "narrowed by it), for the finishing pass",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.number("slot", "finish_allowance", "mm", non_negative())) {
+                 if (!r.has("slot", "along")) {
+                   r.problem("slot", "finish_allowance",
+                             "is for a slot along a drawing's contour ([slot] along)");
+                 } else {
+                   job.slot.finish_allowance_mm = *v;
+                 }
+               }
+             }),
+      custom("slot", "finish_pass", "boolean", "", "true or false", "false",
+             "a slot along a contour: after its levels, one pass along its walls at full depth "
+             "(climb or conventional as [path] direction)",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.boolean("slot", "finish_pass")) {
+                 if (!r.has("slot", "along")) {
+                   r.problem("slot", "finish_pass",
+                             "is for a slot along a drawing's contour ([slot] along)");
+                 } else {
+                   job.slot.finish_pass = *v;
+                 }
+               }
+             }),
       custom("slot", "length", "number", "mm", "> 0", "required (none with along)",
              "slot length along +Y (a slot along a drawing's contour has the contour's length)",
              [](JobReader& r, Job& job) {
@@ -805,6 +831,12 @@ void check_centreline(JobReader& r, Job& job) {
     r.problem("slot", "along",
               fmt::format("layer '{}' crosses itself at {}: a slot's centreline must not",
                           slot.along, where(*cross)));
+  }
+  const double orbit = 0.5 * (slot.width_mm - job.tool.diameter_mm);
+  if (slot.finish_allowance_mm > 0 && !(slot.finish_allowance_mm < orbit)) {
+    r.problem("slot", "finish_allowance",
+              fmt::format("must be below the orbit's half width (W - D) / 2 = {} mm, got {}",
+                          fmt_num(orbit), fmt_num(slot.finish_allowance_mm)));
   }
   if (!r.problems().empty()) return;
   slot.length_mm = c.length_mm();

@@ -376,11 +376,17 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
   if (g0.type != PathType::linear && (!(g0.s > 0) || g0.s >= 2 * g0.R)) {
     throw InputError(fmt::format("[path] step: must be in (0, {:g}) mm, got {:g}", 2 * g0.R, g0.s));
   }
-  // The orbit narrowed by the arc tolerance: the biarcs stay within a of the centreline.
+  // The orbit narrowed by the arc tolerance (the biarcs stay within a of the centreline) and
+  // by the finishing allowance (the cycles leave it on the walls).
   Geometry g = g0;
+  const double wall_a = g0.a - tol;  // the finishing pass's offset from the centreline
   if (g.type != PathType::linear) {
-    g.b *= (g0.a - tol) / g0.a;
-    g.a = g0.a - tol;
+    const double a = wall_a - job.slot.finish_allowance_mm;
+    if (!(a > 0)) {
+      throw InputError("[slot] finish_allowance: the cycles' orbit would vanish; lower it");
+    }
+    g.b *= a / g0.a;
+    g.a = a;
   }
   const double L = c.length();
   const Centreline::Frame f0 = c.at(0);
@@ -467,6 +473,55 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
     }
     const Vec3 e = out.path.segments().back().end();
     out.path.append(Segment::line(e, Vec3(e.x(), e.y(), g.safe_z), Motion::rapid, g.rapid));
+  }
+  if (job.slot.finish_pass && g.type != PathType::linear) {
+    // Along the walls at full depth, a from the centreline: climb (cw orbit frame) along the
+    // right wall forward, round the far end, back along the left wall and round the near end
+    // (a closed centreline: each wall once); mirrored for conventional or a ccw spindle.
+    // Down at the centreline's start (cleared), out to the wall, the loop, up at safe z.
+    std::vector<ToolPath> loops;
+    const auto loop = [&](const auto& build) {
+      ToolPath local;
+      Builder bld(local, mirror);
+      build(bld);
+      loops.push_back(std::move(local));
+    };
+    const double a = wall_a;
+    if (c.closed()) {
+      loop([&](Builder& b) {
+        b.start_at(Vec3(a, 0, 0));
+        b.line_to(Vec3(a, L, 0), Motion::feed, g.feed);
+      });
+      loop([&](Builder& b) {
+        b.start_at(Vec3(-a, L, 0));
+        b.line_to(Vec3(-a, 0, 0), Motion::feed, g.feed);
+      });
+    } else {
+      loop([&](Builder& b) {
+        b.start_at(Vec3(a, 0, 0));
+        b.line_to(Vec3(a, L, 0), Motion::feed, g.feed);
+        b.curve(Vec3(0, L, 0), Vec3(a, 0, 0), Vec3(0, a, 0), Vec3::Zero(), 0.0, kPi, g.feed);
+        b.line_to(Vec3(-a, 0, 0), Motion::feed, g.feed);
+        b.curve(Vec3(0, 0, 0), Vec3(a, 0, 0), Vec3(0, a, 0), Vec3::Zero(), kPi, kTwoPi, g.feed);
+      });
+    }
+    for (const ToolPath& local : loops) {
+      const Vec3 q = local.segments().front().start();  // local: x across, y along
+      const Centreline::Frame fq = c.at(q.y());
+      const Vec2 start = fq.p + q.x() * fq.n;
+      const auto at = [](const Vec2& v, double z) { return Vec3(v.x(), v.y(), z); };
+      const Vec3 here = out.path.segments().back().end();
+      out.path.append(Segment::line(here, at(fq.p, g.safe_z), Motion::rapid, g.rapid));
+      out.path.append(
+          Segment::line(at(fq.p, g.safe_z), at(fq.p, g.clearance), Motion::rapid, g.rapid));
+      out.path.append(
+          Segment::line(at(fq.p, g.clearance), at(fq.p, g.zf), Motion::feed, g.entry_feed));
+      out.path.append(Segment::line(at(fq.p, g.zf), at(start, g.zf), Motion::feed, g.entry_feed));
+      out.path.mark_cycle();
+      append_mapped(out.path, local, c, 0.0, g.zf, tol);
+      const Vec3 e = out.path.segments().back().end();
+      out.path.append(Segment::line(e, Vec3(e.x(), e.y(), g.safe_z), Motion::rapid, g.rapid));
+    }
   }
   out.info.trochoid_radius_mm = g.a;
   out.info.semi_axis_feed_mm = g.b;
