@@ -100,6 +100,15 @@ void KfStream::push(const double* x, std::size_t n,
 }
 
 std::vector<double> planned_cycle_bounds(const Job& job) {
+  // The monitor's cycles are the straight slot's, all alike; a slot along a curve has cycles
+  // of changing step (and needs the engagement kernel, above this module, to plan).
+  if (job.slot.curved()) {
+    throw InputError(fmt::format(
+        "{}: the monitor follows the cycles of a straight slot; a slot along a drawing's "
+        "contour ([slot] along = \"{}\") has cycles of changing step: monitor it with a "
+        "straight job of the same tool and conditions",
+        job.source, job.slot.along));
+  }
   const PlannedPath pp = plan_path(job);
   const auto& marks = pp.path.cycles();
   if (marks.size() < 2) {
