@@ -9,8 +9,8 @@
 #include <filesystem>
 
 #include "common.hpp"
-#include "trochomill/gcode.hpp"
 #include "trochomill/engagement.hpp"
+#include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/version.hpp"
 

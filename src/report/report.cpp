@@ -210,8 +210,9 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
     out += fmt::format(
         "  {:<21}h_max {:.5f} mm at ({:.3f}, {:.3f}); after the entry {:.5f} mm at "
         "({:.3f}, {:.3f})\n",
-        fmt::format("along '{}'", job.slot.along), m.h_max_slot_mm, m.h_max_slot_at_mm.x(), m.h_max_slot_at_mm.y(),
-        m.h_max_after_entry_mm, m.h_max_after_entry_at_mm.x(), m.h_max_after_entry_at_mm.y());
+        fmt::format("along '{}'", job.slot.along), m.h_max_slot_mm, m.h_max_slot_at_mm.x(),
+        m.h_max_slot_at_mm.y(), m.h_max_after_entry_mm, m.h_max_after_entry_at_mm.x(),
+        m.h_max_after_entry_at_mm.y());
     out +=
         "  steady cycle         none (a slot along a curve: each cycle's step follows the "
         "bend): whole-program figures only\n";
