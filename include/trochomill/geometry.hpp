@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -172,6 +173,24 @@ class PlanarCurve {
   [[nodiscard]] virtual Vec3 point(double u) const = 0;
   [[nodiscard]] virtual Vec3 unit_tangent(double u) const = 0;
 };
+/// An ellipse (or elliptical arc) c + a cos t + b sin t (mm; a and b its conjugate semi-axes,
+/// z = const), t increasing: what the drawings' ellipses and elliptical arcs are fitted from.
+class EllipseCurve final : public PlanarCurve {
+ public:
+  EllipseCurve(const Vec3& c, const Vec3& a, const Vec3& b) : c_(c), a_(a), b_(b) {}
+  [[nodiscard]] Vec3 point(double t) const override {
+    return c_ + a_ * std::cos(t) + b_ * std::sin(t);
+  }
+  [[nodiscard]] Vec3 unit_tangent(double t) const override {
+    const Vec3 d = -a_ * std::sin(t) + b_ * std::cos(t);
+    const double n = d.norm();
+    return n > 0 ? Vec3(d / n) : Vec3::Zero();
+  }
+
+ private:
+  Vec3 c_, a_, b_;
+};
+
 /// Tangent-continuous biarcs through the curve from u0 to u1 (split first into `pieces` equal
 /// spans of u, each halved until its biarc stays within 0.8 tolerance_mm of the curve at 24
 /// interior samples). The last arc ends exactly where the curve ends. Throws Error when a

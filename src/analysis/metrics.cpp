@@ -413,32 +413,31 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   }
   m.mrr_total_mm3_per_min = m.removed_volume_mm3 / m.machining_time_s * 60.0;
   m.feed_per_tooth_mm = job.cutting.feed_per_tooth_mm;
+  // The largest chip, where it is, and the largest after the entry (from the first cycle
+  // mark; the whole program without marks), in one pass.
+  const double entry_end_s = path.cycles().empty() ? 0.0 : path.cycles().front().start_time_s;
+  std::size_t i_max = 0, i_after = n;
+  double h_after = 0;
   for (std::size_t i = 0; i < n; ++i) {
     // Plunge starts have no radial chip (engagement.hpp: radial_chip_mm).
     const double h = radial_chip_mm(e, i, R);
     if (h > m.h_max_slot_mm) {
       m.h_max_slot_mm = h;
       m.t_h_max_slot_s = s.t_s[i];
+      i_max = i;
+    }
+    if (s.t_s[i] >= entry_end_s && (i_after == n || h > h_after)) {
+      i_after = i;
+      h_after = h;
     }
     m.engagement_angle_max_slot_deg =
         std::max(m.engagement_angle_max_slot_deg, rad_to_deg(e.engagement_angle_rad[i]));
   }
-  {
-    const double entry_end_s = path.cycles().empty() ? 0.0 : path.cycles().front().start_time_s;
-    std::size_t i_max = 0, i_after = n;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double h = radial_chip_mm(e, i, R);
-      if (h > radial_chip_mm(e, i_max, R)) i_max = i;
-      if (s.t_s[i] >= entry_end_s && (i_after == n || h > radial_chip_mm(e, i_after, R))) {
-        i_after = i;
-      }
-    }
-    const auto at = [&](std::size_t i) { return Vec3(s.x_mm[i], s.y_mm[i], s.z_mm[i]); };
-    if (n > 0) m.h_max_slot_at_mm = at(i_max);
-    if (i_after < n) {
-      m.h_max_after_entry_mm = radial_chip_mm(e, i_after, R);
-      m.h_max_after_entry_at_mm = at(i_after);
-    }
+  const auto at = [&](std::size_t i) { return Vec3(s.x_mm[i], s.y_mm[i], s.z_mm[i]); };
+  if (n > 0) m.h_max_slot_at_mm = at(i_max);
+  if (i_after < n) {
+    m.h_max_after_entry_mm = h_after;
+    m.h_max_after_entry_at_mm = at(i_after);
   }
   // A slot along a curve: each cycle's step follows the bend, so there is no steady cycle;
   // the walls and floor of the straight slot's models do not apply. Whole-program figures.

@@ -103,23 +103,6 @@ class Nurbs final : public PlanarCurve {
   std::vector<double> w_;
 };
 
-// An elliptical arc: c + M cos t + m sin t, t from t0 to t1.
-class EllipseCurve final : public PlanarCurve {
- public:
-  EllipseCurve(Vec3 c, Vec3 major, Vec3 minor) : c_(c), a_(major), b_(minor) {}
-  [[nodiscard]] Vec3 point(double t) const override {
-    return c_ + a_ * std::cos(t) + b_ * std::sin(t);
-  }
-  [[nodiscard]] Vec3 unit_tangent(double t) const override {
-    const Vec3 d = -a_ * std::sin(t) + b_ * std::cos(t);
-    const double n = d.norm();
-    return n > 0 ? Vec3(d / n) : Vec3::Zero();
-  }
-
- private:
-  Vec3 c_, a_, b_;
-};
-
 class Reader final : public DL_CreationAdapter {
  public:
   Reader(std::string source, const DrawingOptions& o) : src_(std::move(source)), o_(o) {}
@@ -383,10 +366,7 @@ void read_units(const std::string& text, Drawing& d, const std::string& source) 
 
 Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& options) {
   const std::string source = file.string();
-  const std::string text = read_drawing_text(file, "DXF");
-  if (!(options.arc_tolerance_mm > 0) || !(options.join_tolerance_mm > 0)) {
-    throw InputError("drawing: the arc and join tolerances must be > 0 mm");
-  }
+  const std::string text = read_drawing_text(file, "DXF", options);
   Drawing d;
   d.file = file;
   read_units(text, d, source);
@@ -423,7 +403,11 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   return d;
 }
 
-std::string read_drawing_text(const std::filesystem::path& file, std::string_view kind) {
+std::string read_drawing_text(const std::filesystem::path& file, std::string_view kind,
+                              const DrawingOptions& options) {
+  if (!(options.arc_tolerance_mm > 0) || !(options.join_tolerance_mm > 0)) {
+    throw InputError("drawing: the arc and join tolerances must be > 0 mm");
+  }
   std::error_code ec;
   const auto status = std::filesystem::status(file, ec);
   if (ec || !std::filesystem::exists(status)) {

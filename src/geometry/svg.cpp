@@ -477,10 +477,7 @@ class Reader {
 
 Drawing read_svg(const std::filesystem::path& file, const DrawingOptions& options) {
   const std::string source = file.string();
-  const std::string text = read_drawing_text(file, "SVG");
-  if (!(options.arc_tolerance_mm > 0) || !(options.join_tolerance_mm > 0)) {
-    throw InputError("drawing: the arc and join tolerances must be > 0 mm");
-  }
+  const std::string text = read_drawing_text(file, "SVG", options);
   Reader r(source, text, options);
   pugi::xml_document doc;
   const pugi::xml_parse_result res = doc.load_buffer(text.data(), text.size());

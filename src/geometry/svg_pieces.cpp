@@ -48,23 +48,6 @@ class Bezier final : public PlanarCurve {
   std::array<Vec2, 4> p_;
 };
 
-// An ellipse c + a cos t + b sin t (mm), t increasing.
-class Ellipse final : public PlanarCurve {
- public:
-  Ellipse(Vec2 c, Vec2 a, Vec2 b) : c_(c), a_(a), b_(b) {}
-  [[nodiscard]] Vec3 point(double t) const override {
-    return lift(c_ + a_ * std::cos(t) + b_ * std::sin(t));
-  }
-  [[nodiscard]] Vec3 unit_tangent(double t) const override {
-    const Vec2 d = -a_ * std::sin(t) + b_ * std::cos(t);
-    const double n = d.norm();
-    return n > 0 ? lift(d / n) : Vec3::Zero();
-  }
-
- private:
-  Vec2 c_, a_, b_;
-};
-
 }  // namespace
 
 PieceSink::PieceSink(const Affine& m, double tolerance_mm, std::vector<DrawnPiece>& out,
@@ -92,8 +75,8 @@ void PieceSink::ellipse(const Vec2& c, const Vec2& a, const Vec2& b, double t0, 
   }
   const int n = std::max(1, static_cast<int>(std::ceil(std::abs(t1 - t0) / (0.5 * kPi))));
   // Decreasing t: the same ellipse with b turned round, at -t (increasing).
-  if (t1 >= t0) return fit(Ellipse(cm, am, bm), t0, t1, n);
-  fit(Ellipse(cm, am, -bm), -t0, -t1, n);
+  if (t1 >= t0) return fit(EllipseCurve(lift(cm), lift(am), lift(bm)), t0, t1, n);
+  fit(EllipseCurve(lift(cm), lift(am), lift(-bm)), -t0, -t1, n);
 }
 
 void PieceSink::check(const Vec2& p) {

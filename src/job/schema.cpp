@@ -128,6 +128,14 @@ Key machine_position(const char* key, const char* doc, std::optional<Vec3>& (*fi
                 });
 }
 
+// A [slot] key only a slot along a drawing's contour has: true with [slot] along, else the
+// problem `what` on the key.
+bool along_only(JobReader& r, const char* key, const char* what) {
+  if (r.has("slot", "along")) return true;
+  r.problem("slot", key, what);
+  return false;
+}
+
 #define FIELD(member)     \
   +[](Job & j) -> auto& { \
     return j.member;      \
@@ -310,11 +318,9 @@ std::vector<Key> build_schema() {
              "each entered by [path] entry",
              [](JobReader& r, Job& job) {
                if (auto v = r.number("slot", "max_step_down", "mm", positive())) {
-                 if (!r.has("slot", "along")) {
-                   r.problem("slot", "max_step_down",
-                             "levels are planned for a slot along a drawing's contour ([slot] "
-                             "along); a straight slot is cut at its whole depth");
-                 } else {
+                 if (along_only(r, "max_step_down",
+                                "levels are planned for a slot along a drawing's contour "
+                                "([slot] along); a straight slot is cut at its whole depth")) {
                    job.slot.max_step_down_mm = *v;
                  }
                }
@@ -324,10 +330,8 @@ std::vector<Key> build_schema() {
              "narrowed by it), for the finishing pass",
              [](JobReader& r, Job& job) {
                if (auto v = r.number("slot", "finish_allowance", "mm", non_negative())) {
-                 if (!r.has("slot", "along")) {
-                   r.problem("slot", "finish_allowance",
-                             "is for a slot along a drawing's contour ([slot] along)");
-                 } else {
+                 if (along_only(r, "finish_allowance",
+                                "is for a slot along a drawing's contour ([slot] along)")) {
                    job.slot.finish_allowance_mm = *v;
                  }
                }
@@ -337,10 +341,8 @@ std::vector<Key> build_schema() {
              "(climb or conventional as [path] direction)",
              [](JobReader& r, Job& job) {
                if (auto v = r.boolean("slot", "finish_pass")) {
-                 if (!r.has("slot", "along")) {
-                   r.problem("slot", "finish_pass",
-                             "is for a slot along a drawing's contour ([slot] along)");
-                 } else {
+                 if (along_only(r, "finish_pass",
+                                "is for a slot along a drawing's contour ([slot] along)")) {
                    job.slot.finish_pass = *v;
                  }
                }

@@ -56,11 +56,12 @@ struct DrawingOptions {
 [[nodiscard]] std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces,
                                                      double join_mm);
 
-/// A drawing file's text for its reader (`kind`: "DXF", "SVG"): a regular file of at most
-/// 1 GB (a device, a folder or a larger file is refused before reading: about 40 bytes of
-/// pieces per byte of drawing would not fit). Throws InputError naming the file.
+/// A drawing file's text for its reader (`kind`: "DXF", "SVG"), after checking the
+/// options' tolerances (> 0 mm): a regular file of at most 1 GB (a device, a folder or a
+/// larger file is refused before reading: about 40 bytes of pieces per byte of drawing would
+/// not fit). Throws InputError naming the file.
 [[nodiscard]] std::string read_drawing_text(const std::filesystem::path& file,
-                                            std::string_view kind);
+                                            std::string_view kind, const DrawingOptions& options);
 
 /// Reads a DXF file: LINE, ARC, CIRCLE, LWPOLYLINE and POLYLINE (with bulges), SPLINE (NURBS,
 /// from its control points, knots and weights), ELLIPSE (and elliptical arcs), in the XY plane
