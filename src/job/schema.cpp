@@ -313,11 +313,11 @@ std::vector<Key> build_schema() {
                  }
                }
              }),
-      custom("slot", "max_step_down", "number", "mm", "> 0", "the whole depth",
+      custom("slot", "max_step_down", "number", "mm", "in [0.001, 1e5]", "the whole depth",
              "a slot along a contour is cut in levels of equal depth, each at most this deep, "
              "each entered by [path] entry",
              [](JobReader& r, Job& job) {
-               if (auto v = r.number("slot", "max_step_down", "mm", positive())) {
+               if (auto v = r.number("slot", "max_step_down", "mm", Range{1e-3, kMaxLengthMm})) {
                  if (along_only(r, "max_step_down",
                                 "levels are planned for a slot along a drawing's contour "
                                 "([slot] along); a straight slot is cut at its whole depth")) {

@@ -397,6 +397,8 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
   const double depth = -g.zf;
   const double step_down = job.slot.max_step_down_mm > 0 ? job.slot.max_step_down_mm : depth;
   const int levels = checked_count(std::ceil(depth / step_down - 1e-9));
+  // Every level's cycles at the nominal step, before any work.
+  if (g.type != PathType::linear) (void)checked_count(levels * std::ceil(L / g.s));
   std::optional<StepRule> rule;
   if (g.type != PathType::linear) {
     (void)checked_count(std::ceil(L / (0.01 * g.s)));

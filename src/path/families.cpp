@@ -412,6 +412,10 @@ double estimate_plan_memory(const Job& job) {
   // Measured on the trochoidal family (VmHWM of `plan`): 1.7 to 5.7 kB a cycle from a
   // 0.01 mm to a 1 mm step (longer cycles fit more arcs), over 30 MB for the process.
   const double per_cycle = job.path.type == PathType::linear_elliptical ? 4500.0 : 3000.0;
+  // A slot along a contour: its cycles once per depth level.
+  if (job.slot.curved() && job.slot.max_step_down_mm > 0) {
+    cycles *= std::ceil(job.slot.depth_mm / job.slot.max_step_down_mm - 1e-9);
+  }
   return 30e6 + cycles * per_cycle;
 }
 
