@@ -52,9 +52,12 @@ $(FUZZ_BUILD)/build.ninja: | fuzz-deps
 	  -DTROCHOMILL_WERROR=ON -DTROCHOMILL_FUZZ=ON -DTROCHOMILL_BUILD_TESTS=OFF \
 	  -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
 
-fuzz: fuzz-deps $(FUZZ_BUILD)/build.ninja
-	cmake --build $(FUZZ_BUILD) -j $(JOBS)
-	scripts/fuzz $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_RUNS)
+# Only the targets are built there; the seeds are written by the Release build's CLI.
+FUZZ_TARGETS = fuzz_job fuzz_gcode fuzz_signal fuzz_mesh fuzz_stock_mesh fuzz_forces_csv \
+               fuzz_profile_csv fuzz_dxf fuzz_svg
+fuzz: fuzz-deps build $(FUZZ_BUILD)/build.ninja
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target $(FUZZ_TARGETS)
+	TROCHOMILL_CLI=$(TROCHOMILL) scripts/fuzz $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_RUNS)
 
 bench: build
 	$(BUILD)/bin/trochomill_bench --benchmark_min_time=0.2

@@ -363,9 +363,7 @@ TEST(Areal, CompareSurfacesAlignsAShiftedTiltedCopy) {
 // ---- X3P ---------------------------------------------------------------------------------
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("trochomill-x3p-{}", getpid());
-  fs::create_directories(dir);
-  return dir / name;
+  return test::scratch_dir("x3p") / name;
 }
 
 // Writes an archive of the given entries (name, content).

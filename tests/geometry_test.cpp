@@ -45,10 +45,7 @@ double largest_deviation(const std::vector<Contour>& out, const std::vector<Cont
 
 // An SVG document written to a file of its own in the temporary directory.
 std::filesystem::path svg_file(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("trochomill-geometry-svg-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const auto file = dir / name;
+  const auto file = test::scratch_dir("geometry-svg") / name;
   std::ofstream(file, std::ios::binary) << text;
   return file;
 }

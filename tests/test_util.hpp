@@ -3,6 +3,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -69,6 +70,28 @@ inline std::vector<std::filesystem::path> files_in(const std::filesystem::path& 
   return out;
 }
 // The whole file's bytes.
+/// A folder of this test process's own in the temporary directory ("trochomill-NAME-PID"),
+/// made on first use and removed, with what is in it, when the process ends (each test is a
+/// process of its own under ctest, so none is left behind in /tmp).
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  struct Folders {
+    std::vector<std::filesystem::path> made;
+    ~Folders() {
+      for (const auto& d : made) {
+        std::error_code ec;
+        std::filesystem::remove_all(d, ec);
+      }
+    }
+  };
+  static Folders folders;
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("trochomill-" + name + "-" + std::to_string(::getpid()));
+  if (std::find(folders.made.begin(), folders.made.end(), dir) == folders.made.end()) {
+    std::filesystem::create_directories(dir);
+    folders.made.push_back(dir);
+  }
+  return dir;
+}
 inline std::string read_file(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -134,12 +157,21 @@ inline double distance_to_polyline(const PathSamples& s, const Vec3& q, std::siz
   const std::size_t hi = std::min(n - 1, hint + window);
   double best = 1e300;
   std::size_t best_i = hint;
+  // Plain doubles, not Eigen expressions: this loop runs 10^8 times in some tests, and the
+  // sanitizer build (-O1, Eigen's asserts on) made the expression form 50x slower.
+  const double qx = q.x(), qy = q.y(), qz = q.z();
+  const double* xs = s.x_mm.data();
+  const double* ys = s.y_mm.data();
+  const double* zs = s.z_mm.data();
   auto consider = [&](std::size_t i) {
-    const Vec3 a(s.x_mm[i], s.y_mm[i], s.z_mm[i]), b(s.x_mm[i + 1], s.y_mm[i + 1], s.z_mm[i + 1]);
-    const Vec3 d = b - a;
-    const double L2 = d.squaredNorm();
-    const double t = L2 > 0 ? std::clamp((q - a).dot(d) / L2, 0.0, 1.0) : 0.0;
-    const double dist = (q - a - t * d).norm();
+    const double ax = xs[i], ay = ys[i], az = zs[i];
+    const double dx = xs[i + 1] - ax, dy = ys[i + 1] - ay, dz = zs[i + 1] - az;
+    const double L2 = dx * dx + dy * dy + dz * dz;
+    const double t =
+        L2 > 0 ? std::clamp(((qx - ax) * dx + (qy - ay) * dy + (qz - az) * dz) / L2, 0.0, 1.0)
+               : 0.0;
+    const double ex = qx - ax - t * dx, ey = qy - ay - t * dy, ez = qz - az - t * dz;
+    const double dist = std::sqrt(ex * ex + ey * ey + ez * ez);
     if (dist < best) {
       best = dist;
       best_i = i;

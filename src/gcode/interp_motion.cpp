@@ -165,18 +165,23 @@ std::size_t Interpreter::append(Segment seg, std::uint32_t column) {
     prog_.summary.add(seg);
     return GcodeMove::npos;
   }
-  const std::size_t n = prog_.path.segments().size();
-  if (opt_.max_path_bytes > 0 && (n & 0x3ff) == 0) {
-    // Checked every 1024 moves: the path's segments and the trace's moves as held.
-    const double per_move =
-        static_cast<double>(sizeof(Segment)) + (opt_.trace ? sizeof(GcodeMove) + 64.0 : 0.0);
-    const double held = static_cast<double>(n) * per_move;
-    if (held > opt_.max_path_bytes) {
+  const std::vector<Segment>& segs = prog_.path.segments();
+  const std::size_t n = segs.size();
+  if (opt_.max_path_bytes > 0 && n == segs.capacity()) {
+    // Checked when the path grows: the next move doubles its buffers (the segments and the
+    // two running totals), and the old and new buffers are held at once while they move, so
+    // the peak is three times what the buffers hold now. The trace's moves are held too.
+    const double cap = static_cast<double>(std::max<std::size_t>(n, 1));
+    const double per_move = static_cast<double>(sizeof(Segment) + 2 * sizeof(double));
+    const double traced = opt_.trace ? static_cast<double>(n) * (sizeof(GcodeMove) + 64.0) : 0.0;
+    const double peak = 3.0 * cap * per_move + traced;
+    if (peak > opt_.max_path_bytes) {
       fail_at(0, fmt::format("the program's path holds {} moves ({:.2f} GB) after {} blocks, "
-                             "past the {:.2f} GB the memory limit leaves for reading it: does "
-                             "the program loop without end? (a long program that does not: "
-                             "raise the memory limit)",
-                             n, held / 1e9, prog_.info.blocks_executed, opt_.max_path_bytes / 1e9));
+                             "and the next would take it past the {:.2f} GB the memory limit "
+                             "leaves for reading it: does the program loop without end? (a "
+                             "long program that does not: raise the memory limit)",
+                             n, (cap * per_move + traced) / 1e9, prog_.info.blocks_executed,
+                             opt_.max_path_bytes / 1e9));
     }
   }
   try {
