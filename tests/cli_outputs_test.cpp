@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -243,6 +244,22 @@ TEST_F(Cli, CtrlCStopsCleanlyAndLeavesNoHalfWrittenFile) {
   ::kill(pid, SIGTERM);
   EXPECT_EQ(exit_code_of(pid), 143) << read_file(log);
   EXPECT_FALSE(std::filesystem::exists(ajson));
+  EXPECT_EQ(files_in(tmp), 0u);
+
+  // 6. optimize-feed while it reads a program that loops without moving (the reader's block
+  // limit would stop it after 200 million blocks, 20 s and more): Ctrl-C answered within a
+  // second (the reader polls every 64k blocks, a few ms; it once read to the limit first).
+  const std::string spin = (dir_ / "spin.ngc").string();
+  std::ofstream(spin) << "G21 G90\n#1=0\no100 while [1]\n#1=[#1+1]\no100 endwhile\nM2\n";
+  const std::string fed = (dir_ / "fed.ngc").string();
+  pid = spawn_cli("optimize-feed " + spin + " --job " + ex + " -o " + fed, log, tmp.string());
+  ASSERT_GT(pid, 0);
+  wait_for_cpu(pid, 1.0);
+  const auto asked = std::chrono::steady_clock::now();
+  ::kill(pid, SIGINT);
+  EXPECT_EQ(exit_code_of(pid), 130) << read_file(log);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count(), 1.0);
+  EXPECT_FALSE(std::filesystem::exists(fed));
   EXPECT_EQ(files_in(tmp), 0u);
 }
 

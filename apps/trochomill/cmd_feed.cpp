@@ -94,6 +94,7 @@ void register_feed_commands(CLI::App& app, int& exit_code) {
       // The rewritten program's report (in the slot frame of the job's placement), with the
       // before/after part.
       GcodeReadOptions ro = opt.read;
+      ro.cancel = [hooks = run.hooks()] { return hooks.cancelled(); };
       const ToolPath path = to_slot_frame(read_gcode(r.text, a->out, ro).path, slot_placement(job));
       ReportRequest rq;
       rq.job_file = a->job.file;

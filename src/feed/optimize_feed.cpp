@@ -385,7 +385,9 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
                                  const FeedOptimizeOptions& options, const RunHooks& hooks) {
   FeedOptimizeResult r;
   hooks.begin("reading");
-  const Traced in = read_traced(text, name, options.read);
+  GcodeReadOptions read = options.read;
+  if (!read.cancel && hooks.cancel) read.cancel = [&hooks] { return hooks.cancelled(); };
+  const Traced in = read_traced(text, name, read);
   if (!in.program.info.feed_read_at.empty()) {
     throw InputError(fmt::format(
         "{}: the program reads its own feed (#<_feed>): its motion may change with the feeds, "
