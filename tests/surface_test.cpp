@@ -2,6 +2,7 @@
 // against closed forms.
 #include "trochomill/surface.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,6 +13,8 @@
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/job.hpp"
+#include "trochomill/texture.hpp"
+#include "trochomill/units.hpp"
 
 namespace trochomill {
 namespace {
@@ -430,6 +433,54 @@ TEST(Texture, WallProfilesFromASimulationsWallsCsv) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("w.csv:4:"), std::string::npos) << e.what();
   }
+}
+
+// A simulation stopped mid-slot: the walls (x = -+10 mm, a 2 um sine of 0.5 mm period) up to
+// y = 8 mm, then the front arc of radius 10 mm about (0, 8). The machined part alone is
+// measured (with the arc its waviness was the arc's, hundreds of um); a window whose walls
+// are all front is refused.
+TEST(Texture, WallProfilesOfASimulationLeaveOutTheFrontArc) {
+  std::string csv = "y_mm,z_mm,left_x_mm,right_x_mm\n";
+  const double amp = 0.002, period = 0.5;
+  for (int i = 0; i <= 1800; ++i) {
+    const double y = i * 0.01;
+    const double x =
+        y <= 8 ? 10 - amp * std::sin(2 * kPi * y / period) : std::sqrt(100 - (y - 8) * (y - 8));
+    csv += fmt::format("{:.2f},-1,{:.9f},{:.9f}\n", y, -x, x);
+  }
+  const MeasuredProfile all = read_wall_profile_csv(csv, "walls.csv", true);
+  EXPECT_EQ(all.z_mm.size(), 1801u);
+  const MeasuredProfile left = read_wall_profile_csv(csv, "walls.csv", true, {}, true);
+  // Kept: y up to 18 - 10.002 = 7.998 mm (the wall's distance from the centre line is its
+  // deepest point's, 10 mm and the sine's 2 um), so the samples 0 to 7.99 mm.
+  EXPECT_EQ(left.z_mm.size(), 800u);
+  EXPECT_NE(left.description.find("the front arc, y 8 to 18 mm, left out"), std::string::npos)
+      << left.description;
+  for (const double z : left.z_mm) EXPECT_NEAR(z, -10.0, amp + 1e-9);
+  const MeasuredProfile right = read_wall_profile_csv(csv, "walls.csv", false, {}, true);
+  EXPECT_EQ(right.z_mm.size(), 800u);
+  std::string front = "y_mm,z_mm,left_x_mm,right_x_mm\n";
+  for (int i = 0; i <= 100; ++i) {
+    const double y = i * 0.1, x = std::sqrt(100 - y * y);
+    front += fmt::format("{:.1f},-1,{:.9f},{:.9f}\n", y, -x, x);
+  }
+  EXPECT_NE(test::message_of([&] {
+              (void)read_wall_profile_csv(front, "w.csv", true, {}, true);
+            }).find("is all front arc"),
+            std::string::npos);
+  // What is left of a short window (2.3 mm) holds no three cut-offs of 0.8 mm, where the
+  // default's table starts: the default is the series' nearest that fits, 0.25 mm, with a
+  // note (it was an error). The sine's 0.5 mm period is then waviness: Wa = 2 um x 2 / pi
+  // times the Gaussian filter's transmission at 0.5 mm, within 5 % (the evaluation length,
+  // 1.8 mm, holds 3.6 periods: the mean over it is not the whole periods' mean).
+  const std::vector<double> short_wall(left.z_mm.begin(), left.z_mm.begin() + 231);
+  const ProfileTexture t = profile_texture(short_wall, 0.01);
+  EXPECT_EQ(t.cutoff_mm, 0.25);
+  EXPECT_NE(t.cutoff_source.find("0.8 mm, where the default's table starts, does not fit"),
+            std::string::npos)
+      << t.cutoff_source;
+  const double wa = amp * 2 / kPi * gaussian_transmission(0.5, 0.25);
+  EXPECT_NEAR(t.wa_mm, wa, 0.05 * wa);
 }
 
 }  // namespace

@@ -154,7 +154,8 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       if (!sides.empty()) {
         const std::string text = read_text_file(walls);
         for (const bool left : sides) {
-          const MeasuredProfile p = read_wall_profile_csv(text, walls.string(), left, a->z_mm);
+          const MeasuredProfile p =
+              read_wall_profile_csv(text, walls.string(), left, a->z_mm, true);
           entries.push_back(profile_entry(left ? "left" : "right", "simulated " + p.description,
                                           profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm, pf)));
         }

@@ -140,9 +140,16 @@ struct MeasuredProfile {
                                                double z_to_mm = 1.0);
 /// One wall of a simulation's walls.csv (y_mm, z_mm, left_x_mm, right_x_mm: `simulate --out`)
 /// along y at the level nearest `z_mm` (default: the middle level), material side up (+x on
-/// the left wall, -x on the right). Throws InputError naming source:line or what is missing.
+/// the left wall, -x on the right). `machined_only`: the front arc where the simulation's
+/// window ended is left out: the points with y above the last y less the wall's distance
+/// from the slot's centre line (the largest |x| at that level: the cut front is an arc about
+/// the centre line no longer along y than that radius, as the circular families' and the
+/// ellipses' up to aspect ratio 1 are), and the description says where the profile ends. Throws
+/// InputError naming source:line or what is missing (or, machined_only, when fewer than 3
+/// points of wall are left: the window's walls are all front).
 [[nodiscard]] MeasuredProfile read_wall_profile_csv(std::string_view text, std::string_view source,
-                                                    bool left, std::optional<double> z_mm = {});
+                                                    bool left, std::optional<double> z_mm = {},
+                                                    bool machined_only = false);
 
 /// The material ratio (Abbott-Firestone) curve: the share of the evaluation length where the
 /// profile is at or above height c, for heights from its top to its bottom (`points` values).

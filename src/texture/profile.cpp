@@ -337,7 +337,27 @@ ProfileTexture choose_and_evaluate(std::optional<double> cutoff, const Evaluate&
   // samples a cut-off, less than three cut-offs of profile), the series' cut-off nearest to it
   // that fits is taken, and the note says why.
   double lc = 0.8;
-  std::optional<ProfileTexture> t = evaluate(lc);
+  std::optional<ProfileTexture> t;
+  try {
+    t = evaluate(lc);
+  } catch (const InputError& e) {
+    // Where the table starts does not fit a short profile: the series' nearest shorter
+    // cut-off that does, else the error of the start (a profile too coarse for 0.8 mm is
+    // refused: a longer cut-off would rest on a handful of samples).
+    for (const double c : {0.25, 0.08}) {
+      try {
+        t = evaluate(c);
+      } catch (const InputError&) {
+        continue;
+      }
+      t->cutoff_source = fmt::format(
+          "the nearest ISO 21920-3 cut-off this profile admits: 0.8 mm, where the default's "
+          "table starts, does not fit it ({})",
+          e.what());
+      return *t;
+    }
+    throw;
+  }
   for (int k = 0; k < 4; ++k) {
     const double next = default_cutoff_mm(t->roughness.ra_mm);
     if (next == lc) {
@@ -539,7 +559,7 @@ MeasuredProfile read_profile_csv(std::string_view text, std::string_view source,
 }
 
 MeasuredProfile read_wall_profile_csv(std::string_view text, std::string_view source, bool left,
-                                      std::optional<double> z_mm) {
+                                      std::optional<double> z_mm, bool machined_only) {
   CsvOptions o;
   o.columns = {"y_mm", "z_mm", left ? "left_x_mm" : "right_x_mm"};
   const CsvTable t = parse_csv(text, source, o);
@@ -574,8 +594,28 @@ MeasuredProfile read_wall_profile_csv(std::string_view text, std::string_view so
     p.z_mm.push_back(pts[i].second);
   }
   p.dx_mm = equal_spacing(y, line, source, fmt::format("y at z = {:g} mm", level).c_str());
-  p.description = fmt::format("{} wall at z = {:g} mm, y {:g} to {:g} mm ({} points)",
-                              left ? "left" : "right", level, y.front(), y.back(), y.size());
+  std::string front;
+  if (machined_only && !y.empty()) {
+    // Heights are material side up: the wall is the deepest, -|x| of the wall.
+    const double half_width = -*std::min_element(p.z_mm.begin(), p.z_mm.end());
+    const double y_cut = y.back() - half_width;
+    const auto keep =
+        static_cast<std::size_t>(std::upper_bound(y.begin(), y.end(), y_cut) - y.begin());
+    if (keep < 3) {
+      throw InputError(fmt::format(
+          "{}: the {} wall at z = {:g} mm is all front arc (y {:g} to {:g} mm, the wall {:g} mm "
+          "from the centre line): the simulation's window ended before a wall was finished; "
+          "simulate more cycles",
+          source, left ? "left" : "right", level, y.front(), y.back(), half_width));
+    }
+    if (keep < y.size()) {
+      front = fmt::format("; the front arc, y {:g} to {:g} mm, left out", y[keep], y.back());
+      y.resize(keep);
+      p.z_mm.resize(keep);
+    }
+  }
+  p.description = fmt::format("{} wall at z = {:g} mm, y {:g} to {:g} mm ({} points{})",
+                              left ? "left" : "right", level, y.front(), y.back(), y.size(), front);
   return p;
 }
 
