@@ -3,6 +3,7 @@
 // straight loop, and the centrelines a slot cannot follow are refused with what is wrong.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -179,8 +180,8 @@ TEST(CurvedSlot, EveryFamilyHoldsItsStraightChipAlongTheBend) {
 }
 
 // Depth levels: the deepest cut is the depth, ceil(depth / max_step_down) levels of equal
-// depth, each entered by its ramp no steeper than entry_angle, and linked above the stock.
-TEST(CurvedSlot, LevelsOfEqualDepthEachEnteredByItsRamp) {
+// depth, each entered by its ramp no steeper than entry_angle, and linked down in the slot.
+TEST(CurvedSlot, LevelsOfEqualDepthEachEnteredByItsRampAndLinkedDown) {
   const std::vector<Override> ov = {parse_override("slot.depth=7"),
                                     parse_override("slot.max_step_down=2.5"),
                                     parse_override("path.entry_angle=4")};
@@ -222,6 +223,42 @@ TEST(CurvedSlot, LevelsOfEqualDepthEachEnteredByItsRamp) {
       level_top = std::min(level_top, seg.start().z());
     }
   }
+  // Between levels the tool stays down: from the first level's cycles to the last level's,
+  // nothing rises above the clearance over the level just cut (no trip to safe z), and the
+  // links (up to that height, back along the centreline, on to the next entry) are feed moves
+  // within the orbit of the centreline, where the engagement kernel finds no material.
+  const double a = 0.5 * (job.slot.width_mm - job.tool.diameter_mm);
+  const double clearance = std::min(job.path.clearance_mm, job.machine.safe_z_mm);
+  const Contour& centre = job.slot.centreline->contour;
+  const std::size_t first_cycle = pp.path.cycles().front().first_segment;
+  const std::size_t last_cycle = pp.path.cycles().back().first_segment;
+  std::vector<std::size_t> links;
+  for (std::size_t i = first_cycle; i < last_cycle; ++i) {
+    const Segment& seg = pp.path.segments()[i];
+    const double top = std::max(seg.start().z(), seg.end().z());
+    EXPECT_LT(top, -7.0 / 3 + clearance + 1e-9) << "segment " << i << " leaves the slot";
+    EXPECT_EQ(seg.motion(), Motion::feed) << "segment " << i;
+    const bool link = std::abs(seg.start().z() - seg.end().z()) < 1e-12 &&
+                      std::any_of(floors.begin(), floors.end(), [&](double f) {
+                        return std::abs(seg.start().z() - (f + clearance)) < 1e-9;
+                      });
+    // The links: at a feeding height, rising, or in from the last cycle at the floor.
+    const bool in =
+        i + 1 < last_cycle && pp.path.segments()[i + 1].end().z() > seg.end().z() + 1e-9;
+    if (link || in || seg.end().z() > seg.start().z() + 1e-9) links.push_back(i);
+  }
+  ASSERT_GE(links.size(), 4u);  // at least up and back, twice
+  const EngagementSeries e = compute_engagement(pp.path, job);
+  std::size_t link_samples = 0;
+  for (std::size_t k = 0; k < e.samples.size(); ++k) {
+    if (!std::binary_search(links.begin(), links.end(), e.samples.segment[k])) continue;
+    ++link_samples;
+    EXPECT_EQ(e.engagement_angle_rad[k], 0.0)
+        << "a link cuts at sample " << k << ", z " << e.samples.z_mm[k] << " mm";
+    const Vec2 q(e.samples.x_mm[k], e.samples.y_mm[k]);
+    EXPECT_LE(centre.distance_mm(q), a + 1e-6) << "a link leaves the orbit at sample " << k;
+  }
+  EXPECT_GT(link_samples, 100u);
   // A straight slot is cut at its whole depth: the key is refused there.
   const std::string m = test::message_of(
       [] { (void)test::wagih_job("trochoidal", {parse_override("slot.max_step_down=1")}); });

@@ -277,11 +277,25 @@ class StepRule {
 // Entry to depth at the centreline's start C (its tangent t, right normal n), arriving at the
 // first cycle's start p (on the orbit, a from C). The tool starts at safe z above.
 // `z_top`: where feeding starts (the clearance above the top face, or above the level cut
-// before). A path that already holds moves is joined by a rapid at safe z.
+// before). A path that already holds moves is joined by a rapid at safe z; with `link_feed`
+// (> 0) the tool is already down at z_top in cleared material (at C, the level before's
+// floor below it) and moves on there at that feed to where the entry starts, which lies
+// within the orbit of C (plunge, ramp, helix; the outside entry always comes from safe z).
 void emit_curve_entry(ToolPath& out, const Geometry& g, const PathSpec& spec, const Vec2& c,
-                      const Vec2& t, const Vec2& p, bool mirror, double z_top) {
+                      const Vec2& t, const Vec2& p, bool mirror, double z_top,
+                      double link_feed = 0) {
   auto at = [](const Vec2& q, double z) { return Vec3(q.x(), q.y(), z); };
+  bool first = true;
   auto line = [&](const Vec3& a, const Vec3& b, Motion m, double speed) {
+    if (first && link_feed > 0 && spec.entry != EntryType::outside) {
+      // The descent from safe z becomes a move at z_top from where the tool is.
+      first = false;
+      const Vec3 here = out.segments().back().end();
+      const Vec3 to(b.x(), b.y(), z_top);
+      if ((to - here).norm() > 1e-12) out.append(Segment::line(here, to, Motion::feed, link_feed));
+      return;
+    }
+    first = false;
     if (!out.empty() && (out.segments().back().end() - a).norm() > 1e-12) {
       out.append(Segment::line(out.segments().back().end(), a, Motion::rapid, g.rapid));
     }
@@ -405,14 +419,23 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
     rule.emplace(job, judge, g, mirror, tol);
   }
   const double reach = g.a + g.b + g.R;  // how far along a cycle's cut reaches
+  // Between levels the tool stays down where it can (every entry but the outside one starts
+  // within the orbit of the centreline's start): up to the next level's feeding height, the
+  // clearance above the floor just cut, and back along the centreline, all in the slot cut
+  // to that depth, at the air feed (machine.air_feed, else max_feed, else the feed).
+  const double link_feed = job.machine.air_feed_mm_per_min > 0   ? job.machine.air_feed_mm_per_min
+                           : job.machine.max_feed_mm_per_min > 0 ? job.machine.max_feed_mm_per_min
+                                                                 : g.feed;
+  const bool stay_down = job.path.entry != EntryType::outside;
   int cycles = 0;
   double steady_length = 0;
   for (int level = 1; level <= levels; ++level) {
     Geometry gl = g;
     gl.zf = -depth * level / levels;
     const double z_top = level == 1 ? g.clearance : -depth * (level - 1) / levels + g.clearance;
+    const double down = level > 1 && stay_down ? link_feed : 0.0;
     if (g.type == PathType::linear) {
-      emit_curve_entry(out.path, gl, job.path, f0.p, f0.t, f0.p, mirror, z_top);
+      emit_curve_entry(out.path, gl, job.path, f0.p, f0.t, f0.p, mirror, z_top, down);
       ToolPath local;
       local.append(Segment::line(Vec3(0, 0, 0), Vec3(0, L, 0), Motion::feed, g.feed));
       out.path.mark_cycle();
@@ -420,7 +443,7 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
       ++cycles;
       steady_length = L;
     } else {
-      emit_curve_entry(out.path, gl, job.path, f0.p, f0.t, p0, mirror, z_top);
+      emit_curve_entry(out.path, gl, job.path, f0.p, f0.t, p0, mirror, z_top, down);
       // The start cap: a whole orbit circle about C(0) (with the tool it covers the round
       // end); it widens the entry's bore to the slot, so the cycles (the marks) start after it.
       append_mapped(out.path, local_cycle(g, 0, mirror, true), c, 0.0, gl.zf, tol);
@@ -474,6 +497,22 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
       }
     }
     const Vec3 e = out.path.segments().back().end();
+    if (level < levels && stay_down) {
+      // In to the centreline's end (the end cap's orbit holds the tool), up to the next
+      // level's feeding height there (clear of the walls by the orbit's radius), then back
+      // along the centreline to its start (a ring: already there).
+      const double z_next = gl.zf + g.clearance;
+      const Centreline::Frame fe = c.at(L);
+      const Vec3 in(fe.p.x(), fe.p.y(), e.z()), end_c(fe.p.x(), fe.p.y(), z_next);
+      if ((in - e).norm() > 1e-12) out.path.append(Segment::line(e, in, Motion::feed, link_feed));
+      out.path.append(Segment::line(in, end_c, Motion::feed, link_feed));
+      if (!c.closed()) {
+        ToolPath back;
+        back.append(Segment::line(Vec3(0, L, 0), Vec3(0, 0, 0), Motion::feed, link_feed));
+        append_mapped(out.path, back, c, 0.0, z_next, tol);
+      }
+      continue;
+    }
     out.path.append(Segment::line(e, Vec3(e.x(), e.y(), g.safe_z), Motion::rapid, g.rapid));
   }
   if (job.slot.finish_pass && g.type != PathType::linear) {
