@@ -90,10 +90,53 @@ TEST_F(Cli, AnalyzeSummarisesAProgramWithoutACycleByTheWholeProgram) {
                           "waviness_left_mm", "performance_index", "cycle_h_max_per_tooth_mm"}) {
     EXPECT_TRUE(j[key].is_null()) << key;
   }
+  // Where: the full slot's block (line 4); the descent (line 3) is the entry, and the full
+  // slot runs on 32 mm from it, farther than a tool diameter, so it is no part of the entry.
+  const std::string at4 = f + ":4";
+  EXPECT_EQ(j["h_max_at_line"], at4);
+  EXPECT_EQ(j["h_max_after_entry_at_line"], at4);
+  EXPECT_EQ(j["engagement_max_at_line"], at4);
+  EXPECT_EQ(j["engagement_max_after_entry_at_line"], at4);
+  EXPECT_NEAR(j["h_max_after_entry_mm"].get<double>(), 0.075, 0.075 * 1e-6);
+  EXPECT_EQ(j["engagement_max_after_entry_deg"].get<double>(),
+            j["engagement_angle_max_deg"].get<double>());
   const CliResult t = run_cli("analyze " + ex + " --gcode " + f);
   ASSERT_EQ(t.code, 0) << t.out;
   EXPECT_NE(t.out.find("h_max                0.07500 mm"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find("h_max at             " + at4 + " (0.000, "), std::string::npos) << t.out;
   EXPECT_NE(t.out.find("steady cycle         none"), std::string::npos) << t.out;
+  // A planned job has no lines to name.
+  const CliResult planned = run_cli("analyze " + ex + " --json -");
+  ASSERT_EQ(planned.code, 0) << planned.out;
+  EXPECT_TRUE(nlohmann::json::parse(planned.out)["h_max_at_line"].is_null());
+}
+
+// A slot along a contour written with its helix entry and read back: the largest chip
+// outside the entries is the planned path's (whose entry ends at its first cycle mark; the
+// program's at the moves within a tool diameter of the helix), within 1 % (the program's
+// 4-decimal coordinates), and the block named is a motion block of the program.
+TEST_F(Cli, AnalyzeNamesTheBlockOfTheLargestChipOutsideTheEntries) {
+  const auto ex = test::example("curves/bend.toml").string();
+  const auto ngc = (dir_ / "bend.ngc").string();
+  ASSERT_EQ(run_cli("plan " + ex + " -o " + ngc).code, 0);
+  const CliResult planned = run_cli("analyze " + ex + " --json -");
+  const CliResult read = run_cli("analyze " + ex + " --gcode " + ngc + " --json -");
+  ASSERT_EQ(planned.code, 0) << planned.out;
+  ASSERT_EQ(read.code, 0) << read.out;
+  const auto p = nlohmann::json::parse(planned.out), r = nlohmann::json::parse(read.out);
+  const double hp = p["h_max_after_entry_mm"].get<double>();
+  EXPECT_NEAR(r["h_max_after_entry_mm"].get<double>(), hp, 0.01 * hp);
+  EXPECT_LT(hp, p["h_max_mm"].get<double>());  // the entry's chip is the larger here
+  const std::string where = r["h_max_after_entry_at_line"].get<std::string>();
+  ASSERT_EQ(where.rfind(ngc + ":", 0), 0u) << where;
+  const int line = std::stoi(where.substr(ngc.size() + 1));
+  std::ifstream in(ngc);
+  std::string text;
+  for (int k = 0; k < line && std::getline(in, text); ++k) {
+  }
+  EXPECT_TRUE(text.rfind("G1", 0) == 0 || text.rfind("G2", 0) == 0 || text.rfind("G3", 0) == 0 ||
+              text.rfind("X", 0) == 0 || text.rfind("Y", 0) == 0)
+      << line << ": " << text;
 }
 
 // analyze: the JSON has every metric key, consistent with itself; the CSV has one

@@ -116,13 +116,18 @@ void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
       ->check(finite_above(0, 1e3));
 }
 
-ToolPath job_path(const Job& job, const std::string& gcode_file, std::optional<double> memory_gb) {
+ToolPath job_path(const Job& job, const std::string& gcode_file, std::optional<double> memory_gb,
+                  GcodeProgram* lines) {
   if (gcode_file.empty()) return plan_slot(job).path;
   GcodeReadOptions ro = gcode_options(job.machine).read;
   // Reading leaves the most of the memory to the work on the path (samples, chips).
   ro.max_path_bytes = kPathShareOfMemory * memory_limit_bytes(memory_gb);
-  const GcodeProgram prog = read_gcode_file(gcode_file, ro);
+  GcodeProgram prog = read_gcode_file(gcode_file, ro);
   for (const std::string& w : prog.info.warnings) fmt::print(stderr, "warning: {}\n", w);
+  if (lines != nullptr) {
+    lines->segment_lines = std::move(prog.segment_lines);
+    lines->source_files = std::move(prog.source_files);
+  }
   const std::vector<std::string> differ = header_mismatches(job, prog, gcode_file);
   for (const std::string& w : differ) fmt::print(stderr, "warning: {}\n", w);
   if (!differ.empty()) {

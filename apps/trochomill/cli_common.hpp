@@ -66,8 +66,11 @@ void check_memory(const char* command, double need_bytes, std::optional<double> 
 /// The job's planned path, or the NC program's when one is given (turned into the slot frame
 /// by the job's placement; a warning on stderr for each header key that disagrees).
 /// `memory_gb`: the command's --memory-limit (a quarter of it for the program's path as read).
+/// `lines`: receives the program's line table (segment_lines, source_files: the path's
+/// segments keep their order in the slot frame), to name the block of a move.
 [[nodiscard]] ToolPath job_path(const Job& job, const std::string& gcode_file,
-                                std::optional<double> memory_gb = std::nullopt);
+                                std::optional<double> memory_gb = std::nullopt,
+                                GcodeProgram* lines = nullptr);
 
 /// Checks a command's outputs before any work: none is one of the inputs (`plan -o job.toml`
 /// would overwrite the job), none is a directory, each one's directory exists. "-" (stdout)

@@ -33,15 +33,22 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
     cmd->final_callback([a, &exit_code] {
       check_outputs({&a->json, &a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
-      const ToolPath path = job_path(job, a->gcode, a->memory_gb);
+      GcodeProgram lines;
+      const ToolPath path = job_path(job, a->gcode, a->memory_gb, &lines);
       check_memory("analyze", estimate_analysis_memory(job, path), a->memory_gb,
                    fmt::format("{:.0f} s of program at {:g} rpm, {} samples per tooth pass: "
                                "lower [analysis] steps_per_tooth or analyse a shorter program",
                                path.duration_s(), job.cutting.spindle_speed_rpm,
                                job.analysis.steps_per_tooth));
       const GuardedRun run(true);
-      const ProcessMetrics m = analyze_with_forces(job, path, run.hooks());
+      ProcessMetrics m = analyze_with_forces(job, path, run.hooks());
       run.done();
+      if (!a->gcode.empty()) {
+        m.h_max_slot_source = lines.where(m.h_max_slot_segment);
+        m.h_max_after_entry_source = lines.where(m.h_max_after_entry_segment);
+        m.engagement_max_slot_source = lines.where(m.engagement_max_slot_segment);
+        m.engagement_max_after_entry_source = lines.where(m.engagement_max_after_entry_segment);
+      }
       if (!a->json.empty()) emit(a->json, metrics_json(job, m));
       if (!a->csv.empty()) emit(a->csv, series_csv(m.series));
       if (summary_to_stdout({&a->json, &a->csv})) {

@@ -41,10 +41,23 @@ struct ProcessMetrics {
   double engagement_angle_max_slot_deg = 0;  ///< largest engagement over the program (deg)
   double cutting_time_total_s = 0;           ///< time with the tool advancing into stock (s)
   Vec3 h_max_slot_at_mm = Vec3::Zero();      ///< the tool centre where h_max_slot occurs (mm)
-  /// The largest chip after the entry (from the first cycle mark; the whole program without
-  /// marks) and where (mm).
+  /// The largest chip outside the entries and where (mm): after the first cycle mark of a
+  /// planned path; in a program without marks (read from a file) outside each descent into
+  /// the stock and the feed move after it (the first at the new depth).
   double h_max_after_entry_mm = 0;
   Vec3 h_max_after_entry_at_mm = Vec3::Zero();
+  Vec3 engagement_max_slot_at_mm = Vec3::Zero();  ///< where the largest engagement is (mm)
+  /// The largest engagement outside the entries (as h_max_after_entry) and where.
+  double engagement_max_after_entry_deg = 0;
+  Vec3 engagement_max_after_entry_at_mm = Vec3::Zero();
+  /// The path's segments where the three occur (npos: none), and for a program read from a
+  /// file the blocks that made them ("file:line", filled by the caller that read it: the
+  /// analysis knows only the path).
+  static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+  std::size_t h_max_slot_segment = npos, h_max_after_entry_segment = npos;
+  std::size_t engagement_max_slot_segment = npos, engagement_max_after_entry_segment = npos;
+  std::string h_max_slot_source, h_max_after_entry_source, engagement_max_slot_source,
+      engagement_max_after_entry_source;
 
   // Steady-state cycle (or window).
   bool periodic = false;

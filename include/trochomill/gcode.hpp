@@ -145,10 +145,22 @@ struct GcodeProgramInfo {
   std::vector<std::pair<std::string, std::string>> header_keys;
 };
 
+/// Where a segment of a read program comes from: the file (an index into
+/// GcodeProgram::source_files: 0 the program, then the subroutine files it calls) and the
+/// 1-based line of the block that made it.
+struct SourceLine {
+  std::uint32_t source = 0;
+  std::uint32_t line = 0;
+};
+
 struct GcodeProgram {
   ToolPath path;  ///< empty when read with keep_path = false
   GcodeProgramInfo info;
   PathSummary summary;  ///< filled when read with keep_path = false (else summarize(path))
+  std::vector<SourceLine> segment_lines;  ///< one per segment of `path`
+  std::vector<std::string> source_files;  ///< the names SourceLine::source indexes
+  /// "file:line" of the block that made segment i of `path` ("" past its end).
+  [[nodiscard]] std::string where(std::size_t segment) const;
 };
 
 /// Reads a LinuxCNC tool table: lines `T<n> P<pocket> Z<length> D<diameter> ;comment` (other

@@ -413,10 +413,47 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   }
   m.mrr_total_mm3_per_min = m.removed_volume_mm3 / m.machining_time_s * 60.0;
   m.feed_per_tooth_mm = job.cutting.feed_per_tooth_mm;
-  // The largest chip, where it is, and the largest after the entry (from the first cycle
-  // mark; the whole program without marks), in one pass.
+  // The largest chip, where it is, and the largest outside the entries, in one pass. A
+  // planned path's entry ends at its first cycle mark; a program without marks (one read from
+  // a file) has an entry at each descent into the stock: the descending feed moves below the
+  // stock's top and the feed moves after them that stay within a tool diameter of where the
+  // descent ended (the bore and its widening, as a helix's last turn or a start circle).
   const double entry_end_s = path.cycles().empty() ? 0.0 : path.cycles().front().start_time_s;
-  std::size_t i_max = 0, i_after = n;
+  std::vector<char> entry_segment;
+  if (path.cycles().empty()) {
+    const double top = stock_top_mm(job, nullptr);
+    const auto& segs = path.segments();
+    entry_segment.assign(segs.size(), 0);
+    const double D = job.tool.diameter_mm;
+    bool after_descent = false;
+    Vec3 bottom = Vec3::Zero();  // where the last descent ended
+    const auto near = [&](const Vec3& p) {
+      return std::hypot(p.x() - bottom.x(), p.y() - bottom.y()) <= D;
+    };
+    for (std::size_t k = 0; k < segs.size(); ++k) {
+      const Segment& sg = segs[k];
+      if (sg.motion() == Motion::rapid) {
+        after_descent = false;
+        continue;
+      }
+      const double z0 = sg.start().z(), z1 = sg.end().z();
+      if (z1 < z0 - 1e-9 && z1 < top) {
+        entry_segment[k] = 1;
+        after_descent = true;
+        bottom = sg.end();
+      } else if (after_descent && near(sg.end()) && near(sg.point_at(0.5 * sg.length_mm()))) {
+        entry_segment[k] = 1;
+      } else {
+        after_descent = false;
+      }
+    }
+  }
+  const auto in_entry = [&](std::size_t i) {
+    if (entry_segment.empty()) return s.t_s[i] < entry_end_s;
+    return i < s.segment.size() && s.segment[i] < entry_segment.size() &&
+           entry_segment[s.segment[i]] != 0;
+  };
+  std::size_t i_max = 0, i_after = n, i_eng = 0, i_eng_after = n;
   double h_after = 0;
   for (std::size_t i = 0; i < n; ++i) {
     // Plunge starts have no radial chip (engagement.hpp: radial_chip_mm).
@@ -426,18 +463,38 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
       m.t_h_max_slot_s = s.t_s[i];
       i_max = i;
     }
-    if (s.t_s[i] >= entry_end_s && (i_after == n || h > h_after)) {
+    if (!in_entry(i) && (i_after == n || h > h_after)) {
       i_after = i;
       h_after = h;
     }
-    m.engagement_angle_max_slot_deg =
-        std::max(m.engagement_angle_max_slot_deg, rad_to_deg(e.engagement_angle_rad[i]));
+    const double deg = rad_to_deg(e.engagement_angle_rad[i]);
+    if (deg > m.engagement_angle_max_slot_deg) {
+      m.engagement_angle_max_slot_deg = deg;
+      i_eng = i;
+    }
+    if (!in_entry(i) && (i_eng_after == n || deg > m.engagement_max_after_entry_deg)) {
+      m.engagement_max_after_entry_deg = deg;
+      i_eng_after = i;
+    }
   }
   const auto at = [&](std::size_t i) { return Vec3(s.x_mm[i], s.y_mm[i], s.z_mm[i]); };
-  if (n > 0) m.h_max_slot_at_mm = at(i_max);
+  const auto segment = [&](std::size_t i) {
+    return i < s.segment.size() ? s.segment[i] : ProcessMetrics::npos;
+  };
+  if (n > 0) {
+    m.h_max_slot_at_mm = at(i_max);
+    m.h_max_slot_segment = segment(i_max);
+    m.engagement_max_slot_at_mm = at(i_eng);
+    m.engagement_max_slot_segment = segment(i_eng);
+  }
   if (i_after < n) {
     m.h_max_after_entry_mm = h_after;
     m.h_max_after_entry_at_mm = at(i_after);
+    m.h_max_after_entry_segment = segment(i_after);
+  }
+  if (i_eng_after < n) {
+    m.engagement_max_after_entry_at_mm = at(i_eng_after);
+    m.engagement_max_after_entry_segment = segment(i_eng_after);
   }
   // A slot along a curve: each cycle's step follows the bend, so there is no steady cycle;
   // the walls and floor of the straight slot's models do not apply. Whole-program figures.

@@ -92,6 +92,7 @@ GcodeProgram Interpreter::run() {
   }
   comp_.dequeue();  // compensated moves still waiting run as they are
   prog_.info.lines = std::max(prog_.info.lines, main_lines_);
+  for (const Source& src : sources_) prog_.source_files.push_back(src.name);
   if (prog_.path.empty() && prog_.summary.segments == 0) {
     throw InputError(
         fmt::format("{}: the program has no motion (no G0/G1/G2/G3 moves)", sources_[0].name));

@@ -299,7 +299,7 @@ class Interpreter : private InterpState {
   void trace(const GcodeMove& mv) const {
     if (opt_.trace) opt_.trace(mv);
   }
-  std::size_t append(Segment seg, std::uint32_t column);
+  std::size_t append(Segment seg, std::uint32_t column, std::size_t source, std::size_t line);
   void describe(GcodeMove& mv, std::size_t source, std::size_t line) const;
   ArcData arc_data(const Vec3& from, const Vec3& target, std::uint32_t column) const;
   void arc(const Vec3& target, std::uint32_t column);

@@ -152,15 +152,16 @@ void Interpreter::put_line(const Vec3& end, bool rapid, double f, std::uint32_t 
   mv.feed_mm_per_min = f;
   mv.path_started = true;
   if (length > 0) {
-    mv.segment =
-        append(Segment::line(out_pos_, end, rapid ? Motion::rapid : Motion::feed, f), column);
+    mv.segment = append(Segment::line(out_pos_, end, rapid ? Motion::rapid : Motion::feed, f),
+                        column, source, line);
   }
   trace(mv);
   out_pos_ = end;
 }
 
 // Appends a segment; returns its index in the path (npos: not kept, or of no length).
-std::size_t Interpreter::append(Segment seg, std::uint32_t column) {
+std::size_t Interpreter::append(Segment seg, std::uint32_t column, std::size_t source,
+                                std::size_t line) {
   if (!opt_.keep_path) {
     prog_.summary.add(seg);
     return GcodeMove::npos;
@@ -172,7 +173,8 @@ std::size_t Interpreter::append(Segment seg, std::uint32_t column) {
     // two running totals), and the old and new buffers are held at once while they move, so
     // the peak is three times what the buffers hold now. The trace's moves are held too.
     const double cap = static_cast<double>(std::max<std::size_t>(n, 1));
-    const double per_move = static_cast<double>(sizeof(Segment) + 2 * sizeof(double));
+    const double per_move =
+        static_cast<double>(sizeof(Segment) + 2 * sizeof(double) + sizeof(SourceLine));
     const double traced = opt_.trace ? static_cast<double>(n) * (sizeof(GcodeMove) + 64.0) : 0.0;
     const double peak = 3.0 * cap * per_move + traced;
     if (peak > opt_.max_path_bytes) {
@@ -189,7 +191,10 @@ std::size_t Interpreter::append(Segment seg, std::uint32_t column) {
   } catch (const Error& e) {
     fail_at(column, e.what());
   }
-  return prog_.path.segments().size() > n ? n : GcodeMove::npos;
+  if (prog_.path.segments().size() == n) return GcodeMove::npos;
+  prog_.segment_lines.push_back(
+      {static_cast<std::uint32_t>(source), static_cast<std::uint32_t>(line)});
+  return n;
 }
 
 // What a move's block was and the frame its words were in (GcodeMove's rewrite fields).
@@ -372,7 +377,7 @@ void Interpreter::put_arc(const Vec3& from, const ArcData& d, double axial, doub
   }
   note_feed(f);
   mv.path_started = true;
-  mv.segment = append(std::move(seg), column);
+  mv.segment = append(std::move(seg), column, source, line);
   trace(mv);
   out_pos_ = end;
 }

@@ -61,6 +61,13 @@ GcodeProgram read_gcode(std::string_view text, std::string_view source_name,
   return prog;
 }
 
+std::string GcodeProgram::where(std::size_t segment) const {
+  if (segment >= segment_lines.size()) return {};
+  const SourceLine& l = segment_lines[segment];
+  const std::string& file = l.source < source_files.size() ? source_files[l.source] : "?";
+  return fmt::format("{}:{}", file, l.line);
+}
+
 GcodeProgram read_gcode_file(const std::filesystem::path& file, const GcodeReadOptions& options) {
   return read_gcode(read_text_file(file), file.string(), options);
 }

@@ -189,6 +189,17 @@ std::string metrics_json(const Job& job, const ProcessMetrics& m) {
   j["h_max_at_mm"] = point(m.h_max_slot_at_mm);
   j["h_max_after_entry_mm"] = m.h_max_after_entry_mm;
   j["h_max_after_entry_at_mm"] = point(m.h_max_after_entry_at_mm);
+  j["engagement_max_at_mm"] = point(m.engagement_max_slot_at_mm);
+  j["engagement_max_after_entry_deg"] = m.engagement_max_after_entry_deg;
+  j["engagement_max_after_entry_at_mm"] = point(m.engagement_max_after_entry_at_mm);
+  // And, for a program read from a file, the blocks that made those moves ("file:line").
+  const auto source = [](const std::string& s) {
+    return s.empty() ? nlohmann::json(nullptr) : nlohmann::json(s);
+  };
+  j["h_max_at_line"] = source(m.h_max_slot_source);
+  j["h_max_after_entry_at_line"] = source(m.h_max_after_entry_source);
+  j["engagement_max_at_line"] = source(m.engagement_max_slot_source);
+  j["engagement_max_after_entry_at_line"] = source(m.engagement_max_after_entry_source);
   return j.dump(2) + "\n";
 }
 
@@ -206,6 +217,19 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
   out += fmt::format("  h_max                {:.5f} mm at {:.4f} s (f_z {:.4g} mm)\n",
                      m.h_max_slot_mm, m.t_h_max_slot_s, m.feed_per_tooth_mm);
   out += fmt::format("  engagement max       {:.2f} deg\n", m.engagement_angle_max_slot_deg);
+  if (!m.h_max_slot_source.empty()) {
+    // A program read from a file: the blocks of the largest chip and engagement.
+    const auto xyz = [](const Vec3& p) {
+      return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z());
+    };
+    out += fmt::format("  h_max at             {} {}; after the entry {:.5f} mm at {} {}\n",
+                       m.h_max_slot_source, xyz(m.h_max_slot_at_mm), m.h_max_after_entry_mm,
+                       m.h_max_after_entry_source, xyz(m.h_max_after_entry_at_mm));
+    out += fmt::format("  engagement max at    {} {}; after the entry {:.2f} deg at {} {}\n",
+                       m.engagement_max_slot_source, xyz(m.engagement_max_slot_at_mm),
+                       m.engagement_max_after_entry_deg, m.engagement_max_after_entry_source,
+                       xyz(m.engagement_max_after_entry_at_mm));
+  }
   if (job.slot.curved()) {
     out += fmt::format(
         "  {:<21}h_max {:.5f} mm at ({:.3f}, {:.3f}); after the entry {:.5f} mm at "
