@@ -126,11 +126,16 @@ TEST(CurvedSlot, ALineArcLineStaysInsideAndHoldsTheStraightChip) {
   EXPECT_NEAR(curved.h_max_after_entry_mm / flat.h_max_mm, 1.0, 0.03)
       << curved.h_max_after_entry_mm << " " << flat.h_max_mm;
   // The slot ends where the drawing does: the last tool centre at the floor is a (the end
-  // cap's radius) from the centreline's end (60, 50).
+  // cap's radius) from the centreline's end (60, 50). Each floor move sampled at 256 points
+  // (an arc of radius a = 2 mm between samples: at most a (1 - cos(pi / 256)) = 1.5e-4 mm
+  // short of its top).
   double end_reach = 0;
   for (const Segment& seg : pp.path.segments()) {
-    if (seg.motion() == Motion::feed && std::abs(seg.end().z() + job.slot.depth_mm) < 1e-9) {
-      end_reach = std::max(end_reach, seg.end().y() - 50);
+    if (seg.motion() == Motion::feed && std::abs(seg.end().z() + job.slot.depth_mm) < 1e-9 &&
+        std::abs(seg.start().z() + job.slot.depth_mm) < 1e-9) {
+      for (int k = 0; k <= 256; ++k) {
+        end_reach = std::max(end_reach, seg.point_at(seg.length_mm() * k / 256).y() - 50);
+      }
     }
   }
   EXPECT_NEAR(end_reach, a - job.machine.arc_tolerance_mm, 1e-3);

@@ -8,6 +8,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "trochomill/app.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/report.hpp"
@@ -43,12 +44,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       const GuardedRun run(true);
       ProcessMetrics m = analyze_with_forces(job, path, run.hooks());
       run.done();
-      if (!a->gcode.empty()) {
-        m.h_max_slot_source = lines.where(m.h_max_slot_segment);
-        m.h_max_after_entry_source = lines.where(m.h_max_after_entry_segment);
-        m.engagement_max_slot_source = lines.where(m.engagement_max_slot_segment);
-        m.engagement_max_after_entry_source = lines.where(m.engagement_max_after_entry_segment);
-      }
+      name_program_lines(m, lines);
       if (!a->json.empty()) emit(a->json, metrics_json(job, m));
       if (!a->csv.empty()) emit(a->csv, series_csv(m.series));
       if (summary_to_stdout({&a->json, &a->csv})) {

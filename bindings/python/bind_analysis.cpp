@@ -7,6 +7,7 @@
 
 #include "common.hpp"
 #include "trochomill/analysis.hpp"
+#include "trochomill/app.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/report/analysis.hpp"
@@ -50,6 +51,9 @@ void bind_analysis(py::module_& m) {
                                  job.analysis.steps_per_tooth));
         ProcessMetrics pm = run_released(
             [&](const RunHooks& h) { return analyze_with_forces(job, path, h); }, progress);
+        if (py::isinstance<PyPath>(job_or_path)) {
+          name_program_lines(pm, job_or_path.cast<const PyPath&>().lines);
+        }
         py::dict out = from_json(metrics_json(job, pm));
         out["series"] = analyze_series(std::move(pm.series));
         py::dict walls;  // the steady cycle's walls, as the JSON reports their texture

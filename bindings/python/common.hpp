@@ -22,6 +22,7 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
+#include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/progress.hpp"
@@ -54,6 +55,7 @@ struct PyPath {
   int cycles = 0;                    ///< trochoid cycles (planned paths)
   std::vector<std::string> warnings;
   std::string source;  ///< "plan" or the program's name
+  GcodeProgram lines;  ///< a program's line table (segment_lines, source_files) only
 };
 
 /// The job of an argument that may be a Job or a Path (the path's job).

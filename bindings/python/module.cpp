@@ -90,6 +90,8 @@ PyPath read_program(const py::object& program, const py::object& job_obj) {
   }
   p.cycles = static_cast<int>(p.path.cycles().size());
   p.job = std::move(job);
+  p.lines.segment_lines = std::move(prog.segment_lines);
+  p.lines.source_files = std::move(prog.source_files);
   return p;
 }
 

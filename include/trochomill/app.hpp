@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "trochomill/analysis.hpp"
+#include "trochomill/gcode.hpp"
 #include "trochomill/path.hpp"
 
 namespace trochomill {
@@ -45,6 +46,11 @@ struct WindowNames {
 /// `advice` (what makes the run smaller). `what`: the run, e.g. "simulate".
 void check_memory(std::string_view what, double need_bytes, std::optional<double> limit_gb,
                   std::string_view option, std::string_view advice);
+
+/// Names the blocks of the analysis's largest chip and engagement (ProcessMetrics' *_source,
+/// "file:line") from the line table of the program the path was read from (its
+/// segment_lines and source_files); nothing for a table without lines.
+void name_program_lines(ProcessMetrics& metrics, const GcodeProgram& lines);
 
 /// The feed schedule's targets as a user gives them, over the job's defaults
 /// (default_feed_targets: the job's feed per tooth and its [machine] feed limits).

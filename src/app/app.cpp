@@ -86,4 +86,13 @@ FeedTargets feed_targets(const Job& job, const FeedTargetRequest& r) {
   return t;
 }
 
+void name_program_lines(ProcessMetrics& metrics, const GcodeProgram& lines) {
+  if (lines.segment_lines.empty()) return;
+  metrics.h_max_slot_source = lines.where(metrics.h_max_slot_segment);
+  metrics.h_max_after_entry_source = lines.where(metrics.h_max_after_entry_segment);
+  metrics.engagement_max_slot_source = lines.where(metrics.engagement_max_slot_segment);
+  metrics.engagement_max_after_entry_source =
+      lines.where(metrics.engagement_max_after_entry_segment);
+}
+
 }  // namespace trochomill

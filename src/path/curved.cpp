@@ -125,9 +125,48 @@ class Mapped final : public PlanarCurve {
 };
 
 // Appends the biarcs of every segment of `local` (planned from y = 0) carried onto the
-// centreline from arc length `base`, at height z and the segments' feed.
+// centreline from arc length `base`, at height z and the segments' feed. Consecutive pieces
+// that are one line (collinear) or one circle (the same centre and radius, turning the same
+// way, together at most a half turn: every dialect writes that as one block) are joined: on a
+// straight stretch a circular cycle's mapped circle is two half arcs, not the fit's quarters.
 void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, double base, double z,
                    double tolerance_mm) {
+  struct Piece {
+    bool line = false;
+    Vec3 start, end;
+    double cx = 0, cy = 0, r = 0, start_rad = 0, sweep_rad = 0, speed = 0;
+  };
+  std::optional<Piece> pending;
+  const auto flush = [&] {
+    if (!pending) return;
+    const Piece& p = *pending;
+    out.append(p.line ? Segment::line(p.start, p.end, Motion::feed, p.speed)
+                      : Segment::arc_xy(p.cx, p.cy, p.r, p.start_rad, p.sweep_rad, z, z,
+                                        Motion::feed, p.speed));
+    pending.reset();
+  };
+  const auto joins = [](const Piece& a, const Piece& b) {
+    if (a.line != b.line || a.speed != b.speed) return false;
+    if (a.line) {
+      const Vec3 da = a.end - a.start, db = b.end - b.start;
+      const double la = da.norm(), lb = db.norm();
+      return la > 0 && lb > 0 && (da / la - db / lb).norm() < 1e-12;
+    }
+    // Within 1e-6 mm (the fit's centres of one circle differ in the last digits; the arc
+    // tolerance is 1e-3 mm by default and a program's resolution 1e-4).
+    return std::abs(a.cx - b.cx) < 1e-6 && std::abs(a.cy - b.cy) < 1e-6 &&
+           std::abs(a.r - b.r) < 1e-6 && a.sweep_rad * b.sweep_rad > 0 &&
+           std::abs(a.sweep_rad + b.sweep_rad) <= kPi + 1e-12;
+  };
+  const auto push = [&](const Piece& p) {
+    if (pending && joins(*pending, p)) {
+      pending->end = p.end;
+      pending->sweep_rad += p.sweep_rad;
+      return;
+    }
+    flush();
+    pending = p;
+  };
   for (const Segment& seg : local.segments()) {
     const Mapped m(seg, c, base, z);
     // Half turns of a curve's parameter, lines whole, then halved until within tolerance.
@@ -137,18 +176,26 @@ void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, do
             : 1;
     const double u0 = seg.kind() == Segment::Kind::curve ? seg.u0() : 0.0;
     const double u1 = seg.kind() == Segment::Kind::curve ? seg.u1() : 1.0;
-    Vec3 from = out.empty() ? m.point(u0) : out.segments().back().end();
+    Vec3 from = pending ? pending->end : out.empty() ? m.point(u0) : out.segments().back().end();
     for (const FitArc& a : fit_biarcs(m, u0, u1, pieces, tolerance_mm)) {
-      if (a.is_line) {
-        out.append(Segment::line(from, a.end, Motion::feed, seg.speed_mm_per_min()));
-      } else {
-        const double start = std::atan2(from.y() - a.cy, from.x() - a.cx);
-        out.append(Segment::arc_xy(a.cx, a.cy, a.radius_mm, start, a.sweep_rad, z, z, Motion::feed,
-                                   seg.speed_mm_per_min()));
+      Piece p;
+      p.line = a.is_line;
+      p.start = from;
+      p.end = a.end;
+      p.speed = seg.speed_mm_per_min();
+      if (!a.is_line) {
+        // The arc's end as the segment computes it (where the next piece starts).
+        p.cx = a.cx, p.cy = a.cy, p.r = a.radius_mm, p.sweep_rad = a.sweep_rad;
+        p.start_rad = std::atan2(from.y() - a.cy, from.x() - a.cx);
+        p.end =
+            Segment::arc_xy(p.cx, p.cy, p.r, p.start_rad, p.sweep_rad, z, z, Motion::feed, p.speed)
+                .end();
       }
-      from = out.segments().back().end();
+      push(p);
+      from = p.end;
     }
   }
+  flush();
 }
 
 // One cycle of the family in the straight frame from y = 0 with step s (the start cap and the
@@ -422,10 +469,11 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
   // Between levels the tool stays down where it can (every entry but the outside one starts
   // within the orbit of the centreline's start): up to the next level's feeding height, the
   // clearance above the floor just cut, and back along the centreline, all in the slot cut
-  // to that depth, at the air feed (machine.air_feed, else max_feed, else the feed).
+  // to that depth, as feed moves (a rapid need not run straight) at the air feed
+  // (machine.air_feed, else max_feed, else the rapid rate: the control holds it to its most).
   const double link_feed = job.machine.air_feed_mm_per_min > 0   ? job.machine.air_feed_mm_per_min
                            : job.machine.max_feed_mm_per_min > 0 ? job.machine.max_feed_mm_per_min
-                                                                 : g.feed;
+                                                                 : g.rapid;
   const bool stay_down = job.path.entry != EntryType::outside;
   int cycles = 0;
   double steady_length = 0;
