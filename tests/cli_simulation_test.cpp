@@ -62,25 +62,26 @@ TEST_F(Cli, SimulateWritesItsOutputs) {
   const ChipMapData m = read_chip_map_h5(std::filesystem::path(out) / "chips.h5");
   EXPECT_EQ(m.t_s.size(), j["steps"].get<std::size_t>());
   EXPECT_EQ(m.teeth, 4u);
-  // texture reads the folder's walls (at the middle level, each wall material side up).
-  const CliResult tex = run_cli("texture " + out + " --lambda-c 0.8 --json -");
+  // texture reads the folder's floor. Its walls are refused: the slot is 8 mm long and 20 mm
+  // wide, all round end and no finished wall (texture measured the round end as a wall).
+  const CliResult walls = run_cli("texture " + out + " --surface walls");
+  EXPECT_EQ(walls.code, 2) << walls.out;
+  EXPECT_NE(walls.out.find("/walls.csv: the left wall at z = "), std::string::npos) << walls.out;
+  EXPECT_NE(walls.out.find("is all front arc"), std::string::npos) << walls.out;
+  const CliResult tex = run_cli("texture " + out + " --surface floor --json -");
   ASSERT_EQ(tex.code, 0) << tex.out;
   const auto tj = nlohmann::json::parse(tex.out)["surfaces"];
   // The floor, cut across the slot in this window: an end mill without axial runout leaves it
   // flat (every Z ray ends at the tool's bottom), so Sa and Sz are 0 to rounding.
   ASSERT_TRUE(std::filesystem::exists(std::filesystem::path(out) / "floor.x3p"));
-  ASSERT_EQ(tj.size(), 3u);
-  EXPECT_EQ(tj[2]["surface"], "floor");
-  EXPECT_EQ(tj[2]["kind"], "areal");
-  EXPECT_LT(tj[2]["sl"]["sa_mm"].get<double>(), 1e-12);
-  EXPECT_LT(tj[2]["sl"]["sz_mm"].get<double>(), 1e-12);
-  EXPECT_EQ(tj[2]["sl"]["sku"].get<double>(), 0.0);  // no shape: not a ratio of rounding errors
-  EXPECT_TRUE(tj[2]["sl"]["sal_mm"].is_null());
-  EXPECT_TRUE(tj[2]["sl"]["flat"].get<bool>());
-  EXPECT_EQ(tj[0]["surface"], "left");
-  EXPECT_NE(tj[0]["description"].get<std::string>().find("simulated left wall at z = "),
-            std::string::npos);
-  EXPECT_GT(tj[1]["ra_mm"].get<double>(), 0.0);
+  ASSERT_EQ(tj.size(), 1u);
+  EXPECT_EQ(tj[0]["surface"], "floor");
+  EXPECT_EQ(tj[0]["kind"], "areal");
+  EXPECT_LT(tj[0]["sl"]["sa_mm"].get<double>(), 1e-12);
+  EXPECT_LT(tj[0]["sl"]["sz_mm"].get<double>(), 1e-12);
+  EXPECT_EQ(tj[0]["sl"]["sku"].get<double>(), 0.0);  // no shape: not a ratio of rounding errors
+  EXPECT_TRUE(tj[0]["sl"]["sal_mm"].is_null());
+  EXPECT_TRUE(tj[0]["sl"]["flat"].get<bool>());
 
   CliResult bad = run_cli("simulate " + ex + " --cycles 5:2" + common);
   EXPECT_EQ(bad.code, 2) << bad.out;
