@@ -401,8 +401,10 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
 
   // The models work in the slot frame of the job's placement; the program is in the
   // workpiece's (a rigid move: lengths, and so the pieces' places along the moves, agree).
+  hooks.check();
   const Placement placement = slot_placement(job);
   const ToolPath slot_path = to_slot_frame(path, placement);
+  hooks.check();
   for (const std::string& w : header_mismatches(job, in.program, std::string(name))) {
     r.warnings.push_back(w);
   }
@@ -438,16 +440,25 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   hooks.begin("scheduling");
   FeedTargets targets = options.targets;
   targets.stock_top_mm = stock_top_mm(job, stock);
-  // The move that made each segment of the path.
-  std::map<std::size_t, std::size_t> move_of_segment;
+  // The move that made each segment of the path (npos: none), by the segment's index (a
+  // std::map of it took a second and no Ctrl-C on a 2-million-move program).
+  std::vector<std::size_t> move_of_segment(slot_path.segments().size(), GcodeMove::npos);
   for (std::size_t i = 0; i < in.moves.size(); ++i) {
-    if (in.moves[i].segment != GcodeMove::npos) move_of_segment[in.moves[i].segment] = i;
+    const std::size_t sg = in.moves[i].segment;
+    if (sg < move_of_segment.size()) move_of_segment[sg] = i;
   }
+  const auto move_of = [&](std::size_t segment) -> const GcodeMove* {
+    if (segment >= move_of_segment.size() || move_of_segment[segment] == GcodeMove::npos) {
+      return nullptr;
+    }
+    return &in.moves[move_of_segment[segment]];
+  };
+  hooks.check();
   targets.caps = force_caps(job, options, hooks, [&](double s_mm) {
     // The pieces subdivide the program's moves: a length along them is one along the path.
-    const auto it = move_of_segment.find(slot_path.segment_at_length(s_mm));
-    if (it == move_of_segment.end()) return std::string(name);
-    return fmt::format("{}:{}", in.moves[it->second].file, in.moves[it->second].line);
+    const GcodeMove* m = move_of(slot_path.segment_at_length(s_mm));
+    if (m == nullptr) return std::string(name);
+    return fmt::format("{}:{}", m->file, m->line);
   });
   targets.chips = path_chips;
   const FeedSchedule fs = schedule_feed(job, slot_path, targets, hooks);
@@ -592,9 +603,9 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
     // 3 %: the schedule's own tolerance (docs/models.md section 15).
     if (!(ca.h_mm[i] > r.h_target_mm * 1.03)) continue;
     if (limit_of[ca.segment[i]] != FeedLimit::min_feed) continue;
-    const auto it = move_of_segment.find(input_segment[ca.segment[i]]);
-    if (it == move_of_segment.end()) continue;
-    const GcodeMove& m = in.moves[it->second];
+    const GcodeMove* mp = move_of(input_segment[ca.segment[i]]);
+    if (mp == nullptr) continue;
+    const GcodeMove& m = *mp;
     UnheldBlock& u = unheld[{m.source, m.line}];
     u.file = std::string(m.file);
     u.line = m.line;
@@ -616,8 +627,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   std::vector<Over> overs;
   auto block_of = [&](std::size_t after_segment) -> const GcodeMove* {
     if (limit_of[after_segment] != FeedLimit::min_feed) return nullptr;
-    const auto it = move_of_segment.find(input_segment[after_segment]);
-    return it == move_of_segment.end() ? nullptr : &in.moves[it->second];
+    return move_of(input_segment[after_segment]);
   };
   if (options.targets.mrr_mm3_per_min) {
     Over o{"removal rate cap", "mm^3/min", *options.targets.mrr_mm3_per_min, {}, 0};
