@@ -152,7 +152,7 @@ TEST_F(Cli, AnEndlessProgramStopsEveryCommandThatReadsIt) {
 #if !defined(__SANITIZE_ADDRESS__)  // AddressSanitizer keeps freed memory in quarantine
   rusage use{};
   ASSERT_EQ(getrusage(RUSAGE_CHILDREN, &use), 0);
-  EXPECT_LT(static_cast<double>(use.ru_maxrss) * 1e3, 0.5e9 + 0.15e9);
+  EXPECT_LT(static_cast<double>(use.ru_maxrss) * 1024, 0.5e9 + 0.15e9);
 #endif
 }
 

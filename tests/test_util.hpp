@@ -69,7 +69,6 @@ inline std::vector<std::filesystem::path> files_in(const std::filesystem::path& 
   std::sort(out.begin(), out.end());
   return out;
 }
-// The whole file's bytes.
 /// A folder of this test process's own in the temporary directory ("trochomill-NAME-PID"),
 /// made on first use and removed, with what is in it, when the process ends (each test is a
 /// process of its own under ctest, so none is left behind in /tmp).
@@ -92,6 +91,7 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   }
   return dir;
 }
+// The whole file's bytes.
 inline std::string read_file(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};

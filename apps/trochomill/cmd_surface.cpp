@@ -151,13 +151,21 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
     if (fs::is_directory(a->source, ec)) {
       const fs::path walls = fs::path(a->source) / "walls.csv";
       const fs::path floor = fs::path(a->source) / "floor.x3p";
+      // Under `all` (the default) a wall that cannot be measured (a window holding only the
+      // cut front) is left out with a note, as a missing floor is; asked for, it is an error.
+      std::vector<std::string> skipped;
       if (!sides.empty()) {
         const std::string text = read_text_file(walls);
         for (const bool left : sides) {
-          const MeasuredProfile p =
-              read_wall_profile_csv(text, walls.string(), left, a->z_mm, true);
-          entries.push_back(profile_entry(left ? "left" : "right", "simulated " + p.description,
-                                          profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm, pf)));
+          try {
+            const MeasuredProfile p =
+                read_wall_profile_csv(text, walls.string(), left, a->z_mm, true);
+            entries.push_back(profile_entry(left ? "left" : "right", "simulated " + p.description,
+                                            profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm, pf)));
+          } catch (const InputError& e) {
+            if (sf != "all") throw;
+            skipped.emplace_back(e.what());
+          }
         }
       }
       if (want_floor && (sf == "floor" || fs::exists(floor, ec))) {
@@ -172,6 +180,8 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
         if (!info.comment.empty()) m.description = info.comment;  // what simulate wrote
         entries.push_back(areal_entry("floor", m));
       }
+      if (entries.empty() && !skipped.empty()) throw InputError(skipped.front());
+      for (const std::string& s : skipped) fmt::print(stderr, "note: {} (left out)\n", s);
     } else if (ext == ".x3p") {
       const HeightMap m = read_x3p(a->source, nullptr, max_points);
       if (m.ny == 1) {

@@ -43,7 +43,7 @@ struct ProcessMetrics {
   Vec3 h_max_slot_at_mm = Vec3::Zero();      ///< the tool centre where h_max_slot occurs (mm)
   /// The largest chip outside the entries and where (mm): after the first cycle mark of a
   /// planned path; in a program without marks (read from a file) outside each descent into
-  /// the stock and the feed move after it (the first at the new depth).
+  /// the stock and the feed moves after it within a tool diameter of where it ended.
   double h_max_after_entry_mm = 0;
   Vec3 h_max_after_entry_at_mm = Vec3::Zero();
   Vec3 engagement_max_slot_at_mm = Vec3::Zero();  ///< where the largest engagement is (mm)

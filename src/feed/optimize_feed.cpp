@@ -495,7 +495,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
 
   // Read the result again: its motion is the input's, its feeds within the limits.
   hooks.begin("checking");
-  const Traced out = read_traced(r.text, name, options.read);
+  const Traced out = read_traced(r.text, name, read);
   // The written places' rounding, 0.5 10^-places program units, twice over (inch: more).
   const double tol =
       std::max(2e-6, 25.4 * std::pow(10.0, -rewrite_places(options.read.dialect, 1.0)));

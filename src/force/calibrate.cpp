@@ -184,7 +184,19 @@ std::optional<std::string> aliasing_note(const std::array<std::vector<double>, 3
   const double share = aliasing_share(f, t, dt_meas_s, cutoff_hz, fine);
   if (share <= kLimit) return std::nullopt;
   double dt = dt_meas_s;
-  while (dt > 1.5 * dt_model && aliasing_share(f, t, dt, cutoff_hz, fine) > kLimit) dt /= 2;
+  double at = share;
+  while (dt > 1.5 * dt_model && at > kLimit) {
+    dt = std::max(dt / 2, dt_model);
+    at = aliasing_share(f, t, dt, cutoff_hz, fine);
+  }
+  if (at > kLimit) {
+    return fmt::format(
+        "the measured record ({:.0f} Hz) is coarse for the force's jumps at tooth entry and "
+        "exit: the model sampled at that rate differs from it by {:.1f} % after the {:.0f} Hz "
+        "filter, and still {:.1f} % at the model's own {:.0f} Hz: the fitted coefficients may "
+        "be biased unless the record was low-pass filtered before it was sampled",
+        1.0 / dt_meas_s, 100 * share, cutoff_hz, 100 * at, 1.0 / dt);
+  }
   return fmt::format(
       "the measured record ({:.0f} Hz) is coarse for the force's jumps at tooth entry and "
       "exit: the model sampled at that rate differs from it by {:.1f} % after the {:.0f} Hz "

@@ -171,11 +171,13 @@ std::size_t Interpreter::append(Segment seg, std::uint32_t column, std::size_t s
   if (opt_.max_path_bytes > 0 && n == segs.capacity()) {
     // Checked when the path grows: the next move doubles its buffers (the segments and the
     // two running totals), and the old and new buffers are held at once while they move, so
-    // the peak is three times what the buffers hold now. The trace's moves are held too.
+    // the peak is three times what the buffers hold now. The trace's moves are held too: by
+    // the next check twice as many, in a vector that doubles as well (three times again).
     const double cap = static_cast<double>(std::max<std::size_t>(n, 1));
     const double per_move =
         static_cast<double>(sizeof(Segment) + 2 * sizeof(double) + sizeof(SourceLine));
-    const double traced = opt_.trace ? static_cast<double>(n) * (sizeof(GcodeMove) + 64.0) : 0.0;
+    const double traced =
+        opt_.trace ? 3.0 * cap * static_cast<double>(sizeof(GcodeMove) + 64) : 0.0;
     const double peak = 3.0 * cap * per_move + traced;
     if (peak > opt_.max_path_bytes) {
       fail_at(0, fmt::format("the program's path holds {} moves ({:.2f} GB) after {} blocks, "

@@ -160,8 +160,13 @@ void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, do
   };
   const auto push = [&](const Piece& p) {
     if (pending && joins(*pending, p)) {
-      pending->end = p.end;
       pending->sweep_rad += p.sweep_rad;
+      // The joined arc's own end (on the first piece's centre), where the next piece starts.
+      pending->end = p.line
+                         ? p.end
+                         : Segment::arc_xy(pending->cx, pending->cy, pending->r, pending->start_rad,
+                                           pending->sweep_rad, z, z, Motion::feed, pending->speed)
+                               .end();
       return;
     }
     flush();
@@ -192,7 +197,7 @@ void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, do
                 .end();
       }
       push(p);
-      from = p.end;
+      from = pending->end;
     }
   }
   flush();
