@@ -111,6 +111,25 @@ TEST_F(Cli, AnalyzeSummarisesAProgramWithoutACycleByTheWholeProgram) {
   EXPECT_TRUE(nlohmann::json::parse(planned.out)["h_max_at_line"].is_null());
 }
 
+// LinuxCNC's arcspiral.ngc (an inch spiral of R-word arcs, 2.54 mm deep) has no steady cycle
+// and its window touches no slot wall: analyze gives the whole program's figures and null
+// walls (it stopped with "wall profile: no cutting sample within R", exit 2). Skipped where
+// LinuxCNC's sample programs are not installed.
+TEST_F(Cli, AnalyzeOfAProgramWithoutWallsGivesTheWholeProgram) {
+  const std::string spiral = "/usr/share/linuxcnc/ncfiles/arcspiral.ngc";
+  if (!std::filesystem::exists(spiral)) GTEST_SKIP() << spiral << " is not installed";
+  const auto ex = test::example("wagih2023/trochoidal.toml").string();
+  const CliResult r = run_cli("analyze " + ex + " --gcode " + spiral + " --json -");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["periodic"].get<bool>());
+  EXPECT_TRUE(j["waviness_left_mm"].is_null());
+  EXPECT_TRUE(j["wall_peak_y_mm"].is_null());
+  EXPECT_GT(j["h_max_mm"].get<double>(), 0.0);
+  EXPECT_GT(j["removed_volume_mm3"].get<double>(), 0.0);
+  EXPECT_EQ(j["h_max_at_line"].get<std::string>().rfind(spiral + ":", 0), 0u);
+}
+
 // A slot along a contour written with its helix entry and read back: the largest chip
 // outside the entries is the planned path's (whose entry ends at its first cycle mark; the
 // program's at the moves within a tool diameter of the helix), within 1 % (the program's

@@ -678,8 +678,17 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
       }
     }
   };
-  m.walls_path.left = path_wall(true, yl);
-  m.walls_path.right = path_wall(false, yr);
+  try {
+    m.walls_path.left = path_wall(true, yl);
+    m.walls_path.right = path_wall(false, yr);
+  } catch (const InputError&) {
+    // A program without a steady cycle whose window has no slot walls (a spiral, a pocket:
+    // nothing cuts along the walls' y there): the walls, their texture and the floor's
+    // imprints are not modelled (null); the whole-program figures stand. With a steady
+    // cycle the walls exist, and a failure is a fault to report.
+    if (w.periodic) throw;
+    return m;
+  }
   if (std::max(m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm) > 0.5 * wall_reach) {
     dense = dense_samples(true);
     m.walls_path.left = path_wall(true, yl);
