@@ -362,9 +362,7 @@ TEST(Areal, CompareSurfacesAlignsAShiftedTiltedCopy) {
 
 // ---- X3P ---------------------------------------------------------------------------------
 
-fs::path scratch(const std::string& name) {
-  return test::scratch_dir("x3p") / name;
-}
+fs::path scratch(const std::string& name) { return test::scratch_dir("x3p") / name; }
 
 // Writes an archive of the given entries (name, content).
 void write_zip(const fs::path& file, const std::vector<std::pair<std::string, std::string>>& e) {

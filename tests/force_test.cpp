@@ -340,13 +340,18 @@ TEST(Forces, CalibrationRoundTripRecoversCoefficientsAndRunout) {
   EXPECT_TRUE(r.warnings.empty());  // 754 samples per tooth pass (20 kHz at 26.5 Hz)
   // The same record at 500 Hz: 18.8 samples per tooth pass, fewer than the 25 that keep ten
   // tooth-passing harmonics under 0.8 Nyquist: the fit says so.
-  MeasuredForces coarse;
-  for (std::size_t i = 0; i < meas.t_s.size(); i += 40) {
-    coarse.t_s.push_back(meas.t_s[i]);
-    coarse.fx_n.push_back(meas.fx_n[i]);
-    coarse.fy_n.push_back(meas.fy_n[i]);
-    coarse.fz_n.push_back(meas.fz_n[i]);
-  }
+  // The record taken every `stride` samples (20 kHz / stride).
+  const auto every = [&](std::size_t stride) {
+    MeasuredForces m;
+    for (std::size_t i = 0; i < meas.t_s.size(); i += stride) {
+      m.t_s.push_back(meas.t_s[i]);
+      m.fx_n.push_back(meas.fx_n[i]);
+      m.fy_n.push_back(meas.fy_n[i]);
+      m.fz_n.push_back(meas.fz_n[i]);
+    }
+    return m;
+  };
+  const MeasuredForces coarse = every(40);
   CalibrationOptions oc = o;
   oc.fit = {"k_c"};
   const CalibrationResult rc = calibrate_forces(start, path, coarse, oc);
@@ -359,14 +364,7 @@ TEST(Forces, CalibrationRoundTripRecoversCoefficientsAndRunout) {
   // instant by instant (as `forces --csv` writes the model), so the force's jumps alias below
   // the cutoff; the fit says so and names a rate (it was silent, and k_c came out 3.4 % low
   // on such a record of the README's round trip).
-  MeasuredForces sampled;
-  for (std::size_t i = 0; i < meas.t_s.size(); i += 16) {
-    sampled.t_s.push_back(meas.t_s[i]);
-    sampled.fx_n.push_back(meas.fx_n[i]);
-    sampled.fy_n.push_back(meas.fy_n[i]);
-    sampled.fz_n.push_back(meas.fz_n[i]);
-  }
-  const CalibrationResult ra = calibrate_forces(start, path, sampled, oc);
+  const CalibrationResult ra = calibrate_forces(start, path, every(16), oc);
   ASSERT_EQ(ra.warnings.size(), 1u);
   EXPECT_NE(ra.warnings[0].find("measured record (1250 Hz) is coarse for the force's jumps"),
             std::string::npos)

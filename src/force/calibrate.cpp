@@ -152,20 +152,22 @@ class StopAndReport : public ceres::IterationCallback {
 // leaves the cut alias into the band below the cutoff when the record is coarse: a record
 // made that way biases the coefficients (k_c -3.4 % at 96 steps per revolution on the
 // Bergmann example, -1.1 % at 192, none at 500; the measure is then 9 %, 4 % and 1.6 %).
-double aliasing_share(const std::array<std::vector<double>, 3>& f, const std::vector<double>& t,
-                      double dt_s, double cutoff_hz, const Sos& fine) {
+// `smooth`: f filtered at the model's rate (once, by the caller).
+double aliasing_share(const std::array<std::vector<double>, 3>& f,
+                      const std::array<std::vector<double>, 3>& smooth,
+                      const std::vector<double>& t, double dt_s, double cutoff_hz) {
   const auto n = static_cast<std::size_t>((t.back() - t.front()) / dt_s) + 1;
   if (n < 16) return 0;
   const Sos coarse = butter_lowpass(4, cutoff_hz, 1.0 / dt_s);
   double diff = 0, norm = 0;
-  for (const auto& axis : f) {
-    const std::vector<double> smooth = sosfiltfilt(fine, axis);
+  for (std::size_t a = 0; a < 3; ++a) {
+    const std::vector<double>& axis = f[a];
     std::vector<double> sampled(n);
     for (std::size_t k = 0; k < n; ++k)
       sampled[k] = interp(t, axis, t.front() + static_cast<double>(k) * dt_s);
     sampled = sosfiltfilt(coarse, sampled);
     for (std::size_t k = 0; k < n; ++k) {
-      const double ref = interp(t, smooth, t.front() + static_cast<double>(k) * dt_s);
+      const double ref = interp(t, smooth[a], t.front() + static_cast<double>(k) * dt_s);
       diff += (sampled[k] - ref) * (sampled[k] - ref);
       norm += ref * ref;
     }
@@ -176,18 +178,19 @@ double aliasing_share(const std::array<std::vector<double>, 3>& f, const std::ve
 // A warning when the record is coarse enough for that difference to pass 2 %, with the rate
 // (a power of two times the record's, at most the model's) where it falls below.
 std::optional<std::string> aliasing_note(const std::array<std::vector<double>, 3>& f,
+                                         const std::array<std::vector<double>, 3>& smooth,
                                          const std::vector<double>& t, double dt_meas_s,
-                                         double cutoff_hz, const Sos& fine) {
+                                         double cutoff_hz) {
   const double dt_model = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
   if (!(dt_meas_s > 1.5 * dt_model)) return std::nullopt;
   constexpr double kLimit = 0.02;
-  const double share = aliasing_share(f, t, dt_meas_s, cutoff_hz, fine);
+  const double share = aliasing_share(f, smooth, t, dt_meas_s, cutoff_hz);
   if (share <= kLimit) return std::nullopt;
   double dt = dt_meas_s;
   double at = share;
   while (dt > 1.5 * dt_model && at > kLimit) {
     dt = std::max(dt / 2, dt_model);
-    at = aliasing_share(f, t, dt, cutoff_hz, fine);
+    at = aliasing_share(f, smooth, t, dt, cutoff_hz);
   }
   if (at > kLimit) {
     return fmt::format(
@@ -414,16 +417,20 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   const Sos sos_model = butter_lowpass(4, cutoff, 1.0 / dt_model);
   const Sos sos_meas = butter_lowpass(4, cutoff, 1.0 / dt_meas);
   problem.set_filter(sos_model);
+  // The model's forces filtered as problem.forces filters from now on (the raw ones are kept
+  // only for the aliasing check).
+  std::array<std::vector<double>, 3> f0s;
+  for (std::size_t a = 0; a < 3; ++a) f0s[a] = sosfiltfilt(sos_model, f0[a]);
   // (Only where the cutoff was not lowered for the same coarse record: one warning of it.)
   if (warnings.empty()) {
-    if (auto w = aliasing_note(f0, tm, dt_meas, cutoff, sos_model)) warnings.push_back(*w);
+    if (auto w = aliasing_note(f0, f0s, tm, dt_meas, cutoff)) warnings.push_back(*w);
   }
+  f0 = std::move(f0s);
   const std::array<std::vector<double>, 3> mf{sosfiltfilt(sos_meas, measured.fx_n),
                                               sosfiltfilt(sos_meas, measured.fy_n),
                                               sosfiltfilt(sos_meas, measured.fz_n)};
   // Alignment: the shift (measured time = model time + shift) maximising the correlation of
   // the resultants, at the model's step, refined by a parabola.
-  for (auto& v : f0) v = sosfiltfilt(sos_model, v);  // as problem.forces filters from now on
   const double max_shift = o.max_shift_s >= 0 ? o.max_shift_s : 30.0 / spindle_speed_rpm(job);
   const int ns = static_cast<int>(std::ceil(max_shift / dt_model));
   std::vector<double> res_model(tm.size());
