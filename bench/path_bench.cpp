@@ -73,14 +73,18 @@ BENCHMARK_MAIN();
 
 // A slot along a 1 m centreline (bench/data/meander.dxf: five 160 mm legs, four U-turns of
 // radius 20 mm), W 12, D 8, step 1 mm, 6 mm deep in three levels: planned with the engagement
-// kernel judging the bends' steps, and written as G-code (its size in bytes).
+// kernel judging the bends' steps, and written as G-code (its size in bytes), at the arc
+// tolerance given in um (the default 1 um, and 10 um: a roughing tolerance).
 void BM_PlanCurvedSlot1m(benchmark::State& state) {
+  const double tolerance_mm = static_cast<double>(state.range(0)) * 1e-3;
   const std::string dir = std::string(TROCHOMILL_SOURCE_DIR) + "/bench/data/";
   std::string text = "[geometry]\nfile = \"" + dir +
                      "meander.dxf\"\n[tool]\ndiameter = 8.0\nteeth = 3\n[slot]\nalong = "
                      "\"MEANDER\"\nwidth = 12.0\ndepth = 6.0\nmax_step_down = 2.0\n[cutting]\n"
                      "feed_rate = 900.0\nspindle_speed = 6000.0\n[machine]\ndialect = "
-                     "\"linuxcnc\"\n[path]\ntype = \"trochoidal\"\nstep = 1.0\nentry = \"helix\"\n";
+                     "\"linuxcnc\"\narc_tolerance = " +
+                     fmt::format("{}", tolerance_mm) +
+                     "\n[path]\ntype = \"trochoidal\"\nstep = 1.0\nentry = \"helix\"\n";
   const trochomill::Job job = trochomill::parse_job(text, dir + "meander.toml");
   trochomill::GcodeWriteOptions opt;
   opt.dialect = trochomill::Dialect::linuxcnc;
@@ -95,7 +99,7 @@ void BM_PlanCurvedSlot1m(benchmark::State& state) {
   state.counters["cycles"] = static_cast<double>(cycles);
   state.counters["gcode_bytes"] = static_cast<double>(bytes);
 }
-BENCHMARK(BM_PlanCurvedSlot1m)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PlanCurvedSlot1m)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
 
 // Reading a 10 MB DXF: 100,000 polylines of four lines and a bulge each (R12 text, written
 // here), chained into closed contours.

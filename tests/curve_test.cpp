@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 
@@ -375,6 +376,24 @@ TEST(CurvedSlot, CentrelinesASlotCannotFollowAreRefused) {
   std::filesystem::create_directories(dir / "folder.svg");
   m = test::message_of([&] { (void)read_drawing(dir / "folder.svg", DrawingOptions{}); });
   EXPECT_TRUE(has(m, "folder.svg: not a SVG file (a folder or a device)")) << m;
+  // The header's unit scales the entities after it (one pass); an unknown unit, or a unit
+  // after the entities, is refused.
+  const auto dxf = [&](const std::string& first, const std::string& second) {
+    const std::string header = "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n" + first + "\n0\nENDSEC\n";
+    const std::string entities =
+        "0\nSECTION\n2\nENTITIES\n0\nLINE\n8\nL\n10\n0\n20\n0\n11\n1\n21\n0\n0\nENDSEC\n";
+    std::ofstream(dir / "units.dxf")
+        << (second.empty() ? header + entities : entities + header) << "0\nEOF\n";
+    return dir / "units.dxf";
+  };
+  const Drawing inch = read_drawing(dxf("1", ""), DrawingOptions{});
+  ASSERT_EQ(inch.contours.size(), 1u);
+  EXPECT_DOUBLE_EQ(inch.contours[0].contour.length_mm(), 25.4);
+  EXPECT_EQ(inch.units, "in");
+  m = test::message_of([&] { (void)read_drawing(dxf("3", ""), DrawingOptions{}); });
+  EXPECT_TRUE(has(m, "$INSUNITS 3 is a unit trochomill does not read")) << m;
+  m = test::message_of([&] { (void)read_drawing(dxf("1", "after"), DrawingOptions{}); });
+  EXPECT_TRUE(has(m, "$INSUNITS comes after 1 entities")) << m;
   std::filesystem::remove_all(dir);
   // A straight slot still needs its length.
   text = base.substr(base.find("[tool]"));

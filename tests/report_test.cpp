@@ -1,10 +1,12 @@
 // Report helpers: --vary parsing and study tables; the HTML report's decimation and data.
 #include "trochomill/report.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -98,6 +100,73 @@ TEST(Report, DataDocumentHoldsTheAnalysisAndCannotCloseItsScript) {
   // Without a simulation the page carries no three.js.
   EXPECT_EQ(html.find("TrochomillView3D="), std::string::npos);
   EXPECT_NE(html.find("trochomill-data"), std::string::npos);
+}
+
+// A curved slot's report carries the drawing's other layers (the part under the path): the
+// example's part.dxf, written by ezdxf, holds a ring (centre (40, 40), radius 30) and an
+// outline (-15..95 x -15..85) besides the centreline. A drawing whose other layer cannot be
+// read (three lines meeting: a branch) keeps the report, without them and with a note.
+TEST(Report, ACurvedSlotShowsTheDrawingsOtherLayers) {
+  const auto data = [](const Job& job) {
+    ReportData d;
+    d.job = job;
+    d.path = plan_slot(d.job).path;
+    d.metrics = analyze_process(d.job, d.path);
+    return nlohmann::json::parse(report_data_json(d))["path"];
+  };
+  nlohmann::json p = data(load_job(test::example("curves/bend.toml")));
+  const auto& dr = p["drawing"];
+  EXPECT_EQ(dr["layers"], nlohmann::json::parse(R"(["RING", "OUTLINE"])"));
+  EXPECT_TRUE(dr["note"].is_null());
+  ASSERT_EQ(dr["x_mm"].size(), dr["y_mm"].size());
+  double x_lo = 1e9, x_hi = -1e9, y_lo = 1e9, y_hi = -1e9;
+  int breaks = 0, on_ring = 0;
+  for (std::size_t k = 0; k < dr["x_mm"].size(); ++k) {
+    if (dr["x_mm"][k].is_null()) {
+      ++breaks;
+      continue;
+    }
+    const double x = dr["x_mm"][k], y = dr["y_mm"][k];
+    x_lo = std::min(x_lo, x), x_hi = std::max(x_hi, x);
+    y_lo = std::min(y_lo, y), y_hi = std::max(y_hi, y);
+    // Six significant digits in the page's data: 1e-4 mm at 95 mm.
+    if (breaks == 0) {
+      EXPECT_NEAR(std::hypot(x - 40, y - 40), 30.0, 1e-4);
+      ++on_ring;
+    }
+  }
+  EXPECT_EQ(breaks, 1);
+  // The ring as chords of sagitta <= 0.01 mm: 2 pi / (2 acos(1 - 0.01 / 30)) = 122 or more.
+  EXPECT_GE(on_ring, 122);
+  EXPECT_NEAR(x_lo, -15, 1e-9);
+  EXPECT_NEAR(x_hi, 95, 1e-9);
+  EXPECT_NEAR(y_lo, -15, 1e-9);
+  EXPECT_NEAR(y_hi, 85, 1e-9);
+  // The plot's box holds the drawing.
+  EXPECT_LE(p["slot"]["x_min_mm"].get<double>(), -15);
+  EXPECT_GE(p["slot"]["y_max_mm"].get<double>(), 85);
+
+  const auto dir = test::scratch_dir("report-drawing");
+  std::string dxf = "0\nSECTION\n2\nENTITIES\n";
+  const auto line = [&](const char* layer, double x0, double y0, double x1, double y1) {
+    dxf += fmt::format("0\nLINE\n8\n{}\n10\n{}\n20\n{}\n11\n{}\n21\n{}\n", layer, x0, y0, x1, y1);
+  };
+  line("C", 0, 0, 0, 50);
+  line("FORK", 30, 0, 40, 0);
+  line("FORK", 30, 0, 30, 10);
+  line("FORK", 30, 0, 20, 5);
+  dxf += "0\nENDSEC\n0\nEOF\n";
+  std::ofstream(dir / "fork.dxf") << dxf;
+  const Job job = parse_job(
+      "[geometry]\nfile = \"fork.dxf\"\n[tool]\ndiameter = 8.0\nteeth = 3\n[slot]\nalong = "
+      "\"C\"\nwidth = 12.0\ndepth = 2.0\n[cutting]\nfeed_rate = 900.0\nspindle_speed = 6000.0\n"
+      "[path]\ntype = \"circular\"\nstep = 1.0\n",
+      (dir / "fork.toml").string());
+  p = data(job);
+  EXPECT_TRUE(p["drawing"]["x_mm"].empty());
+  const std::string note = p["drawing"]["note"].get<std::string>();
+  EXPECT_NE(note.find("the drawing's other layers are not shown"), std::string::npos) << note;
+  EXPECT_NE(note.find("layer 'FORK': a branch at (30, 0) mm"), std::string::npos) << note;
 }
 
 }  // namespace

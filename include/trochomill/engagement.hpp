@@ -18,6 +18,7 @@
 // chip thickness can have a local maximum (see ChipQuery in src/engagement/kernel.cpp).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -75,13 +76,20 @@ struct EngagementSeries {
 
 /// The radial chip of sample i (mm): its h_max, or 0 where the tool descends into stock no
 /// earlier position touched (a helix, ramp or plunge start: the kernel caps h_max at the
-/// radius there, but the chip is axial). What the program's h_max and the feed schedule
+/// radius there, but the chip is axial), and 0 where it has not moved across since the
+/// sample before and does not descend (a retract or a dwell: the tooth passes where the one
+/// before cut; the kernel measures the chip against the last surface a cutting move left,
+/// which a vertical rapid does not renew). What the program's h_max and the feed schedule
 /// count.
 [[nodiscard]] inline double radial_chip_mm(const EngagementSeries& e, std::size_t i,
                                            double radius_mm) {
-  const bool plunging = i > 0 && e.samples.z_mm[i] < e.samples.z_mm[i - 1] &&
-                        e.h_max_mm[i] >= radius_mm * (1 - 1e-12);
-  return plunging ? 0.0 : e.h_max_mm[i];
+  if (i == 0) return e.h_max_mm[i];
+  const PathSamples& s = e.samples;
+  const bool plunging = s.z_mm[i] < s.z_mm[i - 1] && e.h_max_mm[i] >= radius_mm * (1 - 1e-12);
+  // 1e-9 mm: no move across but rounding.
+  const bool in_place = std::abs(s.x_mm[i] - s.x_mm[i - 1]) <= 1e-9 &&
+                        std::abs(s.y_mm[i] - s.y_mm[i - 1]) <= 1e-9 && s.z_mm[i] >= s.z_mm[i - 1];
+  return plunging || in_place ? 0.0 : e.h_max_mm[i];
 }
 
 /// The top of the stock the engagement kernel cuts (mm): the stock mesh's highest vertex when

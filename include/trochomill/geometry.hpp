@@ -192,9 +192,10 @@ class EllipseCurve final : public PlanarCurve {
 };
 
 /// Tangent-continuous biarcs through the curve from u0 to u1 (split first into `pieces` equal
-/// spans of u, each halved until its biarc stays within 0.8 tolerance_mm of the curve at 24
-/// interior samples). The last arc ends exactly where the curve ends. Throws Error when a
-/// span cannot be fitted after 30 halvings (a feature below the tolerance).
+/// spans of u, each cut into the longest pieces whose biarc stays within 0.8 tolerance_mm of the
+/// curve at 24 interior samples, found by doubling, halving and bisection). The last arc ends
+/// exactly where the curve ends. Throws Error when a piece would need more than 30 halvings (a
+/// feature below the tolerance).
 [[nodiscard]] std::vector<FitArc> fit_biarcs(const PlanarCurve& curve, double u0, double u1,
                                              int pieces, double tolerance_mm);
 /// The end points of chords through the curve from u0 to u1 within tolerance_mm (the start

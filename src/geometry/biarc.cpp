@@ -1,7 +1,8 @@
 // Biarc and chord fitting of planar curves within a deviation tolerance (geometry.hpp). Each piece
 // [u_a, u_b] gets the equal-tangent-length biarc through its end points with the curve's end
-// tangents; if the curve strays from it by more than the tolerance (checked at interior
-// samples, with a safety margin) the piece is halved. The result is tangent-continuous.
+// tangents, accepted where the curve stays within the tolerance of it (checked at interior
+// samples, with a safety margin); each piece as long as such a biarc allows. The result is
+// tangent-continuous.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -64,21 +65,30 @@ double distance_to_arc(const FitArc& arc, const Vec3& p) {
                   std::hypot(p.x() - arc.end.x(), p.y() - arc.end.y()));
 }
 
-// The equal-tangent-length biarc through P0 (tangent T0) and P1 (tangent T1).
-bool biarc(const Vec3& P0, const Vec3& T0, const Vec3& P1, const Vec3& T1, FitArc& a1, FitArc& a2) {
+// The biarc through P0 (tangent T0) and P1 (tangent T1) whose first tangent length is `ratio`
+// times its second (1: the equal-tangent-length biarc). With v = P1 - P0 and tangent lengths
+// d1 = ratio d2, the junction's condition |v - d1 T0 - d2 T1| = d1 + d2 is the quadratic
+// (1 - T0.T1) 2 ratio d2^2 + 2 (ratio v.T0 + v.T1) d2 - v.v = 0 in d2; its positive root.
+bool biarc(const Vec3& P0, const Vec3& T0, const Vec3& P1, const Vec3& T1, double ratio, FitArc& a1,
+           FitArc& a2) {
   const Vec3 v = P1 - P0;
-  const Vec3 t = T0 + T1;
-  const double vt = v.dot(t), vv = v.dot(v), tt = t.dot(t);
-  double d;
-  const double denom = 4.0 - tt;  // = 2 - 2 T0.T1 >= 0
-  if (denom <= 1e-12) {
-    if (std::abs(vt) <= 1e-15) return false;
-    d = vv / (2.0 * vt);
+  const double qa = 2.0 * ratio * (1.0 - T0.dot(T1));
+  const double qb = 2.0 * (ratio * v.dot(T0) + v.dot(T1));
+  const double vv = v.dot(v);
+  double d2;
+  if (qa <= 1e-12) {
+    if (std::abs(qb) <= 1e-15) return false;
+    d2 = vv / qb;
   } else {
-    d = (-vt + std::sqrt(vt * vt + denom * vv)) / denom;
+    // The root (-qb + sqrt(qb^2 + 4 qa vv)) / (2 qa), written without cancellation.
+    const double disc = std::sqrt(qb * qb + 4.0 * qa * vv);
+    d2 = qb >= 0 ? 2.0 * vv / (qb + disc) : (-qb + disc) / (2.0 * qa);
   }
-  if (!(d > 0) || !std::isfinite(d)) return false;
-  const Vec3 J = 0.5 * ((P0 + d * T0) + (P1 - d * T1));
+  const double d1 = ratio * d2;
+  if (!(d1 > 0) || !(d2 > 0) || !std::isfinite(d1) || !std::isfinite(d2)) return false;
+  // The junction divides the segment between the two tangent ends in the ratio d1 : d2.
+  const Vec3 Q0 = P0 + d1 * T0, Q1 = P1 - d2 * T1;
+  const Vec3 J = Q0 + (d1 / (d1 + d2)) * (Q1 - Q0);
   a1 = arc_from_tangent(P0, T0, J);
   // Second arc: from J to P1 with the tangent that arrives along T1; build it backwards.
   FitArc back = arc_from_tangent(P1, -T1, J);
@@ -89,32 +99,86 @@ bool biarc(const Vec3& P0, const Vec3& T0, const Vec3& P1, const Vec3& T1, FitAr
   return true;
 }
 
-void fit_piece(const PlanarCurve& c, double ua, double ub, double tol, int depth,
-               std::vector<FitArc>& out) {
+// The biarc of the curve from ua to ub, if it stays within the tolerance (with the margin) at
+// the interior samples.
+bool fit_span(const PlanarCurve& c, double ua, double ub, double tol, FitArc& a1, FitArc& a2) {
   const Vec3 P0 = c.point(ua), P1 = c.point(ub);
   const Vec3 T0 = c.unit_tangent(ua), T1 = c.unit_tangent(ub);
-  FitArc a1, a2;
-  bool ok = T0.squaredNorm() > 0 && T1.squaredNorm() > 0 && biarc(P0, T0, P1, T1, a1, a2);
-  // A biarc arc turning 135 degrees or more over a piece this short is a loop, however close
-  // the curve's samples lie to it: halve the piece instead.
-  ok = ok && std::abs(a1.sweep_rad) < 0.75 * M_PI && std::abs(a2.sweep_rad) < 0.75 * M_PI;
-  if (ok) {
-    for (int k = 1; k < kCheckSamples && ok; ++k) {
-      const Vec3 p = c.point(ua + (ub - ua) * k / kCheckSamples);
+  if (!(T0.squaredNorm() > 0) || !(T1.squaredNorm() > 0)) return false;
+  // The samples coarse to fine (the middle, the quarters, the eighths, then the rest): a
+  // biarc that strays usually does so at the first ones, so most rejections look at few.
+  static constexpr std::array<int, kCheckSamples - 1> kOrder = {
+      12, 6, 18, 3, 9, 15, 21, 1, 2, 4, 5, 7, 8, 10, 11, 13, 14, 16, 17, 19, 20, 22, 23};
+  std::array<Vec3, kCheckSamples - 1> samples;
+  for (std::size_t i = 0; i < kOrder.size(); ++i) {
+    samples[i] = c.point(ua + (ub - ua) * kOrder[i] / kCheckSamples);
+  }
+  // The equal-tangent biarc first, then junctions moved towards either end (a curve whose
+  // curvature changes along the piece is followed farther by unequal arcs).
+  for (const double ratio : {1.0, 0.8, 1.25, 0.6, 1.0 / 0.6, 0.45, 1.0 / 0.45, 0.3, 1.0 / 0.3}) {
+    if (!biarc(P0, T0, P1, T1, ratio, a1, a2)) continue;
+    // A biarc arc turning 135 degrees or more over a piece this short is a loop, however close
+    // the curve's samples lie to it: a shorter piece instead.
+    bool ok = std::abs(a1.sweep_rad) < 0.75 * M_PI && std::abs(a2.sweep_rad) < 0.75 * M_PI;
+    for (const Vec3& p : samples) {
+      if (!ok) break;
       ok = std::min(distance_to_arc(a1, p), distance_to_arc(a2, p)) <= kSafety * tol;
     }
+    if (ok) return true;
   }
-  if (ok || depth >= kMaxDepth) {
-    if (!ok) {
-      throw Error("biarc fit did not converge: the curve has a feature below the tolerance");
+  return false;
+}
+
+// The span [a, b] as few biarcs as the search finds: from each piece's start, the longest
+// piece that fits (grown from the last piece's length by doubling, or halved until it fits,
+// then bisected to within 1/16 of its length), so a curve of slowly changing curvature gets
+// pieces of the length its tolerance allows rather than of a power-of-two share of the span.
+void fit_span_greedy(const PlanarCurve& c, double a, double b, double tol,
+                     std::vector<FitArc>& out) {
+  // In the share t of the span (u = a + t (b - a)): a curve may run backwards in u.
+  const auto u = [&](double t) { return t >= 1 ? b : a + t * (b - a); };
+  const auto fits = [&](double ta, double tb, FitArc& f1, FitArc& f2) {
+    return fit_span(c, u(ta), u(tb), tol, f1, f2);
+  };
+  double ta = 0, guess = 1;
+  FitArc a1, a2, t1, t2;
+  while (ta < 1) {
+    double lo = std::min(1.0, ta + guess), hi = 1;
+    bool bracketed = false;  // hi fails
+    if (fits(ta, lo, a1, a2)) {
+      while (lo < 1) {
+        const double t = std::min(1.0, ta + 2 * (lo - ta));
+        if (!fits(ta, t, t1, t2)) {
+          hi = t;
+          bracketed = true;
+          break;
+        }
+        lo = t, a1 = t1, a2 = t2;
+      }
+    } else {
+      bracketed = true;
+      int depth = 0;
+      do {
+        if (++depth > kMaxDepth) {
+          throw Error("biarc fit did not converge: the curve has a feature below the tolerance");
+        }
+        hi = lo;
+        lo = ta + 0.5 * (lo - ta);
+      } while (!fits(ta, lo, a1, a2));
+    }
+    while (bracketed && hi - lo > (lo - ta) / 16) {
+      const double m = 0.5 * (lo + hi);
+      if (fits(ta, m, t1, t2)) {
+        lo = m, a1 = t1, a2 = t2;
+      } else {
+        hi = m;
+      }
     }
     out.push_back(a1);
     out.push_back(a2);
-    return;
+    guess = lo - ta;
+    ta = lo;
   }
-  const double um = 0.5 * (ua + ub);
-  fit_piece(c, ua, um, tol, depth + 1, out);
-  fit_piece(c, um, ub, tol, depth + 1, out);
 }
 
 double chord_deviation(const PlanarCurve& c, double ua, double ub) {
@@ -149,8 +213,9 @@ std::vector<FitArc> fit_biarcs(const PlanarCurve& curve, double u0, double u1, i
   std::vector<FitArc> out;
   const int n = std::max(1, pieces);
   const double du = (u1 - u0) / n;
-  for (int i = 0; i < n; ++i)
-    fit_piece(curve, u0 + du * i, u0 + du * (i + 1), tolerance_mm, 0, out);
+  for (int i = 0; i < n; ++i) {
+    fit_span_greedy(curve, u0 + du * i, i + 1 == n ? u1 : u0 + du * (i + 1), tolerance_mm, out);
+  }
   return out;
 }
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <tuple>
 #include <unordered_map>
 
@@ -20,63 +21,109 @@ const Vec2& end_point(const std::vector<DrawnPiece>& p, End e) {
   return e % 2 == 0 ? p[e / 2].piece.start : p[e / 2].piece.end;
 }
 
-// The ends within `tol` of each end (same layer only), in compressed rows: the partners of
-// end e are list[first[e] .. first[e + 1]). Found through the ends sorted by layer and grid
-// cell: cells 2 tol wide, so an end's partners lie in its cell or the next one towards the
-// half of the cell it is in, along x and y: two runs of the sorted ends, each found by one
-// binary search (the cells of one column, y next to y, are consecutive).
+// The piece ends by layer and grid cell, for the ends near a point: cells `size` wide, so the
+// ends within size / 2 of a point lie in its cell or the next one towards the half of the
+// cell it is in, along x and y (four cells). A hash table of the cells, each cell's ends
+// linked through `next_` (the table's order depends on the input only).
+class EndGrid {
+ public:
+  EndGrid(const std::vector<DrawnPiece>& p, const std::vector<End>& ends,
+          const std::vector<std::uint32_t>& layer, double size)
+      : p_(p), layer_(layer), size_(size), next_(ends.size(), kNone) {
+    std::size_t slots = 16;
+    while (slots < 2 * ends.size()) slots *= 2;
+    head_.assign(slots, kNone);
+    cell_.resize(ends.size());
+    for (std::size_t k = 0; k < ends.size(); ++k) {
+      const Vec2& v = end_point(p_, ends[k]);
+      cell_[k] = {ends[k], layer_[ends[k] / 2], cell(v.x()), cell(v.y())};
+      std::size_t& h = head_[slot(cell_[k].layer, cell_[k].x, cell_[k].y)];
+      next_[k] = h;
+      h = k;
+    }
+  }
+  // Calls f(end) for every end of the layer in the four cells near a, until f returns false.
+  template <class F>
+  void near(const Vec2& a, std::uint32_t layer, F&& f) const {
+    const double cx = a.x() / size_, cy = a.y() / size_;
+    const std::int64_t ix = cell(a.x()), iy = cell(a.y());
+    const std::int64_t ox = cx - static_cast<double>(ix) < 0.5 ? -1 : 1;
+    const std::int64_t oy = cy - static_cast<double>(iy) < 0.5 ? -1 : 1;
+    for (const std::int64_t x : {ix, ix + ox}) {
+      for (const std::int64_t y : {iy, iy + oy}) {
+        for (std::size_t k = head_[slot(layer, x, y)]; k != kNone; k = next_[k]) {
+          const Cell& c = cell_[k];
+          if (c.layer == layer && c.x == x && c.y == y && !f(c.end)) return;
+        }
+      }
+    }
+  }
+
+ private:
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  struct Cell {
+    End end;
+    std::uint32_t layer;
+    std::int64_t x, y;
+  };
+  [[nodiscard]] std::int64_t cell(double v) const {
+    return static_cast<std::int64_t>(std::floor(v / size_));
+  }
+  [[nodiscard]] std::size_t slot(std::uint32_t layer, std::int64_t x, std::int64_t y) const {
+    auto h = static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ULL;
+    h ^= static_cast<std::uint64_t>(y) * 0xC2B2AE3D27D4EB4FULL + (h >> 29);
+    h ^= static_cast<std::uint64_t>(layer) * 0x165667B19E3779F9ULL + (h >> 32);
+    return static_cast<std::size_t>(h ^ (h >> 31)) & (head_.size() - 1);
+  }
+  const std::vector<DrawnPiece>& p_;
+  const std::vector<std::uint32_t>& layer_;
+  double size_;
+  std::vector<std::size_t> head_, next_;
+  std::vector<Cell> cell_;
+};
+
+// Layers as numbers (pieces of one layer mostly come together: compare with the last).
+std::vector<std::uint32_t> layer_numbers(const std::vector<DrawnPiece>& p) {
+  std::vector<std::uint32_t> layer(p.size());
+  std::unordered_map<std::string, std::uint32_t> ids;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (i > 0 && p[i].layer == p[i - 1].layer) {
+      layer[i] = layer[i - 1];
+    } else {
+      layer[i] = ids.emplace(p[i].layer, static_cast<std::uint32_t>(ids.size())).first->second;
+    }
+  }
+  return layer;
+}
+
+// The ends within `tol` of each end (same layer only, other pieces), in compressed rows: the
+// partners of end e are list[first[e] .. first[e + 1]), in end order. At most three are kept:
+// one is a join, two or more a branch (reported with them), and a point where thousands of
+// ends meet then costs no more than one where three do.
 struct Partners {
   std::vector<std::size_t> first;
   std::vector<End> list;
   [[nodiscard]] std::size_t count(End e) const { return first[e + 1] - first[e]; }
 };
 
-Partners partners_of(const std::vector<DrawnPiece>& p, double tol) {
-  // Layers as numbers (pieces of one layer mostly come together: compare with the last).
-  std::vector<std::uint32_t> layer(p.size());
-  {
-    std::unordered_map<std::string, std::uint32_t> ids;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (i > 0 && p[i].layer == p[i - 1].layer) {
-        layer[i] = layer[i - 1];
-      } else {
-        layer[i] = ids.emplace(p[i].layer, static_cast<std::uint32_t>(ids.size())).first->second;
-      }
-    }
-  }
-  using Key = std::tuple<std::uint32_t, std::int64_t, std::int64_t>;  // layer, cell x, cell y
-  const double size = 2 * tol;
+Partners partners_of(const std::vector<DrawnPiece>& p, const std::vector<std::uint32_t>& layer,
+                     double tol) {
   const std::size_t n = 2 * p.size();
-  std::vector<std::pair<Key, End>> cells(n);
-  for (End e = 0; e < n; ++e) {
-    const Vec2& v = end_point(p, e);
-    cells[e] = {Key{layer[e / 2], static_cast<std::int64_t>(std::floor(v.x() / size)),
-                    static_cast<std::int64_t>(std::floor(v.y() / size))},
-                e};
-  }
-  std::sort(cells.begin(), cells.end());
+  std::vector<End> all(n);
+  for (End e = 0; e < n; ++e) all[e] = e;
+  const EndGrid grid(p, all, layer, 2 * tol);
   Partners out;
   out.first.reserve(n + 1);
+  out.list.reserve(n);
   std::vector<End> mine;
   for (End e = 0; e < n; ++e) {
     out.first.push_back(out.list.size());
     const Vec2& a = end_point(p, e);
-    const double cx = a.x() / size, cy = a.y() / size;
-    const auto ix = static_cast<std::int64_t>(std::floor(cx));
-    const auto iy = static_cast<std::int64_t>(std::floor(cy));
-    const std::int64_t ox = cx - static_cast<double>(ix) < 0.5 ? -1 : 1;
-    const std::int64_t oy = cy - static_cast<double>(iy) < 0.5 ? -1 : 1;
     mine.clear();
-    for (const std::int64_t x : {ix, ix + ox}) {
-      const Key lo{layer[e / 2], x, std::min(iy, iy + oy)};
-      const Key hi{layer[e / 2], x, std::max(iy, iy + oy)};
-      auto it = std::lower_bound(cells.begin(), cells.end(), lo,
-                                 [](const auto& c, const Key& k) { return c.first < k; });
-      for (; it != cells.end() && it->first <= hi; ++it) {
-        const End f = it->second;
-        if (f / 2 != e / 2 && (end_point(p, f) - a).norm() <= tol) mine.push_back(f);
-      }
-    }
+    grid.near(a, layer[e / 2], [&](End f) {
+      if (f / 2 != e / 2 && (end_point(p, f) - a).norm() <= tol) mine.push_back(f);
+      return mine.size() < 3;
+    });
     std::sort(mine.begin(), mine.end());
     out.list.insert(out.list.end(), mine.begin(), mine.end());
   }
@@ -103,7 +150,8 @@ std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces, double jo
       }
     }
   }
-  const Partners partners = partners_of(pieces, join_mm);
+  const std::vector<std::uint32_t> layer = layer_numbers(pieces);
+  const Partners partners = partners_of(pieces, layer, join_mm);
   for (End e = 0; e < 2 * pieces.size(); ++e) {
     if (partners.count(e) >= 2) {
       std::string names = pieces[e / 2].entity;
@@ -175,22 +223,34 @@ std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces, double jo
     if (!closed) free_ends.push_back({head, tail});
     out.push_back(std::move(c));
   }
-  // A gap: two free ends nearer than ten tolerances were meant to meet.
+  // A gap: two free ends nearer than ten tolerances were meant to meet (the first pair in the
+  // order of the chains' ends).
   std::vector<End> ends;
   for (const auto& [h, t] : free_ends) ends.insert(ends.end(), {h, t});
   const double near = 10 * join_mm;
+  const EndGrid grid(pieces, ends, layer, 2 * near);
+  std::vector<std::size_t> order(2 * pieces.size(), 0);  // end -> its place in `ends`
+  for (std::size_t k = 0; k < ends.size(); ++k) order[ends[k]] = k;
+  std::optional<std::pair<std::size_t, std::size_t>> gap;
   for (std::size_t a = 0; a < ends.size(); ++a) {
-    for (std::size_t b = a + 1; b < ends.size(); ++b) {
-      const DrawnPiece &pa = pieces[ends[a] / 2], &pb = pieces[ends[b] / 2];
-      if (pa.layer != pb.layer) continue;
-      const double g = (end_point(pieces, ends[a]) - end_point(pieces, ends[b])).norm();
-      if (g <= near) {
-        throw InputError(fmt::format(
-            "layer '{}': a gap of {:.6g} mm at {} between {} and {} (ends join within {} mm; "
-            "close the gap in the drawing or raise the join tolerance)",
-            pa.layer, g, at(end_point(pieces, ends[a])), pa.entity, pb.entity, join_mm));
+    const Vec2& pa = end_point(pieces, ends[a]);
+    grid.near(pa, layer[ends[a] / 2], [&](End f) {
+      const std::size_t b = order[f];
+      if (b > a && (end_point(pieces, f) - pa).norm() <= near && (!gap || std::pair{a, b} < *gap)) {
+        gap = {a, b};
       }
-    }
+      return true;
+    });
+    if (gap && gap->first == a) break;
+  }
+  if (gap) {
+    const DrawnPiece &pa = pieces[ends[gap->first] / 2], &pb = pieces[ends[gap->second] / 2];
+    const Vec2& va = end_point(pieces, ends[gap->first]);
+    const double g = (va - end_point(pieces, ends[gap->second])).norm();
+    throw InputError(fmt::format(
+        "layer '{}': a gap of {:.6g} mm at {} between {} and {} (ends join within {} mm; "
+        "close the gap in the drawing or raise the join tolerance)",
+        pa.layer, g, at(va), pa.entity, pb.entity, join_mm));
   }
   return out;
 }

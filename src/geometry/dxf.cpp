@@ -110,10 +110,30 @@ class Reader final : public DL_CreationAdapter {
   std::vector<DrawnPiece> pieces;
   std::vector<std::string> problems;
   std::optional<int> insunits_code;
+  std::optional<std::string> units_error;  ///< a unit it cannot read, or one after entities
+  const char* units = insunits(0)->second;
+  [[nodiscard]] double unit() const { return unit_; }
   std::vector<std::string> seen_layers;  ///< of every entity, chosen or not
 
+  // The unit, from the header (before any entity: the pieces are scaled as they come).
   void setVariableInt(const std::string& key, int value, int) override {
-    if (key == "$INSUNITS") insunits_code = value;
+    if (key != "$INSUNITS") return;
+    insunits_code = value;
+    const auto unit = insunits(value);
+    if (!unit) {
+      units_error = fmt::format(
+          "{}: $INSUNITS {} is a unit trochomill does not read (0 unitless, 1 in, 2 ft, 4 mm, "
+          "5 cm, 6 m, 8 microinch, 9 mil, 10 yd, 13 micron, 14 dm)",
+          src_, value);
+    } else if (entities_ > 0) {
+      units_error = fmt::format(
+          "{}: $INSUNITS comes after {} entities (a DXF's HEADER section comes before its "
+          "ENTITIES)",
+          src_, entities_);
+    } else {
+      unit_ = unit->first;
+      units = unit->second;
+    }
   }
   void addBlock(const DL_BlockData&) override {
     flush();
@@ -228,7 +248,8 @@ class Reader final : public DL_CreationAdapter {
   // Starts an entity: its name for messages, its layer, its plane. False: skip it.
   bool begin(const char* kind) {
     flush();
-    if (in_block_) return false;
+    ++entities_;
+    if (in_block_ || units_error) return false;
     const DL_Attributes& at = getAttributes();
     entity_ = fmt::format("{} #{:X}", kind, at.getHandle() < 0 ? 0 : at.getHandle());
     layer_ = at.getLayer();
@@ -335,32 +356,9 @@ class Reader final : public DL_CreationAdapter {
   std::string entity_, layer_;
   std::optional<Poly> poly_;
   std::optional<Spline> spline_;
-
- public:
-  double unit_ = 1;
+  std::size_t entities_ = 0;
+  double unit_ = insunits(0)->first;
 };
-
-// The unit first ($INSUNITS is in the header, before any entity; a second pass is cheap).
-void read_units(const std::string& text, Drawing& d, const std::string& source) {
-  struct Units final : public DL_CreationAdapter {
-    std::optional<int> code;
-    void setVariableInt(const std::string& key, int value, int) override {
-      if (key == "$INSUNITS") code = value;
-    }
-  } u;
-  std::istringstream in(text);
-  DL_Dxf().in(in, &u);
-  if (!u.code) u.code = 0;
-  const auto unit = insunits(*u.code);
-  if (!unit) {
-    throw InputError(fmt::format(
-        "{}: $INSUNITS {} is a unit trochomill does not read (0 unitless, 1 in, 2 ft, 4 mm, "
-        "5 cm, 6 m, 8 microinch, 9 mil, 10 yd, 13 micron, 14 dm)",
-        source, *u.code));
-  }
-  d.mm_per_unit = unit->first;
-  d.units = unit->second;
-}
 
 }  // namespace
 
@@ -369,13 +367,14 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   const std::string text = read_drawing_text(file, "DXF", options);
   Drawing d;
   d.file = file;
-  read_units(text, d, source);
   Reader r(source, options);
-  r.unit_ = d.mm_per_unit;
   std::istringstream in(text);
   DL_Dxf dxf;
   dxf.in(in, &r);
   r.flush();
+  if (r.units_error) throw InputError(*r.units_error);
+  d.mm_per_unit = r.unit();
+  d.units = r.units;
   if (!r.problems.empty()) throw InputError(r.problems);
   std::vector<std::string>& seen = r.seen_layers;
   std::sort(seen.begin(), seen.end());

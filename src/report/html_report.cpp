@@ -13,6 +13,7 @@
 #include <numeric>
 
 #include "trochomill/error.hpp"
+#include "trochomill/geometry/drawing.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/version.hpp"
 #include "web_assets.hpp"
@@ -156,6 +157,40 @@ json path_part(const ReportData& d) {
     outline_x = {number(x_min), number(x_max), number(x_max), number(x_min), number(x_min)};
     outline_y = {number(y_min), number(y_min), number(y_max), number(y_max), number(y_min)};
   }
+  // The drawing under a curved slot: every contour of the other layers (the part's walls,
+  // islands, holes), as chords within 0.01 mm, null between them. A drawing whose other layers
+  // cannot be read (a gap, a branch) leaves them out with a note; the slot was read alone.
+  json drawing_x = json::array(), drawing_y = json::array(), drawing_layers = json::array();
+  json drawing_note = nullptr;
+  if (d.job.slot.curved() && !d.job.geometry.path.empty()) {
+    DrawingOptions o;
+    o.join_tolerance_mm = d.job.geometry.join_tolerance_mm;
+    o.arc_tolerance_mm = std::max(d.job.machine.arc_tolerance_mm, 0.01);
+    try {
+      const Drawing drawing = read_drawing(d.job.geometry.path, o);
+      for (const DrawnContour& c : drawing.contours) {
+        if (c.layer == d.job.slot.along) continue;
+        if (std::find(drawing_layers.begin(), drawing_layers.end(), c.layer) ==
+            drawing_layers.end()) {
+          drawing_layers.push_back(c.layer);
+        }
+        const std::vector<Vec2> pts = c.contour.points(0.01);
+        if (!drawing_x.empty()) {
+          drawing_x.push_back(nullptr);
+          drawing_y.push_back(nullptr);
+        }
+        for (std::size_t k = 0; k < pts.size() + (c.contour.closed ? 1 : 0); ++k) {
+          const Vec2& q = pts[k % pts.size()];
+          drawing_x.push_back(number(q.x()));
+          drawing_y.push_back(number(q.y()));
+          x_min = std::min(x_min, q.x()), x_max = std::max(x_max, q.x());
+          y_min = std::min(y_min, q.y()), y_max = std::max(y_max, q.y());
+        }
+      }
+    } catch (const InputError& e) {
+      drawing_note = fmt::format("the drawing's other layers are not shown: {}", e.what());
+    }
+  }
   // The samples are uniform in time but the last (at the end): t_i = i dt, the last T.
   json out = {{"dt_s", s.size() > 1 ? number(s.t_s[1] - s.t_s[0]) : json(0.0)},
               {"samples", s.size()},
@@ -176,6 +211,11 @@ json path_part(const ReportData& d) {
                 {"along", d.job.slot.along},
                 {"depth_mm", number(d.job.slot.depth_mm)}}},
               {"outline", {{"x_mm", outline_x}, {"y_mm", outline_y}}},
+              {"drawing",
+               {{"x_mm", drawing_x},
+                {"y_mm", drawing_y},
+                {"layers", drawing_layers},
+                {"note", drawing_note}}},
               {"cycle_from_s", number(d.metrics.cycle_start_s)},
               {"cycle_to_s", number(d.metrics.cycle_start_s + d.metrics.cycle_time_s)},
               {"periodic", d.metrics.periodic}};

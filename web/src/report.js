@@ -440,6 +440,8 @@ function pathPart() {
   const sl = p.slot;
   // The slot's boundaries (a rectangle, or the region along a drawing's contour), null between.
   const outline = [p.outline.x_mm, p.outline.y_mm];
+  // The drawing's other contours under the path (a curved slot's part), null between them.
+  const drawing = p.drawing ? [p.drawing.x_mm, p.drawing.y_mm] : [[], []];
   const disc = (cx, cy) => {
     const xs = [], ys = [];
     for (let k = 0; k <= 72; k++) {
@@ -489,14 +491,17 @@ function pathPart() {
   };
   const mk = (label, stroke, extra = {}) => ({ label, stroke, facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }],
     paths: polyline, points: { show: false }, width: 1.2, ...extra });
-  const series = [{}, mk('slot', '#5b6475', { width: 2 }), mk('feed moves', '#9aa4b5'), mk('rapids', '#bf8700', { dash: [6, 4] }),
+  const hasDrawing = drawing[0].length > 0;
+  const series = [{}, mk('slot', '#5b6475', { width: 2 }),
+    ...(hasDrawing ? [mk(`drawing (${p.drawing.layers.join(', ')})`, '#2da44e', { width: 1.4 })] : []), mk('feed moves', '#9aa4b5'), mk('rapids', '#bf8700', { dash: [6, 4] }),
     mk('entry', '#8250df', { width: 2 }), mk('steady cycle', '#1f6feb', { width: 2.2 }),
     mk('tool disc', '#d1242f', { width: 2 }), mk('tool centre', '#d1242f', { width: 2 })];
   const cross = (cx, cy) => {
     const h = p.tool_radius_mm / 6;
     return [[cx - h, cx + h, null, cx, cx], [cy, cy, null, cy - h, cy + h]];
   };
-  const dataTop = [null, outline, feed, rapid, entry, cycle, disc(pos0.x, pos0.y), cross(pos0.x, pos0.y)];
+  const dataTop = [null, outline, ...(hasDrawing ? [drawing] : []), feed, rapid, entry, cycle, disc(pos0.x, pos0.y), cross(pos0.x, pos0.y)];
+  const iDisc = dataTop.length - 2, iCross = dataTop.length - 1;
   const u = new uPlot({
     mode: 2, width, height,
     scales: { x: { time: false, range: xr }, y: { range: yr } },
@@ -519,8 +524,8 @@ function pathPart() {
   const label = el('span', { class: 'readout' });
   const setTime = (t) => {
     const q = at(Number(t));
-    dataTop[6] = disc(q.x, q.y);
-    dataTop[7] = cross(q.x, q.y);
+    dataTop[iDisc] = disc(q.x, q.y);
+    dataTop[iCross] = cross(q.x, q.y);
     u.setData(dataTop, false);
     slider.value = q.t;
     label.textContent = `t ${q.t.toFixed(3)} s   x ${q.x.toFixed(4)} mm   y ${q.y.toFixed(4)} mm   z ${q.z.toFixed(4)} mm`;
@@ -529,6 +534,7 @@ function pathPart() {
   };
   slider.addEventListener('input', () => setTime(slider.value));
   fig.box.append(el('div', { class: 'slider' }, el('span', { text: 'time' }), slider, label));
+  if (p.drawing && p.drawing.note) fig.box.append(el('p', { class: 'note', text: p.drawing.note }));
   api.setTime = setTime;
   api.positionAt = at;
   setTime(pos0.t);
