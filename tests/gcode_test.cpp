@@ -498,6 +498,35 @@ TEST(GcodeComp, TheToolTableGivesTheRadiusAndFanucIsWarned) {
   EXPECT_NE(p.info.warnings[0].find("table.nc:4: G41 read with LinuxCNC's rules"),
             std::string::npos)
       << p.info.warnings[0];
+  // A tool the table lacks: LinuxCNC's diameter 0 (the path as programmed), or the job's
+  // tool where one is given, each with a warning.
+  o = GcodeReadOptions{};
+  p = read_gcode(body, "missing.ngc", o);
+  ASSERT_EQ(p.path.segments().size(), 3u);
+  EXPECT_NEAR(p.path.segments()[1].axis_a().norm(), 20, 1e-12);
+  ASSERT_EQ(p.info.warnings.size(), 1u);
+  EXPECT_NE(p.info.warnings[0].find("G41: tool 4 is not in the tool table (--tool-table, "
+                                    "[machine] tool_table): its diameter is taken as 0 (as "
+                                    "LinuxCNC does): the path is not compensated"),
+            std::string::npos)
+      << p.info.warnings[0];
+  o.missing_tool_diameter_mm = 8;
+  p = read_gcode(body, "missing.ngc", o);
+  ASSERT_EQ(p.path.segments().size(), 3u);
+  EXPECT_NEAR(p.path.segments()[1].axis_a().norm(), 16, 1e-12);  // 20 - 8 / 2
+  ASSERT_EQ(p.info.warnings.size(), 1u);
+  EXPECT_NE(p.info.warnings[0].find("its diameter is taken as the job's tool's, 8 mm"),
+            std::string::npos)
+      << p.info.warnings[0];
+}
+
+// A program without motion reads, with a warning (LinuxCNC runs it); what analyses the path
+// refuses it, naming the file.
+TEST(GcodeReader, AProgramWithoutMotionReadsWithAWarning) {
+  const GcodeProgram p = read_gcode("G21 G90 (just a header)\nM3 S1000\nM2\n", "nm.ngc");
+  EXPECT_TRUE(p.path.empty());
+  ASSERT_EQ(p.info.warnings.size(), 1u);
+  EXPECT_EQ(p.info.warnings[0], "nm.ngc: the program has no motion (no G0/G1/G2/G3 moves)");
 }
 
 // ---- Fanuc Macro B (hand-computed motion: LinuxCNC does not read these) ----------------------

@@ -122,7 +122,13 @@ ToolPath job_path(const Job& job, const std::string& gcode_file, std::optional<d
   GcodeReadOptions ro = gcode_options(job.machine).read;
   // Reading leaves the most of the memory to the work on the path (samples, chips).
   ro.max_path_bytes = kPathShareOfMemory * memory_limit_bytes(memory_gb);
+  ro.missing_tool_diameter_mm = job.tool.diameter_mm;
   GcodeProgram prog = read_gcode_file(gcode_file, ro);
+  if (prog.path.empty()) {
+    throw InputError(fmt::format(
+        "{}: the program has no motion (no G0/G1/G2/G3 moves): there is nothing to analyse",
+        gcode_file));
+  }
   for (const std::string& w : prog.info.warnings) fmt::print(stderr, "warning: {}\n", w);
   if (lines != nullptr) {
     lines->segment_lines = std::move(prog.segment_lines);

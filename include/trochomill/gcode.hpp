@@ -88,8 +88,11 @@ struct GcodeMove {
 /// The interpreter's setting: the language, where the machine's offsets and home are, the
 /// tool table, the limits that stop a runaway program. Machine positions are mm.
 struct GcodeReadOptions {
-  double rapid_rate_mm_per_min = 10000;    ///< speed given to G0 moves (mm/min)
-  double arc_radius_tolerance_mm = 0.002;  ///< allowed start/end radius mismatch of arcs (mm)
+  double rapid_rate_mm_per_min = 10000;  ///< speed given to G0 moves (mm/min)
+  /// How far an R-form arc's radius may fall short of half its chord (mm); a centre-form arc's
+  /// radii to start and end may differ as LinuxCNC allows (0.02 sqrt(2) mm, or 0.002 sqrt(2)
+  /// in in G20, and 0.1 %).
+  double arc_radius_tolerance_mm = 0.002;
   /// The language: linuxcnc (RS274/NGC with O-words) or fanuc (Macro B); sinumerik and grbl
   /// read as linuxcnc's plain subset plus their unit words.
   Dialect dialect = Dialect::linuxcnc;
@@ -97,6 +100,9 @@ struct GcodeReadOptions {
   /// define the subroutine itself (the program's own folder is searched first).
   std::vector<std::filesystem::path> include_dirs;
   std::map<int, ToolTableEntry> tools;  ///< tool number -> entry; a missing tool has length 0
+  /// The diameter (mm) cutter compensation takes for a tool neither `tools` nor the table has
+  /// (the job's tool where a job reads the program; 0, LinuxCNC's, otherwise), with a warning.
+  double missing_tool_diameter_mm = 0;
   /// A LinuxCNC tool table read when the program is (its entries over `tools`); empty: none.
   std::filesystem::path tool_table;
   /// Origins of G54, G55, ... G59.3 (index 0 .. 8) in machine coordinates (mm) and their XY

@@ -93,8 +93,10 @@ GcodeProgram Interpreter::run() {
   comp_.dequeue();  // compensated moves still waiting run as they are
   prog_.info.lines = std::max(prog_.info.lines, main_lines_);
   for (const Source& src : sources_) prog_.source_files.push_back(src.name);
+  // A program without motion (a setting, a probe-less macro, a tool change) is a program
+  // LinuxCNC runs; what needs moves (analysis, simulation) says so where it needs them.
   if (prog_.path.empty() && prog_.summary.segments == 0) {
-    throw InputError(
+    prog_.info.warnings.push_back(
         fmt::format("{}: the program has no motion (no G0/G1/G2/G3 moves)", sources_[0].name));
   }
   return std::move(prog_);
@@ -274,6 +276,7 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
       case 70:
       case 80:
       case 90:
+        break;  // coolant: queued with the compensated moves (LinuxCNC)
       case 480:
       case 490:
       case 500:
@@ -407,7 +410,13 @@ void Interpreter::run_motion(const BlockCodes& codes) {
   }
   const bool axis_used_by_group0 =
       group0 == 100 || group0 == 280 || group0 == 300 || group0 == 520 || group0 == 920;
-  if (block_.has_axis() && !axis_used_by_group0) {
+  // G2/G3 with its centre and no end point: a full circle back to the start (LinuxCNC); an
+  // R-form arc needs its end.
+  const char o1 = plane_ == Plane::zx ? 'k' : plane_ == Plane::yz ? 'j' : 'i';
+  const char o2 = plane_ == Plane::zx ? 'i' : plane_ == Plane::yz ? 'k' : 'j';
+  full_circle_ = motion >= 20 && motion <= 30 && !axis_used_by_group0 && !block_.has_axis() &&
+                 !block_.has('r') && (block_.has(o1) || block_.has(o2));
+  if ((block_.has_axis() || full_circle_) && !axis_used_by_group0) {
     if (motion == 800) {
       fail_at(motion_col, "G80 cancels the motion mode: it cannot take axis words");
     }

@@ -48,6 +48,21 @@ void Interpreter::read_block(std::size_t i) {
       }
       continue;
     }
+    if ((c == '@' || c == '^') && !fanuc_) {
+      // LinuxCNC's polar words (its find_ends): distance @ and angle ^ in the XY plane.
+      ++i;
+      if (i >= s.size()) fail(at, fmt::format("'{}' needs a number after it", c));
+      word_ = c;
+      word_at_ = at;
+      const double v = read_value(i);
+      word_ = 0;
+      bool& has = c == '@' ? block_.has_polar_r : block_.has_polar_a;
+      if (has) fail(at, fmt::format("two {} words in one block", c));
+      has = true;
+      (c == '@' ? block_.polar_r : block_.polar_a_deg) = v;
+      (c == '@' ? block_.polar_r_col : block_.polar_a_col) = col_of(at);
+      continue;
+    }
     if (c < 'a' || c > 'z') {
       fail(i, fmt::format("unexpected character {} (expected a word such as G1 or X10)",
                           ngc::shown(c)));
@@ -177,9 +192,18 @@ BlockCodes Interpreter::group_codes() const {
 
 // Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).
 void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp_word) const {
-  const bool moved = block_.has_axis() && group0 != 100 && group0 != 920 && group0 != 520;
+  const bool moved =
+      (block_.has_axis() || full_circle_) && group0 != 100 && group0 != 920 && group0 != 520;
   const bool cycle = moved && motion_ >= 730;
   const bool arc = moved && (motion_ == 20 || motion_ == 30);
+  if (block_.has_polar() && !moved && group0 != 280 && group0 != 300) {
+    fail_at(block_.polar_col(), fmt::format("{} word with no motion to use it (polar coordinates "
+                                            "place a G0/G1/G2/G3 or canned cycle's end)",
+                                            block_.has_polar_r ? '@' : '^'));
+  }
+  // G64 P- Q-: the path blending tolerance and the naive cam tolerance (no effect on the path).
+  const bool g64 = std::any_of(block_.g.begin(), block_.g.end(),
+                               [](const Block::Code& c) { return c.code10 == 640; });
   bool m61 = false;
   for (const auto& mc : block_.m) m61 = m61 || mc.code10 == 610;
   auto refuse = [&](char c, const char* users) {
@@ -187,7 +211,7 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   };
   const bool q_cycle =
       cycle && (motion_ == 730 || motion_ == 830 || (fanuc_ && (motion_ == 760 || motion_ == 870)));
-  if (block_.has('q') && !q_cycle && !m61) refuse('q', "G73, G83 or M61");
+  if (block_.has('q') && !q_cycle && !m61 && !g64) refuse('q', "G64, G73, G83 or M61");
   const bool m98 = pending_m98_.has_value();
   // LinuxCNC takes no L with G74 (its check lists G73 and G76-G89).
   const bool l_cycle = cycle && (fanuc_ || motion_ != 740);
@@ -201,8 +225,9 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   for (const char c : std::string_view("ijk")) {
     if (block_.has(c) && !arc && !g87) refuse(c, "G2/G3 or G87");
   }
-  if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_) {
-    refuse('p', "G2/G3, G4, G10 or canned cycle");
+  if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_ &&
+      !g64) {
+    refuse('p', "G2/G3, G4, G10, G64 or canned cycle");
   }
   if (block_.has('h') && tool_length != 430) refuse('h', "G43");
   // D alone: LinuxCNC refuses it; Sinumerik's "T1 D1" (its tool offset) is tolerated, as its

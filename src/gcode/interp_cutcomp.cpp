@@ -86,13 +86,18 @@ void CutterComp::start(int g, std::uint32_t column) {
     } else {
       const auto it = interp_.tools_.find(static_cast<int>(tool));
       if (it == interp_.tools_.end()) {
-        interp_.fail_at(
-            interp_.block_.has('d') ? interp_.block_.col('d') : column,
-            fmt::format("{}: tool {:g} is not in the tool table (--tool-table, [machine] "
-                        "tool_table); its diameter sets the offset",
-                        name, tool));
+        // LinuxCNC runs a tool its table lacks with diameter 0; a job's tool stands in.
+        const double d = interp_.opt_.missing_tool_diameter_mm;
+        interp_.warn(fmt::format(
+            "{}: tool {:g} is not in the tool table (--tool-table, [machine] tool_table): its "
+            "diameter is taken as {}",
+            name, tool,
+            d > 0 ? fmt::format("the job's tool's, {:g} mm", d)
+                  : std::string("0 (as LinuxCNC does): the path is not compensated")));
+        radius = 0.5 * d;
+      } else {
+        radius = 0.5 * it->second.diameter_mm;
       }
-      radius = 0.5 * it->second.diameter_mm;
     }
   }
   if (radius < 0) {  // a negative diameter offsets to the other side (LinuxCNC)

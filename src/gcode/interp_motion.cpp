@@ -19,6 +19,12 @@ namespace trochomill::gcode_detail {
 // or G53's machine coordinates.
 Vec3 Interpreter::ends(bool g53) {
   Vec3 t = cur_pos_;
+  if (block_.has_polar()) {
+    if (g53) fail_at(block_.polar_col(), "Cannot use polar coordinates with G53");
+    if (plane_ != Plane::xy) {
+      fail_at(block_.polar_col(), "polar coordinates (@, ^) are in the XY plane (G17) only");
+    }
+  }
   if (g53) {
     note_tool_length("G53");
     const Vec3 m = to_machine_tip(cur_pos_) + Vec3(0, 0, tool_z_);
@@ -34,7 +40,38 @@ Vec3 Interpreter::ends(bool g53) {
     const char c = static_cast<char>('x' + a);
     if (block_.has(c)) t[a] = absolute_ ? len(c) : cur_pos_[a] + len(c);
   }
+  if (block_.has_polar()) polar_end(t.x(), t.y(), block_.has_polar_r, block_.has_polar_a);
   return t;
+}
+
+// The XY end of polar words as LinuxCNC's find_ends takes them: in G90 @ and ^ are the
+// distance from the origin and the angle from +X (the missing one the current point's); in
+// G91 they add to the current point's distance and angle.
+void Interpreter::polar_end(double& x, double& y, bool use_r, bool use_a) const {
+  if (block_.has('x') || block_.has('y')) {
+    fail_at(block_.col(block_.has('x') ? 'x' : 'y'),
+            "Cannot specify X or Y words with polar coordinate");
+  }
+  const double r_word = use_r ? block_.polar_r * unit_ : 0.0;
+  const double a_word = use_a ? block_.polar_a_deg * kPi / 180 : 0.0;
+  if (absolute_) {
+    if (use_r && !use_a && x == 0 && y == 0) {
+      fail_at(block_.polar_r_col, "Must specify angle in polar coordinate if at the origin");
+    }
+    const double r = use_r ? r_word : std::hypot(y, x);
+    const double a = use_a ? a_word : std::atan2(y, x);
+    x = r * std::cos(a);
+    y = r * std::sin(a);
+    return;
+  }
+  if (x == 0 && y == 0) {
+    fail_at(block_.polar_col(),
+            use_r ? "Incremental motion with polar coordinates is indeterminate when at the origin"
+                  : "G91 motion with polar coordinates is indeterminate when at the origin");
+  }
+  const double r = std::hypot(y, x) + r_word, a = std::atan2(y, x) + a_word;
+  x = r * std::cos(a);
+  y = r * std::sin(a);
 }
 
 void Interpreter::move(bool g53, std::uint32_t column) {
@@ -43,6 +80,10 @@ void Interpreter::move(bool g53, std::uint32_t column) {
   }
   if (g53) comp_.refuse(column, "G53 (a move in machine coordinates)");
   const Vec3 target = ends(g53);
+  if (motion_ >= 382 && motion_ <= 385) {
+    probe(target, column);
+    return;
+  }
   if (motion_ <= 10) {
     comp_.allow_arcs();
     if (comp_.moves()) {
@@ -68,6 +109,37 @@ void Interpreter::move(bool g53, std::uint32_t column) {
   plain_move_ = feed_mode_ == FeedMode::per_minute;
   arc(target, column);
   plain_move_ = false;
+}
+
+// G38.2-G38.5, a probing move: read as a feed move to its end (where a probe stops at contact
+// no reading of the program can know), the probe's result parameters set as LinuxCNC's
+// preview sets them (#5061-#5063 the end point, #5070 = 0: not tripped), with a warning once.
+// Refused as LinuxCNC refuses it: with cutter compensation on, in inverse time, G38.2 and
+// G38.4 of zero length.
+void Interpreter::probe(const Vec3& target, std::uint32_t column) {
+  const std::string name = code_name('G', motion_);
+  comp_.refuse(column, fmt::format("{} (probing)", name));
+  if (feed_mode_ == FeedMode::inverse_time) {
+    fail_at(column, fmt::format("{}: cannot probe in inverse time feed mode (G93)", name));
+  }
+  // G38.3 and G38.5 (no error when the probe does not trip) may stay where they are.
+  if ((motion_ == 382 || motion_ == 384) && (target - cur_pos_).norm() <= 1e-9) {
+    fail_at(column, fmt::format("{}: Start point too close to probe point (the probe move "
+                                "has no length)",
+                                name));
+  }
+  if (!probe_warned_) {
+    probe_warned_ = true;
+    warn(
+        fmt::format("{} (probing) read as a feed move to its end point: a probe stops where "
+                    "it touches, which reading the program cannot know; as in LinuxCNC's "
+                    "preview, #5061-#5063 are that end point and #5070 is 0 (not tripped)",
+                    name));
+  }
+  emit_line(target, false, column);
+  cur_pos_ = target;
+  for (int a = 0; a < 3; ++a) params_[5061 + static_cast<std::size_t>(a)] = target[a] / unit_;
+  params_[5070] = 0;
 }
 
 double Interpreter::feed_for(double length_mm, std::uint32_t column) {
@@ -268,11 +340,17 @@ ArcData Interpreter::arc_data(const Vec3& from, const Vec3& target, std::uint32_
     c1 = arc_absolute_ ? d1 : s1 + d1;
     c2 = arc_absolute_ ? d2 : s2 + d2;
     const double r0 = std::hypot(s1 - c1, s2 - c2), r1 = std::hypot(t1 - c1, t2 - c2);
-    if (std::abs(r0 - r1) > opt_.arc_radius_tolerance_mm) {
+    // LinuxCNC's limits (its arc_data_ijk): the radii differ by at most 0.02 sqrt(2) mm
+    // (0.002 sqrt(2) in in G20) and by at most 0.1 % of the larger.
+    const double abs_tol = (unit_ == 1.0 ? 0.02 : 0.002 * 25.4) * std::sqrt(2.0);
+    const double abs_err = std::abs(r0 - r1), rel_err = abs_err / std::max(r0, r1);
+    if (abs_err > abs_tol || rel_err > 0.001) {
       fail_at(column,
               fmt::format("arc radius to the end ({:.4f} {}) differs from the radius to the start "
-                          "({:.4f} {}) by more than {:g} mm",
-                          r1 / u, unit_name(), r0 / u, unit_name(), opt_.arc_radius_tolerance_mm));
+                          "({:.4f} {}) by {:.4g} {} ({:.3g} %; allowed: {:.4g} {} and 0.1 %, as "
+                          "LinuxCNC)",
+                          r1 / u, unit_name(), r0 / u, unit_name(), abs_err / u, unit_name(),
+                          100 * rel_err, abs_tol / u, unit_name()));
     }
     // Move the centre onto the chord's bisector so both radii agree exactly.
     const double mx = 0.5 * (s1 + t1), my = 0.5 * (s2 + t2);

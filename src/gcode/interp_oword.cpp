@@ -257,7 +257,10 @@ void Interpreter::o_word(OKind kind, const std::string& label, std::size_t i, st
     case OKind::ret: {
       const std::optional<double> v = o_value(i);
       o_end(i);
-      if (frames_.size() < 2 || frames_.back().label != label) {
+      // A return inside a subroutine returns from it whatever its label (LinuxCNC's
+      // retval.ngc returns by an if's number); an endsub must close its own sub.
+      const bool in_sub = frames_.size() >= 2;
+      if (!in_sub || (kind == OKind::endsub && frames_.back().label != label)) {
         if (kind == OKind::endsub && frames_.size() < 2) {
           fail(at, fmt::format("o{} endsub without its sub", show_label(label)));
         }

@@ -103,8 +103,9 @@ struct GroupOf {
   int code10;
   GroupIndex group;
 };
-inline constexpr std::array<GroupOf, 63> kGroupOf{{
+inline constexpr std::array<GroupOf, 67> kGroupOf{{
     {0, kMotion},        {10, kMotion},      {20, kMotion},      {30, kMotion},
+    {382, kMotion},      {383, kMotion},     {384, kMotion},     {385, kMotion},
     {730, kMotion},      {740, kMotion},     {760, kMotion},     {800, kMotion},
     {810, kMotion},      {820, kMotion},     {830, kMotion},     {840, kMotion},
     {850, kMotion},      {860, kMotion},     {870, kMotion},     {880, kMotion},
@@ -209,9 +210,15 @@ struct Block {
   };
   std::vector<NumberedSet> numbered;
   std::vector<NamedSet> named;
+  // LinuxCNC's polar words: @ the distance from the XY origin (program length units) and ^
+  // the angle from +X (degrees); increments of both in G91.
+  bool has_polar_r = false, has_polar_a = false;
+  double polar_r = 0, polar_a_deg = 0;
+  std::uint32_t polar_r_col = 0, polar_a_col = 0;
 
   void clear() {
     present = 0;
+    has_polar_r = has_polar_a = false;
     g.clear();
     m.clear();
     numbered.clear();
@@ -222,7 +229,9 @@ struct Block {
   [[nodiscard]] std::uint32_t col(char c) const {
     return column[static_cast<std::size_t>(c - 'a')];
   }
-  [[nodiscard]] bool has_axis() const { return has('x') || has('y') || has('z'); }
+  [[nodiscard]] bool has_polar() const { return has_polar_r || has_polar_a; }
+  [[nodiscard]] std::uint32_t polar_col() const { return has_polar_r ? polar_r_col : polar_a_col; }
+  [[nodiscard]] bool has_axis() const { return has('x') || has('y') || has('z') || has_polar(); }
 };
 
 // An arc of the plane: centre (c1, c2) on its axes i1, i2 (normal in), radius and sweep (rad,

@@ -61,7 +61,8 @@ std::size_t sample_count(double total, double step, const char* what) {
 template <typename Start, typename Rate>
 PathSamples sample_uniform(const ToolPath& path, double step, double total, const char* what,
                            Start start, Rate rate) {
-  if (path.empty()) throw Error("cannot sample an empty path");
+  if (path.empty())
+    throw InputError("the path is empty (a program without motion?): nothing to sample");
   const std::size_t n = sample_count(total, step, what);
   PathSamples out;
   reserve(out, n + 2);
@@ -96,7 +97,8 @@ PathSamples sample_by_length(const ToolPath& path, double ds_mm) {
 }
 
 PathSamples sample_at_times(const ToolPath& path, const std::vector<double>& times_s) {
-  if (path.empty()) throw Error("cannot sample an empty path");
+  if (path.empty())
+    throw InputError("the path is empty (a program without motion?): nothing to sample");
   PathSamples out;
   reserve(out, times_s.size());
   std::size_t seg = 0;

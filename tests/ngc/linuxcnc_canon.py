@@ -109,6 +109,10 @@ class Canon:
     def straight_feed(self, x, y, z, *rest):
         self.moves.append(("G1",) + self.to_machine(x, y, z) + (self.feed_now(), self.lineno))
 
+    def straight_probe(self, x, y, z, *rest):
+        # A probing move (G38.x) as a feed move to its end, as trochomill reads it.
+        self.straight_feed(x, y, z)
+
     def arc_feed(self, first_end, second_end, first_axis, second_axis, rotation, axis_end, *rest):
         # CANON_PLANE: 1 XY (first X, second Y, axis Z), 2 YZ (Y, Z, X), 3 XZ (Z, X, Y).
         if self.plane == 1:
@@ -137,7 +141,8 @@ class Canon:
 def run_rs274(program, var, tools):
     """The standalone interpreter `rs274 -g` (4 decimals): for programs that use the tool
     table, which this Debian build's Python module crashes on. Its external units are inches:
-    the var file and the tool lengths and diameters go to it in inches, it prints mm."""
+    the var file and the tool lengths and diameters go to it in inches; it prints in the
+    program's units (USE_LENGTH_UNITS: mm, or inches after G20)."""
     import re
     import shutil
     exe = shutil.which("rs274")
@@ -155,10 +160,17 @@ def run_rs274(program, var, tools):
     with open(tfile, "w") as f:
         for t, (z, d) in sorted(tools.items()):
             f.write("T%d P%d Z%.12f D%.12f\n" % (t, t, z / IN, d / IN))
-    out = subprocess.run([exe, "-t", tfile, "-v", vfile, "-g", program], capture_output=True,
-                         text=True, stdin=subprocess.DEVNULL).stdout
+    run = subprocess.run([exe, "-t", tfile, "-v", vfile, "-g", program], capture_output=True,
+                         text=True, stdin=subprocess.DEVNULL)
+    out = run.stdout
+    # rs274 stops at an error and says why on stderr (then its output is a partial program).
+    said = [l for l in run.stderr.splitlines() if l.strip() and l.strip() != "executing"]
+    if said:
+        print("error: " + said[0])
+        sys.exit(1)
     canon = Canon(vfile, tools)
     plane = "XY"
+    mm = 1.0  # mm per printed unit: rs274 prints in the program's units (G20: inches)
     call = re.compile(r"^\s*\d+ N\S*\s+(\w+)\((.*)\)\s*$")
     for line in out.splitlines():
         m = call.match(line)
@@ -171,23 +183,25 @@ def run_rs274(program, var, tools):
         nums = [float(a) for a in re.findall(r"-?\d+\.\d+|-?\d+", args.split("CANON_")[0])] \
             if "CANON_" not in args else []
         # Values reach the Canon methods in inches (they scale by IN).
-        if name == "SET_G5X_OFFSET":
-            canon.g5x = [v for v in nums[1:4]]
+        if name == "USE_LENGTH_UNITS":
+            mm = IN if "INCHES" in args else 1.0
+        elif name == "SET_G5X_OFFSET":
+            canon.g5x = [v * mm for v in nums[1:4]]
         elif name == "SET_G92_OFFSET":
-            canon.g92 = [v for v in nums[0:3]]
+            canon.g92 = [v * mm for v in nums[0:3]]
         elif name == "SET_XY_ROTATION":
             canon.rotation = nums[0]
         elif name == "SELECT_PLANE":
             plane = args.replace("CANON_PLANE_", "")
             canon.plane = {"XY": 1, "YZ": 2, "XZ": 3}[plane]
         elif name == "SET_FEED_RATE":
-            canon.feed = nums[0]
+            canon.feed = nums[0] * mm
         elif name == "SET_FEED_MODE":
             canon.per_rev = int(nums[1]) == 1
         elif name == "SET_SPINDLE_SPEED":
             canon.spindle = nums[-1]
-        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
-            x, y, z = (v / IN for v in nums[0:3])
+        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE"):
+            x, y, z = (v * mm / IN for v in nums[0:3])
             canon.lineno = 0
             if name == "STRAIGHT_TRAVERSE":
                 canon.straight_traverse(x, y, z)
@@ -195,7 +209,8 @@ def run_rs274(program, var, tools):
                 canon.straight_feed(x, y, z)
         elif name == "ARC_FEED":
             v = nums
-            canon.arc_feed(v[0] / IN, v[1] / IN, v[2] / IN, v[3] / IN, int(v[4]), v[5] / IN)
+            k = mm / IN
+            canon.arc_feed(v[0] * k, v[1] * k, v[2] * k, v[3] * k, int(v[4]), v[5] * k)
     return canon
 
 

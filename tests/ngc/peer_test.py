@@ -59,6 +59,8 @@ def parse(line):
 def length(moves, first):
     """The path's length: the moves from `first` on, from the end of the one before."""
     total = 0.0
+    if first > len(moves):  # no moves (a program without motion) or none after the first
+        return total
     prev = moves[first - 1][1] if first > 0 else [0.0, 0.0, 0.0]
     for kind, end, centre, axis, turns, feed, src, started in moves[first:]:
         if kind in ("G2", "G3"):
@@ -90,12 +92,14 @@ def main():
     for prog in programs:
         name = os.path.basename(prog)
         # Programs that use the tool table or G95 go to `rs274 -g` (this Debian build's Python
-        # module crashes on tool data and does not pass the spindle speed), which prints 4 decimals: ends within half its last
-        # digit, lengths within that per move.
+        # module crashes on tool data and does not pass the spindle speed), which prints 4
+        # decimals of the program's unit: ends within half its last digit (in mm, or in inches
+        # after G20), lengths within that per move.
         text = open(prog).read().upper()
         standalone = "G43" in text or "M6" in text or "G95" in text or "G41 " in text \
             or "G42 " in text
-        tol = 5e-5 + 1e-9 if standalone else TOL_MM
+        digit = 5e-5 * (25.4 if "G20" in text else 1.0)
+        tol = digit + 1e-9 if standalone else TOL_MM
         peer = subprocess.run(
             ["/usr/bin/python3", os.path.join(HERE, "linuxcnc_canon.py"), prog, "--var",
              os.path.join(HERE, "machine.var"), "--tools", os.path.join(HERE, "tools.tbl")]
@@ -138,7 +142,17 @@ def main():
                                         % (where, m[3], m[4], n[3], n[4]))
                         break
                     dc = max(abs(m[2][k] - n[2][k]) for k in range(3) if m[2][k] is not None)
-                    if dc > tol:
+                    # LinuxCNC keeps a centre whose radii to start and end differ (within its
+                    # limits: a spiral); trochomill moves it onto the chord's bisector, by at
+                    # most that difference.
+                    start = a[i - 1][1] if i > 0 else None
+                    spiral = 0.0
+                    if start is not None:
+                        ks = [k for k in range(3) if m[2][k] is not None]
+                        r0 = math.sqrt(sum((start[k] - m[2][k]) ** 2 for k in ks))
+                        r1 = math.sqrt(sum((m[1][k] - m[2][k]) ** 2 for k in ks))
+                        spiral = abs(r0 - r1)
+                    if dc > tol + spiral:
                         problems.append("%s: centre %s against %s" % (where, m[2], n[2]))
                         break
                 if m[0] != "G0" and abs(m[5] - n[5]) > max(TOL_FEED * abs(m[5]), tol):
@@ -149,7 +163,7 @@ def main():
                 # the approach left the tool at, which is unknown before the program.
                 first = next((i for i, m in enumerate(b) if m[7]), len(b)) + 1
                 la, lb = length(a, first), length(b, first)
-                if abs(la - lb) > (1e-4 * len(a) if standalone else 1e-9 * max(la, 1.0)):
+                if abs(la - lb) > (2 * digit * len(a) if standalone else 1e-9 * max(la, 1.0)):
                     problems.append("length %.12g mm against %.12g mm" % (la, lb))
             compared += len(b)
         if problems:
