@@ -66,6 +66,7 @@ PyPath read_program(const py::object& program, const py::object& job_obj) {
   if (!job_obj.is_none()) job = std::make_shared<const PyJob>(job_obj.cast<const PyJob&>());
   GcodeReadOptions ro = job ? gcode_options(job->job.machine).read : GcodeReadOptions{};
   ro.max_path_bytes = kPathShareOfMemory * default_memory_limit_bytes();  // an endless loop
+  if (job) ro.missing_tool_diameter_mm = job->job.tool.diameter_mm;  // as the CLI's --gcode
   PyPath p;
   GcodeProgram prog;
   const bool is_file = py::isinstance(program, py::module_::import("os").attr("PathLike")) ||
@@ -280,8 +281,9 @@ the job's slot frame when read with a job, else in the program's work frame.)")
         "Reads an NC program as LinuxCNC (or the job's machine.dialect) runs it: `program` a "
         "file name (str without a newline, or os.PathLike) or the program's text. With a job, "
         "the path is put in the job's slot frame (its placement) and the job's [machine] "
-        "(dialect, offsets, tool table, rapid rate) reads it; `warnings` lists what was "
-        "assumed and where the program's header disagrees with the job.");
+        "(dialect, offsets, tool table, rapid rate) reads it, its tool standing in for a tool "
+        "the table lacks; `warnings` lists what was assumed and where the program's header "
+        "disagrees with the job.");
 }
 
 }  // namespace trochomill::python

@@ -1,5 +1,6 @@
 """The job, plans, samples and NC programs through the module, against the CLI."""
 
+import math
 import pathlib
 import tomllib
 
@@ -159,6 +160,22 @@ def test_gcode_errors_name_line_and_column(tmp_path):
         tm.read_gcode("G21 G90\nG1 X1 Y2 Q\nM2\n")
     with pytest.raises(tm.InputError, match="read without a job"):
         tm.read_gcode("G21 G90 G1 X1 F100\nG1 X2\nM2\n").gcode()
+
+
+def test_a_tool_the_table_lacks_is_the_jobs(wagih):
+    """G41 D4 with no tool table: without a job the offset is 0 (as LinuxCNC), with one it is
+    the job's tool's radius (elliptical.toml: D 10 mm); each said in a warning."""
+    text = "G21 G17 G90 G94\nG0 X20 Y-20 Z0\nF500\nG41 D4\nG1 Y0\nG3 X20 Y0 I-20 J0\nG40\nG1 X0\nM2\n"
+    alone = tm.read_gcode(text)
+    assert any("its diameter is taken as 0" in w for w in alone.warnings)
+    job = tm.Job.from_toml(wagih)
+    with_job = tm.read_gcode(text, job=job)
+    d = job.to_dict()["tool"]["diameter"]
+    assert any("the job's tool's, %g mm" % d in w for w in with_job.warnings)
+    # The full circle runs a tool radius r inside the programmed one (radius 20 - r): 2 pi r
+    # shorter; the entry and exit lines change by less than r each.
+    r = d / 2
+    assert alone.length_mm - with_job.length_mm > 2 * math.pi * r - 2 * r
 
 
 def test_a_drawing_reads_as_check_drawing_reads_it():
