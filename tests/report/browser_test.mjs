@@ -174,6 +174,16 @@ async function checkReport(t, name, jobArgs, reportArgs, expect) {
         if (typeof v === 'number') numbers++;
       }
       assert.ok(numbers > 30, `only ${numbers} numbers`);
+      // The headline first: the figures that matter, each analyze's own number shown to 4
+      // significant digits; the full table folded below it.
+      const head = await page.evaluate(() => [...document.querySelectorAll('#summary-headline tr[data-key]')]
+        .map((r) => [r.dataset.key, JSON.parse(r.children[1].dataset.value), r.children[1].textContent]));
+      assert.ok(head.length >= 6, `headline of ${head.length} figures`);
+      for (const [k, v, shown] of head) {
+        assert.deepEqual(v, flat[k], k);
+        assert.equal(Number(shown), Number(v.toPrecision(4)), `${k} shown as ${shown}`);
+      }
+      assert.equal(await page.evaluate(() => document.querySelector('#summary-all').open), false);
     });
     await t.test('the path slider moves the tool disc to the planned position', async () => {
       const d = await page.evaluate(() => ({ T: window.trochomillReport.data.path.duration_s, dt: window.trochomillReport.data.path.dt_s }));

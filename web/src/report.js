@@ -390,8 +390,44 @@ function headerPart() {
       (data.overrides.length ? `; overrides: ${data.overrides.join(', ')}` : '') }),
     el('p', { text: `command: ${data.command}` }));
   main.append(head, toc);
-  const sec = section('summary', 'Summary', 'The numbers of `trochomill analyze --json` for this job (same keys and units): whole program, steady cycle (or window), walls and performance index.');
+  const sec = section('summary', 'Summary', 'What matters for this job first (4 significant digits), then every number of `trochomill analyze --json` (same keys and units) folded below.');
   for (const n of data.notes) note(sec, n);
+  // The headline: the figures that matter, in plain words, each with what it means; a figure
+  // the job or program does not have (no steady cycle, no walls, no force model) is left out.
+  const headline = [
+    ['machining_time_with_acceleration_s', 'Machining time', 's', 'the whole program at the programmed feeds, slowed where the machine\'s acceleration limits it'],
+    ['path_length_mm', 'Path length', 'mm', 'tool-centre path, rapids included'],
+    ['h_max_after_entry_mm', 'Largest chip after the entry', 'mm', 'the largest local uncut chip thickness once the tool is in the cut (the exact engagement kernel)'],
+    ['engagement_max_after_entry_deg', 'Largest engagement after the entry', '°', 'the largest engaged angle of the tool circle once in the cut'],
+    ['cycle_h_max_mm', 'Steady cycle: largest chip', 'mm', 'in one cycle of the steady state (Wagih 2023)'],
+    ['cycle_engagement_angle_max_deg', 'Steady cycle: largest engagement', '°', 'in one cycle of the steady state'],
+    ['cycle_time_s', 'Steady cycle: time', 's', 'one cycle'],
+    ['cycle_mrr_mm3_per_min', 'Steady cycle: removal rate', 'mm³/min', 'the volume one cycle removes over its time'],
+    ['mrr_total_mm3_per_min', 'Removal rate, whole program', 'mm³/min', 'removed volume over the machining time'],
+    ['removed_volume_mm3', 'Removed volume', 'mm³', 'what the program cuts from the stock'],
+    ['waviness_left_mm', 'Wall waviness, left', 'mm', 'peak to valley of the left wall\'s profile from the tool\'s passes'],
+    ['waviness_right_mm', 'Wall waviness, right', 'mm', 'the same on the right wall'],
+    ['cycle_force_max_predicted_n', 'Largest cutting force', 'N', 'the force model\'s largest resultant in the cycle'],
+    ['performance_index', 'Performance index', '', 'Wagih 2023: removal rate per chip load, to compare paths'],
+  ];
+  const list = el('table', { class: 'summary headline', id: 'summary-headline' });
+  for (const [key, name, unit, meaning] of headline) {
+    const v = s[key];
+    if (typeof v !== 'number') continue;
+    list.append(el('tr', { 'data-key': key }, el('td', { text: name }),
+      el('td', { class: 'num', 'data-value': JSON.stringify(v), text: fmtNum(v, 4) }), el('td', { text: unit }),
+      el('td', { class: 'meaning', text: meaning })));
+  }
+  sec.append(list);
+  const assumed = [];
+  if (typeof s.feed_per_tooth_mm === 'number') assumed.push(`feed per tooth f_z ${fmtNum(s.feed_per_tooth_mm, 4)} mm`);
+  if (s.job) {
+    if (s.job.path_type) assumed.push(`path ${s.job.path_type}`);
+    if (typeof s.job.tool_diameter_mm === 'number') assumed.push(`tool ${fmtNum(s.job.tool_diameter_mm, 4)} mm, ${s.job.teeth} teeth`);
+    if (typeof s.job.spindle_speed_rpm === 'number') assumed.push(`${fmtNum(s.job.spindle_speed_rpm, 4)} rpm at ${fmtNum(s.job.feed_rate_mm_per_min, 4)} mm/min`);
+  }
+  if (s.performance_index_note) assumed.push(`performance index: ${s.performance_index_note}`);
+  if (assumed.length) sec.append(el('p', { class: 'assumed', text: `For: ${assumed.join('; ')}.` }));
   const table = el('table', { class: 'summary', id: 'summary-table' });
   table.append(el('tr', {}, el('th', { text: 'key' }), el('th', { text: 'value' }), el('th', { text: 'unit' })));
   const unitOf = (k) => {
@@ -412,7 +448,7 @@ function headerPart() {
     }
   };
   rows(s, '');
-  sec.append(table);
+  sec.append(el('details', { id: 'summary-all' }, el('summary', { text: 'Every figure (analyze --json)' }), table));
   sec.append(el('details', {}, el('summary', { text: 'The job file as read' }), el('pre', { text: data.job_text })));
 }
 
