@@ -520,6 +520,19 @@ TEST(GcodeComp, TheToolTableGivesTheRadiusAndFanucIsWarned) {
       << p.info.warnings[0];
 }
 
+// A polar move fixes X and Y as X and Y words do: a program whose first move is polar has its
+// path from there (the moves after it are counted), in closed form.
+TEST(GcodeReader, AFirstPolarMoveStartsThePath) {
+  const GcodeProgram p =
+      read_gcode("G21 G17 G90\nG0 @10 ^45\nG1 F100 Z-1\nG91 G1 @5 ^90\nM2\n", "p.ngc");
+  ASSERT_EQ(p.path.segments().size(), 2u);
+  const double a = kPi / 4, b = 3 * kPi / 4;  // 45 and 45 + 90 degrees
+  const Vec3 end(15 * std::cos(b), 15 * std::sin(b), -1);
+  EXPECT_LE((p.path.segments().back().end() - end).norm(), 1e-12);
+  const double across = std::hypot(end.x() - 10 * std::cos(a), end.y() - 10 * std::sin(a));
+  EXPECT_NEAR(p.path.length_mm(), 1 + across, 1e-9);
+}
+
 // A program without motion reads, with a warning (LinuxCNC runs it); what analyses the path
 // refuses it, naming the file.
 TEST(GcodeReader, AProgramWithoutMotionReadsWithAWarning) {

@@ -251,7 +251,8 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--max-acceleration", a->machine.max_acceleration_mm_per_s2,
                     "path acceleration limit for the time estimate, mm/s^2")
         ->check(finite_in(0, 1e15));
-    cmd->add_option("--dialect", a->dialect, "language: linuxcnc (default) or fanuc")
+    cmd->add_option("--dialect", a->dialect,
+                    "language: linuxcnc (default), fanuc, sinumerik or grbl")
         ->check(CLI::IsMember({"linuxcnc", "fanuc", "sinumerik", "grbl"}));
     cmd->add_option("-I,--include", a->includes,
                     "folder searched for o<name> call's name.ngc (repeatable; the program's own "

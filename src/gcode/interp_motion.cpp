@@ -190,7 +190,7 @@ void Interpreter::check_target(const Vec3& out, std::uint32_t column) const {
 // (G28 without axis words): it starts the path like an XY move.
 void Interpreter::emit_line(const Vec3& target, bool rapid, std::uint32_t column, bool starts) {
   put_line(to_out(target), rapid, -1, column, cur_.source, cur_.line_no,
-           starts || block_.has('x') || block_.has('y'));
+           starts || block_.has('x') || block_.has('y') || block_.has_polar());
 }
 
 // A straight move to `end` (output frame) at feed f (mm/min; < 0: the feed mode's), made by
@@ -401,7 +401,7 @@ void Interpreter::arc(const Vec3& target, std::uint32_t column) {
   const Vec3 from = cur_pos_;
   cur_pos_ = target;
   put_arc(from, d, target[d.in], f, column, cur_.source, cur_.line_no,
-          block_.has('x') || block_.has('y'));
+          block_.has('x') || block_.has('y') || block_.has_polar());
 }
 
 // An arc from `from` (program mm) about d's centre through d.sweep, ending at `axial` along

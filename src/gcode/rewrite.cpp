@@ -72,7 +72,7 @@ std::vector<Word> words_of(const std::string& s) {
   std::size_t i = 0;
   while (i < s.size()) {
     const char c = s[i];
-    if (c >= 'a' && c <= 'z') {
+    if ((c >= 'a' && c <= 'z') || c == '@' || c == '^') {  // @ ^: LinuxCNC's polar words
       const std::size_t e = std::max(value_end(s, i + 1), i + 1);
       w.push_back({c, i, e});
       i = e;
@@ -320,7 +320,8 @@ FeedRewrite rewrite_feeds(std::string_view text, const std::vector<GcodeMove>& m
                                             : b.kept_feed;
     const std::string f_word = "F" + feed_number(first_feed, m.unit_mm);
     for (const Word& w : words) {
-      const bool coordinate = std::string_view("xyzijkrp").find(w.letter) != std::string::npos;
+      // Split moves get X Y Z words: the polar words that placed the end go too.
+      const bool coordinate = std::string_view("xyzijkrp@^").find(w.letter) != std::string::npos;
       // A replaced F word goes with the new words at the end: motion words, then F.
       if (w.letter == 'f' && b.rewritten) {
         cut.push_back(raw_span(w));

@@ -79,9 +79,13 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
     out += fmt::format(", {:.4f} s with {:g} mm/s^2", time_with_acceleration_s,
                        max_acceleration_mm_per_s2);
   }
-  out += fmt::format(
-      "\n  bounding box  x [{:.4f}, {:.4f}]  y [{:.4f}, {:.4f}]  z [{:.4f}, {:.4f}] mm\n", b.lo.x(),
-      b.hi.x(), b.lo.y(), b.hi.y(), b.lo.z(), b.hi.z());
+  if (sum.segments == 0) {
+    out += "\n  bounding box  none (no motion)\n";
+  } else {
+    out += fmt::format(
+        "\n  bounding box  x [{:.4f}, {:.4f}]  y [{:.4f}, {:.4f}]  z [{:.4f}, {:.4f}] mm\n",
+        b.lo.x(), b.hi.x(), b.lo.y(), b.hi.y(), b.lo.z(), b.hi.z());
+  }
   out += fmt::format("  feed          {:g} to {:g} mm/min, spindle up to {:g} rpm\n",
                      prog.info.min_feed_mm_per_min, prog.info.max_feed_mm_per_min,
                      prog.info.max_spindle_rpm);

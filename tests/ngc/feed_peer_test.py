@@ -117,7 +117,7 @@ def same_motion(a, b):
     return problems
 
 
-WORD = re.compile(r"[XYZIJKRPF][-+]?(#<[^>]*>|#+\d+|[\d.]+)")
+WORD = re.compile(r"[XYZIJKRPF@^][-+]?(#<[^>]*>|#+\d+|[\d.]+)")  # @ ^: LinuxCNC's polar words
 
 
 def residue(line):

@@ -399,6 +399,8 @@ function headerPart() {
     ['path_length_mm', 'Path length', 'mm', 'tool-centre path, rapids included'],
     ['h_max_after_entry_mm', 'Largest chip after the entry', 'mm', 'the largest local uncut chip thickness once the tool is in the cut (the exact engagement kernel)'],
     ['engagement_max_after_entry_deg', 'Largest engagement after the entry', '°', 'the largest engaged angle of the tool circle once in the cut'],
+    ['h_max_mm', 'Largest chip, whole program', 'mm', 'the entry included (a descent into the stock may take the whole feed per tooth)'],
+    ['engagement_angle_max_deg', 'Largest engagement, whole program', '°', 'the entry included (a helix or plunge is engaged all round: 360°)'],
     ['cycle_h_max_mm', 'Steady cycle: largest chip', 'mm', 'in one cycle of the steady state (Wagih 2023)'],
     ['cycle_engagement_angle_max_deg', 'Steady cycle: largest engagement', '°', 'in one cycle of the steady state'],
     ['cycle_time_s', 'Steady cycle: time', 's', 'one cycle'],
@@ -454,7 +456,7 @@ function headerPart() {
 
 function pathPart() {
   const p = data.path;
-  const sec = section('path', 'Tool path', 'Top view of the slot (mm): the tool-centre path (rapids dashed), the entry, the steady cycle highlighted, and the tool disc at the time of the slider.');
+  const sec = section('path', 'Tool path', `Top view of the slot (mm): the tool-centre path (rapids dashed), the entry, ${data.path.periodic ? 'the steady cycle highlighted' : 'no steady cycle (each cycle differs: the figures are the whole program\'s)'}, and the tool disc at the time of the slider.`);
   const fig = figure(sec, 'path-top', 'Path, top view', `${p.slot.along ? `slot ${fmtNum(p.slot.width_mm)} mm wide along '${p.slot.along}' (${fmtNum(p.slot.length_mm)} mm)` : `slot ${fmtNum(p.slot.width_mm)} x ${fmtNum(p.slot.length_mm)} mm`}, tool radius ${fmtNum(p.tool_radius_mm)} mm; ${p.samples} samples every ${fmtNum(p.dt_s, 4)} s`);
   const n = p.samples;
   // Uniform in time, the last sample at the path's end.
