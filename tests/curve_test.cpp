@@ -379,7 +379,8 @@ TEST(CurvedSlot, CentrelinesASlotCannotFollowAreRefused) {
   // The header's unit scales the entities after it (one pass); an unknown unit, or a unit
   // after the entities, is refused.
   const auto dxf = [&](const std::string& first, const std::string& second) {
-    const std::string header = "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n" + first + "\n0\nENDSEC\n";
+    const std::string header =
+        "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n" + first + "\n0\nENDSEC\n";
     const std::string entities =
         "0\nSECTION\n2\nENTITIES\n0\nLINE\n8\nL\n10\n0\n20\n0\n11\n1\n21\n0\n0\nENDSEC\n";
     std::ofstream(dir / "units.dxf")

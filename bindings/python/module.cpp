@@ -66,7 +66,7 @@ PyPath read_program(const py::object& program, const py::object& job_obj) {
   if (!job_obj.is_none()) job = std::make_shared<const PyJob>(job_obj.cast<const PyJob&>());
   GcodeReadOptions ro = job ? gcode_options(job->job.machine).read : GcodeReadOptions{};
   ro.max_path_bytes = kPathShareOfMemory * default_memory_limit_bytes();  // an endless loop
-  if (job) ro.missing_tool_diameter_mm = job->job.tool.diameter_mm;  // as the CLI's --gcode
+  if (job) ro.missing_tool_diameter_mm = job->job.tool.diameter_mm;       // as the CLI's --gcode
   PyPath p;
   GcodeProgram prog;
   const bool is_file = py::isinstance(program, py::module_::import("os").attr("PathLike")) ||

@@ -412,8 +412,8 @@ void Interpreter::run_motion(const BlockCodes& codes) {
       group0 == 100 || group0 == 280 || group0 == 300 || group0 == 520 || group0 == 920;
   // G2/G3 with its centre and no end point: a full circle back to the start (LinuxCNC); an
   // R-form arc needs its end.
-  const char o1 = plane_ == Plane::zx ? 'k' : plane_ == Plane::yz ? 'j' : 'i';
-  const char o2 = plane_ == Plane::zx ? 'i' : plane_ == Plane::yz ? 'k' : 'j';
+  const ArcData ax = plane_axes();
+  const auto o1 = static_cast<char>('i' + ax.i1), o2 = static_cast<char>('i' + ax.i2);
   full_circle_ = motion >= 20 && motion <= 30 && !axis_used_by_group0 && !block_.has_axis() &&
                  !block_.has('r') && (block_.has(o1) || block_.has(o2));
   if ((block_.has_axis() || full_circle_) && !axis_used_by_group0) {

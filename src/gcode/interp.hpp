@@ -249,7 +249,7 @@ class Interpreter : private InterpState {
   void check_fanuc_write(int index, std::size_t at, double v) const;
   // A length word in mm.
   double len(char c) const { return block_[c] * unit_; }
-  void polar_end(double& x, double& y, bool use_r, bool use_a) const;
+  void polar_end(double& x, double& y) const;
   bool full_circle_ = false;  // this block's G2/G3 is a full circle without an end point
   bool probe_warned_ = false;
   void probe(const Vec3& target, std::uint32_t column);

@@ -44,16 +44,13 @@ void Interpreter::canned_cycle(int g, std::uint32_t column) {
     old = cycle_il_ = current;
     cycle_il_flag_ = true;
   }
-  if (block_.has_polar() && plane_ != Plane::xy) {
-    fail_at(block_.polar_col(), "polar coordinates (@, ^) are in the XY plane (G17) only");
-  }
   double r, bottom, a, b, da = 0, db = 0;
   if (absolute_) {
     r = cycle_r_;
     bottom = bottom_word;
     a = block_.has(w1) ? len(w1) : cur_pos_[i1];
     b = block_.has(w2) ? len(w2) : cur_pos_[i2];
-    if (block_.has_polar()) polar_end(a, b, block_.has_polar_r, block_.has_polar_a);
+    if (block_.has_polar()) polar_end(a, b);
   } else {
     if (block_.has(w1)) da = len(w1);
     if (block_.has(w2)) db = len(w2);
@@ -155,9 +152,7 @@ void Interpreter::canned_cycle(int g, std::uint32_t column) {
     a += da;
     b += db;
     // G91's polar words step each repeat round the origin (LinuxCNC's hole circles).
-    if (!absolute_ && block_.has_polar()) {
-      polar_end(a, b, block_.has_polar_r, block_.has_polar_a);
-    }
+    if (!absolute_ && block_.has_polar()) polar_end(a, b);
     if (back_bore_fanuc) {
       // At the initial level: orient, shift, rapid down to R (the bore's bottom), shift
       // back, feed up to the bottom word (the bore's top), orient, shift, rapid out.

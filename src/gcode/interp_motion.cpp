@@ -19,11 +19,8 @@ namespace trochomill::gcode_detail {
 // or G53's machine coordinates.
 Vec3 Interpreter::ends(bool g53) {
   Vec3 t = cur_pos_;
-  if (block_.has_polar()) {
-    if (g53) fail_at(block_.polar_col(), "Cannot use polar coordinates with G53");
-    if (plane_ != Plane::xy) {
-      fail_at(block_.polar_col(), "polar coordinates (@, ^) are in the XY plane (G17) only");
-    }
+  if (block_.has_polar() && g53) {
+    fail_at(block_.polar_col(), "Cannot use polar coordinates with G53");
   }
   if (g53) {
     note_tool_length("G53");
@@ -40,14 +37,18 @@ Vec3 Interpreter::ends(bool g53) {
     const char c = static_cast<char>('x' + a);
     if (block_.has(c)) t[a] = absolute_ ? len(c) : cur_pos_[a] + len(c);
   }
-  if (block_.has_polar()) polar_end(t.x(), t.y(), block_.has_polar_r, block_.has_polar_a);
+  if (block_.has_polar()) polar_end(t.x(), t.y());
   return t;
 }
 
 // The XY end of polar words as LinuxCNC's find_ends takes them: in G90 @ and ^ are the
 // distance from the origin and the angle from +X (the missing one the current point's); in
-// G91 they add to the current point's distance and angle.
-void Interpreter::polar_end(double& x, double& y, bool use_r, bool use_a) const {
+// G91 they add to the current point's distance and angle. The XY plane (G17) only.
+void Interpreter::polar_end(double& x, double& y) const {
+  if (plane_ != Plane::xy) {
+    fail_at(block_.polar_col(), "polar coordinates (@, ^) are in the XY plane (G17) only");
+  }
+  const bool use_r = block_.has_polar_r, use_a = block_.has_polar_a;
   if (block_.has('x') || block_.has('y')) {
     fail_at(block_.col(block_.has('x') ? 'x' : 'y'),
             "Cannot specify X or Y words with polar coordinate");

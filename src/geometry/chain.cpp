@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdint>
 #include <optional>
-#include <tuple>
 #include <unordered_map>
 
 #include "trochomill/error.hpp"
@@ -29,14 +28,14 @@ class EndGrid {
  public:
   EndGrid(const std::vector<DrawnPiece>& p, const std::vector<End>& ends,
           const std::vector<std::uint32_t>& layer, double size)
-      : p_(p), layer_(layer), size_(size), next_(ends.size(), kNone) {
+      : size_(size), next_(ends.size(), kNone) {
     std::size_t slots = 16;
     while (slots < 2 * ends.size()) slots *= 2;
     head_.assign(slots, kNone);
     cell_.resize(ends.size());
     for (std::size_t k = 0; k < ends.size(); ++k) {
-      const Vec2& v = end_point(p_, ends[k]);
-      cell_[k] = {ends[k], layer_[ends[k] / 2], cell(v.x()), cell(v.y())};
+      const Vec2& v = end_point(p, ends[k]);
+      cell_[k] = {ends[k], layer[ends[k] / 2], cell(v.x()), cell(v.y())};
       std::size_t& h = head_[slot(cell_[k].layer, cell_[k].x, cell_[k].y)];
       next_[k] = h;
       h = k;
@@ -75,8 +74,6 @@ class EndGrid {
     h ^= static_cast<std::uint64_t>(layer) * 0x165667B19E3779F9ULL + (h >> 32);
     return static_cast<std::size_t>(h ^ (h >> 31)) & (head_.size() - 1);
   }
-  const std::vector<DrawnPiece>& p_;
-  const std::vector<std::uint32_t>& layer_;
   double size_;
   std::vector<std::size_t> head_, next_;
   std::vector<Cell> cell_;
@@ -224,7 +221,7 @@ std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces, double jo
     out.push_back(std::move(c));
   }
   // A gap: two free ends nearer than ten tolerances were meant to meet (the first pair in the
-  // order of the chains' ends).
+  // order of the chains' ends: the first end that has one, with its first partner).
   std::vector<End> ends;
   for (const auto& [h, t] : free_ends) ends.insert(ends.end(), {h, t});
   const double near = 10 * join_mm;
@@ -236,12 +233,12 @@ std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces, double jo
     const Vec2& pa = end_point(pieces, ends[a]);
     grid.near(pa, layer[ends[a] / 2], [&](End f) {
       const std::size_t b = order[f];
-      if (b > a && (end_point(pieces, f) - pa).norm() <= near && (!gap || std::pair{a, b} < *gap)) {
+      if (b > a && (end_point(pieces, f) - pa).norm() <= near && (!gap || b < gap->second)) {
         gap = {a, b};
       }
       return true;
     });
-    if (gap && gap->first == a) break;
+    if (gap) break;
   }
   if (gap) {
     const DrawnPiece &pa = pieces[ends[gap->first] / 2], &pb = pieces[ends[gap->second] / 2];

@@ -109,7 +109,6 @@ class Reader final : public DL_CreationAdapter {
 
   std::vector<DrawnPiece> pieces;
   std::vector<std::string> problems;
-  std::optional<int> insunits_code;
   std::optional<std::string> units_error;  ///< a unit it cannot read, or one after entities
   const char* units = insunits(0)->second;
   [[nodiscard]] double unit() const { return unit_; }
@@ -118,7 +117,6 @@ class Reader final : public DL_CreationAdapter {
   // The unit, from the header (before any entity: the pieces are scaled as they come).
   void setVariableInt(const std::string& key, int value, int) override {
     if (key != "$INSUNITS") return;
-    insunits_code = value;
     const auto unit = insunits(value);
     if (!unit) {
       units_error = fmt::format(
