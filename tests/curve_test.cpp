@@ -112,6 +112,28 @@ TEST(CurvedSlot, RingStaysInsideHoldsTheStraightChipAndEachLoopIsTheMappedLoop) 
   EXPECT_LT(worst, 1e-4);
 }
 
+// At the smallest arc tolerance (1e-6 mm) the fit's pieces are many and short: each arc
+// starts exactly where the piece before it ended (the path refuses a gap over 1e-9 mm; the
+// arcs took the fit's radius and started up to 1.7e-9 mm off it). The 1 m meander of the
+// benchmark, one level: the path as long as at the default tolerance within 0.5 % (the
+// orbit is narrowed by the tolerance: 1e-3 mm of the 2 mm half width).
+TEST(CurvedSlot, TheSmallestArcToleranceKeepsThePathJoined) {
+  const auto dir = test::source_dir() / "bench/data";
+  const std::string text =
+      "[geometry]\nfile = \"meander.dxf\"\n[tool]\ndiameter = 8.0\nteeth = 3\n"
+      "[slot]\nalong = \"MEANDER\"\nwidth = 12.0\ndepth = 2.0\n[cutting]\n"
+      "feed_rate = 900.0\nspindle_speed = 6000.0\n[path]\ntype = "
+      "\"trochoidal\"\nstep = 1.0\nentry = \"helix\"\n";
+  const Job fine = parse_job(text, (dir / "meander.toml").string(),
+                             {parse_override("machine.arc_tolerance=1e-6")});
+  const ToolPath p = plan_slot(fine).path;
+  for (std::size_t k = 1; k < p.segments().size(); ++k) {
+    ASSERT_LE((p.segments()[k].start() - p.segments()[k - 1].end()).norm(), 1e-9) << k;
+  }
+  const double usual = plan_slot(parse_job(text, (dir / "meander.toml").string())).path.length_mm();
+  EXPECT_NEAR(p.length_mm(), usual, 5e-3 * usual);
+}
+
 TEST(CurvedSlot, ALineArcLineStaysInsideAndHoldsTheStraightChip) {
   const Job job = load_job(test::example("curves/bend.toml"));
   const PlannedPath pp = plan_slot(job);

@@ -189,8 +189,12 @@ void append_mapped(ToolPath& out, const ToolPath& local, const Centreline& c, do
       p.end = a.end;
       p.speed = seg.speed_mm_per_min();
       if (!a.is_line) {
-        // The arc's end as the segment computes it (where the next piece starts).
-        p.cx = a.cx, p.cy = a.cy, p.r = a.radius_mm, p.sweep_rad = a.sweep_rad;
+        // Through the piece's actual start (the end before it, as computed, which may differ
+        // from the fit's start in the last digits: the radius follows it so that the arc
+        // starts exactly there), and its end as the segment computes it (where the next
+        // piece starts).
+        p.cx = a.cx, p.cy = a.cy, p.sweep_rad = a.sweep_rad;
+        p.r = std::hypot(from.x() - a.cx, from.y() - a.cy);
         p.start_rad = std::atan2(from.y() - a.cy, from.x() - a.cx);
         p.end =
             Segment::arc_xy(p.cx, p.cy, p.r, p.start_rad, p.sweep_rad, z, z, Motion::feed, p.speed)
