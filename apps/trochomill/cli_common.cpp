@@ -21,6 +21,7 @@
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/sim.hpp"
 
 namespace trochomill::cli {
@@ -118,7 +119,7 @@ void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
 
 ToolPath job_path(const Job& job, const std::string& gcode_file, std::optional<double> memory_gb,
                   GcodeProgram* lines) {
-  if (gcode_file.empty()) return plan_slot(job).path;
+  if (gcode_file.empty()) return plan_job(job).path;
   GcodeReadOptions ro = gcode_options(job.machine).read;
   // Reading leaves the most of the memory to the work on the path (samples, chips).
   ro.max_path_bytes = kPathShareOfMemory * memory_limit_bytes(memory_gb);

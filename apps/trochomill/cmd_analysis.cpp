@@ -11,6 +11,7 @@
 #include "trochomill/app.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
 
 namespace trochomill::cli {
@@ -85,7 +86,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       inner.cancel = run.hooks().cancel;
       const auto points = run_study(
           doc, base, varies, a->threads,
-          [&inner](const Job& job) { return analyze_with_forces(job, plan_slot(job).path, inner); },
+          [&inner](const Job& job) { return analyze_with_forces(job, plan_job(job).path, inner); },
           run.hooks());
       run.done();
       if (!a->json.empty()) emit(a->json, study_json(varies, points));

@@ -13,6 +13,7 @@
 #include "trochomill/analysis.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/units.hpp"
 
@@ -121,7 +122,30 @@ void register_path_commands(CLI::App& app, int& exit_code) {
           throw InputError(fmt::format("{} is an option of --feed-schedule", o));
         }
       }
-      PlannedPath planned = plan_slot(job);
+      PlannedPath planned;
+      std::optional<PocketInfo> pocket;
+      if (job.pocket.defined()) {
+        PlannedPocket pp = plan_pocket(job);
+        const PocketProof proof = prove_pocket(job, pp);
+        std::FILE* to = a->out == "-" ? stderr : stdout;
+        fmt::print(to,
+                   "  the kernel on the program: clearing (entries excepted) engagement max "
+                   "{:.4g} degrees at ({:.3f}, {:.3f}, {:.3f}), chip max {:.5f} mm, {:.3g} % of "
+                   "its cutting above the target; finishing pass engagement max {:.4g} degrees "
+                   "at ({:.3f}, {:.3f}, {:.3f}), chip max {:.5f} mm\n",
+                   proof.clearing_max_engagement_deg, proof.clearing_max_at_mm.x(),
+                   proof.clearing_max_at_mm.y(), proof.clearing_max_at_mm.z(),
+                   proof.clearing_max_chip_mm, 100 * proof.clearing_share_above_target,
+                   proof.finish_max_engagement_deg, proof.finish_max_at_mm.x(),
+                   proof.finish_max_at_mm.y(), proof.finish_max_at_mm.z(),
+                   proof.finish_max_chip_mm);
+        planned.path = std::move(pp.path);
+        planned.info.cycles = pp.info.passes;
+        planned.info.levels = pp.info.levels;
+        pocket = std::move(pp.info);
+      } else {
+        planned = plan_job(job);
+      }
       std::optional<FeedSchedule> fs;
       if (a->schedule) {
         const GuardedRun run(true);
@@ -151,7 +175,18 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                      at.y(), at.z(), m->at_s, m->feed_mm_per_min, describe(m->limit));
         }
       }
-      if (a->out != "-") {
+      if (pocket) {
+        std::FILE* to = a->out == "-" ? stderr : stdout;
+        fmt::print(to, "{}", pocket_summary(*pocket));
+      }
+      if (a->out != "-" && pocket) {
+        fmt::print(
+            "{}: pocket, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
+            "lines -> {}\n",
+            a->job.file, planned.path.length_mm(), planned.path.duration_s(),
+            estimate_time_s(planned.path, job.machine), std::count(code.begin(), code.end(), '\n'),
+            a->out);
+      } else if (a->out != "-") {
         fmt::print(
             "{}: {} {} cycles, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
             "lines -> {}\n",

@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/study.hpp"
 
@@ -282,7 +283,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
         rq.job_text = to_toml(job);
         rq.overrides = best_overrides;
         rq.command = "trochomill optimize " + a->job.file;
-        ReportData d = build_report(job, plan_slot(job).path, rq, run.hooks());
+        ReportData d = build_report(job, plan_job(job).path, rq, run.hooks());
         if (goals.size() > 1) {
           ReportPareto p;
           p.keys = r.keys;

@@ -10,6 +10,7 @@
 #include "common.hpp"
 #include "trochomill/analysis.hpp"
 #include "trochomill/force.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/report/analysis.hpp"
 
 namespace trochomill::python {
@@ -38,7 +39,7 @@ void bind_study(py::module_& m) {
               return run_study(
                   *job.doc, job.overrides, varies, threads,
                   [&inner](const Job& j) {
-                    return analyze_with_forces(j, plan_slot(j).path, inner);
+                    return analyze_with_forces(j, plan_job(j).path, inner);
                   },
                   h);
             },

@@ -12,6 +12,7 @@
 #include "trochomill/app.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill::python {
@@ -95,7 +96,7 @@ void check_memory(const char* what, double need_bytes, std::optional<double> lim
 
 ToolPath path_of(const py::object& job_or_path) {
   if (py::isinstance<PyPath>(job_or_path)) return job_or_path.cast<const PyPath&>().path;
-  return plan_slot(job_of(job_or_path, "path").job).path;
+  return plan_job(job_of(job_or_path, "path").job).path;
 }
 
 std::pair<double, double> window_of(const ToolPath& path, const py::object& cycles,

@@ -12,6 +12,7 @@
 #include "trochomill/engagement.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/version.hpp"
 
 namespace trochomill::python {
@@ -265,7 +266,7 @@ the job's slot frame when read with a job, else in the program's work frame.)")
                      fmt::format("a {:g} mm slot at a {:g} mm step: raise path.step or plan a "
                                  "shorter slot",
                                  job.job.slot.length_mm, job.job.path.step_mm));
-        PlannedPath planned = plan_slot(job.job);
+        PlannedPath planned = plan_job(job.job);
         PyPath p;
         p.path = std::move(planned.path);
         p.cycles = planned.info.cycles;

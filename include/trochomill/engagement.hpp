@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "trochomill/geometry.hpp"
@@ -72,6 +73,29 @@ struct EngagementSeries {
   /// above whose region removed it, else the stock's top (z = 0, or the [stock] box's top),
   /// at most the flute length.
   std::vector<double> removal_rate_mm3_per_s;
+};
+
+/// The plan-view region a tool of radius R has removed: the union of the discs about the
+/// centres cut so far, the exact kernel's region (compute_engagement). For planners that place
+/// the tool by its engagement (pocket.hpp). Lengths mm, angles rad.
+class RemovedRegion {
+ public:
+  /// Centres cut or asked about should lie in the box lo_mm .. hi_mm (others are slower).
+  RemovedRegion(double radius_mm, const Vec2& lo_mm, const Vec2& hi_mm);
+  RemovedRegion(RemovedRegion&&) noexcept;
+  RemovedRegion& operator=(RemovedRegion&&) noexcept;
+  ~RemovedRegion();
+  /// The arcs of the tool circle about c outside the region (the stock it touches there),
+  /// angles counter-clockwise from +X.
+  [[nodiscard]] std::vector<AngleArc> uncut_arcs(const Vec2& c) const;
+  /// Adds the disc about c.
+  void cut(const Vec2& c);
+  /// Whether p lies inside a disc cut so far.
+  [[nodiscard]] bool contains(const Vec2& p) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// The radial chip of sample i (mm): its h_max, or 0 where the tool descends into stock no

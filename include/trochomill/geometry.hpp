@@ -149,6 +149,23 @@ struct Contour {
 [[nodiscard]] std::vector<Contour> offset_region(const std::vector<Contour>& closed,
                                                  double distance_mm, double tolerance_mm);
 
+/// The part of region `a` outside region `b` (each given as closed contours, even-odd), in
+/// the form offset_region gives. Same tolerance and errors as offset_region.
+[[nodiscard]] std::vector<Contour> region_difference(const std::vector<Contour>& a,
+                                                     const std::vector<Contour>& b,
+                                                     double tolerance_mm);
+/// The part of region `a` inside region `b`, as region_difference.
+[[nodiscard]] std::vector<Contour> region_intersection(const std::vector<Contour>& a,
+                                                       const std::vector<Contour>& b,
+                                                       double tolerance_mm);
+/// A region in offset_region's form cut into its connected parts: each outer boundary
+/// (counter-clockwise) followed by the holes (clockwise) directly inside it, in the input's
+/// order of the outer boundaries.
+[[nodiscard]] std::vector<std::vector<Contour>> region_parts(const std::vector<Contour>& region);
+/// Whether p lies inside the region of the closed contours by the even-odd rule (arcs
+/// exact); a point on a contour may count either way.
+[[nodiscard]] bool region_contains(const std::vector<Contour>& region, const Vec2& p);
+
 /// The region within `distance_mm` (> 0) of a contour, open or closed: a slot of width
 /// 2 distance_mm along an open contour, with round ends; a ring along a closed one. Same
 /// output and tolerance as offset_region.
@@ -204,6 +221,14 @@ class EllipseCurve final : public PlanarCurve {
                                            int pieces, double tolerance_mm);
 /// A fit's arc as a contour piece.
 [[nodiscard]] ContourPiece to_piece(const FitArc& arc);
+
+/// Lines and circular arcs through a polyline's points within `tolerance_mm` of every point
+/// (each piece the longest that fits, found by doubling and bisection: an arc through its
+/// first, middle and last point, a line when those are collinear within the tolerance). The
+/// pieces start and end on the polyline's points, so consecutive pieces join exactly; they
+/// are tangent-continuous only where the polyline is, within the tolerance.
+[[nodiscard]] std::vector<ContourPiece> fit_polyline(const std::vector<Vec2>& points,
+                                                     double tolerance_mm);
 
 /// Where the contour crosses or touches itself (mm), if it does: its pieces as chords within
 /// 1e-4 mm, every pair that is not consecutive along the contour tested (a sweep in x); the

@@ -78,6 +78,27 @@ struct Slot {
   [[nodiscard]] bool curved() const noexcept { return centreline != nullptr; }
 };
 
+/// `[pocket]`: a pocket cleared down to its floor, its walls the closed contours of a drawing's
+/// layer and the islands left standing those of another (lengths mm, the drawing's frame = the
+/// workpiece's; top face z = 0).
+struct Pocket {
+  std::string boundary;          ///< the layer (or SVG id) of the walls' closed contours
+  std::string islands;           ///< the layer of the islands' closed contours; empty: none
+  double depth_mm = 0;           ///< floor below the top face (mm)
+  double max_step_down_mm = 0;   ///< depth of each level (mm); 0: the whole depth at once
+  double stock_to_leave_mm = 0;  ///< left on walls and islands by the clearing (mm)
+  /// The clearing's engagement target (degrees): the largest arc of the tool in the material
+  /// once in the pocket (entries excepted). From [pocket] max_engagement, or from max_chip:
+  /// asin(h / f_z) (a side cut's largest chip is f_z sin of its engagement).
+  double max_engagement_deg = 0;
+  double max_chip_mm = 0;           ///< the largest chip that engagement makes, f_z sin (mm)
+  bool finish_pass = true;          ///< one pass along walls and islands at full depth
+  double fit_tolerance_mm = 0.002;  ///< the clearing path written as arcs within this (mm)
+  /// The contours (set by the job reader from [geometry] file). Shared: a job is copied often.
+  std::shared_ptr<const std::vector<DrawnContour>> boundary_contours, island_contours;
+  [[nodiscard]] bool defined() const noexcept { return boundary_contours != nullptr; }
+};
+
 /// `[geometry]`: the drawing the part's contours come from.
 struct GeometrySource {
   std::string file;                 ///< as written in the job (relative to the job file)
@@ -147,6 +168,7 @@ struct Job {
   Tool tool;
   GeometrySource geometry;
   Slot slot;
+  Pocket pocket;  ///< defined(): the job plans a pocket, not a slot
   PathSpec path;
   Cutting cutting;
   Machine machine;

@@ -498,10 +498,12 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   }
   // A slot along a curve: each cycle's step follows the bend, so there is no steady cycle;
   // the walls and floor of the straight slot's models do not apply. Whole-program figures.
-  if (job.slot.curved()) {
+  if (job.slot.curved() || job.pocket.defined()) {
     m.periodic = false;
     m.performance_index_note =
-        "a slot along a curve has no steady cycle: whole-program figures only";
+        job.pocket.defined()
+            ? "a pocket has no steady cycle: whole-program figures only"
+            : "a slot along a curve has no steady cycle: whole-program figures only";
     return m;
   }
 

@@ -208,6 +208,7 @@ class Removed {
     return near_;
   }
   [[nodiscard]] const Disc& disc(int j) const { return discs_[j]; }
+  [[nodiscard]] bool covers(double px, double py) const { return inside(px, py); }
 
   // Adds another region's discs from its `from`-th on (the union of both), in the order they
   // were inserted there. Returns how many discs the other region has.
@@ -1010,5 +1011,26 @@ EngagementSeries compute_engagement(const ToolPath& path, const Job& job,
   return compute_engagement(sample_by_time(path, per_tooth_s / options.steps_per_tooth), job,
                             options);
 }
+
+struct RemovedRegion::Impl {
+  Removed removed;
+};
+
+RemovedRegion::RemovedRegion(double radius_mm, const Vec2& lo_mm, const Vec2& hi_mm)
+    : impl_(std::make_unique<Impl>(
+          Impl{Removed(radius_mm, lo_mm.x(), lo_mm.y(), hi_mm.x(), hi_mm.y())})) {}
+RemovedRegion::RemovedRegion(RemovedRegion&&) noexcept = default;
+RemovedRegion& RemovedRegion::operator=(RemovedRegion&&) noexcept = default;
+RemovedRegion::~RemovedRegion() = default;
+
+std::vector<AngleArc> RemovedRegion::uncut_arcs(const Vec2& c) const {
+  return join_wrap(impl_->removed.outside(c.x(), c.y()));
+}
+
+void RemovedRegion::cut(const Vec2& c) {
+  impl_->removed.insert(c.x(), c.y(), impl_->removed.outside(c.x(), c.y()));
+}
+
+bool RemovedRegion::contains(const Vec2& p) const { return impl_->removed.covers(p.x(), p.y()); }
 
 }  // namespace trochomill

@@ -281,9 +281,19 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
   const Dialect d = opt.dialect;
   if (d == Dialect::linuxcnc || d == Dialect::fanuc) e.line("%");
   if (d == Dialect::fanuc) e.line(fmt::format("O{:04d}", job.machine.program_number));
-  e.comment(fmt::format("trochomill {}: {} slot {:g} x {:g} x {:g} mm, {} milling", kVersion,
-                        to_string(job.path.type), job.slot.width_mm, job.slot.length_mm,
-                        job.slot.depth_mm, to_string(job.path.direction)));
+  if (job.pocket.defined()) {
+    const Pocket& pk = job.pocket;
+    e.comment(
+        fmt::format("trochomill {}: pocket of layer {}{}, {:g} mm deep, engagement at most "
+                    "{:g} degrees, {} milling",
+                    kVersion, pk.boundary,
+                    pk.islands.empty() ? std::string() : ", islands of layer " + pk.islands,
+                    pk.depth_mm, pk.max_engagement_deg, to_string(job.path.direction)));
+  } else {
+    e.comment(fmt::format("trochomill {}: {} slot {:g} x {:g} x {:g} mm, {} milling", kVersion,
+                          to_string(job.path.type), job.slot.width_mm, job.slot.length_mm,
+                          job.slot.depth_mm, to_string(job.path.direction)));
+  }
   e.comment(fmt::format("job: {}", job.source));
   e.comment(fmt::format("path length {:.3f} mm, {:.3f} s at programmed feed, {} dialect",
                         path.length_mm(), path.duration_s(), to_string(d)));

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 
 #include "trochomill/error.hpp"
 #include "trochomill/geometry.hpp"
@@ -234,6 +235,115 @@ ContourPiece to_piece(const FitArc& a) {
   const Vec2 s(a.start.x(), a.start.y()), e(a.end.x(), a.end.y());
   if (a.is_line) return ContourPiece::line(s, e);
   return ContourPiece::arc(s, e, Vec2(a.cx, a.cy), a.sweep_rad >= 0);
+}
+
+namespace {
+
+// The piece from points[i] to points[j] if every point between lies within tol of it: a line
+// when they do, else the arc through points[i], the middle point and points[j], when each
+// point between lies within tol of its circle and in order along it.
+std::optional<ContourPiece> piece_through(const std::vector<Vec2>& pts, std::size_t i,
+                                          std::size_t j, double tol) {
+  const Vec2 a = pts[i], c = pts[j];
+  const Vec2 ac = c - a;
+  const double L = ac.norm();
+  if (j == i + 1) return ContourPiece::line(a, c);
+  if (L < 1e-12) return std::nullopt;
+  const Vec2 u = ac / L;
+  bool line_ok = true;
+  for (std::size_t k = i + 1; k < j && line_ok; ++k) {
+    const Vec2 d = pts[k] - a;
+    const double along = d.dot(u);
+    const double off = std::abs(u.x() * d.y() - u.y() * d.x());
+    line_ok = off <= tol && along >= -tol && along <= L + tol;
+  }
+  if (line_ok) return ContourPiece::line(a, c);
+  // The chords between the points, not only the points, within tol: their middles too.
+  auto chords_within = [&](const ContourPiece& pc) {
+    for (std::size_t k = i; k < j; ++k) {
+      if (pc.distance_mm(0.5 * (pts[k] + pts[k + 1])) > tol) return false;
+    }
+    return true;
+  };
+  const Vec2 b = pts[(i + j) / 2];
+  const Vec2 ab = b - a;
+  const double cross = ab.x() * ac.y() - ab.y() * ac.x();
+  if (std::abs(cross) < 1e-15) return std::nullopt;
+  // Circumcentre of a, b, c.
+  const double ab2 = ab.squaredNorm(), ac2 = ac.squaredNorm();
+  const Vec2 centre = a + Vec2(ac.y() * ab2 - ab.y() * ac2, ab.x() * ac2 - ac.x() * ab2) /
+                              (2 * (ab.x() * ac.y() - ab.y() * ac.x()));
+  const double r = (a - centre).norm();
+  // Nearly collinear points put the centre far off and inexactly: the arc must end at c
+  // (its end is computed from the angle, so both ends at the radius to 1e-9 mm).
+  if (!(std::abs((c - centre).norm() - r) <= 1e-9) || r > 1e6) return std::nullopt;
+  const bool ccw = cross > 0;  // a -> b -> c turns left
+  const double s = ccw ? 1.0 : -1.0;
+  const double a0 = std::atan2(a.y() - centre.y(), a.x() - centre.x());
+  auto param = [&](const Vec2& p) {  // angle travelled from a in the arc's sense, [0, 2 pi)
+    double d = s * (std::atan2(p.y() - centre.y(), p.x() - centre.x()) - a0);
+    d = std::fmod(d, 2 * M_PI);
+    return d < 0 ? d + 2 * M_PI : d;
+  };
+  const double total = param(c);
+  double last = 0;
+  // In order along the arc, each point within tol of the circle, and the arc between two
+  // consecutive points no longer than their chord allows (pi/2 of it and the tolerance):
+  // points that turn back do not make a loop the long way round.
+  auto short_enough = [&](double t0, double t1, const Vec2& p0, const Vec2& p1) {
+    return (t1 - t0) * r <= 0.5 * M_PI * (p1 - p0).norm() + 2 * tol;
+  };
+  for (std::size_t k = i + 1; k < j; ++k) {
+    if (std::abs((pts[k] - centre).norm() - r) > tol) return std::nullopt;
+    const double t = param(pts[k]);
+    if (t < last - 1e-12 || t > total + 1e-12) return std::nullopt;
+    if (!short_enough(last, t, pts[k - 1], pts[k])) return std::nullopt;
+    last = t;
+  }
+  if (!short_enough(last, total, pts[j - 1], c)) return std::nullopt;
+  const ContourPiece arc = ContourPiece::arc(a, c, centre, ccw);
+  if (!chords_within(arc)) return std::nullopt;
+  return arc;
+}
+
+}  // namespace
+
+std::vector<ContourPiece> fit_polyline(const std::vector<Vec2>& points, double tolerance_mm) {
+  if (!(tolerance_mm > 0)) throw InputError("fit tolerance must be > 0 mm");
+  std::vector<ContourPiece> out;
+  const std::size_t n = points.size();
+  std::size_t i = 0;
+  while (i + 1 < n) {
+    // Grow by doubling while the piece fits, then bisect between the last fit and the miss.
+    std::size_t good = i + 1, step = 2;
+    std::optional<ContourPiece> best = piece_through(points, i, good, tolerance_mm);
+    std::size_t bad = n;
+    while (true) {
+      const std::size_t j = std::min(n - 1, i + step);
+      if (j <= good) break;
+      if (auto p = piece_through(points, i, j, tolerance_mm)) {
+        good = j;
+        best = p;
+        if (j == n - 1) break;
+        step *= 2;
+      } else {
+        bad = j;
+        break;
+      }
+    }
+    while (bad < n && bad > good + 1) {
+      const std::size_t mid = (good + bad) / 2;
+      if (auto p = piece_through(points, i, mid, tolerance_mm)) {
+        good = mid;
+        best = p;
+      } else {
+        bad = mid;
+      }
+    }
+    if (best) out.push_back(*best);  // (a line between coincident points: dropped)
+    i = good;
+  }
+  return out;
 }
 
 }  // namespace trochomill

@@ -147,6 +147,133 @@ std::vector<Contour> offset_region(const std::vector<Contour>& closed, double di
   return run_offset(region, cl::etClosedPolygon, distance_mm, tolerance_mm);
 }
 
+namespace {
+
+// Region a op region b, each by the even-odd rule.
+std::vector<Contour> boolean(const std::vector<Contour>& a, const std::vector<Contour>& b,
+                             cl::ClipType op, double tolerance_mm) {
+  check_tolerance(tolerance_mm);
+  const double tol = 0.5 * tolerance_mm;
+  std::vector<const Contour*> all;
+  for (const auto* set : {&a, &b}) {
+    for (std::size_t i = 0; i < set->size(); ++i) {
+      if (!(*set)[i].closed) {
+        throw InputError(
+            fmt::format("region: contour {} is open (a region needs closed ones)", i + 1));
+      }
+      all.push_back(&(*set)[i]);
+    }
+  }
+  check_size(all, tol);
+  cl::Clipper c;
+  for (std::size_t i = 0; i < a.size(); ++i) c.AddPath(to_path(a[i], tol, i), cl::ptSubject, true);
+  for (std::size_t i = 0; i < b.size(); ++i) c.AddPath(to_path(b[i], tol, i), cl::ptClip, true);
+  cl::PolyTree tree;
+  c.Execute(op, tree, cl::pftEvenOdd, cl::pftEvenOdd);
+  return to_contours(tree);
+}
+
+// Even-odd crossings of the horizontal ray from p towards +x with one contour (arcs exact).
+int crossings(const Contour& c, const Vec2& p) {
+  int n = 0;
+  auto line = [&](const Vec2& a, const Vec2& b) {
+    if ((a.y() > p.y()) == (b.y() > p.y())) return;
+    const double x = a.x() + (p.y() - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
+    if (x > p.x()) ++n;
+  };
+  for (const ContourPiece& piece : c.pieces) {
+    if (!piece.is_arc()) {
+      line(piece.start, piece.end);
+      continue;
+    }
+    // The arc's crossings with y = p.y: on its circle at x = cx +- sqrt(r^2 - dy^2), counted
+    // when they lie on the arc; the half-open rule of the chord test by the arc's monotone
+    // pieces: split at its topmost and bottommost points.
+    const Vec2 c0 = *piece.centre;
+    const double r = piece.radius_mm(), dy = p.y() - c0.y();
+    const double a0 = std::atan2(piece.start.y() - c0.y(), piece.start.x() - c0.x());
+    const double sweep = piece.sweep_rad();
+    std::vector<double> cuts{0.0, 1.0};
+    for (const double at : {0.5 * M_PI, -0.5 * M_PI}) {
+      double d = at - a0;
+      // the fraction of the sweep where the arc reaches angle `at`
+      if (sweep > 0) {
+        d = std::fmod(d, 2 * M_PI);
+        if (d < 0) d += 2 * M_PI;
+      } else {
+        d = std::fmod(d, 2 * M_PI);
+        if (d > 0) d -= 2 * M_PI;
+      }
+      const double t = d / sweep;
+      if (t > 0 && t < 1) cuts.push_back(t);
+    }
+    std::sort(cuts.begin(), cuts.end());
+    if (std::abs(dy) > r) continue;
+    const double b1 = std::asin(std::clamp(dy / r, -1.0, 1.0)), b2 = M_PI - b1;
+    for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+      const double t0 = cuts[k], t1 = cuts[k + 1];
+      const Vec2 q0 = c0 + r * Vec2(std::cos(a0 + sweep * t0), std::sin(a0 + sweep * t0));
+      const Vec2 q1 = c0 + r * Vec2(std::cos(a0 + sweep * t1), std::sin(a0 + sweep * t1));
+      if ((q0.y() > p.y()) == (q1.y() > p.y())) continue;
+      // One crossing on this piece, monotone in y: the candidate angle within its span.
+      for (const double b : {b1, b2}) {
+        double d = std::fmod(b - a0, 2 * M_PI);
+        if (sweep > 0 && d < 0) d += 2 * M_PI;
+        if (sweep < 0 && d > 0) d -= 2 * M_PI;
+        const double t = d / sweep;
+        if (t >= t0 - 1e-12 && t <= t1 + 1e-12) {
+          if (c0.x() + r * std::cos(b) > p.x()) ++n;
+          break;
+        }
+      }
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
+std::vector<Contour> region_difference(const std::vector<Contour>& a, const std::vector<Contour>& b,
+                                       double tolerance_mm) {
+  return boolean(a, b, cl::ctDifference, tolerance_mm);
+}
+
+std::vector<Contour> region_intersection(const std::vector<Contour>& a,
+                                         const std::vector<Contour>& b, double tolerance_mm) {
+  return boolean(a, b, cl::ctIntersection, tolerance_mm);
+}
+
+bool region_contains(const std::vector<Contour>& region, const Vec2& p) {
+  int n = 0;
+  for (const Contour& c : region) n += crossings(c, p);
+  return n % 2 == 1;
+}
+
+std::vector<std::vector<Contour>> region_parts(const std::vector<Contour>& region) {
+  std::vector<std::vector<Contour>> parts;
+  std::vector<double> areas;
+  for (const Contour& c : region) {
+    if (c.signed_area_mm2() > 0) {
+      parts.push_back({c});
+      areas.push_back(c.signed_area_mm2());
+    }
+  }
+  for (const Contour& c : region) {
+    if (c.signed_area_mm2() > 0 || c.pieces.empty()) continue;
+    // A hole belongs to the smallest outer boundary around it.
+    const Vec2 p = c.pieces.front().start;
+    std::size_t best = parts.size();
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      if (region_contains({parts[k].front()}, p) &&
+          (best == parts.size() || areas[k] < areas[best])) {
+        best = k;
+      }
+    }
+    if (best < parts.size()) parts[best].push_back(c);
+  }
+  return parts;
+}
+
 std::vector<Contour> offset_curve(const Contour& contour, double distance_mm, double tolerance_mm) {
   check_tolerance(tolerance_mm);
   if (!(distance_mm > 0 && distance_mm <= kMaxCoord)) {

@@ -85,6 +85,9 @@ class JobReader {
     const toml::table* t = root_[section].as_table();
     return t ? t->get(key) : nullptr;
   }
+  [[nodiscard]] bool has_section(std::string_view section) const {
+    return root_[section].as_table() != nullptr;
+  }
   [[nodiscard]] bool has(const std::string& section, const std::string& key) const {
     return find(section, key) != nullptr;
   }

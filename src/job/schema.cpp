@@ -48,6 +48,11 @@ std::string choices_text(const Names<E> (&table)[N]) {
   return out;
 }
 
+// A job with [pocket] plans a pocket: the slot's required keys and the path family are not.
+bool pocket_waives(const JobReader& r, std::string_view section) {
+  return (section == "slot" || section == "path") && r.has_section("pocket");
+}
+
 // A number key: absent keeps the member's value (the struct's default, or a library
 // material's coefficient); an optional member stays empty.
 template <class T>
@@ -59,7 +64,8 @@ Key number(const char* section, const char* key, const char* unit, Range range, 
     if constexpr (is_optional<T>::value) {
       if (auto v = r.number(section, key, unit, range)) dst = *v;
     } else {
-      dst = r.number(section, key, unit, range, dst, required).value_or(dst);
+      dst = r.number(section, key, unit, range, dst, required && !pocket_waives(r, section))
+                .value_or(dst);
     }
   };
   k.show = [=](Job& defaults) -> std::string {
@@ -91,7 +97,8 @@ Key choice(const char* section, const char* key, const Names<E> (&table)[N], Fie
   Key k{section, key, "choice", "", choices_text(table), required, doc, {}, {}};
   k.read = [=, options = options_of(table)](JobReader& r, Job& job) {
     E& dst = field(job);
-    dst = r.choice<E>(section, key, options, dst, required).value_or(dst);
+    dst = r.choice<E>(section, key, options, dst, required && !pocket_waives(r, section))
+              .value_or(dst);
   };
   k.show = [=, &table](Job& d) {
     return required ? std::string("required") : std::string(name_of(table, field(d)));
@@ -347,6 +354,68 @@ std::vector<Key> build_schema() {
                  }
                }
              }),
+      // [pocket]
+      custom("pocket", "boundary", "string", "", "a layer (or SVG id) of [geometry] file",
+             "required (a pocket)",
+             "the pocket's walls: the closed contours on this layer of the drawing (several: "
+             "several pockets); a job gives [slot] or [pocket]",
+             [](JobReader& r, Job& job) {
+               if (!r.has_section("pocket")) return;
+               if (auto v = r.string("pocket", "boundary")) {
+                 if (v->empty()) {
+                   r.problem("pocket", "boundary", "give the drawing's layer (or SVG id)");
+                 } else {
+                   job.pocket.boundary = *v;
+                 }
+               } else {
+                 r.problems().push_back(fmt::format(
+                     "{}: missing required key [pocket] boundary (the drawing's layer of the "
+                     "pocket's walls)",
+                     r.source()));
+               }
+             }),
+      custom("pocket", "islands", "string", "", "a layer (or SVG id) of [geometry] file", "none",
+             "the islands left standing: the closed contours on this layer, each inside a "
+             "boundary, none touching another",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.string("pocket", "islands")) {
+                 if (v->empty()) {
+                   r.problem("pocket", "islands", "give the drawing's layer (or SVG id)");
+                 } else {
+                   job.pocket.islands = *v;
+                 }
+               }
+             }),
+      custom("pocket", "depth", "number", "mm", "> 0", "required (a pocket)",
+             "the pocket's floor below the top face z = 0",
+             [](JobReader& r, Job& job) {
+               if (!r.has_section("pocket")) return;
+               job.pocket.depth_mm =
+                   r.number("pocket", "depth", "mm", Range{0, kMaxLengthMm, false}, 0.0, true)
+                       .value_or(0.0);
+             }),
+      number("pocket", "max_step_down", "mm", Range{1e-3, kMaxLengthMm},
+             FIELD(pocket.max_step_down_mm),
+             "the pocket is cleared in levels of equal depth, each at most this deep (0: one "
+             "level)"),
+      number("pocket", "stock_to_leave", "mm", Range{0, 100}, FIELD(pocket.stock_to_leave_mm),
+             "what the clearing leaves on walls and islands for the finishing pass"),
+      number("pocket", "max_engagement", "degrees", Range{0, 180, false},
+             FIELD(pocket.max_engagement_deg),
+             "the clearing's largest engagement (arc of the tool in the material) once in the "
+             "pocket, entries excepted; give this or max_chip"),
+      number("pocket", "max_chip", "mm", positive(), FIELD(pocket.max_chip_mm),
+             "the clearing's largest chip, below f_z: the engagement target is then "
+             "asin(max_chip / f_z); give this or max_engagement"),
+      custom("pocket", "finish_pass", "boolean", "", "true or false", "true",
+             "after the levels, one pass along walls and islands at full depth (climb or "
+             "conventional as [path] direction)",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.boolean("pocket", "finish_pass")) job.pocket.finish_pass = *v;
+             }),
+      number("pocket", "fit_tolerance", "mm", Range{1e-4, 0.1}, FIELD(pocket.fit_tolerance_mm),
+             "the clearing path is written as arcs and lines within this of the planned points "
+             "(the walls are kept this much further away)"),
       custom("slot", "length", "number", "mm", "> 0", "required (none with along)",
              "slot length along +Y (a slot along a drawing's contour has the contour's length)",
              [](JobReader& r, Job& job) {
@@ -357,8 +426,9 @@ std::vector<Key> build_schema() {
                            "[slot] length (or along)");
                  return;
                }
-               job.slot.length_mm =
-                   r.number("slot", "length", "mm", positive(), 0.0, !along).value_or(0.0);
+               job.slot.length_mm = r.number("slot", "length", "mm", positive(), 0.0,
+                                             !along && !r.has_section("pocket"))
+                                        .value_or(0.0);
              }),
       number("slot", "depth", "mm", positive(), FIELD(slot.depth_mm),
              "slot depth a_p below the top face z = 0", true),
@@ -379,7 +449,8 @@ std::vector<Key> build_schema() {
           "trochoidal step s (advance per cycle), below D; for linear the stepover between passes",
           [](JobReader& r, Job& job) {
             const bool needs_step =
-                job.path.type != PathType::linear || job.slot.width_mm > job.tool.diameter_mm;
+                !r.has_section("pocket") &&
+                (job.path.type != PathType::linear || job.slot.width_mm > job.tool.diameter_mm);
             job.path.step_mm =
                 r.number("path", "step", "mm", positive(), 0.0, needs_step).value_or(0.0);
           }),
@@ -752,6 +823,24 @@ void check_settings_rules(JobReader& r, const Job& job) {
 }
 
 // `[slot] along`: the drawing read (relative to the job file), its one contour on the layer
+// The job's drawing ([geometry] file, relative to the job file) with only `layers`; none
+// (and the problem recorded on [geometry] file) when it cannot be read.
+std::optional<Drawing> read_job_drawing(JobReader& r, Job& job, std::vector<std::string> layers) {
+  const std::filesystem::path file(job.geometry.file);
+  job.geometry.path =
+      file.is_absolute() ? file : std::filesystem::path(r.source()).parent_path() / file;
+  DrawingOptions options;
+  options.join_tolerance_mm = job.geometry.join_tolerance_mm;
+  options.arc_tolerance_mm = job.machine.arc_tolerance_mm;
+  options.layers = std::move(layers);
+  try {
+    return read_drawing(job.geometry.path, options);
+  } catch (const InputError& e) {
+    r.problem("geometry", "file", e.what());
+    return std::nullopt;
+  }
+}
+
 // the centreline, checked for what a slot along it needs: no corner, no bend tighter than
 // W/2, no crossing of itself. The slot's length becomes the contour's and, without a [stock]
 // box, the stock is the box around the slot (1 mm beside it, 0.5 mm below its floor).
@@ -770,20 +859,9 @@ void check_centreline(JobReader& r, Job& job) {
     }
   }
   if (!r.problems().empty()) return;
-  const std::filesystem::path file(job.geometry.file);
-  job.geometry.path =
-      file.is_absolute() ? file : std::filesystem::path(r.source()).parent_path() / file;
-  DrawingOptions options;
-  options.join_tolerance_mm = job.geometry.join_tolerance_mm;
-  options.arc_tolerance_mm = job.machine.arc_tolerance_mm;
-  options.layers = {slot.along};
-  Drawing drawing;
-  try {
-    drawing = read_drawing(job.geometry.path, options);
-  } catch (const InputError& e) {
-    r.problem("geometry", "file", e.what());
-    return;
-  }
+  const auto read = read_job_drawing(r, job, {slot.along});
+  if (!read) return;
+  Drawing drawing = std::move(*read);
   if (drawing.contours.size() != 1) {
     r.problem("slot", "along",
               fmt::format("layer '{}' of {} holds {} contours; a slot's centreline is one (put "
@@ -850,6 +928,130 @@ void check_centreline(JobReader& r, Job& job) {
     job.stock_max_mm = Vec3(box.hi.x() + m, box.hi.y() + m, 0);
   }
   slot.centreline = std::make_shared<const DrawnContour>(std::move(centre));
+}
+
+// [pocket]: one of the engagement targets, the drawing's closed contours on the boundary and
+// island layers, the islands inside the boundaries and apart, the boundaries apart. Without a
+// [stock] box the stock is the box around the boundaries down to 0.5 mm below the floor.
+void check_pocket(JobReader& r, Job& job) {
+  if (!r.has_section("pocket")) return;
+  Pocket& pk = job.pocket;
+  if (r.has_section("slot")) {
+    r.problems().push_back(fmt::format(
+        "{}: [slot] and [pocket]: a job plans a slot or a pocket; remove one", r.source()));
+  }
+  const bool by_angle = r.has("pocket", "max_engagement"), by_chip = r.has("pocket", "max_chip");
+  if (by_angle && by_chip) {
+    r.problem("pocket", "max_chip", "give max_engagement (degrees) or max_chip (mm), not both");
+  } else if (!by_angle && !by_chip) {
+    r.problems().push_back(fmt::format(
+        "{}: missing [pocket] max_engagement (degrees) or max_chip (mm): give one", r.source()));
+  }
+  for (const char* key : {"type", "step", "aspect_ratio", "linear_distance"}) {
+    if (r.has("path", key)) {
+      r.problem("path", key,
+                "is for slots; a pocket's clearing is planned from its engagement target "
+                "([pocket] max_engagement or max_chip)");
+    }
+  }
+  if (r.has("path", "entry") && job.path.entry != EntryType::helix) {
+    r.problem("path", "entry",
+              fmt::format("a pocket is entered by a helix (entry = \"helix\"), got \"{}\"",
+                          to_string(job.path.entry)));
+  }
+  job.path.entry = EntryType::helix;
+  if (job.geometry.file.empty()) {
+    r.problem("pocket", "boundary", "names a layer of a drawing: give [geometry] file");
+  }
+  if (!r.problems().empty() || pk.boundary.empty()) return;
+  const double fz = job.cutting.feed_per_tooth_mm;
+  if (by_chip) {
+    if (!(pk.max_chip_mm < fz)) {
+      r.problem("pocket", "max_chip",
+                fmt::format("must be below the feed per tooth f_z = {} mm (a side cut's chip is "
+                            "f_z sin of its engagement, f_z from 90 degrees on): give "
+                            "max_engagement for targets of 90 degrees and more; got {} mm",
+                            fmt_num(fz), fmt_num(pk.max_chip_mm)));
+      return;
+    }
+    pk.max_engagement_deg = rad_to_deg(std::asin(pk.max_chip_mm / fz));
+  } else {
+    pk.max_chip_mm = fz * std::sin(deg_to_rad(std::min(90.0, pk.max_engagement_deg)));
+  }
+  std::vector<std::string> layers{pk.boundary};
+  if (!pk.islands.empty()) {
+    if (pk.islands == pk.boundary) {
+      r.problem("pocket", "islands", "must be another layer than boundary");
+      return;
+    }
+    layers.push_back(pk.islands);
+  }
+  const auto drawing = read_job_drawing(r, job, layers);
+  if (!drawing) return;
+  auto boundaries = std::make_shared<std::vector<DrawnContour>>();
+  auto islands = std::make_shared<std::vector<DrawnContour>>();
+  for (const DrawnContour& c : drawing->contours) {
+    const bool is_boundary = c.layer == pk.boundary;
+    if (!c.contour.closed) {
+      const Vec2 a = c.contour.pieces.front().start, b = c.contour.pieces.back().end;
+      r.problem("pocket", is_boundary ? "boundary" : "islands",
+                fmt::format("layer '{}' has an open contour ({}, from ({:.4f}, {:.4f}) to "
+                            "({:.4f}, {:.4f})): a pocket's walls and islands are closed",
+                            c.layer, c.entities.front(), a.x(), a.y(), b.x(), b.y()));
+      continue;
+    }
+    (is_boundary ? boundaries : islands)->push_back(c);
+  }
+  if (!r.problems().empty()) return;
+  // Overlaps, to 1e-6 of the smaller area (Clipper's chords at 1 um of the contours).
+  constexpr double kTol = 1e-3;
+  auto overlap = [&](const Contour& a, const Contour& b) {
+    const double area = std::abs(region_area_mm2(region_intersection({a}, {b}, kTol)));
+    return area > 1e-6 * std::min(std::abs(a.signed_area_mm2()), std::abs(b.signed_area_mm2()));
+  };
+  auto name = [](const DrawnContour& c) { return c.entities.front(); };
+  for (std::size_t i = 0; i < boundaries->size(); ++i) {
+    for (std::size_t j = i + 1; j < boundaries->size(); ++j) {
+      if (overlap((*boundaries)[i].contour, (*boundaries)[j].contour)) {
+        r.problem("pocket", "boundary",
+                  fmt::format("the contours of {} and {} on layer '{}' overlap or nest: each "
+                              "pocket's walls are one closed contour (an island goes on the "
+                              "islands layer)",
+                              name((*boundaries)[i]), name((*boundaries)[j]), pk.boundary));
+      }
+    }
+  }
+  std::vector<Contour> walls;
+  for (const DrawnContour& b : *boundaries) walls.push_back(b.contour);
+  for (std::size_t i = 0; i < islands->size(); ++i) {
+    const Contour& c = (*islands)[i].contour;
+    const double outside = std::abs(region_area_mm2(region_difference({c}, walls, kTol)));
+    if (outside > 1e-6 * std::abs(c.signed_area_mm2())) {
+      r.problem("pocket", "islands",
+                fmt::format("the island {} on layer '{}' is not inside a boundary ({:.4g} mm^2 "
+                            "of it lies outside layer '{}')",
+                            name((*islands)[i]), pk.islands, outside, pk.boundary));
+    }
+    for (std::size_t j = i + 1; j < islands->size(); ++j) {
+      if (overlap(c, (*islands)[j].contour)) {
+        r.problem("pocket", "islands",
+                  fmt::format("the islands {} and {} on layer '{}' overlap or nest: draw them as "
+                              "one island",
+                              name((*islands)[i]), name((*islands)[j]), pk.islands));
+      }
+    }
+  }
+  if (!r.problems().empty()) return;
+  if (!job.stock_min_mm) {
+    Box3 box;
+    for (const Contour& w : walls) {
+      for (const Vec2& p : w.points(1e-3)) box.extend(Vec3(p.x(), p.y(), 0));
+    }
+    job.stock_min_mm = Vec3(box.lo.x(), box.lo.y(), -pk.depth_mm - 0.5);
+    job.stock_max_mm = Vec3(box.hi.x(), box.hi.y(), 0);
+  }
+  pk.boundary_contours = std::move(boundaries);
+  pk.island_contours = std::move(islands);
 }
 
 // What a program and the models can represent (beyond each key's own range): coordinates
@@ -1016,6 +1218,7 @@ void check_rules(JobReader& r, Job& job) {
   check_settings_rules(r, job);
   check_material(r, job.material);
   check_centreline(r, job);
+  check_pocket(r, job);
   check_representable(r, job);
 }
 

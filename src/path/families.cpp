@@ -426,6 +426,11 @@ PlannedPath plan_path(const Job& job, const ChipJudge& judge) {
   // and a ccw spindle mirrors it.
   const bool mirror = (job.path.direction == Direction::conventional) !=
                       (job.cutting.spindle_direction == SpindleDirection::ccw);
+  if (job.pocket.defined()) {
+    throw InputError(fmt::format(
+        "{}: the job plans a pocket ([pocket]); this models a slot (give a job with [slot])",
+        job.source));
+  }
   if (job.slot.curved()) {
     if (!judge) throw Error("plan_path: a slot along a curve needs a chip judge (plan_slot)");
     return plan_along_curve(job, g, mirror, judge);

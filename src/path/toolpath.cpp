@@ -23,7 +23,10 @@ void ToolPath::append(Segment segment) {
     const double gap = (segment.start() - last.end()).norm();
     if (gap > 1e-9) {
       throw Error(
-          fmt::format("path is discontinuous at segment {}: gap {:.3g} mm", segments_.size(), gap));
+          fmt::format("path is discontinuous at segment {}: gap {:.3g} mm (from ({:.6f}, {:.6f}, "
+                      "{:.6f}) to ({:.6f}, {:.6f}, {:.6f}))",
+                      segments_.size(), gap, last.end().x(), last.end().y(), last.end().z(),
+                      segment.start().x(), segment.start().y(), segment.start().z()));
     }
     s0 = start_length_.back() + last.length_mm();
     t0 = start_time_.back() + last.length_mm() / (last.speed_mm_per_min() / 60.0);

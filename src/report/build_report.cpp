@@ -7,6 +7,7 @@
 #include <set>
 
 #include "trochomill/error.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
 
 namespace trochomill {
@@ -123,8 +124,13 @@ ReportData build_report(Job job, ToolPath path, ReportRequest r, const RunHooks&
   }
   hooks.check();
 
-  // Forces (fast chips) over the window; new against worn with wear states.
-  if (jb.material.model) {
+  // Forces (fast chips) over the window; new against worn with wear states. A program without
+  // a steady cycle (a pocket, a slot along a curve) has no window of its own.
+  if (jb.material.model && !(to > from)) {
+    d.notes.push_back(
+        "forces: not shown: the program has no steady cycle; give a window (its start and end, "
+        "s of programmed time) for a part of it");
+  } else if (jb.material.model) {
     SimControl control;
     control.hooks = hooks;
     ReportForces f;
@@ -203,7 +209,7 @@ ReportData build_report(Job job, ToolPath path, ReportRequest r, const RunHooks&
     st.varies = r.varies;
     st.points = run_study(
         *r.document, r.overrides, r.varies, 0,
-        [&inner](const Job& j) { return analyze_with_forces(j, plan_slot(j).path, inner); }, hooks);
+        [&inner](const Job& j) { return analyze_with_forces(j, plan_job(j).path, inner); }, hooks);
     d.study = std::move(st);
   }
   return d;

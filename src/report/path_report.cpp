@@ -92,4 +92,33 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
   return out;
 }
 
+std::string pocket_summary(const PocketInfo& info) {
+  std::string out = fmt::format(
+      "pocket: {} part{}, {} level{}, {} clearing passes a level ({} links staying down, {} "
+      "lifts), {:.1f} mm of clearing a level\n",
+      info.parts, info.parts == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s", info.passes,
+      info.links_down, info.lifts, info.clearing_length_mm);
+  out += fmt::format(
+      "  engagement target {:.4g} degrees; the planner's largest at its points {:.4g} degrees "
+      "(entries excepted; `analyze` measures the program)\n",
+      info.target_engagement_deg, info.planned_max_engagement_deg);
+  for (const PocketLeftover& l : info.unreachable) {
+    out += fmt::format(
+        "  warning: {:.4g} mm^2 about ({:.3f}, {:.3f}) is narrower than the tool with the stock "
+        "to leave: no path reaches it\n",
+        l.area_mm2, l.at_mm.x(), l.at_mm.y());
+  }
+  if (info.cusps_mm2 > 0) {
+    out += fmt::format("  inside corners' cusps (radius R + stock): {:.4g} mm^2 in all\n",
+                       info.cusps_mm2);
+  }
+  if (info.left_for_finish_mm2 > 0) {
+    out += fmt::format(
+        "  {:.4g} mm^2 within reach is left to the finishing pass (inside corners the clearing "
+        "cannot enter within the target)\n",
+        info.left_for_finish_mm2);
+  }
+  return out;
+}
+
 }  // namespace trochomill

@@ -24,6 +24,7 @@
 #include "trochomill/force.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/mechanism.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/study.hpp"
@@ -72,7 +73,7 @@ json evaluate(const Job& job, SweepEval eval, const std::optional<std::pair<int,
     return json::parse(
         mechanism_json(job, job.mechanism, c, summarize_zones(c, job.mechanism, wear), wear));
   }
-  const ToolPath path = plan_slot(job).path;
+  const ToolPath path = plan_job(job).path;
   if (eval == SweepEval::analyze)
     return json::parse(metrics_json(job, analyze_with_forces(job, path, hooks)));
   std::pair<double, double> window;

@@ -12,6 +12,7 @@
 
 #include "trochomill/gcode.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/progress.hpp"
 
 namespace trochomill {
@@ -31,5 +32,10 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 [[nodiscard]] std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
                                            double time_with_acceleration_s,
                                            double max_acceleration_mm_per_s2);
+
+/// What a pocket's plan did, for people (lines ending in newlines): parts, levels, passes and
+/// links, the clearing length, the planner's largest engagement against the target, the
+/// leftovers beyond reach (area and where) and what the finishing pass is left.
+[[nodiscard]] std::string pocket_summary(const PocketInfo& info);
 
 }  // namespace trochomill

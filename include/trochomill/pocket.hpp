@@ -1,0 +1,83 @@
+// Pocket clearing at a guaranteed engagement (docs/models.md, "Pockets"): the region the tool
+// centre may reach (the pocket less its islands, shrunk by the tool radius and the stock to
+// leave, through Clipper), a helical entry where the region is widest, then passes that each
+// step hold the tool's engagement in the stock at or below the target by the exact engagement
+// kernel's removed region (RemovedRegion), links that stay down where the tool would cut
+// nothing and lift elsewhere, the same passes at each depth level, and a finishing pass along
+// walls and islands. Lengths mm, angles degrees; the drawing's frame is the workpiece's,
+// the top face z = 0.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "trochomill/engagement.hpp"
+#include "trochomill/geometry.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/path.hpp"
+#include "trochomill/progress.hpp"
+
+namespace trochomill {
+
+/// A part of the pocket the clearing leaves: beyond the tool's reach (narrower than the tool
+/// with the stock to leave on both sides: a neck, a slit, a corner's cusp), or within reach
+/// but not at the target (an inside corner's last material, left to the finishing pass).
+struct PocketLeftover {
+  double area_mm2 = 0;
+  Vec2 at_mm = Vec2::Zero();  ///< a point of it (the mean of its outline's vertices)
+};
+
+struct PocketInfo {
+  double target_engagement_deg = 0;  ///< [pocket] max_engagement (or from max_chip)
+  /// The planner's own largest engagement at its step points (degrees), entries excepted.
+  double planned_max_engagement_deg = 0;
+  int parts = 0;       ///< connected regions the tool centre may reach (each entered once)
+  int levels = 0;      ///< depth levels
+  int passes = 0;      ///< clearing passes per level, all parts
+  int links_down = 0;  ///< links per level that stay down in cleared area
+  int lifts = 0;       ///< links per level that lift over stock
+  double clearing_length_mm = 0;  ///< feed length of one level's clearing passes
+  /// Beyond the tool's reach: the pocket less what a tool centre in the region sweeps, less
+  /// the inside corners' cusps below 1.5 (1 - pi/4) (R + stock)^2 each (mm^2).
+  std::vector<PocketLeftover> unreachable;
+  double cusps_mm2 = 0;  ///< the small leftovers not listed (inside corners' cusps)
+  /// Within reach but left by the clearing because reaching it would pass the target (an
+  /// inside corner's last material): the finishing pass takes it (mm^2, on the planner's grid).
+  double left_for_finish_mm2 = 0;
+  /// The path's entries: [first, last) segment index ranges (the helices and the finishing
+  /// pass's lead-in), where the target does not hold.
+  std::vector<std::pair<std::size_t, std::size_t>> entries;
+  std::size_t finish_first_segment = 0;  ///< the finishing pass's first segment (or the end)
+};
+
+struct PlannedPocket {
+  ToolPath path;
+  PocketInfo info;
+};
+
+/// Plans the job's pocket ([pocket], its contours read by the job). Throws InputError when
+/// the tool does not fit or the helix does not, Error without a pocket.
+[[nodiscard]] PlannedPocket plan_pocket(const Job& job);
+
+/// The engagement kernel's reading of a planned pocket (compute_engagement on its path, one
+/// sample per tooth), the proof of the target: the largest engagement and chip of the clearing
+/// outside its entries and where (the tool centre, mm), the share of its cutting time (samples
+/// that cut) above the target, and the same largest figures of the finishing pass.
+struct PocketProof {
+  double clearing_max_engagement_deg = 0;
+  Vec3 clearing_max_at_mm = Vec3::Zero();
+  double clearing_max_chip_mm = 0;
+  double clearing_share_above_target = 0;  ///< 0 .. 1
+  double finish_max_engagement_deg = 0;
+  Vec3 finish_max_at_mm = Vec3::Zero();
+  double finish_max_chip_mm = 0;
+};
+[[nodiscard]] PocketProof prove_pocket(const Job& job, const PlannedPocket& pocket,
+                                       const RunHooks& hooks = {});
+
+/// The job's program: the pocket's (plan_pocket) with [pocket], else the slot's (plan_slot).
+[[nodiscard]] PlannedPath plan_job(const Job& job);
+
+}  // namespace trochomill

@@ -1,0 +1,892 @@
+// Pocket clearing at a guaranteed engagement (see include/trochomill/pocket.hpp and
+// docs/models.md, "Pockets").
+#include "trochomill/pocket.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+
+#include "trochomill/error.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+namespace {
+
+constexpr double kClipperTol = 1e-3;  // mm: offset_region's chords (vertices on the exact offset)
+
+Vec2 dir(double a) { return {std::cos(a), std::sin(a)}; }
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// Whether segments [a, b] and [c, d] cross (proper or touching).
+bool segments_cross(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const double d1 = cross2(b - a, c - a), d2 = cross2(b - a, d - a);
+  const double d3 = cross2(d - c, a - c), d4 = cross2(d - c, b - c);
+  return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0));
+}
+
+// A fast inside test for a region of closed polylines (offset_region's form): a grid whose
+// cells know the status of their centre and the edges that pass through them; a point is
+// its cell's centre status, flipped once per edge the segment from the centre to it crosses.
+class RegionGrid {
+ public:
+  RegionGrid(const std::vector<Contour>& region, double cell_mm) : cell_(cell_mm) {
+    Box3 box;
+    for (const Contour& c : region) {
+      for (const ContourPiece& p : c.pieces) {
+        edges_.push_back({p.start, p.end});
+        box.extend(Vec3(p.start.x(), p.start.y(), 0));
+      }
+    }
+    if (edges_.empty()) {
+      nx_ = ny_ = 1;
+      x0_ = y0_ = 0;
+      cells_.resize(1);
+      return;
+    }
+    x0_ = box.lo.x() - 2 * cell_;
+    y0_ = box.lo.y() - 2 * cell_;
+    nx_ = static_cast<long>(std::ceil((box.hi.x() - x0_) / cell_)) + 2;
+    ny_ = static_cast<long>(std::ceil((box.hi.y() - y0_) / cell_)) + 2;
+    if (static_cast<double>(nx_) * static_cast<double>(ny_) > 2e7) {
+      throw Error("pocket: the region grid would exceed 2e7 cells (a bug: the cell is sized)");
+    }
+    cells_.resize(static_cast<std::size_t>(nx_ * ny_));
+    std::vector<std::vector<int>> rows(static_cast<std::size_t>(ny_));
+    for (int k = 0; k < static_cast<int>(edges_.size()); ++k) {
+      const Vec2 a = edges_[k].first, b = edges_[k].second;
+      const long r0 = row(std::min(a.y(), b.y())), r1 = row(std::max(a.y(), b.y()));
+      for (long r = r0; r <= r1; ++r) {
+        rows[static_cast<std::size_t>(r)].push_back(k);
+        // The edge's x range within this row's band.
+        const double ylo = y0_ + static_cast<double>(r) * cell_, yhi = ylo + cell_;
+        double xa = a.x(), xb = b.x();
+        if (std::abs(b.y() - a.y()) > 1e-15) {
+          const double t0 = std::clamp((ylo - a.y()) / (b.y() - a.y()), 0.0, 1.0);
+          const double t1 = std::clamp((yhi - a.y()) / (b.y() - a.y()), 0.0, 1.0);
+          xa = a.x() + t0 * (b.x() - a.x());
+          xb = a.x() + t1 * (b.x() - a.x());
+        }
+        for (long c = col(std::min(xa, xb)); c <= col(std::max(xa, xb)); ++c) {
+          cells_[static_cast<std::size_t>(r * nx_ + c)].edges.push_back(k);
+        }
+      }
+    }
+    // Centre status by even-odd crossings of the row's centre line towards +x.
+    std::vector<double> xs;
+    for (long r = 0; r < ny_; ++r) {
+      const double yc = y0_ + (static_cast<double>(r) + 0.5) * cell_;
+      xs.clear();
+      for (const int k : rows[static_cast<std::size_t>(r)]) {
+        const Vec2 a = edges_[k].first, b = edges_[k].second;
+        if ((a.y() > yc) == (b.y() > yc)) continue;
+        xs.push_back(a.x() + (yc - a.y()) / (b.y() - a.y()) * (b.x() - a.x()));
+      }
+      std::sort(xs.begin(), xs.end());
+      std::size_t passed = 0;
+      for (long c = 0; c < nx_; ++c) {
+        const double xc = x0_ + (static_cast<double>(c) + 0.5) * cell_;
+        while (passed < xs.size() && xs[passed] <= xc) ++passed;
+        cells_[static_cast<std::size_t>(r * nx_ + c)].inside = (xs.size() - passed) % 2 == 1;
+      }
+    }
+  }
+
+  [[nodiscard]] bool contains(const Vec2& p) const {
+    const long r = row(p.y()), c = col(p.x());
+    if (p.x() < x0_ || p.y() < y0_ || p.x() > x0_ + static_cast<double>(nx_) * cell_ ||
+        p.y() > y0_ + static_cast<double>(ny_) * cell_) {
+      return false;
+    }
+    const Cell& cell = cells_[static_cast<std::size_t>(r * nx_ + c)];
+    bool in = cell.inside;
+    const Vec2 centre(x0_ + (static_cast<double>(c) + 0.5) * cell_,
+                      y0_ + (static_cast<double>(r) + 0.5) * cell_);
+    for (const int k : cell.edges) {
+      if (segments_cross(centre, p, edges_[k].first, edges_[k].second)) in = !in;
+    }
+    return in;
+  }
+
+ private:
+  struct Cell {
+    bool inside = false;
+    std::vector<int> edges;
+  };
+  [[nodiscard]] long row(double y) const {
+    return std::clamp(static_cast<long>(std::floor((y - y0_) / cell_)), 0L, ny_ - 1);
+  }
+  [[nodiscard]] long col(double x) const {
+    return std::clamp(static_cast<long>(std::floor((x - x0_) / cell_)), 0L, nx_ - 1);
+  }
+  double cell_;
+  double x0_ = 0, y0_ = 0;
+  long nx_ = 0, ny_ = 0;
+  std::vector<std::pair<Vec2, Vec2>> edges_;
+  std::vector<Cell> cells_;
+};
+
+// The material the clearing must remove, on a grid: cells whose centre a tool centre in the
+// region reaches by less than R - h (so that a pass along the region's edge covers them).
+class Coverage {
+ public:
+  enum : std::uint8_t { kNone = 0, kRemaining = 1, kCovered = 2, kGivenUp = 3 };
+
+  Coverage(const std::vector<Contour>& reach, double cell_mm, double R)
+      : h_(cell_mm), R_(R), test_(reach, std::max(cell_mm, 0.25 * R)) {
+    Box3 box;
+    for (const Contour& c : reach) {
+      for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
+    }
+    x0_ = box.lo.x() - h_;
+    y0_ = box.lo.y() - h_;
+    nx_ = static_cast<long>(std::ceil((box.hi.x() - x0_) / h_)) + 2;
+    ny_ = static_cast<long>(std::ceil((box.hi.y() - y0_) / h_)) + 2;
+    state_.assign(static_cast<std::size_t>(nx_ * ny_), kNone);
+    for (long r = 0; r < ny_; ++r) {
+      for (long c = 0; c < nx_; ++c) {
+        if (test_.contains(centre(c, r))) {
+          state_[static_cast<std::size_t>(r * nx_ + c)] = kRemaining;
+          ++remaining_;
+        }
+      }
+    }
+  }
+
+  [[nodiscard]] Vec2 centre(long c, long r) const {
+    return {x0_ + (static_cast<double>(c) + 0.5) * h_, y0_ + (static_cast<double>(r) + 0.5) * h_};
+  }
+  [[nodiscard]] double cell_mm() const { return h_; }
+  [[nodiscard]] long remaining() const { return remaining_; }
+  [[nodiscard]] long given_up() const { return given_up_; }
+
+  // Marks the cells within R of c as covered; returns how many were remaining.
+  long cut(const Vec2& p) {
+    long n = 0;
+    for_cells(p, R_, [&](std::uint8_t& s) {
+      if (s == kRemaining) {
+        s = kCovered;
+        ++n;
+      }
+    });
+    remaining_ -= n;
+    return n;
+  }
+  // Gives up the remaining cells within `radius` of p.
+  void give_up(const Vec2& p, double radius) {
+    for_cells(p, radius, [&](std::uint8_t& s) {
+      if (s == kRemaining) {
+        s = kGivenUp;
+        --remaining_;
+        ++given_up_;
+      }
+    });
+  }
+  // The remaining cell nearest to p.
+  [[nodiscard]] std::optional<Vec2> nearest_remaining(const Vec2& p) const {
+    double best = std::numeric_limits<double>::infinity();
+    std::optional<Vec2> out;
+    for (long r = 0; r < ny_; ++r) {
+      for (long c = 0; c < nx_; ++c) {
+        if (state_[static_cast<std::size_t>(r * nx_ + c)] != kRemaining) continue;
+        const double d = (centre(c, r) - p).squaredNorm();
+        if (d < best) {
+          best = d;
+          out = centre(c, r);
+        }
+      }
+    }
+    return out;
+  }
+
+ private:
+  template <class F>
+  void for_cells(const Vec2& p, double radius, F&& f) {
+    const long c0 = std::max(0L, static_cast<long>(std::floor((p.x() - radius - x0_) / h_)));
+    const long c1 = std::min(nx_ - 1, static_cast<long>(std::floor((p.x() + radius - x0_) / h_)));
+    const long r0 = std::max(0L, static_cast<long>(std::floor((p.y() - radius - y0_) / h_)));
+    const long r1 = std::min(ny_ - 1, static_cast<long>(std::floor((p.y() + radius - y0_) / h_)));
+    const double r2 = radius * radius;
+    for (long r = r0; r <= r1; ++r) {
+      for (long c = c0; c <= c1; ++c) {
+        if ((centre(c, r) - p).squaredNorm() < r2) f(state_[static_cast<std::size_t>(r * nx_ + c)]);
+      }
+    }
+  }
+
+  double h_, R_;
+  RegionGrid test_;
+  double x0_ = 0, y0_ = 0;
+  long nx_ = 0, ny_ = 0;
+  std::vector<std::uint8_t> state_;
+  long remaining_ = 0, given_up_ = 0;
+};
+
+// One planar move of the clearing sequence of a part (z added per level).
+struct Move2 {
+  enum Kind { arc_or_line, link_down, lift } kind = arc_or_line;
+  ContourPiece piece;  // arc_or_line: the piece; links: start -> end (a line)
+  bool entry = false;  // part of the helix's flat circle
+};
+
+// A clearing pass: its step points (tangent-continuous arcs between them).
+struct Pass {
+  std::vector<Vec2> points;
+};
+
+struct Settings {
+  double R = 0;            // tool radius
+  double step = 0;         // the planner's step along the path (mm)
+  double aim_deg = 0;      // the engagement the steps hold (target less a margin)
+  double kernel_step = 0;  // the kernel's sample spacing (f_z): its front arc's half width
+  double sigma = 1;        // +1: stock on the right (climb, cw spindle); -1: mirrored
+};
+
+// The planner of one part: its region, the removed region and the coverage.
+class PartPlanner {
+ public:
+  PartPlanner(const Settings& s, const std::vector<Contour>& part, const Vec2& lo, const Vec2& hi)
+      : s_(s),
+        inside_(part, std::max(0.25, 0.25 * s.R)),
+        removed_(s.R, lo, hi),
+        coverage_(offset_region(part, s.R - cell_size(s.R), kClipperTol), cell_size(s.R), s.R) {}
+
+  static double cell_size(double R) { return std::clamp(R / 20.0, 0.02, 0.25); }
+
+  [[nodiscard]] bool in_region(const Vec2& p) const { return inside_.contains(p); }
+  Coverage& coverage() { return coverage_; }
+
+  // Cuts the disc at p; returns how many coverage cells it took.
+  long cut(const Vec2& p) {
+    removed_.cut(p);
+    centres_.push_back(p);
+    return coverage_.cut(p);
+  }
+
+  // The engagement (degrees) of the tool at `to` moving along the unit tangent t, as the
+  // kernel measures it at its sample spacing (one tooth, f_z): the uncut arcs of the circle at
+  // `to` (the discs cut so far, the last at the step's start) less what the disc one sample
+  // back along t covers (the arc within acos(f_z / 2R) of the backward direction). The
+  // discs between the step's start and that sample are left out: the estimate is at least
+  // the kernel's.
+  [[nodiscard]] double uncut_rad(const Vec2& at) const {
+    double total = 0;
+    for (const AngleArc& a : removed_.uncut_arcs(at)) total += a.sweep_rad();
+    return total;
+  }
+  [[nodiscard]] double engagement_deg(const Vec2& to, const Vec2& t) const {
+    const auto arcs = removed_.uncut_arcs(to);
+    if (arcs.empty()) return 0;
+    const double back = std::atan2(-t.y(), -t.x());
+    const double half = std::acos(std::min(1.0, s_.kernel_step / (2 * s_.R)));
+    double lo = std::fmod(back - half, kTwoPi);
+    if (lo < 0) lo += kTwoPi;
+    const double hi = lo + 2 * half;  // the covered arc [lo, hi], hi may pass 2 pi
+    double total = 0;
+    for (const AngleArc& a : arcs) {
+      double len = a.sweep_rad();
+      // Overlap of [a.start, a.end] with [lo, hi] and its copies 2 pi either side.
+      for (const double shift : {-kTwoPi, 0.0, kTwoPi}) {
+        const double o0 = std::max(a.start_rad, lo + shift), o1 = std::min(a.end_rad, hi + shift);
+        if (o1 > o0) len -= o1 - o0;
+      }
+      total += std::max(0.0, len);
+    }
+    return rad_to_deg(total);
+  }
+
+  // A step from p: the line of length s in the direction psi + theta (counter-clockwise);
+  // allowed when its end and middle lie in the region and the engagement at its quarter
+  // points stays within the aim (the kernel samples every tooth between the points).
+  struct Probe {
+    bool ok = false;
+    double eng = 0;  // the largest at the points checked (degrees)
+    Vec2 end;
+  };
+  [[nodiscard]] Probe probe(const Vec2& p, double psi, double theta) const {
+    Probe out;
+    const Vec2 u = dir(psi + theta);
+    out.end = p + s_.step * u;
+    if (!in_region(out.end) || !in_region(p + 0.5 * s_.step * u)) return out;
+    for (const double f : {1.0, 0.75, 0.5, 0.25}) {
+      out.eng = std::max(out.eng, engagement_deg(p + f * s_.step * u, u));
+      if (out.eng > s_.aim_deg) return out;
+    }
+    // The kernel's first sample after the turn at p: one tooth on, its last disc at p itself
+    // (where the tool came from the step before, along another direction).
+    out.eng = std::max(out.eng, rad_to_deg(uncut_rad(p + s_.kernel_step * u)));
+    if (out.eng > s_.aim_deg) return out;
+    out.ok = true;
+    return out;
+  }
+
+  // The next step from p with heading psi (the last step's turn theta_prev), in the frame
+  // where turning towards the stock is negative: the step that turns furthest towards the
+  // stock while allowed, found from the last turn by scanning and bisection; where that finds
+  // no edge between allowed and not, the edge of least turn on a grid of 57 turns, else the
+  // allowed step that cuts most. None: no step is allowed.
+  struct Choice {
+    double theta = 0;
+    Probe probe;
+  };
+  [[nodiscard]] std::optional<Choice> choose(const Vec2& p, double psi, double theta_prev) const {
+    const double kMaxTurn = 0.95 * kPi;  // a turn of 171 degrees: nearly straight back
+    const double kScan = std::min(deg_to_rad(4), kMaxTurn / 4);
+    auto at = [&](double th) { return probe(p, psi, s_.sigma * th); };
+    auto bisect = [&](double ok_th, Probe ok_pr, double bad_th) {
+      for (int k = 0; k < 7; ++k) {  // 4 degrees / 2^7: 0.03 degrees
+        const double mid = 0.5 * (ok_th + bad_th);
+        const Probe pm = at(mid);
+        if (pm.ok) {
+          ok_th = mid;
+          ok_pr = pm;
+        } else {
+          bad_th = mid;
+        }
+      }
+      return Choice{ok_th, ok_pr};
+    };
+    const double start = std::clamp(theta_prev, -kMaxTurn, kMaxTurn);
+    const Probe first = at(start);
+    if (first.ok) {
+      double ok_th = start;
+      Probe ok_pr = first;
+      for (double next = start - kScan; next >= -kMaxTurn; next -= kScan) {
+        const Probe pn = at(next);
+        if (!pn.ok) return bisect(ok_th, ok_pr, next);
+        ok_th = next;
+        ok_pr = pn;
+      }
+    } else {
+      double bad_th = start;
+      for (double next = start + kScan; next <= kMaxTurn; next += kScan) {
+        const Probe pn = at(next);
+        if (pn.ok) return bisect(next, pn, bad_th);
+        bad_th = next;
+      }
+    }
+    // The whole circle of turns on a grid.
+    constexpr int kHalf = 28;
+    const double d = kMaxTurn / kHalf;
+    std::vector<Probe> grid;
+    for (int k = -kHalf; k <= kHalf; ++k) grid.push_back(at(k * d));
+    std::optional<Choice> best;
+    for (int k = 1; k < static_cast<int>(grid.size()); ++k) {
+      // An edge: allowed here, not one grid step towards the stock.
+      if (!grid[k].ok || grid[k - 1].ok) continue;
+      const double th = (k - kHalf) * d;
+      if (!best || std::abs(th) < std::abs(best->theta)) best = bisect(th, grid[k], th - d);
+    }
+    if (best) return best;
+    for (int k = 0; k < static_cast<int>(grid.size()); ++k) {
+      if (grid[k].ok && (!best || grid[k].eng > best->probe.eng)) {
+        best = Choice{(k - kHalf) * d, grid[k]};
+      }
+    }
+    return best;
+  }
+
+  // Runs one pass from p with heading psi (the helix's end, or a start next to stock).
+  // `target`: head straight for it until the tool cuts. Ends where no step is allowed or after
+  // 2R of steps that take no coverage cell. Returns the pass's points.
+  Pass run_pass(Vec2 p, double psi, std::optional<Vec2> target) {
+    Pass pass;
+    pass.points.push_back(p);
+    constexpr double kCutting = 0.5;  // degrees: a step below this cuts nothing
+    double theta = 0;
+    double air = 0;  // the length run since the coverage last gained
+    for (std::size_t n = 0; n < 4000000; ++n) {
+      if (target) {
+        const Vec2 to = *target - p;
+        const double want = std::atan2(to.y(), to.x());
+        const Probe pr = probe(p, want, 0);
+        if (to.norm() > s_.step && pr.ok && pr.eng < kCutting) {
+          p = pr.end;
+          psi = want;
+          pass.points.push_back(p);
+          cut(p);
+          continue;
+        }
+        // Cutting, there, or blocked: steer from here with the stock on the right.
+        psi = want + s_.sigma * 0.5 * kPi;
+        theta = 0;
+        target.reset();
+      }
+      const auto c = choose(p, psi, theta);
+      if (!c) break;  // no step allowed
+      planned_max_ = std::max(planned_max_, c->probe.eng);
+      psi += s_.sigma * c->theta;
+      theta = c->theta;
+      p = c->probe.end;
+      pass.points.push_back(p);
+      // Progress is what the coverage gains: slivers below a cell do not keep a pass going.
+      if (cut(p) > 0) {
+        air = 0;
+      } else {
+        air += s_.step;
+        if (air > 2 * s_.R) break;
+      }
+    }
+    return pass;
+  }
+
+  [[nodiscard]] double planned_max_deg() const { return planned_max_; }
+
+  // The cut centre nearest to p.
+  [[nodiscard]] Vec2 nearest_centre(const Vec2& p) const {
+    double best = std::numeric_limits<double>::infinity();
+    Vec2 out = p;
+    for (const Vec2& c : centres_) {
+      const double d = (c - p).squaredNorm();
+      if (d < best) {
+        best = d;
+        out = c;
+      }
+    }
+    return out;
+  }
+
+  // Whether the tool can go from a to b at the level cutting nothing: every point of the line
+  // in the region, the engagement at each of its points (a step apart) below half a degree.
+  // When it can, the line's discs are cut (what slivers it takes are in the model).
+  bool link_down(const Vec2& a, const Vec2& b) {
+    const double L = (b - a).norm();
+    const int n = std::max(1, static_cast<int>(std::ceil(L / s_.step)));
+    Vec2 prev = a;
+    for (int k = 1; k <= n; ++k) {
+      const Vec2 p = a + (b - a) * (static_cast<double>(k) / n);
+      if (!in_region(p) || !in_region(0.5 * (p + prev))) return false;
+      if (engagement_deg(p, (p - prev).normalized()) >= 0.5) return false;
+      prev = p;
+    }
+    for (int k = 1; k <= n; ++k) cut(a + (b - a) * (static_cast<double>(k) / n));
+    return true;
+  }
+
+ private:
+  Settings s_;
+  RegionGrid inside_;
+  RemovedRegion removed_;
+  Coverage coverage_;
+  std::vector<Vec2> centres_;
+  double planned_max_ = 0;
+};
+
+// The centre of the part's widest place (largest distance to its contours), on a grid
+// refined twice, and that distance.
+std::pair<Vec2, double> widest_point(const std::vector<Contour>& part, const RegionGrid& inside) {
+  Box3 box;
+  for (const Contour& c : part) {
+    for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
+  }
+  auto clearance = [&](const Vec2& p) {
+    double d = std::numeric_limits<double>::infinity();
+    for (const Contour& c : part) d = std::min(d, c.distance_mm(p));
+    return d;
+  };
+  Vec2 best((box.lo.x() + box.hi.x()) / 2, (box.lo.y() + box.hi.y()) / 2);
+  double best_d = -1;
+  const double span = std::max(box.hi.x() - box.lo.x(), box.hi.y() - box.lo.y());
+  double h = std::max(span / 64, 1e-3);
+  Vec2 lo(box.lo.x(), box.lo.y()), hi(box.hi.x(), box.hi.y());
+  for (int round = 0; round < 3; ++round) {
+    for (double y = lo.y() + 0.5 * h; y < hi.y(); y += h) {
+      for (double x = lo.x() + 0.5 * h; x < hi.x(); x += h) {
+        const Vec2 p(x, y);
+        if (!inside.contains(p)) continue;
+        const double d = clearance(p);
+        if (d > best_d) {
+          best_d = d;
+          best = p;
+        }
+      }
+    }
+    lo = best - Vec2(2 * h, 2 * h);
+    hi = best + Vec2(2 * h, 2 * h);
+    h /= 8;
+  }
+  return {best, std::max(0.0, best_d)};
+}
+
+// The clearing of one part, as planar moves (the helix's flat circle first).
+struct PartPlan {
+  Vec2 helix_centre = Vec2::Zero();
+  double helix_radius = 0;
+  std::vector<Move2> moves;  // from the helix's end point
+  int passes = 0, links_down = 0, lifts = 0;
+  double clearing_length = 0;
+  double planned_max_deg = 0;
+  double given_up_mm2 = 0;
+};
+
+PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>& part) {
+  const Pocket& pk = job.pocket;
+  Box3 box;
+  for (const Contour& c : part) {
+    for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
+  }
+  const Vec2 lo(box.lo.x() - s.R, box.lo.y() - s.R), hi(box.hi.x() + s.R, box.hi.y() + s.R);
+  PartPlanner planner(s, part, lo, hi);
+  PartPlan out;
+  const RegionGrid inside(part, std::max(0.25, 0.25 * s.R));
+  const auto [centre, room] = widest_point(part, inside);
+  double rh = job.path.entry_radius_mm;
+  if (rh > 0 && rh > room) {
+    throw InputError(fmt::format(
+        "[path] entry_radius: the helix of radius {:g} mm does not fit in the pocket's widest "
+        "place at ({:.3f}, {:.3f}), where the tool centre has {:.4g} mm of room; give at most "
+        "that or 0 (automatic)",
+        rh, centre.x(), centre.y(), room));
+  }
+  if (rh <= 0) rh = std::min(0.5 * s.R, 0.9 * room);
+  out.helix_centre = centre;
+  out.helix_radius = rh;
+  // The helix's flat circle at the level: counter-clockwise with the stock on the right.
+  const double turn = s.sigma;  // +1 counter-clockwise
+  const Vec2 start = centre + Vec2(rh, 0);
+  const int n_circle = std::max(8, static_cast<int>(std::ceil(kTwoPi * rh / s.step)));
+  for (int k = 0; k <= n_circle; ++k) {
+    planner.cut(centre + rh * dir(turn * kTwoPi * k / n_circle));
+  }
+  if (rh > 0) {
+    const Vec2 half = centre - Vec2(rh, 0);
+    out.moves.push_back(
+        {Move2::arc_or_line, ContourPiece::arc(start, half, centre, turn > 0), true});
+    out.moves.push_back(
+        {Move2::arc_or_line, ContourPiece::arc(half, start, centre, turn > 0), true});
+  }
+  Vec2 p = start;
+  double psi = turn * 0.5 * kPi;  // the circle's tangent at angle 0
+  std::optional<Vec2> target;
+  const double cell = planner.coverage().cell_mm();
+  // (A guard: each pass gains coverage or gives some up, so the cells bound the count.)
+  for (int guard = 0; guard < 10000000 && planner.coverage().remaining() > 0; ++guard) {
+    const long before = planner.coverage().remaining();
+    Pass pass = planner.run_pass(p, psi, target);
+    const long gained = before - planner.coverage().remaining();
+    if (pass.points.size() >= 2) {
+      // Arcs and lines through the step points within the fit tolerance of them and of the
+      // chords between (the planner checked the chords: an arc bulging off them would not be).
+      for (const ContourPiece& piece : fit_polyline(pass.points, pk.fit_tolerance_mm)) {
+        out.moves.push_back({Move2::arc_or_line, piece});
+        out.clearing_length += piece.length_mm();
+      }
+      ++out.passes;
+      p = pass.points.back();
+    }
+    // Where to go on: the remaining stock nearest to here, from the cut centre nearest to it.
+    const auto next = planner.coverage().nearest_remaining(p);
+    if (!next) break;
+    if (gained < 2 && target) {
+      // The last pass made for this stock and took (almost) none: it is out of reach at the
+      // target (an inside corner's last material): left to the finishing pass.
+      planner.coverage().give_up(*target, 0.5 * s.R);
+      target.reset();
+      continue;
+    }
+    const Vec2 from = planner.nearest_centre(*next);
+    if ((from - p).norm() > 1e-9) {
+      const bool down = planner.link_down(p, from);
+      out.moves.push_back({down ? Move2::link_down : Move2::lift, ContourPiece::line(p, from)});
+      ++(down ? out.links_down : out.lifts);
+      p = from;
+    }
+    const Vec2 to = *next - p;
+    psi = std::atan2(to.y(), to.x());
+    target = *next;
+  }
+  out.planned_max_deg = planner.planned_max_deg();
+  out.given_up_mm2 = static_cast<double>(planner.coverage().given_up()) * cell * cell;
+  return out;
+}
+
+// The region of the pocket: its boundaries and islands (even-odd).
+std::vector<Contour> pocket_region(const Pocket& pk) {
+  std::vector<Contour> region;
+  for (const DrawnContour& c : *pk.boundary_contours) region.push_back(c.contour);
+  if (pk.island_contours) {
+    for (const DrawnContour& c : *pk.island_contours) region.push_back(c.contour);
+  }
+  return region;
+}
+
+Vec2 mean_vertex(const Contour& c) {
+  Vec2 m = Vec2::Zero();
+  for (const ContourPiece& p : c.pieces) m += p.start;
+  return c.pieces.empty() ? m : Vec2(m / static_cast<double>(c.pieces.size()));
+}
+
+}  // namespace
+
+PlannedPocket plan_pocket(const Job& job) {
+  const Pocket& pk = job.pocket;
+  if (!pk.defined()) throw Error("plan_pocket: the job has no [pocket]");
+  const double R = job.tool.radius_mm();
+  const double feed = feed_rate_mm_per_min(job);
+  if (!(feed > 0)) throw InputError("[cutting]: the feed rate must be > 0 mm/min");
+  const double entry_feed =
+      job.path.entry_feed_mm_per_min > 0 ? job.path.entry_feed_mm_per_min : 0.5 * feed;
+  const double rapid = job.machine.rapid_rate_mm_per_min;
+  const double safe_z = job.machine.safe_z_mm, clearance = job.path.clearance_mm;
+  const double stl = pk.stock_to_leave_mm;
+  const std::vector<Contour> region = pocket_region(pk);
+  // The tool centre's region, kept the fit tolerance and three times Clipper's chords (the
+  // offset, the corners' rounding twice) further in, so that the fitted arcs stay R + stock
+  // from every wall and island.
+  const double keep = R + stl + pk.fit_tolerance_mm + 3 * kClipperTol;
+  // Its convex corners rounded (the region shrunk by rc more, then grown back by rc): the
+  // clearing stays out of the sharp corners, where no path holds the target (the last tool
+  // position in a corner of angle alpha touches both walls: its arc in the stock is
+  // 180 - alpha degrees); their material is the finishing pass's (docs/models.md, "Pockets").
+  const double rc = 0.25 * R;
+  std::vector<Contour> centre_region = offset_region(region, -(keep + rc), kClipperTol);
+  if (!centre_region.empty() && rc > 0)
+    centre_region = offset_region(centre_region, rc, kClipperTol);
+  if (centre_region.empty()) {
+    throw InputError(fmt::format(
+        "[pocket] boundary: the tool (D = {:g} mm) with stock_to_leave = {:g} mm fits nowhere in "
+        "layer '{}' (the pocket is narrower than D + 2 stock everywhere)",
+        job.tool.diameter_mm, stl, pk.boundary));
+  }
+  Settings s;
+  s.R = R;
+  s.step = std::clamp(0.1 * R, 0.05, 1.0);
+  // Margin: the kernel samples every tooth between the planner's points (a step's quarters and
+  // the first tooth after its turn); 1 degree held the kernel's largest within the target on
+  // the test pockets and the example (docs/models.md, "Pockets").
+  s.aim_deg = std::max(0.5 * pk.max_engagement_deg, pk.max_engagement_deg - 1.0);
+  s.kernel_step = std::max(1e-4, job.cutting.feed_per_tooth_mm);
+  const bool mirror = (job.path.direction == Direction::conventional) !=
+                      (job.cutting.spindle_direction == SpindleDirection::ccw);
+  s.sigma = mirror ? -1.0 : 1.0;
+
+  PlannedPocket out;
+  PocketInfo& info = out.info;
+  info.target_engagement_deg = pk.max_engagement_deg;
+  const auto parts = region_parts(centre_region);
+  std::vector<PartPlan> plans;
+  for (const auto& part : parts) {
+    plans.push_back(plan_part(job, s, part));
+    const PartPlan& pp = plans.back();
+    info.passes += pp.passes;
+    info.links_down += pp.links_down;
+    info.lifts += pp.lifts;
+    info.clearing_length_mm += pp.clearing_length;
+    info.planned_max_engagement_deg = std::max(info.planned_max_engagement_deg, pp.planned_max_deg);
+    info.left_for_finish_mm2 += pp.given_up_mm2;
+  }
+  info.parts = static_cast<int>(parts.size());
+
+  // What no tool centre in the region reaches: the pocket less the region grown back.
+  {
+    const auto reach = offset_region(region, -keep, kClipperTol);
+    const auto swept = offset_region(reach, keep, kClipperTol);
+    const auto left = region_difference(region, swept, kClipperTol);
+    const double cusp = 1.5 * (1 - kPi / 4) * keep * keep;
+    for (const auto& part : region_parts(left)) {
+      const double a = region_area_mm2(part);
+      if (a > cusp) {
+        info.unreachable.push_back({a, mean_vertex(part.front())});
+      } else {
+        info.cusps_mm2 += a;
+      }
+    }
+  }
+
+  // Levels of equal depth.
+  const double depth = pk.depth_mm;
+  const int levels =
+      pk.max_step_down_mm > 0
+          ? std::max(1, static_cast<int>(std::ceil(depth / pk.max_step_down_mm - 1e-9)))
+          : 1;
+  info.levels = levels;
+  ToolPath& path = out.path;
+  auto at = [](const Vec2& p, double z) { return Vec3(p.x(), p.y(), z); };
+  auto here = [&]() { return path.segments().back().end(); };
+  auto line_to = [&](const Vec3& b, Motion m, double speed) {
+    const Vec3 a = here();
+    if ((b - a).norm() > 1e-12) path.append(Segment::line(a, b, m, speed));
+  };
+  auto piece_at = [&](const ContourPiece& p, double z0, double z1, Motion m, double speed) {
+    if (!p.is_arc()) {
+      path.append(Segment::line(at(p.start, z0), at(p.end, z1), m, speed));
+      return;
+    }
+    const Vec2 c = *p.centre;
+    const double a0 = std::atan2(p.start.y() - c.y(), p.start.x() - c.x());
+    path.append(Segment::arc_xy(c.x(), c.y(), p.radius_mm(), a0, p.sweep_rad(), z0, z1, m, speed));
+  };
+  // Goes to p at height z from anywhere: up to the safe plane, across, down to z_clear, then
+  // at the entry feed to z.
+  auto travel = [&](const Vec2& p, double z_clear, double z) {
+    if (path.empty()) {
+      path.append(Segment::line(at(p, safe_z), at(p, z_clear), Motion::rapid, rapid));
+    } else {
+      const Vec3 h = here();
+      line_to(Vec3(h.x(), h.y(), std::max(h.z(), safe_z)), Motion::rapid, rapid);
+      line_to(at(p, safe_z), Motion::rapid, rapid);
+      line_to(at(p, z_clear), Motion::rapid, rapid);
+    }
+    line_to(at(p, z), Motion::feed, entry_feed);
+  };
+  const double pitch = std::max(1e-3, job.path.entry_pitch_mm);
+  for (int k = 1; k <= levels; ++k) {
+    const double z_prev = k == 1 ? 0.0 : -depth * (k - 1) / levels;
+    const double z = -depth * k / levels;
+    for (const PartPlan& pp : plans) {
+      const Vec2 c = pp.helix_centre;
+      const double rh = pp.helix_radius;
+      const Vec2 start = c + Vec2(rh, 0);
+      const std::size_t first = path.segments().size();
+      travel(start, z_prev + clearance, z_prev + (k == 1 ? clearance : 0.0));
+      // The helix down to z: whole turns at the pitch or less.
+      const double drop = here().z() - z;
+      if (rh > 0) {
+        const int turns = std::max(1, static_cast<int>(std::ceil(drop / pitch - 1e-9)));
+        for (int t = 0; t < turns; ++t) {
+          const double za = here().z(), zb = za - drop / turns;
+          path.append(Segment::arc_xy(c.x(), c.y(), rh, 0.0, s.sigma * kTwoPi, za, zb, Motion::feed,
+                                      entry_feed));
+        }
+      } else {
+        line_to(at(start, z), Motion::feed, entry_feed);
+      }
+      std::size_t entry_end = path.segments().size();
+      for (std::size_t i = 0; i < pp.moves.size(); ++i) {
+        const Move2& m = pp.moves[i];
+        switch (m.kind) {
+          case Move2::arc_or_line:
+            piece_at(m.piece, z, z, Motion::feed, feed);
+            break;
+          case Move2::link_down:
+            line_to(at(m.piece.end, z), Motion::feed, feed);
+            break;
+          case Move2::lift:
+            travel(m.piece.end, z + clearance, z);
+            break;
+        }
+        if (m.entry) entry_end = path.segments().size();  // the helix's flat circle
+      }
+      info.entries.emplace_back(first, entry_end);
+    }
+  }
+
+  // The finishing pass: along the walls and islands at full depth, climb or conventional,
+  // entered and left by quarter arcs from the cleared area.
+  info.finish_first_segment = path.segments().size();
+  if (pk.finish_pass) {
+    const double z = -depth;
+    const double margin = 2 * kClipperTol;  // the chords and the fit, inside the walls' offset
+    auto finish = offset_region(region, -(R + margin), kClipperTol);
+    const RegionGrid cleared(centre_region, std::max(0.25, 0.25 * R));
+    for (Contour& c : finish) {
+      if (mirror) c = c.reversed();
+      std::vector<Vec2> pts = c.points(kClipperTol);
+      if (pts.size() < 3) continue;
+      // Start in the middle of the longest edge (away from corners).
+      std::size_t best = 0;
+      double best_len = -1;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const double l = (pts[(i + 1) % pts.size()] - pts[i]).norm();
+        if (l > best_len) {
+          best_len = l;
+          best = i;
+        }
+      }
+      const Vec2 a = pts[best], b = pts[(best + 1) % pts.size()];
+      const Vec2 S = 0.5 * (a + b), t = (b - a).normalized();
+      std::vector<Vec2> loop{S};
+      for (std::size_t k = 1; k <= pts.size(); ++k) loop.push_back(pts[(best + k) % pts.size()]);
+      loop.push_back(S);
+      // The cleared side: the left for a counter-clockwise (stock on the right) run.
+      const double side = mirror ? -1.0 : 1.0;
+      const Vec2 n_in = side * Vec2(-t.y(), t.x());
+      // The largest lead radius (from R/2 + stock down, by 0.7) whose arcs start and end in
+      // the cleared region.
+      double rl = std::max(stl + 0.5 * R, 0.25 * R);
+      std::optional<Vec2> lead;
+      for (int tries = 0; tries < 12; ++tries) {
+        const Vec2 cl = S + n_in * rl;
+        if (cleared.contains(cl - t * rl) && cleared.contains(cl + t * rl)) {
+          lead = cl;
+          break;
+        }
+        rl *= 0.7;
+      }
+      const std::size_t first = path.segments().size();
+      if (lead) {
+        const Vec2 cl = *lead;
+        const Vec2 p0 = cl - t * rl, p1 = cl + t * rl;
+        travel(p0, z + clearance, z);
+        piece_at(ContourPiece::arc(p0, S, cl, side > 0), z, z, Motion::feed, feed);
+        info.entries.emplace_back(first, path.segments().size());
+        for (const ContourPiece& p : fit_polyline(loop, kClipperTol)) {
+          piece_at(p, z, z, Motion::feed, feed);
+        }
+        piece_at(ContourPiece::arc(S, p1, cl, side > 0), z, z, Motion::feed, feed);
+      } else {
+        travel(S, z + clearance, z);
+        info.entries.emplace_back(first, path.segments().size());
+        for (const ContourPiece& p : fit_polyline(loop, kClipperTol)) {
+          piece_at(p, z, z, Motion::feed, feed);
+        }
+      }
+    }
+  }
+  const Vec3 e = here();
+  line_to(Vec3(e.x(), e.y(), std::max(e.z(), safe_z)), Motion::rapid, rapid);
+  return out;
+}
+
+PocketProof prove_pocket(const Job& job, const PlannedPocket& pocket, const RunHooks& hooks) {
+  EngagementOptions opt;
+  opt.hooks = hooks;
+  const EngagementSeries e = compute_engagement(pocket.path, job, opt);
+  const PocketInfo& info = pocket.info;
+  PocketProof out;
+  const double R = job.tool.radius_mm();
+  long cutting = 0, above = 0;
+  for (std::size_t i = 0; i < e.samples.size(); ++i) {
+    const std::size_t seg = e.samples.segment[i];
+    bool entry = false;
+    for (const auto& [a, b] : info.entries) entry = entry || (seg >= a && seg < b);
+    if (entry) continue;
+    const double eng = rad_to_deg(e.engagement_angle_rad[i]);
+    const double chip = radial_chip_mm(e, i, R);
+    const Vec3 at(e.samples.x_mm[i], e.samples.y_mm[i], e.samples.z_mm[i]);
+    if (seg >= info.finish_first_segment) {
+      if (eng > out.finish_max_engagement_deg) {
+        out.finish_max_engagement_deg = eng;
+        out.finish_max_at_mm = at;
+      }
+      out.finish_max_chip_mm = std::max(out.finish_max_chip_mm, chip);
+      continue;
+    }
+    if (eng > 0.5) ++cutting;
+    if (eng > info.target_engagement_deg) ++above;
+    if (eng > out.clearing_max_engagement_deg) {
+      out.clearing_max_engagement_deg = eng;
+      out.clearing_max_at_mm = at;
+    }
+    out.clearing_max_chip_mm = std::max(out.clearing_max_chip_mm, chip);
+  }
+  out.clearing_share_above_target =
+      cutting > 0 ? static_cast<double>(above) / static_cast<double>(cutting) : 0.0;
+  return out;
+}
+
+PlannedPath plan_job(const Job& job) {
+  if (!job.pocket.defined()) return plan_slot(job);
+  PlannedPocket p = plan_pocket(job);
+  PlannedPath out;
+  out.path = std::move(p.path);
+  out.info.cycles = p.info.passes;
+  out.info.levels = p.info.levels;
+  out.info.closed_start = true;
+  return out;
+}
+
+}  // namespace trochomill

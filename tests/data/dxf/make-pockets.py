@@ -1,0 +1,39 @@
+#!/usr/bin/env python3
+"""Writes pockets.dxf, the pocket tests' drawing, with ezdxf (Debian's python3-ezdxf, a DXF
+writer independent of trochomill's reader). Units mm. Run from this folder:
+/usr/bin/python3 make-pockets.py
+
+Layers (sharp corners unless said):
+  RECT     a 60 x 40 mm rectangle at the origin
+  L        an L: 50 x 20 mm and 20 x 50 mm arms, at x 100
+  ISLB     a 70 x 50 mm pocket at x 200 whose islands are on ISL
+  ISL      a 12 x 8 mm block at (215, 12) and a 6 mm radius boss at (250, 25)
+  NECK     two 30 x 30 mm rooms joined by a 14 mm wide neck, at x 300
+  CIRC     a circle of radius 20 mm at (450, 20)
+  OPEN     an open polyline (a pocket's wall must be closed)
+  OUT      an island outside RECT;  OVER  two islands inside RECT that overlap
+"""
+import ezdxf
+
+doc = ezdxf.new("R2010", setup=False)
+doc.header["$INSUNITS"] = 4
+m = doc.modelspace()
+
+
+def poly(points, layer):
+    m.add_lwpolyline(points, close=True, dxfattribs={"layer": layer})
+
+
+poly([(0, 0), (60, 0), (60, 40), (0, 40)], "RECT")
+poly([(100, 0), (150, 0), (150, 20), (120, 20), (120, 50), (100, 50)], "L")
+poly([(200, 0), (270, 0), (270, 50), (200, 50)], "ISLB")
+poly([(215, 12), (227, 12), (227, 20), (215, 20)], "ISL")
+m.add_circle((250, 25), 6.0, dxfattribs={"layer": "ISL"})
+poly([(300, 0), (330, 0), (330, 8), (345, 8), (345, 0), (375, 0), (375, 30), (345, 30),
+      (345, 22), (330, 22), (330, 30), (300, 30)], "NECK")
+m.add_circle((450, 20), 20.0, dxfattribs={"layer": "CIRC"})
+m.add_lwpolyline([(0, 100), (50, 100), (50, 140)], dxfattribs={"layer": "OPEN"})
+m.add_circle((80, 20), 5.0, dxfattribs={"layer": "OUT"})
+m.add_circle((20, 20), 6.0, dxfattribs={"layer": "OVER"})
+m.add_circle((28, 20), 6.0, dxfattribs={"layer": "OVER"})
+doc.saveas("pockets.dxf")

@@ -1,0 +1,207 @@
+// Pockets: the region helpers (Clipper booleans, even-odd containment, parts), the polyline
+// fit, the removed region against its closed form, the planner's invariants and the job's
+// refusals. The peers (LinuxCNC's reading, shapely's cut area) are tests/pockets/peer.py.
+#include "trochomill/pocket.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "test_util.hpp"
+#include "trochomill/engagement.hpp"
+#include "trochomill/error.hpp"
+#include "trochomill/geometry.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/units.hpp"
+
+using namespace trochomill;
+
+namespace {
+
+std::string pocket_job(const std::string& pocket_keys, const std::string& extra = "") {
+  return "[geometry]\nfile = \"" + (test::source_dir() / "tests/data/dxf/pockets.dxf").string() +
+         "\"\n[pocket]\n" + pocket_keys +
+         "\n[tool]\ndiameter = 10.0\nteeth = 3\n[cutting]\nfeed_rate = 1200.0\n"
+         "spindle_speed = 8000.0\n" +
+         extra;
+}
+
+bool has(const std::string& m, const std::string& part) {
+  return m.find(part) != std::string::npos;
+}
+
+}  // namespace
+
+TEST(Pocket, RegionHelpersAgreeWithClosedForms) {
+  const Contour square = Contour::polyline({{0, 0}, {10, 0}, {10, 10}, {0, 10}}, true);
+  const Contour hole = Contour::circle({5, 5}, 2);
+  // Even-odd: the circle inside the square is a hole; arcs exact at the boundary's sides.
+  EXPECT_TRUE(region_contains({square, hole}, {1, 1}));
+  EXPECT_FALSE(region_contains({square, hole}, {5, 5}));
+  EXPECT_TRUE(region_contains({hole}, {5, 6.999}));
+  EXPECT_FALSE(region_contains({hole}, {5, 7.001}));
+  EXPECT_FALSE(region_contains({square}, {10.001, 5}));
+  // Difference and intersection: areas to Clipper's chords (1e-3 mm tolerance: the circle's
+  // chords of sagitta 5e-4 mm lose about 2 pi r * 2/3 * 5e-4 = 4e-3 mm^2).
+  const double tol = 1e-3;
+  EXPECT_NEAR(region_area_mm2(region_difference({square}, {hole}, tol)), 100 - kPi * 4, 1e-2);
+  EXPECT_NEAR(region_area_mm2(region_intersection({square}, {hole}, tol)), kPi * 4, 1e-2);
+  // Parts: the square with its hole and a second square apart.
+  const Contour far = Contour::polyline({{20, 0}, {25, 0}, {25, 5}, {20, 5}}, true);
+  const auto region = offset_region({square, hole, far}, 0, tol);
+  const auto parts = region_parts(region);
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_EQ(parts[0].size(), 2u);  // the larger square with the hole
+  EXPECT_EQ(parts[1].size(), 1u);
+  EXPECT_NEAR(region_area_mm2(parts[0]), 100 - kPi * 4, 1e-2);
+}
+
+TEST(Pocket, PolylineFitKeepsPointsAndChordsWithinTheTolerance) {
+  // 90 points on a quarter circle of radius 10 mm: one arc through them.
+  std::vector<Vec2> pts;
+  for (int k = 0; k <= 90; ++k)
+    pts.emplace_back(10 * std::cos(k * kPi / 180), 10 * std::sin(k * kPi / 180));
+  auto fit = fit_polyline(pts, 1e-3);
+  ASSERT_EQ(fit.size(), 1u);
+  EXPECT_TRUE(fit[0].is_arc());
+  EXPECT_NEAR(fit[0].radius_mm(), 10, 1e-9);
+  EXPECT_NEAR(fit[0].sweep_rad(), 0.5 * kPi, 1e-9);
+  // A square's corner: two lines, joined exactly at the corner.
+  fit = fit_polyline({{0, 0}, {1, 0}, {2, 0}, {2, 1}, {2, 2}}, 1e-3);
+  ASSERT_EQ(fit.size(), 2u);
+  EXPECT_FALSE(fit[0].is_arc());
+  EXPECT_EQ(fit[0].end, Vec2(2, 0));
+  // Points that turn back do not make a loop the long way round: each piece's length stays
+  // that of the points it stands for.
+  fit = fit_polyline({{0, 0}, {1, 0}, {1.0001, 0.0001}, {0.5, 0.0002}}, 1e-2);
+  double len = 0;
+  for (const auto& p : fit) len += p.length_mm();
+  EXPECT_LT(len, 2.0);
+  // Every piece within the tolerance of every point and chord middle it stands for.
+  pts.clear();
+  for (int k = 0; k <= 200; ++k) {
+    const double t = 0.05 * k;
+    pts.emplace_back(t, std::sin(t) + 0.002 * ((k % 3) - 1));
+  }
+  const double tol = 0.01;
+  fit = fit_polyline(pts, tol);
+  for (std::size_t k = 0; k + 1 < pts.size(); ++k) {
+    double d = 1e9, dm = 1e9;
+    for (const auto& p : fit) {
+      d = std::min(d, p.distance_mm(pts[k]));
+      dm = std::min(dm, p.distance_mm(0.5 * (pts[k] + pts[k + 1])));
+    }
+    EXPECT_LE(d, tol + 1e-12);
+    EXPECT_LE(dm, tol + 1e-12);
+  }
+}
+
+TEST(Pocket, RemovedRegionGivesTheUncutArcInClosedForm) {
+  // One disc of radius R at the origin: the circle at distance d keeps 2 pi - 2 acos(d / 2R).
+  const double R = 5;
+  RemovedRegion removed(R, {-20, -20}, {20, 20});
+  removed.cut({0, 0});
+  for (const double d : {0.1, 1.0, 4.0, 9.0}) {
+    double total = 0;
+    for (const AngleArc& a : removed.uncut_arcs({d, 0})) total += a.sweep_rad();
+    // 1e-9 rad: the kernel's crossings are exact to rounding.
+    EXPECT_NEAR(total, kTwoPi - 2 * std::acos(d / (2 * R)), 1e-9) << d;
+  }
+  EXPECT_TRUE(removed.contains({4.9, 0}));
+  EXPECT_FALSE(removed.contains({5.1, 0}));
+  EXPECT_TRUE(removed.uncut_arcs({11, 0}).size() == 1);  // untouched: the whole circle
+}
+
+TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
+  const Job job = parse_job(pocket_job("boundary = \"RECT\"\ndepth = 4.0\nmax_step_down = 2.0\n"
+                                       "stock_to_leave = 0.2\nmax_engagement = 50.0\n"),
+                            "rect.toml");
+  // max_chip follows: f_z sin(50 degrees), f_z = 1200 / (3 8000) = 0.05 mm.
+  EXPECT_NEAR(job.pocket.max_chip_mm, 0.05 * std::sin(deg_to_rad(50)), 1e-12);
+  // The stock: the boundary's box, 0.5 mm below the floor.
+  ASSERT_TRUE(job.stock_min_mm && job.stock_max_mm);
+  EXPECT_EQ(*job.stock_min_mm, Vec3(0, 0, -4.5));
+  EXPECT_EQ(*job.stock_max_mm, Vec3(60, 40, 0));
+  const PlannedPocket p = plan_pocket(job);
+  EXPECT_EQ(p.info.parts, 1);
+  EXPECT_EQ(p.info.levels, 2);
+  EXPECT_GT(p.info.passes, 0);
+  EXPECT_LE(p.info.planned_max_engagement_deg, 49.0 + 1e-9);  // the aim: 1 degree below
+  EXPECT_TRUE(p.info.unreachable.empty());
+  // The four corners' cusps: (1 - pi/4) (R + stock + fit + 3e-3)^2 each, to Clipper's chords.
+  EXPECT_NEAR(p.info.cusps_mm2, 4 * (1 - kPi / 4) * std::pow(5.205, 2), 0.05);
+  // Starts and ends above the safe plane; every rapid that moves across is there.
+  const auto& segs = p.path.segments();
+  EXPECT_GE(segs.front().start().z(), job.machine.safe_z_mm);
+  EXPECT_GE(segs.back().end().z(), job.machine.safe_z_mm);
+  for (const Segment& s : segs) {
+    if (s.motion() != Motion::rapid) continue;
+    const bool across = (s.end() - s.start()).head<2>().norm() > 1e-9;
+    if (across) {
+      EXPECT_GE(std::min(s.start().z(), s.end().z()), job.machine.safe_z_mm - 1e-12);
+    }
+  }
+  // No centre at a cutting level closer than R + stock to the walls before the finishing
+  // pass, nor than R in it (1e-6 mm: the path's own geometry, not the program's decimals).
+  const Contour walls = job.pocket.boundary_contours->front().contour;
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    const Segment& s = segs[i];
+    if (s.motion() != Motion::feed || s.start().z() >= 0 || s.end().z() >= 0) continue;
+    const double limit = i < p.info.finish_first_segment ? 5.2 : 5.0;
+    const int n = std::max(2, static_cast<int>(s.length_mm() / 0.05));
+    for (int k = 0; k <= n; ++k) {
+      const Vec3 q = s.point_at(s.length_mm() * k / n);
+      ASSERT_GE(walls.distance_mm(q.head<2>()), limit - 1e-6) << i << " at " << q.transpose();
+    }
+  }
+  // The kernel's proof: the clearing within the target + 2 %, the finishing pass reported.
+  const PocketProof proof = prove_pocket(job, p);
+  EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
+  EXPECT_GT(proof.clearing_max_engagement_deg, 40);  // it does cut near the target
+  EXPECT_GT(proof.finish_max_engagement_deg, 0);
+}
+
+TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {
+  const auto message = [](const std::string& keys, const std::string& extra = "") {
+    return test::message_of([&] { (void)parse_job(pocket_job(keys, extra), "bad.toml"); });
+  };
+  const std::string ok = "boundary = \"RECT\"\ndepth = 4.0\n";
+  std::string m = message("boundary = \"OPEN\"\ndepth = 4.0\nmax_engagement = 50.0\n");
+  EXPECT_TRUE(has(m, "layer 'OPEN' has an open contour")) << m;
+  m = message(ok + "islands = \"OUT\"\nmax_engagement = 50.0\n");
+  EXPECT_TRUE(has(m, "is not inside a boundary")) << m;
+  m = message(ok + "islands = \"OVER\"\nmax_engagement = 50.0\n");
+  EXPECT_TRUE(has(m, "overlap or nest")) << m;
+  m = message(ok + "max_engagement = 0.0\n");
+  EXPECT_TRUE(has(m, "[pocket] max_engagement: must be in (0, 180]")) << m;
+  m = message(ok + "max_engagement = 181.0\n");
+  EXPECT_TRUE(has(m, "[pocket] max_engagement: must be in (0, 180]")) << m;
+  m = message(ok);
+  EXPECT_TRUE(has(m, "missing [pocket] max_engagement (degrees) or max_chip (mm)")) << m;
+  m = message(ok + "max_engagement = 50.0\nmax_chip = 0.02\n");
+  EXPECT_TRUE(has(m, "not both")) << m;
+  m = message(ok + "max_chip = 0.06\n");
+  EXPECT_TRUE(has(m, "must be below the feed per tooth f_z = 0.05 mm")) << m;
+  m = message(ok + "max_engagement = 50.0\n", "[slot]\nwidth = 12.0\ndepth = 3.0\nlength = 20.0\n");
+  EXPECT_TRUE(has(m, "[slot] and [pocket]")) << m;
+  m = message(ok + "max_engagement = 50.0\n", "[path]\nstep = 1.0\n");
+  EXPECT_TRUE(has(m, "[path] step: is for slots")) << m;
+  m = message("depth = 4.0\nmax_engagement = 50.0\n");
+  EXPECT_TRUE(has(m, "missing required key [pocket] boundary")) << m;
+  m = message("boundary = \"NOPE\"\ndepth = 4.0\nmax_engagement = 50.0\n");
+  EXPECT_TRUE(has(m, "'NOPE'")) << m;
+  // A tool wider than the pocket: refused when planning, with the tool and the layer.
+  std::string text = pocket_job(ok + "max_engagement = 50.0\n");
+  text.replace(text.find("diameter = 10.0"), 15, "diameter = 45.0");
+  const Job wide = parse_job(text, "wide.toml");
+  m = test::message_of([&] { (void)plan_pocket(wide); });
+  EXPECT_TRUE(has(m,
+                  "the tool (D = 45 mm) with stock_to_leave = 0 mm fits nowhere in layer "
+                  "'RECT'"))
+      << m;
+  // A job with [pocket] is not a slot: the slot models say so.
+  const Job pocket = parse_job(pocket_job(ok + "max_engagement = 50.0\n"), "p.toml");
+  m = test::message_of([&] { (void)plan_slot(pocket); });
+  EXPECT_TRUE(has(m, "the job plans a pocket")) << m;
+}
