@@ -275,8 +275,9 @@ the job's slot frame when read with a job, else in the program's work frame.)")
         return p;
       },
       py::arg("job"), py::arg("memory_limit_gb") = py::none(),
-      "Plans the job's slot program (entry, the path family's cycles, exit) in the slot frame "
-      "(mm): a Path. memory_limit_gb: refuse above this estimate (default 75 % of RAM).");
+      "Plans the job's program: a slot's (entry, the path family's cycles, exit) in the slot "
+      "frame, or with [pocket] the pocket's clearing (the drawing's frame), in mm: a Path. "
+      "memory_limit_gb: refuse above this estimate (default 75 % of RAM).");
 
   m.def("read_gcode", &read_program, py::arg("program"), py::arg("job") = py::none(),
         "Reads an NC program as LinuxCNC (or the job's machine.dialect) runs it: `program` a "

@@ -133,10 +133,18 @@ json path_part(const ReportData& d) {
   json outline_x = json::array(), outline_y = json::array();
   double x_min = -0.5 * d.job.slot.width_mm, x_max = 0.5 * d.job.slot.width_mm, y_min = 0.0,
          y_max = d.job.slot.length_mm;
-  if (d.job.slot.curved()) {
+  const bool pocket = d.job.pocket.defined();
+  if (d.job.slot.curved() || pocket) {
     Box3 box;
-    for (const Contour& c :
-         offset_curve(d.job.slot.centreline->contour, 0.5 * d.job.slot.width_mm, 0.01)) {
+    // A pocket: its walls and islands as drawn; a curved slot: its walls.
+    std::vector<Contour> walls;
+    if (pocket) {
+      for (const DrawnContour& c : *d.job.pocket.boundary_contours) walls.push_back(c.contour);
+      for (const DrawnContour& c : *d.job.pocket.island_contours) walls.push_back(c.contour);
+    } else {
+      walls = offset_curve(d.job.slot.centreline->contour, 0.5 * d.job.slot.width_mm, 0.01);
+    }
+    for (const Contour& c : walls) {
       const std::vector<Vec2> pts = c.points(0.01);
       if (!outline_x.empty()) {
         outline_x.push_back(nullptr);
@@ -162,14 +170,17 @@ json path_part(const ReportData& d) {
   // cannot be read (a gap, a branch) leaves them out with a note; the slot was read alone.
   json drawing_x = json::array(), drawing_y = json::array(), drawing_layers = json::array();
   json drawing_note = nullptr;
-  if (d.job.slot.curved() && !d.job.geometry.path.empty()) {
+  if ((d.job.slot.curved() || pocket) && !d.job.geometry.path.empty()) {
     DrawingOptions o;
     o.join_tolerance_mm = d.job.geometry.join_tolerance_mm;
     o.arc_tolerance_mm = std::max(d.job.machine.arc_tolerance_mm, 0.01);
     try {
       const Drawing drawing = read_drawing(d.job.geometry.path, o);
       for (const DrawnContour& c : drawing.contours) {
-        if (c.layer == d.job.slot.along) continue;
+        if (pocket ? c.layer == d.job.pocket.boundary || c.layer == d.job.pocket.islands
+                   : c.layer == d.job.slot.along) {
+          continue;
+        }
         if (std::find(drawing_layers.begin(), drawing_layers.end(), c.layer) ==
             drawing_layers.end()) {
           drawing_layers.push_back(c.layer);
@@ -192,33 +203,39 @@ json path_part(const ReportData& d) {
     }
   }
   // The samples are uniform in time but the last (at the end): t_i = i dt, the last T.
-  json out = {{"dt_s", s.size() > 1 ? number(s.t_s[1] - s.t_s[0]) : json(0.0)},
-              {"samples", s.size()},
-              {"x_mm", pick(s.x_mm, idx)},
-              {"y_mm", pick(s.y_mm, idx)},
-              {"z_mm", pick(s.z_mm, idx)},
-              {"rapid", rapid},
-              {"duration_s", number(T)},
-              {"tool_radius_mm", number(g.tool_radius_mm)},
-              {"teeth", d.job.tool.teeth},
-              {"slot",
-               {{"x_min_mm", number(x_min)},
-                {"x_max_mm", number(x_max)},
-                {"y_min_mm", number(y_min)},
-                {"y_max_mm", number(y_max)},
-                {"width_mm", number(d.job.slot.width_mm)},
-                {"length_mm", number(d.job.slot.length_mm)},
-                {"along", d.job.slot.along},
-                {"depth_mm", number(d.job.slot.depth_mm)}}},
-              {"outline", {{"x_mm", outline_x}, {"y_mm", outline_y}}},
-              {"drawing",
-               {{"x_mm", drawing_x},
-                {"y_mm", drawing_y},
-                {"layers", drawing_layers},
-                {"note", drawing_note}}},
-              {"cycle_from_s", number(d.metrics.cycle_start_s)},
-              {"cycle_to_s", number(d.metrics.cycle_start_s + d.metrics.cycle_time_s)},
-              {"periodic", d.metrics.periodic}};
+  json out = {
+      {"dt_s", s.size() > 1 ? number(s.t_s[1] - s.t_s[0]) : json(0.0)},
+      {"samples", s.size()},
+      {"x_mm", pick(s.x_mm, idx)},
+      {"y_mm", pick(s.y_mm, idx)},
+      {"z_mm", pick(s.z_mm, idx)},
+      {"rapid", rapid},
+      {"duration_s", number(T)},
+      {"tool_radius_mm", number(g.tool_radius_mm)},
+      {"teeth", d.job.tool.teeth},
+      {"slot",
+       {{"x_min_mm", number(x_min)},
+        {"x_max_mm", number(x_max)},
+        {"y_min_mm", number(y_min)},
+        {"y_max_mm", number(y_max)},
+        {"width_mm", number(d.job.slot.width_mm)},
+        {"length_mm", number(d.job.slot.length_mm)},
+        {"along", d.job.slot.along},
+        {"depth_mm", number(d.job.slot.depth_mm)}}},
+      {"pocket", pocket ? json{{"boundary", d.job.pocket.boundary},
+                               {"islands", d.job.pocket.islands},
+                               {"depth_mm", number(d.job.pocket.depth_mm)},
+                               {"max_engagement_deg", number(d.job.pocket.max_engagement_deg)}}
+                        : json(nullptr)},
+      {"outline", {{"x_mm", outline_x}, {"y_mm", outline_y}}},
+      {"drawing",
+       {{"x_mm", drawing_x},
+        {"y_mm", drawing_y},
+        {"layers", drawing_layers},
+        {"note", drawing_note}}},
+      {"cycle_from_s", number(d.metrics.cycle_start_s)},
+      {"cycle_to_s", number(d.metrics.cycle_start_s + d.metrics.cycle_time_s)},
+      {"periodic", d.metrics.periodic}};
   out["entry_to_s"] = p.cycles().empty() ? nullptr : number(p.cycles().front().start_time_s);
   return out;
 }

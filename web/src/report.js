@@ -456,8 +456,9 @@ function headerPart() {
 
 function pathPart() {
   const p = data.path;
-  const sec = section('path', 'Tool path', `Top view of the slot (mm): the tool-centre path (rapids dashed), the entry, ${data.path.periodic ? 'the steady cycle highlighted' : 'no steady cycle (each cycle differs: the figures are the whole program\'s)'}, and the tool disc at the time of the slider.`);
-  const fig = figure(sec, 'path-top', 'Path, top view', `${p.slot.along ? `slot ${fmtNum(p.slot.width_mm)} mm wide along '${p.slot.along}' (${fmtNum(p.slot.length_mm)} mm)` : `slot ${fmtNum(p.slot.width_mm)} x ${fmtNum(p.slot.length_mm)} mm`}, tool radius ${fmtNum(p.tool_radius_mm)} mm; ${p.samples} samples every ${fmtNum(p.dt_s, 4)} s`);
+  const pk = p.pocket;
+  const sec = section('path', 'Tool path', `Top view of the ${pk ? 'pocket' : 'slot'} (mm): the tool-centre path (rapids dashed), the entry, ${data.path.periodic ? 'the steady cycle highlighted' : 'no steady cycle (each cycle differs: the figures are the whole program\'s)'}, and the tool disc at the time of the slider.`);
+  const fig = figure(sec, 'path-top', 'Path, top view', `${pk ? `pocket of layer '${pk.boundary}'${pk.islands ? `, islands of layer '${pk.islands}'` : ''}, ${fmtNum(pk.depth_mm)} mm deep, engagement at most ${fmtNum(pk.max_engagement_deg)}°` : p.slot.along ? `slot ${fmtNum(p.slot.width_mm)} mm wide along '${p.slot.along}' (${fmtNum(p.slot.length_mm)} mm)` : `slot ${fmtNum(p.slot.width_mm)} x ${fmtNum(p.slot.length_mm)} mm`}, tool radius ${fmtNum(p.tool_radius_mm)} mm; ${p.samples} samples every ${fmtNum(p.dt_s, 4)} s`);
   const n = p.samples;
   // Uniform in time, the last sample at the path's end.
   p.t_s = Array.from({ length: n }, (_, i) => (i === n - 1 ? p.duration_s : i * p.dt_s));
@@ -530,7 +531,7 @@ function pathPart() {
   const mk = (label, stroke, extra = {}) => ({ label, stroke, facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }],
     paths: polyline, points: { show: false }, width: 1.2, ...extra });
   const hasDrawing = drawing[0].length > 0;
-  const series = [{}, mk('slot', '#5b6475', { width: 2 }),
+  const series = [{}, mk(pk ? 'walls and islands' : 'slot', '#5b6475', { width: 2 }),
     ...(hasDrawing ? [mk(`drawing (${p.drawing.layers.join(', ')})`, '#2da44e', { width: 1.4 })] : []), mk('feed moves', '#9aa4b5'), mk('rapids', '#bf8700', { dash: [6, 4] }),
     mk('entry', '#8250df', { width: 2 }), mk('steady cycle', '#1f6feb', { width: 2.2 }),
     mk('tool disc', '#d1242f', { width: 2 }), mk('tool centre', '#d1242f', { width: 2 })];
