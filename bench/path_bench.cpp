@@ -13,6 +13,7 @@
 #include "trochomill/geometry/drawing.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/pocket.hpp"
 
 namespace {
 
@@ -100,6 +101,28 @@ void BM_PlanCurvedSlot1m(benchmark::State& state) {
   state.counters["gcode_bytes"] = static_cast<double>(bytes);
 }
 BENCHMARK(BM_PlanCurvedSlot1m)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
+
+// Planning the example pocket (examples/pockets/plate.toml: 80 x 50 mm around two islands,
+// 10 mm tool, 53 degrees, two levels and the finishing pass) and writing its program; /1 adds
+// the engagement kernel's proof on the program (what `plan` prints).
+void BM_PlanPocketPlate(benchmark::State& state) {
+  const trochomill::Job job =
+      trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) + "/examples/pockets/plate.toml");
+  trochomill::GcodeWriteOptions opt;
+  opt.dialect = trochomill::Dialect::linuxcnc;
+  std::size_t bytes = 0, passes = 0;
+  for (auto _ : state) {
+    const auto p = trochomill::plan_pocket(job);
+    const std::string code = trochomill::write_gcode(job, p.path, opt);
+    if (state.range(0) == 1) benchmark::DoNotOptimize(trochomill::prove_pocket(job, p));
+    bytes = code.size();
+    passes = static_cast<std::size_t>(p.info.passes);
+    benchmark::DoNotOptimize(code.data());
+  }
+  state.counters["passes"] = static_cast<double>(passes);
+  state.counters["gcode_bytes"] = static_cast<double>(bytes);
+}
+BENCHMARK(BM_PlanPocketPlate)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Reading a 10 MB DXF: 100,000 polylines of four lines and a bulge each (R12 text, written
 // here), chained into closed contours.

@@ -163,13 +163,17 @@ class Coverage {
   [[nodiscard]] long remaining() const { return remaining_; }
   [[nodiscard]] long given_up() const { return given_up_; }
 
-  // Marks the cells within R of c as covered; returns how many were remaining.
+  // Marks the cells within R of c as covered (a given-up cell a later pass takes too);
+  // returns how many were remaining.
   long cut(const Vec2& p) {
     long n = 0;
     for_cells(p, R_, [&](std::uint8_t& s) {
       if (s == kRemaining) {
         s = kCovered;
         ++n;
+      } else if (s == kGivenUp) {
+        s = kCovered;
+        --given_up_;
       }
     });
     remaining_ -= n;
@@ -765,7 +769,9 @@ PlannedPocket plan_pocket(const Job& job) {
             line_to(at(m.piece.end, z), Motion::feed, feed);
             break;
           case Move2::lift:
-            travel(m.piece.end, z + clearance, z);
+            // Down through the levels above at the entry feed: a relink point lies on the
+            // frontier, where the arcs' fit may have left a sliver on the way down.
+            travel(m.piece.end, clearance, z);
             break;
         }
         if (m.entry) entry_end = path.segments().size();  // the helix's flat circle
@@ -820,7 +826,7 @@ PlannedPocket plan_pocket(const Job& job) {
       if (lead) {
         const Vec2 cl = *lead;
         const Vec2 p0 = cl - t * rl, p1 = cl + t * rl;
-        travel(p0, z + clearance, z);
+        travel(p0, clearance, z);
         piece_at(ContourPiece::arc(p0, S, cl, side > 0), z, z, Motion::feed, feed);
         info.entries.emplace_back(first, path.segments().size());
         for (const ContourPiece& p : fit_polyline(loop, kClipperTol)) {
@@ -828,7 +834,7 @@ PlannedPocket plan_pocket(const Job& job) {
         }
         piece_at(ContourPiece::arc(S, p1, cl, side > 0), z, z, Motion::feed, feed);
       } else {
-        travel(S, z + clearance, z);
+        travel(S, clearance, z);
         info.entries.emplace_back(first, path.segments().size());
         for (const ContourPiece& p : fit_polyline(loop, kClipperTol)) {
           piece_at(p, z, z, Motion::feed, feed);
