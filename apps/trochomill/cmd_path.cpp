@@ -128,17 +128,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
         PlannedPocket pp = plan_pocket(job);
         const PocketProof proof = prove_pocket(job, pp);
         std::FILE* to = a->out == "-" ? stderr : stdout;
-        fmt::print(to,
-                   "  the kernel on the program: clearing (entries excepted) engagement max "
-                   "{:.4g} degrees at ({:.3f}, {:.3f}, {:.3f}), chip max {:.5f} mm, {:.3g} % of "
-                   "its cutting above the target; finishing pass engagement max {:.4g} degrees "
-                   "at ({:.3f}, {:.3f}, {:.3f}), chip max {:.5f} mm\n",
-                   proof.clearing_max_engagement_deg, proof.clearing_max_at_mm.x(),
-                   proof.clearing_max_at_mm.y(), proof.clearing_max_at_mm.z(),
-                   proof.clearing_max_chip_mm, 100 * proof.clearing_share_above_target,
-                   proof.finish_max_engagement_deg, proof.finish_max_at_mm.x(),
-                   proof.finish_max_at_mm.y(), proof.finish_max_at_mm.z(),
-                   proof.finish_max_chip_mm);
+        fmt::print(to, "{}", pocket_summary(pp.info, proof));
         planned.path = std::move(pp.path);
         planned.info.cycles = pp.info.passes;
         planned.info.levels = pp.info.levels;
@@ -174,10 +164,6 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                      target, m->pieces, m->h_max_mm, 100.0 * (m->h_max_mm / target - 1.0), at.x(),
                      at.y(), at.z(), m->at_s, m->feed_mm_per_min, describe(m->limit));
         }
-      }
-      if (pocket) {
-        std::FILE* to = a->out == "-" ? stderr : stdout;
-        fmt::print(to, "{}", pocket_summary(*pocket));
       }
       if (a->out != "-" && pocket) {
         fmt::print(

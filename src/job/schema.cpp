@@ -405,8 +405,9 @@ std::vector<Key> build_schema() {
              "the clearing's largest engagement (arc of the tool in the material) once in the "
              "pocket, entries excepted; give this or max_chip"),
       number("pocket", "max_chip", "mm", positive(), FIELD(pocket.max_chip_mm),
-             "the clearing's largest chip, below f_z: the engagement target is then "
-             "asin(max_chip / f_z); give this or max_engagement"),
+             "the target as a side cut's largest chip, below f_z: the engagement target is "
+             "then asin(max_chip / f_z) (where the tool turns into the stock the chip may reach "
+             "f_z: `plan` prints the largest); give this or max_engagement"),
       custom("pocket", "finish_pass", "boolean", "", "true or false", "true",
              "after the levels, one pass along walls and islands at full depth (climb or "
              "conventional as [path] direction)",

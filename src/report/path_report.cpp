@@ -92,16 +92,30 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
   return out;
 }
 
-std::string pocket_summary(const PocketInfo& info) {
+std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
   std::string out = fmt::format(
       "pocket: {} part{}, {} level{}, {} clearing passes a level ({} links staying down, {} "
       "lifts), {:.1f} mm of clearing a level\n",
       info.parts, info.parts == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s", info.passes,
       info.links_down, info.lifts, info.clearing_length_mm);
   out += fmt::format(
-      "  engagement target {:.4g} degrees; the planner's largest at its points {:.4g} degrees "
-      "(entries excepted; `analyze` measures the program)\n",
+      "  engagement target {:.4g} degrees; the planner's largest at its points {:.4g} degrees\n",
       info.target_engagement_deg, info.planned_max_engagement_deg);
+  const auto at = [](const Vec3& p) {
+    return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z());
+  };
+  out += fmt::format(
+      "  the kernel on the program: clearing (entries excepted) engagement max {:.4g} degrees at "
+      "{}, chip max {:.5f} mm, {:.3g} % of its cutting above the target\n",
+      proof.clearing_max_engagement_deg, at(proof.clearing_max_at_mm), proof.clearing_max_chip_mm,
+      100 * proof.clearing_share_above_target);
+  if (proof.finish_max_engagement_deg > 0) {
+    out += fmt::format(
+        "  the kernel on the program: finishing pass engagement max {:.4g} degrees at {}, chip "
+        "max {:.5f} mm (where it meets what the clearing left: inside corners, parts narrower "
+        "than the tool)\n",
+        proof.finish_max_engagement_deg, at(proof.finish_max_at_mm), proof.finish_max_chip_mm);
+  }
   for (const PocketLeftover& l : info.unreachable) {
     out += fmt::format(
         "  warning: {:.4g} mm^2 about ({:.3f}, {:.3f}) is narrower than the tool with the stock "

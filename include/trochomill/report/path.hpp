@@ -35,7 +35,8 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 
 /// What a pocket's plan did, for people (lines ending in newlines): parts, levels, passes and
 /// links, the clearing length, the planner's largest engagement against the target, the
-/// leftovers beyond reach (area and where) and what the finishing pass is left.
-[[nodiscard]] std::string pocket_summary(const PocketInfo& info);
+/// engagement kernel's proof on the program, the leftovers beyond reach (area and where) and
+/// what the finishing pass is left.
+[[nodiscard]] std::string pocket_summary(const PocketInfo& info, const PocketProof& proof);
 
 }  // namespace trochomill
