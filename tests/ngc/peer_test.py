@@ -82,6 +82,22 @@ def length(moves, first):
     return total
 
 
+def xy_arc_points(kind, prev, end, centre, sagitta=1e-4):
+    """The points after `prev` of an XY arc move (G2/G3) from prev to end about centre, as
+    chords of sagitta <= `sagitta` mm (a whole circle when the ends coincide)."""
+    cx, cy = centre[0], centre[1]
+    r = math.hypot(prev[0] - cx, prev[1] - cy)
+    a0 = math.atan2(prev[1] - cy, prev[0] - cx)
+    a1 = math.atan2(end[1] - cy, end[0] - cx)
+    sweep = (a1 - a0) % (2 * math.pi) if kind == "G3" else -((a0 - a1) % (2 * math.pi))
+    if abs(sweep) < 1e-12:
+        sweep = math.copysign(2 * math.pi, 1 if kind == "G3" else -1)
+    step = 2 * math.acos(max(-1.0, 1 - sagitta / r)) if r > sagitta else math.pi
+    n = max(1, math.ceil(abs(sweep) / step))
+    return [(cx + r * math.cos(a0 + sweep * k / n), cy + r * math.sin(a0 + sweep * k / n))
+            for k in range(1, n + 1)]
+
+
 def main():
     troch = sys.argv[1]
     programs = sys.argv[2:] or sorted(

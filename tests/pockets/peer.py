@@ -21,8 +21,7 @@ from shapely.ops import unary_union
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "tests", "ngc"))
-sys.path.insert(0, os.path.join(ROOT, "tests", "curves"))
-from peer_test import parse, length  # noqa: E402
+from peer_test import parse, length, xy_arc_points  # noqa: E402
 
 cli, work = sys.argv[1], sys.argv[2]
 os.makedirs(work, exist_ok=True)
@@ -47,17 +46,7 @@ def path_points(moves, keep):
             if not cur:
                 cur.append((prev[0], prev[1]))
             if kind in ("G2", "G3"):
-                cx, cy = centre[0], centre[1]
-                r = math.hypot(prev[0] - cx, prev[1] - cy)
-                a0 = math.atan2(prev[1] - cy, prev[0] - cx)
-                a1 = math.atan2(end[1] - cy, end[0] - cx)
-                sweep = (a1 - a0) % (2 * math.pi) if kind == "G3" else -((a0 - a1) % (2 * math.pi))
-                if abs(sweep) < 1e-12:
-                    sweep = math.copysign(2 * math.pi, 1 if kind == "G3" else -1)
-                step = 2 * math.acos(max(-1.0, 1 - 1e-4 / r)) if r > 1e-4 else math.pi
-                n = max(1, math.ceil(abs(sweep) / step))
-                cur += [(cx + r * math.cos(a0 + sweep * k / n), cy + r * math.sin(a0 + sweep * k / n))
-                        for k in range(1, n + 1)]
+                cur += xy_arc_points(kind, prev, end, centre)
             else:
                 cur.append((end[0], end[1]))
         elif cur:
