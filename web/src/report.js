@@ -476,6 +476,25 @@ function pathPart() {
     const inCycle = t >= p.cycle_from_s && t <= p.cycle_to_s;
     cycle[0].push(inCycle ? x : null); cycle[1].push(inCycle ? y : null);
   }
+  // A pocket: the path where the engagement comes near its target (90 % of it and more) and
+  // where it passes it, from the engagement series (each path sample takes the largest
+  // engagement of the series' samples since the path sample before).
+  const near = [[], []], over = [[], []];
+  if (pk && data.engagement && data.engagement.program) {
+    const et = data.engagement.program.t_s, ev = data.engagement.program.engagement_deg;
+    const target = pk.max_engagement_deg;
+    let j = 0;
+    for (let i = 0; i < n; i++) {
+      let m = 0;
+      while (j < et.length && et[j] <= p.t_s[i]) { if (ev[j] != null) m = Math.max(m, ev[j]); j++; }
+      // Not the rapids nor the descents (the helices: all round in the stock).
+      const feedHere = isRapidAt[i] !== 1 && !(i > 0 && p.z_mm[i] < p.z_mm[i - 1] - 1e-9);
+      const isNear = feedHere && m >= 0.9 * target && m <= target, isOver = feedHere && m > target;
+      near[0].push(isNear ? p.x_mm[i] : null); near[1].push(isNear ? p.y_mm[i] : null);
+      over[0].push(isOver ? p.x_mm[i] : null); over[1].push(isOver ? p.y_mm[i] : null);
+    }
+  }
+  const hasEngagement = near[0].some((v) => v != null) || over[0].some((v) => v != null);
   const sl = p.slot;
   // The slot's boundaries (a rectangle, or the region along a drawing's contour), null between.
   const outline = [p.outline.x_mm, p.outline.y_mm];
@@ -534,12 +553,15 @@ function pathPart() {
   const series = [{}, mk(pk ? 'walls and islands' : 'slot', '#5b6475', { width: 2 }),
     ...(hasDrawing ? [mk(`drawing (${p.drawing.layers.join(', ')})`, '#2da44e', { width: 1.4 })] : []), mk('feed moves', '#9aa4b5'), mk('rapids', '#bf8700', { dash: [6, 4] }),
     mk('entry', '#8250df', { width: 2 }), mk('steady cycle', '#1f6feb', { width: 2.2 }),
+    ...(hasEngagement ? [mk(`engagement 90-100 % of ${fmtNum(pk.max_engagement_deg)}°`, '#0598bc', { width: 2 }),
+      mk(`engagement above ${fmtNum(pk.max_engagement_deg)}°`, '#cf222e', { width: 3 })] : []),
     mk('tool disc', '#d1242f', { width: 2 }), mk('tool centre', '#d1242f', { width: 2 })];
   const cross = (cx, cy) => {
     const h = p.tool_radius_mm / 6;
     return [[cx - h, cx + h, null, cx, cx], [cy, cy, null, cy - h, cy + h]];
   };
-  const dataTop = [null, outline, ...(hasDrawing ? [drawing] : []), feed, rapid, entry, cycle, disc(pos0.x, pos0.y), cross(pos0.x, pos0.y)];
+  const dataTop = [null, outline, ...(hasDrawing ? [drawing] : []), feed, rapid, entry, cycle,
+    ...(hasEngagement ? [near, over] : []), disc(pos0.x, pos0.y), cross(pos0.x, pos0.y)];
   const iDisc = dataTop.length - 2, iCross = dataTop.length - 1;
   const u = new uPlot({
     mode: 2, width, height,
