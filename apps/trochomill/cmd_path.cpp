@@ -113,10 +113,19 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     cmd->final_callback([a, cmd, &exit_code] {
       check_outputs({&a->out}, {&a->job.file});
       const Job job = a->job.load();
-      check_memory("plan", estimate_plan_memory(job), a->memory_gb,
-                   fmt::format("a {:g} mm slot at a {:g} mm step: raise [path] step or plan a "
-                               "shorter slot",
-                               job.slot.length_mm, job.path.step_mm));
+      if (job.pocket.defined()) {
+        check_memory(
+            "plan", estimate_pocket_memory(job), a->memory_gb,
+            fmt::format("a pocket of layer '{}' cleared at {:g} degrees with a {:g} mm "
+                        "tool: raise [pocket] max_engagement, use a larger tool or "
+                        "split the pocket",
+                        job.pocket.boundary, job.pocket.max_engagement_deg, job.tool.diameter_mm));
+      } else {
+        check_memory("plan", estimate_plan_memory(job), a->memory_gb,
+                     fmt::format("a {:g} mm slot at a {:g} mm step: raise [path] step or plan a "
+                                 "shorter slot",
+                                 job.slot.length_mm, job.path.step_mm));
+      }
       for (const char* o : kFeedTargetFlags) {
         if (cmd->count(o) > 0 && !a->schedule) {
           throw InputError(fmt::format("{} is an option of --feed-schedule", o));

@@ -47,6 +47,9 @@ class RegionGrid {
       cells_.resize(1);
       return;
     }
+    // At most about 4e6 cells (64 MB of cells' headers), however large the region.
+    cell_ = std::max(
+        cell_, std::sqrt((box.hi.x() - box.lo.x() + 1) * (box.hi.y() - box.lo.y() + 1) / 4e6));
     x0_ = box.lo.x() - 2 * cell_;
     y0_ = box.lo.y() - 2 * cell_;
     nx_ = static_cast<long>(std::ceil((box.hi.x() - x0_) / cell_)) + 2;
@@ -133,6 +136,7 @@ class RegionGrid {
 // region reaches by less than R - h (so that a pass along the region's edge covers them).
 class Coverage {
  public:
+  static constexpr double kMaxCells = 4e8;  // a byte each
   enum : std::uint8_t { kNone = 0, kRemaining = 1, kCovered = 2, kGivenUp = 3 };
 
   Coverage(const std::vector<Contour>& reach, double cell_mm, double R)
@@ -143,6 +147,16 @@ class Coverage {
     }
     x0_ = box.lo.x() - h_;
     y0_ = box.lo.y() - h_;
+    const double cells =
+        std::ceil((box.hi.x() - x0_) / h_ + 2) * std::ceil((box.hi.y() - y0_) / h_ + 2);
+    if (!(cells <= kMaxCells)) {
+      throw InputError(fmt::format(
+          "[pocket] boundary: a region of {:.0f} x {:.0f} mm needs {:.3g} cells of {:g} mm to "
+          "track "
+          "the stock a {:g} mm tool leaves (at most {:.0g}): clear it with a larger tool or "
+          "split it into smaller pockets",
+          box.hi.x() - box.lo.x(), box.hi.y() - box.lo.y(), cells, h_, 2 * R, kMaxCells));
+    }
     nx_ = static_cast<long>(std::ceil((box.hi.x() - x0_) / h_)) + 2;
     ny_ = static_cast<long>(std::ceil((box.hi.y() - y0_) / h_)) + 2;
     state_.assign(static_cast<std::size_t>(nx_ * ny_), kNone);
@@ -888,6 +902,33 @@ PocketProof prove_pocket(const Job& job, const PlannedPocket& pocket, const RunH
   out.clearing_share_above_target =
       cutting > 0 ? static_cast<double>(above) / static_cast<double>(cutting) : 0.0;
   return out;
+}
+
+double estimate_pocket_memory(const Job& job) {
+  const Pocket& pk = job.pocket;
+  if (!pk.defined()) return 30e6;
+  Box3 box;
+  double area = 0;
+  for (const DrawnContour& c : *pk.boundary_contours) {
+    area += std::abs(c.contour.signed_area_mm2());
+    for (const Vec2& p : c.contour.points(0.1)) box.extend(Vec3(p.x(), p.y(), 0));
+  }
+  const double R = job.tool.radius_mm();
+  if (!(R > 0) || box.empty()) return 30e6;
+  const double h = std::clamp(R / 20.0, 0.02, 0.25);
+  const Vec3 size = box.size_mm();
+  const double cells = (size.x() / h + 3) * (size.y() / h + 3);
+  const double side = R * (1 - std::cos(deg_to_rad(std::min(90.0, pk.max_engagement_deg))));
+  const double step = std::clamp(0.1 * R, 0.05, 1.0);
+  const int levels =
+      pk.max_step_down_mm > 0
+          ? std::max(1, static_cast<int>(std::ceil(pk.depth_mm / pk.max_step_down_mm - 1e-9)))
+          : 1;
+  const double clearing_mm = 5 * area / std::max(side, 1e-3);  // a level
+  const double feed_mm_s = std::max(feed_rate_mm_per_min(job), 1e-3) / 60;
+  const double samples =
+      levels * clearing_mm / feed_mm_s * job.cutting.spindle_speed_rpm * job.tool.teeth / 60;
+  return 30e6 + cells + 200 * clearing_mm / step + 450 * samples;
 }
 
 PlannedPath plan_job(const Job& job) {
