@@ -262,10 +262,19 @@ the job's slot frame when read with a job, else in the program's work frame.)")
   m.def(
       "plan",
       [](const PyJob& job, std::optional<double> memory_limit_gb) {
-        check_memory("plan", estimate_plan_memory(job.job), memory_limit_gb,
-                     fmt::format("a {:g} mm slot at a {:g} mm step: raise path.step or plan a "
-                                 "shorter slot",
-                                 job.job.slot.length_mm, job.job.path.step_mm));
+        if (job.job.pocket.defined()) {
+          check_memory("plan", estimate_pocket_memory(job.job), memory_limit_gb,
+                       fmt::format("a pocket of layer '{}' cleared at {:g} degrees with a {:g} "
+                                   "mm tool: raise pocket.max_engagement, use a larger tool or "
+                                   "split the pocket",
+                                   job.job.pocket.boundary, job.job.pocket.max_engagement_deg,
+                                   job.job.tool.diameter_mm));
+        } else {
+          check_memory("plan", estimate_plan_memory(job.job), memory_limit_gb,
+                       fmt::format("a {:g} mm slot at a {:g} mm step: raise path.step or plan a "
+                                   "shorter slot",
+                                   job.job.slot.length_mm, job.job.path.step_mm));
+        }
         PlannedPath planned = plan_job(job.job);
         PyPath p;
         p.path = std::move(planned.path);

@@ -205,8 +205,11 @@ std::string metrics_json(const Job& job, const ProcessMetrics& m) {
 
 std::string metrics_text(const std::string& job_file, const std::string& gcode, const Job& job,
                          const ProcessMetrics& m) {
-  std::string out = fmt::format("{}: {}{}\n", job_file, to_string(job.path.type),
-                                gcode.empty() ? "" : " (from " + gcode + ")");
+  const std::string what = job.pocket.defined()
+                               ? fmt::format("pocket of layer '{}'", job.pocket.boundary)
+                               : std::string(to_string(job.path.type));
+  std::string out =
+      fmt::format("{}: {}{}\n", job_file, what, gcode.empty() ? "" : " (from " + gcode + ")");
   out +=
       fmt::format("  machining time       {:.3f} s ({:.3f} s with acceleration), path {:.2f} mm\n",
                   m.machining_time_s, m.machining_time_accel_s, m.path_length_mm);
