@@ -424,7 +424,8 @@ function headerPart() {
   const assumed = [];
   if (typeof s.feed_per_tooth_mm === 'number') assumed.push(`feed per tooth f_z ${fmtNum(s.feed_per_tooth_mm, 4)} mm`);
   if (s.job) {
-    if (s.job.path_type) assumed.push(`path ${s.job.path_type}`);
+    if (data.path && data.path.pocket) assumed.push(`pocket of layer '${data.path.pocket.boundary}'`);
+    else if (s.job.path_type) assumed.push(`path ${s.job.path_type}`);
     if (typeof s.job.tool_diameter_mm === 'number') assumed.push(`tool ${fmtNum(s.job.tool_diameter_mm, 4)} mm, ${s.job.teeth} teeth`);
     if (typeof s.job.spindle_speed_rpm === 'number') assumed.push(`${fmtNum(s.job.spindle_speed_rpm, 4)} rpm at ${fmtNum(s.job.feed_rate_mm_per_min, 4)} mm/min`);
   }
@@ -626,6 +627,10 @@ function engagementPart() {
 function wallsPart() {
   const w = data.walls;
   const sec = section('walls', 'Walls and floor', 'Wall profiles along the feed over one period of the steady state: path level (envelope of the tool circles) and tooth level (envelope of the tooth tips), with their waviness; the predicted wall texture and the floor texture in the middle of the slot (ISO 16610-21 mean line); the floor imprint density (Wagih 2023 Figs. 21-22).');
+  if (data.path && data.path.pocket) {
+    sec.append(el('p', { text: 'A pocket has no steady cycle: the wall profiles over a slot\'s period do not apply (the finishing pass makes the walls).' }));
+    return;
+  }
   const cols = el('div', { class: 'columns' });
   sec.append(cols);
   for (const side of ['left', 'right']) {
