@@ -9,6 +9,7 @@
 #include <string>
 
 #include "test_util.hpp"
+#include "trochomill/analysis.hpp"
 #include "trochomill/engagement.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/geometry.hpp"
@@ -160,6 +161,10 @@ TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
   EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
   EXPECT_GT(proof.clearing_max_engagement_deg, 40);  // it does cut near the target
   EXPECT_GT(proof.finish_max_engagement_deg, 0);
+  // `analyze` proves it from its own series: the same figures (one sample per tooth pass).
+  const PocketProof again = prove_pocket(p.info, analyze_process(job, p.path).series);
+  EXPECT_EQ(again.clearing_max_engagement_deg, proof.clearing_max_engagement_deg);
+  EXPECT_EQ(again.finish_max_engagement_deg, proof.finish_max_engagement_deg);
 }
 
 TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {

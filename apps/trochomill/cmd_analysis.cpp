@@ -50,6 +50,12 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       if (!a->csv.empty()) emit(a->csv, series_csv(m.series));
       if (summary_to_stdout({&a->json, &a->csv})) {
         fmt::print("{}", metrics_text(a->job.file, a->gcode, job, m));
+        // A pocket's own plan: the target's proof from this analysis's series (the clearing
+        // outside its entries, apart from the finishing pass), as `plan` prints it.
+        if (job.pocket.defined() && a->gcode.empty()) {
+          const PlannedPocket pp = plan_pocket(job);
+          fmt::print("{}", pocket_summary(pp.info, prove_pocket(pp.info, m.series)));
+        }
       }
       run.finish("interrupted: the outputs were written in full");
       exit_code = 0;

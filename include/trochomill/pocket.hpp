@@ -76,6 +76,9 @@ struct PocketProof {
 };
 [[nodiscard]] PocketProof prove_pocket(const Job& job, const PlannedPocket& pocket,
                                        const RunHooks& hooks = {});
+/// The same from the kernel's series of the pocket's path already computed (`analyze`'s: one
+/// sample per tooth pass or finer), with the plan's entries and finishing pass.
+[[nodiscard]] PocketProof prove_pocket(const PocketInfo& info, const EngagementSeries& series);
 
 /// The memory `plan` of a pocket job takes (bytes), before planning: the process (30 MB), the
 /// planner's grids (a byte a cell of the coverage) and steps (200 B each) and the kernel's

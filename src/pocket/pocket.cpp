@@ -870,10 +870,12 @@ PlannedPocket plan_pocket(const Job& job) {
 PocketProof prove_pocket(const Job& job, const PlannedPocket& pocket, const RunHooks& hooks) {
   EngagementOptions opt;
   opt.hooks = hooks;
-  const EngagementSeries e = compute_engagement(pocket.path, job, opt);
-  const PocketInfo& info = pocket.info;
+  return prove_pocket(pocket.info, compute_engagement(pocket.path, job, opt));
+}
+
+PocketProof prove_pocket(const PocketInfo& info, const EngagementSeries& e) {
   PocketProof out;
-  const double R = job.tool.radius_mm();
+  const double R = e.tool_radius_mm;
   long cutting = 0, above = 0;
   for (std::size_t i = 0; i < e.samples.size(); ++i) {
     const std::size_t seg = e.samples.segment[i];
