@@ -143,6 +143,22 @@ bool along_only(JobReader& r, const char* key, const char* what) {
   return false;
 }
 
+// A key naming a layer (or SVG id) of [geometry] file: read into `dst` when given and not
+// empty; when absent, reported missing with `missing` (what it names) if that is given.
+void read_layer(JobReader& r, const char* section, const char* key, std::string& dst,
+                const char* missing = nullptr) {
+  if (auto v = r.string(section, key)) {
+    if (v->empty()) {
+      r.problem(section, key, "give the drawing's layer (or SVG id)");
+    } else {
+      dst = *v;
+    }
+  } else if (missing != nullptr) {
+    r.problems().push_back(
+        fmt::format("{}: missing required key [{}] {} ({})", r.source(), section, key, missing));
+  }
+}
+
 #define FIELD(member)     \
   +[](Job & j) -> auto& { \
     return j.member;      \
@@ -311,15 +327,7 @@ std::vector<Key> build_schema() {
       custom("slot", "along", "string", "", "a layer (or SVG id) of [geometry] file", "none",
              "the slot's centreline: the one open or closed contour on this layer of the "
              "drawing (the slot is every point within W/2 of it); none: a straight slot along +Y",
-             [](JobReader& r, Job& job) {
-               if (auto v = r.string("slot", "along")) {
-                 if (v->empty()) {
-                   r.problem("slot", "along", "give the drawing's layer (or SVG id)");
-                 } else {
-                   job.slot.along = *v;
-                 }
-               }
-             }),
+             [](JobReader& r, Job& job) { read_layer(r, "slot", "along", job.slot.along); }),
       custom("slot", "max_step_down", "number", "mm", "in [0.001, 1e5]", "the whole depth",
              "a slot along a contour is cut in levels of equal depth, each at most this deep, "
              "each entered by [path] entry",
@@ -361,31 +369,14 @@ std::vector<Key> build_schema() {
              "several pockets); a job gives [slot] or [pocket]",
              [](JobReader& r, Job& job) {
                if (!r.has_section("pocket")) return;
-               if (auto v = r.string("pocket", "boundary")) {
-                 if (v->empty()) {
-                   r.problem("pocket", "boundary", "give the drawing's layer (or SVG id)");
-                 } else {
-                   job.pocket.boundary = *v;
-                 }
-               } else {
-                 r.problems().push_back(fmt::format(
-                     "{}: missing required key [pocket] boundary (the drawing's layer of the "
-                     "pocket's walls)",
-                     r.source()));
-               }
+               read_layer(r, "pocket", "boundary", job.pocket.boundary,
+                          "the drawing's layer of the pocket's walls");
              }),
-      custom("pocket", "islands", "string", "", "a layer (or SVG id) of [geometry] file", "none",
-             "the islands left standing: the closed contours on this layer, each inside a "
-             "boundary, none touching another",
-             [](JobReader& r, Job& job) {
-               if (auto v = r.string("pocket", "islands")) {
-                 if (v->empty()) {
-                   r.problem("pocket", "islands", "give the drawing's layer (or SVG id)");
-                 } else {
-                   job.pocket.islands = *v;
-                 }
-               }
-             }),
+      custom(
+          "pocket", "islands", "string", "", "a layer (or SVG id) of [geometry] file", "none",
+          "the islands left standing: the closed contours on this layer, each inside a "
+          "boundary, none touching another",
+          [](JobReader& r, Job& job) { read_layer(r, "pocket", "islands", job.pocket.islands); }),
       custom("pocket", "depth", "number", "mm", "> 0", "required (a pocket)",
              "the pocket's floor below the top face z = 0",
              [](JobReader& r, Job& job) {

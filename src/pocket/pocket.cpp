@@ -275,6 +275,7 @@ class PartPlanner {
   static double cell_size(double R) { return std::clamp(R / 20.0, 0.02, 0.25); }
 
   [[nodiscard]] bool in_region(const Vec2& p) const { return inside_.contains(p); }
+  [[nodiscard]] const RegionGrid& region() const { return inside_; }
   Coverage& coverage() { return coverage_; }
 
   // Cuts the disc at p; returns how many coverage cells it took.
@@ -549,8 +550,7 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
   const Vec2 lo(box.lo.x() - s.R, box.lo.y() - s.R), hi(box.hi.x() + s.R, box.hi.y() + s.R);
   PartPlanner planner(s, part, lo, hi);
   PartPlan out;
-  const RegionGrid inside(part, std::max(0.25, 0.25 * s.R));
-  const auto [centre, room] = widest_point(part, inside);
+  const auto [centre, room] = widest_point(part, planner.region());
   double rh = job.path.entry_radius_mm;
   if (rh > 0 && rh > room) {
     throw InputError(fmt::format(
@@ -621,6 +621,16 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
   return out;
 }
 
+// The planner's step along the path (mm): 0.1 R within 0.05 to 1 mm.
+double pocket_step_mm(double R) { return std::clamp(0.1 * R, 0.05, 1.0); }
+
+// The pocket's depth levels: equal, each at most max_step_down deep (one without it).
+int pocket_levels(const Pocket& pk) {
+  return pk.max_step_down_mm > 0
+             ? std::max(1, static_cast<int>(std::ceil(pk.depth_mm / pk.max_step_down_mm - 1e-9)))
+             : 1;
+}
+
 // The region of the pocket: its boundaries and islands (even-odd).
 std::vector<Contour> pocket_region(const Pocket& pk) {
   std::vector<Contour> region;
@@ -671,7 +681,7 @@ PlannedPocket plan_pocket(const Job& job) {
   }
   Settings s;
   s.R = R;
-  s.step = std::clamp(0.1 * R, 0.05, 1.0);
+  s.step = pocket_step_mm(R);
   // Margin: the kernel samples every tooth between the planner's points (a step's quarters and
   // the first tooth after its turn); 1 degree held the kernel's largest within the target on
   // the test pockets and the example (docs/models.md, "Pockets").
@@ -716,10 +726,7 @@ PlannedPocket plan_pocket(const Job& job) {
 
   // Levels of equal depth.
   const double depth = pk.depth_mm;
-  const int levels =
-      pk.max_step_down_mm > 0
-          ? std::max(1, static_cast<int>(std::ceil(depth / pk.max_step_down_mm - 1e-9)))
-          : 1;
+  const int levels = pocket_levels(pk);
   info.levels = levels;
   ToolPath& path = out.path;
   auto at = [](const Vec2& p, double z) { return Vec3(p.x(), p.y(), z); };
@@ -917,15 +924,12 @@ double estimate_pocket_memory(const Job& job) {
   }
   const double R = job.tool.radius_mm();
   if (!(R > 0) || box.empty()) return 30e6;
-  const double h = std::clamp(R / 20.0, 0.02, 0.25);
+  const double h = PartPlanner::cell_size(R);
   const Vec3 size = box.size_mm();
   const double cells = (size.x() / h + 3) * (size.y() / h + 3);
   const double side = R * (1 - std::cos(deg_to_rad(std::min(90.0, pk.max_engagement_deg))));
-  const double step = std::clamp(0.1 * R, 0.05, 1.0);
-  const int levels =
-      pk.max_step_down_mm > 0
-          ? std::max(1, static_cast<int>(std::ceil(pk.depth_mm / pk.max_step_down_mm - 1e-9)))
-          : 1;
+  const double step = pocket_step_mm(R);
+  const int levels = pocket_levels(pk);
   const double clearing_mm = 5 * area / std::max(side, 1e-3);  // a level
   const double feed_mm_s = std::max(feed_rate_mm_per_min(job), 1e-3) / 60;
   const double samples =

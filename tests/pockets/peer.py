@@ -37,6 +37,13 @@ def check(ok, what):
         failures.append(what)
 
 
+def rs274(program):
+    """LinuxCNC's rs274 reading the program (tests/ngc/linuxcnc_canon.py): its moves as lines."""
+    return subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tests", "ngc", "linuxcnc_canon.py"),
+                           program, "--tools", os.path.join(ROOT, "tests", "ngc", "tools.tbl"),
+                           "--rs274"], capture_output=True, text=True)
+
+
 def path_points(moves, keep):
     """The tool centre's feed points where keep(z0, z1): arcs as chords of sagitta <= 1e-4 mm,
     as runs (a list of point lists, one per run of such moves)."""
@@ -92,9 +99,7 @@ for name, (boundary, islands, walls, corners) in CASES.items():
     # the kernel samples every tooth in between).
     check(eng <= TARGET * 1.02, "%s: the kernel's largest clearing engagement %.3f degrees "
           "(target %g)" % (name, eng, TARGET))
-    peer = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tests", "ngc", "linuxcnc_canon.py"),
-                           prog, "--tools", os.path.join(ROOT, "tests", "ngc", "tools.tbl"),
-                           "--rs274"], capture_output=True, text=True)
+    peer = rs274(prog)
     if peer.returncode == 77:
         print(peer.stderr.strip())
         sys.exit(77)
@@ -127,9 +132,7 @@ for name, (boundary, islands, walls, corners) in CASES.items():
     rough = os.path.join(work, name + "-rough.ngc")
     plan = subprocess.run([cli, "plan", job, "--set", "pocket.finish_pass=false", "-o", rough],
                           capture_output=True, text=True)
-    peer = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tests", "ngc", "linuxcnc_canon.py"),
-                           rough, "--tools", os.path.join(ROOT, "tests", "ngc", "tools.tbl"),
-                           "--rs274"], capture_output=True, text=True)
+    peer = rs274(rough)
     rough_moves = [parse(l) for l in peer.stdout.splitlines() if l.strip()]
     check(plan.returncode == 0 and peer.returncode == 0 and rough_moves,
           "%s: the clearing alone planned and read" % name)
