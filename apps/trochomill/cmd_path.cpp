@@ -116,10 +116,11 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       if (job.pocket.defined()) {
         check_memory(
             "plan", estimate_pocket_memory(job), a->memory_gb,
-            fmt::format("a pocket of layer '{}' cleared at {:g} degrees with a {:g} mm "
-                        "tool: raise [pocket] max_engagement, use a larger tool or "
-                        "split the pocket",
-                        job.pocket.boundary, job.pocket.max_engagement_deg, job.tool.diameter_mm));
+            fmt::format(
+                "a pocket of layer '{}' cleared at {:g} degrees with a {:g} mm "
+                "tool: raise [pocket] max_engagement or max_step_down, use a larger tool or "
+                "split the pocket",
+                job.pocket.boundary, job.pocket.max_engagement_deg, job.tool.diameter_mm));
       } else {
         check_memory("plan", estimate_plan_memory(job), a->memory_gb,
                      fmt::format("a {:g} mm slot at a {:g} mm step: raise [path] step or plan a "

@@ -265,8 +265,8 @@ the job's slot frame when read with a job, else in the program's work frame.)")
         if (job.job.pocket.defined()) {
           check_memory("plan", estimate_pocket_memory(job.job), memory_limit_gb,
                        fmt::format("a pocket of layer '{}' cleared at {:g} degrees with a {:g} "
-                                   "mm tool: raise pocket.max_engagement, use a larger tool or "
-                                   "split the pocket",
+                                   "mm tool: raise pocket.max_engagement or pocket.max_step_down, "
+                                   "use a larger tool or split the pocket",
                                    job.job.pocket.boundary, job.job.pocket.max_engagement_deg,
                                    job.job.tool.diameter_mm));
         } else {

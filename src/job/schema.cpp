@@ -405,9 +405,11 @@ std::vector<Key> build_schema() {
              [](JobReader& r, Job& job) {
                if (auto v = r.boolean("pocket", "finish_pass")) job.pocket.finish_pass = *v;
              }),
-      number("pocket", "fit_tolerance", "mm", Range{1e-4, 0.1}, FIELD(pocket.fit_tolerance_mm),
+      number("pocket", "fit_tolerance", "mm", Range{1e-4, 0.005}, FIELD(pocket.fit_tolerance_mm),
              "the clearing path is written as arcs and lines within this of the planned points "
-             "(the walls are kept this much further away)"),
+             "(the walls are kept this much further away); at most 0.005 mm: a looser fit moves "
+             "the path off the points checked and the target no longer holds (0.1 mm: 63 "
+             "degrees for 53)"),
       custom("slot", "length", "number", "mm", "> 0", "required (none with along)",
              "slot length along +Y (a slot along a drawing's contour has the contour's length)",
              [](JobReader& r, Job& job) {
