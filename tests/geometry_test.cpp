@@ -2,6 +2,7 @@
 // offsets through Clipper against closed forms and the exact distance to the input.
 #include "trochomill/geometry.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -545,6 +546,28 @@ TEST(Geometry, SvgBadInputIsRefusedWithWhatIsWrong) {
     const std::string m = test::message_of([&] { (void)read_svg(file, DrawingOptions{}); });
     EXPECT_NE(m.find(c.expect), std::string::npos) << c.name << ": " << m;
     EXPECT_EQ(m.rfind(file.string(), 0), 0u) << c.name << ": starts with the file: " << m;
+  }
+  // Curves far beyond a machine's travel (18 arches 100 km across: about 2,900 arcs each
+  // within 0.002 mm) stop the reading at the budget of fitted arcs, naming the element where it ran
+  // out; the same arches 1 m across (70 arcs each) read.
+  const auto arches = [](const char* size, int n) {
+    std::string d = "M0 0";  // each arch an open path of its own, 1 mm above the one before
+    for (int i = 0; i < n; ++i) d += fmt::format(" c 0 {0} {0} {0} {0} 0 m -{0} 1", size);
+    return "<svg width=\"100mm\" viewBox=\"0 0 100 100\"><path id=\"arches\" d=\"" + d +
+           "\"/></svg>";
+  };
+  const std::string m =
+      test::message_of([&] { (void)read_svg(svg_file("far-arches.svg", arches("1e8", 18)), {}); });
+  EXPECT_NE(m.find("path #arches on layer '0': the drawing's curves need more than 50000 arcs "
+                   "within 0.002 mm (the arc tolerance)"),
+            std::string::npos)
+      << m;
+  const Drawing near = read_svg(svg_file("arches.svg", arches("1e3", 18)), {});
+  ASSERT_EQ(near.contours.size(), 18u);
+  // Each arch 70 arcs (measured): the bounds only say it is fitted finely and read whole.
+  for (const DrawnContour& c : near.contours) {
+    EXPECT_GT(arcs_in(c.contour), 30u);
+    EXPECT_LT(arcs_in(c.contour), 150u);
   }
   // Deep nesting is walked without recursion.
   std::string deep = "<svg>";

@@ -212,9 +212,16 @@ class EllipseCurve final : public PlanarCurve {
 /// spans of u, each cut into the longest pieces whose biarc stays within 0.8 tolerance_mm of the
 /// curve at 24 interior samples, found by doubling, halving and bisection). The last arc ends
 /// exactly where the curve ends. Throws Error when a piece would need more than 30 halvings (a
-/// feature below the tolerance).
-[[nodiscard]] std::vector<FitArc> fit_biarcs(const PlanarCurve& curve, double u0, double u1,
-                                             int pieces, double tolerance_mm);
+/// feature below the tolerance), ArcLimit when the fit would take more than max_arcs arcs
+/// (the drawing readers' budget, kMaxDrawingArcs; checked as the arcs are made, so a curve
+/// far too long for the tolerance costs no more than the budget).
+[[nodiscard]] std::vector<FitArc> fit_biarcs(
+    const PlanarCurve& curve, double u0, double u1, int pieces, double tolerance_mm,
+    std::size_t max_arcs = std::numeric_limits<std::size_t>::max());
+/// fit_biarcs would have taken more than `max_arcs` arcs.
+struct ArcLimit {
+  std::size_t max_arcs;
+};
 /// The end points of chords through the curve from u0 to u1 within tolerance_mm (the start
 /// not included).
 [[nodiscard]] std::vector<Vec3> fit_chords(const PlanarCurve& curve, double u0, double u1,

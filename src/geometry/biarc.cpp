@@ -134,7 +134,7 @@ bool fit_span(const PlanarCurve& c, double ua, double ub, double tol, FitArc& a1
 // piece that fits (grown from the last piece's length by doubling, or halved until it fits,
 // then bisected to within 1/16 of its length), so a curve of slowly changing curvature gets
 // pieces of the length its tolerance allows rather than of a power-of-two share of the span.
-void fit_span_greedy(const PlanarCurve& c, double a, double b, double tol,
+void fit_span_greedy(const PlanarCurve& c, double a, double b, double tol, std::size_t max_arcs,
                      std::vector<FitArc>& out) {
   // In the share t of the span (u = a + t (b - a)): a curve may run backwards in u.
   const auto u = [&](double t) { return t >= 1 ? b : a + t * (b - a); };
@@ -175,6 +175,7 @@ void fit_span_greedy(const PlanarCurve& c, double a, double b, double tol,
         hi = m;
       }
     }
+    if (out.size() + 2 > max_arcs) throw ArcLimit{max_arcs};
     out.push_back(a1);
     out.push_back(a2);
     guess = lo - ta;
@@ -209,13 +210,14 @@ void chord_piece(const PlanarCurve& c, double ua, double ub, double tol, int dep
 }  // namespace
 
 std::vector<FitArc> fit_biarcs(const PlanarCurve& curve, double u0, double u1, int pieces,
-                               double tolerance_mm) {
+                               double tolerance_mm, std::size_t max_arcs) {
   if (!(tolerance_mm > 0)) throw InputError("arc tolerance must be > 0 mm");
   std::vector<FitArc> out;
   const int n = std::max(1, pieces);
   const double du = (u1 - u0) / n;
   for (int i = 0; i < n; ++i) {
-    fit_span_greedy(curve, u0 + du * i, i + 1 == n ? u1 : u0 + du * (i + 1), tolerance_mm, out);
+    fit_span_greedy(curve, u0 + du * i, i + 1 == n ? u1 : u0 + du * (i + 1), tolerance_mm, max_arcs,
+                    out);
   }
   return out;
 }

@@ -110,6 +110,7 @@ class Reader final : public DL_CreationAdapter {
   std::vector<DrawnPiece> pieces;
   std::vector<std::string> problems;
   std::optional<std::string> units_error;  ///< a unit it cannot read, or one after entities
+  std::optional<std::string> limit_error;  ///< the drawing's arcs beyond kMaxDrawingArcs
   const char* units = insunits(0)->second;
   [[nodiscard]] double unit() const { return unit_; }
   std::vector<std::string> seen_layers;  ///< of every entity, chosen or not
@@ -247,7 +248,7 @@ class Reader final : public DL_CreationAdapter {
   bool begin(const char* kind) {
     flush();
     ++entities_;
-    if (in_block_ || units_error) return false;
+    if (in_block_ || units_error || limit_error) return false;
     const DL_Attributes& at = getAttributes();
     entity_ = fmt::format("{} #{:X}", kind, at.getHandle() < 0 ? 0 : at.getHandle());
     layer_ = at.getLayer();
@@ -285,9 +286,16 @@ class Reader final : public DL_CreationAdapter {
   // Biarcs within the arc tolerance (in the entity's units: the tolerance divided by the unit).
   void fit(const PlanarCurve& c, double u0, double u1, int n) {
     try {
-      for (const FitArc& a : fit_biarcs(c, u0, u1, n, o_.arc_tolerance_mm / unit_)) {
-        add(to_piece(a));
-      }
+      const std::vector<FitArc> arcs =
+          fit_biarcs(c, u0, u1, n, o_.arc_tolerance_mm / unit_, kMaxDrawingArcs - fitted_);
+      fitted_ += arcs.size();
+      for (const FitArc& a : arcs) add(to_piece(a));
+    } catch (const ArcLimit&) {
+      limit_error = fmt::format(
+          "{}: {} on layer '{}': the drawing's curves need more than {} arcs within {} mm (the "
+          "arc tolerance): a drawing traced from an image, or curves far larger than a "
+          "machine's travel; not read (simplify the curves or loosen the tolerance)",
+          src_, entity_, layer_, kMaxDrawingArcs, o_.arc_tolerance_mm);
     } catch (const Error& e) {
       problem("cannot be fitted with arcs within {} mm ({})", o_.arc_tolerance_mm, e.what());
     }
@@ -355,6 +363,7 @@ class Reader final : public DL_CreationAdapter {
   std::optional<Poly> poly_;
   std::optional<Spline> spline_;
   std::size_t entities_ = 0;
+  std::size_t fitted_ = 0;  // arcs fitted to the drawing's curves so far
   double unit_ = insunits(0)->first;
 };
 
@@ -371,6 +380,7 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   dxf.in(in, &r);
   r.flush();
   if (r.units_error) throw InputError(*r.units_error);
+  if (r.limit_error) throw InputError(*r.limit_error);
   d.mm_per_unit = r.unit();
   d.units = r.units;
   if (!r.problems.empty()) throw InputError(r.problems);

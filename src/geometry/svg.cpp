@@ -328,12 +328,14 @@ class Reader {
     const char* attr = "transform";
     try {
       const Affine m = ctx->ctm * svg::read_transform(n.attribute("transform").value());
-      svg::PieceSink e(m, o_.arc_tolerance_mm, pieces, layer, entity);
+      svg::PieceSink e(m, o_.arc_tolerance_mm, pieces, fitted_, layer, entity);
       attr = "d";
       shape_pieces(n, name, e, attr);
       if (e.added > 0) {
         for (const std::size_t i : names) used_[i] = 1;
       }
+    } catch (const svg::Limit& l) {
+      throw InputError(fmt::format("{}: {} on layer '{}': {}", src_, entity, layer, l.what));
     } catch (const svg::SyntaxError& e) {
       problem(entity, layer, "{}", syntax(n, attr, e));
     } catch (const Problem& p) {
@@ -471,6 +473,7 @@ class Reader {
   const DrawingOptions& o_;
   std::vector<char> used_;
   std::vector<std::size_t> line_starts_{0};
+  std::size_t fitted_ = 0;  // arcs fitted to the drawing's curves so far
 };
 
 }  // namespace

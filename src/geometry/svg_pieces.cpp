@@ -51,8 +51,13 @@ class Bezier final : public PlanarCurve {
 }  // namespace
 
 PieceSink::PieceSink(const Affine& m, double tolerance_mm, std::vector<DrawnPiece>& out,
-                     std::string layer, std::string entity)
-    : m_(m), tol_(tolerance_mm), out_(out), layer_(std::move(layer)), entity_(std::move(entity)) {}
+                     std::size_t& fitted, std::string layer, std::string entity)
+    : m_(m),
+      tol_(tolerance_mm),
+      out_(out),
+      fitted_(fitted),
+      layer_(std::move(layer)),
+      entity_(std::move(entity)) {}
 
 void PieceSink::line(const Vec2& p0, const Vec2& p1) { add(ContourPiece::line(m_(p0), m_(p1))); }
 void PieceSink::cubic(const Vec2& p0, const Vec2& p1, const Vec2& p2, const Vec2& p3) {
@@ -90,14 +95,22 @@ void PieceSink::add(const ContourPiece& p) {
   check(p.end);
   if (p.start == p.end && !p.is_arc()) return;  // a zero-length line joins nothing
   if (out_.size() >= kMaxPieces) {
-    throw InputError(fmt::format("more than {} lines and arcs: not read", kMaxPieces));
+    throw Limit{fmt::format("more than {} lines and arcs: not read", kMaxPieces)};
   }
   out_.push_back({p, layer_, entity_});
   ++added;
 }
 void PieceSink::fit(const PlanarCurve& c, double u0, double u1, int n) {
   try {
-    for (const FitArc& a : fit_biarcs(c, u0, u1, n, tol_)) add(to_piece(a));
+    const std::vector<FitArc> arcs = fit_biarcs(c, u0, u1, n, tol_, kMaxDrawingArcs - fitted_);
+    fitted_ += arcs.size();
+    for (const FitArc& a : arcs) add(to_piece(a));
+  } catch (const ArcLimit&) {
+    throw Limit{fmt::format(
+        "the drawing's curves need more than {} arcs within {} mm (the arc tolerance): a "
+        "drawing traced from an image, or curves far larger than a machine's travel; not read "
+        "(simplify the curves or loosen the tolerance)",
+        kMaxDrawingArcs, tol_)};
   } catch (const InputError&) {
     throw;
   } catch (const Error& e) {

@@ -79,15 +79,21 @@ void endpoint_arc(const Vec2& p0, double rx, double ry, double phi_rad, bool lar
 struct Problem {
   std::string what;
 };
+/// A limit of the whole drawing reached at one element: the reading stops (the reader names
+/// the file and the element with it).
+struct Limit {
+  std::string what;
+};
 
 /// One element's pieces (svg_pieces.cpp): user units through `m` into mm (y up), appended to
 /// `out` with the layer and entity. Circles (round after the transform) become exact arcs,
-/// Béziers and other ellipses biarcs within tolerance_mm. Throws Problem for a point beyond
-/// 1000 km or a curve that cannot be fitted, InputError beyond two million pieces.
+/// Béziers and other ellipses biarcs within tolerance_mm, counted in `fitted` (the drawing's
+/// fitted arcs so far). Throws Problem for a point beyond 1000 km or a curve that cannot be
+/// fitted, Limit beyond two million pieces or kMaxDrawingArcs fitted arcs.
 class PieceSink final : public PathSink {
  public:
-  PieceSink(const Affine& m, double tolerance_mm, std::vector<DrawnPiece>& out, std::string layer,
-            std::string entity);
+  PieceSink(const Affine& m, double tolerance_mm, std::vector<DrawnPiece>& out, std::size_t& fitted,
+            std::string layer, std::string entity);
   std::size_t added = 0;  ///< pieces appended
   void line(const Vec2& p0, const Vec2& p1) override;
   void cubic(const Vec2& p0, const Vec2& p1, const Vec2& p2, const Vec2& p3) override;
@@ -102,6 +108,7 @@ class PieceSink final : public PathSink {
   Affine m_;
   double tol_;
   std::vector<DrawnPiece>& out_;
+  std::size_t& fitted_;
   std::string layer_, entity_;
 };
 

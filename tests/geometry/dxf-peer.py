@@ -156,6 +156,16 @@ def fit_only(m, doc):
     m.add_spline([(0, 0), (10, 5), (20, 0)])
 
 
+def far_splines(m, doc):
+    # Arches 100 km across (about 2,900 arcs each within 0.002 mm): 18 of them need more arcs
+    # than a drawing is fitted with.
+    s = 1e8
+    for i in range(18):
+        m.add_open_spline([(0, 0), (0, s), (s, s), (s, 0)], degree=3)
+
+
+refused("far-splines", far_splines, "the drawing's curves need more than 50000 arcs within "
+        "0.002 mm (the arc tolerance)")
 refused("branch", branch, "a branch at (0, 0) mm")
 refused("gap", gap, "a gap of 0.05 mm")
 refused("insert", insert, "INSERT of block 'BOLT'")

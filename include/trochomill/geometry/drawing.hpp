@@ -38,6 +38,12 @@ struct Drawing {
   std::string units;       ///< "mm", "in", ..., "unitless (read as mm)" or "px (96 per in)"
 };
 
+/// The most arcs a drawing's splines, ellipses and Béziers are fitted with, all together. A
+/// part's drawing needs far fewer (a Bézier arch 1 m across takes 70 at 0.002 mm); more is
+/// a drawing traced from an image, or curves far beyond any machine's travel, which would take
+/// seconds to read (about 20 µs an arc).
+inline constexpr std::size_t kMaxDrawingArcs = 50'000;
+
 struct DrawingOptions {
   /// Ends of pieces closer than this are one point (mm, 1e-6 to 100).
   double join_tolerance_mm = 0.01;
