@@ -75,7 +75,8 @@ TEST(Analysis, ToothMarksOnAStraightWall) {
   EXPECT_LE(m.walls_path.left.waviness_mm, 0.01 * 0.01 / 40 + 1e-12);  // ds^2 / 8R
 }
 
-// The left wall of the true trochoid, independently: the envelope E(theta) = c(theta) +
+// The wall at -x of the clockwise true trochoid (the right wall of the counter-clockwise one, its
+// mirror, as climb milling runs it), independently: the envelope E(theta) = c(theta) +
 // R m(theta) of the circles along c(theta) = (-a cos theta, a sin theta + s theta / 2 pi)
 // (m the unit normal towards -x), the cusp where cycle k's envelope meets cycle k+1's
 // (solved by Newton in two unknowns), the valley at the envelope's extreme (golden section).
@@ -120,11 +121,11 @@ TEST(Analysis, TrochoidWallWavinessMatchesAnalyticEnvelope) {
     const Job job = test::wagih_job("trochoidal", {parse_override("path.step=" + std::to_string(s)),
                                                    parse_override("slot.length=40")});
     const ProcessMetrics m = analyze_process(job, plan_path(job).path);
-    const double expected = trochoid_left_cusp(5.0, s, 5.0);
+    const double expected = trochoid_left_cusp(5.0, s, 5.0);  // the climb path's right wall
     // y grid of s / 2000 with the envelope's slope at the cusp below (s/2) / (a + R): the
     // cusp is resolved to (s / 20) * (s / 4000); the 0.01 mm centre samples (or s/100) add
     // ds^2 / 8R below 3e-6 mm.
-    EXPECT_NEAR(m.walls_path.left.waviness_mm, expected, s * s / 80000 + 3e-6) << s;
+    EXPECT_NEAR(m.walls_path.right.waviness_mm, expected, s * s / 80000 + 3e-6) << s;
     EXPECT_TRUE(m.periodic);
   }
 }
@@ -485,16 +486,18 @@ TEST(Analysis, ALevelTakesWhatEveryLevelBelowRemoved) {
 
 // The stock as a mesh: the job's [stock] box given as 12 triangles gives the box's engagement
 // on the Wagih trochoidal path (every arc's ends from the circle's crossings with the faces'
-// edges instead of the box's closed form: 1e-9 rad and mm), and a block whose top slopes from
+// edges instead of the box's closed form: 1e-9 rad and mm; the box 2 mm wider than the slot on
+// either side, as a circle tangent to a face at the wall would give its crossing to
+// sqrt(2 eps / R), 1e-7 rad for a rounding eps of 1e-15 mm), and a block whose top slopes from
 // z = 0 at y = 0 to -4 at y = 40: a full slot at z = -1 meets stock only where the top is above
 // it, y < 10; at a tooth pass with the centre near y = 7 the engaged arcs are the front
 // half-circle's below y = 10 (y + 5 sin(phi) <= 10) and outside the disc a step back (closed
 // form), and past y = 15 nothing.
 TEST(Analysis, AStockMeshIsTheStock) {
   Job job = test::wagih_job("trochoidal");
-  job.stock_min_mm = Vec3(-10.0, -5.0, -8.0);
-  job.stock_max_mm = Vec3(10.0, 40.0, 0.0);
-  const Mesh box = test::block_mesh(-10, 10, -5, 40, -8, {0, 0, 0, 0});
+  job.stock_min_mm = Vec3(-12.0, -5.0, -8.0);
+  job.stock_max_mm = Vec3(12.0, 40.0, 0.0);
+  const Mesh box = test::block_mesh(-12, 12, -5, 40, -8, {0, 0, 0, 0});
   const PlannedPath planned = plan_path(job);
   EngagementOptions o;
   const EngagementSeries a = compute_engagement(planned.path, job, o);

@@ -76,8 +76,10 @@ TEST(CurvedSlot, RingStaysInsideHoldsTheStraightChipAndEachLoopIsTheMappedLoop) 
       << curved.h_max_after_entry_mm << " " << flat.h_max_mm;
 
   // Each loop's length against the tube map of the straight trochoid, integrated here
-  // independently: x = -a' cos u, y = a' sin u + s u / 2 pi (a' = a - tolerance), mapped onto
-  // the ring of radius 30 mm turning left: |d/du| = sqrt(((1 + x / 30) y')^2 + x'^2). The step
+  // independently: x = a' cos u, y = a' sin u + s u / 2 pi (a' = a - tolerance; x across to
+  // the right: climb with a cw spindle runs the frame's clockwise loop x = -a' cos u mirrored),
+  // mapped onto the ring of radius 30 mm turning left: |d/du| = sqrt(((1 + x / 30) y')^2 +
+  // x'^2). The step
   // s of each loop from where it and the next start (their angle about the ring's centre).
   const double rc = 30, ap = a - tol;
   const Vec2 o(40, 40);
@@ -98,7 +100,7 @@ TEST(CurvedSlot, RingStaysInsideHoldsTheStraightChipAndEachLoopIsTheMappedLoop) 
     double integral = 0;
     for (int i = 0; i <= n; ++i) {
       const double u = 2 * M_PI * i / n;
-      const double x = -ap * std::cos(u), dx = ap * std::sin(u);
+      const double x = ap * std::cos(u), dx = -ap * std::sin(u);
       const double dy = ap * std::cos(u) + s / (2 * M_PI);
       const double f = std::hypot((1 + x / rc) * dy, dx);
       integral += f * (i == 0 || i == n ? 1 : (i % 2 ? 4 : 2));

@@ -6,9 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/job.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -178,6 +183,55 @@ TEST(Engagement, RejectsBadOptions) {
   EngagementOptions o;
   o.steps_per_tooth = 0;
   EXPECT_THROW((void)compute_engagement(p, job, o), InputError);
+}
+
+// Climb milling with a clockwise (M3) spindle keeps the material on the tool's right: the tooth
+// sweeps from the tool's left through its front to its right, so it enters material on the
+// right at the thickest chip (down milling) and material on the left at zero (up milling).
+// Measured here on what the kernel finds engaged, not on the planner's own frame: the share of
+// each sample's engaged angle lying right of the motion (sin(phi - phi_v) < 0), over the
+// program but its full-slot samples, for the families, a slot along a curve and a pocket;
+// conventional mirrors it. Seen: 0.954 (linear) to 0.999 (the bend) for climb; the rest is
+// where an arc reaches round the tool's front, at a cycle's first contact.
+TEST(Engagement, ClimbPutsTheMaterialOnTheToolsRight) {
+  const auto right_share = [](const Job& job) {
+    const PlannedPath pp = plan_job(job);
+    const EngagementSeries e = compute_engagement(pp.path, job);
+    double right = 0, all = 0;
+    for (std::size_t i = 0; i < e.samples.size(); ++i) {
+      // A full slot (the entry, a linear slot's first pass) is cut on both sides alike.
+      if (e.engagement_angle_rad[i] > 0.9 * kPi) continue;
+      const double v = std::atan2(e.samples.ty[i], e.samples.tx[i]);
+      for (const AngleArc& a : e.arcs[i]) {
+        const int n = std::max(1, static_cast<int>(std::ceil(a.sweep_rad() / 0.01)));
+        for (int k = 0; k < n; ++k) {
+          const double phi = a.start_rad + a.sweep_rad() * (k + 0.5) / n;
+          all += a.sweep_rad() / n;
+          if (std::sin(phi - v) < 0) right += a.sweep_rad() / n;
+        }
+      }
+    }
+    return right / all;
+  };
+  const std::vector<std::pair<std::string, Job>> jobs = {
+      {"trochoidal", test::wagih_job("trochoidal")},
+      {"circular", test::wagih_job("circular")},
+      {"linear", test::wagih_job("trochoidal", {parse_override("path.type=linear")})},
+      {"bend", load_job(test::example("curves/bend.toml"))},
+      {"pocket", parse_job("[geometry]\nfile = \"" +
+                               (test::source_dir() / "tests/data/dxf/pockets.dxf").string() +
+                               "\"\n[pocket]\nboundary = \"RECT\"\ndepth = 2.0\n"
+                               "max_engagement = 50.0\n[tool]\ndiameter = 10.0\nteeth = 3\n"
+                               "[cutting]\nfeed_rate = 1200.0\nspindle_speed = 8000.0\n",
+                           "pocket.toml")},
+  };
+  for (const auto& [name, job] : jobs) {
+    Job conv = job;
+    conv.path.direction = Direction::conventional;
+    const double climb = right_share(job), up = right_share(conv);
+    EXPECT_GT(climb, 0.9) << name;
+    EXPECT_LT(up, 0.1) << name;
+  }
 }
 
 }  // namespace

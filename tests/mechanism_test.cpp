@@ -56,9 +56,12 @@ TEST(Mechanism, ExactModelMatchesKernel) {
     std::vector<double> hk;
     for (std::size_t i = 0; i < e.samples.size(); ++i) {
       if (e.samples.t_s[i] < tm) continue;
-      // theta from x = -a cos(theta), the branch from the direction of motion in x.
-      const double ct = std::clamp(-e.samples.x_mm[i] / a, -1.0, 1.0);
-      th.push_back(e.samples.tx[i] >= 0 ? std::acos(ct) : kTwoPi - std::acos(ct));
+      // theta from x = -a cos(theta), the branch from the direction of motion in x, in the
+      // model's frame: the clockwise orbit, which climb milling with a cw spindle runs
+      // mirrored (x -> -x; the chip is the same in the mirror).
+      const double x = -e.samples.x_mm[i], tx = -e.samples.tx[i];
+      const double ct = std::clamp(-x / a, -1.0, 1.0);
+      th.push_back(tx >= 0 ? std::acos(ct) : kTwoPi - std::acos(ct));
       hk.push_back(e.swept_rate_mm2_per_s[i] > 0 ? e.h_max_mm[i] : 0.0);
     }
     const MechanismCurve c = mechanism_curve_at(job, st, th);

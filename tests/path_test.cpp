@@ -382,7 +382,9 @@ TEST(Planner, ConventionalMirrorsClimbAndOrbitsTheOtherWay) {
     EXPECT_NEAR(a.x_mm[i], -b.x_mm[i], 1e-12);
     EXPECT_NEAR(a.y_mm[i], b.y_mm[i], 1e-12);
   }
-  // Signed area swept by the centre over one cycle (shoelace): climb orbits clockwise (< 0).
+  // Signed area swept by the centre over one cycle (shoelace): climb with a cw spindle orbits
+  // counter-clockwise (> 0: the material outside the orbit on the tool's right, docs/models.md
+  // section 2; Engagement.ClimbPutsTheMaterialOnTheToolsRight checks it on the kernel).
   auto area = [](const PlannedPath& p) {
     const auto& seg = p.path.segments()[p.path.cycles()[3].first_segment];
     double A = 0;
@@ -394,12 +396,12 @@ TEST(Planner, ConventionalMirrorsClimbAndOrbitsTheOtherWay) {
     }
     return A;
   };
-  EXPECT_LT(area(climb), 0);
-  EXPECT_GT(area(conv), 0);
+  EXPECT_GT(area(climb), 0);
+  EXPECT_LT(area(conv), 0);
   // A ccw spindle with climb milling mirrors too.
   const PlannedPath ccw =
       plan_path(test::wagih_job("elliptical", {parse_override("cutting.spindle_direction=ccw")}));
-  EXPECT_GT(area(ccw), 0);
+  EXPECT_LT(area(ccw), 0);
 }
 
 // The tool never leaves the slot: |x| + R <= W/2 and, with a closed start, y - R >= 0.
@@ -514,12 +516,13 @@ TEST(Planner, LinearSlotPasses) {
   // Feed length: down 7 mm outside (1 mm clearance + 6) at entry feed, then y from -6 to
   // 20 + 5 + 1 = 26: 32 mm.
   EXPECT_NEAR(one.path.feed_length_mm(), 7 + 32, 1e-12);
-  // W = 20, step 1 mm: ceil(10 / 1) + 1 = 11 passes from x = +5 to x = -5 (climb).
+  // W = 20, step 1 mm: ceil(10 / 1) + 1 = 11 passes from x = -5 to x = +5 (climb: each pass
+  // along +y with the next one's material on its right).
   const PlannedPath wide = plan_path(test::wagih_job("linear"));
   EXPECT_EQ(wide.info.cycles, 11);
   const auto& segs = wide.path.segments();
-  EXPECT_NEAR(segs[wide.path.cycles().front().first_segment].start().x(), 5.0, 1e-12);
-  EXPECT_NEAR(segs[wide.path.cycles().back().first_segment].start().x(), -5.0, 1e-12);
+  EXPECT_NEAR(segs[wide.path.cycles().front().first_segment].start().x(), -5.0, 1e-12);
+  EXPECT_NEAR(segs[wide.path.cycles().back().first_segment].start().x(), 5.0, 1e-12);
 }
 
 }  // namespace

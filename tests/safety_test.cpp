@@ -53,11 +53,11 @@ TEST(Safety, SetUpAndApproachFollowTheDialect) {
   };
   const std::vector<Case> cases = {
       {Dialect::linuxcnc,
-       {"G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "S2000 M3", "G0 G43 H7 Z5", "G0 X-5 Y"}},
+       {"G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "S2000 M3", "G0 G43 H7 Z5", "G0 X5 Y"}},
       {Dialect::fanuc,
-       {"O1000", "G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "G0 G43 H7 Z5.", "G0 X-5. Y"}},
-      {Dialect::sinumerik, {"G71 G17 G90 G94 G40", "G54", "T7 D1", "M6", "G0 Z5", "G0 X-5 Y"}},
-      {Dialect::grbl, {"G21 G17 G90 G94", "G54", "S2000 M3", "G0 Z5", "G0 X-5 Y"}},
+       {"O1000", "G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "G0 G43 H7 Z5.", "G0 X5. Y"}},
+      {Dialect::sinumerik, {"G71 G17 G90 G94 G40", "G54", "T7 D1", "M6", "G0 Z5", "G0 X5 Y"}},
+      {Dialect::grbl, {"G21 G17 G90 G94", "G54", "S2000 M3", "G0 Z5", "G0 X5 Y"}},
   };
   for (const Case& c : cases) {
     const std::vector<std::string> lines = lines_of(write(job, c.dialect));

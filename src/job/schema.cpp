@@ -452,8 +452,10 @@ std::vector<Key> build_schema() {
              "r_e = b / a for elliptical and linear-elliptical (trochoidal is r_e = 1)"),
       number("path", "linear_distance", "mm", non_negative(), FIELD(path.linear_distance_mm),
              "d, the straight wall moves of linear-elliptical"),
-      choice("path", "direction", kDirections, FIELD(path.direction),
-             "milling direction (conventional mirrors the orbit)"),
+      choice(
+          "path", "direction", kDirections, FIELD(path.direction),
+          "milling direction: climb orbits counter-clockwise with a cw spindle (G3), conventional "
+          "mirrors it"),
       choice("path", "entry", kEntries, FIELD(path.entry),
              "outside: open slot start, feed in from y < 0 at depth; helix, ramp, plunge: closed "
              "start"),

@@ -400,8 +400,8 @@ void emit_curve_entry(ToolPath& out, const Geometry& g, const PathSpec& spec, co
             "fits (the orbit's radius)",
             r, g.a));
       }
-      // Turning as the orbit turns (clockwise for climb with a cw spindle), ending on the line
-      // from C to p; one more turn at depth cleans the bore's floor, then out to p.
+      // Turning as the orbit turns (counter-clockwise for climb with a cw spindle), ending on the
+      // line from C to p; one more turn at depth cleans the bore's floor, then out to p.
       const double dir = mirror ? 1.0 : -1.0;
       const double end = std::atan2(p.y() - c.y(), p.x() - c.x());
       const double turns = (z_top - g.zf) / spec.entry_pitch_mm;
@@ -573,14 +573,15 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
     out.path.append(Segment::line(e, Vec3(e.x(), e.y(), g.safe_z), Motion::rapid, g.rapid));
   }
   if (job.slot.finish_pass && g.type != PathType::linear) {
-    // Along the walls at full depth, a from the centreline: climb (cw orbit frame) along the
-    // right wall forward, round the far end, back along the left wall and round the near end
-    // (a closed centreline: each wall once); mirrored for conventional or a ccw spindle.
+    // Along the walls at full depth, a from the centreline: the right wall forward, round the
+    // far end, back along the left wall and round the near end (a closed centreline: each wall
+    // once), counter-clockwise, the walls on the tool's right: climb with a cw spindle, so
+    // mirrored where the cycles are not (conventional or a ccw spindle).
     // Down at the centreline's start (cleared), out to the wall, the loop, up at safe z.
     std::vector<ToolPath> loops;
     const auto loop = [&](const auto& build) {
       ToolPath local;
-      Builder bld(local, mirror);
+      Builder bld(local, !mirror);
       build(bld);
       loops.push_back(std::move(local));
     };

@@ -1,6 +1,8 @@
 // The slot planner: the five path families of Wagih 2023 Eq. 1 (docs/models.md section 2) with
-// entry to depth, cycles until the slot end is cleared, and exit. Everything is built for climb
-// milling with a clockwise spindle and mirrored in x for the other orbit direction.
+// entry to depth, cycles until the slot end is cleared, and exit. Everything is built in the
+// clockwise-orbit frame (the new material on the left of the tool: conventional milling with a
+// clockwise spindle) and mirrored in x for the other orbit direction (climb with a clockwise
+// spindle).
 //
 // Placement (docs/models.md, "Planning"): with an `outside` entry the slot is open at y = 0:
 // the tool feeds in along the wall line x = -a from outside the stock to the first cycle's
@@ -347,8 +349,8 @@ PlannedPath plan_linear(const Job& job, const Geometry& g, bool mirror) {
   const double y_start = closed ? g.R : 0.0;
   const double y_end = g.L + g.R + g.clearance;  // past the open end by the clearance
   for (int i = 0; i < passes; ++i) {
-    // Climb with a cw spindle feeding +y: new material on the left, so passes go from +a
-    // towards -a (the first pass cuts full width).
+    // The frame (conventional with a cw spindle) feeding +y: new material on the left, so passes
+    // go from +a towards -a (the first pass cuts full width).
     const double x = passes > 1 ? g.a - 2 * g.a * i / (passes - 1) : 0.0;
     if (i > 0) {
       bld.line_to(Vec3(bld.here().x(), bld.here().y(), g.safe_z), Motion::rapid, g.rapid);
@@ -422,9 +424,12 @@ double estimate_plan_memory(const Job& job) {
 PlannedPath plan_path(const Job& job, const ChipJudge& judge) {
   const Geometry g = make_geometry(job);
   if (!(g.feed > 0)) throw InputError("[cutting]: the feed rate must be > 0 mm/min");
-  // Orbit direction: climb with a cw spindle is the clockwise orbit; each of conventional
-  // and a ccw spindle mirrors it.
-  const bool mirror = (job.path.direction == Direction::conventional) !=
+  // Orbit direction. A clockwise (M3) spindle's tooth enters the material on the right of the
+  // tool's motion at its thickest (climb, down milling) and the material on its left at zero
+  // (conventional, up milling). The frame's orbit is clockwise, its new material on the left:
+  // conventional with a cw spindle. Climb mirrors it (a counter-clockwise orbit, G3), and so
+  // does a ccw spindle (both together cancel).
+  const bool mirror = (job.path.direction == Direction::climb) !=
                       (job.cutting.spindle_direction == SpindleDirection::ccw);
   if (job.pocket.defined()) {
     throw InputError(fmt::format(

@@ -27,7 +27,8 @@ inline int checked_count(double n) {
   return static_cast<int>(n);
 }
 
-// Builds segments in the climb/cw frame and mirrors x on the way into the path when asked.
+// Builds segments in the clockwise-orbit frame (plan_path) and mirrors x on the way into the
+// path when asked.
 class Builder {
  public:
   Builder(ToolPath& path, bool mirror) : path_(path), mirror_(mirror) {}
@@ -69,7 +70,7 @@ struct Geometry {
   PathType type = PathType::trochoidal;
 };
 
-// One cycle of a trochoidal family starting at (-a, y, zf) in the climb/cw frame.
+// One cycle of a trochoidal family starting at (-a, y, zf) in the clockwise-orbit frame.
 void emit_cycle(Builder& bld, const Geometry& g, double y);
 
 /// The families' geometry of the job (its tool, slot, step and feeds).
