@@ -62,7 +62,10 @@ void register_mechanism_commands(CLI::App& app, int& exit_code) {
     add_job_args(cmd, a->job);
     add_mechanism_aliases(cmd, a->job);
     add_key_alias(cmd, a->job, "--share", "mechanism.share",
-                  "required CZIII share of the cutting part, 0..1");
+                  "required CZIII share, 0..1, of the cutting part or the cycle (--share-of)");
+    add_key_alias(cmd, a->job, "--share-of", "mechanism.share_of",
+                  "what the share is of: cutting (the time in the cut) or cycle (cooling "
+                  "included)");
     cmd->add_flag("--feed", a->feed, "recommend the feed per tooth at the job's step instead");
     cmd->add_option("--json", a->json, "write the recommendation as JSON (- for stdout)");
     cmd->final_callback([a, &exit_code] {

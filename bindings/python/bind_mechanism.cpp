@@ -50,17 +50,21 @@ model: "exact" or "pivkin2025" (default the job's mechanism.model); flank_wear_m
 
   m.def(
       "recommend",
-      [](const PyJob& pj, std::optional<double> share, bool feed) {
+      [](const PyJob& pj, std::optional<double> share, std::optional<std::string> share_of,
+         bool feed) {
         std::vector<Override> more;
         if (share) more.push_back({"mechanism.share", fmt::format("{}", *share), "share"});
+        if (share_of) more.push_back({"mechanism.share_of", *share_of, "share_of"});
         const Job job = more.empty() ? pj.job : pj.with(more);
         const Recommendation r = recommend(job, job.mechanism, job.tool.flank_wear_mm > 0, feed);
         return from_json(recommendation_json(job, job.mechanism, r, feed));
       },
-      py::arg("job"), py::kw_only(), py::arg("share") = py::none(), py::arg("feed") = false,
+      py::arg("job"), py::kw_only(), py::arg("share") = py::none(),
+      py::arg("share_of") = py::none(), py::arg("feed") = false,
       R"(The smallest trochoid step (mm), or with feed=True the feed per tooth (mm) at the job's
-step, whose cutting part is at least `share` (0..1, default mechanism.share) in CZIII: the
-keys of `trochomill recommend --json` (with its "explanation").)");
+step, whose cutting part (share_of="cutting", default mechanism.share_of) or whole cycle
+(share_of="cycle") is at least `share` (0..1, default mechanism.share) in CZIII: the keys of
+`trochomill recommend --json` (with its "explanation").)");
 }
 
 }  // namespace trochomill::python

@@ -106,10 +106,12 @@ struct MechanismCurve {
   std::vector<int> zone;                 ///< 0 not cutting, 1 CZI, 2 CZII, 3 CZIII
 };
 
-/// Zone shares of the cutting part of the cycle (by time; they sum to 1) and where each
-/// zone starts and ends (s from the cycle's start of cutting; -1 when the zone is absent).
+/// Zone shares of the cutting part of the cycle (by time; they sum to 1) and of the whole
+/// cycle (they sum to the cutting part's share of the cycle), and where each zone starts and
+/// ends (s from the cycle's start of cutting; -1 when the zone is absent).
 struct ZoneSummary {
-  double share[3] = {0, 0, 0};  ///< CZI, CZII, CZIII
+  double share[3] = {0, 0, 0};        ///< CZI, CZII, CZIII, of the cutting part
+  double cycle_share[3] = {0, 0, 0};  ///< the same of the whole cycle
   double start_s[3] = {-1, -1, -1};
   double end_s[3] = {-1, -1, -1};
   double cutting_time_s = 0;
@@ -131,8 +133,9 @@ struct ZoneSummary {
 [[nodiscard]] ZoneSummary summarize_zones(const MechanismCurve& c,
                                           const MechanismSettings& settings, bool use_wear);
 
-/// Recommendation: the smallest step (mm) for which at least `share` of the cutting part is
-/// in CZIII (or, with `for_feed`, the smallest feed per tooth at the job's step).
+/// Recommendation: the smallest step (mm) for which at least `share` of the cutting part (or
+/// of the cycle: `share_of`) is in CZIII (or, with `for_feed`, the smallest feed per tooth at
+/// the job's step).
 struct Recommendation {
   bool found = false;
   double value = 0;   ///< min_step_mm or min_feed_per_tooth_mm

@@ -41,6 +41,8 @@ inline constexpr Names<ArcOutput> kArcOutputs[] = {{"arcs", ArcOutput::arcs},
                                                    {"chords", ArcOutput::chords}};
 inline constexpr Names<ChipModel> kChipModels[] = {{"exact", ChipModel::exact},
                                                    {"pivkin2025", ChipModel::pivkin2025}};
+inline constexpr Names<ShareOf> kSharesOf[] = {{"cutting", ShareOf::cutting},
+                                               {"cycle", ShareOf::cycle}};
 inline constexpr Names<ForceModel> kForceModels[] = {{"bergmann", ForceModel::bergmann},
                                                      {"kienzle", ForceModel::kienzle},
                                                      {"linear", ForceModel::linear}};

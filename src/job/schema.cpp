@@ -592,7 +592,10 @@ std::vector<Key> build_schema() {
              FIELD(mechanism.thresholds.transition_pct),
              "marker where the acoustic ratio k_f crosses 1"),
       number("mechanism", "share", "fraction", Range{0.0, 1.0, false, true}, FIELD(mechanism.share),
-             "required CZIII share of the cutting part for `recommend`"),
+             "required CZIII share for `recommend`, of what share_of says"),
+      choice("mechanism", "share_of", kSharesOf, FIELD(mechanism.share_of),
+             "what share is a share of: cutting (the time in the cut) or cycle (the whole "
+             "cycle, cooling included: Pivkin 2025's reading)"),
       choice("mechanism", "model", kChipModels, FIELD(mechanism.model),
              "chip model: exact, or pivkin2025, the published model (circular trochoid only; "
              "docs/models.md section 9)"),
@@ -1311,6 +1314,9 @@ std::string_view to_string(Direction d) noexcept {
 }
 std::string_view to_string(ChipModel m) noexcept {
   return job_detail::name_of(job_detail::kChipModels, m);
+}
+std::string_view to_string(ShareOf s) noexcept {
+  return job_detail::name_of(job_detail::kSharesOf, s);
 }
 std::string_view to_string(WorkOffset w) noexcept {
   return job_detail::name_of(job_detail::kWorkOffsets, w);

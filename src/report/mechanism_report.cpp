@@ -13,6 +13,9 @@ namespace {
 nlohmann::json zones_json(const ZoneSummary& z) {
   return {{"CZI", z.share[0]}, {"CZII", z.share[1]}, {"CZIII", z.share[2]}};
 }
+nlohmann::json cycle_zones_json(const ZoneSummary& z) {
+  return {{"CZI", z.cycle_share[0]}, {"CZII", z.cycle_share[1]}, {"CZIII", z.cycle_share[2]}};
+}
 
 nlohmann::json times_json(const ZoneSummary& z) {
   nlohmann::json j = nlohmann::json::object();
@@ -35,6 +38,7 @@ std::string mechanism_json(const Job& job, const MechanismSettings& st, const Me
                       {"h_m_mm", z.h_m_mm},
                       {"transition_s", z.transition_s},
                       {"zone_share", zones_json(z)},
+                      {"zone_share_of_cycle", cycle_zones_json(z)},
                       {"zone_times_s", times_json(z)},
                       {"thresholds_pct",
                        {{"czi_max", st.thresholds.czi_max_pct},
@@ -88,9 +92,11 @@ std::string recommendation_json(const Job& job, const MechanismSettings& st,
                             {for_feed ? "min_feed_per_tooth_mm" : "min_step_mm",
                              r.found ? nlohmann::json(r.value) : nlohmann::json(nullptr)},
                             {"share", st.share},
+                            {"share_of", to_string(st.share_of)},
                             {"model", to_string(st.model)},
                             {"flank_wear_mm", job.tool.flank_wear_mm},
                             {"zone_share", zones_json(r.zones)},
+                            {"zone_share_of_cycle", cycle_zones_json(r.zones)},
                             {"explanation", r.explanation}};
   return j.dump(2) + "\n";
 }

@@ -83,7 +83,8 @@ def mechanism(job: Job, *, model: str | None = None,
               flank_wear_mm: float | None = None) -> dict[str, Any]:
     """`mechanism --json`'s keys; curves theta_deg, t_s, h_mm, psi_deg, teeth_in_contact,
     gamma_k_deg, kappa_deg, k_re_pct, zone as arrays."""
-def recommend(job: Job, *, share: float | None = None, feed: bool = False) -> dict[str, Any]: ...
+def recommend(job: Job, *, share: float | None = None, share_of: str | None = None,
+              feed: bool = False) -> dict[str, Any]: ...
 def simulate(job: Job | Path, *, cycles: tuple[int, int] | None = None, from_s: float | None = None,
              to_s: float | None = None, progress: _Progress = None,
              memory_limit_gb: float | None = None) -> dict[str, Any]:

@@ -11,6 +11,13 @@ enum class ChipModel {
   pivkin2025,  ///< Pivkin 2025's published model (Eqs. 2-23), class Pivkin2025
 };
 
+/// What the recommendation's CZIII share is a share of (docs/models.md section 9).
+enum class ShareOf {
+  cutting,  ///< the cutting part of the cycle (the time a tooth is in the cut)
+  cycle,    ///< the whole cycle, its cooling part included (Pivkin 2025: "more than half of
+            ///< the cycle")
+};
+
 /// Mechanism thresholds (percent of r_e) and the recommendation's default share.
 struct MechanismThresholds {
   double czi_max_pct = 25;     ///< K_re below this: CZI (ploughing)
@@ -21,7 +28,8 @@ struct MechanismThresholds {
 /// `[mechanism]`; the flank wear VB_B is the tool's (`[tool] flank_wear`).
 struct MechanismSettings {
   MechanismThresholds thresholds;
-  double share = 0.5;  ///< required CZIII share of the cutting part (0..1)
+  double share = 0.5;  ///< required CZIII share (0..1) of the cutting part or the cycle
+  ShareOf share_of = ShareOf::cutting;
   ChipModel model = ChipModel::exact;
   int points = 3600;  ///< theta samples per cycle
   /// `[material] friction_angle` theta_m (degrees) for h_m = r_e (1 - cos theta_m); 0 = not
