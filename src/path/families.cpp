@@ -218,7 +218,7 @@ Envelope cycle_envelope(const Geometry& g, double delta) {
   return env;
 }
 
-// Entry to depth at the wall point p = (-a or x, y, zf) of the climb/cw frame, arriving with
+// Entry to depth at the wall point p = (-a or x, y, zf) of the clockwise-orbit frame, arriving with
 // the tool at p. The tool starts at safe z above the entry.
 void emit_entry(Builder& bld, const Geometry& g, const PathSpec& spec, const Vec3& p, bool along_y,
                 double room_mm) {
