@@ -33,20 +33,29 @@ void BM_PlanEllipticalSlot100mm(benchmark::State& state) {
 }
 BENCHMARK(BM_PlanEllipticalSlot100mm)->Unit(benchmark::kMillisecond);
 
-void BM_PlanAndWriteEllipticalSlot100mm(benchmark::State& state) {
-  const trochomill::Job job = slot_job(100);
+// Plans the job with `plan` and writes its LinuxCNC program at each iteration; the counters
+// are the plan's `count` (under `count_name`) and the program's size.
+template <typename Plan, typename Count>
+void plan_and_write(benchmark::State& state, const trochomill::Job& job, Plan plan,
+                    const char* count_name, Count count) {
   trochomill::GcodeWriteOptions opt;
   opt.dialect = trochomill::Dialect::linuxcnc;
-  std::size_t cycles = 0, bytes = 0;
+  std::size_t n = 0, bytes = 0;
   for (auto _ : state) {
-    const auto p = trochomill::plan_path(job);
+    const auto p = plan(job);
     const std::string code = trochomill::write_gcode(job, p.path, opt);
-    cycles = static_cast<std::size_t>(p.info.cycles);
+    n = static_cast<std::size_t>(count(p));
     bytes = code.size();
     benchmark::DoNotOptimize(code.data());
   }
-  state.counters["cycles"] = static_cast<double>(cycles);
+  state.counters[count_name] = static_cast<double>(n);
   state.counters["gcode_bytes"] = static_cast<double>(bytes);
+}
+
+void BM_PlanAndWriteEllipticalSlot100mm(benchmark::State& state) {
+  plan_and_write(
+      state, slot_job(100), [](const trochomill::Job& j) { return trochomill::plan_path(j); },
+      "cycles", [](const trochomill::PlannedPath& p) { return p.info.cycles; });
 }
 BENCHMARK(BM_PlanAndWriteEllipticalSlot100mm)->Unit(benchmark::kMillisecond);
 
@@ -86,19 +95,10 @@ void BM_PlanCurvedSlot1m(benchmark::State& state) {
                      "\"linuxcnc\"\narc_tolerance = " +
                      fmt::format("{}", tolerance_mm) +
                      "\n[path]\ntype = \"trochoidal\"\nstep = 1.0\nentry = \"helix\"\n";
-  const trochomill::Job job = trochomill::parse_job(text, dir + "meander.toml");
-  trochomill::GcodeWriteOptions opt;
-  opt.dialect = trochomill::Dialect::linuxcnc;
-  std::size_t bytes = 0, cycles = 0;
-  for (auto _ : state) {
-    const auto p = trochomill::plan_slot(job);
-    const std::string code = trochomill::write_gcode(job, p.path, opt);
-    bytes = code.size();
-    cycles = static_cast<std::size_t>(p.info.cycles);
-    benchmark::DoNotOptimize(code.data());
-  }
-  state.counters["cycles"] = static_cast<double>(cycles);
-  state.counters["gcode_bytes"] = static_cast<double>(bytes);
+  plan_and_write(
+      state, trochomill::parse_job(text, dir + "meander.toml"),
+      [](const trochomill::Job& j) { return trochomill::plan_slot(j); }, "cycles",
+      [](const trochomill::PlannedPath& p) { return p.info.cycles; });
 }
 BENCHMARK(BM_PlanCurvedSlot1m)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
 
@@ -106,21 +106,16 @@ BENCHMARK(BM_PlanCurvedSlot1m)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
 // 10 mm tool, 53 degrees, two levels and the finishing pass) and writing its program; /1 adds
 // the engagement kernel's proof on the program (what `plan` prints).
 void BM_PlanPocketPlate(benchmark::State& state) {
-  const trochomill::Job job =
-      trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) + "/examples/pockets/plate.toml");
-  trochomill::GcodeWriteOptions opt;
-  opt.dialect = trochomill::Dialect::linuxcnc;
-  std::size_t bytes = 0, passes = 0;
-  for (auto _ : state) {
-    const auto p = trochomill::plan_pocket(job);
-    const std::string code = trochomill::write_gcode(job, p.path, opt);
-    if (state.range(0) == 1) benchmark::DoNotOptimize(trochomill::prove_pocket(job, p));
-    bytes = code.size();
-    passes = static_cast<std::size_t>(p.info.passes);
-    benchmark::DoNotOptimize(code.data());
-  }
-  state.counters["passes"] = static_cast<double>(passes);
-  state.counters["gcode_bytes"] = static_cast<double>(bytes);
+  const bool prove = state.range(0) == 1;
+  plan_and_write(
+      state,
+      trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) + "/examples/pockets/plate.toml"),
+      [prove](const trochomill::Job& j) {
+        auto p = trochomill::plan_pocket(j);
+        if (prove) benchmark::DoNotOptimize(trochomill::prove_pocket(j, p));
+        return p;
+      },
+      "passes", [](const trochomill::PlannedPocket& p) { return p.info.passes; });
 }
 BENCHMARK(BM_PlanPocketPlate)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 

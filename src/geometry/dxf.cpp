@@ -11,6 +11,7 @@
 #include <optional>
 #include <sstream>
 
+#include "geometry/drawing_limits.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/geometry/drawing.hpp"
 #include "trochomill/io.hpp"
@@ -291,11 +292,8 @@ class Reader final : public DL_CreationAdapter {
       fitted_ += arcs.size();
       for (const FitArc& a : arcs) add(to_piece(a));
     } catch (const ArcLimit&) {
-      limit_error = fmt::format(
-          "{}: {} on layer '{}': the drawing's curves need more than {} arcs within {} mm (the "
-          "arc tolerance): a drawing traced from an image, or curves far larger than a "
-          "machine's travel; not read (simplify the curves or loosen the tolerance)",
-          src_, entity_, layer_, kMaxDrawingArcs, o_.arc_tolerance_mm);
+      limit_error = fmt::format("{}: {} on layer '{}': {}", src_, entity_, layer_,
+                                drawing_detail::too_many_arcs(o_.arc_tolerance_mm));
     } catch (const Error& e) {
       problem("cannot be fitted with arcs within {} mm ({})", o_.arc_tolerance_mm, e.what());
     }

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 
+#include "geometry/drawing_limits.hpp"
 #include "geometry/svg_syntax.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/units.hpp"
@@ -106,11 +107,7 @@ void PieceSink::fit(const PlanarCurve& c, double u0, double u1, int n) {
     fitted_ += arcs.size();
     for (const FitArc& a : arcs) add(to_piece(a));
   } catch (const ArcLimit&) {
-    throw Limit{fmt::format(
-        "the drawing's curves need more than {} arcs within {} mm (the arc tolerance): a "
-        "drawing traced from an image, or curves far larger than a machine's travel; not read "
-        "(simplify the curves or loosen the tolerance)",
-        kMaxDrawingArcs, tol_)};
+    throw Limit{drawing_detail::too_many_arcs(tol_)};
   } catch (const InputError&) {
     throw;
   } catch (const Error& e) {

@@ -318,7 +318,7 @@ Recommendation recommend(const Job& job, const MechanismSettings& st, bool use_w
         a = b, b = std::min(hi_v, b * 1.01);
       for (int it = 0; it < 200 && a > lo_v && holds(a, st); ++it)
         b = a, a = std::max(lo_v, a / 1.01);
-      if (holds(a, st)) b = a;  // at the scan's start
+      if (a <= lo_v && holds(a, st)) b = a;  // the share holds from the scan's start
       for (int it = 0; it < 60 && (b - a) > 1e-3 * b; ++it) {
         const double m = 0.5 * (a + b);
         (holds(m, st) ? b : a) = m;
