@@ -2,7 +2,6 @@
 # packages first (scripts/install-deps is idempotent), then build incrementally.
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
-FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_RUNS ?= 0
 JOBS       ?= $(shell nproc)
@@ -35,29 +34,26 @@ demo: build
 test: test-deps build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
-$(ASAN_BUILD)/build.ninja: | deps
-	cmake -S . -B $(ASAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
-	  -DTROCHOMILL_WERROR=ON \
-	  -DTROCHOMILL_SANITIZE=ON -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+# One clang build for the sanitizers and the fuzzers: the library, the CLI and the tests with
+# AddressSanitizer and UndefinedBehaviorSanitizer (-O1), the library also with libFuzzer's
+# coverage, so `make fuzz` links its targets against the same objects (CI builds it once).
+$(ASAN_BUILD)/build.ninja: | fuzz-deps
+	CC=clang-14 CXX=clang++-14 cmake -S . -B $(ASAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Debug \
+	  -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" -DTROCHOMILL_WERROR=ON \
+	  -DTROCHOMILL_SANITIZE=ON -DTROCHOMILL_FUZZ=ON -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
 
-test-asan: test-deps $(ASAN_BUILD)/build.ninja
+test-asan: test-deps fuzz-deps $(ASAN_BUILD)/build.ninja
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS)
 
-# libFuzzer targets, instrumented with ASan and UBSan (clang 14): FUZZ_SECONDS each, or
-# FUZZ_RUNS executions each; `make fuzz FUZZ_SECONDS=600` for a longer run.
-$(FUZZ_BUILD)/build.ninja: | fuzz-deps
-	CXX=clang++-14 cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	  -DTROCHOMILL_WERROR=ON -DTROCHOMILL_FUZZ=ON -DTROCHOMILL_BUILD_TESTS=OFF \
-	  -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
-
-# Only the targets are built there; the seeds are written by the Release build's CLI.
+# libFuzzer targets, FUZZ_SECONDS each or FUZZ_RUNS executions each (`make fuzz
+# FUZZ_SECONDS=600` for a longer run); the seeds are written by the Release build's CLI.
 FUZZ_TARGETS = fuzz_job fuzz_gcode fuzz_signal fuzz_mesh fuzz_stock_mesh fuzz_forces_csv \
                fuzz_profile_csv fuzz_dxf fuzz_svg
-fuzz: fuzz-deps build $(FUZZ_BUILD)/build.ninja
-	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target $(FUZZ_TARGETS)
-	TROCHOMILL_CLI=$(TROCHOMILL) scripts/fuzz $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_RUNS)
+fuzz: fuzz-deps build $(ASAN_BUILD)/build.ninja
+	cmake --build $(ASAN_BUILD) -j $(JOBS) --target $(FUZZ_TARGETS)
+	TROCHOMILL_CLI=$(TROCHOMILL) scripts/fuzz $(ASAN_BUILD) $(FUZZ_SECONDS) $(FUZZ_RUNS)
 
 bench: build
 	$(BUILD)/bin/trochomill_bench --benchmark_min_time=0.2
@@ -69,4 +65,4 @@ format:
 	clang-format -i $$(git ls-files '*.cpp' '*.hpp')
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD)

@@ -184,7 +184,7 @@ TEST(Analysis, SteadyCycleAtSmallSteps) {
   for (const std::string type : {"trochoidal", "circular", "elliptical", "linear-elliptical"}) {
     for (const Case& c : cases) {
       if (c.step < 0.005 && type != "trochoidal") continue;  // 10 s each: one family is enough
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(TROCHOMILL_SANITIZED)
       // 90 s under the sanitizers (the walls' texture of 0.001 mm steps): the Release suite
       // runs it, the sanitizers see the same code at 0.01 mm.
       if (c.step < 0.005) continue;

@@ -61,7 +61,7 @@ double estimate_gb_of(const std::string& args) {
 // within a factor of 2 of the peak it then uses. The estimate is printed to 0.01 GB, so the
 // runs are sized to a hundred MB or more.
 TEST_F(Cli, MemoryEstimatesMatchThePeak) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(TROCHOMILL_SANITIZED)
   GTEST_SKIP() << "AddressSanitizer's shadow memory and redzones are not in the estimate";
 #endif
   const auto w = test::example("wagih2023/trochoidal.toml").string();
@@ -91,7 +91,7 @@ TEST_F(Cli, MemoryEstimatesMatchThePeak) {
 // memory it then uses: within a factor of 2 of the process's measured peak (VmHWM) at every
 // resolution, with and without the HDF5 chip map; and the refusal names the numbers.
 TEST_F(Cli, SimulateMemoryEstimateMatchesThePeak) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(TROCHOMILL_SANITIZED)
   GTEST_SKIP() << "AddressSanitizer's shadow memory and redzones are not in the estimate";
 #endif
   const auto ex = test::example("wagih2023/trochoidal.toml").string();
@@ -149,7 +149,7 @@ TEST_F(Cli, AnEndlessProgramStopsEveryCommandThatReadsIt) {
   const CliResult big = run_cli("analyze " + ex + " --gcode " + ngc + " --memory-limit 2");
   EXPECT_EQ(big.code, 2) << big.out;
   EXPECT_NE(big.out.find("loop without end"), std::string::npos) << big.out;
-#if !defined(__SANITIZE_ADDRESS__)  // AddressSanitizer keeps freed memory in quarantine
+#if !defined(TROCHOMILL_SANITIZED)  // AddressSanitizer keeps freed memory in quarantine
   rusage use{};
   ASSERT_EQ(getrusage(RUSAGE_CHILDREN, &use), 0);
   EXPECT_LT(static_cast<double>(use.ru_maxrss) * 1024, 0.5e9 + 0.15e9);

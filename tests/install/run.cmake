@@ -1,7 +1,7 @@
 # The install test (cmake -P): installs the build tree into a fresh prefix, configures and
 # builds the consumer project against it with find_package(trochomill), and checks that the
 # consumer's plan of an example is the CLI's (same cycles and path length).
-foreach(v BUILD SOURCE WORK)
+foreach(v BUILD SOURCE WORK CXX)
   if(NOT DEFINED ${v})
     message(FATAL_ERROR "run.cmake needs -D${v}=...")
   endif()
@@ -16,7 +16,7 @@ function(run)
 endfunction()
 run(${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/prefix)
 run(${CMAKE_COMMAND} -S ${SOURCE}/tests/install/consumer -B ${WORK}/build -G Ninja
-    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${WORK}/prefix "-DCMAKE_CXX_FLAGS=${FLAGS}"
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${WORK}/prefix -DCMAKE_CXX_COMPILER=${CXX} "-DCMAKE_CXX_FLAGS=${FLAGS}"
     "-DCMAKE_EXE_LINKER_FLAGS=${FLAGS}")
 run(${CMAKE_COMMAND} --build ${WORK}/build)
 set(example ${SOURCE}/examples/wagih2023/elliptical.toml)
