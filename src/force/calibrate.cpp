@@ -126,6 +126,34 @@ double interp(const std::vector<double>& t, const std::vector<double>& y, double
   return y[j - 1] + f * (y[j] - y[j - 1]);
 }
 
+// interp for times that mostly grow from one call to the next (the model's steps against the
+// record): the sample pair is searched forward from the last one, a binary search only when
+// the time goes back. The same pair as std::upper_bound's and the same arithmetic, so
+// interp's values to the last bit; several series on the same times share the search.
+class ForwardInterp {
+ public:
+  explicit ForwardInterp(const std::vector<double>& t) : t_(t) {}
+  // Moves to time x; then value(y) is interp(t, y, x).
+  void seek(double x) {
+    x_ = x;
+    if (x <= t_.front() || x >= t_.back()) return;
+    if (!(t_[hi_ - 1] <= x))
+      hi_ = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), x) - t_.begin());
+    while (t_[hi_] <= x) ++hi_;
+    w_ = (x - t_[hi_ - 1]) / (t_[hi_] - t_[hi_ - 1]);
+  }
+  double value(const std::vector<double>& y) const {
+    if (x_ <= t_.front()) return y.front();
+    if (x_ >= t_.back()) return y.back();
+    return y[hi_ - 1] + w_ * (y[hi_] - y[hi_ - 1]);
+  }
+
+ private:
+  const std::vector<double>& t_;
+  std::size_t hi_ = 1;  // t_[hi_ - 1] <= x_ < t_[hi_] inside the record
+  double x_ = 0, w_ = 0;
+};
+
 // ------------------------------------------------------------------ the model
 
 // Reports the solver's iterations and stops it on Ctrl-C.
@@ -299,10 +327,11 @@ struct Residuals {
       return false;  // Ctrl-C: the iteration callback stops the solver
     }
     const std::size_t n = idx->size();
+    ForwardInterp at(*t_meas);
     for (std::size_t k = 0; k < n; ++k) {
       const std::size_t j = (*idx)[k];
-      const double tt = (*tm)[j] + shift;
-      for (std::size_t a = 0; a < 3; ++a) r[a * n + k] = f[a][j] - interp(*t_meas, (*meas)[a], tt);
+      at.seek((*tm)[j] + shift);
+      for (std::size_t a = 0; a < 3; ++a) r[a * n + k] = f[a][j] - at.value((*meas)[a]);
     }
     return true;
   }
@@ -446,10 +475,12 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
     const double sh = j * dt_model;
     double sxy = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
     int n = 0;
+    ForwardInterp at(measured.t_s);
     for (std::size_t k = 0; k < tm.size(); ++k) {
       const double tt = tm[k] + sh;
       if (tt < measured.t_s.front() || tt > measured.t_s.back()) continue;
-      const double x = res_model[k], y = interp(measured.t_s, res_meas, tt);
+      at.seek(tt);
+      const double x = res_model[k], y = at.value(res_meas);
       sxy += x * y, sx += x, sy += y, sxx += x * x, syy += y * y;
       ++n;
     }
