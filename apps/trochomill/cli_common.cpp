@@ -48,9 +48,32 @@ CLI::Validator finite_check(double lo, double hi, bool open_lo) {
 CLI::Validator finite_in(double lo, double hi) { return finite_check(lo, hi, false); }
 CLI::Validator finite_above(double lo, double hi) { return finite_check(lo, hi, true); }
 
+namespace {
+// Runs a library parser of a flag's text; its errors (which name the text, not the flag) are
+// given the flag in front.
+template <class Parse>
+auto with_flag(const std::string& flag, Parse&& parse) {
+  try {
+    return parse();
+  } catch (const InputError& e) {
+    std::vector<std::string> problems;
+    for (const auto& p : e.problems()) problems.push_back(flag + " " + p);
+    throw InputError(problems);
+  }
+}
+}  // namespace
+
+Vary parse_vary_flag(const std::string& text) {
+  return with_flag("--vary", [&] { return parse_vary(text); });
+}
+
 std::vector<Override> JobArgs::overrides() const {
   std::vector<Override> ov;
-  for (const auto& s : sets) ov.push_back(parse_override(s));
+  for (const auto& s : sets) {
+    Override o = with_flag("--set", [&] { return parse_override(s); });
+    o.origin = "--set " + o.key;  // the schema's messages name the flag and the key
+    ov.push_back(std::move(o));
+  }
   for (const Alias& a : aliases) ov.push_back(Override{a.key, a.value, a.flag});
   return ov;
 }

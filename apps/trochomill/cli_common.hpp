@@ -37,6 +37,9 @@ struct JobArgs {
   [[nodiscard]] std::vector<Override> overrides() const;
   [[nodiscard]] Job load() const;
 };
+/// A value-list flag (`--vary key=v1,v2,...`) parsed by the library, its errors named by the
+/// flag (the library's name only the text).
+[[nodiscard]] Vary parse_vary_flag(const std::string& text);
 /// Adds JOB (required) and --set to a command.
 void add_job_args(CLI::App* cmd, JobArgs& a);
 /// A flag that is an alias of a job key: `--flag VALUE` is `--set key=VALUE`, validated by the

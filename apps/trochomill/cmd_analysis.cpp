@@ -84,7 +84,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       check_outputs({&a->json, &a->csv}, {&a->job.file});
       const std::vector<Override> base = a->job.overrides();
       std::vector<Vary> varies;
-      for (const auto& v : a->vary) varies.push_back(parse_vary(v));
+      for (const auto& v : a->vary) varies.push_back(parse_vary_flag(v));
       const JobDocument doc = JobDocument::load(a->job.file);
       (void)doc.build(base);  // a bad base job is bad input (exit 2)
       const GuardedRun run(true);

@@ -67,7 +67,7 @@ void register_report_commands(CLI::App& app, int& exit_code, int argc, char** ar
     ReportRequest r;
     r.with = split_trimmed(a->with);
     r.with.erase(std::remove(r.with.begin(), r.with.end(), std::string()), r.with.end());
-    for (const auto& v : a->vary) r.varies.push_back(parse_vary(v));
+    for (const auto& v : a->vary) r.varies.push_back(parse_vary_flag(v));
     Job job = a->job.load();
     r.job_file = a->job.file;
     r.gcode_file = a->gcode;

@@ -100,7 +100,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       check_outputs({&a->json}, {&a->job.file, &a->output});
       check_outputs({&a->output}, {&a->job.file});
       std::vector<Vary> grid;
-      for (const auto& v : a->vary) grid.push_back(parse_vary(v));
+      for (const auto& v : a->vary) grid.push_back(parse_vary_flag(v));
       std::vector<SweepRange> ranges;
       for (const auto& r : a->range) ranges.push_back(parse_range(r));
       const SweepPlan plan =

@@ -191,8 +191,8 @@ struct Job {
 struct Override {
   std::string key;    ///< "section.key"
   std::string value;  ///< "0.8", "true", "elliptical", "[0, 90, 180, 270]"
-  /// Where it came from, for messages: empty for `--set`, else the CLI flag that is an alias
-  /// of the key ("--share").
+  /// How messages name it, as the caller does: the CLI's "--set path.step", or "--share" for
+  /// a flag that stands for the key (then "--share (mechanism.share)"); empty: the key.
   std::string origin;
 };
 

@@ -37,18 +37,18 @@ std::vector<std::string> split_values(const std::string& text) {
 Vary parse_vary(const std::string& text) {
   const auto eq = text.find('=');
   if (eq == std::string::npos) {
-    throw InputError(fmt::format("--vary '{}': expected section.key=v1,v2,...", text));
+    throw InputError(fmt::format("'{}': expected section.key=v1,v2,...", text));
   }
   Vary v;
   v.key = trim(text.substr(0, eq));
   const auto dot = v.key.find('.');
   if (dot == std::string::npos || dot == 0 || dot + 1 == v.key.size()) {
     throw InputError(
-        fmt::format("--vary '{}': the key must be section.key (e.g. path.aspect_ratio)", text));
+        fmt::format("'{}': the key must be section.key (e.g. path.aspect_ratio)", text));
   }
   for (auto& val : split_values(text.substr(eq + 1))) {
     val = trim(val);
-    if (val.empty()) throw InputError(fmt::format("--vary '{}': empty value in the list", text));
+    if (val.empty()) throw InputError(fmt::format("'{}': empty value in the list", text));
     v.values.push_back(val);
   }
   return v;
@@ -58,7 +58,8 @@ std::vector<StudyPoint> run_study(const JobDocument& doc, const std::vector<Over
                                   const std::vector<Vary>& varies, int threads,
                                   const std::function<ProcessMetrics(const Job&)>& evaluate,
                                   const RunHooks& hooks) {
-  if (varies.empty()) throw InputError("compare: give at least one --vary key=v1,v2,...");
+  if (varies.empty())
+    throw InputError("compare: give at least one key to vary (section.key and its values)");
   std::size_t total = 1;
   for (const auto& v : varies) total *= v.values.size();
   if (total > 100000) {
@@ -74,7 +75,8 @@ std::vector<StudyPoint> run_study(const JobDocument& doc, const std::vector<Over
       rest /= varies[k].values.size();
     }
     for (std::size_t k = 0; k < varies.size(); ++k) {
-      ov.push_back(Override{varies[k].key, varies[k].values[idx[k]], "--vary"});
+      // Named by its key in messages (the point's values are named with them).
+      ov.push_back(Override{varies[k].key, varies[k].values[idx[k]], ""});
     }
     points[p].overrides = std::move(ov);
   }

@@ -1,5 +1,5 @@
-// The job document: TOML parsing (toml++), `--set` overrides applied to a copy of the parsed
-// document, the flattened keys written into G-code headers, and the materials library (read
+// The job document: TOML parsing (toml++), overrides (the CLI's `--set`) applied to a copy of the
+// parsed document, the flattened keys written into G-code headers, and the materials library (read
 // once per directory). Validation is the schema's (schema.cpp).
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -38,11 +38,12 @@ void apply_override(toml::table& root, const Override& o) {
   }
   toml::table* t = existing->as_table();
   if (t == nullptr) {
-    throw InputError(fmt::format("--set {}: '{}' is not a table", o.key, section));
+    throw InputError(
+        fmt::format("{}: '{}' is not a table", override_label(o.origin, o.key), section));
   }
   if (key.find('.') != std::string::npos) {
-    throw InputError(
-        fmt::format("--set {}: nested keys are not supported (use section.key)", o.key));
+    throw InputError(fmt::format("{}: nested keys are not supported (use section.key)",
+                                 override_label(o.origin, o.key)));
   }
   t->insert_or_assign(key, *parsed.get("v"));
 }
@@ -173,7 +174,7 @@ std::vector<Material> material_library() {
 Override parse_override(std::string_view text) {
   const auto eq = text.find('=');
   if (eq == std::string_view::npos) {
-    throw InputError(fmt::format("--set '{}': expected section.key=value", text));
+    throw InputError(fmt::format("'{}': expected section.key=value", text));
   }
   std::string key(text.substr(0, eq));
   std::string value(text.substr(eq + 1));
@@ -181,9 +182,9 @@ Override parse_override(std::string_view text) {
   value = trim(value);
   const auto dot = key.find('.');
   if (dot == std::string::npos || dot == 0 || dot + 1 == key.size()) {
-    throw InputError(fmt::format("--set '{}': the key must be section.key (e.g. path.step)", text));
+    throw InputError(fmt::format("'{}': the key must be section.key (e.g. path.step)", text));
   }
-  if (value.empty()) throw InputError(fmt::format("--set '{}': the value is empty", text));
+  if (value.empty()) throw InputError(fmt::format("'{}': the value is empty", text));
   return Override{key, value, {}};
 }
 

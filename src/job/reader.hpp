@@ -28,6 +28,15 @@ inline std::string suggestion(std::string_view word, const std::vector<std::stri
 
 inline std::string fmt_num(double v) { return fmt::format("{:g}", v); }
 
+// How a message names an override: as its caller named it (Override::origin, e.g. the CLI's
+// "--set path.step", or "--share (mechanism.share)" for a flag that stands for a key), else
+// by its key alone (the library's and Python's callers).
+inline std::string override_label(const std::string& origin, const std::string& key) {
+  if (origin.empty()) return key;
+  if (origin.find(key) != std::string::npos) return origin;
+  return fmt::format("{} ({})", origin, key);
+}
+
 struct Range {
   double lo = -std::numeric_limits<double>::infinity();
   double hi = std::numeric_limits<double>::infinity();
@@ -291,8 +300,7 @@ class JobReader {
 
  private:
   static std::string origin(std::map<std::string, std::string>::const_iterator it) {
-    return it->second.empty() ? fmt::format("--set {}", it->first)
-                              : fmt::format("{} ({})", it->second, it->first);
+    return override_label(it->second, it->first);
   }
   static std::string unit_or(const std::string& unit) { return unit.empty() ? "number" : unit; }
   static std::string range_hint(const Range& r) {
