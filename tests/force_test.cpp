@@ -293,6 +293,13 @@ TEST(Forces, MeanForceRegressionRecoversTheLinearCoefficients) {
 // samples; what remains is the linear interpolation of the generated series (0.3 % on k_c
 // when this was written); the fit must land within 1 % of each true value (the bound).
 TEST(Forces, CalibrationRoundTripRecoversCoefficientsAndRunout) {
+#if defined(TROCHOMILL_SANITIZED)
+  // 78 s under the sanitizers (the solver's iterations over a 20 kHz record): the Release
+  // suite checks the recovered values; the sanitizers see the calibration's code in
+  // Forces.CalibrationWithSimulatedChips, Forces.CalibrationRefusesAnUnidentifiableFit and
+  // Cli.ForcesCalibrateAndMaterials.
+  GTEST_SKIP() << "the recovered coefficients are checked in the Release suite";
+#endif
   const std::vector<Override> fast = {parse_override("forces.fast_steps_per_rev=1000")};
   Job truth = load_job(test::example("bergmann2021/trochoidal.toml"), fast);
   const ToolPath path = plan_path(truth).path;
