@@ -83,8 +83,7 @@ TEST_F(Cli, AStudyWhoseEveryPointFailedFails) {
       << r.out;
   r = run_cli("compare " + ex + " --vary path.step=1,30 --set slot.length=4");
   EXPECT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("compare: 1 of 2 points failed (the first: path.step: "),
-            std::string::npos)
+  EXPECT_NE(r.out.find("compare: 1 of 2 points failed (the first: path.step: "), std::string::npos)
       << r.out;
 }
 

@@ -65,8 +65,7 @@ TEST(Job, OverrideErrorsNameTheOverride) {
     (void)load_job(test::example("wagih2023/elliptical.toml"), {parse_override("path.step=-1")});
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("path.step: must be > 0 mm, got -1"),
-              std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("path.step: must be > 0 mm, got -1"), std::string::npos)
         << e.what();
   }
   try {

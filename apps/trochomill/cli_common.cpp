@@ -74,7 +74,8 @@ std::vector<Override> JobArgs::overrides() const {
     o.origin = "--set " + o.key;  // the schema's messages name the flag and the key
     ov.push_back(std::move(o));
   }
-  for (const Alias& a : aliases) ov.push_back(Override{a.key, a.value, a.flag});
+  for (const Alias& a : aliases)
+    ov.push_back(Override{a.key, a.value, fmt::format("{} ({})", a.flag, a.key)});
   return ov;
 }
 

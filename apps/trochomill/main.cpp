@@ -3,11 +3,11 @@
 // input (arguments, job file, NC program, signal), 1 runtime failure, 130 interrupted (Ctrl-C), 143
 // terminated (SIGTERM).
 #include <fmt/format.h>
+#include <malloc.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
-#include <malloc.h>
 #include <string>
 #include <vector>
 

@@ -191,8 +191,8 @@ struct Job {
 struct Override {
   std::string key;    ///< "section.key"
   std::string value;  ///< "0.8", "true", "elliptical", "[0, 90, 180, 270]"
-  /// How messages name it, as the caller does: the CLI's "--set path.step", or "--share" for
-  /// a flag that stands for the key (then "--share (mechanism.share)"); empty: the key.
+  /// How messages name it, as the caller does (the CLI's "--set path.step", or "--share
+  /// (mechanism.share)" for a flag that stands for the key); empty: the key.
   std::string origin;
 };
 

@@ -128,8 +128,8 @@ double interp(const std::vector<double>& t, const std::vector<double>& y, double
 
 // interp for times that mostly grow from one call to the next (the model's steps against the
 // record): the sample pair is searched forward from the last one, a binary search only when
-// the time goes back. The same pair as std::upper_bound's and the same arithmetic, so
-// interp's values to the last bit; several series on the same times share the search.
+// the time goes back or jumps ahead. The same pair as std::upper_bound's and the same arithmetic,
+// so interp's values to the last bit; several series on the same times share the search.
 class ForwardInterp {
  public:
   explicit ForwardInterp(const std::vector<double>& t) : t_(t) {}
@@ -137,7 +137,8 @@ class ForwardInterp {
   void seek(double x) {
     x_ = x;
     if (x <= t_.front() || x >= t_.back()) return;
-    if (!(t_[hi_ - 1] <= x))
+    // Back in time, or more than a few samples ahead (the first seek, a jump): binary search.
+    if (!(t_[hi_ - 1] <= x) || (hi_ + kWalk < t_.size() && t_[hi_ + kWalk] <= x))
       hi_ = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), x) - t_.begin());
     while (t_[hi_] <= x) ++hi_;
     w_ = (x - t_[hi_ - 1]) / (t_[hi_] - t_[hi_ - 1]);
@@ -149,6 +150,7 @@ class ForwardInterp {
   }
 
  private:
+  static constexpr std::size_t kWalk = 8;
   const std::vector<double>& t_;
   std::size_t hi_ = 1;  // t_[hi_ - 1] <= x_ < t_[hi_] inside the record
   double x_ = 0, w_ = 0;

@@ -28,13 +28,11 @@ inline std::string suggestion(std::string_view word, const std::vector<std::stri
 
 inline std::string fmt_num(double v) { return fmt::format("{:g}", v); }
 
-// How a message names an override: as its caller named it (Override::origin, e.g. the CLI's
-// "--set path.step", or "--share (mechanism.share)" for a flag that stands for a key), else
-// by its key alone (the library's and Python's callers).
+// How a message names an override: as its caller named it (Override::origin: the CLI's
+// "--set path.step", "--share (mechanism.share)" for a flag that stands for a key), else by its
+// key alone (the library's and Python's callers).
 inline std::string override_label(const std::string& origin, const std::string& key) {
-  if (origin.empty()) return key;
-  if (origin.find(key) != std::string::npos) return origin;
-  return fmt::format("{} ({})", origin, key);
+  return origin.empty() ? key : origin;
 }
 
 struct Range {
