@@ -81,7 +81,7 @@ class Evaluator {
     OptPoint p;
     p.values = values;
     std::vector<Override> o = base_;
-    for (std::size_t k = 0; k < vars_.size(); ++k) o.push_back({vars_[k].key, values[k], "--var"});
+    for (std::size_t k = 0; k < vars_.size(); ++k) o.push_back({vars_[k].key, values[k], ""});
     try {
       p.metrics = point_metrics(doc_.build(o), o_.eval, o_.cycles, inner_, o_.memory_limit_bytes);
       p.feasible = true;

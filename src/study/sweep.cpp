@@ -185,7 +185,7 @@ std::string sweep_row(const JobDocument& doc, const std::vector<Override>& base,
                       const RunHooks& inner) {
   std::vector<Override> o = base;
   for (std::size_t k = 0; k < plan.keys.size(); ++k)
-    o.push_back({plan.keys[k], plan.points[i][k], "--vary/--range"});
+    o.push_back({plan.keys[k], plan.points[i][k], ""});
   std::string error;
   std::map<std::string, json> values;
   try {
