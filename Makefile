@@ -35,12 +35,17 @@ test: test-deps build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 # One clang build for the sanitizers and the fuzzers: the library, the CLI and the tests with
-# AddressSanitizer and UndefinedBehaviorSanitizer (-O1), the library also with libFuzzer's
-# coverage, so `make fuzz` links its targets against the same objects (CI builds it once).
+# AddressSanitizer and UndefinedBehaviorSanitizer, the library also with libFuzzer's coverage,
+# so `make fuzz` links its targets against the same objects (CI builds it once). -O2: the
+# sanitizer tests run a quarter faster than at -O1 (OptimizeFeed.ForceAndTorqueCapsHold 102 s
+# to 75 s) for the same build time. A unity build (16 files a unit): 582 s to 369 s on 2 cores,
+# the headers parsed once a unit; the Release build stays one file a unit (the build users
+# get, and quick to rebuild after an edit).
 $(ASAN_BUILD)/build.ninja: | fuzz-deps
 	CC=clang-14 CXX=clang++-14 cmake -S . -B $(ASAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Debug \
-	  -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" -DTROCHOMILL_WERROR=ON \
-	  -DTROCHOMILL_SANITIZE=ON -DTROCHOMILL_FUZZ=ON -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
+	  -DCMAKE_CXX_FLAGS_DEBUG="-g -O2" -DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=16 \
+	  -DTROCHOMILL_WERROR=ON -DTROCHOMILL_SANITIZE=ON -DTROCHOMILL_FUZZ=ON \
+	  -DTROCHOMILL_BUILD_BENCH=OFF $(CMAKE_FLAGS)
 
 test-asan: test-deps fuzz-deps $(ASAN_BUILD)/build.ninja
 	cmake --build $(ASAN_BUILD) -j $(JOBS)

@@ -65,6 +65,31 @@ TEST(App, WindowErrorsNameTheCallersOptions) {
   }
 }
 
+// An option named in a message: what() and problems() read its API name (as Python users
+// call it), message() each adapter's own name for it; a message without one is what() as it
+// is, and a stray mark (a control character in a file's text) passes through unchanged.
+TEST(App, MessagesNameOptionsByTheAdaptersNames) {
+  const auto flag = [](std::string_view n) { return n == "rate_hz" ? "--rate" : std::string(n); };
+  const InputError e(
+      std::vector<std::string>{"a.f32: give " + option_name("rate_hz") + " (Hz)",
+                               option_name("start_s") + " needs " + option_name("signal")});
+  EXPECT_EQ(std::string(e.what()), "a.f32: give rate_hz (Hz)\nstart_s needs signal");
+  EXPECT_EQ(e.problems(),
+            (std::vector<std::string>{"a.f32: give rate_hz (Hz)", "start_s needs signal"}));
+  EXPECT_EQ(e.message(flag), "a.f32: give --rate (Hz)\nstart_s needs signal");
+  const Interrupted stop("interrupted: " + option_name("resume") + " continues");
+  EXPECT_EQ(stop.message([](std::string_view n) { return "--" + std::string(n); }),
+            "interrupted: --resume continues");
+  const IoError plain("cannot write 'x'");
+  EXPECT_EQ(plain.message(flag), "cannot write 'x'");
+  EXPECT_EQ(render_options("a\x1e b", flag), "a\x1e b");
+  EXPECT_EQ(render_options("a\x1f"
+                           "b\x1e",
+                           flag),
+            "a\x1f"
+            "b\x1e");
+}
+
 TEST(App, MemoryChecksNameTheLimitAndItsSource) {
   EXPECT_EQ(memory_limit_bytes(2.5, "--memory-limit"), 2.5e9);
   EXPECT_EQ(memory_limit_bytes(std::nullopt, "--memory-limit"), default_memory_limit_bytes());

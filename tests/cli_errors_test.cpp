@@ -5,6 +5,7 @@
 
 #include <cctype>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -119,6 +120,34 @@ TEST_F(Cli, NumericFlagsAreFiniteAndInRange) {
     const CliResult r = run_cli(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
     EXPECT_NE(r.out.find(message), std::string::npos) << args << "\n" << r.out;
+  }
+}
+
+// The library names an option as its API does (rate_hz, parts, lambda_c_mm); the CLI shows
+// its flag for it, in the message's place, in every kind of message (bad input, a note of an
+// interrupted run is tested in Cli.ASweepLocksItsOutputAndResumeChecksIt).
+TEST_F(Cli, LibraryOptionsAreNamedByTheirFlags) {
+  const std::string wagih = test::example("wagih2023/trochoidal.toml").string();
+  const std::string raw = (dir_ / "a.f32").string();
+  { std::ofstream(raw, std::ios::binary) << std::string(400, '\0'); }
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"spectrum " + raw, "a.f32: raw samples carry no rate: give --rate (Hz)"},
+      {"report " + wagih + " -o r.html --with plots", "report: --with 'plots': unknown item"},
+      {"report " + wagih + " -o r.html --signal " + raw + " --rate 1000",
+       "report: --signal needs --start T"},
+      {"sweep " + wagih + " --range path.type=1:2 --samples 2 -o s.csv",
+       "--range path.type: the key is choice, not a number (give its values with --vary)"},
+      {"optimize " + wagih + " --var path.step=0.5:1 --maximize mrr -o b.toml",
+       "--maximize mrr: not a metric of --eval analyze"},
+      {"optimize " + wagih +
+           " --var path.step=0.5:1 --var path.step=0.6:1 --maximize h_max_mm -o b.toml",
+       "--var path.step: given twice"},
+  };
+  for (const auto& [args, message] : cases) {
+    const CliResult r = run_cli(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(message), std::string::npos) << args << "\n" << r.out;
+    EXPECT_EQ(r.out.find('\x1e'), std::string::npos) << args;  // no mark left
   }
 }
 

@@ -505,8 +505,8 @@ TEST(GcodeComp, TheToolTableGivesTheRadiusAndFanucIsWarned) {
   ASSERT_EQ(p.path.segments().size(), 3u);
   EXPECT_NEAR(p.path.segments()[1].axis_a().norm(), 20, 1e-12);
   ASSERT_EQ(p.info.warnings.size(), 1u);
-  EXPECT_NE(p.info.warnings[0].find("G41: tool 4 is not in the tool table (--tool-table, "
-                                    "[machine] tool_table): its diameter is taken as 0 (as "
+  EXPECT_NE(p.info.warnings[0].find("G41: tool 4 is not in the tool table "
+                                    "([machine] tool_table): its diameter is taken as 0 (as "
                                     "LinuxCNC does): the path is not compensated"),
             std::string::npos)
       << p.info.warnings[0];

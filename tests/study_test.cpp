@@ -273,7 +273,7 @@ TEST(Optimize, BadVariablesMetricsAndConstraintsAreRefused) {
                    OptimizeOptions{});
     FAIL() << "an unknown metric was accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("--maximize mrr: not a metric of --eval analyze"),
+    EXPECT_NE(std::string(e.what()).find("maximize mrr: not a metric of eval analyze"),
               std::string::npos)
         << e.what();
   }

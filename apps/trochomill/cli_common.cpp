@@ -63,6 +63,44 @@ auto with_flag(const std::string& flag, Parse&& parse) {
 }
 }  // namespace
 
+std::string cli_option_name(std::string_view api_name) {
+  // The library's (and Python's) name of each option the CLI has a flag for, and the flag.
+  static const std::map<std::string, std::string, std::less<>> flags = {
+      {"engine", "--engine"},
+      {"eval", "--eval"},
+      {"fit", "--fit"},
+      {"format", "--format"},
+      {"job", "--job"},
+      {"lambda_c_mm", "--lambda-c"},
+      {"max_blocks", "--max-blocks"},
+      {"max_evaluations", "--max-evals"},
+      {"maximize", "--maximize"},
+      {"mean_forces", "--mean-forces"},
+      {"measured_t_s", "--measured"},
+      {"memory_limit_gb", "--memory-limit"},
+      {"min_feed_mm_per_min", "--min-feed"},
+      {"minimize", "--minimize"},
+      {"model", "--model"},
+      {"output", "--out"},
+      {"parts", "--with"},
+      {"ranges", "--range"},
+      {"rate_hz", "--rate"},
+      {"resume", "--resume"},
+      {"samples", "--samples"},
+      {"sampler", "--sampler"},
+      {"signal", "--signal"},
+      {"start_s", "--start"},
+      {"stream", "--stream"},
+      {"subject_to", "--subject-to"},
+      {"variables", "--var"},
+      {"vary", "--vary"},
+  };
+  const auto it = flags.find(api_name);
+  return it == flags.end() ? std::string(api_name) : it->second;
+}
+
+std::string cli_message(const Error& e) { return e.message(cli_option_name); }
+
 Vary parse_vary_flag(const std::string& text) {
   return with_flag("--vary", [&] { return parse_vary(text); });
 }

@@ -14,9 +14,11 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "trochomill/analysis.hpp"
+#include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
@@ -40,6 +42,12 @@ struct JobArgs {
 /// A value-list flag (`--vary key=v1,v2,...`) parsed by the library, its errors named by the
 /// flag (the library's name only the text).
 [[nodiscard]] Vary parse_vary_flag(const std::string& text);
+/// The CLI's flag for an option the library names by its API name (option_name in
+/// trochomill/error.hpp): rate_hz is --rate, parts is --with; a name the CLI has no flag for
+/// stays as it is.
+[[nodiscard]] std::string cli_option_name(std::string_view api_name);
+/// An error's message as the CLI shows it: each option it names by its flag.
+[[nodiscard]] std::string cli_message(const Error& e);
 /// Adds JOB (required) and --set to a command.
 void add_job_args(CLI::App* cmd, JobArgs& a);
 /// A flag that is an alias of a job key: `--flag VALUE` is `--set key=VALUE`, validated by the

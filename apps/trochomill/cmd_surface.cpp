@@ -164,7 +164,7 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
                                             profile_texture(p.z_mm, p.dx_mm, a->lambda_c_mm, pf)));
           } catch (const InputError& e) {
             if (sf != "all") throw;
-            skipped.emplace_back(e.what());
+            skipped.emplace_back(cli_message(e));
           }
         }
       }

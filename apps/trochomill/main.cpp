@@ -79,13 +79,16 @@ int main(int argc, char** argv) {
   } catch (const trochomill::Interrupted& e) {
     // The library's own message is "interrupted"; a command that stopped while writing says
     // what it wrote.
-    const std::string what = e.what();
+    const std::string what = cli::cli_message(e);
     say("\n" + (what == "interrupted" ? std::string("interrupted: nothing was written") : what) +
         "\n");
     return cli::interrupted_exit_code();
   } catch (const trochomill::InputError& e) {
-    say(std::string("error: ") + e.what() + "\n");
+    say("error: " + cli::cli_message(e) + "\n");
     return 2;
+  } catch (const trochomill::Error& e) {
+    say("error: " + cli::cli_message(e) + "\n");
+    return 1;
   } catch (const std::exception& e) {
     say(std::string("error: ") + e.what() + "\n");
     return 1;

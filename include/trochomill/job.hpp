@@ -253,6 +253,8 @@ struct JobKey {
 };
 /// Every key of the job file, in the order of the reference (section by section).
 [[nodiscard]] const std::vector<JobKey>& job_keys();
+/// The key `section.key` (e.g. "path.step"), or nullptr when the schema has none.
+[[nodiscard]] const JobKey* find_job_key(std::string_view full_key);
 /// The key reference as Markdown tables (the one in docs/user-guide.md is this text).
 [[nodiscard]] std::string job_keys_markdown();
 

@@ -23,8 +23,8 @@ struct SweepRange {
   double lo = 0, hi = 0;
 };
 /// Parses "section.key=lo:hi" (lo < hi, finite). Throws InputError, its message starting with
-/// `what` (the option the text came from: "--range", "--var").
-[[nodiscard]] SweepRange parse_range(const std::string& text, std::string_view what = "--range");
+/// `what` (the option the text came from, an option_name; empty: the sweep's ranges).
+[[nodiscard]] SweepRange parse_range(const std::string& text, std::string_view what = {});
 
 enum class Sampler {
   sobol,  ///< Sobol's low-discrepancy sequence (Joe and Kuo's directions; first point skipped)

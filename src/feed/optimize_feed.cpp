@@ -374,7 +374,7 @@ std::optional<std::string> corner_note(const Job& job, const std::vector<GcodeMo
   return fmt::format(
       "{}:{}: this level cuts {:.4g} mm deep, within the tool's {:.4g} mm corner radius: the "
       "kernel takes the tool as a square end mill of radius {:.4g} mm (its circle and radial "
-      "chip), so the feeds there follow that tool; --engine sim models the corner (its "
+      "chip), so the feeds there follow that tool; the simulation engine models the corner (its "
       "narrower circle and thinner chip)",
       at->file, at->line, shallowest, rc, job.tool.radius_mm());
 }
@@ -421,12 +421,12 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
         estimate_simulation_memory(job, slot_path, 0.0, slot_path.duration_s(), stock);
     if (!(est.total(false) <= options.memory_limit_bytes)) {
       throw InputError(fmt::format(
-          "optimize-feed --engine sim: the simulation's estimated memory {:.2f} GB (boards "
+          "optimize-feed {} sim: the simulation's estimated memory {:.2f} GB (boards "
           "{:.2f}, records {:.2f}) exceeds the limit of {:.2f} GB; coarsen [simulation] "
-          "resolution (now {} mm) or steps_per_rev (now {}), or raise --memory-limit",
-          est.total(false) / 1e9, est.boards_bytes / 1e9, est.records_bytes / 1e9,
-          options.memory_limit_bytes / 1e9, job.simulation.resolution_mm,
-          job.simulation.steps_per_rev));
+          "resolution (now {} mm) or steps_per_rev (now {}), or raise {}",
+          option_name("engine"), est.total(false) / 1e9, est.boards_bytes / 1e9,
+          est.records_bytes / 1e9, options.memory_limit_bytes / 1e9, job.simulation.resolution_mm,
+          job.simulation.steps_per_rev, option_name("memory_limit_gb")));
     }
   }
   if (options.engine == FeedEngine::kernel) {
@@ -686,8 +686,8 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
     throw InputError(fmt::format(
         "optimize-feed: the {} of {:g} {} cannot be held: at the minimum feed ({:g} mm/min) "
         "the program still reaches more in {} block(s): {}; raise the cap or lower the minimum "
-        "feed (--min-feed, [machine] min_feed)",
-        o.what, o.cap, o.unit, o.feed, o.blocks.size(), where));
+        "feed ({}, [machine] min_feed)",
+        o.what, o.cap, o.unit, o.feed, o.blocks.size(), where, option_name("min_feed_mm_per_min")));
   }
   return r;
 }

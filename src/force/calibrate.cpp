@@ -66,7 +66,8 @@ const ParamSpec& spec(const std::string& name) {
   }
   std::string all;
   for (const auto& s : specs()) all += (all.empty() ? "" : ", ") + std::string(s.name);
-  throw InputError(fmt::format("--fit: unknown parameter '{}' (one of {})", name, all));
+  throw InputError(
+      fmt::format("{}: unknown parameter '{}' (one of {})", option_name("fit"), name, all));
 }
 
 // The coefficient named n (nullptr for the exponents m_n, m_a and the runout); const or not
@@ -380,11 +381,11 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   for (const auto& n : names) {
     (void)spec(n);
     if (!belongs(o.model, n)) {
-      throw InputError(
-          fmt::format("--fit: '{}' is not a parameter of the {} model", n, to_string(o.model)));
+      throw InputError(fmt::format("{}: '{}' is not a parameter of the {} model",
+                                   option_name("fit"), n, to_string(o.model)));
     }
     if (std::count(names.begin(), names.end(), n) > 1) {
-      throw InputError(fmt::format("--fit: '{}' given twice", n));
+      throw InputError(fmt::format("{}: '{}' given twice", option_name("fit"), n));
     }
   }
   const bool has_phase = std::count(names.begin(), names.end(), "runout_phase") > 0;
@@ -393,7 +394,8 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
       std::abs(std::abs(job.tool.tooth_angles_deg[1] - job.tool.tooth_angles_deg[0]) - 180) <
           1e-9) {
     throw InputError(
-        "--fit: runout_radial and runout_phase together are not identifiable on two opposite "
+        option_name("fit") +
+        ": runout_radial and runout_phase together are not identifiable on two opposite "
         "teeth (only e cos(phase) changes the chips); fit runout_radial alone");
   }
   // Start: the job's coefficients when it has this model, the defaults otherwise.
@@ -722,7 +724,7 @@ MeanForceFit fit_mean_forces(const Job& job, const std::vector<MeanForcePoint>& 
     throw InputError(fmt::format(
         "mean-force fit: the closed form holds for full-immersion straight slots; the job must "
         "have [path] type = \"linear\" and [slot] width = [tool] diameter ({} mm), got {} with "
-        "width {} mm (e.g. --set path.type=linear --set slot.width={})",
+        "width {} mm (e.g. path.type = \"linear\" and slot.width = {})",
         job.tool.diameter_mm, to_string(job.path.type), job.slot.width_mm, job.tool.diameter_mm));
   }
   double fmin = 1e300, fmax = -1e300;
@@ -764,9 +766,8 @@ MeanForceFit fit_mean_forces(const Job& job, const std::vector<MeanForcePoint>& 
   m.k_re = kPi * r.offset[1] / za;
   m.k_ac = kPi * r.slope[2] / za;
   m.k_ae = 2 * r.offset[2] / za;
-  m.source =
-      fmt::format("trochomill calibrate --mean-forces: {} slot tests, R^2 {:.4f} {:.4f} {:.4f}",
-                  points.size(), r.r2[0], r.r2[1], r.r2[2]);
+  m.source = fmt::format("mean-force fit of {} slot tests, R^2 {:.4f} {:.4f} {:.4f}", points.size(),
+                         r.r2[0], r.r2[1], r.r2[2]);
   return r;
 }
 

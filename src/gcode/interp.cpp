@@ -139,8 +139,8 @@ void Interpreter::count_block() {
   ++prog_.info.blocks_executed;
   if (prog_.info.blocks_executed > opt_.max_blocks) {
     fail_at(0, fmt::format("stopped after {} blocks: does the program loop without end? "
-                           "(the limit is the reader's max_blocks, check-gcode --max-blocks)",
-                           opt_.max_blocks));
+                           "(the limit is the reader's {})",
+                           opt_.max_blocks, option_name("max_blocks")));
   }
   if ((prog_.info.blocks_executed & 0xffff) == 0 && opt_.cancel && opt_.cancel()) {
     throw Interrupted("reading the NC program was interrupted");
@@ -248,9 +248,82 @@ void Interpreter::set_feed_speed_tool(int feed_mode) {
 }
 
 // The M codes: stop and pause set for the end of the block, M98/M99 noted for it.
+// LinuxCNC's modal groups of M-codes (at most one code of each in a block, four codes in all):
+// stops 4, I/O 5, tool change 6, spindle 7, coolant 8, override switches 9, user codes 10, and
+// the modal state's save and restore M70-M73; -1 for the codes of no group (Fanuc's M98/M99).
+namespace {
+int m_group(int m) {
+  switch (m) {
+    case 0:
+    case 10:
+    case 20:
+    case 300:
+    case 600:
+      return 4;
+    case 60:
+    case 610:
+      return 6;
+    case 30:
+    case 40:
+    case 50:
+    case 190:
+      return 7;
+    case 70:
+    case 80:
+    case 90:
+      return 8;
+    default:
+      break;
+  }
+  if (m >= 620 && m <= 680) return 5;
+  if (m >= 480 && m <= 530) return 9;
+  if (m >= 700 && m <= 730) return 11;
+  if (m >= 1000 && m <= 1990) return 10;
+  return -1;
+}
+}  // namespace
+
+void Interpreter::check_m_codes() const {
+  if (block_.m.size() > 4) {
+    fail_at(block_.m[4].column, "more than four M-codes in one block (LinuxCNC's limit)");
+  }
+  for (std::size_t a = 0; a < block_.m.size(); ++a) {
+    const int g = m_group(block_.m[a].code10);
+    for (std::size_t b = 0; b < a && g >= 0; ++b) {
+      if (m_group(block_.m[b].code10) == g) {
+        fail_at(
+            block_.m[a].column,
+            fmt::format("{} and {} in one block: two M-codes of one modal group",
+                        code_name('M', block_.m[b].code10), code_name('M', block_.m[a].code10)));
+      }
+    }
+  }
+}
+
 void Interpreter::run_m_codes(bool& stop, bool& pause) {
+  check_m_codes();
+  // A word an M-code needs, whole and within [lo, hi].
+  const auto whole_in = [&](char c, double lo, double hi) {
+    return block_.has(c) && block_[c] == std::floor(block_[c]) && block_[c] >= lo &&
+           block_[c] <= hi;
+  };
   for (const auto& [m, column] : block_.m) {
     switch (m) {
+      case 190:
+        // Spindle orientation: the spindle stops at angle R (degrees), turning as P says, within
+        // Q seconds; no motion of the axes.
+        if (block_.has('p') && !whole_in('p', 0, 2)) {
+          fail_at(block_.col('p'), "M19's P (the turn to the angle) must be 0, 1 or 2");
+        }
+        if (block_.has('r') && !(block_['r'] >= 0 && block_['r'] <= 360)) {
+          fail_at(block_.col('r'), "M19's R (the angle) must be within 0 .. 360 degrees");
+        }
+        if (block_.has('q') && !(block_['q'] > 0)) {
+          fail_at(block_.col('q'), "M19's Q (the time allowed, s) must be > 0");
+        }
+        spindle_on_ = false;
+        spindle_dir_ = 0;
+        break;
       case 0:
       case 10:
       case 600:
@@ -292,6 +365,14 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
       case 680:
         // Outputs wait for motion to stop, which a compensated path cannot (LinuxCNC).
         comp_.refuse(column, fmt::format("{} (a motion output)", code_name('M', m)));
+        if (m <= 650 && !block_.has('p')) {
+          fail_at(column, fmt::format("{} needs the output's number in P", code_name('M', m)));
+        }
+        if (m == 660) check_m66(column);
+        if (m >= 670 && !(block_.has('e') && block_['e'] >= 0)) {
+          fail_at(column, fmt::format("{} needs the analog output's number in E (>= 0)",
+                                      code_name('M', m)));
+        }
         break;
       case 980: {
         if (!fanuc_) {
@@ -338,7 +419,8 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
         restore_modal(saved_);
         break;
       case 730:
-        if (frames_.size() < 2) fail_at(column, "M73 is for subroutines (it restores at return)");
+        // In the main program there is no return to restore at: nothing to do (LinuxCNC).
+        if (frames_.size() < 2) break;
         save_modal(frames_.back().restore_modal ? sub_saved_.back() : push_sub_saved());
         frames_.back().restore_modal = true;
         break;
@@ -448,6 +530,24 @@ void Interpreter::run_motion(const BlockCodes& codes) {
   if (motion_ < 730) {
     cycle_il_flag_ = false;
     cycle_motion_ = -1;  // the next cycle is a first one (its Z and R again)
+  }
+}
+
+// M66: wait for the digital input P or the analog input E, in the way L (0 returns at once),
+// at most Q seconds; the wait does not move the tool.
+void Interpreter::check_m66(std::uint32_t column) const {
+  const bool p = block_.has('p') && block_['p'] >= 0, e = block_.has('e') && block_['e'] >= 0;
+  if (!p && !e) fail_at(column, "M66 needs the input to wait for: P (digital) or E (analog)");
+  if (p && e) fail_at(column, "M66 waits for a digital (P) or an analog (E) input, not both");
+  const double l = block_.has('l') ? block_['l'] : 0;
+  if (l < 0 || l != std::floor(l)) {
+    fail_at(block_.col('l'), "M66's L (the way to wait) must be a whole number >= 0");
+  }
+  if (l != 0 && e) {
+    fail_at(block_.col('l'), "M66 reads an analog input (E) only with L0 (return at once)");
+  }
+  if (l != 0 && !(block_.has('q') && block_['q'] > 0)) {
+    fail_at(column, "M66 with L other than 0 (return at once) needs a time Q > 0 s to wait");
   }
 }
 

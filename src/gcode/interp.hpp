@@ -217,6 +217,8 @@ class Interpreter : private InterpState {
   void execute();
   inline void set_feed_speed_tool(int feed_mode);
   inline void run_m_codes(bool& stop, bool& pause);
+  void check_m_codes() const;
+  void check_m66(std::uint32_t column) const;
   inline void set_modes(const BlockCodes& codes);
   inline void run_motion(const BlockCodes& codes);
   void end_program() { ended_ = true; }

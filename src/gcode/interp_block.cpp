@@ -104,7 +104,6 @@ void Interpreter::read_block(std::size_t i) {
       continue;
     }
     if (letter == 'o') fail(at, "an O-word must start its line");
-    if (letter == 'e') fail(at, "unsupported word 'E'");
     const auto k = static_cast<std::size_t>(letter - 'a');
     if (block_.has(letter)) {
       fail(at, fmt::format("two {} words in one block", upper(letter)));
@@ -209,25 +208,41 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   auto refuse = [&](char c, const char* users) {
     fail_at(block_.col(c), fmt::format("{} word with no {} to use it", upper(c), users));
   };
+  // The M-codes that take words (LinuxCNC): M19 P R Q (spindle orientation), M50-M53 P
+  // (override switches), M62-M65 P (digital outputs), M66 P|E L Q (wait for an input), M67/M68
+  // E Q (analog outputs), user M-codes M100-M199 P Q (their arguments).
+  bool m19 = false, m_p = false, m_q = false, m66 = false, m_e = false;
+  for (const auto& mc : block_.m) {
+    const int m = mc.code10;
+    const bool user = m >= 1000 && m <= 1990 && m % 10 == 0;
+    m19 = m19 || m == 190;
+    m66 = m66 || m == 660;
+    m_p = m_p || m == 190 || (m >= 500 && m <= 530) || (m >= 620 && m <= 660) || user;
+    m_q = m_q || m == 190 || (m >= 660 && m <= 680) || user;
+    m_e = m_e || (m >= 660 && m <= 680);
+  }
   const bool q_cycle =
       cycle && (motion_ == 730 || motion_ == 830 || (fanuc_ && (motion_ == 760 || motion_ == 870)));
-  if (block_.has('q') && !q_cycle && !m61 && !g64) refuse('q', "G64, G73, G83 or M61");
+  if (block_.has('q') && !q_cycle && !m61 && !g64 && !m_q) {
+    refuse('q', "G64, G73, G83, M19, M61, M66, M67, M68 or user M-code");
+  }
+  if (block_.has('e') && !m_e) refuse('e', "M66, M67 or M68");
   const bool m98 = pending_m98_.has_value();
   // LinuxCNC takes no L with G74 (its check lists G73 and G76-G89).
   const bool l_cycle = cycle && (fanuc_ || motion_ != 740);
-  if (block_.has('l') && !l_cycle && group0 != 100 && !m98) {
-    refuse('l', "G10 or canned cycle other than G74");
+  if (block_.has('l') && !l_cycle && group0 != 100 && !m98 && !m66) {
+    refuse('l', "G10, M66 or canned cycle other than G74");
   }
-  if (block_.has('r') && !arc && !cycle && group0 != 100) {
-    refuse('r', "G2/G3, canned cycle or G10");
+  if (block_.has('r') && !arc && !cycle && group0 != 100 && !m19) {
+    refuse('r', "G2/G3, canned cycle, G10 or M19");
   }
   const bool g87 = cycle && motion_ == 870 && !fanuc_;
   for (const char c : std::string_view("ijk")) {
     if (block_.has(c) && !arc && !g87) refuse(c, "G2/G3 or G87");
   }
   if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_ &&
-      !g64) {
-    refuse('p', "G2/G3, G4, G10, G64 or canned cycle");
+      !g64 && !m_p) {
+    refuse('p', "G2/G3, G4, G10, G64, canned cycle, M19, M50-M53, M62-M66 or user M-code");
   }
   if (block_.has('h') && tool_length != 430) refuse('h', "G43");
   // D alone: LinuxCNC refuses it; Sinumerik's "T1 D1" (its tool offset) is tolerated, as its

@@ -88,12 +88,12 @@ void CutterComp::start(int g, std::uint32_t column) {
       if (it == interp_.tools_.end()) {
         // LinuxCNC runs a tool its table lacks with diameter 0; a job's tool stands in.
         const double d = interp_.opt_.missing_tool_diameter_mm;
-        interp_.warn(fmt::format(
-            "{}: tool {:g} is not in the tool table (--tool-table, [machine] tool_table): its "
-            "diameter is taken as {}",
-            name, tool,
-            d > 0 ? fmt::format("the job's tool's, {:g} mm", d)
-                  : std::string("0 (as LinuxCNC does): the path is not compensated")));
+        interp_.warn(
+            fmt::format("{}: tool {:g} is not in the tool table ([machine] tool_table): its "
+                        "diameter is taken as {}",
+                        name, tool,
+                        d > 0 ? fmt::format("the job's tool's, {:g} mm", d)
+                              : std::string("0 (as LinuxCNC does): the path is not compensated")));
         radius = 0.5 * d;
       } else {
         radius = 0.5 * it->second.diameter_mm;

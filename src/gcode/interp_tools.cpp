@@ -53,8 +53,8 @@ void Interpreter::note_tool_length(const char* what) {
   if (unknown_tool_ < 0 || tool_warned_) return;
   tool_warned_ = true;
   warn(
-      fmt::format("{} with G43 H{:g}: tool {:g} is not in the tool table (--tool-table, "
-                  "[machine] tool_table); its length is taken as 0",
+      fmt::format("{} with G43 H{:g}: tool {:g} is not in the tool table "
+                  "([machine] tool_table); its length is taken as 0",
                   what, unknown_tool_, unknown_tool_));
 }
 

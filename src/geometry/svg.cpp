@@ -91,9 +91,9 @@ bool hidden(const pugi::xml_node& n) {
   return false;
 }
 
-class Reader {
+class SvgReader {
  public:
-  Reader(std::string source, std::string_view text, const DrawingOptions& o)
+  SvgReader(std::string source, std::string_view text, const DrawingOptions& o)
       : src_(std::move(source)), o_(o), used_(o.layers.size(), 0) {
     for (std::size_t i = 0; i < text.size(); ++i) {
       if (text[i] == '\n') line_starts_.push_back(i + 1);
@@ -481,7 +481,7 @@ class Reader {
 Drawing read_svg(const std::filesystem::path& file, const DrawingOptions& options) {
   const std::string source = file.string();
   const std::string text = read_drawing_text(file, "SVG", options);
-  Reader r(source, text, options);
+  SvgReader r(source, text, options);
   pugi::xml_document doc;
   const pugi::xml_parse_result res = doc.load_buffer(text.data(), text.size());
   if (!res) {

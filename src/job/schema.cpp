@@ -1270,6 +1270,16 @@ const std::vector<JobKey>& job_keys() {
   return keys;
 }
 
+const JobKey* find_job_key(std::string_view full_key) {
+  for (const JobKey& k : job_keys()) {
+    if (full_key.size() == k.section.size() + 1 + k.key.size() && full_key.starts_with(k.section) &&
+        full_key[k.section.size()] == '.' && full_key.ends_with(k.key)) {
+      return &k;
+    }
+  }
+  return nullptr;
+}
+
 std::string job_keys_markdown() {
   // One table per section, the sections in the order they first appear in the schema.
   std::vector<std::string> sections;

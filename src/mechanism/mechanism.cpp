@@ -46,7 +46,8 @@ CycleSetup setup(const Job& job, const MechanismSettings& st) {
   if (st.model == ChipModel::pivkin2025 && job.path.type != PathType::trochoidal) {
     throw InputError(
         "the pivkin2025 model is published for the circular trochoid: it needs [path] type = "
-        "\"trochoidal\" (use --model exact for the elliptical family)");
+        "\"trochoidal\" (use " +
+        option_name("model") + " exact for the elliptical family)");
   }
   if (st.points < 36) throw InputError(fmt::format("points must be >= 36, got {}", st.points));
   CycleSetup c;

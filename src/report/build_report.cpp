@@ -41,35 +41,41 @@ std::string job_name(const ReportRequest& r) {
 void check_report_request(const Job& job, const ReportRequest& r) {
   for (const std::string& item : r.with) {
     if (!kWithItems.count(item)) {
-      throw InputError(fmt::format(
-          "report: --with '{}': unknown item; allowed: mechanism, forces, simulate", item));
+      throw InputError(
+          fmt::format("report: {} '{}': unknown item; allowed: mechanism, forces, simulate",
+                      option_name("parts"), item));
     }
   }
   if (r.signal && !r.signal_start_s) {
-    throw InputError(
-        "report: --signal needs --start T: the time in the recording where the program starts "
-        "(the monitor's cycles come from the job's planned path)");
+    throw InputError(fmt::format(
+        "report: {} needs {} T: the time in the recording where the program starts (the "
+        "monitor's cycles come from the job's planned path)",
+        option_name("signal"), option_name("start_s")));
   }
-  if (r.signal_start_s && !r.signal) throw InputError("report: --start needs --signal");
+  if (r.signal_start_s && !r.signal)
+    throw InputError(
+        fmt::format("report: {} needs {}", option_name("start_s"), option_name("signal")));
   if (r.signal_start_s && !(std::isfinite(*r.signal_start_s) && *r.signal_start_s >= 0)) {
-    throw InputError(fmt::format("report: --start {}: a time >= 0 s", *r.signal_start_s));
+    throw InputError(
+        fmt::format("report: {} {}: a time >= 0 s", option_name("start_s"), *r.signal_start_s));
   }
   if (r.signal) validate(job.monitor, r.signal->rate_hz);
   if (asked(r, "forces") && !job.material.model) {
-    throw InputError(fmt::format(
-        "report: --with forces: {} has no [material] force model (give [material] name or "
-        "coefficients; see `trochomill materials`)",
-        job_name(r)));
+    throw InputError(
+        fmt::format("report: {} forces: {} has no [material] force model (give [material] name or "
+                    "coefficients; see `trochomill materials`)",
+                    option_name("parts"), job_name(r)));
   }
   if (r.measured && !job.material.model) {
-    throw InputError(fmt::format(
-        "report: --measured: {} has no [material] force model to calibrate", job_name(r)));
+    throw InputError(fmt::format("report: {}: {} has no [material] force model to calibrate",
+                                 option_name("measured_t_s"), job_name(r)));
   }
   if (r.measured && r.measured->t_s.size() < 2) {
-    throw InputError("report: --measured: the record has fewer than two samples");
+    throw InputError("report: " + option_name("measured_t_s") +
+                     ": the record has fewer than two samples");
   }
   if (!r.varies.empty() && r.document == nullptr) {
-    throw InputError("report: a study (--vary) needs the job's document");
+    throw InputError("report: a study (" + option_name("vary") + ") needs the job's document");
   }
   if (r.window_s) {
     const auto [a, b] = *r.window_s;

@@ -383,7 +383,8 @@ std::string SimulationOutputs::finish(const JobSimulation& js, std::optional<dou
     const double step = stl_step_mm ? *stl_step_mm : default_surface_step_mm(*js.work);
     write_file_atomic(p, height_field_stl(surface_height_field(*js.work, step)));
   });
-  const char* stopped = "interrupted: --out not written (no file of this run is in it)";
+  const char* stopped =
+      "interrupted: the output folder was not written (no file of this run is in it)";
   hooks.begin("writing outputs");
   for (std::size_t k = 0; k < outputs.size(); ++k) {
     hooks.check(stopped);

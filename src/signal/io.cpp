@@ -62,7 +62,8 @@ std::string read_all(const std::string& path) {
 
 Signal read_raw(const std::string& path, const SignalReadOptions& o, bool f32) {
   if (!o.rate_hz) {
-    throw InputError(fmt::format("{}: raw samples carry no rate: give --rate (Hz)", path));
+    throw InputError(
+        fmt::format("{}: raw samples carry no rate: give {} (Hz)", path, option_name("rate_hz")));
   }
   const std::string bytes = read_all(path);
   const std::size_t w = f32 ? 4 : 2;
@@ -129,12 +130,13 @@ Signal read_csv(const std::string& path, const SignalReadOptions& o) {
     }
     s.rate_hz = 1.0 / dt;
     if (o.rate_hz && std::abs(*o.rate_hz - s.rate_hz) > 1e-6 * s.rate_hz) {
-      throw InputError(fmt::format("{}: --rate {} Hz contradicts the time column ({} Hz)", path,
-                                   *o.rate_hz, s.rate_hz));
+      throw InputError(fmt::format("{}: {} {} Hz contradicts the time column ({} Hz)", path,
+                                   option_name("rate_hz"), *o.rate_hz, s.rate_hz));
     }
   } else {
     if (!o.rate_hz) {
-      throw InputError(fmt::format("{}: no time column (t, t_s or time): give --rate (Hz)", path));
+      throw InputError(fmt::format("{}: no time column (t, t_s or time): give {} (Hz)", path,
+                                   option_name("rate_hz")));
     }
     s.rate_hz = *o.rate_hz;
   }
@@ -159,8 +161,8 @@ Signal read_sndfile(const std::string& path, const SignalReadOptions& o) {
         fmt::format("{}: channel {} does not exist (0..{})", path, o.channel, info.channels - 1));
   }
   if (o.rate_hz && std::abs(*o.rate_hz - info.samplerate) > 1e-9) {
-    throw InputError(fmt::format("{}: --rate {} Hz contradicts the file's {} Hz", path, *o.rate_hz,
-                                 info.samplerate));
+    throw InputError(fmt::format("{}: {} {} Hz contradicts the file's {} Hz", path,
+                                 option_name("rate_hz"), *o.rate_hz, info.samplerate));
   }
   const auto ch = static_cast<std::size_t>(info.channels);
   std::vector<double> buf(static_cast<std::size_t>(info.frames) * ch);
@@ -201,7 +203,7 @@ void decode_raw(const unsigned char* bytes, std::size_t count, SampleFormat f, d
 
 Signal read_signal(const std::string& path, const SignalReadOptions& o) {
   if (o.rate_hz && !(*o.rate_hz > 0)) {
-    throw InputError(fmt::format("--rate must be > 0 Hz, got {}", *o.rate_hz));
+    throw InputError(fmt::format("{} must be > 0 Hz, got {}", option_name("rate_hz"), *o.rate_hz));
   }
   SampleFormat f = o.format;
   if (f == SampleFormat::automatic) {
@@ -213,7 +215,7 @@ Signal read_signal(const std::string& path, const SignalReadOptions& o) {
     } else if (e == "s16" || e == "pcm") {
       f = SampleFormat::s16;
     } else if (path == "-") {
-      throw InputError("standard input: give --format f32, s16 or csv");
+      throw InputError("standard input: give " + option_name("format") + " f32, s16 or csv");
     } else {
       f = SampleFormat::sndfile;
     }

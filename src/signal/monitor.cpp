@@ -153,8 +153,8 @@ CycleTiming cycles_from_job(const Job& job, double start_s, double duration_s) {
   if (ct.start_s.empty()) {
     throw InputError(fmt::format(
         "no whole cycle of the program (cycles from {:.3f} s to {:.3f} s after its start) lies "
-        "in the signal ({:.3f} s) with --start {:g} s",
-        bounds.front(), bounds.back(), duration_s, start_s));
+        "in the signal ({:.3f} s) with {} {:g} s",
+        bounds.front(), bounds.back(), duration_s, option_name("start_s"), start_s));
   }
   ct.period_s = sum / static_cast<double>(ct.start_s.size());
   return ct;
@@ -177,7 +177,8 @@ CycleTiming cycles_from_signal(const KfSeries& kf, double min_period_s, double m
   if (!(var > 0) || lag_hi <= lag_lo + 2) {
     none.note = fmt::format(
         "the signal ({} windows) is too short or flat to find a cycle period between {:g} and "
-        "{:g} s: no cycles (give --job and --start to take them from the program)",
+        "{:g} s: no cycles (give the job and where its program starts in the signal to take them "
+        "from the program)",
         n, min_period_s, max_period_s);
     return none;
   }
@@ -196,7 +197,8 @@ CycleTiming cycles_from_signal(const KfSeries& kf, double min_period_s, double m
   if (best < 0.3) {
     none.note = fmt::format(
         "no cycle period stands out in the signal (autocorrelation peak {:.2f} < 0.3 between "
-        "{:g} and {:g} s): no cycles (give --job and --start to take them from the program)",
+        "{:g} and {:g} s): no cycles (give the job and where its program starts in the signal to "
+        "take them from the program)",
         best, min_period_s, max_period_s);
     return none;
   }

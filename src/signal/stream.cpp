@@ -16,7 +16,8 @@ namespace trochomill {
 void monitor_stream(std::FILE* in, SampleFormat f, LiveMonitor& live,
                     const std::function<void(const LiveWindow&)>& out) {
   if (f != SampleFormat::f32 && f != SampleFormat::s16 && f != SampleFormat::csv) {
-    throw InputError("--stream reads --format f32, s16 or csv");
+    throw InputError(option_name("stream") + " reads " + option_name("format") +
+                     " f32, s16 or csv");
   }
   if (f == SampleFormat::csv) {
     std::string line;

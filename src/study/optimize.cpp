@@ -23,13 +23,6 @@ namespace {
 
 constexpr double kPenalty = 1e30;  // a failed or infeasible point's objective
 
-const JobKey* find_key(const std::string& key) {
-  for (const JobKey& k : job_keys()) {
-    if (k.section + "." + k.key == key) return &k;
-  }
-  return nullptr;
-}
-
 // Evaluates points, each once: the values are the cache's key.
 class Evaluator {
  public:
@@ -57,7 +50,7 @@ class Evaluator {
     // 4 decimals the programs are written with, mm/min to the 0.001 of their F words,
     // degrees to 0.0001, rpm to 0.1; other keys to 6 significant digits. The point
     // evaluated is the one written, and no 0.30000000000000004 reaches the job.
-    const JobKey* jk = find_key(v.key);
+    const JobKey* jk = find_job_key(v.key);
     const std::string unit = jk != nullptr ? jk->unit : std::string();
     const int places = unit == "mm"        ? 4
                        : unit == "mm/min"  ? 3
@@ -175,20 +168,23 @@ bool dominates(const OptPoint& a, const OptPoint& b, const std::vector<Objective
 OptVariable parse_opt_variable(const std::string& text) {
   const auto eq = text.find('=');
   if (eq == std::string::npos) {
-    throw InputError(
-        fmt::format("--var '{}': expected section.key=lo:hi or section.key=v1,v2,...", text));
+    throw InputError(fmt::format("{} '{}': expected section.key=lo:hi or section.key=v1,v2,...",
+                                 option_name("variables"), text));
   }
   OptVariable v;
   v.key = trim(text.substr(0, eq));
-  const JobKey* k = find_key(v.key);
-  if (!k) throw InputError(fmt::format("--var {}: no such job key (see `trochomill keys`)", v.key));
+  const JobKey* k = find_job_key(v.key);
+  if (!k) {
+    throw InputError(fmt::format("{} {}: no such job key (see `trochomill keys`)",
+                                 option_name("variables"), v.key));
+  }
   const std::string rest = text.substr(eq + 1);
   if (rest.find(':') != std::string::npos && rest.find(',') == std::string::npos) {
-    const SweepRange r = parse_range(text, "--var");
+    const SweepRange r = parse_range(text, option_name("variables"));
     if (k->type != "number" && k->type != "integer") {
       throw InputError(
-          fmt::format("--var {}: the key is {}, not a number: give its choices as {}=a,b,...",
-                      v.key, k->type, v.key));
+          fmt::format("{} {}: the key is {}, not a number: give its choices as {}=a,b,...",
+                      option_name("variables"), v.key, k->type, v.key));
     }
     v.lo = r.lo;
     v.hi = r.hi;
@@ -197,7 +193,8 @@ OptVariable parse_opt_variable(const std::string& text) {
   }
   v.choices = parse_vary(text).values;
   if (v.choices.size() < 2) {
-    throw InputError(fmt::format("--var {}: a choice needs two or more values", v.key));
+    throw InputError(
+        fmt::format("{} {}: a choice needs two or more values", option_name("variables"), v.key));
   }
   return v;
 }
@@ -211,16 +208,18 @@ Constraint parse_constraint(const std::string& text) {
     c.upper = false;
   }
   if (op == std::string::npos) {
-    throw InputError(fmt::format(
-        "--subject-to '{}': expected METRIC<=VALUE or METRIC>=VALUE, e.g. h_max_mm<=0.05", text));
+    throw InputError(
+        fmt::format("{} '{}': expected METRIC<=VALUE or METRIC>=VALUE, e.g. h_max_mm<=0.05",
+                    option_name("subject_to"), text));
   }
   c.metric = trim(text.substr(0, op));
   const std::string v = trim(text.substr(op + 2));
   char* end = nullptr;
   c.value = std::strtod(v.c_str(), &end);
   if (c.metric.empty() || v.empty() || *end != '\0' || !std::isfinite(c.value)) {
-    throw InputError(fmt::format(
-        "--subject-to '{}': expected METRIC<=VALUE or METRIC>=VALUE with a finite number", text));
+    throw InputError(
+        fmt::format("{} '{}': expected METRIC<=VALUE or METRIC>=VALUE with a finite number",
+                    option_name("subject_to"), text));
   }
   return c;
 }
@@ -229,26 +228,32 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
                         const std::vector<OptVariable>& vars, const std::vector<Objective>& goals,
                         const std::vector<Constraint>& constraints, const OptimizeOptions& o,
                         const RunHooks& hooks) {
-  if (vars.empty()) throw InputError("optimize: give at least one --var");
-  if (goals.empty()) throw InputError("optimize: give --maximize or --minimize METRIC");
-  if (o.max_evaluations < 10) throw InputError("optimize: --max-evals must be at least 10");
+  if (vars.empty()) throw InputError("optimize: give at least one " + option_name("variables"));
+  if (goals.empty()) {
+    throw InputError("optimize: give " + option_name("maximize") + " or " +
+                     option_name("minimize") + " METRIC");
+  }
+  if (o.max_evaluations < 10) {
+    throw InputError("optimize: " + option_name("max_evaluations") + " must be at least 10");
+  }
   // Every metric named must be one the evaluation gives.
   const Job base_job = doc.build(base);
   const std::vector<std::string> names = metric_names(base_job, o.eval);
-  const auto check = [&](const std::string& m, const char* option) {
+  const auto check = [&](const std::string& m, const std::string& option) {
     if (std::find(names.begin(), names.end(), m) == names.end()) {
       std::string list;
       for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-      throw InputError(fmt::format("{} {}: not a metric of --eval {}; these are: {}", option, m,
-                                   to_string(o.eval), list));
+      throw InputError(fmt::format("{} {}: not a metric of {} {}; these are: {}", option, m,
+                                   option_name("eval"), to_string(o.eval), list));
     }
   };
-  for (const Objective& g : goals) check(g.metric, g.maximize ? "--maximize" : "--minimize");
-  for (const Constraint& c : constraints) check(c.metric, "--subject-to");
+  for (const Objective& g : goals)
+    check(g.metric, option_name(g.maximize ? "maximize" : "minimize"));
+  for (const Constraint& c : constraints) check(c.metric, option_name("subject_to"));
   for (std::size_t a = 0; a < vars.size(); ++a) {
     for (std::size_t b = a + 1; b < vars.size(); ++b) {
       if (vars[a].key == vars[b].key) {
-        throw InputError(fmt::format("--var {}: given twice", vars[a].key));
+        throw InputError(fmt::format("{} {}: given twice", option_name("variables"), vars[a].key));
       }
     }
   }

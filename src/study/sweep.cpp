@@ -36,11 +36,11 @@ using nlohmann::json;
 
 constexpr std::size_t kMaxPoints = 1000000;
 
-const JobKey* find_key(const std::string& key) {
-  for (const JobKey& k : job_keys()) {
-    if (k.section + "." + k.key == key) return &k;
-  }
-  return nullptr;
+// What an interrupted sweep says.
+const std::string& stopped_message() {
+  static const std::string m =
+      "interrupted: the rows written stay; " + option_name("resume") + " continues";
+  return m;
 }
 
 // Measurements of the run itself differ from run to run: never metrics of a point.
@@ -242,7 +242,8 @@ std::vector<std::string> metric_names(const Job& base, SweepEval eval) {
   return {cols.begin() + 3, cols.end()};  // after index, ok, error
 }
 
-SweepRange parse_range(const std::string& text, std::string_view what) {
+SweepRange parse_range(const std::string& text, std::string_view option) {
+  const std::string what = option.empty() ? option_name("ranges") : std::string(option);
   const auto eq = text.find('=');
   const auto colon = text.find(':', eq == std::string::npos ? 0 : eq);
   SweepRange r;
@@ -266,7 +267,7 @@ SweepRange parse_range(const std::string& text, std::string_view what) {
 Sampler parse_sampler(const std::string& name) {
   if (name == "sobol") return Sampler::sobol;
   if (name == "lhs") return Sampler::lhs;
-  throw InputError(fmt::format("--sampler '{}': sobol or lhs", name));
+  throw InputError(fmt::format("{} '{}': sobol or lhs", option_name("sampler"), name));
 }
 
 SweepEval parse_sweep_eval(const std::string& name) {
@@ -274,7 +275,8 @@ SweepEval parse_sweep_eval(const std::string& name) {
        {SweepEval::analyze, SweepEval::mechanism, SweepEval::forces, SweepEval::simulate}) {
     if (to_string(e) == name) return e;
   }
-  throw InputError(fmt::format("--eval '{}': analyze, mechanism, forces or simulate", name));
+  throw InputError(
+      fmt::format("{} '{}': analyze, mechanism, forces or simulate", option_name("eval"), name));
 }
 
 std::string_view to_string(SweepEval e) noexcept {
@@ -297,7 +299,7 @@ std::vector<std::vector<double>> unit_samples(std::size_t samples, std::size_t d
   if (dimensions == 0) return out;
   if (sampler == Sampler::sobol) {
     if (dimensions > 3667)
-      throw InputError("--range: Sobol's sequence has at most 3667 dimensions");
+      throw InputError(option_name("ranges") + ": Sobol's sequence has at most 3667 dimensions");
     boost::random::sobol gen(static_cast<unsigned>(dimensions));
     const double scale = static_cast<double>(gen.max()) + 1.0;
     for (auto& p : out) {
@@ -321,8 +323,8 @@ SweepPlan plan_sweep(const std::vector<Vary>& grid, const std::vector<SweepRange
                      std::size_t samples, Sampler sampler, std::uint64_t seed) {
   SweepPlan plan;
   std::set<std::string> seen;
-  const auto add_key = [&](const std::string& key, const char* option) {
-    if (!find_key(key)) {
+  const auto add_key = [&](const std::string& key, const std::string& option) {
+    if (!find_job_key(key)) {
       throw InputError(fmt::format("{} {}: no such job key (see `trochomill keys`)", option, key));
     }
     if (!seen.insert(key).second) {
@@ -330,24 +332,24 @@ SweepPlan plan_sweep(const std::vector<Vary>& grid, const std::vector<SweepRange
     }
     plan.keys.push_back(key);
   };
-  for (const Vary& v : grid) add_key(v.key, "--vary");
+  for (const Vary& v : grid) add_key(v.key, option_name("vary"));
   std::vector<bool> integer;
   for (const SweepRange& r : ranges) {
-    add_key(r.key, "--range");
-    const JobKey* k = find_key(r.key);
+    add_key(r.key, option_name("ranges"));
+    const JobKey* k = find_job_key(r.key);
     if (k->type != "number" && k->type != "integer") {
-      throw InputError(
-          fmt::format("--range {}: the key is {}, not a number (give its values "
-                      "with --vary)",
-                      r.key, k->type));
+      throw InputError(fmt::format("{} {}: the key is {}, not a number (give its values with {})",
+                                   option_name("ranges"), r.key, k->type, option_name("vary")));
     }
     integer.push_back(k->type == "integer");
   }
   if (ranges.empty() != (samples == 0)) {
-    throw InputError(ranges.empty() ? "--samples needs at least one --range"
-                                    : "--range needs --samples N (N > 0)");
+    throw InputError(
+        ranges.empty() ? option_name("samples") + " needs at least one " + option_name("ranges")
+                       : option_name("ranges") + " needs " + option_name("samples") + " N (N > 0)");
   }
-  if (grid.empty() && ranges.empty()) throw InputError("sweep: give --vary or --range");
+  if (grid.empty() && ranges.empty())
+    throw InputError("sweep: give " + option_name("vary") + " or " + option_name("ranges"));
   double count = static_cast<double>(std::max<std::size_t>(samples, 1));
   for (const Vary& v : grid) count *= static_cast<double>(v.values.size());
   if (count > static_cast<double>(kMaxPoints)) {
@@ -495,8 +497,8 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
   const bool exists = std::filesystem::exists(csv);
   if (exists && !resume) {
     throw InputError(
-        fmt::format("{} exists: --resume continues that sweep, or remove the file to start again",
-                    csv.string()));
+        fmt::format("{} exists: {} continues that sweep, or remove the file to start again",
+                    csv.string(), option_name("resume")));
   }
   // The output is locked while this sweep writes it: a second sweep of the same file (a
   // --resume started twice) refuses to start instead of writing the same rows again.
@@ -528,8 +530,8 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
       const SweepTable t = parse_sweep_csv(text.substr(0, keep), csv);  // read once
       if (t.columns != columns) {
         throw InputError(fmt::format(
-            "{}: its columns are another sweep's (other keys or --eval); give another output",
-            csv.string()));
+            "{}: its columns are another sweep's (other keys or {}); give another output",
+            csv.string(), option_name("eval")));
       }
       for (const auto& row : t.rows) {
         char* end = nullptr;
@@ -589,7 +591,7 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
     detail::distribute_points(
         *world, todo, [&](std::size_t i) { return arena.execute([&] { return row_of(i); }); },
         accept, hooks);
-    hooks.check("interrupted: the rows written stay; --resume continues");
+    hooks.check(stopped_message().c_str());
     return evaluated;
   }
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
@@ -611,7 +613,7 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
         },
         tbb::simple_partitioner());
   });
-  hooks.check("interrupted: the rows written stay; --resume continues");
+  hooks.check(stopped_message().c_str());
   return evaluated;
 }
 

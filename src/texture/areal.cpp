@@ -744,8 +744,8 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
     if (l > shorter) {
       throw InputError(fmt::format(
           "L-filter: the nesting index {:g} mm is longer than the map's shorter side ({:g} mm); "
-          "give a shorter one (--lambda-c) or a larger map",
-          l, shorter));
+          "give a shorter one ({}) or a larger map",
+          l, shorter, option_name("l_mm")));
     }
     if (o.s_mm && l <= *o.s_mm) {
       throw InputError(fmt::format(
@@ -784,8 +784,8 @@ ArealTexture areal_texture(const HeightMap& map, const ArealFilterOptions& o) {
       throw InputError(fmt::format(
           "L-filter: the map ({} x {} points, {:g} x {:g} mm apart) admits none of ISO "
           "21920-3's cut-offs (0.08 .. 8 mm: at least two sample spacings, at most its shorter "
-          "side of {:g} mm); give one (--lambda-c)",
-          map.nx, map.ny, map.dx_mm, map.dy_mm, shorter));
+          "side of {:g} mm); give one ({})",
+          map.nx, map.ny, map.dx_mm, map.dy_mm, shorter, option_name("l_mm")));
     }
     t.l_source = "ISO 21920-3 default from Sa";
     for (int k = 0;; ++k) {

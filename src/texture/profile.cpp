@@ -484,9 +484,8 @@ ProfileTexture profile_texture(const std::vector<double>& raw_z_mm, double dx_mm
     if (sections < 1) {
       throw InputError(fmt::format(
           "profile texture: {:.4g} mm of profile holds less than three cut-offs of {:g} mm "
-          "(run-in, one sampling length, run-out); give a longer profile or a shorter "
-          "--lambda-c",
-          static_cast<double>(z_mm.size()) * dx_mm, lc));
+          "(run-in, one sampling length, run-out); give a longer profile or a shorter {}",
+          static_cast<double>(z_mm.size()) * dx_mm, lc, option_name("lambda_c_mm")));
     }
     if (o.lambda_s_mm && *o.lambda_s_mm >= lc) {
       throw InputError(

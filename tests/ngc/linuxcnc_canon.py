@@ -171,7 +171,7 @@ def run_rs274(program, var, tools):
     canon = Canon(vfile, tools)
     plane = "XY"
     mm = 1.0  # mm per printed unit: rs274 prints in the program's units (G20: inches)
-    call = re.compile(r"^\s*\d+ N\S*\s+(\w+)\((.*)\)\s*$")
+    call = re.compile(r"^\s*\d+ N\S*\s+([\w.]+)\((.*)\)\s*$")  # SPINDLE.0.WAIT_ORIENT_COMPLETE
     for line in out.splitlines():
         m = call.match(line)
         if not m:

@@ -382,7 +382,7 @@ def test_report_refuses_bad_requests(pivkin):
     job = tm.Job.from_toml(pivkin)
     with pytest.raises(tm.InputError, match="unknown item; allowed: mechanism, forces, simulate"):
         tm.report(job, parts=["plots"])
-    with pytest.raises(tm.InputError, match="needs --start"):
+    with pytest.raises(tm.InputError, match="needs start_s"):
         tm.report(job, signal=np.zeros(1000), rate_hz=100000.0)
     with pytest.raises(tm.InputError, match="no \\[material\\] force model"):
         tm.report(job, parts=["forces"])
