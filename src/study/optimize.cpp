@@ -10,10 +10,8 @@
 #include <limits>
 #include <mutex>
 #include <nlopt.hpp>
-#include <pagmo/algorithms/nsga2.hpp>
-#include <pagmo/population.hpp>
-#include <pagmo/problem.hpp>
 
+#include "nsga2.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/study.hpp"
@@ -127,31 +125,6 @@ double goal(const OptPoint& p, const Objective& o) {
   if (it == p.metrics.end()) return kPenalty;
   return o.maximize ? -it->second : it->second;
 }
-
-// pagmo's problem: minimise every goal (a point that fails or breaks a constraint gets the
-// penalty in all of them: the death penalty).
-struct ParetoProblem {
-  Evaluator* eval = nullptr;
-  const std::vector<OptVariable>* vars = nullptr;
-  const std::vector<Objective>* goals = nullptr;
-  [[nodiscard]] pagmo::vector_double fitness(const pagmo::vector_double& x) const {
-    std::vector<std::string> values;
-    for (std::size_t k = 0; k < x.size(); ++k) values.push_back(eval->value(k, x[k]));
-    const OptPoint& p = eval->at(values);
-    pagmo::vector_double f;
-    for (const Objective& o : *goals) f.push_back(p.feasible ? goal(p, o) : kPenalty);
-    return f;
-  }
-  [[nodiscard]] std::pair<pagmo::vector_double, pagmo::vector_double> get_bounds() const {
-    pagmo::vector_double lo, hi;
-    for (const OptVariable& v : *vars) {
-      lo.push_back(v.choices.empty() ? v.lo : 0.0);
-      hi.push_back(v.choices.empty() ? v.hi : static_cast<double>(v.choices.size()) - 1e-9);
-    }
-    return {lo, hi};
-  }
-  [[nodiscard]] pagmo::vector_double::size_type get_nobj() const { return goals->size(); }
-};
 
 bool dominates(const OptPoint& a, const OptPoint& b, const std::vector<Objective>& goals) {
   bool better = false;
@@ -382,12 +355,27 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
     const int pop = std::max(8, (o.population + 3) / 4 * 4);
     const int generations = std::max(1, o.max_evaluations / pop - 1);
     ev.set_total(static_cast<std::size_t>(pop) * static_cast<std::size_t>(generations + 1));
-    pagmo::problem prob{ParetoProblem{&ev, &vars, &goals}};
-    pagmo::population population(prob, static_cast<pagmo::population::size_type>(pop),
-                                 static_cast<unsigned>(o.seed));
-    pagmo::algorithm algo{pagmo::nsga2(static_cast<unsigned>(generations), 0.95, 10., 0.01, 50.,
-                                       static_cast<unsigned>(o.seed))};
-    population = algo.evolve(population);
+    // Minimise every goal; a point that fails or breaks a constraint gets the penalty in all
+    // of them (the death penalty).
+    std::vector<double> lo, hi;
+    for (const OptVariable& v : vars) {
+      lo.push_back(v.choices.empty() ? v.lo : 0.0);
+      hi.push_back(v.choices.empty() ? v.hi : static_cast<double>(v.choices.size()) - 1e-9);
+    }
+    study_detail::run_nsga2(goals.size(), lo, hi, static_cast<unsigned>(pop),
+                            static_cast<unsigned>(generations), static_cast<unsigned>(o.seed),
+                            [&](const std::vector<double>& x) {
+                              std::vector<std::string> values;
+                              for (std::size_t k = 0; k < x.size(); ++k) {
+                                values.push_back(ev.value(k, x[k]));
+                              }
+                              const OptPoint& p = ev.at(values);
+                              std::vector<double> f;
+                              for (const Objective& g : goals) {
+                                f.push_back(p.feasible ? goal(p, g) : kPenalty);
+                              }
+                              return f;
+                            });
     hooks.check("interrupted");
     const auto all = ev.all();
     for (const OptPoint* p : all) {

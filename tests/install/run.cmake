@@ -30,6 +30,22 @@ if(NOT consumer STREQUAL cli OR cli STREQUAL "")
 endif()
 message(STATUS "consumer built against the installed tree: ${consumer}")
 
+# The NSGA-II plugin (pagmo, loaded by optimize with several goals) is installed beside the
+# library, and the installed CLI runs a two-goal optimisation with it.
+file(GLOB_RECURSE plugin "${WORK}/prefix/*/libtrochomill_nsga2.so")
+if(NOT plugin)
+  message(FATAL_ERROR "libtrochomill_nsga2.so is not in the installed tree")
+endif()
+run(${WORK}/prefix/bin/trochomill optimize ${example} --var path.step=0.5:1
+    --maximize cycle_mrr_mm3_per_min --minimize h_max_mm --max-evals 16 --population 8
+    --pareto ${WORK}/pareto.csv -o ${WORK}/best.toml)
+file(STRINGS ${WORK}/pareto.csv pareto)
+list(LENGTH pareto rows)
+if(rows LESS 2)
+  message(FATAL_ERROR "the installed CLI's Pareto set is empty: ${pareto}")
+endif()
+message(STATUS "the installed CLI's two-goal optimisation: ${rows} lines of Pareto set")
+
 # The installed Python package (when built): imported from the prefix's site-packages alone,
 # it plans the same slot.
 if(DEFINED PYTHON AND DEFINED PYTHON_DIR)
