@@ -4,6 +4,7 @@
 #include <dlfcn.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <exception>
 #include <filesystem>
 #include <mutex>
@@ -31,8 +32,10 @@ std::vector<std::filesystem::path> plugin_candidates() {
     out.push_back(
         (exe.parent_path() / TROCHOMILL_PLUGIN_FROM_BIN / kPluginFile).lexically_normal());
   }
-  out.emplace_back(std::filesystem::path(TROCHOMILL_BUILD_PLUGIN_DIR) / kPluginFile);
-  out.emplace_back(std::filesystem::path(TROCHOMILL_INSTALL_PLUGIN_DIR) / kPluginFile);
+  for (const char* dir : {TROCHOMILL_BUILD_PLUGIN_DIR, TROCHOMILL_INSTALL_PLUGIN_DIR}) {
+    const std::filesystem::path p = std::filesystem::path(dir) / kPluginFile;
+    if (std::find(out.begin(), out.end(), p) == out.end()) out.push_back(p);  // each place once
+  }
   return out;
 }
 
