@@ -316,8 +316,8 @@ void register_study_commands(CLI::App& app, int& exit_code) {
                      r.evaluations, line, goals[0].metric, r.best->metrics.at(goals[0].metric),
                      a->output);
         } else {
-          fmt::print(sink, "{}: {} Pareto points of {} evaluations -> {}\n", a->job.file,
-                     r.pareto.size(), r.evaluations, a->pareto);
+          fmt::print(sink, "{}: {} Pareto point{} of {} evaluations -> {}\n", a->job.file,
+                     r.pareto.size(), r.pareto.size() == 1 ? "" : "s", r.evaluations, a->pareto);
         }
       }
       run.finish("interrupted");

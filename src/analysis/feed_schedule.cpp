@@ -147,7 +147,9 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
   const double lo = targets.min_feed_mm_per_min, hi = targets.max_feed_mm_per_min;
   if (!(lo > 0) || !(hi >= lo) || !std::isfinite(hi)) {
     throw InputError(fmt::format(
-        "feed schedule: the feed limits must be 0 < min <= max (mm/min), got {} and {}", lo, hi));
+        "feed schedule: the feed limits ({} and {}, or [machine] min_feed and max_feed) must be "
+        "0 < min <= max (mm/min), got {} and {}",
+        option_name("min_feed_mm_per_min"), option_name("max_feed_mm_per_min"), lo, hi));
   }
   const std::optional<double> mrr_cap = targets.mrr_mm3_per_min;
   if (mrr_cap && (!(*mrr_cap > 0) || !std::isfinite(*mrr_cap))) {

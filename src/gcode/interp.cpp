@@ -365,7 +365,7 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
       case 680:
         // Outputs wait for motion to stop, which a compensated path cannot (LinuxCNC).
         comp_.refuse(column, fmt::format("{} (a motion output)", code_name('M', m)));
-        if (m <= 650 && !block_.has('p')) {
+        if (m >= 620 && m <= 650 && !block_.has('p')) {
           fail_at(column, fmt::format("{} needs the output's number in P", code_name('M', m)));
         }
         if (m == 660) check_m66(column);

@@ -466,9 +466,9 @@ ProfileTexture profile_texture(const std::vector<double>& raw_z_mm, double dx_mm
     const double ls = *o.lambda_s_mm;
     if (!(std::isfinite(ls) && ls >= 2 * dx_mm && (!cutoff_mm || ls < *cutoff_mm))) {
       throw InputError(fmt::format(
-          "profile texture: lambda_s must be at least two sample spacings ({:g} mm) and shorter "
-          "than lambda_c, got {} mm",
-          2 * dx_mm, ls));
+          "profile texture: {} must be at least two sample spacings ({:g} mm) and shorter "
+          "than {}, got {} mm",
+          option_name("lambda_s_mm"), 2 * dx_mm, option_name("lambda_c_mm"), ls));
     }
     primary = gaussian_filter(raw_z_mm, dx_mm, ls, FilterEnds::normalize).mean_mm;
   }
