@@ -94,8 +94,10 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
          std::optional<double> air_feed_mm_per_min, double feed_step_percent, double piece_mm,
          const std::vector<std::string>& include_dirs, const std::string& engine,
          const std::optional<std::string>& stock, std::optional<int> rounds,
-         const py::object& progress) {
+         const py::object& progress, std::optional<double> memory_limit_gb) {
         FeedOptimizeOptions o;
+        // The sim engine's estimate is checked against it before the boards are made.
+        o.memory_limit_bytes = memory_limit_bytes(memory_limit_gb, option_name("memory_limit_gb"));
         if (engine != "kernel" && engine != "sim") {
           throw InputError(fmt::format(
               "optimize_feed: engine must be \"kernel\" or \"sim\", got \"{}\"", engine));
@@ -138,14 +140,15 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
       py::arg("air_feed_mm_per_min") = py::none(), py::arg("feed_step_percent") = 5.0,
       py::arg("piece_mm") = 0.5, py::arg("include_dirs") = std::vector<std::string>{},
       py::arg("engine") = "kernel", py::arg("stock") = py::none(), py::arg("rounds") = py::none(),
-      py::arg("progress") = py::none(),
+      py::arg("progress") = py::none(), py::arg("memory_limit_gb") = py::none(),
       R"(Feed optimisation of an NC program, as `trochomill optimize-feed PROGRAM --job JOB`
 (docs/models.md section 15): program is the file's path, job a Job; the targets as
 schedule_feed's plus force_n (N), power_w (W) and torque_nm (N m) caps from the job's
 [material] model; include_dirs are searched for subroutine files; engine "kernel" (the
 exact engagement, 2.5D programs) or "sim" (the tri-dexel simulation at the job's
 [simulation] resolution: any motion); stock a closed mesh file (STL, PLY, OBJ; mm, the
-program's frame) instead of the job's box; rounds of evaluation (default 12). Returns the summary of
+program's frame) instead of the job's box; rounds of evaluation (default 12);
+memory_limit_gb (default 75 % of the RAM) bounds the sim engine's estimated memory. Returns the summary of
 `--json` (times, quantiles of h_max, removal rate and forces before and after, shares of
 feed time by limit, blocks where the target cannot be held, warnings), "text" (the
 rewritten program) and "before"/"after": per cutting sample t_s, feed_mm_per_min and

@@ -455,3 +455,9 @@ def test_optimize_feed_stock_mesh_and_engine(tmp_path):
         assert r["text"] == out.read_text()
     with pytest.raises(tm.InputError, match="engine"):
         tm.optimize_feed(str(prog), job, engine="gpu")
+    # The sim engine's memory estimate is checked before the boards are made, as the CLI's
+    # --memory-limit does; the message names the keyword.
+    with pytest.raises(tm.InputError, match="or raise memory_limit_gb"):
+        tm.optimize_feed(str(prog), job, engine="sim", stock=str(stl), memory_limit_gb=1e-6)
+    with pytest.raises(tm.InputError, match="memory_limit_gb"):
+        tm.optimize_feed(str(prog), job, memory_limit_gb=-1.0)
