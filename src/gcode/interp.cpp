@@ -425,7 +425,7 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
         frames_.back().restore_modal = true;
         break;
       default:
-        if (m >= 1000 && m <= 1990 && m % 10 == 0) {
+        if (user_m_code(m)) {
           warn(fmt::format("{} (a user M-code) was ignored: it runs a program of the machine's",
                            code_name('M', m)));
           break;

@@ -214,11 +214,10 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   bool m19 = false, m_p = false, m_q = false, m66 = false, m_e = false;
   for (const auto& mc : block_.m) {
     const int m = mc.code10;
-    const bool user = m >= 1000 && m <= 1990 && m % 10 == 0;
     m19 = m19 || m == 190;
     m66 = m66 || m == 660;
-    m_p = m_p || m == 190 || (m >= 500 && m <= 530) || (m >= 620 && m <= 660) || user;
-    m_q = m_q || m == 190 || (m >= 660 && m <= 680) || user;
+    m_p = m_p || m == 190 || (m >= 500 && m <= 530) || (m >= 620 && m <= 660) || user_m_code(m);
+    m_q = m_q || m == 190 || (m >= 660 && m <= 680) || user_m_code(m);
     m_e = m_e || (m >= 660 && m <= 680);
   }
   const bool q_cycle =

@@ -26,7 +26,11 @@ inline constexpr int kMaxParameter = 5602;  // #1 .. #5601, as LinuxCNC
 // EQ/NE/LE/GE compare within this (LinuxCNC's TOLERANCE_EQUAL).
 inline constexpr double kTolEqual = 1e-6;
 inline constexpr double kMaxCoordinate = 1e6;  // mm: beyond this a move is refused (1 km)
-inline constexpr int kMaxNesting = 200;        // brackets, signs and # in one value
+/// A user M-code M100-M199 (its code in tenths): a program of the machine's, taking P and Q.
+inline constexpr bool user_m_code(int code10) {
+  return code10 >= 1000 && code10 <= 1990 && code10 % 10 == 0;
+}
+inline constexpr int kMaxNesting = 200;  // brackets, signs and # in one value
 
 enum class Plane { xy, zx, yz };
 enum class FeedMode { per_minute, inverse_time, per_rev };

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <mutex>
@@ -44,21 +45,24 @@ Nsga2Entry load_entry() {
   static Nsga2Entry entry = nullptr;
   static std::string why;
   std::call_once(once, [] {
+    const auto passed = [](const std::filesystem::path& p, std::string_view reason) {
+      why += fmt::format("{}{} ({})", why.empty() ? "" : "; ", p.string(), reason);
+    };
     for (const std::filesystem::path& p : plugin_candidates()) {
       std::error_code ec;
       if (!std::filesystem::exists(p, ec)) {
-        why += fmt::format("{}{} (not there)", why.empty() ? "" : "; ", p.string());
+        passed(p, "not there");
         continue;
       }
       void* h = ::dlopen(p.c_str(), RTLD_NOW | RTLD_LOCAL);
       if (h == nullptr) {
         const char* e = ::dlerror();
-        why += fmt::format("{}{} ({})", why.empty() ? "" : "; ", p.string(), e ? e : "?");
+        passed(p, e != nullptr ? e : "?");
         continue;
       }
       entry = reinterpret_cast<Nsga2Entry>(::dlsym(h, kNsga2Symbol));
       if (entry != nullptr) return;  // kept loaded for the process's life
-      why += fmt::format("{}{} (no {})", why.empty() ? "" : "; ", p.string(), kNsga2Symbol);
+      passed(p, fmt::format("no {}", kNsga2Symbol));
       ::dlclose(h);
     }
   });
