@@ -10,6 +10,7 @@
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/report.hpp"
+#include "trochomill/study.hpp"
 
 namespace {
 
@@ -63,10 +64,7 @@ void BM_CompareEightAspectRatios(benchmark::State& state) {
   for (auto _ : state) {
     // As `compare` runs it: the file parsed once, every point analysed with its predicted force.
     const auto doc = trochomill::JobDocument::load(job);
-    const auto pts = trochomill::run_study(
-        doc, {}, vary, static_cast<int>(state.range(0)), [](const trochomill::Job& j) {
-          return trochomill::analyze_with_forces(j, trochomill::plan_path(j).path);
-        });
+    const auto pts = trochomill::run_compare(doc, {}, vary, static_cast<int>(state.range(0)));
     benchmark::DoNotOptimize(pts.data());
   }
   state.SetLabel(state.range(0) == 0 ? "all cores" : "1 thread");

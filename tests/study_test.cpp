@@ -11,14 +11,32 @@
 #include <set>
 
 #include "test_util.hpp"
+#include "trochomill/app.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
 
 namespace trochomill {
 namespace {
 
 namespace fs = std::filesystem;
+
+// compare's, sweep's and optimize's value lists: commas inside brackets and quotes kept.
+TEST(Sweep, ParseVary) {
+  const Vary v = parse_vary("path.aspect_ratio=0.5, 0.6 ,0.7");
+  EXPECT_EQ(v.key, "path.aspect_ratio");
+  ASSERT_EQ(v.values.size(), 3u);
+  EXPECT_EQ(v.values[1], "0.6");
+  const Vary t = parse_vary("tool.tooth_angles=[0, 90, 180, 270],[0, 95, 180, 275]");
+  ASSERT_EQ(t.values.size(), 2u);
+  EXPECT_EQ(t.values[1], "[0, 95, 180, 275]");
+  const Vary q = parse_vary(R"(path.type="elliptical","linear-elliptical")");
+  ASSERT_EQ(q.values.size(), 2u);
+  EXPECT_THROW((void)parse_vary("path.step"), InputError);
+  EXPECT_THROW((void)parse_vary("step=1,2"), InputError);
+  EXPECT_THROW((void)parse_vary("path.step=1,,2"), InputError);
+}
 
 // scipy.stats.qmc.Sobol(d=3, scramble=False).random(5) (Joe and Kuo's directions) without its
 // first point, the origin, which Boost's generator skips: exact binary fractions.
@@ -111,10 +129,7 @@ TEST_F(SweepRun, RowsAreTheAnalysisOfEachPointAndFailuresAreRecorded) {
                                     t.columns.begin());
   };
   const std::vector<Vary> varies = {parse_vary("path.aspect_ratio=0.8,1.2")};
-  const auto study =
-      nlohmann::json::parse(study_json(varies, run_study(doc, {}, varies, 1, [](const Job& j) {
-                                         return analyze_with_forces(j, plan_path(j).path);
-                                       })));
+  const auto study = nlohmann::json::parse(study_json(varies, run_compare(doc, {}, varies, 1)));
   for (const std::size_t row : {0u, 2u}) {
     EXPECT_EQ(t.rows[row][col("ok")], "1");
     const auto& m = study["points"][row / 2]["metrics"];
@@ -130,6 +145,49 @@ TEST_F(SweepRun, RowsAreTheAnalysisOfEachPointAndFailuresAreRecorded) {
   }
   // An existing file is refused without --resume.
   EXPECT_THROW((void)run_sweep(doc, {}, plan, SweepOptions{}, csv, false), InputError);
+}
+
+// compare is the sweep's engine kept in memory: a key the schema does not have, or one given
+// twice, is refused before any point runs (it failed point by point); the grid's order is
+// the plan's; a point that fails records why. The report's study refuses a grid whose every
+// point failed, in Python as in the CLI (report_data, the layer both call).
+TEST(Compare, KeysAreCheckedFirstAndEveryFailureIsRecorded) {
+  const JobDocument doc = JobDocument::load(test::example("wagih2023/elliptical.toml"));
+  EXPECT_THROW((void)run_compare(doc, {}, {parse_vary("path.nope=1,2")}, 1), InputError);
+  EXPECT_THROW(
+      (void)run_compare(doc, {}, {parse_vary("path.step=1,2"), parse_vary("path.step=3")}, 1),
+      InputError);
+  EXPECT_THROW((void)run_compare(doc, {}, {}, 1), InputError);
+  const std::vector<Override> base = {{"slot.length", "4", ""}};
+  const std::vector<Vary> varies = {parse_vary("path.step=1,-1"),
+                                    parse_vary("path.aspect_ratio=0.8,1.2")};
+  const std::vector<StudyPoint> points = run_compare(doc, base, varies, 2);
+  const SweepPlan plan = plan_sweep(varies, {}, 0, Sampler::sobol, 0);
+  ASSERT_EQ(points.size(), plan.points.size());
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    ASSERT_EQ(points[p].overrides.size(), 3u);
+    EXPECT_EQ(points[p].overrides[0].key, "slot.length");
+    EXPECT_EQ(points[p].overrides[1].value, plan.points[p][0]);
+    EXPECT_EQ(points[p].overrides[2].value, plan.points[p][1]);
+    EXPECT_EQ(points[p].ok, plan.points[p][0] == "1") << points[p].error;
+    if (points[p].ok) {
+      EXPECT_GT(points[p].metrics.h_max_mm, 0);
+    } else {
+      EXPECT_NE(points[p].error.find("path.step"), std::string::npos);
+    }
+  }
+  Job job = doc.build(base);
+  ReportRequest r;
+  r.overrides = {{"slot.length", "4", ""}, {"path.step", "-1", ""}};
+  r.varies = {parse_vary("path.aspect_ratio=0.8,1.2")};
+  r.document = &doc;
+  try {
+    (void)report_data(job, plan_job(job).path, r);
+    ADD_FAILURE() << "a study of failures was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("every point of the study failed"), std::string::npos)
+        << e.what();
+  }
 }
 
 // A run stopped after two rows and in the middle of the third resumes to the same file; one

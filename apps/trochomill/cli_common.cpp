@@ -23,6 +23,7 @@
 #include "trochomill/io.hpp"
 #include "trochomill/pocket.hpp"
 #include "trochomill/sim.hpp"
+#include "trochomill/study.hpp"
 
 namespace trochomill::cli {
 
@@ -66,10 +67,12 @@ auto with_flag(const std::string& flag, Parse&& parse) {
 std::string cli_option_name(std::string_view api_name) {
   // The library's (and Python's) name of each option the CLI has a flag for, and the flag.
   static const std::map<std::string, std::string, std::less<>> flags = {
+      {"cycles", "--cycles"},
       {"engine", "--engine"},
       {"eval", "--eval"},
       {"fit", "--fit"},
       {"format", "--format"},
+      {"from_s", "--from"},
       {"l_mm", "--lambda-c"},
       {"lambda_c_mm", "--lambda-c"},
       {"lambda_s_mm", "--lambda-s"},
@@ -92,6 +95,7 @@ std::string cli_option_name(std::string_view api_name) {
       {"start_s", "--start"},
       {"stream", "--stream"},
       {"subject_to", "--subject-to"},
+      {"to_s", "--to"},
       {"variables", "--var"},
       {"vary", "--vary"},
   };
@@ -305,10 +309,10 @@ bool summary_to_stdout(std::initializer_list<const std::string*> outputs) {
 
 std::pair<double, double> WindowArgs::resolve(const ToolPath& path) const {
   WindowRequest r;
-  if (!cycles.empty()) r.cycles = parse_cycle_range(cycles, "--cycles");
+  if (!cycles.empty()) r.cycles = parse_cycle_range(cycles);
   r.from_s = from_s;
   r.to_s = to_s;
-  return resolve_window(path, r, {"--cycles", "--from", "--to"});
+  return resolve_window(path, r);
 }
 
 void add_window_args(CLI::App* cmd, WindowArgs& w, const std::string& what) {
@@ -452,15 +456,6 @@ void print_failed_points(const char* command, const std::vector<StudyPoint>& poi
   if (failed == 0) return;
   fmt::print(stderr, "{}: {} of {} points failed (the first: {})\n", command, failed, points.size(),
              first->error);
-}
-
-double memory_limit_bytes(std::optional<double> limit_gb) {
-  return trochomill::memory_limit_bytes(limit_gb, "--memory-limit");
-}
-
-void check_memory(const char* command, double need_bytes, std::optional<double> limit_gb,
-                  const std::string& advice) {
-  trochomill::check_memory(command, need_bytes, limit_gb, "--memory-limit", advice);
 }
 
 void add_memory_limit(CLI::App* cmd, std::optional<double>& limit_gb) {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "trochomill/analysis.hpp"
+#include "trochomill/app.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
@@ -70,10 +71,6 @@ void emit_file(const std::string& target, const std::string& extension,
                const std::function<void(const std::filesystem::path&)>& writer);
 /// The lower-case extension of an output path (".wav").
 [[nodiscard]] std::string lower_extension(const std::string& path);
-/// Refuses a run whose memory estimate (bytes) passes --memory-limit (or 75 % of RAM): the
-/// message gives both numbers and `advice` (what makes the run smaller). InputError (exit 2).
-void check_memory(const char* command, double need_bytes, std::optional<double> limit_gb,
-                  const std::string& advice);
 /// The job's planned path, or the NC program's when one is given (turned into the slot frame
 /// by the job's placement; a warning on stderr for each header key that disagrees).
 /// `memory_gb`: the command's --memory-limit (a quarter of it for the program's path as read).
@@ -170,9 +167,6 @@ class GuardedRun {
   struct Bar;
   std::shared_ptr<Bar> bar_;
 };
-/// The memory limit of a long run (bytes): `--memory-limit` GB (> 0, else InputError), or 75 %
-/// of the machine's RAM.
-[[nodiscard]] double memory_limit_bytes(std::optional<double> limit_gb);
 /// A study's points that failed, counted on stderr with the first one's error (nothing when
 /// none failed).
 void print_failed_points(const char* command, const std::vector<StudyPoint>& points);

@@ -13,6 +13,7 @@
 #include "trochomill/force.hpp"
 #include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
+#include "trochomill/study.hpp"
 
 namespace trochomill::cli {
 
@@ -88,12 +89,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       const JobDocument doc = JobDocument::load(a->job.file);
       (void)doc.build(base);  // a bad base job is bad input (exit 2)
       const GuardedRun run(true);
-      RunHooks inner;  // each point only heeds Ctrl-C; the bar counts points
-      inner.cancel = run.hooks().cancel;
-      const auto points = run_study(
-          doc, base, varies, a->threads,
-          [&inner](const Job& job) { return analyze_with_forces(job, plan_job(job).path, inner); },
-          run.hooks());
+      const auto points = run_compare(doc, base, varies, a->threads, run.hooks());
       run.done();
       if (!a->json.empty()) emit(a->json, study_json(varies, points));
       if (!a->csv.empty()) emit(a->csv, study_csv(varies, points));

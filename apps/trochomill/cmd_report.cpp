@@ -9,6 +9,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "trochomill/app.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/report.hpp"
@@ -105,15 +106,7 @@ void register_report_commands(CLI::App& app, int& exit_code, int argc, char** ar
 
     const GuardedRun run(true);
     const RunHooks hooks = run.hooks();
-    const ReportData d = build_report(job, std::move(path), std::move(r), hooks);
-    if (d.study && !d.study->points.empty() &&
-        std::none_of(d.study->points.begin(), d.study->points.end(),
-                     [](const StudyPoint& p) { return p.ok; })) {
-      throw InputError(
-          fmt::format("report --vary: every point of the study failed (the first: {}); "
-                      "nothing was written",
-                      d.study->points.front().error));
-    }
+    const ReportData d = report_data(job, std::move(path), std::move(r), hooks);
     if (d.study) print_failed_points("report --vary", d.study->points);
     const std::string html = report_html(d, hooks);
     run.done();

@@ -97,7 +97,7 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
          const py::object& progress, std::optional<double> memory_limit_gb) {
         FeedOptimizeOptions o;
         // The sim engine's estimate is checked against it before the boards are made.
-        o.memory_limit_bytes = memory_limit_bytes(memory_limit_gb, "memory_limit_gb");
+        o.memory_limit_bytes = memory_limit_bytes(memory_limit_gb);
         if (engine != "kernel" && engine != "sim") {
           throw InputError(fmt::format(
               "optimize_feed: engine must be \"kernel\" or \"sim\", got \"{}\"", engine));

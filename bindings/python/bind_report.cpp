@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common.hpp"
+#include "trochomill/app.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/report/html.hpp"
 #include "trochomill/signal.hpp"
@@ -77,7 +78,7 @@ void bind_report(py::module_& m) {
                      "lower analysis.steps_per_tooth or report on a shorter program");
         std::string html = run_released(
             [&](const RunHooks& h) {
-              const ReportData d = build_report(pj.job, std::move(path), std::move(r), h);
+              const ReportData d = report_data(pj.job, std::move(path), std::move(r), h);
               return report_html(d, h);
             },
             progress);

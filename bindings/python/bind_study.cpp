@@ -8,10 +8,8 @@
 #include <vector>
 
 #include "common.hpp"
-#include "trochomill/analysis.hpp"
-#include "trochomill/force.hpp"
-#include "trochomill/pocket.hpp"
 #include "trochomill/report/analysis.hpp"
+#include "trochomill/study.hpp"
 
 namespace trochomill::python {
 
@@ -34,14 +32,7 @@ void bind_study(py::module_& m) {
         }
         const std::vector<StudyPoint> points = run_released(
             [&](const RunHooks& h) {
-              RunHooks inner;
-              inner.cancel = h.cancel;
-              return run_study(
-                  *job.doc, job.overrides, varies, threads,
-                  [&inner](const Job& j) {
-                    return analyze_with_forces(j, plan_job(j).path, inner);
-                  },
-                  h);
+              return run_compare(*job.doc, job.overrides, varies, threads, h);
             },
             progress);
         py::dict doc = from_json(study_json(varies, points));

@@ -89,11 +89,6 @@ py::object from_json(const std::string& text) {
   return py::module_::import("json").attr("loads")(text);
 }
 
-void check_memory(const char* what, double need_bytes, std::optional<double> limit_gb,
-                  const std::string& advice) {
-  trochomill::check_memory(what, need_bytes, limit_gb, "memory_limit_gb", advice);
-}
-
 ToolPath path_of(const py::object& job_or_path) {
   if (py::isinstance<PyPath>(job_or_path)) return job_or_path.cast<const PyPath&>().path;
   return plan_job(job_of(job_or_path, "path").job).path;
@@ -105,7 +100,7 @@ std::pair<double, double> window_of(const ToolPath& path, const py::object& cycl
   if (!cycles.is_none()) r.cycles = cycles.cast<std::pair<long long, long long>>();
   r.from_s = from_s;
   r.to_s = to_s;
-  return resolve_window(path, r, {"cycles", "from_s", "to_s"});
+  return resolve_window(path, r);
 }
 
 std::vector<double> degrees(const std::vector<double>& rad) {

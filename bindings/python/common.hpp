@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "trochomill/app.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/gcode.hpp"
@@ -89,11 +90,6 @@ py::array_t<T> to_array(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
 [[nodiscard]] std::vector<Override> overrides_of(const py::object& set);
 /// JSON text (the CLI's --json documents) as Python objects (json.loads).
 [[nodiscard]] py::object from_json(const std::string& text);
-
-/// The memory limit of a call (bytes): `limit_gb` when given (> 0), else 75 % of the RAM;
-/// throws InputError naming `what` and `advice` when `need_bytes` passes it.
-void check_memory(const char* what, double need_bytes, std::optional<double> limit_gb,
-                  const std::string& advice);
 
 /// The path of an argument: a Path as it is, a Job's planned path.
 [[nodiscard]] ToolPath path_of(const py::object& job_or_path);

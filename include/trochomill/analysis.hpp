@@ -245,14 +245,12 @@ struct FeedSchedule {
 [[nodiscard]] FeedSchedule schedule_feed(const Job& job, const ToolPath& path,
                                          const FeedTargets& targets, const RunHooks& hooks = {});
 
-/// A key varied by a parameter study, with its values (TOML, as typed).
+/// A key varied by a parameter study, with its values (TOML, as typed); parse_vary and the
+/// studies themselves (compare, sweep) are in study.hpp.
 struct Vary {
   std::string key;                  ///< "section.key"
   std::vector<std::string> values;  ///< TOML values as typed
 };
-/// Parses "section.key=v1,v2,..." (a value may be a TOML array in brackets). Throws
-/// InputError.
-[[nodiscard]] Vary parse_vary(const std::string& text);
 
 /// One grid point of a study: its overrides and its metrics (or the error that stopped it).
 struct StudyPoint {
@@ -262,17 +260,4 @@ struct StudyPoint {
   ProcessMetrics metrics;
 };
 
-/// Evaluates every point of the grid (the Cartesian product of the varies, the first varying
-/// slowest) on `threads` threads (0: all cores). Each point's job is built from the parsed
-/// document `doc` with the `base` overrides then its own (the file is read once); results
-/// are in grid order whatever the thread count. A point whose job is invalid or whose
-/// evaluation fails records the message, not thrown. At most 100,000 points. `hooks`: the
-/// phase "grid" with progress per point; cancelling (or `evaluate` throwing Interrupted)
-/// stops the study with Interrupted.
-[[nodiscard]] std::vector<StudyPoint> run_study(
-    const JobDocument& doc, const std::vector<Override>& base, const std::vector<Vary>& varies,
-    int threads, const std::function<ProcessMetrics(const Job&)>& evaluate,
-    const RunHooks& hooks = {});
-
-/// The study as a text table, JSON and CSV (one row per point).
 }  // namespace trochomill

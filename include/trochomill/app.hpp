@@ -1,7 +1,8 @@
 // The application layer: what every caller of the library (the CLI, the Python module) does
-// around a model call, written once. Each caller names its own options (the CLI `--cycles`,
-// Python `cycles`) through the `names` it passes, so that a message speaks the caller's
-// language while the rule is one. Times s, memory bytes (limits GB where a user gives them).
+// around a model call, written once. Its messages name options by their API names, marked with
+// option_name (`cycles`, `from_s`, `to_s`, `memory_limit_gb`); each caller renders them as its
+// own (Error::message: the CLI's `--cycles`, Python's `cycles`), so the rule is one. Times s,
+// memory bytes (limits GB where a user gives them).
 #pragma once
 
 #include <optional>
@@ -12,6 +13,7 @@
 #include "trochomill/analysis.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/report/html.hpp"
 
 namespace trochomill {
 
@@ -23,29 +25,23 @@ struct WindowRequest {
   std::optional<double> from_s, to_s;
   [[nodiscard]] bool given() const { return cycles || from_s || to_s; }
 };
-/// What the caller calls the window's options, for messages.
-struct WindowNames {
-  std::string cycles = "cycles", from = "from_s", to = "to_s";
-};
 /// The window (s): the cycles' times (cycle_window), or [from_s or 0, to_s or the path's end].
-/// Throws InputError naming the caller's option: both forms given, a cycle range outside
-/// 0 <= A < B <= the path's cycles (checked before any narrowing), a time not finite or
-/// outside [0, 1e9] s, or an end not after the start.
+/// Throws InputError naming the option (`cycles`, `from_s`, `to_s`): both forms given, a cycle
+/// range outside 0 <= A < B <= the path's cycles (checked before any narrowing), a time not finite
+/// or outside [0, 1e9] s, or an end not after the start.
 [[nodiscard]] std::pair<double, double> resolve_window(const ToolPath& path,
-                                                       const WindowRequest& request,
-                                                       const WindowNames& names = {});
-/// Reads "A:B" (the CLI's form of a cycle range). Throws InputError naming `option`.
-[[nodiscard]] std::pair<long long, long long> parse_cycle_range(std::string_view text,
-                                                                std::string_view option);
+                                                       const WindowRequest& request);
+/// Reads "A:B" (the CLI's form of a cycle range). Throws InputError naming `cycles`.
+[[nodiscard]] std::pair<long long, long long> parse_cycle_range(std::string_view text);
 
 /// The memory a run may take (bytes): `limit_gb` when given (a finite number > 0, else an
-/// InputError naming `option`), else default_memory_limit_bytes (75 % of the RAM).
-[[nodiscard]] double memory_limit_bytes(std::optional<double> limit_gb, std::string_view option);
+/// InputError naming `memory_limit_gb`), else default_memory_limit_bytes (75 % of the RAM).
+[[nodiscard]] double memory_limit_bytes(std::optional<double> limit_gb);
 /// Refuses a run whose estimate (bytes) passes the limit before anything is allocated: an
-/// InputError that gives both numbers, where the limit came from (`option` or 75 % of RAM) and
-/// `advice` (what makes the run smaller). `what`: the run, e.g. "simulate".
+/// InputError that gives both numbers, where the limit came from (`memory_limit_gb` or 75 % of
+/// RAM) and `advice` (what makes the run smaller). `what`: the run, e.g. "simulate".
 void check_memory(std::string_view what, double need_bytes, std::optional<double> limit_gb,
-                  std::string_view option, std::string_view advice);
+                  std::string_view advice);
 
 /// Names the blocks of the analysis's largest chip and engagement (ProcessMetrics' *_source,
 /// "file:line") from the line table of the program the path was read from (its
@@ -59,5 +55,12 @@ struct FeedTargetRequest {
   std::optional<double> min_feed_mm_per_min, max_feed_mm_per_min, air_feed_mm_per_min;
 };
 [[nodiscard]] FeedTargets feed_targets(const Job& job, const FeedTargetRequest& request);
+
+/// The report's data: build_report's parts, then the request's parameter study (compare's
+/// grid over `request.varies`, built from `request.document` with `request.overrides`:
+/// run_compare, in the study module above the report's). Throws InputError naming the option
+/// `vary` when every point of the study failed: a page of failures is not written.
+[[nodiscard]] ReportData report_data(Job job, ToolPath path, ReportRequest request,
+                                     const RunHooks& hooks = {});
 
 }  // namespace trochomill

@@ -17,6 +17,23 @@
 
 namespace trochomill {
 
+/// Parses "section.key=v1,v2,..." (a value may be a TOML array in brackets): the values of
+/// compare's and sweep's grids and optimize's choices. Throws InputError.
+[[nodiscard]] Vary parse_vary(const std::string& text);
+
+/// `compare`: analyze (with the predicted force) on every point of the grid, the Cartesian
+/// product of `varies` in plan_sweep's order (the first key slowest), through the sweep's own
+/// plan, evaluation and parallel loop, every point's metrics kept (at most 100,000 points).
+/// Each point's job is built from the parsed document `doc` with the `base` overrides then its
+/// values (the file is read once); results are in grid order whatever `threads` (0: all
+/// cores). A point whose job is invalid or whose evaluation fails records the message, not
+/// thrown; an unknown or repeated key is an InputError before any point runs. `hooks`: the
+/// phase "grid" with progress per point; cancelling stops it with Interrupted.
+[[nodiscard]] std::vector<StudyPoint> run_compare(const JobDocument& doc,
+                                                  const std::vector<Override>& base,
+                                                  const std::vector<Vary>& varies, int threads,
+                                                  const RunHooks& hooks = {});
+
 /// A key sampled over an interval (`--range key=lo:hi`); integer keys are rounded.
 struct SweepRange {
   std::string key;

@@ -676,7 +676,7 @@ std::vector<Key> build_schema() {
   const std::vector<Key> rest = {
       // [forces]
       integer("forces", "fast_steps_per_rev", 8, 100000, FIELD(forces.fast_steps_per_rev),
-              "time steps per revolution of the fast chip source (forces --fast, analyze's "
+              "time steps per revolution of the fast chip source (the fast forces, analyze's "
               "predicted force); calibration uses at least 500 per tooth pass"),
       number("forces", "ploughing_angle", "degrees", Range{0.0, 90.0, false, false},
              FIELD(forces.ploughing_angle_deg),

@@ -208,16 +208,6 @@ ReportData build_report(Job job, ToolPath path, ReportRequest r, const RunHooks&
     d.monitor = std::move(mo);
   }
   hooks.check();
-  if (!r.varies.empty()) {
-    RunHooks inner;  // each point only heeds Ctrl-C; the progress counts points
-    inner.cancel = hooks.cancel;
-    ReportStudy st;
-    st.varies = r.varies;
-    st.points = run_study(
-        *r.document, r.overrides, r.varies, 0,
-        [&inner](const Job& j) { return analyze_with_forces(j, plan_job(j).path, inner); }, hooks);
-    d.study = std::move(st);
-  }
   return d;
 }
 

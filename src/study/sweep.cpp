@@ -9,10 +9,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <boost/random/sobol.hpp>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -35,6 +37,7 @@ namespace {
 using nlohmann::json;
 
 constexpr std::size_t kMaxPoints = 1000000;
+constexpr std::size_t kMaxComparePoints = 100000;
 
 // What an interrupted sweep says.
 const std::string& stopped_message() {
@@ -64,6 +67,52 @@ void flatten(const json& j, const std::string& prefix,
   }
 }
 
+// analyze's evaluation of a point: the job's plan, its metrics with the predicted force.
+ProcessMetrics analyze_point(const Job& job, const RunHooks& hooks) {
+  return analyze_with_forces(job, plan_job(job).path, hooks);
+}
+
+// The overrides of point i: the base's, then the point's values (named by their keys).
+std::vector<Override> point_overrides(const std::vector<Override>& base, const SweepPlan& plan,
+                                      std::size_t i) {
+  std::vector<Override> o = base;
+  for (std::size_t k = 0; k < plan.keys.size(); ++k)
+    o.push_back({plan.keys[k], plan.points[i][k], ""});
+  return o;
+}
+
+// Runs run(k) for k in [0, count) on `threads` threads (0: all cores), a point per task, until
+// the hooks cancel; a point stopped by Interrupted stops the rest. After the points that were
+// running: Interrupted (`stopped`) when cancelled, else the point's own Interrupted.
+template <class Run>
+void for_each_point(std::size_t count, int threads, const RunHooks& hooks, const char* stopped,
+                    const Run& run) {
+  std::atomic<bool> stop{false};
+  std::exception_ptr interrupted;
+  std::mutex mu;
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, count, 1),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            if (stop || hooks.cancelled()) return;
+            try {
+              run(k);
+            } catch (const Interrupted&) {
+              const std::lock_guard<std::mutex> lock(mu);
+              if (!interrupted) interrupted = std::current_exception();
+              stop = true;
+              return;
+            }
+          }
+        },
+        tbb::simple_partitioner());
+  });
+  hooks.check(stopped);
+  if (interrupted) std::rethrow_exception(interrupted);
+}
+
 // The document of one evaluation.
 json evaluate(const Job& job, SweepEval eval, const std::optional<std::pair<int, int>>& cycles,
               const RunHooks& hooks, double memory_limit_bytes) {
@@ -73,9 +122,8 @@ json evaluate(const Job& job, SweepEval eval, const std::optional<std::pair<int,
     return json::parse(
         mechanism_json(job, job.mechanism, c, summarize_zones(c, job.mechanism, wear), wear));
   }
+  if (eval == SweepEval::analyze) return json::parse(metrics_json(job, analyze_point(job, hooks)));
   const ToolPath path = plan_job(job).path;
-  if (eval == SweepEval::analyze)
-    return json::parse(metrics_json(job, analyze_with_forces(job, path, hooks)));
   std::pair<double, double> window;
   if (cycles) {
     window = cycle_window(path, cycles->first, cycles->second);
@@ -183,9 +231,7 @@ std::string sweep_row(const JobDocument& doc, const std::vector<Override>& base,
                       const SweepPlan& plan, const SweepOptions& options,
                       const std::vector<std::string>& columns, std::size_t i,
                       const RunHooks& inner) {
-  std::vector<Override> o = base;
-  for (std::size_t k = 0; k < plan.keys.size(); ++k)
-    o.push_back({plan.keys[k], plan.points[i][k], ""});
+  const std::vector<Override> o = point_overrides(base, plan, i);
   std::string error;
   std::map<std::string, json> values;
   try {
@@ -218,7 +264,48 @@ std::string sweep_row(const JobDocument& doc, const std::vector<Override>& base,
   return line + "\n";
 }
 
+// "a, [1, 2], b" -> {"a", " [1, 2]", " b"}: commas inside brackets, braces and quotes kept.
+std::vector<std::string> split_values(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  int depth = 0;
+  bool quoted = false;
+  for (const char c : text) {
+    if (c == '"') quoted = !quoted;
+    if (!quoted && (c == '[' || c == '{')) ++depth;
+    if (!quoted && (c == ']' || c == '}')) --depth;
+    if (c == ',' && depth == 0 && !quoted) {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
 }  // namespace
+
+Vary parse_vary(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) {
+    throw InputError(fmt::format("'{}': expected section.key=v1,v2,...", text));
+  }
+  Vary v;
+  v.key = trim(text.substr(0, eq));
+  const auto dot = v.key.find('.');
+  if (dot == std::string::npos || dot == 0 || dot + 1 == v.key.size()) {
+    throw InputError(
+        fmt::format("'{}': the key must be section.key (e.g. path.aspect_ratio)", text));
+  }
+  for (auto& val : split_values(text.substr(eq + 1))) {
+    val = trim(val);
+    if (val.empty()) throw InputError(fmt::format("'{}': empty value in the list", text));
+    v.values.push_back(val);
+  }
+  return v;
+}
 
 std::map<std::string, double> point_metrics(const Job& job, SweepEval eval,
                                             const std::optional<std::pair<int, int>>& cycles,
@@ -328,7 +415,7 @@ SweepPlan plan_sweep(const std::vector<Vary>& grid, const std::vector<SweepRange
       throw InputError(fmt::format("{} {}: no such job key (see `trochomill keys`)", option, key));
     }
     if (!seen.insert(key).second) {
-      throw InputError(fmt::format("{}: the key appears twice in the sweep", key));
+      throw InputError(fmt::format("{}: the key is given twice", key));
     }
     plan.keys.push_back(key);
   };
@@ -594,26 +681,12 @@ static std::size_t run_sweep_here(const JobDocument& doc, const std::vector<Over
     hooks.check(stopped_message().c_str());
     return evaluated;
   }
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, todo.size(), 1),
-        [&](const tbb::blocked_range<std::size_t>& r) {
-          for (std::size_t k = r.begin(); k < r.end(); ++k) {
-            if (hooks.cancelled()) return;
-            std::string line;
-            try {
-              line = row_of(todo[k]);
-            } catch (const Interrupted&) {
-              return;
-            }
-            const std::lock_guard<std::mutex> lock(mu);
-            accept(k, std::move(line));
-          }
-        },
-        tbb::simple_partitioner());
-  });
-  hooks.check(stopped_message().c_str());
+  for_each_point(todo.size(), options.threads, hooks, stopped_message().c_str(),
+                 [&](std::size_t k) {
+                   std::string line = row_of(todo[k]);
+                   const std::lock_guard<std::mutex> lock(mu);
+                   accept(k, std::move(line));
+                 });
   return evaluated;
 }
 
@@ -646,6 +719,47 @@ std::size_t run_sweep(const JobDocument& doc, const std::vector<Override>& base,
     if (distributed && !told) (void)detail::agree_to_start(*world, false);
     throw;
   }
+}
+
+std::vector<StudyPoint> run_compare(const JobDocument& doc, const std::vector<Override>& base,
+                                    const std::vector<Vary>& varies, int threads,
+                                    const RunHooks& hooks) {
+  if (varies.empty()) {
+    throw InputError(
+        fmt::format("compare: give at least one key to vary ({}: section.key and its values)",
+                    option_name("vary")));
+  }
+  // Every point's metrics are kept (the sweep streams its rows to a file instead).
+  double count = 1;
+  for (const Vary& v : varies) count *= static_cast<double>(v.values.size());
+  if (count > static_cast<double>(kMaxComparePoints)) {
+    throw InputError(fmt::format(
+        "compare: the grid has {:.0f} points (limit {}): fewer values, or sweep, which writes "
+        "its rows as they come",
+        count, kMaxComparePoints));
+  }
+  const SweepPlan plan = plan_sweep(varies, {}, 0, Sampler::sobol, 0);
+  std::vector<StudyPoint> points(plan.points.size());
+  for (std::size_t p = 0; p < points.size(); ++p)
+    points[p].overrides = point_overrides(base, plan, p);
+  hooks.begin("grid");
+  SharedProgress progress(hooks, points.size());
+  RunHooks inner;  // each point only heeds Ctrl-C; the progress counts points
+  inner.cancel = hooks.cancel;
+  for_each_point(points.size(), threads, hooks, "interrupted", [&](std::size_t p) {
+    StudyPoint& sp = points[p];
+    try {
+      sp.metrics = analyze_point(doc.build(sp.overrides), inner);
+      sp.metrics.series = EngagementSeries{};  // keep the study small
+      sp.ok = true;
+    } catch (const Interrupted&) {
+      throw;
+    } catch (const std::exception& e) {
+      sp.error = e.what();
+    }
+    progress.add(1);
+  });
+  return points;
 }
 
 }  // namespace trochomill

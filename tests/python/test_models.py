@@ -378,7 +378,7 @@ def test_report_is_the_clis_page(bergmann, tmp_path):
     assert a["forces"]["worn"]["label"] == "state 1 (VB 0.15 mm)"
 
 
-def test_report_refuses_bad_requests(pivkin):
+def test_report_refuses_bad_requests(pivkin, tmp_path):
     job = tm.Job.from_toml(pivkin)
     with pytest.raises(tm.InputError, match="unknown item; allowed: mechanism, forces, simulate"):
         tm.report(job, parts=["plots"])
@@ -386,6 +386,11 @@ def test_report_refuses_bad_requests(pivkin):
         tm.report(job, signal=np.zeros(1000), rate_hz=100000.0)
     with pytest.raises(tm.InputError, match="no \\[material\\] force model"):
         tm.report(job, parts=["forces"])
+    # A study whose every point fails is refused, as the CLI refuses it (nothing written).
+    out = tmp_path / "r.html"
+    with pytest.raises(tm.InputError, match="report vary: every point of the study failed"):
+        tm.report(job, str(out), vary={"path.step": [-1.0, -2.0]})
+    assert not out.exists()
 
 
 def test_optimize_feed_is_the_cli(wagih, tmp_path):

@@ -136,7 +136,8 @@ void check_report_request(const Job& job, const ReportRequest& request);
 /// where the job has a [material] model (its wear state against the last or first of
 /// [topography]), and what the request adds: the simulation window, the monitor (Welch
 /// spectrum and spectrogram with it), the calibration (fast chips) with the fitted model's
-/// forces, the study. What a default part leaves out goes into `notes`. Checks the request
+/// forces (the parameter study is the caller's: report_data in app.hpp runs it, with the
+/// studies above this module). What a default part leaves out goes into `notes`. Checks the request
 /// first (check_report_request). `hooks`: the phases of each part; cancelling throws
 /// Interrupted (a stopped simulation too).
 [[nodiscard]] ReportData build_report(Job job, ToolPath path, ReportRequest request,
