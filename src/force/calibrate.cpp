@@ -1,7 +1,6 @@
 // Calibration of the force models: bounded nonlinear least squares against measured forces
-// (Ceres), and the classical mean-force regression of the linear model (force.hpp;
-// docs/models.md section 12).
-#include <ceres/ceres.h>
+// (Ceres, in the plugin least_squares.hpp describes), and the classical mean-force regression of
+// the linear model (force.hpp; docs/models.md section 12).
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
@@ -14,6 +13,8 @@
 #include <sstream>
 #include <string>
 
+#include "least_squares.hpp"
+#include "trochomill/common/plugin.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/io.hpp"
@@ -158,23 +159,6 @@ class ForwardInterp {
 };
 
 // ------------------------------------------------------------------ the model
-
-// Reports the solver's iterations and stops it on Ctrl-C.
-class StopAndReport : public ceres::IterationCallback {
- public:
-  StopAndReport(const RunHooks& hooks, int max_iterations)
-      : hooks_(hooks), max_(static_cast<std::size_t>(max_iterations)) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    if (hooks_.cancelled()) return ceres::SOLVER_ABORT;
-    if (hooks_.progress)
-      hooks_.progress(std::min(max_, static_cast<std::size_t>(s.iteration)), max_);
-    return ceres::SOLVER_CONTINUE;
-  }
-
- private:
-  const RunHooks& hooks_;
-  std::size_t max_;
-};
 
 // How much a record sampled every dt_s, without a low-pass filter ahead of the sampler, differs
 // from the force after the fit's filter: the model's own forces f (x, y, z at the times t)
@@ -544,35 +528,37 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   }
   double xs = 0;  // the shift's correction, in model steps
   Residuals fn{&problem, &m0, &t0, &names, &scales, &tm, &idx, &measured.t_s, &mf, dt_model};
-  auto* cost =
-      new ceres::DynamicNumericDiffCostFunction<Residuals, ceres::CENTRAL>(new Residuals(fn));
-  cost->AddParameterBlock(static_cast<int>(p));
-  cost->AddParameterBlock(1);
-  cost->SetNumResiduals(static_cast<int>(3 * idx.size()));
   xs = shift / dt_model;
-  ceres::Problem cp;
-  cp.AddResidualBlock(cost, nullptr, x.data(), &xs);
+  force_detail::LeastSquaresCall call;
+  call.blocks = {x.data(), &xs};
+  call.block_sizes = {static_cast<int>(p), 1};
+  call.lower = {std::vector<double>(p), {shift / dt_model - 2}};
+  call.upper = {std::vector<double>(p), {shift / dt_model + 2}};
   for (std::size_t i = 0; i < p; ++i) {
     const ParamSpec& s = spec(names[i]);
-    cp.SetParameterLowerBound(x.data(), static_cast<int>(i), s.lo / scales[i]);
-    cp.SetParameterUpperBound(x.data(), static_cast<int>(i), s.hi / scales[i]);
+    call.lower[0][i] = s.lo / scales[i];
+    call.upper[0][i] = s.hi / scales[i];
   }
-  cp.SetParameterLowerBound(&xs, 0, shift / dt_model - 2);
-  cp.SetParameterUpperBound(&xs, 0, shift / dt_model + 2);
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = 100;
-  so.function_tolerance = 1e-10;
-  so.parameter_tolerance = 1e-10;
-  so.gradient_tolerance = 1e-12;
-  so.num_threads = 1;
-  so.logging_type = ceres::SILENT;
+  call.residuals = static_cast<int>(3 * idx.size());
+  call.fn = fn;
+  call.max_iterations = 100;
+  call.function_tolerance = 1e-10;
+  call.parameter_tolerance = 1e-10;
+  call.gradient_tolerance = 1e-12;
+  // Reports the solver's iterations and stops it on Ctrl-C.
+  call.keep_going = [&o, &call](int iteration) {
+    if (o.hooks.cancelled()) return false;
+    if (o.hooks.progress) {
+      const auto max = static_cast<std::size_t>(call.max_iterations);
+      o.hooks.progress(std::min(max, static_cast<std::size_t>(iteration)), max);
+    }
+    return true;
+  };
+  const auto& ceres = plugin_table<force_detail::CeresTable>("ceres", force_detail::kCeresSymbol,
+                                                             "calibrate's fit (Ceres)");
   problem.quiet();
   o.hooks.begin("fit");
-  StopAndReport callback(o.hooks, so.max_num_iterations);
-  so.callbacks.push_back(&callback);
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &cp, &summary);
+  const force_detail::LeastSquaresResult fit = ceres.solve(call);
   o.hooks.check();
 
   CalibrationResult out;
@@ -581,10 +567,7 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   out.warnings = std::move(warnings);
   for (std::size_t i = 0; i < p; ++i) set_param(out.material, out.tool, names[i], x[i] * scales[i]);
   // Statistics at the optimum: residuals and Jacobian (scaled parameters).
-  std::vector<double> rv;
-  ceres::CRSMatrix jac;
-  double final_cost = 0;
-  cp.Evaluate(ceres::Problem::EvaluateOptions(), &final_cost, &rv, nullptr, &jac);
+  const std::vector<double>& rv = fit.residuals;
   const std::size_t nr = rv.size();
   const double shift_final = xs * dt_model;
   double ssr = 0, sst = 0;
@@ -607,10 +590,11 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   // Columns: the p parameters, then the shift (the covariance accounts for both).
   Eigen::MatrixXd J =
       Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nr), static_cast<Eigen::Index>(p + 1));
-  for (int r = 0; r < jac.num_rows; ++r) {
-    for (int k = jac.rows[static_cast<std::size_t>(r)];
-         k < jac.rows[static_cast<std::size_t>(r + 1)]; ++k) {
-      J(r, jac.cols[static_cast<std::size_t>(k)]) = jac.values[static_cast<std::size_t>(k)];
+  for (int r = 0; r < fit.jacobian_rows; ++r) {
+    for (int k = fit.jacobian_row_starts[static_cast<std::size_t>(r)];
+         k < fit.jacobian_row_starts[static_cast<std::size_t>(r + 1)]; ++k) {
+      J(r, fit.jacobian_cols[static_cast<std::size_t>(k)]) =
+          fit.jacobian_values[static_cast<std::size_t>(k)];
     }
   }
   const double s2 = ssr / static_cast<double>(nr - p - 1);
@@ -633,8 +617,8 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   out.shift_s = shift_final;
   out.cutoff_hz = cutoff;
   out.samples = idx.size();
-  out.iterations = static_cast<int>(summary.iterations.size());
-  out.report = summary.BriefReport();
+  out.iterations = fit.iterations;
+  out.report = fit.report;
   out.material.source =
       fmt::format("trochomill calibrate: RMSE {:.3g} N, R^2 {:.4f}", out.rmse_n, out.r2);
   return out;

@@ -1,52 +1,32 @@
-// Triangle meshes: their files through assimp, their box, and where a line crosses a triangle
-// (geometry.hpp).
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
+// Triangle meshes: their files through assimp (in the plugin mesh_plugin.hpp describes), their box,
+// and where a line crosses a triangle (geometry.hpp).
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
 #include <cmath>
 
+#include "mesh_plugin.hpp"
+#include "trochomill/common/plugin.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/geometry.hpp"
 #include "trochomill/io.hpp"
 
 namespace trochomill {
 
+namespace {
+
+const geometry_detail::AssimpTable& assimp() {
+  return plugin_table<geometry_detail::AssimpTable>("assimp", geometry_detail::kAssimpSymbol,
+                                                    "reading or writing a mesh file (assimp)");
+}
+
+}  // namespace
+
 Mesh read_mesh(const std::filesystem::path& file) {
   if (!std::filesystem::is_regular_file(file)) {
     throw InputError(fmt::format("{}: no such mesh file", file.string()));
   }
-  Assimp::Importer imp;
-  const aiScene* scene =
-      imp.ReadFile(file.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                      aiProcess_FindDegenerates | aiProcess_SortByPType);
-  if (scene == nullptr) {
-    throw InputError(fmt::format("{}: not a readable STL/PLY/OBJ mesh ({})", file.string(),
-                                 imp.GetErrorString()));
-  }
-  Mesh m;
-  for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
-    const aiMesh* am = scene->mMeshes[i];
-    const auto base = static_cast<std::uint32_t>(m.vertices.size());
-    for (unsigned v = 0; v < am->mNumVertices; ++v) {
-      const aiVector3D& p = am->mVertices[v];
-      m.vertices.push_back(
-          {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
-    }
-    for (unsigned f = 0; f < am->mNumFaces; ++f) {
-      const aiFace& face = am->mFaces[f];
-      if (face.mNumIndices != 3) continue;  // points and lines
-      m.triangles.push_back(
-          {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
-    }
-  }
-  if (m.triangles.empty()) {
-    throw InputError(fmt::format("{}: the mesh has no triangles", file.string()));
-  }
-  return m;
+  return assimp().read(file);
 }
 
 void write_mesh(const std::filesystem::path& file, const Mesh& mesh) {
@@ -61,37 +41,7 @@ void write_mesh(const std::filesystem::path& file, const Mesh& mesh) {
     throw InputError(
         fmt::format("{}: unknown mesh extension '{}' (.stl, .ply or .obj)", file.string(), ext));
   }
-  aiScene scene;
-  scene.mRootNode = new aiNode();
-  scene.mMaterials = new aiMaterial* [1] { new aiMaterial() };
-  scene.mNumMaterials = 1;
-  scene.mMeshes = new aiMesh* [1] { new aiMesh() };
-  scene.mNumMeshes = 1;
-  scene.mRootNode->mMeshes = new unsigned[1]{0};
-  scene.mRootNode->mNumMeshes = 1;
-  aiMesh* am = scene.mMeshes[0];
-  am->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
-  am->mNumVertices = static_cast<unsigned>(mesh.vertices.size());
-  am->mVertices = new aiVector3D[mesh.vertices.size()];
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const auto& v = mesh.vertices[i];
-    am->mVertices[i] = aiVector3D(static_cast<ai_real>(v[0]), static_cast<ai_real>(v[1]),
-                                  static_cast<ai_real>(v[2]));
-  }
-  am->mNumFaces = static_cast<unsigned>(mesh.triangles.size());
-  am->mFaces = new aiFace[mesh.triangles.size()];
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-    aiFace& f = am->mFaces[i];
-    f.mNumIndices = 3;
-    f.mIndices = new unsigned[3]{mesh.triangles[i][0], mesh.triangles[i][1], mesh.triangles[i][2]};
-  }
-  Assimp::Exporter ex;
-  const aiExportDataBlob* blob = ex.ExportToBlob(&scene, format);
-  if (blob == nullptr) {
-    throw IoError(
-        fmt::format("{}: cannot write the mesh ({})", file.string(), ex.GetErrorString()));
-  }
-  write_file_atomic(file, std::string_view(static_cast<const char*>(blob->data), blob->size));
+  write_file_atomic(file, assimp().encode(file, mesh, format));
 }
 
 namespace {

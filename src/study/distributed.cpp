@@ -1,5 +1,6 @@
 // MPI for the sweep: the world of a run started by mpirun, and the points handed out by rank 0
-// to whichever rank asks. Without MPI in the build, one rank and no MPI call.
+// to whichever rank asks. The MPI calls are the plugin's (mpi_plugin.hpp), loaded only in a
+// run that mpirun started. Without MPI in the build, one rank and no MPI call.
 #include "distributed.hpp"
 
 #include <fmt/format.h>
@@ -12,13 +13,19 @@
 #include <mutex>
 #include <thread>
 
+#include "mpi_plugin.hpp"
+#include "trochomill/common/plugin.hpp"
 #include "trochomill/error.hpp"
 
-#ifdef TROCHOMILL_HAVE_MPI
-#include <mpi.h>
-#endif
-
 namespace trochomill {
+namespace {
+
+const study_detail::MpiTable& mpi() {
+  return plugin_table<study_detail::MpiTable>("mpi", study_detail::kMpiSymbol,
+                                              "a sweep under mpirun (Open MPI)");
+}
+
+}  // namespace
 
 bool Distributed::built_with_mpi() noexcept {
 #ifdef TROCHOMILL_HAVE_MPI
@@ -34,29 +41,16 @@ Distributed::Distributed() {
   if (std::getenv("OMPI_COMM_WORLD_SIZE") == nullptr && std::getenv("PMI_SIZE") == nullptr) {
     return;
   }
-  int provided = 0;
-  if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
-    throw Error("MPI_Init_thread failed");
-  }
+  mpi().init(&rank_, &size_);
   initialised_ = true;
-  if (provided < MPI_THREAD_FUNNELED) {
-    MPI_Finalize();
-    throw Error("the MPI library gives no thread support (MPI_THREAD_FUNNELED is needed)");
-  }
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-  MPI_Comm_size(MPI_COMM_WORLD, &size_);
 #endif
 }
 
 Distributed::~Distributed() {
-#ifdef TROCHOMILL_HAVE_MPI
-  if (initialised_) MPI_Finalize();
-#endif
+  if (initialised_) mpi().finalize();
 }
 
 namespace detail {
-
-#ifdef TROCHOMILL_HAVE_MPI
 namespace {
 
 constexpr int kTagResult = 1;  // worker -> 0: position (int64, -1: none yet) then the row
@@ -66,22 +60,22 @@ void send_result(std::int64_t position, const std::string& line) {
   std::string msg(sizeof position, '\0');
   std::memcpy(msg.data(), &position, sizeof position);
   msg += line;
-  MPI_Send(msg.data(), static_cast<int>(msg.size()), MPI_CHAR, 0, kTagResult, MPI_COMM_WORLD);
+  mpi().send_bytes(msg, 0, kTagResult);
 }
 
 }  // namespace
-#endif
 
 void distribute_points(const Distributed& world, const std::vector<std::size_t>& todo,
                        const std::function<std::string(std::size_t)>& row_of,
                        const std::function<void(std::size_t, std::string)>& row_done,
                        const RunHooks& hooks) {
-#ifdef TROCHOMILL_HAVE_MPI
+  if (!Distributed::built_with_mpi()) throw Error("this build has no MPI");
+  const study_detail::MpiTable& m = mpi();
   if (world.rank() != 0) {
     send_result(-1, {});
     for (;;) {
       std::int64_t work[2] = {0, 0};
-      MPI_Recv(work, 2, MPI_INT64_T, 0, kTagWork, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      m.recv_int64(work, 2, 0, kTagWork);
       if (work[0] < 0) return;
       send_result(work[0], row_of(static_cast<std::size_t>(work[1])));
     }
@@ -111,18 +105,12 @@ void distribute_points(const Distributed& world, const std::vector<std::size_t>&
   int active = world.size() - 1;
   std::string buffer;
   while (active > 0) {
-    int flag = 0;
-    MPI_Status status;
-    MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &flag, &status);
-    if (!flag) {
+    int source = 0, count = 0;
+    if (!m.probe_bytes(kTagResult, &source, &count)) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
       continue;
     }
-    int count = 0;
-    MPI_Get_count(&status, MPI_CHAR, &count);
-    buffer.resize(static_cast<std::size_t>(count));
-    MPI_Recv(buffer.data(), count, MPI_CHAR, status.MPI_SOURCE, kTagResult, MPI_COMM_WORLD,
-             MPI_STATUS_IGNORE);
+    m.recv_bytes(buffer, count, source, kTagResult);
     std::int64_t position = -1;
     std::memcpy(&position, buffer.data(), sizeof position);
     if (position >= 0) done(static_cast<std::size_t>(position), buffer.substr(sizeof position));
@@ -134,27 +122,15 @@ void distribute_points(const Distributed& world, const std::vector<std::size_t>&
         work[1] = static_cast<std::int64_t>(todo[p]);
       }
     }
-    MPI_Send(work, 2, MPI_INT64_T, status.MPI_SOURCE, kTagWork, MPI_COMM_WORLD);
+    m.send_int64(work, 2, source, kTagWork);
     if (work[0] < 0) --active;
   }
   local.join();
   if (local_error) std::rethrow_exception(local_error);
-#else
-  (void)world, (void)todo, (void)row_of, (void)row_done, (void)hooks;
-  throw Error("this build has no MPI");
-#endif
 }
 
 bool agree_to_start(const Distributed& world, bool go) {
-#ifdef TROCHOMILL_HAVE_MPI
-  if (world.size() > 1) {
-    int flag = go ? 1 : 0;
-    MPI_Bcast(&flag, 1, MPI_INT, 0, MPI_COMM_WORLD);
-    return flag != 0;
-  }
-#else
-  (void)world;
-#endif
+  if (Distributed::built_with_mpi() && world.size() > 1) return mpi().bcast_int(go ? 1 : 0) != 0;
   return go;
 }
 

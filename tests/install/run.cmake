@@ -30,11 +30,18 @@ if(NOT consumer STREQUAL cli OR cli STREQUAL "")
 endif()
 message(STATUS "consumer built against the installed tree: ${consumer}")
 
-# The NSGA-II plugin (pagmo, loaded by optimize with several goals) is installed beside the
-# library, and the installed CLI runs a two-goal optimisation with it.
-file(GLOB_RECURSE plugin "${WORK}/prefix/*/libtrochomill_nsga2.so")
-if(NOT plugin)
-  message(FATAL_ERROR "libtrochomill_nsga2.so is not in the installed tree")
+# The plugins (docs/architecture.md, "Plugins") are installed beside the library, and the
+# installed CLI runs a two-goal optimisation (pagmo's NSGA-II) and writes a mesh (assimp) with
+# them.
+foreach(name nsga2 hdf5 assimp ceres sndfile)
+  file(GLOB_RECURSE plugin "${WORK}/prefix/*/trochomill/libtrochomill_${name}.so")
+  if(NOT plugin)
+    message(FATAL_ERROR "libtrochomill_${name}.so is not in the installed tree")
+  endif()
+endforeach()
+run(${WORK}/prefix/bin/trochomill insert ${example} -o ${WORK}/insert.stl)
+if(NOT EXISTS ${WORK}/insert.stl)
+  message(FATAL_ERROR "the installed CLI wrote no insert mesh")
 endif()
 run(${WORK}/prefix/bin/trochomill optimize ${example} --var path.step=0.5:1
     --maximize cycle_mrr_mm3_per_min --minimize h_max_mm --max-evals 16 --population 8
