@@ -127,6 +127,10 @@ TEST(App, MemoryChecksNameTheLimitAndItsSource) {
   EXPECT_EQ(shown([] { check_memory("simulate", 3e9, 1.0, "coarser"); }, cli_flag),
             "simulate: estimated memory 3.00 GB exceeds the limit of 1.00 GB (--memory-limit): "
             "coarser; or raise --memory-limit");
+  // A tiny limit reads in MB (it read "0.00 GB").
+  EXPECT_EQ(test::message_of([] { check_memory("plan", 3e6, 0.0001, "x"); }),
+            "plan: estimated memory 3.00 MB exceeds the limit of 0.10 MB (memory_limit_gb): x; or "
+            "raise memory_limit_gb");
   EXPECT_NE(test::message_of([] {
               check_memory("plan", 1e18, std::nullopt, "x");
             }).find("(75 % of RAM): x; or raise memory_limit_gb"),

@@ -87,5 +87,31 @@ TEST_F(Cli, AStudyWhoseEveryPointFailedFails) {
       << r.out;
 }
 
+// An option of the other kind of run is refused, not ignored: optimize's --pareto and
+// --population with one goal, -o with several; report's --rate without --signal; compare's
+// unknown key before any point runs.
+TEST_F(Cli, OptionsThatDoNotApplyAreRefused) {
+  const std::string ex = test::example("wagih2023/trochoidal.toml");
+  const std::string one =
+      "optimize " + ex + " --var path.step=0.5:1 --maximize cycle_mrr_mm3_per_min";
+  CliResult r = run_cli(one + " --max-evals 10 -o - --pareto " + (dir_ / "p.csv").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--pareto is for several goals"), std::string::npos) << r.out;
+  r = run_cli(one + " --max-evals 10 -o - --population 8");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--population is for several goals"), std::string::npos) << r.out;
+  r = run_cli(one + " --minimize h_max_mm --max-evals 16 --pareto - -o " +
+              (dir_ / "b.toml").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("-o is for one goal"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "b.toml"));
+  r = run_cli("report " + ex + " --rate 1000 -o " + (dir_ / "r.html").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--rate requires --signal"), std::string::npos) << r.out;
+  r = run_cli("compare " + ex + " --vary path.nope=1,2");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--vary path.nope: no such job key"), std::string::npos) << r.out;
+}
+
 }  // namespace
 }  // namespace trochomill

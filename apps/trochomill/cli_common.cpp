@@ -336,11 +336,16 @@ void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required, const std::str
   auto* o = cmd->add_option(name, a.file,
                             "WAV/FLAC/AIFF (libsndfile), CSV, raw .f32/.s16 (- for stdin, raw)");
   if (required) o->required();
-  cmd->add_option("--rate", a.rate, "sample rate, Hz (raw data, CSV without a time column)")
-      ->check(finite_above(0, 1e8));
-  cmd->add_option("--format", a.format, "auto, wav, csv, f32 or s16 (default: by extension)");
-  cmd->add_option("--channel", a.channel, "0-based channel (or CSV data column)")
-      ->check(CLI::NonNegativeNumber);
+  auto* rate =
+      cmd->add_option("--rate", a.rate, "sample rate, Hz (raw data, CSV without a time column)")
+          ->check(finite_above(0, 1e8));
+  auto* format =
+      cmd->add_option("--format", a.format, "auto, wav, csv, f32 or s16 (default: by extension)");
+  auto* channel = cmd->add_option("--channel", a.channel, "0-based channel (or CSV data column)")
+                      ->check(CLI::NonNegativeNumber);
+  if (!required) {  // options of a signal that may be left out: refused without it
+    for (CLI::Option* x : {rate, format, channel}) x->needs(o);
+  }
 }
 
 std::pair<double, double> parse_band(const std::string& opt, const std::string& text) {

@@ -194,7 +194,7 @@ void register_study_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--html", a->html,
                     "the HTML report of the best job (one goal) or of the job with the Pareto "
                     "set (several)");
-    cmd->final_callback([a, &exit_code] {
+    cmd->final_callback([a, cmd, &exit_code] {
       check_outputs({&a->output, &a->pareto, &a->json, &a->html}, {&a->job.file});
       std::vector<OptVariable> vars;
       for (const auto& v : a->vars) vars.push_back(parse_opt_variable(v));
@@ -209,6 +209,20 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       if (goals.size() > 1 && a->pareto.empty()) {
         throw InputError(
             "optimize: several goals give a Pareto set: --pareto FILE.csv is required");
+      }
+      // Options of the other kind of run are refused, not ignored.
+      for (const char* opt : {"--pareto", "--population"}) {
+        if (goals.size() == 1 && cmd->count(opt) > 0) {
+          throw InputError(fmt::format(
+              "optimize: {} is for several goals (NSGA-II's Pareto set); one goal gives the best "
+              "job (-o)",
+              opt));
+        }
+      }
+      if (goals.size() > 1 && cmd->count("--output") > 0) {
+        throw InputError(
+            "optimize: -o is for one goal (the best job); several goals give a Pareto set "
+            "(--pareto)");
       }
       OptimizeOptions o;
       o.eval = parse_sweep_eval(a->eval);

@@ -13,6 +13,18 @@
 
 namespace trochomill {
 
+namespace {
+
+// A memory size as a user reads it: GB to two decimals, MB below 0.01 GB, kB below 0.01 MB
+// (a limit of 0.0001 GB read "0.00 GB").
+std::string size_text(double bytes) {
+  if (bytes >= 0.995e7) return fmt::format("{:.2f} GB", bytes / 1e9);
+  if (bytes >= 0.995e4) return fmt::format("{:.2f} MB", bytes / 1e6);
+  return fmt::format("{:.2f} kB", bytes / 1e3);
+}
+
+}  // namespace
+
 std::pair<double, double> resolve_window(const ToolPath& path, const WindowRequest& r) {
   const std::string cycles = option_name("cycles"), from_s = option_name("from_s"),
                     to_s = option_name("to_s");
@@ -72,9 +84,10 @@ void check_memory(std::string_view what, double need_bytes, std::optional<double
   const double limit = memory_limit_bytes(limit_gb);
   const std::string option = option_name("memory_limit_gb");
   if (!(need_bytes <= limit)) {
-    throw InputError(fmt::format(
-        "{}: estimated memory {:.2f} GB exceeds the limit of {:.2f} GB ({}): {}; or raise {}", what,
-        need_bytes / 1e9, limit / 1e9, limit_gb ? option : "75 % of RAM", advice, option));
+    throw InputError(
+        fmt::format("{}: estimated memory {} exceeds the limit of {} ({}): {}; or raise {}", what,
+                    size_text(need_bytes), size_text(limit), limit_gb ? option : "75 % of RAM",
+                    advice, option));
   }
 }
 

@@ -156,7 +156,7 @@ def test_help_and_stub_name_every_function_with_units():
 
 def test_memory_limit_refuses_before_running(bergmann):
     job = tm.Job.from_toml(bergmann)
-    with pytest.raises(tm.InputError, match="simulate: estimated memory .* exceeds the limit of 0.00 GB"):
+    with pytest.raises(tm.InputError, match="simulate: estimated memory .* exceeds the limit of 1.00 kB"):
         tm.simulate(job, memory_limit_gb=1e-6)
     with pytest.raises(tm.InputError, match="memory_limit_gb must be a finite number > 0"):
         tm.plan(job, memory_limit_gb=-1.0)
