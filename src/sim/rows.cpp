@@ -1,6 +1,7 @@
-// The rows of one layer crossing an annular sector, vectorised (src/sim/rows.hpp). Highway's
-// dynamic dispatch: this file is compiled once per target (foreach_target.h includes it again
-// for each), and row_chords calls the best the processor supports.
+// The plugin libtrochomill_rows.so: the rows of one layer crossing an annular sector,
+// vectorised (src/sim/rows.hpp). Highway's dynamic dispatch: this file is compiled once per
+// target (foreach_target.h includes it again for each), and the table's functions call the
+// best the processor supports.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "sim/rows.cpp"
 #include "sim/rows.hpp"
@@ -143,21 +144,25 @@ namespace trochomill::sim_detail {
 HWY_EXPORT(RowChordsImpl);
 HWY_EXPORT(RaysMaybeImpl);
 
-void RowChords::reserve_rows(std::size_t n) {
-  if (perp.size() >= n) return;
-  for (std::vector<double>* v : {&perp, &lo, &hi, &a_lo, &a_hi, &b_lo, &b_hi, &maybe}) {
-    v->resize(n);
-  }
-}
+namespace {
 
-void row_chords(const SlicerCoeffs& sector, double origin, double d, int r0, int n, double centre,
-                bool negate, double R, double r_in, RowChords& out) {
+void row_chords_any(const SlicerCoeffs& sector, double origin, double d, int r0, int n,
+                    double centre, bool negate, double R, double r_in, RowChords& out) {
   HWY_DYNAMIC_DISPATCH(RowChordsImpl)(sector, origin, d, r0, n, centre, negate, R, r_in, out);
 }
 
-void rays_maybe(const double* rays, int count, int first, double along, RowChords& out) {
+void rays_maybe_any(const double* rays, int count, int first, double along, RowChords& out) {
   HWY_DYNAMIC_DISPATCH(RaysMaybeImpl)(rays, count, first, along, out);
 }
 
+const RowsTable kTable{&row_chords_any, &rays_maybe_any};
+
+}  // namespace
+
 }  // namespace trochomill::sim_detail
+
+extern "C" __attribute__((visibility("default"))) const trochomill::sim_detail::RowsTable*
+trochomill_rows_table() {
+  return &trochomill::sim_detail::kTable;
+}
 #endif  // HWY_ONCE

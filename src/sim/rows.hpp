@@ -2,7 +2,10 @@
 // X and Y boards' row check in the time-stepped simulation, vectorised with Google Highway
 // (its dynamic dispatch picks the widest vectors the processor has at run time). Every lane
 // does the scalar code's operations in the same order (no fused multiply-add, the same
-// comparisons for min and max), so the results are the same bits on every target.
+// comparisons for min and max), so the results are the same bits on every target. The
+// vector code is the plugin libtrochomill_rows.so (rows.cpp): libhwy's set-up at load (its
+// timer's calibration) cost every start of the program about 3 ms; the first simulation
+// loads it.
 #pragma once
 
 #include <cstddef>
@@ -21,7 +24,12 @@ struct RowChords {
   // surely does not.
   std::vector<double> maybe;
   // Makes room for n rows (the vectors' lanes, a whole number of vectors).
-  void reserve_rows(std::size_t n);
+  void reserve_rows(std::size_t n) {
+    if (perp.size() >= n) return;
+    for (std::vector<double>* v : {&perp, &lo, &hi, &a_lo, &a_hi, &b_lo, &b_hi, &maybe}) {
+      v->resize(n);
+    }
+  }
 };
 
 // Rows r0 .. r0 + n - 1 of a board whose rows lie at origin + (r + 1/2) d (mm): each row's
@@ -40,5 +48,14 @@ void row_chords(const SlicerCoeffs& sector, double origin, double d, int r0, int
 // out.maybe where a part overlaps an inline interval or the ray is spilled (the caller
 // looks at those itself), else 0: exactly where has_material finds nothing.
 void rays_maybe(const double* rays, int count, int first, double along, RowChords& out);
+
+// The plugin's functions (trochomill_rows_table()): row_chords and rays_maybe, dispatched to
+// the processor's widest vectors.
+struct RowsTable {
+  void (*row_chords)(const SlicerCoeffs& sector, double origin, double d, int r0, int n,
+                     double centre, bool negate, double R, double r_in, RowChords& out);
+  void (*rays_maybe)(const double* rays, int count, int first, double along, RowChords& out);
+};
+inline constexpr const char* kRowsSymbol = "trochomill_rows_table";
 
 }  // namespace trochomill::sim_detail

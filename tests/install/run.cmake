@@ -45,7 +45,7 @@ if(NOT EXISTS ${WORK}/insert.stl)
 endif()
 run(${WORK}/prefix/bin/trochomill optimize ${example} --var path.step=0.5:1
     --maximize cycle_mrr_mm3_per_min --minimize h_max_mm --max-evals 16 --population 8
-    --pareto ${WORK}/pareto.csv -o ${WORK}/best.toml)
+    --pareto ${WORK}/pareto.csv)
 file(STRINGS ${WORK}/pareto.csv pareto)
 list(LENGTH pareto rows)
 if(rows LESS 2)

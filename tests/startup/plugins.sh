@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Start-up: the program links none of the heavy optional libraries (pagmo, HDF5, assimp, Ceres,
-# Open MPI, libsndfile: their loading costs every start, docs/PERFORMANCE.md "Start-up"); the
+# Open MPI, libsndfile, Highway: their loading costs every start, docs/PERFORMANCE.md "Start-up"); the
 # commands that do not need them run without any plugin; each command that needs one, without
 # it, fails with exit 1, naming the plugin and where it looked, and leaves no output; with the
 # plugins (found beside the program) the same commands run.
@@ -14,7 +14,7 @@ fail=0
 bad() { echo "FAIL: $*"; fail=1; }
 
 libs=$(ldd "$bin")
-for lib in libpagmo libhdf5 libassimp libceres libmpi libsndfile libglog libcholmod; do
+for lib in libpagmo libhdf5 libassimp libceres libmpi libsndfile libglog libcholmod libhwy; do
   if grep -q "$lib" <<<"$libs"; then bad "$bin links $lib"; fi
 done
 
@@ -43,6 +43,7 @@ needs() {
 }
 needs sndfile "$work/a.wav" "$bin" synth-signal "$job" -o "$work/a.wav" --cycles 2
 needs assimp "$work/a.stl" "$bin" insert "$job" -o "$work/a.stl"
+needs rows "$work/s.json" "$bin" simulate "$job" --set slot.length=2 --cycles 0:1 --json "$work/s.json"
 needs hdf5 "$work/sim" "$bin" simulate "$job" --set slot.length=2 --cycles 0:1 --out "$work/sim"
 needs nsga2 "$work/p.csv" "$bin" optimize "$job" --set slot.length=3 --var path.step=0.1:0.2 \
   --maximize cycle_mrr_mm3_per_min --minimize h_max_mm --max-evals 16 --population 8 --pareto "$work/p.csv"
