@@ -343,7 +343,10 @@ void add_signal_args(CLI::App* cmd, SignalArgs& a, bool required, const std::str
       cmd->add_option("--format", a.format, "auto, wav, csv, f32 or s16 (default: by extension)");
   auto* channel = cmd->add_option("--channel", a.channel, "0-based channel (or CSV data column)")
                       ->check(CLI::NonNegativeNumber);
-  if (!required) {  // options of a signal that may be left out: refused without it
+  // A signal given by an option (report's --signal): its reading options are refused without
+  // it. (A command's optional positional SIGNAL is not: monitor --stream reads standard input
+  // with them.)
+  if (!required && name.rfind("--", 0) == 0) {
     for (CLI::Option* x : {rate, format, channel}) x->needs(o);
   }
 }
