@@ -6,7 +6,9 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -53,7 +55,12 @@ double estimate_gb_of(const std::string& args) {
   EXPECT_EQ(r.code, 2) << r.out;
   const auto at = r.out.find("estimated memory ");
   EXPECT_NE(at, std::string::npos) << r.out;
-  return at == std::string::npos ? 0.0 : std::strtod(r.out.c_str() + at + 17, nullptr);
+  if (at == std::string::npos) return 0.0;
+  char* end = nullptr;
+  const double v = std::strtod(r.out.c_str() + at + 17, &end);
+  // memory_text: GB, or MB / kB for small sizes.
+  const std::string unit(end, std::min<std::size_t>(3, std::strlen(end)));
+  return unit == " MB" ? v / 1e3 : unit == " kB" ? v / 1e6 : v;
 }
 
 // Every command that can be asked for too much estimates its memory before it allocates,

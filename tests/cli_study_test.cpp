@@ -108,6 +108,12 @@ TEST_F(Cli, OptionsThatDoNotApplyAreRefused) {
   r = run_cli("report " + ex + " --rate 1000 -o " + (dir_ / "r.html").string());
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("--rate requires --signal"), std::string::npos) << r.out;
+  // A command whose SIGNAL is an optional positional keeps its reading options without it:
+  // monitor --stream reads standard input with them.
+  EXPECT_EQ(test::run_command("printf '0.1\\n0.2\\n' | " + std::string(TROCHOMILL_CLI) +
+                              " monitor --stream --rate 40000 --format csv")
+                .code,
+            0);
   r = run_cli("compare " + ex + " --vary path.nope=1,2");
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("--vary path.nope: no such job key"), std::string::npos) << r.out;

@@ -158,6 +158,8 @@ TEST(Compare, KeysAreCheckedFirstAndEveryFailureIsRecorded) {
       (void)run_compare(doc, {}, {parse_vary("path.step=1,2"), parse_vary("path.step=3")}, 1),
       InputError);
   EXPECT_THROW((void)run_compare(doc, {}, {}, 1), InputError);
+  // A key without values (Python builds its lists itself) is refused; it crashed the plan.
+  EXPECT_THROW((void)run_compare(doc, {}, {Vary{"path.step", {}}}, 1), InputError);
   const std::vector<Override> base = {{"slot.length", "4", ""}};
   const std::vector<Vary> varies = {parse_vary("path.step=1,-1"),
                                     parse_vary("path.aspect_ratio=0.8,1.2")};

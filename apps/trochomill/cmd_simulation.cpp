@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/sim.hpp"
 
@@ -56,13 +57,13 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
       const double limit = memory_limit_bytes(a->memory_gb);
       if (need > limit) {
         throw InputError(fmt::format(
-            "simulate: estimated memory {:.2f} GB (boards {:.2f}, path samples {:.2f}, process "
-            "{:.2f}, outputs {:.2f}) exceeds the limit of {:.2f} GB ({}); coarsen [simulation] "
-            "resolution (now {} mm), shorten the window (--cycles, --from/--to) or raise "
-            "--memory-limit",
-            need / 1e9, est.boards_bytes / 1e9, est.stream_bytes / 1e9, est.base_bytes / 1e9,
-            a->out.empty() ? 0.0 : est.writing_bytes() / 1e9, limit / 1e9,
-            a->memory_gb ? "--memory-limit" : "75 % of RAM", job.simulation.resolution_mm));
+            "simulate: estimated memory {} (boards {}, path samples {}, process {}, outputs {}) "
+            "exceeds the limit of {} ({}); coarsen [simulation] resolution (now {} mm), shorten "
+            "the window (--cycles, --from/--to) or raise --memory-limit",
+            memory_text(need), memory_text(est.boards_bytes), memory_text(est.stream_bytes),
+            memory_text(est.base_bytes), memory_text(a->out.empty() ? 0.0 : est.writing_bytes()),
+            memory_text(limit), a->memory_gb ? "--memory-limit" : "75 % of RAM",
+            job.simulation.resolution_mm));
       }
       // Ctrl-C stops after the current step; what was computed is written, marked incomplete.
       // A Ctrl-C during the output writing leaves --out without any file of this run.
@@ -125,11 +126,11 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
         const MemoryEstimate est = estimate_simulation_memory(job, path, from, to);
         const double limit = memory_limit_bytes(a->memory_gb);
         if (est.total(false) > limit) {
-          throw InputError(fmt::format(
-              "forces: the simulation would need {:.2f} GB ({} is {:.2f} GB); shorten the window "
-              "(--cycles, --from/--to), coarsen [simulation] resolution or use --fast",
-              est.total(false) / 1e9, a->memory_gb ? "--memory-limit" : "75 % of RAM",
-              limit / 1e9));
+          throw InputError(
+              fmt::format("forces: the simulation would need {} ({} is {}); shorten the window "
+                          "(--cycles, --from/--to), coarsen [simulation] resolution or use --fast",
+                          memory_text(est.total(false)),
+                          a->memory_gb ? "--memory-limit" : "75 % of RAM", memory_text(limit)));
         }
         reserve = static_cast<std::size_t>(est.chip_entries);
       }

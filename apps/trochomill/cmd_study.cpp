@@ -203,13 +203,6 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       for (const auto& m : a->minimize) goals.push_back({m, false});
       std::vector<Constraint> cons;
       for (const auto& c : a->subject_to) cons.push_back(parse_constraint(c));
-      if (goals.size() == 1 && a->output.empty()) {
-        throw InputError("optimize: -o FILE.toml is required (the best job is written there)");
-      }
-      if (goals.size() > 1 && a->pareto.empty()) {
-        throw InputError(
-            "optimize: several goals give a Pareto set: --pareto FILE.csv is required");
-      }
       // Options of the other kind of run are refused, not ignored.
       for (const char* opt : {"--pareto", "--population"}) {
         if (goals.size() == 1 && cmd->count(opt) > 0) {
@@ -223,6 +216,13 @@ void register_study_commands(CLI::App& app, int& exit_code) {
         throw InputError(
             "optimize: -o is for one goal (the best job); several goals give a Pareto set "
             "(--pareto)");
+      }
+      if (goals.size() == 1 && a->output.empty()) {
+        throw InputError("optimize: -o FILE.toml is required (the best job is written there)");
+      }
+      if (goals.size() > 1 && a->pareto.empty()) {
+        throw InputError(
+            "optimize: several goals give a Pareto set: --pareto FILE.csv is required");
       }
       OptimizeOptions o;
       o.eval = parse_sweep_eval(a->eval);

@@ -56,6 +56,9 @@ void write_text_atomic(
 
 /// `s` without the leading and trailing characters in `chars`.
 [[nodiscard]] std::string trim(std::string_view s, std::string_view chars = " \t");
+/// A memory size (bytes) as a user reads it: GB to two decimals, MB below 0.01 GB, kB below
+/// 0.01 MB ("3.00 GB", "0.10 MB"), so that a small limit never reads "0.00 GB".
+[[nodiscard]] std::string memory_text(double bytes);
 /// `s` with every `from` replaced by `to` (a temporary path in a message by the one the user
 /// named).
 [[nodiscard]] std::string replace_all(std::string s, std::string_view from, std::string_view to);

@@ -13,18 +13,6 @@
 
 namespace trochomill {
 
-namespace {
-
-// A memory size as a user reads it: GB to two decimals, MB below 0.01 GB, kB below 0.01 MB
-// (a limit of 0.0001 GB read "0.00 GB").
-std::string size_text(double bytes) {
-  if (bytes >= 0.995e7) return fmt::format("{:.2f} GB", bytes / 1e9);
-  if (bytes >= 0.995e4) return fmt::format("{:.2f} MB", bytes / 1e6);
-  return fmt::format("{:.2f} kB", bytes / 1e3);
-}
-
-}  // namespace
-
 std::pair<double, double> resolve_window(const ToolPath& path, const WindowRequest& r) {
   const std::string cycles = option_name("cycles"), from_s = option_name("from_s"),
                     to_s = option_name("to_s");
@@ -86,7 +74,7 @@ void check_memory(std::string_view what, double need_bytes, std::optional<double
   if (!(need_bytes <= limit)) {
     throw InputError(
         fmt::format("{}: estimated memory {} exceeds the limit of {} ({}): {}; or raise {}", what,
-                    size_text(need_bytes), size_text(limit), limit_gb ? option : "75 % of RAM",
+                    memory_text(need_bytes), memory_text(limit), limit_gb ? option : "75 % of RAM",
                     advice, option));
   }
 }
@@ -116,6 +104,9 @@ ReportData report_data(Job job, ToolPath path, ReportRequest request, const RunH
   std::vector<Vary> varies = std::move(request.varies);
   const JobDocument* doc = request.document;
   const std::vector<Override> base = request.overrides;
+  // The study's keys checked before the report's parts run (an unknown or repeated key, a key
+  // without values).
+  if (!varies.empty()) (void)plan_sweep(varies, {}, 0, Sampler::sobol, 0);
   ReportData d = build_report(std::move(job), std::move(path), std::move(request), hooks);
   if (varies.empty()) return d;
   ReportStudy st;

@@ -194,6 +194,12 @@ std::string read_text_file(const fs::path& path) {
   }
 }
 
+std::string memory_text(double bytes) {
+  if (bytes >= 0.995e7) return fmt::format("{:.2f} GB", bytes / 1e9);
+  if (bytes >= 0.995e4) return fmt::format("{:.2f} MB", bytes / 1e6);
+  return fmt::format("{:.2f} kB", bytes / 1e3);
+}
+
 std::string trim(std::string_view s, std::string_view chars) {
   const auto b = s.find_first_not_of(chars);
   if (b == std::string_view::npos) return {};

@@ -36,47 +36,71 @@ std::vector<std::filesystem::path> plugin_candidates(const std::string& file) {
   return out;
 }
 
-struct Loaded {
-  void* handle = nullptr;
-  std::string why;  // the places tried, when none loaded
-};
+// The handles of the plugins loaded (kept for the process's life), by file name.
+std::mutex loaded_mutex;
+std::map<std::string, void*, std::less<>> loaded;
+
+// Loads `path` if it is a plugin of this build that has `symbol`: its handle, or null with
+// the reason in `why`.
+void* open_plugin(const std::filesystem::path& path, const std::string& symbol, std::string& why) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    why = "not there";
+    return nullptr;
+  }
+  void* h = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (h == nullptr) {
+    const char* e = ::dlerror();
+    why = e != nullptr ? e : "cannot be loaded";
+    return nullptr;
+  }
+  // Its tables' layout must be this program's: the same version and plugin headers.
+  using Id = const char* (*)();
+  const auto id = reinterpret_cast<Id>(::dlsym(h, "trochomill_plugin_id"));
+  if (id == nullptr || std::string_view(id()) != TROCHOMILL_PLUGIN_ID) {
+    why = fmt::format("a plugin of another build (its id {}, this program's {})",
+                      id != nullptr ? id() : "none", TROCHOMILL_PLUGIN_ID);
+  } else if (::dlsym(h, symbol.c_str()) == nullptr) {
+    why = fmt::format("no {}", symbol);
+  } else {
+    return h;
+  }
+  ::dlclose(h);
+  return nullptr;
+}
 
 }  // namespace
 
 void* plugin_symbol(std::string_view name, std::string_view symbol, std::string_view what) {
-  static std::mutex mu;
-  static std::map<std::string, Loaded, std::less<>> plugins;
   const std::string file = fmt::format("libtrochomill_{}.so", name);
-  const std::lock_guard<std::mutex> lock(mu);
-  auto it = plugins.find(file);
-  if (it == plugins.end()) {
-    Loaded l;
+  const std::string sym(symbol);
+  const std::lock_guard<std::mutex> lock(loaded_mutex);
+  auto it = loaded.find(file);
+  if (it == loaded.end()) {
+    // Each place in turn until one holds this build's plugin; a failure is not kept (the next
+    // call looks again, after the user has put the plugin in place).
+    std::string tried;
+    void* handle = nullptr;
     for (const std::filesystem::path& p : plugin_candidates(file)) {
-      std::error_code ec;
-      if (!std::filesystem::exists(p, ec)) {
-        l.why += fmt::format("{}{} (not there)", l.why.empty() ? "" : "; ", p.string());
-        continue;
-      }
-      l.handle = ::dlopen(p.c_str(), RTLD_NOW | RTLD_LOCAL);
-      if (l.handle != nullptr) break;  // kept loaded for the process's life
-      const char* e = ::dlerror();
-      l.why += fmt::format("{}{} ({})", l.why.empty() ? "" : "; ", p.string(), e ? e : "?");
+      std::string why;
+      handle = open_plugin(p, sym, why);
+      if (handle != nullptr) break;
+      tried += fmt::format("{}{} ({})", tried.empty() ? "" : "; ", p.string(), why);
     }
-    it = plugins.emplace(file, std::move(l)).first;
+    if (handle == nullptr) {
+      const char* dir = std::getenv("TROCHOMILL_PLUGIN_DIR");
+      throw Error(
+          fmt::format("{}: the plugin {} could not be loaded: {}; {}", what, file, tried,
+                      dir != nullptr && *dir != '\0'
+                          ? "TROCHOMILL_PLUGIN_DIR is set, so only that folder is searched"
+                          : "install it with the program (lib/trochomill beside bin/), or set "
+                            "TROCHOMILL_PLUGIN_DIR to the folder that holds it"));
+    }
+    it = loaded.emplace(file, handle).first;
   }
-  if (it->second.handle == nullptr) {
-    const char* dir = std::getenv("TROCHOMILL_PLUGIN_DIR");
-    throw Error(
-        fmt::format("{}: the plugin {} could not be loaded: {}; {}", what, file, it->second.why,
-                    dir != nullptr && *dir != '\0'
-                        ? "TROCHOMILL_PLUGIN_DIR is set, so only that folder is searched"
-                        : "install it with the program (lib/trochomill beside bin/), or set "
-                          "TROCHOMILL_PLUGIN_DIR to the folder that holds it"));
-  }
-  void* s = ::dlsym(it->second.handle, std::string(symbol).c_str());
+  void* s = ::dlsym(it->second, sym.c_str());
   if (s == nullptr) {
-    throw Error(fmt::format("{}: the plugin {} has no {} (a plugin of another build?)", what, file,
-                            symbol));
+    throw Error(fmt::format("{}: the plugin {} has no {}", what, file, symbol));
   }
   return s;
 }

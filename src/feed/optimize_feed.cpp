@@ -18,6 +18,7 @@
 #include "trochomill/feed.hpp"
 #include "trochomill/force.hpp"
 #include "trochomill/geometry.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/units.hpp"
 
@@ -421,12 +422,13 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
         estimate_simulation_memory(job, slot_path, 0.0, slot_path.duration_s(), stock);
     if (!(est.total(false) <= options.memory_limit_bytes)) {
       throw InputError(fmt::format(
-          "optimize-feed {} sim: the simulation's estimated memory {:.2f} GB (boards "
-          "{:.2f}, records {:.2f}) exceeds the limit of {:.2f} GB; coarsen [simulation] "
-          "resolution (now {} mm) or steps_per_rev (now {}), or raise {}",
-          option_name("engine"), est.total(false) / 1e9, est.boards_bytes / 1e9,
-          est.records_bytes / 1e9, options.memory_limit_bytes / 1e9, job.simulation.resolution_mm,
-          job.simulation.steps_per_rev, option_name("memory_limit_gb")));
+          "optimize-feed {} sim: the simulation's estimated memory {} (boards {}, records {}) "
+          "exceeds the limit of {}; coarsen [simulation] resolution (now {} mm) or "
+          "steps_per_rev (now {}), or raise {}",
+          option_name("engine"), memory_text(est.total(false)), memory_text(est.boards_bytes),
+          memory_text(est.records_bytes), memory_text(options.memory_limit_bytes),
+          job.simulation.resolution_mm, job.simulation.steps_per_rev,
+          option_name("memory_limit_gb")));
     }
   }
   if (options.engine == FeedEngine::kernel) {

@@ -11,6 +11,7 @@
 #include "interp.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill::gcode_detail {
@@ -253,12 +254,12 @@ std::size_t Interpreter::append(Segment seg, std::uint32_t column, std::size_t s
         opt_.trace ? 3.0 * cap * static_cast<double>(sizeof(GcodeMove) + 64) : 0.0;
     const double peak = 3.0 * cap * per_move + traced;
     if (peak > opt_.max_path_bytes) {
-      fail_at(0, fmt::format("the program's path holds {} moves ({:.2f} GB) after {} blocks, "
-                             "and the next would take it past the {:.2f} GB the memory limit "
+      fail_at(0, fmt::format("the program's path holds {} moves ({}) after {} blocks, "
+                             "and the next would take it past the {} the memory limit "
                              "leaves for reading it: does the program loop without end? (a "
                              "long program that does not: raise the memory limit)",
-                             n, (cap * per_move + traced) / 1e9, prog_.info.blocks_executed,
-                             opt_.max_path_bytes / 1e9));
+                             n, memory_text(cap * per_move + traced), prog_.info.blocks_executed,
+                             memory_text(opt_.max_path_bytes)));
     }
   }
   try {

@@ -49,6 +49,10 @@ void row_chords(const SlicerCoeffs& sector, double origin, double d, int r0, int
 // looks at those itself), else 0: exactly where has_material finds nothing.
 void rays_maybe(const double* rays, int count, int first, double along, RowChords& out);
 
+// Loads the plugin now (it loads at the first row check otherwise): a simulation without it
+// fails at its start, not after its pre-roll. Throws Error naming the places tried.
+void require_rows();
+
 // The plugin's functions (trochomill_rows_table()): row_chords and rays_maybe, dispatched to
 // the processor's widest vectors.
 struct RowsTable {

@@ -14,6 +14,8 @@ const RowsTable& rows() {
 
 }  // namespace
 
+void require_rows() { (void)rows(); }
+
 void row_chords(const SlicerCoeffs& sector, double origin, double d, int r0, int n, double centre,
                 bool negate, double R, double r_in, RowChords& out) {
   rows().row_chords(sector, origin, d, r0, n, centre, negate, R, r_in, out);

@@ -604,6 +604,7 @@ class Stepper {
 
 SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings& s, TriDexel& work,
                    double t0_s, double t1_s, const SimControl& control) {
+  sim_detail::require_rows();
   if (s.steps_per_rev < 8) {
     throw InputError(
         fmt::format("[simulation] steps_per_rev must be >= 8, got {}", s.steps_per_rev));
@@ -1010,6 +1011,7 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
     throw InputError(
         fmt::format("simulation window {} to {} s: need 0 <= from < to", from_s, to_s));
   }
+  sim_detail::require_rows();  // a missing plugin said now, before the pre-roll
   if (stock_mesh) control.hooks.begin("stock: the mesh's dexels");
   TriDexel work = stock_mesh ? stock_from_mesh(*stock_mesh, s.resolution_mm, control.hooks)
                              : TriDexel(job_stock(job), s.resolution_mm);

@@ -146,10 +146,10 @@ json evaluate(const Job& job, SweepEval eval, const std::optional<std::pair<int,
         estimate_simulation_memory(job, path, window.first, window.second).total(false);
     if (!(need <= memory_limit_bytes)) {
       throw InputError(fmt::format(
-          "simulate: the estimated memory {:.2f} GB exceeds this point's share of the memory "
-          "limit, {:.2f} GB: coarsen [simulation] resolution (now {} mm), shorten the window, "
+          "simulate: the estimated memory {} exceeds this point's share of the memory "
+          "limit, {}: coarsen [simulation] resolution (now {} mm), shorten the window, "
           "or run fewer points at once",
-          need / 1e9, memory_limit_bytes / 1e9, job.simulation.resolution_mm));
+          memory_text(need), memory_text(memory_limit_bytes), job.simulation.resolution_mm));
     }
   }
   const JobSimulation js = simulate_job(job, path, window.first, window.second, control);
@@ -419,7 +419,11 @@ SweepPlan plan_sweep(const std::vector<Vary>& grid, const std::vector<SweepRange
     }
     plan.keys.push_back(key);
   };
-  for (const Vary& v : grid) add_key(v.key, option_name("vary"));
+  for (const Vary& v : grid) {
+    add_key(v.key, option_name("vary"));
+    if (v.values.empty())
+      throw InputError(fmt::format("{} {}: no values to take", option_name("vary"), v.key));
+  }
   std::vector<bool> integer;
   for (const SweepRange& r : ranges) {
     add_key(r.key, option_name("ranges"));

@@ -33,7 +33,11 @@ message(STATUS "consumer built against the installed tree: ${consumer}")
 # The plugins (docs/architecture.md, "Plugins") are installed beside the library, and the
 # installed CLI runs a two-goal optimisation (pagmo's NSGA-II) and writes a mesh (assimp) with
 # them.
-foreach(name nsga2 hdf5 assimp ceres sndfile)
+set(plugins nsga2 rows hdf5 assimp ceres sndfile)
+if(MPI)
+  list(APPEND plugins mpi)
+endif()
+foreach(name IN LISTS plugins)
   file(GLOB_RECURSE plugin "${WORK}/prefix/*/trochomill/libtrochomill_${name}.so")
   if(NOT plugin)
     message(FATAL_ERROR "libtrochomill_${name}.so is not in the installed tree")

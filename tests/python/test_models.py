@@ -391,6 +391,11 @@ def test_report_refuses_bad_requests(pivkin, tmp_path):
     with pytest.raises(tm.InputError, match="report vary: every point of the study failed"):
         tm.report(job, str(out), vary={"path.step": [-1.0, -2.0]})
     assert not out.exists()
+    # A key without values is refused (it crashed the process).
+    with pytest.raises(tm.InputError, match="vary path.step: no values to take"):
+        tm.report(job, str(out), vary={"path.step": []})
+    with pytest.raises(tm.InputError, match="vary path.step: no values to take"):
+        tm.compare(job, {"path.step": []})
 
 
 def test_optimize_feed_is_the_cli(wagih, tmp_path):

@@ -45,6 +45,12 @@ needs sndfile "$work/a.wav" "$bin" synth-signal "$job" -o "$work/a.wav" --cycles
 needs assimp "$work/a.stl" "$bin" insert "$job" -o "$work/a.stl"
 needs rows "$work/s.json" "$bin" simulate "$job" --set slot.length=2 --cycles 0:1 --json "$work/s.json"
 needs hdf5 "$work/sim" "$bin" simulate "$job" --set slot.length=2 --cycles 0:1 --out "$work/sim"
+# calibrate reads the record, then fits with Ceres: the record from the fast forces (no plugin).
+bergmann=$src/examples/bergmann2021/trochoidal.toml
+"$bin" forces "$bergmann" --fast --cycles 1:2 --csv "$work/f.csv" >/dev/null ||
+  bad "forces --fast without plugins"
+needs ceres "$work/m.toml" "$bin" calibrate "$bergmann" --measured "$work/f.csv" \
+  --fast --fit k_c --write "$work/m.toml"
 needs nsga2 "$work/p.csv" "$bin" optimize "$job" --set slot.length=3 --var path.step=0.1:0.2 \
   --maximize cycle_mrr_mm3_per_min --minimize h_max_mm --max-evals 16 --population 8 --pareto "$work/p.csv"
 
