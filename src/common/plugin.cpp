@@ -18,12 +18,20 @@
 namespace trochomill {
 namespace {
 
-// Where libtrochomill_<name>.so may be, in order (see plugin_symbol).
-std::vector<std::filesystem::path> plugin_candidates(const std::string& file) {
+// TROCHOMILL_PLUGIN_DIR when it is set (not empty), else null.
+const char* user_plugin_dir() {
+  const char* dir = std::getenv("TROCHOMILL_PLUGIN_DIR");
+  return dir != nullptr && *dir != '\0' ? dir : nullptr;
+}
+
+// Where libtrochomill_<name>.so may be, in order (see plugin_symbol): `user_dir` alone when
+// the user gave one.
+std::vector<std::filesystem::path> plugin_candidates(const std::string& file,
+                                                     const char* user_dir) {
   std::vector<std::filesystem::path> out;
-  if (const char* dir = std::getenv("TROCHOMILL_PLUGIN_DIR"); dir != nullptr && *dir != '\0') {
-    out.emplace_back(std::filesystem::path(dir) / file);
-    return out;  // the user's choice: nothing else is tried
+  if (user_dir != nullptr) {
+    out.emplace_back(std::filesystem::path(user_dir) / file);
+    return out;
   }
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
@@ -79,22 +87,21 @@ void* plugin_symbol(std::string_view name, std::string_view symbol, std::string_
   if (it == loaded.end()) {
     // Each place in turn until one holds this build's plugin; a failure is not kept (the next
     // call looks again, after the user has put the plugin in place).
+    const char* user_dir = user_plugin_dir();
     std::string tried;
     void* handle = nullptr;
-    for (const std::filesystem::path& p : plugin_candidates(file)) {
+    for (const std::filesystem::path& p : plugin_candidates(file, user_dir)) {
       std::string why;
       handle = open_plugin(p, sym, why);
       if (handle != nullptr) break;
       tried += fmt::format("{}{} ({})", tried.empty() ? "" : "; ", p.string(), why);
     }
     if (handle == nullptr) {
-      const char* dir = std::getenv("TROCHOMILL_PLUGIN_DIR");
-      throw Error(
-          fmt::format("{}: the plugin {} could not be loaded: {}; {}", what, file, tried,
-                      dir != nullptr && *dir != '\0'
-                          ? "TROCHOMILL_PLUGIN_DIR is set, so only that folder is searched"
-                          : "install it with the program (lib/trochomill beside bin/), or set "
-                            "TROCHOMILL_PLUGIN_DIR to the folder that holds it"));
+      throw Error(fmt::format(
+          "{}: the plugin {} could not be loaded: {}; {}", what, file, tried,
+          user_dir != nullptr ? "TROCHOMILL_PLUGIN_DIR is set, so only that folder is searched"
+                              : "install it with the program (lib/trochomill beside bin/), or set "
+                                "TROCHOMILL_PLUGIN_DIR to the folder that holds it"));
     }
     it = loaded.emplace(file, handle).first;
   }

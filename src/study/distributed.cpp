@@ -20,9 +20,11 @@
 namespace trochomill {
 namespace {
 
+// Looked up once (every message goes through it); a failed load is tried again next call.
 const study_detail::MpiTable& mpi() {
-  return plugin_table<study_detail::MpiTable>("mpi", study_detail::kMpiSymbol,
-                                              "a sweep under mpirun (Open MPI)");
+  static const study_detail::MpiTable& table = plugin_table<study_detail::MpiTable>(
+      "mpi", study_detail::kMpiSymbol, "a sweep under mpirun (Open MPI)");
+  return table;
 }
 
 }  // namespace
