@@ -143,8 +143,7 @@ TEST_F(Cli, ForcesCalibrateAndMaterials) {
   EXPECT_EQ(run_cli("calibrate " + ex).code, 2);
   EXPECT_EQ(run_cli("calibrate " + ex + " --measured " + csv + " --fast --fit k_x").code, 2);
   EXPECT_EQ(run_cli("calibrate " + ex + " --measured " + csv + " --columns a,b").code, 2);
-  const CliResult nm =
-      run_cli("forces " + test::example("wagih2023/elliptical.toml").string() + " --fast");
+  const CliResult nm = run_cli("forces " + test::example("curves/bend.toml").string() + " --fast");
   EXPECT_EQ(nm.code, 2) << nm.out;
   EXPECT_NE(nm.out.find("[material]"), std::string::npos) << nm.out;
   // analyze: PI from the predicted force when [material] is given and roughness measured.

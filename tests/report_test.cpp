@@ -19,6 +19,37 @@ namespace {
 
 // Every run of samples that one pixel column covers keeps its first and last sample and
 // the smallest and largest of every series (checked against the runs recomputed here).
+// figure_text rounds as the report's page does (web/src/report.js fmtNum(v, 4): toPrecision,
+// String(Number(...)), toExponential from 1e6 up and below 1e-4). Expected texts are node's
+// own output for these values (ties such as 12345 and 9999.5 round up in magnitude there).
+TEST(Report, FigureTextRoundsAsThePage) {
+  const std::vector<std::pair<double, std::string>> cases = {{64.956, "64.96"},
+                                                             {2216.2, "2216"},
+                                                             {0.075, "0.075"},
+                                                             {12345, "12350"},
+                                                             {180.86, "180.9"},
+                                                             {1234567, "1.235e+6"},
+                                                             {0.00001234, "1.234e-5"},
+                                                             {-3.14159, "-3.142"},
+                                                             {100000, "100000"},
+                                                             {0.0001, "0.0001"},
+                                                             {999.95, "1000"},
+                                                             {0.125, "0.125"},
+                                                             {9999.5, "10000"},
+                                                             {2.5, "2.5"},
+                                                             {1e-4 * 1.00005, "0.0001"},
+                                                             {395.3380732915399, "395.3"},
+                                                             {0.07500000001, "0.075"},
+                                                             {123456, "123500"},
+                                                             {5e-324, "4.941e-324"},
+                                                             {1.7976931348623157e308, "1.798e+308"},
+                                                             {0.3, "0.3"},
+                                                             {0, "0"}};
+  for (const auto& [v, want] : cases) EXPECT_EQ(figure_text(v), want) << v;
+  EXPECT_EQ(figure_text(std::nan("")), "-");
+  EXPECT_EQ(figure_text(2216.2, 6), "2216.2");
+}
+
 TEST(Report, DecimationKeepsEveryExtremeOfEveryColumn) {
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0, 1);

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -254,6 +255,100 @@ TEST(Signal, WearDriftAndPloughingFlags) {
   const MonitorReport clean =
       analyze_signal(synth_signal(job, job.monitor, o), job.monitor, &job, o.lead_s);
   for (const auto& c : clean.cycles) EXPECT_FALSE(c.ploughing);
+}
+
+// Pivkin 2025's k_f ranges, judged per zone and half of the cut: synthetic recordings of
+// the paper's example (edge radius 0.03 mm, as the tests above) built inside the new tool's
+// ranges (CZII and CZIII 1.0), inside the worn tool's (CZII 1.6; CZIII 1.9 in the up-cut
+// half, 1.3 in the down-cut half), outside both (CZIII 3.0), and with only the down-cut half
+// of CZIII out of the new range. CZIII fills most of both halves; CZII is brief where the
+// cut starts (the chip grows fast) and longer where it ends, so its up-cut cell has too few
+// windows to judge and its down-cut cell is judged. Each value sits at least 0.15 inside (or
+// outside) every range edge it tests; a 5 ms window's k_f scatters by ~18 %, so the cells'
+// means (checked: at least 8 windows in CZII's, 25 in CZIII's) lie within ~6 % and ~4 % of
+// the synthetic values (one standard deviation; the recording's seed is fixed).
+TEST(Signal, RangesJudgeEachZoneAndHalf) {
+  const Job job = pivkin_job();
+  const auto run = [&](double czii, double cziii, double czii_down, double cziii_down) {
+    SynthOptions o;
+    o.cycles = 6;
+    o.kf_czii = czii;
+    o.kf_cziii = cziii;
+    o.kf_czii_down = czii_down;
+    o.kf_cziii_down = cziii_down;
+    return analyze_signal(synth_signal(job, job.monitor, o), job.monitor, &job, o.lead_s);
+  };
+  // Every cell judged, each on enough windows.
+  const MonitorReport fresh = run(1.0, 1.0, 1.0, 1.0);
+  ASSERT_EQ(fresh.cycles.size(), 6u);
+  for (const auto& c : fresh.cycles) {
+    ASSERT_EQ(c.judged.size(), 3u);
+    for (const auto& j : c.judged) {
+      EXPECT_FALSE(j.zone == 2 && j.half == 1);
+      EXPECT_GE(j.windows, j.zone == 2 ? 8 : 25) << kf_cell_name(j.zone, j.half);
+      EXPECT_NEAR(j.k_f, 1.0, j.zone == 2 ? 0.12 : 0.08) << kf_cell_name(j.zone, j.half);
+    }
+    EXPECT_EQ(c.tool_state, "new");
+  }
+  EXPECT_EQ(fresh.cycles_new, 6);
+  for (const auto& f : fresh.flags) EXPECT_EQ(f.find("Pivkin"), std::string::npos) << f;
+
+  const MonitorReport worn = run(1.6, 1.9, 1.6, 1.3);
+  EXPECT_EQ(worn.cycles_worn, 6);
+  for (const auto& c : worn.cycles) {
+    for (const auto& j : c.judged) {
+      EXPECT_FALSE(j.in_new) << kf_cell_name(j.zone, j.half);
+      EXPECT_TRUE(j.in_worn) << kf_cell_name(j.zone, j.half);
+    }
+  }
+  // A flag for each zone and half, naming the zone, the half and both ranges.
+  const auto flag_with = [](const MonitorReport& r, const std::string& what) {
+    return std::count_if(r.flags.begin(), r.flags.end(),
+                         [&](const std::string& f) { return f.find(what) != std::string::npos; });
+  };
+  EXPECT_EQ(flag_with(worn, "CZIII up-cut half: k_f outside the new tool's 0.90-1.10"), 1);
+  EXPECT_EQ(flag_with(worn, "inside the worn tool's 1.50-2.30 (Fig. 24) in 6 of them"), 1);
+  EXPECT_EQ(flag_with(worn, "CZIII down-cut half"), 1);
+  EXPECT_EQ(flag_with(worn, "inside the worn tool's 1.00-1.70"), 1);
+  EXPECT_EQ(flag_with(worn, "CZII down-cut half: k_f outside the new tool's 0.85-1.15"), 1);
+  EXPECT_EQ(flag_with(worn, "CZII up-cut"), 0);
+  EXPECT_EQ(flag_with(worn, "new in 0, worn in 6, neither in 0 of 6 cycles"), 1);
+
+  const MonitorReport broken = run(1.0, 3.0, 1.0, 3.0);
+  EXPECT_EQ(broken.cycles_neither, 6);
+  EXPECT_EQ(flag_with(broken, "inside the worn tool's 1.50-2.30 (Fig. 24) in 0 of them"), 1);
+
+  // Only the down-cut half of CZIII out: the halves are told apart.
+  const MonitorReport half = run(1.0, 1.0, 1.0, 1.35);
+  EXPECT_EQ(flag_with(half, "CZIII down-cut half"), 1);
+  EXPECT_EQ(flag_with(half, "CZIII up-cut half"), 0);
+  EXPECT_EQ(flag_with(half, "CZII "), 0);
+  EXPECT_EQ(half.cycles_neither, 6);  // CZIII's up-cut 1.0 is below the worn tool's 1.5
+
+  // No criteria: nothing judged.
+  Job none = job;
+  none.monitor.criteria = KfCriteria::none;
+  SynthOptions o;
+  o.cycles = 4;
+  const MonitorReport off =
+      analyze_signal(synth_signal(none, none.monitor, o), none.monitor, &none, o.lead_s);
+  for (const auto& c : off.cycles) EXPECT_TRUE(c.judged.empty());
+
+  // Live: the window after each worn cycle says so (the recording ends with the fourth cycle:
+  // no window after it, so three).
+  SynthOptions lw;
+  lw.cycles = 4;
+  lw.rate_hz = 48000;
+  lw.kf_czii = 1.6;
+  lw.kf_cziii = 1.9;
+  lw.kf_cziii_down = 1.3;
+  const Signal s = synth_signal(job, job.monitor, lw);
+  LiveMonitor live(s.rate_hz, job.monitor, &job, lw.lead_s);
+  int flagged = 0;
+  live.push(s.samples.data(), s.samples.size(), [&](const LiveWindow& w) {
+    for (const auto& f : w.flags) flagged += f == "ranges-worn" ? 1 : 0;
+  });
+  EXPECT_EQ(flagged, 3);
 }
 
 // Live monitoring with a job: every window gets the offline analysis' cycle and phase (the

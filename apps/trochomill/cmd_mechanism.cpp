@@ -66,6 +66,12 @@ void register_mechanism_commands(CLI::App& app, int& exit_code) {
     add_key_alias(cmd, a->job, "--share-of", "mechanism.share_of",
                   "what the share is of: cutting (the time in the cut) or cycle (cooling "
                   "included)");
+    add_key_alias(cmd, a->job, "--criterion", "mechanism.criterion",
+                  "what the step must do: cziii (--share of CZIII, the default) or plunger "
+                  "(at most --plunger-share of the cut's first half in CZI: Pivkin 2025)");
+    add_key_alias(cmd, a->job, "--plunger-share", "mechanism.plunger_share",
+                  "criterion plunger: the largest CZI share of the cut's first half, 0..1 "
+                  "(default 0.2)");
     cmd->add_flag("--feed", a->feed, "recommend the feed per tooth at the job's step instead");
     cmd->add_option("--json", a->json, "write the recommendation as JSON (- for stdout)");
     cmd->final_callback([a, &exit_code] {

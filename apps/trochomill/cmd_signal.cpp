@@ -126,11 +126,19 @@ void register_signal_commands(CLI::App& app, int& exit_code) {
     cmd->add_option("--kf-czi", syn.kf_czi, "k_f in CZI")
         ->capture_default_str()
         ->check(finite_above(0, 100));
-    cmd->add_option("--kf-czii", syn.kf_czii, "k_f in CZII")
+    cmd->add_option("--kf-czii", syn.kf_czii,
+                    "k_f in CZII (the cut's up-cut half, and both without --kf-czii-down)")
         ->capture_default_str()
         ->check(finite_above(0, 100));
-    cmd->add_option("--kf-cziii", syn.kf_cziii, "k_f in CZIII")
+    cmd->add_option("--kf-cziii", syn.kf_cziii,
+                    "k_f in CZIII (the cut's up-cut half, and both without --kf-cziii-down)")
         ->capture_default_str()
+        ->check(finite_above(0, 100));
+    cmd->add_option("--kf-czii-down", syn.kf_czii_down,
+                    "k_f in CZII in the cut's second (down-cut) half (default: --kf-czii)")
+        ->check(finite_above(0, 100));
+    cmd->add_option("--kf-cziii-down", syn.kf_cziii_down,
+                    "k_f in CZIII in the cut's second (down-cut) half (default: --kf-cziii)")
         ->check(finite_above(0, 100));
     cmd->add_option("--wear-drift", syn.wear_drift,
                     "k_f grows by this fraction from the first cycle to the last")

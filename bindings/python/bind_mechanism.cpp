@@ -51,20 +51,28 @@ model: "exact" or "pivkin2025" (default the job's mechanism.model); flank_wear_m
   m.def(
       "recommend",
       [](const PyJob& pj, std::optional<double> share, std::optional<std::string> share_of,
-         bool feed) {
+         std::optional<std::string> criterion, std::optional<double> plunger_share, bool feed) {
         std::vector<Override> more;
         if (share) more.push_back({"mechanism.share", fmt::format("{}", *share), "share"});
         if (share_of) more.push_back({"mechanism.share_of", *share_of, "share_of"});
+        if (criterion) more.push_back({"mechanism.criterion", *criterion, "criterion"});
+        if (plunger_share) {
+          more.push_back(
+              {"mechanism.plunger_share", fmt::format("{}", *plunger_share), "plunger_share"});
+        }
         const Job job = more.empty() ? pj.job : pj.with(more);
         const Recommendation r = recommend(job, job.mechanism, job.tool.flank_wear_mm > 0, feed);
         return from_json(recommendation_json(job, job.mechanism, r, feed));
       },
       py::arg("job"), py::kw_only(), py::arg("share") = py::none(),
-      py::arg("share_of") = py::none(), py::arg("feed") = false,
+      py::arg("share_of") = py::none(), py::arg("criterion") = py::none(),
+      py::arg("plunger_share") = py::none(), py::arg("feed") = false,
       R"(The smallest trochoid step (mm), or with feed=True the feed per tooth (mm) at the job's
 step, whose cutting part (share_of="cutting", default mechanism.share_of) or whole cycle
-(share_of="cycle") is at least `share` (0..1, default mechanism.share) in CZIII: the keys of
-`trochomill recommend --json` (with its "explanation").)");
+(share_of="cycle") is at least `share` (0..1, default mechanism.share) in CZIII; with
+criterion="plunger", whose cut keeps CZI to at most `plunger_share` (0..1, default 0.2) of its
+first half (Pivkin 2025's plunger criterion): the keys of `trochomill recommend --json` (with
+its "explanation").)");
 }
 
 }  // namespace trochomill::python

@@ -109,7 +109,8 @@ void bind_synth_signal(py::module_& m) {
   m.def(
       "synth_signal",
       [](const PyJob& pj, double rate_hz, int cycles, double kf_czi, double kf_czii,
-         double kf_cziii, double wear_drift, double noise, double lead_s, std::uint32_t seed,
+         double kf_cziii, std::optional<double> kf_czii_down, std::optional<double> kf_cziii_down,
+         double wear_drift, double noise, double lead_s, std::uint32_t seed,
          std::optional<double> memory_limit_gb) {
         struct Range {
           const char* name;
@@ -121,6 +122,8 @@ void bind_synth_signal(py::module_& m) {
               Range{"cycles", static_cast<double>(cycles), 1, 100000, false},
               Range{"kf_czi", kf_czi, 0, 100, true}, Range{"kf_czii", kf_czii, 0, 100, true},
               Range{"kf_cziii", kf_cziii, 0, 100, true},
+              Range{"kf_czii_down", kf_czii_down.value_or(1), 0, 100, true},
+              Range{"kf_cziii_down", kf_cziii_down.value_or(1), 0, 100, true},
               Range{"wear_drift", wear_drift, 0, 100, false}, Range{"noise", noise, 0, 100, false},
               Range{"lead_s", lead_s, 0, 1e4, false}}) {
           if (!(std::isfinite(r.v) && (r.open_lo ? r.v > r.lo : r.v >= r.lo) && r.v <= r.hi)) {
@@ -134,6 +137,8 @@ void bind_synth_signal(py::module_& m) {
         o.kf_czi = kf_czi;
         o.kf_czii = kf_czii;
         o.kf_cziii = kf_cziii;
+        o.kf_czii_down = kf_czii_down;
+        o.kf_cziii_down = kf_cziii_down;
         o.wear_drift = wear_drift;
         o.noise = noise;
         o.lead_s = lead_s;
@@ -152,12 +157,14 @@ void bind_synth_signal(py::module_& m) {
         return out;
       },
       py::arg("job"), py::kw_only(), py::arg("rate_hz") = 100000.0, py::arg("cycles") = 12,
-      py::arg("kf_czi") = 1.6, py::arg("kf_czii") = 1.15, py::arg("kf_cziii") = 1.0,
+      py::arg("kf_czi") = 1.6, py::arg("kf_czii") = 1.0, py::arg("kf_cziii") = 1.0,
+      py::arg("kf_czii_down") = py::none(), py::arg("kf_cziii_down") = py::none(),
       py::arg("wear_drift") = 0.0, py::arg("noise") = 0.02, py::arg("lead_s") = 0.1,
       py::arg("seed") = 1, py::arg("memory_limit_gb") = py::none(),
       R"(A synthetic vibroacoustic signal following the model's zones, as `trochomill
 synth-signal` writes it: per cycle of the steady trochoid, noise bands whose RMS ratio is
-k_f of the zone (kf_czi, kf_czii, kf_cziii), a wear drift (k_f x (1 + wear_drift) by the last
+k_f of the zone (kf_czi, kf_czii, kf_cziii; kf_czii_down and kf_cziii_down, when given, in
+the cut's second, down-cut half), a wear drift (k_f x (1 + wear_drift) by the last
 cycle), white noise (RMS relative to cutting), lead_s (s) of air before the program.
 Returns {"samples": float64 array, "rate_hz", "cycles" (covered), "start_s"}.)");
 }

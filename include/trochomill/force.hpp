@@ -140,6 +140,13 @@ struct JobForces {
 [[nodiscard]] EdgeGrid job_edge_grid(const Job& job, const SimTool& tool,
                                      EdgeTopography* info = nullptr);
 
+/// Whether the material gives the force along the cutting direction alone (Kienzle or
+/// Bergmann with k_n and k_a zero; linear with only k_tc and k_te): the forces are then the
+/// cutting force alone, F_R,max a lower bound, the torque and the power whole.
+[[nodiscard]] bool cutting_direction_only(const Material& m);
+/// What that means, one sentence for the outputs (CLI, JSON, report) of such a material.
+[[nodiscard]] std::string cutting_direction_only_note(const Material& m);
+
 /// When the job has a [material] force model: F_R,max (N) over the steady cycle of `m` with
 /// the fast chip source (Wagih's F_R,max is the trochoidal operation's, not the entry's),
 /// reusing m's engagement, and the performance index from it (set_performance_index).

@@ -272,6 +272,8 @@ struct JobKey {
 [[nodiscard]] std::string_view to_string(Direction d) noexcept;
 [[nodiscard]] std::string_view to_string(ChipModel m) noexcept;
 [[nodiscard]] std::string_view to_string(ShareOf s) noexcept;
+[[nodiscard]] std::string_view to_string(Criterion c) noexcept;
+[[nodiscard]] std::string_view to_string(KfCriteria c) noexcept;
 [[nodiscard]] std::string_view to_string(WorkOffset w) noexcept;  ///< "G54" .. "G59"
 /// Parses a chip model name (exact | pivkin2025); InputError otherwise.
 [[nodiscard]] ChipModel parse_chip_model(std::string_view name);

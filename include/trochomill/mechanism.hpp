@@ -116,9 +116,13 @@ struct ZoneSummary {
   double end_s[3] = {-1, -1, -1};
   double cutting_time_s = 0;
   double cutting_start_s = 0;  ///< from theta = 0
+  double cutting_span_s = 0;   ///< from the cut's start to its end, pauses included
   double transition_s = -1;    ///< first time K_re crosses the transition marker
   double h_max_mm = 0;
   double h_m_mm = 0;  ///< minimum undeformed chip thickness r_e (1 - cos theta_m)
+  /// CZI's share of the first half of the cutting part (the span from the cut's start to its
+  /// end, pauses included, halved): Pivkin 2025's plunger criterion, the up-cut half.
+  double plunger_first_half_share = 0;
 };
 
 /// The chip curves for a trochoidal or elliptical job (InputError for other families or
@@ -134,8 +138,9 @@ struct ZoneSummary {
                                           const MechanismSettings& settings, bool use_wear);
 
 /// Recommendation: the smallest step (mm) for which at least `share` of the cutting part (or
-/// of the cycle: `share_of`) is in CZIII (or, with `for_feed`, the smallest feed per tooth at
-/// the job's step).
+/// of the cycle: `share_of`) is in CZIII, or with criterion = plunger at most `plunger_share`
+/// of the cut's first half is in CZI (or, with `for_feed`, the smallest feed per tooth at the
+/// job's step).
 struct Recommendation {
   bool found = false;
   double value = 0;   ///< min_step_mm or min_feed_per_tooth_mm

@@ -168,11 +168,52 @@ struct CycleTiming {
                                              double max_period_s);
 
 /// The mechanism model beside the signal: zone (0 air, 1-3 CZI-III) and K_re at each of
-/// `phase_bins` phases of a cycle (phase = time since the cycle start / cycle time).
+/// `phase_bins` phases of a cycle (phase = time since the cycle start / cycle time), and the
+/// half of the cut each falls in (1 the first, up-cut half; 2 the second, down-cut half; 0
+/// not cutting): the cut's span from its start to its end, pauses included, halved.
 struct ModelProfile {
   std::vector<double> k_re_pct;
   std::vector<int> zone;
+  std::vector<int> half;
 };
+/// The half of the cut (1 first, 2 second, 0 not cutting) at `t_s` into a cycle of the
+/// mechanism curve whose zones `z` summarises (cycle time `cycle_s`).
+[[nodiscard]] int cut_half(double t_s, int zone, double cutting_start_s, double cutting_span_s,
+                           double cycle_s);
+
+/// A k_f range (lo..hi, inclusive) of Pivkin 2025's monitoring criteria.
+struct KfRange {
+  double lo = 0, hi = 0;
+  [[nodiscard]] bool contains(double v) const { return v >= lo && v <= hi; }
+};
+/// Pivkin 2025's k_f ranges for zone CZII (`zone` 2) or CZIII (3) in the cut's first half
+/// (`half` 1, up-cut) or second (2, down-cut): a new tool (Fig. 21, stage TI: CZII 0.85-1.15,
+/// CZIII 1 +- 10 %) and a worn one (Fig. 24, stage TIII: CZII 0.7-1, up to 2.5; CZIII 1.5-2.3
+/// until the middle of the cut, 1-1.7 after it). CZI has no range (k_f follows K_re there).
+[[nodiscard]] KfRange pivkin2025_kf_range(int zone, int half, bool worn);
+
+/// One zone and half of the cut of a cycle, judged against the ranges.
+struct KfJudgement {
+  int zone = 0;     ///< 2 CZII, 3 CZIII
+  int half = 0;     ///< 1 first (up-cut), 2 second (down-cut)
+  double k_f = 0;   ///< mean k_f of the windows there
+  int windows = 0;  ///< how many
+  KfRange new_range, worn_range;
+  bool in_new = false, in_worn = false;
+};
+/// The fewest windows a (zone, half) cell is judged on: one 5 ms window's k_f scatters by
+/// ~18 % on noise-like signals, five windows' mean by ~8 %, about half the new tool's CZII
+/// range (+-15 %). A zone that brief in a half (CZII at the cut's start, where the chip grows
+/// fast) is not judged in that cycle.
+inline constexpr int kKfMinWindows = 5;
+/// Judges the mean k_f of each (zone, half) cell; `sum` and `count` indexed [zone - 2][half -
+/// 1]. Cells with fewer than kKfMinWindows windows are left out.
+[[nodiscard]] std::vector<KfJudgement> judge_kf(const double sum[2][2], const double count[2][2]);
+/// What the judged cells say: "new" (all inside the new tool's ranges), "worn" (all inside the
+/// worn tool's, not all the new's), "neither", or "" with no cell judged.
+[[nodiscard]] std::string kf_tool_state(const std::vector<KfJudgement>& judged);
+/// "CZIII up-cut" and the like.
+[[nodiscard]] std::string kf_cell_name(int zone, int half);
 /// The job's mechanism model (mechanism_settings(job)) at `bins` phases of its steady-state
 /// cycle (bin centres; phase 0 is theta = 0).
 [[nodiscard]] ModelProfile model_profile(const Job& job, int bins);
@@ -184,6 +225,10 @@ struct CycleResult {
   std::optional<double> k_f_czi, k_f_cziii;  ///< mean k_f in the zone's phases (with a job)
   bool ploughing = false;                    ///< k_f_czi > ploughing_ratio * k_f_cziii
   bool wear = false;                         ///< k_f_mean > wear_ratio * reference level
+  /// With a job and criteria: each zone and half of the cut against the ranges, and what
+  /// they say of the tool ("new", "worn", "neither"; "" where nothing was judged).
+  std::vector<KfJudgement> judged;
+  std::string tool_state;
 };
 
 struct MonitorReport {
@@ -194,6 +239,8 @@ struct MonitorReport {
   double k_f_mean = 0;       ///< mean over the cycles' k_f_mean (over all windows without cycles)
   double reference_k_f = 0;  ///< mean k_f level of the first baseline_cycles cycles
   bool wear_trend = false;   ///< the last baseline_cycles cycles' level > wear_ratio * reference
+  /// With criteria: how many cycles the ranges call new, worn and neither.
+  int cycles_new = 0, cycles_worn = 0, cycles_neither = 0;
   std::vector<std::string> flags;  ///< human-readable, one per finding
   /// What limits the result (no period in the signal: no cycles, the mean over all windows).
   std::vector<std::string> warnings;
@@ -213,7 +260,11 @@ struct MonitorReport {
 struct SynthOptions {
   double rate_hz = 100000;
   int cycles = 12;
-  double kf_czi = 1.6, kf_czii = 1.15, kf_cziii = 1.0;
+  /// k_f per zone (the up-cut half's where the halves differ): CZII and CZIII in the middle of
+  /// Pivkin 2025's new-tool ranges, CZI above them (k_f rises there with K_re).
+  double kf_czi = 1.6, kf_czii = 1.0, kf_cziii = 1.0;
+  /// k_f of CZII and CZIII in the cut's second (down-cut) half; absent: as in the first.
+  std::optional<double> kf_czii_down, kf_cziii_down;
   double idle = 0.05;     ///< band amplitude in air, relative to cutting
   double noise = 0.02;    ///< white noise RMS, relative to the cutting band RMS
   double wear_drift = 0;  ///< k_f x (1 + wear_drift) by the last cycle's end
@@ -231,12 +282,15 @@ struct SynthOptions {
 /// planned timing (cycle k starts at start_s + its programmed start) with running flags:
 /// "ploughing" when a CZI window's k_f exceeds ploughing_ratio times the running mean of the
 /// CZIII windows so far (after 10 of them), "wear" once the last finished cycle's k_f level
-/// exceeds wear_ratio times the first baseline_cycles cycles' level.
+/// exceeds wear_ratio times the first baseline_cycles cycles' level, and with criteria, on the
+/// first window after a cycle whose zones and halves leave the new tool's ranges,
+/// "ranges-worn" (all inside the worn tool's) or "ranges-neither".
 struct LiveWindow {
   KfStream::Window window;
   int cycle = -1;     ///< -1 outside the planned cycles or without a job
   double phase = -1;  ///< 0..1 within the cycle
   int zone = -1;      ///< model zone (0 air, 1-3 CZI-III); -1 unknown
+  int half = -1;      ///< half of the cut (1 up-cut, 2 down-cut, 0 not cutting); -1 unknown
   std::vector<std::string> flags;
 };
 class LiveMonitor;
@@ -260,6 +314,8 @@ class LiveMonitor {
   KfStream stream_;
   std::vector<double> bounds_;  ///< cycle boundaries in stream time (empty without a job)
   std::vector<int> zone_;       ///< model zones per phase bin
+  std::vector<int> half_;       ///< and the half of the cut (1, 2; 0 not cutting)
+  double cell_sum_[2][2] = {{0, 0}, {0, 0}}, cell_n_[2][2] = {{0, 0}, {0, 0}};
   int cycle_ = -1;
   double cycle_sum_ = 0, cycle_n_ = 0, ref_sum_ = 0, cziii_sum_ = 0, cziii_n_ = 0;
   int finished_ = 0;

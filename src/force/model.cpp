@@ -177,4 +177,20 @@ void sum_teeth(ForceSeries& s, double omega_abs) {
   }
 }
 
+bool cutting_direction_only(const Material& m) {
+  if (!m.model) return false;
+  if (*m.model == ForceModel::linear) {
+    return m.k_rc == 0 && m.k_ac == 0 && m.k_re == 0 && m.k_ae == 0;
+  }
+  return m.k_n == 0 && m.k_a == 0;
+}
+
+std::string cutting_direction_only_note(const Material& m) {
+  return fmt::format(
+      "{} gives the force along the cutting direction only ({} = 0): the forces are the "
+      "cutting force alone, F_R,max a lower bound; the torque and the power are whole",
+      m.name.empty() ? std::string("[material]") : m.name,
+      m.model && *m.model == ForceModel::linear ? "k_rc, k_ac, k_re, k_ae" : "k_n, k_a");
+}
+
 }  // namespace trochomill

@@ -43,6 +43,10 @@ inline constexpr Names<ChipModel> kChipModels[] = {{"exact", ChipModel::exact},
                                                    {"pivkin2025", ChipModel::pivkin2025}};
 inline constexpr Names<ShareOf> kSharesOf[] = {{"cutting", ShareOf::cutting},
                                                {"cycle", ShareOf::cycle}};
+inline constexpr Names<Criterion> kCriteria[] = {{"cziii", Criterion::cziii},
+                                                 {"plunger", Criterion::plunger}};
+inline constexpr Names<KfCriteria> kKfCriteria[] = {{"none", KfCriteria::none},
+                                                    {"pivkin2025", KfCriteria::pivkin2025}};
 inline constexpr Names<ForceModel> kForceModels[] = {{"bergmann", ForceModel::bergmann},
                                                      {"kienzle", ForceModel::kienzle},
                                                      {"linear", ForceModel::linear}};

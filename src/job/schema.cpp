@@ -596,6 +596,13 @@ std::vector<Key> build_schema() {
       choice("mechanism", "share_of", kSharesOf, FIELD(mechanism.share_of),
              "what share is a share of: cutting (the time in the cut) or cycle (the whole "
              "cycle, cooling included: Pivkin 2025's reading)"),
+      choice("mechanism", "criterion", kCriteria, FIELD(mechanism.criterion),
+             "what `recommend` asks of a step: cziii (at least share of CZIII) or plunger (at "
+             "most plunger_share of the cut's first half in CZI: Pivkin 2025's criterion)"),
+      number("mechanism", "plunger_share", "fraction", Range{0.0, 1.0, true, false},
+             FIELD(mechanism.plunger_share),
+             "criterion = plunger: the largest share of the first half of the cutting part in "
+             "CZI (ploughing, the plunger mechanism)"),
       choice("mechanism", "model", kChipModels, FIELD(mechanism.model),
              "chip model: exact, or pivkin2025, the published model (circular trochoid only; "
              "docs/models.md section 9)"),
@@ -628,6 +635,9 @@ std::vector<Key> build_schema() {
              "ploughing flagged where k_f in CZI exceeds CZIII's by this"),
       integer("monitor", "phase_bins", 4, 10000, FIELD(monitor.phase_bins),
               "k_f profile bins over a cycle"),
+      choice("monitor", "criteria", kKfCriteria, FIELD(monitor.criteria),
+             "with a job, the k_f ranges each cycle is judged against per zone and half of the "
+             "cut: pivkin2025 (Pivkin 2025 Figs. 21 and 24, new and worn tool) or none"),
       // [simulation]
       number("simulation", "resolution", "mm", Range{1e-4, 10.0}, FIELD(simulation.resolution_mm),
              "dexel spacing of the three boards (Bergmann 2021: 0.005)"),
@@ -1327,6 +1337,12 @@ std::string_view to_string(ChipModel m) noexcept {
 }
 std::string_view to_string(ShareOf s) noexcept {
   return job_detail::name_of(job_detail::kSharesOf, s);
+}
+std::string_view to_string(Criterion c) noexcept {
+  return job_detail::name_of(job_detail::kCriteria, c);
+}
+std::string_view to_string(KfCriteria c) noexcept {
+  return job_detail::name_of(job_detail::kKfCriteria, c);
 }
 std::string_view to_string(WorkOffset w) noexcept {
   return job_detail::name_of(job_detail::kWorkOffsets, w);

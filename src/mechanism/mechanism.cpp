@@ -271,6 +271,29 @@ ZoneSummary summarize_zones(const MechanismCurve& c, const MechanismSettings& st
     tt += dt;
   }
   z.cutting_time_s = dur[0] + dur[1] + dur[2];
+  // The first half of the cut: from its start to the middle of its span (to the end of the
+  // last cutting sample); CZI's time in it, pieces split at the middle.
+  if (found) {
+    double span = 0;
+    tt = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = (start + k) % n, j = (i + 1) % n;
+      const double dt = j == 0 ? c.cycle_time_s - c.t_s[i] : c.t_s[j] - c.t_s[i];
+      if (c.zone[i] != 0) span = tt + dt;
+      tt += dt;
+    }
+    z.cutting_span_s = span;
+    const double half = 0.5 * span;
+    double czi = 0;
+    tt = 0;
+    for (std::size_t k = 0; k < n && tt < half; ++k) {
+      const std::size_t i = (start + k) % n, j = (i + 1) % n;
+      const double dt = j == 0 ? c.cycle_time_s - c.t_s[i] : c.t_s[j] - c.t_s[i];
+      if (c.zone[i] == 1) czi += std::min(tt + dt, half) - tt;
+      tt += dt;
+    }
+    z.plunger_first_half_share = half > 0 ? czi / half : 0;
+  }
   for (int q = 0; q < 3; ++q) {
     z.share[q] = z.cutting_time_s > 0 ? dur[q] / z.cutting_time_s : 0;
     z.cycle_share[q] = c.cycle_time_s > 0 ? dur[q] / c.cycle_time_s : 0;
@@ -284,6 +307,10 @@ Recommendation recommend(const Job& job, const MechanismSettings& st, bool use_w
   if (!(st.share > 0 && st.share <= 1)) {
     throw InputError(fmt::format("share must be in (0, 1], got {}", st.share));
   }
+  if (!(st.plunger_share >= 0 && st.plunger_share < 1)) {
+    throw InputError(fmt::format("plunger_share must be in [0, 1), got {}", st.plunger_share));
+  }
+  const bool plunger = st.criterion == Criterion::plunger;
   MechanismSettings coarse = st;
   coarse.points = std::min(st.points, 720);  // the search; the answer is re-evaluated finely
   const bool of_cycle = st.share_of == ShareOf::cycle;
@@ -304,9 +331,10 @@ Recommendation recommend(const Job& job, const MechanismSettings& st, bool use_w
   // where the share grows slowly (the whole cycle's, about 0.06 a mm of step on Pivkin's
   // example) the coarse grid's crossing is a few % off the full one's.
   const double lo_v = for_feed ? 1e-4 : 1e-3, hi_v = for_feed ? 0.5 : R;
-  const auto holds = [&](double v, const MechanismSettings& s) {
-    return cziii(eval(v, s)) >= st.share;
+  const auto met = [&](const ZoneSummary& z) {
+    return plunger ? z.plunger_first_half_share <= st.plunger_share : cziii(z) >= st.share;
   };
+  const auto holds = [&](double v, const MechanismSettings& s) { return met(eval(v, s)); };
   constexpr int kScan = 48;
   double prev = lo_v;
   Recommendation r;
@@ -325,7 +353,7 @@ Recommendation recommend(const Job& job, const MechanismSettings& st, bool use_w
         (holds(m, st) ? b : a) = m;
       }
       r.zones = eval(b, st);
-      r.found = cziii(r.zones) >= st.share;
+      r.found = met(r.zones);
       r.value = b;
       break;
     }
@@ -334,13 +362,30 @@ Recommendation recommend(const Job& job, const MechanismSettings& st, bool use_w
   const char* what = for_feed ? "feed per tooth" : "trochoid step";
   const char* of = of_cycle ? "the cycle" : "the cutting part";
   const double* sh = of_cycle ? r.zones.cycle_share : r.zones.share;
+  const std::string wear =
+      use_wear ? fmt::format(", flank wear {:g} mm", job.tool.flank_wear_mm) : "";
+  if (plunger) {
+    r.explanation =
+        r.found ? fmt::format(
+                      "smallest {} {:.4g} mm keeps CZI (ploughing, K_re < {:g} %, r_e {:g} mm{}) "
+                      "to {:.1f} % of the first half of the cut (at most {:g} %: Pivkin 2025's "
+                      "plunger criterion); CZIII {:.0f} % of the cutting part",
+                      what, r.value, st.thresholds.czi_max_pct, job.tool.edge_radius_mm, wear,
+                      100 * r.zones.plunger_first_half_share, 100 * st.plunger_share,
+                      100 * r.zones.share[2])
+                : fmt::format(
+                      "no {} up to {:g} mm keeps CZI to {:g} % of the first half of the cut: "
+                      "the chip there stays below {:g} % of r_e = {:g} mm",
+                      what, hi_v, 100 * st.plunger_share, st.thresholds.czi_max_pct,
+                      job.tool.edge_radius_mm);
+    return r;
+  }
   if (r.found) {
     r.explanation = fmt::format(
         "smallest {} {:.4g} mm puts {:.0f} % of {} in CZIII (K_re >= {:g} %, r_e {:g} mm{}); "
         "CZI {:.0f} %, CZII {:.0f} %{}",
-        what, r.value, 100 * sh[2], of, st.thresholds.czii_max_pct, job.tool.edge_radius_mm,
-        use_wear ? fmt::format(", flank wear {:g} mm", job.tool.flank_wear_mm) : "", 100 * sh[0],
-        100 * sh[1], of_cycle ? ", the rest not cutting" : "");
+        what, r.value, 100 * sh[2], of, st.thresholds.czii_max_pct, job.tool.edge_radius_mm, wear,
+        100 * sh[0], 100 * sh[1], of_cycle ? ", the rest not cutting" : "");
   } else {
     r.explanation = fmt::format(
         "no {} up to {:g} mm puts {:.0f} % of {} in CZIII{}", what, hi_v, 100 * st.share, of,

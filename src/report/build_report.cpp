@@ -153,6 +153,9 @@ ReportData build_report(Job job, ToolPath path, ReportRequest r, const RunHooks&
       f.worn_label = state_label(worn, static_cast<std::size_t>(worn.topography.state));
     }
     d.forces = std::move(f);
+    if (cutting_direction_only(jb.material)) {
+      d.notes.push_back("forces: " + cutting_direction_only_note(jb.material));
+    }
   } else {
     d.notes.push_back(fmt::format(
         "forces: not shown: {} has no [material] force model (see `trochomill materials`)",

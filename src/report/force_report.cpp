@@ -5,6 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "trochomill/report/analysis.hpp"
 #include "trochomill/report/force.hpp"
 
 namespace trochomill {
@@ -30,22 +31,27 @@ std::string force_summary_json(const Job& job, const JobForces& f, double from_s
                             {"to_s", to_s},
                             {"chips_wall_s", f.chips_wall_s},
                             {"forces_wall_s", f.forces_wall_s},
-                            {"complete", f.chips.complete}};
+                            {"complete", f.chips.complete},
+                            {"cutting_direction_only", cutting_direction_only(job.material)}};
   return j.dump(2) + "\n";
 }
 
 std::string force_summary_text(const Job& job, const JobForces& f, double from_s, double to_s) {
   const ForceSummary& sm = f.summary;
+  const auto n = [](double v) { return figure_text(v); };
   return fmt::format(
-      "{}: {} model{}, {} chips, {:.4f} to {:.4f} s, {} steps\n"
-      "  F_R,max {:.1f} N at {:.4f} s; |F_x| {:.1f}, |F_y| {:.1f}, |F_z| {:.1f} N max\n"
-      "  torque max {:.3f} N m, power max {:.1f} W (mean {:.1f} W); {:.2f} s + {:.2f} s{}\n",
+      "{}: {} model{}, {} chips, {} to {} s, {} steps\n"
+      "  F_R,max {} N at {} s; |F_x| {}, |F_y| {}, |F_z| {} N max\n"
+      "  torque max {} N m, power max {} W (mean {} W); {:.2f} s + {:.2f} s{}\n{}",
       job.source, to_string(*job.material.model),
       job.material.name.empty() ? "" : " (" + job.material.name + ")",
-      f.fast ? "fast" : "simulated", from_s, to_s, f.series.size(), sm.f_resultant_max_n,
-      sm.t_resultant_max_s, sm.f_x_max_n, sm.f_y_max_n, sm.f_z_max_n, sm.torque_max_nm,
-      sm.power_max_w, sm.power_mean_w, f.chips_wall_s, f.forces_wall_s,
-      f.chips.complete ? "" : " (interrupted: incomplete)");
+      f.fast ? "fast" : "simulated", n(from_s), n(to_s), f.series.size(), n(sm.f_resultant_max_n),
+      n(sm.t_resultant_max_s), n(sm.f_x_max_n), n(sm.f_y_max_n), n(sm.f_z_max_n),
+      n(sm.torque_max_nm), n(sm.power_max_w), n(sm.power_mean_w), f.chips_wall_s, f.forces_wall_s,
+      f.chips.complete ? "" : " (interrupted: incomplete)",
+      cutting_direction_only(job.material)
+          ? "  note: " + cutting_direction_only_note(job.material) + "\n"
+          : "");
 }
 
 std::string calibration_json(const CalibrationResult& r) {

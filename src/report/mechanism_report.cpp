@@ -4,6 +4,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 
+#include "trochomill/report/analysis.hpp"
 #include "trochomill/report/mechanism.hpp"
 #include "trochomill/units.hpp"
 
@@ -39,6 +40,7 @@ std::string mechanism_json(const Job& job, const MechanismSettings& st, const Me
                       {"transition_s", z.transition_s},
                       {"zone_share", zones_json(z)},
                       {"zone_share_of_cycle", cycle_zones_json(z)},
+                      {"plunger_first_half_share", z.plunger_first_half_share},
                       {"zone_times_s", times_json(z)},
                       {"thresholds_pct",
                        {{"czi_max", st.thresholds.czi_max_pct},
@@ -71,18 +73,21 @@ std::string mechanism_text(const std::string& job_file, const Job& job, const Me
   std::string out = fmt::format(
       "{}: {} model, r_e {:g} mm{}\n", job_file, to_string(st.model), job.tool.edge_radius_mm,
       use_wear ? fmt::format(", flank wear {:g} mm", job.tool.flank_wear_mm) : "");
-  out += fmt::format("  cycle {:.4f} s, cutting {:.4f} s, h_max {:.5f} mm, h_m {}\n",
-                     c.cycle_time_s, z.cutting_time_s, z.h_max_mm,
-                     st.friction_angle_deg > 0 ? fmt::format("{:.5f} mm", z.h_m_mm)
+  const auto n = [](double v) { return figure_text(v); };
+  out += fmt::format("  cycle {} s, cutting {} s, h_max {} mm, h_m {}\n", n(c.cycle_time_s),
+                     n(z.cutting_time_s), n(z.h_max_mm),
+                     st.friction_angle_deg > 0 ? n(z.h_m_mm) + " mm"
                                                : std::string("n/a (no [material] friction_angle)"));
   const char* names[3] = {"CZI  ", "CZII ", "CZIII"};
   for (int q = 0; q < 3; ++q) {
-    out += fmt::format("  {} {:5.1f} % of the cutting part", names[q], 100 * z.share[q]);
+    out += fmt::format("  {} {} % of the cutting part", names[q], n(100 * z.share[q]));
     if (z.start_s[q] >= 0) {
-      out += fmt::format(", {:.4f} to {:.4f} s after cutting starts", z.start_s[q], z.end_s[q]);
+      out += fmt::format(", {} to {} s after cutting starts", n(z.start_s[q]), n(z.end_s[q]));
     }
     out += "\n";
   }
+  out += fmt::format("  CZI is {} % of the cut's first half (the plunger criterion's share)\n",
+                     n(100 * z.plunger_first_half_share));
   return out;
 }
 
@@ -91,8 +96,11 @@ std::string recommendation_json(const Job& job, const MechanismSettings& st,
   const nlohmann::json j = {{"found", r.found},
                             {for_feed ? "min_feed_per_tooth_mm" : "min_step_mm",
                              r.found ? nlohmann::json(r.value) : nlohmann::json(nullptr)},
+                            {"criterion", to_string(st.criterion)},
                             {"share", st.share},
                             {"share_of", to_string(st.share_of)},
+                            {"plunger_share", st.plunger_share},
+                            {"plunger_first_half_share", r.zones.plunger_first_half_share},
                             {"model", to_string(st.model)},
                             {"flank_wear_mm", job.tool.flank_wear_mm},
                             {"zone_share", zones_json(r.zones)},

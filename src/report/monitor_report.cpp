@@ -57,6 +57,9 @@ std::string monitor_json(const MonitorReport& r, const std::string& signal, cons
   j["period_s"] = r.timing.period_s;
   j["reference_k_f"] = num(r.reference_k_f);
   j["wear_trend"] = r.wear_trend;
+  j["criteria"] = r.model ? std::string(to_string(m.criteria)) : std::string("none");
+  j["cycles_by_tool_state"] = {
+      {"new", r.cycles_new}, {"worn", r.cycles_worn}, {"neither", r.cycles_neither}};
   j["flags"] = r.flags;
   j["warnings"] = r.warnings;
   j["k_f_per_cycle"] = nlohmann::json::array();
@@ -65,14 +68,29 @@ std::string monitor_json(const MonitorReport& r, const std::string& signal, cons
     j["k_f_per_cycle"].push_back(num(c.k_f_mean));
     nlohmann::json profile = nlohmann::json::array();
     for (const double v : c.k_f_profile) profile.push_back(num(v));
-    j["cycle_details"].push_back({{"start_s", c.start_s},
-                                  {"end_s", c.end_s},
-                                  {"k_f_mean", num(c.k_f_mean)},
-                                  {"k_f_czi", opt(c.k_f_czi)},
-                                  {"k_f_cziii", opt(c.k_f_cziii)},
-                                  {"ploughing", c.ploughing},
-                                  {"wear", c.wear},
-                                  {"k_f_profile", profile}});
+    nlohmann::json judged = nlohmann::json::array();
+    for (const auto& q : c.judged) {
+      judged.push_back({{"zone", q.zone == 2 ? "CZII" : "CZIII"},
+                        {"half", q.half == 1 ? "up-cut" : "down-cut"},
+                        {"k_f", num(q.k_f)},
+                        {"windows", q.windows},
+                        {"new_range", {q.new_range.lo, q.new_range.hi}},
+                        {"worn_range", {q.worn_range.lo, q.worn_range.hi}},
+                        {"in_new", q.in_new},
+                        {"in_worn", q.in_worn}});
+    }
+    j["cycle_details"].push_back(
+        {{"start_s", c.start_s},
+         {"end_s", c.end_s},
+         {"k_f_mean", num(c.k_f_mean)},
+         {"k_f_czi", opt(c.k_f_czi)},
+         {"k_f_cziii", opt(c.k_f_cziii)},
+         {"ploughing", c.ploughing},
+         {"wear", c.wear},
+         {"tool_state",
+          c.tool_state.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.tool_state)},
+         {"judged", judged},
+         {"k_f_profile", profile}});
   }
   if (r.model) {
     nlohmann::json phase = nlohmann::json::array();
@@ -112,6 +130,7 @@ std::string monitor_table(const MonitorReport& r, const std::string& signal, con
     }
     if (c.ploughing) out += "  ploughing?";
     if (c.wear) out += "  wear";
+    if (!c.tool_state.empty()) out += "  ranges: " + c.tool_state;
     out += "\n";
   }
   if (r.flags.empty()) out += "  no flags\n";
@@ -127,6 +146,7 @@ std::string live_json_line(const LiveWindow& w) {
                       {"cycle", w.cycle},
                       {"phase", w.phase >= 0 ? num(w.phase) : nlohmann::json(nullptr)},
                       {"zone", w.zone},
+                      {"half", w.half},
                       {"flags", w.flags}};
   return j.dump() + "\n";
 }

@@ -1,7 +1,9 @@
 // JSON, CSV and table output of the analysis, and the parameter study (see report.hpp).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -203,58 +205,94 @@ std::string metrics_json(const Job& job, const ProcessMetrics& m) {
   return j.dump(2) + "\n";
 }
 
+std::string figure_text(double v, int digits) {
+  if (!std::isfinite(v)) return "-";
+  if (v == 0) return "0";
+  const int d = std::clamp(digits, 1, 17);
+  // The magnitude's exact decimal digits (40 after the first: a tie at `d` digits has a short
+  // exact expansion, so a "5" followed by zeros here is one), rounded half up in magnitude as
+  // ECMAScript's toPrecision and toExponential round (printf rounds a tie to even).
+  const std::string e = fmt::format("{:.40e}", std::abs(v));
+  const std::string mantissa = e.substr(0, 1) + e.substr(2, 40);
+  int exponent = std::atoi(e.c_str() + e.find('e') + 1);
+  std::string kept = mantissa.substr(0, static_cast<std::size_t>(d));
+  if (mantissa[static_cast<std::size_t>(d)] >= '5') {
+    int i = d - 1;
+    while (i >= 0 && kept[static_cast<std::size_t>(i)] == '9')
+      kept[static_cast<std::size_t>(i--)] = '0';
+    if (i < 0) {
+      kept.insert(kept.begin(), '1');
+      kept.pop_back();
+      ++exponent;
+    } else {
+      ++kept[static_cast<std::size_t>(i)];
+    }
+  }
+  const std::string sign = v < 0 ? "-" : "";
+  const std::string point = kept.size() > 1 ? "." + kept.substr(1) : "";
+  const double a = std::abs(v);
+  if (a >= 1e6 || a < 1e-4) {  // the page's exponent form, "1.235e+6"
+    return fmt::format("{}{}{}e{}{}", sign, kept.substr(0, 1), point, exponent < 0 ? '-' : '+',
+                       std::abs(exponent));
+  }
+  // The shortest text of the rounded value (as the page's String(Number(...))).
+  const double r =
+      std::strtod(fmt::format("{}{}e{}", kept.substr(0, 1), point, exponent).c_str(), nullptr);
+  return sign + fmt::format("{}", r);
+}
+
 std::string metrics_text(const std::string& job_file, const std::string& gcode, const Job& job,
                          const ProcessMetrics& m) {
+  const auto f = [](double v) { return figure_text(v); };
   const std::string what = job.pocket.defined()
                                ? fmt::format("pocket of layer '{}'", job.pocket.boundary)
                                : std::string(to_string(job.path.type));
   std::string out =
       fmt::format("{}: {}{}\n", job_file, what, gcode.empty() ? "" : " (from " + gcode + ")");
-  out +=
-      fmt::format("  machining time       {:.3f} s ({:.3f} s with acceleration), path {:.2f} mm\n",
-                  m.machining_time_s, m.machining_time_accel_s, m.path_length_mm);
+  out += fmt::format("  machining time       {} s ({} s with acceleration), path {} mm\n",
+                     f(m.machining_time_s), f(m.machining_time_accel_s), f(m.path_length_mm));
   // The whole program, then the steady cycle where there is one.
-  out +=
-      fmt::format("  MRR                  {:.1f} mm^3/min over the program ({:.1f} mm^3 removed)\n",
-                  m.mrr_total_mm3_per_min, m.removed_volume_mm3);
-  out += fmt::format("  h_max                {:.5f} mm at {:.4f} s (f_z {:.4g} mm)\n",
-                     m.h_max_slot_mm, m.t_h_max_slot_s, m.feed_per_tooth_mm);
-  out += fmt::format("  engagement max       {:.2f} deg\n", m.engagement_angle_max_slot_deg);
+  out += fmt::format("  MRR                  {} mm^3/min over the program ({} mm^3 removed)\n",
+                     f(m.mrr_total_mm3_per_min), f(m.removed_volume_mm3));
+  out += fmt::format("  h_max                {} mm at {} s (f_z {} mm)\n", f(m.h_max_slot_mm),
+                     f(m.t_h_max_slot_s), f(m.feed_per_tooth_mm));
+  out += fmt::format("  engagement max       {} deg\n", f(m.engagement_angle_max_slot_deg));
+  // Where a figure is: a place on the part, to the thousandth of a mm (a position, not a
+  // figure: 4 significant digits would round 123.456 mm to 0.04 mm).
+  const auto xyz = [](const Vec3& p) {
+    return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z());
+  };
   if (!m.h_max_slot_source.empty()) {
     // A program read from a file: the blocks of the largest chip and engagement.
-    const auto xyz = [](const Vec3& p) {
-      return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z());
-    };
-    out += fmt::format("  h_max at             {} {}; after the entry {:.5f} mm at {} {}\n",
-                       m.h_max_slot_source, xyz(m.h_max_slot_at_mm), m.h_max_after_entry_mm,
+    out += fmt::format("  h_max at             {} {}; after the entry {} mm at {} {}\n",
+                       m.h_max_slot_source, xyz(m.h_max_slot_at_mm), f(m.h_max_after_entry_mm),
                        m.h_max_after_entry_source, xyz(m.h_max_after_entry_at_mm));
-    out += fmt::format("  engagement max at    {} {}; after the entry {:.2f} deg at {} {}\n",
+    out += fmt::format("  engagement max at    {} {}; after the entry {} deg at {} {}\n",
                        m.engagement_max_slot_source, xyz(m.engagement_max_slot_at_mm),
-                       m.engagement_max_after_entry_deg, m.engagement_max_after_entry_source,
+                       f(m.engagement_max_after_entry_deg), m.engagement_max_after_entry_source,
                        xyz(m.engagement_max_after_entry_at_mm));
   }
   if (job.slot.curved()) {
     out += fmt::format(
-        "  {:<21}h_max {:.5f} mm at ({:.3f}, {:.3f}); after the entry {:.5f} mm at "
-        "({:.3f}, {:.3f})\n",
-        fmt::format("along '{}'", job.slot.along), m.h_max_slot_mm, m.h_max_slot_at_mm.x(),
-        m.h_max_slot_at_mm.y(), m.h_max_after_entry_mm, m.h_max_after_entry_at_mm.x(),
+        "  {:<21}h_max {} mm at ({:.3f}, {:.3f}); after the entry {} mm at ({:.3f}, {:.3f})\n",
+        fmt::format("along '{}'", job.slot.along), f(m.h_max_slot_mm), m.h_max_slot_at_mm.x(),
+        m.h_max_slot_at_mm.y(), f(m.h_max_after_entry_mm), m.h_max_after_entry_at_mm.x(),
         m.h_max_after_entry_at_mm.y());
     out +=
         "  steady cycle         none (a slot along a curve: each cycle's step follows the "
         "bend): whole-program figures only\n";
     return out;
   }
+  const auto um = [&](double mm) { return f(1000 * mm); };
   if (m.texture_floor[1]) {
     const auto ra = [&](std::size_t k) {
-      return m.texture_floor[k] ? fmt::format("{:.3f}", 1000 * m.texture_floor[k]->roughness.ra_mm)
-                                : std::string("-");
+      return m.texture_floor[k] ? um(m.texture_floor[k]->roughness.ra_mm) : std::string("-");
     };
     out += fmt::format(
-        "  floor texture        Ra {} um, Rz {:.3f} um, Wt {:.3f} um in the middle (lambda_c {:g} "
-        "mm); Ra {} / {} um beside the left / right wall (end edges' dish {:g} deg)\n",
-        ra(1), 1000 * m.texture_floor[1]->roughness.rz_mm, 1000 * m.texture_floor[1]->wt_mm,
-        m.texture_floor[1]->cutoff_mm, ra(0), ra(2), job.tool.dish_angle_deg);
+        "  floor texture        Ra {} um, Rz {} um, Wt {} um in the middle (lambda_c {} mm); Ra "
+        "{} / {} um beside the left / right wall (end edges' dish {} deg)\n",
+        ra(1), um(m.texture_floor[1]->roughness.rz_mm), um(m.texture_floor[1]->wt_mm),
+        f(m.texture_floor[1]->cutoff_mm), ra(0), ra(2), f(job.tool.dish_angle_deg));
   }
   if (!m.periodic) {
     out +=
@@ -262,33 +300,33 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
         "figures only\n";
     return out;
   }
+  out += fmt::format("  steady cycle         {} s, {} mm; cutting {} s, cooling {} s\n",
+                     f(m.cycle_time_s), f(m.path_length_per_cycle_mm), f(m.cutting_time_s),
+                     f(m.cooling_time_s));
+  out += fmt::format("    MRR                {} mm^3/min\n", f(m.mrr_mm3_per_min));
+  out += fmt::format("    h_max              {} mm at {} s after cutting starts\n", f(m.h_max_mm),
+                     f(m.t_h_max_s));
+  out += fmt::format("    engagement max     {} deg\n", f(m.engagement_angle_max_deg));
   out += fmt::format(
-      "  steady cycle         {:.4f} s, {:.3f} mm; cutting {:.4f} s, cooling {:.4f} s\n",
-      m.cycle_time_s, m.path_length_per_cycle_mm, m.cutting_time_s, m.cooling_time_s);
-  out += fmt::format("    MRR                {:.1f} mm^3/min\n", m.mrr_mm3_per_min);
-  out += fmt::format("    h_max              {:.5f} mm at {:.4f} s after cutting starts\n",
-                     m.h_max_mm, m.t_h_max_s);
-  out += fmt::format("    engagement max     {:.2f} deg\n", m.engagement_angle_max_deg);
-  out += fmt::format(
-      "  wall waviness        left {:.5f} mm, right {:.5f} mm (path); "
-      "left {:.5f} mm, right {:.5f} mm (tooth)\n",
-      m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm, m.walls_tooth.left.waviness_mm,
-      m.walls_tooth.right.waviness_mm);
+      "  wall waviness        left {} mm, right {} mm (path); left {} mm, right {} mm (tooth)\n",
+      f(m.walls_path.left.waviness_mm), f(m.walls_path.right.waviness_mm),
+      f(m.walls_tooth.left.waviness_mm), f(m.walls_tooth.right.waviness_mm));
   if (m.texture_left && m.texture_right) {
     out += fmt::format(
-        "  wall texture         Ra {:.3f} / {:.3f} um, Rz {:.3f} / {:.3f} um, Wt {:.3f} / {:.3f} "
-        "um (left / right, lambda_c {:g} / {:g} mm)\n",
-        1000 * m.texture_left->roughness.ra_mm, 1000 * m.texture_right->roughness.ra_mm,
-        1000 * m.texture_left->roughness.rz_mm, 1000 * m.texture_right->roughness.rz_mm,
-        1000 * m.texture_left->wt_mm, 1000 * m.texture_right->wt_mm, m.texture_left->cutoff_mm,
-        m.texture_right->cutoff_mm);
+        "  wall texture         Ra {} / {} um, Rz {} / {} um, Wt {} / {} um (left / right, "
+        "lambda_c {} / {} mm)\n",
+        um(m.texture_left->roughness.ra_mm), um(m.texture_right->roughness.ra_mm),
+        um(m.texture_left->roughness.rz_mm), um(m.texture_right->roughness.rz_mm),
+        um(m.texture_left->wt_mm), um(m.texture_right->wt_mm), f(m.texture_left->cutoff_mm),
+        f(m.texture_right->cutoff_mm));
   }
   if (m.force_max_predicted_n) {
-    out += fmt::format("  F_R,max predicted    {:.1f} N over the cycle ([material] {})\n",
-                       *m.force_max_predicted_n, to_string(*job.material.model));
+    out += fmt::format("  F_R,max predicted    {} N over the cycle ([material] {}{})\n",
+                       f(*m.force_max_predicted_n), to_string(*job.material.model),
+                       job.material.name.empty() ? "" : ", " + job.material.name);
   }
   if (m.performance_index)
-    out += fmt::format("  performance index    {:.6g}\n", *m.performance_index);
+    out += fmt::format("  performance index    {}\n", f(*m.performance_index));
   return out;
 }
 
@@ -322,7 +360,7 @@ std::string study_table(const std::vector<Vary>& varies, const std::vector<Study
   // them from [material]).
   for (const auto& p : points) {
     if (p.ok && p.metrics.force_max_predicted_n) {
-      columns.push_back("force_max_predicted_n");
+      columns.push_back("cycle_force_max_predicted_n");
       columns.push_back("performance_index");
       break;
     }

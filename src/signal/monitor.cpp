@@ -123,9 +123,16 @@ std::vector<double> planned_cycle_bounds(const Job& job) {
   return b;
 }
 
+int cut_half(double t_s, int zone, double cutting_start_s, double cutting_span_s, double cycle_s) {
+  if (zone <= 0 || !(cycle_s > 0)) return 0;
+  const double into = std::fmod(t_s - cutting_start_s + 2 * cycle_s, cycle_s);
+  return into < 0.5 * cutting_span_s ? 1 : 2;
+}
+
 ModelProfile model_profile(const Job& job, int bins) {
   const MechanismSettings& st = job.mechanism;
   const MechanismCurve c = mechanism_curve(job, st);
+  const ZoneSummary z = summarize_zones(c, st, false);
   ModelProfile mp;
   for (int b = 0; b < bins; ++b) {
     const double t = (b + 0.5) / bins * c.cycle_time_s;
@@ -133,8 +140,52 @@ ModelProfile model_profile(const Job& job, int bins) {
     const auto i = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, it - c.t_s.begin() - 1));
     mp.k_re_pct.push_back(c.k_re_pct[i]);
     mp.zone.push_back(c.zone[i]);
+    mp.half.push_back(cut_half(t, c.zone[i], z.cutting_start_s, z.cutting_span_s, c.cycle_time_s));
   }
   return mp;
+}
+
+KfRange pivkin2025_kf_range(int zone, int half, bool worn) {
+  if (zone == 2) return worn ? KfRange{0.7, 2.5} : KfRange{0.85, 1.15};
+  if (zone == 3) {
+    if (!worn) return {0.9, 1.1};
+    return half == 1 ? KfRange{1.5, 2.3} : KfRange{1.0, 1.7};
+  }
+  throw InputError(fmt::format("Pivkin 2025's k_f ranges cover CZII and CZIII, not zone {}", zone));
+}
+
+std::string kf_cell_name(int zone, int half) {
+  return fmt::format("{} {}", zone == 2 ? "CZII" : "CZIII", half == 1 ? "up-cut" : "down-cut");
+}
+
+std::vector<KfJudgement> judge_kf(const double sum[2][2], const double count[2][2]) {
+  std::vector<KfJudgement> out;
+  for (int z = 0; z < 2; ++z) {
+    for (int h = 0; h < 2; ++h) {
+      if (!(count[z][h] >= kKfMinWindows)) continue;
+      KfJudgement j;
+      j.zone = z + 2;
+      j.half = h + 1;
+      j.k_f = sum[z][h] / count[z][h];
+      j.windows = static_cast<int>(count[z][h]);
+      j.new_range = pivkin2025_kf_range(j.zone, j.half, false);
+      j.worn_range = pivkin2025_kf_range(j.zone, j.half, true);
+      j.in_new = j.new_range.contains(j.k_f);
+      j.in_worn = j.worn_range.contains(j.k_f);
+      out.push_back(j);
+    }
+  }
+  return out;
+}
+
+std::string kf_tool_state(const std::vector<KfJudgement>& judged) {
+  if (judged.empty()) return "";
+  const auto all = [&](bool KfJudgement::*in) {
+    return std::all_of(judged.begin(), judged.end(), [&](const KfJudgement& j) { return j.*in; });
+  };
+  if (all(&KfJudgement::in_new)) return "new";
+  if (all(&KfJudgement::in_worn)) return "worn";
+  return "neither";
 }
 
 CycleTiming cycles_from_job(const Job& job, double start_s, double duration_s) {
@@ -284,6 +335,54 @@ CycleTiming cycles_from_signal(const KfSeries& kf, double min_period_s, double m
   return ct;
 }
 
+namespace {
+
+// The ranges' findings: how many cycles look new, worn or neither, and one flag per zone and
+// half of the cut whose k_f leaves the new tool's range in some cycle.
+void range_flags(MonitorReport& r) {
+  for (const auto& c : r.cycles) {
+    r.cycles_new += c.tool_state == "new" ? 1 : 0;
+    r.cycles_worn += c.tool_state == "worn" ? 1 : 0;
+    r.cycles_neither += c.tool_state == "neither" ? 1 : 0;
+  }
+  const int judged = r.cycles_new + r.cycles_worn + r.cycles_neither;
+  if (judged == 0) return;
+  for (int zone = 2; zone <= 3; ++zone) {
+    for (int half = 1; half <= 2; ++half) {
+      int cycles = 0, outside = 0, worn = 0, first = -1;
+      double sum = 0;
+      for (std::size_t k = 0; k < r.cycles.size(); ++k) {
+        for (const auto& j : r.cycles[k].judged) {
+          if (j.zone != zone || j.half != half) continue;
+          ++cycles;
+          if (j.in_new) continue;
+          ++outside;
+          worn += j.in_worn ? 1 : 0;
+          sum += j.k_f;
+          if (first < 0) first = static_cast<int>(k);
+        }
+      }
+      if (outside == 0) continue;
+      const KfRange nr = pivkin2025_kf_range(zone, half, false);
+      const KfRange wr = pivkin2025_kf_range(zone, half, true);
+      r.flags.push_back(fmt::format(
+          "{} half: k_f outside the new tool's {:.2f}-{:.2f} (Pivkin 2025 Fig. 21) in {} of {} "
+          "cycles (mean {:.3f} there, first in cycle {}); inside the worn tool's {:.2f}-{:.2f} "
+          "(Fig. 24) in {} of them",
+          kf_cell_name(zone, half), nr.lo, nr.hi, outside, cycles, sum / outside, first, wr.lo,
+          wr.hi, worn));
+    }
+  }
+  if (r.cycles_worn + r.cycles_neither > 0) {
+    r.flags.push_back(fmt::format(
+        "tool state by Pivkin 2025's k_f ranges: new in {}, worn in {}, neither in {} of {} "
+        "cycles",
+        r.cycles_new, r.cycles_worn, r.cycles_neither, judged));
+  }
+}
+
+}  // namespace
+
 MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m, const Job* job,
                              double start_s) {
   MonitorReport r;
@@ -324,9 +423,14 @@ MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m, const Jo
     // The cutting part: the model's zones, or without a model the windows above a quarter of
     // the cycle's loudest.
     double s_all = 0, n_all = 0, s1 = 0, n1 = 0, s3 = 0, n3 = 0;
+    double cell_sum[2][2] = {{0, 0}, {0, 0}}, cell_n[2][2] = {{0, 0}, {0, 0}};
     for (const auto& [i, b] : in) {
       const double kf = r.kf.k_f[i];
       const int zone = r.model ? r.model->zone[b] : -1;
+      if (r.model && zone >= 2 && r.model->half[b] > 0) {
+        cell_sum[zone - 2][r.model->half[b] - 1] += kf;
+        cell_n[zone - 2][r.model->half[b] - 1] += 1;
+      }
       const bool cutting =
           r.model ? zone > 0 : std::hypot(r.kf.rms_low[i], r.kf.rms_high[i]) >= 0.25 * env_max;
       if (!cutting) continue;
@@ -344,6 +448,10 @@ MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m, const Jo
     if (n1 > 0) cr.k_f_czi = s1 / n1;
     if (n3 > 0) cr.k_f_cziii = s3 / n3;
     cr.ploughing = cr.k_f_czi && cr.k_f_cziii && *cr.k_f_czi > m.ploughing_ratio * *cr.k_f_cziii;
+    if (r.model && m.criteria == KfCriteria::pivkin2025) {
+      cr.judged = judge_kf(cell_sum, cell_n);
+      cr.tool_state = kf_tool_state(cr.judged);
+    }
     r.cycles.push_back(std::move(cr));
   }
   // Levels: the mean over cycles; wear against the first baseline_cycles.
@@ -403,6 +511,7 @@ MonitorReport analyze_signal(const Signal& s, const MonitorSettings& m, const Jo
         "CZIII level",
         ploughing, r.cycles.size(), m.ploughing_ratio));
   }
+  range_flags(r);
   return r;
 }
 
@@ -414,7 +523,9 @@ LiveMonitor::LiveMonitor(double rate_hz, const MonitorSettings& m, const Job* jo
     : m_(m), stream_(rate_hz, m) {
   if (job != nullptr) {
     for (const double b : planned_cycle_bounds(*job)) bounds_.push_back(start_s + b);
-    zone_ = model_profile(*job, m.phase_bins).zone;
+    ModelProfile mp = model_profile(*job, m.phase_bins);
+    zone_ = std::move(mp.zone);
+    half_ = std::move(mp.half);
   }
 }
 
@@ -430,22 +541,35 @@ void LiveMonitor::push(const double* x, std::size_t n,
       lw.cycle = k;
       lw.phase = (w.t_s - bounds_[uk]) / (bounds_[uk + 1] - bounds_[uk]);
       const auto bins = zone_.size();
-      lw.zone =
-          zone_[std::min(bins - 1, static_cast<std::size_t>(lw.phase * static_cast<double>(bins)))];
+      const std::size_t b =
+          std::min(bins - 1, static_cast<std::size_t>(lw.phase * static_cast<double>(bins)));
+      lw.zone = zone_[b];
+      lw.half = half_[b];
     }
-    // A cycle finished: its level joins the reference or is compared with it.
+    // A cycle finished: its level joins the reference or is compared with it, and its zones
+    // and halves are judged against the ranges.
     if (lw.cycle != cycle_) {
       if (cycle_ >= 0 && cycle_n_ > 0) {
         last_level_ = cycle_sum_ / cycle_n_;
         if (finished_ < m_.baseline_cycles) ref_sum_ += last_level_;
         ++finished_;
       }
+      if (cycle_ >= 0 && m_.criteria == KfCriteria::pivkin2025) {
+        const std::string state = kf_tool_state(judge_kf(cell_sum_, cell_n_));
+        if (state == "worn" || state == "neither") lw.flags.push_back("ranges-" + state);
+      }
       cycle_ = lw.cycle;
       cycle_sum_ = cycle_n_ = 0;
+      for (auto& row : cell_sum_) row[0] = row[1] = 0;
+      for (auto& row : cell_n_) row[0] = row[1] = 0;
     }
     if (lw.zone > 0 && std::isfinite(w.k_f)) {
       cycle_sum_ += w.k_f;
       cycle_n_ += 1;
+      if (lw.zone >= 2 && lw.half > 0) {
+        cell_sum_[lw.zone - 2][lw.half - 1] += w.k_f;
+        cell_n_[lw.zone - 2][lw.half - 1] += 1;
+      }
       if (lw.zone == 3) {
         cziii_sum_ += w.k_f;
         cziii_n_ += 1;

@@ -49,6 +49,9 @@ Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions
   need(o.idle >= 0, fmt::format("idle must be >= 0, got {}", o.idle));
   need(o.kf_czi > 0 && o.kf_czii > 0 && o.kf_cziii > 0,
        fmt::format("k_f values must be > 0, got {}, {}, {}", o.kf_czi, o.kf_czii, o.kf_cziii));
+  need(o.kf_czii_down.value_or(1) > 0 && o.kf_cziii_down.value_or(1) > 0,
+       fmt::format("down-cut k_f values must be > 0, got {}, {}", o.kf_czii_down.value_or(1),
+                   o.kf_cziii_down.value_or(1)));
   need(o.wear_drift > -1, fmt::format("wear drift must be > -1, got {}", o.wear_drift));
   if (!problems.empty()) throw InputError(problems);
   validate(m, o.rate_hz);
@@ -63,6 +66,7 @@ Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions
   }
   const MechanismSettings& st = job.mechanism;
   const MechanismCurve c = mechanism_curve(job, st);
+  const ZoneSummary zs = summarize_zones(c, st, false);
 
   Signal s;
   s.rate_hz = o.rate_hz;
@@ -84,15 +88,17 @@ Signal synth_signal(const Job& job, const MonitorSettings& m, const SynthOptions
       const double ph = (tp - starts[cyc]) / (starts[cyc + 1] - starts[cyc]);
       const auto it = std::upper_bound(c.t_s.begin(), c.t_s.end(), ph * c.cycle_time_s);
       const auto j = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, it - c.t_s.begin() - 1));
+      const bool down = cut_half(ph * c.cycle_time_s, c.zone[j], zs.cutting_start_s,
+                                 zs.cutting_span_s, c.cycle_time_s) == 2;
       switch (c.zone[j]) {
         case 1:
           amp = 1, k = o.kf_czi;
           break;
         case 2:
-          amp = 1, k = o.kf_czii;
+          amp = 1, k = down ? o.kf_czii_down.value_or(o.kf_czii) : o.kf_czii;
           break;
         case 3:
-          amp = 1, k = o.kf_cziii;
+          amp = 1, k = down ? o.kf_cziii_down.value_or(o.kf_cziii) : o.kf_cziii;
           break;
         default:
           break;

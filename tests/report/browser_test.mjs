@@ -78,11 +78,13 @@ async function canvasInk(page, id) {
   }, id);
 }
 
-// The same for a PNG (a screenshot or an export): decoded by the browser itself.
-async function pngInk(png) {
+// The same for a PNG (a screenshot or an export): decoded by the browser itself. With
+// `againstCorner`, ink is what differs from the top-left pixel (a view's own background)
+// rather than what is not white.
+async function pngInk(png, againstCorner = false) {
   const page = await browser.newPage();
   await page.setContent('<canvas id=c></canvas>');
-  const r = await page.evaluate(async (b64) => {
+  const r = await page.evaluate(async ([b64, againstCorner]) => {
     const img = new Image();
     img.src = 'data:image/png;base64,' + b64;
     await img.decode();
@@ -94,12 +96,13 @@ async function pngInk(png) {
     let ink = 0;
     const colours = new Set();
     for (let i = 0; i < d.length; i += 4) {
-      if (d[i] > 245 && d[i + 1] > 245 && d[i + 2] > 245) continue;
+      if (againstCorner ? d[i] === d[0] && d[i + 1] === d[1] && d[i + 2] === d[2]
+        : d[i] > 245 && d[i + 1] > 245 && d[i + 2] > 245) continue;
       ink++;
       if (colours.size < 256) colours.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
     }
     return { width: c.width, height: c.height, share: ink / (c.width * c.height), colours: colours.size };
-  }, Buffer.from(png).toString('base64'));
+  }, [Buffer.from(png).toString('base64'), againstCorner]);
   await page.close();
   return r;
 }
@@ -183,6 +186,18 @@ async function checkReport(t, name, jobArgs, reportArgs, expect) {
         assert.deepEqual(v, flat[k], k);
         assert.equal(Number(shown), Number(v.toPrecision(4)), `${k} shown as ${shown}`);
       }
+      // And `analyze`'s text shows the same figures as the same text (one rounding for both).
+      const text = cli('analyze', ...jobArgs);
+      const inText = ['machining_time_with_acceleration_s', 'path_length_mm', 'mrr_total_mm3_per_min',
+        'removed_volume_mm3', 'engagement_angle_max_deg', 'cycle_time_s', 'cycle_mrr_mm3_per_min',
+        'cycle_h_max_mm', 'cycle_engagement_angle_max_deg'];
+      let compared = 0;
+      for (const [k, , shown] of head) {
+        if (!inText.includes(k)) continue;
+        compared++;
+        assert.match(text, new RegExp(`[ (]${shown.replace('.', '\\.')} `), `${k}: ${shown} not in analyze's text\n${text}`);
+      }
+      assert.ok(compared >= 4, `${compared} headline figures compared with analyze's text`);
       assert.equal(await page.evaluate(() => document.querySelector('#summary-all').open), false);
     });
     await t.test('the path slider moves the tool disc to the planned position', async () => {
@@ -280,6 +295,13 @@ test('Bergmann 2021: forces new against worn, and the simulation in 3D', async (
         const ink = await pngInk(Buffer.from(v.png, 'base64'));
         // The surface fills a good part of the view in more than a few shades.
         assert.ok(ink.share > 0.1 && ink.colours > 20, `3D view blank: ${JSON.stringify(ink)}`);
+        // And on the page as a reader sees it (the compositor's pixels, SwiftShader's WebGL in
+        // headless Chromium): a blank view is its background colour alone; the surface covers
+        // about a quarter of it at the default camera (0.1 leaves room for other cameras).
+        const view3d = page.locator('#fig-surface-3d .view3d');
+        await view3d.scrollIntoViewIfNeeded();
+        const shot = await pngInk(await view3d.screenshot(), true);
+        assert.ok(shot.share > 0.1 && shot.colours > 20, `3D view blank on the page: ${JSON.stringify(shot)}`);
         await page.selectOption('#surface-colour', 'deviation');
         const range = await page.evaluate(() => window.trochomillReport.views['surface-3d'].range());
         // Deviation from the nominal slot: the floor at -depth is 0; stock left inside the

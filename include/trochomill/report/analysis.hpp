@@ -15,6 +15,12 @@
 
 namespace trochomill {
 
+/// A figure as the report's headline and the CLI's summaries show it: rounded to `digits`
+/// significant digits and written in the shortest text of that value ("0.075", "64.96",
+/// "2216", "12350"), in exponent form from 1e6 up and below 1e-4; "-" when not finite. The
+/// report's page formats the same way (web/src/report.js, fmtNum).
+[[nodiscard]] std::string figure_text(double v, int digits = 4);
+
 /// The analysis as a JSON document (keys carry their units: _mm, _s, _deg, _mm3_per_min).
 [[nodiscard]] std::string metrics_json(const Job& job, const ProcessMetrics& m);
 /// `analyze`'s summary; `gcode`: the program analysed (empty: the planned path).

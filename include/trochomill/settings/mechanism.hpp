@@ -18,6 +18,13 @@ enum class ShareOf {
             ///< the cycle")
 };
 
+/// What `recommend` asks of a step (docs/models.md section 9).
+enum class Criterion {
+  cziii,    ///< at least `share` of the cutting part (or the cycle: share_of) in CZIII
+  plunger,  ///< at most `plunger_share` of the first half of the cutting part in CZI (Pivkin
+            ///< 2025's plunger criterion: the ploughing zone within 20 % of the first half)
+};
+
 /// Mechanism thresholds (percent of r_e) and the recommendation's default share.
 struct MechanismThresholds {
   double czi_max_pct = 25;     ///< K_re below this: CZI (ploughing)
@@ -30,6 +37,8 @@ struct MechanismSettings {
   MechanismThresholds thresholds;
   double share = 0.5;  ///< required CZIII share (0..1) of the cutting part or the cycle
   ShareOf share_of = ShareOf::cutting;
+  Criterion criterion = Criterion::cziii;
+  double plunger_share = 0.2;  ///< largest CZI share (0..1) of the cut's first half (plunger)
   ChipModel model = ChipModel::exact;
   int points = 3600;  ///< theta samples per cycle
   /// `[material] friction_angle` theta_m (degrees) for h_m = r_e (1 - cos theta_m); 0 = not

@@ -4,6 +4,13 @@
 
 namespace trochomill {
 
+/// Ranges the monitor judges each cycle's k_f against (docs/models.md section 10).
+enum class KfCriteria {
+  none,        ///< no ranges: the ploughing and wear flags only
+  pivkin2025,  ///< Pivkin 2025's ranges per zone and half of the cut, new tool (Fig. 21) and
+               ///< worn tool (Fig. 24)
+};
+
 /// Pivkin 2025's k_f = RMS(low band) / RMS(high band) monitor. Frequencies in Hz, times in s.
 struct MonitorSettings {
   double low_min_hz = 2000, low_max_hz = 5000;     ///< low band (Hz)
@@ -14,6 +21,7 @@ struct MonitorSettings {
   double wear_ratio = 1.3;  ///< wear flagged where the k_f level exceeds the reference by this
   double ploughing_ratio = 1.15;  ///< ploughing flagged where k_f in CZI exceeds CZIII's by this
   int phase_bins = 50;            ///< k_f profile bins over a cycle
+  KfCriteria criteria = KfCriteria::pivkin2025;  ///< with a job: the k_f ranges judged
 };
 
 }  // namespace trochomill
