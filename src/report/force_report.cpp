@@ -32,7 +32,10 @@ std::string force_summary_json(const Job& job, const JobForces& f, double from_s
                             {"chips_wall_s", f.chips_wall_s},
                             {"forces_wall_s", f.forces_wall_s},
                             {"complete", f.chips.complete},
-                            {"cutting_direction_only", cutting_direction_only(job.material)}};
+                            {"cutting_direction_only", cutting_direction_only(job.material)},
+                            {"note", cutting_direction_only(job.material)
+                                         ? nlohmann::json(cutting_direction_only_note(job.material))
+                                         : nlohmann::json(nullptr)}};
   return j.dump(2) + "\n";
 }
 

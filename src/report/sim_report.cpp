@@ -18,6 +18,7 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/report/analysis.hpp"
 #include "trochomill/report/force.hpp"
 #include "trochomill/report/sim.hpp"
 #include "trochomill/version.hpp"
@@ -210,11 +211,11 @@ std::string simulation_text(const std::string& job_file, const Job& job, const J
   const SimResult& r = js.result;
   const double h_max = r.h_max_mm;
   return fmt::format(
-      "{}: {:.4f} to {:.4f} s, {} steps at {} per rev, {:g} mm dexels: removed "
-      "{:.4f} mm^3, h_max {:.5f} mm, {} dexel updates, {:.2f} s, {:.1f} MB{}\n",
-      job_file, from_s, to_s, r.step_count, job.simulation.steps_per_rev,
-      job.simulation.resolution_mm, r.removed_mm3, h_max, r.dexel_updates, wall_s,
-      static_cast<double>(js.memory_bytes) / 1048576.0,
+      "{}: {} to {} s, {} steps at {} per rev, {:g} mm dexels: removed {} mm^3, h_max {} mm, "
+      "{} dexel updates, {:.2f} s, {:.1f} MB{}\n",
+      job_file, figure_text(from_s), figure_text(to_s), r.step_count, job.simulation.steps_per_rev,
+      job.simulation.resolution_mm, figure_text(r.removed_mm3), figure_text(h_max), r.dexel_updates,
+      wall_s, static_cast<double>(js.memory_bytes) / 1048576.0,
       r.complete ? "" : " (interrupted: incomplete)");
 }
 

@@ -256,10 +256,10 @@ test('Wagih 2023 elliptical: the default report', async (t) => {
     // The published chip model is the circular trochoid's: one K_re trace here.
     figures: { 'texture-left': 2, 'texture-right': 2, 'mechanism-kre': 1 },
     check: async (tt, page) => {
-      await tt.test('no forces without [material], and the page says so', async () => {
+      await tt.test('the example\'s P20 gives the cutting force alone, and the page says so', async () => {
         const text = await page.locator('#forces').innerText();
-        assert.match(text, /not computed/);
-        assert.match(await page.locator('#summary').innerText(), /no \[material\] force model/);
+        assert.match(text, /p20-kienzle gives the force along the cutting direction only/);
+        assert.match(await page.locator('#summary').innerText(), /cutting direction only/);
       });
     },
   });

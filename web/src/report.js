@@ -706,6 +706,7 @@ function forcesPart() {
   const sec = section('forces', 'Forces', 'Cutting forces on the workpiece over the window, from the job\'s [material] model with the fast chip source (analytic engagement, axial discs, helix lag): F_x, F_y, F_z, the resultant F_R, spindle torque and power.');
   if (!f) return;
   const s = f.series, sm = f.summary;
+  if (sm.note) note(sec, `Note: ${sm.note}.`);
   forceSeriesPlot(sec, 'forces-xyz', `Forces, ${f.label}`, `F_R,max ${fmtNum(sm.f_resultant_max_n)} N; window ${fmtNum(sm.from_s)}-${fmtNum(sm.to_s)} s; ${s.samples} steps, ${s.shown} shown`, s);
   const fig = figure(sec, 'forces-torque', 'Torque and power', `torque max ${fmtNum(sm.torque_max_nm)} N m, power max ${fmtNum(sm.power_max_w)} W`);
   linePlot(fig, { x: s.t_s, xLabel: 'time (s)', axes: { y: 'torque (N m)', y2: 'power (W)' },
