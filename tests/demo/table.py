@@ -15,12 +15,11 @@ os.makedirs(work, exist_ok=True)
 out = subprocess.run(["bash", os.path.join(root, "scripts/demo"), cli, work, "--wagih-table"],
                      cwd=root, capture_output=True, text=True, check=True).stdout
 # The columns and the demo's formats (scripts/demo, wagih_table).
-columns = [("cycle_time_s", "%.4f"), ("cycle_cutting_time_s", "%.4f"),
-           ("cycle_cooling_time_s", "%.4f"), ("cycle_mrr_mm3_per_min", "%.1f"),
-           ("mrr_total_mm3_per_min", "%.1f"), ("cycle_h_max_mm", "%.5f"),
-           ("cycle_t_h_max_s", "%.4f"), ("cycle_engagement_angle_max_deg", "%.2f"),
-           ("waviness_left_mm", "%.5f"), ("waviness_right_mm", "%.5f"),
-           ("waviness_left_tooth_mm", "%.5f"), ("waviness_right_tooth_mm", "%.5f")]
+columns = [(key, "%.4g") for key in [
+    "cycle_time_s", "cycle_cutting_time_s", "cycle_cooling_time_s", "cycle_mrr_mm3_per_min",
+    "mrr_total_mm3_per_min", "cycle_h_max_mm", "cycle_t_h_max_s", "cycle_engagement_angle_max_deg",
+    "waviness_left_mm", "waviness_right_mm", "waviness_left_tooth_mm", "waviness_right_tooth_mm",
+    "cycle_force_max_predicted_n"]]
 families = ["trochoidal", "circular", "elliptical", "linear-elliptical"]
 rows = {line.split()[0]: line.split()[1:] for line in out.splitlines()
         if line.split() and line.split()[0] in families}
