@@ -525,7 +525,14 @@ void Interpreter::run_motion(const BlockCodes& codes) {
   } else if (motion >= 20 && motion <= 30 && !axis_used_by_group0) {
     fail_at(motion_col, "arc without an end point");
   } else if (g53) {
-    fail_at(block_.g.front().column, "G53 needs axis words (a move in machine coordinates)");
+    // LinuxCNC: G53 with G0 or G1 in the block and no axis words moves to where the tool
+    // already is (a move of no length); without G0 or G1 it is refused.
+    if (motion != 0 && motion != 10) {
+      fail_at(block_.g.front().column,
+              "G53 needs G0 or G1 in its block (LinuxCNC: \"Must use g0 or g1 with g53\")");
+    }
+    ++prog_.info.motion_blocks;
+    move(true, motion_col);
   }
   if (motion_ < 730) {
     cycle_il_flag_ = false;
