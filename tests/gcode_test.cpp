@@ -598,6 +598,55 @@ M99
   }
 }
 
+// Fanuc as posts and people write it: WH for WHILE, G65's M and E arguments (#13, #8), the
+// spindle-and-coolant M13/M14 (read as M3/M4, said) and a machine maker's M-code (said, not
+// refused); LinuxCNC's dialect still refuses M13, as LinuxCNC does. Positions by hand.
+TEST(GcodeFanuc, AbbreviationsArgumentsAndMachineMCodes) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const std::string prog = R"(%
+O1000
+G21 G90 G17 G94
+G0 X0. Y0. Z5.
+M13 S1000
+#1 = 0
+WH [#1 LT 2] DO 1
+  #1 = #1 + 1
+  G1 X#1 F100.
+END 1
+M10
+G65 P2000 E3. M4.
+M14
+M30
+O2000
+G1 X#8 Y#13
+M99
+%
+)";
+  const GcodeProgram p = read_gcode(prog, "f.nc", ro);
+  const std::vector<Vec3> want = {{1, 0, 5}, {2, 0, 5}, {3, 4, 5}};
+  const std::vector<Vec3> got = ends_of(p);
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t k = 0; k < want.size(); ++k) {
+    EXPECT_LE((got[k] - want[k]).norm(), 1e-12) << k << ": " << got[k].transpose();
+  }
+  const auto warned = [&](const std::string& what) {
+    return std::count_if(p.info.warnings.begin(), p.info.warnings.end(),
+                         [&](const std::string& w) { return w.find(what) != std::string::npos; });
+  };
+  EXPECT_EQ(warned("f.nc:5: M13: read as M3 with coolant on"), 1);
+  EXPECT_EQ(warned("f.nc:13: M14: read as M4 with coolant on"), 1);
+  EXPECT_EQ(warned("f.nc:11: M10 (the machine maker's M-code on a Fanuc control) was ignored"), 1);
+  EXPECT_THROW((void)read_gcode("G0 X0 Y0 Z5\nM13\nM2\n", "l.ngc"), InputError);
+  try {
+    (void)read_gcode(":\nG0 X1.\n", "c.nc", ro);
+    ADD_FAILURE() << "':' without a number read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("c.nc:1:1: ':' needs a program number"), std::string::npos)
+        << e.what();
+  }
+}
+
 // G88 stops for the operator to retract by hand: the retraction is modelled as a rapid to the
 // clear plane and named (LinuxCNC's canon has no move there; docs/gcode.md).
 TEST(GcodeCycles, G88RetractsAsTheOperatorWouldAndSaysSo) {

@@ -166,7 +166,9 @@ void Interpreter::run_line(std::string_view raw) {
       // A program number: the start of a (sub)program; the rest of the line runs.
       std::size_t j = i + 1;
       while (j < s.size() && s[j] >= '0' && s[j] <= '9') ++j;
-      if (j == i + 1) fail(i, "'O' needs a program number after it");
+      if (j == i + 1) {
+        fail(i, fmt::format("'{}' needs a program number after it", s[i] == ':' ? ':' : 'O'));
+      }
       i = j;
     }
     if (fanuc_statement(i)) return;
@@ -374,6 +376,18 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
                                       code_name('M', m)));
         }
         break;
+      case 130:
+      case 140:
+        // Fanuc machines' spindle-and-coolant codes (M13: M3 with coolant, M14: M4 with it);
+        // not LinuxCNC's, and the machine maker's in the end: said, and read as such.
+        if (!fanuc_) fail_at(column, fmt::format("unsupported M-code {}", code_name('M', m)));
+        spindle_on_ = true;
+        spindle_dir_ = m == 130 ? 1 : -1;
+        warn(
+            fmt::format("{}: read as {} with coolant on (most Fanuc machines; the machine "
+                        "maker's code)",
+                        code_name('M', m), m == 130 ? "M3" : "M4"));
+        break;
       case 980: {
         if (!fanuc_) {
           fail_at(column,
@@ -428,6 +442,15 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
         if (user_m_code(m)) {
           warn(fmt::format("{} (a user M-code) was ignored: it runs a program of the machine's",
                            code_name('M', m)));
+          break;
+        }
+        // A Fanuc control's other M-codes below M100 are the machine maker's (clamps, doors,
+        // chip conveyors, probes): they do not move the tool, and are said, not refused.
+        if (fanuc_ && m >= 0 && m < 1000 && m % 10 == 0) {
+          warn(
+              fmt::format("{} (the machine maker's M-code on a Fanuc control) was ignored: it "
+                          "does not move the tool here",
+                          code_name('M', m)));
           break;
         }
         fail_at(column, fmt::format("unsupported M-code {}", code_name('M', m)));

@@ -96,7 +96,13 @@ void Interpreter::read_block(std::size_t i) {
         }
       }
     }
-    if (letter == 'g' || letter == 'm') {
+    // Fanuc's G65: every word after it but G, L, N, O and P is an argument, M included
+    // (argument specification I: M is #13).
+    const bool g65_argument =
+        letter == 'm' && fanuc_ &&
+        std::any_of(block_.g.begin(), block_.g.end(),
+                    [](const Block::Code& code) { return code.code10 == 650; });
+    if ((letter == 'g' || letter == 'm') && !g65_argument) {
       // Every code is below 1000 (G59.3, M199): anything larger is no code (and would not
       // fit the tenths it is compared in).
       if (!(std::abs(v) < 1e4)) fail(at, fmt::format("{}{:g} is not a code", upper(letter), v));

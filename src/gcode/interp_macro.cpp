@@ -24,7 +24,8 @@
 
 namespace trochomill::gcode_detail {
 
-// GOTO, IF [..] GOTO / THEN, WHILE [..] DO m, DO m, END m at i: true when the line was one.
+// GOTO, IF [..] GOTO / THEN, WHILE (or WH) [..] DO m, DO m, END m at i: true when the line was
+// one.
 bool Interpreter::fanuc_statement(std::size_t i) {
   const std::string& s = line_.text;
   const std::string_view rest = std::string_view(s).substr(std::min(i, s.size()));
@@ -67,9 +68,10 @@ bool Interpreter::fanuc_statement(std::size_t i) {
     }
     fail(i, "IF [condition] is followed by GOTO n or THEN #i = value");
   }
-  if (starts("while[")) {
+  // WHILE, or WH as the 30i series abbreviates it.
+  if (starts("while[") || starts("wh[")) {
     count_block();
-    i += 5;
+    i += starts("while[") ? 5 : 2;
     const double c = zero_if_vacant(read_expression(i));
     if (std::string_view(s).substr(i, 2) != "do") fail(i, "WHILE [condition] DO m: DO is missing");
     i += 2;
