@@ -146,6 +146,15 @@ def test_recommend_is_the_clis(pivkin, feed):
     assert "60 % of the cutting part in CZIII" in result["explanation"]
 
 
+def test_recommend_plunger_is_the_clis(pivkin):
+    result = tm.recommend(tm.Job.from_toml(pivkin), criterion="plunger", plunger_share=0.1)
+    cli = cli_json("recommend", pivkin, "--criterion", "plunger", "--plunger-share", "0.1")
+    assert result == cli
+    assert result["criterion"] == "plunger" and result["plunger_first_half_share"] <= 0.1
+    with pytest.raises(tm.InputError, match="plunger_share"):
+        tm.recommend(tm.Job.from_toml(pivkin), criterion="plunger", plunger_share=1.5)
+
+
 def test_simulate_is_the_clis(bergmann, tmp_path):
     job = tm.Job.from_toml(bergmann, set=SMALL_SIM)
     result = tm.simulate(job, cycles=(1, 2))
