@@ -271,19 +271,11 @@ ZoneSummary summarize_zones(const MechanismCurve& c, const MechanismSettings& st
     tt += dt;
   }
   z.cutting_time_s = dur[0] + dur[1] + dur[2];
-  // The first half of the cut: from its start to the middle of its span (to the end of the
-  // last cutting sample); CZI's time in it, pieces split at the middle.
+  // The first half of the cut: from its start to the middle of its span (the end of the last
+  // cutting sample, the latest zone end); CZI's time in it, pieces split at the middle.
   if (found) {
-    double span = 0;
-    tt = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t i = (start + k) % n, j = (i + 1) % n;
-      const double dt = j == 0 ? c.cycle_time_s - c.t_s[i] : c.t_s[j] - c.t_s[i];
-      if (c.zone[i] != 0) span = tt + dt;
-      tt += dt;
-    }
-    z.cutting_span_s = span;
-    const double half = 0.5 * span;
+    z.cutting_span_s = std::max({0.0, z.end_s[0], z.end_s[1], z.end_s[2]});
+    const double half = 0.5 * z.cutting_span_s;
     double czi = 0;
     tt = 0;
     for (std::size_t k = 0; k < n && tt < half; ++k) {
