@@ -542,6 +542,32 @@ TEST(GcodeReader, AProgramWithoutMotionReadsWithAWarning) {
   EXPECT_EQ(p.info.warnings[0], "nm.ngc: the program has no motion (no G0/G1/G2/G3 moves)");
 }
 
+// The axes besides X Y Z are carried, not drawn: the path is the X Y Z motion (its time along
+// X Y Z at F, as LinuxCNC reads F when X Y Z move), the moves of A B C or U V W alone take
+// their own time (A B C at F degrees/min, U V W at F mm/min, G93 1/F min), in closed form.
+TEST(GcodeReader, OtherAxesAreCarriedWithTheirOwnTime) {
+  const GcodeProgram p = read_gcode(
+      "G21 G90 G17\nG0 X0 Y0 Z1\nG1 F600 X10 A90\n"  // 10 mm at 600 mm/min: 1 s of path
+      "G1 A180\n"                                    // 90 deg at 600 deg/min: 9 s
+      "G1 U6 A0\n"                                   // U moves: 6 mm at 600 mm/min: 0.6 s
+      "G20 G1 B10\nG21\n"                            // F keeps its speed: 600/25.4 deg/min
+      "G93 G1 C30 F2\nG94\n"                         // 1/2 min: 30 s
+      "G0 A45\nM2\n",                                // a rapid: no time counted
+      "x.ngc");
+  ASSERT_EQ(p.path.segments().size(), 1u);
+  EXPECT_NEAR(p.path.duration_s(), 1.0, 1e-12);
+  EXPECT_EQ(p.info.extra_axes, "ABCU");
+  const double b_s = 10 / (600 / 25.4) * 60;
+  EXPECT_NEAR(p.info.extra_only_time_s, 9 + 0.6 + b_s + 30, 1e-9);
+  EXPECT_EQ(p.info.extra_min[0], 0);
+  EXPECT_EQ(p.info.extra_max[0], 180);
+  EXPECT_EQ(p.info.extra_max[3], 6);
+  ASSERT_FALSE(p.info.warnings.empty());
+  EXPECT_NE(p.info.warnings[0].find("x.ngc:3: A: the program uses axes besides X Y Z"),
+            std::string::npos)
+      << p.info.warnings[0];
+}
+
 // ---- Fanuc Macro B (hand-computed motion: LinuxCNC does not read these) ----------------------
 
 std::vector<Vec3> ends_of(const GcodeProgram& p) {

@@ -79,6 +79,11 @@ std::string trace_line(const GcodeMove& m) {
                      m.centre_mm.y(), m.centre_mm.z(), m.axis.x(), m.axis.y(), m.axis.z(),
                      m.sweep_rad * 180.0 / kPi);
   }
+  if (m.extra_axes) {
+    const auto& e = m.extra_end;
+    s += fmt::format(" ABC:{:.9f},{:.9f},{:.9f} UVW:{:.9f},{:.9f},{:.9f}", e[0], e[1], e[2], e[3],
+                     e[4], e[5]);
+  }
   s += fmt::format(" F{:.9f} G{} {}:{}", m.feed_mm_per_min, m.plane, m.file, m.line);
   return s;
 }

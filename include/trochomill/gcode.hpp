@@ -56,7 +56,11 @@ struct GcodeMove {
   Vec3 axis = Vec3::UnitZ();      ///< arcs: the plane's normal (G17 +Z, G18 +Y, G19 +X)
   double sweep_rad = 0;           ///< arcs: signed turn about the axis (+ = counter-clockwise)
   double feed_mm_per_min = 0;
-  int plane = 17;             ///< the active plane: 17, 18 or 19
+  int plane = 17;  ///< the active plane: 17, 18 or 19
+  /// The axes besides X Y Z at the move's end, output frame: A B C (degrees) and U V W (mm);
+  /// `extra_axes` is true once the program has given a word of any of them.
+  std::array<double, 6> extra_end{};
+  bool extra_axes = false;
   bool path_started = false;  ///< false for the approach before the path starts (see read_gcode)
   std::string_view file;      ///< the file of the block (the program or a subroutine file)
   std::size_t line = 0;       ///< 1-based line in that file
@@ -93,6 +97,9 @@ struct GcodeReadOptions {
   /// radii to start and end may differ as LinuxCNC allows (0.02 sqrt(2) mm, or 0.002 sqrt(2)
   /// in in G20, and 0.1 %).
   double arc_radius_tolerance_mm = 0.002;
+  /// How far the arcs a spline (G5, G5.1, G5.2) is read as may deviate from its exact curve
+  /// (mm): the path holds biarcs, tangent-continuous, within this of the curve.
+  double spline_tolerance_mm = 0.001;
   /// The language: linuxcnc (RS274/NGC with O-words) or fanuc (Macro B); sinumerik and grbl
   /// read as linuxcnc's plain subset plus their unit words.
   Dialect dialect = Dialect::linuxcnc;
@@ -147,6 +154,13 @@ struct GcodeProgramInfo {
   /// Where the program first reads its own feed (#<_feed>), "file:line:column"; empty: never.
   /// Its motion may then depend on its feeds (optimize-feed refuses it).
   std::string feed_read_at;
+  /// The axes besides X Y Z the program moves (a subset of "ABCUVW"; empty: none), each one's
+  /// range in the output frame (A B C degrees, U V W mm; indexed A B C U V W), and the time
+  /// of the feed moves that turn or move only them (s: ABC at F degrees/min, UVW at F mm/min,
+  /// G93 1/F min), which the path's time (its X Y Z motion) leaves out.
+  std::string extra_axes;
+  std::array<double, 6> extra_min{}, extra_max{};
+  double extra_only_time_s = 0;
   /// The job keys a trochomill program records in its header, `section.key = value` (TOML).
   std::vector<std::pair<std::string, std::string>> header_keys;
 };

@@ -208,6 +208,28 @@ class EllipseCurve final : public PlanarCurve {
   Vec3 c_, a_, b_;
 };
 
+/// A NURBS curve in a plane z = const (that of its first control point): its degree, knots
+/// (control points + degree + 1 of them, not decreasing), control points (mm) and weights (> 0),
+/// for u in [knot[degree], knot[control points]]. Evaluated by de Boor's algorithm on the
+/// homogeneous points (exact); its tangent by central differences over a millionth of the
+/// parameter range. Bézier curves are the NURBS of one span and weights 1. The caller checks
+/// the data (the DXF reader and the G-code interpreter say what is wrong with theirs).
+class NurbsCurve final : public PlanarCurve {
+ public:
+  NurbsCurve(int degree, std::vector<double> knots, std::vector<Vec3> ctrl,
+             std::vector<double> weights);
+  [[nodiscard]] double u0() const { return u_[static_cast<std::size_t>(p_)]; }
+  [[nodiscard]] double u1() const { return u_[c_.size()]; }
+  [[nodiscard]] Vec3 point(double u) const override;
+  [[nodiscard]] Vec3 unit_tangent(double u) const override;
+
+ private:
+  int p_;
+  std::vector<double> u_;
+  std::vector<Vec3> c_;
+  std::vector<double> w_;
+};
+
 /// Tangent-continuous biarcs through the curve from u0 to u1 (split first into `pieces` equal
 /// spans of u, each cut into the longest pieces whose biarc stays within 0.8 tolerance_mm of the
 /// curve at 24 interior samples, found by doubling, halving and bisection). The last arc ends

@@ -201,6 +201,8 @@ void Interpreter::execute() {
     }
   }
   check_words();
+  xnext_ = xpos_;
+  if (block_.has_extra()) note_extra_axes();
   const BlockCodes codes = group_codes();
   // Feed mode, F, S, T, M, then the G groups in LinuxCNC's order.
   set_feed_speed_tool(codes[kFeedMode]);
@@ -505,6 +507,7 @@ void Interpreter::run_motion(const BlockCodes& codes) {
   const int motion = codes[kMotion], group0 = codes[kGroup0];
   const std::uint32_t motion_col = codes.col[kMotion];
   const bool g53 = codes.g53;
+  const int motion_before = motion_;
   if (motion >= 0) {
     if (motion == 800) {
       motion_ = -1;
@@ -521,7 +524,10 @@ void Interpreter::run_motion(const BlockCodes& codes) {
   const auto o1 = static_cast<char>('i' + ax.i1), o2 = static_cast<char>('i' + ax.i2);
   full_circle_ = motion >= 20 && motion <= 30 && !axis_used_by_group0 && !block_.has_axis() &&
                  !block_.has('r') && (block_.has(o1) || block_.has(o2));
-  if ((block_.has_axis() || full_circle_) && !axis_used_by_group0) {
+  // G0 or G1 in a block without axis words: a move to where the tool is (LinuxCNC's canon
+  // gets it; it has no length).
+  const bool in_place = (motion == 0 || motion == 10) && !g53 && !block_.has_axis();
+  if ((block_.has_axis() || full_circle_ || in_place) && !axis_used_by_group0) {
     if (motion == 800) {
       fail_at(motion_col, "G80 cancels the motion mode: it cannot take axis words");
     }
@@ -530,7 +536,20 @@ void Interpreter::run_motion(const BlockCodes& codes) {
       fail_at(block_.col(first), "axis words without a motion mode (G0/G1/G2/G3)");
     }
     ++prog_.info.motion_blocks;
-    if (motion_ >= 730) {
+    if (motion_ >= 730 && block_.has_extra()) {
+      // LinuxCNC: "Cannot put an A in canned cycle" (and B, C, U, V, W).
+      for (const char c : kExtraAxes) {
+        if (block_.has(c)) {
+          fail_at(block_.col(c), fmt::format("Cannot put {} {} in canned cycle",
+                                             c == 'a' || c == 'u' ? "an" : "a", upper(c)));
+        }
+      }
+    }
+    if (motion_ == 50 || motion_ == 51) {
+      spline(motion >= 0 ? motion_col : block_.col(block_.has('x') ? 'x' : 'y'));
+    } else if (motion_ == 52) {
+      nurbs_point(motion_before != 52, motion >= 0 ? motion_col : 0);
+    } else if (motion_ >= 730) {
       comp_.refuse(motion >= 0        ? motion_col
                    : block_.g.empty() ? 0
                                       : block_.g.front().column,
@@ -545,6 +564,9 @@ void Interpreter::run_motion(const BlockCodes& codes) {
                                          : block_.has('y') ? 'y'
                                                            : 'z'));
     }
+  } else if (motion == 52 && !axis_used_by_group0) {
+    // G5.2 without a control point: the start's weight P and the order L.
+    nurbs_point(motion_before != 52, motion_col);
   } else if (motion >= 20 && motion <= 30 && !axis_used_by_group0) {
     fail_at(motion_col, "arc without an end point");
   } else if (g53) {

@@ -114,6 +114,17 @@ struct InterpState {
   std::array<double, 3> cycle_ijk_{};  // G87's I J K (mm)
   bool g88_warned_ = false, shift_warned_ = false;
   bool cycle_il_flag_ = false;
+  // The axes besides X Y Z (A B C degrees, U V W mm): program coordinates, G92's offsets, the
+  // output frame's value at the path's end and the output system's origin; where the block's
+  // move takes them (set by ends(), used by the move it emits); whether a word of them was read.
+  ExtraAxes xpos_{}, xg92_{}, xout_{}, xout_origin_{}, xnext_{};
+  bool extra_seen_ = false;
+  // Splines: G5's first control point offset when its I J are left out (the last G5's -P -Q,
+  // mm), G5.2's control points (program mm) with their weights and the order (LinuxCNC 2.9).
+  double spline_i_ = 0, spline_j_ = 0;
+  std::vector<Vec3> nurbs_points_;
+  std::vector<double> nurbs_weights_;
+  int nurbs_order_ = 3;
   // Position.
   Vec3 cur_pos_ = Vec3::Zero();  // program coordinates (mm)
   Vec3 out_pos_ = Vec3::Zero();  // output frame, the path's end
@@ -286,6 +297,19 @@ class Interpreter : private InterpState {
   // A system set by G10 is known: no warning when it is selected later.
   void note_given(int n) { system_warned_[static_cast<std::size_t>(n - 1)] = true; }
   void home_move(int g, std::uint32_t column);
+  // The axes besides X Y Z: a value of axis k (0 = A .. 5 = W) in machine coordinates, back,
+  // in the output frame; a word of the block in mm (U V W) or degrees (A B C).
+  [[nodiscard]] double xmachine(int k, double p) const {
+    return p + xg92_[static_cast<std::size_t>(k)] + params_[sys_param(system_, 3 + k)];
+  }
+  [[nodiscard]] double xfrom_machine(int k, double m) const {
+    return m - params_[sys_param(system_, 3 + k)] - xg92_[static_cast<std::size_t>(k)];
+  }
+  [[nodiscard]] double xlen(int k) const {
+    const char c = kExtraAxes[static_cast<std::size_t>(k)];
+    return k >= 3 ? len(c) : block_[c];
+  }
+  void note_extra_axes();
 
   // ---- interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49)
   void tool_length_offset(int g);
@@ -293,6 +317,8 @@ class Interpreter : private InterpState {
 
   // ---- interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace
   Vec3 ends(bool g53);
+  ExtraAxes extras_out(GcodeMove& mv);
+  double extra_time_s(const ExtraAxes& out_end, std::uint32_t column);
   void move(bool g53, std::uint32_t column);
   double feed_for(double length_mm, std::uint32_t column);
   void note_feed(double f);
@@ -309,6 +335,12 @@ class Interpreter : private InterpState {
   void describe(GcodeMove& mv, std::size_t source, std::size_t line) const;
   ArcData arc_data(const Vec3& from, const Vec3& target, std::uint32_t column) const;
   void arc(const Vec3& target, std::uint32_t column);
+  // Splines (G5 cubic, G5.1 quadratic, G5.2/G5.3 NURBS): their exact curve as biarcs.
+  void spline(std::uint32_t column);
+  void nurbs_point(bool fresh, std::uint32_t column);
+  void nurbs_end(std::uint32_t column);
+  void put_curve(const std::vector<Vec3>& points, const std::vector<double>& weights, int order,
+                 std::uint32_t column);
   void put_arc(const Vec3& from, const ArcData& d, double axial, double f, std::uint32_t column,
                std::size_t source, std::size_t line, bool xy, const Vec3* exact_end = nullptr);
 

@@ -138,17 +138,17 @@ void Interpreter::check_range(char c) const {
   }
 }
 
-// The block's words before its codes run: rotary axes refused, coordinates in range.
+// The block's words before its codes run: coordinates in range (A B C in degrees).
 void Interpreter::check_words() const {
-  // Words no milling program of ours uses: refused by name.
-  for (const char c : std::string_view("abcuvw")) {
-    if (block_.has(c)) {
-      fail_at(block_.col(c),
-              fmt::format("rotary axis {} is not supported (3-axis programs only)", upper(c)));
-    }
-  }
-  for (const char c : std::string_view("xyzijkrq")) {
+  for (const char c : std::string_view("xyzijkrquvw")) {
     if (block_.has(c)) check_range(c);
+  }
+  for (const char c : std::string_view("abc")) {
+    if (block_.has(c) && !(std::abs(block_[c]) <= kMaxCoordinate)) {
+      fail_at(block_.col(c), fmt::format("{}{:g} is beyond +-1e6 degrees, what trochomill "
+                                         "represents",
+                                         upper(c), block_[c]));
+    }
   }
 }
 
@@ -201,6 +201,12 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
       (block_.has_axis() || full_circle_) && group0 != 100 && group0 != 920 && group0 != 520;
   const bool cycle = moved && motion_ >= 730;
   const bool arc = moved && (motion_ == 20 || motion_ == 30);
+  // Splines: G5 takes I J P Q, G5.1 I J, G5.2 P (a weight) and L (the order), its block with or
+  // without axis words.
+  const bool g5 = moved && motion_ == 50, g51 = moved && motion_ == 51;
+  const bool g52 =
+      motion_ == 52 && (moved || std::any_of(block_.g.begin(), block_.g.end(),
+                                             [](const Block::Code& c) { return c.code10 == 52; }));
   if (block_.has_polar() && !moved && group0 != 280 && group0 != 300) {
     fail_at(block_.polar_col(), fmt::format("{} word with no motion to use it (polar coordinates "
                                             "place a G0/G1/G2/G3 or canned cycle's end)",
@@ -228,14 +234,14 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   }
   const bool q_cycle =
       cycle && (motion_ == 730 || motion_ == 830 || (fanuc_ && (motion_ == 760 || motion_ == 870)));
-  if (block_.has('q') && !q_cycle && !m61 && !g64 && !m_q) {
+  if (block_.has('q') && !q_cycle && !m61 && !g64 && !m_q && !g5) {
     refuse('q', "G64, G73, G83, M19, M61, M66, M67, M68 or user M-code");
   }
   if (block_.has('e') && !m_e) refuse('e', "M66, M67 or M68");
   const bool m98 = pending_m98_.has_value();
   // LinuxCNC takes no L with G74 (its check lists G73 and G76-G89).
   const bool l_cycle = cycle && (fanuc_ || motion_ != 740);
-  if (block_.has('l') && !l_cycle && group0 != 100 && !m98 && !m66) {
+  if (block_.has('l') && !l_cycle && group0 != 100 && !m98 && !m66 && !g52) {
     refuse('l', "G10, M66 or canned cycle other than G74");
   }
   if (block_.has('r') && !arc && !cycle && group0 != 100 && !m19) {
@@ -243,10 +249,12 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   }
   const bool g87 = cycle && motion_ == 870 && !fanuc_;
   for (const char c : std::string_view("ijk")) {
-    if (block_.has(c) && !arc && !g87) refuse(c, "G2/G3 or G87");
+    if (block_.has(c) && !arc && !g87 && !((g5 || g51) && c != 'k')) {
+      refuse(c, "G2/G3, G5, G5.1 or G87");
+    }
   }
   if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_ &&
-      !g64 && !m_p) {
+      !g64 && !m_p && !g5 && !g52) {
     refuse('p', "G2/G3, G4, G10, G64, canned cycle, M19, M50-M53, M62-M66 or user M-code");
   }
   if (block_.has('h') && tool_length != 430) refuse('h', "G43");
@@ -263,9 +271,6 @@ void Interpreter::unsupported_g(int g, std::uint32_t column) const {
     fail_at(column, fmt::format("{} (threading) is not supported on a milling path", name));
   }
   if (g >= 380 && g <= 385) fail_at(column, fmt::format("{} (probing) is not supported", name));
-  if (g == 50 || g == 51 || g == 52 || g == 53) {
-    fail_at(column, fmt::format("{} (splines) is not supported", name));
-  }
   if (g == 760) {
     fail_at(column,
             "G76 is LinuxCNC's lathe threading cycle, not supported on a milling path "

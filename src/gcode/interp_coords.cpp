@@ -31,6 +31,9 @@ void Interpreter::init_offsets() {
   out_origin_ = Vec3(params_[sys_param(system_, 0)], params_[sys_param(system_, 1)],
                      params_[sys_param(system_, 2)]);
   out_rotation_ = params_[sys_param(system_, 9)];
+  for (int k = 0; k < 6; ++k) {
+    xout_origin_[static_cast<std::size_t>(k)] = params_[sys_param(system_, 3 + k)];
+  }
   load_system();
   // G28 / G30 positions: given, or X0 Y0 of the output frame at home_z above it.
   auto home = [&](const std::optional<Vec3>& given, std::size_t p) {
@@ -90,8 +93,25 @@ void Interpreter::note_system_used(int n) {
                     kNames[static_cast<std::size_t>(opt_.work_system - 1)]));
     // Unknown offsets are taken as the output system's (a program moving between systems on
     // one part then keeps its geometry).
-    for (int a = 0; a < 3; ++a) params_[sys_param(n, a)] = params_[sys_param(opt_.work_system, a)];
+    for (int a = 0; a < 9; ++a) params_[sys_param(n, a)] = params_[sys_param(opt_.work_system, a)];
   }
+}
+
+// The first word of an axis besides X Y Z: said once, with what the reading does with it.
+void Interpreter::note_extra_axes() {
+  if (extra_seen_) return;
+  extra_seen_ = true;
+  std::string letters;
+  for (const char c : kExtraAxes) {
+    if (block_.has(c)) letters += upper(c);
+  }
+  warn(
+      fmt::format("{}: the program uses axes besides X Y Z: they are read as LinuxCNC reads "
+                  "them and carried along (check-gcode: their ranges and --trace), but the "
+                  "path is the tool's X Y Z motion alone, as if the part did not turn (A B C) "
+                  "and U V W stood still; analyses and simulations of this program leave "
+                  "that motion out",
+                  letters));
 }
 
 void Interpreter::select_system(int g) {
@@ -100,10 +120,17 @@ void Interpreter::select_system(int g) {
   if (n == system_) return;
   note_system_used(n);
   const Vec3 machine = to_machine_tip(cur_pos_);
+  ExtraAxes xm{};
+  for (int k = 0; k < 6; ++k)
+    xm[static_cast<std::size_t>(k)] = xmachine(k, xpos_[static_cast<std::size_t>(k)]);
   system_ = n;
   params_[5220] = n;
   load_system();
   cur_pos_ = from_machine_tip(machine);
+  for (int k = 0; k < 6; ++k) {
+    xpos_[static_cast<std::size_t>(k)] = xfrom_machine(k, xm[static_cast<std::size_t>(k)]);
+  }
+  xnext_ = xpos_;
 }
 
 void Interpreter::non_modal(int g, std::uint32_t column) {
@@ -115,6 +142,9 @@ void Interpreter::non_modal(int g, std::uint32_t column) {
     case 300:
       home_move(g, column);
       break;
+    case 53:
+      nurbs_end(column);
+      break;
     case 281:
     case 301: {
       // Store the current machine position (of the spindle's gauge line, as LinuxCNC) as
@@ -122,6 +152,10 @@ void Interpreter::non_modal(int g, std::uint32_t column) {
       const Vec3 m = to_machine_tip(cur_pos_) + Vec3(0, 0, tool_z_);
       const std::size_t p = g == 281 ? 5161 : 5181;
       for (int a = 0; a < 3; ++a) params_[p + static_cast<std::size_t>(a)] = m[a];
+      for (int k = 0; k < 6; ++k) {
+        params_[p + 3 + static_cast<std::size_t>(k)] =
+            xmachine(k, xpos_[static_cast<std::size_t>(k)]);
+      }
       (g == 281 ? g28_given_ : g30_given_) = true;
       break;
     }
@@ -135,6 +169,14 @@ void Interpreter::non_modal(int g, std::uint32_t column) {
         cur_pos_[a] = len(c);
         params_[5211 + static_cast<std::size_t>(a)] = g92_[a];
       }
+      for (int k = 0; k < 6; ++k) {
+        const auto ku = static_cast<std::size_t>(k);
+        if (!block_.has(kExtraAxes[ku])) continue;
+        xg92_[ku] = xpos_[ku] + xg92_[ku] - xlen(k);
+        xpos_[ku] = xlen(k);
+        params_[5214 + ku] = xg92_[ku];
+      }
+      xnext_ = xpos_;
       params_[5210] = 1;
       break;
     }
@@ -147,6 +189,14 @@ void Interpreter::non_modal(int g, std::uint32_t column) {
         g92_[a] = len(c);
         params_[5211 + static_cast<std::size_t>(a)] = g92_[a];
       }
+      for (int k = 0; k < 6; ++k) {
+        const auto ku = static_cast<std::size_t>(k);
+        if (!block_.has(kExtraAxes[ku])) continue;
+        xpos_[ku] += xg92_[ku] - xlen(k);
+        xg92_[ku] = xlen(k);
+        params_[5214 + ku] = xg92_[ku];
+      }
+      xnext_ = xpos_;
       params_[5210] = 1;
       break;
     }
@@ -154,6 +204,9 @@ void Interpreter::non_modal(int g, std::uint32_t column) {
     case 922:
       cur_pos_ += g92_;
       g92_.setZero();
+      for (std::size_t k = 0; k < 6; ++k) xpos_[k] += xg92_[k];
+      xg92_ = {};
+      xnext_ = xpos_;
       params_[5210] = 0;
       if (g == 921) {
         for (std::size_t p = 5211; p <= 5219; ++p) params_[p] = 0;
@@ -166,6 +219,12 @@ void Interpreter::non_modal(int g, std::uint32_t column) {
         cur_pos_[a] += g92_[a] - o;
         g92_[a] = o;
       }
+      for (std::size_t k = 0; k < 6; ++k) {
+        const double o = params_[5214 + k];
+        xpos_[k] += xg92_[k] - o;
+        xg92_[k] = o;
+      }
+      xnext_ = xpos_;
       break;
     default:
       break;
@@ -211,6 +270,9 @@ void Interpreter::g10(std::uint32_t column) {
   if (n == system_) comp_.refuse(column, "a change of the active system's origin (G10)");
   // The machine position stays; the active system's coordinates follow the new origin.
   const Vec3 machine = to_machine_tip(cur_pos_);
+  ExtraAxes xm{};
+  for (int k = 0; k < 6; ++k)
+    xm[static_cast<std::size_t>(k)] = xmachine(k, xpos_[static_cast<std::size_t>(k)]);
   const double r = block_.has('r') ? block_['r'] : params_[sys_param(n, 9)];
   if (block_.has('r')) {
     if (l == 20) fail_at(block_.col('r'), "R is not allowed in G10 L20");
@@ -220,6 +282,10 @@ void Interpreter::g10(std::uint32_t column) {
     for (int a = 0; a < 3; ++a) {
       const char c = static_cast<char>('x' + a);
       if (block_.has(c)) params_[sys_param(n, a)] = len(c);
+    }
+    for (int k = 0; k < 6; ++k) {
+      if (block_.has(kExtraAxes[static_cast<std::size_t>(k)]))
+        params_[sys_param(n, 3 + k)] = xlen(k);
     }
   } else {
     // L20: the origin such that the current point has the given coordinates in system n.
@@ -237,11 +303,21 @@ void Interpreter::g10(std::uint32_t column) {
     params_[sys_param(n, 0)] += ox - x;
     params_[sys_param(n, 1)] += oy - y;
     if (block_.has('z')) params_[sys_param(n, 2)] += in_n.z() - len('z');
+    for (int k = 0; k < 6; ++k) {
+      // The current point in system n without G92, as X Y Z above.
+      if (block_.has(kExtraAxes[static_cast<std::size_t>(k)])) {
+        params_[sys_param(n, 3 + k)] = xm[static_cast<std::size_t>(k)] - xlen(k);
+      }
+    }
   }
   note_given(n);
   if (n == system_) {
     load_system();
     cur_pos_ = from_machine_tip(machine);
+    for (int k = 0; k < 6; ++k) {
+      xpos_[static_cast<std::size_t>(k)] = xfrom_machine(k, xm[static_cast<std::size_t>(k)]);
+    }
+    xnext_ = xpos_;
   }
 }
 
@@ -265,6 +341,7 @@ void Interpreter::home_move(int g, std::uint32_t column) {
   const Vec3 waypoint = ends(false);
   emit_line(waypoint, true, column);
   cur_pos_ = waypoint;
+  xpos_ = xnext_;
   const std::size_t p = g == 280 ? 5161 : 5181;
   // The stored position is of the gauge line: the tip is the tool length below it.
   const Vec3 home = from_machine_tip(Vec3(params_[p], params_[p + 1], params_[p + 2] - tool_z_));
@@ -273,8 +350,15 @@ void Interpreter::home_move(int g, std::uint32_t column) {
   for (int a = 0; a < 3; ++a) {
     if (!any || block_.has(static_cast<char>('x' + a))) target[a] = home[a];
   }
+  for (int k = 0; k < 6; ++k) {
+    const auto ku = static_cast<std::size_t>(k);
+    if (!any || block_.has(kExtraAxes[ku])) {
+      xnext_[ku] = xfrom_machine(k, params_[p + 3 + ku]);
+    }
+  }
   emit_line(target, true, column, !any);
   cur_pos_ = target;
+  xpos_ = xnext_;
 }
 
 }  // namespace trochomill::gcode_detail

@@ -356,13 +356,15 @@ double Interpreter::read_parameter(std::size_t& i) {
   const int index = parameter_index(read_value(i), at);
   if (fanuc_) return fanuc_variable(index);
   if (index >= 5420 && index <= 5428) {
-    // The current position in the active system (A B C U V W: 0).
+    // The current position in the active system: X Y Z, then A B C (degrees), U V W.
     if (comp_.on()) {
       fail(at, fmt::format("#{} (the current position) cannot be read with cutter radius "
                            "compensation on (#<_x> #<_y> #<_z> give the tool centre)",
                            index));
     }
-    return index <= 5422 ? cur_pos_[index - 5420] / unit_ : 0.0;
+    if (index <= 5422) return cur_pos_[index - 5420] / unit_;
+    const int k = index - 5423;
+    return xpos_[static_cast<std::size_t>(k)] / (k >= 3 ? unit_ : 1.0);
   }
   return params_[static_cast<std::size_t>(index)];
 }
@@ -427,6 +429,17 @@ std::optional<double> Interpreter::predefined(const std::string& name) const {
   if (name == "_abs_x" || name == "_abs_y" || name == "_abs_z") {
     const Vec3 m = to_machine_tip(cur_pos_);
     return (name == "_abs_x" ? m.x() : name == "_abs_y" ? m.y() : m.z()) / u;
+  }
+  // A B C (degrees) and U V W: the position of the axes besides X Y Z, in the active system
+  // (_a ..) and in machine coordinates (_abs_a ..).
+  const bool abs_extra = name.size() == 6 && name.compare(0, 5, "_abs_") == 0;
+  if (name.size() == 2 || abs_extra) {
+    const auto at = std::string_view("abcuvw").find(name.back());
+    if (at != std::string_view::npos) {
+      const int k = static_cast<int>(at);
+      const double p = xpos_[at];
+      return (abs_extra ? xmachine(k, p) : p) / (k >= 3 ? u : 1.0);
+    }
   }
   if (name == "_value") return value_;
   if (name == "_value_returned") return value_returned_ ? 1 : 0;

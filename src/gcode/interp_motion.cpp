@@ -6,11 +6,14 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <string_view>
 #include <utility>
+#include <vector>
 
 #include "interp.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/geometry.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/units.hpp"
 
@@ -18,8 +21,18 @@ namespace trochomill::gcode_detail {
 
 // The end point of a move in program coordinates (mm): the axis words in the distance mode,
 // or G53's machine coordinates.
+// The axes besides X Y Z go to xnext_ (program coordinates) for the move the block makes.
 Vec3 Interpreter::ends(bool g53) {
   Vec3 t = cur_pos_;
+  xnext_ = xpos_;
+  if (block_.has_extra()) {
+    for (int k = 0; k < 6; ++k) {
+      const auto ku = static_cast<std::size_t>(k);
+      if (!block_.has(kExtraAxes[ku])) continue;
+      const double v = xlen(k);
+      xnext_[ku] = g53 ? xfrom_machine(k, v) : absolute_ ? v : xpos_[ku] + v;
+    }
+  }
   if (block_.has_polar() && g53) {
     fail_at(block_.polar_col(), "Cannot use polar coordinates with G53");
   }
@@ -86,6 +99,12 @@ void Interpreter::move(bool g53, std::uint32_t column) {
     probe(target, column);
     return;
   }
+  if (comp_.moves() && xnext_ != xpos_) {
+    fail_at(block_.col(*std::find_if(kExtraAxes.begin(), kExtraAxes.end(),
+                                     [&](char c) { return block_.has(c); })),
+            "A B C U V W motion with cutter radius compensation on is not supported (the "
+            "compensated moves wait for their corners; program the turn with G40)");
+  }
   if (motion_ <= 10) {
     comp_.allow_arcs();
     if (comp_.moves()) {
@@ -96,6 +115,7 @@ void Interpreter::move(bool g53, std::uint32_t column) {
       plain_move_ = false;
     }
     cur_pos_ = target;
+    xpos_ = xnext_;
     return;
   }
   if (comp_.arc_not_allowed()) {
@@ -111,6 +131,7 @@ void Interpreter::move(bool g53, std::uint32_t column) {
   plain_move_ = feed_mode_ == FeedMode::per_minute;
   arc(target, column);
   plain_move_ = false;
+  xpos_ = xnext_;
 }
 
 // G38.2-G38.5, a probing move: read as a feed move to its end (where a probe stops at contact
@@ -140,6 +161,7 @@ void Interpreter::probe(const Vec3& target, std::uint32_t column) {
   }
   emit_line(target, false, column);
   cur_pos_ = target;
+  xpos_ = xnext_;
   for (int a = 0; a < 3; ++a) params_[5061 + static_cast<std::size_t>(a)] = target[a] / unit_;
   params_[5070] = 0;
 }
@@ -206,6 +228,7 @@ void Interpreter::put_line(const Vec3& end, bool rapid, double f, std::uint32_t 
   mv.end_mm = end;
   mv.plane = plane_code();
   describe(mv, source, line);
+  const ExtraAxes xend = extras_out(mv);
   if (!started_) {
     // The machine's position before the program is unknown: the first move in X or Y only
     // establishes where the path starts.
@@ -213,10 +236,14 @@ void Interpreter::put_line(const Vec3& end, bool rapid, double f, std::uint32_t 
     if (!rapid) mv.feed_mm_per_min = f >= 0 ? f : feed_for((end - mv.start_mm).norm(), column);
     trace(mv);
     out_pos_ = end;
+    xout_ = xend;
     started_ = xy;
     return;
   }
   const double length = (end - out_pos_).norm();
+  if (length == 0 && !rapid && xend != xout_) {
+    prog_.info.extra_only_time_s += extra_time_s(xend, column);
+  }
   if (rapid) {
     f = opt_.rapid_rate_mm_per_min;
   } else {
@@ -231,6 +258,54 @@ void Interpreter::put_line(const Vec3& end, bool rapid, double f, std::uint32_t 
   }
   trace(mv);
   out_pos_ = end;
+  xout_ = xend;
+}
+
+// The axes besides X Y Z at the end of the move being made (xnext_), in the output frame, put
+// in the move; the ones that move noted with their range.
+ExtraAxes Interpreter::extras_out(GcodeMove& mv) {
+  if (!extra_seen_) return xout_;
+  ExtraAxes e{};
+  for (int k = 0; k < 6; ++k) {
+    const auto ku = static_cast<std::size_t>(k);
+    e[ku] = xmachine(k, xnext_[ku]) - xout_origin_[ku];
+    if (e[ku] != xout_[ku]) {
+      std::string& used = prog_.info.extra_axes;
+      const char name = upper(kExtraAxes[ku]);
+      if (used.find(name) == std::string::npos) {
+        used += name;
+        std::sort(used.begin(), used.end(), [](char a, char b) {
+          return std::string_view("ABCUVW").find(a) < std::string_view("ABCUVW").find(b);
+        });
+        prog_.info.extra_min[ku] = prog_.info.extra_max[ku] = xout_[ku];
+      }
+      prog_.info.extra_min[ku] = std::min(prog_.info.extra_min[ku], e[ku]);
+      prog_.info.extra_max[ku] = std::max(prog_.info.extra_max[ku], e[ku]);
+    }
+  }
+  mv.extra_end = e;
+  mv.extra_axes = true;
+  return e;
+}
+
+// The time (s) of a feed move that moves only the axes besides X Y Z to `out_end` (output
+// frame), as LinuxCNC reads F there: along U V W at F mm/min when they move, else along A B C
+// at F degrees/min; in G93 1/F minutes.
+double Interpreter::extra_time_s(const ExtraAxes& out_end, std::uint32_t column) {
+  double uvw = 0, abc = 0;
+  for (std::size_t k = 0; k < 6; ++k) {
+    const double d = out_end[k] - xout_[k];
+    (k >= 3 ? uvw : abc) += d * d;
+  }
+  uvw = std::sqrt(uvw);
+  abc = std::sqrt(abc);
+  if (feed_mode_ == FeedMode::inverse_time) {
+    (void)feed_for(1.0, column);  // the checks of F
+    return 60.0 / inverse_f_;
+  }
+  const double f = feed_for(0.0, column);  // mm/min (G95: F times S)
+  // F is in the program's units per minute: mm or inches for U V W, degrees for A B C.
+  return 60.0 * (uvw > 0 ? uvw / f : abc / (f / unit_));
 }
 
 // Appends a segment; returns its index in the path (npos: not kept, or of no length).
@@ -342,25 +417,19 @@ ArcData Interpreter::arc_data(const Vec3& from, const Vec3& target, std::uint32_
     c1 = arc_absolute_ ? d1 : s1 + d1;
     c2 = arc_absolute_ ? d2 : s2 + d2;
     const double r0 = std::hypot(s1 - c1, s2 - c2), r1 = std::hypot(t1 - c1, t2 - c2);
-    // LinuxCNC's limits (its arc_data_ijk): the radii differ by at most 0.02 sqrt(2) mm
-    // (0.002 sqrt(2) in in G20) and by at most 0.1 % of the larger.
+    // LinuxCNC's limits (its arc_data_ijk): the radii may differ by 0.02 sqrt(2) mm (0.002
+    // sqrt(2) in in G20), or by more when that is at most 0.1 % of the larger, up to 100 times
+    // that. The centre stays where it is programmed; the arc then ends at its end point as a
+    // spiral (put_arc), as LinuxCNC's motion runs it.
     const double abs_tol = (unit_ == 1.0 ? 0.02 : 0.002 * 25.4) * std::sqrt(2.0);
     const double abs_err = std::abs(r0 - r1), rel_err = abs_err / std::max(r0, r1);
-    if (abs_err > abs_tol || rel_err > 0.001) {
+    if (abs_err > 100 * abs_tol || (abs_err > abs_tol && rel_err > 0.001)) {
       fail_at(column,
               fmt::format("arc radius to the end ({:.4f} {}) differs from the radius to the start "
-                          "({:.4f} {}) by {:.4g} {} ({:.3g} %; allowed: {:.4g} {} and 0.1 %, as "
-                          "LinuxCNC)",
+                          "({:.4f} {}) by {:.4g} {} ({:.3g} %; allowed, as LinuxCNC: {:.4g} {}, or "
+                          "0.1 % up to {:.4g} {})",
                           r1 / u, unit_name(), r0 / u, unit_name(), abs_err / u, unit_name(),
-                          100 * rel_err, abs_tol / u, unit_name()));
-    }
-    // Move the centre onto the chord's bisector so both radii agree exactly.
-    const double mx = 0.5 * (s1 + t1), my = 0.5 * (s2 + t2);
-    const double dx = t1 - s1, dy = t2 - s2, L2 = dx * dx + dy * dy;
-    if (L2 > 0) {
-      const double k = ((c1 - mx) * dx + (c2 - my) * dy) / L2;
-      c1 -= k * dx;
-      c2 -= k * dy;
+                          100 * rel_err, abs_tol / u, unit_name(), 100 * abs_tol / u, unit_name()));
     }
   }
   const double rad = std::hypot(s1 - c1, s2 - c2);
@@ -403,7 +472,7 @@ void Interpreter::arc(const Vec3& target, std::uint32_t column) {
   const Vec3 from = cur_pos_;
   cur_pos_ = target;
   put_arc(from, d, target[d.in], f, column, cur_.source, cur_.line_no,
-          block_.has('x') || block_.has('y') || block_.has_polar());
+          block_.has('x') || block_.has('y') || block_.has_polar(), &target);
 }
 
 // An arc from `from` (program mm) about d's centre through d.sweep, ending at `axial` along
@@ -446,9 +515,11 @@ void Interpreter::put_arc(const Vec3& from, const ArcData& d, double axial, doub
   mv.plane = plane_code();
   describe(mv, source, line);
   mv.feed_mm_per_min = f;
+  const ExtraAxes xend = extras_out(mv);
   if (!started_) {
     trace(mv);
     out_pos_ = end;
+    xout_ = xend;
     started_ = xy;
     return;
   }
@@ -462,6 +533,167 @@ void Interpreter::put_arc(const Vec3& from, const ArcData& d, double axial, doub
   mv.segment = append(std::move(seg), column, source, line);
   trace(mv);
   out_pos_ = end;
+  xout_ = xend;
+}
+
+}  // namespace trochomill::gcode_detail
+
+namespace trochomill::gcode_detail {
+
+// G5 (a cubic) and G5.1 (a quadratic) as LinuxCNC 2.9's convert_spline reads them: Bézier
+// curves in the XY plane from the current point; G5's first control point I J from the start
+// (left out: the last G5's second control point mirrored, for a smooth join), its second P Q
+// from the end; G5.1's one control point I J from the start.
+void Interpreter::spline(std::uint32_t column) {
+  if (comp_.on()) fail_at(column, "Cannot convert spline with cutter radius compensation");
+  if (plane_ != Plane::xy) fail_at(column, "Splines must be in the XY plane");
+  for (const char c : std::string_view("zabc")) {
+    if (block_.has(c)) fail_at(block_.col(c), "Splines may not have motion in Z, A, B, or C");
+  }
+  const Vec3 end = ends(false);
+  std::vector<Vec3> points{cur_pos_};
+  if (motion_ == 51) {
+    if (!block_.has('i') || !block_.has('j')) {
+      fail_at(column, "Must specify both I and J with G5.1");
+    }
+    points.push_back(cur_pos_ + Vec3(len('i'), len('j'), 0));
+  } else {
+    double i = spline_i_, j = spline_j_;
+    if (block_.has('i') != block_.has('j')) {
+      fail_at(column, "Must specify both I and J, or neither");
+    }
+    if (block_.has('i')) {
+      i = len('i');
+      j = len('j');
+    }
+    if (!block_.has('p') || !block_.has('q')) fail_at(column, "Must specify both P and Q with G5");
+    points.push_back(cur_pos_ + Vec3(i, j, 0));
+    points.push_back(end + Vec3(len('p'), len('q'), 0));
+    spline_i_ = -len('p');
+    spline_j_ = -len('q');
+  }
+  points.push_back(end);
+  put_curve(points, std::vector<double>(points.size(), 1.0), static_cast<int>(points.size()),
+            column);
+  cur_pos_ = end;
+  xpos_ = xnext_;
+}
+
+// A block of G5.2 (LinuxCNC 2.9's convert_nurbs): a control point X Y with its weight P (the
+// first block may give the start's weight P alone) and the order L (3 unless above 3); the
+// points wait for G5.3. `fresh`: the block starts a new curve (the mode was not G5.2).
+void Interpreter::nurbs_point(bool fresh, std::uint32_t column) {
+  if (comp_.on()) fail_at(column, "Cannot convert spline with cutter radius compensation");
+  if (plane_ != Plane::xy) fail_at(column, "Splines must be in the XY plane");
+  const bool x = block_.has('x'), y = block_.has('y');
+  if (x != y) fail_at(column, "You must specify both X and Y coordinates for Control Points");
+  if (fresh) {
+    nurbs_points_.clear();
+    nurbs_weights_.clear();
+  }
+  const double p = block_.has('p') ? block_['p'] : -1.0;
+  if (!x && p > 0 && !nurbs_points_.empty()) {
+    fail_at(block_.col('p'), "Can specify P without X and Y only for the first control point");
+  }
+  if (p <= 0 && (!nurbs_points_.empty() || x)) {
+    fail_at(block_.has('p') ? block_.col('p') : column,
+            "Must specify positive weight P for every Control Point");
+  }
+  if (feed_mode_ == FeedMode::per_minute && !(feed_ > 0)) {
+    fail_at(column, "Cannot make a NURBS with 0 feedrate");
+  }
+  if (nurbs_points_.empty()) {
+    nurbs_points_.push_back(cur_pos_);
+    nurbs_weights_.push_back(!x && p > 0 ? p : 1.0);
+    nurbs_order_ = 3;
+  }
+  if (block_.has('l') && block_['l'] > 3) {
+    if (block_['l'] != std::floor(block_['l']) || block_['l'] > 30) {
+      fail_at(block_.col('l'), "G5.2's order L must be a whole number 3 .. 30");
+    }
+    nurbs_order_ = static_cast<int>(block_['l']);
+  }
+  if (x) {
+    // Control points are placed from the curve's start (LinuxCNC moves the current point only
+    // at G5.3).
+    Vec3 q = ends(false);
+    q.z() = cur_pos_.z();
+    nurbs_points_.push_back(q);
+    nurbs_weights_.push_back(p);
+  }
+}
+
+// G5.3: the NURBS of the G5.2 blocks before it, from the current point to its last control
+// point.
+void Interpreter::nurbs_end(std::uint32_t column) {
+  if (motion_ != 52 || nurbs_points_.empty()) {
+    fail_at(column, "Cannot use G5.3 without G5.2 first");
+  }
+  if (nurbs_points_.size() < static_cast<std::size_t>(nurbs_order_)) {
+    fail_at(column, fmt::format("You must specify a number of control points at least equal to "
+                                "the order L = {}",
+                                nurbs_order_));
+  }
+  ++prog_.info.motion_blocks;
+  const Vec3 end = nurbs_points_.back();
+  put_curve(nurbs_points_, nurbs_weights_, nurbs_order_, column);
+  cur_pos_ = end;
+  nurbs_points_.clear();
+  nurbs_weights_.clear();
+  motion_ = -1;
+}
+
+// A NURBS of the given order (degree + 1) on LinuxCNC's clamped uniform knots (0 .. n - k + 2,
+// the ends repeated k times) in the XY plane at the current height, from the current point:
+// fitted with biarcs within spline_tolerance_mm and run at the block's feed (G93: the whole
+// curve in 1/F minutes).
+void Interpreter::put_curve(const std::vector<Vec3>& points, const std::vector<double>& weights,
+                            int order, std::uint32_t column) {
+  const std::size_t n = points.size() - 1, k = static_cast<std::size_t>(order);
+  std::vector<double> knots;
+  for (std::size_t i = 0; i <= n + k; ++i) {
+    knots.push_back(i < k    ? 0.0
+                    : i <= n ? static_cast<double>(i - k + 1)
+                             : static_cast<double>(n - k + 2));
+  }
+  const NurbsCurve curve(order - 1, std::move(knots), points, weights);
+  double extent = 0;
+  for (std::size_t i = 1; i < points.size(); ++i) extent += (points[i] - points[i - 1]).norm();
+  if (extent <= 1e-9) {
+    // Every control point on the start: no motion (LinuxCNC's preview draws nothing either).
+    return;
+  }
+  std::vector<FitArc> arcs;
+  try {
+    arcs = fit_biarcs(curve, curve.u0(), curve.u1(), static_cast<int>(std::max<std::size_t>(4, n)),
+                      opt_.spline_tolerance_mm, 100000);
+  } catch (const ArcLimit&) {
+    fail_at(column, fmt::format("the spline needs more than 100000 arcs within {} mm of its curve",
+                                opt_.spline_tolerance_mm));
+  } catch (const Error& e) {
+    fail_at(column, fmt::format("the spline cannot be followed with arcs: {}", e.what()));
+  }
+  double length = 0;
+  for (const FitArc& a : arcs) {
+    length += a.is_line ? (a.end - a.start).norm() : std::abs(a.radius_mm * a.sweep_rad);
+  }
+  const double f = feed_for(length, column);
+  for (const FitArc& a : arcs) {
+    Vec3 end = a.end;
+    end.z() = cur_pos_.z();
+    if (a.is_line) {
+      put_line(to_out(end), false, f, column, cur_.source, cur_.line_no, true);
+      continue;
+    }
+    ArcData d;
+    d.c1 = a.cx;
+    d.c2 = a.cy;
+    d.rad = a.radius_mm;
+    d.sweep = a.sweep_rad;
+    Vec3 start = a.start;
+    start.z() = cur_pos_.z();
+    put_arc(start, d, end.z(), f, column, cur_.source, cur_.line_no, true, &end);
+  }
 }
 
 }  // namespace trochomill::gcode_detail

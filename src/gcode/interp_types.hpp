@@ -91,23 +91,24 @@ enum GroupIndex {
   kDwell,
   kGroups
 };
-inline constexpr std::array<const char*, kGroups> kGroupNames{"motion",
-                                                              "non-modal (G10 G28 G30 G52 G92)",
-                                                              "plane",
-                                                              "units",
-                                                              "distance mode",
-                                                              "arc distance mode",
-                                                              "feed mode",
-                                                              "tool length",
-                                                              "coordinate system",
-                                                              "retract mode",
-                                                              "cutter compensation",
-                                                              "dwell"};
+inline constexpr std::array<const char*, kGroups> kGroupNames{
+    "motion",
+    "non-modal (G5.3 G10 G28 G30 G52 G92)",
+    "plane",
+    "units",
+    "distance mode",
+    "arc distance mode",
+    "feed mode",
+    "tool length",
+    "coordinate system",
+    "retract mode",
+    "cutter compensation",
+    "dwell"};
 struct GroupOf {
   int code10;
   GroupIndex group;
 };
-inline constexpr std::array<GroupOf, 67> kGroupOf{{
+inline constexpr std::array<GroupOf, 71> kGroupOf{{
     {0, kMotion},        {10, kMotion},      {20, kMotion},      {30, kMotion},
     {382, kMotion},      {383, kMotion},     {384, kMotion},     {385, kMotion},
     {730, kMotion},      {740, kMotion},     {760, kMotion},     {800, kMotion},
@@ -124,7 +125,8 @@ inline constexpr std::array<GroupOf, 67> kGroupOf{{
     {550, kSystem},      {560, kSystem},     {570, kSystem},     {580, kSystem},
     {590, kSystem},      {591, kSystem},     {592, kSystem},     {593, kSystem},
     {980, kRetract},     {990, kRetract},    {400, kComp},       {410, kComp},
-    {411, kComp},        {420, kComp},       {421, kComp},
+    {411, kComp},        {420, kComp},       {421, kComp},       {50, kMotion},
+    {51, kMotion},       {52, kMotion},      {53, kGroup0},
 }};
 // A block's G codes by modal group (x10, -1: none of the group), their columns, and G53.
 struct BlockCodes {
@@ -235,8 +237,20 @@ struct Block {
   }
   [[nodiscard]] bool has_polar() const { return has_polar_r || has_polar_a; }
   [[nodiscard]] std::uint32_t polar_col() const { return has_polar_r ? polar_r_col : polar_a_col; }
-  [[nodiscard]] bool has_axis() const { return has('x') || has('y') || has('z') || has_polar(); }
+  // X Y Z (or polar words) and the axes besides them: A B C (rotary) and U V W.
+  [[nodiscard]] bool has_xyz() const { return has('x') || has('y') || has('z') || has_polar(); }
+  [[nodiscard]] bool has_extra() const { return (present & kExtraAxisBits) != 0; }
+  [[nodiscard]] bool has_axis() const { return has_xyz() || has_extra(); }
+  static constexpr std::uint32_t kExtraAxisBits = (1U << ('a' - 'a')) | (1U << ('b' - 'a')) |
+                                                  (1U << ('c' - 'a')) | (1U << ('u' - 'a')) |
+                                                  (1U << ('v' - 'a')) | (1U << ('w' - 'a'));
 };
+
+// The axes besides X Y Z, in LinuxCNC's order: A B C (rotary, degrees) then U V W (linear, mm,
+// parallel to X Y Z); their parameters follow X Y Z's (a system's A at 5204 + 20 n, G92's at
+// 5214, G28's at 5164).
+inline constexpr std::array<char, 6> kExtraAxes{'a', 'b', 'c', 'u', 'v', 'w'};
+using ExtraAxes = std::array<double, 6>;
 
 // An arc of the plane: centre (c1, c2) on its axes i1, i2 (normal in), radius and sweep (rad,
 // positive counterclockwise, with P's extra turns).

@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 #include <optional>
+#include <utility>
+#include <vector>
 
 #include "trochomill/error.hpp"
 #include "trochomill/geometry.hpp"
@@ -346,6 +348,51 @@ std::vector<ContourPiece> fit_polyline(const std::vector<Vec2>& points, double t
     i = good;
   }
   return out;
+}
+
+}  // namespace trochomill
+
+namespace trochomill {
+
+NurbsCurve::NurbsCurve(int degree, std::vector<double> knots, std::vector<Vec3> ctrl,
+                       std::vector<double> weights)
+    : p_(degree), u_(std::move(knots)), c_(std::move(ctrl)), w_(std::move(weights)) {
+  if (p_ < 1 || c_.size() < static_cast<std::size_t>(p_) + 1 ||
+      u_.size() != c_.size() + static_cast<std::size_t>(p_) + 1 || w_.size() != c_.size()) {
+    throw Error("NurbsCurve: degree, knots, control points and weights do not agree");
+  }
+}
+
+Vec3 NurbsCurve::point(double u) const {
+  u = std::clamp(u, u0(), u1());
+  // The knot span: u in [U_k, U_k+1), the last span closed at its end.
+  const auto p = static_cast<std::size_t>(p_);
+  std::size_t k = p;
+  while (k + 1 < c_.size() && u >= u_[k + 1]) ++k;
+  std::vector<Eigen::Vector3d> d(p + 1);  // (w x, w y, w)
+  for (std::size_t j = 0; j <= p; ++j) {
+    const std::size_t i = k - p + j;
+    d[j] = Eigen::Vector3d(w_[i] * c_[i].x(), w_[i] * c_[i].y(), w_[i]);
+  }
+  for (std::size_t r = 1; r <= p; ++r) {
+    for (std::size_t j = p; j >= r; --j) {
+      const std::size_t i = k - p + j;
+      const double den = u_[i + p - r + 1] - u_[i];
+      const double a = den > 0 ? (u - u_[i]) / den : 0.0;
+      d[j] = (1 - a) * d[j - 1] + a * d[j];
+    }
+  }
+  const Eigen::Vector3d& q = d[p];
+  return Vec3(q.x() / q.z(), q.y() / q.z(), c_.front().z());
+}
+
+Vec3 NurbsCurve::unit_tangent(double u) const {
+  const double h = 1e-6 * (u1() - u0());
+  const double a = std::max(u0(), u - h), b = std::min(u1(), u + h);
+  Vec3 t = point(b) - point(a);
+  t.z() = 0;
+  const double n = t.norm();
+  return n > 0 ? Vec3(t / n) : Vec3::Zero();
 }
 
 }  // namespace trochomill

@@ -58,52 +58,6 @@ std::optional<std::pair<double, const char*>> insunits(int code) {
   }
 }
 
-// A NURBS curve in the plane (de Boor on homogeneous points), its tangent by central
-// differences over a millionth of the parameter range.
-class Nurbs final : public PlanarCurve {
- public:
-  Nurbs(int degree, std::vector<double> knots, std::vector<Vec3> ctrl, std::vector<double> w)
-      : p_(degree), u_(std::move(knots)), c_(std::move(ctrl)), w_(std::move(w)) {}
-  [[nodiscard]] double u0() const { return u_[static_cast<std::size_t>(p_)]; }
-  [[nodiscard]] double u1() const { return u_[c_.size()]; }
-  [[nodiscard]] Vec3 point(double u) const override {
-    u = std::clamp(u, u0(), u1());
-    // The knot span: u in [U_k, U_k+1), the last span closed at its end.
-    std::size_t k = static_cast<std::size_t>(p_);
-    while (k + 1 < c_.size() && u >= u_[k + 1]) ++k;
-    std::vector<Eigen::Vector3d> d(static_cast<std::size_t>(p_) + 1);  // (w x, w y, w)
-    for (std::size_t j = 0; j <= static_cast<std::size_t>(p_); ++j) {
-      const std::size_t i = k - static_cast<std::size_t>(p_) + j;
-      d[j] = Eigen::Vector3d(w_[i] * c_[i].x(), w_[i] * c_[i].y(), w_[i]);
-    }
-    for (int r = 1; r <= p_; ++r) {
-      for (int j = p_; j >= r; --j) {
-        const std::size_t i = k - static_cast<std::size_t>(p_) + static_cast<std::size_t>(j);
-        const double den = u_[i + static_cast<std::size_t>(p_ - r) + 1] - u_[i];
-        const double a = den > 0 ? (u - u_[i]) / den : 0.0;
-        d[static_cast<std::size_t>(j)] =
-            (1 - a) * d[static_cast<std::size_t>(j - 1)] + a * d[static_cast<std::size_t>(j)];
-      }
-    }
-    const Eigen::Vector3d& q = d[static_cast<std::size_t>(p_)];
-    return Vec3(q.x() / q.z(), q.y() / q.z(), c_.front().z());
-  }
-  [[nodiscard]] Vec3 unit_tangent(double u) const override {
-    const double h = 1e-6 * (u1() - u0());
-    const double a = std::max(u0(), u - h), b = std::min(u1(), u + h);
-    Vec3 t = point(b) - point(a);
-    t.z() = 0;
-    const double n = t.norm();
-    return n > 0 ? Vec3(t / n) : Vec3::Zero();
-  }
-
- private:
-  int p_;
-  std::vector<double> u_;
-  std::vector<Vec3> c_;
-  std::vector<double> w_;
-};
-
 class Reader final : public DL_CreationAdapter {
  public:
   Reader(std::string source, const DrawingOptions& o) : src_(std::move(source)), o_(o) {}
@@ -349,7 +303,7 @@ class Reader final : public DL_CreationAdapter {
     for (std::size_t i = 1; i < s.knots.size(); ++i) {
       if (!(s.knots[i] >= s.knots[i - 1])) return problem("its knots decrease at knot {}", i + 1);
     }
-    const Nurbs curve(s.degree, s.knots, s.ctrl, s.w);
+    const NurbsCurve curve(s.degree, s.knots, s.ctrl, s.w);
     if (!(curve.u1() > curve.u0())) return problem("its knots span no parameter range");
     fit(curve, curve.u0(), curve.u1(), static_cast<int>(std::max<std::size_t>(4, nc)));
   }

@@ -46,7 +46,15 @@ std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
                              double time_with_acceleration_s) {
   const PathSummary sum = prog.path.empty() ? prog.summary : summarize(prog.path);
   const Box3& b = sum.box;
-  const nlohmann::json j = {
+  // The axes besides X Y Z the program moves: each one's range (A B C degrees, U V W mm).
+  nlohmann::json extra = nlohmann::json::object();
+  for (const char c : prog.info.extra_axes) {
+    const auto k = static_cast<std::size_t>(std::string_view("ABCUVW").find(c));
+    const std::string unit = k < 3 ? "deg" : "mm";
+    extra[std::string(1, c)] = {{"min_" + unit, prog.info.extra_min[k]},
+                                {"max_" + unit, prog.info.extra_max[k]}};
+  }
+  nlohmann::json j = {
       {"file", file},
       {"lines", prog.info.lines},
       {"motion_blocks", prog.info.motion_blocks},
@@ -63,6 +71,10 @@ std::string gcode_check_json(const std::string& file, const GcodeProgram& prog,
       {"feed_max_mm_per_min", prog.info.max_feed_mm_per_min},
       {"spindle_max_rpm", prog.info.max_spindle_rpm},
   };
+  if (!prog.info.extra_axes.empty()) {
+    j["extra_axes"] = extra;
+    j["extra_axes_only_time_s"] = prog.info.extra_only_time_s;
+  }
   return j.dump(2) + "\n";
 }
 
@@ -89,6 +101,16 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
   out += fmt::format("  feed          {:g} to {:g} mm/min, spindle up to {:g} rpm\n",
                      prog.info.min_feed_mm_per_min, prog.info.max_feed_mm_per_min,
                      prog.info.max_spindle_rpm);
+  if (!prog.info.extra_axes.empty()) {
+    out += "  other axes   ";
+    for (const char c : prog.info.extra_axes) {
+      const auto k = static_cast<std::size_t>(std::string_view("ABCUVW").find(c));
+      out += fmt::format(" {} [{:.4f}, {:.4f}] {}", c, prog.info.extra_min[k],
+                         prog.info.extra_max[k], k < 3 ? "deg" : "mm");
+    }
+    out += fmt::format("; {:.4f} s of feed moves of these alone (not in the time above)\n",
+                       prog.info.extra_only_time_s);
+  }
   return out;
 }
 

@@ -40,6 +40,10 @@ class Canon:
         self.feed = 0.0
         self.g5x = [0.0, 0.0, 0.0]
         self.g92 = [0.0, 0.0, 0.0]
+        # The axes besides X Y Z (A B C degrees, U V W mm): their offsets and current values.
+        self.g5x_extra = [0.0] * 6
+        self.g92_extra = [0.0] * 6
+        self.extra = [0.0] * 6
         self.rotation = 0.0
         self.state = None
         self.per_rev = False  # G95, from the interpreter's comment (its state lags a line)
@@ -58,7 +62,7 @@ class Canon:
         return 1.0
 
     def get_axis_mask(self):
-        return 7  # X Y Z
+        return 0x1FF  # X Y Z A B C U V W
 
     def get_block_delete(self):
         return False
@@ -73,9 +77,20 @@ class Canon:
 
     def set_g5x_offset(self, index, x, y, z, *rest):
         self.g5x = [x * IN, y * IN, z * IN]
+        if len(rest) >= 6:
+            self.g5x_extra = extra_mm(rest)
 
     def set_g92_offset(self, x, y, z, *rest):
         self.g92 = [x * IN, y * IN, z * IN]
+        if len(rest) >= 6:
+            self.g92_extra = extra_mm(rest)
+
+    def note_extra(self, rest):
+        # A B C U V W of a move (program coordinates: rotary in degrees, U V W in inches) in
+        # machine coordinates.
+        if len(rest) >= 6:
+            e = extra_mm(rest)
+            self.extra = [e[k] + self.g92_extra[k] + self.g5x_extra[k] for k in range(6)]
 
     def set_xy_rotation(self, theta):
         self.rotation = theta
@@ -104,16 +119,20 @@ class Canon:
         self.spindle = args[-1] if len(args) > 1 else args[0]
 
     def straight_traverse(self, x, y, z, *rest):
-        self.moves.append(("G0",) + self.to_machine(x, y, z) + (None, self.lineno))
+        self.note_extra(rest)
+        self.moves.append(("G0",) + self.to_machine(x, y, z) + (None, self.lineno, list(self.extra)))
 
     def straight_feed(self, x, y, z, *rest):
-        self.moves.append(("G1",) + self.to_machine(x, y, z) + (self.feed_now(), self.lineno))
+        self.note_extra(rest)
+        self.moves.append(("G1",) + self.to_machine(x, y, z)
+                          + (self.feed_now(), self.lineno, list(self.extra)))
 
     def straight_probe(self, x, y, z, *rest):
         # A probing move (G38.x) as a feed move to its end, as trochomill reads it.
-        self.straight_feed(x, y, z)
+        self.straight_feed(x, y, z, *rest)
 
     def arc_feed(self, first_end, second_end, first_axis, second_axis, rotation, axis_end, *rest):
+        self.note_extra(rest)
         # CANON_PLANE: 1 XY (first X, second Y, axis Z), 2 YZ (Y, Z, X), 3 XZ (Z, X, Y).
         if self.plane == 1:
             end = (first_end, second_end, axis_end)
@@ -128,14 +147,26 @@ class Canon:
             centre = (second_axis, None, first_axis)
             axis = (0, 1, 0)
         self.moves.append(("G3" if rotation > 0 else "G2",) + self.to_machine(*end)
-                          + (self.feed_now(), self.lineno, machine_centre(self, centre), axis,
-                             rotation))
+                          + (self.feed_now(), self.lineno, list(self.extra),
+                             machine_centre(self, centre), axis, rotation))
 
     def __getattr__(self, name):
         # Every other canonical call (spindle, coolant, comments, dwell, tool change...).
         if name.startswith("__"):
             raise AttributeError(name)
         return lambda *args: None
+
+
+def extra_mm(values):
+    """A B C (degrees, as they are) and U V W (inches to mm) of a canonical call."""
+    return [values[k] * (IN if k >= 3 else 1.0) for k in range(6)]
+
+
+def rs274_extra(values, mm):
+    """A B C U V W (degrees, mm) of an rs274 line's values after X Y Z: this build prints A B C
+    only (its machine has no U V W), in the program's units."""
+    v = list(values[:6]) + [0.0] * (6 - len(values[:6]))
+    return [w * (mm if k >= 3 else 1.0) for k, w in enumerate(v)]
 
 
 def run_rs274(program, var, tools):
@@ -187,8 +218,10 @@ def run_rs274(program, var, tools):
             mm = IN if "INCHES" in args else 1.0
         elif name == "SET_G5X_OFFSET":
             canon.g5x = [v * mm for v in nums[1:4]]
+            canon.g5x_extra = rs274_extra(nums[4:], mm)
         elif name == "SET_G92_OFFSET":
             canon.g92 = [v * mm for v in nums[0:3]]
+            canon.g92_extra = rs274_extra(nums[3:], mm)
         elif name == "SET_XY_ROTATION":
             canon.rotation = nums[0]
         elif name == "SELECT_PLANE":
@@ -202,15 +235,18 @@ def run_rs274(program, var, tools):
             canon.spindle = nums[-1]
         elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE"):
             x, y, z = (v * mm / IN for v in nums[0:3])
+            # A B C U V W in the canon's units (inches for U V W, as the module gives them).
+            rest = [v / IN if k >= 3 else v for k, v in enumerate(rs274_extra(nums[3:], mm))]
             canon.lineno = 0
             if name == "STRAIGHT_TRAVERSE":
-                canon.straight_traverse(x, y, z)
+                canon.straight_traverse(x, y, z, *rest)
             else:
-                canon.straight_feed(x, y, z)
+                canon.straight_feed(x, y, z, *rest)
         elif name == "ARC_FEED":
             v = nums
             k = mm / IN
-            canon.arc_feed(v[0] * k, v[1] * k, v[2] * k, v[3] * k, int(v[4]), v[5] * k)
+            rest = [w / IN if j >= 3 else w for j, w in enumerate(rs274_extra(v[6:], mm))]
+            canon.arc_feed(v[0] * k, v[1] * k, v[2] * k, v[3] * k, int(v[4]), v[5] * k, *rest)
     return canon
 
 
@@ -257,12 +293,13 @@ def main():
 
 def print_moves(canon):
     for m in canon.moves:
-        kind, x, y, z, feed, line = m[:6]
+        kind, x, y, z, feed, line, extra = m[:7]
         s = "%s X%.9f Y%.9f Z%.9f" % (kind, x, y, z)
         if kind in ("G2", "G3"):
-            centre, axis, rotation = m[6:]
+            centre, axis, rotation = m[7:]
             s += " C%s,%s,%s A%d,%d,%d R%d" % (
                 tuple("%.9f" % c if c is not None else "-" for c in centre) + axis + (rotation,))
+        s += " ABC:%.9f,%.9f,%.9f UVW:%.9f,%.9f,%.9f" % tuple(extra)
         if feed is not None:
             s += " F%.9f" % feed
         s += " L%d" % line

@@ -28,7 +28,8 @@ TOL_FEED = 1e-6  # mm/min, relative; feeds are products of the same words
 
 
 def parse(line):
-    """A move line of either tool: (kind, end, centre, axis, turns, feed, line, started)."""
+    """A move line of either tool: (kind, end, centre, axis, turns, feed, line, started, extra):
+    extra is A B C (degrees) and U V W (mm) at the end, None where the line has none."""
     started = not line.startswith("; ")
     if not started:
         line = line[2:]
@@ -36,9 +37,11 @@ def parse(line):
     kind = words[0]
     end = [float(words[1][1:]), float(words[2][1:]), float(words[3][1:])]
     centre = axis = turns = feed = None
-    src = None
+    src = extra = None
     for w in words[4:]:
-        if w[0] == "C":
+        if w.startswith("ABC:") or w.startswith("UVW:"):
+            extra = (extra or []) + [float(v) for v in w[4:].split(",")]
+        elif w[0] == "C":
             centre = [None if c == "-" else float(c) for c in w[1:].split(",")]
         elif w[0] == "A":
             axis = [int(float(a)) for a in w[1:].split(",")]
@@ -53,7 +56,7 @@ def parse(line):
             src = int(w[1:])
         elif ":" in w:
             src = int(w.rsplit(":", 1)[1])
-    return kind, end, centre, axis, turns, feed, src, started
+    return kind, end, centre, axis, turns, feed, src, started, extra
 
 
 def length(moves, first):
@@ -62,7 +65,10 @@ def length(moves, first):
     if first > len(moves):  # no moves (a program without motion) or none after the first
         return total
     prev = moves[first - 1][1] if first > 0 else [0.0, 0.0, 0.0]
-    for kind, end, centre, axis, turns, feed, src, started in moves[first:]:
+    for kind, end, centre, axis, turns, feed, src, started, extra in moves[first:]:
+        if kind == "SPL":  # a spline: compared on its own (compare_spline)
+            prev = end
+            continue
         if kind in ("G2", "G3"):
             n = axis.index(1)
             i1, i2 = [(0, 1), (1, 2), (2, 0)][[2, 0, 1].index(n)]
@@ -98,6 +104,89 @@ def xy_arc_points(kind, prev, end, centre, sagitta=1e-4):
             for k in range(1, n + 1)]
 
 
+SPLINE_TOL = 1e-3 + 1e-6  # mm: trochomill's spline_tolerance_mm, and the 9 printed decimals
+
+
+def spline_line_numbers(prog):
+    """The lines of the program with a spline code (G5, G5.1, G5.3: where the curve is made)."""
+    import re
+    code = re.compile(r"G\s*0*5\s*(\.\s*[013])?(?![\d.])", re.I)
+    lines = set()
+    for n, text in enumerate(open(prog, errors="replace"), 1):
+        text = re.sub(r"\([^)]*\)|;.*", "", text)
+        if code.search(text):
+            lines.add(n)
+    return lines
+
+
+def collapse_splines(moves, lines):
+    """Each run of moves from one spline line as one move ("SPL"); the runs' moves by key."""
+    out, runs = [], {}
+    i = 0
+    while i < len(moves):
+        m = moves[i]
+        if m[6] in lines and m[0] != "G0":
+            j = i
+            while j + 1 < len(moves) and moves[j + 1][6] == m[6] and moves[j + 1][0] != "G0":
+                j += 1
+            prev = out[-1][1] if out else moves[i][1]
+            key = (m[6], len(runs))
+            runs[key] = (prev, moves[i:j + 1])
+            last = moves[j]
+            out.append(("SPL", last[1], None, None, None, last[5], last[6], last[7], last[8]))
+            i = j + 1
+        else:
+            out.append(m)
+            i += 1
+    return out, runs
+
+
+def path_points(start, run, step=2e-3):
+    """Points along a run of moves (lines and XY arcs) at most `step` mm apart."""
+    pts = [start]
+    prev = start
+    for kind, end, centre, axis, turns, feed, src, started, extra in run:
+        if kind in ("G2", "G3"):
+            r = math.hypot(prev[0] - centre[0], prev[1] - centre[1])
+            for x, y in xy_arc_points(kind, prev, end, centre, sagitta=min(1e-6, r / 10)):
+                pts.append([x, y, end[2]])
+        else:
+            n = max(1, math.ceil(math.dist(prev, end) / step))
+            pts += [[prev[k] + (end[k] - prev[k]) * t / n for k in range(3)]
+                    for t in range(1, n + 1)]
+        prev = end
+    return pts
+
+
+def seg_distance(p, a, b):
+    d = [b[k] - a[k] for k in range(3)]
+    L2 = sum(v * v for v in d)
+    t = 0.0 if L2 == 0 else max(0.0, min(1.0, sum((p[k] - a[k]) * d[k] for k in range(3)) / L2))
+    return math.dist(p, [a[k] + t * d[k] for k in range(3)])
+
+
+def compare_spline(ra, rb):
+    """LinuxCNC's chords against trochomill's arcs of one spline: the same start and end, every
+    LinuxCNC point within SPLINE_TOL of trochomill's curve, and the chords no longer than the
+    arcs (a chord is shorter than the curve it spans) but not 1 % shorter."""
+    (sa, ma), (sb, mb) = ra, rb
+    if max(abs(ma[-1][1][k] - mb[-1][1][k]) for k in range(3)) > 1e-6:
+        return "end %s against %s" % (ma[-1][1], mb[-1][1])
+    dense = path_points(sb, mb)
+    worst = 0.0
+    for m in ma:
+        p = m[1]
+        worst = max(worst, min(seg_distance(p, dense[k], dense[k + 1])
+                               for k in range(len(dense) - 1)))
+    if worst > SPLINE_TOL:
+        return "a point of LinuxCNC's %.6f mm from trochomill's curve" % worst
+    la = sum(math.dist(p, q) for p, q in zip([sa] + [m[1] for m in ma], [m[1] for m in ma]))
+    lb = sum(math.dist(p, q) for p, q in zip(dense, dense[1:]))
+    if not (0.99 * lb - 1e-6 <= la <= lb + 1e-6):
+        return "chords %.6f mm against the curve's %.6f mm" % (la, lb)
+    return None
+
+
 def main():
     troch = sys.argv[1]
     programs = sys.argv[2:] or sorted(
@@ -106,6 +195,7 @@ def main():
     failures = 0
     compared = 0
     for prog in programs:
+        prog = os.path.abspath(prog)  # LinuxCNC runs in lib/ (the subroutine files)
         name = os.path.basename(prog)
         # Programs that use the tool table or G95 go to `rs274 -g` (this Debian build's Python
         # module crashes on tool data and does not pass the spindle speed), which prints 4
@@ -124,6 +214,15 @@ def main():
         if peer.returncode == 77:
             print(peer.stderr.strip())
             return 77
+        if peer.returncode < 0 and not standalone:
+            # The module crashed (it does on tool data the check above did not see: a bare T
+            # word, M06): the standalone interpreter instead.
+            standalone = True
+            tol = digit + 1e-9
+            peer = subprocess.run(
+                ["/usr/bin/python3", os.path.join(HERE, "linuxcnc_canon.py"), prog, "--var",
+                 os.path.join(HERE, "machine.var"), "--tools", os.path.join(HERE, "tools.tbl"),
+                 "--rs274"], capture_output=True, text=True, cwd=os.path.join(HERE, "lib"))
         ours = subprocess.run([troch, "check-gcode", prog, "--trace"] + OPTIONS,
                               capture_output=True, text=True)
         problems = []
@@ -137,8 +236,23 @@ def main():
             # LinuxCNC's moves in machine coordinates; trochomill's in G54.
             a = [(k, [e[i] - G54[i] for i in range(3)],
                   None if c is None else [None if c[i] is None else c[i] - G54[i]
-                                          for i in range(3)], ax, t, f, s, st)
-                 for k, e, c, ax, t, f, s, st in a]
+                                          for i in range(3)], ax, t, f, s, st, x)
+                 for k, e, c, ax, t, f, s, st, x in a]
+            # Splines (G5, G5.1, G5.2 .. G5.3): LinuxCNC's preview draws chords between points
+            # of the exact curve, trochomill follows it with arcs: each run of a spline's moves
+            # becomes one move compared by its end, its points' distance to the arcs and its
+            # length.
+            spline_lines = spline_line_numbers(prog)
+            if spline_lines:
+                a, runs_a = collapse_splines(a, spline_lines)
+                b, runs_b = collapse_splines(b, spline_lines)
+                for key in sorted(set(runs_a) & set(runs_b)):
+                    why = compare_spline(runs_a[key], runs_b[key])
+                    if why:
+                        problems.append("spline of line %s: %s" % (key[0], why))
+                if set(runs_a) != set(runs_b):
+                    problems.append("splines at lines %s in LinuxCNC, %s in trochomill"
+                                    % (sorted(k[0] for k in runs_a), sorted(k[0] for k in runs_b)))
             if len(a) != len(b):
                 problems.append("%d moves in LinuxCNC, %d in trochomill" % (len(a), len(b)))
             for i, (m, n) in enumerate(zip(a, b)):
@@ -151,6 +265,12 @@ def main():
                 d = max(abs(m[1][k] - n[1][k]) for k in range(3)) if n[7] else 0.0
                 if d > tol:
                     problems.append("%s: end %s against %s" % (where, m[1], n[1]))
+                    break
+                # A B C U V W: trochomill prints them once the program has used them; before,
+                # LinuxCNC's must be 0 (the machine of machine.var has no offsets for them).
+                xa, xb = m[8] or [0.0] * 6, n[8] or [0.0] * 6
+                if max(abs(xa[k] - xb[k]) for k in range(6)) > tol:
+                    problems.append("%s: A B C U V W %s against %s" % (where, xa, xb))
                     break
                 if m[0] in ("G2", "G3"):
                     if m[3] != n[3] or m[4] != n[4]:
