@@ -17,7 +17,7 @@ foreach(entry IN ITEMS
     Pockets.LinuxCncReadsThemTheAreaIsClearedAndTheTargetHolds:35
     Cli.ForcesCalibrateAndMaterials:35 Optimize.ParetoSetIsNonDominated:30
     Planner.ToolStaysInsideAndCutsTheWholeSlot:30 Ngc.MovesEqualLinuxCncsOnTheCorpus:27
-    Ngc.LinuxCncSamplesReadAsLinuxCnc:27)
+    Ngc.LinuxCncSamplesReadAsLinuxCnc:27 Ngc.ProgramsByOthersReadAsLinuxCnc:40)
   string(REPLACE ":" ";" pair "${entry}")
   list(GET pair 0 name)
   list(GET pair 1 cost)

@@ -329,7 +329,7 @@ TEST(GcodeInterp, JobMachineKeysPlaceOffsetsHomeAndToolLengths) {
   const GcodeReadOptions ro = gcode_options(job.machine).read;
   // G54 (the job's work_offset) is not given: machine coordinates are G54's.
   const GcodeProgram p = read_gcode(
-      "G21 G90 G0 X0 Y0 Z5\nG55 G0 X1 Y2\nG1 Z-3 F300\nG43 H2\nG28 G91 Z0\nG90 G53 G0 Z0\n",
+      "G21 G90 G0 X0 Y0 Z5\nG55 G0 X1 Y2\nG1 Z-3 F300\nG43 H2\nG28 G91 Z0\nG90 G53 G0 Z0\nM2\n",
       "machine.ngc", ro);
   const auto& seg = p.path.segments();
   ASSERT_EQ(seg.size(), 5u);
@@ -346,7 +346,7 @@ TEST(GcodeInterp, JobMachineKeysPlaceOffsetsHomeAndToolLengths) {
 
 TEST(GcodeInterp, AssumptionsAreNamedInWarnings) {
   const GcodeProgram p =
-      read_gcode("G0 X0 Y0 Z5\nG56 G0 X1 Y1\nG28\nT3 M6 G43 H3\nG53 G0 Z0\n", "assume.ngc");
+      read_gcode("G0 X0 Y0 Z5\nG56 G0 X1 Y1\nG28\nT3 M6 G43 H3\nG53 G0 Z0\nM2\n", "assume.ngc");
   ASSERT_EQ(p.info.warnings.size(), 3u);
   EXPECT_NE(p.info.warnings[0].find("assume.ngc:2: G56 is used but its offset is not given"),
             std::string::npos)
@@ -566,6 +566,22 @@ TEST(GcodeReader, OtherAxesAreCarriedWithTheirOwnTime) {
   EXPECT_NE(p.info.warnings[0].find("x.ngc:3: A: the program uses axes besides X Y Z"),
             std::string::npos)
       << p.info.warnings[0];
+}
+
+// Threading runs at the pitch times the spindle speed, not at F: G33 K1.5 at S600 is 900
+// mm/min; G33.1 taps in at K S and comes out I times faster to where it started (closed form).
+TEST(GcodeReader, ThreadingRunsAtThePitchTimesTheSpindleSpeed) {
+  const GcodeProgram p = read_gcode(
+      "G21 G90 G17\nG0 X0 Y0 Z5\nS600 M3 F100\nG33 Z-10 K1.5\nG0 Z5\nG33.1 Z-3 K1.25 I2\nM2\n",
+      "t.ngc");
+  const auto& s = p.path.segments();
+  ASSERT_EQ(s.size(), 4u);
+  EXPECT_DOUBLE_EQ(s[0].speed_mm_per_min(), 900);
+  EXPECT_DOUBLE_EQ(s[2].speed_mm_per_min(), 750);
+  EXPECT_DOUBLE_EQ(s[3].speed_mm_per_min(), 1500);
+  EXPECT_LE((s[3].end() - Vec3(0, 0, 5)).norm(), 1e-12);  // back where the tap started
+  const double t = 15.0 / 900 * 60 + 8.0 / 750 * 60 + 8.0 / 1500 * 60;
+  EXPECT_NEAR(p.path.duration_s() - 15.0 / 10000 * 60, t, 1e-9);  // less the rapid up
 }
 
 // ---- Fanuc Macro B (hand-computed motion: LinuxCNC does not read these) ----------------------

@@ -61,7 +61,7 @@ GcodeProgram Interpreter::run() {
     prog_.path.reserve(static_cast<std::size_t>(std::count(t.begin(), t.end(), '\n')) + 1);
   }
   // A program between '%' lines: the first non-blank line '%' opens it, the next one ends it.
-  bool percent_open = false, first = true;
+  bool percent_open = false, first = true, percent_closed = false;
   while (!ended_) {
     std::string_view raw;
     if (!next_line(raw)) break;
@@ -82,9 +82,19 @@ GcodeProgram Interpreter::run() {
       while (!t.empty() && (t.back() == ' ' || t.back() == '\t' || t.back() == '\r')) {
         t.remove_suffix(1);
       }
-      if (t == "%") break;
+      if (t == "%") {
+        percent_closed = true;
+        break;
+      }
     }
     run_line(raw);
+  }
+  // LinuxCNC refuses a program that stops without M2, M30 or a closing '%'; a sender of
+  // another control's programs runs it. Read to its last line, with a warning.
+  if (!ended_ && !percent_closed && !fanuc_ && (prog_.info.motion_blocks > 0 || !first)) {
+    warn(
+        "the program ends without M2, M30 or a closing %: LinuxCNC refuses it (\"File ended "
+        "with no percent sign or program end\"); read to its last line");
   }
   if (frames_.size() > 1) {
     fail_at(0, fmt::format("the file ends inside subroutine o<{}> (no endsub reached)",
@@ -536,7 +546,7 @@ void Interpreter::run_motion(const BlockCodes& codes) {
       fail_at(block_.col(first), "axis words without a motion mode (G0/G1/G2/G3)");
     }
     ++prog_.info.motion_blocks;
-    if (motion_ >= 730 && block_.has_extra()) {
+    if (motion_ >= 730 && block_.has_extra() && (fanuc_ || motion_ != 760)) {
       // LinuxCNC: "Cannot put an A in canned cycle" (and B, C, U, V, W).
       for (const char c : kExtraAxes) {
         if (block_.has(c)) {
@@ -545,7 +555,12 @@ void Interpreter::run_motion(const BlockCodes& codes) {
         }
       }
     }
-    if (motion_ == 50 || motion_ == 51) {
+    if (motion_ == 330 || motion_ == 331 || (motion_ == 760 && !fanuc_)) {
+      thread(motion >= 0 ? motion_col
+                         : block_.col(block_.has('x')   ? 'x'
+                                      : block_.has('y') ? 'y'
+                                                        : 'z'));
+    } else if (motion_ == 50 || motion_ == 51) {
       spline(motion >= 0 ? motion_col : block_.col(block_.has('x') ? 'x' : 'y'));
     } else if (motion_ == 52) {
       nurbs_point(motion_before != 52, motion >= 0 ? motion_col : 0);

@@ -349,6 +349,9 @@ class Interpreter : private InterpState {
   [[nodiscard]] ArcData plane_axes() const;
   void note_fanuc_shift(const std::string& name);
   void line_to(const Vec3& target, bool rapid, std::uint32_t column);
+  // Threading (G33, G33.1, LinuxCNC's G76): moves at the pitch times the spindle speed.
+  void thread(std::uint32_t column);
+  void threading_cycle(std::uint32_t column);
 
   // ---- interp_macro.cpp: Fanuc Macro B (GOTO, IF, WHILE, G65) and subprograms (M98/M99)
   bool fanuc_statement(std::size_t i);

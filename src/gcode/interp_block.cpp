@@ -169,8 +169,6 @@ BlockCodes Interpreter::group_codes() const {
       continue;  // path blending: no effect on the path
     }
     if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
-    // G76 is Fanuc's fine boring cycle; LinuxCNC's is lathe threading.
-    if (g == 760 && !fanuc_) unsupported_g(g, column);
     const auto it = std::find_if(kGroupOf.begin(), kGroupOf.end(),
                                  [g = g](const GroupOf& e) { return e.code10 == g; });
     if (it == kGroupOf.end()) unsupported_g(g, column);
@@ -204,6 +202,9 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   // Splines: G5 takes I J P Q, G5.1 I J, G5.2 P (a weight) and L (the order), its block with or
   // without axis words.
   const bool g5 = moved && motion_ == 50, g51 = moved && motion_ == 51;
+  // Threading: G33 takes K, G33.1 I K, LinuxCNC's G76 I J K P Q R H E L.
+  const bool g33 = moved && (motion_ == 330 || motion_ == 331);
+  const bool g76 = moved && motion_ == 760 && !fanuc_;
   const bool g52 =
       motion_ == 52 && (moved || std::any_of(block_.g.begin(), block_.g.end(),
                                              [](const Block::Code& c) { return c.code10 == 52; }));
@@ -233,11 +234,11 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
     m_e = m_e || (m >= 660 && m <= 680);
   }
   const bool q_cycle =
-      cycle && (motion_ == 730 || motion_ == 830 || (fanuc_ && (motion_ == 760 || motion_ == 870)));
+      cycle && (motion_ == 730 || motion_ == 830 || motion_ == 760 || (fanuc_ && motion_ == 870));
   if (block_.has('q') && !q_cycle && !m61 && !g64 && !m_q && !g5) {
     refuse('q', "G64, G73, G83, M19, M61, M66, M67, M68 or user M-code");
   }
-  if (block_.has('e') && !m_e) refuse('e', "M66, M67 or M68");
+  if (block_.has('e') && !m_e && !g76) refuse('e', "G76, M66, M67 or M68");
   const bool m98 = pending_m98_.has_value();
   // LinuxCNC takes no L with G74 (its check lists G73 and G76-G89).
   const bool l_cycle = cycle && (fanuc_ || motion_ != 740);
@@ -249,15 +250,16 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   }
   const bool g87 = cycle && motion_ == 870 && !fanuc_;
   for (const char c : std::string_view("ijk")) {
-    if (block_.has(c) && !arc && !g87 && !((g5 || g51) && c != 'k')) {
-      refuse(c, "G2/G3, G5, G5.1 or G87");
+    const bool thread = g76 || (g33 && c == 'k') || (moved && motion_ == 331 && c == 'i');
+    if (block_.has(c) && !arc && !g87 && !((g5 || g51) && c != 'k') && !thread) {
+      refuse(c, "G2/G3, G5, G5.1, G33, G33.1, G76 or G87");
     }
   }
   if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_ &&
       !g64 && !m_p && !g5 && !g52) {
     refuse('p', "G2/G3, G4, G10, G64, canned cycle, M19, M50-M53, M62-M66 or user M-code");
   }
-  if (block_.has('h') && tool_length != 430) refuse('h', "G43");
+  if (block_.has('h') && tool_length != 430 && !g76) refuse('h', "G43 or G76");
   // D alone: LinuxCNC refuses it; Sinumerik's "T1 D1" (its tool offset) is tolerated, as its
   // other words are, and Fanuc's D is an offset register.
   if (block_.has('d') && !comp_word && opt_.dialect == Dialect::linuxcnc && !block_.has('t')) {
@@ -267,15 +269,7 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
 
 void Interpreter::unsupported_g(int g, std::uint32_t column) const {
   const std::string name = code_name('G', g);
-  if (g == 330 || g == 331) {
-    fail_at(column, fmt::format("{} (threading) is not supported on a milling path", name));
-  }
   if (g >= 380 && g <= 385) fail_at(column, fmt::format("{} (probing) is not supported", name));
-  if (g == 760) {
-    fail_at(column,
-            "G76 is LinuxCNC's lathe threading cycle, not supported on a milling path "
-            "(Fanuc's fine boring G76: read with the fanuc dialect)");
-  }
   if (g == 70 || g == 80 || g == 960) {
     fail_at(column, fmt::format("{} is a lathe mode, not supported", name));
   }

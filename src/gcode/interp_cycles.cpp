@@ -2,6 +2,7 @@
 // plane.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -287,6 +288,129 @@ void Interpreter::note_fanuc_shift(const std::string& name) {
 void Interpreter::line_to(const Vec3& target, bool rapid, std::uint32_t column) {
   emit_line(target, rapid, column, true);
   cur_pos_ = target;
+}
+
+// ---- threading ------------------------------------------------------------------------------
+
+// G33 (a straight move synchronized with the spindle: K per revolution), G33.1 (rigid
+// tapping: in to the end point and back out to where it started, the way out I times faster)
+// and LinuxCNC's G76 (threading_cycle), as LinuxCNC 2.9's convert_straight runs them: their
+// speed is the pitch times the spindle speed S (mm/min); F is not theirs.
+void Interpreter::thread(std::uint32_t column) {
+  const std::string name = code_name('G', motion_);
+  if (motion_ == 760) {
+    threading_cycle(column);
+    return;
+  }
+  comp_.refuse(column, name + " (spindle-synchronized motion)");
+  if (!block_.has('k')) fail_at(column, "K word missing with g33/g33.1");
+  if (block_.has('f')) fail_at(block_.col('f'), "F word used with a g33/g33.1");
+  if (spindle_dir_ == 0) fail_at(column, fmt::format("Spindle not turning in {}", name));
+  if (feed_mode_ == FeedMode::inverse_time) {
+    fail_at(column, fmt::format("{} in inverse time (G93): its speed is K per revolution", name));
+  }
+  const double f = len('k') * speed_;  // mm per revolution times rpm
+  if (!(f > 0)) {
+    fail_at(column, fmt::format("{} at K{:g} and S{:g}: the move would never end (K > 0 and "
+                                "S > 0 give its speed)",
+                                name, block_['k'], speed_));
+  }
+  const Vec3 start = cur_pos_, target = ends(false);
+  if (motion_ == 331 && xnext_ != xpos_) {
+    fail_at(column, "G33.1 (rigid tapping) moves X Y Z only");
+  }
+  const bool xy = block_.has('x') || block_.has('y') || block_.has_polar();
+  put_line(to_out(target), false, f, column, cur_.source, cur_.line_no, xy);
+  if (motion_ == 330) {
+    cur_pos_ = target;
+    xpos_ = xnext_;
+    return;
+  }
+  // Rigid tapping returns to its start, I times faster (I >= 1).
+  const double scale = block_.has('i') ? std::max(1.0, block_['i']) : 1.0;
+  put_line(to_out(start), false, f * scale, column, cur_.source, cur_.line_no, xy);
+}
+
+// LinuxCNC's G76 threading cycle (its convert_threading_cycle and threading_pass): passes
+// along Z at the pitch P per revolution, each deeper along X (I the thread's offset from the
+// start, its sign the side: > 0 boring; J the first cut's depth, K the full depth, R the
+// degression of the depths, Q the compound angle in degrees, H the spring passes, E and L the
+// entry/exit tapers), back at rapid, then to the block's end point. The spindle turns; no
+// cutter compensation, no A B C U V W motion.
+void Interpreter::threading_cycle(std::uint32_t column) {
+  if (comp_.on())
+    fail_at(column, "Cannot use G76 threading cycle with cutter radius compensation on");
+  if (!block_.has('p')) fail_at(column, "P word missing with G76");
+  if (!block_.has('i') || !block_.has('j') || !block_.has('k')) {
+    fail_at(column, "I J or K words missing with G76");
+  }
+  if (spindle_dir_ == 0) fail_at(column, "Chosen spindle (0) not turning in G76");
+  if (feed_mode_ == FeedMode::inverse_time) {
+    fail_at(column, "G76 in inverse time (G93): its speed is P per revolution");
+  }
+  const Vec3 start = cur_pos_, end = ends(false);
+  if (xnext_ != xpos_) fail_at(column, "Cannot move rotary axes with G76");
+  const double i = len('i'), j = len('j'), k = len('k');
+  if (i == 0) fail_at(block_.col('i'), "In G76, I must not be 0");
+  if (j <= 0) fail_at(block_.col('j'), "In G76, J must be greater than 0");
+  if (k <= j) fail_at(block_.col('k'), "In G76, K must be greater than J");
+  const double pitch = len('p');
+  if (!(pitch > 0) || !(speed_ > 0)) {
+    fail_at(column, fmt::format("G76 at P{:g} and S{:g}: the passes would never end (P > 0 and "
+                                "S > 0 give their speed)",
+                                block_['p'], speed_));
+  }
+  const bool boring = i > 0;
+  const double safe_x = start.x(), full_dia_depth = std::abs(i), start_depth = std::abs(i) + j;
+  const double full_height = k, end_depth = k + std::abs(i);
+  double angle = block_.has('q') ? block_['q'] * kPi / 180 : 0.0;
+  if (end.z() > start.z()) angle = -angle;
+  const int spring = block_.has('h') ? static_cast<int>(block_['h']) : 0;
+  const double degression = block_.has('r') && block_['r'] >= 1 ? block_['r'] : 1.0;
+  double taper = block_.has('e') ? std::max(0.0, len('e')) : 0.0;
+  const double taper_pitch = taper > 0 ? pitch * std::hypot(taper, full_height) / taper : pitch;
+  if (end.z() > start.z()) taper = -taper;
+  const int flags = block_.has('l') ? std::max(0, static_cast<int>(block_['l'])) : 0;
+  const bool entry_taper = taper != 0 && (flags & 1) != 0,
+             exit_taper = taper != 0 && (flags & 2) != 0;
+  const double target_z = end.z() + k * std::tan(angle);
+  // The passes: depth = |I| + J pass^(1/R) until the full depth, then H + 1 at it.
+  const double passes = std::pow(k / j, degression) + spring + 2;
+  if (passes > 1e5) {
+    fail_at(column, fmt::format("G76 would cut {:.3g} passes (K/J = {:g} to the power R = {:g})",
+                                passes, k / j, degression));
+  }
+  const double f = pitch * speed_, f_taper = taper_pitch * speed_;
+  const auto x_at = [&](double d) { return boring ? safe_x + d : safe_x - d; };
+  const auto at = [&](double x, double z) { return Vec3(x, start.y(), z); };
+  const auto go = [&](const Vec3& p, bool rapid, double feed) {
+    put_line(to_out(p), rapid, feed, column, cur_.source, cur_.line_no, true);
+    cur_pos_ = p;
+  };
+  const auto pass = [&](double depth, double zoff) {
+    go(at(x_at(depth - end_depth), start.z() - zoff), true, 0);  // back
+    if (entry_taper) {
+      go(at(x_at(depth - full_height), start.z() - zoff), false, f_taper);  // in
+      go(at(x_at(depth), start.z() - zoff - taper), false, f_taper);        // angled in
+    } else {
+      go(at(x_at(depth), start.z() - zoff), true, 0);  // in
+    }
+    if (exit_taper) {
+      go(at(x_at(depth), target_z - zoff + taper), false, f);              // over
+      go(at(x_at(depth - full_height), target_z - zoff), false, f_taper);  // angled out
+    } else {
+      go(at(x_at(depth), target_z - zoff), false, f);  // over
+    }
+    go(at(x_at(depth - end_depth), target_z - zoff), true, 0);  // out
+  };
+  double depth = start_depth;
+  int n = 1;
+  while (depth < end_depth) {
+    pass(depth, (depth - full_dia_depth) * std::tan(angle));
+    depth = full_dia_depth + j * std::pow(++n, 1.0 / degression);
+  }
+  for (int s = 0; s <= spring; ++s) pass(end_depth, (end_depth - full_dia_depth) * std::tan(angle));
+  go(end, true, 0);
 }
 
 }  // namespace trochomill::gcode_detail

@@ -243,11 +243,11 @@ double Interpreter::apply(Op op, double a, double b, std::size_t at) const {
     case Op::gt:
       return a > b ? 1 : 0;
     case Op::ge:
-      return (std::abs(a - b) < kTolEqual || a >= b) ? 1 : 0;
+      return a >= b ? 1 : 0;
     case Op::lt:
       return a < b ? 1 : 0;
     case Op::le:
-      return (std::abs(a - b) < kTolEqual || a <= b) ? 1 : 0;
+      return a <= b ? 1 : 0;
     case Op::and_:
       return (a != 0 && b != 0) ? 1 : 0;
     case Op::or_:

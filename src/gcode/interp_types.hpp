@@ -23,8 +23,9 @@
 namespace trochomill::gcode_detail {
 
 inline constexpr int kMaxParameter = 5602;  // #1 .. #5601, as LinuxCNC
-// EQ/NE/LE/GE compare within this (LinuxCNC's TOLERANCE_EQUAL).
-inline constexpr double kTolEqual = 1e-6;
+// EQ and NE compare within this (LinuxCNC 2.9's TOLERANCE_EQUAL, also its test of an arc
+// starting cutter compensation); LE and GE compare exactly there.
+inline constexpr double kTolEqual = 1e-4;
 inline constexpr double kMaxCoordinate = 1e6;  // mm: beyond this a move is refused (1 km)
 /// A user M-code M100-M199 (its code in tenths): a program of the machine's, taking P and Q.
 inline constexpr bool user_m_code(int code10) {
@@ -108,7 +109,7 @@ struct GroupOf {
   int code10;
   GroupIndex group;
 };
-inline constexpr std::array<GroupOf, 71> kGroupOf{{
+inline constexpr std::array<GroupOf, 73> kGroupOf{{
     {0, kMotion},        {10, kMotion},      {20, kMotion},      {30, kMotion},
     {382, kMotion},      {383, kMotion},     {384, kMotion},     {385, kMotion},
     {730, kMotion},      {740, kMotion},     {760, kMotion},     {800, kMotion},
@@ -126,7 +127,8 @@ inline constexpr std::array<GroupOf, 71> kGroupOf{{
     {590, kSystem},      {591, kSystem},     {592, kSystem},     {593, kSystem},
     {980, kRetract},     {990, kRetract},    {400, kComp},       {410, kComp},
     {411, kComp},        {420, kComp},       {421, kComp},       {50, kMotion},
-    {51, kMotion},       {52, kMotion},      {53, kGroup0},
+    {51, kMotion},       {52, kMotion},      {53, kGroup0},      {330, kMotion},
+    {331, kMotion},
 }};
 // A block's G codes by modal group (x10, -1: none of the group), their columns, and G53.
 struct BlockCodes {

@@ -49,7 +49,9 @@ def trace(troch, prog):
         w = line.replace("; ", "").split()
         m = {"kind": w[0], "end": [float(v[1:]) for v in w[1:4]], "feed": None}
         for x in w[4:]:
-            if x[0] == "C":
+            if x.startswith("ABC:") or x.startswith("UVW:"):
+                m["extra"] = m.get("extra", []) + [float(c) for c in x[4:].split(",")]
+            elif x[0] == "C":
                 m["centre"] = [float(c) for c in x[1:].split(",")]
             elif x[0] == "A":
                 m["axis"] = [float(c) for c in x[1:].split(",")]
@@ -108,6 +110,12 @@ def same_motion(a, b):
                     problems.append("input move %d: feed %g outside %g .. %g"
                                     % (i + 1, f, MIN_FEED, MAX_FEED))
             if math.dist(n["end"], m["end"]) <= TOL:
+                # A B C U V W reach the input's values where the input move ends.
+                if m.get("extra") != n.get("extra") and max(
+                        abs(u - v) for u, v in zip(m.get("extra", [0.0] * 6),
+                                                   n.get("extra", [0.0] * 6))) > TOL:
+                    return ["input move %d: A B C U V W %s became %s"
+                            % (i + 1, m.get("extra"), n.get("extra"))]
                 break
         prev_a = m["end"]
         prev_b = n["end"]

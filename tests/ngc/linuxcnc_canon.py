@@ -131,6 +131,14 @@ class Canon:
         # A probing move (G38.x) as a feed move to its end, as trochomill reads it.
         self.straight_feed(x, y, z, *rest)
 
+    def rigid_tap(self, x, y, z, *rest):
+        # G33.1: in to the point and back out, as LinuxCNC's preview draws it.
+        back = self.moves[-1][1:4] if self.moves else None
+        self.straight_feed(x, y, z)
+        if back is not None:
+            self.moves.append(("G1",) + tuple(back) + (self.feed_now(), self.lineno,
+                                                      list(self.extra)))
+
     def arc_feed(self, first_end, second_end, first_axis, second_axis, rotation, axis_end, *rest):
         self.note_extra(rest)
         # CANON_PLANE: 1 XY (first X, second Y, axis Z), 2 YZ (Y, Z, X), 3 XZ (Z, X, Y).
@@ -242,6 +250,10 @@ def run_rs274(program, var, tools):
                 canon.straight_traverse(x, y, z, *rest)
             else:
                 canon.straight_feed(x, y, z, *rest)
+        elif name == "RIGID_TAP":
+            x, y, z = (v * mm / IN for v in nums[0:3])
+            canon.lineno = 0
+            canon.rigid_tap(x, y, z)
         elif name == "ARC_FEED":
             v = nums
             k = mm / IN

@@ -16,9 +16,9 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SAMPLES = "/usr/share/linuxcnc/ncfiles"
-# Read with LinuxCNC's moves (2026-12: 37 of the 43 that LinuxCNC runs with this machine).
+# Read with LinuxCNC's moves (2026-12: 38 of the 44 that LinuxCNC runs with this machine).
 MATCH = """3D_Chips 3dtest arcspiral cds comp-g1 comp311 comp311_2 factorial flowsnake g20sub g881
-g881min g882 gmoccapy_2_tools_with_cutter_radius_compensation gridprobe hole-circle m250 b-index daisy systems
+g881min g882 gmoccapy_2_tools_with_cutter_radius_compensation gridprobe hole-circle m250 b-index daisy systems threading
 m61demo m6demo m6remap m70m72-demo m73-demo m75 m76 offsets polar retval roparams smartprobe
 spiral testm6fail toplevel tort touchoff""".split()
 
