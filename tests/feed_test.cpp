@@ -18,6 +18,7 @@
 #include "trochomill/force.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/sim.hpp"
 
 namespace trochomill {
 namespace {
@@ -509,6 +510,50 @@ TEST(OptimizeFeed, ACornerIsTheSimulations) {
   EXPECT_NE(corner_warning(optimize_feed(bull, two, "two.ngc", o))
                 .find("two.ngc:6: this level cuts 0.5 mm deep, within the tool's 0.8 mm corner"),
             std::string::npos);
+}
+
+}  // namespace
+}  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// Ramps and rising lead-outs: the kernel's chip (analysis) against the tri-dexel simulation's
+// on the same moves of a program: a ramp down into a box stock (the tool moving 0.074 mm
+// sideways and 0.011 mm down a tooth), a straight cut, a ramp up and out through fresh stock.
+// On each inclined move the largest radial chip of the two agree within 10 % (the
+// simulation's rays are 0.04 mm apart: its chip is the rays' within a dexel), the kernel's at
+// most f_z (the horizontal advance per tooth: 0.0742 mm on the ramp, 0.075 where the tooth
+// before was on the straight cut), not the tool's radius (the chip a region without the
+// move's own teeth gave). The simulation's chip is its flutes': the edge segments above the
+// tip's, whose chip on a descent is the end edges' cut of the layer below (models.md
+// section 7: the simulation counts it as the rays' radial depth, 5 mm here).
+TEST(Analysis, RampChipsAgreeWithTheSimulation) {
+  const Job job = test::straight_job(
+      10.0, 4,
+      {parse_override("stock.min=[-20, 0, -6]"), parse_override("stock.max=[20, 60, 0]"),
+       parse_override("simulation.resolution=0.04")});
+  const std::string text =
+      "G21 G90 G17 G94\nG0 X0 Y-8 Z1\nG1 Y12 Z-2 F600\nG1 Y25\nG1 Y40 Z1\nG0 Z5\nM2\n";
+  const GcodeProgram prog = read_gcode(text, "ramp.ngc");
+  const PathChips k = kernel_chips(job, prog.path);
+  const JobSimulation js = simulate_job(job, prog.path, 0.0, prog.path.duration_s());
+  const auto spt = static_cast<std::uint32_t>(js.result.segments_per_tooth);
+  const double fz = 600.0 / (2000 * 4);
+  for (const std::size_t seg : {std::size_t{0}, std::size_t{2}}) {
+    double hk = 0, hs = 0;
+    for (std::size_t i = 0; i < k.size(); ++i) {
+      if (k.segment[i] == seg) hk = std::max(hk, k.h_mm[i]);
+    }
+    for (const ChipEntry& c : js.result.chip_map) {
+      std::size_t at = 0;
+      (void)prog.path.length_at_time_mm(js.result.steps[c.step].t_s, &at);
+      if (at == seg && c.segment % spt != 0) hs = std::max(hs, static_cast<double>(c.h_mm));
+    }
+    EXPECT_LE(hk, fz * (1 + 1e-9)) << seg;
+    EXPECT_GT(hk, 0.9 * fz) << seg;
+    EXPECT_NEAR(hk, hs, 0.1 * hs) << seg;
+  }
 }
 
 }  // namespace

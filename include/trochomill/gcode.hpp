@@ -69,9 +69,12 @@ struct GcodeMove {
   static constexpr std::size_t npos = static_cast<std::size_t>(-1);
   std::size_t source = 0;  ///< 0: the program itself, else a subroutine file it calls
   /// A G0/G1/G2/G3 of the block's own words at a feed per minute (G94), without cutter
-  /// compensation or G53: its end and centre are words of the block, so it can be split.
+  /// compensation or G53, that moves no axis besides X Y Z: its end and centre are words of
+  /// the block, so it can be split.
   bool plain = false;
   int motion = -1;              ///< the motion mode: 0, 1, 2, 3 (-1: a canned cycle and the like)
+  /// Threading (G33, G33.1, G76): it runs at the pitch times the spindle speed; F is not its.
+  bool synchronized = false;
   std::uint64_t block_run = 0;  ///< the block execution that made it (a loop's passes differ)
   std::size_t segment = npos;   ///< its segment in GcodeProgram::path (npos: none)
   /// The block's frame: the output-frame position of program zero (mm), the turn of the

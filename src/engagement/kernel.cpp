@@ -962,12 +962,27 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
                   ? mesh_stock->inside(cx, cy, R, smp.z_mm[i], std::min(top, smp.z_mm[i] + flute))
                   : inside_rect(cx, cy, R, sx0, sx1, sy0,
                                 opt.open_ahead ? std::numeric_limits<double>::infinity() : sy1));
+    // A tooth cuts with its flutes only what the tooth before it left: that tooth's disc is
+    // gone up its flutes, and what lies below it (a descent's new depth, or the layer under
+    // the stock's top where the tooth before was above it) is the end edges' axial chip. The
+    // 2.5D region holds that disc but where the region changed under the tool: a descent
+    // (a ramp, a helix, a lead-in) starts an empty region, a rise above its level (a
+    // lead-out) adds no discs, a new level reached by a rise has none of the rise's. The
+    // flutes' engagement and chip are taken against that disc here too, the chip at most the
+    // horizontal advance per tooth. (The axial chip is not a radial chip: radial_chip_mm.)
+    double own_limit = std::numeric_limits<double>::infinity();
+    if (i >= static_cast<std::size_t>(m)) {
+      const std::size_t k = i - m;
+      const double dx = smp.x_mm[k] - cx, dy = smp.y_mm[k] - cy, d = std::hypot(dx, dy);
+      if (d < 2 * R) subtract(eng, std::atan2(dy, dx), std::acos(d / (2 * R)));
+      own_limit = d;
+    }
     double total = 0;
     for (const auto& a : eng) total += a.sweep_rad();
     out.engagement_angle_rad[i] = total;
     out.radial_engagement_mm[i] = R * (1 - std::cos(std::min(total, kPi)));
     const auto [hmax, hang] = eng.empty() ? std::pair{0.0, 0.0} : chip.h_max(removed, cx, cy, eng);
-    out.h_max_mm[i] = hmax;
+    out.h_max_mm[i] = std::min(hmax, own_limit);
     out.h_max_angle_rad[i] = wrap(hang);
     int teeth = 0;
     for (const double alpha : job.tool.tooth_angles_deg) {

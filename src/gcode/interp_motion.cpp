@@ -110,7 +110,7 @@ void Interpreter::move(bool g53, std::uint32_t column) {
     if (comp_.moves()) {
       comp_.line(target, motion_ == 0, column);
     } else {
-      plain_move_ = !g53 && (motion_ == 0 || feed_mode_ == FeedMode::per_minute);
+      plain_move_ = !g53 && (motion_ == 0 || feed_mode_ == FeedMode::per_minute) && xnext_ == xpos_;
       emit_line(target, motion_ == 0, column);
       plain_move_ = false;
     }
@@ -128,7 +128,7 @@ void Interpreter::move(bool g53, std::uint32_t column) {
     cur_pos_ = target;
     return;
   }
-  plain_move_ = feed_mode_ == FeedMode::per_minute;
+  plain_move_ = feed_mode_ == FeedMode::per_minute && xnext_ == xpos_;
   arc(target, column);
   plain_move_ = false;
   xpos_ = xnext_;
@@ -355,6 +355,7 @@ void Interpreter::describe(GcodeMove& mv, std::size_t source, std::size_t line) 
   mv.source = source;
   mv.plain = plain_move_;
   mv.motion = motion_ == 0 ? 0 : motion_ == 10 ? 1 : motion_ == 20 ? 2 : motion_ == 30 ? 3 : -1;
+  mv.synchronized = motion_ == 330 || motion_ == 331 || (motion_ == 760 && !fanuc_);
   mv.block_run = prog_.info.blocks_executed;
   mv.program_zero_mm = to_out(Vec3::Zero());
   mv.program_turn_rad = (rotation_ - out_rotation_) * kPi / 180.0;

@@ -262,7 +262,9 @@ FeedRewrite rewrite_feeds(std::string_view text, const std::vector<GcodeMove>& m
         modal = m.feed_word;  // a subroutine file's own F word
       }
     }
-    if (m.motion == 0 || m.kind == GcodeMove::Kind::rapid || m.feed_mode == 93) continue;
+    if (m.motion == 0 || m.kind == GcodeMove::Kind::rapid || m.feed_mode == 93 || m.synchronized) {
+      continue;  // no F of theirs (threading runs at the pitch times the spindle speed)
+    }
     double want = m.feed_word;  // a kept move: its feed as it was
     if (b != nullptr && b->rewritten) want = b->split ? feeds[i].feed_mm_per_min.front() : b->feed;
     if (differs(modal, want)) {

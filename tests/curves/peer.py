@@ -33,7 +33,7 @@ def check(ok, what):
 def floor_points(moves, z_floor):
     """The tool centre's points at the floor: arcs as chords of sagitta <= 1e-4 mm."""
     pts, prev = [], [0.0, 0.0, 0.0]
-    for kind, end, centre, axis, turns, feed, src, started in moves:
+    for kind, end, centre, axis, turns, feed, src, started, _extra in moves:
         at_floor = abs(prev[2] - z_floor) < 1e-6 and abs(end[2] - z_floor) < 1e-6
         if at_floor and kind in ("G2", "G3"):
             pts += xy_arc_points(kind, prev, end, centre)

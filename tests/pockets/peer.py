@@ -48,7 +48,7 @@ def path_points(moves, keep):
     """The tool centre's feed points where keep(z0, z1): arcs as chords of sagitta <= 1e-4 mm,
     as runs (a list of point lists, one per run of such moves)."""
     runs, cur, prev = [], [], [0.0, 0.0, 0.0]
-    for kind, end, centre, axis, turns, feed, src, started in moves:
+    for kind, end, centre, axis, turns, feed, src, started, _extra in moves:
         if kind in ("G1", "G2", "G3") and keep(prev[2], end[2]):
             if not cur:
                 cur.append((prev[0], prev[1]))
