@@ -730,3 +730,48 @@ TEST(FeedSchedule, BadTargetsAreRefused) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// [stock] is in the work offset's coordinates, the frame of the job's G-code: a job placed at
+// slot.origin_x = 100, origin_y = 50 (and turned by 90 degrees) with its box moved (and
+// turned) with it removes what the job at the origin does from the job's own G-code read back
+// (1e-6 relative: the program's coordinates are written to 4 decimals); left where it was, the
+// box misses the slot and nothing is cut.
+TEST(Analysis, TheStockBoxIsInTheProgramsFrame) {
+  const auto job_at = [](const std::string& origin, const std::string& lo, const std::string& hi) {
+    std::vector<Override> ov = {parse_override("stock.min=" + lo),
+                                parse_override("stock.max=" + hi)};
+    if (!origin.empty()) {
+      for (const std::string& o :
+           {std::string("slot.origin_x=100"), std::string("slot.origin_y=50"), origin}) {
+        ov.push_back(parse_override(o));
+      }
+    }
+    return test::straight_job(10.0, 4, ov);
+  };
+  // The job's own program, read back into the slot's frame, as `analyze --gcode` reads it.
+  const auto removed = [](const Job& job) {
+    const std::string text =
+        write_gcode(job, plan_path(job).path, gcode_options(job.machine).write);
+    const ToolPath path =
+        to_slot_frame(read_gcode(text, "job.ngc", gcode_options(job.machine).read).path,
+                      slot_placement(job));
+    return analyze_process(job, path).removed_volume_mm3;
+  };
+  const Job home = job_at("", "[-3, 5, -6]", "[20, 30, 0]");
+  const Job moved = job_at("slot.angle=0", "[97, 55, -6]", "[120, 80, 0]");
+  // Turned by 90 degrees: the slot's +x is the work's +y, its +y the work's -x.
+  const Job turned = job_at("slot.angle=90", "[70, 47, -6]", "[95, 70, 0]");
+  const Job missed = job_at("slot.angle=0", "[-3, 5, -6]", "[20, 30, 0]");
+  const double v = removed(home);
+  ASSERT_GT(v, 100.0);
+  EXPECT_NEAR(removed(moved), v, 1e-6 * v);
+  EXPECT_NEAR(removed(turned), v, 1e-6 * v);
+  EXPECT_THROW((void)removed(missed), InputError);  // the path never cuts
+  EXPECT_THROW((void)job_at("slot.angle=30", "[0, 0, -6]", "[1, 1, 0]"), InputError);
+}
+
+}  // namespace
+}  // namespace trochomill

@@ -654,7 +654,8 @@ std::vector<Key> build_schema() {
               "worker threads (0: all cores); results are the same for any count"),
       // [stock]
       custom("stock", "min", "array of numbers", "mm", "[x, y, z], below max", "the slot region",
-             "lower corner of the stock box (give min and max): the simulation's workpiece and, "
+             "lower corner of the stock box (give min and max) in the work offset's "
+             "coordinates, the frame of the job's G-code: the simulation's workpiece and, "
              "given, the engagement's stock (x, y range, below the top); by default the slot "
              "from y = 0 to its length (1 mm beside each wall and 0.5 mm below the floor for "
              "the simulation), up to z = 0",
@@ -1125,6 +1126,42 @@ void check_representable(JobReader& r, const Job& job) {
 }
 
 // The rules that tie keys together, after every key was read.
+// [stock] is given in the work offset's coordinates (the frame of the job's G-code and of
+// programs read with it); the models work in the slot's frame. A straight slot placed by
+// slot.origin_x, origin_y and angle: the box moved into that frame (turned by a multiple of
+// 90 degrees it stays a box).
+void place_stock(JobReader& r, Job& job) {
+  if (!r.has("stock", "min") || !job.stock_min_mm || !job.stock_max_mm) return;
+  const Slot& slot = job.slot;
+  if (slot.origin_x_mm == 0 && slot.origin_y_mm == 0 && slot.angle_deg == 0) return;
+  const double quarters = slot.angle_deg / 90.0;
+  if (std::abs(quarters - std::round(quarters)) > 1e-9) {
+    r.problem("stock", "min",
+              fmt::format("is in the work offset's coordinates, where slot.angle = {} degrees "
+                          "turns the slot: a box turned by other than a multiple of 90 degrees "
+                          "is no box in the slot's frame (give the stock as a mesh: --stock "
+                          "FILE.stl, or turn the slot by a multiple of 90 degrees)",
+                          fmt_num(slot.angle_deg)));
+    return;
+  }
+  // Work -> slot: p - origin turned back by the angle (a quarter turn at a time, exactly).
+  const long turns = ((std::lround(quarters) % 4) + 4) % 4;
+  auto to_slot = [&](double x, double y) {
+    double u = x - slot.origin_x_mm, v = y - slot.origin_y_mm;
+    for (long k = 0; k < turns; ++k) {
+      const double t = u;  // a quarter turn clockwise (back)
+      u = v;
+      v = -t;
+    }
+    return std::pair{u, v};
+  };
+  const Vec3 lo = *job.stock_min_mm, hi = *job.stock_max_mm;
+  const auto [ax, ay] = to_slot(lo.x(), lo.y());
+  const auto [bx, by] = to_slot(hi.x(), hi.y());
+  job.stock_min_mm = Vec3(std::min(ax, bx), std::min(ay, by), lo.z());
+  job.stock_max_mm = Vec3(std::max(ax, bx), std::max(ay, by), hi.z());
+}
+
 void check_rules(JobReader& r, Job& job) {
   Tool& tool = job.tool;
   if (tool.diameter_mm > 0 && tool.corner_radius_mm > tool.radius_mm()) {
@@ -1228,6 +1265,7 @@ void check_rules(JobReader& r, Job& job) {
   check_material(r, job.material);
   check_centreline(r, job);
   check_pocket(r, job);
+  place_stock(r, job);
   check_representable(r, job);
 }
 
