@@ -12,9 +12,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <random>
 
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -582,6 +585,35 @@ TEST(GcodeReader, ThreadingRunsAtThePitchTimesTheSpindleSpeed) {
   EXPECT_LE((s[3].end() - Vec3(0, 0, 5)).norm(), 1e-12);  // back where the tap started
   const double t = 15.0 / 900 * 60 + 8.0 / 750 * 60 + 8.0 / 1500 * 60;
   EXPECT_NEAR(p.path.duration_s() - 15.0 / 10000 * 60, t, 1e-9);  // less the rapid up
+}
+
+// --trace writes its numbers with append_fixed: character for character fmt's "{:.9f}" (and
+// the other widths) on random values over 21 decades, on exact ties (odd multiples of 2^-11,
+// 2^-20: ties to even) and on the values beyond its range that go to fmt itself.
+TEST(GcodeTrace, FixedNumbersAreFmtsCharacterForCharacter) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> mag(-12.0, 9.0), unit(0.0, 1.0);
+  std::vector<double> values{0.0, -0.0, 1e-10, -1e-10,
+                             0.5, 1.5,  2.5,   999999999.9999999,
+                             1e9, -1e9, 1e15,  std::numeric_limits<double>::infinity()};
+  for (int k = 1; k < 4096; k += 2) {
+    values.push_back(k / 2048.0);
+    values.push_back(-k / 1048576.0);
+  }
+  for (int k = 0; k < 200000; ++k) {
+    const double v = std::pow(10.0, mag(rng)) * (unit(rng) < 0.5 ? -1 : 1);
+    values.push_back(v);
+  }
+  std::size_t checked = 0;
+  for (const double v : values) {
+    for (const int d : {0, 1, 4, 6, 9}) {
+      std::string ours;
+      append_fixed(ours, v, d);
+      ASSERT_EQ(ours, fmt::format("{:.{}f}", v, d)) << v << " " << d;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 1000000u);
 }
 
 // ---- Fanuc Macro B (hand-computed motion: LinuxCNC does not read these) ----------------------

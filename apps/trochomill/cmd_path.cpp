@@ -5,14 +5,18 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <memory>
+#include <string>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "trochomill/analysis.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/io.hpp"
 #include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/units.hpp"
@@ -66,25 +70,47 @@ std::pair<int, Vec3> parse_offset(const std::string& s) {
   return {n, v};
 }
 
-// One move of --trace.
+// One move of --trace (append_fixed: fmt's "{:.9f}", a tenth of its time; a trace of a
+// long program writes millions of numbers).
 std::string trace_line(const GcodeMove& m) {
   const char* kind = m.kind == GcodeMove::Kind::rapid  ? "G0"
                      : m.kind == GcodeMove::Kind::feed ? "G1"
                      : m.sweep_rad > 0                 ? "G3"
                                                        : "G2";
-  std::string s = fmt::format("{}{} X{:.9f} Y{:.9f} Z{:.9f}", m.path_started ? "" : "; ", kind,
-                              m.end_mm.x(), m.end_mm.y(), m.end_mm.z());
+  std::string s;
+  s.reserve(m.kind == GcodeMove::Kind::arc ? 192 : 112);
+  if (!m.path_started) s += "; ";
+  s += kind;
+  const auto num = [&](const char* before, double v) {
+    s += before;
+    append_fixed(s, v, 9);
+  };
+  num(" X", m.end_mm.x());
+  num(" Y", m.end_mm.y());
+  num(" Z", m.end_mm.z());
   if (m.kind == GcodeMove::Kind::arc) {
-    s += fmt::format(" C{:.9f},{:.9f},{:.9f} A{:.0f},{:.0f},{:.0f} T{:.9f}", m.centre_mm.x(),
-                     m.centre_mm.y(), m.centre_mm.z(), m.axis.x(), m.axis.y(), m.axis.z(),
-                     m.sweep_rad * 180.0 / kPi);
+    num(" C", m.centre_mm.x());
+    num(",", m.centre_mm.y());
+    num(",", m.centre_mm.z());
+    s += fmt::format(" A{:.0f},{:.0f},{:.0f}", m.axis.x(), m.axis.y(), m.axis.z());
+    num(" T", m.sweep_rad * 180.0 / kPi);
   }
   if (m.extra_axes) {
     const auto& e = m.extra_end;
-    s += fmt::format(" ABC:{:.9f},{:.9f},{:.9f} UVW:{:.9f},{:.9f},{:.9f}", e[0], e[1], e[2], e[3],
-                     e[4], e[5]);
+    num(" ABC:", e[0]);
+    num(",", e[1]);
+    num(",", e[2]);
+    num(" UVW:", e[3]);
+    num(",", e[4]);
+    num(",", e[5]);
   }
-  s += fmt::format(" F{:.9f} G{} {}:{}", m.feed_mm_per_min, m.plane, m.file, m.line);
+  num(" F", m.feed_mm_per_min);
+  s += " G";
+  s += m.plane == 17 ? "17" : m.plane == 18 ? "18" : "19";
+  s += ' ';
+  s += m.file;
+  s += ':';
+  s += std::to_string(m.line);
   return s;
 }
 
@@ -367,13 +393,34 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       }
       if (!a->g28.empty()) ro.g28_position_mm = Vec3(a->g28[0], a->g28[1], a->g28[2]);
       if (!a->g30.empty()) ro.g30_position_mm = Vec3(a->g30[0], a->g30[1], a->g30[2]);
+      std::function<void()> trace_flush;
       if (a->trace) {
-        ro.trace = [](const GcodeMove& m) { fmt::print("{}\n", trace_line(m)); };
+        // Lines gathered in a buffer and written 64 kB at a time.
+        auto buffer = std::make_shared<std::string>();
+        ro.trace = [buffer](const GcodeMove& m) {
+          *buffer += trace_line(m);
+          *buffer += '\n';
+          if (buffer->size() >= (1U << 16)) {
+            std::fwrite(buffer->data(), 1, buffer->size(), stdout);
+            buffer->clear();
+          }
+        };
+        trace_flush = [buffer] {
+          std::fwrite(buffer->data(), 1, buffer->size(), stdout);
+          buffer->clear();
+        };
       }
       // The time with acceleration needs the whole path; without it the program is read as a
       // stream (its summary only).
       ro.keep_path = a->machine.max_acceleration_mm_per_s2 > 0;
-      const GcodeProgram prog = read_gcode_file(a->file, ro);
+      GcodeProgram prog;
+      try {
+        prog = read_gcode_file(a->file, ro);
+      } catch (...) {
+        if (trace_flush) trace_flush();  // the moves before the error, as they were read
+        throw;
+      }
+      if (trace_flush) trace_flush();
       for (const std::string& w : prog.info.warnings) fmt::print(stderr, "warning: {}\n", w);
       if (a->trace) {
         exit_code = 0;

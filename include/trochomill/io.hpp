@@ -59,6 +59,12 @@ void write_text_atomic(
 /// A memory size (bytes) as a user reads it: GB to two decimals, MB below 0.01 GB, kB below
 /// 0.01 MB ("3.00 GB", "0.10 MB"), so that a small limit never reads "0.00 GB".
 [[nodiscard]] std::string memory_text(double bytes);
+/// Appends v with `decimals` (0 .. 9) digits after the point, exactly as fmt's "{:.Nf}"
+/// writes it (correctly rounded, ties to even, a minus sign on negative values that round to
+/// zero): exact binary-to-decimal arithmetic in 128-bit integers for |v| < 1e9, fmt itself
+/// beyond and for values that are not finite. About a tenth of fmt's time for such a format:
+/// the interpreter's --trace writes millions.
+void append_fixed(std::string& out, double v, int decimals);
 /// `s` with every `from` replaced by `to` (a temporary path in a message by the one the user
 /// named).
 [[nodiscard]] std::string replace_all(std::string s, std::string_view from, std::string_view to);

@@ -5,9 +5,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -192,6 +195,48 @@ std::string read_text_file(const fs::path& path) {
   } catch (const IoError& e) {
     throw InputError(e.what());
   }
+}
+
+void append_fixed(std::string& out, double v, int decimals) {
+  if (decimals < 0 || decimals > 9 || !std::isfinite(v) || !(std::abs(v) < 1e9)) {
+    out += fmt::format("{:.{}f}", v, decimals);
+    return;
+  }
+  static constexpr std::array<std::uint64_t, 10> kPow10{
+      1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000, 1000000000};
+  const std::uint64_t scale = kPow10[static_cast<std::size_t>(decimals)];
+  // |v| = m 2^e exactly, m < 2^53; |v| scale = m scale 2^e (< 2^83 before the shift).
+  int exp = 0;
+  const double frac = std::frexp(std::abs(v), &exp);
+  const auto m = static_cast<std::uint64_t>(std::ldexp(frac, 53));
+  const int e = exp - 53;
+  __extension__ typedef unsigned __int128 U;
+  U q = 0;
+  if (m != 0) {
+    const U num = static_cast<U>(m) * scale;
+    if (e >= 0) {
+      q = num << e;  // |v| < 1e9: e <= -23 in practice; kept exact for any e that fits
+    } else if (-e < 127) {
+      const int sh = -e;
+      q = num >> sh;
+      const U rem = num - (q << sh), half = static_cast<U>(1) << (sh - 1);
+      if (rem > half || (rem == half && (q & 1) != 0)) ++q;  // ties to even
+    }
+  }
+  if (std::signbit(v)) out += '-';
+  const auto q64 = static_cast<std::uint64_t>(q);  // |v| scale < 1e18 + 1: 64 bits hold it
+  const std::uint64_t whole = q64 / scale, part = q64 % scale;
+  char buf[32];
+  out.append(buf, std::to_chars(buf, buf + sizeof buf, whole).ptr);
+  if (decimals == 0) return;
+  out += '.';
+  char digits[10];
+  std::uint64_t p = part;
+  for (int k = decimals - 1; k >= 0; --k) {
+    digits[k] = static_cast<char>('0' + p % 10);
+    p /= 10;
+  }
+  out.append(digits, static_cast<std::size_t>(decimals));
 }
 
 std::string memory_text(double bytes) {

@@ -93,13 +93,32 @@ Vec3 ToolPath::point_at_length(double s_mm) const {
 
 namespace trochomill {
 
+// A curve's box in closed form: each coordinate c + A cos u + B sin u + V u is extreme at the
+// ends or where its derivative -A sin u + B cos u + V vanishes, at u = phi + asin(V / rho) and
+// phi + pi - asin(V / rho) (rho = |(A, B)|, phi = atan2(B, A)) plus whole turns; of those
+// within the curve's range only the first and the last of each kind can be extreme (the drift
+// V u tilts the turns' values one way).
 void extend(Box3& b, const Segment& seg) {
-  auto add = [&](const Vec3& p) { b.extend(p); };
-  add(seg.start());
-  add(seg.end());
-  if (seg.kind() == Segment::Kind::curve) {
-    const int n = std::max(4, static_cast<int>(std::abs(seg.u1() - seg.u0()) * 720.0 / M_PI));
-    for (int k = 1; k < n; ++k) add(seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * k / n));
+  b.extend(seg.start());
+  b.extend(seg.end());
+  if (seg.kind() != Segment::Kind::curve) return;
+  const double lo = std::min(seg.u0(), seg.u1()), hi = std::max(seg.u0(), seg.u1());
+  for (int d = 0; d < 3; ++d) {
+    const double A = seg.axis_a()[d], B = seg.axis_b()[d], V = seg.drift()[d], c = seg.center()[d];
+    const double rho = std::hypot(A, B);
+    if (!(rho > 0) || std::abs(V) >= rho) continue;  // monotonic: the ends hold its extremes
+    const double phi = std::atan2(B, A), s = std::asin(V / rho);
+    for (const double alpha : {phi + s, phi + M_PI - s}) {
+      const double k0 = std::ceil((lo - alpha) / (2 * M_PI)),
+                   k1 = std::floor((hi - alpha) / (2 * M_PI));
+      for (const double k : {k0, k1}) {
+        if (k < k0 || k > k1) continue;
+        const double u = alpha + 2 * M_PI * k;
+        Vec3 p = b.lo;  // only coordinate d moves the box
+        p[d] = c + A * std::cos(u) + B * std::sin(u) + V * u;
+        b.extend(p);
+      }
+    }
   }
 }
 
