@@ -836,3 +836,41 @@ TEST(GcodeFanuc, MalformedMacrosNameTheLine) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// Fanuc's G68 rotation and G51 scaling (hand-computed: LinuxCNC has neither): a quarter turn
+// about the origin takes X10 Y0 to (0, 10) and X10 Y5 to (-5, 10); a factor 2 takes X5 Y1 to
+// (10, 2); a mirror of X (I-1.) turns the clockwise half circle from (0, 0) to (10, 0) into a
+// counter-clockwise one to (-10, 0) through (-5, 5); G69 and G50 leave the tool where it is.
+// LinuxCNC's dialect refuses them.
+TEST(GcodeFanuc, RotationAndScalingMoveTheProgram) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const GcodeProgram p = read_gcode(
+      "%\nO1000\nG21 G90 G17\nG0 X0. Y0. Z1.\nG1 Z-1. F600.\nG68 X0. Y0. R90.\nG1 X10. Y0.\n"
+      "G1 X10. Y5.\nG69\nG1 X0. Y0.\nG51 X0. Y0. P2.\nG1 X5. Y1.\nG50\nG1 X0. Y0.\n"
+      "G51 X0. Y0. I-1. J1. K1.\nG2 X10. Y0. I5. J0.\nG50\nG1 X0. Y0.\nM30\n%\n",
+      "turn.nc", ro);
+  const std::vector<Vec3> want{{0, 0, -1},  {0, 10, -1}, {-5, 10, -1}, {0, 0, -1},
+                               {10, 2, -1}, {0, 0, -1},  {-10, 0, -1}, {0, 0, -1}};
+  const auto& s = p.path.segments();
+  ASSERT_EQ(s.size(), want.size());
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    EXPECT_LE((s[i].end() - want[i]).norm(), 1e-12) << i;
+  }
+  EXPECT_LE((s[6].point_at(0.5 * s[6].length_mm()) - Vec3(-5, 5, -1)).norm(), 1e-12);
+  EXPECT_NEAR(s[6].length_mm(), 5 * kPi, 1e-12);
+  GcodeReadOptions lc;
+  try {
+    (void)read_gcode("G0 X0 Y0 Z1\nG68 X0 Y0 R90\nM2\n", "turn.ngc", lc);
+    ADD_FAILURE() << "LinuxCNC's dialect read G68";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("turn.ngc:2:1: unsupported G-code G68"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace trochomill

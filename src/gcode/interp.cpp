@@ -526,8 +526,8 @@ void Interpreter::run_motion(const BlockCodes& codes) {
       motion_ = motion;
     }
   }
-  const bool axis_used_by_group0 =
-      group0 == 100 || group0 == 280 || group0 == 300 || group0 == 520 || group0 == 920;
+  const bool axis_used_by_group0 = group0 == 100 || group0 == 280 || group0 == 300 ||
+                                   group0 == 520 || group0 == 920 || group0 == 510 || group0 == 680;
   // G2/G3 with its centre and no end point: a full circle back to the start (LinuxCNC); an
   // R-form arc needs its end.
   const ArcData ax = plane_axes();

@@ -125,6 +125,12 @@ struct InterpState {
   std::vector<Vec3> nurbs_points_;
   std::vector<double> nurbs_weights_;
   int nurbs_order_ = 3;
+  // Fanuc's G51 scaling (about its centre, per axis; negative: a mirror) and G68 rotation
+  // (about its centre in XY, degrees), applied to program coordinates in that order before
+  // the work offset.
+  bool scale_on_ = false, rotate_on_ = false;
+  Vec3 scale_centre_ = Vec3::Zero(), scale_k_ = Vec3::Ones();
+  double rot_cx_ = 0, rot_cy_ = 0, rot_deg_ = 0;
   // Position.
   Vec3 cur_pos_ = Vec3::Zero();  // program coordinates (mm)
   Vec3 out_pos_ = Vec3::Zero();  // output frame, the path's end
@@ -297,6 +303,13 @@ class Interpreter : private InterpState {
   // A system set by G10 is known: no warning when it is selected later.
   void note_given(int n) { system_warned_[static_cast<std::size_t>(n - 1)] = true; }
   void home_move(int g, std::uint32_t column);
+  // Fanuc's G51/G50 and G68/G69: the program's coordinates scaled and turned (to_transformed,
+  // from_transformed: points; a direction through to_transformed_dir).
+  void program_transform(int g, std::uint32_t column);
+  [[nodiscard]] Vec3 to_transformed(Vec3 p) const;
+  [[nodiscard]] Vec3 from_transformed(Vec3 p) const;
+  [[nodiscard]] Vec3 to_transformed_dir(Vec3 d) const;
+  [[nodiscard]] bool transformed() const { return scale_on_ || rotate_on_; }
   // The axes besides X Y Z: a value of axis k (0 = A .. 5 = W) in machine coordinates, back,
   // in the output frame; a word of the block in mm (U V W) or degrees (A B C).
   [[nodiscard]] double xmachine(int k, double p) const {

@@ -169,6 +169,8 @@ BlockCodes Interpreter::group_codes() const {
       continue;  // path blending: no effect on the path
     }
     if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
+    // Fanuc's scaling (G50/G51) and rotation (G68/G69); LinuxCNC has neither.
+    if ((g == 500 || g == 510 || g == 680 || g == 690) && !fanuc_) unsupported_g(g, column);
     const auto it = std::find_if(kGroupOf.begin(), kGroupOf.end(),
                                  [g = g](const GroupOf& e) { return e.code10 == g; });
     if (it == kGroupOf.end()) unsupported_g(g, column);
@@ -195,8 +197,8 @@ BlockCodes Interpreter::group_codes() const {
 
 // Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).
 void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp_word) const {
-  const bool moved =
-      (block_.has_axis() || full_circle_) && group0 != 100 && group0 != 920 && group0 != 520;
+  const bool moved = (block_.has_axis() || full_circle_) && group0 != 100 && group0 != 920 &&
+                     group0 != 520 && group0 != 510 && group0 != 680;
   const bool cycle = moved && motion_ >= 730;
   const bool arc = moved && (motion_ == 20 || motion_ == 30);
   // Splines: G5 takes I J P Q, G5.1 I J, G5.2 P (a weight) and L (the order), its block with or
@@ -245,18 +247,18 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   if (block_.has('l') && !l_cycle && group0 != 100 && !m98 && !m66 && !g52) {
     refuse('l', "G10, M66 or canned cycle other than G74");
   }
-  if (block_.has('r') && !arc && !cycle && group0 != 100 && !m19) {
+  if (block_.has('r') && !arc && !cycle && group0 != 100 && !m19 && group0 != 680) {
     refuse('r', "G2/G3, canned cycle, G10 or M19");
   }
   const bool g87 = cycle && motion_ == 870 && !fanuc_;
   for (const char c : std::string_view("ijk")) {
     const bool thread = g76 || (g33 && c == 'k') || (moved && motion_ == 331 && c == 'i');
-    if (block_.has(c) && !arc && !g87 && !((g5 || g51) && c != 'k') && !thread) {
+    if (block_.has(c) && !arc && !g87 && !((g5 || g51) && c != 'k') && !thread && group0 != 510) {
       refuse(c, "G2/G3, G5, G5.1, G33, G33.1, G76 or G87");
     }
   }
   if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_ &&
-      !g64 && !m_p && !g5 && !g52) {
+      !g64 && !m_p && !g5 && !g52 && group0 != 510) {
     refuse('p', "G2/G3, G4, G10, G64, canned cycle, M19, M50-M53, M62-M66 or user M-code");
   }
   if (block_.has('h') && tool_length != 430 && !g76) refuse('h', "G43 or G76");

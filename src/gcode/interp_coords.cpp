@@ -52,7 +52,8 @@ void Interpreter::load_system() {
 }
 
 // Machine position of the tool tip for program coordinates p.
-Vec3 Interpreter::to_machine_tip(const Vec3& p) const {
+Vec3 Interpreter::to_machine_tip(const Vec3& program_point) const {
+  const Vec3 p = transformed() ? to_transformed(program_point) : program_point;
   double x = p.x() + g92_.x(), y = p.y() + g92_.y();
   rotate(x, y, rotation_);
   return Vec3(x + origin_.x(), y + origin_.y(), p.z() + g92_.z() + origin_.z());
@@ -62,7 +63,98 @@ Vec3 Interpreter::to_machine_tip(const Vec3& p) const {
 Vec3 Interpreter::from_machine_tip(const Vec3& m) const {
   double x = m.x() - origin_.x(), y = m.y() - origin_.y();
   rotate(x, y, -rotation_);
-  return Vec3(x - g92_.x(), y - g92_.y(), m.z() - origin_.z() - g92_.z());
+  const Vec3 p(x - g92_.x(), y - g92_.y(), m.z() - origin_.z() - g92_.z());
+  return transformed() ? from_transformed(p) : p;
+}
+
+// Fanuc's scaling then rotation of program coordinates.
+Vec3 Interpreter::to_transformed(Vec3 p) const {
+  if (scale_on_) p = scale_centre_ + scale_k_.cwiseProduct(p - scale_centre_);
+  if (rotate_on_) {
+    double x = p.x() - rot_cx_, y = p.y() - rot_cy_;
+    rotate(x, y, rot_deg_);
+    p.x() = x + rot_cx_;
+    p.y() = y + rot_cy_;
+  }
+  return p;
+}
+
+Vec3 Interpreter::from_transformed(Vec3 p) const {
+  if (rotate_on_) {
+    double x = p.x() - rot_cx_, y = p.y() - rot_cy_;
+    rotate(x, y, -rot_deg_);
+    p.x() = x + rot_cx_;
+    p.y() = y + rot_cy_;
+  }
+  if (scale_on_) p = scale_centre_ + (p - scale_centre_).cwiseQuotient(scale_k_);
+  return p;
+}
+
+Vec3 Interpreter::to_transformed_dir(Vec3 d) const {
+  if (scale_on_) d = scale_k_.cwiseProduct(d);
+  if (rotate_on_) {
+    double x = d.x(), y = d.y();
+    rotate(x, y, rot_deg_);
+    d.x() = x;
+    d.y() = y;
+  }
+  return d;
+}
+
+// G51 X Y Z (the centre; the current point's where left out) with P (one factor) or I J K
+// (one per axis; negative mirrors), G50 off; G68 X Y (the centre) R (degrees,
+// counter-clockwise; added to the current angle in G91), G69 off. The tool stays where it
+// is: its program coordinates follow the new transform.
+void Interpreter::program_transform(int g, std::uint32_t column) {
+  comp_.refuse(column, code_name('G', g) + " (scaling or rotation of the program)");
+  const Vec3 machine = to_machine_tip(cur_pos_);
+  const auto centre = [&](char c, int a) {
+    if (!block_.has(c)) return cur_pos_[a];
+    return absolute_ ? len(c) : cur_pos_[a] + len(c);
+  };
+  if (g == 510) {
+    double k[3];
+    if (block_.has('p')) {
+      if (block_.has('i') || block_.has('j') || block_.has('k')) {
+        fail_at(block_.col('p'), "G51 takes one factor P or one per axis I J K, not both");
+      }
+      k[0] = k[1] = k[2] = block_['p'];
+    } else if (block_.has('i') || block_.has('j') || block_.has('k')) {
+      k[0] = block_.has('i') ? block_['i'] : 1.0;
+      k[1] = block_.has('j') ? block_['j'] : 1.0;
+      k[2] = block_.has('k') ? block_['k'] : 1.0;
+    } else {
+      fail_at(column, "G51 needs its factor: P (every axis) or I J K (one per axis)");
+    }
+    for (const double f : k) {
+      if (!(std::abs(f) >= 1e-6 && std::abs(f) <= 1e6)) {
+        fail_at(column, fmt::format("G51 factor {:g}: allowed 1e-6 .. 1e6 in size (negative "
+                                    "mirrors)",
+                                    f));
+      }
+    }
+    scale_centre_ = Vec3(centre('x', 0), centre('y', 1), centre('z', 2));
+    scale_k_ = Vec3(k[0], k[1], k[2]);
+    scale_on_ = true;
+    warn(
+        fmt::format("G51: the program is scaled by {:g} {:g} {:g} about X{:g} Y{:g} Z{:g} (P and "
+                    "I J K read as factors, 1 = full size, as with a decimal point)",
+                    k[0], k[1], k[2], scale_centre_.x() / unit_, scale_centre_.y() / unit_,
+                    scale_centre_.z() / unit_));
+  } else if (g == 500) {
+    scale_on_ = false;
+  } else if (g == 680) {
+    if (plane_ != Plane::xy) fail_at(column, "G68 turns the XY plane (G17) only here");
+    if (!block_.has('r')) fail_at(column, "G68 needs the angle R (degrees)");
+    const double r = block_['r'];
+    rot_cx_ = centre('x', 0);
+    rot_cy_ = centre('y', 1);
+    rot_deg_ = absolute_ || !rotate_on_ ? r : rot_deg_ + r;
+    rotate_on_ = true;
+  } else if (g == 690) {
+    rotate_on_ = false;
+  }
+  cur_pos_ = from_machine_tip(machine);
 }
 
 // The output frame (the job's work system as the program started) of program coordinates.
@@ -74,7 +166,8 @@ Vec3 Interpreter::to_out(const Vec3& p) const {
 }
 
 // A direction (no translation) from program to output frame.
-Vec3 Interpreter::dir_to_out(const Vec3& d) const {
+Vec3 Interpreter::dir_to_out(const Vec3& program_dir) const {
+  const Vec3 d = transformed() ? to_transformed_dir(program_dir) : program_dir;
   double x = d.x(), y = d.y();
   rotate(x, y, rotation_ - out_rotation_);
   return Vec3(x, y, d.z());
@@ -144,6 +237,12 @@ void Interpreter::non_modal(int g, std::uint32_t column) {
       break;
     case 53:
       nurbs_end(column);
+      break;
+    case 500:
+    case 510:
+    case 680:
+    case 690:
+      program_transform(g, column);
       break;
     case 281:
     case 301: {

@@ -353,7 +353,7 @@ void Interpreter::describe(GcodeMove& mv, std::size_t source, std::size_t line) 
   mv.file = sources_[source].name;
   mv.line = line;
   mv.source = source;
-  mv.plain = plain_move_;
+  mv.plain = plain_move_ && !transformed();
   mv.motion = motion_ == 0 ? 0 : motion_ == 10 ? 1 : motion_ == 20 ? 2 : motion_ == 30 ? 3 : -1;
   mv.synchronized = motion_ == 330 || motion_ == 331 || (motion_ == 760 && !fanuc_);
   mv.block_run = prog_.info.blocks_executed;
@@ -513,6 +513,13 @@ void Interpreter::put_arc(const Vec3& from, const ArcData& d, double axial, doub
   mv.centre_mm = c_out;
   mv.axis = dir_to_out(nrm);
   mv.sweep_rad = sweep;
+  if (scale_on_) {
+    // Scaled (G51): the plane's normal stays a unit normal of its sign; a mirror of one of
+    // the plane's axes turns the arc the other way about it.
+    mv.axis = mv.axis.normalized() * (scale_k_[in] < 0 ? -1.0 : 1.0);
+    for (int a = 0; a < 3; ++a) mv.axis[a] += 0.0;  // no negative zeros
+    if (scale_k_[i1] * scale_k_[i2] < 0) mv.sweep_rad = -sweep;
+  }
   mv.plane = plane_code();
   describe(mv, source, line);
   mv.feed_mm_per_min = f;

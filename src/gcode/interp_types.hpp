@@ -94,7 +94,7 @@ enum GroupIndex {
 };
 inline constexpr std::array<const char*, kGroups> kGroupNames{
     "motion",
-    "non-modal (G5.3 G10 G28 G30 G52 G92)",
+    "non-modal (G5.3 G10 G28 G30 G50 G51 G52 G68 G69 G92)",
     "plane",
     "units",
     "distance mode",
@@ -109,7 +109,7 @@ struct GroupOf {
   int code10;
   GroupIndex group;
 };
-inline constexpr std::array<GroupOf, 73> kGroupOf{{
+inline constexpr std::array<GroupOf, 77> kGroupOf{{
     {0, kMotion},        {10, kMotion},      {20, kMotion},      {30, kMotion},
     {382, kMotion},      {383, kMotion},     {384, kMotion},     {385, kMotion},
     {730, kMotion},      {740, kMotion},     {760, kMotion},     {800, kMotion},
@@ -128,7 +128,8 @@ inline constexpr std::array<GroupOf, 73> kGroupOf{{
     {980, kRetract},     {990, kRetract},    {400, kComp},       {410, kComp},
     {411, kComp},        {420, kComp},       {421, kComp},       {50, kMotion},
     {51, kMotion},       {52, kMotion},      {53, kGroup0},      {330, kMotion},
-    {331, kMotion},
+    {331, kMotion},      {500, kGroup0},     {510, kGroup0},     {680, kGroup0},
+    {690, kGroup0},
 }};
 // A block's G codes by modal group (x10, -1: none of the group), their columns, and G53.
 struct BlockCodes {
