@@ -48,6 +48,11 @@ KNOWN = {
 def main():
     troch = sys.argv[1]
     names = sorted(f[:-4] for f in os.listdir(CORPUS) if f.endswith(".ngc"))
+    # Under the sanitizers (TROCHOMILL_CORPUS_STRIDE from tests/CMakeLists.txt) every n-th
+    # program, for memory and undefined behaviour; the Release suite reads them all and
+    # holds the share.
+    stride = int(os.environ.get("TROCHOMILL_CORPUS_STRIDE", "1"))
+    names = names[::stride]
     listed = set(f[:-4] for f in (l.split("\t")[0] for l in open(os.path.join(CORPUS, "SOURCES.tsv")))
                  if f.endswith(".ngc"))
     unlisted = [n for n in names if n not in listed]
@@ -106,7 +111,7 @@ def main():
           "%d read with its moves (%.1f %%), %d differ for a known reason; %d refused by "
           "LinuxCNC" % (len(names), runs, len(NEEDS_END) + len(NEEDS_PERCENT), same,
                         100 * share, runs - same, refused))
-    if share < 0.95:
+    if share < 0.95 and stride == 1:
         failures.append("%.1f %% read as LinuxCNC reads them, below 95 %%" % (100 * share))
     for f in failures:
         print("FAIL " + f)
