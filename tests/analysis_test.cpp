@@ -755,9 +755,8 @@ TEST(Analysis, TheStockBoxIsInTheProgramsFrame) {
   const auto removed = [](const Job& job) {
     const std::string text =
         write_gcode(job, plan_path(job).path, gcode_options(job.machine).write);
-    const ToolPath path =
-        to_slot_frame(read_gcode(text, "job.ngc", gcode_options(job.machine).read).path,
-                      slot_placement(job));
+    const ToolPath path = to_slot_frame(
+        read_gcode(text, "job.ngc", gcode_options(job.machine).read).path, slot_placement(job));
     return analyze_process(job, path).removed_volume_mm3;
   };
   const Job home = job_at("", "[-3, 5, -6]", "[20, 30, 0]");
@@ -771,6 +770,35 @@ TEST(Analysis, TheStockBoxIsInTheProgramsFrame) {
   EXPECT_NEAR(removed(turned), v, 1e-6 * v);
   EXPECT_THROW((void)removed(missed), InputError);  // the path never cuts
   EXPECT_THROW((void)job_at("slot.angle=30", "[0, 0, -6]", "[1, 1, 0]"), InputError);
+}
+
+}  // namespace
+}  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// A program that is not a slot (tests/ngc/corpus/linuxcnc__sam-tolerance-issue.ngc, a 3D
+// finishing pass of XZ arcs from LinuxCNC's repository) under a slot job's tool with a
+// [stock] box around it: its window once passed for a steady cycle that removed more than a
+// full slot can (an error, exit 1); now its whole-program figures stand alone, with the
+// reason, and the cycle's figures are left empty.
+TEST(Analysis, AProgramThatIsNotASlotGetsItsWholeProgramFigures) {
+  const Job job = parse_job(
+      "[tool]\ndiameter = 3.0\nteeth = 2\n[slot]\nwidth = 4.0\nlength = 40.0\ndepth = 1.0\n"
+      "[path]\ntype = \"linear\"\nstep = 0.5\n[cutting]\nfeed_rate = 600.0\n"
+      "spindle_speed = 10000.0\n[stock]\nmin = [75.6, -2.0, -3.8]\nmax = [83.3, 87.6, 0.0]\n",
+      "tool.toml");
+  const GcodeProgram p =
+      read_gcode_file(test::source_dir() / "tests/ngc/corpus/linuxcnc__sam-tolerance-issue.ngc");
+  ASSERT_TRUE(p.path.cycles().empty());
+  const ProcessMetrics m = analyze_process(job, p.path);
+  EXPECT_FALSE(m.periodic);
+  EXPECT_EQ(m.cycle_time_s, 0.0);
+  EXPECT_GT(m.removed_volume_mm3, 0.0);
+  EXPECT_GT(m.h_max_slot_mm, 0.0);
+  EXPECT_NE(m.performance_index_note.find("the program is not a slot"), std::string::npos)
+      << m.performance_index_note;
 }
 
 }  // namespace

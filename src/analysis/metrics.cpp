@@ -507,374 +507,401 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
     return m;
   }
 
-  // Steady-state cycle.
-  const bool trochoidal = job.path.type != PathType::linear;
-  const Window w = find_window(e, cutting, job.path.step_mm, trochoidal);
-  m.periodic = w.periodic;
-  m.cycle_time_s = w.duration_s;
-  m.path_length_per_cycle_mm = w.length_mm;
-  // The cycle's series: for a periodic path, the steady state of an endless slot (a real
-  // slot as long as the tool's reach, like the paper's 20 mm examples, never gets there):
-  // the path from 2.5 cycles (or more, see below) before the window to 1.5 after, with the
-  // stock open ahead, so the engagement is the endless slot's.
-  EngagementSeries steady;
-  std::vector<char> steady_cut;
-  const EngagementSeries* cs = &e;
-  const std::vector<char>* ccut = &cutting;
-  std::size_t cf = w.first, cl = w.last;
-  double t0 = w.t0_s;
-  if (w.periodic) {
-    const double T = w.duration_s;
-    // History: 2.5 cycles rebuild the region a cycle's own orbit covers; when the orbit is
-    // wider than the tool (a > R) it leaves an island at its centre that only the cycles
-    // whose orbit passes over it remove, about (b + R) / s cycles back.
-    const SlotGeometry sg = slot_geometry(job);
-    const double a = sg.orbit_a_mm, b = sg.orbit_b_mm;
-    const double history =
-        2.5 + (a > R && job.path.step_mm > 0 ? std::ceil((b + R) / job.path.step_mm) : 0.0);
-    const double from = std::max(0.0, w.t0_s - history * T);
-    const double to = std::min(path.duration_s(), w.t0_s + 1.55 * T);
-    std::vector<double> times;
-    for (double t = from; t <= to; t += dt_sample) times.push_back(t);
-    EngagementOptions so = opt;
-    so.open_ahead = true;
-    steady = compute_engagement(sample_at_times(path, times), job, so);
-    steady_cut.assign(steady.samples.size(), 0);
-    for (std::size_t i = 0; i < steady_cut.size(); ++i) {
-      steady_cut[i] = steady.swept_rate_mm2_per_s[i] > thr ? 1 : 0;
-    }
-    std::size_t j0 = 0;
-    for (std::size_t i = 1; i < steady_cut.size(); ++i) {
-      if (steady.samples.t_s[i] >= w.t0_s - 0.5 * T && steady_cut[i] && !steady_cut[i - 1]) {
-        j0 = i;
-        break;
-      }
-    }
-    if (j0 == 0) {  // no cooling in the cycle: start where the window does
-      while (j0 + 1 < steady_cut.size() && steady.samples.t_s[j0] < w.t0_s - 0.5 * T) ++j0;
-    }
-    std::size_t j1 = j0;
-    while (j1 < steady_cut.size() && steady.samples.t_s[j1] < steady.samples.t_s[j0] + T - 1e-9) {
-      ++j1;
-    }
-    cs = &steady;
-    ccut = &steady_cut;
-    cf = j0;
-    cl = j1;
-    t0 = steady.samples.t_s[j0];
-  }
-  m.cycle_start_s = t0;
-  double swept = 0, ap_sum = 0;
-  int ap_n = 0;
-  std::size_t i_h = cf;
-  for (std::size_t i = cf; i < cl; ++i) {
-    const EngagementSeries& c = *cs;
-    const double ap = std::clamp(-c.samples.z_mm[i], 0.0, depth);
-    swept += c.removal_rate_mm3_per_s[i] * dt_sample;
-    if ((*ccut)[i]) {
-      m.cutting_time_s += dt_sample;
-      ap_sum += ap;
-      ++ap_n;
-    }
-    if (c.h_max_mm[i] > m.h_max_mm) {
-      m.h_max_mm = c.h_max_mm[i];
-      i_h = i;
-    }
-    m.engagement_angle_max_deg =
-        std::max(m.engagement_angle_max_deg, rad_to_deg(c.engagement_angle_rad[i]));
-  }
-  m.cutting_time_s = std::min(m.cutting_time_s, m.cycle_time_s);
-  m.cooling_time_s = m.cycle_time_s - m.cutting_time_s;
-  m.axial_depth_mm = ap_n > 0 ? ap_sum / ap_n : depth;
-  m.t_h_max_s = cs->samples.t_s[i_h] - t0;
-  m.mrr_swept_mm3_per_min = m.cycle_time_s > 0 ? swept / m.cycle_time_s * 60.0 : 0.0;
-  m.mrr_mm3_per_min = w.periodic ? W * job.path.step_mm * m.axial_depth_mm / m.cycle_time_s * 60.0
-                                 : m.mrr_swept_mm3_per_min;
-  // A bound no cycle can pass: the tool sweeps at most its diameter times the depth at the
-  // fastest feed of the cycle (a full slot). A rate above it is a wrong cycle, not a result
-  // (1e-6 for rounding of the window's ends).
-  {
-    double v_max = 0;
-    const PathSamples& q = cs->samples;
-    for (std::size_t i = std::max<std::size_t>(cf, 1); i < std::min(cl + 1, q.size()); ++i) {
-      if (q.t_s[i] > q.t_s[i - 1]) {
-        v_max = std::max(v_max, (q.s_mm[i] - q.s_mm[i - 1]) / (q.t_s[i] - q.t_s[i - 1]));
-      }
-    }
-    if (v_max == 0) v_max = feed;  // a window shorter than a sample: the programmed feed
-    const double full_slot = 2 * R * depth * v_max * 60.0;
-    if (m.mrr_mm3_per_min > full_slot * (1 + 1e-6) ||
-        m.mrr_swept_mm3_per_min > full_slot * (1 + 1e-6)) {
-      throw Error(fmt::format(
-          "analyze: the steady cycle found ({:.6g} s, {:.6g} mm of path from t = {:.6g} s) removes "
-          "{:.6g} mm^3/min, more than a full slot at the cycle's fastest feed (D a_p v_f = "
-          "{:.6g} mm^3/min): no result is given for a cycle that cannot be; please report the job",
-          m.cycle_time_s, m.path_length_per_cycle_mm, m.cycle_start_s, m.mrr_mm3_per_min,
-          full_slot));
-    }
-  }
-
-  const EngagementSeries& ce = *cs;
-  const PathSamples& q = ce.samples;
-  const std::vector<char>& cc = *ccut;
-  const std::size_t qn = q.size();
-
-  // Walls over one period of y around the cycle's contact with each wall.
-  const double period =
-      w.periodic ? job.path.step_mm : std::max(1.0, 2 * job.cutting.feed_per_tooth_mm);
-  std::size_t il = cf, ir = cf;
-  for (std::size_t i = cf; i < std::max(cl, cf + 1) && i < qn; ++i) {
-    if (q.x_mm[i] < q.x_mm[il]) il = i;
-    if (q.x_mm[i] > q.x_mm[ir]) ir = i;
-  }
-  // Dense centre samples (every 0.01 mm, or s / 100) from a cycle and a half before the
-  // window to two and a half after: every circle that reaches either wall's period window.
-  const double ds = std::min(0.01, period / 100);
-  // Dense centre samples (every 0.01 mm, or s / 100) from a cycle and a half before the
-  // window to two and a half after, where the centre is within `wall_reach` of its extreme x
-  // (found on the tooth-pass samples): only circles there can reach a wall's profile
-  // (checked below: the walls must lie well inside it, else every sample is taken).
-  const double wall_reach = 0.5 + 2 * m.feed_per_tooth_mm;
-  const double dt_dense = ds / feed;
-  auto dense_samples = [&](bool all) {
-    const double span = std::max(w.duration_s, 1.0 / feed);
-    const double from = std::max(0.0, t0 - 1.5 * span);
-    const double to = std::min(path.duration_s(), t0 + 2.5 * span);
-    double xlo = std::numeric_limits<double>::infinity(), xhi = -xlo;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (s.z_mm[i] >= 0) continue;
-      xlo = std::min(xlo, s.x_mm[i]);
-      xhi = std::max(xhi, s.x_mm[i]);
-    }
-    std::vector<double> times;
-    double last = -1;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (s.t_s[i] < from - dt_sample || s.t_s[i] > to + dt_sample) continue;
-      if (!all && s.x_mm[i] > xlo + wall_reach && s.x_mm[i] < xhi - wall_reach) continue;
-      const double a = std::max({from, s.t_s[i] - dt_sample, last + dt_dense});
-      const double b = std::min(to, s.t_s[i] + dt_sample);
-      for (double t = a; t <= b; t += dt_dense) times.push_back(last = t);
-    }
-    return sample_at_times(path, times);
-  };
-  PathSamples dense = dense_samples(false);
-  constexpr int kWallPoints = 2001;
-  double yl = q.y_mm[il], yr = q.y_mm[ir];
-  // One period of a wall around y_c. A short slot's end can leave part of the steady
-  // contact's period uncut: then the period before it (or after, or two before) is used,
-  // the profile being periodic.
-  const std::array<double, 5> shifts = {0.0, -1.0, 1.0, -2.0, 2.0};
-  auto path_side = [&](bool left, double yc) {
-    const Walls both =
-        walls_from_circles(dense, R, -1e-9, yc - period / 2, yc + period / 2, kWallPoints);
-    return left ? both.left : both.right;
-  };
-  auto path_wall = [&](bool left, double& yc) {
-    for (std::size_t k = 0;; ++k) {
-      try {
-        WallProfile prof = path_side(left, yc + shifts[k] * period);
-        yc += shifts[k] * period;
-        return prof;
-      } catch (const InputError&) {
-        if (k + 1 == shifts.size()) throw;
-      }
-    }
-  };
+  // Steady-state cycle, then the walls, floor and chips in it: a slot's figures. A program
+  // read from G-code (a path without the planner's cycle marks) that is not a slot (a pocket,
+  // a contour, a 3D surface) may repeat nothing the step explains or have no walls: then its
+  // whole-program figures stand alone, with the reason (for a planned slot such a failure is
+  // an error, as it was).
+  const bool program = path.cycles().empty();
+  ProcessMetrics whole;
+  if (program) whole = m;
   try {
-    m.walls_path.left = path_wall(true, yl);
-    m.walls_path.right = path_wall(false, yr);
-  } catch (const InputError&) {
-    // A program without a steady cycle whose window has no slot walls (a spiral, a pocket:
-    // nothing cuts along the walls' y there): the walls, their texture and the floor's
-    // imprints are not modelled (null); the whole-program figures stand. With a steady
-    // cycle the walls exist, and a failure is a fault to report.
-    if (w.periodic) throw;
-    return m;
-  }
-  if (std::max(m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm) > 0.5 * wall_reach) {
-    dense = dense_samples(true);
-    m.walls_path.left = path_wall(true, yl);
-    m.walls_path.right = path_wall(false, yr);
-  }
-
-  // Tooth level: tooth tips every 0.1 degree of spindle rotation while the centre is near a
-  // wall (within the path-level waviness + runout + 2 f_z of its extreme) in the windows.
-  const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
-                       (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
-  const double dt_tip = deg_to_rad(0.1) / std::abs(omega);
-  {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (std::size_t i = 0; i < dense.size(); ++i) {
-      if (dense.z_mm[i] >= 0) continue;
-      lo = std::min(lo, dense.x_mm[i]);
-      hi = std::max(hi, dense.x_mm[i]);
-    }
-    const double e_r = job.tool.runout_radial_mm;
-    // The tooth-level wall lies within the path-level waviness plus runout and the tooth
-    // cusps (about f_z^2 / 8R) of the extreme; centres farther than `band` from their extreme
-    // cannot put a tip on it. Checked after the fact: the band doubles until the profile
-    // fits inside it.
-    const double fz = m.feed_per_tooth_mm;
-    const double base = 2 * e_r + fz * fz / R + 0.002;
-    // Centres between dense samples by cubic Hermite interpolation (positions and unit
-    // tangents times the chord length): error O(ds^4 kappa^3), far below a micrometre for
-    // ds = 0.01 mm, and no length inversion per tip sample.
-    auto tips_for = [&](bool left, double yc, double band) {
+    const bool trochoidal = job.path.type != PathType::linear;
+    const Window w = find_window(e, cutting, job.path.step_mm, trochoidal);
+    m.periodic = w.periodic;
+    m.cycle_time_s = w.duration_s;
+    m.path_length_per_cycle_mm = w.length_mm;
+    // The cycle's series: for a periodic path, the steady state of an endless slot (a real
+    // slot as long as the tool's reach, like the paper's 20 mm examples, never gets there):
+    // the path from 2.5 cycles (or more, see below) before the window to 1.5 after, with the
+    // stock open ahead, so the engagement is the endless slot's.
+    EngagementSeries steady;
+    std::vector<char> steady_cut;
+    const EngagementSeries* cs = &e;
+    const std::vector<char>* ccut = &cutting;
+    std::size_t cf = w.first, cl = w.last;
+    double t0 = w.t0_s;
+    if (w.periodic) {
+      const double T = w.duration_s;
+      // History: 2.5 cycles rebuild the region a cycle's own orbit covers; when the orbit is
+      // wider than the tool (a > R) it leaves an island at its centre that only the cycles
+      // whose orbit passes over it remove, about (b + R) / s cycles back.
+      const SlotGeometry sg = slot_geometry(job);
+      const double a = sg.orbit_a_mm, b = sg.orbit_b_mm;
+      const double history =
+          2.5 + (a > R && job.path.step_mm > 0 ? std::ceil((b + R) / job.path.step_mm) : 0.0);
+      const double from = std::max(0.0, w.t0_s - history * T);
+      const double to = std::min(path.duration_s(), w.t0_s + 1.55 * T);
       std::vector<double> times;
-      PathSamples ts;
-      auto add = [&](std::size_t i, double t) {
-        const double a = dense.t_s[i], b = dense.t_s[i + 1];
-        const double u = b > a ? std::clamp((t - a) / (b - a), 0.0, 1.0) : 0.0;
-        const double h = dense.s_mm[i + 1] - dense.s_mm[i];
-        const double h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;
-        const double h01 = -2 * u * u * u + 3 * u * u, h11 = u * u * u - u * u;
-        ts.t_s.push_back(t);
-        ts.x_mm.push_back(h00 * dense.x_mm[i] + h10 * h * dense.tx[i] + h01 * dense.x_mm[i + 1] +
-                          h11 * h * dense.tx[i + 1]);
-        ts.y_mm.push_back(h00 * dense.y_mm[i] + h10 * h * dense.ty[i] + h01 * dense.y_mm[i + 1] +
-                          h11 * h * dense.ty[i + 1]);
-        ts.z_mm.push_back(h00 * dense.z_mm[i] + h10 * h * dense.tz[i] + h01 * dense.z_mm[i + 1] +
-                          h11 * h * dense.tz[i + 1]);
-        times.push_back(t);
-      };
-      std::vector<std::size_t> breaks;  // sentinel samples between runs
-      double last_end = -1, grid_next = -std::numeric_limits<double>::infinity();
-      // Only times when some tooth points within delta of the wall's normal can put a tip
-      // within the band of the extreme: R (1 - cos delta) <= band + 2 e, with margin.
-      const double wall_dir = left ? kPi : 0.0;
-      const double delta =
-          1.2 * std::acos(std::max(-1.0, 1.0 - (band + 2 * e_r) / R)) + 2 * deg_to_rad(0.1);
-      auto tooth_near = [&](double t) {
-        for (const double a_deg : job.tool.tooth_angles_deg) {
-          if (std::abs(std::remainder(omega * t + deg_to_rad(a_deg) - wall_dir, kTwoPi)) <= delta) {
-            return true;
-          }
-        }
-        return false;
-      };
-      for (std::size_t i = 0; i + 1 < dense.size(); ++i) {
-        if (dense.z_mm[i] >= 0) continue;
-        const bool near = left ? dense.x_mm[i] <= lo + band : dense.x_mm[i] >= hi - band;
-        // A tip at the wall is within its extreme's reach of the centre's y: |sin| of the
-        // angle from the extreme below sqrt(2 band / R), so |dy| <= R sqrt(2 band / R).
-        const double reach = R * std::sqrt(2 * band / R) + 0.01;
-        if (!near || std::abs(dense.y_mm[i] - yc) > period / 2 + reach) continue;
-        const double a = dense.t_s[i], b = dense.t_s[i + 1];
-        if (b - a > 1.5 * dt_dense) continue;  // a gap between near-wall runs
-        const double from = std::max(a, grid_next);
-        const auto steps = static_cast<long>(std::floor((b - from) / dt_tip));
-        for (long k = 0; k <= steps; ++k) {
-          const double t = from + static_cast<double>(k) * dt_tip;
-          grid_next = t + dt_tip;
-          if (!tooth_near(t)) continue;
-          if (!times.empty() && t > last_end + 1.5 * dt_tip) {
-            // A gap: a sentinel sample (lifted below) so no chord joins the two runs.
-            breaks.push_back(times.size());
-            add(i, t);
-          }
-          add(i, t);
-          last_end = t;
-        }
+      for (double t = from; t <= to; t += dt_sample) times.push_back(t);
+      EngagementOptions so = opt;
+      so.open_ahead = true;
+      steady = compute_engagement(sample_at_times(path, times), job, so);
+      steady_cut.assign(steady.samples.size(), 0);
+      for (std::size_t i = 0; i < steady_cut.size(); ++i) {
+        steady_cut[i] = steady.swept_rate_mm2_per_s[i] > thr ? 1 : 0;
       }
-      if (times.size() < 2) {  // the band is too narrow for any tip: it widens (below)
-        throw InputError("analyze: no tooth-tip samples near the wall");
-      }
-      ToothTracks tr = tooth_tracks(ts, job.tool, job.cutting);
-      for (const std::size_t b : breaks) {
-        for (auto& z : tr.z_mm) z[b] = std::numeric_limits<double>::infinity();
-      }
-      return walls_from_tips(tr, -1e-9, yc - period / 2, yc + period / 2, kWallPoints, band);
-    };
-    for (const bool left : {true, false}) {
-      const double wp = left ? m.walls_path.left.waviness_mm : m.walls_path.right.waviness_mm;
-      double& yc = left ? yl : yr;
-      for (double band = 1.5 * wp + base;; band *= 2) {
-        Walls tw;
-        bool cut = false;
-        for (std::size_t k = 0; k < shifts.size() && !cut; ++k) {
-          // As for the path level: a period the tips cut. Where no tip within the band
-          // reaches some y of the period, the band is too narrow for this wall (a step or
-          // feed that leaves deeper scallops than the path-level waviness): it widens.
-          try {
-            tw = tips_for(left, yc + shifts[k] * period, band);
-            if (shifts[k] != 0) {
-              yc += shifts[k] * period;
-              (left ? m.walls_path.left : m.walls_path.right) = path_side(left, yc);
-            }
-            cut = true;
-          } catch (const InputError&) {
-            if (k + 1 == shifts.size() && band > R) throw;
-          }
-        }
-        if (!cut) continue;
-        const WallProfile& prof = left ? tw.left : tw.right;
-        // Complete when the profile lies within the band of the extreme tip reach: a centre
-        // beyond the band puts its tips (radius <= R + e) beyond the band too.
-        const double extreme = left ? lo - R - e_r : hi + R + e_r;
-        const double worst = left ? *std::max_element(prof.x_mm.begin(), prof.x_mm.end()) - extreme
-                                  : extreme - *std::min_element(prof.x_mm.begin(), prof.x_mm.end());
-        if (worst < band || band > R) {
-          (left ? m.walls_tooth.left : m.walls_tooth.right) = prof;
+      std::size_t j0 = 0;
+      for (std::size_t i = 1; i < steady_cut.size(); ++i) {
+        if (steady.samples.t_s[i] >= w.t0_s - 0.5 * T && steady_cut[i] && !steady_cut[i - 1]) {
+          j0 = i;
           break;
         }
       }
-    }
-    // The walls' texture along y: one period of the tooth-level profile.
-    for (const bool left : {true, false}) {
-      const WallProfile& wall = left ? m.walls_tooth.left : m.walls_tooth.right;
-      if (wall.x_mm.size() >= 3) {
-        (left ? m.texture_left : m.texture_right) = wall_texture(wall, left);
+      if (j0 == 0) {  // no cooling in the cycle: start where the window does
+        while (j0 + 1 < steady_cut.size() && steady.samples.t_s[j0] < w.t0_s - 0.5 * T) ++j0;
       }
+      std::size_t j1 = j0;
+      while (j1 < steady_cut.size() && steady.samples.t_s[j1] < steady.samples.t_s[j0] + T - 1e-9) {
+        ++j1;
+      }
+      cs = &steady;
+      ccut = &steady_cut;
+      cf = j0;
+      cl = j1;
+      t0 = steady.samples.t_s[j0];
     }
-  }
-
-  // Bottom imprints: one circle per tooth pass at the floor in the window.
-  {
-    std::vector<double> xs;
-    const std::size_t step = static_cast<std::size_t>(opt.steps_per_tooth);
-    for (std::size_t i = cf; i < cl; i += step) {
-      if (q.z_mm[i] <= -depth + 1e-6) xs.push_back(q.x_mm[i]);
-    }
-    const double advance =
-        w.periodic ? job.path.step_mm : std::abs(q.y_mm[std::min(cl, qn - 1)] - q.y_mm[cf]);
-    if (!xs.empty() && advance > 0) {
-      m.imprint = bottom_imprint_density(xs, R, 0.5 * W, advance, job.analysis.imprint_points);
-    }
-  }
-
-  predict_floor(job, s, omega, m);
-
-  // Exact chip between adjacent teeth's tip trajectories, at the angle of each sample's
-  // h_max where the previous tooth's circle bounds it (elsewhere the older surface does and
-  // the trajectories do not enter).
-  {
-    DenseCentre dc;
-    dc.s = &q;
-    dc.t_first = q.t_s.front();
-    dc.dt = dt_sample;
-    m.h_max_per_tooth_mm.assign(static_cast<std::size_t>(job.tool.teeth), 0.0);
+    m.cycle_start_s = t0;
+    double swept = 0, ap_sum = 0;
+    int ap_n = 0;
+    std::size_t i_h = cf;
     for (std::size_t i = cf; i < cl; ++i) {
-      if (!cc[i] || ce.h_max_mm[i] <= 0) continue;
-      const double phi = ce.h_max_angle_rad[i], t = q.t_s[i];
-      const ToothChip plain = tooth_chip(dc, job.tool, omega, 0.0, t, phi, 0);
-      if (std::abs(plain.translation_mm - ce.h_max_mm[i]) > 1e-7) {
-        // The older surface bounds the chip: the same for every tooth.
-        for (auto& h : m.h_max_per_tooth_mm) h = std::max(h, ce.h_max_mm[i]);
-        continue;
+      const EngagementSeries& c = *cs;
+      const double ap = std::clamp(-c.samples.z_mm[i], 0.0, depth);
+      swept += c.removal_rate_mm3_per_s[i] * dt_sample;
+      if ((*ccut)[i]) {
+        m.cutting_time_s += dt_sample;
+        ap_sum += ap;
+        ++ap_n;
       }
-      m.chip_translation_error_mm = std::max(m.chip_translation_error_mm,
-                                             std::abs(plain.trajectory_mm - plain.translation_mm));
-      for (int k = 0; k < job.tool.teeth; ++k) {
-        const ToothChip c = tooth_chip(dc, job.tool, omega, job.tool.runout_radial_mm, t, phi, k);
-        auto& h = m.h_max_per_tooth_mm[static_cast<std::size_t>(k)];
-        h = std::max(h, c.trajectory_mm);
+      if (c.h_max_mm[i] > m.h_max_mm) {
+        m.h_max_mm = c.h_max_mm[i];
+        i_h = i;
+      }
+      m.engagement_angle_max_deg =
+          std::max(m.engagement_angle_max_deg, rad_to_deg(c.engagement_angle_rad[i]));
+    }
+    m.cutting_time_s = std::min(m.cutting_time_s, m.cycle_time_s);
+    m.cooling_time_s = m.cycle_time_s - m.cutting_time_s;
+    m.axial_depth_mm = ap_n > 0 ? ap_sum / ap_n : depth;
+    m.t_h_max_s = cs->samples.t_s[i_h] - t0;
+    m.mrr_swept_mm3_per_min = m.cycle_time_s > 0 ? swept / m.cycle_time_s * 60.0 : 0.0;
+    m.mrr_mm3_per_min = w.periodic ? W * job.path.step_mm * m.axial_depth_mm / m.cycle_time_s * 60.0
+                                   : m.mrr_swept_mm3_per_min;
+    // A bound no cycle can pass: the tool sweeps at most its diameter times the depth at the
+    // fastest feed of the cycle (a full slot). A rate above it is a wrong cycle, not a result
+    // (1e-6 for rounding of the window's ends).
+    {
+      double v_max = 0;
+      const PathSamples& q = cs->samples;
+      for (std::size_t i = std::max<std::size_t>(cf, 1); i < std::min(cl + 1, q.size()); ++i) {
+        if (q.t_s[i] > q.t_s[i - 1]) {
+          v_max = std::max(v_max, (q.s_mm[i] - q.s_mm[i - 1]) / (q.t_s[i] - q.t_s[i - 1]));
+        }
+      }
+      if (v_max == 0) v_max = feed;  // a window shorter than a sample: the programmed feed
+      const double full_slot = 2 * R * depth * v_max * 60.0;
+      if (m.mrr_mm3_per_min > full_slot * (1 + 1e-6) ||
+          m.mrr_swept_mm3_per_min > full_slot * (1 + 1e-6)) {
+        throw Error(fmt::format(
+            "analyze: the steady cycle found ({:.6g} s, {:.6g} mm of path from t = {:.6g} s) "
+            "removes "
+            "{:.6g} mm^3/min, more than a full slot at the cycle's fastest feed (D a_p v_f = "
+            "{:.6g} mm^3/min): no result is given for a cycle that cannot be; please report the "
+            "job",
+            m.cycle_time_s, m.path_length_per_cycle_mm, m.cycle_start_s, m.mrr_mm3_per_min,
+            full_slot));
       }
     }
-    m.h_max_tooth_mm = *std::max_element(m.h_max_per_tooth_mm.begin(), m.h_max_per_tooth_mm.end());
-  }
 
-  set_performance_index(job, m);
-  return m;
+    const EngagementSeries& ce = *cs;
+    const PathSamples& q = ce.samples;
+    const std::vector<char>& cc = *ccut;
+    const std::size_t qn = q.size();
+
+    // Walls over one period of y around the cycle's contact with each wall.
+    const double period =
+        w.periodic ? job.path.step_mm : std::max(1.0, 2 * job.cutting.feed_per_tooth_mm);
+    std::size_t il = cf, ir = cf;
+    for (std::size_t i = cf; i < std::max(cl, cf + 1) && i < qn; ++i) {
+      if (q.x_mm[i] < q.x_mm[il]) il = i;
+      if (q.x_mm[i] > q.x_mm[ir]) ir = i;
+    }
+    // Dense centre samples (every 0.01 mm, or s / 100) from a cycle and a half before the
+    // window to two and a half after: every circle that reaches either wall's period window.
+    const double ds = std::min(0.01, period / 100);
+    // Dense centre samples (every 0.01 mm, or s / 100) from a cycle and a half before the
+    // window to two and a half after, where the centre is within `wall_reach` of its extreme x
+    // (found on the tooth-pass samples): only circles there can reach a wall's profile
+    // (checked below: the walls must lie well inside it, else every sample is taken).
+    const double wall_reach = 0.5 + 2 * m.feed_per_tooth_mm;
+    const double dt_dense = ds / feed;
+    auto dense_samples = [&](bool all) {
+      const double span = std::max(w.duration_s, 1.0 / feed);
+      const double from = std::max(0.0, t0 - 1.5 * span);
+      const double to = std::min(path.duration_s(), t0 + 2.5 * span);
+      double xlo = std::numeric_limits<double>::infinity(), xhi = -xlo;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (s.z_mm[i] >= 0) continue;
+        xlo = std::min(xlo, s.x_mm[i]);
+        xhi = std::max(xhi, s.x_mm[i]);
+      }
+      std::vector<double> times;
+      double last = -1;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (s.t_s[i] < from - dt_sample || s.t_s[i] > to + dt_sample) continue;
+        if (!all && s.x_mm[i] > xlo + wall_reach && s.x_mm[i] < xhi - wall_reach) continue;
+        const double a = std::max({from, s.t_s[i] - dt_sample, last + dt_dense});
+        const double b = std::min(to, s.t_s[i] + dt_sample);
+        for (double t = a; t <= b; t += dt_dense) times.push_back(last = t);
+      }
+      return sample_at_times(path, times);
+    };
+    PathSamples dense = dense_samples(false);
+    constexpr int kWallPoints = 2001;
+    double yl = q.y_mm[il], yr = q.y_mm[ir];
+    // One period of a wall around y_c. A short slot's end can leave part of the steady
+    // contact's period uncut: then the period before it (or after, or two before) is used,
+    // the profile being periodic.
+    const std::array<double, 5> shifts = {0.0, -1.0, 1.0, -2.0, 2.0};
+    auto path_side = [&](bool left, double yc) {
+      const Walls both =
+          walls_from_circles(dense, R, -1e-9, yc - period / 2, yc + period / 2, kWallPoints);
+      return left ? both.left : both.right;
+    };
+    auto path_wall = [&](bool left, double& yc) {
+      for (std::size_t k = 0;; ++k) {
+        try {
+          WallProfile prof = path_side(left, yc + shifts[k] * period);
+          yc += shifts[k] * period;
+          return prof;
+        } catch (const InputError&) {
+          if (k + 1 == shifts.size()) throw;
+        }
+      }
+    };
+    try {
+      m.walls_path.left = path_wall(true, yl);
+      m.walls_path.right = path_wall(false, yr);
+    } catch (const InputError&) {
+      // A program without a steady cycle whose window has no slot walls (a spiral, a pocket:
+      // nothing cuts along the walls' y there): the walls, their texture and the floor's
+      // imprints are not modelled (null); the whole-program figures stand. With a steady
+      // cycle the walls exist, and a failure is a fault to report.
+      if (w.periodic) throw;
+      return m;
+    }
+    if (std::max(m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm) >
+        0.5 * wall_reach) {
+      dense = dense_samples(true);
+      m.walls_path.left = path_wall(true, yl);
+      m.walls_path.right = path_wall(false, yr);
+    }
+
+    // Tooth level: tooth tips every 0.1 degree of spindle rotation while the centre is near a
+    // wall (within the path-level waviness + runout + 2 f_z of its extreme) in the windows.
+    const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
+                         (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
+    const double dt_tip = deg_to_rad(0.1) / std::abs(omega);
+    {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (std::size_t i = 0; i < dense.size(); ++i) {
+        if (dense.z_mm[i] >= 0) continue;
+        lo = std::min(lo, dense.x_mm[i]);
+        hi = std::max(hi, dense.x_mm[i]);
+      }
+      const double e_r = job.tool.runout_radial_mm;
+      // The tooth-level wall lies within the path-level waviness plus runout and the tooth
+      // cusps (about f_z^2 / 8R) of the extreme; centres farther than `band` from their extreme
+      // cannot put a tip on it. Checked after the fact: the band doubles until the profile
+      // fits inside it.
+      const double fz = m.feed_per_tooth_mm;
+      const double base = 2 * e_r + fz * fz / R + 0.002;
+      // Centres between dense samples by cubic Hermite interpolation (positions and unit
+      // tangents times the chord length): error O(ds^4 kappa^3), far below a micrometre for
+      // ds = 0.01 mm, and no length inversion per tip sample.
+      auto tips_for = [&](bool left, double yc, double band) {
+        std::vector<double> times;
+        PathSamples ts;
+        auto add = [&](std::size_t i, double t) {
+          const double a = dense.t_s[i], b = dense.t_s[i + 1];
+          const double u = b > a ? std::clamp((t - a) / (b - a), 0.0, 1.0) : 0.0;
+          const double h = dense.s_mm[i + 1] - dense.s_mm[i];
+          const double h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;
+          const double h01 = -2 * u * u * u + 3 * u * u, h11 = u * u * u - u * u;
+          ts.t_s.push_back(t);
+          ts.x_mm.push_back(h00 * dense.x_mm[i] + h10 * h * dense.tx[i] + h01 * dense.x_mm[i + 1] +
+                            h11 * h * dense.tx[i + 1]);
+          ts.y_mm.push_back(h00 * dense.y_mm[i] + h10 * h * dense.ty[i] + h01 * dense.y_mm[i + 1] +
+                            h11 * h * dense.ty[i + 1]);
+          ts.z_mm.push_back(h00 * dense.z_mm[i] + h10 * h * dense.tz[i] + h01 * dense.z_mm[i + 1] +
+                            h11 * h * dense.tz[i + 1]);
+          times.push_back(t);
+        };
+        std::vector<std::size_t> breaks;  // sentinel samples between runs
+        double last_end = -1, grid_next = -std::numeric_limits<double>::infinity();
+        // Only times when some tooth points within delta of the wall's normal can put a tip
+        // within the band of the extreme: R (1 - cos delta) <= band + 2 e, with margin.
+        const double wall_dir = left ? kPi : 0.0;
+        const double delta =
+            1.2 * std::acos(std::max(-1.0, 1.0 - (band + 2 * e_r) / R)) + 2 * deg_to_rad(0.1);
+        auto tooth_near = [&](double t) {
+          for (const double a_deg : job.tool.tooth_angles_deg) {
+            if (std::abs(std::remainder(omega * t + deg_to_rad(a_deg) - wall_dir, kTwoPi)) <=
+                delta) {
+              return true;
+            }
+          }
+          return false;
+        };
+        for (std::size_t i = 0; i + 1 < dense.size(); ++i) {
+          if (dense.z_mm[i] >= 0) continue;
+          const bool near = left ? dense.x_mm[i] <= lo + band : dense.x_mm[i] >= hi - band;
+          // A tip at the wall is within its extreme's reach of the centre's y: |sin| of the
+          // angle from the extreme below sqrt(2 band / R), so |dy| <= R sqrt(2 band / R).
+          const double reach = R * std::sqrt(2 * band / R) + 0.01;
+          if (!near || std::abs(dense.y_mm[i] - yc) > period / 2 + reach) continue;
+          const double a = dense.t_s[i], b = dense.t_s[i + 1];
+          if (b - a > 1.5 * dt_dense) continue;  // a gap between near-wall runs
+          const double from = std::max(a, grid_next);
+          const auto steps = static_cast<long>(std::floor((b - from) / dt_tip));
+          for (long k = 0; k <= steps; ++k) {
+            const double t = from + static_cast<double>(k) * dt_tip;
+            grid_next = t + dt_tip;
+            if (!tooth_near(t)) continue;
+            if (!times.empty() && t > last_end + 1.5 * dt_tip) {
+              // A gap: a sentinel sample (lifted below) so no chord joins the two runs.
+              breaks.push_back(times.size());
+              add(i, t);
+            }
+            add(i, t);
+            last_end = t;
+          }
+        }
+        if (times.size() < 2) {  // the band is too narrow for any tip: it widens (below)
+          throw InputError("analyze: no tooth-tip samples near the wall");
+        }
+        ToothTracks tr = tooth_tracks(ts, job.tool, job.cutting);
+        for (const std::size_t b : breaks) {
+          for (auto& z : tr.z_mm) z[b] = std::numeric_limits<double>::infinity();
+        }
+        return walls_from_tips(tr, -1e-9, yc - period / 2, yc + period / 2, kWallPoints, band);
+      };
+      for (const bool left : {true, false}) {
+        const double wp = left ? m.walls_path.left.waviness_mm : m.walls_path.right.waviness_mm;
+        double& yc = left ? yl : yr;
+        for (double band = 1.5 * wp + base;; band *= 2) {
+          Walls tw;
+          bool cut = false;
+          for (std::size_t k = 0; k < shifts.size() && !cut; ++k) {
+            // As for the path level: a period the tips cut. Where no tip within the band
+            // reaches some y of the period, the band is too narrow for this wall (a step or
+            // feed that leaves deeper scallops than the path-level waviness): it widens.
+            try {
+              tw = tips_for(left, yc + shifts[k] * period, band);
+              if (shifts[k] != 0) {
+                yc += shifts[k] * period;
+                (left ? m.walls_path.left : m.walls_path.right) = path_side(left, yc);
+              }
+              cut = true;
+            } catch (const InputError&) {
+              if (k + 1 == shifts.size() && band > R) throw;
+            }
+          }
+          if (!cut) continue;
+          const WallProfile& prof = left ? tw.left : tw.right;
+          // Complete when the profile lies within the band of the extreme tip reach: a centre
+          // beyond the band puts its tips (radius <= R + e) beyond the band too.
+          const double extreme = left ? lo - R - e_r : hi + R + e_r;
+          const double worst =
+              left ? *std::max_element(prof.x_mm.begin(), prof.x_mm.end()) - extreme
+                   : extreme - *std::min_element(prof.x_mm.begin(), prof.x_mm.end());
+          if (worst < band || band > R) {
+            (left ? m.walls_tooth.left : m.walls_tooth.right) = prof;
+            break;
+          }
+        }
+      }
+      // The walls' texture along y: one period of the tooth-level profile.
+      for (const bool left : {true, false}) {
+        const WallProfile& wall = left ? m.walls_tooth.left : m.walls_tooth.right;
+        if (wall.x_mm.size() >= 3) {
+          (left ? m.texture_left : m.texture_right) = wall_texture(wall, left);
+        }
+      }
+    }
+
+    // Bottom imprints: one circle per tooth pass at the floor in the window.
+    {
+      std::vector<double> xs;
+      const std::size_t step = static_cast<std::size_t>(opt.steps_per_tooth);
+      for (std::size_t i = cf; i < cl; i += step) {
+        if (q.z_mm[i] <= -depth + 1e-6) xs.push_back(q.x_mm[i]);
+      }
+      const double advance =
+          w.periodic ? job.path.step_mm : std::abs(q.y_mm[std::min(cl, qn - 1)] - q.y_mm[cf]);
+      if (!xs.empty() && advance > 0) {
+        m.imprint = bottom_imprint_density(xs, R, 0.5 * W, advance, job.analysis.imprint_points);
+      }
+    }
+
+    predict_floor(job, s, omega, m);
+
+    // Exact chip between adjacent teeth's tip trajectories, at the angle of each sample's
+    // h_max where the previous tooth's circle bounds it (elsewhere the older surface does and
+    // the trajectories do not enter).
+    {
+      DenseCentre dc;
+      dc.s = &q;
+      dc.t_first = q.t_s.front();
+      dc.dt = dt_sample;
+      m.h_max_per_tooth_mm.assign(static_cast<std::size_t>(job.tool.teeth), 0.0);
+      for (std::size_t i = cf; i < cl; ++i) {
+        if (!cc[i] || ce.h_max_mm[i] <= 0) continue;
+        const double phi = ce.h_max_angle_rad[i], t = q.t_s[i];
+        const ToothChip plain = tooth_chip(dc, job.tool, omega, 0.0, t, phi, 0);
+        if (std::abs(plain.translation_mm - ce.h_max_mm[i]) > 1e-7) {
+          // The older surface bounds the chip: the same for every tooth.
+          for (auto& h : m.h_max_per_tooth_mm) h = std::max(h, ce.h_max_mm[i]);
+          continue;
+        }
+        m.chip_translation_error_mm = std::max(
+            m.chip_translation_error_mm, std::abs(plain.trajectory_mm - plain.translation_mm));
+        for (int k = 0; k < job.tool.teeth; ++k) {
+          const ToothChip c = tooth_chip(dc, job.tool, omega, job.tool.runout_radial_mm, t, phi, k);
+          auto& h = m.h_max_per_tooth_mm[static_cast<std::size_t>(k)];
+          h = std::max(h, c.trajectory_mm);
+        }
+      }
+      m.h_max_tooth_mm =
+          *std::max_element(m.h_max_per_tooth_mm.begin(), m.h_max_per_tooth_mm.end());
+    }
+
+    set_performance_index(job, m);
+    return m;
+  } catch (const Interrupted&) {
+    throw;
+  } catch (const IoError&) {
+    throw;
+  } catch (const Error& err) {
+    if (!program) throw;
+    whole.periodic = false;
+    whole.performance_index_note = fmt::format(
+        "the program is not a slot whose cycle repeats with the step ({}): whole-program "
+        "figures only",
+        err.what());
+    return whole;
+  }
 }
 
 void set_performance_index(const Job& job, ProcessMetrics& m,

@@ -163,10 +163,11 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
                                                     {"right", m.walls_path.right.peak_y_mm}}
                                    : nlohmann::json(nullptr);
   j["performance_index_note"] =
-      m.periodic ? m.performance_index_note
-                 : std::string(
-                       "no steady cycle (the program is not periodic): Wagih's index "
-                       "compares one cycle's removal rate");
+      m.periodic || !m.performance_index_note.empty()
+          ? m.performance_index_note
+          : std::string(
+                "no steady cycle (the program is not periodic): Wagih's index "
+                "compares one cycle's removal rate");
   j["samples"] = m.series.samples.size();
   return j;
 }
@@ -295,9 +296,11 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
         f(m.texture_floor[1]->cutoff_mm), ra(0), ra(2), f(job.tool.dish_angle_deg));
   }
   if (!m.periodic) {
-    out +=
-        "  steady cycle         none (the path does not repeat with the step): whole-program "
-        "figures only\n";
+    out += m.performance_index_note.empty()
+               ? std::string(
+                     "  steady cycle         none (the path does not repeat with the "
+                     "step): whole-program figures only\n")
+               : "  steady cycle         none: " + m.performance_index_note + "\n";
     return out;
   }
   out += fmt::format("  steady cycle         {} s, {} mm; cutting {} s, cooling {} s\n",
