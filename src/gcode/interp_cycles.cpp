@@ -365,6 +365,13 @@ void Interpreter::threading_cycle(std::uint32_t column) {
   const double full_height = k, end_depth = k + std::abs(i);
   double angle = block_.has('q') ? block_['q'] * kPi / 180 : 0.0;
   if (end.z() > start.z()) angle = -angle;
+  // H spring passes and L taper flags: whole numbers in a range before they become ints.
+  if (block_.has('h') && !(block_['h'] >= 0 && block_['h'] <= 1000)) {
+    fail_at(block_.col('h'), "G76's spring passes H must be 0 .. 1000");
+  }
+  if (block_.has('l') && !(block_['l'] >= -1 && block_['l'] <= 3)) {
+    fail_at(block_.col('l'), "G76's taper flags L must be 0 .. 3 (1 entry, 2 exit, 3 both)");
+  }
   const int spring = block_.has('h') ? static_cast<int>(block_['h']) : 0;
   const double degression = block_.has('r') && block_['r'] >= 1 ? block_['r'] : 1.0;
   double taper = block_.has('e') ? std::max(0.0, len('e')) : 0.0;

@@ -367,8 +367,10 @@ Vec3 NurbsCurve::point(double u) const {
   u = std::clamp(u, u0(), u1());
   // The knot span: u in [U_k, U_k+1), the last span closed at its end.
   const auto p = static_cast<std::size_t>(p_);
-  std::size_t k = p;
-  while (k + 1 < c_.size() && u >= u_[k + 1]) ++k;
+  // The last knot index k in [p, n - 1] with U_k <= u (binary search: curves of many points).
+  const auto first = u_.begin() + static_cast<std::ptrdiff_t>(p) + 1,
+             last = u_.begin() + static_cast<std::ptrdiff_t>(c_.size());
+  const std::size_t k = p + static_cast<std::size_t>(std::upper_bound(first, last, u) - first);
   std::vector<Eigen::Vector3d> d(p + 1);  // (w x, w y, w)
   for (std::size_t j = 0; j <= p; ++j) {
     const std::size_t i = k - p + j;
