@@ -6,9 +6,10 @@
 //  - interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73;
 //  - interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30;
 //  - interp_tools.cpp: the tool table and tool length offsets (G43, G43.1, G49);
-//  - interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace;
+//  - interp_motion.cpp: motion: end points, feeds, lines, arcs and splines into the path and the
+//    trace;
 //  - interp_cutcomp.cpp: cutter radius compensation (G41/G42, G41.1/G42.1, G40) and its queue;
-//  - interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89);
+//  - interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89) and threading (G33, G33.1, G76);
 //  - interp_macro.cpp: Fanuc Macro B (GOTO, IF, WHILE, G65) and subprograms (M98/M99);
 //  - interp_oword.cpp: O-words: subroutines, calls, if, loops.
 // interp_types.hpp has the data types they share.
@@ -328,7 +329,7 @@ class Interpreter : private InterpState {
   void tool_length_offset(int g);
   void note_tool_length(const char* what);
 
-  // ---- interp_motion.cpp: motion: end points, feeds, lines and arcs into the path and the trace
+  // ---- interp_motion.cpp: motion: end points, feeds, lines, arcs and splines into the path
   Vec3 ends(bool g53);
   ExtraAxes extras_out(GcodeMove& mv);
   double extra_time_s(const ExtraAxes& out_end, std::uint32_t column);
@@ -357,7 +358,7 @@ class Interpreter : private InterpState {
   void put_arc(const Vec3& from, const ArcData& d, double axial, double f, std::uint32_t column,
                std::size_t source, std::size_t line, bool xy, const Vec3* exact_end = nullptr);
 
-  // ---- interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89)
+  // ---- interp_cycles.cpp: canned cycles (G73 G74 G76 G81-G89) and threading
   void canned_cycle(int g, std::uint32_t column);
   [[nodiscard]] ArcData plane_axes() const;
   void note_fanuc_shift(const std::string& name);
