@@ -72,7 +72,7 @@ struct GcodeMove {
   /// compensation or G53, that moves no axis besides X Y Z: its end and centre are words of
   /// the block, so it can be split.
   bool plain = false;
-  int motion = -1;              ///< the motion mode: 0, 1, 2, 3 (-1: a canned cycle and the like)
+  int motion = -1;  ///< the motion mode: 0, 1, 2, 3 (-1: a canned cycle and the like)
   /// Threading (G33, G33.1, G76): it runs at the pitch times the spindle speed; F is not its.
   bool synchronized = false;
   std::uint64_t block_run = 0;  ///< the block execution that made it (a loop's passes differ)
