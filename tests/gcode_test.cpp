@@ -874,3 +874,34 @@ TEST(GcodeFanuc, RotationAndScalingMoveTheProgram) {
 
 }  // namespace
 }  // namespace trochomill
+
+namespace trochomill {
+namespace {
+
+// Haas's M97 P<block> L<times>: a subprogram at block N100 of the program itself, run twice
+// (incremental moves: (5, 0), (5, 5), then (10, 5), (10, 10)), back after M99 to the block
+// after the call; a block number the program lacks is named. LinuxCNC's dialect refuses M97.
+TEST(GcodeFanuc, HaasLocalSubprogramCalls) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const GcodeProgram p = read_gcode(
+      "%\nO1000\nG21 G90 G17\nG0 X0. Y0. Z1.\nG1 Z-1. F600.\nM97 P100 L2\nG1 X0. Y0.\nM30\n"
+      "N100 G91 G1 X5.\nY5.\nG90\nM99\n%\n",
+      "haas.nc", ro);
+  const std::vector<Vec3> want{{0, 0, -1},  {5, 0, -1},   {5, 5, -1},
+                               {10, 5, -1}, {10, 10, -1}, {0, 0, -1}};
+  const auto& s = p.path.segments();
+  ASSERT_EQ(s.size(), want.size());
+  for (std::size_t i = 0; i < s.size(); ++i) EXPECT_LE((s[i].end() - want[i]).norm(), 1e-12) << i;
+  try {
+    (void)read_gcode("G0 X0. Y0. Z1.\nM97 P200\nM30\n", "haas.nc", ro);
+    ADD_FAILURE() << "a missing block was called";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("M97 P 200: no block N200 in haas.nc"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW((void)read_gcode("G0 X0 Y0 Z1\nM97 P100\nM2\n", "lc.ngc"), InputError);
+}
+
+}  // namespace
+}  // namespace trochomill

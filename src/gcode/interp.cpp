@@ -203,6 +203,7 @@ void Interpreter::run_line(std::string_view raw) {
 
 void Interpreter::execute() {
   pending_m98_.reset();
+  pending_m97_ = false;
   pending_m99_ = false;
   for (const auto& gc : block_.g) {
     if (gc.code10 == 650) {
@@ -399,6 +400,23 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
             fmt::format("{}: read as {} with coolant on (most Fanuc machines; the machine "
                         "maker's code)",
                         code_name('M', m), m == 130 ? "M3" : "M4"));
+        break;
+      case 970:
+        // Haas's local subprogram call, M97 P<block number> L<times>: read in the fanuc
+        // dialect (on another control of the family M97 is the machine maker's).
+        if (!fanuc_) fail_at(column, fmt::format("unsupported M-code {}", code_name('M', m)));
+        if (!block_.has('p')) fail_at(column, "M97 needs the block number (N) in P");
+        if (block_['p'] < 0 || block_['p'] != std::floor(block_['p']) || block_['p'] > 99999) {
+          fail_at(block_.col('p'), "M97 P must be a block number 0 .. 99999");
+        }
+        {
+          const double times = block_.has('l') ? block_['l'] : 1;
+          if (times < 0 || times != std::floor(times) || times > 9999) {
+            fail_at(column, "M97's repeat count L must be a whole number 0 .. 9999");
+          }
+          pending_m98_ = std::make_pair(block_['p'], times);
+          pending_m97_ = true;
+        }
         break;
       case 980: {
         if (!fanuc_) {

@@ -54,6 +54,7 @@ struct InterpState {
   bool decimal_warned_ = false;
   // This block's subprogram call and return (Fanuc).
   std::optional<std::pair<double, double>> pending_m98_;  // P, L of this block's M98
+  bool pending_m97_ = false;  // the call is Haas's M97: P is a block number of this program
   bool pending_m99_ = false;
   double m99_p_ = -1;
   // The text: the program and the subroutine files, where the next line is, the line and the
@@ -372,7 +373,7 @@ class Interpreter : private InterpState {
   void fanuc_end(std::size_t i) const;
   std::string loop_id(std::size_t& i);
   void skip_past_end(const std::string& label, std::size_t at);
-  void goto_label(double n, std::size_t at);
+  void goto_label(double n, std::size_t at, const char* what = "GOTO");
   void macro_call(std::uint32_t column);
   void subprogram_call();
   void enter(Frame f);

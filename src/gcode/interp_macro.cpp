@@ -144,9 +144,9 @@ void Interpreter::skip_past_end(const std::string& label, std::size_t at) {
 }
 
 // GOTO n: the block numbered N n, searched forward from here, then from the file's start.
-void Interpreter::goto_label(double n, std::size_t at) {
+void Interpreter::goto_label(double n, std::size_t at, const char* what) {
   if (std::isnan(n) || n < 0 || n != std::floor(n) || n > 99999) {
-    fail(at, "GOTO needs a sequence number 0 .. 99999");
+    fail(at, fmt::format("{} needs a sequence number 0 .. 99999", what));
   }
   const Source& src = sources_[cur_.source];
   ngc::Line l;
@@ -176,7 +176,7 @@ void Interpreter::goto_label(double n, std::size_t at) {
       off = end == src.text.size() ? end : end + 1;
     }
   }
-  fail(at, fmt::format("GOTO {:g}: no block N{:g} in {}", n, n, src.name));
+  fail(at, fmt::format("{} {:g}: no block N{:g} in {}", what, n, n, src.name));
 }
 
 // G65 P<program> L<times> with arguments A B C I J K D E F H M Q R S T U V W X Y Z: a call
@@ -215,6 +215,21 @@ void Interpreter::macro_call(std::uint32_t column) {
 void Interpreter::subprogram_call() {
   const auto [prog, times] = *pending_m98_;
   if (times == 0) return;
+  if (pending_m97_) {
+    // Haas's M97: the subprogram starts at block N<P> of this program (searched as GOTO is)
+    // and returns at M99, with the caller's local variables.
+    Frame f;
+    f.label = fmt::format("N{:g}", prog);
+    f.ret = cur_;
+    f.new_locals = false;
+    f.repeats = times;
+    const Cursor back = cur_;
+    goto_label(prog, line_.text.find('p'), "M97 P");
+    f.start = cur_;
+    cur_ = back;
+    enter(std::move(f));
+    return;
+  }
   Frame f = program_frame(prog, block_.col('p'));
   f.new_locals = false;  // M98: the caller's local variables
   f.repeats = times;
