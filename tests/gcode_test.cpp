@@ -624,6 +624,16 @@ std::vector<Vec3> ends_of(const GcodeProgram& p) {
   return e;
 }
 
+// The program's segment ends are `want`, one for one (1e-12 mm: hand-computed motion of
+// exact numbers).
+void expect_ends(const GcodeProgram& p, const std::vector<Vec3>& want) {
+  const std::vector<Vec3> got = ends_of(p);
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t k = 0; k < want.size(); ++k) {
+    EXPECT_LE((got[k] - want[k]).norm(), 1e-12) << k << ": " << got[k].transpose();
+  }
+}
+
 TEST(GcodeFanuc, MacroBLoopsJumpsSubprogramsAndMacroCalls) {
   GcodeReadOptions ro;
   ro.dialect = Dialect::fanuc;
@@ -665,11 +675,7 @@ M99
   // = 2 + [12 AND 6 = 4] = 6, OR 1 = 7 (Fanuc: AND binds like *, OR like +).
   const std::vector<Vec3> want = {{10, 0, 5}, {20, 0, 5}, {20, 5, 5}, {20, 7, 5}, {21, 7, 5},
                                   {22, 7, 5}, {1, 2, 5},  {1, 9, 5},  {7, 9, 5}};
-  const std::vector<Vec3> got = ends_of(p);
-  ASSERT_EQ(got.size(), want.size());
-  for (std::size_t k = 0; k < want.size(); ++k) {
-    EXPECT_LE((got[k] - want[k]).norm(), 1e-12) << k << ": " << got[k].transpose();
-  }
+  expect_ends(p, want);
 }
 
 // Fanuc as posts and people write it: WH for WHILE, G65's M and E arguments (#13, #8), the
@@ -699,11 +705,7 @@ M99
 )";
   const GcodeProgram p = read_gcode(prog, "f.nc", ro);
   const std::vector<Vec3> want = {{1, 0, 5}, {2, 0, 5}, {3, 4, 5}};
-  const std::vector<Vec3> got = ends_of(p);
-  ASSERT_EQ(got.size(), want.size());
-  for (std::size_t k = 0; k < want.size(); ++k) {
-    EXPECT_LE((got[k] - want[k]).norm(), 1e-12) << k << ": " << got[k].transpose();
-  }
+  expect_ends(p, want);
   const auto warned = [&](const std::string& what) {
     return std::count_if(p.info.warnings.begin(), p.info.warnings.end(),
                          [&](const std::string& w) { return w.find(what) != std::string::npos; });
@@ -855,11 +857,8 @@ TEST(GcodeFanuc, RotationAndScalingMoveTheProgram) {
       "turn.nc", ro);
   const std::vector<Vec3> want{{0, 0, -1},  {0, 10, -1}, {-5, 10, -1}, {0, 0, -1},
                                {10, 2, -1}, {0, 0, -1},  {-10, 0, -1}, {0, 0, -1}};
+  ASSERT_NO_FATAL_FAILURE(expect_ends(p, want));
   const auto& s = p.path.segments();
-  ASSERT_EQ(s.size(), want.size());
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    EXPECT_LE((s[i].end() - want[i]).norm(), 1e-12) << i;
-  }
   EXPECT_LE((s[6].point_at(0.5 * s[6].length_mm()) - Vec3(-5, 5, -1)).norm(), 1e-12);
   EXPECT_NEAR(s[6].length_mm(), 5 * kPi, 1e-12);
   GcodeReadOptions lc;
@@ -890,9 +889,7 @@ TEST(GcodeFanuc, HaasLocalSubprogramCalls) {
       "haas.nc", ro);
   const std::vector<Vec3> want{{0, 0, -1},  {5, 0, -1},   {5, 5, -1},
                                {10, 5, -1}, {10, 10, -1}, {0, 0, -1}};
-  const auto& s = p.path.segments();
-  ASSERT_EQ(s.size(), want.size());
-  for (std::size_t i = 0; i < s.size(); ++i) EXPECT_LE((s[i].end() - want[i]).norm(), 1e-12) << i;
+  expect_ends(p, want);
   try {
     (void)read_gcode("G0 X0. Y0. Z1.\nM97 P200\nM30\n", "haas.nc", ro);
     ADD_FAILURE() << "a missing block was called";

@@ -75,6 +75,12 @@ void subtract(ArcSet& set, double mid, double half) {
   }
   const double a = wrap(mid - half), b = a + 2 * half;
   auto cut = [&](double lo, double hi) {
+    // Nothing to cut (the common case where the tooth before's disc is already the region's):
+    // no new set.
+    if (std::none_of(set.begin(), set.end(),
+                     [&](const AngleArc& arc) { return arc.end_rad > lo && arc.start_rad < hi; })) {
+      return;
+    }
     ArcSet out;
     for (const auto& arc : set) {
       if (arc.end_rad <= lo || arc.start_rad >= hi) {

@@ -111,28 +111,22 @@ def xy_arc_points(kind, prev, end, centre, sagitta=1e-4):
 SPLINE_TOL = 1e-3 + 1e-6  # mm: trochomill's spline_tolerance_mm, and the 9 printed decimals
 
 
-def spline_line_numbers(prog):
-    """The lines of the program with a spline code (G5, G5.1, G5.3: where the curve is made)."""
+def special_line_numbers(prog):
+    """The program's lines, in one pass, (a) with a spline code (G5, G5.1, G5.3: where the
+    curve is made) and (b) with G33, G33.1 or G76: their moves run at the pitch times the
+    spindle speed, which LinuxCNC's canon does not pass to the preview (their feeds are not
+    compared)."""
     import re
-    code = re.compile(r"G\s*0*5\s*(\.\s*[013])?(?![\d.])", re.I)
-    lines = set()
+    spline = re.compile(r"G\s*0*5\s*(\.\s*[013])?(?![\d.])", re.I)
+    synced = re.compile(r"G\s*(33|76)(?![\d])", re.I)
+    splines, synchronized = set(), set()
     for n, text in enumerate(open(prog, errors="replace"), 1):
         text = re.sub(r"\([^)]*\)|;.*", "", text)
-        if code.search(text):
-            lines.add(n)
-    return lines
-
-
-def synchronized_line_numbers(prog):
-    """The lines with G33, G33.1 or G76: their moves run at the pitch times the spindle speed,
-    which LinuxCNC's canon does not pass to the preview (their feeds are not compared)."""
-    import re
-    code = re.compile(r"G\s*(33|76)(?![\d])", re.I)
-    lines = set()
-    for n, text in enumerate(open(prog, errors="replace"), 1):
-        if code.search(re.sub(r"\([^)]*\)|;.*", "", text)):
-            lines.add(n)
-    return lines
+        if spline.search(text):
+            splines.add(n)
+        if synced.search(text):
+            synchronized.add(n)
+    return splines, synchronized
 
 
 def collapse_splines(moves, lines):
@@ -271,8 +265,7 @@ def main():
             # of the exact curve, trochomill follows it with arcs: each run of a spline's moves
             # becomes one move compared by its end, its points' distance to the arcs and its
             # length.
-            synchronized = synchronized_line_numbers(prog)
-            spline_lines = spline_line_numbers(prog)
+            spline_lines, synchronized = special_line_numbers(prog)
             if spline_lines:
                 a, runs_a = collapse_splines(a, spline_lines)
                 b, runs_b = collapse_splines(b, spline_lines)
