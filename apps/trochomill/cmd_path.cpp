@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <string>
@@ -395,19 +397,27 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       if (!a->g30.empty()) ro.g30_position_mm = Vec3(a->g30[0], a->g30[1], a->g30[2]);
       std::function<void()> trace_flush;
       if (a->trace) {
-        // Lines gathered in a buffer and written 64 kB at a time.
+        // Lines gathered in a buffer and written 64 kB at a time; a failed write (a full
+        // disk, a closed pipe) stops the reading with the reason.
         auto buffer = std::make_shared<std::string>();
-        ro.trace = [buffer](const GcodeMove& m) {
+        const auto write_out = [buffer] {
+          if (std::fwrite(buffer->data(), 1, buffer->size(), stdout) != buffer->size()) {
+            throw IoError(fmt::format("--trace: writing to standard output failed: {}",
+                                      std::strerror(errno)));
+          }
+          buffer->clear();
+        };
+        ro.trace = [buffer, write_out](const GcodeMove& m) {
           *buffer += trace_line(m);
           *buffer += '\n';
-          if (buffer->size() >= (1U << 16)) {
-            std::fwrite(buffer->data(), 1, buffer->size(), stdout);
-            buffer->clear();
-          }
+          if (buffer->size() >= (1U << 16)) write_out();
         };
-        trace_flush = [buffer] {
-          std::fwrite(buffer->data(), 1, buffer->size(), stdout);
-          buffer->clear();
+        trace_flush = [write_out] {
+          write_out();
+          if (std::fflush(stdout) != 0) {
+            throw IoError(fmt::format("--trace: writing to standard output failed: {}",
+                                      std::strerror(errno)));
+          }
         };
       }
       // The time with acceleration needs the whole path; without it the program is read as a
@@ -416,6 +426,8 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       GcodeProgram prog;
       try {
         prog = read_gcode_file(a->file, ro);
+      } catch (const IoError&) {
+        throw;
       } catch (...) {
         if (trace_flush) trace_flush();  // the moves before the error, as they were read
         throw;
