@@ -801,5 +801,48 @@ TEST(Analysis, AProgramThatIsNotASlotGetsItsWholeProgramFigures) {
       << m.performance_index_note;
 }
 
+// A drilling program cuts with the end face alone: its holes' volume, the descent per tooth as
+// the axial chip, one descent per hole and per peck; a job of a [stock] without [slot] reads.
+TEST(Analysis, DrillingIsCutByTheEndFace) {
+  const Job job = parse_job(
+      "[tool]\ndiameter = 6.0\nteeth = 2\nflute_length = 20.0\n[cutting]\n"
+      "feed_per_tooth = 0.0125\nspindle_speed = 8000.0\n[stock]\nmin = [0.0, 0.0, -20.0]\n"
+      "max = [60.0, 20.0, 0.0]\n",
+      "drill.toml");
+  const GcodeProgram p = read_gcode(
+      "G21 G17 G90 G94\nG0 Z5\nG0 X10 Y10\nG98 G81 X10 Y10 Z-8 R2 F200\nX30\n"
+      "G83 X50 Y10 Z-12 R2 Q3 F200\nG80\nG0 Z20\nM2\n",
+      "drill.ngc");
+  const ProcessMetrics m = analyze_process(job, p.path);
+  const double R = 3.0, area = kPi * R * R;
+  // Each hole's deepest sample lies at most one sample's descent above its bottom (f_z at one
+  // step per tooth), and each peck may recut as much where it passes the one before: 8 such
+  // slivers (3 holes, 4 later pecks) of pi R^2 x 0.0125 mm bound the difference.
+  EXPECT_NEAR(m.removed_volume_mm3, area * (8 + 8 + 12), 8 * area * 0.0125);
+  // F200 mm/min at 8000 rpm and 2 teeth: 0.0125 mm of descent per tooth.
+  EXPECT_NEAR(m.h_axial_max_mm, 200.0 / (8000 * 2), 1e-9);
+  // G81 twice, G83 from R2 to Z-12 by Q3: pecks to -1, -4, -7, -10, -12.
+  EXPECT_EQ(m.descents_into_stock, 2 + 5);
+  EXPECT_EQ(m.h_max_slot_mm, 0.0);  // no flute chip: the tool never moves across
+  EXPECT_EQ(m.engagement_angle_max_slot_deg, 0.0);
+  // At one of the holes (the three descend at one feed: equal to rounding).
+  const double x = m.h_axial_max_at_mm.x();
+  EXPECT_TRUE(x == 10.0 || x == 30.0 || x == 50.0) << x;
+  EXPECT_EQ(m.h_axial_max_at_mm.y(), 10.0);
+  EXPECT_GT(m.cutting_time_total_s, 0.0);
+  EXPECT_FALSE(m.periodic);
+  EXPECT_NE(m.performance_index_note.find("the job has no [slot]"), std::string::npos)
+      << m.performance_index_note;
+  // Planning from that job says what it lacks.
+  try {
+    (void)plan_path(job);
+    ADD_FAILURE() << "a job without [slot] planned";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("drill.toml: the job has no [slot] to plan"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace trochomill

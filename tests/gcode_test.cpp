@@ -723,6 +723,51 @@ M99
   }
 }
 
+// G65's argument specification II: A B C once, I J K up to ten times (#4 .. #33), a new set
+// where a letter is not after the one before in I J K order, mixed with specification I (the
+// later word holds a variable two give). Variables by hand from Fanuc's table.
+TEST(GcodeFanuc, MacroArgumentSpecificationTwo) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const std::string call =
+      "G65 P2000 A1. I2. J3. K4. I5. K6. J7. I8. D9. I10. J11. K12. I13. I14. I15. I16. I17.";
+  const std::string sub = R"(
+M30
+O2000
+G1 X#1 Y#4 F100.
+G1 X#5 Y#6
+G1 X#7 Y#9
+G1 X#11 Y#13
+G1 X#10 Y#16
+G1 X#17 Y#18
+G1 X#19 Y#22
+G1 X#25 Y#28
+G1 X#31 Y[#8 + #12 + #14 + #15 + #20 + #21 + #23 + #24 + #26 + #27 + #29 + #30 + #32 + #33 + 1.]
+M99
+%
+)";
+  const std::string head = "%\nO1000\nG21 G90 G17 G94\nG0 X0. Y0. Z5.\n";
+  const GcodeProgram p = read_gcode(head + call + sub, "spec2.nc", ro);
+  // I2 J3 K4: set 1 (#4 #5 #6); I5 K6: set 2 (#7, #9); J7, not after K: set 3's J (#11); I8:
+  // set 4 (#13); D9 is #7 (specification I), the later word; I10 J11 K12: set 5 (#16 #17
+  // #18); I13 .. I17: sets 6 .. 10 (#19 #22 #25 #28 #31). #10 is vacant (X left out); the
+  // rest of #4 .. #33 are vacant (0 in the sum).
+  const std::vector<Vec3> want = {{1, 2, 5},   {3, 4, 5},   {9, 6, 5},   {7, 8, 5}, {7, 10, 5},
+                                  {11, 12, 5}, {13, 14, 5}, {15, 16, 5}, {17, 1, 5}};
+  expect_ends(p, want);
+  // An eleventh set is too many; an argument before G65 is not one.
+  for (const auto& [text, what] :
+       {std::pair{call + " I18.", "at most ten sets of I J K"},
+        std::pair{"X1. " + call, "X before G65: its arguments come after it"}}) {
+    try {
+      (void)read_gcode(head + text + sub, "bad.nc", ro);
+      ADD_FAILURE() << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  }
+}
+
 // G88 stops for the operator to retract by hand: the retraction is modelled as a rapid to the
 // clear plane and named (LinuxCNC's canon has no move there; docs/gcode.md).
 TEST(GcodeCycles, G88RetractsAsTheOperatorWouldAndSaysSo) {

@@ -32,6 +32,7 @@ py::dict analyze_series(EngagementSeries&& e) {
   d["teeth_in_cut"] = to_array(std::move(e.teeth_in_cut));
   d["mrr_mm3_per_min"] = to_array(std::move(mrr));
   d["radial_engagement_mm"] = to_array(std::move(e.radial_engagement_mm));
+  d["axial_chip_mm"] = to_array(std::move(e.axial_chip_mm));
   return d;
 }
 
@@ -79,7 +80,7 @@ job: a Job (its planned path) or a Path (planned, or read from G-code with a job
 Returns the keys of `trochomill analyze --json` (units in their names: _mm, _s, _deg,
 _mm3_per_min; cycle_* keys None when the path has no steady cycle) and "series": float64
 arrays t_s, x_mm, y_mm, z_mm, engagement_deg, h_max_mm, mrr_mm3_per_min,
-radial_engagement_mm and the int32 array teeth_in_cut, one entry per sample;
+radial_engagement_mm, axial_chip_mm (the end edges' chip: descent per tooth) and the int32 array teeth_in_cut, one entry per sample;
 "wall_texture_profiles": per wall ("left", "right") the predicted R and W profiles the wall
 texture was evaluated on (x_mm along the feed, roughness_mm, waviness_mm);
 "floor_texture_profiles": the same for the floor's lines ("left", "middle", "right", beside

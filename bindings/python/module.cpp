@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <string_view>
 
 #include "common.hpp"
 #include "trochomill/engagement.hpp"
@@ -94,6 +95,10 @@ PyPath read_program(const py::object& program, const py::object& job_obj) {
   p.job = std::move(job);
   p.lines.segment_lines = std::move(prog.segment_lines);
   p.lines.source_files = std::move(prog.source_files);
+  p.lines.info.extra_axes = prog.info.extra_axes;
+  p.lines.info.extra_min = prog.info.extra_min;
+  p.lines.info.extra_max = prog.info.extra_max;
+  p.lines.info.extra_only_time_s = prog.info.extra_only_time_s;
   return p;
 }
 
@@ -214,6 +219,28 @@ the job's slot frame when read with a job, else in the program's work frame.)")
             return to_array(std::move(t));
           },
           "programmed time where each cycle starts (s)")
+      .def_property_readonly(
+          "extra_axes",
+          [](const PyPath& p) {
+            // As check-gcode's JSON: each axis besides X Y Z the program moves, its range.
+            py::dict d;
+            for (const char c : p.lines.info.extra_axes) {
+              const auto k = static_cast<std::size_t>(std::string_view("ABCUVW").find(c));
+              const std::string unit = k < 3 ? "deg" : "mm";
+              py::dict r;
+              r[py::str("min_" + unit)] = p.lines.info.extra_min[k];
+              r[py::str("max_" + unit)] = p.lines.info.extra_max[k];
+              d[py::str(std::string(1, c))] = r;
+            }
+            return d;
+          },
+          "the axes besides X Y Z a program read from G-code moves, each one's range in the "
+          "work frame: {'A': {'min_deg': .., 'max_deg': ..}, 'U': {'min_mm': .., 'max_mm': ..}}; "
+          "the path holds the X Y Z motion only")
+      .def_property_readonly(
+          "extra_axes_only_time_s", [](const PyPath& p) { return p.lines.info.extra_only_time_s; },
+          "time of the feed moves that move only axes besides X Y Z (s: A B C at F degrees/min, "
+          "U V W at F mm/min), which duration_s leaves out")
       .def_readonly("warnings", &PyPath::warnings,
                     "what the reader assumed or found (a program read from G-code)")
       .def_readonly("source", &PyPath::source, "\"plan\" or the program's name")

@@ -50,14 +50,22 @@ struct ProcessMetrics {
   /// The largest engagement outside the entries (as h_max_after_entry) and where.
   double engagement_max_after_entry_deg = 0;
   Vec3 engagement_max_after_entry_at_mm = Vec3::Zero();
+  /// The end edges' largest axial chip (mm): the descent per tooth period where a descending
+  /// end face cuts stock no earlier position removed (engagement.hpp: axial_chip_mm), where it
+  /// is, and how many descents into stock cut with the end face (runs of such samples: a
+  /// plunge, each peck of a drilling cycle, a ramp, a helix).
+  double h_axial_max_mm = 0;
+  Vec3 h_axial_max_at_mm = Vec3::Zero();
+  int descents_into_stock = 0;
   /// The path's segments where the three occur (npos: none), and for a program read from a
   /// file the blocks that made them ("file:line", filled by the caller that read it: the
   /// analysis knows only the path).
   static constexpr std::size_t npos = static_cast<std::size_t>(-1);
   std::size_t h_max_slot_segment = npos, h_max_after_entry_segment = npos;
   std::size_t engagement_max_slot_segment = npos, engagement_max_after_entry_segment = npos;
+  std::size_t h_axial_max_segment = npos;
   std::string h_max_slot_source, h_max_after_entry_source, engagement_max_slot_source,
-      engagement_max_after_entry_source;
+      engagement_max_after_entry_source, h_axial_max_source;
 
   // Steady-state cycle (or window).
   bool periodic = false;

@@ -71,8 +71,12 @@ struct EngagementSeries {
   /// Material removal rate (mm^3/s): the swept rate of each part of the engaged arcs times
   /// the height of stock over it, from the position's height up to the nearest Z level
   /// above whose region removed it, else the stock's top (z = 0, or the [stock] box's top),
-  /// at most the flute length.
+  /// at most the flute length; plus, where the tool descends, the end face's: the descent
+  /// rate times the face's area over stock no earlier position removed.
   std::vector<double> removal_rate_mm3_per_s;
+  /// The end edges' axial chip (mm): the descent per tooth period where the end face cuts
+  /// stock no earlier position removed (a plunge, a ramp, a helix), 0 elsewhere.
+  std::vector<double> axial_chip_mm;
 };
 
 /// The plan-view region a tool of radius R has removed: the union of the discs about the

@@ -383,7 +383,8 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   const double thr = 1e-6 * 2 * R * feed;
   double dt_sample = n > 1 ? tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth : 0;
   for (std::size_t i = 0; i < n; ++i) {
-    cutting[i] = e.swept_rate_mm2_per_s[i] > thr ? 1 : 0;
+    // The flutes advance into stock, or the end face descends into it (a plunge, a drill).
+    cutting[i] = e.swept_rate_mm2_per_s[i] > thr || e.axial_chip_mm[i] > 0 ? 1 : 0;
     if (cutting[i]) m.cutting_time_total_s += dt_sample;
   }
   if (std::none_of(cutting.begin(), cutting.end(), [](char c) { return c != 0; })) {
@@ -410,6 +411,18 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   // at several levels: docs/models.md section 7, removal rate).
   for (std::size_t i = 0; i < n; ++i) {
     m.removed_volume_mm3 += e.removal_rate_mm3_per_s[i] * dt_sample;
+  }
+  // The end faces: the largest axial chip (descent per tooth) and the descents into stock
+  // (runs of samples whose end face cuts, apart from the flutes' radial chip).
+  std::size_t i_axial = n;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double a = e.axial_chip_mm[i];
+    if (a <= 0) continue;
+    if (i == 0 || !(e.axial_chip_mm[i - 1] > 0)) ++m.descents_into_stock;
+    if (i_axial == n || a > m.h_axial_max_mm) {
+      m.h_axial_max_mm = a;
+      i_axial = i;
+    }
   }
   m.mrr_total_mm3_per_min = m.removed_volume_mm3 / m.machining_time_s * 60.0;
   m.feed_per_tooth_mm = job.cutting.feed_per_tooth_mm;
@@ -492,18 +505,25 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
     m.h_max_after_entry_at_mm = at(i_after);
     m.h_max_after_entry_segment = segment(i_after);
   }
+  if (i_axial < n) {
+    m.h_axial_max_at_mm = at(i_axial);
+    m.h_axial_max_segment = segment(i_axial);
+  }
   if (i_eng_after < n) {
     m.engagement_max_after_entry_at_mm = at(i_eng_after);
     m.engagement_max_after_entry_segment = segment(i_eng_after);
   }
   // A slot along a curve: each cycle's step follows the bend, so there is no steady cycle;
   // the walls and floor of the straight slot's models do not apply. Whole-program figures.
-  if (job.slot.curved() || job.pocket.defined()) {
+  // A job of a [stock] alone (a program read from G-code) has no slot to hold a cycle to.
+  if (job.slot.curved() || job.pocket.defined() || !(job.slot.width_mm > 0)) {
     m.periodic = false;
     m.performance_index_note =
-        job.pocket.defined()
-            ? "a pocket has no steady cycle: whole-program figures only"
-            : "a slot along a curve has no steady cycle: whole-program figures only";
+        job.pocket.defined() ? "a pocket has no steady cycle: whole-program figures only"
+        : job.slot.curved()
+            ? "a slot along a curve has no steady cycle: whole-program figures only"
+            : "the job has no [slot] (its [stock] is the program's stock): whole-program "
+              "figures only";
     return m;
   }
 

@@ -98,6 +98,7 @@ void name_program_lines(ProcessMetrics& metrics, const GcodeProgram& lines) {
   metrics.engagement_max_slot_source = lines.where(metrics.engagement_max_slot_segment);
   metrics.engagement_max_after_entry_source =
       lines.where(metrics.engagement_max_after_entry_segment);
+  metrics.h_axial_max_source = lines.where(metrics.h_axial_max_segment);
 }
 
 ReportData report_data(Job job, ToolPath path, ReportRequest request, const RunHooks& hooks) {

@@ -16,6 +16,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -802,6 +803,50 @@ double swept_rate(const PathSamples& s, std::size_t i, double R, const ArcSet& e
   return v * R * integral;
 }
 
+// The lowest height the tool centre reached near a plan point: positions binned in cells of
+// the radius asked about, each cell's lowest kept; deepest() looks through the cells around.
+class Bottoms {
+ public:
+  explicit Bottoms(double radius_mm) : r_(radius_mm) {}
+  [[nodiscard]] double deepest(double x, double y) const {
+    double z = std::numeric_limits<double>::infinity();
+    const auto [ix, iy] = cell(x, y);
+    for (std::int64_t dx = -1; dx <= 1; ++dx) {
+      for (std::int64_t dy = -1; dy <= 1; ++dy) {
+        const auto it = cells_.find(key(ix + dx, iy + dy));
+        if (it == cells_.end()) continue;
+        for (const auto& [px, py, pz] : it->second) {
+          if (pz < z && std::hypot(px - x, py - y) <= r_) z = pz;
+        }
+      }
+    }
+    return z;
+  }
+  void add(double x, double y, double z) {
+    const auto [ix, iy] = cell(x, y);
+    auto& points = cells_[key(ix, iy)];
+    // One point per place (within a thousandth of the radius) keeps a plunge's samples one.
+    for (auto& [px, py, pz] : points) {
+      if (std::abs(px - x) <= 1e-3 * r_ && std::abs(py - y) <= 1e-3 * r_) {
+        pz = std::min(pz, z);
+        return;
+      }
+    }
+    points.push_back({x, y, z});
+  }
+
+ private:
+  [[nodiscard]] std::pair<std::int64_t, std::int64_t> cell(double x, double y) const {
+    return {static_cast<std::int64_t>(std::floor(x / r_)),
+            static_cast<std::int64_t>(std::floor(y / r_))};
+  }
+  static std::uint64_t key(std::int64_t ix, std::int64_t iy) {
+    return (static_cast<std::uint64_t>(ix) << 32) ^ (static_cast<std::uint64_t>(iy) & 0xffffffffu);
+  }
+  double r_;
+  std::unordered_map<std::uint64_t, std::vector<std::array<double, 3>>> cells_;
+};
+
 }  // namespace
 
 double stock_top_mm(const Job& job, const Mesh* stock_mesh) {
@@ -845,6 +890,8 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   out.teeth_in_cut.assign(n, 0);
   out.swept_rate_mm2_per_s.assign(n, 0.0);
   out.removal_rate_mm3_per_s.assign(n, 0.0);
+  out.axial_chip_mm.assign(n, 0.0);
+  const double tooth_s = tooth_period_s(job.tool, job.cutting);
   const double flute = job.tool.flute_length_mm > 0 ? job.tool.flute_length_mm
                                                     : std::numeric_limits<double>::infinity();
 
@@ -936,6 +983,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   std::vector<Removed*> home(n, nullptr);  // each cutting position's region
   std::vector<char> above(n, 0);           // a ramp above its region's level: no disc
   ChipQuery chip(R);
+  Bottoms bottoms(R / 20);
   std::vector<ArcSet> pending(n);  // exposed arcs of discs waiting for insertion (lag m)
   auto cutting = [&](std::size_t i) { return smp.z_mm[i] < top; };
 
@@ -963,11 +1011,34 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     const Removed& removed = *home[i];
     ArcSet free = removed.outside(cx, cy);
     if (m == 1) pending[i] = free;
-    ArcSet eng = intersect(
-        free, mesh_stock
-                  ? mesh_stock->inside(cx, cy, R, smp.z_mm[i], std::min(top, smp.z_mm[i] + flute))
-                  : inside_rect(cx, cy, R, sx0, sx1, sy0,
-                                opt.open_ahead ? std::numeric_limits<double>::infinity() : sy1));
+    const ArcSet in_stock =
+        mesh_stock ? mesh_stock->inside(cx, cy, R, smp.z_mm[i], std::min(top, smp.z_mm[i] + flute))
+                   : inside_rect(cx, cy, R, sx0, sx1, sy0,
+                                 opt.open_ahead ? std::numeric_limits<double>::infinity() : sy1);
+    ArcSet eng = intersect(free, in_stock);
+    // The end edges' axial cut: a descending position's end face cuts the stock under it that
+    // no earlier position removed. In a descent's own region (its level not yet reached) that
+    // is all the stock under the face (the region's premise: nothing below the level it left
+    // was cut); descending above a level, the part outside the level's region. The area is
+    // taken as pi R^2 times the share of the tool circle over it (exact for a face wholly in or
+    // out, and for a straight stock edge through its centre). The axial chip is the descent
+    // per tooth there. Where an earlier position stood deeper at the same place (within R / 20:
+    // the pecks of a drilling cycle, a plunge into a hole) the descent cuts only below it.
+    // docs/models.md section 7.
+    double axial_rate = 0;
+    if (i > 0 && smp.z_mm[i] < smp.z_mm[i - 1] && smp.t_s[i] > smp.t_s[i - 1]) {
+      const double done = bottoms.deepest(cx, cy);
+      const double dz = std::min({smp.z_mm[i - 1], top, done}) - smp.z_mm[i];
+      double share = 0;
+      for (const auto& a : std::isnan(current_z) ? in_stock : eng) share += a.sweep_rad();
+      share = std::min(1.0, share / kTwoPi);
+      if (dz > 0 && share > 0) {
+        const double vz = dz / (smp.t_s[i] - smp.t_s[i - 1]);
+        axial_rate = kPi * R * R * share * vz;
+        out.axial_chip_mm[i] = vz * tooth_s;
+      }
+    }
+    bottoms.add(cx, cy, smp.z_mm[i]);
     // A tooth cuts with its flutes only what the tooth before it left: that tooth's disc is
     // gone up its flutes, and what lies below it (a descent's new depth, or the layer under
     // the stock's top where the tooth before was above it) is the end edges' axial chip. The
@@ -980,7 +1051,12 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     if (i >= static_cast<std::size_t>(m)) {
       const std::size_t k = i - m;
       const double dx = smp.x_mm[k] - cx, dy = smp.y_mm[k] - cy, d = std::hypot(dx, dy);
-      if (d < 2 * R) subtract(eng, std::atan2(dy, dx), std::acos(d / (2 * R)));
+      // The same centre (a plunge, a dwell): the circle lies on that disc's edge, all cut.
+      if (d <= 1e-12 * R) {
+        eng.clear();
+      } else if (d < 2 * R) {
+        subtract(eng, std::atan2(dy, dx), std::acos(d / (2 * R)));
+      }
       own_limit = d;
     }
     double total = 0;
@@ -1018,6 +1094,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
       rate += swept_rate(smp, i, R, rest) * std::min(flute, top - z);
       out.removal_rate_mm3_per_s[i] = rate;
     }
+    out.removal_rate_mm3_per_s[i] += axial_rate;
     out.arcs[i] = join_wrap(std::move(eng));
   }
   return out;

@@ -97,11 +97,12 @@ void Interpreter::read_block(std::size_t i) {
       }
     }
     // Fanuc's G65: every word after it but G, L, N, O and P is an argument, M included
-    // (argument specification I: M is #13).
+    // (argument specification I: M is #13), I J K up to ten times each (specification II).
+    const bool g65 =
+        fanuc_ && std::any_of(block_.g.begin(), block_.g.end(),
+                              [](const Block::Code& code) { return code.code10 == 650; });
     const bool g65_argument =
-        letter == 'm' && fanuc_ &&
-        std::any_of(block_.g.begin(), block_.g.end(),
-                    [](const Block::Code& code) { return code.code10 == 650; });
+        g65 && std::string_view("glnop").find(letter) == std::string_view::npos;
     if ((letter == 'g' || letter == 'm') && !g65_argument) {
       // Every code is below 1000 (G59.3, M199): anything larger is no code (and would not
       // fit the tenths it is compared in).
@@ -111,6 +112,10 @@ void Interpreter::read_block(std::size_t i) {
     }
     if (letter == 'o') fail(at, "an O-word must start its line");
     const auto k = static_cast<std::size_t>(letter - 'a');
+    if (g65_argument) {
+      block_.arguments.push_back({letter, v, col_of(at)});
+      if (block_.has(letter) && (letter == 'i' || letter == 'j' || letter == 'k')) continue;
+    }
     if (block_.has(letter)) {
       fail(at, fmt::format("two {} words in one block", upper(letter)));
     }

@@ -179,8 +179,13 @@ void Interpreter::goto_label(double n, std::size_t at, const char* what) {
   fail(at, fmt::format("{} {:g}: no block N{:g} in {}", what, n, n, src.name));
 }
 
-// G65 P<program> L<times> with arguments A B C I J K D E F H M Q R S T U V W X Y Z: a call
-// with its own local variables #1 .. #26 (Fanuc's argument specification I).
+// G65 P<program> L<times> with arguments: a call with its own local variables #1 .. #33.
+// Fanuc's argument specification I: A B C I J K D E F H M Q R S T U V W X Y Z are #1 .. #26
+// (#1 2 3 4 5 6 7 8 9 11 13 17 18 19 20 21 22 23 24 25 26); specification II: A B C are
+// #1 .. #3 and up to ten sets of I J K #4 .. #33, set n's I J K at #(3n + 1) .. #(3n + 3). The
+// two mix, the type of each word by its order: a set's I, J and K come in that order, and an
+// I, J or K not after the one before in I J K order begins the next set. Where two words
+// give one variable the later one holds (I2 after I1 and a D both give #7).
 void Interpreter::macro_call(std::uint32_t column) {
   if (!fanuc_)
     fail_at(column, "G65 is Fanuc's macro call: read the program with the fanuc dialect");
@@ -195,7 +200,34 @@ void Interpreter::macro_call(std::uint32_t column) {
   std::array<double, 34> args;
   args.fill(std::numeric_limits<double>::quiet_NaN());
   for (const auto& [c, n] : kArgs) {
-    if (block_.has(c)) args[static_cast<std::size_t>(n)] = block_[c];
+    const bool after = std::any_of(block_.arguments.begin(), block_.arguments.end(),
+                                   [c = c](const Block::Argument& a) { return a.letter == c; });
+    if (block_.has(c) && !after) {
+      fail_at(block_.col(c),
+              fmt::format("{} before G65: its arguments come after it (Fanuc)", upper(c)));
+    }
+  }
+  int set = 0, last = -1;  // the I J K set and the last of its letters (0 I, 1 J, 2 K)
+  for (const Block::Argument& a : block_.arguments) {
+    if (a.letter == 'i' || a.letter == 'j' || a.letter == 'k') {
+      const int order = a.letter - 'i';
+      if (last >= 0 && order <= last) ++set;
+      if (set > 9) {
+        fail_at(a.column, "G65 takes at most ten sets of I J K (argument specification II)");
+      }
+      last = order;
+      args[static_cast<std::size_t>(4 + 3 * set + order)] = a.value;
+      continue;
+    }
+    const auto it = std::find_if(kArgs.begin(), kArgs.end(),
+                                 [&](const auto& e) { return e.first == a.letter; });
+    if (it == kArgs.end()) {
+      fail_at(a.column,
+              fmt::format("{} is not an argument of G65 (A B C D E F H I J K M Q R S T U V W X "
+                          "Y Z)",
+                          upper(a.letter)));
+    }
+    args[static_cast<std::size_t>(it->second)] = a.value;
   }
   const double times = block_.has('l') ? block_['l'] : 1;
   if (times < 0 || times != std::floor(times) || times > 9999) {

@@ -219,6 +219,14 @@ struct Block {
   };
   std::vector<NumberedSet> numbered;
   std::vector<NamedSet> named;
+  // Fanuc's G65: its argument words in the block's order (I, J and K may repeat: argument
+  // specification II).
+  struct Argument {
+    char letter;
+    double value;
+    std::uint32_t column;
+  };
+  std::vector<Argument> arguments;
   // LinuxCNC's polar words: @ the distance from the XY origin (program length units) and ^
   // the angle from +X (degrees); increments of both in G91.
   bool has_polar_r = false, has_polar_a = false;
@@ -232,6 +240,7 @@ struct Block {
     m.clear();
     numbered.clear();
     named.clear();
+    arguments.clear();
   }
   [[nodiscard]] bool has(char c) const { return (present >> (c - 'a')) & 1U; }
   [[nodiscard]] double operator[](char c) const { return value[static_cast<std::size_t>(c - 'a')]; }

@@ -49,8 +49,11 @@ std::string choices_text(const Names<E> (&table)[N]) {
 }
 
 // A job with [pocket] plans a pocket: the slot's required keys and the path family are not.
+// Nor are they in a job of a [stock] without [slot]: the stock a program read from G-code
+// cuts, which plans nothing (plan_path says so).
 bool pocket_waives(const JobReader& r, std::string_view section) {
-  return (section == "slot" || section == "path") && r.has_section("pocket");
+  return (section == "slot" || section == "path") &&
+         (r.has_section("pocket") || (r.has_section("stock") && !r.has_section("slot")));
 }
 
 // A number key: absent keeps the member's value (the struct's default, or a library
@@ -421,7 +424,7 @@ std::vector<Key> build_schema() {
                  return;
                }
                job.slot.length_mm = r.number("slot", "length", "mm", positive(), 0.0,
-                                             !along && !r.has_section("pocket"))
+                                             !along && !pocket_waives(r, "slot"))
                                         .value_or(0.0);
              }),
       number("slot", "depth", "mm", positive(), FIELD(slot.depth_mm),
@@ -443,7 +446,7 @@ std::vector<Key> build_schema() {
           "trochoidal step s (advance per cycle), below D; for linear the stepover between passes",
           [](JobReader& r, Job& job) {
             const bool needs_step =
-                !r.has_section("pocket") &&
+                !pocket_waives(r, "path") &&
                 (job.path.type != PathType::linear || job.slot.width_mm > job.tool.diameter_mm);
             job.path.step_mm =
                 r.number("path", "step", "mm", positive(), 0.0, needs_step).value_or(0.0);

@@ -422,6 +422,17 @@ double estimate_plan_memory(const Job& job) {
 }
 
 PlannedPath plan_path(const Job& job, const ChipJudge& judge) {
+  if (job.pocket.defined()) {
+    throw InputError(fmt::format(
+        "{}: the job plans a pocket ([pocket]); this models a slot (give a job with [slot])",
+        job.source));
+  }
+  if (!(job.slot.width_mm > 0)) {
+    throw InputError(fmt::format(
+        "{}: the job has no [slot] to plan (width, length, depth mm; [path] type and step): its "
+        "[stock] alone is the stock of a program read from G-code",
+        job.source));
+  }
   const Geometry g = make_geometry(job);
   if (!(g.feed > 0)) throw InputError("[cutting]: the feed rate must be > 0 mm/min");
   // Orbit direction. A clockwise (M3) spindle's tooth enters the material on the right of the
@@ -431,11 +442,6 @@ PlannedPath plan_path(const Job& job, const ChipJudge& judge) {
   // does a ccw spindle (both together cancel).
   const bool mirror = (job.path.direction == Direction::climb) !=
                       (job.cutting.spindle_direction == SpindleDirection::ccw);
-  if (job.pocket.defined()) {
-    throw InputError(fmt::format(
-        "{}: the job plans a pocket ([pocket]); this models a slot (give a job with [slot])",
-        job.source));
-  }
   if (job.slot.curved()) {
     if (!judge) throw Error("plan_path: a slot along a curve needs a chip judge (plan_slot)");
     return plan_along_curve(job, g, mirror, judge);

@@ -195,6 +195,9 @@ std::string metrics_json(const Job& job, const ProcessMetrics& m) {
   j["engagement_max_at_mm"] = point(m.engagement_max_slot_at_mm);
   j["engagement_max_after_entry_deg"] = m.engagement_max_after_entry_deg;
   j["engagement_max_after_entry_at_mm"] = point(m.engagement_max_after_entry_at_mm);
+  j["h_axial_max_mm"] = m.h_axial_max_mm;
+  j["h_axial_max_at_mm"] = point(m.h_axial_max_at_mm);
+  j["descents_into_stock"] = m.descents_into_stock;
   // And, for a program read from a file, the blocks that made those moves ("file:line").
   const auto source = [](const std::string& s) {
     return s.empty() ? nlohmann::json(nullptr) : nlohmann::json(s);
@@ -203,6 +206,7 @@ std::string metrics_json(const Job& job, const ProcessMetrics& m) {
   j["h_max_after_entry_at_line"] = source(m.h_max_after_entry_source);
   j["engagement_max_at_line"] = source(m.engagement_max_slot_source);
   j["engagement_max_after_entry_at_line"] = source(m.engagement_max_after_entry_source);
+  j["h_axial_max_at_line"] = source(m.h_axial_max_source);
   return j.dump(2) + "\n";
 }
 
@@ -247,7 +251,8 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
   const auto f = [](double v) { return figure_text(v); };
   const std::string what = job.pocket.defined()
                                ? fmt::format("pocket of layer '{}'", job.pocket.boundary)
-                               : std::string(to_string(job.path.type));
+                           : job.slot.width_mm > 0 ? std::string(to_string(job.path.type))
+                                                   : std::string("program");
   std::string out =
       fmt::format("{}: {}{}\n", job_file, what, gcode.empty() ? "" : " (from " + gcode + ")");
   out += fmt::format("  machining time       {} s ({} s with acceleration), path {} mm\n",
@@ -263,8 +268,19 @@ std::string metrics_text(const std::string& job_file, const std::string& gcode, 
   const auto xyz = [](const Vec3& p) {
     return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z());
   };
-  if (!m.h_max_slot_source.empty()) {
-    // A program read from a file: the blocks of the largest chip and engagement.
+  // The end edges' chip: the descent per tooth where the end face cuts (docs/models.md
+  // section 7).
+  if (m.descents_into_stock > 0) {
+    out += fmt::format(
+        "  axial chip max       {} mm at {}{} ({} descent{} into stock)\n", f(m.h_axial_max_mm),
+        m.h_axial_max_source.empty() ? "" : m.h_axial_max_source + " ", xyz(m.h_axial_max_at_mm),
+        m.descents_into_stock, m.descents_into_stock == 1 ? "" : "s");
+  } else {
+    out += "  axial chip max       0 mm (no descent into stock)\n";
+  }
+  if (!m.h_max_slot_source.empty() && m.engagement_angle_max_slot_deg > 0) {
+    // A program read from a file: the blocks of the largest chip and engagement (none where
+    // the flutes never cut: a drilling program).
     out += fmt::format("  h_max at             {} {}; after the entry {} mm at {} {}\n",
                        m.h_max_slot_source, xyz(m.h_max_slot_at_mm), f(m.h_max_after_entry_mm),
                        m.h_max_after_entry_source, xyz(m.h_max_after_entry_at_mm));
@@ -337,7 +353,7 @@ std::string series_csv(const EngagementSeries& e) {
   const PathSamples& s = e.samples;
   std::string out =
       "t_s,x_mm,y_mm,z_mm,engaged_arcs_deg,engagement_deg,h_max_mm,teeth_in_cut,"
-      "mrr_mm3_per_min\n";
+      "mrr_mm3_per_min,axial_chip_mm\n";
   out.reserve(s.size() * 96);
   for (std::size_t i = 0; i < s.size(); ++i) {
     std::string arcs;
@@ -346,10 +362,10 @@ std::string series_csv(const EngagementSeries& e) {
       fmt::format_to(std::back_inserter(arcs), "{:.4f}:{:.4f}", rad_to_deg(a.start_rad),
                      rad_to_deg(a.end_rad));
     }
-    fmt::format_to(std::back_inserter(out),
-                   "{:.6f},{:.6f},{:.6f},{:.6f},{},{:.4f},{:.7f},{},{:.3f}\n", s.t_s[i], s.x_mm[i],
-                   s.y_mm[i], s.z_mm[i], arcs, rad_to_deg(e.engagement_angle_rad[i]), e.h_max_mm[i],
-                   e.teeth_in_cut[i], e.removal_rate_mm3_per_s[i] * 60.0);
+    fmt::format_to(
+        std::back_inserter(out), "{:.6f},{:.6f},{:.6f},{:.6f},{},{:.4f},{:.7f},{},{:.3f},{:.7f}\n",
+        s.t_s[i], s.x_mm[i], s.y_mm[i], s.z_mm[i], arcs, rad_to_deg(e.engagement_angle_rad[i]),
+        e.h_max_mm[i], e.teeth_in_cut[i], e.removal_rate_mm3_per_s[i] * 60.0, e.axial_chip_mm[i]);
   }
   return out;
 }

@@ -200,3 +200,17 @@ def test_a_slot_along_a_curve_plans_as_the_cli_plans_it():
     path = tm.plan(job)
     cli = run_cli("plan", str(root / "examples/curves/bend.toml"), "-o", "-").stdout
     assert path.gcode() == cli
+
+
+def test_other_axes_read_as_check_gcode_reports_them():
+    """A and W words: each axis's range (A degrees, W mm) as check-gcode --json gives it, and
+    the time of the move of A alone at F degrees/min (90 degrees at 180/min: 30 s), which the
+    path's duration (its X Y Z motion) leaves out."""
+    text = "G21 G90 G94\nG0 X0 Y0 Z5 A0\nG1 X10 F600 W-2\nG1 A90 F180\nG1 A-30 X20 F600\nM2\n"
+    p = tm.read_gcode(text)
+    assert p.extra_axes == {"A": {"min_deg": -30.0, "max_deg": 90.0},
+                            "W": {"min_mm": -2.0, "max_mm": 0.0}}
+    assert p.extra_axes_only_time_s == pytest.approx(30.0, rel=1e-12)
+    # The path starts at the first position (X0 Y0 Z5): two 10 mm X moves at 600 mm/min.
+    assert p.duration_s == pytest.approx(2 * 10 / 600 * 60, rel=1e-12)
+    assert tm.read_gcode("G0 X1\nM2\n").extra_axes == {}
