@@ -127,7 +127,8 @@ TEST(Biarc, ChordsNeverAboveTolerance) {
 TEST(Gcode, RoundTripEveryDialectAndFamily) {
   const double tol = 0.001;
   const double rounding = 0.5e-4 * std::sqrt(3.0);  // 4 decimals on three axes
-  for (const Dialect d : {Dialect::linuxcnc, Dialect::fanuc, Dialect::sinumerik, Dialect::grbl}) {
+  for (const Dialect d : {Dialect::linuxcnc, Dialect::fanuc, Dialect::sinumerik, Dialect::grbl,
+                          Dialect::haas, Dialect::mach3}) {
     for (const std::string type :
          {"trochoidal", "circular", "elliptical", "linear-elliptical", "linear"}) {
       for (const ArcOutput mode : {ArcOutput::arcs, ArcOutput::chords}) {
@@ -149,6 +150,7 @@ TEST(Gcode, RoundTripEveryDialectAndFamily) {
         const std::string code = write_gcode(job, pp.path, wo);
         GcodeReadOptions ro;
         ro.rapid_rate_mm_per_min = job.machine.rapid_rate_mm_per_min;
+        if (d == Dialect::haas || d == Dialect::mach3) ro.dialect = d;  // read as its control
         const GcodeProgram prog = read_gcode(code, "roundtrip.ngc", ro);
         const std::string label = std::string(to_string(d)) + " " + type +
                                   (mode == ArcOutput::arcs ? " arcs" : " chords");
@@ -768,6 +770,208 @@ M99
   }
 }
 
+// IF [..] THEN #i = ...: the setting, and an alarm #3000 = n, only where the condition holds (a
+// macro guarding its arguments, as Haas's and Fanuc's serial-number macros do).
+TEST(GcodeFanuc, IfThenSetsOnlyWhereTheConditionHolds) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const GcodeProgram p = read_gcode(
+      "G21 G90 G94\nG0 X0. Y0. Z5.\n#100 = 1.\nIF [1 EQ 2] THEN #100 = 9.\n"
+      "IF [1 EQ 2] THEN #3000 = 9 (NOT RAISED)\nG1 X#100 F100.\nIF [1 EQ 1] THEN #101 = 3.\n"
+      "G1 Y#101\nM30\n",
+      "if.nc", ro);
+  expect_ends(p, {{1, 0, 5}, {1, 3, 5}});
+  try {
+    (void)read_gcode("G0 X0. Y0. Z5.\nIF [1 EQ 1] THEN #3000 = 7 (RAISED)\nM30\n", "a.nc", ro);
+    ADD_FAILURE() << "the alarm was not raised";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("a.nc:2:18: the program raised alarm #3000 = 7 (RAISED)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Fanuc's polar coordinate command G16 .. G15: X the distance from the program's zero, Y the
+// angle (degrees; in G91 added to the current point's), the one left out the current point's.
+// LinuxCNC has no G15/G16 (it refuses them; its polar words are @ and ^). Ends by hand.
+TEST(GcodeFanuc, PolarCoordinatesG16) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const std::string prog =
+      "G21 G90 G17 G94\nG0 X0. Y0. Z5.\nG16\nG1 X10. Y90. F100.\nY180.\nG91 Y-90.\nG90 X20.\n"
+      "G15\nG1 X5. Y5.\nM30\n";
+  const GcodeProgram p = read_gcode(prog, "polar.nc", ro);
+  expect_ends(p, {{0, 10, 5}, {-10, 0, 5}, {0, 10, 5}, {0, 20, 5}, {5, 5, 5}});
+  for (const char* code : {"G15", "G16"}) {
+    try {
+      (void)read_gcode(fmt::format("G0 X0 Y0 Z5\n{}\nM2\n", code), "l.ngc");
+      ADD_FAILURE() << code << " read by the linuxcnc dialect";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(fmt::format("unsupported G-code {}", code)),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_THROW((void)read_gcode("G0 X0. Y0. Z5.\nG16 G91 G1 X10. Y10. F100.\nM30\n", "r.nc", ro),
+               InputError);  // an incremental radius: the current point as the centre
+}
+
+// Fanuc's G10 data setting and extra systems: L2 P1 .. P6 (G91: added), L2 P0 the external
+// offset (every system moves), L20 P the G54.1 P systems; L10 .. L13 the H and D registers
+// G43 and G41 read. Positions by hand (the output frame is G54 with its origin at 0).
+TEST(GcodeFanuc, DataSettingAndExtraSystems) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::fanuc;
+  const std::string prog =
+      "G21 G90 G17 G94\nG10 L2 P2 X100. Y0. Z0.\nG10 L20 P3 X200. Y10. Z0.\nG0 X0. Y0. Z5.\n"
+      "G55 X0. Y0.\nG54.1 P3 X1. Y1.\nG10 L2 P2 G91 X5.\nG90 G55 X0. Y0.\nG10 L2 P0 X1000.\n"
+      "G0 X0. Y0.\n"
+      // H3: 20 - 0.5; G53 Z0 puts the spindle's gauge line at machine Z 0, the tip 19.5 below.
+      "G54 G10 L10 P3 R20.\nG10 L11 P3 R-0.5\nG43 H3 Z50.\nG53 Z0.\nG49 G0 Z5.\n"
+      // D5: a radius of 3 (geometry 3.2, wear -0.2); left of +X is +Y.
+      "G10 L12 P5 R3.2\nG10 L13 P5 R-0.2\nG0 X-10. Y0.\nG41 D5 G1 X0. Y0. F100.\nX20.\n"
+      "G40 X30.\nM30\n";
+  const GcodeProgram p = read_gcode(prog, "data.nc", ro);
+  const std::vector<Vec3> e = ends_of(p);
+  ASSERT_GE(e.size(), 9U);
+  EXPECT_LE((e[0] - Vec3(100, 0, 5)).norm(), 1e-12);   // G55 X0 Y0
+  EXPECT_LE((e[1] - Vec3(201, 11, 5)).norm(), 1e-12);  // G54.1 P3 X1 Y1
+  EXPECT_LE((e[2] - Vec3(105, 0, 5)).norm(), 1e-12);   // G55 moved by 5 in G91
+  EXPECT_LE((e[3] - Vec3(1105, 0, 5)).norm(), 1e-12);  // and by the external 1000
+  // Back in G54 (with the external offset): X0 Y0 is at 1000; the G53 Z0 move of the tip.
+  bool found_z = false, found_comp = false;
+  for (const Vec3& v : e) {
+    found_z = found_z || std::abs(v.z() - (-19.5 - 0.0)) <= 1e-12;
+    found_comp = found_comp || (std::abs(v.x() - 1020) <= 1e-12 && std::abs(v.y() - 3) <= 1e-12);
+  }
+  EXPECT_TRUE(found_z) << "G53 Z0 with H3 of 19.5 mm";
+  EXPECT_TRUE(found_comp) << "X20 compensated 3 mm to the left";
+  EXPECT_EQ(
+      std::count_if(p.info.warnings.begin(), p.info.warnings.end(),
+                    [](const std::string& w) { return w.find("assumed") != std::string::npos; }),
+      0);
+  // What Fanuc's G10 does not have, and Haas's codes, are refused by name.
+  EXPECT_THROW((void)read_gcode("G10 L3 P1 R1.\nM30\n", "l3.nc", ro), InputError);
+  EXPECT_THROW((void)read_gcode("G0 X0. Y0. Z5.\nG154 P2 X1.\nM30\n", "g154.nc", ro), InputError);
+}
+
+// Haas: G154 P1 .. P99 and G110 .. G129 (its first 20), G10 L20 into them, G10 L2 P0 the G52
+// shift, G10 L12 a diameter; G187 and G103 (smoothing, look-ahead) leave the path as it is.
+TEST(GcodeHaas, ExtraSystemsG52AndMachineSettings) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::haas;
+  const std::string prog =
+      "G21 G90 G17 G94\nG10 L20 P2 X50. Y0. Z0.\nG0 X0. Y0. Z5.\nG111 X0. Y0.\nG154 P2 X1.\n"
+      "G10 L2 P0 X3.\nG1 X0. F100.\nG187 P1 E0.01\nG103 P4\nG54 X0. Y0.\n"
+      "G10 L12 P5 R6.\nG0 X-10. Y0.\nG41 D5 G1 X0. Y0. F100.\nX20.\nG40 X30.\nM30\n";
+  const GcodeProgram p = read_gcode(prog, "haas.nc", ro);
+  const std::vector<Vec3> e = ends_of(p);
+  ASSERT_GE(e.size(), 5U);
+  EXPECT_LE((e[0] - Vec3(50, 0, 5)).norm(), 1e-12);  // G111 = G154 P2
+  EXPECT_LE((e[1] - Vec3(51, 0, 5)).norm(), 1e-12);
+  EXPECT_LE((e[2] - Vec3(53, 0, 5)).norm(), 1e-12);  // G52 X3
+  EXPECT_LE((e[3] - Vec3(3, 0, 5)).norm(), 1e-12);   // G54 with G52 X3
+  bool found_comp = false;
+  for (const Vec3& v : e) {
+    found_comp = found_comp || (std::abs(v.x() - 23) <= 1e-12 && std::abs(v.y() - 3) <= 1e-12);
+  }
+  EXPECT_TRUE(found_comp) << "a 6 mm diameter: 3 mm to the left";
+  // Fanuc's dialect has no G187; LinuxCNC's neither.
+  GcodeReadOptions fanuc;
+  fanuc.dialect = Dialect::fanuc;
+  EXPECT_THROW((void)read_gcode("G187 P1\nM30\n", "f.nc", fanuc), InputError);
+}
+
+// Mach3: LinuxCNC's language with Fanuc-style subprograms (O<n>, M98 P L, M99), G15/G16
+// polar coordinates, G59 P7 .. fixtures and G31 (straight probe, LinuxCNC's G38.2).
+TEST(GcodeMach3, SubprogramsPolarFixturesAndProbe) {
+  GcodeReadOptions ro;
+  ro.dialect = Dialect::mach3;
+  const std::string prog =
+      "G21 G90 G17 G94\nG0 X0 Y0 Z5\nM98 P100 L2\nG16\nG1 X10 Y90 F100\nG15\nG59 P7 X0 Y0\n"
+      "G31 X5 F50\nM30\nO100\nG91 G1 X1 F100\nG90\nM99\n";
+  const GcodeProgram p = read_gcode(prog, "mach3.tap", ro);
+  expect_ends(p, {{1, 0, 5}, {2, 0, 5}, {0, 10, 5}, {0, 0, 5}, {5, 0, 5}});
+  const auto warned = [&](const std::string& what) {
+    return std::any_of(p.info.warnings.begin(), p.info.warnings.end(),
+                       [&](const std::string& w) { return w.find(what) != std::string::npos; });
+  };
+  EXPECT_TRUE(warned("G59 P7 is used but its offset is not given"));
+  EXPECT_TRUE(warned("read as a feed move to its end point"));
+  EXPECT_THROW((void)read_gcode("G28.1 X0\nM30\n", "r.tap", ro), InputError);
+}
+
+// Programs by others for Haas and Mach3 (tests/ngc/dialects, README.md names each one's
+// source and licence), read with their control's dialect.
+TEST(GcodeDialects, HaasAndMach3ProgramsByOthers) {
+  const auto dir = test::source_dir() / "tests/ngc/dialects";
+  GcodeReadOptions haas;
+  haas.dialect = Dialect::haas;
+  // A Haas serial-number macro (G65 arguments, IF without THEN and THEN M97, M97 local
+  // subprograms, G103, G51 scaling and G68 rotation, G50 G69 in one block, #4109 the modal
+  // F), called by the file beside it with Z-0.005 (inch): its engraving runs at that depth
+  // and rises to R0.1 above the top between characters.
+  const GcodeProgram sn = read_gcode_file(dir / "sn_call.nc", haas);
+  double deepest = 0;
+  for (const Segment& seg : sn.path.segments()) deepest = std::min(deepest, seg.end().z());
+  EXPECT_NEAR(deepest, -0.005 * 25.4, 1e-9);  // exact numbers, one scaling by P (1 here)
+  // A Haas part program: facing, contours and drilling, read whole.
+  const GcodeProgram step =
+      read_gcode_file(dir / "haas__cadekiely__stepblock-steps-o78241.nc", haas);
+  EXPECT_GT(step.path.feed_length_mm(), 0.0);
+  // Another, whose G82 leaves out R and P (Haas: the initial level, no dwell) and which
+  // engraves text with G47: refused by name where it starts.
+  try {
+    (void)read_gcode_file(dir / "haas__cadekiely__4x3_block-o78244.nc", haas);
+    ADD_FAILURE() << "G47 read";
+  } catch (const InputError& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("o78244.nc:140:6: G47 (Haas's text engraving) is not read"),
+        std::string::npos)
+        << e.what();
+  }
+  // pcb2gcode's Mach3 output with its probing: M40/M41 (the Mach3 profile's macros) said and
+  // ignored, G31 read as LinuxCNC's G38.2, M98 P8 L6 and #[expressions] as Mach3 runs them.
+  GcodeReadOptions mach3;
+  mach3.dialect = Dialect::mach3;
+  const GcodeProgram front =
+      read_gcode_file(dir / "mach3__pcb2gcode__example_board_al_mach3_front.ngc", mach3);
+  const auto said = [&](const std::string& what) {
+    return std::any_of(front.info.warnings.begin(), front.info.warnings.end(),
+                       [&](const std::string& w) { return w.find(what) != std::string::npos; });
+  };
+  EXPECT_TRUE(said("M40 (a macro of the Mach3 profile) was ignored"));
+  EXPECT_TRUE(said("read as a feed move to its end point"));
+  EXPECT_GT(front.path.feed_length_mm(), 0.0);
+}
+
+// G96 D S: the spindle speed of a feed-per-revolution move is S m/min over the circumference
+// at its start's X (LinuxCNC's motion), at most D; G97 S back to rpm. Feeds by hand.
+TEST(GcodeSpindle, ConstantSurfaceSpeedG96) {
+  std::vector<double> feeds;
+  GcodeReadOptions ro;
+  ro.trace = [&](const GcodeMove& m) {
+    if (m.kind != GcodeMove::Kind::rapid) feeds.push_back(m.feed_mm_per_min);
+  };
+  const GcodeProgram p = read_gcode(
+      "G21 G90 G17 G95\nG0 X10 Y0 Z0\nS500 M3\nG96 D2000 S100\nG1 X20 F0.1\nG1 X1\nG1 X2\n"
+      "G97 S1000\nG1 X30\nM2\n",
+      "css.ngc", ro);
+  ASSERT_EQ(feeds.size(), 4U);
+  EXPECT_NEAR(feeds[0], 0.1 * 100 * 1000 / (2 * kPi * 10), 1e-9);  // 1591.5 rpm at X10
+  EXPECT_NEAR(feeds[1], 0.1 * 100 * 1000 / (2 * kPi * 20), 1e-9);  // 795.8 rpm at X20
+  EXPECT_NEAR(feeds[2], 0.1 * 2000, 1e-9);  // 15,915 rpm at X1: at most D2000
+  EXPECT_NEAR(feeds[3], 0.1 * 1000, 1e-9);  // G97: S1000
+  // Without S, G96 is an error, as in LinuxCNC.
+  try {
+    (void)read_gcode("G96 D2000\nM2\n", "s.ngc");
+    ADD_FAILURE() << "G96 without S";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("S word missing with G96"), std::string::npos) << e.what();
+  }
+  (void)p;
+}
+
 // G88 stops for the operator to retract by hand: the retraction is modelled as a rapid to the
 // clear plane and named (LinuxCNC's canon has no move there; docs/gcode.md).
 TEST(GcodeCycles, G88RetractsAsTheOperatorWouldAndSaysSo) {
@@ -870,12 +1074,15 @@ TEST(GcodeFanuc, MalformedMacrosNameTheLine) {
           << "want: " << want << "\ngot:  " << e.what();
     }
   }
-  // M98 in the LinuxCNC dialect says where it belongs.
+  // M98 in the Grbl dialect says where it belongs (LinuxCNC 2.9 reads it).
   try {
-    (void)read_gcode("G0 X0 Y0 Z0\nM98 P100\n", "l.ngc");
+    GcodeReadOptions grbl;
+    grbl.dialect = Dialect::grbl;
+    (void)read_gcode("G0 X0 Y0 Z0\nM98 P100\n", "l.ngc", grbl);
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("l.ngc:2:1: M98 is Fanuc's subprogram call"),
+    EXPECT_NE(std::string(e.what()).find("l.ngc:2:1: M98 is the subprogram call of Fanuc, "
+                                         "LinuxCNC, Haas and Mach3, not of the grbl dialect"),
               std::string::npos)
         << e.what();
   }

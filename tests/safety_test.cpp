@@ -58,6 +58,10 @@ TEST(Safety, SetUpAndApproachFollowTheDialect) {
        {"O1000", "G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "G0 G43 H7 Z5.", "G0 X5. Y"}},
       {Dialect::sinumerik, {"G71 G17 G90 G94 G40", "G54", "T7 D1", "M6", "G0 Z5", "G0 X5 Y"}},
       {Dialect::grbl, {"G21 G17 G90 G94", "G54", "S2000 M3", "G0 Z5", "G0 X5 Y"}},
+      {Dialect::haas,
+       {"O1000", "G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "G0 G43 H7 Z5.", "G0 X5. Y"}},
+      {Dialect::mach3,
+       {"G21 G17 G90 G94 G40 G49 G80", "G54", "T7 M6", "S2000 M3", "G0 G43 H7 Z5", "G0 X5 Y"}},
   };
   for (const Case& c : cases) {
     const std::vector<std::string> lines = lines_of(write(job, c.dialect));
@@ -123,8 +127,8 @@ TEST(Safety, NoRapidMovesXYBelowTheClearancePlane) {
     for (const std::string entry : {"outside", "helix", "ramp", "plunge"}) {
       if (type == "linear" && entry == "helix") continue;
       const Job job = test::wagih_job(type, family_overrides(type, entry));
-      for (const Dialect d :
-           {Dialect::linuxcnc, Dialect::fanuc, Dialect::sinumerik, Dialect::grbl}) {
+      for (const Dialect d : {Dialect::linuxcnc, Dialect::fanuc, Dialect::sinumerik, Dialect::grbl,
+                              Dialect::haas, Dialect::mach3}) {
         const std::string label = fmt::format("{} {} {}", type, entry, to_string(d));
         const GcodeProgram prog = read_gcode(write(job, d), "safe.ngc");
         expect_safe_rapids(prog, job.machine.safe_z_mm, label);

@@ -27,13 +27,6 @@ namespace trochomill::cli {
 
 namespace {
 
-Dialect parse_dialect(const std::string& s) {
-  if (s == "fanuc") return Dialect::fanuc;
-  if (s == "sinumerik") return Dialect::sinumerik;
-  if (s == "grbl") return Dialect::grbl;
-  return Dialect::linuxcnc;
-}
-
 // "G54" .. "G59.3" -> 1 .. 9.
 int work_system_number(std::string s) {
   for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -134,7 +127,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("-o,--output", a->out, "output G-code file (- for stdout)")->required();
     add_key_alias(cmd, a->job, "--dialect", "machine.dialect",
-                  "linuxcnc | fanuc | sinumerik | grbl");
+                  "linuxcnc | fanuc | sinumerik | grbl | haas | mach3");
     add_key_alias(cmd, a->job, "--tolerance", "machine.arc_tolerance",
                   "max deviation of fitted arcs/chords, mm");
     add_key_flag(cmd, a->job, "--chords", "machine.arc_output", "chords",
@@ -316,8 +309,8 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                     "path acceleration limit for the time estimate, mm/s^2")
         ->check(finite_in(0, 1e15));
     cmd->add_option("--dialect", a->dialect,
-                    "language: linuxcnc (default), fanuc, sinumerik or grbl")
-        ->check(CLI::IsMember({"linuxcnc", "fanuc", "sinumerik", "grbl"}));
+                    "language: linuxcnc (default), fanuc, sinumerik, grbl, haas or mach3")
+        ->check(CLI::IsMember({"linuxcnc", "fanuc", "sinumerik", "grbl", "haas", "mach3"}));
     cmd->add_option("-I,--include", a->includes,
                     "folder searched for o<name> call's name.ngc (repeatable; the program's own "
                     "folder is searched first)")
@@ -386,7 +379,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
         if (cmd->count("--work-system") > 0) from_job.work_system = ro.work_system;
         ro = from_job;
       }
-      if (!a->dialect.empty()) ro.dialect = parse_dialect(a->dialect);
+      if (!a->dialect.empty()) ro.dialect = trochomill::parse_dialect(a->dialect);
       for (const auto& d : a->includes) ro.include_dirs.emplace_back(d);
       if (!a->tool_table.empty()) ro.tool_table = a->tool_table;
       for (const std::string& o : a->offsets) {

@@ -111,7 +111,10 @@ enum class Direction { climb, conventional };
 enum class EntryType { helix, ramp, plunge, outside };
 enum class SpindleDirection { cw, ccw };
 enum class Coolant { off, flood, mist };
-enum class Dialect { linuxcnc, fanuc, sinumerik, grbl };
+/// The control a program is written for or read as. haas and mach3 are the languages of
+/// Fanuc and of LinuxCNC with their controls' differences (docs/gcode.md); written as fanuc's
+/// and linuxcnc's programs.
+enum class Dialect { linuxcnc, fanuc, sinumerik, grbl, haas, mach3 };
 /// The work offset the program selects (G54 .. G59).
 enum class WorkOffset { g54, g55, g56, g57, g58, g59 };
 enum class ArcOutput { arcs, chords };
@@ -279,7 +282,8 @@ struct JobKey {
 [[nodiscard]] ChipModel parse_chip_model(std::string_view name);
 /// Parses a force model name (bergmann | kienzle | linear); InputError otherwise.
 [[nodiscard]] ForceModel parse_force_model(std::string_view name);
-/// Parses a dialect name (linuxcnc | fanuc | sinumerik | grbl); InputError otherwise.
+/// Parses a dialect name (linuxcnc | fanuc | sinumerik | grbl | haas | mach3); InputError
+/// otherwise.
 [[nodiscard]] Dialect parse_dialect(std::string_view name);
 
 }  // namespace trochomill

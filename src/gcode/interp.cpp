@@ -38,7 +38,7 @@ Interpreter::Interpreter(std::string_view text, std::string_view name, const Gco
   main.text = text;
   main.name = std::string(name);
   sources_.push_back(std::move(main));
-  params_.assign(kMaxParameter, 0.0);
+  params_.assign(o_numbers_ ? kMaxExtendedParameter : kMaxParameter, 0.0);
   if (fanuc_) {
     // Fanuc's local and common variables start vacant.
     const double vacant = std::numeric_limits<double>::quiet_NaN();
@@ -91,7 +91,7 @@ GcodeProgram Interpreter::run() {
   }
   // LinuxCNC refuses a program that stops without M2, M30 or a closing '%'; a sender of
   // another control's programs runs it. Read to its last line, with a warning.
-  if (!ended_ && !percent_closed && !fanuc_ && (prog_.info.motion_blocks > 0 || !first)) {
+  if (!ended_ && !percent_closed && !o_numbers_ && (prog_.info.motion_blocks > 0 || !first)) {
     warn(
         "the program ends without M2, M30 or a closing %: LinuxCNC refuses it (\"File ended "
         "with no percent sign or program end\"); read to its last line");
@@ -171,7 +171,7 @@ void Interpreter::run_line(std::string_view raw) {
     if (j == i + 1) fail(i, "'N' needs a line number after it");
     i = j;
   }
-  if (fanuc_) {
+  if (o_numbers_) {
     if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
       // A program number: the start of a (sub)program; the rest of the line runs.
       std::size_t j = i + 1;
@@ -181,7 +181,7 @@ void Interpreter::run_line(std::string_view raw) {
       }
       i = j;
     }
-    if (fanuc_statement(i)) return;
+    if (fanuc_ && fanuc_statement(i)) return;
   } else if (i < s.size() && (s[i] == 'o' || s[i] == ':')) {
     if (line_.comment_column != 0 && line_.comment_column < col_of(i)) {
       fail(i, "an O-word must start its line (a comment comes before it)");
@@ -192,7 +192,7 @@ void Interpreter::run_line(std::string_view raw) {
   count_block();
   read_block(i);
   // Parameter settings take effect after the whole line is read, before it runs.
-  for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
+  set_numbered();
   for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
   block_feed_events_ = feed_events_;
   block_feed_before_ = feed_;
@@ -220,6 +220,7 @@ void Interpreter::execute() {
   bool stop = false, pause = false;
   run_m_codes(stop, pause);
   set_modes(codes);
+  polar_words(codes);
   run_motion(codes);
   check_unused(codes[kGroup0], codes[kDwell], codes[kToolLength], codes[kComp] > 400);
   if (stop || pause) {
@@ -229,6 +230,41 @@ void Interpreter::execute() {
   if (stop) end_program();
   if (pending_m98_ && !ended_) subprogram_call();
   if (pending_m99_ && !ended_) subprogram_return();
+}
+
+// Fanuc's (and Haas's, Mach3's) polar coordinate command, G16 .. G15: in the XY plane a move's
+// X is the distance from the program's zero and Y the angle from +X (degrees), read as
+// LinuxCNC's @ and ^ words (the one left out the current point's; in G91 the angle adds to
+// the current point's). Not in blocks whose X Y are not an end (G10, G28, G30, G52, G53, G92).
+void Interpreter::polar_words(const BlockCodes& codes) {
+  for (const auto& gc : block_.g) {
+    if (gc.code10 == 150 || gc.code10 == 160) polar_mode_ = gc.code10 == 160;
+  }
+  if (!polar_mode_ || !(block_.has('x') || block_.has('y'))) return;
+  const int group0 = codes[kGroup0];
+  if (codes.g53 || group0 == 100 || group0 == 280 || group0 == 300 || group0 == 520 ||
+      group0 == 920) {
+    return;
+  }
+  const std::uint32_t col = block_.col(block_.has('x') ? 'x' : 'y');
+  if (plane_ != Plane::xy)
+    fail_at(col, "G16 (polar coordinates) is read in the XY plane (G17) only");
+  if (!absolute_ && block_.has('x')) {
+    fail_at(block_.col('x'),
+            "G16 with the radius X in G91 (the current point as the polar centre) is not read: "
+            "give the radius in G90");
+  }
+  if (block_.has('x')) {
+    block_.has_polar_r = true;
+    block_.polar_r = block_['x'];
+    block_.polar_r_col = block_.col('x');
+  }
+  if (block_.has('y')) {
+    block_.has_polar_a = true;
+    block_.polar_a_deg = block_['y'];
+    block_.polar_a_col = block_.col('y');
+  }
+  block_.present &= ~((1U << ('x' - 'a')) | (1U << ('y' - 'a')));
 }
 
 // Feed mode, F, S and T.
@@ -252,6 +288,21 @@ void Interpreter::set_feed_speed_tool(int feed_mode) {
   if (block_.has('s')) {
     if (block_['s'] < 0) fail_at(block_.col('s'), "spindle speed S must be >= 0");
     speed_ = block_['s'];
+  }
+  // G96 D S (constant surface speed, at most D rpm) and G97 (S in rpm), LinuxCNC's group 14.
+  const auto g96 = std::find_if(block_.g.begin(), block_.g.end(),
+                                [](const Block::Code& c) { return c.code10 == 960; });
+  const bool g97 = std::any_of(block_.g.begin(), block_.g.end(),
+                               [](const Block::Code& c) { return c.code10 == 970; });
+  if (g96 != block_.g.end()) {
+    if (g97) fail_at(g96->column, "two spindle speed mode codes in one block");
+    if (!block_.has('s')) fail_at(g96->column, "S word missing with G96");
+    css_ = true;
+    css_max_rpm_ = block_.has('d') ? std::abs(block_['d']) : 0.0;
+  } else if (g97) {
+    css_ = false;
+  }
+  if (block_.has('s') && !css_) {
     prog_.info.max_spindle_rpm = std::max(prog_.info.max_spindle_rpm, speed_);
   }
   if (block_.has('t')) {
@@ -419,17 +470,17 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
         }
         break;
       case 980: {
-        if (!fanuc_) {
-          fail_at(column,
-                  "M98 is Fanuc's subprogram call: read the program with the fanuc "
-                  "dialect, or call an o-word subroutine");
+        if (!m98_) {
+          fail_at(column, fmt::format("M98 is the subprogram call of Fanuc, LinuxCNC, Haas and "
+                                      "Mach3, not of the {} dialect",
+                                      to_string(opt_.dialect)));
         }
         if (!block_.has('p')) fail_at(column, "M98 needs the program number in P");
         double prog = block_['p'], times = block_.has('l') ? block_['l'] : 1;
         if (prog < 0 || prog != std::floor(prog) || prog > 99999999) {
           fail_at(block_.col('p'), "M98 P must be a program number");
         }
-        if (!block_.has('l') && prog > 9999) {  // P<times 4 digits><program 4 digits>
+        if (fanuc_ && !block_.has('l') && prog > 9999) {  // P<times 4 digits><program 4>
           times = std::floor(prog / 10000);
           prog = std::fmod(prog, 10000);
         }
@@ -440,10 +491,10 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
         break;
       }
       case 990:
-        if (!fanuc_) {
-          fail_at(column,
-                  "M99 is Fanuc's subprogram return: read the program with the fanuc "
-                  "dialect, or end an o-word subroutine with endsub");
+        if (!m98_) {
+          fail_at(column, fmt::format("M99 is the subprogram return of Fanuc, LinuxCNC, Haas and "
+                                      "Mach3, not of the {} dialect",
+                                      to_string(opt_.dialect)));
         }
         pending_m99_ = true;
         m99_p_ = block_.has('p') ? block_['p'] : -1;
@@ -483,6 +534,15 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
                           code_name('M', m)));
           break;
         }
+        // Mach3 runs any other M-code as a macro of its profile (a script of the machine's
+        // set-up: probing logs, tool changers): said, not refused.
+        if (mach3_ && m >= 0 && m < 10000 && m % 10 == 0) {
+          warn(
+              fmt::format("{} (a macro of the Mach3 profile) was ignored: it does not move the "
+                          "tool here",
+                          code_name('M', m)));
+          break;
+        }
         fail_at(column, fmt::format("unsupported M-code {}", code_name('M', m)));
     }
   }
@@ -517,11 +577,19 @@ void Interpreter::set_modes(const BlockCodes& codes) {
   }
   if (system >= 0) {
     comp_.refuse(system_col, "a coordinate system change (G54-G59.3)");
-    select_system(system);
+    select_system(system, system_col);
   }
   if (distance >= 0) absolute_ = distance == 900;
   if (arc_distance >= 0) arc_absolute_ = arc_distance == 901;
   if (retract >= 0) retract_r_ = retract == 990;
+  if (codes.g50) {
+    comp_.refuse(codes.g50_col, "G50");
+    program_transform(500, codes.g50_col);
+  }
+  if (codes.g69) {
+    comp_.refuse(codes.g69_col, "G69");
+    program_transform(690, codes.g69_col);
+  }
   if (group0 >= 0) {
     if (group0 != 100) {
       comp_.refuse(group0_col, fmt::format("{}", code_name('G', group0)));
@@ -602,6 +670,16 @@ void Interpreter::run_motion(const BlockCodes& codes) {
     nurbs_point(motion_before != 52, motion_col);
   } else if (motion >= 20 && motion <= 30 && !axis_used_by_group0) {
     fail_at(motion_col, "arc without an end point");
+  } else if (g53 && fanuc_ && motion != 0 && motion != 10) {
+    // Fanuc and Haas: G53 moves at rapid, whatever the motion mode (and without axis words
+    // not at all).
+    if (block_.has_axis()) {
+      const int mode = motion_;
+      motion_ = 0;
+      ++prog_.info.motion_blocks;
+      move(true, block_.g.front().column);
+      motion_ = mode;
+    }
   } else if (g53) {
     // LinuxCNC: G53 with G0 or G1 in the block and no axis words moves to where the tool
     // already is (a move of no length); without G0 or G1 it is refused.

@@ -50,7 +50,15 @@ struct InterpState {
 
   // The options and the dialect (set first: the members below read them).
   GcodeReadOptions opt_;
-  bool fanuc_ = opt_.dialect == Dialect::fanuc;  // Fanuc with Macro B
+  bool haas_ = opt_.dialect == Dialect::haas;
+  bool mach3_ = opt_.dialect == Dialect::mach3;
+  bool fanuc_ = opt_.dialect == Dialect::fanuc || haas_;  // Fanuc with Macro B (Haas too)
+  // O<n> lines start programs, not O-word statements (Fanuc, Haas, Mach3); G15/G16 polar.
+  bool o_numbers_ = fanuc_ || mach3_;
+  // M98 P<n> L<times> calls program O<n>, M99 returns: those and LinuxCNC 2.9's Fanuc-style
+  // subroutines (a bare O<n> line in its O-word language).
+  bool m98_ = o_numbers_ || opt_.dialect == Dialect::linuxcnc;
+  bool polar_mode_ = false;  // G16 .. G15
   bool decimal_warned_ = false;
   // This block's subprogram call and return (Fanuc).
   std::optional<std::pair<double, double>> pending_m98_;  // P, L of this block's M98
@@ -92,11 +100,14 @@ struct InterpState {
   bool feed_given_ = false;
   double inverse_f_ = -1;  // G93: this block's F
   double speed_ = 0;
+  bool css_ = false;        // G96 .. G97
+  double css_max_rpm_ = 0;  // G96's D (0: none)
+  bool css_warned_ = false, tcp_warned_ = false;
   bool spindle_on_ = false;
   int spindle_dir_ = 0;  // 1 clockwise (M3), -1 counterclockwise (M4), 0 stopped
   // G99 (retract to R) until G98: LinuxCNC's interpreter starts so (its setup leaves the mode
   // at its first value, R_PLANE); Fanuc starts in G98.
-  bool retract_r_ = opt_.dialect != Dialect::fanuc;
+  bool retract_r_ = !fanuc_;
   double tool_loaded_ = 0, tool_selected_ = 0;
   double tool_z_ = 0;  // active tool length offset (mm)
   std::map<int, ToolTableEntry> tools_ = opt_.tools;
@@ -109,7 +120,17 @@ struct InterpState {
   double out_rotation_ = 0;
   bool g28_given_ = false, g30_given_ = false, home_warned_ = false, tool_warned_ = false;
   double unknown_tool_ = -1;  // the H of an active G43 whose tool the table lacks
-  std::array<bool, 9> system_warned_{};
+  // G54 .. G59.3 (1 .. 9), then the extra systems P1 .. kExtraSystems (10 ..): Fanuc's G54.1 P,
+  // Haas's G154 P (G110 .. G129 its first 20), Mach3's G59 P7 .. (its fixtures 7 ..).
+  std::vector<bool> system_warned_ = std::vector<bool>(10 + kExtraSystems, false);
+  // Fanuc's external work offset (G10 L2 P0): added to every system's origin (mm).
+  Vec3 ext_offset_ = Vec3::Zero();
+  // Fanuc's and Haas's offset registers (G10 L10 .. L13): H length and D radius (or Haas's
+  // diameter), geometry and wear (mm); a register G10 never set reads the tool table.
+  struct OffsetRegister {
+    std::optional<double> h_geometry, h_wear, d_geometry, d_wear;
+  };
+  std::map<int, OffsetRegister> registers_;
   // Canned cycles.
   int cycle_motion_ = -1;
   double cycle_r_ = 0, cycle_z_ = 0, cycle_q_ = 0, cycle_p_ = 0, cycle_il_ = 0;
@@ -151,6 +172,7 @@ class CutterComp {
   explicit CutterComp(Interpreter& interp) : interp_(interp) {}
 
   [[nodiscard]] bool on() const { return side_ != Side::off; }
+  [[nodiscard]] bool on_left() const { return side_ == Side::left; }
   [[nodiscard]] bool moves() const { return on() && radius_ > 0; }
   // The position LinuxCNC reports as #<_x> #<_y> #<_z>: the tool centre while compensation
   // runs (Fanuc's #5041-#5043 too).
@@ -234,6 +256,7 @@ class Interpreter : private InterpState {
   void count_block();
   inline void run_line(std::string_view raw);
   void execute();
+  void polar_words(const BlockCodes& codes);
   inline void set_feed_speed_tool(int feed_mode);
   inline void run_m_codes(bool& stop, bool& pause);
   void check_m_codes() const;
@@ -256,6 +279,7 @@ class Interpreter : private InterpState {
   bool function_follows(std::size_t i) const;
   double read_function(std::size_t& i);
   double read_parameter(std::size_t& i);
+  double fanuc_modal(int index) const;
   double fanuc_variable(int index) const;
   int parameter_index(double v, std::size_t at) const;
   std::string read_name(std::size_t& i);
@@ -267,6 +291,7 @@ class Interpreter : private InterpState {
   // ---- interp_block.cpp: blocks: their words, their codes' modal groups, the checks; M70-M73
   void read_block(std::size_t i);
   static char upper(char c) { return static_cast<char>(c - 'a' + 'A'); }
+  void set_numbered();
   void check_fanuc_write(int index, std::size_t at, double v) const;
   // A length word in mm.
   double len(char c) const { return block_[c] * unit_; }
@@ -289,9 +314,12 @@ class Interpreter : private InterpState {
   // ---- interp_coords.cpp: coordinate systems and offsets: G54-G59.3, G10, G92, G52, G28/G30
   // Parameters of a coordinate system n (1 = G54 .. 9 = G59.3): X at 5201 + 20 n, R at 5210 +
   // 20 n. G92: 5211-5213, enabled at 5210. G28: 5161-5163, G30: 5181-5183. All mm.
+  // The extra systems (n >= 10, P = n - 9) at Fanuc's #7001 + 20 (P - 1).
   static std::size_t sys_param(int n, int axis) {
-    return static_cast<std::size_t>(5201 + 20 * n + axis);
+    return static_cast<std::size_t>(n <= 9 ? 5201 + 20 * n + axis : 7001 + 20 * (n - 10) + axis);
   }
+  [[nodiscard]] std::string system_name(int n) const;
+  void select_system_n(int n);
   void init_offsets();
   void load_system();
   [[nodiscard]] Vec3 to_machine_tip(const Vec3& p) const;
@@ -299,8 +327,9 @@ class Interpreter : private InterpState {
   [[nodiscard]] Vec3 to_out(const Vec3& p) const;
   [[nodiscard]] Vec3 dir_to_out(const Vec3& d) const;
   void note_system_used(int n);
-  void select_system(int g);
+  void select_system(int g, std::uint32_t column);
   void non_modal(int g, std::uint32_t column);
+  void fanuc_g10(std::uint32_t column);
   void g10(std::uint32_t column);
   // A system set by G10 is known: no warning when it is selected later.
   void note_given(int n) { system_warned_[static_cast<std::size_t>(n - 1)] = true; }
@@ -336,6 +365,9 @@ class Interpreter : private InterpState {
   double extra_time_s(const ExtraAxes& out_end, std::uint32_t column);
   void move(bool g53, std::uint32_t column);
   double feed_for(double length_mm, std::uint32_t column);
+  // The spindle speed a move runs at (rpm): S, or under G96 (constant surface speed) S m/min
+  // (G20: ft/min) over the circumference at the current X, at most D.
+  double spindle_rpm(std::uint32_t column);
   void note_feed(double f);
   void check_target(const Vec3& out, std::uint32_t column) const;
   void emit_line(const Vec3& target, bool rapid, std::uint32_t column, bool starts = false);

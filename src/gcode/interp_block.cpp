@@ -40,9 +40,8 @@ void Interpreter::read_block(std::size_t i) {
       ++i;
       // Fanuc: the right side is an expression without brackets (#1 = #1 + 1).
       const double v = fanuc_ ? read_binary(i, 1) : read_value(i);
-      if (fanuc_ && name.empty()) check_fanuc_write(index, at, v);
       if (name.empty()) {
-        block_.numbered.push_back({index, v});
+        block_.numbered.push_back({index, v, at});
       } else {
         block_.named.push_back({std::move(name), v, col_of(at)});
       }
@@ -107,7 +106,15 @@ void Interpreter::read_block(std::size_t i) {
       // Every code is below 1000 (G59.3, M199): anything larger is no code (and would not
       // fit the tenths it is compared in).
       if (!(std::abs(v) < 1e4)) fail(at, fmt::format("{}{:g} is not a code", upper(letter), v));
-      (letter == 'g' ? block_.g : block_.m).push_back({code10(v), col_of(at)});
+      int code = code10(v);
+      // Mach3's straight probe G31 is LinuxCNC's G38.2.
+      if (letter == 'g' && mach3_ && code == 310) code = 382;
+      if (letter == 'g' && mach3_ && code == 281) {
+        fail(at,
+             "Mach3's G28.1 (referencing axes on their home switches) is not read: where the "
+             "axes go is the machine's homing set-up");
+      }
+      (letter == 'g' ? block_.g : block_.m).push_back({code, col_of(at)});
       continue;
     }
     if (letter == 'o') fail(at, "an O-word must start its line");
@@ -122,6 +129,15 @@ void Interpreter::read_block(std::size_t i) {
     block_.present |= 1U << k;
     block_.value[k] = v;
     block_.column[k] = col_of(at);
+  }
+}
+
+// The block's #i = value settings, after the whole line is read (Fanuc: #3000 raises its
+// alarm and the positions are read only, when the setting runs).
+void Interpreter::set_numbered() {
+  for (const auto& p : block_.numbered) {
+    if (fanuc_) check_fanuc_write(p.index, p.at, p.value);
+    params_[static_cast<std::size_t>(p.index)] = p.value;
   }
 }
 
@@ -164,6 +180,7 @@ BlockCodes Interpreter::group_codes() const {
   code.fill(-1);
   std::array<std::uint32_t, kGroups> col{};
   bool g53 = false;
+  BlockCodes out;
   for (const auto& [g, column] : block_.g) {
     if (g == 530) {
       g53 = true;
@@ -173,9 +190,29 @@ BlockCodes Interpreter::group_codes() const {
       comp_.refuse(column, fmt::format("{} (path control mode)", code_name('G', g)));
       continue;  // path blending: no effect on the path
     }
-    if (g == 970 || g == 150 || g == 160) continue;  // constant spindle speed, polar off
+    if (g == 960 || g == 970) continue;  // spindle speed modes (set_feed_speed_tool)
+    if (g == 150 || g == 160) {
+      if (!o_numbers_) unsupported_g(g, column);  // LinuxCNC has @ ^, not G15/G16
+      continue;                                   // polar coordinates off / on (polar_words)
+    }
+    if (g == 1870 || g == 1030) {
+      // Haas's smoothness (G187 P E) and block look-ahead (G103 P): no effect on the path.
+      if (!haas_) unsupported_g(g, column);
+      continue;
+    }
     // Fanuc's scaling (G50/G51) and rotation (G68/G69); LinuxCNC has neither.
     if ((g == 500 || g == 510 || g == 680 || g == 690) && !fanuc_) unsupported_g(g, column);
+    if (g == 500 || g == 690) {
+      (g == 500 ? out.g50 : out.g69) = true;
+      (g == 500 ? out.g50_col : out.g69_col) = column;
+      continue;
+    }
+    // Extra coordinate systems: Fanuc's G54.1 P (and Haas's), Haas's G154 P and G110 .. G129.
+    if ((g == 541 && !fanuc_) || ((g == 1540 || (g >= 1100 && g <= 1290)) && !haas_)) {
+      unsupported_g(g, column);
+    }
+    // Fanuc's tool centre point control G43.4: read as G43 (set_modes warns).
+    if (g == 434 && !fanuc_) unsupported_g(g, column);
     const auto it = std::find_if(kGroupOf.begin(), kGroupOf.end(),
                                  [g = g](const GroupOf& e) { return e.code10 == g; });
     if (it == kGroupOf.end()) unsupported_g(g, column);
@@ -197,7 +234,10 @@ BlockCodes Interpreter::group_codes() const {
     code[k] = g;
     col[k] = column;
   }
-  return {code, col, g53};
+  out.code = code;
+  out.col = col;
+  out.g53 = g53;
+  return out;
 }
 
 // Words no code of the block uses are errors, as in LinuxCNC (a typo must not pass).
@@ -220,9 +260,17 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
                                             "place a G0/G1/G2/G3 or canned cycle's end)",
                                             block_.has_polar_r ? '@' : '^'));
   }
+  const auto has_g = [&](int code10) {
+    return std::any_of(block_.g.begin(), block_.g.end(),
+                       [=](const Block::Code& c) { return c.code10 == code10; });
+  };
   // G64 P- Q-: the path blending tolerance and the naive cam tolerance (no effect on the path).
-  const bool g64 = std::any_of(block_.g.begin(), block_.g.end(),
-                               [](const Block::Code& c) { return c.code10 == 640; });
+  const bool g64 = has_g(640);
+  // P of an extra coordinate system (G54.1, G154, Mach3's G59) and of Haas's G187 and G103; E
+  // of G187; D of G96 (the largest spindle speed).
+  const bool system_p = has_g(541) || has_g(1540) || (mach3_ && has_g(590));
+  const bool haas_p = haas_ && (has_g(1870) || has_g(1030));
+  const bool g96 = has_g(960);
   bool m61 = false;
   for (const auto& mc : block_.m) m61 = m61 || mc.code10 == 610;
   auto refuse = [&](char c, const char* users) {
@@ -245,7 +293,9 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
   if (block_.has('q') && !q_cycle && !m61 && !g64 && !m_q && !g5) {
     refuse('q', "G64, G73, G83, M19, M61, M66, M67, M68 or user M-code");
   }
-  if (block_.has('e') && !m_e && !g76) refuse('e', "G76, M66, M67 or M68");
+  if (block_.has('e') && !m_e && !g76 && !(haas_ && has_g(1870))) {
+    refuse('e', "G76, M66, M67 or M68");
+  }
   const bool m98 = pending_m98_.has_value();
   // LinuxCNC takes no L with G74 (its check lists G73 and G76-G89).
   const bool l_cycle = cycle && (fanuc_ || motion_ != 740);
@@ -263,21 +313,27 @@ void Interpreter::check_unused(int group0, int dwell, int tool_length, bool comp
     }
   }
   if (block_.has('p') && !arc && !cycle && dwell < 0 && group0 != 100 && !m98 && !pending_m99_ &&
-      !g64 && !m_p && !g5 && !g52 && group0 != 510) {
+      !g64 && !m_p && !g5 && !g52 && group0 != 510 && !system_p && !haas_p) {
     refuse('p', "G2/G3, G4, G10, G64, canned cycle, M19, M50-M53, M62-M66 or user M-code");
   }
-  if (block_.has('h') && tool_length != 430 && !g76) refuse('h', "G43 or G76");
+  if (block_.has('h') && tool_length != 430 && tool_length != 434 && !g76) {
+    refuse('h', "G43 or G76");
+  }
   // D alone: LinuxCNC refuses it; Sinumerik's "T1 D1" (its tool offset) is tolerated, as its
   // other words are, and Fanuc's D is an offset register.
-  if (block_.has('d') && !comp_word && opt_.dialect == Dialect::linuxcnc && !block_.has('t')) {
-    refuse('d', "G41/G42 (or G41.1/G42.1)");
+  if (block_.has('d') && !comp_word && !g96 &&
+      (opt_.dialect == Dialect::linuxcnc || opt_.dialect == Dialect::mach3) && !block_.has('t')) {
+    refuse('d', "G41/G42 (or G41.1/G42.1) or G96");
   }
 }
 
 void Interpreter::unsupported_g(int g, std::uint32_t column) const {
   const std::string name = code_name('G', g);
   if (g >= 380 && g <= 385) fail_at(column, fmt::format("{} (probing) is not supported", name));
-  if (g == 70 || g == 80 || g == 960) {
+  if (g == 470 && haas_) {
+    fail_at(column, "G47 (Haas's text engraving) is not read: its strokes are the control's font");
+  }
+  if (g == 70 || g == 80) {
     fail_at(column, fmt::format("{} is a lathe mode, not supported", name));
   }
   fail_at(column, fmt::format("unsupported G-code {}", name));
@@ -306,7 +362,7 @@ void Interpreter::restore_modal(const ModalSave& m) {
   feed_ = m.feed;
   speed_ = m.speed;
   retract_r_ = m.retract_r;
-  if (m.system != system_) select_system(m.system == 1 ? 540 : 540 + (m.system - 1) * 10);
+  if (m.system != system_) select_system_n(m.system);
 }
 
 }  // namespace trochomill::gcode_detail

@@ -47,7 +47,8 @@ void Interpreter::init_offsets() {
 
 void Interpreter::load_system() {
   origin_ = Vec3(params_[sys_param(system_, 0)], params_[sys_param(system_, 1)],
-                 params_[sys_param(system_, 2)]);
+                 params_[sys_param(system_, 2)]) +
+            ext_offset_;
   rotation_ = params_[sys_param(system_, 9)];
 }
 
@@ -173,20 +174,29 @@ Vec3 Interpreter::dir_to_out(const Vec3& program_dir) const {
   return Vec3(x, y, d.z());
 }
 
+std::string Interpreter::system_name(int n) const {
+  static constexpr std::array<std::string_view, 9> kNames{"G54", "G55",   "G56",   "G57",  "G58",
+                                                          "G59", "G59.1", "G59.2", "G59.3"};
+  if (n <= 9) return std::string(kNames[static_cast<std::size_t>(n - 1)]);
+  const int p = n - 9;
+  if (haas_) return fmt::format("G154 P{}", p);
+  if (mach3_) return fmt::format("G59 P{}", p + 6);
+  return fmt::format("G54.1 P{}", p);
+}
+
 void Interpreter::note_system_used(int n) {
-  if (n != opt_.work_system && !opt_.work_offsets_mm[static_cast<std::size_t>(n - 1)] &&
-      !system_warned_[static_cast<std::size_t>(n - 1)]) {
-    system_warned_[static_cast<std::size_t>(n - 1)] = true;
-    static constexpr std::array<std::string_view, 9> kNames{"G54", "G55",   "G56",   "G57",  "G58",
-                                                            "G59", "G59.1", "G59.2", "G59.3"};
+  const auto k = static_cast<std::size_t>(n - 1);
+  const bool given = n <= 9 && opt_.work_offsets_mm[k].has_value();
+  if (n != opt_.work_system && !given && !system_warned_[k]) {
+    system_warned_[k] = true;
     warn(
-        fmt::format("{} is used but its offset is not given ([machine] work_offsets): "
+        fmt::format("{} is used but its offset is not given ([machine] work_offsets{}): "
                     "assumed equal to {}'s",
-                    kNames[static_cast<std::size_t>(n - 1)],
-                    kNames[static_cast<std::size_t>(opt_.work_system - 1)]));
+                    system_name(n), n <= 9 ? "" : ", or G10 L20 in the program",
+                    system_name(opt_.work_system)));
     // Unknown offsets are taken as the output system's (a program moving between systems on
     // one part then keeps its geometry).
-    for (int a = 0; a < 9; ++a) params_[sys_param(n, a)] = params_[sys_param(opt_.work_system, a)];
+    for (int a = 0; a < 10; ++a) params_[sys_param(n, a)] = params_[sys_param(opt_.work_system, a)];
   }
 }
 
@@ -207,9 +217,31 @@ void Interpreter::note_extra_axes() {
                   letters));
 }
 
-void Interpreter::select_system(int g) {
+// G54 .. G59.3; Fanuc's G54.1 P1 .. P300, Haas's G154 P1 .. P99 and G110 .. G129 (G154 P1 ..
+// P20), Mach3's G59 P7 .. P306 (its fixtures 7 ..): the extra systems.
+void Interpreter::select_system(int g, std::uint32_t column) {
   static constexpr std::array<int, 9> kCodes{540, 550, 560, 570, 580, 590, 591, 592, 593};
-  const int n = static_cast<int>(std::find(kCodes.begin(), kCodes.end(), g) - kCodes.begin()) + 1;
+  int n = static_cast<int>(std::find(kCodes.begin(), kCodes.end(), g) - kCodes.begin()) + 1;
+  const bool extra_p = g == 541 || g == 1540 || (g == 590 && mach3_ && block_.has('p'));
+  if (g >= 1100 && g <= 1290) n = 10 + (g - 1100) / 10;
+  if (extra_p) {
+    const std::string name = code_name('G', g);
+    const int lo = g == 590 ? 7 : 1, hi = g == 590    ? kExtraSystems + 6
+                                          : g == 1540 ? 99
+                                                      : kExtraSystems;
+    if (!block_.has('p'))
+      fail_at(column, fmt::format("{} needs the system's number in P ({} .. {})", name, lo, hi));
+    const double p = block_['p'];
+    if (p < lo || p > hi || p != std::floor(p)) {
+      fail_at(block_.col('p'),
+              fmt::format("{} P{:g}: P is a whole number {} .. {}", name, p, lo, hi));
+    }
+    n = 9 + static_cast<int>(p) - (g == 590 ? 6 : 0);
+  }
+  select_system_n(n);
+}
+
+void Interpreter::select_system_n(int n) {
   if (n == system_) return;
   note_system_used(n);
   const Vec3 machine = to_machine_tip(cur_pos_);
@@ -330,11 +362,110 @@ void Interpreter::non_modal(int g, std::uint32_t column) {
   }
 }
 
+// Fanuc's and Haas's G10 data setting (their manuals' forms): L2 P1 .. P6 the offsets of G54 ..
+// G59 (P0: Fanuc's external offset, added to every system; Haas's G52), L20 P the extra systems
+// (G54.1 P, G154 P), X Y Z and the other axes the offset, added to it in G91; L10 .. L13 P R
+// the offset registers (H geometry and wear, D geometry and wear; added in G91), Haas's L1 its
+// L11 and Fanuc's L1 (memory A) the one value of H and D.
+void Interpreter::fanuc_g10(std::uint32_t column) {
+  const double lv = block_['l'];
+  const int l = static_cast<int>(lv);
+  const bool registers = l == 1 || (l >= 10 && l <= 13);
+  if (!registers && l != 2 && l != 20) {
+    fail_at(block_.col('l'),
+            fmt::format("G10 L{} is not read ({}: L2 and L20 set work offsets, L1 and L10 .. L13 "
+                        "offset registers)",
+                        l, haas_ ? "Haas" : "Fanuc"));
+  }
+  if (!block_.has('p')) fail_at(column, fmt::format("G10 L{} needs P", l));
+  const double pv = block_['p'];
+  if (registers) {
+    if (pv < 0 || pv != std::floor(pv) || pv > 9999) {
+      fail_at(block_.col('p'),
+              fmt::format("G10 L{} P{:g}: P is an offset number 0 .. 9999", l, pv));
+    }
+    if (!block_.has('r')) fail_at(column, fmt::format("G10 L{} needs the value in R", l));
+    OffsetRegister& reg = registers_[static_cast<int>(pv)];
+    const double v = len('r');
+    const auto set = [&](std::optional<double>& slot) {
+      slot = absolute_ ? v : slot.value_or(0.0) + v;
+    };
+    if (l == 10) set(reg.h_geometry);
+    if (l == 11 || (l == 1 && haas_)) set(reg.h_wear);
+    if (l == 12) set(reg.d_geometry);
+    if (l == 13) set(reg.d_wear);
+    if (l == 1 && !haas_) {
+      set(reg.h_geometry);
+      set(reg.d_geometry);
+    }
+    return;
+  }
+  const int hi = l == 2 ? 6 : haas_ ? 99 : kExtraSystems;
+  if (pv < 0 || pv > hi || pv != std::floor(pv) || (l == 20 && pv < 1)) {
+    fail_at(block_.col('p'),
+            fmt::format("G10 L{} P{:g}: P is {} .. {}{}", l, pv, l == 2 ? 0 : 1, hi,
+                        l == 2  ? (haas_ ? " (0: G52)" : " (0: the external offset)")
+                        : haas_ ? " (G154 P)"
+                                : " (G54.1 P)"));
+  }
+  if (block_.has('r')) fail_at(block_.col('r'), fmt::format("R is not a word of G10 L{}", l));
+  const int p = static_cast<int>(pv);
+  comp_.refuse(column, "a change of a work offset (G10)");
+  const Vec3 machine = to_machine_tip(cur_pos_);
+  ExtraAxes xm{};
+  for (int k = 0; k < 6; ++k)
+    xm[static_cast<std::size_t>(k)] = xmachine(k, xpos_[static_cast<std::size_t>(k)]);
+  if (l == 2 && p == 0 && haas_) {
+    // Haas: the G52 offset.
+    for (int a = 0; a < 3; ++a) {
+      const char c = static_cast<char>('x' + a);
+      if (!block_.has(c)) continue;
+      const double now = absolute_ ? len(c) : g92_[a] + len(c);
+      cur_pos_[a] += g92_[a] - now;
+      g92_[a] = now;
+      params_[5211 + static_cast<std::size_t>(a)] = now;
+    }
+    params_[5210] = 1;
+    return;
+  }
+  if (l == 2 && p == 0) {
+    for (int a = 0; a < 3; ++a) {
+      const char c = static_cast<char>('x' + a);
+      if (block_.has(c)) ext_offset_[a] = absolute_ ? len(c) : ext_offset_[a] + len(c);
+    }
+  } else {
+    const int n = l == 2 ? p : 9 + p;
+    for (int a = 0; a < 3; ++a) {
+      const char c = static_cast<char>('x' + a);
+      if (block_.has(c))
+        params_[sys_param(n, a)] = (absolute_ ? 0 : params_[sys_param(n, a)]) + len(c);
+    }
+    for (int k = 0; k < 6; ++k) {
+      if (block_.has(kExtraAxes[static_cast<std::size_t>(k)])) {
+        params_[sys_param(n, 3 + k)] = (absolute_ ? 0 : params_[sys_param(n, 3 + k)]) + xlen(k);
+      }
+    }
+    note_given(n);
+    if (n != system_) return;
+  }
+  // The active system moved: the machine position stays, the program's coordinates follow.
+  load_system();
+  cur_pos_ = from_machine_tip(machine);
+  for (int k = 0; k < 6; ++k) {
+    xpos_[static_cast<std::size_t>(k)] = xfrom_machine(k, xm[static_cast<std::size_t>(k)]);
+  }
+  xnext_ = xpos_;
+}
+
 void Interpreter::g10(std::uint32_t column) {
   if (!block_.has('l')) fail_at(column, "G10 needs L (L1 tool table, L2 or L20 work offsets)");
   const double lv = block_['l'];
   if (lv != std::floor(lv) || lv < 0 || lv > 100) {
     fail_at(block_.col('l'), fmt::format("G10 L{:g}: L is 1, 2, 10, 11 or 20", lv));
+  }
+  if (fanuc_) {
+    fanuc_g10(column);
+    return;
   }
   const int l = static_cast<int>(lv);
   if (l == 1 || l == 10 || l == 11) {

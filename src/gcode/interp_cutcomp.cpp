@@ -47,7 +47,8 @@ void CutterComp::start(int g, std::uint32_t column) {
   if (interp_.plane_ != Plane::xy) {
     interp_.fail_at(column, "cutter radius compensation is supported in the XY plane (G17) only");
   }
-  if (on()) {
+  // Fanuc's G41/G42 in offset mode: the same side and offset again go on as they were.
+  if (on() && !interp_.fanuc_) {
     interp_.fail_at(column,
                     "G41/G42 while cutter radius compensation is on: cancel it with G40 first");
   }
@@ -73,12 +74,22 @@ void CutterComp::start(int g, std::uint32_t column) {
     if (interp_.fanuc_ && !fanuc_warned_) {
       fanuc_warned_ = true;
       interp_.warn(
-          fmt::format("{} read with LinuxCNC's rules: D is a tool of the tool table (half "
-                      "its diameter is the offset) and corners follow LinuxCNC; a Fanuc "
-                      "control reads D as an offset register and starts up by its own type",
+          fmt::format("{} read with LinuxCNC's rules: D is the offset register G10 L12/L13 "
+                      "set, else a tool of the tool table (half its diameter is the offset), "
+                      "and corners follow LinuxCNC; a Fanuc control starts up by its own type",
                       name));
     }
-    if (tool == 0) {
+    const auto reg =
+        interp_.fanuc_ ? interp_.registers_.find(static_cast<int>(tool)) : interp_.registers_.end();
+    if (reg != interp_.registers_.end() && (reg->second.d_geometry || reg->second.d_wear)) {
+      // Fanuc's D register (a radius) or Haas's (a diameter, its setting 40 at Diameter) set
+      // by G10 L12/L13: geometry (else the table's) plus wear.
+      const auto it = interp_.tools_.find(static_cast<int>(tool));
+      const double table = it != interp_.tools_.end() ? it->second.diameter_mm : 0.0;
+      const double scale = interp_.haas_ ? 0.5 : 1.0;
+      radius = reg->second.d_geometry ? scale * *reg->second.d_geometry : 0.5 * table;
+      radius += scale * reg->second.d_wear.value_or(0.0);
+    } else if (tool == 0) {
       interp_.warn(
           fmt::format("{} with no tool loaded (M6) and no D: the offset is 0, the path is "
                       "not compensated",
@@ -103,6 +114,12 @@ void CutterComp::start(int g, std::uint32_t column) {
   if (radius < 0) {  // a negative diameter offsets to the other side (LinuxCNC)
     radius = -radius;
     side = side == Side::left ? Side::right : Side::left;
+  }
+  if (on()) {
+    if (side == side_ && radius == radius_) return;
+    interp_.fail_at(column,
+                    "G41/G42 changing the side or the offset while compensating (Fanuc's offset "
+                    "mode) is not read: cancel it with G40 first");
   }
   side_ = side;
   radius_ = radius;

@@ -34,6 +34,8 @@ void Interpreter::canned_cycle(int g, std::uint32_t column) {
   const double bottom_word = block_.has(wn) ? len(wn) : cycle_z_;
   if (block_.has('r')) {
     cycle_r_ = len('r');
+  } else if (first && haas_) {
+    cycle_r_ = absolute_ ? cur_pos_[in] : 0.0;  // Haas: R left out is the initial level
   } else if (first) {
     fail_at(column, fmt::format("{} needs R (the retract plane)", name));
   }
@@ -84,6 +86,8 @@ void Interpreter::canned_cycle(int g, std::uint32_t column) {
   if (g == 820 || g == 860 || g == 880 || g == 890) {
     if (block_.has('p')) {
       cycle_p_ = block_['p'];
+    } else if (first && fanuc_) {
+      cycle_p_ = 0;  // Fanuc and Haas: no P, no dwell
     } else if (first) {
       fail_at(column, fmt::format("{} needs P (the dwell, s)", name));
     }
@@ -309,7 +313,7 @@ void Interpreter::thread(std::uint32_t column) {
   if (feed_mode_ == FeedMode::inverse_time) {
     fail_at(column, fmt::format("{} in inverse time (G93): its speed is K per revolution", name));
   }
-  const double f = len('k') * speed_;  // mm per revolution times rpm
+  const double f = len('k') * spindle_rpm(column);  // mm per revolution times rpm
   if (!(f > 0)) {
     fail_at(column, fmt::format("{} at K{:g} and S{:g}: the move would never end (K > 0 and "
                                 "S > 0 give its speed)",
@@ -387,7 +391,8 @@ void Interpreter::threading_cycle(std::uint32_t column) {
     fail_at(column, fmt::format("G76 would cut {:.3g} passes (K/J = {:g} to the power R = {:g})",
                                 passes, k / j, degression));
   }
-  const double f = pitch * speed_, f_taper = taper_pitch * speed_;
+  const double rpm = spindle_rpm(column);
+  const double f = pitch * rpm, f_taper = taper_pitch * rpm;
   const auto x_at = [&](double d) { return boring ? safe_x + d : safe_x - d; };
   const auto at = [&](double x, double z) { return Vec3(x, start.y(), z); };
   const auto go = [&](const Vec3& p, bool rapid, double feed) {

@@ -371,10 +371,51 @@ double Interpreter::read_parameter(std::size_t& i) {
 
 // Fanuc's system variables that describe the position; #0 is always vacant.
 double Interpreter::fanuc_variable(int index) const {
+  if (index >= 4001 && index <= 4130) return fanuc_modal(index);
   if (index >= 5001 && index <= 5003) return cur_pos_[index - 5001] / unit_;
   if (index >= 5041 && index <= 5043) return comp_.current()[index - 5041] / unit_;
   if (index >= 5021 && index <= 5023) return to_machine_tip(cur_pos_)[index - 5021] / unit_;
   return params_[static_cast<std::size_t>(index)];
+}
+
+// Fanuc's modal information #4001 .. #4130 (read only): the G code of each group the program
+// set (#4001 motion, #4002 plane, #4003 G90/G91, #4005 feed mode, #4006 units, #4007 cutter
+// compensation, #4008 length offset, #4009 canned cycle, #4010 return level, #4014 work
+// system: 54 .. 59, 54.1), and F (#4109, program units), S (#4119), T (#4120) and the active
+// H and D; any other is vacant.
+double Interpreter::fanuc_modal(int index) const {
+  const double vacant = std::numeric_limits<double>::quiet_NaN();
+  const double motion = motion_ < 0 ? 80 : (motion_ >= 730 ? 80 : motion_ / 10.0);
+  switch (index) {
+    case 4001:
+      return motion;
+    case 4002:
+      return plane_ == Plane::xy ? 17 : plane_ == Plane::zx ? 18 : 19;
+    case 4003:
+      return absolute_ ? 90 : 91;
+    case 4005:
+      return feed_mode_ == FeedMode::inverse_time ? 93 : feed_mode_ == FeedMode::per_rev ? 95 : 94;
+    case 4006:
+      return unit_ == 1.0 ? 21 : 20;
+    case 4007:
+      return !comp_.on() ? 40 : comp_.on_left() ? 41 : 42;
+    case 4008:
+      return tool_z_ != 0 ? 43 : 49;
+    case 4009:
+      return motion_ >= 730 ? motion_ / 10.0 : 80;
+    case 4010:
+      return retract_r_ ? 99 : 98;
+    case 4014:
+      return system_ <= 6 ? 53 + system_ : 54.1;
+    case 4109:
+      return feed_ / unit_;
+    case 4119:
+      return speed_;
+    case 4120:
+      return tool_selected_;
+    default:
+      return vacant;
+  }
 }
 
 int Interpreter::parameter_index(double v, std::size_t at) const {
@@ -382,8 +423,8 @@ int Interpreter::parameter_index(double v, std::size_t at) const {
   if (fanuc_ && v == 0) return 0;  // #0: vacant, read only
   const double r = std::round(v);
   if (std::abs(v - r) > 1e-4) fail(at, fmt::format("parameter number {:g} is not whole", v));
-  if (r < 1 || r >= kMaxParameter) {
-    fail(at, fmt::format("parameter number {:g} is outside 1 .. {}", r, kMaxParameter - 1));
+  if (r < 1 || r >= static_cast<double>(params_.size())) {
+    fail(at, fmt::format("parameter number {:g} is outside 1 .. {}", r, params_.size() - 1));
   }
   return static_cast<int>(r);
 }
@@ -458,7 +499,7 @@ std::optional<double> Interpreter::predefined(const std::string& name) const {
   if (name == "_tool_offset") return tool_z_ / u;
   if (name == "_coord_system") {
     static constexpr std::array<int, 9> kCodes{540, 550, 560, 570, 580, 590, 591, 592, 593};
-    return kCodes[static_cast<std::size_t>(system_ - 1)];
+    return system_ <= 9 ? kCodes[static_cast<std::size_t>(system_ - 1)] : 541;
   }
   if (name == "_plane") return plane_ == Plane::xy ? 170 : plane_ == Plane::zx ? 180 : 190;
   if (name == "_motion_mode") return motion_ < 0 ? 800 : motion_;
@@ -467,6 +508,8 @@ std::optional<double> Interpreter::predefined(const std::string& name) const {
   if (name == "_retract_old_z") return retract_r_ ? 0 : 1;
   if (name == "_call_level") return static_cast<double>(frames_.size() - 1);
   if (name == "_spindle_on") return spindle_on_ ? 1 : 0;
+  if (name == "_spindle_rpm_mode") return css_ ? 0 : 1;
+  if (name == "_spindle_css_mode") return css_ ? 1 : 0;
   if (name == "_ccomp") return 400;
   return std::nullopt;
 }

@@ -54,16 +54,26 @@ bool Interpreter::fanuc_statement(std::size_t i) {
       if (c != 0) goto_label(n, at);
       return true;
     }
-    if (after.substr(0, 4) == "then") {
-      i += 4;
+    // THEN, or (Haas) a setting right after the condition.
+    if (after.substr(0, 4) == "then" || (haas_ && after.substr(0, 1) == "#")) {
+      if (after.substr(0, 4) == "then") i += 4;
       read_block(i);
-      if (block_.present != 0 || !block_.g.empty() || !block_.m.empty() ||
-          block_.numbered.empty()) {
+      const bool block = block_.present != 0 || !block_.g.empty() || !block_.m.empty();
+      if (block && haas_) {
+        // Haas: THEN runs a whole block (an M97 call, a move) where the condition holds.
+        if (c != 0) {
+          set_numbered();
+          for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
+          block_feed_events_ = feed_events_;
+          block_feed_before_ = feed_;
+          execute();
+        }
+        return true;
+      }
+      if (block || block_.numbered.empty()) {
         fail(i, "IF [..] THEN takes a variable assignment (#1 = ...)");
       }
-      if (c != 0) {
-        for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
-      }
+      if (c != 0) set_numbered();  // an alarm (#3000) only where the condition holds
       return true;
     }
     fail(i, "IF [condition] is followed by GOTO n or THEN #i = value");
@@ -346,8 +356,11 @@ Frame Interpreter::program_frame(double n, std::uint32_t column) {
   dirs.push_back(main.has_parent_path() ? main.parent_path() : std::filesystem::path("."));
   dirs.insert(dirs.end(), opt_.include_dirs.begin(), opt_.include_dirs.end());
   for (const auto& d : dirs) {
-    for (const std::string& stem : {fmt::format("O{:04d}", number), fmt::format("O{}", number)}) {
-      for (const char* ext : {"", ".nc", ".ngc"}) {
+    // Fanuc's and Haas's names (O0010, O10, o10), LinuxCNC's subroutine file (10.ngc).
+    for (const std::string& stem : {fmt::format("O{:04d}", number), fmt::format("O{:05d}", number),
+                                    fmt::format("O{}", number), fmt::format("o{:04d}", number),
+                                    fmt::format("o{}", number), fmt::format("{}", number)}) {
+      for (const char* ext : {"", ".nc", ".ngc", ".NC", ".cnc", ".tap"}) {
         const std::filesystem::path file = d / (stem + ext);
         std::error_code ec;
         if (!std::filesystem::is_regular_file(file, ec)) continue;

@@ -188,10 +188,32 @@ double Interpreter::feed_for(double length_mm, std::uint32_t column) {
       if (!(speed_ > 0)) {
         fail_at(column, "feed per revolution (G95) with the spindle speed S0: program S");
       }
-      f = feed_ * speed_;
+      f = feed_ * spindle_rpm(column);
       break;
   }
   return f;
+}
+
+double Interpreter::spindle_rpm(std::uint32_t column) {
+  if (!css_) return speed_;
+  if (!css_warned_) {
+    css_warned_ = true;
+    warn(
+        "G96 (constant surface speed): a move at a feed per revolution or spindle-synchronized "
+        "runs at the spindle speed of its start's X (S over the circumference there, at most "
+        "D)");
+  }
+  // LinuxCNC's motion: S m/min (G20: ft/min) over 2 pi |X| (X from the program's zero).
+  const double r_mm = std::abs(cur_pos_.x());
+  const double per_min_mm = speed_ * (unit_ == 1.0 ? 1000.0 : 304.8);
+  double rpm = r_mm > 0 ? per_min_mm / (2 * kPi * r_mm) : std::numeric_limits<double>::infinity();
+  if (css_max_rpm_ > 0) rpm = std::min(rpm, css_max_rpm_);
+  if (!std::isfinite(rpm)) {
+    fail_at(column,
+            "G96 without D at X0: the spindle speed would be unbounded (give D, the most rpm)");
+  }
+  prog_.info.max_spindle_rpm = std::max(prog_.info.max_spindle_rpm, rpm);
+  return rpm;
 }
 
 void Interpreter::note_feed(double f) {

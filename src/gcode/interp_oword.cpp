@@ -89,7 +89,7 @@ void Interpreter::run_after_program_number() {
   if (line_.text.empty()) return;
   count_block();
   read_block(i);
-  for (const auto& p : block_.numbered) params_[static_cast<std::size_t>(p.index)] = p.value;
+  set_numbered();
   for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
   execute();
 }

@@ -23,6 +23,17 @@ namespace gcode_detail {
 
 void Interpreter::tool_length_offset(int g) {
   double z = 0;
+  if (g == 434) {
+    // Fanuc's tool centre point control: the length along the tool's axis, which with the
+    // rotary axes still (the path is the X Y Z motion) is G43's.
+    if (!tcp_warned_) {
+      tcp_warned_ = true;
+      warn(
+          "G43.4 (tool centre point control) read as G43: the length offset along Z, as with "
+          "the rotary axes at zero; the path is the tool tip's X Y Z motion");
+    }
+    g = 430;
+  }
   if (g == 430) {
     double h = tool_loaded_;
     if (block_.has('h')) h = block_['h'];
@@ -31,7 +42,14 @@ void Interpreter::tool_length_offset(int g) {
     }
     const auto it = tools_.find(static_cast<int>(h));
     unknown_tool_ = -1;
-    if (it != tools_.end()) {
+    const auto reg = fanuc_ ? registers_.find(static_cast<int>(h)) : registers_.end();
+    if (reg != registers_.end() && (reg->second.h_geometry || reg->second.h_wear)) {
+      // Fanuc's and Haas's H register set by G10: geometry (else the table's) plus wear.
+      const double geometry = reg->second.h_geometry ? *reg->second.h_geometry
+                              : it != tools_.end()   ? it->second.length_mm
+                                                     : 0.0;
+      z = geometry + reg->second.h_wear.value_or(0.0);
+    } else if (it != tools_.end()) {
       z = it->second.length_mm;
     } else if (h != 0) {
       unknown_tool_ = h;  // named if a machine-coordinate move needs the length

@@ -23,6 +23,10 @@
 namespace trochomill::gcode_detail {
 
 inline constexpr int kMaxParameter = 5602;  // #1 .. #5601, as LinuxCNC
+// Extra coordinate systems (Fanuc's G54.1 P1 .. P300) and, in the dialects that have them, the
+// variables up to theirs (#7001 + 20 (P - 1) .. ).
+inline constexpr int kExtraSystems = 300;
+inline constexpr int kMaxExtendedParameter = 7001 + 20 * kExtraSystems;
 // EQ and NE compare within this (LinuxCNC 2.9's TOLERANCE_EQUAL, also its test of an arc
 // starting cutter compensation); LE and GE compare exactly there.
 inline constexpr double kTolEqual = 1e-4;
@@ -109,7 +113,7 @@ struct GroupOf {
   int code10;
   GroupIndex group;
 };
-inline constexpr std::array<GroupOf, 77> kGroupOf{{
+inline constexpr std::array<GroupOf, 100> kGroupOf{{
     {0, kMotion},        {10, kMotion},      {20, kMotion},      {30, kMotion},
     {382, kMotion},      {383, kMotion},     {384, kMotion},     {385, kMotion},
     {730, kMotion},      {740, kMotion},     {760, kMotion},     {800, kMotion},
@@ -129,13 +133,22 @@ inline constexpr std::array<GroupOf, 77> kGroupOf{{
     {411, kComp},        {420, kComp},       {421, kComp},       {50, kMotion},
     {51, kMotion},       {52, kMotion},      {53, kGroup0},      {330, kMotion},
     {331, kMotion},      {500, kGroup0},     {510, kGroup0},     {680, kGroup0},
-    {690, kGroup0},
+    {690, kGroup0},      {541, kSystem},     {1540, kSystem},    {1100, kSystem},
+    {1110, kSystem},     {1120, kSystem},    {1130, kSystem},    {1140, kSystem},
+    {1150, kSystem},     {1160, kSystem},    {1170, kSystem},    {1180, kSystem},
+    {1190, kSystem},     {1200, kSystem},    {1210, kSystem},    {1220, kSystem},
+    {1230, kSystem},     {1240, kSystem},    {1250, kSystem},    {1260, kSystem},
+    {1270, kSystem},     {1280, kSystem},    {1290, kSystem},    {434, kToolLength},
 }};
 // A block's G codes by modal group (x10, -1: none of the group), their columns, and G53.
 struct BlockCodes {
   std::array<int, kGroups> code;
   std::array<std::uint32_t, kGroups> col;
   bool g53 = false;
+  // Fanuc's G50 (scaling off) and G69 (rotation off): modal groups of their own (11, 16), so
+  // one block may hold both, and G10 or G92 beside them.
+  bool g50 = false, g69 = false;
+  std::uint32_t g50_col = 0, g69_col = 0;
   [[nodiscard]] int operator[](GroupIndex g) const { return code[g]; }
 };
 
@@ -211,6 +224,7 @@ struct Block {
   struct NumberedSet {
     int index;
     double value;
+    std::size_t at;  // the line's character of its '#'
   };
   struct NamedSet {
     std::string name;

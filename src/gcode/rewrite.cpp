@@ -118,7 +118,8 @@ Vec3 to_program(const GcodeMove& m, const Vec3& p) {
 
 // Coordinate places a dialect's controls read: LinuxCNC parses doubles (9 places keep a split
 // arc's centre, which the control moves onto the chord's bisector, within 1e-8 mm); Sinumerik
-// 6; Fanuc (8 digits a word at most) and Grbl (single precision) 4 in mm. Inch: one more.
+// 6; Fanuc and Haas (8 digits a word at most), Grbl (single precision) and Mach3 (its
+// displays' 4) 4 in mm. Inch: one more.
 }  // namespace
 
 int rewrite_places(Dialect d, double unit_mm) {
@@ -146,7 +147,8 @@ std::string piece_words(const GcodeMove& m, const Vec3& from, const Vec3& to, in
     std::string t = number(v, 9);
     const auto digits =
         std::count_if(t.begin(), t.end(), [](char c) { return c >= '0' && c <= '9'; });
-    return dialect == Dialect::fanuc && digits > 8 ? number(v, places) : t;
+    return (dialect == Dialect::fanuc || dialect == Dialect::haas) && digits > 8 ? number(v, places)
+                                                                                 : t;
   };
   std::string out;
   for (int k = 0; k < 3; ++k) {

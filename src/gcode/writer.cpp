@@ -1,6 +1,7 @@
-// G-code writer for four dialects. Circular arcs in the XY plane become G2/G3 (split into
-// pieces of less than 180 degrees, which every control accepts, Grbl included); other flat
-// curves become biarcs (or chords on request) within the tolerance; anything else chords.
+// G-code writer for six dialects (haas as fanuc, mach3 as linuxcnc). Circular arcs in the XY plane
+// become G2/G3 (split into pieces of less than 180 degrees, which every control accepts, Grbl
+// included); other flat curves become biarcs (or chords on request) within the tolerance; anything
+// else chords.
 #include <fmt/format.h>
 
 #include <array>
@@ -85,7 +86,7 @@ class Emitter {
       while (len > 0 && digits[len - 1] == '0') --len;
       out_ += '.';
       out_.append(digits, static_cast<std::size_t>(len));
-    } else if (opt_.dialect == Dialect::fanuc) {
+    } else if (opt_.dialect == Dialect::fanuc || opt_.dialect == Dialect::haas) {
       // A Fanuc set to least-increment input (its factory setting) reads "Z5" as 5 um: every
       // Fanuc number carries its decimal point.
       out_ += '.';
@@ -278,8 +279,12 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
   const Placement placement = slot_placement(job);
   check_rapids(path, job.machine.safe_z_mm);  // a rigid motion about Z keeps what it checks
   Emitter e(opt, placement);
-  const Dialect d = opt.dialect;
-  if (d == Dialect::linuxcnc || d == Dialect::fanuc) e.line("%");
+  // Haas reads Fanuc's programs, Mach3 LinuxCNC's (without the % lines, ending with M30).
+  const bool mach3 = opt.dialect == Dialect::mach3;
+  const Dialect d = opt.dialect == Dialect::haas ? Dialect::fanuc
+                    : mach3                      ? Dialect::linuxcnc
+                                                 : opt.dialect;
+  if ((d == Dialect::linuxcnc && !mach3) || d == Dialect::fanuc) e.line("%");
   if (d == Dialect::fanuc) e.line(fmt::format("O{:04d}", job.machine.program_number));
   if (job.pocket.defined()) {
     const Pocket& pk = job.pocket;
@@ -296,7 +301,7 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
   }
   e.comment(fmt::format("job: {}", job.source));
   e.comment(fmt::format("path length {:.3f} mm, {:.3f} s at programmed feed, {} dialect",
-                        path.length_mm(), path.duration_s(), to_string(d)));
+                        path.length_mm(), path.duration_s(), to_string(opt.dialect)));
   if (!placement.is_identity()) {
     e.comment(fmt::format("slot origin at X{:g} Y{:g}, slot +Y turned {:g} degrees from +Y",
                           placement.origin_x_mm, placement.origin_y_mm, placement.angle_deg));
@@ -324,6 +329,9 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
     case Dialect::grbl:
       e.line("G21 G17 G90 G94");
       break;
+    case Dialect::haas:
+    case Dialect::mach3:
+      break;  // written as fanuc and linuxcnc
   }
   e.line(std::string(to_string(job.machine.work_offset)));
   const int t = job.tool.tool_number;
@@ -364,8 +372,8 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
 
   if (job.cutting.coolant != Coolant::off) e.line("M9");
   e.line("M5");
-  e.line(d == Dialect::linuxcnc || d == Dialect::grbl ? "M2" : "M30");
-  if (d == Dialect::linuxcnc || d == Dialect::fanuc) e.line("%");
+  e.line((d == Dialect::linuxcnc && !mach3) || d == Dialect::grbl ? "M2" : "M30");
+  if ((d == Dialect::linuxcnc && !mach3) || d == Dialect::fanuc) e.line("%");
   return std::move(e.out());
 }
 

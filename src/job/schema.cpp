@@ -1193,7 +1193,8 @@ void check_rules(JobReader& r, Job& job) {
               fmt::format("dialect = \"sinumerik\" has the settable offsets G54 .. G57, got {}",
                           to_string(mc.work_offset)));
   }
-  if ((mc.dialect == Dialect::linuxcnc || mc.dialect == Dialect::fanuc) &&
+  if ((mc.dialect == Dialect::linuxcnc || mc.dialect == Dialect::fanuc ||
+       mc.dialect == Dialect::haas || mc.dialect == Dialect::mach3) &&
       (mc.length_offset > 0 ? mc.length_offset : tool.tool_number) == 0) {
     r.problem(r.has("machine", "length_offset") ? "machine" : "tool",
               r.has("machine", "length_offset") ? "length_offset" : "tool_number",

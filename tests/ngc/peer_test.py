@@ -224,11 +224,15 @@ def main():
         # Programs that use the tool table or G95 go to `rs274 -g` (this Debian build's Python
         # module crashes on tool data and does not pass the spindle speed), which prints 4
         # decimals of the program's unit: ends within half its last digit (in mm, or in inches
-        # after G20), lengths within that per move.
+        # after G20), lengths within that per move; where the program sets G92 or G52 offsets,
+        # the machine position is the sum of three printed numbers (the end, the G5x and the
+        # G92 offset), each rounded: three half-digits.
         text = open(prog).read().upper()
         standalone = "G43" in text or "M6" in text or "G95" in text or "G41 " in text \
             or "G42 " in text
         digit = 5e-5 * (25.4 if "G20" in text else 1.0)
+        if "G92" in text or "G52" in text:
+            digit *= 3
         tol = digit + 1e-9 if standalone else TOL_MM
         peer = subprocess.run(
             ["/usr/bin/python3", os.path.join(HERE, "linuxcnc_canon.py"), prog, "--var",

@@ -96,7 +96,7 @@ def test_copy_is_independent(wagih):
     assert job.to_dict()["path"]["step"] == 1.0 and other.to_dict()["path"]["step"] == 0.5
 
 
-@pytest.mark.parametrize("dialect", [None, "fanuc", "sinumerik", "grbl"])
+@pytest.mark.parametrize("dialect", [None, "fanuc", "sinumerik", "grbl", "haas", "mach3"])
 def test_gcode_is_the_plan_commands(wagih, dialect):
     path = tm.plan(tm.Job.from_toml(wagih))
     args = ["plan", wagih, "-o", "-"] + (["--dialect", dialect] if dialect else [])

@@ -60,6 +60,11 @@ class Path:
     @property
     def cycle_start_s(self) -> _F64: ...
     @property
+    def extra_axes(self) -> dict[str, dict[str, float]]:
+        """The axes besides X Y Z a program moves: {'A': {'min_deg': .., 'max_deg': ..}, ..}."""
+    @property
+    def extra_axes_only_time_s(self) -> float: ...
+    @property
     def warnings(self) -> list[str]: ...
     @property
     def source(self) -> str: ...
@@ -68,7 +73,7 @@ class Path:
     def sample(self, dt_s: float | None = None, ds_mm: float | None = None) -> dict[str, npt.NDArray[Any]]:
         """Arrays t_s, s_mm, x_mm, y_mm, z_mm, feed_mm_per_min (float64) and rapid (bool)."""
     def gcode(self, dialect: str | None = None) -> str:
-        """The program text: linuxcnc, fanuc, sinumerik or grbl (default the job's)."""
+        """The program text: linuxcnc, fanuc, sinumerik, grbl, haas or mach3 (default the job's)."""
 
 def plan(job: Job, memory_limit_gb: float | None = None) -> Path: ...
 def read_gcode(program: str | os.PathLike[str], job: Job | None = None) -> Path: ...
