@@ -801,6 +801,39 @@ TEST(Analysis, AProgramThatIsNotASlotGetsItsWholeProgramFigures) {
       << m.performance_index_note;
 }
 
+// A lead-in that drops from a link back into a slot a level below has cleared meets air, not
+// a fresh layer (a real adaptive program's lead-ins gave 181 degrees and a chip near f_z there,
+// where the tri-dexel simulation removes nothing).
+TEST(Analysis, ALeadInIntoAClearedLevelCutsNothing) {
+  const Job job = parse_job(
+      "[tool]\ndiameter = 10.0\nteeth = 4\nflute_length = 20.0\n[cutting]\nfeed_rate = 600.0\n"
+      "spindle_speed = 2000.0\n[stock]\nmin = [0.0, -20.0, -10.0]\nmax = [60.0, 20.0, 0.0]\n",
+      "leadin.toml");
+  const GcodeProgram p = read_gcode(
+      "G21 G90 G17 G94\nG0 X-10 Y0 Z1\nG1 Z-2 F600\nG1 X40\nG1 Z-1.8\nG1 X10\nG1 X15 Z-2\n"
+      "G1 X20\nG0 Z5\nM2\n",
+      "leadin.ngc");
+  const ProcessMetrics m = analyze_process(job, p.path);
+  const EngagementSeries& e = m.series;
+  double eng = 0, h = 0, axial = 0, eng_slot = 0;
+  for (std::size_t i = 0; i < e.samples.size(); ++i) {
+    const std::size_t seg = e.samples.segment[i];
+    if (seg == 4) {  // the lead-in ramp, X10 Z-1.8 to X15 Z-2 (the path starts at X-10 Z1)
+      eng = std::max(eng, e.engagement_angle_rad[i]);
+      h = std::max(h, e.h_max_mm[i]);
+      axial = std::max(axial, e.axial_chip_mm[i]);
+    }
+    if (seg == 1) eng_slot = std::max(eng_slot, e.engagement_angle_rad[i]);  // the slot
+  }
+  const double fz = 600.0 / (2000 * 4);
+  EXPECT_GT(rad_to_deg(eng_slot), 180.0);  // the slot itself: full immersion
+  // Along the slot's own centre line the ramp's circle lies inside the union of the slot's
+  // discs but for their cusps (height f_z^2 / 8R = 0.00014 mm): slivers only.
+  EXPECT_LT(rad_to_deg(eng), 10.0);
+  EXPECT_LT(h, 0.01 * fz);
+  EXPECT_EQ(axial, 0.0);  // the end face descends through cleared stock
+}
+
 // A drilling program cuts with the end face alone: its holes' volume, the descent per tooth as
 // the axial chip, one descent per hole and per peck; a job of a [stock] without [slot] reads.
 TEST(Analysis, DrillingIsCutByTheEndFace) {

@@ -1016,6 +1016,26 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
                    : inside_rect(cx, cy, R, sx0, sx1, sy0,
                                  opt.open_ahead ? std::numeric_limits<double>::infinity() : sy1);
     ArcSet eng = intersect(free, in_stock);
+    // A descent in its own region (its level not reached) cuts only what no level at or below
+    // its height removed: a lead-in dropping from a link back into a pocket a deeper level has
+    // cleared meets air, not a fresh layer (each such level removed its stock up to the
+    // flute length above it).
+    ArcSet under = in_stock;              // the end face's stock
+    std::vector<const Removed*> cleared;  // those levels' regions, for the chip
+    if (std::isnan(current_z) && !(eng.empty() && under.empty())) {
+      const double z = smp.z_mm[i];
+      for (const Level& l : levels) {
+        if (std::isnan(l.z_mm) || l.removed.get() == &removed || l.z_mm > z + kLevelTol ||
+            z - l.z_mm > flute) {
+          continue;
+        }
+        const ArcSet left = l.removed->outside(cx, cy);
+        cleared.push_back(l.removed.get());
+        eng = intersect(eng, left);
+        under = intersect(under, left);
+        if (eng.empty() && under.empty()) break;
+      }
+    }
     // The end edges' axial cut: a descending position's end face cuts the stock under it that
     // no earlier position removed. In a descent's own region (its level not yet reached) that
     // is all the stock under the face (the region's premise: nothing below the level it left
@@ -1030,7 +1050,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
       const double done = bottoms.deepest(cx, cy);
       const double dz = std::min({smp.z_mm[i - 1], top, done}) - smp.z_mm[i];
       double share = 0;
-      for (const auto& a : std::isnan(current_z) ? in_stock : eng) share += a.sweep_rad();
+      for (const auto& a : std::isnan(current_z) ? under : eng) share += a.sweep_rad();
       share = std::min(1.0, share / kTwoPi);
       if (dz > 0 && share > 0) {
         const double vz = dz / (smp.t_s[i] - smp.t_s[i - 1]);
@@ -1063,7 +1083,18 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     for (const auto& a : eng) total += a.sweep_rad();
     out.engagement_angle_rad[i] = total;
     out.radial_engagement_mm[i] = R * (1 - std::cos(std::min(total, kPi)));
-    const auto [hmax, hang] = eng.empty() ? std::pair{0.0, 0.0} : chip.h_max(removed, cx, cy, eng);
+    auto [hmax, hang] = eng.empty() ? std::pair{0.0, 0.0} : chip.h_max(removed, cx, cy, eng);
+    // Against the union with the cleared levels' regions the chip is at most each one's (the
+    // farthest removed point of a ray is the farther of the two): the smallest, a bound on
+    // the safe side (exact where one region holds the other's part of the ray).
+    for (const Removed* r : cleared) {
+      if (eng.empty()) break;
+      const auto [h, a] = chip.h_max(*r, cx, cy, eng);
+      if (h < hmax) {
+        hmax = h;
+        hang = a;
+      }
+    }
     out.h_max_mm[i] = std::min(hmax, own_limit);
     out.h_max_angle_rad[i] = wrap(hang);
     int teeth = 0;
