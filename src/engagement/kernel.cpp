@@ -803,48 +803,28 @@ double swept_rate(const PathSamples& s, std::size_t i, double R, const ArcSet& e
   return v * R * integral;
 }
 
-// The lowest height the tool centre reached near a plan point: positions binned in cells of
-// the radius asked about, each cell's lowest kept; deepest() looks through the cells around.
+// The lowest height the tool centre reached at a plan place: the plan binned in square cells
+// of the side given, each cell's lowest kept (one hash lookup a position).
 class Bottoms {
  public:
-  explicit Bottoms(double radius_mm) : r_(radius_mm) {}
+  explicit Bottoms(double cell_mm) : cell_(cell_mm) {}
   [[nodiscard]] double deepest(double x, double y) const {
-    double z = std::numeric_limits<double>::infinity();
-    const auto [ix, iy] = cell(x, y);
-    for (std::int64_t dx = -1; dx <= 1; ++dx) {
-      for (std::int64_t dy = -1; dy <= 1; ++dy) {
-        const auto it = cells_.find(key(ix + dx, iy + dy));
-        if (it == cells_.end()) continue;
-        for (const auto& [px, py, pz] : it->second) {
-          if (pz < z && std::hypot(px - x, py - y) <= r_) z = pz;
-        }
-      }
-    }
-    return z;
+    const auto it = cells_.find(key(x, y));
+    return it == cells_.end() ? std::numeric_limits<double>::infinity() : it->second;
   }
   void add(double x, double y, double z) {
-    const auto [ix, iy] = cell(x, y);
-    auto& points = cells_[key(ix, iy)];
-    // One point per place (within a thousandth of the radius) keeps a plunge's samples one.
-    for (auto& [px, py, pz] : points) {
-      if (std::abs(px - x) <= 1e-3 * r_ && std::abs(py - y) <= 1e-3 * r_) {
-        pz = std::min(pz, z);
-        return;
-      }
-    }
-    points.push_back({x, y, z});
+    const auto [it, fresh] = cells_.try_emplace(key(x, y), z);
+    if (!fresh) it->second = std::min(it->second, z);
   }
 
  private:
-  [[nodiscard]] std::pair<std::int64_t, std::int64_t> cell(double x, double y) const {
-    return {static_cast<std::int64_t>(std::floor(x / r_)),
-            static_cast<std::int64_t>(std::floor(y / r_))};
-  }
-  static std::uint64_t key(std::int64_t ix, std::int64_t iy) {
+  [[nodiscard]] std::uint64_t key(double x, double y) const {
+    const auto ix = static_cast<std::int64_t>(std::floor(x / cell_));
+    const auto iy = static_cast<std::int64_t>(std::floor(y / cell_));
     return (static_cast<std::uint64_t>(ix) << 32) ^ (static_cast<std::uint64_t>(iy) & 0xffffffffu);
   }
-  double r_;
-  std::unordered_map<std::uint64_t, std::vector<std::array<double, 3>>> cells_;
+  double cell_;
+  std::unordered_map<std::uint64_t, double> cells_;
 };
 
 }  // namespace
@@ -1042,8 +1022,9 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     // was cut); descending above a level, the part outside the level's region. The area is
     // taken as pi R^2 times the share of the tool circle over it (exact for a face wholly in or
     // out, and for a straight stock edge through its centre). The axial chip is the descent
-    // per tooth there. Where an earlier position stood deeper at the same place (within R / 20:
-    // the pecks of a drilling cycle, a plunge into a hole) the descent cuts only below it.
+    // per tooth there. Where an earlier position stood deeper at the same place (in the same
+    // R / 20 square of the plan: the pecks of a drilling cycle, a plunge into a hole) the
+    // descent cuts only below it.
     // docs/models.md section 7.
     double axial_rate = 0;
     if (i > 0 && smp.z_mm[i] < smp.z_mm[i - 1] && smp.t_s[i] > smp.t_s[i - 1]) {
