@@ -850,6 +850,21 @@ TEST(GcodeFanuc, DataSettingAndExtraSystems) {
       std::count_if(p.info.warnings.begin(), p.info.warnings.end(),
                     [](const std::string& w) { return w.find("assumed") != std::string::npos; }),
       0);
+  // An offset the program writes itself is its own: #7001 (G54.1 P1's X) = 3.
+  const GcodeProgram own =
+      read_gcode("G21 G90 G94\nG0 X0. Y0. Z5.\n#7001 = 3.\nG54.1 P1 X0. Y0.\nM30\n", "own.nc", ro);
+  expect_ends(own, {{3, 0, 5}});
+  EXPECT_TRUE(own.info.warnings.empty());
+  // #4001 .. #4130 are the control's: read only.
+  EXPECT_THROW((void)read_gcode("#4001 = 5.\nM30\n", "ro.nc", ro), InputError);
+  // G53 moves at rapid whatever the mode (the G1 before it).
+  std::vector<GcodeMove::Kind> kinds;
+  GcodeReadOptions traced = ro;
+  traced.trace = [&](const GcodeMove& m) { kinds.push_back(m.kind); };
+  (void)read_gcode("G21 G90 G94\nG0 X0. Y0. Z5.\nG1 X1. F100.\nG53 Z0.\nM30\n", "g53.nc", traced);
+  ASSERT_EQ(kinds.size(), 3U);  // the approach, the G1, the G53
+  EXPECT_EQ(kinds[1], GcodeMove::Kind::feed);
+  EXPECT_EQ(kinds[2], GcodeMove::Kind::rapid);
   // What Fanuc's G10 does not have, and Haas's codes, are refused by name.
   EXPECT_THROW((void)read_gcode("G10 L3 P1 R1.\nM30\n", "l3.nc", ro), InputError);
   EXPECT_THROW((void)read_gcode("G0 X0. Y0. Z5.\nG154 P2 X1.\nM30\n", "g154.nc", ro), InputError);
@@ -876,6 +891,12 @@ TEST(GcodeHaas, ExtraSystemsG52AndMachineSettings) {
     found_comp = found_comp || (std::abs(v.x() - 23) <= 1e-12 && std::abs(v.y() - 3) <= 1e-12);
   }
   EXPECT_TRUE(found_comp) << "a 6 mm diameter: 3 mm to the left";
+  // Haas's programs have five digits: M98 P10001 calls O10001 (Fanuc's P would be 1 repeat of
+  // O0001).
+  const GcodeProgram five = read_gcode(
+      "%\nO00001\nG21 G90 G94\nG0 X0. Y0. Z5.\nM98 P10001\nM30\n%\nO10001\nG0 X7. Y7.\nM99\n",
+      "five.nc", ro);
+  expect_ends(five, {{7, 7, 5}});
   // Fanuc's dialect has no G187; LinuxCNC's neither.
   GcodeReadOptions fanuc;
   fanuc.dialect = Dialect::fanuc;
@@ -889,9 +910,10 @@ TEST(GcodeMach3, SubprogramsPolarFixturesAndProbe) {
   ro.dialect = Dialect::mach3;
   const std::string prog =
       "G21 G90 G17 G94\nG0 X0 Y0 Z5\nM98 P100 L2\nG16\nG1 X10 Y90 F100\nG15\nG59 P7 X0 Y0\n"
-      "G31 X5 F50\nM30\nO100\nG91 G1 X1 F100\nG90\nM99\n";
+      "G31 X5 F50\nG59 P1 X0 Y0\nM30\nO100\nG91 G1 X1 F100\nG90\nM99\n";
   const GcodeProgram p = read_gcode(prog, "mach3.tap", ro);
-  expect_ends(p, {{1, 0, 5}, {2, 0, 5}, {0, 10, 5}, {0, 0, 5}, {5, 0, 5}});
+  // G59 P1 is G54: back to X0 Y0.
+  expect_ends(p, {{1, 0, 5}, {2, 0, 5}, {0, 10, 5}, {0, 0, 5}, {5, 0, 5}, {0, 0, 5}});
   const auto warned = [&](const std::string& what) {
     return std::any_of(p.info.warnings.begin(), p.info.warnings.end(),
                        [&](const std::string& w) { return w.find(what) != std::string::npos; });

@@ -480,7 +480,8 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
         if (prog < 0 || prog != std::floor(prog) || prog > 99999999) {
           fail_at(block_.col('p'), "M98 P must be a program number");
         }
-        if (fanuc_ && !block_.has('l') && prog > 9999) {  // P<times 4 digits><program 4>
+        // Fanuc's P<times 4 digits><program 4 digits>; Haas's programs have 5 digits.
+        if (opt_.dialect == Dialect::fanuc && !block_.has('l') && prog > 9999) {
           times = std::floor(prog / 10000);
           prog = std::fmod(prog, 10000);
         }
@@ -623,7 +624,17 @@ void Interpreter::run_motion(const BlockCodes& codes) {
   // G0 or G1 in a block without axis words: a move to where the tool is (LinuxCNC's canon
   // gets it; it has no length).
   const bool in_place = (motion == 0 || motion == 10) && !g53 && !block_.has_axis();
-  if ((block_.has_axis() || full_circle_ || in_place) && !axis_used_by_group0) {
+  if (g53 && fanuc_ && motion != 0 && motion != 10) {
+    // Fanuc and Haas: G53 moves at rapid, whatever the motion mode (without axis words not
+    // at all); the mode stays.
+    if (block_.has_axis() && !axis_used_by_group0) {
+      const int mode = motion_;
+      motion_ = 0;
+      ++prog_.info.motion_blocks;
+      move(true, block_.g.front().column);
+      motion_ = mode;
+    }
+  } else if ((block_.has_axis() || full_circle_ || in_place) && !axis_used_by_group0) {
     if (motion == 800) {
       fail_at(motion_col, "G80 cancels the motion mode: it cannot take axis words");
     }
@@ -670,17 +681,7 @@ void Interpreter::run_motion(const BlockCodes& codes) {
     nurbs_point(motion_before != 52, motion_col);
   } else if (motion >= 20 && motion <= 30 && !axis_used_by_group0) {
     fail_at(motion_col, "arc without an end point");
-  } else if (g53 && fanuc_ && motion != 0 && motion != 10) {
-    // Fanuc and Haas: G53 moves at rapid, whatever the motion mode (and without axis words
-    // not at all).
-    if (block_.has_axis()) {
-      const int mode = motion_;
-      motion_ = 0;
-      ++prog_.info.motion_blocks;
-      move(true, block_.g.front().column);
-      motion_ = mode;
-    }
-  } else if (g53) {
+  } else if (g53 && !(fanuc_ && motion != 0 && motion != 10)) {
     // LinuxCNC: G53 with G0 or G1 in the block and no axis words moves to where the tool
     // already is (a move of no length); without G0 or G1 it is refused.
     if (motion != 0 && motion != 10) {

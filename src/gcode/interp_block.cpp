@@ -138,6 +138,11 @@ void Interpreter::set_numbered() {
   for (const auto& p : block_.numbered) {
     if (fanuc_) check_fanuc_write(p.index, p.at, p.value);
     params_[static_cast<std::size_t>(p.index)] = p.value;
+    // A system's offset the program sets itself is given (not assumed the output system's).
+    if (p.index >= 5221 && p.index < 5221 + 20 * 9) note_given((p.index - 5201) / 20);
+    if (o_numbers_ && p.index >= 7001 && p.index < 7001 + 20 * kExtraSystems) {
+      note_given(10 + (p.index - 7001) / 20);
+    }
   }
 }
 
@@ -149,6 +154,9 @@ void Interpreter::check_fanuc_write(int index, std::size_t at, double v) const {
   }
   if (index >= 5001 && index <= 5043) {
     fail(at, fmt::format("#{} is a position the control keeps: read only", index));
+  }
+  if (index >= 4001 && index <= 4130) {
+    fail(at, fmt::format("#{} is modal information the control keeps: read only", index));
   }
 }
 

@@ -226,9 +226,7 @@ void Interpreter::select_system(int g, std::uint32_t column) {
   if (g >= 1100 && g <= 1290) n = 10 + (g - 1100) / 10;
   if (extra_p) {
     const std::string name = code_name('G', g);
-    const int lo = g == 590 ? 7 : 1, hi = g == 590    ? kExtraSystems + 6
-                                          : g == 1540 ? 99
-                                                      : kExtraSystems;
+    const int lo = 1, hi = g == 590 ? 254 : g == 1540 ? 99 : kExtraSystems;
     if (!block_.has('p'))
       fail_at(column, fmt::format("{} needs the system's number in P ({} .. {})", name, lo, hi));
     const double p = block_['p'];
@@ -236,7 +234,9 @@ void Interpreter::select_system(int g, std::uint32_t column) {
       fail_at(block_.col('p'),
               fmt::format("{} P{:g}: P is a whole number {} .. {}", name, p, lo, hi));
     }
-    n = 9 + static_cast<int>(p) - (g == 590 ? 6 : 0);
+    // Mach3: G59 P1 .. P6 are G54 .. G59, P7 .. its fixtures beyond.
+    n = g == 590 ? (p <= 6 ? static_cast<int>(p) : 9 + static_cast<int>(p) - 6)
+                 : 9 + static_cast<int>(p);
   }
   select_system_n(n);
 }

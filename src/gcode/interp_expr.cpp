@@ -406,7 +406,10 @@ double Interpreter::fanuc_modal(int index) const {
     case 4010:
       return retract_r_ ? 99 : 98;
     case 4014:
-      return system_ <= 6 ? 53 + system_ : 54.1;
+      return system_ <= 6   ? 53 + system_
+             : system_ <= 9 ? 59 + 0.1 * (system_ - 6)
+             : haas_        ? 154
+                            : 54.1;
     case 4109:
       return feed_ / unit_;
     case 4119:

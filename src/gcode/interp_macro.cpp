@@ -62,6 +62,7 @@ bool Interpreter::fanuc_statement(std::size_t i) {
       if (block && haas_) {
         // Haas: THEN runs a whole block (an M97 call, a move) where the condition holds.
         if (c != 0) {
+          count_block();
           set_numbered();
           for (const auto& p : block_.named) set_named(p.name, p.value, p.column);
           block_feed_events_ = feed_events_;
@@ -343,10 +344,27 @@ Frame Interpreter::program_frame(double n, std::uint32_t column) {
     return Cursor{si, it->second.first, it->second.second};
   };
   Frame f;
-  f.label = fmt::format("O{:04d}", number);
+  // LinuxCNC's M98 runs its o<n> subroutines too: their endsub names n.
+  f.label = opt_.dialect == Dialect::linuxcnc ? fmt::format("{}", number)
+                                              : fmt::format("O{:04d}", number);
   f.ret = cur_;
   for (std::size_t si = 0; si < sources_.size(); ++si) {
     if (auto c = find_in(si)) {
+      // LinuxCNC's M98 calls a bare O<n> only: an "o<n> sub" is called with o<n> call.
+      if (opt_.dialect == Dialect::linuxcnc) {
+        const std::string_view t = sources_[si].text;
+        const std::size_t end = c->offset == 0 ? 0 : c->offset - 1;
+        const std::size_t begin = t.rfind('\n', end == 0 ? 0 : end - 1);
+        ngc::Line l;
+        ngc::normalise(t.substr(begin == std::string_view::npos ? 0 : begin + 1,
+                                end - (begin == std::string_view::npos ? 0 : begin + 1)),
+                       l);
+        std::size_t k = 1;
+        while (k < l.text.size() && l.text[k] >= '0' && l.text[k] <= '9') ++k;
+        if (l.text.compare(k, 3, "sub") == 0) {
+          fail_at(column, "'O.... sub' subroutine must be called with 'O.... call' (LinuxCNC)");
+        }
+      }
       f.start = *c;
       return f;
     }
