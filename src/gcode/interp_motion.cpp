@@ -693,6 +693,14 @@ void Interpreter::put_curve(const std::vector<Vec3>& points, const std::vector<d
     // Every control point on the start: no motion (LinuxCNC's preview draws nothing either).
     return;
   }
+  // Weights a million-fold apart fold the curve into its control polygon's corners, which no
+  // bounded set of arcs within the tolerance follows (the fit ran for minutes: a fuzzer's find).
+  const auto [wlo, whi] = std::minmax_element(weights.begin(), weights.end());
+  if (wlo != weights.end() && *whi > 1e6 * *wlo) {
+    fail_at(column, fmt::format("the NURBS weights P differ more than a million-fold ({:g} and "
+                                "{:g}): its curve is its control polygon's corners; not read",
+                                *wlo, *whi));
+  }
   std::vector<FitArc> arcs;
   try {
     arcs = fit_biarcs(curve, curve.u0(), curve.u1(), static_cast<int>(std::max<std::size_t>(4, n)),
