@@ -279,7 +279,8 @@ the job's slot frame when read with a job, else in the program's work frame.)")
             return write_gcode(job, p.path, gcode_options(job.machine).write);
           },
           py::arg("dialect") = py::none(),
-          "The program as G-code text (linuxcnc, fanuc, sinumerik, grbl, haas or mach3; default the job's "
+          "The program as G-code text (linuxcnc, fanuc, sinumerik, grbl, haas or mach3; default "
+          "the job's "
           "machine.dialect), as `trochomill plan` writes it.")
       .def("__repr__", [](const PyPath& p) {
         return fmt::format("<trochomill.Path {}: {} segments, {:.3f} mm, {:.3f} s>", p.source,

@@ -681,7 +681,7 @@ void Interpreter::run_motion(const BlockCodes& codes) {
     nurbs_point(motion_before != 52, motion_col);
   } else if (motion >= 20 && motion <= 30 && !axis_used_by_group0) {
     fail_at(motion_col, "arc without an end point");
-  } else if (g53 && !(fanuc_ && motion != 0 && motion != 10)) {
+  } else if (g53) {
     // LinuxCNC: G53 with G0 or G1 in the block and no axis words moves to where the tool
     // already is (a move of no length); without G0 or G1 it is refused.
     if (motion != 0 && motion != 10) {

@@ -30,12 +30,9 @@ inline constexpr Names<SpindleDirection> kSpindleDirections[] = {{"cw", SpindleD
                                                                  {"ccw", SpindleDirection::ccw}};
 inline constexpr Names<Coolant> kCoolants[] = {
     {"off", Coolant::off}, {"flood", Coolant::flood}, {"mist", Coolant::mist}};
-inline constexpr Names<Dialect> kDialects[] = {{"linuxcnc", Dialect::linuxcnc},
-                                               {"fanuc", Dialect::fanuc},
-                                               {"sinumerik", Dialect::sinumerik},
-                                               {"grbl", Dialect::grbl},
-                                               {"haas", Dialect::haas},
-                                               {"mach3", Dialect::mach3}};
+inline constexpr Names<Dialect> kDialects[] = {
+    {"linuxcnc", Dialect::linuxcnc}, {"fanuc", Dialect::fanuc}, {"sinumerik", Dialect::sinumerik},
+    {"grbl", Dialect::grbl},         {"haas", Dialect::haas},   {"mach3", Dialect::mach3}};
 inline constexpr Names<WorkOffset> kWorkOffsets[] = {
     {"G54", WorkOffset::g54}, {"G55", WorkOffset::g55}, {"G56", WorkOffset::g56},
     {"G57", WorkOffset::g57}, {"G58", WorkOffset::g58}, {"G59", WorkOffset::g59}};
