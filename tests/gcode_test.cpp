@@ -897,6 +897,13 @@ TEST(GcodeHaas, ExtraSystemsG52AndMachineSettings) {
       "%\nO00001\nG21 G90 G94\nG0 X0. Y0. Z5.\nM98 P10001\nM30\n%\nO10001\nG0 X7. Y7.\nM99\n",
       "five.nc", ro);
   expect_ends(five, {{7, 7, 5}});
+  // G154 P1 .. P99's offsets at #14001 + 20 (P - 1), P1 .. P20's also at #7001 + 20 (P - 1).
+  const GcodeProgram vars = read_gcode(
+      "G21 G90 G17 G94\n#14421 = 10.\n#14422 = 4.\n#14001 = 2.\n#100 = #7001\n"
+      "G0 X0. Y0. Z5.\nG154 P22 X0. Y0.\nG154 P1 X#100 Y0.\nM30\n",
+      "vars.nc", ro);
+  expect_ends(vars, {{10, 4, 5}, {4, 0, 5}});  // P22 at (10, 4); P1 at X2, X#100 = 2 more
+  EXPECT_THROW((void)read_gcode("#15981 = 1.\nM30\n", "p100.nc", ro), InputError);  // no P100
   // Fanuc's dialect has no G187; LinuxCNC's neither.
   GcodeReadOptions fanuc;
   fanuc.dialect = Dialect::fanuc;

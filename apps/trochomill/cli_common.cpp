@@ -82,6 +82,7 @@ std::string cli_option_name(std::string_view api_name) {
       {"measured_t_s", "--measured"},
       {"memory_limit_gb", "--memory-limit"},
       {"max_feed_mm_per_min", "--max-feed"},
+      {"h_axial_max_mm", "--h-axial-max"},
       {"min_feed_mm_per_min", "--min-feed"},
       {"minimize", "--minimize"},
       {"model", "--model"},
@@ -151,13 +152,17 @@ void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std:
 }
 
 FeedTargets FeedTargetArgs::resolve(const Job& job) const {
-  return feed_targets(
-      job, {h_max_mm, mrr_mm3_per_min, feed_step_percent, piece_mm, min_feed, max_feed, air_feed});
+  return feed_targets(job, {h_max_mm, mrr_mm3_per_min, feed_step_percent, piece_mm, min_feed,
+                            max_feed, air_feed, h_axial_max_mm});
 }
 
 void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
   cmd->add_option("--h-max", a.h_max_mm,
                   "target largest chip, mm (default: the job's feed per tooth)")
+      ->check(finite_above(0, 100));
+  cmd->add_option("--h-axial-max", a.h_axial_max_mm,
+                  "largest axial chip of a descent (its descent per tooth where the end face "
+                  "cuts), mm; a faster descent is slowed to it (default: the target chip)")
       ->check(finite_above(0, 100));
   cmd->add_option("--mrr", a.mrr_mm3_per_min,
                   "cap on the removal rate, mm^3/min (the swept area times the slot depth)")

@@ -110,7 +110,7 @@ void add_window_args(CLI::App* cmd, WindowArgs& w, const std::string& what);
 /// The feed schedule's flags (plan --feed-schedule, optimize-feed): the chip target, the
 /// removal cap and the feed limits over the job's [machine] ones.
 struct FeedTargetArgs {
-  std::optional<double> h_max_mm, mrr_mm3_per_min, min_feed, max_feed, air_feed;
+  std::optional<double> h_max_mm, mrr_mm3_per_min, min_feed, max_feed, air_feed, h_axial_max_mm;
   double feed_step_percent = FeedTargets{}.feed_step_percent;
   double piece_mm = FeedTargets{}.piece_mm;
   /// The job's targets (default_feed_targets) with the flags given over them.

@@ -25,10 +25,10 @@ FeedTargets feed_targets(const Job& job, std::optional<double> h_max_mm,
                          std::optional<double> min_feed_mm_per_min,
                          std::optional<double> max_feed_mm_per_min,
                          std::optional<double> air_feed_mm_per_min, double feed_step_percent,
-                         double piece_mm) {
+                         double piece_mm, std::optional<double> h_axial_max_mm) {
   return trochomill::feed_targets(
       job, {h_max_mm, mrr_mm3_per_min, feed_step_percent, piece_mm, min_feed_mm_per_min,
-            max_feed_mm_per_min, air_feed_mm_per_min});
+            max_feed_mm_per_min, air_feed_mm_per_min, h_axial_max_mm});
 }
 
 }  // namespace
@@ -39,12 +39,13 @@ void bind_feed(py::module_& m) {
       [](const py::object& job_or_path, std::optional<double> h_max_mm,
          std::optional<double> mrr_mm3_per_min, std::optional<double> min_feed_mm_per_min,
          std::optional<double> max_feed_mm_per_min, std::optional<double> air_feed_mm_per_min,
-         double feed_step_percent, double piece_mm, const py::object& progress) {
+         double feed_step_percent, double piece_mm, const py::object& progress,
+         std::optional<double> h_axial_max_mm) {
         const PyJob& pj = job_of(job_or_path, "schedule_feed");
         const ToolPath path = path_of(job_or_path);
-        const FeedTargets t =
-            feed_targets(pj.job, h_max_mm, mrr_mm3_per_min, min_feed_mm_per_min,
-                         max_feed_mm_per_min, air_feed_mm_per_min, feed_step_percent, piece_mm);
+        const FeedTargets t = feed_targets(pj.job, h_max_mm, mrr_mm3_per_min, min_feed_mm_per_min,
+                                           max_feed_mm_per_min, air_feed_mm_per_min,
+                                           feed_step_percent, piece_mm, h_axial_max_mm);
         FeedSchedule fs = run_released(
             [&](const RunHooks& h) { return schedule_feed(pj.job, path, t, h); }, progress);
         PyPath p;
@@ -59,6 +60,8 @@ void bind_feed(py::module_& m) {
         out["time_after_s"] = fs.time_after_s;
         out["h_max_before_mm"] = fs.h_max_before_mm;
         out["h_max_after_mm"] = fs.h_max_after_mm;
+        out["h_axial_max_before_mm"] = fs.h_axial_max_before_mm;
+        out["h_axial_max_after_mm"] = fs.h_axial_max_after_mm;
         out["pieces"] = fs.pieces;
         std::vector<std::int32_t> limit(fs.piece_limit.size());
         for (std::size_t i = 0; i < limit.size(); ++i)
@@ -72,18 +75,22 @@ void bind_feed(py::module_& m) {
       py::arg("mrr_mm3_per_min") = py::none(), py::arg("min_feed_mm_per_min") = py::none(),
       py::arg("max_feed_mm_per_min") = py::none(), py::arg("air_feed_mm_per_min") = py::none(),
       py::arg("feed_step_percent") = 5.0, py::arg("piece_mm") = 0.5,
-      py::arg("progress") = py::none(),
+      py::arg("progress") = py::none(), py::arg("h_axial_max_mm") = py::none(),
       R"(Chip-load feed scheduling, as `plan --feed-schedule` (docs/models.md section 15): each
 piece of the path (at most piece_mm long) fed so that its largest chip is h_max_mm (default
 the job's feed per tooth) and its removal rate at most mrr_mm3_per_min where given, within
+a descent's axial chip (the descent per tooth where the end face cuts) at most
+h_axial_max_mm (default h_max_mm; a descent is never fed faster than programmed),
 min_feed_mm_per_min and max_feed_mm_per_min (default the
 job's machine.min_feed and max_feed, else a tenth and three times its feed),
 air_feed_mm_per_min where the tool cuts nothing (default machine.air_feed, else the max
 feed), neighbouring pieces within feed_step_percent sharing the slower feed. job: a
 Job (its planned path) or a Path. Returns "path" (the scheduled Path: path.gcode() is the
-program), time_before_s, time_after_s, h_max_before_mm, h_max_after_mm, pieces, and per
-feed piece piece_h_max_mm, piece_feed_mm_per_min and piece_limit (int32: 0 none, 1 min
-feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
+program), time_before_s, time_after_s, h_max_before_mm, h_max_after_mm,
+h_axial_max_before_mm, h_axial_max_after_mm, pieces, and per feed piece piece_h_max_mm,
+piece_feed_mm_per_min and piece_limit (int32: 0 the chip target, 1 min feed, 2 max feed,
+3 air, 4 plunge (kept at its feed), 5 removal cap, 6 force cap, 7 power cap, 8 torque cap,
+9 acceleration, 10 the axial chip target).)");
 
   m.def(
       "optimize_feed",
@@ -94,7 +101,8 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
          std::optional<double> air_feed_mm_per_min, double feed_step_percent, double piece_mm,
          const std::vector<std::string>& include_dirs, const std::string& engine,
          const std::optional<std::string>& stock, std::optional<int> rounds,
-         const py::object& progress, std::optional<double> memory_limit_gb) {
+         const py::object& progress, std::optional<double> memory_limit_gb,
+         std::optional<double> h_axial_max_mm) {
         FeedOptimizeOptions o;
         // The sim engine's estimate is checked against it before the boards are made.
         o.memory_limit_bytes = memory_limit_bytes(memory_limit_gb);
@@ -107,9 +115,9 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
         if (rounds && (*rounds < 1 || *rounds > 100)) {
           throw InputError(fmt::format("optimize_feed: rounds must be 1 .. 100, got {}", *rounds));
         }
-        o.targets =
-            feed_targets(pj.job, h_max_mm, mrr_mm3_per_min, min_feed_mm_per_min,
-                         max_feed_mm_per_min, air_feed_mm_per_min, feed_step_percent, piece_mm);
+        o.targets = feed_targets(pj.job, h_max_mm, mrr_mm3_per_min, min_feed_mm_per_min,
+                                 max_feed_mm_per_min, air_feed_mm_per_min, feed_step_percent,
+                                 piece_mm, h_axial_max_mm);
         o.force_n = force_n;
         o.power_w = power_w;
         o.torque_nm = torque_nm;
@@ -141,6 +149,7 @@ feed, 2 max feed, 3 air, 4 plunge (kept at its feed), 5 removal cap).)");
       py::arg("piece_mm") = 0.5, py::arg("include_dirs") = std::vector<std::string>{},
       py::arg("engine") = "kernel", py::arg("stock") = py::none(), py::arg("rounds") = py::none(),
       py::arg("progress") = py::none(), py::arg("memory_limit_gb") = py::none(),
+      py::arg("h_axial_max_mm") = py::none(),
       R"(Feed optimisation of an NC program, as `trochomill optimize-feed PROGRAM --job JOB`
 (docs/models.md section 15): program is the file's path, job a Job; the targets as
 schedule_feed's plus force_n (N), power_w (W) and torque_nm (N m) caps from the job's

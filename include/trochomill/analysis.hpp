@@ -145,7 +145,8 @@ enum class FeedLimit {
   force,
   power,
   torque,
-  acceleration
+  acceleration,
+  axial  ///< the axial chip target (FeedTargets::h_axial_max_mm): a descent's end face
 };
 /// The chips along a path as a feed schedule reads them, per sample (one per tooth pass from
 /// the engagement kernel, one per time step from the simulation).
@@ -160,8 +161,13 @@ struct PathChips {
   std::vector<double> h_mm;           ///< the largest uncut chip thickness (mm; 0: none)
   std::vector<double> mrr_mm3_per_s;  ///< the removal rate (mm^3/s)
   /// Material removed without a chip on the side of the edge (an axial chip: a plunge into
-  /// stock no earlier position touched); the feed schedule keeps such pieces' feed.
+  /// stock no earlier position touched); the feed schedule keeps such pieces' feed or goes
+  /// slower (the axial chip target).
   std::vector<char> plunge;
+  /// The end edges' axial chip (mm): the descent per tooth period where the end face cuts
+  /// stock (a plunge, a ramp, a helix, a peck), 0 elsewhere. In proportion to the feed, as
+  /// the radial chip.
+  std::vector<double> axial_mm;
   [[nodiscard]] std::size_t size() const noexcept { return t_s.size(); }
 };
 /// The exact engagement kernel's chips (engagement.hpp), one sample per tooth pass: the
@@ -174,6 +180,10 @@ struct PathChips {
 struct FeedTargets {
   /// The largest local chip (mm) each piece of the path is fed to; default: the job's f_z.
   std::optional<double> h_max_mm;
+  /// The largest axial chip (mm: the descent per tooth where the end face cuts stock,
+  /// PathChips::axial_mm) a descent may cut: a descent faster than that is slowed to it.
+  /// Unset: the chip target (h_max_mm).
+  std::optional<double> h_axial_max_mm;
   /// Cap on the removal rate (mm^3/min; PathChips::mrr_mm3_per_s: the kernel's counts the
   /// stock over each part of the engaged arcs, level by level). Unset: none.
   std::optional<double> mrr_mm3_per_min;
@@ -196,8 +206,9 @@ struct FeedTargets {
   /// optimize-feed's `--engine sim` gives the tri-dexel simulation's.
   std::function<PathChips(const ToolPath& pieces)> chips;
   /// The stock's top (mm, the path's frame): a piece that descends (a helix, ramp or plunge)
-  /// below it keeps its programmed feed or goes slower, never faster: its chip includes the
-  /// end edges' and the hole's full engagement, which the radial chip does not hold. Unset:
+  /// below it keeps its programmed feed or goes slower, never faster: slower where its
+  /// radial chip or its axial chip passes its target (the end edges' cut, whose cutting
+  /// conditions the program's author chose for the descent). Unset:
   /// the job's (engagement.hpp: stock_top_mm without a mesh).
   std::optional<double> stock_top_mm;
 };
@@ -223,7 +234,10 @@ struct FeedSchedule {
   double time_after_s = 0;     ///< the scheduled path's (s)
   double h_max_before_mm = 0;  ///< the largest chip at the input's feeds (mm)
   double h_max_after_mm = 0;   ///< at the scheduled feeds, before pieces are merged (mm)
-  std::size_t pieces = 0;      ///< segments of the scheduled path
+  /// The largest axial chip (mm, PathChips::axial_mm) at the input's feeds and at the
+  /// scheduled ones.
+  double h_axial_max_before_mm = 0, h_axial_max_after_mm = 0;
+  std::size_t pieces = 0;  ///< segments of the scheduled path
   /// Per feed piece (before merging): its largest chip (mm), feed (mm/min) and limit.
   std::vector<double> piece_h_max_mm, piece_feed_mm_per_min;
   std::vector<FeedLimit> piece_limit;

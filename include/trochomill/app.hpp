@@ -53,6 +53,7 @@ void name_program_lines(ProcessMetrics& metrics, const GcodeProgram& lines);
 struct FeedTargetRequest {
   std::optional<double> h_max_mm, mrr_mm3_per_min, feed_step_percent, piece_mm;
   std::optional<double> min_feed_mm_per_min, max_feed_mm_per_min, air_feed_mm_per_min;
+  std::optional<double> h_axial_max_mm;
 };
 [[nodiscard]] FeedTargets feed_targets(const Job& job, const FeedTargetRequest& request);
 

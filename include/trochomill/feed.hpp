@@ -69,9 +69,9 @@ struct FeedOptimizeResult {
   std::string text;     ///< the rewritten program
   FeedRewrite rewrite;  ///< its counts (its text moved to `text`)
   std::size_t moves = 0, moves_split = 0;
-  /// Moves the model cannot judge, each kept at its programmed feed or slower: descents into
-  /// the stock (a helix, ramp or plunge below its top) and axial chips (material removed
-  /// with no radial chip).
+  /// Moves kept at their programmed feed or slower (slower where the radial or the axial
+  /// chip passes its target): descents into the stock (a helix, ramp or plunge below its
+  /// top) and axial chips (material removed with no radial chip).
   std::size_t moves_descending = 0, moves_axial = 0;
   /// Programmed time (s) at the programmed feeds and rapid rate, and with the machine's
   /// acceleration limit (path.hpp: estimate_time_s; equal when [machine] max_acceleration is
@@ -87,17 +87,20 @@ struct FeedOptimizeResult {
   bool forces = false;
   CutQuantiles force_before_n, force_after_n, power_before_w, power_after_w, torque_before_nm,
       torque_after_nm;
-  double h_target_mm = 0;                  ///< the chip target (mm)
+  double h_target_mm = 0;  ///< the chip target (mm)
+  /// The axial chip target (mm, FeedTargets::h_axial_max_mm) and the largest axial chip
+  /// (mm: the descent per tooth where the end face cuts stock) before and after.
+  double h_axial_target_mm = 0, h_axial_max_before_mm = 0, h_axial_max_after_mm = 0;
   FeedEngine engine = FeedEngine::kernel;  ///< where the chips came from
   double sim_resolution_mm = 0;            ///< with the simulation: its dexel spacing (mm)
   int sim_steps_per_rev = 0;               ///< and its time steps per revolution
   /// Shares (0..1) of the rewritten program's feed time held by the chip target, the removal
-  /// cap, the max and min feed, the air feed, descents and plunges (kept at their programmed
-  /// feed or slower), and
-  /// kept (moves the rewrite does not feed: canned cycles, compensation, other files).
+  /// cap, the max and min feed, the air feed, descents and plunges kept at their programmed
+  /// feed, descents slowed to the axial chip target, and kept (moves the rewrite does not
+  /// feed: canned cycles, compensation, other files).
   double share_target = 0, share_mrr = 0, share_max_feed = 0, share_min_feed = 0, share_air = 0,
          share_plunge = 0, share_kept = 0, share_force = 0, share_power = 0, share_torque = 0,
-         share_acceleration = 0;
+         share_acceleration = 0, share_axial = 0;
   double min_feed_after_mm_per_min = 0, max_feed_after_mm_per_min = 0;
   std::vector<UnheldBlock> unheld;    ///< where the chip target cannot be held
   std::vector<std::string> warnings;  ///< the reader's, for the input program

@@ -78,6 +78,8 @@ const char* describe(FeedLimit limit) noexcept {
       return "the torque cap";
     case FeedLimit::acceleration:
       return "the acceleration";
+    case FeedLimit::axial:
+      return "the axial chip target";
   }
   return "?";
 }
@@ -107,6 +109,7 @@ PathChips kernel_chips(const Job& job, const ToolPath& path, const RunHooks& hoo
   c.from_segment.resize(n);
   c.h_mm.resize(n);
   c.mrr_mm3_per_s = e.removal_rate_mm3_per_s;
+  c.axial_mm = e.axial_chip_mm;
   c.plunge.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     // One sample per tooth pass: the chip was made since the sample before.
@@ -143,6 +146,12 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     throw InputError(
         fmt::format("feed schedule: the target h_max {:g} mm is not below the tool radius {:g} mm",
                     h_target, 0.5 * job.tool.diameter_mm));
+  }
+  const double axial_target = targets.h_axial_max_mm.value_or(h_target);
+  if (!(axial_target > 0) || !std::isfinite(axial_target)) {
+    throw InputError(fmt::format(
+        "feed schedule: the axial chip target ({}) must be a finite number > 0 mm, got {}",
+        option_name("h_axial_max_mm"), axial_target));
   }
   const double lo = targets.min_feed_mm_per_min, hi = targets.max_feed_mm_per_min;
   if (!(lo > 0) || !(hi >= lo) || !std::isfinite(hi)) {
@@ -204,8 +213,10 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
   // step's length over the tooth period), so the step's feed times target / h is the feed
   // that cuts that chip at the target. The step belongs to the pieces of both its ends: a
   // fast piece that ends where the engagement rises makes the next one's first chip.
+  // The axial chip (the descent per tooth where the end face cuts) is in proportion to the
+  // feed too: its step's feed times target / chip holds the axial target.
   struct PieceChips {
-    std::vector<double> h_mm, allowed_feed;
+    std::vector<double> h_mm, allowed_feed, axial_mm, axial_feed;
     std::vector<bool> plunge, by_mrr;
   };
   const double tiny = 1e-9 * h_target;
@@ -213,13 +224,25 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     PieceChips c;
     c.h_mm.assign(pieces.size(), 0.0);
     c.allowed_feed.assign(pieces.size(), std::numeric_limits<double>::infinity());
+    c.axial_mm.assign(pieces.size(), 0.0);
+    c.axial_feed.assign(pieces.size(), std::numeric_limits<double>::infinity());
     c.plunge.assign(pieces.size(), false);
     c.by_mrr.assign(pieces.size(), false);
     for (std::size_t i = 0; i < e.size(); ++i) {
       const double h = e.h_mm[i];
       const double dt = e.t_s[i] - e.from_t_s[i];
+      const double axial = i < e.axial_mm.size() ? e.axial_mm[i] : 0.0;
+      if (axial > 1e-9 * axial_target && dt > 0) {
+        const double step_feed = (e.s_mm[i] - e.from_s_mm[i]) / dt * 60.0;
+        const double allowed = step_feed * axial_target / axial;
+        for (std::size_t k = e.from_segment[i]; k <= e.segment[i]; ++k) {
+          c.axial_mm[k] = std::max(c.axial_mm[k], axial);
+          c.axial_feed[k] = std::min(c.axial_feed[k], allowed);
+        }
+      }
       if (e.plunge[i]) {
-        // An axial chip the radial model does not hold: the pieces keep their programmed feed.
+        // An axial chip the radial model does not hold: the pieces keep their programmed feed
+        // or go slower (the axial target).
         for (std::size_t k = e.from_segment[i]; k <= e.segment[i]; ++k) c.plunge[k] = true;
         continue;
       }
@@ -315,6 +338,8 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     const std::vector<double>& h = pc.h_mm;
     if (it == 0) {
       out.h_max_before_mm = e.size() > 0 ? *std::max_element(e.h_mm.begin(), e.h_mm.end()) : 0;
+      for (const double a : e.axial_mm)
+        out.h_axial_max_before_mm = std::max(out.h_axial_max_before_mm, a);
     }
     // The caps evaluated on the path as it is: they lower the allowed feeds where needed.
     std::vector<double> allowed = pc.allowed_feed;
@@ -343,6 +368,7 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
           }
         }
         out.h_max_after_mm = std::max(out.h_max_after_mm, h[k]);
+        out.h_axial_max_after_mm = std::max(out.h_axial_max_after_mm, pc.axial_mm[k]);
         out.piece_h_max_mm.push_back(h[k]);
         out.piece_feed_mm_per_min.push_back(pieces[k].feed);
         out.piece_limit.push_back(pieces[k].limit);
@@ -354,24 +380,31 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
     for (std::size_t k = 0; k < pieces.size(); ++k) {
       Piece& p = pieces[k];
       if (segs[p.segment].motion() == Motion::rapid) continue;
+      const double programmed = segs[p.segment].speed_mm_per_min();
       if (pc.plunge[k]) {
-        p.feed = segs[p.segment].speed_mm_per_min();
+        p.feed = programmed;
         p.limit = FeedLimit::plunge;
+        if (pc.axial_feed[k] < programmed) {
+          p.feed = std::max(pc.axial_feed[k], lo);
+          p.limit = pc.axial_feed[k] < lo ? FeedLimit::min_feed : FeedLimit::axial;
+        }
         continue;
       }
       // A cap may bind where the radial chip is nil: a step whose chip was made in the piece
-      // before (the tool entering the stock from air).
-      const bool cuts = std::isfinite(pc.allowed_feed[k]) || std::isfinite(allowed[k]);
-      double f = cuts ? std::min(allowed[k], pc.allowed_feed[k]) : air;
+      // before (the tool entering the stock from air), or a descent's axial chip alone.
+      const bool cuts = std::isfinite(pc.allowed_feed[k]) || std::isfinite(allowed[k]) ||
+                        std::isfinite(pc.axial_feed[k]);
+      double f = cuts ? std::min({allowed[k], pc.allowed_feed[k], pc.axial_feed[k]}) : air;
       // The chip is proportional to the step only where the engaged arcs stay as they were:
       // the region behind the tool is scalloped by the earlier steps too, so the feeds settle
       // by lowering alone in the second half of the rounds (the chip ends at or below the
       // target instead of swinging about it).
       if (2 * it >= iterations) f = std::min(f, p.feed);
-      p.limit = !cuts                             ? FeedLimit::air
-                : allowed[k] < pc.allowed_feed[k] ? cap_limit[k]
-                : pc.by_mrr[k]                    ? FeedLimit::mrr
-                                                  : FeedLimit::none;
+      p.limit = !cuts                                                         ? FeedLimit::air
+                : pc.axial_feed[k] < std::min(allowed[k], pc.allowed_feed[k]) ? FeedLimit::axial
+                : allowed[k] < pc.allowed_feed[k]                             ? cap_limit[k]
+                : pc.by_mrr[k]                                                ? FeedLimit::mrr
+                                                                              : FeedLimit::none;
       if (f > hi) {
         f = hi;
         if (p.limit == FeedLimit::none) p.limit = FeedLimit::max_feed;
@@ -380,8 +413,8 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
         f = lo;
         p.limit = FeedLimit::min_feed;
       }
-      if (descends[k] && f >= segs[p.segment].speed_mm_per_min()) {
-        f = segs[p.segment].speed_mm_per_min();
+      if (descends[k] && f >= programmed) {
+        f = programmed;
         p.limit = FeedLimit::plunge;
       }
       p.feed = f;

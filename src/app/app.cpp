@@ -83,6 +83,7 @@ FeedTargets feed_targets(const Job& job, const FeedTargetRequest& r) {
   FeedTargets t = default_feed_targets(job);
   t.h_max_mm = r.h_max_mm;
   t.mrr_mm3_per_min = r.mrr_mm3_per_min;
+  t.h_axial_max_mm = r.h_axial_max_mm;
   if (r.feed_step_percent) t.feed_step_percent = *r.feed_step_percent;
   if (r.piece_mm) t.piece_mm = *r.piece_mm;
   if (r.min_feed_mm_per_min) t.min_feed_mm_per_min = *r.min_feed_mm_per_min;

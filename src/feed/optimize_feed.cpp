@@ -78,7 +78,7 @@ CutQuantiles quantiles(const std::vector<double>& v, const std::vector<double>& 
 // The chips of a path: per sample its time, feed, chip and removal rate, and the time it
 // stands for (the step before it where it cuts, else 0).
 struct Chips {
-  std::vector<double> t_s, s_mm, feed, h_mm, mrr, cut_dt_s;
+  std::vector<double> t_s, s_mm, feed, h_mm, mrr, cut_dt_s, axial_mm;
   std::vector<std::size_t> segment;
   double cutting_time_s = 0;
 };
@@ -89,6 +89,7 @@ Chips chips_of(const PathChips& e, const ToolPath& path) {
   c.s_mm = e.s_mm;
   c.segment = e.segment;
   c.h_mm = e.h_mm;
+  c.axial_mm = e.axial_mm;
   c.feed.resize(n);
   c.mrr.resize(n);
   c.cut_dt_s.resize(n);
@@ -311,6 +312,7 @@ PathChips simulated_chips(const Job& job, const ToolPath& path, const Mesh* stoc
   c.h_mm.resize(n);
   c.mrr_mm3_per_s.resize(n);
   c.plunge.assign(n, 0);
+  c.axial_mm.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     const SimStep& st = steps[i];
     c.t_s[i] = st.t_s;
@@ -334,6 +336,10 @@ PathChips simulated_chips(const Job& job, const ToolPath& path, const Mesh* stoc
     c.plunge[i] = (st.h_max_mm == 0 && removed > d * d * d) ||
                   (descent > 1e-12 && st.h_max_mm > per_tooth + d);
     if (c.plunge[i]) c.h_mm[i] = 0;
+    // The axial chip: the descent per tooth period where a descending step removes more than
+    // a dexel cube (the simulation does not tell the end face's share from the flutes', so
+    // every such descent counts: the safe side).
+    if (descent > 1e-12 && dt > 0 && removed > d * d * d) c.axial_mm[i] = descent * period / dt;
   }
   return c;
 }
@@ -465,6 +471,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   targets.chips = path_chips;
   const FeedSchedule fs = schedule_feed(job, slot_path, targets, hooks);
   r.h_target_mm = options.targets.h_max_mm.value_or(job.cutting.feed_per_tooth_mm);
+  r.h_axial_target_mm = options.targets.h_axial_max_mm.value_or(r.h_target_mm);
 
   // Each move's pieces (the schedule's pieces of its segment).
   std::vector<std::vector<const FeedPiece*>> of_segment(path.segments().size());
@@ -480,13 +487,15 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
       feeds[i].feed_mm_per_min.push_back(p->feed_mm_per_min);
     }
     if (feeds[i].ends_mm.size() > 1) ++r.moves_split;
-    // What the model cannot judge: a descent into the stock, an axial chip (the schedule's
-    // plunge limit on a move that does not descend).
+    // Kept at the programmed feed or slower: a descent into the stock, an axial chip (the
+    // schedule's plunge or axial limit on a move that does not descend).
     const Segment& in_slot = slot_path.segments()[m.segment];
     if (piece_descends_below(in_slot, 0.0, in_slot.length_mm(), *targets.stock_top_mm)) {
       ++r.moves_descending;
     } else if (std::any_of(of_segment[m.segment].begin(), of_segment[m.segment].end(),
-                           [](const FeedPiece* p) { return p->limit == FeedLimit::plunge; })) {
+                           [](const FeedPiece* p) {
+                             return p->limit == FeedLimit::plunge || p->limit == FeedLimit::axial;
+                           })) {
       ++r.moves_axial;
     }
   }
@@ -553,6 +562,7 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
     r.share_power = by_limit[FeedLimit::power] / feed_time;
     r.share_torque = by_limit[FeedLimit::torque] / feed_time;
     r.share_acceleration = by_limit[FeedLimit::acceleration] / feed_time;
+    r.share_axial = by_limit[FeedLimit::axial] / feed_time;
   }
   if (!std::isfinite(r.min_feed_after_mm_per_min)) r.min_feed_after_mm_per_min = 0;
 
@@ -571,6 +581,8 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   r.h_after_mm = quantiles(ca.h_mm, ca.cut_dt_s);
   r.mrr_before = quantiles(cb.mrr, cb.cut_dt_s);
   r.mrr_after = quantiles(ca.mrr, ca.cut_dt_s);
+  for (const double a : cb.axial_mm) r.h_axial_max_before_mm = std::max(r.h_axial_max_before_mm, a);
+  for (const double a : ca.axial_mm) r.h_axial_max_after_mm = std::max(r.h_axial_max_after_mm, a);
   ForceSeries fa;  // the rewritten program's forces (with a model)
   if (job.material.model) {
     r.forces = true;
@@ -722,6 +734,9 @@ std::string feed_summary_json(const FeedOptimizeResult& r) {
                                 ? nlohmann::ordered_json(r.sim_steps_per_rev)
                                 : nlohmann::ordered_json(nullptr)},
       {"h_target_mm", r.h_target_mm},
+      {"h_axial_target_mm", r.h_axial_target_mm},
+      {"h_axial_max_before_mm", r.h_axial_max_before_mm},
+      {"h_axial_max_after_mm", r.h_axial_max_after_mm},
       {"time_before_s", r.time_before_s},
       {"time_after_s", r.time_after_s},
       {"time_before_with_acceleration_s", r.time_before_accel_s},
@@ -754,6 +769,7 @@ std::string feed_summary_json(const FeedOptimizeResult& r) {
         {"min_feed", r.share_min_feed},
         {"air_feed", r.share_air},
         {"plunge_kept", r.share_plunge},
+        {"axial_chip_target", r.share_axial},
         {"kept", r.share_kept}}},
       {"moves", r.moves},
       {"moves_split", r.moves_split},
@@ -786,6 +802,8 @@ std::string feed_summary_text(const FeedOptimizeResult& r) {
   s += fmt::format("h_max (target {:.4f} mm), over the cutting time:\n", r.h_target_mm);
   s += "  before        " + q(r.h_before_mm, "p50 {:.4f}  p90 {:.4f}  p99 {:.4f}  max {:.4f} mm\n");
   s += "  after         " + q(r.h_after_mm, "p50 {:.4f}  p90 {:.4f}  p99 {:.4f}  max {:.4f} mm\n");
+  s += fmt::format("axial chip (target {:.4f} mm), max: before {:.4f} mm, after {:.4f} mm\n",
+                   r.h_axial_target_mm, r.h_axial_max_before_mm, r.h_axial_max_after_mm);
   s += "MRR before      " +
        q(r.mrr_before, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} mm^3/min\n");
   s += "MRR after       " +
@@ -808,16 +826,18 @@ std::string feed_summary_text(const FeedOptimizeResult& r) {
   s += fmt::format(
       "feed time held by: chip target {:.1f} %, MRR cap {:.1f} %, force cap {:.1f} %, power cap "
       "{:.1f} %, torque cap {:.1f} %, acceleration {:.1f} %, max feed {:.1f} %, min feed {:.1f} "
-      "%, air feed {:.1f} %, descents and plunges kept {:.1f} %, kept moves {:.1f} %\n",
+      "%, air feed {:.1f} %, descents and plunges kept {:.1f} %, axial chip target {:.1f} %, "
+      "kept moves {:.1f} %\n",
       100 * r.share_target, 100 * r.share_mrr, 100 * r.share_force, 100 * r.share_power,
       100 * r.share_torque, 100 * r.share_acceleration, 100 * r.share_max_feed,
-      100 * r.share_min_feed, 100 * r.share_air, 100 * r.share_plunge, 100 * r.share_kept);
+      100 * r.share_min_feed, 100 * r.share_air, 100 * r.share_plunge, 100 * r.share_axial,
+      100 * r.share_kept);
   s += fmt::format("{} moves, {} split, {} blocks changed, {} lines added\n", r.moves,
                    r.moves_split, r.rewrite.blocks_changed, r.rewrite.lines_added);
   if (r.moves_descending + r.moves_axial > 0) {
     s += fmt::format(
-        "not judged by the model, kept at their programmed feed or slower: {} descents into the "
-        "stock (helix, ramp, plunge), {} moves with an axial chip\n",
+        "kept at their programmed feed or slower (slower where a chip passes its target): {} "
+        "descents into the stock (helix, ramp, plunge), {} moves with an axial chip\n",
         r.moves_descending, r.moves_axial);
   }
   for (const UnheldBlock& u : r.unheld) {

@@ -426,6 +426,9 @@ int Interpreter::parameter_index(double v, std::size_t at) const {
   if (fanuc_ && v == 0) return 0;  // #0: vacant, read only
   const double r = std::round(v);
   if (std::abs(v - r) > 1e-4) fail(at, fmt::format("parameter number {:g} is not whole", v));
+  // Haas keeps G154 P1 .. P99's offsets at #14001 + 20 (P - 1), P1 .. P20 also at Fanuc's
+  // #7001 + 20 (P - 1) (G110 .. G129): one store, the extra systems' (sys_param).
+  if (haas_ && r >= 14001 && r < 14001 + 20 * 99) return static_cast<int>(r) - 14001 + 7001;
   if (r < 1 || r >= static_cast<double>(params_.size())) {
     fail(at, fmt::format("parameter number {:g} is outside 1 .. {}", r, params_.size() - 1));
   }

@@ -145,7 +145,8 @@ def schedule_feed(job: Job | Path, *, h_max_mm: float | None = None,
                   min_feed_mm_per_min: float | None = None,
                   max_feed_mm_per_min: float | None = None, air_feed_mm_per_min: float | None = None,
                   feed_step_percent: float = 5.0, piece_mm: float = 0.5,
-                  progress: _Progress = None) -> dict[str, Any]:
+                  progress: _Progress = None,
+                  h_axial_max_mm: float | None = None) -> dict[str, Any]:
     """"path" (the scheduled Path), times and chips before and after, per-piece arrays."""
 def optimize_feed(program: str, job: Job, *, h_max_mm: float | None = None,
                   mrr_mm3_per_min: float | None = None, force_n: float | None = None,
@@ -153,5 +154,8 @@ def optimize_feed(program: str, job: Job, *, h_max_mm: float | None = None,
                   min_feed_mm_per_min: float | None = None,
                   max_feed_mm_per_min: float | None = None, air_feed_mm_per_min: float | None = None,
                   feed_step_percent: float = 5.0, piece_mm: float = 0.5,
-                  include_dirs: list[str] = ..., progress: _Progress = None) -> dict[str, Any]:
+                  include_dirs: list[str] = ..., engine: str = "kernel",
+                  stock: str | None = None, rounds: int | None = None,
+                  progress: _Progress = None, memory_limit_gb: float | None = None,
+                  h_axial_max_mm: float | None = None) -> dict[str, Any]:
     """The optimize-feed summary, "text" (the rewritten program), "before"/"after" series."""
