@@ -83,6 +83,17 @@ TEST(Signal, FilteringMatchesScipy) {
   EXPECT_EQ(pb, sosfilt(other, x));
   EXPECT_EQ(qa, yy);
   EXPECT_EQ(qb, sosfiltfilt(other, x));
+  // Three signals through one filter side by side (a force's x, y, z): each exactly its own.
+  std::vector<double> x2(x.size()), x3(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    x2[i] = -2.0 * x[i] + 0.1;
+    x3[i] = x[(i * 7) % x.size()];
+  }
+  std::array<std::vector<double>, 3> xyz{x, x2, x3};
+  sosfiltfilt_three(sos, xyz);
+  EXPECT_EQ(xyz[0], yy);
+  EXPECT_EQ(xyz[1], sosfiltfilt(sos, x2));
+  EXPECT_EQ(xyz[2], sosfiltfilt(sos, x3));
   for (std::size_t i = 0; i < x.size(); ++i) {
     EXPECT_NEAR(y[i], f["sosfilt"][i].get<double>(), 1e-10) << i;
     EXPECT_NEAR(yy[i], f["sosfiltfilt"][i].get<double>(), 1e-10) << i;

@@ -270,12 +270,23 @@ class ForceProblem {
     const ForceSeries s = compute_forces(*chips_, tool, *grid_, model);
     if (times) *times = s.t_s;
     std::array<std::vector<double>, 3> out{s.fx_n, s.fy_n, s.fz_n};
-    if (sos_) {
-      for (auto& v : out) v = sosfiltfilt(*sos_, v);
-    }
+    if (sos_) sosfiltfilt_three(*sos_, out);
     return out;
   }
   void set_filter(const Sos& sos) { sos_ = sos; }
+  // forces() for the fit, by the scaled coefficients `key`: the last ones' are kept, as the
+  // fit's derivative by the time shift asks for them again (the forces do not depend on the
+  // shift: of nine evaluations a Jacobian, with central differences over three coefficients
+  // and the shift, two).
+  const std::array<std::vector<double>, 3>& forces_for(const std::vector<double>& key,
+                                                       const Material& m, const Tool& t) {
+    if (!last_key_ || *last_key_ != key) {
+      last_key_.reset();  // not valid until computed (forces() may throw Interrupted)
+      last_ = forces(m, t);
+      last_key_ = key;
+    }
+    return last_;
+  }
 
  private:
   const Job& job_;
@@ -286,6 +297,8 @@ class ForceProblem {
   std::optional<EdgeGrid> grid_;
   Tool tool_;
   std::optional<Sos> sos_;
+  std::optional<std::vector<double>> last_key_;
+  std::array<std::vector<double>, 3> last_;
 };
 
 struct Residuals {
@@ -307,12 +320,13 @@ struct Residuals {
       set_param(m, t, (*names)[i], x[0][i] * (*scales)[i]);
     }
     const double shift = x[1][0] * shift_scale;
-    std::array<std::vector<double>, 3> f;
+    const std::array<std::vector<double>, 3>* fp = nullptr;
     try {
-      f = problem->forces(m, t);
+      fp = &problem->forces_for(std::vector<double>(x[0], x[0] + names->size()), m, t);
     } catch (const Interrupted&) {
       return false;  // Ctrl-C: the iteration callback stops the solver
     }
+    const std::array<std::vector<double>, 3>& f = *fp;
     const std::size_t n = idx->size();
     ForwardInterp at(*t_meas);
     for (std::size_t k = 0; k < n; ++k) {
@@ -436,16 +450,15 @@ CalibrationResult calibrate_forces(const Job& job, const ToolPath& path,
   problem.set_filter(sos_model);
   // The model's forces filtered as problem.forces filters from now on (the raw ones are kept
   // only for the aliasing check).
-  std::array<std::vector<double>, 3> f0s;
-  for (std::size_t a = 0; a < 3; ++a) f0s[a] = sosfiltfilt(sos_model, f0[a]);
+  std::array<std::vector<double>, 3> f0s = f0;
+  sosfiltfilt_three(sos_model, f0s);
   // (Only where the cutoff was not lowered for the same coarse record: one warning of it.)
   if (warnings.empty()) {
     if (auto w = aliasing_note(f0, f0s, tm, dt_meas, cutoff)) warnings.push_back(*w);
   }
   f0 = std::move(f0s);
-  const std::array<std::vector<double>, 3> mf{sosfiltfilt(sos_meas, measured.fx_n),
-                                              sosfiltfilt(sos_meas, measured.fy_n),
-                                              sosfiltfilt(sos_meas, measured.fz_n)};
+  std::array<std::vector<double>, 3> mf{measured.fx_n, measured.fy_n, measured.fz_n};
+  sosfiltfilt_three(sos_meas, mf);
   // Alignment: the shift (measured time = model time + shift) maximising the correlation of
   // the resultants, at the model's step, refined by a parabola.
   const double max_shift = o.max_shift_s >= 0 ? o.max_shift_s : 30.0 / spindle_speed_rpm(job);
