@@ -155,7 +155,8 @@ TEST(Signal, WhiteNoiseGivesTheBandwidthRatio) {
   EXPECT_NEAR(std::sqrt(sl / sh), std::sqrt(3000.0 / 5000.0), 0.02 * std::sqrt(0.6));
 }
 
-// Streaming (causal, pushed in uneven pieces) equals the offline causal series exactly.
+// Streaming (causal, pushed in uneven pieces, some longer than its 4096-sample blocks) equals
+// the offline causal series exactly.
 TEST(Signal, StreamingEqualsOfflineCausal) {
   Signal s;
   s.rate_hz = 48000;
@@ -172,7 +173,7 @@ TEST(Signal, StreamingEqualsOfflineCausal) {
     const std::size_t n = std::min(piece, s.samples.size() - pos);
     stream.push(s.samples.data() + pos, n, [&](const KfStream::Window& w) { got.push_back(w); });
     pos += n;
-    piece = piece * 3 % 997 + 1;
+    piece = piece * 3 % 9973 + 1;  // up to 9973: more than one of the stream's blocks
   }
   ASSERT_EQ(got.size(), off.k_f.size());
   for (std::size_t i = 0; i < got.size(); ++i) {

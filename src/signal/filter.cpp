@@ -196,8 +196,8 @@ struct Cascade {
 // or from the end backward. Both inputs are read before either output is written, so an
 // output may be its own input or the other's.
 using v2d = double __attribute__((vector_size(16)));
-void run_pair(const Cascade& a, const double* xa, double* ya, const Cascade& b, const double* xb,
-              double* yb, std::size_t n, bool backward) {
+void run_pair(Cascade& a, const double* xa, double* ya, Cascade& b, const double* xb, double* yb,
+              std::size_t n, bool backward) {
   const FlushSubnormals flush;
   const std::size_t ns = a.n;
   v2d c[12][5], z[12][2];
@@ -217,6 +217,10 @@ void run_pair(const Cascade& a, const double* xa, double* ya, const Cascade& b, 
     }
     ya[i] = x[0];
     yb[i] = x[1];
+  }
+  for (std::size_t k = 0; k < ns; ++k) {  // the states at the end, for a stream's next block
+    a.z[k][0] = z[k][0][0], a.z[k][1] = z[k][1][0];
+    b.z[k][0] = z[k][0][1], b.z[k][1] = z[k][1][1];
   }
 }
 
@@ -256,6 +260,20 @@ void SosFilter::process(const double* in, double* out, std::size_t n) {
   Cascade c(sos_, z_);
   for (std::size_t i = 0; i < n; ++i) out[i] = c.step(in[i]);
   c.save(z_);
+}
+
+void SosFilter::process_pair(SosFilter& a, SosFilter& b, const double* in, double* out_a,
+                             double* out_b, std::size_t n) {
+  if (a.sos_.sections.size() != b.sos_.sections.size()) {
+    a.process(in, out_a, n);
+    b.process(in, out_b, n);
+    return;
+  }
+  if (a.sos_.sections.size() > 12) throw Error("SosFilter: more than 12 sections");
+  Cascade ca(a.sos_, a.z_), cb(b.sos_, b.z_);
+  run_pair(ca, in, out_a, cb, in, out_b, n, false);
+  ca.save(a.z_);
+  cb.save(b.z_);
 }
 
 std::vector<double> sosfilt(const Sos& sos, const std::vector<double>& x) {
@@ -365,7 +383,7 @@ void sosfilt_pair(const Sos& a, const Sos& b, const std::vector<double>& x, std:
     yb = sosfilt(b, x);
     return;
   }
-  const Cascade ca(a, za), cb(b, zb);
+  Cascade ca(a, za), cb(b, zb);
   ya.resize(x.size());
   yb.resize(x.size());
   run_pair(ca, x.data(), ya.data(), cb, x.data(), yb.data(), x.size(), false);
@@ -399,11 +417,11 @@ void sosfiltfilt_pair(const Sos& a, const Sos& b, const std::vector<double>& x,
   const auto zia = step_states(a), zib = step_states(b);
   {
     const double x0 = fa.front();
-    const Cascade ca(a, scaled(zia, x0)), cb(b, scaled(zib, x0));
+    Cascade ca(a, scaled(zia, x0)), cb(b, scaled(zib, x0));
     run_pair(ca, fa.data(), fa.data(), cb, fa.data(), fb.data(), m, false);
   }
   {
-    const Cascade ca(a, scaled(zia, fa.back())), cb(b, scaled(zib, fb.back()));
+    Cascade ca(a, scaled(zia, fa.back())), cb(b, scaled(zib, fb.back()));
     run_pair(ca, fa.data(), fa.data(), cb, fb.data(), fb.data(), m, true);
   }
   for (auto* v : {&fa, &fb}) {
