@@ -805,10 +805,8 @@ TEST(Analysis, AProgramThatIsNotASlotGetsItsWholeProgramFigures) {
 // a fresh layer (a real adaptive program's lead-ins gave 181 degrees and a chip near f_z there,
 // where the tri-dexel simulation removes nothing).
 TEST(Analysis, ALeadInIntoAClearedLevelCutsNothing) {
-  const Job job = parse_job(
-      "[tool]\ndiameter = 10.0\nteeth = 4\nflute_length = 20.0\n[cutting]\nfeed_rate = 600.0\n"
-      "spindle_speed = 2000.0\n[stock]\nmin = [0.0, -20.0, -10.0]\nmax = [60.0, 20.0, 0.0]\n",
-      "leadin.toml");
+  const Job job = test::stock_job(10.0, 4, "feed_rate = 600.0\nspindle_speed = 2000.0\n",
+                                  {0, -20, -10}, {60, 20, 0}, "leadin.toml");
   const GcodeProgram p = read_gcode(
       "G21 G90 G17 G94\nG0 X-10 Y0 Z1\nG1 Z-2 F600\nG1 X40\nG1 Z-1.8\nG1 X10\nG1 X15 Z-2\n"
       "G1 X20\nG0 Z5\nM2\n",
@@ -837,11 +835,8 @@ TEST(Analysis, ALeadInIntoAClearedLevelCutsNothing) {
 // A drilling program cuts with the end face alone: its holes' volume, the descent per tooth as
 // the axial chip, one descent per hole and per peck; a job of a [stock] without [slot] reads.
 TEST(Analysis, DrillingIsCutByTheEndFace) {
-  const Job job = parse_job(
-      "[tool]\ndiameter = 6.0\nteeth = 2\nflute_length = 20.0\n[cutting]\n"
-      "feed_per_tooth = 0.0125\nspindle_speed = 8000.0\n[stock]\nmin = [0.0, 0.0, -20.0]\n"
-      "max = [60.0, 20.0, 0.0]\n",
-      "drill.toml");
+  const Job job = test::stock_job(6.0, 2, "feed_per_tooth = 0.0125\nspindle_speed = 8000.0\n",
+                                  {0, 0, -20}, {60, 20, 0}, "drill.toml");
   const GcodeProgram p = read_gcode(
       "G21 G17 G90 G94\nG0 Z5\nG0 X10 Y10\nG98 G81 X10 Y10 Z-8 R2 F200\nX30\n"
       "G83 X50 Y10 Z-12 R2 Q3 F200\nG80\nG0 Z20\nM2\n",

@@ -146,11 +146,8 @@ TEST(OptimizeFeed, DescentsIntoTheStockNeverSpeedUp) {
 // Re-analysed independently (analyze_process on the program as written). With a target of
 // 0.005 mm the first plunge runs at 80 mm/min.
 TEST(OptimizeFeed, DescentsAreSlowedToTheAxialChipTarget) {
-  const Job job = parse_job(
-      "[tool]\ndiameter = 6.0\nteeth = 2\nflute_length = 20.0\n[cutting]\n"
-      "feed_per_tooth = 0.0125\nspindle_speed = 8000.0\n[stock]\nmin = [0.0, 0.0, -20.0]\n"
-      "max = [60.0, 20.0, 0.0]\n",
-      "axial.toml");
+  const Job job = test::stock_job(6.0, 2, "feed_per_tooth = 0.0125\nspindle_speed = 8000.0\n",
+                                  {0, 0, -20}, {60, 20, 0}, "axial.toml");
   const std::string text =
       "G21 G17 G90 G94\nG0 X10 Y10 Z5\nG1 Z-8 F400\nG0 Z5\nG0 X30\nG1 Z-8 F100\nG0 Z5\n"
       "G0 X40 Z1\nG1 X42 Z-5 F800\nG0 Z5\nM2\n";

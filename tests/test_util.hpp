@@ -147,6 +147,21 @@ spindle_speed = 2000.0
                    "straight.toml", ov);
 }
 
+// A job of a tool and a [stock] box alone (no [slot], no [path]: for programs read with
+// analyze --gcode or optimize-feed): diameter (mm), teeth, flute length 20 mm, the [cutting]
+// lines as given, the box from lo to hi (mm).
+inline Job stock_job(double diameter_mm, int teeth, const std::string& cutting, const Vec3& lo,
+                     const Vec3& hi, const std::string& name) {
+  const auto point = [](const Vec3& p) {
+    return "[" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " +
+           std::to_string(p.z()) + "]";
+  };
+  return parse_job("[tool]\ndiameter = " + std::to_string(diameter_mm) +
+                       "\nteeth = " + std::to_string(teeth) + "\nflute_length = 20.0\n[cutting]\n" +
+                       cutting + "[stock]\nmin = " + point(lo) + "\nmax = " + point(hi) + "\n",
+                   name);
+}
+
 // Distance from q to the polyline through samples (x, y, z), searching a window of indices
 // from just behind `hint` forward (paths are compared in order; a path may retrace itself
 // exactly, so ties go to the earliest index from the hint on) and updating it.

@@ -300,29 +300,40 @@ std::vector<std::array<double, 2>> step_states(const Sos& sos) {
   return zi;
 }
 
+// The step states for a step of height k (scipy's zi * x[0]).
+std::vector<std::array<double, 2>> scaled(std::vector<std::array<double, 2>> z, double k) {
+  for (auto& v : z) v = {v[0] * k, v[1] * k};
+  return z;
+}
+
+// The zero-phase filters' odd extension of x by `pad` samples at each end (2 x[0] - x[pad..1]
+// before, 2 x[n-1] - x[n-2..n-1-pad] after; scipy's sosfiltfilt), into e. Refuses a signal
+// of `pad` samples or fewer.
+void odd_extension(const std::vector<double>& x, std::size_t pad, std::vector<double>& e) {
+  const std::size_t n = x.size();
+  if (n <= pad) {
+    throw InputError(
+        fmt::format("zero-phase filtering needs more than {} samples, got {}", pad, n));
+  }
+  e.resize(n + 2 * pad);
+  for (std::size_t i = 0; i < pad; ++i) e[i] = 2 * x[0] - x[pad - i];
+  std::copy(x.begin(), x.end(), e.begin() + static_cast<std::ptrdiff_t>(pad));
+  for (std::size_t i = 0; i < pad; ++i) e[pad + n + i] = 2 * x[n - 1] - x[n - 2 - i];
+}
+
 void filter_from(const Sos& sos, const std::vector<std::array<double, 2>>& zi, double scale,
                  std::vector<double>& x) {
-  std::vector<std::array<double, 2>> z = zi;
-  for (auto& v : z) v = {v[0] * scale, v[1] * scale};
   const FlushSubnormals flush;
-  Cascade c(sos, z);
+  Cascade c(sos, scaled(zi, scale));
   for (double& v : x) v = c.step(v);
 }
 
 }  // namespace
 
 std::vector<double> sosfiltfilt(const Sos& sos, const std::vector<double>& x) {
-  const std::size_t pad = 3 * (2 * sos.sections.size() + 1);
-  if (x.size() <= pad) {
-    throw InputError(
-        fmt::format("zero-phase filtering needs more than {} samples, got {}", pad, x.size()));
-  }
-  // Odd extension: 2 x[0] - x[pad..1] before, 2 x[n-1] - x[n-2..n-1-pad] after.
-  const std::size_t n = x.size();
-  std::vector<double> e(n + 2 * pad);
-  for (std::size_t i = 0; i < pad; ++i) e[i] = 2 * x[0] - x[pad - i];
-  std::copy(x.begin(), x.end(), e.begin() + static_cast<std::ptrdiff_t>(pad));
-  for (std::size_t i = 0; i < pad; ++i) e[pad + n + i] = 2 * x[n - 1] - x[n - 2 - i];
+  const std::size_t pad = 3 * (2 * sos.sections.size() + 1), n = x.size();
+  std::vector<double> e;
+  odd_extension(x, pad, e);
   const auto zi = step_states(sos);
   filter_from(sos, zi, e.front(), e);
   std::reverse(e.begin(), e.end());
@@ -338,35 +349,21 @@ void sosfiltfilt_three(const Sos& sos, std::array<std::vector<double>, 3>& xyz) 
     for (auto& v : xyz) v = sosfiltfilt(sos, v);
     return;
   }
-  const std::size_t pad = 3 * (2 * sos.sections.size() + 1);
-  if (n <= pad) {
-    throw InputError(
-        fmt::format("zero-phase filtering needs more than {} samples, got {}", pad, n));
-  }
   // As sosfiltfilt: the odd extension, forward from the step states scaled by the first
   // value, backward (from the end, no reversal) by the last, the padding cut off.
-  const std::size_t m = n + 2 * pad;
+  const std::size_t pad = 3 * (2 * sos.sections.size() + 1), m = n + 2 * pad;
   const auto zi = step_states(sos);
-  auto scaled = [&zi](double k) {
-    std::vector<std::array<double, 2>> z = zi;
-    for (auto& v : z) v = {v[0] * k, v[1] * k};
-    return z;
-  };
   std::array<std::vector<double>, 3> e;
   std::array<double*, 3> ptr{};
   for (std::size_t a = 0; a < 3; ++a) {
-    const std::vector<double>& x = xyz[a];
-    e[a].resize(m);
-    for (std::size_t i = 0; i < pad; ++i) e[a][i] = 2 * x[0] - x[pad - i];
-    std::copy(x.begin(), x.end(), e[a].begin() + static_cast<std::ptrdiff_t>(pad));
-    for (std::size_t i = 0; i < pad; ++i) e[a][pad + n + i] = 2 * x[n - 1] - x[n - 2 - i];
+    odd_extension(xyz[a], pad, e[a]);
     ptr[a] = e[a].data();
   }
-  run_three({Cascade(sos, scaled(e[0].front())), Cascade(sos, scaled(e[1].front())),
-             Cascade(sos, scaled(e[2].front()))},
+  run_three({Cascade(sos, scaled(zi, e[0].front())), Cascade(sos, scaled(zi, e[1].front())),
+             Cascade(sos, scaled(zi, e[2].front()))},
             ptr, m, false);
-  run_three({Cascade(sos, scaled(e[0].back())), Cascade(sos, scaled(e[1].back())),
-             Cascade(sos, scaled(e[2].back()))},
+  run_three({Cascade(sos, scaled(zi, e[0].back())), Cascade(sos, scaled(zi, e[1].back())),
+             Cascade(sos, scaled(zi, e[2].back()))},
             ptr, m, true);
   for (std::size_t a = 0; a < 3; ++a) {
     std::copy(e[a].begin() + static_cast<std::ptrdiff_t>(pad),
@@ -398,22 +395,12 @@ void sosfiltfilt_pair(const Sos& a, const Sos& b, const std::vector<double>& x,
     yb = sosfiltfilt(b, x);
     return;
   }
-  if (x.size() <= pad) {
-    throw InputError(
-        fmt::format("zero-phase filtering needs more than {} samples, got {}", pad, x.size()));
-  }
   // Odd extension in fa; forward in place (fa) and into fb; backward in place, from the end
   // (no reversal); then the padding is cut off. Two buffers: large signals allocate (and
   // page-fault) little.
   const std::size_t n = x.size(), m = n + 2 * pad;
-  std::vector<double> fa(m), fb(m);
-  for (std::size_t i = 0; i < pad; ++i) fa[i] = 2 * x[0] - x[pad - i];
-  std::copy(x.begin(), x.end(), fa.begin() + static_cast<std::ptrdiff_t>(pad));
-  for (std::size_t i = 0; i < pad; ++i) fa[pad + n + i] = 2 * x[n - 1] - x[n - 2 - i];
-  auto scaled = [](std::vector<std::array<double, 2>> z, double k) {
-    for (auto& v : z) v = {v[0] * k, v[1] * k};
-    return z;
-  };
+  std::vector<double> fa, fb(m);
+  odd_extension(x, pad, fa);
   const auto zia = step_states(a), zib = step_states(b);
   {
     const double x0 = fa.front();
