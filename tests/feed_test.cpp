@@ -200,7 +200,19 @@ TEST(OptimizeFeed, DescentsAreSlowedToTheAxialChipTarget) {
     EXPECT_GE(m.h_axial_max_mm, 0.97 * target) << target;
     EXPECT_NEAR(r.h_axial_max_after_mm, m.h_axial_max_mm, 1e-9) << target;
     EXPECT_NE(feed_summary_text(r).find("axial chip (target"), std::string::npos);
+    EXPECT_TRUE(r.unheld_axial.empty()) << target;
   }
+  // A target the minimum feed (60 mm/min here) cannot hold is named block by block: 60 mm/min
+  // descends 0.00375 mm a tooth on the plunges.
+  FeedOptimizeOptions tiny = options_60_1800(job);
+  tiny.targets.h_axial_max_mm = 0.001;
+  const FeedOptimizeResult t = optimize_feed(job, text, "axial.ngc", tiny);
+  ASSERT_EQ(t.unheld_axial.size(), 3u);  // lines 3, 6 and 9: both plunges and the ramp
+  EXPECT_EQ(t.unheld_axial[0].line, 3u);
+  EXPECT_NEAR(t.unheld_axial[0].h_max_mm, 60.0 / teeth_per_min, 1e-9);
+  EXPECT_NE(feed_summary_text(t).find("cannot hold the axial chip target at axial.ngc:3"),
+            std::string::npos)
+      << feed_summary_text(t);
 }
 
 // A straight full slot cuts f_z at every tooth pass: optimised to h_max = f_z, its cutting

@@ -102,7 +102,9 @@ struct FeedOptimizeResult {
          share_plunge = 0, share_kept = 0, share_force = 0, share_power = 0, share_torque = 0,
          share_acceleration = 0, share_axial = 0;
   double min_feed_after_mm_per_min = 0, max_feed_after_mm_per_min = 0;
-  std::vector<UnheldBlock> unheld;    ///< where the chip target cannot be held
+  std::vector<UnheldBlock> unheld;  ///< where the chip target cannot be held
+  /// Where the axial chip target cannot be held (h_max_mm: the largest axial chip there).
+  std::vector<UnheldBlock> unheld_axial;
   std::vector<std::string> warnings;  ///< the reader's, for the input program
   /// Per tooth-pass sample of the input and of the rewritten program: time (s), place along
   /// the path (mm), feed (mm/min; NaN in rapids) and chip (mm) (the report's before/after).

@@ -611,22 +611,29 @@ FeedOptimizeResult optimize_feed(const Job& job, std::string_view text, std::str
   r.feed_after = ca.feed;
   r.h_after = ca.h_mm;
 
-  // Blocks where the chip stays above the target at the minimum feed.
-  std::map<std::pair<std::size_t, std::size_t>, UnheldBlock> unheld;
-  for (std::size_t i = 0; i < ca.h_mm.size(); ++i) {
-    // 3 %: the schedule's own tolerance (docs/models.md section 15).
-    if (!(ca.h_mm[i] > r.h_target_mm * 1.03)) continue;
-    if (limit_of[ca.segment[i]] != FeedLimit::min_feed) continue;
-    const GcodeMove* mp = move_of(input_segment[ca.segment[i]]);
-    if (mp == nullptr) continue;
-    const GcodeMove& m = *mp;
-    UnheldBlock& u = unheld[{m.source, m.line}];
-    u.file = std::string(m.file);
-    u.line = m.line;
-    u.h_max_mm = std::max(u.h_max_mm, ca.h_mm[i]);
-    u.feed_mm_per_min = ca.feed[i];
-  }
-  for (auto& [key, u] : unheld) r.unheld.push_back(std::move(u));
+  // Blocks where the chip (radial, or the end face's axial chip) stays above its target at
+  // the minimum feed.
+  const auto unheld_blocks = [&](const std::vector<double>& chip, double target) {
+    std::map<std::pair<std::size_t, std::size_t>, UnheldBlock> unheld;
+    for (std::size_t i = 0; i < chip.size(); ++i) {
+      // 3 %: the schedule's own tolerance (docs/models.md section 15).
+      if (!(chip[i] > target * 1.03)) continue;
+      if (limit_of[ca.segment[i]] != FeedLimit::min_feed) continue;
+      const GcodeMove* mp = move_of(input_segment[ca.segment[i]]);
+      if (mp == nullptr) continue;
+      const GcodeMove& m = *mp;
+      UnheldBlock& u = unheld[{m.source, m.line}];
+      u.file = std::string(m.file);
+      u.line = m.line;
+      u.h_max_mm = std::max(u.h_max_mm, chip[i]);
+      u.feed_mm_per_min = ca.feed[i];
+    }
+    std::vector<UnheldBlock> list;
+    for (auto& [key, u] : unheld) list.push_back(std::move(u));
+    return list;
+  };
+  r.unheld = unheld_blocks(ca.h_mm, r.h_target_mm);
+  r.unheld_axial = unheld_blocks(ca.axial_mm, r.h_axial_target_mm);
 
   // Caps the minimum feed cannot hold (a full slot whose edge forces alone exceed a force
   // cap, say) are refused: a program above a hard cap is not written. 3 %: the schedule's
@@ -718,13 +725,16 @@ nlohmann::ordered_json quantiles_json(const CutQuantiles& q) {
 }  // namespace
 
 std::string feed_summary_json(const FeedOptimizeResult& r) {
-  nlohmann::ordered_json unheld = nlohmann::ordered_json::array();
-  for (const UnheldBlock& u : r.unheld) {
-    unheld.push_back({{"file", u.file},
-                      {"line", u.line},
-                      {"h_max_mm", u.h_max_mm},
-                      {"feed_mm_per_min", u.feed_mm_per_min}});
-  }
+  const auto blocks = [](const std::vector<UnheldBlock>& list) {
+    nlohmann::ordered_json out = nlohmann::ordered_json::array();
+    for (const UnheldBlock& u : list) {
+      out.push_back({{"file", u.file},
+                     {"line", u.line},
+                     {"h_max_mm", u.h_max_mm},
+                     {"feed_mm_per_min", u.feed_mm_per_min}});
+    }
+    return out;
+  };
   const nlohmann::ordered_json j = {
       {"engine", r.engine == FeedEngine::sim ? "sim" : "kernel"},
       {"sim_resolution_mm", r.engine == FeedEngine::sim
@@ -777,7 +787,8 @@ std::string feed_summary_json(const FeedOptimizeResult& r) {
       {"moves_axial_chip", r.moves_axial},
       {"blocks_changed", r.rewrite.blocks_changed},
       {"lines_added", r.rewrite.lines_added},
-      {"unheld", unheld},
+      {"unheld", blocks(r.unheld)},
+      {"unheld_axial", blocks(r.unheld_axial)},
       {"warnings", r.warnings}};
   return j.dump(2) + "\n";
 }
@@ -802,7 +813,7 @@ std::string feed_summary_text(const FeedOptimizeResult& r) {
   s += fmt::format("h_max (target {:.4f} mm), over the cutting time:\n", r.h_target_mm);
   s += "  before        " + q(r.h_before_mm, "p50 {:.4f}  p90 {:.4f}  p99 {:.4f}  max {:.4f} mm\n");
   s += "  after         " + q(r.h_after_mm, "p50 {:.4f}  p90 {:.4f}  p99 {:.4f}  max {:.4f} mm\n");
-  s += fmt::format("axial chip (target {:.4f} mm), max: before {:.4f} mm, after {:.4f} mm\n",
+  s += fmt::format("axial chip (target {:.4g} mm), max: before {:.4f} mm, after {:.4f} mm\n",
                    r.h_axial_target_mm, r.h_axial_max_before_mm, r.h_axial_max_after_mm);
   s += "MRR before      " +
        q(r.mrr_before, "p50 {:.0f}  p90 {:.0f}  p99 {:.0f}  max {:.0f} mm^3/min\n");
@@ -843,6 +854,12 @@ std::string feed_summary_text(const FeedOptimizeResult& r) {
   for (const UnheldBlock& u : r.unheld) {
     s += fmt::format(
         "cannot hold the target at {}:{}: h_max {:.4f} mm at the minimum feed {:g} "
+        "mm/min\n",
+        u.file, u.line, u.h_max_mm, u.feed_mm_per_min);
+  }
+  for (const UnheldBlock& u : r.unheld_axial) {
+    s += fmt::format(
+        "cannot hold the axial chip target at {}:{}: {:.4f} mm a tooth at the minimum feed {:g} "
         "mm/min\n",
         u.file, u.line, u.h_max_mm, u.feed_mm_per_min);
   }

@@ -988,6 +988,9 @@ function feedPart() {
   const shares = Object.entries(s.share_of_feed_time).filter(([, v]) => v > 0)
     .map(([k, v]) => `${k.replace(/_/g, ' ')} ${fmtNum(100 * v, 3)} %`).join(', ');
   sec.append(el('p', { class: 'note', text: `Feed time held by: ${shares}.` }));
+  if (s.unheld_axial && s.unheld_axial.length) {
+    sec.append(el('p', { class: 'note', text: `Where the axial chip target (${fmtNum(s.h_axial_target_mm, 4)} mm) cannot be held: ${s.unheld_axial.map((u) => `${u.file}:${u.line} (${fmtNum(u.h_max_mm, 4)} mm a tooth at ${fmtNum(u.feed_mm_per_min)} mm/min)`).join('; ')}.` }));
+  }
   if (s.unheld.length) {
     sec.append(el('p', { class: 'note', text: `Where the target cannot be held: ${s.unheld.map((u) => `${u.file}:${u.line} (h_max ${fmtNum(u.h_max_mm, 4)} mm at ${fmtNum(u.feed_mm_per_min)} mm/min)`).join('; ')}.` }));
   }
