@@ -1,6 +1,7 @@
 // Benchmarks of the engagement kernel on the Wagih 2023 examples (20 mm slots, one sample
 // per tooth pass, as the performance aim in docs/PERFORMANCE.md states).
 #include <benchmark/benchmark.h>
+#include <fmt/format.h>
 
 #include <string>
 
@@ -14,11 +15,16 @@
 
 namespace {
 
+// The four Wagih 2023 examples, by the benchmarks' first argument.
+const char* const kWagihNames[] = {"trochoidal", "circular", "elliptical", "linear-elliptical"};
+trochomill::Job wagih_job(const char* name) {
+  return trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) + "/examples/wagih2023/" + name +
+                              ".toml");
+}
+
 void BM_EngagementWagih(benchmark::State& state) {
-  static const char* const kNames[] = {"trochoidal", "circular", "elliptical", "linear-elliptical"};
-  const char* name = kNames[state.range(0)];
-  const trochomill::Job job = trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) +
-                                                   "/examples/wagih2023/" + name + ".toml");
+  const char* name = kWagihNames[state.range(0)];
+  const trochomill::Job job = wagih_job(name);
   const auto planned = trochomill::plan_path(job);
   std::size_t samples = 0;
   for (auto _ : state) {
@@ -31,17 +37,11 @@ void BM_EngagementWagih(benchmark::State& state) {
 }
 BENCHMARK(BM_EngagementWagih)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 
-}  // namespace
-
-namespace {
-
 // The whole analysis (engagement, cycle, walls at path and tooth level, imprints, tooth
-// chips) of one Wagih example; the aim in docs/PERFORMANCE.md is < 100 ms on one core.
+// chips, the predicted floor) of one Wagih example.
 void BM_AnalyzeWagih(benchmark::State& state) {
-  static const char* const kNames[] = {"trochoidal", "circular", "elliptical", "linear-elliptical"};
-  const char* name = kNames[state.range(0)];
-  const trochomill::Job job = trochomill::load_job(std::string(TROCHOMILL_SOURCE_DIR) +
-                                                   "/examples/wagih2023/" + name + ".toml");
+  const char* name = kWagihNames[state.range(0)];
+  const trochomill::Job job = wagih_job(name);
   const auto planned = trochomill::plan_path(job);
   for (auto _ : state) {
     const auto m = trochomill::analyze_process(job, planned.path);
@@ -50,6 +50,23 @@ void BM_AnalyzeWagih(benchmark::State& state) {
   state.SetLabel(name);
 }
 BENCHMARK(BM_AnalyzeWagih)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
+
+// The same without the predicted floor (the parts a study of the cycle's or the walls'
+// metrics asks for: analysis.hpp AnalysisParts), and the steady cycle alone (a simulation's
+// window).
+void BM_AnalyzeWagihParts(benchmark::State& state) {
+  const char* name = kWagihNames[state.range(0)];
+  const trochomill::Job job = wagih_job(name);
+  const auto planned = trochomill::plan_path(job);
+  trochomill::AnalysisParts parts = trochomill::AnalysisParts::cycle_only();
+  parts.walls = state.range(1) == 1;
+  for (auto _ : state) {
+    const auto m = trochomill::analyze_process(job, planned.path, {}, parts);
+    benchmark::DoNotOptimize(m.h_max_mm);
+  }
+  state.SetLabel(fmt::format("{}, {}", name, parts.walls ? "no floor" : "cycle only"));
+}
+BENCHMARK(BM_AnalyzeWagihParts)->ArgsProduct({{0, 1, 2, 3}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <tuple>
 
 #include "test_util.hpp"
 #include "trochomill/app.hpp"
@@ -275,6 +276,39 @@ TEST(Optimize, FindsTheLargestFeedWhoseChipStaysBelowTheLimit) {
   EXPECT_EQ(again.flat_keys, job.flat_keys);
 }
 
+// A study computes only the analysis's parts its metrics need (the floor is about half of
+// analyze): every metric comes out the same to the bit with its parts as with all, and a part
+// left out gives no figures (not zeros).
+TEST(Optimize, EveryMetricIsTheSameWithOnlyTheAnalysisPartsItNeeds) {
+  const Job job = load_job(test::example("wagih2023/elliptical.toml"));
+  const auto full = point_metrics(job, SweepEval::analyze, std::nullopt);
+  ASSERT_TRUE(full.count("ra_floor_mm") && full.count("waviness_left_tooth_mm") &&
+              full.count("cycle_force_max_predicted_n") && full.count("performance_index"));
+  EXPECT_EQ(analysis_parts_for({"h_max_mm", "cycle_mrr_mm3_per_min", "cycle_time_s"}),
+            AnalysisParts::cycle_only());
+  EXPECT_EQ(analysis_parts_for({"ra_floor_left_mm"}), (AnalysisParts{true, true, false}));
+  EXPECT_EQ(analysis_parts_for({"wall_peak_y_mm.left"}), (AnalysisParts{true, false, false}));
+  EXPECT_EQ(analysis_parts_for({"performance_index"}), (AnalysisParts{true, false, true}));
+  EXPECT_EQ(analysis_parts_for({"cycle_force_max_predicted_n"}),
+            (AnalysisParts{false, false, true}));
+  std::map<std::tuple<bool, bool, bool>, std::map<std::string, double>> by_parts;
+  for (const std::string& key : metric_names(job, SweepEval::analyze)) {
+    const AnalysisParts p = analysis_parts_for({key});
+    auto [it, fresh] = by_parts.try_emplace({p.walls, p.floor, p.force});
+    if (fresh) it->second = point_metrics(job, SweepEval::analyze, std::nullopt, {}, 0, p);
+    const auto& some = it->second;
+    ASSERT_EQ(some.count(key), full.count(key)) << key;
+    if (full.count(key)) {
+      EXPECT_EQ(some.at(key), full.at(key)) << key;  // exact: the same code on the same input
+    }
+  }
+  const auto cycle = by_parts.at({false, false, false});
+  for (const char* key : {"waviness_left_mm", "ra_left_mm", "ra_floor_mm", "performance_index",
+                          "cycle_force_max_predicted_n", "cycle_h_max_tooth_mm"}) {
+    EXPECT_EQ(cycle.count(key), 0u) << key;
+  }
+}
+
 // A range narrower than a setting's rounding (0.0001 mm) keeps its points inside it (they
 // were rounded out of it and NLopt refused its own bounds); a study whose every point fails
 // says the first point's error.
@@ -288,6 +322,9 @@ TEST(Optimize, ANarrowRangeStaysInsideAndFailuresAreSaid) {
   const double step = std::stod(r.best->values[0]);
   EXPECT_GE(step, 0.50001);
   EXPECT_LE(step, 0.50002);
+  // Searched on the cycle alone, reported with every metric (the floor's too).
+  EXPECT_TRUE(r.best->metrics.count("waviness_left_tooth_mm"));
+  EXPECT_TRUE(r.best->metrics.count("ra_floor_mm"));
   const OptimizeResult bad = optimize(doc, {}, {parse_opt_variable("path.aspect_ratio=1.1:1.2")},
                                       {{"cycle_mrr_mm3_per_min", true}}, {}, o);
   EXPECT_FALSE(bad.best);

@@ -203,7 +203,10 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       job.sets = a->sets;
       const Job j = job.load();
       const ToolPath path = plan_slot(j).path;
-      const ProcessMetrics m = sides.empty() ? ProcessMetrics{} : analyze_process(j, path);
+      AnalysisParts walls = AnalysisParts::cycle_only();
+      walls.walls = true;
+      const ProcessMetrics m =
+          sides.empty() ? ProcessMetrics{} : analyze_process(j, path, {}, walls);
       for (const bool left : sides) {
         const WallProfile& w = left ? m.walls_tooth.left : m.walls_tooth.right;
         if (w.x_mm.size() < 3) {

@@ -24,6 +24,27 @@
 
 namespace trochomill {
 
+/// The parts of an analysis past the whole program's figures and the steady cycle's. Each
+/// costs time (the floor about half of `analyze`, docs/PERFORMANCE.md): a caller that reads
+/// only some metrics asks for theirs (report.hpp: analysis_parts_for). A part left out keeps
+/// its fields at their defaults; the figures of the parts computed are the same to the bit.
+struct AnalysisParts {
+  /// The walls at path and tooth level, their texture, the floor's imprints and the teeth's
+  /// exact chips (h_max_tooth_mm, chip_translation_error_mm).
+  bool walls = true;
+  /// The floor the end edges leave and its texture (floor, texture_floor). It needs the walls
+  /// (a program whose window has no walls has no floor figures either): `floor` computes them.
+  bool floor = true;
+  /// The force model's F_R,max over the cycle and the performance index from it (force.hpp:
+  /// analyze_with_forces; analyze_process never runs the force model).
+  bool force = true;
+
+  /// Only the whole program's and the steady cycle's figures (a simulation's window).
+  [[nodiscard]] static AnalysisParts cycle_only() { return {false, false, false}; }
+  [[nodiscard]] bool all() const { return walls && floor && force; }
+  friend bool operator==(const AnalysisParts&, const AnalysisParts&) = default;
+};
+
 struct ProcessMetrics {
   // Whole program.
   double path_length_mm = 0;          ///< all moves (mm)
@@ -113,12 +134,17 @@ struct ProcessMetrics {
   std::string performance_index_note;           ///< where its inputs came from, or what is missing
 
   EngagementSeries series;  ///< the time series (one sample per tooth pass / steps)
+  /// The parts computed (the request, the floor with its walls); the outputs give null for
+  /// the figures of a part left out.
+  AnalysisParts parts;
 };
 
 /// Analyses `path` for `job` (the job gives tool, slot, cutting conditions, step, [analysis]
-/// and [measured]). Throws InputError when the path never cuts the slot.
+/// and [measured]): the whole program, the steady cycle and the `parts` asked for. Throws
+/// InputError when the path never cuts the slot.
 [[nodiscard]] ProcessMetrics analyze_process(const Job& job, const ToolPath& path,
-                                             const RunHooks& hooks = {});
+                                             const RunHooks& hooks = {},
+                                             const AnalysisParts& parts = {});
 /// The memory analyze_process will hold (bytes), before running it: its samples (one per
 /// tooth pass / steps_per_tooth over the whole path, about 400 bytes each as measured) and
 /// the process (its resident memory now, at least 20 MB: process_base_bytes).

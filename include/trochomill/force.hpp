@@ -152,9 +152,11 @@ struct JobForces {
 /// reusing m's engagement, and the performance index from it (set_performance_index).
 /// Nothing without a model. For analyze and compare.
 void fill_predicted_force(const Job& job, const ToolPath& path, ProcessMetrics& m);
-/// analyze_process with the predicted force filled in (what `analyze` and `compare` report).
+/// analyze_process with the predicted force filled in (what `analyze` and `compare` report);
+/// without parts.force, analyze_process alone.
 [[nodiscard]] ProcessMetrics analyze_with_forces(const Job& job, const ToolPath& path,
-                                                 const RunHooks& hooks = {});
+                                                 const RunHooks& hooks = {},
+                                                 const AnalysisParts& parts = {});
 
 // ---------------------------------------------------------------- calibration
 

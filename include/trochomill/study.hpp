@@ -73,10 +73,11 @@ enum class SweepEval { analyze, mechanism, forces, simulate };
 /// The metrics of one point: the numbers of the evaluation's JSON document (as the sweep's
 /// columns; null figures left out). Throws what the evaluation throws.
 /// `memory_limit_bytes` (> 0): a simulation whose memory estimate passes it is refused
-/// (InputError) before it starts.
+/// (InputError) before it starts. `parts`: for analyze, the analysis's parts to compute
+/// (report.hpp: analysis_parts_for; the metrics of the others are left out).
 [[nodiscard]] std::map<std::string, double> point_metrics(
     const Job& job, SweepEval eval, const std::optional<std::pair<int, int>>& cycles,
-    const RunHooks& hooks = {}, double memory_limit_bytes = 0);
+    const RunHooks& hooks = {}, double memory_limit_bytes = 0, const AnalysisParts& parts = {});
 /// The metric names an evaluation gives (the sweep's metric columns).
 [[nodiscard]] std::vector<std::string> metric_names(const Job& base, SweepEval eval);
 

@@ -364,9 +364,12 @@ double estimate_analysis_memory(const Job& job, const ToolPath& path) {
   return process_base_bytes() + samples * 400.0;
 }
 
-ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHooks& hooks) {
+ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHooks& hooks,
+                               const AnalysisParts& parts) {
   if (path.empty()) throw InputError("analyze: the path is empty");
   ProcessMetrics m;
+  m.parts = parts;
+  m.parts.walls = parts.walls || parts.floor;
   EngagementOptions opt;
   opt.steps_per_tooth = job.analysis.steps_per_tooth;
   opt.hooks = hooks;
@@ -644,6 +647,12 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
       }
     }
 
+    // The steady cycle is all a caller asked for (the walls and the floor cost most).
+    if (!parts.walls && !parts.floor) {
+      set_performance_index(job, m);
+      return m;
+    }
+
     const EngagementSeries& ce = *cs;
     const PathSamples& q = ce.samples;
     const std::vector<char>& cc = *ccut;
@@ -875,7 +884,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
       }
     }
 
-    predict_floor(job, s, omega, m);
+    if (parts.floor) predict_floor(job, s, omega, m);
 
     // Exact chip between adjacent teeth's tip trajectories, at the angle of each sample's
     // h_max where the previous tooth's circle bounds it (elsewhere the older surface does and

@@ -72,9 +72,10 @@ void fill_predicted_force(const Job& job, const ToolPath& path, ProcessMetrics& 
   set_performance_index(job, m, f.summary.f_resultant_max_n);
 }
 
-ProcessMetrics analyze_with_forces(const Job& job, const ToolPath& path, const RunHooks& hooks) {
-  ProcessMetrics m = analyze_process(job, path, hooks);
-  fill_predicted_force(job, path, m);
+ProcessMetrics analyze_with_forces(const Job& job, const ToolPath& path, const RunHooks& hooks,
+                                   const AnalysisParts& parts) {
+  ProcessMetrics m = analyze_process(job, path, hooks, parts);
+  if (parts.force) fill_predicted_force(job, path, m);
   return m;
 }
 

@@ -7,6 +7,7 @@
 #include <functional>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <string_view>
 
 #include "trochomill/error.hpp"
 #include "trochomill/force.hpp"
@@ -147,6 +148,33 @@ double scalar(const ProcessMetrics& m, const std::string& key) {
   throw Error("unknown metric " + key);
 }
 
+// The part of the analysis one top-level key of metrics_json needs (nested keys by their
+// first part).
+AnalysisParts part_of(std::string_view key) {
+  key = key.substr(0, key.find('.'));
+  AnalysisParts p = AnalysisParts::cycle_only();
+  const auto is = [&](std::string_view k) { return key == k; };
+  if (is("cycle_force_max_predicted_n")) {
+    p.force = true;
+  } else if (is("performance_index")) {  // F_R,max, the walls' Ra and waviness
+    p.walls = p.force = true;
+  } else if (key.find("floor") != std::string_view::npos) {
+    p.walls = p.floor = true;
+  } else if (key.rfind("waviness_", 0) == 0 || is("wall_peak_y_mm") || is("cycle_h_max_tooth_mm") ||
+             is("cycle_h_max_per_tooth_mm") || is("cycle_chip_translation_error_mm") ||
+             is("bottom_imprint")) {
+    p.walls = true;
+  } else {
+    for (const TextureKey& k : kTextureKeys) p.walls = p.walls || is(k.left) || is(k.right);
+  }
+  return p;
+}
+
+// Whether `have` holds every part `need` names.
+bool covers(const AnalysisParts& have, const AnalysisParts& need) {
+  return (have.walls || !need.walls) && (have.floor || !need.floor) && (have.force || !need.force);
+}
+
 nlohmann::json metrics_object(const ProcessMetrics& m) {
   // A figure that is not there (no cycle, no tooth-level wall, no force model) is null.
   nlohmann::json j = nlohmann::json::object();
@@ -169,10 +197,27 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
                 "no steady cycle (the program is not periodic): Wagih's index "
                 "compares one cycle's removal rate");
   j["samples"] = m.series.samples.size();
+  // The figures of a part not computed are not there.
+  if (!m.parts.all()) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      if (!covers(m.parts, part_of(it.key()))) *it = nullptr;
+    }
+  }
   return j;
 }
 
 }  // namespace
+
+AnalysisParts analysis_parts_for(const std::vector<std::string>& metric_keys) {
+  AnalysisParts p = AnalysisParts::cycle_only();
+  for (const std::string& k : metric_keys) {
+    const AnalysisParts q = part_of(k);
+    p.walls = p.walls || q.walls;
+    p.floor = p.floor || q.floor;
+    p.force = p.force || q.force;
+  }
+  return p;
+}
 
 std::string metrics_json(const Job& job, const ProcessMetrics& m) {
   nlohmann::json j = metrics_object(m);

@@ -4,6 +4,7 @@
 // NSGA-II, and the Pareto set of everything evaluated. Every evaluation is a job built from
 // the document with the variables' values and run through the sweep's evaluation.
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +15,7 @@
 #include "nsga2.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/io.hpp"
+#include "trochomill/report.hpp"
 #include "trochomill/study.hpp"
 
 namespace trochomill {
@@ -26,8 +28,14 @@ class Evaluator {
  public:
   Evaluator(const JobDocument& doc, const std::vector<Override>& base,
             const std::vector<OptVariable>& vars, const std::vector<Constraint>& constraints,
-            const OptimizeOptions& o, const RunHooks& hooks)
-      : doc_(doc), base_(base), vars_(vars), constraints_(constraints), o_(o), hooks_(hooks) {
+            const OptimizeOptions& o, const AnalysisParts& parts, const RunHooks& hooks)
+      : doc_(doc),
+        base_(base),
+        vars_(vars),
+        constraints_(constraints),
+        o_(o),
+        parts_(parts),
+        hooks_(hooks) {
     inner_.cancel = hooks.cancel;
   }
 
@@ -74,7 +82,8 @@ class Evaluator {
     std::vector<Override> o = base_;
     for (std::size_t k = 0; k < vars_.size(); ++k) o.push_back({vars_[k].key, values[k], ""});
     try {
-      p.metrics = point_metrics(doc_.build(o), o_.eval, o_.cycles, inner_, o_.memory_limit_bytes);
+      p.metrics =
+          point_metrics(doc_.build(o), o_.eval, o_.cycles, inner_, o_.memory_limit_bytes, parts_);
       p.feasible = true;
       for (const Constraint& c : constraints_) p.feasible = p.feasible && violation(p, c) <= 0;
     } catch (const Interrupted&) {
@@ -100,6 +109,21 @@ class Evaluator {
     return d - 1e-9 * std::abs(c.value);
   }
 
+  // A point found with some of the analysis's parts, given every metric: evaluated again with
+  // all of them (the metrics searched on come out the same to the bit). Should that fail (a
+  // part left out can fail where the cycle did not), the point keeps the metrics it has.
+  void complete(OptPoint& p) const {
+    if (parts_.all() || p.metrics.empty()) return;
+    std::vector<Override> o = base_;
+    for (std::size_t k = 0; k < vars_.size(); ++k) o.push_back({vars_[k].key, p.values[k], ""});
+    try {
+      p.metrics = point_metrics(doc_.build(o), o_.eval, o_.cycles, inner_, o_.memory_limit_bytes);
+    } catch (const Interrupted&) {
+      throw;
+    } catch (const std::exception&) {
+    }
+  }
+
   [[nodiscard]] std::vector<const OptPoint*> all() const {
     std::vector<const OptPoint*> out;
     for (const auto& [k, p] : cache_) out.push_back(&p);
@@ -112,6 +136,7 @@ class Evaluator {
   const std::vector<OptVariable>& vars_;
   const std::vector<Constraint>& constraints_;
   const OptimizeOptions& o_;
+  const AnalysisParts parts_;
   const RunHooks& hooks_;
   RunHooks inner_;
   std::mutex mu_;
@@ -233,7 +258,14 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
 
   OptimizeResult r;
   for (const OptVariable& v : vars) r.keys.push_back(v.key);
-  Evaluator ev(doc, base, vars, constraints, o, hooks);
+  // An analysis computes only the parts the goals and constraints read (the floor alone is
+  // about half of it); the points reported get all of them (Evaluator::complete).
+  std::vector<std::string> named;
+  for (const Objective& g : goals) named.push_back(g.metric);
+  for (const Constraint& c : constraints) named.push_back(c.metric);
+  const AnalysisParts parts =
+      o.eval == SweepEval::analyze ? analysis_parts_for(named) : AnalysisParts{};
+  Evaluator ev(doc, base, vars, constraints, o, parts, hooks);
   if (hooks.phase) hooks.phase("evaluations");
 
   if (goals.size() == 1) {
@@ -390,6 +422,14 @@ OptimizeResult optimize(const JobDocument& doc, const std::vector<Override>& bas
     });
   }
   r.evaluations = ev.all().size();
+  {
+    std::vector<OptPoint*> reported;
+    if (r.best) reported.push_back(&*r.best);
+    for (OptPoint& p : r.pareto) reported.push_back(&p);
+    tbb::parallel_for(std::size_t{0}, reported.size(),
+                      [&](std::size_t i) { ev.complete(*reported[i]); });
+    hooks.check("interrupted");
+  }
   for (const OptPoint* p : ev.all()) {
     if (p->error.empty()) continue;
     if (r.failed++ == 0) r.first_error = p->error;

@@ -67,9 +67,11 @@ void flatten(const json& j, const std::string& prefix,
   }
 }
 
-// analyze's evaluation of a point: the job's plan, its metrics with the predicted force.
-ProcessMetrics analyze_point(const Job& job, const RunHooks& hooks) {
-  return analyze_with_forces(job, plan_job(job).path, hooks);
+// analyze's evaluation of a point: the job's plan, its metrics with the predicted force (the
+// parts asked for).
+ProcessMetrics analyze_point(const Job& job, const RunHooks& hooks,
+                             const AnalysisParts& parts = {}) {
+  return analyze_with_forces(job, plan_job(job).path, hooks, parts);
 }
 
 // The overrides of point i: the base's, then the point's values (named by their keys).
@@ -115,20 +117,23 @@ void for_each_point(std::size_t count, int threads, const RunHooks& hooks, const
 
 // The document of one evaluation.
 json evaluate(const Job& job, SweepEval eval, const std::optional<std::pair<int, int>>& cycles,
-              const RunHooks& hooks, double memory_limit_bytes) {
+              const RunHooks& hooks, double memory_limit_bytes, const AnalysisParts& parts = {}) {
   if (eval == SweepEval::mechanism) {
     const bool wear = job.tool.flank_wear_mm > 0;
     const MechanismCurve c = mechanism_curve(job, job.mechanism, wear);
     return json::parse(
         mechanism_json(job, job.mechanism, c, summarize_zones(c, job.mechanism, wear), wear));
   }
-  if (eval == SweepEval::analyze) return json::parse(metrics_json(job, analyze_point(job, hooks)));
+  if (eval == SweepEval::analyze) {
+    return json::parse(metrics_json(job, analyze_point(job, hooks, parts)));
+  }
   const ToolPath path = plan_job(job).path;
   std::pair<double, double> window;
   if (cycles) {
     window = cycle_window(path, cycles->first, cycles->second);
   } else {
-    const ProcessMetrics m = analyze_process(job, path, hooks);
+    // The steady cycle is all the window needs (not the walls or the floor).
+    const ProcessMetrics m = analyze_process(job, path, hooks, AnalysisParts::cycle_only());
     window = {m.cycle_start_s, m.cycle_start_s + m.cycle_time_s};
   }
   SimControl control;
@@ -309,9 +314,10 @@ Vary parse_vary(const std::string& text) {
 
 std::map<std::string, double> point_metrics(const Job& job, SweepEval eval,
                                             const std::optional<std::pair<int, int>>& cycles,
-                                            const RunHooks& hooks, double memory_limit_bytes) {
+                                            const RunHooks& hooks, double memory_limit_bytes,
+                                            const AnalysisParts& parts) {
   std::vector<std::pair<std::string, json>> leaves;
-  flatten(evaluate(job, eval, cycles, hooks, memory_limit_bytes), "", leaves);
+  flatten(evaluate(job, eval, cycles, hooks, memory_limit_bytes, parts), "", leaves);
   std::map<std::string, double> out;
   for (const auto& [k, v] : leaves) {
     if (v.is_boolean()) {

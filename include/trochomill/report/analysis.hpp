@@ -21,7 +21,14 @@ namespace trochomill {
 /// report's page formats the same way (web/src/report.js, fmtNum).
 [[nodiscard]] std::string figure_text(double v, int digits = 4);
 
-/// The analysis as a JSON document (keys carry their units: _mm, _s, _deg, _mm3_per_min).
+/// The parts of the analysis (analysis.hpp: AnalysisParts) the metrics named need, by their
+/// keys in metrics_json (a study's metric names: nested keys joined by '.'); a key of the
+/// whole program or the steady cycle needs none. A metric's value is the same to the bit
+/// with its parts as with all.
+[[nodiscard]] AnalysisParts analysis_parts_for(const std::vector<std::string>& metric_keys);
+
+/// The analysis as a JSON document (keys carry their units: _mm, _s, _deg, _mm3_per_min); the
+/// figures of a part not computed (m.parts) are null.
 [[nodiscard]] std::string metrics_json(const Job& job, const ProcessMetrics& m);
 /// `analyze`'s summary; `gcode`: the program analysed (empty: the planned path).
 [[nodiscard]] std::string metrics_text(const std::string& job_file, const std::string& gcode,
