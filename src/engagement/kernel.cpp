@@ -229,11 +229,13 @@ class Removed {
 
   // Inserts a disc whose circle's part outside R (before it) is `exposed`.
   void insert(double cx, double cy, ArcSet exposed) {
+    // The discs near the centre: those outside() gathered for it if nothing was inserted
+    // since (the kernel asks for a sample's free circle, then inserts its disc a tooth later).
+    if (!(cache_valid_ && cache_x_ == cx && cache_y_ == cy)) gather(cx, cy, false);
     cache_valid_ = false;
     have_last_ = true;
     last_x_ = cx;
     last_y_ = cy;
-    gather(cx, cy, false);
     // A disc at the centre of an alive one (a pure z move, a revisited point) adds nothing.
     for (const int j : near_) {
       if (std::hypot(discs_[j].x - cx, discs_[j].y - cy) <= 1e-9) return;
