@@ -104,8 +104,12 @@ void subtract(ArcSet& set, double mid, double half) {
 struct Disc {
   double x = 0, y = 0;
   ArcSet exposed;
-  double bx0 = 0, by0 = 0, bx1 = 0, by1 = 0;  // bounding box of the exposed arcs
-  std::size_t cell = 0;                       // grid cell holding the centre
+  std::size_t cell = 0;  // grid cell holding the centre
+};
+
+// The bounding box of a disc's exposed arcs (mm).
+struct Box {
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
 };
 
 class Removed {
@@ -245,7 +249,8 @@ class Removed {
       const double dx = cx - d.x, dy = cy - d.y, dist = std::hypot(dx, dy);
       if (dist >= 2 * R_) continue;
       // Bounding-box reject: the exposed arcs lie outside the new disc.
-      const double nx = std::clamp(cx, d.bx0, d.bx1), ny = std::clamp(cy, d.by0, d.by1);
+      const Box& b = box_[static_cast<std::size_t>(j)];
+      const double nx = std::clamp(cx, b.x0, b.x1), ny = std::clamp(cy, b.y0, b.y1);
       if (std::hypot(nx - cx, ny - cy) >= R_) continue;
       subtract(d.exposed, std::atan2(dy, dx), dist <= kEps ? kPi : std::acos(dist / (2 * R_)));
       if (d.exposed.empty()) {
@@ -253,7 +258,7 @@ class Removed {
         auto& cell = grid_[d.cell];
         cell.erase(std::find(cell.begin(), cell.end(), j));
       } else {
-        bounds(d);
+        box_[static_cast<std::size_t>(j)] = bounds(d);
       }
     }
     if (exposed.empty()) return;
@@ -262,7 +267,7 @@ class Removed {
     d.y = cy;
     d.exposed = std::move(exposed);
     d.cell = cell_of(cell_x(cx), cell_y(cy));
-    bounds(d);
+    box_.push_back(bounds(d));
     const int idx = static_cast<int>(discs_.size());
     grid_[d.cell].push_back(idx);
     all_[d.cell].push_back(idx);
@@ -299,15 +304,15 @@ class Removed {
     for (long b = cell_y(cy - ext); b <= cell_y(cy + ext); ++b) {
       for (long a = cell_x(cx - ext); a <= cell_x(cx + ext); ++a) {
         for (const int j : grid_[cell_of(a, b)]) {
-          const Disc& d = discs_[j];
+          // (The boxes apart from the discs: a scan reads 32 bytes a candidate.)
+          const Box& d = box_[static_cast<std::size_t>(j)];
           // The exposed arcs' bounding box must meet the circle of radius R around the
           // query: nearest box point within R, farthest corner beyond R (squared distances).
-          const double nx = std::clamp(cx, d.bx0, d.bx1) - cx,
-                       ny = std::clamp(cy, d.by0, d.by1) - cy;
+          const double nx = std::clamp(cx, d.x0, d.x1) - cx, ny = std::clamp(cy, d.y0, d.y1) - cy;
           if (nx * nx + ny * ny > near2) continue;
           if (circle_only) {
-            const double fx = std::max(std::abs(cx - d.bx0), std::abs(cx - d.bx1));
-            const double fy = std::max(std::abs(cy - d.by0), std::abs(cy - d.by1));
+            const double fx = std::max(std::abs(cx - d.x0), std::abs(cx - d.x1));
+            const double fy = std::max(std::abs(cy - d.y0), std::abs(cy - d.y1));
             if (fx * fx + fy * fy < far2) continue;
           }
           near_.push_back(j);
@@ -330,16 +335,17 @@ class Removed {
     return false;
   }
 
-  void bounds(Disc& d) const {
-    d.bx0 = d.by0 = std::numeric_limits<double>::infinity();
-    d.bx1 = d.by1 = -std::numeric_limits<double>::infinity();
+  [[nodiscard]] Box bounds(const Disc& d) const {
+    Box b;
+    b.x0 = b.y0 = std::numeric_limits<double>::infinity();
+    b.x1 = b.y1 = -std::numeric_limits<double>::infinity();
     for (const auto& arc : d.exposed) {
       auto add = [&](double ux, double uy) {
         const double x = d.x + R_ * ux, y = d.y + R_ * uy;
-        d.bx0 = std::min(d.bx0, x);
-        d.bx1 = std::max(d.bx1, x);
-        d.by0 = std::min(d.by0, y);
-        d.by1 = std::max(d.by1, y);
+        b.x0 = std::min(b.x0, x);
+        b.x1 = std::max(b.x1, x);
+        b.y0 = std::min(b.y0, y);
+        b.y1 = std::max(b.y1, y);
       };
       add(std::cos(arc.start_rad), std::sin(arc.start_rad));
       add(std::cos(arc.end_rad), std::sin(arc.end_rad));
@@ -349,6 +355,7 @@ class Removed {
         if (th > arc.start_rad && th < arc.end_rad) add(kAxis[q][0], kAxis[q][1]);
       }
     }
+    return b;
   }
 
   static void normalise(ArcSet& s) {
@@ -369,6 +376,7 @@ class Removed {
   double R_, cell_, x0_, y0_;
   long nx_ = 0, ny_ = 0;
   std::vector<Disc> discs_;
+  std::vector<Box> box_;                // per disc
   std::vector<std::vector<int>> grid_;  // alive discs per cell
   std::vector<std::vector<int>> all_;   // every stored disc per cell (for point tests)
   mutable std::vector<int> near_;
