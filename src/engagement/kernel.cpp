@@ -235,7 +235,7 @@ class Removed {
   void insert(double cx, double cy, ArcSet exposed) {
     // The discs near the centre: those outside() gathered for it if nothing was inserted
     // since (the kernel asks for a sample's free circle, then inserts its disc a tooth later).
-    if (!(cache_valid_ && cache_x_ == cx && cache_y_ == cy)) gather(cx, cy, false);
+    if (!(cache_valid_ && cache_x_ == cx && cache_y_ == cy)) gather(cx, cy);
     cache_valid_ = false;
     have_last_ = true;
     last_x_ = cx;
@@ -253,12 +253,17 @@ class Removed {
       const double nx = std::clamp(cx, b.x0, b.x1), ny = std::clamp(cy, b.y0, b.y1);
       if (std::hypot(nx - cx, ny - cy) >= R_) continue;
       subtract(d.exposed, std::atan2(dy, dx), dist <= kEps ? kPi : std::acos(dist / (2 * R_)));
+      const auto u = static_cast<std::size_t>(j);
       if (d.exposed.empty()) {
-        // A dead disc leaves its cell: the candidate sets hold only boundary discs.
-        auto& cell = grid_[d.cell];
-        cell.erase(std::find(cell.begin(), cell.end(), j));
+        // A dead disc leaves its cells: the candidate sets hold only boundary discs.
+        delist(j, span_[u], Span{});
       } else {
-        box_[static_cast<std::size_t>(j)] = bounds(d);
+        // Its arcs shrank, so did their box (within the old one): it leaves the cells the
+        // box no longer meets.
+        box_[u] = bounds(d);
+        const Span now = span_of(box_[u]);
+        delist(j, span_[u], now);
+        span_[u] = now;
       }
     }
     if (exposed.empty()) return;
@@ -268,8 +273,13 @@ class Removed {
     d.exposed = std::move(exposed);
     d.cell = cell_of(cell_x(cx), cell_y(cy));
     box_.push_back(bounds(d));
+    span_.push_back(span_of(box_.back()));
+    seen_.push_back(0);
     const int idx = static_cast<int>(discs_.size());
-    grid_[d.cell].push_back(idx);
+    const Span& sp = span_.back();
+    for (long b = sp.iy0; b <= sp.iy1; ++b) {
+      for (long a = sp.ix0; a <= sp.ix1; ++a) grid_[cell_of(a, b)].push_back(idx);
+    }
     all_[d.cell].push_back(idx);
     discs_.push_back(std::move(d));
   }
@@ -285,40 +295,72 @@ class Removed {
     return static_cast<std::size_t>(iy * nx_ + ix);
   }
 
-  // gather(cx, cy, false) unless its result for this centre is still valid (no insertion
-  // since): outside() and the chip query at one sample share it.
+  // The cells [ix0, ix1] x [iy0, iy1] an alive disc is listed in (those its exposed arcs'
+  // box meets; none: ix1 < ix0).
+  struct Span {
+    long ix0 = 0, iy0 = 0, ix1 = -1, iy1 = -1;
+    [[nodiscard]] bool holds(long a, long b) const {
+      return a >= ix0 && a <= ix1 && b >= iy0 && b <= iy1;
+    }
+  };
+  [[nodiscard]] Span span_of(const Box& b) const {
+    return {cell_x(b.x0), cell_y(b.y0), cell_x(b.x1), cell_y(b.y1)};
+  }
+  // Takes disc j out of the cells of `from` that `keep` does not hold.
+  void delist(int j, const Span& from, const Span& keep) {
+    for (long b = from.iy0; b <= from.iy1; ++b) {
+      for (long a = from.ix0; a <= from.ix1; ++a) {
+        if (keep.holds(a, b)) continue;
+        auto& cell = grid_[cell_of(a, b)];
+        cell.erase(std::find(cell.begin(), cell.end(), j));
+      }
+    }
+  }
+
+  // gather(cx, cy) unless its result for this centre is still valid (no insertion since):
+  // outside() and the chip query at one sample share it.
   void gather_cached(double cx, double cy) const {
     if (cache_valid_ && cache_x_ == cx && cache_y_ == cy) return;
-    gather(cx, cy, false);
+    gather(cx, cy);
     cache_valid_ = true;
     cache_x_ = cx;
     cache_y_ = cy;
   }
 
-  // Alive discs near (cx, cy) whose exposed arcs can meet the circle of radius R around it
-  // (circle_only) or anything inside that circle (the disc).
-  void gather(double cx, double cy, bool circle_only) const {
+  // Alive discs whose exposed arcs' box comes within R of (cx, cy), in the order of their
+  // centres' cells (row by row) and, within a cell, of insertion. A disc is listed in every
+  // cell its box meets, so only the cells within R of the query are read (a box within R
+  // meets one of them): about a third of the candidates of binning by centre, which needs
+  // the cells within 2R.
+  void gather(double cx, double cy) const {
     near_.clear();
-    const double ext = 2 * R_;  // exposed arcs lie within R of their centre
-    const double near2 = (R_ + 1e-9) * (R_ + 1e-9), far2 = (R_ - 1e-9) * (R_ - 1e-9);
-    for (long b = cell_y(cy - ext); b <= cell_y(cy + ext); ++b) {
-      for (long a = cell_x(cx - ext); a <= cell_x(cx + ext); ++a) {
+    if (++stamp_ == 0) {  // the stamps wrapped: none is current
+      std::fill(seen_.begin(), seen_.end(), 0U);
+      stamp_ = 1;
+    }
+    const double reach = R_ + 1e-9, near2 = reach * reach;
+    for (long b = cell_y(cy - reach); b <= cell_y(cy + reach); ++b) {
+      for (long a = cell_x(cx - reach); a <= cell_x(cx + reach); ++a) {
         for (const int j : grid_[cell_of(a, b)]) {
-          // (The boxes apart from the discs: a scan reads 32 bytes a candidate.)
-          const Box& d = box_[static_cast<std::size_t>(j)];
-          // The exposed arcs' bounding box must meet the circle of radius R around the
-          // query: nearest box point within R, farthest corner beyond R (squared distances).
+          const auto u = static_cast<std::size_t>(j);
+          if (seen_[u] == stamp_) continue;  // listed in an earlier cell too
+          seen_[u] = stamp_;
+          // The exposed arcs' bounding box must meet the disc of radius R around the query:
+          // its nearest point within R (squared distances).
+          const Box& d = box_[u];
           const double nx = std::clamp(cx, d.x0, d.x1) - cx, ny = std::clamp(cy, d.y0, d.y1) - cy;
           if (nx * nx + ny * ny > near2) continue;
-          if (circle_only) {
-            const double fx = std::max(std::abs(cx - d.x0), std::abs(cx - d.x1));
-            const double fy = std::max(std::abs(cy - d.y0), std::abs(cy - d.y1));
-            if (fx * fx + fy * fy < far2) continue;
-          }
           near_.push_back(j);
         }
       }
     }
+    // The order a scan of the centres' cells gave (the chip's angle among equal chips, and
+    // so every output, depends on it).
+    std::sort(near_.begin(), near_.end(), [&](int p, int q) {
+      const std::size_t cp = discs_[static_cast<std::size_t>(p)].cell,
+                        cq = discs_[static_cast<std::size_t>(q)].cell;
+      return cp != cq ? cp < cq : p < q;
+    });
   }
 
   // Is (px, py) inside the removed region? Directly: within R of any inserted disc.
@@ -376,8 +418,11 @@ class Removed {
   double R_, cell_, x0_, y0_;
   long nx_ = 0, ny_ = 0;
   std::vector<Disc> discs_;
-  std::vector<Box> box_;                // per disc
-  std::vector<std::vector<int>> grid_;  // alive discs per cell
+  std::vector<Box> box_;                     // per disc
+  std::vector<Span> span_;                   // per disc: the cells it is listed in (alive discs)
+  mutable std::vector<std::uint32_t> seen_;  // per disc: the gather that last met it
+  mutable std::uint32_t stamp_ = 0;
+  std::vector<std::vector<int>> grid_;  // alive discs per cell their box meets
   std::vector<std::vector<int>> all_;   // every stored disc per cell (for point tests)
   mutable std::vector<int> near_;
   mutable bool cache_valid_ = false;
