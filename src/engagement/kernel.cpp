@@ -104,6 +104,8 @@ void subtract(ArcSet& set, double mid, double half) {
 struct Disc {
   double x = 0, y = 0;
   ArcSet exposed;
+  /// Per exposed arc: the cosine and sine of its start and its end (set with its box).
+  std::vector<std::array<double, 4>> ends;
   std::size_t cell = 0;  // grid cell holding the centre
 };
 
@@ -129,13 +131,13 @@ class Removed {
     gather_cached(cx, cy);
     std::vector<double> cross;
     bool degenerate = false;
-    for (const int j : near_) {
-      const Disc& d = discs_[j];
-      const double dx = d.x - cx, dy = d.y - cy, dist = std::hypot(dx, dy);
+    for (std::size_t k = 0; k < near_.size(); ++k) {
+      const Disc& d = discs_[near_[k]];
+      const double dist = near_dist(k);
       // The circle of an alive disc: only boundary points, no open stock on it.
       if (dist <= 1e-9) return {};
       if (dist >= 2 * R_ - kEps || dist <= kEps) continue;
-      const double alpha = std::atan2(dy, dx), beta = std::acos(dist / (2 * R_));
+      const double alpha = near_alpha(k), beta = near_beta(k);
       // Equal circles: the crossing at angle alpha -+ beta on this circle sits at
       // alpha + pi +- beta on the disc's.
       for (const double sgn : {-1.0, 1.0}) {
@@ -219,6 +221,30 @@ class Removed {
     return near_;
   }
   [[nodiscard]] const Disc& disc(int j) const { return discs_[j]; }
+  // Of the k-th disc near_disc (or outside) listed, as seen from the centre it listed them
+  // for: the distance to its centre, that centre's direction (rad) and acos(distance / 2R)
+  // (the half-angle of the two circles' crossings), each computed once for all who ask.
+  [[nodiscard]] double near_dist(std::size_t k) const {
+    double& v = near_dist_[k];
+    if (std::isnan(v)) {
+      const Disc& d = discs_[near_[k]];
+      v = std::hypot(d.x - gx_, d.y - gy_);
+    }
+    return v;
+  }
+  [[nodiscard]] double near_alpha(std::size_t k) const {
+    double& v = near_alpha_[k];
+    if (std::isnan(v)) {
+      const Disc& d = discs_[near_[k]];
+      v = std::atan2(d.y - gy_, d.x - gx_);
+    }
+    return v;
+  }
+  [[nodiscard]] double near_beta(std::size_t k) const {
+    double& v = near_beta_[k];
+    if (std::isnan(v)) v = std::acos(near_dist(k) / (2 * R_));
+    return v;
+  }
   [[nodiscard]] bool covers(double px, double py) const { return inside(px, py); }
 
   // Adds another region's discs from its `from`-th on (the union of both), in the order they
@@ -241,18 +267,20 @@ class Removed {
     last_x_ = cx;
     last_y_ = cy;
     // A disc at the centre of an alive one (a pure z move, a revisited point) adds nothing.
-    for (const int j : near_) {
-      if (std::hypot(discs_[j].x - cx, discs_[j].y - cy) <= 1e-9) return;
+    for (std::size_t k = 0; k < near_.size(); ++k) {
+      if (near_dist(k) <= 1e-9) return;
     }
-    for (const int j : near_) {
+    for (std::size_t k = 0; k < near_.size(); ++k) {
+      const int j = near_[k];
       Disc& d = discs_[j];
-      const double dx = cx - d.x, dy = cy - d.y, dist = std::hypot(dx, dy);
+      // (The distance as from the disc: hypot's value does not depend on the signs.)
+      const double dx = cx - d.x, dy = cy - d.y, dist = near_dist(k);
       if (dist >= 2 * R_) continue;
       // Bounding-box reject: the exposed arcs lie outside the new disc.
       const Box& b = box_[static_cast<std::size_t>(j)];
       const double nx = std::clamp(cx, b.x0, b.x1), ny = std::clamp(cy, b.y0, b.y1);
       if (std::hypot(nx - cx, ny - cy) >= R_) continue;
-      subtract(d.exposed, std::atan2(dy, dx), dist <= kEps ? kPi : std::acos(dist / (2 * R_)));
+      subtract(d.exposed, std::atan2(dy, dx), dist <= kEps ? kPi : near_beta(k));
       const auto u = static_cast<std::size_t>(j);
       if (d.exposed.empty()) {
         // A dead disc leaves its cells: the candidate sets hold only boundary discs.
@@ -334,6 +362,8 @@ class Removed {
   // the cells within 2R.
   void gather(double cx, double cy) const {
     near_.clear();
+    gx_ = cx;
+    gy_ = cy;
     if (++stamp_ == 0) {  // the stamps wrapped: none is current
       std::fill(seen_.begin(), seen_.end(), 0U);
       stamp_ = 1;
@@ -361,6 +391,10 @@ class Removed {
                         cq = discs_[static_cast<std::size_t>(q)].cell;
       return cp != cq ? cp < cq : p < q;
     });
+    const double unknown = std::numeric_limits<double>::quiet_NaN();
+    near_dist_.assign(near_.size(), unknown);
+    near_alpha_.assign(near_.size(), unknown);
+    near_beta_.assign(near_.size(), unknown);
   }
 
   // Is (px, py) inside the removed region? Directly: within R of any inserted disc.
@@ -377,8 +411,10 @@ class Removed {
     return false;
   }
 
-  [[nodiscard]] Box bounds(const Disc& d) const {
+  // The box of d's exposed arcs; sets d.ends.
+  [[nodiscard]] Box bounds(Disc& d) const {
     Box b;
+    d.ends.clear();
     b.x0 = b.y0 = std::numeric_limits<double>::infinity();
     b.x1 = b.y1 = -std::numeric_limits<double>::infinity();
     for (const auto& arc : d.exposed) {
@@ -389,8 +425,11 @@ class Removed {
         b.y0 = std::min(b.y0, y);
         b.y1 = std::max(b.y1, y);
       };
-      add(std::cos(arc.start_rad), std::sin(arc.start_rad));
-      add(std::cos(arc.end_rad), std::sin(arc.end_rad));
+      d.ends.push_back({std::cos(arc.start_rad), std::sin(arc.start_rad), std::cos(arc.end_rad),
+                        std::sin(arc.end_rad)});
+      const auto& e = d.ends.back();
+      add(e[0], e[1]);
+      add(e[2], e[3]);
       static constexpr double kAxis[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
       for (int q = 0; q <= 4; ++q) {  // axis extremes inside the arc
         const double th = q * 0.5 * kPi;
@@ -425,6 +464,8 @@ class Removed {
   std::vector<std::vector<int>> grid_;  // alive discs per cell their box meets
   std::vector<std::vector<int>> all_;   // every stored disc per cell (for point tests)
   mutable std::vector<int> near_;
+  mutable double gx_ = 0, gy_ = 0;  // the centre near_ was gathered for
+  mutable std::vector<double> near_dist_, near_alpha_, near_beta_;  // NaN: not yet asked
   mutable bool cache_valid_ = false;
   mutable double cache_x_ = 0, cache_y_ = 0;
   bool have_last_ = false;
@@ -689,16 +730,19 @@ class ChipQuery {
     pieces_.clear();
     for (auto& b : bins_) b.clear();
     cand_.clear();
-    for (const int j : removed.near_disc(cx, cy)) {
-      const Disc& d = removed.disc(j);
-      const double ox = d.x - cx, oy = d.y - cy, dist = std::hypot(ox, oy);
-      const double alpha = std::atan2(oy, ox);
-      for (const auto& arc : d.exposed) {
+    const std::vector<int>& near = removed.near_disc(cx, cy);
+    for (std::size_t k = 0; k < near.size(); ++k) {
+      const Disc& d = removed.disc(near[k]);
+      const double ox = d.x - cx, oy = d.y - cy, dist = removed.near_dist(k);
+      const double alpha = removed.near_alpha(k);
+      for (std::size_t q = 0; q < d.exposed.size(); ++q) {
+        const AngleArc& arc = d.exposed[q];
+        const auto& e = d.ends[q];
         // Only arcs reaching into the tool disc can bound a chip: the arc's nearest point
         // to the centre is the foot towards it (if on the arc) or an end.
         // The arc's ends relative to the tool centre.
-        const double ax = ox + R_ * std::cos(arc.start_rad), ay = oy + R_ * std::sin(arc.start_rad);
-        const double bx = ox + R_ * std::cos(arc.end_rad), by = oy + R_ * std::sin(arc.end_rad);
+        const double ax = ox + R_ * e[0], ay = oy + R_ * e[1];
+        const double bx = ox + R_ * e[2], by = oy + R_ * e[3];
         {
           const double foot = wrap(alpha + kPi);
           const bool foot_on =
