@@ -68,13 +68,16 @@ bool near_end(const ArcSet& set, double a) {
   return false;
 }
 
-// Removes the arc centred on `mid` with half-width `half` (rad) from `set`.
-void subtract(ArcSet& set, double mid, double half) {
+// Removes the arc centred on `mid` with half-width `half` (rad) from `set`. Whether the set
+// changed.
+bool subtract(ArcSet& set, double mid, double half) {
   if (half >= kPi) {
+    const bool had = !set.empty();
     set.clear();
-    return;
+    return had;
   }
   const double a = wrap(mid - half), b = a + 2 * half;
+  bool changed = false;
   auto cut = [&](double lo, double hi) {
     // Nothing to cut (the common case where the tooth before's disc is already the region's):
     // no new set.
@@ -82,6 +85,7 @@ void subtract(ArcSet& set, double mid, double half) {
                      [&](const AngleArc& arc) { return arc.end_rad > lo && arc.start_rad < hi; })) {
       return;
     }
+    changed = true;
     ArcSet out;
     for (const auto& arc : set) {
       if (arc.end_rad <= lo || arc.start_rad >= hi) {
@@ -99,13 +103,15 @@ void subtract(ArcSet& set, double mid, double half) {
     cut(a, kTwoPi);
     cut(0.0, b - kTwoPi);
   }
+  return changed;
 }
 
 struct Disc {
   double x = 0, y = 0;
   ArcSet exposed;
-  /// Per exposed arc: the cosine and sine of its start and its end (set with its box).
-  std::vector<std::array<double, 4>> ends;
+  /// Per exposed arc: the cosine and sine of its start and its end, and the two angles (set
+  /// with its box).
+  std::vector<std::array<double, 6>> ends;
   std::size_t cell = 0;  // grid cell holding the centre
 };
 
@@ -280,7 +286,9 @@ class Removed {
       const Box& b = box_[static_cast<std::size_t>(j)];
       const double nx = std::clamp(cx, b.x0, b.x1), ny = std::clamp(cy, b.y0, b.y1);
       if (std::hypot(nx - cx, ny - cy) >= R_) continue;
-      subtract(d.exposed, std::atan2(dy, dx), dist <= kEps ? kPi : near_beta(k));
+      if (!subtract(d.exposed, std::atan2(dy, dx), dist <= kEps ? kPi : near_beta(k))) {
+        continue;  // nothing of its arcs lay in the new disc: the same box
+      }
       const auto u = static_cast<std::size_t>(j);
       if (d.exposed.empty()) {
         // A dead disc leaves its cells: the candidate sets hold only boundary discs.
@@ -412,9 +420,25 @@ class Removed {
   }
 
   // The box of d's exposed arcs; sets d.ends.
+  // The box of d's exposed arcs; sets d.ends (an end that was an end before keeps its
+  // cosine and sine).
   [[nodiscard]] Box bounds(Disc& d) const {
     Box b;
+    old_ends_.swap(d.ends);
     d.ends.clear();
+    const auto unit = [&](double angle, double& c, double& sn) {
+      for (const auto& o : old_ends_) {
+        for (int e = 0; e < 2; ++e) {
+          if (o[static_cast<std::size_t>(4 + e)] == angle) {
+            c = o[static_cast<std::size_t>(2 * e)];
+            sn = o[static_cast<std::size_t>(2 * e + 1)];
+            return;
+          }
+        }
+      }
+      c = std::cos(angle);
+      sn = std::sin(angle);
+    };
     b.x0 = b.y0 = std::numeric_limits<double>::infinity();
     b.x1 = b.y1 = -std::numeric_limits<double>::infinity();
     for (const auto& arc : d.exposed) {
@@ -425,9 +449,10 @@ class Removed {
         b.y0 = std::min(b.y0, y);
         b.y1 = std::max(b.y1, y);
       };
-      d.ends.push_back({std::cos(arc.start_rad), std::sin(arc.start_rad), std::cos(arc.end_rad),
-                        std::sin(arc.end_rad)});
-      const auto& e = d.ends.back();
+      std::array<double, 6> e{0, 0, 0, 0, arc.start_rad, arc.end_rad};
+      unit(arc.start_rad, e[0], e[1]);
+      unit(arc.end_rad, e[2], e[3]);
+      d.ends.push_back(e);
       add(e[0], e[1]);
       add(e[2], e[3]);
       static constexpr double kAxis[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
@@ -464,7 +489,8 @@ class Removed {
   std::vector<std::vector<int>> grid_;  // alive discs per cell their box meets
   std::vector<std::vector<int>> all_;   // every stored disc per cell (for point tests)
   mutable std::vector<int> near_;
-  mutable double gx_ = 0, gy_ = 0;  // the centre near_ was gathered for
+  mutable std::vector<std::array<double, 6>> old_ends_;  // bounds()'s scratch
+  mutable double gx_ = 0, gy_ = 0;                       // the centre near_ was gathered for
   mutable std::vector<double> near_dist_, near_alpha_, near_beta_;  // NaN: not yet asked
   mutable bool cache_valid_ = false;
   mutable double cache_x_ = 0, cache_y_ = 0;
