@@ -47,31 +47,34 @@ Traced read_traced(std::string_view text, std::string_view name, GcodeReadOption
   return t;
 }
 
-// Time-weighted quantiles of v over the samples with weight w > 0.
+// Time-weighted quantiles of v over the samples with weight w > 0. (The pairs sorted by value
+// in place: a force series has a step per degree of the whole program, and an index sort
+// through v was a tenth of optimize-feed's time.)
 CutQuantiles quantiles(const std::vector<double>& v, const std::vector<double>& w) {
   CutQuantiles q;
-  std::vector<std::size_t> idx;
+  std::vector<std::pair<double, double>> vw;
   double total = 0;
   for (std::size_t i = 0; i < v.size(); ++i) {
     if (w[i] > 0) {
-      idx.push_back(i);
+      vw.emplace_back(v[i], w[i]);
       total += w[i];
     }
   }
-  if (idx.empty()) return q;
-  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
-  auto at = [&](double p) {
-    double acc = 0;
-    for (const std::size_t i : idx) {
-      acc += w[i];
-      if (acc >= p * total) return v[i];
-    }
-    return v[idx.back()];
-  };
-  q.p50 = at(0.5);
-  q.p90 = at(0.9);
-  q.p99 = at(0.99);
-  q.max = v[idx.back()];
+  if (vw.empty()) return q;
+  std::sort(vw.begin(), vw.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  // The three quantiles in one pass over the cumulated weight.
+  const std::array<double, 3> p = {0.5, 0.9, 0.99};
+  std::array<double, 3> found = {vw.back().first, vw.back().first, vw.back().first};
+  std::size_t next = 0;
+  double acc = 0;
+  for (std::size_t i = 0; i < vw.size() && next < p.size(); ++i) {
+    acc += vw[i].second;
+    while (next < p.size() && acc >= p[next] * total) found[next++] = vw[i].first;
+  }
+  q.p50 = found[0];
+  q.p90 = found[1];
+  q.p99 = found[2];
+  q.max = vw.back().first;
   return q;
 }
 
