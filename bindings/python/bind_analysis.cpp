@@ -42,8 +42,9 @@ void bind_analysis(py::module_& m) {
   m.def(
       "analyze",
       [](const py::object& job_or_path, std::optional<double> memory_limit_gb,
-         const py::object& progress) {
+         const py::object& progress, bool walls_part, bool floor_part, bool force_part) {
         const Job& job = job_of(job_or_path, "analyze").job;
+        const AnalysisParts parts{walls_part, floor_part, force_part};
         const ToolPath path = path_of(job_or_path);
         check_memory("analyze", estimate_analysis_memory(job, path), memory_limit_gb,
                      fmt::format("{:.0f} s of program at {:g} rpm, {} samples per tooth pass: "
@@ -51,7 +52,7 @@ void bind_analysis(py::module_& m) {
                                  path.duration_s(), job.cutting.spindle_speed_rpm,
                                  job.analysis.steps_per_tooth));
         ProcessMetrics pm = run_released(
-            [&](const RunHooks& h) { return analyze_with_forces(job, path, h); }, progress);
+            [&](const RunHooks& h) { return analyze_with_forces(job, path, h, parts); }, progress);
         if (py::isinstance<PyPath>(job_or_path)) {
           name_program_lines(pm, job_or_path.cast<const PyPath&>().lines);
         }
@@ -73,7 +74,8 @@ void bind_analysis(py::module_& m) {
         return out;
       },
       py::arg("job"), py::kw_only(), py::arg("memory_limit_gb") = py::none(),
-      py::arg("progress") = py::none(),
+      py::arg("progress") = py::none(), py::arg("walls") = true, py::arg("floor") = true,
+      py::arg("force") = true,
       R"(Engagement, chip thickness, times, removal rate, walls and texture of a slot program.
 
 job: a Job (its planned path) or a Path (planned, or read from G-code with a job).
@@ -85,7 +87,12 @@ radial_engagement_mm, axial_chip_mm (the end edges' chip: descent per tooth) and
 texture was evaluated on (x_mm along the feed, roughness_mm, waviness_mm);
 "floor_texture_profiles": the same for the floor's lines ("left", "middle", "right", beside
 each wall and in the middle, at x = line_x_mm across the slot).
-progress: None or callable(phase: str, done: int, total: int).)");
+progress: None or callable(phase: str, done: int, total: int).
+walls, floor, force: the parts of the analysis past the whole program and the steady cycle
+(the walls and their texture, the predicted floor and its texture, the force model's
+F_R,max and the performance index). A part left out costs nothing and its keys are None (its
+profiles absent); every other figure is the same to the bit. The floor needs the walls:
+floor=True computes them. The floor is about half of the analysis's time.)");
 }
 
 }  // namespace trochomill::python

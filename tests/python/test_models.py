@@ -56,6 +56,35 @@ def test_analyze_is_the_clis(wagih, overrides):
     assert result["h_max_mm"] == pytest.approx(series["h_max_mm"].max(), rel=1e-12)
 
 
+def test_analyze_leaves_out_the_parts_not_asked_for(wagih):
+    job = tm.Job.from_toml(wagih)
+    full = tm.analyze(job)
+    walls_keys = ("waviness_", "ra_left", "ra_right", "rz_left", "rz_right", "wa_left",
+                  "wa_right", "wt_left", "wt_right", "lambda_c_left", "lambda_c_right",
+                  "wall_peak", "cycle_h_max_tooth", "cycle_h_max_per_tooth",
+                  "cycle_chip_translation", "bottom_imprint", "performance_index_")
+    for parts in ({"floor": False}, {"walls": False, "floor": False},
+                  {"force": False}, {"walls": False, "floor": False, "force": False}):
+        some = tm.analyze(job, **parts)
+        assert some.pop("floor_texture_profiles") == {} or parts.get("floor", True)
+        assert (some.pop("wall_texture_profiles") == {}) == (not parts.get("walls", True))
+        left_out = 0
+        for key, value in some.items():
+            if key in ("series", "performance_index_note"):
+                continue
+            gone = ((not parts.get("floor", True) and "floor" in key)
+                    or (not parts.get("walls", True) and key.startswith(walls_keys))
+                    or (not parts.get("force", True)
+                        and key in ("cycle_force_max_predicted_n", "performance_index"))
+                    or (not parts.get("walls", True) and key == "performance_index"))
+            if gone:
+                assert value is None and full[key] is not None, key
+                left_out += 1
+            else:  # the same code on the same input: equal to the bit
+                assert value == full[key], key
+        assert left_out >= 2, parts
+
+
 def test_analyze_a_job_without_a_steady_cycle(wagih):
     job = tm.Job.from_toml(wagih, set={"path.type": "linear", "path.aspect_ratio": 1.0})
     result = tm.analyze(job)

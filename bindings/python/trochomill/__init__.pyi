@@ -78,9 +78,11 @@ class Path:
 def plan(job: Job, memory_limit_gb: float | None = None) -> Path: ...
 def read_gcode(program: str | os.PathLike[str], job: Job | None = None) -> Path: ...
 def analyze(job: Job | Path, *, memory_limit_gb: float | None = None,
-            progress: _Progress = None) -> dict[str, Any]:
+            progress: _Progress = None, walls: bool = True, floor: bool = True,
+            force: bool = True) -> dict[str, Any]:
     """`analyze --json`'s keys and "series" (t_s, x_mm, y_mm, z_mm, engagement_deg,
-    h_max_mm, mrr_mm3_per_min, radial_engagement_mm, teeth_in_cut)."""
+    h_max_mm, mrr_mm3_per_min, radial_engagement_mm, teeth_in_cut); walls, floor, force:
+    the parts computed (a part left out gives None for its keys)."""
 def compare(job: Job, vary: Mapping[str, Sequence[_Value]], *, threads: int = 0,
             progress: _Progress = None) -> dict[str, Any]:
     """Columns: each varied key, "ok", "error" and each number of analyze's JSON."""
