@@ -12,6 +12,8 @@
 #include "trochomill/path.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/study.hpp"
+#include "trochomill/surface.hpp"
+#include "trochomill/units.hpp"
 
 namespace {
 
@@ -71,6 +73,23 @@ BENCHMARK(BM_AnalyzeWagihParts)->ArgsProduct({{0, 1, 2, 3}, {0, 1}})->Unit(bench
 }  // namespace
 
 namespace {
+
+// The predicted floor alone: the end edges' passes over the whole elliptical program along the
+// slot's middle (x = 0), 1.75 mm at 0.5 um (the 0.25 mm cut-off's traverse), on one thread
+// (analyze runs the three lines in parallel).
+void BM_FloorProfileWagih(benchmark::State& state) {
+  const trochomill::Job job = wagih_job("elliptical");
+  const auto planned = trochomill::plan_path(job);
+  const trochomill::PathSamples s =
+      trochomill::sample_by_time(planned.path, trochomill::tooth_period_s(job.tool, job.cutting));
+  const double omega = -trochomill::rpm_to_rad_per_s(job.cutting.spindle_speed_rpm);
+  const double mid = 0.5 * job.slot.length_mm;
+  for (auto _ : state) {
+    const auto f = trochomill::floor_profile(s, job.tool, omega, 0.0, mid - 0.875, 0.0005, 3501);
+    benchmark::DoNotOptimize(f.z_mm.data());
+  }
+}
+BENCHMARK(BM_FloorProfileWagih)->Unit(benchmark::kMillisecond);
 
 // `compare` of eight aspect ratios (the paper's parameter study) on all cores.
 void BM_CompareEightAspectRatios(benchmark::State& state) {
