@@ -82,6 +82,17 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
   // One sweep over the path: the passes of the edges' parts at least `inner` from the axis,
   // over the points `todo` marks (all when empty).
   auto sweep = [&](double inner, const std::vector<char>& todo) {
+    // The last spindle angle whose cosine and sine were taken: a step's end is the next
+    // one's start (the same double), so each is taken once.
+    double last_p = std::numeric_limits<double>::quiet_NaN();
+    V2 last_u{1, 0};
+    const auto spindle = [&](double ph) {
+      if (ph != last_p) {
+        last_p = ph;
+        last_u = V2{std::cos(ph), std::sin(ph)};
+      }
+      return last_u;
+    };
     for (std::size_t i = 0; i + 1 < n; ++i) {
       const double dt = s.t_s[i + 1] - s.t_s[i];
       if (!(dt > 0)) continue;
@@ -104,7 +115,7 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
         const double pa = omega * ta, pb = omega * tb;
         // The spindle's direction at both ends and halfway (one sine and cosine each), the
         // teeth's and the runout's turned from it by their fixed angles.
-        const V2 sa{std::cos(pa), std::sin(pa)}, sb{std::cos(pb), std::sin(pb)};
+        const V2 sa = spindle(pa), sb = spindle(pb);
         const double pm = 0.5 * (pa + pb);
         const V2 sm{std::cos(pm), std::sin(pm)};
         auto turned = [](V2 u, const Turn& t) {
