@@ -778,7 +778,7 @@ class ChipQuery {
           if (mind > R_ * (1 + 1e-9)) continue;
         }
         const int idx = static_cast<int>(pieces_.size());
-        pieces_.push_back({d.x, d.y, arc});
+        pieces_.push_back({d.x, d.y, arc, e[0], e[1], e[2], e[3]});
         // Polar range of the arc seen from the centre, and the candidate angles.
         auto polar = [&](double th) {
           return std::atan2(oy + R_ * std::sin(th), ox + R_ * std::cos(th));
@@ -843,6 +843,17 @@ class ChipQuery {
   struct Piece {
     double x, y;
     AngleArc arc;
+    double sx, sy, ex, ey;  // the unit vectors to the arc's start and end
+    // Whether the direction (vx, vy) from the centre lies on the arc [start, end), by the
+    // signs of cross products with the ends (a ray of the chip query passes an arc's end by
+    // at least 1e-9 rad, far outside their rounding).
+    [[nodiscard]] bool holds(double vx, double vy) const {
+      const double sweep = arc.end_rad - arc.start_rad;
+      if (sweep >= kTwoPi) return true;
+      if (sweep <= kPi) return sx * vy - sy * vx >= 0 && vx * ey - vy * ex > 0;
+      // More than a half turn: not in the rest, [end, start).
+      return !(ex * vy - ey * vx >= 0 && vx * sy - vy * sx > 0);
+    }
   };
   static constexpr int kBins = 256;
 
@@ -885,8 +896,7 @@ class ChipQuery {
       const double sq = std::sqrt(q);
       for (const double r : {t + sq, t - sq}) {
         if (r <= best || r > r_max) continue;
-        const double a = wrap(std::atan2(cy_ + r * uy - p.y, cx_ + r * ux - p.x));
-        if ((a >= p.arc.start_rad && a < p.arc.end_rad) || a + kTwoPi < p.arc.end_rad) {
+        if (p.holds(cx_ + r * ux - p.x, cy_ + r * uy - p.y)) {
           best = r;
           break;
         }
