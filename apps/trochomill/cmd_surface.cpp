@@ -203,8 +203,7 @@ void register_surface_commands(CLI::App& app, int& exit_code) {
       job.sets = a->sets;
       const Job j = job.load();
       const ToolPath path = plan_slot(j).path;
-      AnalysisParts walls = AnalysisParts::cycle_only();
-      walls.walls = true;
+      const AnalysisParts walls{true, false, false};  // the walls alone
       const ProcessMetrics m =
           sides.empty() ? ProcessMetrics{} : analyze_process(j, path, {}, walls);
       for (const bool left : sides) {

@@ -42,6 +42,17 @@ struct AnalysisParts {
   /// Only the whole program's and the steady cycle's figures (a simulation's window).
   [[nodiscard]] static AnalysisParts cycle_only() { return {false, false, false}; }
   [[nodiscard]] bool all() const { return walls && floor && force; }
+  /// Whether every part `need` names is here.
+  [[nodiscard]] bool has(const AnalysisParts& need) const {
+    return (walls || !need.walls) && (floor || !need.floor) && (force || !need.force);
+  }
+  /// Adds the parts of `o`.
+  AnalysisParts& operator|=(const AnalysisParts& o) {
+    walls = walls || o.walls;
+    floor = floor || o.floor;
+    force = force || o.force;
+    return *this;
+  }
   friend bool operator==(const AnalysisParts&, const AnalysisParts&) = default;
 };
 

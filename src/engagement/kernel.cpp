@@ -106,12 +106,20 @@ bool subtract(ArcSet& set, double mid, double half) {
   return changed;
 }
 
+// A direction on a circle: its angle (rad), cosine and sine.
+struct Unit {
+  double angle = 0, c = 1, s = 0;
+};
+// The ends of an arc.
+struct ArcEnds {
+  Unit start, end;
+};
+
 struct Disc {
   double x = 0, y = 0;
   ArcSet exposed;
-  /// Per exposed arc: the cosine and sine of its start and its end, and the two angles (set
-  /// with its box).
-  std::vector<std::array<double, 6>> ends;
+  /// Per exposed arc: its start's and its end's direction (set with its box).
+  std::vector<ArcEnds> ends;
   std::size_t cell = 0;  // grid cell holding the centre
 };
 
@@ -231,25 +239,13 @@ class Removed {
   // for: the distance to its centre, that centre's direction (rad) and acos(distance / 2R)
   // (the half-angle of the two circles' crossings), each computed once for all who ask.
   [[nodiscard]] double near_dist(std::size_t k) const {
-    double& v = near_dist_[k];
-    if (std::isnan(v)) {
-      const Disc& d = discs_[near_[k]];
-      v = std::hypot(d.x - gx_, d.y - gy_);
-    }
-    return v;
+    return memo(near_dist_, k, [&](const Disc& d) { return std::hypot(d.x - gx_, d.y - gy_); });
   }
   [[nodiscard]] double near_alpha(std::size_t k) const {
-    double& v = near_alpha_[k];
-    if (std::isnan(v)) {
-      const Disc& d = discs_[near_[k]];
-      v = std::atan2(d.y - gy_, d.x - gx_);
-    }
-    return v;
+    return memo(near_alpha_, k, [&](const Disc& d) { return std::atan2(d.y - gy_, d.x - gx_); });
   }
   [[nodiscard]] double near_beta(std::size_t k) const {
-    double& v = near_beta_[k];
-    if (std::isnan(v)) v = std::acos(near_dist(k) / (2 * R_));
-    return v;
+    return memo(near_beta_, k, [&](const Disc&) { return std::acos(near_dist(k) / (2 * R_)); });
   }
   [[nodiscard]] bool covers(double px, double py) const { return inside(px, py); }
 
@@ -329,6 +325,14 @@ class Removed {
   }
   [[nodiscard]] std::size_t cell_of(long ix, long iy) const {
     return static_cast<std::size_t>(iy * nx_ + ix);
+  }
+
+  // cache[k] (NaN: not yet computed) of the k-th listed disc, computed by f(disc) once.
+  template <class F>
+  double memo(std::vector<double>& cache, std::size_t k, const F& f) const {
+    double& v = cache[k];
+    if (std::isnan(v)) v = f(discs_[static_cast<std::size_t>(near_[k])]);
+    return v;
   }
 
   // The cells [ix0, ix1] x [iy0, iy1] an alive disc is listed in (those its exposed arcs'
@@ -419,25 +423,18 @@ class Removed {
     return false;
   }
 
-  // The box of d's exposed arcs; sets d.ends.
   // The box of d's exposed arcs; sets d.ends (an end that was an end before keeps its
   // cosine and sine).
   [[nodiscard]] Box bounds(Disc& d) const {
     Box b;
     old_ends_.swap(d.ends);
     d.ends.clear();
-    const auto unit = [&](double angle, double& c, double& sn) {
-      for (const auto& o : old_ends_) {
-        for (int e = 0; e < 2; ++e) {
-          if (o[static_cast<std::size_t>(4 + e)] == angle) {
-            c = o[static_cast<std::size_t>(2 * e)];
-            sn = o[static_cast<std::size_t>(2 * e + 1)];
-            return;
-          }
-        }
+    const auto unit = [&](double angle) {
+      for (const ArcEnds& o : old_ends_) {
+        if (o.start.angle == angle) return o.start;
+        if (o.end.angle == angle) return o.end;
       }
-      c = std::cos(angle);
-      sn = std::sin(angle);
+      return Unit{angle, std::cos(angle), std::sin(angle)};
     };
     b.x0 = b.y0 = std::numeric_limits<double>::infinity();
     b.x1 = b.y1 = -std::numeric_limits<double>::infinity();
@@ -449,12 +446,9 @@ class Removed {
         b.y0 = std::min(b.y0, y);
         b.y1 = std::max(b.y1, y);
       };
-      std::array<double, 6> e{0, 0, 0, 0, arc.start_rad, arc.end_rad};
-      unit(arc.start_rad, e[0], e[1]);
-      unit(arc.end_rad, e[2], e[3]);
-      d.ends.push_back(e);
-      add(e[0], e[1]);
-      add(e[2], e[3]);
+      d.ends.push_back({unit(arc.start_rad), unit(arc.end_rad)});
+      add(d.ends.back().start.c, d.ends.back().start.s);
+      add(d.ends.back().end.c, d.ends.back().end.s);
       static constexpr double kAxis[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
       for (int q = 0; q <= 4; ++q) {  // axis extremes inside the arc
         const double th = q * 0.5 * kPi;
@@ -489,8 +483,8 @@ class Removed {
   std::vector<std::vector<int>> grid_;  // alive discs per cell their box meets
   std::vector<std::vector<int>> all_;   // every stored disc per cell (for point tests)
   mutable std::vector<int> near_;
-  mutable std::vector<std::array<double, 6>> old_ends_;  // bounds()'s scratch
-  mutable double gx_ = 0, gy_ = 0;                       // the centre near_ was gathered for
+  mutable std::vector<ArcEnds> old_ends_;  // bounds()'s scratch
+  mutable double gx_ = 0, gy_ = 0;         // the centre near_ was gathered for
   mutable std::vector<double> near_dist_, near_alpha_, near_beta_;  // NaN: not yet asked
   mutable bool cache_valid_ = false;
   mutable double cache_x_ = 0, cache_y_ = 0;
@@ -767,8 +761,8 @@ class ChipQuery {
         // Only arcs reaching into the tool disc can bound a chip: the arc's nearest point
         // to the centre is the foot towards it (if on the arc) or an end.
         // The arc's ends relative to the tool centre.
-        const double ax = ox + R_ * e[0], ay = oy + R_ * e[1];
-        const double bx = ox + R_ * e[2], by = oy + R_ * e[3];
+        const double ax = ox + R_ * e.start.c, ay = oy + R_ * e.start.s;
+        const double bx = ox + R_ * e.end.c, by = oy + R_ * e.end.s;
         {
           const double foot = wrap(alpha + kPi);
           const bool foot_on =
@@ -778,7 +772,7 @@ class ChipQuery {
           if (mind > R_ * (1 + 1e-9)) continue;
         }
         const int idx = static_cast<int>(pieces_.size());
-        pieces_.push_back({d.x, d.y, arc, e[0], e[1], e[2], e[3]});
+        pieces_.push_back({d.x, d.y, arc, e});
         // Polar range of the arc seen from the centre, and the candidate angles.
         auto polar = [&](double th) {
           return std::atan2(oy + R_ * std::sin(th), ox + R_ * std::cos(th));
@@ -843,16 +837,17 @@ class ChipQuery {
   struct Piece {
     double x, y;
     AngleArc arc;
-    double sx, sy, ex, ey;  // the unit vectors to the arc's start and end
+    ArcEnds ends;
     // Whether the direction (vx, vy) from the centre lies on the arc [start, end), by the
     // signs of cross products with the ends (a ray of the chip query passes an arc's end by
     // at least 1e-9 rad, far outside their rounding).
     [[nodiscard]] bool holds(double vx, double vy) const {
       const double sweep = arc.end_rad - arc.start_rad;
       if (sweep >= kTwoPi) return true;
-      if (sweep <= kPi) return sx * vy - sy * vx >= 0 && vx * ey - vy * ex > 0;
+      const Unit &a = ends.start, &b = ends.end;
+      if (sweep <= kPi) return a.c * vy - a.s * vx >= 0 && vx * b.s - vy * b.c > 0;
       // More than a half turn: not in the rest, [end, start).
-      return !(ex * vy - ey * vx >= 0 && vx * sy - vy * sx > 0);
+      return !(b.c * vy - b.s * vx >= 0 && vx * a.s - vy * a.c > 0);
     }
   };
   static constexpr int kBins = 256;

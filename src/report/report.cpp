@@ -170,11 +170,6 @@ AnalysisParts part_of(std::string_view key) {
   return p;
 }
 
-// Whether `have` holds every part `need` names.
-bool covers(const AnalysisParts& have, const AnalysisParts& need) {
-  return (have.walls || !need.walls) && (have.floor || !need.floor) && (have.force || !need.force);
-}
-
 nlohmann::json metrics_object(const ProcessMetrics& m) {
   // A figure that is not there (no cycle, no tooth-level wall, no force model) is null.
   nlohmann::json j = nlohmann::json::object();
@@ -200,7 +195,7 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
   // The figures of a part not computed are not there.
   if (!m.parts.all()) {
     for (auto it = j.begin(); it != j.end(); ++it) {
-      if (!covers(m.parts, part_of(it.key()))) *it = nullptr;
+      if (!m.parts.has(part_of(it.key()))) *it = nullptr;
     }
   }
   return j;
@@ -210,12 +205,7 @@ nlohmann::json metrics_object(const ProcessMetrics& m) {
 
 AnalysisParts analysis_parts_for(const std::vector<std::string>& metric_keys) {
   AnalysisParts p = AnalysisParts::cycle_only();
-  for (const std::string& k : metric_keys) {
-    const AnalysisParts q = part_of(k);
-    p.walls = p.walls || q.walls;
-    p.floor = p.floor || q.floor;
-    p.force = p.force || q.force;
-  }
+  for (const std::string& k : metric_keys) p |= part_of(k);
   return p;
 }
 
