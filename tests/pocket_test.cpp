@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -161,10 +162,25 @@ TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
   EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
   EXPECT_GT(proof.clearing_max_engagement_deg, 40);  // it does cut near the target
   EXPECT_GT(proof.finish_max_engagement_deg, 0);
+  // The runs through cleared area and the links that stay down go at the link feed (no
+  // air_feed or max_feed: the rapid rate, 10000 mm/min, 0.417 mm a tooth): they are a good
+  // part of the program, and they cut nothing but the feed marks such moves leave, whose
+  // depth f^2 / 8R is 4.3 um, and grazes below f_z^2 / 8R (0.06 um): their chip is a mark's
+  // depth, within a quarter of f_z (0.0125 mm).
+  ASSERT_FALSE(p.info.air_segments.empty());
+  EXPECT_GT(p.info.air_length_mm, 0.2 * p.info.clearing_length_mm);
+  EXPECT_TRUE(std::is_sorted(p.info.air_segments.begin(), p.info.air_segments.end()));
+  for (const std::size_t k : p.info.air_segments) {
+    ASSERT_LT(k, p.info.finish_first_segment);
+    EXPECT_EQ(segs[k].speed_mm_per_min(), job.machine.rapid_rate_mm_per_min) << k;
+    EXPECT_EQ(segs[k].start().z(), segs[k].end().z()) << k;  // at the level
+  }
+  EXPECT_LE(proof.air_max_chip_mm, 0.25 * 0.05);
   // `analyze` proves it from its own series: the same figures (one sample per tooth pass).
   const PocketProof again = prove_pocket(p.info, analyze_process(job, p.path).series);
   EXPECT_EQ(again.clearing_max_engagement_deg, proof.clearing_max_engagement_deg);
   EXPECT_EQ(again.finish_max_engagement_deg, proof.finish_max_engagement_deg);
+  EXPECT_EQ(again.air_max_chip_mm, proof.air_max_chip_mm);
 }
 
 TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {

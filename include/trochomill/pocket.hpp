@@ -38,7 +38,11 @@ struct PocketInfo {
   int passes = 0;      ///< clearing passes per level, all parts
   int links_down = 0;  ///< links per level that stay down in cleared area
   int lifts = 0;       ///< links per level that lift over stock
-  double clearing_length_mm = 0;  ///< feed length of one level's clearing passes
+  double clearing_length_mm = 0;  ///< feed length of one level's clearing passes that cut
+  /// Length of one level's passes that runs through cleared area, cutting nothing (their runs
+  /// at least R long): fed at the link feed (machine.air_feed, else max_feed, else the rapid
+  /// rate).
+  double air_length_mm = 0;
   /// Beyond the tool's reach: the pocket less what a tool centre in the region sweeps, less
   /// the inside corners' cusps below 1.5 (1 - pi/4) (R + stock)^2 each (mm^2).
   std::vector<PocketLeftover> unreachable;
@@ -50,6 +54,9 @@ struct PocketInfo {
   /// pass's lead-in), where the target does not hold.
   std::vector<std::pair<std::size_t, std::size_t>> entries;
   std::size_t finish_first_segment = 0;  ///< the finishing pass's first segment (or the end)
+  /// The segments at the link feed (runs through cleared area, links that stay down), in
+  /// increasing order: they must cut nothing.
+  std::vector<std::size_t> air_segments;
 };
 
 struct PlannedPocket {
@@ -64,7 +71,8 @@ struct PlannedPocket {
 /// The engagement kernel's reading of a planned pocket (compute_engagement on its path, one
 /// sample per tooth), the proof of the target: the largest engagement and chip of the clearing
 /// outside its entries and where (the tool centre, mm), the share of its cutting time (samples
-/// that cut) above the target, and the same largest figures of the finishing pass.
+/// that cut) above the target, and the same largest figures of the finishing pass and of the
+/// moves at the link feed.
 struct PocketProof {
   double clearing_max_engagement_deg = 0;
   Vec3 clearing_max_at_mm = Vec3::Zero();
@@ -73,6 +81,10 @@ struct PocketProof {
   double finish_max_engagement_deg = 0;
   Vec3 finish_max_at_mm = Vec3::Zero();
   double finish_max_chip_mm = 0;
+  /// The same of the moves at the link feed (PocketInfo::air_segments): a graze at most.
+  double air_max_engagement_deg = 0;
+  Vec3 air_max_at_mm = Vec3::Zero();
+  double air_max_chip_mm = 0;
 };
 [[nodiscard]] PocketProof prove_pocket(const Job& job, const PlannedPocket& pocket,
                                        const RunHooks& hooks = {});

@@ -117,9 +117,10 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
 std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
   std::string out = fmt::format(
       "pocket: {} part{}, {} level{}, {} clearing passes a level ({} links staying down, {} "
-      "lifts), {:.1f} mm of clearing a level\n",
+      "lifts), {:.1f} mm of clearing and {:.1f} mm through cleared area at the link feed a "
+      "level\n",
       info.parts, info.parts == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s", info.passes,
-      info.links_down, info.lifts, info.clearing_length_mm);
+      info.links_down, info.lifts, info.clearing_length_mm, info.air_length_mm);
   out += fmt::format(
       "  engagement target {:.4g} degrees; the planner's largest at its points {:.4g} degrees\n",
       info.target_engagement_deg, info.planned_max_engagement_deg);
@@ -131,6 +132,13 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
       "{}, chip max {:.5f} mm, {:.3g} % of its cutting above the target\n",
       proof.clearing_max_engagement_deg, at(proof.clearing_max_at_mm), proof.clearing_max_chip_mm,
       100 * proof.clearing_share_above_target);
+  if (info.air_length_mm > 0 || info.links_down > 0) {
+    out += fmt::format(
+        "  the kernel on the program: moves at the link feed (through cleared area) chip max "
+        "{:.5f} mm, engagement max {:.4g} degrees at {} (the feed marks such moves leave, a "
+        "tooth's advance at that feed apart)\n",
+        proof.air_max_chip_mm, proof.air_max_engagement_deg, at(proof.air_max_at_mm));
+  }
   if (proof.finish_max_engagement_deg > 0) {
     out += fmt::format(
         "  the kernel on the program: finishing pass engagement max {:.4g} degrees at {}, chip "
