@@ -92,6 +92,9 @@ class RemovedRegion {
   /// The arcs of the tool circle about c outside the region (the stock it touches there),
   /// angles counter-clockwise from +X.
   [[nodiscard]] std::vector<AngleArc> uncut_arcs(const Vec2& c) const;
+  /// Makes the queries of uncut_arcs within slack_mm of c faster until the next cut (the
+  /// discs near them are found once); their answers are the same.
+  void focus(const Vec2& c, double slack_mm) const;
   /// Adds the disc about c.
   void cut(const Vec2& c);
   /// Whether p lies inside a disc cut so far.

@@ -260,11 +260,25 @@ class Removed {
   }
 
   // Inserts a disc whose circle's part outside R (before it) is `exposed`.
+  // Pins the candidates of every query within `slack` of (cx, cy): those gather() would meet
+  // for a reach of R + slack, in its order, until the next insert. A query there filters
+  // them instead of scanning the cells: the same list, in the same order.
+  void pin(double cx, double cy, double slack) const {
+    gather_within(cx, cy, R_ + slack + 1e-9);
+    pinned_ = near_;
+    pin_x_ = cx;
+    pin_y_ = cy;
+    pin_slack_ = slack;
+    pin_valid_ = true;
+    cache_valid_ = false;
+  }
+
   void insert(double cx, double cy, ArcSet exposed) {
     // The discs near the centre: those outside() gathered for it if nothing was inserted
     // since (the kernel asks for a sample's free circle, then inserts its disc a tooth later).
     if (!(cache_valid_ && cache_x_ == cx && cache_y_ == cy)) gather(cx, cy);
     cache_valid_ = false;
+    pin_valid_ = false;  // boxes and lists change below
     have_last_ = true;
     last_x_ = cx;
     last_y_ = cy;
@@ -373,6 +387,27 @@ class Removed {
   // meets one of them): about a third of the candidates of binning by centre, which needs
   // the cells within 2R.
   void gather(double cx, double cy) const {
+    const double reach = R_ + 1e-9;
+    if (pin_valid_ && std::hypot(cx - pin_x_, cy - pin_y_) <= pin_slack_) {
+      near_.clear();
+      gx_ = cx;
+      gy_ = cy;
+      const double near2 = reach * reach;
+      for (const int j : pinned_) {
+        const Box& d = box_[static_cast<std::size_t>(j)];
+        const double nx = std::clamp(cx, d.x0, d.x1) - cx, ny = std::clamp(cy, d.y0, d.y1) - cy;
+        if (nx * nx + ny * ny <= near2) near_.push_back(j);
+      }
+      const double unknown = std::numeric_limits<double>::quiet_NaN();
+      near_dist_.assign(near_.size(), unknown);
+      near_alpha_.assign(near_.size(), unknown);
+      near_beta_.assign(near_.size(), unknown);
+      return;
+    }
+    gather_within(cx, cy, reach);
+  }
+
+  void gather_within(double cx, double cy, double reach) const {
     near_.clear();
     gx_ = cx;
     gy_ = cy;
@@ -380,7 +415,7 @@ class Removed {
       std::fill(seen_.begin(), seen_.end(), 0U);
       stamp_ = 1;
     }
-    const double reach = R_ + 1e-9, near2 = reach * reach;
+    const double near2 = reach * reach;
     for (long b = cell_y(cy - reach); b <= cell_y(cy + reach); ++b) {
       for (long a = cell_x(cx - reach); a <= cell_x(cx + reach); ++a) {
         for (const int j : grid_[cell_of(a, b)]) {
@@ -488,6 +523,9 @@ class Removed {
   mutable std::vector<double> near_dist_, near_alpha_, near_beta_;  // NaN: not yet asked
   mutable bool cache_valid_ = false;
   mutable double cache_x_ = 0, cache_y_ = 0;
+  mutable std::vector<int> pinned_;  // pin()'s candidates
+  mutable bool pin_valid_ = false;
+  mutable double pin_x_ = 0, pin_y_ = 0, pin_slack_ = 0;
   bool have_last_ = false;
   double last_x_ = 0, last_y_ = 0;
 };
@@ -1265,6 +1303,10 @@ RemovedRegion::~RemovedRegion() = default;
 
 std::vector<AngleArc> RemovedRegion::uncut_arcs(const Vec2& c) const {
   return join_wrap(impl_->removed.outside(c.x(), c.y()));
+}
+
+void RemovedRegion::focus(const Vec2& c, double slack_mm) const {
+  impl_->removed.pin(c.x(), c.y(), slack_mm);
 }
 
 void RemovedRegion::cut(const Vec2& c) {

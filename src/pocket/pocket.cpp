@@ -569,6 +569,8 @@ class PartPlanner {
     double theta = 0;
     double air = 0;  // the length run since the coverage last gained
     for (std::size_t n = 0; n < 4000000; ++n) {
+      // Every point this step's search and checks ask about lies within a step of p.
+      removed_.focus(p, s_.step * (1 + 1e-9));
       if (target) {
         const Vec2 to = *target - p;
         const double want = std::atan2(to.y(), to.x());
