@@ -255,9 +255,14 @@ struct ArcLimit {
 /// (each piece the longest that fits, found by doubling and bisection: an arc through its
 /// first, middle and last point, a line when those are collinear within the tolerance). The
 /// pieces start and end on the polyline's points, so consecutive pieces join exactly; they
-/// are tangent-continuous only where the polyline is, within the tolerance.
+/// are tangent-continuous only where the polyline is, within the tolerance. The middles of the
+/// chords between the points are held within the tolerance too, but an arc turning
+/// counter-clockwise (bulge_ccw) or clockwise may bulge outside them, away from its centre, by
+/// up to bulge_mm (when larger than the tolerance): a planner whose points' chords are safe
+/// on one side.
 [[nodiscard]] std::vector<ContourPiece> fit_polyline(const std::vector<Vec2>& points,
-                                                     double tolerance_mm);
+                                                     double tolerance_mm, double bulge_mm = 0,
+                                                     bool bulge_ccw = true);
 
 /// Where the contour crosses or touches itself (mm), if it does: its pieces as chords within
 /// 1e-4 mm, every pair that is not consecutive along the contour tested (a sweep in x); the

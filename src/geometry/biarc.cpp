@@ -247,7 +247,7 @@ namespace {
 // when they do, else the arc through points[i], the middle point and points[j], when each
 // point between lies within tol of its circle and in order along it.
 std::optional<ContourPiece> piece_through(const std::vector<Vec2>& pts, std::size_t i,
-                                          std::size_t j, double tol) {
+                                          std::size_t j, double tol, double bulge, bool bulge_ccw) {
   const Vec2 a = pts[i], c = pts[j];
   const Vec2 ac = c - a;
   const double L = ac.norm();
@@ -262,10 +262,15 @@ std::optional<ContourPiece> piece_through(const std::vector<Vec2>& pts, std::siz
     line_ok = off <= tol && along >= -tol && along <= L + tol;
   }
   if (line_ok) return ContourPiece::line(a, c);
-  // The chords between the points, not only the points, within tol: their middles too.
+  // The chords between the points, not only the points, within tol: their middles too (on
+  // the centre's side of an arc turning the `bulge_ccw` way, within `bulge`).
   auto chords_within = [&](const ContourPiece& pc) {
     for (std::size_t k = i; k < j; ++k) {
-      if (pc.distance_mm(0.5 * (pts[k] + pts[k + 1])) > tol) return false;
+      const Vec2 mid = 0.5 * (pts[k] + pts[k + 1]);
+      const double d = pc.distance_mm(mid);
+      if (d <= tol) continue;
+      const bool inside = pc.is_arc() && (mid - *pc.centre).norm() < pc.radius_mm();
+      if (!(inside && pc.ccw == bulge_ccw && d <= bulge)) return false;
     }
     return true;
   };
@@ -312,7 +317,8 @@ std::optional<ContourPiece> piece_through(const std::vector<Vec2>& pts, std::siz
 
 }  // namespace
 
-std::vector<ContourPiece> fit_polyline(const std::vector<Vec2>& points, double tolerance_mm) {
+std::vector<ContourPiece> fit_polyline(const std::vector<Vec2>& points, double tolerance_mm,
+                                       double bulge_mm, bool bulge_ccw) {
   if (!(tolerance_mm > 0)) throw InputError("fit tolerance must be > 0 mm");
   std::vector<ContourPiece> out;
   const std::size_t n = points.size();
@@ -320,12 +326,13 @@ std::vector<ContourPiece> fit_polyline(const std::vector<Vec2>& points, double t
   while (i + 1 < n) {
     // Grow by doubling while the piece fits, then bisect between the last fit and the miss.
     std::size_t good = i + 1, step = 2;
-    std::optional<ContourPiece> best = piece_through(points, i, good, tolerance_mm);
+    std::optional<ContourPiece> best =
+        piece_through(points, i, good, tolerance_mm, bulge_mm, bulge_ccw);
     std::size_t bad = n;
     while (true) {
       const std::size_t j = std::min(n - 1, i + step);
       if (j <= good) break;
-      if (auto p = piece_through(points, i, j, tolerance_mm)) {
+      if (auto p = piece_through(points, i, j, tolerance_mm, bulge_mm, bulge_ccw)) {
         good = j;
         best = p;
         if (j == n - 1) break;
@@ -337,7 +344,7 @@ std::vector<ContourPiece> fit_polyline(const std::vector<Vec2>& points, double t
     }
     while (bad < n && bad > good + 1) {
       const std::size_t mid = (good + bad) / 2;
-      if (auto p = piece_through(points, i, mid, tolerance_mm)) {
+      if (auto p = piece_through(points, i, mid, tolerance_mm, bulge_mm, bulge_ccw)) {
         good = mid;
         best = p;
       } else {

@@ -95,7 +95,7 @@ for name, (boundary, islands, walls, corners) in CASES.items():
         continue
     ours = float(plan.stdout.split(": pocket, path ")[1].split(" mm")[0])
     eng = float(re.search(r"clearing \(entries excepted\) engagement max ([0-9.]+)", plan.stdout)[1])
-    # 2 %: the acceptance of the target (the planner holds 1 degree below it at its points;
+    # 2 %: the acceptance of the target (the planner holds 1.2 degrees below it at its points;
     # the kernel samples every tooth in between).
     check(eng <= TARGET * 1.02, "%s: the kernel's largest clearing engagement %.3f degrees "
           "(target %g)" % (name, eng, TARGET))
