@@ -672,9 +672,9 @@ struct Run {
   bool air = false;
 };
 
-// A run through cleared area shorter than this (in tool radii) stays at the feed (fewer feed
-// changes; the example pocket's time with acceleration is 1.7 % shorter than with runs of a
-// radius or more, and its program 3 % longer).
+// A run through cleared area shorter than this (in tool radii) stays at the feed: fewer feed
+// changes (at R/10 the example pocket's time is 2.2 % shorter, 414.7 s against 424.2 s, 0.7 %
+// with the machine's acceleration, and its program 8 % longer, 286 kB against 264 kB).
 constexpr double kMinAirRun = 0.25;
 
 // The pass's runs: its steps grouped by whether they cut, the air runs shorter than
