@@ -96,7 +96,7 @@ struct PocketProof {
 /// planner's grids (a byte a cell of the coverage) and steps (200 B each) and the kernel's
 /// proof on the program (450 B a sample, one a tooth pass), the clearing taken as 5 times the
 /// pocket's area over the side step of the target (the example pocket: 3.4 times). An upper
-/// bound within a factor of 2 of the measured peak on the examples (docs/PERFORMANCE.md).
+/// bound within a factor of 3 of the measured peak on the examples (docs/PERFORMANCE.md).
 [[nodiscard]] double estimate_pocket_memory(const Job& job);
 
 /// The job's program: the pocket's (plan_pocket) with [pocket], else the slot's (plan_slot).
