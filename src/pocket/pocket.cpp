@@ -8,7 +8,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <functional>
 #include <limits>
 #include <optional>
 
@@ -189,9 +188,11 @@ class Coverage {
 
   // Marks the cells within R of c as covered (a given-up cell a later pass takes too);
   // returns how many were remaining.
-  long cut(const Vec2& p) {
+  long cut(const Vec2& p) { return cut_segment(p, p); }
+  // The same for the cells within R of the segment [a, b] (what the tool sweeps from a to b).
+  long cut_segment(const Vec2& a, const Vec2& b) {
     long n = 0;
-    for_cells(p, R_, [&](std::uint8_t& s) {
+    for_cells(a, b, R_, [&](std::uint8_t& s) {
       if (s == kRemaining) {
         s = kCovered;
         ++n;
@@ -203,42 +204,9 @@ class Coverage {
     remaining_ -= n;
     return n;
   }
-  // Marks the cells within R of the segment [a, b] as covered (what the tool sweeps from a to
-  // b); returns how many were remaining.
-  long cut_segment(const Vec2& a, const Vec2& b) {
-    const Vec2 ab = b - a;
-    const double L2 = ab.squaredNorm();
-    const double r2 = R_ * R_;
-    long n = 0;
-    const long c0 =
-        std::max(0L, static_cast<long>(std::floor((std::min(a.x(), b.x()) - R_ - x0_) / h_)));
-    const long c1 =
-        std::min(nx_ - 1, static_cast<long>(std::floor((std::max(a.x(), b.x()) + R_ - x0_) / h_)));
-    const long r0 =
-        std::max(0L, static_cast<long>(std::floor((std::min(a.y(), b.y()) - R_ - y0_) / h_)));
-    const long r1 =
-        std::min(ny_ - 1, static_cast<long>(std::floor((std::max(a.y(), b.y()) + R_ - y0_) / h_)));
-    for (long r = r0; r <= r1; ++r) {
-      for (long c = c0; c <= c1; ++c) {
-        std::uint8_t& s = state_[static_cast<std::size_t>(r * nx_ + c)];
-        if (s != kRemaining && s != kGivenUp) continue;
-        const Vec2 q = centre(c, r) - a;
-        const double t = L2 > 0 ? std::clamp(q.dot(ab) / L2, 0.0, 1.0) : 0.0;
-        if ((q - t * ab).squaredNorm() >= r2) continue;
-        if (s == kRemaining) {
-          ++n;
-        } else {
-          --given_up_;
-        }
-        s = kCovered;
-      }
-    }
-    remaining_ -= n;
-    return n;
-  }
   // Gives up the remaining cells within `radius` of p.
   void give_up(const Vec2& p, double radius) {
-    for_cells(p, radius, [&](std::uint8_t& s) {
+    for_cells(p, p, radius, [&](std::uint8_t& s) {
       if (s == kRemaining) {
         s = kGivenUp;
         --remaining_;
@@ -264,16 +232,25 @@ class Coverage {
   }
 
  private:
+  // Applies f to the state of every cell whose centre lies within `radius` of the segment
+  // [a, b] (a disc where a = b).
   template <class F>
-  void for_cells(const Vec2& p, double radius, F&& f) {
-    const long c0 = std::max(0L, static_cast<long>(std::floor((p.x() - radius - x0_) / h_)));
-    const long c1 = std::min(nx_ - 1, static_cast<long>(std::floor((p.x() + radius - x0_) / h_)));
-    const long r0 = std::max(0L, static_cast<long>(std::floor((p.y() - radius - y0_) / h_)));
-    const long r1 = std::min(ny_ - 1, static_cast<long>(std::floor((p.y() + radius - y0_) / h_)));
-    const double r2 = radius * radius;
+  void for_cells(const Vec2& a, const Vec2& b, double radius, F&& f) {
+    const long c0 =
+        std::max(0L, static_cast<long>(std::floor((std::min(a.x(), b.x()) - radius - x0_) / h_)));
+    const long c1 = std::min(
+        nx_ - 1, static_cast<long>(std::floor((std::max(a.x(), b.x()) + radius - x0_) / h_)));
+    const long r0 =
+        std::max(0L, static_cast<long>(std::floor((std::min(a.y(), b.y()) - radius - y0_) / h_)));
+    const long r1 = std::min(
+        ny_ - 1, static_cast<long>(std::floor((std::max(a.y(), b.y()) + radius - y0_) / h_)));
+    const Vec2 ab = b - a;
+    const double L2 = ab.squaredNorm(), r2 = radius * radius;
     for (long r = r0; r <= r1; ++r) {
       for (long c = c0; c <= c1; ++c) {
-        if ((centre(c, r) - p).squaredNorm() < r2) f(state_[static_cast<std::size_t>(r * nx_ + c)]);
+        const Vec2 q = centre(c, r) - a;
+        const double t = L2 > 0 ? std::clamp(q.dot(ab) / L2, 0.0, 1.0) : 0.0;
+        if ((q - t * ab).squaredNorm() < r2) f(state_[static_cast<std::size_t>(r * nx_ + c)]);
       }
     }
   }
@@ -468,16 +445,15 @@ class PartPlanner {
       if (out.eng > s_.aim_deg) return out;
     }
     at[0] = value(0);
-    std::function<bool(double, double, double, double, int)> refine;
-    refine = [&](double la, double ea, double lb, double eb, int depth) {
+    auto refine = [&](auto& self, double la, double ea, double lb, double eb, int depth) -> bool {
       if (depth == 0 || std::abs(ea - eb) <= 2.0) return true;
       const double lm = 0.5 * (la + lb), em = value(lm);
       if (out.eng > s_.aim_deg) return false;
-      return refine(la, ea, lm, em, depth - 1) && refine(lm, em, lb, eb, depth - 1);
+      return self(self, la, ea, lm, em, depth - 1) && self(self, lm, em, lb, eb, depth - 1);
     };
     for (int k = 0; k < m; ++k) {
       const auto a = static_cast<std::size_t>(k);
-      if (!refine(s_.step * k / m, at[a], s_.step * (k + 1) / m, at[a + 1], 3)) return out;
+      if (!refine(refine, s_.step * k / m, at[a], s_.step * (k + 1) / m, at[a + 1], 3)) return out;
     }
     out.ok = true;
     return out;
@@ -974,10 +950,10 @@ PlannedPocket plan_pocket(const Job& job) {
         "layer '{}' (the pocket is narrower than D + 2 stock everywhere)",
         job.tool.diameter_mm, stl, pk.boundary));
   }
-  // Links that stay down, and the passes' runs through cleared area, cut nothing (below half a
-  // degree: a sliver under 0.2 um at R = 5 mm): fed at the air feed, as a curved slot's
-  // (machine.air_feed, else max_feed, else the rapid rate: the control holds it to its most;
-  // feed moves because a rapid need not run straight).
+  // Links that stay down, and the passes' runs through cleared area, only graze the stock
+  // (Settings::graze_deg): fed at the air feed, as a curved slot's (machine.air_feed, else
+  // max_feed, else the rapid rate: the control holds it to its most; feed moves because a
+  // rapid need not run straight).
   const double link_feed = job.machine.air_feed_mm_per_min > 0   ? job.machine.air_feed_mm_per_min
                            : job.machine.max_feed_mm_per_min > 0 ? job.machine.max_feed_mm_per_min
                                                                  : rapid;
