@@ -259,7 +259,6 @@ class Removed {
     return o.discs_.size();
   }
 
-  // Inserts a disc whose circle's part outside R (before it) is `exposed`.
   // Pins the candidates of every query within `slack` of (cx, cy): those gather() would meet
   // for a reach of R + slack, in its order, until the next insert. A query there filters
   // them instead of scanning the cells: the same list, in the same order.
@@ -273,6 +272,7 @@ class Removed {
     cache_valid_ = false;
   }
 
+  // Inserts a disc whose circle's part outside R (before it) is `exposed`.
   void insert(double cx, double cy, ArcSet exposed) {
     // The discs near the centre: those outside() gathered for it if nothing was inserted
     // since (the kernel asks for a sample's free circle, then inserts its disc a tooth later).
@@ -394,14 +394,9 @@ class Removed {
       gy_ = cy;
       const double near2 = reach * reach;
       for (const int j : pinned_) {
-        const Box& d = box_[static_cast<std::size_t>(j)];
-        const double nx = std::clamp(cx, d.x0, d.x1) - cx, ny = std::clamp(cy, d.y0, d.y1) - cy;
-        if (nx * nx + ny * ny <= near2) near_.push_back(j);
+        if (box_meets(j, cx, cy, near2)) near_.push_back(j);
       }
-      const double unknown = std::numeric_limits<double>::quiet_NaN();
-      near_dist_.assign(near_.size(), unknown);
-      near_alpha_.assign(near_.size(), unknown);
-      near_beta_.assign(near_.size(), unknown);
+      forget_memos();
       return;
     }
     gather_within(cx, cy, reach);
@@ -422,12 +417,7 @@ class Removed {
           const auto u = static_cast<std::size_t>(j);
           if (seen_[u] == stamp_) continue;  // listed in an earlier cell too
           seen_[u] = stamp_;
-          // The exposed arcs' bounding box must meet the disc of radius R around the query:
-          // its nearest point within R (squared distances).
-          const Box& d = box_[u];
-          const double nx = std::clamp(cx, d.x0, d.x1) - cx, ny = std::clamp(cy, d.y0, d.y1) - cy;
-          if (nx * nx + ny * ny > near2) continue;
-          near_.push_back(j);
+          if (box_meets(j, cx, cy, near2)) near_.push_back(j);
         }
       }
     }
@@ -438,6 +428,19 @@ class Removed {
                         cq = discs_[static_cast<std::size_t>(q)].cell;
       return cp != cq ? cp < cq : p < q;
     });
+    forget_memos();
+  }
+
+  // Whether disc j's exposed arcs' bounding box meets the disc of radius sqrt(near2) about
+  // (cx, cy): its nearest point within it (squared distances).
+  [[nodiscard]] bool box_meets(int j, double cx, double cy, double near2) const {
+    const Box& d = box_[static_cast<std::size_t>(j)];
+    const double nx = std::clamp(cx, d.x0, d.x1) - cx, ny = std::clamp(cy, d.y0, d.y1) - cy;
+    return nx * nx + ny * ny <= near2;
+  }
+
+  // The per-neighbour memos of near_ not yet asked (NaN).
+  void forget_memos() const {
     const double unknown = std::numeric_limits<double>::quiet_NaN();
     near_dist_.assign(near_.size(), unknown);
     near_alpha_.assign(near_.size(), unknown);
