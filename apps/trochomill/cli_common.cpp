@@ -122,7 +122,11 @@ std::vector<Override> JobArgs::overrides() const {
   return ov;
 }
 
-Job JobArgs::load() const { return load_job(file, overrides()); }
+Job JobArgs::load() const {
+  Job job = load_job(file, overrides());
+  attach_rest_stock(job);  // [pocket] rest_of: the earlier program's stock, read once
+  return job;
+}
 
 void add_job_args(CLI::App* cmd, JobArgs& a) {
   cmd->add_option("JOB", a.file, "job file (TOML)")->required();

@@ -291,7 +291,8 @@ void register_study_commands(CLI::App& app, int& exit_code) {
       }
       if (!a->html.empty()) {
         // The best job's report, or the base job's with the Pareto set.
-        const Job job = doc.build(best_overrides);
+        Job job = doc.build(best_overrides);
+        attach_rest_stock(job);
         ReportRequest rq;
         rq.job_file = a->job.file;
         rq.job_text = to_toml(job);

@@ -25,6 +25,7 @@
 #include "trochomill/force.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/path.hpp"
 #include "trochomill/progress.hpp"
 #include "trochomill/texture.hpp"
@@ -44,7 +45,9 @@ struct PyJob {
   [[nodiscard]] Job with(const std::vector<Override>& more) const {
     std::vector<Override> all = overrides;
     all.insert(all.end(), more.begin(), more.end());
-    return doc->build(all);
+    Job j = doc->build(all);
+    attach_rest_stock(j);  // [pocket] rest_of: the earlier program's stock
+    return j;
   }
 };
 

@@ -25,6 +25,7 @@ PyJob job_from_document(JobDocument doc, std::vector<Override> overrides) {
   j.doc = std::make_shared<const JobDocument>(std::move(doc));
   j.overrides = std::move(overrides);
   j.job = j.doc->build(j.overrides);
+  attach_rest_stock(j.job);  // [pocket] rest_of: the earlier program's stock
   return j;
 }
 
@@ -152,6 +153,7 @@ Units: mm, s, mm/min, rpm, degrees (`trochomill keys` lists every key with its u
             std::vector<Override> all = j.overrides;
             all.push_back(make_override(key, value));
             Job built = j.doc->build(all);  // validated before anything changes
+            attach_rest_stock(built);
             j.overrides = std::move(all);
             j.job = std::move(built);
           },

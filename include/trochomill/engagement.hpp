@@ -18,6 +18,7 @@
 // chip thickness can have a local maximum (see ChipQuery in src/engagement/kernel.cpp).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <memory>
@@ -104,6 +105,24 @@ class RemovedRegion {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Centres of discs of radius `radius_mm` whose union is, within spacing_mm^2 / 8 radius_mm
+/// short of it (the scallops between neighbours on its outline), the region an earlier program
+/// removed from a tool tip height z up (RestStock): its tool's sweep along its moves at z or
+/// below (within 1e-4 mm) is the sweep of a disc of radius_mm over the region within
+/// R_rest - radius_mm of those moves (Clipper, its chords inside the exact offset by at most
+/// 0.5 um), so discs along that region's outline, spacing_mm apart, and on a grid of
+/// 0.9 radius_mm inside it. Empty where no move lies at z or below. Throws InputError when the
+/// earlier tool is the smaller (its region is no union of the larger discs).
+[[nodiscard]] std::vector<Vec2> rest_disc_centres(const RestStock& rest, double z_mm,
+                                                  double radius_mm, double spacing_mm);
+
+/// The spacing of rest_disc_centres' outline discs for a job (mm): a tooth's advance, as the
+/// kernel's samples (0.005 mm to R / 10).
+[[nodiscard]] inline double rest_spacing_mm(const Job& job) {
+  const double lo = 0.005, hi = std::max(lo, 0.1 * job.tool.radius_mm());
+  return std::clamp(job.cutting.feed_per_tooth_mm, lo, hi);
+}
 
 /// The radial chip of sample i (mm): its h_max, or 0 where the tool descends into stock no
 /// earlier position touched (a helix, ramp or plunge start: the kernel caps h_max at the

@@ -81,6 +81,8 @@ struct Slot {
 /// `[pocket]`: a pocket cleared down to its floor, its walls the closed contours of a drawing's
 /// layer and the islands left standing those of another (lengths mm, the drawing's frame = the
 /// workpiece's; top face z = 0).
+struct RestStock;  // path.hpp: an earlier program's remaining stock
+
 struct Pocket {
   std::string boundary;          ///< the layer (or SVG id) of the walls' closed contours
   std::string islands;           ///< the layer of the islands' closed contours; empty: none
@@ -96,6 +98,17 @@ struct Pocket {
   double fit_tolerance_mm = 0.002;  ///< the clearing path written as arcs within this (mm)
   /// The contours (set by the job reader from [geometry] file). Shared: a job is copied often.
   std::shared_ptr<const std::vector<DrawnContour>> boundary_contours, island_contours;
+  /// [pocket] rest_of: an earlier program (as written in the job; `rest_of_path` resolved
+  /// against the job file's folder) whose remaining material is the stock: the clearing cuts
+  /// only what it left. Empty: the stock is the [stock] box.
+  std::string rest_of;
+  std::filesystem::path rest_of_path;
+  /// Its tool's diameter (mm): [pocket] rest_tool_diameter, else (0) the program header's
+  /// tool.diameter (a trochomill program's).
+  double rest_tool_diameter_mm = 0;
+  /// The earlier program as read (attach_rest_stock, pocket.hpp), which the planner, the
+  /// engagement kernel and the simulation take as removed; null until attached.
+  std::shared_ptr<const RestStock> rest;
   [[nodiscard]] bool defined() const noexcept { return boundary_contours != nullptr; }
 };
 

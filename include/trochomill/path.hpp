@@ -137,6 +137,24 @@ class ToolPath {
   std::vector<CycleMark> cycles_;
 };
 
+/// The stock an earlier program left ([pocket] rest_of), for a tool of radius R no larger
+/// than its own: at a tool tip height z, the plan region its flat end mill removed from z up,
+/// the union of what it swept along its horizontal moves at z or below (each removed the
+/// material above its tip). Its descents (helices, ramps, plunges) count as removing nothing
+/// (the material stays in the model: engagements there read high, never low). Lengths mm.
+struct RestStock {
+  std::string name;           ///< the program's file, for messages
+  double tool_radius_mm = 0;  ///< its tool's
+  /// Its horizontal moves at one height, in plan view: each run of consecutive moves an open
+  /// chain of lines and arcs.
+  struct Level {
+    double z_mm = 0;
+    std::vector<Contour> chains;
+  };
+  std::vector<Level> levels;  ///< by increasing z
+  ToolPath path;              ///< the program as read (the simulation sweeps its tool along it)
+};
+
 /// Samples of a path, structure of arrays (one entry per sample).
 struct PathSamples {
   std::vector<double> t_s;   ///< programmed-feed time (s)

@@ -50,6 +50,11 @@ struct PocketInfo {
   /// Within reach but left by the clearing because reaching it would pass the target (an
   /// inside corner's last material): the finishing pass takes it (mm^2, on the planner's grid).
   double left_for_finish_mm2 = 0;
+  /// Rest machining ([pocket] rest_of): the earlier program's tool diameter (mm; 0: no rest_of)
+  /// and, of the area this clearing must cover at the deepest level, what that program had
+  /// removed (mm^2, on the planner's grid).
+  double rest_tool_diameter_mm = 0;
+  double rest_cleared_mm2 = 0;
   /// The path's entries: [first, last) segment index ranges (the helices and the finishing
   /// pass's lead-in), where the target does not hold.
   std::vector<std::pair<std::size_t, std::size_t>> entries;
@@ -63,6 +68,13 @@ struct PlannedPocket {
   ToolPath path;
   PocketInfo info;
 };
+
+/// Reads [pocket] rest_of (the earlier program, through the job's [machine] reading options)
+/// into job.pocket.rest: its horizontal moves by height and its tool's radius (rest_tool_diameter,
+/// else its header's tool.diameter). Nothing without rest_of; again only when the file or
+/// diameter changed. Throws InputError naming the key for a program that cannot be read, that
+/// never cuts below the top, or whose tool is unknown, smaller than the job's or not finite.
+void attach_rest_stock(Job& job);
 
 /// Plans the job's pocket ([pocket], its contours read by the job). Throws InputError when
 /// the tool does not fit or the helix does not, Error without a pocket.

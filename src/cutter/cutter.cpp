@@ -144,9 +144,10 @@ SimTool sim_tool(const Job& job, const SimSettings& s) {
   SimTool t;
   t.radius_mm = job.tool.radius_mm();
   t.corner_radius_mm = job.tool.corner_radius_mm;
-  // Without a flute length the edges reach the top of the slot (depth plus 1 mm).
-  t.flute_length_mm =
-      job.tool.flute_length_mm > 0 ? job.tool.flute_length_mm : job.slot.depth_mm + 1.0;
+  // Without a flute length the edges reach the top of the slot or pocket (depth plus 1 mm).
+  t.flute_length_mm = job.tool.flute_length_mm > 0
+                          ? job.tool.flute_length_mm
+                          : std::max(job.slot.depth_mm, job.pocket.depth_mm) + 1.0;
   t.helix_rad = deg_to_rad(job.tool.helix_angle_deg);
   const double phase = deg_to_rad(job.tool.runout_phase_deg);
   for (const double a : job.tool.tooth_angles_deg) {

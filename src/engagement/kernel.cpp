@@ -248,6 +248,13 @@ class Removed {
     return memo(near_beta_, k, [&](const Disc&) { return std::acos(near_dist(k) / (2 * R_)); });
   }
   [[nodiscard]] bool covers(double px, double py) const { return inside(px, py); }
+  // Calls f(x, y, arc) for every exposed arc of every disc: the region's outline.
+  template <class F>
+  void for_exposed(F&& f) const {
+    for (const Disc& d : discs_) {
+      for (const AngleArc& a : d.exposed) f(d.x, d.y, a);
+    }
+  }
 
   // Adds another region's discs from its `from`-th on (the union of both), in the order they
   // were inserted there. Returns how many discs the other region has.
@@ -1131,6 +1138,32 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     // A new level.
     return enter(start_region(z));
   };
+  // An earlier program's removal ([pocket] rest_of): per count of its levels at or below a
+  // position's height (by increasing z), the region of the discs that stand for it
+  // (rest_disc_centres, a tooth's advance apart on its outline), built when first met.
+  const RestStock* earlier = job.pocket.rest.get();
+  if (!job.pocket.rest_of.empty() && !earlier) {
+    throw Error("compute_engagement: [pocket] rest_of was not read (attach_rest_stock)");
+  }
+  std::vector<std::unique_ptr<Removed>> rest_regions(earlier ? earlier->levels.size() + 1 : 0);
+  auto rest_region = [&](double z) -> const Removed* {
+    if (!earlier) return nullptr;
+    std::size_t k = 0;
+    while (k < earlier->levels.size() && earlier->levels[k].z_mm <= z + kLevelTol) ++k;
+    if (k == 0) return nullptr;
+    if (!rest_regions[k]) {
+      const std::vector<Vec2> c =
+          rest_disc_centres(*earlier, earlier->levels[k - 1].z_mm, R, rest_spacing_mm(job));
+      double x0 = bx0, y0 = by0, x1 = bx1, y1 = by1;
+      for (const Vec2& p : c) {
+        x0 = std::min(x0, p.x()), x1 = std::max(x1, p.x());
+        y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
+      }
+      rest_regions[k] = std::make_unique<Removed>(R, x0, y0, x1, y1);
+      for (const Vec2& p : c) rest_regions[k]->insert(p.x(), p.y(), rest_regions[k]->outside(p.x(), p.y()));
+    }
+    return rest_regions[k].get();
+  };
   std::vector<Removed*> home(n, nullptr);  // each cutting position's region
   std::vector<char> above(n, 0);           // a ramp above its region's level: no disc
   ChipQuery chip(R);
@@ -1162,10 +1195,13 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     const Removed& removed = *home[i];
     ArcSet free = removed.outside(cx, cy);
     if (m == 1) pending[i] = free;
-    const ArcSet in_stock =
+    ArcSet in_stock =
         mesh_stock ? mesh_stock->inside(cx, cy, R, smp.z_mm[i], std::min(top, smp.z_mm[i] + flute))
                    : inside_rect(cx, cy, R, sx0, sx1, sy0,
                                  opt.open_ahead ? std::numeric_limits<double>::infinity() : sy1);
+    if (const Removed* before = rest_region(smp.z_mm[i])) {
+      in_stock = intersect(in_stock, before->outside(cx, cy));
+    }
     ArcSet eng = intersect(free, in_stock);
     // A descent in its own region (its level not reached) cuts only what no level at or below
     // its height removed: a lead-in dropping from a link back into a pocket a deeper level has
@@ -1291,6 +1327,80 @@ EngagementSeries compute_engagement(const ToolPath& path, const Job& job,
   const double per_tooth_s = tooth_period_s(job.tool, job.cutting);
   return compute_engagement(sample_by_time(path, per_tooth_s / options.steps_per_tooth), job,
                             options);
+}
+
+std::vector<Vec2> rest_disc_centres(const RestStock& rest, double z_mm, double radius_mm,
+                                    double spacing_mm) {
+  if (!(rest.tool_radius_mm >= radius_mm * (1 - 1e-12))) {
+    throw InputError(fmt::format(
+        "[pocket] rest_of: {}'s tool (D = {:g} mm) is smaller than this job's (D = {:g} mm): "
+        "rest machining follows a larger tool",
+        rest.name, 2 * rest.tool_radius_mm, 2 * radius_mm));
+  }
+  if (!(spacing_mm > 0)) throw Error("rest_disc_centres: the spacing must be > 0 mm");
+  constexpr double kSame = 1e-4;  // mm: heights within it are one level (as compute_engagement)
+  std::vector<const Contour*> chains;
+  constexpr double kBig = std::numeric_limits<double>::infinity();
+  double x0 = kBig, y0 = kBig, x1 = -kBig, y1 = -kBig;
+  for (const RestStock::Level& l : rest.levels) {
+    if (l.z_mm > z_mm + kSame) continue;
+    for (const Contour& c : l.chains) {
+      chains.push_back(&c);
+      for (const ContourPiece& p : c.pieces) {
+        for (const Vec2& q : {p.start, p.end}) {
+          x0 = std::min(x0, q.x()), x1 = std::max(x1, q.x());
+          y0 = std::min(y0, q.y()), y1 = std::max(y1, q.y());
+        }
+      }
+    }
+  }
+  std::vector<Vec2> out;
+  if (chains.empty()) return out;
+  // Points along the chains at most `step` apart (arcs bulge within their radius of the ends:
+  // the box is grown by the largest).
+  auto along = [&](double step, auto&& f) {
+    for (const Contour* c : chains) {
+      for (const ContourPiece& p : c->pieces) {
+        const int n = std::max(1, static_cast<int>(std::ceil(p.length_mm() / step)));
+        for (int k = 0; k <= n; ++k) f(p.point_at(static_cast<double>(k) / n));
+      }
+    }
+  };
+  const double grow = rest.tool_radius_mm - radius_mm;
+  if (grow < 1e-3) {
+    // Tools alike (within a micron, the smaller counted): the discs along the moves themselves.
+    along(spacing_mm, [&](const Vec2& p) { out.push_back(p); });
+    return out;
+  }
+  // The region within `grow` of the moves: discs of that radius a fine step apart along them
+  // (their scallops step^2 / 8 grow: 0.01 um at 5 mm), in this kernel's removed region; its
+  // outline is their exposed arcs.
+  const double fine = std::min(spacing_mm, 0.1 * grow);
+  double pad = 0;
+  for (const Contour* c : chains) {
+    for (const ContourPiece& p : c->pieces) {
+      if (p.is_arc()) pad = std::max(pad, p.radius_mm());
+    }
+  }
+  const double bx0 = x0 - pad, by0 = y0 - pad, bx1 = x1 + pad, by1 = y1 + pad;
+  Removed within(grow, bx0, by0, bx1, by1);
+  along(fine, [&](const Vec2& p) { within.insert(p.x(), p.y(), within.outside(p.x(), p.y())); });
+  within.for_exposed([&](double cx, double cy, const AngleArc& a) {
+    const int n = std::max(1, static_cast<int>(std::ceil(a.sweep_rad() * grow / spacing_mm)));
+    for (int k = 0; k <= n; ++k) {
+      const double th = a.start_rad + a.sweep_rad() * k / n;
+      out.emplace_back(cx + grow * std::cos(th), cy + grow * std::sin(th));
+    }
+  });
+  // Inside: a grid of 0.9 R (the outline's discs cover the band within R of it; a point
+  // further in lies within 0.64 R of a grid point, itself inside).
+  const double g = 0.9 * radius_mm;
+  for (double y = by0 - grow + 0.5 * g; y < by1 + grow; y += g) {
+    for (double x = bx0 - grow + 0.5 * g; x < bx1 + grow; x += g) {
+      if (within.covers(x, y)) out.emplace_back(x, y);
+    }
+  }
+  return out;
 }
 
 struct RemovedRegion::Impl {

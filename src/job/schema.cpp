@@ -413,6 +413,26 @@ std::vector<Key> build_schema() {
              "(the walls are kept this much further away); at most 0.005 mm: a looser fit moves "
              "the path off the points checked and the target no longer holds (0.1 mm: 63 "
              "degrees for 53)"),
+      custom("pocket", "rest_of", "string", "", "an NC program file", "none",
+             "rest machining: the program an earlier tool cleared the pocket with (relative "
+             "to the job file); its remaining material is the stock, and only what it left "
+             "gets a path",
+             [](JobReader& r, Job& job) {
+               if (auto f = r.string("pocket", "rest_of")) {
+                 if (f->empty()) {
+                   r.problem("pocket", "rest_of", "names a program file; got an empty string");
+                   return;
+                 }
+                 const std::filesystem::path fp(*f);
+                 job.pocket.rest_of = *f;
+                 job.pocket.rest_of_path =
+                     fp.is_absolute() ? fp : std::filesystem::path(r.source()).parent_path() / fp;
+               }
+             }),
+      number("pocket", "rest_tool_diameter", "mm", Range{1e-3, kMaxLengthMm},
+             FIELD(pocket.rest_tool_diameter_mm),
+             "the diameter of rest_of's tool, a flat end mill at least as wide as this job's "
+             "(0: the program header's tool.diameter, as trochomill writes it)"),
       custom("slot", "length", "number", "mm", "> 0", "required (none with along)",
              "slot length along +Y (a slot along a drawing's contour has the contour's length)",
              [](JobReader& r, Job& job) {
@@ -990,6 +1010,9 @@ void check_pocket(JobReader& r, Job& job) {
     pk.max_engagement_deg = rad_to_deg(std::asin(pk.max_chip_mm / fz));
   } else {
     pk.max_chip_mm = fz * std::sin(deg_to_rad(std::min(90.0, pk.max_engagement_deg)));
+  }
+  if (pk.rest_tool_diameter_mm > 0 && pk.rest_of.empty()) {
+    r.problem("pocket", "rest_tool_diameter", "is rest_of's tool: give [pocket] rest_of too");
   }
   std::vector<std::string> layers{pk.boundary};
   if (!pk.islands.empty()) {

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "trochomill/error.hpp"
+#include "trochomill/gcode.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -304,6 +305,7 @@ struct Settings {
   // leaves differs from the model's by less than that.
   double graze_deg = 0;
   double sigma = 1;  // +1: stock on the right (climb, cw spindle); -1: mirrored
+  double fit_tolerance = 0.002;  // [pocket] fit_tolerance (mm)
 };
 
 // The planner of one part: its region, the removed region and the coverage.
@@ -783,16 +785,24 @@ std::pair<Vec2, double> widest_point(const std::vector<Contour>& part, const Reg
 struct PartPlan {
   Vec2 helix_centre = Vec2::Zero();
   double helix_radius = 0;
+  // Rest machining: the part has no stock left (no moves), or is entered from above where
+  // the earlier program cleared the tool's disc (at helix_centre, no helix).
+  bool nothing = false, from_above = false;
   std::vector<Move2> moves;  // from the helix's end point
   int passes = 0, links_down = 0, lifts = 0;
   double clearing_length = 0;  // at the feed
   double air_length = 0;       // the passes' runs through cleared area, at the link feed
   double planned_max_deg = 0;
   double given_up_mm2 = 0;
+  double rest_cleared_mm2 = 0;  // of the coverage, what the earlier program had removed
 };
 
-PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>& part) {
-  const Pocket& pk = job.pocket;
+void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out);
+
+// `before`: the discs of what an earlier program removed at the level (rest_disc_centres), or
+// empty.
+PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>& part,
+                   const std::vector<Vec2>& before) {
   Box3 box;
   for (const Contour& c : part) {
     for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
@@ -801,6 +811,45 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
   PartPlanner planner(s, part, lo, hi);
   PartPlan out;
   const auto [centre, room] = widest_point(part, planner.region());
+  std::optional<Vec2> above;  // rest machining: where to come down from above
+  if (!before.empty()) {
+    // The earlier program's removal: its discs (those that may meet a tool in the box).
+    const long uncovered = planner.coverage().remaining();
+    for (const Vec2& c : before) {
+      if (c.x() > lo.x() - s.R && c.x() < hi.x() + s.R && c.y() > lo.y() - s.R &&
+          c.y() < hi.y() + s.R) {
+        planner.cut(c);
+      }
+    }
+    const double cell = planner.coverage().cell_mm();
+    out.rest_cleared_mm2 =
+        static_cast<double>(uncovered - planner.coverage().remaining()) * cell * cell;
+    if (planner.coverage().remaining() == 0) {
+      out.nothing = true;
+      return out;
+    }
+    // The stock left nearest the widest place, and the place nearest it (on a grid of R / 4)
+    // where the tool's disc lies in the removed region: the tool comes down there.
+    const Vec2 q = *planner.coverage().nearest_remaining(centre);
+    const double g = 0.25 * s.R;
+    double best = std::numeric_limits<double>::infinity();
+    for (double y = lo.y() + 0.5 * g; y < hi.y(); y += g) {
+      for (double x = lo.x() + 0.5 * g; x < hi.x(); x += g) {
+        const Vec2 p(x, y);
+        const double d = (p - q).squaredNorm();
+        if (d >= best || !planner.in_region(p) || planner.uncut(p).total > 0) continue;
+        best = d;
+        above = p;
+      }
+    }
+  }
+  if (above) {
+    out.from_above = true;
+    out.helix_centre = *above;
+    planner.add_exact(*above);
+    plan_passes(s, planner, *above, out);
+    return out;
+  }
   double rh = job.path.entry_radius_mm;
   if (rh > 0 && rh > room) {
     throw InputError(fmt::format(
@@ -827,9 +876,23 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
     out.moves.push_back(
         {Move2::arc_or_line, ContourPiece::arc(half, start, centre, turn > 0), true});
   }
-  Vec2 p = start;
-  double psi = turn * 0.5 * kPi;  // the circle's tangent at angle 0
+  plan_passes(s, planner, start, out);
+  return out;
+}
+
+// The passes of a part from p (the helix's end, heading along the circle, or a point the tool
+// came down to from above), until the coverage is done.
+void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out) {
+  double psi = s.sigma * 0.5 * kPi;  // the helix circle's tangent at angle 0
   std::optional<Vec2> target;
+  if (out.from_above) {
+    // Straight for the stock nearest.
+    if (const auto next = planner.coverage().nearest_remaining(p)) {
+      const Vec2 to = *next - p;
+      psi = std::atan2(to.y(), to.x());
+      target = *next;
+    }
+  }
   const double cell = planner.coverage().cell_mm();
   // (A guard: each pass gains coverage or gives some up, so the cells bound the count.)
   for (int guard = 0; guard < 10000000 && planner.coverage().remaining() > 0; ++guard) {
@@ -849,7 +912,7 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
         // and engage at most 0.07 degrees more near a 50 degree target (kBulge / R sin 50).
         // A run at the link feed keeps to the chords: it must only graze.
         const auto pieces =
-            fit_polyline(pts, pk.fit_tolerance_mm, run.air ? 0.0 : kBulge, s.sigma > 0);
+            fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : kBulge, s.sigma > 0);
         std::vector<Move2> moves;
         if (run.air) {
           moves = air_moves(pieces, s.kernel_step);
@@ -888,7 +951,119 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
   }
   out.planned_max_deg = planner.planned_max_deg();
   out.given_up_mm2 = static_cast<double>(planner.coverage().given_up()) * cell * cell;
-  return out;
+}
+
+// [pocket] rest_of read: its moves at constant heights below the stock's top, by height, as
+// chains of plan-view pieces (arcs exact, other curves as chords within 0.5 um).
+RestStock read_rest(const Job& job) {
+  const Pocket& pk = job.pocket;
+  const std::string name = pk.rest_of;
+  GcodeReadOptions ro = gcode_options(job.machine).read;
+  GcodeProgram prog;
+  try {
+    prog = read_gcode_file(pk.rest_of_path, ro);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("[pocket] rest_of = \"{}\": {}", name, e.what()));
+  }
+  RestStock rest;
+  rest.name = name;
+  double d = pk.rest_tool_diameter_mm;
+  if (!(d > 0)) {
+    for (const auto& [key, value] : prog.info.header_keys) {
+      if (key != "tool.diameter") continue;
+      char* end = nullptr;
+      d = std::strtod(value.c_str(), &end);
+      if (end == value.c_str() || *end != '\0' || !std::isfinite(d) || !(d > 0)) {
+        throw InputError(fmt::format(
+            "[pocket] rest_of = \"{}\": its header's tool.diameter = {} is no diameter (a "
+            "number > 0, mm): give [pocket] rest_tool_diameter",
+            name, value));
+      }
+    }
+  }
+  if (!(d > 0)) {
+    throw InputError(fmt::format(
+        "[pocket] rest_tool_diameter: give the diameter (mm) of rest_of's tool: \"{}\" has no "
+        "trochomill header naming it (tool.diameter)",
+        name));
+  }
+  if (d < job.tool.diameter_mm * (1 - 1e-12)) {
+    throw InputError(fmt::format(
+        "[pocket] rest_tool_diameter: rest_of's tool (D = {:g} mm) is smaller than this job's "
+        "(D = {:g} mm): rest machining follows a larger tool",
+        d, job.tool.diameter_mm));
+  }
+  rest.tool_radius_mm = 0.5 * d;
+  const double top = stock_top_mm(job, nullptr);
+  constexpr double kSame = 1e-4;  // mm: heights within it are one level (the kernel's)
+  const Segment* prev = nullptr;
+  for (const Segment& g : prog.path.segments()) {
+    const Vec3 a = g.start(), b = g.end();
+    const bool flat = std::abs(a.z() - b.z()) <= kSame && g.is_flat_xy() && a.z() < top - kSame &&
+                      g.length_mm() > 0;
+    if (!flat) {
+      prev = nullptr;
+      continue;
+    }
+    auto level = std::find_if(rest.levels.begin(), rest.levels.end(), [&](const auto& l) {
+      return std::abs(l.z_mm - a.z()) <= kSame;
+    });
+    if (level == rest.levels.end()) {
+      rest.levels.push_back({a.z(), {}});
+      level = rest.levels.end() - 1;
+    }
+    const bool joins = prev != nullptr && !level->chains.empty() &&
+                       std::abs(prev->end().z() - a.z()) <= kSame &&
+                       (level->chains.back().pieces.back().end - Vec2(a.x(), a.y())).norm() <= 1e-9;
+    if (!joins) level->chains.emplace_back();
+    Contour& chain = level->chains.back();
+    auto add = [&](const ContourPiece& piece) {
+      if (!chain.pieces.empty()) {
+        ContourPiece q = piece;
+        q.start = chain.pieces.back().end;  // exactly joined
+        chain.pieces.push_back(q);
+      } else {
+        chain.pieces.push_back(piece);
+      }
+    };
+    const Vec2 a2(a.x(), a.y()), b2(b.x(), b.y());
+    if (g.kind() == Segment::Kind::line) {
+      add(ContourPiece::line(a2, b2));
+    } else if (g.is_circular()) {
+      // Halves at most: an arc's ends and centre fix it up to a half turn.
+      const Vec2 c(g.center().x(), g.center().y());
+      const Vec3 t = g.derivative_u(g.u0()) * (g.u1() >= g.u0() ? 1.0 : -1.0);
+      const bool ccw = cross2(a2 - c, Vec2(t.x(), t.y())) > 0;
+      const int n = std::abs(g.u1() - g.u0()) > 0.9 * kPi ? 2 : 1;
+      Vec2 from = a2;
+      for (int k = 1; k <= n; ++k) {
+        const Vec3 q = g.point_u(g.u0() + (g.u1() - g.u0()) * k / n);
+        const Vec2 to = k == n ? b2 : Vec2(q.x(), q.y());
+        add(ContourPiece::arc(from, to, c, ccw));
+        from = to;
+      }
+    } else {
+      const int n = std::max(1, static_cast<int>(std::ceil(g.length_mm() / 0.05)));
+      Vec2 from = a2;
+      for (int k = 1; k <= n; ++k) {
+        const Vec3 q = g.point_at(g.length_mm() * k / n);
+        const Vec2 to = k == n ? b2 : Vec2(q.x(), q.y());
+        add(ContourPiece::line(from, to));
+        from = to;
+      }
+    }
+    prev = &g;
+  }
+  if (rest.levels.empty()) {
+    throw InputError(fmt::format(
+        "[pocket] rest_of = \"{}\": the program never moves across at a constant height below "
+        "the stock's top (z = {:g} mm): it removed nothing to rest-machine after",
+        name, top));
+  }
+  std::sort(rest.levels.begin(), rest.levels.end(),
+            [](const auto& x, const auto& y) { return x.z_mm < y.z_mm; });
+  rest.path = std::move(prog.path);
+  return rest;
 }
 
 // The planner's step along the path (mm): 0.1 R within 0.05 to 1 mm.
@@ -970,23 +1145,59 @@ PlannedPocket plan_pocket(const Job& job) {
   const bool mirror = (job.path.direction == Direction::conventional) !=
                       (job.cutting.spindle_direction == SpindleDirection::ccw);
   s.sigma = mirror ? -1.0 : 1.0;
+  s.fit_tolerance = pk.fit_tolerance_mm;
 
   PlannedPocket out;
   PocketInfo& info = out.info;
   info.target_engagement_deg = pk.max_engagement_deg;
   const auto parts = region_parts(centre_region);
-  std::vector<PartPlan> plans;
-  for (const auto& part : parts) {
-    plans.push_back(plan_part(job, s, part));
-    const PartPlan& pp = plans.back();
+  const double depth = pk.depth_mm;
+  const int levels = pocket_levels(pk);
+  // Rest machining: what the earlier program removed at each level. Levels where its removed
+  // region is the same (the same discs) share one plan; a plan per level otherwise.
+  std::shared_ptr<const RestStock> rest = pk.rest;
+  if (!pk.rest_of.empty() && !rest) rest = std::make_shared<const RestStock>(read_rest(job));
+  std::vector<std::size_t> plan_of(static_cast<std::size_t>(levels), 0);  // per level
+  std::vector<std::vector<PartPlan>> plans;
+  std::vector<Vec2> before_last;  // the last plan's
+  for (int k = 1; k <= levels; ++k) {
+    const double z = -depth * k / levels;
+    std::vector<Vec2> before;
+    if (rest) {
+      before = rest_disc_centres(*rest, z, R, rest_spacing_mm(job));
+      const bool same =
+          k > 1 && before.size() == before_last.size() &&
+          std::equal(before.begin(), before.end(), before_last.begin(),
+                     [](const Vec2& a, const Vec2& b) { return (a - b).norm() <= 1e-9; });
+      if (same) {
+        plan_of[static_cast<std::size_t>(k - 1)] = plans.size() - 1;
+        continue;
+      }
+      before_last = before;
+    } else if (k > 1) {
+      continue;  // one plan for every level
+    }
+    plan_of[static_cast<std::size_t>(k - 1)] = plans.size();
+    plans.emplace_back();
+    for (const auto& part : parts) plans.back().push_back(plan_part(job, s, part, before));
+  }
+  // The figures of a level: the deepest's plan (every level's without rest_of).
+  for (const PartPlan& pp : plans.back()) {
     info.passes += pp.passes;
     info.links_down += pp.links_down;
     info.lifts += pp.lifts;
     info.clearing_length_mm += pp.clearing_length;
     info.air_length_mm += pp.air_length;
-    info.planned_max_engagement_deg = std::max(info.planned_max_engagement_deg, pp.planned_max_deg);
     info.left_for_finish_mm2 += pp.given_up_mm2;
+    info.rest_cleared_mm2 += pp.rest_cleared_mm2;
   }
+  for (const auto& level : plans) {
+    for (const PartPlan& pp : level) {
+      info.planned_max_engagement_deg =
+          std::max(info.planned_max_engagement_deg, pp.planned_max_deg);
+    }
+  }
+  if (rest) info.rest_tool_diameter_mm = 2 * rest->tool_radius_mm;
   info.parts = static_cast<int>(parts.size());
 
   // What no tool centre in the region reaches: the pocket less the region grown back.
@@ -1006,8 +1217,6 @@ PlannedPocket plan_pocket(const Job& job) {
   }
 
   // Levels of equal depth.
-  const double depth = pk.depth_mm;
-  const int levels = pocket_levels(pk);
   info.levels = levels;
   ToolPath& path = out.path;
   auto at = [](const Vec2& p, double z) { return Vec3(p.x(), p.y(), z); };
@@ -1042,22 +1251,33 @@ PlannedPocket plan_pocket(const Job& job) {
   for (int k = 1; k <= levels; ++k) {
     const double z_prev = k == 1 ? 0.0 : -depth * (k - 1) / levels;
     const double z = -depth * k / levels;
-    for (const PartPlan& pp : plans) {
+    const std::size_t plan = plan_of[static_cast<std::size_t>(k - 1)];
+    // A relink point is one the tool centre passed exactly at this level; at the levels above
+    // too where they run the same plan, else only down to the level above.
+    const double relink_z =
+        k > 1 && plan_of[static_cast<std::size_t>(k - 2)] != plan ? z_prev : z;
+    for (const PartPlan& pp : plans[plan]) {
+      if (pp.nothing) continue;
       const Vec2 c = pp.helix_centre;
       const double rh = pp.helix_radius;
       const Vec2 start = c + Vec2(rh, 0);
       const std::size_t first = path.segments().size();
-      travel(start, z_prev + clearance, z_prev + (k == 1 ? clearance : 0.0));
+      if (pp.from_above) {
+        // The earlier program cleared the tool's disc here down to this level: in from above.
+        travel(start, z + clearance, z);
+      } else {
+        travel(start, z_prev + clearance, z_prev + (k == 1 ? clearance : 0.0));
+      }
       // The helix down to z: whole turns at the pitch or less.
       const double drop = here().z() - z;
-      if (rh > 0) {
+      if (!pp.from_above && rh > 0) {
         const int turns = std::max(1, static_cast<int>(std::ceil(drop / pitch - 1e-9)));
         for (int t = 0; t < turns; ++t) {
           const double za = here().z(), zb = za - drop / turns;
           path.append(Segment::arc_xy(c.x(), c.y(), rh, 0.0, s.sigma * kTwoPi, za, zb, Motion::feed,
                                       entry_feed));
         }
-      } else {
+      } else if (!pp.from_above) {
         line_to(at(start, z), Motion::feed, entry_feed);
       }
       std::size_t entry_end = path.segments().size();
@@ -1084,7 +1304,7 @@ PlannedPocket plan_pocket(const Job& job) {
             // A relink point is one the tool centre passed exactly at this level (and so at
             // every level above): its cylinder is cut down to z, so the rapid goes down to
             // the clearance above z.
-            travel(m.piece.end, z + clearance, z);
+            travel(m.piece.end, relink_z + clearance, z);
             break;
         }
         if (m.entry) entry_end = path.segments().size();  // the helix's flat circle
@@ -1163,7 +1383,26 @@ PlannedPocket plan_pocket(const Job& job) {
 PocketProof prove_pocket(const Job& job, const PlannedPocket& pocket, const RunHooks& hooks) {
   EngagementOptions opt;
   opt.hooks = hooks;
+  if (!job.pocket.rest_of.empty() && !job.pocket.rest) {  // the stock the earlier program left
+    Job with_rest = job;
+    attach_rest_stock(with_rest);
+    return prove_pocket(pocket.info, compute_engagement(pocket.path, with_rest, opt));
+  }
   return prove_pocket(pocket.info, compute_engagement(pocket.path, job, opt));
+}
+
+void attach_rest_stock(Job& job) {
+  Pocket& pk = job.pocket;
+  if (pk.rest_of.empty()) {
+    pk.rest.reset();
+    return;
+  }
+  if (pk.rest && pk.rest->name == pk.rest_of &&
+      (!(pk.rest_tool_diameter_mm > 0) ||
+       2 * pk.rest->tool_radius_mm == pk.rest_tool_diameter_mm)) {
+    return;  // read already
+  }
+  pk.rest = std::make_shared<const RestStock>(read_rest(job));
 }
 
 PocketProof prove_pocket(const PocketInfo& info, const EngagementSeries& e) {

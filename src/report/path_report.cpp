@@ -121,6 +121,12 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
       "level\n",
       info.parts, info.parts == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s", info.passes,
       info.links_down, info.lifts, info.clearing_length_mm, info.air_length_mm);
+  if (info.rest_tool_diameter_mm > 0) {
+    out += fmt::format(
+        "  rest machining after a {:g} mm tool: {:.1f} mm^2 of this tool's area at the deepest "
+        "level it had cleared; the passes cut what it left\n",
+        info.rest_tool_diameter_mm, info.rest_cleared_mm2);
+  }
   out += fmt::format(
       "  engagement target {:.4g} degrees; the planner's largest at its points {:.4g} degrees\n",
       info.target_engagement_deg, info.planned_max_engagement_deg);

@@ -1015,6 +1015,21 @@ JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double
   if (stock_mesh) control.hooks.begin("stock: the mesh's dexels");
   TriDexel work = stock_mesh ? stock_from_mesh(*stock_mesh, s.resolution_mm, control.hooks)
                              : TriDexel(job_stock(job), s.resolution_mm);
+  if (!job.pocket.rest_of.empty()) {
+    // Rest machining: the earlier program's flat end mill swept along it first (its envelope:
+    // the workpiece it left, less the feed marks of its teeth).
+    const RestStock* rest = job.pocket.rest.get();
+    if (!rest) throw Error("simulate: [pocket] rest_of was not read (attach_rest_stock)");
+    Job earlier = job;
+    earlier.tool = Tool{};
+    earlier.tool.diameter_mm = 2 * rest->tool_radius_mm;
+    earlier.tool.teeth = job.tool.teeth;
+    earlier.tool.tooth_angles_deg = job.tool.tooth_angles_deg;
+    earlier.tool.flute_length_mm = job.tool.flute_length_mm;  // else the depth's (sim_tool)
+    control.hooks.begin("stock: the earlier program's envelope (rest_of)");
+    (void)sweep_envelope(rest->path, sim_tool(earlier, s), work, 0, rest->path.duration_s(),
+                         control.hooks);
+  }
   const SimTool tool = sim_tool(job, s);
   JobSimulation out;
   const auto clock = [] { return std::chrono::steady_clock::now(); };
@@ -1095,6 +1110,22 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
   for (std::size_t n = 0; n < ps.size(); ++n) {
     const double p[3] = {ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  }
+  if (const RestStock* rest = job.pocket.rest.get(); rest && !rest->path.empty()) {
+    // Rest machining: the earlier program's tool visits first (its reach beyond ours added).
+    const double grow = std::max(0.0, rest->tool_radius_mm - R);
+    const double T = rest->path.duration_s(), dr = std::max(1e-3, T / 20000.0);
+    std::vector<double> at;
+    for (double t = 0; t < T; t += dr) at.push_back(t);
+    at.push_back(T);
+    const PathSamples rs = sample_at_times(rest->path, at);
+    for (std::size_t n = 0; n < rs.size(); ++n) {
+      const double p[3] = {rs.x_mm[n], rs.y_mm[n], rs.z_mm[n]};
+      for (int k = 0; k < 3; ++k) {
+        const double g = k < 2 ? grow : 0.0;
+        lo[k] = std::min(lo[k], p[k] - g), hi[k] = std::max(hi[k], p[k] + g);
+      }
+    }
   }
   auto extent = [&](int k, double grow_lo, double grow_hi) {
     const double a = std::max(box.lo[static_cast<std::size_t>(k)], lo[k] - grow_lo);

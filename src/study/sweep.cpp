@@ -240,7 +240,8 @@ std::string sweep_row(const JobDocument& doc, const std::vector<Override>& base,
   std::string error;
   std::map<std::string, json> values;
   try {
-    const Job job = doc.build(o);
+    Job job = doc.build(o);
+    attach_rest_stock(job);  // [pocket] rest_of: the earlier program's stock
     std::vector<std::pair<std::string, json>> leaves;
     // The points in flight share the limit.
     const int in_flight =
