@@ -25,8 +25,8 @@
 #include "trochomill/force.hpp"
 #include "trochomill/gcode.hpp"
 #include "trochomill/job.hpp"
-#include "trochomill/pocket.hpp"
 #include "trochomill/path.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/progress.hpp"
 #include "trochomill/texture.hpp"
 

@@ -106,14 +106,16 @@ class RemovedRegion {
   std::unique_ptr<Impl> impl_;
 };
 
-/// Centres of discs of radius `radius_mm` whose union is, within spacing_mm^2 / 8 radius_mm
-/// short of it (the scallops between neighbours on its outline), the region an earlier program
-/// removed from a tool tip height z up (RestStock): its tool's sweep along its moves at z or
-/// below (within 1e-4 mm) is the sweep of a disc of radius_mm over the region within
-/// R_rest - radius_mm of those moves (Clipper, its chords inside the exact offset by at most
-/// 0.5 um), so discs along that region's outline, spacing_mm apart, and on a grid of
-/// 0.9 radius_mm inside it. Empty where no move lies at z or below. Throws InputError when the
-/// earlier tool is the smaller (its region is no union of the larger discs).
+/// Centres of discs of radius `radius_mm` whose union is the region an earlier program removed
+/// from a tool tip height z up (RestStock): its tool's sweep along its moves at z or below
+/// (within 1e-4 mm), which is the sweep of a disc of radius_mm over the region within
+/// R_rest - radius_mm of those moves. That region is this kernel's removed region of discs of
+/// that radius along the moves (a tenth of it or `spacing_mm` apart, the smaller); the centres
+/// are on its outline (its discs' exposed arcs) spacing_mm apart, and on a grid of
+/// 0.9 radius_mm inside it. Short of the exact sweep by the scallops between neighbours,
+/// spacing_mm^2 / 8 radius_mm (0.1 um at 0.05 mm and R = 3 mm). Empty where no move lies at
+/// z or below. Throws InputError when the earlier tool is the smaller (its region is no union
+/// of the larger discs).
 [[nodiscard]] std::vector<Vec2> rest_disc_centres(const RestStock& rest, double z_mm,
                                                   double radius_mm, double spacing_mm);
 

@@ -171,10 +171,6 @@ struct Contour {
 /// output and tolerance as offset_region.
 [[nodiscard]] std::vector<Contour> offset_curve(const Contour& contour, double distance_mm,
                                                 double tolerance_mm);
-/// The same of several contours: the union of the regions within `distance_mm` of each (what
-/// a disc of that radius sweeps along them all).
-[[nodiscard]] std::vector<Contour> offset_curves(const std::vector<Contour>& contours,
-                                                 double distance_mm, double tolerance_mm);
 
 // ---------------------------------------------------------------------------------------------
 // Fitting curves with arcs

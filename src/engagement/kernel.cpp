@@ -1160,7 +1160,8 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
         y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
       }
       rest_regions[k] = std::make_unique<Removed>(R, x0, y0, x1, y1);
-      for (const Vec2& p : c) rest_regions[k]->insert(p.x(), p.y(), rest_regions[k]->outside(p.x(), p.y()));
+      for (const Vec2& p : c)
+        rest_regions[k]->insert(p.x(), p.y(), rest_regions[k]->outside(p.x(), p.y()));
     }
     return rest_regions[k].get();
   };

@@ -275,29 +275,16 @@ std::vector<std::vector<Contour>> region_parts(const std::vector<Contour>& regio
 }
 
 std::vector<Contour> offset_curve(const Contour& contour, double distance_mm, double tolerance_mm) {
-  return offset_curves({contour}, distance_mm, tolerance_mm);
-}
-
-std::vector<Contour> offset_curves(const std::vector<Contour>& contours, double distance_mm,
-                                   double tolerance_mm) {
   check_tolerance(tolerance_mm);
   if (!(distance_mm > 0 && distance_mm <= kMaxCoord)) {
     throw InputError(
         fmt::format("offset distance {} mm along a curve: need > 0 mm, within 1 km", distance_mm));
   }
   const double tol = 0.5 * tolerance_mm;
-  std::vector<const Contour*> all;
-  for (const Contour& c : contours) all.push_back(&c);
-  check_size(all, tol);
-  // One offset of them all: Clipper joins the parts (the union of the swept regions).
-  cl::ClipperOffset co(2.0, 0.5 * tolerance_mm * kScale);
-  for (std::size_t i = 0; i < contours.size(); ++i) {
-    co.AddPath(to_path(contours[i], tol, i), cl::jtRound,
-               contours[i].closed ? cl::etClosedLine : cl::etOpenRound);
-  }
-  cl::PolyTree out;
-  co.Execute(out, distance_mm * kScale);
-  return to_contours(out);
+  check_size({&contour}, tol);
+  const cl::Paths in{to_path(contour, tol, 0)};
+  return run_offset(in, contour.closed ? cl::etClosedLine : cl::etOpenRound, distance_mm,
+                    tolerance_mm);
 }
 
 }  // namespace trochomill

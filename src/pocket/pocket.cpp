@@ -304,7 +304,7 @@ struct Settings {
   // 50 target.) A step or a link that only grazes may run at the link feed: the frontier it
   // leaves differs from the model's by less than that.
   double graze_deg = 0;
-  double sigma = 1;  // +1: stock on the right (climb, cw spindle); -1: mirrored
+  double sigma = 1;              // +1: stock on the right (climb, cw spindle); -1: mirrored
   double fit_tolerance = 0.002;  // [pocket] fit_tolerance (mm)
 };
 
@@ -911,8 +911,7 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out)
         // that much more than the model has (later steps find less stock than they expect),
         // and engage at most 0.07 degrees more near a 50 degree target (kBulge / R sin 50).
         // A run at the link feed keeps to the chords: it must only graze.
-        const auto pieces =
-            fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : kBulge, s.sigma > 0);
+        const auto pieces = fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : kBulge, s.sigma > 0);
         std::vector<Move2> moves;
         if (run.air) {
           moves = air_moves(pieces, s.kernel_step);
@@ -1005,9 +1004,8 @@ RestStock read_rest(const Job& job) {
       prev = nullptr;
       continue;
     }
-    auto level = std::find_if(rest.levels.begin(), rest.levels.end(), [&](const auto& l) {
-      return std::abs(l.z_mm - a.z()) <= kSame;
-    });
+    auto level = std::find_if(rest.levels.begin(), rest.levels.end(),
+                              [&](const auto& l) { return std::abs(l.z_mm - a.z()) <= kSame; });
     if (level == rest.levels.end()) {
       rest.levels.push_back({a.z(), {}});
       level = rest.levels.end() - 1;
@@ -1254,8 +1252,7 @@ PlannedPocket plan_pocket(const Job& job) {
     const std::size_t plan = plan_of[static_cast<std::size_t>(k - 1)];
     // A relink point is one the tool centre passed exactly at this level; at the levels above
     // too where they run the same plan, else only down to the level above.
-    const double relink_z =
-        k > 1 && plan_of[static_cast<std::size_t>(k - 2)] != plan ? z_prev : z;
+    const double relink_z = k > 1 && plan_of[static_cast<std::size_t>(k - 2)] != plan ? z_prev : z;
     for (const PartPlan& pp : plans[plan]) {
       if (pp.nothing) continue;
       const Vec2 c = pp.helix_centre;
