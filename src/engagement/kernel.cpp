@@ -1294,20 +1294,29 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     out.swept_rate_mm2_per_s[i] = swept_rate(smp, i, R, eng);
     if (!eng.empty()) {
       // The removal rate: each part of the engaged arcs sweeps stock from the position's
-      // height up to the nearest level above whose region removed it there, or up to the
-      // stock's top (at most the flute length).
+      // height up to the nearest level above whose region removed it there (the program's,
+      // or an earlier program's: rest_of), or up to the stock's top (at most the flute
+      // length).
       const double z = smp.z_mm[i];
-      std::vector<const Level*> upper;
+      std::vector<std::pair<double, const Removed*>> upper;
       for (const Level& l : levels) {
-        if (!std::isnan(l.z_mm) && l.z_mm > z + kLevelTol && l.z_mm < top) upper.push_back(&l);
+        if (!std::isnan(l.z_mm) && l.z_mm > z + kLevelTol && l.z_mm < top) {
+          upper.emplace_back(l.z_mm, l.removed.get());
+        }
+      }
+      if (earlier) {
+        for (const RestStock::Level& l : earlier->levels) {
+          if (l.z_mm > z + kLevelTol && l.z_mm < top)
+            upper.emplace_back(l.z_mm, rest_region(l.z_mm));
+        }
       }
       std::sort(upper.begin(), upper.end(),
-                [](const Level* a, const Level* b) { return a->z_mm < b->z_mm; });
+                [](const auto& a, const auto& b) { return a.first < b.first; });
       ArcSet rest = eng;
       double rate = 0;
-      for (const Level* l : upper) {
-        const ArcSet stock_above = l->removed->outside(cx, cy);
-        rate += swept_rate(smp, i, R, minus(rest, stock_above)) * std::min(flute, l->z_mm - z);
+      for (const auto& [level_z, removed_above] : upper) {
+        const ArcSet stock_above = removed_above->outside(cx, cy);
+        rate += swept_rate(smp, i, R, minus(rest, stock_above)) * std::min(flute, level_z - z);
         rest = intersect(rest, stock_above);
         if (rest.empty()) break;
       }
