@@ -422,3 +422,31 @@ TEST(Pocket, RestStockCountsOnlyBelowTheEarlierCut) {
   const PocketProof proof = prove_pocket(job, p);
   EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
 }
+
+TEST(Pocket, RestMachiningComesDownOnlyWhereTheDiscIsCleared) {
+  // An earlier 20 mm tool's full circle of radius 12 about (30, 20), 2 mm deep, leaves a
+  // pillar of radius 2 at its centre, the stock nearest the rectangle's widest place: a 6 mm
+  // tool's circle about that centre lies in the cleared ring, its disc does not. No rapid may
+  // go below the top within 2 + 3 mm of the pillar's axis (it came down on it before).
+  const auto dir = test::scratch_dir("rest-pillar");
+  {
+    std::ofstream(dir / "ring.ngc") << "G21 G90\nG0 X42 Y20 Z5\nG1 Z-2 F100\n"
+                                       "G3 X42 Y20 I-12 J0 F500\nG0 Z5\nM2\n";
+  }
+  Job job =
+      JobDocument::parse(pocket_job("boundary = \"RECT\"\ndepth = 2.0\n"
+                                    "max_engagement = 50.0\nrest_of = \"" +
+                                    (dir / "ring.ngc").string() + "\"\nrest_tool_diameter = 20\n"),
+                         "rest.toml")
+          .build({parse_override("tool.diameter=6")});
+  attach_rest_stock(job);
+  const PlannedPocket p = plan_pocket(job);
+  int descents = 0;
+  for (const Segment& g : p.path.segments()) {
+    if (g.motion() != Motion::rapid || !(g.end().z() < 0)) continue;
+    ++descents;
+    const double d = std::hypot(g.end().x() - 30, g.end().y() - 20);
+    EXPECT_GE(d, 5.0 - 1e-9) << g.end().transpose();  // the disc clear of the pillar
+  }
+  EXPECT_GT(descents, 0);  // it does come down from above
+}

@@ -320,6 +320,18 @@ class PartPlanner {
   static double cell_size(double R) { return std::clamp(R / 20.0, 0.02, 0.25); }
 
   [[nodiscard]] bool in_region(const Vec2& p) const { return inside_.contains(p); }
+  // Whether the tool's disc at p lies in the removed region: its circle (no uncut arc) and,
+  // for stock left inside it by an earlier program (a pillar between its passes), its centre
+  // and 8 points on each of the circles of R/3 and 2R/3.
+  [[nodiscard]] bool disc_cleared(const Vec2& p) const {
+    if (!removed_.uncut_arcs(p).empty() || !removed_.contains(p)) return false;
+    for (const double r : {s_.R / 3, 2 * s_.R / 3}) {
+      for (int k = 0; k < 8; ++k) {
+        if (!removed_.contains(p + r * dir(kTwoPi * k / 8))) return false;
+      }
+    }
+    return true;
+  }
   [[nodiscard]] const RegionGrid& region() const { return inside_; }
   Coverage& coverage() { return coverage_; }
 
@@ -837,7 +849,7 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
       for (double x = lo.x() + 0.5 * g; x < hi.x(); x += g) {
         const Vec2 p(x, y);
         const double d = (p - q).squaredNorm();
-        if (d >= best || !planner.in_region(p) || planner.uncut(p).total > 0) continue;
+        if (d >= best || !planner.in_region(p) || !planner.disc_cleared(p)) continue;
         best = d;
         above = p;
       }
