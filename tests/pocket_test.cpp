@@ -450,3 +450,19 @@ TEST(Pocket, RestMachiningComesDownOnlyWhereTheDiscIsCleared) {
   }
   EXPECT_GT(descents, 0);  // it does come down from above
 }
+
+TEST(Pocket, TheSimulationRemovesThePocket) {
+  // The 40 mm circle 2 mm deep with a 10 mm tool (a circle has no corners' cusps): the
+  // tri-dexel simulation of the whole program removes pi 20^2 2 mm^3. (Its tool's flutes
+  // reach the pocket's depth without a flute length: 1 mm, the slot's default, left half.)
+  const Job job = JobDocument::parse(pocket_job("boundary = \"CIRC\"\ndepth = 2.0\n"
+                                                "max_engagement = 50.0\n"),
+                                     "circle.toml")
+                      .build({parse_override("simulation.resolution=0.25"),
+                              parse_override("simulation.steps_per_rev=16")});
+  const PlannedPocket p = plan_pocket(job);
+  const JobSimulation sim = simulate_job(job, p.path, 0, p.path.duration_s());
+  const double expected = kPi * 400 * 2;  // 2513.3 mm^3
+  // 1 % (the issue's): 0.25 mm dexels along the 126 mm wall (measured 0.01 %).
+  EXPECT_NEAR(sim.result.removed_mm3, expected, 0.01 * expected);
+}
