@@ -100,10 +100,11 @@ TEST(OptimizeFeed, HoldsTheTargetOnTheWagihPrograms) {
 // minute).
 TEST(OptimizeFeed, DescentsIntoTheStockNeverSpeedUp) {
   for (const char* entry : {"helix", "ramp", "plunge"}) {
-    std::vector<Override> ov = {parse_override(std::string("path.entry=") + entry)};
+    // A slot 10 mm long: the descents are the entry's, the rest of the slot only takes time.
+    std::vector<Override> ov = {parse_override(std::string("path.entry=") + entry),
+                                parse_override("slot.length=10")};
     if (std::string(entry) == "ramp") {  // the kernel's engagement down a long ramp is slow
       ov.push_back(parse_override("slot.depth=1"));
-      ov.push_back(parse_override("slot.length=10"));
     }
     const Job job =
         parse_job(read_text_file(test::example("pivkin2025/trochoidal.toml")), "pivkin.toml", ov);
