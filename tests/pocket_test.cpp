@@ -390,23 +390,30 @@ TEST(Pocket, RestDiscsMakeTheLargerToolsSweep) {
   EXPECT_THROW((void)rest_disc_centres(rest, -2.0, R, spacing), InputError);
 }
 
+namespace {
+
+// A 6 mm tool's pocket job (`keys`, target 50 degrees) after `program`, a 20 mm tool's
+// (written to a scratch folder `name`), its rest stock attached.
+Job rest_job(const std::string& name, const std::string& keys, const std::string& program) {
+  const auto file = test::scratch_dir(name) / "earlier.ngc";
+  std::ofstream(file) << program;
+  Job job = JobDocument::parse(pocket_job(keys + "max_engagement = 50.0\nrest_of = \"" +
+                                          file.string() + "\"\nrest_tool_diameter = 20\n"),
+                               name + ".toml")
+                .build({parse_override("tool.diameter=6")});
+  attach_rest_stock(job);
+  return job;
+}
+
+}  // namespace
+
 TEST(Pocket, RestStockCountsOnlyBelowTheEarlierCut) {
   // The 40 mm circle, 2 mm deep in two levels, after a 20 mm tool's slot 1 mm deep (10 mm
   // long across the centre): the first level starts where the slot is, the second has nothing
   // cleared (its plan its own). The kernel's removal counts the slot's region from 1 mm down
   // only: pi 20^2 2 - (200 + 100 pi) 1 mm^3 in all.
-  const auto dir = test::scratch_dir("rest-levels");
-  {
-    std::ofstream(dir / "slot.ngc") << "G21 G90\nG0 X445 Y20 Z5\nG1 Z-1 F100\nG1 X455 F500\n"
-                                       "G0 Z5\nM2\n";
-  }
-  Job job =
-      JobDocument::parse(pocket_job("boundary = \"CIRC\"\ndepth = 2.0\nmax_step_down = 1.0\n"
-                                    "max_engagement = 50.0\nrest_of = \"" +
-                                    (dir / "slot.ngc").string() + "\"\nrest_tool_diameter = 20\n"),
-                         "rest.toml")
-          .build({parse_override("tool.diameter=6")});
-  attach_rest_stock(job);
+  const Job job = rest_job("rest-levels", "boundary = \"CIRC\"\ndepth = 2.0\nmax_step_down = 1.0\n",
+                           "G21 G90\nG0 X445 Y20 Z5\nG1 Z-1 F100\nG1 X455 F500\nG0 Z5\nM2\n");
   const PlannedPocket p = plan_pocket(job);
   EXPECT_EQ(p.info.rest_cleared_mm2, 0.0);  // the deepest level's
   const EngagementSeries e = compute_engagement(p.path, job);
@@ -428,18 +435,9 @@ TEST(Pocket, RestMachiningComesDownOnlyWhereTheDiscIsCleared) {
   // pillar of radius 2 at its centre, the stock nearest the rectangle's widest place: a 6 mm
   // tool's circle about that centre lies in the cleared ring, its disc does not. No rapid may
   // go below the top within 2 + 3 mm of the pillar's axis (it came down on it before).
-  const auto dir = test::scratch_dir("rest-pillar");
-  {
-    std::ofstream(dir / "ring.ngc") << "G21 G90\nG0 X42 Y20 Z5\nG1 Z-2 F100\n"
-                                       "G3 X42 Y20 I-12 J0 F500\nG0 Z5\nM2\n";
-  }
-  Job job =
-      JobDocument::parse(pocket_job("boundary = \"RECT\"\ndepth = 2.0\n"
-                                    "max_engagement = 50.0\nrest_of = \"" +
-                                    (dir / "ring.ngc").string() + "\"\nrest_tool_diameter = 20\n"),
-                         "rest.toml")
-          .build({parse_override("tool.diameter=6")});
-  attach_rest_stock(job);
+  const Job job = rest_job("rest-pillar", "boundary = \"RECT\"\ndepth = 2.0\n",
+                           "G21 G90\nG0 X42 Y20 Z5\nG1 Z-2 F100\nG3 X42 Y20 I-12 J0 F500\n"
+                           "G0 Z5\nM2\n");
   const PlannedPocket p = plan_pocket(job);
   int descents = 0;
   for (const Segment& g : p.path.segments()) {
