@@ -322,6 +322,14 @@ TEST(Pocket, RestMachiningRefusesWhatItCannotUse) {
   { std::ofstream(dir / "above.ngc") << "G21 G90\nG0 X30 Y20 Z5\nG1 X40 F500\nM2\n"; }
   m = message("rest_of = \"" + (dir / "above.ngc").string() + "\"\nrest_tool_diameter = 20\n");
   EXPECT_TRUE(has(m, "removed nothing")) << m;
+  // A program of two tools.
+  {
+    std::ofstream(dir / "two.ngc") << "G21 G90\nT1 M6\nG0 X30 Y20 Z5\nG1 Z-2 F100\nG1 X40 F500\n"
+                                      "G0 Z5\nT2 M6\nG0 X20 Y20\nG1 Z-2\nG1 X25\nM2\n";
+  }
+  m = message("rest_of = \"" + (dir / "two.ngc").string() + "\"\nrest_tool_diameter = 20\n");
+  EXPECT_TRUE(has(m, "changes tools (T1 at")) << m;
+  EXPECT_TRUE(has(m, "two.ngc:7")) << m;
   // rest_tool_diameter without rest_of.
   m = message("rest_tool_diameter = 20\n");
   EXPECT_TRUE(has(m, "give [pocket] rest_of too")) << m;

@@ -166,6 +166,9 @@ struct GcodeProgramInfo {
   double extra_only_time_s = 0;
   /// The job keys a trochomill program records in its header, `section.key = value` (TOML).
   std::vector<std::pair<std::string, std::string>> header_keys;
+  /// The tools its tool changes (M6) loaded, in order: T numbers, each with the program line
+  /// ("file:line") of its M6.
+  std::vector<std::pair<int, std::string>> tool_changes;
 };
 
 /// Where a segment of a read program comes from: the file (an index into

@@ -411,6 +411,11 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
       case 60:
         comp_.refuse(column, "M6 (a tool change)");
         tool_loaded_ = tool_selected_;
+        if (prog_.info.tool_changes.size() < 10000) {
+          prog_.info.tool_changes.emplace_back(
+              static_cast<int>(tool_loaded_),
+              fmt::format("{}:{}", sources_[cur_.source].name, cur_.line_no));
+        }
         break;
       case 70:
       case 80:

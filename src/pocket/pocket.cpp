@@ -976,6 +976,17 @@ RestStock read_rest(const Job& job) {
   } catch (const InputError& e) {
     throw InputError(fmt::format("[pocket] rest_of = \"{}\": {}", name, e.what()));
   }
+  // One earlier tool: moves of several, each taken as the one of rest_tool_diameter, would
+  // count a smaller tool's as the larger's sweep (stock left in the model as gone).
+  for (const auto& [t, at] : prog.info.tool_changes) {
+    if (t != prog.info.tool_changes.front().first) {
+      throw InputError(fmt::format(
+          "[pocket] rest_of = \"{}\": the program changes tools (T{} at {}, T{} at {}): rest "
+          "machining follows one earlier tool; give a program of one tool",
+          name, prog.info.tool_changes.front().first, prog.info.tool_changes.front().second, t,
+          at));
+    }
+  }
   RestStock rest;
   rest.name = name;
   double d = pk.rest_tool_diameter_mm;
