@@ -288,5 +288,10 @@ using ChipJudge = std::function<double(const Job& job, const ToolPath& path, dou
 /// Effective feed rate (mm/min) and spindle speed (rpm) of the job's cutting conditions.
 [[nodiscard]] double feed_rate_mm_per_min(const Job& job);
 [[nodiscard]] double spindle_speed_rpm(const Job& job);
+/// The feed of the moves through cleared area that cut nothing or only graze the stock (a
+/// curved slot's links between levels, a pocket's links that stay down and its passes' runs
+/// through cleared area), mm/min: machine.air_feed, else max_feed, else the rapid rate (the
+/// control holds a feed move to its most). Feed moves, because a rapid need not run straight.
+[[nodiscard]] double link_feed_mm_per_min(const Machine& machine);
 
 }  // namespace trochomill

@@ -478,11 +478,8 @@ PlannedPath plan_along_curve(const Job& job, const Geometry& g0, bool mirror,
   // Between levels the tool stays down where it can (every entry but the outside one starts
   // within the orbit of the centreline's start): up to the next level's feeding height, the
   // clearance above the floor just cut, and back along the centreline, all in the slot cut
-  // to that depth, as feed moves (a rapid need not run straight) at the air feed
-  // (machine.air_feed, else max_feed, else the rapid rate: the control holds it to its most).
-  const double link_feed = job.machine.air_feed_mm_per_min > 0   ? job.machine.air_feed_mm_per_min
-                           : job.machine.max_feed_mm_per_min > 0 ? job.machine.max_feed_mm_per_min
-                                                                 : g.rapid;
+  // to that depth, as feed moves at the link feed (link_feed_mm_per_min).
+  const double link_feed = link_feed_mm_per_min(job.machine);
   const bool stay_down = job.path.entry != EntryType::outside;
   int cycles = 0;
   double steady_length = 0;

@@ -401,6 +401,11 @@ PlannedPath plan_linear(const Job& job, const Geometry& g, bool mirror) {
 
 double feed_rate_mm_per_min(const Job& job) { return job.cutting.feed_rate_mm_per_min; }
 double spindle_speed_rpm(const Job& job) { return job.cutting.spindle_speed_rpm; }
+double link_feed_mm_per_min(const Machine& m) {
+  return m.air_feed_mm_per_min > 0   ? m.air_feed_mm_per_min
+         : m.max_feed_mm_per_min > 0 ? m.max_feed_mm_per_min
+                                     : m.rapid_rate_mm_per_min;
+}
 
 double estimate_plan_memory(const Job& job) {
   const SlotGeometry g = slot_geometry(job);

@@ -1147,12 +1147,8 @@ PlannedPocket plan_pocket(const Job& job) {
         job.tool.diameter_mm, stl, pk.boundary));
   }
   // Links that stay down, and the passes' runs through cleared area, only graze the stock
-  // (Settings::graze_deg): fed at the air feed, as a curved slot's (machine.air_feed, else
-  // max_feed, else the rapid rate: the control holds it to its most; feed moves because a
-  // rapid need not run straight).
-  const double link_feed = job.machine.air_feed_mm_per_min > 0   ? job.machine.air_feed_mm_per_min
-                           : job.machine.max_feed_mm_per_min > 0 ? job.machine.max_feed_mm_per_min
-                                                                 : rapid;
+  // (Settings::graze_deg): fed at the link feed, as a curved slot's.
+  const double link_feed = link_feed_mm_per_min(job.machine);
   Settings s;
   s.R = R;
   s.step = pocket_step_mm(R);
