@@ -119,6 +119,9 @@ class RemovedRegion {
 [[nodiscard]] std::vector<Vec2> rest_disc_centres(const RestStock& rest, double z_mm,
                                                   double radius_mm, double spacing_mm);
 
+/// Heights within this (mm) are one level: the kernel's 2.5D levels, an earlier program's.
+inline constexpr double kLevelTolMm = 1e-4;
+
 /// The spacing of rest_disc_centres' outline discs for a job (mm): a tooth's advance, as the
 /// kernel's samples (0.005 mm to R / 10).
 [[nodiscard]] inline double rest_spacing_mm(const Job& job) {

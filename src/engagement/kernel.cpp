@@ -261,7 +261,7 @@ class Removed {
   std::size_t merge(const Removed& o, std::size_t from) {
     for (std::size_t k = from; k < o.discs_.size(); ++k) {
       const Disc& d = o.discs_[k];
-      insert(d.x, d.y, outside(d.x, d.y));
+      add(d.x, d.y);
     }
     return o.discs_.size();
   }
@@ -278,6 +278,9 @@ class Removed {
     pin_valid_ = true;
     cache_valid_ = false;
   }
+
+  // Adds the disc about (cx, cy).
+  void add(double cx, double cy) { insert(cx, cy, outside(cx, cy)); }
 
   // Inserts a disc whose circle's part outside R (before it) is `exposed`.
   void insert(double cx, double cy, ArcSet exposed) {
@@ -1078,7 +1081,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   // the discs of the levels below it when it is entered (enter). One level (a slot, its entry
   // helix) is one region, as before levels.
   // docs/models.md section 7.
-  constexpr double kLevelTol = 1e-4;  // mm: heights within it are one level
+  constexpr double kLevelTol = kLevelTolMm;
   struct Level {
     double z_mm;  // NaN until its first horizontal cutting position
     std::unique_ptr<Removed> removed;
@@ -1160,8 +1163,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
         y0 = std::min(y0, p.y()), y1 = std::max(y1, p.y());
       }
       rest_regions[k] = std::make_unique<Removed>(R, x0, y0, x1, y1);
-      for (const Vec2& p : c)
-        rest_regions[k]->insert(p.x(), p.y(), rest_regions[k]->outside(p.x(), p.y()));
+      for (const Vec2& p : c) rest_regions[k]->add(p.x(), p.y());
     }
     return rest_regions[k].get();
   };
@@ -1348,12 +1350,11 @@ std::vector<Vec2> rest_disc_centres(const RestStock& rest, double z_mm, double r
         rest.name, 2 * rest.tool_radius_mm, 2 * radius_mm));
   }
   if (!(spacing_mm > 0)) throw Error("rest_disc_centres: the spacing must be > 0 mm");
-  constexpr double kSame = 1e-4;  // mm: heights within it are one level (as compute_engagement)
   std::vector<const Contour*> chains;
   constexpr double kBig = std::numeric_limits<double>::infinity();
-  double x0 = kBig, y0 = kBig, x1 = -kBig, y1 = -kBig;
+  double x0 = kBig, y0 = kBig, x1 = -kBig, y1 = -kBig, pad = 0;
   for (const RestStock::Level& l : rest.levels) {
-    if (l.z_mm > z_mm + kSame) continue;
+    if (l.z_mm > z_mm + kLevelTolMm) continue;
     for (const Contour& c : l.chains) {
       chains.push_back(&c);
       for (const ContourPiece& p : c.pieces) {
@@ -1361,13 +1362,13 @@ std::vector<Vec2> rest_disc_centres(const RestStock& rest, double z_mm, double r
           x0 = std::min(x0, q.x()), x1 = std::max(x1, q.x());
           y0 = std::min(y0, q.y()), y1 = std::max(y1, q.y());
         }
+        if (p.is_arc()) pad = std::max(pad, p.radius_mm());  // an arc bulges within its radius
       }
     }
   }
   std::vector<Vec2> out;
   if (chains.empty()) return out;
-  // Points along the chains at most `step` apart (arcs bulge within their radius of the ends:
-  // the box is grown by the largest).
+  // Points along the chains at most `step` apart.
   auto along = [&](double step, auto&& f) {
     for (const Contour* c : chains) {
       for (const ContourPiece& p : c->pieces) {
@@ -1386,15 +1387,9 @@ std::vector<Vec2> rest_disc_centres(const RestStock& rest, double z_mm, double r
   // (their scallops step^2 / 8 grow: 0.01 um at 5 mm), in this kernel's removed region; its
   // outline is their exposed arcs.
   const double fine = std::min(spacing_mm, 0.1 * grow);
-  double pad = 0;
-  for (const Contour* c : chains) {
-    for (const ContourPiece& p : c->pieces) {
-      if (p.is_arc()) pad = std::max(pad, p.radius_mm());
-    }
-  }
   const double bx0 = x0 - pad, by0 = y0 - pad, bx1 = x1 + pad, by1 = y1 + pad;
   Removed within(grow, bx0, by0, bx1, by1);
-  along(fine, [&](const Vec2& p) { within.insert(p.x(), p.y(), within.outside(p.x(), p.y())); });
+  along(fine, [&](const Vec2& p) { within.add(p.x(), p.y()); });
   within.for_exposed([&](double cx, double cy, const AngleArc& a) {
     const int n = std::max(1, static_cast<int>(std::ceil(a.sweep_rad() * grow / spacing_mm)));
     for (int k = 0; k <= n; ++k) {
@@ -1432,9 +1427,7 @@ void RemovedRegion::focus(const Vec2& c, double slack_mm) const {
   impl_->removed.pin(c.x(), c.y(), slack_mm);
 }
 
-void RemovedRegion::cut(const Vec2& c) {
-  impl_->removed.insert(c.x(), c.y(), impl_->removed.outside(c.x(), c.y()));
-}
+void RemovedRegion::cut(const Vec2& c) { impl_->removed.add(c.x(), c.y()); }
 
 bool RemovedRegion::contains(const Vec2& p) const { return impl_->removed.covers(p.x(), p.y()); }
 

@@ -1017,24 +1017,24 @@ RestStock read_rest(const Job& job) {
   }
   rest.tool_radius_mm = 0.5 * d;
   const double top = stock_top_mm(job, nullptr);
-  constexpr double kSame = 1e-4;  // mm: heights within it are one level (the kernel's)
   const Segment* prev = nullptr;
   for (const Segment& g : prog.path.segments()) {
     const Vec3 a = g.start(), b = g.end();
-    const bool flat = std::abs(a.z() - b.z()) <= kSame && g.is_flat_xy() && a.z() < top - kSame &&
-                      g.length_mm() > 0;
+    const bool flat = std::abs(a.z() - b.z()) <= kLevelTolMm && g.is_flat_xy() &&
+                      a.z() < top - kLevelTolMm && g.length_mm() > 0;
     if (!flat) {
       prev = nullptr;
       continue;
     }
-    auto level = std::find_if(rest.levels.begin(), rest.levels.end(),
-                              [&](const auto& l) { return std::abs(l.z_mm - a.z()) <= kSame; });
+    auto level = std::find_if(rest.levels.begin(), rest.levels.end(), [&](const auto& l) {
+      return std::abs(l.z_mm - a.z()) <= kLevelTolMm;
+    });
     if (level == rest.levels.end()) {
       rest.levels.push_back({a.z(), {}});
       level = rest.levels.end() - 1;
     }
     const bool joins = prev != nullptr && !level->chains.empty() &&
-                       std::abs(prev->end().z() - a.z()) <= kSame &&
+                       std::abs(prev->end().z() - a.z()) <= kLevelTolMm &&
                        (level->chains.back().pieces.back().end - Vec2(a.x(), a.y())).norm() <= 1e-9;
     if (!joins) level->chains.emplace_back();
     Contour& chain = level->chains.back();

@@ -1102,30 +1102,26 @@ MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, 
   // The region the tool visits up to the window's end: the path's box grown by the radius.
   const double R = job.tool.radius_mm() + job.tool.runout_radial_mm;
   double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
-  const double dt = std::max(1e-3, to_s / 20000.0);
-  std::vector<double> times;
-  for (double t = 0; t < to_s; t += dt) times.push_back(t);
-  times.push_back(to_s);
-  const PathSamples ps = sample_at_times(path, times);
-  for (std::size_t n = 0; n < ps.size(); ++n) {
-    const double p[3] = {ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
-  }
-  if (const RestStock* rest = job.pocket.rest.get(); rest && !rest->path.empty()) {
-    // Rest machining: the earlier program's tool visits first (its reach beyond ours added).
-    const double grow = std::max(0.0, rest->tool_radius_mm - R);
-    const double T = rest->path.duration_s(), dr = std::max(1e-3, T / 20000.0);
-    std::vector<double> at;
-    for (double t = 0; t < T; t += dr) at.push_back(t);
-    at.push_back(T);
-    const PathSamples rs = sample_at_times(rest->path, at);
-    for (std::size_t n = 0; n < rs.size(); ++n) {
-      const double p[3] = {rs.x_mm[n], rs.y_mm[n], rs.z_mm[n]};
+  // The box of a path's positions up to `until` s (20,000 samples, at least 1 ms apart), its XY
+  // grown by `grow` mm.
+  auto visit = [&](const ToolPath& p, double until, double grow) {
+    const double dt = std::max(1e-3, until / 20000.0);
+    std::vector<double> times;
+    for (double t = 0; t < until; t += dt) times.push_back(t);
+    times.push_back(until);
+    const PathSamples ps = sample_at_times(p, times);
+    for (std::size_t n = 0; n < ps.size(); ++n) {
+      const double q[3] = {ps.x_mm[n], ps.y_mm[n], ps.z_mm[n]};
       for (int k = 0; k < 3; ++k) {
         const double g = k < 2 ? grow : 0.0;
-        lo[k] = std::min(lo[k], p[k] - g), hi[k] = std::max(hi[k], p[k] + g);
+        lo[k] = std::min(lo[k], q[k] - g), hi[k] = std::max(hi[k], q[k] + g);
       }
     }
+  };
+  visit(path, to_s, 0.0);
+  if (const RestStock* rest = job.pocket.rest.get(); rest && !rest->path.empty()) {
+    // Rest machining: the earlier program's tool visits first (its reach beyond ours added).
+    visit(rest->path, rest->path.duration_s(), std::max(0.0, rest->tool_radius_mm - R));
   }
   auto extent = [&](int k, double grow_lo, double grow_hi) {
     const double a = std::max(box.lo[static_cast<std::size_t>(k)], lo[k] - grow_lo);
