@@ -429,7 +429,9 @@ std::vector<Key> build_schema() {
                      fp.is_absolute() ? fp : std::filesystem::path(r.source()).parent_path() / fp;
                }
              }),
-      number("pocket", "rest_tool_diameter", "mm", Range{1e-3, kMaxLengthMm},
+      // At most 1 m: the earlier tool's sweep is a grid of discs of this job's radius over the
+      // region within the difference of the radii of its moves (1 m: 7 s on a test pocket).
+      number("pocket", "rest_tool_diameter", "mm", Range{1e-3, 1000},
              FIELD(pocket.rest_tool_diameter_mm),
              "the diameter of rest_of's tool, a flat end mill at least as wide as this job's "
              "(0: the program header's tool.diameter, as trochomill writes it)"),

@@ -1009,6 +1009,12 @@ RestStock read_rest(const Job& job) {
         "trochomill header naming it (tool.diameter)",
         name));
   }
+  if (d > 1000) {  // as [pocket] rest_tool_diameter allows
+    throw InputError(fmt::format(
+        "[pocket] rest_of = \"{}\": its tool diameter {:g} mm is above 1000 mm; give [pocket] "
+        "rest_tool_diameter",
+        name, d));
+  }
   if (d < job.tool.diameter_mm * (1 - 1e-12)) {
     throw InputError(fmt::format(
         "[pocket] rest_tool_diameter: rest_of's tool (D = {:g} mm) is smaller than this job's "
