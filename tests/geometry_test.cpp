@@ -392,6 +392,55 @@ TEST(Geometry, SvgPathCommandsDrawWhatTheyDescribe) {
   EXPECT_NEAR(contour_of(d, "path #flags-spaced").contour.length_mm(), 10 * kPi, 1e-9);
 }
 
+// A cubic whose derivative vanishes inside (control points (0,0) (10,10) (0,10) (10,0): a cusp
+// at t = 1/2, the point (5, 7.5)) folds back there; no biarc turns back, so before the reader
+// split curves at their cusps the fit shrank its pieces towards the cusp without end (a fuzzed
+// drawing hung for minutes). Read, it is a corner at the cusp and the curve elsewhere: the
+// region it closes with its chord has the area Green's theorem gives the Bezier itself, within
+// the length x the arc tolerance (each piece lies within it of the curve).
+TEST(Geometry, SvgCuspIsACorner) {
+  const auto file = svg_file("cusp.svg", std::string(kSvgHead) + R"svg(
+  <path id="cusp" d="M 0 0 C 10 10 0 10 10 0 Z"/>
+</svg>)svg");
+  const Drawing d = read_svg(file, DrawingOptions{});
+  const double tol = DrawingOptions{}.arc_tolerance_mm;
+  const Contour& cusp = contour_of(d, "path #cusp").contour;
+  // The Bezier B(t) in mm (y mirrored about 100 mm) and its Green integral, 1/2 (x y' - y x'),
+  // by Simpson's rule on 20,000 intervals (a degree-5 integrand: exact to rounding).
+  const auto B = [](double t) {
+    const double s = 1 - t;
+    return Vec2(3 * s * s * t * 10 + t * t * t * 10,
+                100 - (3 * s * s * t * 10 + 3 * s * t * t * 10));
+  };
+  const auto dB = [](double t) {  // 3 ((1-t)^2 a + 2 t (1-t) b + t^2 c), a b c the legs
+    const double s = 1 - t;
+    return Vec2(3 * (s * s * 10 - 2 * t * s * 10 + t * t * 10), -3 * (s * s * 10 - t * t * 10));
+  };
+  const int n = 20000;
+  const double h = 1.0 / n;
+  double area = 0;
+  for (int i = 0; i <= n; ++i) {
+    const Vec2 p = B(i * h), dp = dB(i * h);
+    const double w = (i == 0 || i == n) ? 1 : (i % 2 ? 4 : 2);
+    area += w * 0.5 * (p.x() * dp.y() - p.y() * dp.x());
+  }
+  area *= h / 3;
+  // The chord back from (10, 100) to (0, 100): 1/2 (x y' - y x') = 1/2 (100 * 10).
+  area += 0.5 * 100 * 10;
+  EXPECT_NEAR(cusp.signed_area_mm2(), area, cusp.length_mm() * tol);
+  // A piece ends on the cusp itself (the split point is exact to rounding).
+  bool corner = false;
+  for (const ContourPiece& p : cusp.pieces) corner |= (p.end - Vec2(5, 92.5)).norm() < 1e-9;
+  EXPECT_TRUE(corner);
+  // Every piece's end lies on the curve (within the tolerance).
+  for (const ContourPiece& p : cusp.pieces) {
+    if ((p.end - Vec2(0, 100)).norm() < 1e-9) continue;
+    double best = 1e9;
+    for (int i = 0; i <= 100000; ++i) best = std::min(best, (B(i * 1e-5) - p.end).norm());
+    EXPECT_LT(best, tol) << p.end.transpose();
+  }
+}
+
 TEST(Geometry, SvgTransformsAndViewportsGiveMillimetres) {
   // A viewBox of 10 x 10 in one inch: a user unit is 2.54 mm.
   const Drawing inch = read_svg(svg_file("inch.svg", R"svg(<svg xmlns="http://www.w3.org/2000/svg"

@@ -171,6 +171,7 @@ void fit_span_greedy(const PlanarCurve& c, double a, double b, double tol, std::
     }
     while (bracketed && hi - lo > (lo - ta) / 16) {
       const double m = 0.5 * (lo + hi);
+      if (!(m > lo && m < hi)) break;  // lo and hi adjacent doubles: a piece near u's precision
       if (fits(ta, m, t1, t2)) {
         lo = m, a1 = t1, a2 = t2;
       } else {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
 
 #include "geometry/drawing_limits.hpp"
 #include "geometry/svg_syntax.hpp"
@@ -21,6 +22,38 @@ constexpr std::size_t kMaxPieces = 2'000'000;
 bool far(const Vec2& p) { return !(std::abs(p.x()) <= kFarMm && std::abs(p.y()) <= kFarMm); }
 double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 Vec3 lift(const Vec2& p) { return {p.x(), p.y(), 0}; }
+
+// The parameters in (0, 1), increasing, where the cubic Bezier p's derivative vanishes (to a
+// millionth of its control polygon's length: a turn that tight is a corner at the tolerances
+// drawings are read at). d(t) / 3 = a + 2 (b - a) t + (a - 2 b + c) t^2 with a, b, c the
+// polygon's legs; a zero of d is a zero of both components, so it is among the roots of each.
+std::vector<double> cusps(const std::array<Vec2, 4>& p) {
+  const Vec2 a = p[1] - p[0], b = p[2] - p[1], c = p[3] - p[2];
+  const double size = a.norm() + b.norm() + c.norm();
+  const auto d = [&](double t) { return a + 2 * t * (b - a) + t * t * (a - 2 * b + c); };
+  std::vector<double> roots;
+  for (int k = 0; k < 2; ++k) {
+    const double A = a[k] - 2 * b[k] + c[k], B = 2 * (b[k] - a[k]), C = a[k];
+    if (std::abs(A) <= 1e-12 * size) {
+      if (std::abs(B) > 1e-12 * size) roots.push_back(-C / B);
+      continue;
+    }
+    const double disc = B * B - 4 * A * C;
+    if (disc < 0) continue;
+    // Without cancellation: q = -(B + sign(B) sqrt(disc)) / 2, roots q / A and C / q.
+    const double q = -0.5 * (B + std::copysign(std::sqrt(disc), B));
+    roots.push_back(q / A);
+    if (q != 0) roots.push_back(C / q);
+  }
+  std::vector<double> out;
+  for (const double t : roots) {
+    if (t > 1e-9 && t < 1 - 1e-9 && d(t).norm() <= 1e-6 * size) out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end(), [](double x, double y) { return y - x < 1e-9; }),
+            out.end());
+  return out;
+}
 
 // A cubic Bézier (mm). Where its derivative vanishes (a control point on its end) the
 // tangent is the chord over a millionth of the parameter either side.
@@ -65,7 +98,22 @@ void PieceSink::cubic(const Vec2& p0, const Vec2& p1, const Vec2& p2, const Vec2
   const std::array<Vec2, 4> p{m_(p0), m_(p1), m_(p2), m_(p3)};
   for (const Vec2& q : p) check(q);
   if (p[0] == p[1] && p[1] == p[2] && p[2] == p[3]) return;
-  fit(Bezier(p), 0, 1, 2);
+  // A cusp (the derivative vanishing inside, as where a curve folds back on itself) is a
+  // corner: the curve is split there (de Casteljau) and each part fitted on its own, its
+  // tangent at the cusp the one-sided one of its own end (Bezier::unit_tangent).
+  std::array<Vec2, 4> rest = p;
+  double t0 = 0;
+  for (const double t : cusps(p)) {
+    const double u = (t - t0) / (1 - t0);  // t in the part still to fit
+    const Vec2 q01 = rest[0] + u * (rest[1] - rest[0]), q12 = rest[1] + u * (rest[2] - rest[1]),
+               q23 = rest[2] + u * (rest[3] - rest[2]);
+    const Vec2 r0 = q01 + u * (q12 - q01), r1 = q12 + u * (q23 - q12);
+    const Vec2 m = r0 + u * (r1 - r0);
+    fit(Bezier({rest[0], q01, r0, m}), 0, 1, 2);
+    rest = {m, r1, q23, rest[3]};
+    t0 = t;
+  }
+  fit(Bezier(rest), 0, 1, 2);
 }
 void PieceSink::ellipse(const Vec2& c, const Vec2& a, const Vec2& b, double t0, double t1,
                         const Vec2& p0, const Vec2& p1) {
