@@ -472,3 +472,105 @@ TEST(Pocket, TheSimulationRemovesThePocket) {
   // 1 % (the issue's): 0.25 mm dexels along the 126 mm wall (measured 0.01 %).
   EXPECT_NEAR(sim.result.removed_mm3, expected, 0.01 * expected);
 }
+
+TEST(Pocket, AnOpenPocketIsEnteredFromBesideTheStock) {
+  // The 60 x 40 rectangle 2 mm deep, the [stock] box from x = 20 on: its left third is air.
+  // The tool comes down there (no helix), its disc clear of the box, and the clearing holds
+  // the target where it meets the box's edge (where the tool's circle leaves the edge from
+  // inside, the sliver between them joins the arc in the stock: the planner takes a band two
+  // teeth's advances wide beyond the edge as stock).
+  const Job job =
+      JobDocument::parse(pocket_job("boundary = \"RECT\"\ndepth = 2.0\n"
+                                    "max_engagement = 50.0\n"),
+                         "open.toml")
+          .build({parse_override("stock.min=[20, -5, -3]"), parse_override("stock.max=[80, 45, 0]"),
+                  parse_override("simulation.resolution=0.25"),
+                  parse_override("simulation.steps_per_rev=16")});
+  const PlannedPocket p = plan_pocket(job);
+  EXPECT_EQ(p.info.open_entries, 1);
+  EXPECT_EQ(p.info.helix_entries, 0);
+  // The air the clearing covers: the tool centre's region (R + 0.008 mm in from the walls, its
+  // convex corners rounded by R / 4) grown by R, left of the edge less the band (0.1 mm): 19.892
+  // x 39.984 mm less two corners' cusps of radius 6.258; counted in the planner's cells of
+  // 0.5 mm, of which those on the strip's outline (100 mm long: 25 mm^2, 3.2 %) fall either
+  // way (measured 764.5 mm^2).
+  const double air = 19.892 * 39.984 - 2 * (1 - kPi / 4) * std::pow(6.258, 2);
+  EXPECT_NEAR(p.info.open_mm2, air, 0.04 * air);
+  // The first descent below the top is in the air, the tool's disc clear of the box (the
+  // others go down where the tool passed at that level: the relinks).
+  const auto& segs = p.path.segments();
+  const auto first =
+      std::find_if(segs.begin(), segs.end(), [](const Segment& g) { return g.end().z() < 0; });
+  ASSERT_NE(first, segs.end());
+  EXPECT_LE(first->end().x(), 20 - 5 + 1e-9) << first->end().transpose();
+  for (const Segment& g : segs) {
+    // No helix: no arc that descends.
+    EXPECT_FALSE(g.kind() != Segment::Kind::line && g.end().z() != g.start().z())
+        << g.start().transpose();
+  }
+  const PocketProof proof = prove_pocket(job, p);
+  EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
+  EXPECT_GT(proof.clearing_max_engagement_deg, 40);
+  // The simulation removes the rectangle's part in the box, 2 mm deep, less the two corners'
+  // cusps of radius R + 0.002 (the finishing pass's): 1 % (the issue's; 0.25 mm dexels).
+  const JobSimulation sim = simulate_job(job, p.path, 0, p.path.duration_s());
+  const double expected = 2 * (40 * 40 - 2 * (1 - kPi / 4) * 5.002 * 5.002);
+  EXPECT_NEAR(sim.result.removed_mm3, expected, 0.01 * expected);
+}
+
+TEST(Pocket, APreDrilledHoleIsTheEntry) {
+  // A hole at (45, 20) in the 60 x 40 rectangle, two levels: each level is entered by feeding
+  // straight down it (no helix) from the clearance above the top (then above the level
+  // above), and out to a flat circle about it.
+  const Job job = parse_job(pocket_job("boundary = \"RECT\"\ndepth = 4.0\nmax_step_down = 2.0\n"
+                                       "max_engagement = 50.0\nentry_holes = [[45, 20]]\n"),
+                            "hole.toml");
+  ASSERT_EQ(job.pocket.entry_holes_mm.size(), 1u);
+  const PlannedPocket p = plan_pocket(job);
+  EXPECT_EQ(p.info.hole_entries, 1);
+  EXPECT_EQ(p.info.helix_entries, 0);
+  // The first move below the top feeds down the hole; the deepest point of each level's
+  // descents there is the level.
+  const auto& segs = p.path.segments();
+  const auto first =
+      std::find_if(segs.begin(), segs.end(), [](const Segment& g) { return g.end().z() < 0; });
+  ASSERT_NE(first, segs.end());
+  EXPECT_EQ(first->motion(), Motion::feed);
+  EXPECT_EQ(first->start().head<2>(), Vec2(45, 20));
+  EXPECT_EQ(first->end(), Vec3(45, 20, -2));
+  std::vector<double> plunged_to;
+  for (const Segment& g : segs) {
+    EXPECT_FALSE(g.kind() != Segment::Kind::line && g.end().z() != g.start().z())
+        << g.start().transpose();
+    if (g.motion() == Motion::feed && g.end().z() < g.start().z() &&
+        g.end().head<2>() == Vec2(45, 20) && g.start().head<2>() == Vec2(45, 20)) {
+      if (plunged_to.empty() || plunged_to.back() != g.end().z()) plunged_to.push_back(g.end().z());
+    }
+  }
+  EXPECT_EQ(plunged_to, (std::vector<double>{-2, -4}));
+  // Out of a hole of the tool's width no move keeps within the target: the flat circle about
+  // it opens the way, as the helix's does, and the clearing covers the pocket (it gave up
+  // nothing; with the helix at the widest place 0.06 mm^2, an inside corner's last cell).
+  EXPECT_LE(p.info.left_for_finish_mm2, 0.5);
+  EXPECT_GT(p.info.passes, 100);
+  const PocketProof proof = prove_pocket(job, p);
+  EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
+  // Refused: a hole where the tool centre may not go (3 mm from the wall), a malformed list.
+  const auto message = [](const std::string& holes) {
+    return test::message_of([&] {
+      (void)plan_pocket(parse_job(pocket_job("boundary = \"RECT\"\ndepth = 4.0\n"
+                                             "max_engagement = 50.0\nentry_holes = " +
+                                             holes + "\n"),
+                                  "bad.toml"));
+    });
+  };
+  std::string m = message("[[45, 20], [3, 20]]");
+  EXPECT_TRUE(has(m,
+                  "[pocket] entry_holes: hole 2 at (3, 20) mm is where the tool centre may "
+                  "not go"))
+      << m;
+  m = message("[45, 20]");
+  EXPECT_TRUE(has(m, "[pocket] entry_holes: element 0 must be a point [x, y]")) << m;
+  m = message("[[45, 20, 1]]");
+  EXPECT_TRUE(has(m, "element 0 must be a point [x, y]")) << m;
+}

@@ -109,6 +109,10 @@ struct Pocket {
   /// The earlier program as read (attach_rest_stock, pocket.hpp), which the planner, the
   /// engagement kernel and the simulation take as removed; null until attached.
   std::shared_ptr<const RestStock> rest;
+  /// [pocket] entry_holes: pre-drilled holes (x, y in mm, at least the tool's diameter wide,
+  /// through the depth). A part of the pocket holding one is entered by feeding straight down
+  /// it (the first listed in the part), not by a helix.
+  std::vector<Vec2> entry_holes_mm;
   [[nodiscard]] bool defined() const noexcept { return boundary_contours != nullptr; }
 };
 

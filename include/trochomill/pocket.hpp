@@ -55,6 +55,13 @@ struct PocketInfo {
   /// removed (mm^2, on the planner's grid).
   double rest_tool_diameter_mm = 0;
   double rest_cleared_mm2 = 0;
+  /// How each part is entered at the deepest level: a helix, straight down a pre-drilled hole
+  /// ([pocket] entry_holes), or from above where nothing stands (beside a [stock] box the pocket
+  /// runs past, or what rest_of's program cleared).
+  int helix_entries = 0, hole_entries = 0, open_entries = 0;
+  /// The pocket runs past the [stock] box: the air beside it (mm^2 of the area the clearing
+  /// covers at the deepest level, on the planner's grid) counts as cleared.
+  double open_mm2 = 0;
   /// The path's entries: [first, last) segment index ranges (the helices and the finishing
   /// pass's lead-in), where the target does not hold.
   std::vector<std::pair<std::size_t, std::size_t>> entries;

@@ -435,6 +435,36 @@ std::vector<Key> build_schema() {
              FIELD(pocket.rest_tool_diameter_mm),
              "the diameter of rest_of's tool, a flat end mill at least as wide as this job's "
              "(0: the program header's tool.diameter, as trochomill writes it)"),
+      custom("pocket", "entry_holes", "array of [x, y]", "mm", "points the tool centre may reach",
+             "none",
+             "pre-drilled holes, each at least the tool's diameter and through the depth: a "
+             "part of the pocket holding one is entered by feeding straight down it (the first "
+             "listed in the part) instead of a helix",
+             [](JobReader& r, Job& job) {
+               const toml::node* n = r.find("pocket", "entry_holes");
+               if (n == nullptr) return;
+               const toml::array* arr = n->as_array();
+               if (arr == nullptr) {
+                 r.problem("pocket", "entry_holes",
+                           "expected an array of [x, y] points in mm, e.g. [[20, 15], [60, 30]]");
+                 return;
+               }
+               for (std::size_t i = 0; i < arr->size(); ++i) {
+                 const toml::array* xy = arr->get(i)->as_array();
+                 const bool ok = xy != nullptr && xy->size() == 2 && xy->get(0)->is_number() &&
+                                 xy->get(1)->is_number();
+                 const double x = ok ? xy->get(0)->value<double>().value_or(0) : 0;
+                 const double y = ok ? xy->get(1)->value<double>().value_or(0) : 0;
+                 if (!ok || !(std::abs(x) <= kMaxLengthMm && std::abs(y) <= kMaxLengthMm)) {
+                   r.problem("pocket", "entry_holes",
+                             fmt::format("element {} must be a point [x, y] of finite numbers "
+                                         "within +-{:g} mm, e.g. [[20, 15], [60, 30]]",
+                                         i, kMaxLengthMm));
+                   return;
+                 }
+                 job.pocket.entry_holes_mm.emplace_back(x, y);
+               }
+             }),
       custom("slot", "length", "number", "mm", "> 0", "required (none with along)",
              "slot length along +Y (a slot along a drawing's contour has the contour's length)",
              [](JobReader& r, Job& job) {

@@ -793,6 +793,63 @@ std::pair<Vec2, double> widest_point(const std::vector<Contour>& part, const Reg
   return {best, std::max(0.0, best_d)};
 }
 
+// The centres of discs of radius R clear of the [stock] box in plan, for a tool centre region
+// spanning lo..hi: the box grown by R (its corners rounded) is their outline, discs `spacing`
+// apart along it (their scallops spacing^2 / 8 R deep), and beyond it a grid of 0.9 R (a point
+// of the outline's band lies within R of an outline disc; one further out within 0.64 R of a
+// grid point, itself beyond). Empty without a [stock] box or where it covers the region and
+// the tool around it.
+std::vector<Vec2> outside_stock_discs(const Job& job, double R, double spacing, const Vec2& lo,
+                                      const Vec2& hi) {
+  std::vector<Vec2> out;
+  if (!job.stock_min_mm || !job.stock_max_mm) return out;
+  // The box grown by two spacings: where the tool's circle meets the box's edge from inside,
+  // the stock between them is a sliver microns thick, yet its arc is one with the rest of
+  // the tool's arc in the stock (the engagement jumps as the circle leaves the edge). The
+  // planner, checking a tooth's advance apart, must see that: it takes a band two advances
+  // wide beyond the edge as stock.
+  const double band = 2 * spacing;
+  const double x0 = (*job.stock_min_mm)[0] - band, y0 = (*job.stock_min_mm)[1] - band;
+  const double x1 = (*job.stock_max_mm)[0] + band, y1 = (*job.stock_max_mm)[1] + band;
+  if (lo.x() - R >= x0 && lo.y() - R >= y0 && hi.x() + R <= x1 && hi.y() + R <= y1) return out;
+  // Only discs that may meet a tool centred in lo..hi.
+  const auto near = [&](const Vec2& p) {
+    return p.x() > lo.x() - 2 * R && p.x() < hi.x() + 2 * R && p.y() > lo.y() - 2 * R &&
+           p.y() < hi.y() + 2 * R;
+  };
+  const auto edge = [&](const Vec2& a, const Vec2& b) {
+    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / spacing)));
+    for (int k = 0; k < n; ++k) {
+      const Vec2 p = a + (b - a) * (static_cast<double>(k) / n);
+      if (near(p)) out.push_back(p);
+    }
+  };
+  const int nq = std::max(2, static_cast<int>(std::ceil(0.5 * kPi * R / spacing)));
+  const auto corner = [&](const Vec2& c, double a0) {
+    for (int k = 0; k < nq; ++k) {
+      const Vec2 p = c + R * dir(a0 + 0.5 * kPi * k / nq);
+      if (near(p)) out.push_back(p);
+    }
+  };
+  // Counter-clockwise: below, the lower right corner, right, ...
+  edge(Vec2(x0, y0 - R), Vec2(x1, y0 - R));
+  corner(Vec2(x1, y0), -0.5 * kPi);
+  edge(Vec2(x1 + R, y0), Vec2(x1 + R, y1));
+  corner(Vec2(x1, y1), 0);
+  edge(Vec2(x1, y1 + R), Vec2(x0, y1 + R));
+  corner(Vec2(x0, y1), 0.5 * kPi);
+  edge(Vec2(x0 - R, y1), Vec2(x0 - R, y0));
+  corner(Vec2(x0, y0), kPi);
+  const double g = 0.9 * R;
+  for (double y = lo.y() - 2 * R + 0.5 * g; y < hi.y() + 2 * R; y += g) {
+    for (double x = lo.x() - 2 * R + 0.5 * g; x < hi.x() + 2 * R; x += g) {
+      const double dx = std::max({x0 - x, 0.0, x - x1}), dy = std::max({y0 - y, 0.0, y - y1});
+      if (dx * dx + dy * dy >= R * R) out.emplace_back(x, y);
+    }
+  }
+  return out;
+}
+
 // The clearing of one part, as planar moves (the helix's flat circle first).
 struct PartPlan {
   Vec2 helix_centre = Vec2::Zero();
@@ -800,6 +857,7 @@ struct PartPlan {
   // Rest machining: the part has no stock left (no moves), or is entered from above where
   // the earlier program cleared the tool's disc (at helix_centre, no helix).
   bool nothing = false, from_above = false;
+  bool from_hole = false;    // fed straight down a pre-drilled hole at helix_centre
   std::vector<Move2> moves;  // from the helix's end point
   int passes = 0, links_down = 0, lifts = 0;
   double clearing_length = 0;  // at the feed
@@ -807,14 +865,17 @@ struct PartPlan {
   double planned_max_deg = 0;
   double given_up_mm2 = 0;
   double rest_cleared_mm2 = 0;  // of the coverage, what the earlier program had removed
+  double open_mm2 = 0;          // of the coverage, the air beside the [stock] box
 };
 
 void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out);
 
 // `before`: the discs of what an earlier program removed at the level (rest_disc_centres), or
-// empty.
+// empty; `air`: those of the air beside a [stock] box the pocket runs past
+// (outside_stock_discs), or empty; `holes`: [pocket] entry_holes in the part.
 PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>& part,
-                   const std::vector<Vec2>& before) {
+                   const std::vector<Vec2>& before, const std::vector<Vec2>& air,
+                   const std::vector<Vec2>& holes) {
   Box3 box;
   for (const Contour& c : part) {
     for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
@@ -823,19 +884,22 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
   PartPlanner planner(s, part, lo, hi);
   PartPlan out;
   const auto [centre, room] = widest_point(part, planner.region());
-  std::optional<Vec2> above;  // rest machining: where to come down from above
-  if (!before.empty()) {
-    // The earlier program's removal: its discs (those that may meet a tool in the box).
-    const long uncovered = planner.coverage().remaining();
-    for (const Vec2& c : before) {
-      if (c.x() > lo.x() - s.R && c.x() < hi.x() + s.R && c.y() > lo.y() - s.R &&
-          c.y() < hi.y() + s.R) {
-        planner.cut(c);
+  std::optional<Vec2> above;  // where to come down from above
+  if (!before.empty() || !air.empty()) {
+    // What is not there: the discs of each that may meet a tool in the box.
+    const auto cut_all = [&](const std::vector<Vec2>& discs) {
+      const long uncovered = planner.coverage().remaining();
+      for (const Vec2& c : discs) {
+        if (c.x() > lo.x() - s.R && c.x() < hi.x() + s.R && c.y() > lo.y() - s.R &&
+            c.y() < hi.y() + s.R) {
+          planner.cut(c);
+        }
       }
-    }
-    const double cell = planner.coverage().cell_mm();
-    out.rest_cleared_mm2 =
-        static_cast<double>(uncovered - planner.coverage().remaining()) * cell * cell;
+      const double cell = planner.coverage().cell_mm();
+      return static_cast<double>(uncovered - planner.coverage().remaining()) * cell * cell;
+    };
+    out.open_mm2 = cut_all(air);
+    out.rest_cleared_mm2 = cut_all(before);
     if (planner.coverage().remaining() == 0) {
       out.nothing = true;
       return out;
@@ -862,31 +926,42 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
     plan_passes(s, planner, *above, out);
     return out;
   }
-  double rh = job.path.entry_radius_mm;
-  if (rh > 0 && rh > room) {
-    throw InputError(fmt::format(
-        "[path] entry_radius: the helix of radius {:g} mm does not fit in the pocket's widest "
-        "place at ({:.3f}, {:.3f}), where the tool centre has {:.4g} mm of room; give at most "
-        "that or 0 (automatic)",
-        rh, centre.x(), centre.y(), room));
+  // A pre-drilled hole in the part (the first listed) is the entry instead of the helix: fed
+  // straight down it, out to the same flat circle about it and round (a hole of the tool's
+  // width leaves no way out within the target: the circle opens it, as the helix's does).
+  Vec2 c = centre;
+  double room_c = room;
+  if (!holes.empty()) {
+    out.from_hole = true;
+    c = holes.front();
+    room_c = std::numeric_limits<double>::infinity();
+    for (const Contour& k : part) room_c = std::min(room_c, k.distance_mm(c));
   }
-  if (rh <= 0) rh = std::min(0.5 * s.R, 0.9 * room);
-  out.helix_centre = centre;
+  double rh = job.path.entry_radius_mm;
+  if (rh > 0 && rh > room_c) {
+    throw InputError(fmt::format(
+        "[path] entry_radius: the {} of radius {:g} mm does not fit {} at ({:.3f}, {:.3f}), "
+        "where the tool centre has {:.4g} mm of room; give at most that or 0 (automatic)",
+        out.from_hole ? "circle" : "helix", rh,
+        out.from_hole ? "about the entry hole" : "in the pocket's widest place", c.x(), c.y(),
+        room_c));
+  }
+  if (rh <= 0) rh = std::min(0.5 * s.R, 0.9 * room_c);
+  out.helix_centre = c;
   out.helix_radius = rh;
-  // The helix's flat circle at the level: counter-clockwise with the stock on the right.
+  // The flat circle at the level: counter-clockwise with the stock on the right.
   const double turn = s.sigma;  // +1 counter-clockwise
-  const Vec2 start = centre + Vec2(rh, 0);
+  const Vec2 start = c + Vec2(rh, 0);
   const int n_circle = std::max(8, static_cast<int>(std::ceil(kTwoPi * rh / s.step)));
+  if (out.from_hole) planner.cut(c);
   for (int k = 0; k <= n_circle; ++k) {
-    planner.cut(centre + rh * dir(turn * kTwoPi * k / n_circle));
+    planner.cut(c + rh * dir(turn * kTwoPi * k / n_circle));
   }
   planner.add_exact(start);
   if (rh > 0) {
-    const Vec2 half = centre - Vec2(rh, 0);
-    out.moves.push_back(
-        {Move2::arc_or_line, ContourPiece::arc(start, half, centre, turn > 0), true});
-    out.moves.push_back(
-        {Move2::arc_or_line, ContourPiece::arc(half, start, centre, turn > 0), true});
+    const Vec2 half = c - Vec2(rh, 0);
+    out.moves.push_back({Move2::arc_or_line, ContourPiece::arc(start, half, c, turn > 0), true});
+    out.moves.push_back({Move2::arc_or_line, ContourPiece::arc(half, start, c, turn > 0), true});
   }
   plan_passes(s, planner, start, out);
   return out;
@@ -1174,6 +1249,31 @@ PlannedPocket plan_pocket(const Job& job) {
   PocketInfo& info = out.info;
   info.target_engagement_deg = pk.max_engagement_deg;
   const auto parts = region_parts(centre_region);
+  // Pre-drilled holes: each where the tool centre may go, given to the part holding it.
+  std::vector<std::vector<Vec2>> holes_of(parts.size());
+  for (std::size_t i = 0; i < pk.entry_holes_mm.size(); ++i) {
+    const Vec2& h = pk.entry_holes_mm[i];
+    std::size_t j = 0;
+    while (j < parts.size() && !region_contains(parts[j], h)) ++j;
+    if (j == parts.size()) {
+      throw InputError(fmt::format(
+          "[pocket] entry_holes: hole {} at ({:g}, {:g}) mm is where the tool centre may not "
+          "go: outside the boundary, in an island, or within R + stock_to_leave + {:g} = "
+          "{:.4g} mm of a wall (the tool would cut the wall going down it)",
+          i + 1, h.x(), h.y(), keep - R - stl, keep));
+    }
+    holes_of[j].push_back(h);
+  }
+  // The air beside a [stock] box the pocket runs past.
+  std::vector<Vec2> air;
+  {
+    Box3 box;
+    for (const Contour& c : centre_region) {
+      for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
+    }
+    air = outside_stock_discs(job, R, rest_spacing_mm(job), Vec2(box.lo.x(), box.lo.y()),
+                              Vec2(box.hi.x(), box.hi.y()));
+  }
   const double depth = pk.depth_mm;
   const int levels = pocket_levels(pk);
   // Rest machining: what the earlier program removed at each level. Levels where its removed
@@ -1202,7 +1302,9 @@ PlannedPocket plan_pocket(const Job& job) {
     }
     plan_of[static_cast<std::size_t>(k - 1)] = plans.size();
     plans.emplace_back();
-    for (const auto& part : parts) plans.back().push_back(plan_part(job, s, part, before));
+    for (std::size_t j = 0; j < parts.size(); ++j) {
+      plans.back().push_back(plan_part(job, s, parts[j], before, air, holes_of[j]));
+    }
   }
   // The figures of a level: the deepest's plan (every level's without rest_of).
   for (const PartPlan& pp : plans.back()) {
@@ -1213,6 +1315,9 @@ PlannedPocket plan_pocket(const Job& job) {
     info.air_length_mm += pp.air_length;
     info.left_for_finish_mm2 += pp.given_up_mm2;
     info.rest_cleared_mm2 += pp.rest_cleared_mm2;
+    info.open_mm2 += pp.open_mm2;
+    if (pp.nothing) continue;
+    ++(pp.from_hole ? info.hole_entries : pp.from_above ? info.open_entries : info.helix_entries);
   }
   for (const auto& level : plans) {
     for (const PartPlan& pp : level) {
@@ -1287,19 +1392,24 @@ PlannedPocket plan_pocket(const Job& job) {
       if (pp.from_above) {
         // The earlier program cleared the tool's disc here down to this level: in from above.
         travel(start, z + clearance, z);
+      } else if (pp.from_hole) {
+        // Down the hole, then out to the circle.
+        travel(c, z_prev + clearance, z_prev + (k == 1 ? clearance : 0.0));
+        line_to(at(c, z), Motion::feed, entry_feed);
+        line_to(at(start, z), Motion::feed, entry_feed);
       } else {
         travel(start, z_prev + clearance, z_prev + (k == 1 ? clearance : 0.0));
       }
       // The helix down to z: whole turns at the pitch or less.
       const double drop = here().z() - z;
-      if (!pp.from_above && rh > 0) {
+      if (!pp.from_above && !pp.from_hole && rh > 0) {
         const int turns = std::max(1, static_cast<int>(std::ceil(drop / pitch - 1e-9)));
         for (int t = 0; t < turns; ++t) {
           const double za = here().z(), zb = za - drop / turns;
           path.append(Segment::arc_xy(c.x(), c.y(), rh, 0.0, s.sigma * kTwoPi, za, zb, Motion::feed,
                                       entry_feed));
         }
-      } else if (!pp.from_above) {
+      } else if (!pp.from_above && !pp.from_hole) {
         line_to(at(start, z), Motion::feed, entry_feed);
       }
       std::size_t entry_end = path.segments().size();

@@ -127,6 +127,16 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         "level it had cleared; the passes cut what it left\n",
         info.rest_tool_diameter_mm, info.rest_cleared_mm2);
   }
+  if (info.hole_entries > 0 || info.open_mm2 > 0) {
+    out += fmt::format(
+        "  entries a level: {} by helix, {} straight down a pre-drilled hole, {} from above "
+        "where nothing stands{}\n",
+        info.helix_entries, info.hole_entries, info.open_entries,
+        info.open_mm2 > 0 ? fmt::format(" (the pocket runs past the [stock] box: {:.1f} mm^2 "
+                                        "of its area at the deepest level is air)",
+                                        info.open_mm2)
+                          : "");
+  }
   out += fmt::format(
       "  engagement target {:.4g} degrees; the planner's largest at its points {:.4g} degrees\n",
       info.target_engagement_deg, info.planned_max_engagement_deg);

@@ -8,7 +8,8 @@ against the pocket's net area less the inside corners' cusps in closed form,
 at a cutting level closer to a wall or island than R + stock to leave (R for the finishing
 pass); and the engagement kernel's proof that `plan` prints: the clearing's largest
 engagement outside the entries at most the target + 2 %. Then rest machining: the rectangle
-by a 20 mm tool and by a 6 mm tool after it, the pair's cut area and the second's.
+by a 20 mm tool and by a 6 mm tool after it, the pair's cut area and the second's. Then the
+entries: a pocket open beside its stock box, a pre-drilled hole.
 Usage: peer.py TROCHOMILL WORK_DIR. Exit 77 (skip) without LinuxCNC."""
 import math
 import os
@@ -186,6 +187,59 @@ if len(cuts) == 2:
     # 2 %: the corners' 78 mm^2 against shapely's polygons (1e-3 mm along 40 mm of arcs).
     check(abs(left / corners - 1) < 0.02, "rest: the second cuts %.2f mm^2 the first left, "
           "against the cusps' difference %.2f mm^2" % (left, corners))
+
+# Entries: the rectangle with its [stock] box from x = 20 on (its left third air: the tool
+# comes down there, its disc clear of the box), and with a pre-drilled hole at (45, 20) (fed
+# straight down it). LinuxCNC reads both; the first move below the top is where it should be;
+# at the floor the tool cuts the rectangle's part in the box less two corners' cusps (open),
+# the rectangle less four (hole).
+box = Polygon([(20, -5), (80, -5), (80, 45), (20, 45)])
+for name, extra, sets in (("open", "", ["stock.min=[20, -5, -3]", "stock.max=[80, 45, 0]"]),
+                          ("hole", "entry_holes = [[45, 20]]\n", [])):
+    job = os.path.join(work, name + ".toml")
+    with open(job, "w") as f:
+        f.write('[geometry]\nfile = "%s"\n[pocket]\nboundary = "RECT"\n%s' % (DXF, extra))
+        f.write("depth = %g\nmax_step_down = 2.0\nmax_engagement = %g\n[tool]\ndiameter = %g\n"
+                "teeth = 3\n[cutting]\nfeed_rate = 1200.0\nspindle_speed = 8000.0\n"
+                % (DEPTH, TARGET, 2 * R))
+    prog = os.path.join(work, name + ".ngc")
+    args = [cli, "plan", job, "-o", prog]
+    for a in sets:
+        args += ["--set", a]
+    plan = subprocess.run(args, capture_output=True, text=True)
+    check(plan.returncode == 0, "%s: planned (%s)" % (name, plan.stderr.strip()[:300]))
+    if plan.returncode != 0:
+        continue
+    eng = float(re.search(r"clearing \(entries excepted\) engagement max ([0-9.]+)", plan.stdout)[1])
+    check(eng <= TARGET * 1.02, "%s: the kernel's largest clearing engagement %.3f degrees "
+          "(target %g)" % (name, eng, TARGET))
+    peer = rs274(prog)
+    check(peer.returncode == 0 and "error" not in peer.stdout,
+          "%s: LinuxCNC's rs274 reads the program (%s)" % (name, peer.stderr.strip()[:200]))
+    moves = [parse(l) for l in peer.stdout.splitlines() if l.strip()]
+    down = next(m for m in moves if m[1][2] < 0)
+    if name == "open":
+        # 1e-4 mm: the program's 4 decimals.
+        d = box.distance(Point(down[1][0], down[1][1]))
+        # (A rapid: there is nothing there to cut.)
+        check(d >= R - 1e-4, "open: the first move below the top, %s to "
+              "(%.4f, %.4f), %.4f mm from the stock box (R = %g)"
+              % (down[0], down[1][0], down[1][1], d, R))
+    else:
+        check(down[0] == "G1" and abs(down[1][0] - 45) < 1e-4 and abs(down[1][1] - 20) < 1e-4,
+              "hole: the first move below the top, %s to (%.4f, %.4f), down the hole at (45, 20)"
+              % (down[0], down[1][0], down[1][1]))
+    floor = path_points(moves, lambda z0, z1: abs(z0 + DEPTH) < 1e-6 and abs(z1 + DEPTH) < 1e-6)
+    cut = unary_union([LineString(r).buffer(R, resolution=64) if len(r) > 1
+                       else Point(r[0]).buffer(R, resolution=64) for r in floor])
+    if name == "open":
+        cut, expected = cut.intersection(box), walls.intersection(box).area - 2 * CUSP
+    else:
+        expected = walls.area - 4 * CUSP
+    # 1 %: the issue's acceptance (as the pockets above).
+    check(abs(cut.area / expected - 1) < 0.01,
+          "%s: cut area at the floor %.2f mm^2 against %.2f mm^2 (%+.3f %%)"
+          % (name, cut.area, expected, 100 * (cut.area / expected - 1)))
 
 if failures:
     print("%d failed" % len(failures))
