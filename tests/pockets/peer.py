@@ -146,13 +146,10 @@ for name, (boundary, islands, walls, corners) in CASES.items():
     check(d >= R - 1e-4, "%s: the program's closest centre %.5f mm from a wall (R = %g)"
           % (name, d, R))
 
-# Rest machining: the rectangle by a 20 mm tool, then by a 6 mm tool after it ([pocket]
-# rest_of, the first program's header giving its tool). LinuxCNC reads both; at the floor the
-# pair cuts the rectangle less the 6 mm tool's cusps, and the second cuts, outside what the
-# first cut, the corners' difference of cusps.
-walls = CASES["rect"][2]
-cuts = {}
-for name, d, extra in (("rest-first", 20.0, ""), ("rest-second", 6.0, 'rest_of = "rest-first.ngc"\n')):
+def rect_program(name, extra, d, sets=()):
+    """The rectangle 4 mm deep at the target with a tool of diameter d and `extra` [pocket]
+    keys, planned (with --set `sets`), the kernel's proof checked and read by LinuxCNC: its
+    moves and the tool's cut at the floor (shapely), or None where planning failed."""
     job = os.path.join(work, name + ".toml")
     with open(job, "w") as f:
         f.write('[geometry]\nfile = "%s"\n[pocket]\nboundary = "RECT"\n%s' % (DXF, extra))
@@ -160,10 +157,13 @@ for name, d, extra in (("rest-first", 20.0, ""), ("rest-second", 6.0, 'rest_of =
                 "teeth = 3\n[cutting]\nfeed_rate = 1200.0\nspindle_speed = 8000.0\n"
                 % (DEPTH, TARGET, d))
     prog = os.path.join(work, name + ".ngc")
-    plan = subprocess.run([cli, "plan", job, "-o", prog], capture_output=True, text=True)
+    args = [cli, "plan", job, "-o", prog]
+    for a in sets:
+        args += ["--set", a]
+    plan = subprocess.run(args, capture_output=True, text=True)
     check(plan.returncode == 0, "%s: planned (%s)" % (name, plan.stderr.strip()[:300]))
     if plan.returncode != 0:
-        break
+        return None
     eng = float(re.search(r"clearing \(entries excepted\) engagement max ([0-9.]+)", plan.stdout)[1])
     check(eng <= TARGET * 1.02, "%s: the kernel's largest clearing engagement %.3f degrees "
           "(target %g)" % (name, eng, TARGET))
@@ -172,8 +172,22 @@ for name, d, extra in (("rest-first", 20.0, ""), ("rest-second", 6.0, 'rest_of =
           "%s: LinuxCNC's rs274 reads the program (%s)" % (name, peer.stderr.strip()[:200]))
     moves = [parse(l) for l in peer.stdout.splitlines() if l.strip()]
     floor = path_points(moves, lambda z0, z1: abs(z0 + DEPTH) < 1e-6 and abs(z1 + DEPTH) < 1e-6)
-    cuts[name] = unary_union([LineString(r).buffer(d / 2, resolution=64) if len(r) > 1
-                              else Point(r[0]).buffer(d / 2, resolution=64) for r in floor])
+    cut = unary_union([LineString(r).buffer(d / 2, resolution=64) if len(r) > 1
+                       else Point(r[0]).buffer(d / 2, resolution=64) for r in floor])
+    return moves, cut
+
+
+# Rest machining: the rectangle by a 20 mm tool, then by a 6 mm tool after it ([pocket]
+# rest_of, the first program's header giving its tool). LinuxCNC reads both; at the floor the
+# pair cuts the rectangle less the 6 mm tool's cusps, and the second cuts, outside what the
+# first cut, the corners' difference of cusps.
+walls = CASES["rect"][2]
+cuts = {}
+for name, d, extra in (("rest-first", 20.0, ""), ("rest-second", 6.0, 'rest_of = "rest-first.ngc"\n')):
+    got = rect_program(name, extra, d)
+    if got is None:
+        break
+    cuts[name] = got[1]
 if len(cuts) == 2:
     first, second = cuts["rest-first"], cuts["rest-second"]
     c = 1 - math.pi / 4
@@ -196,27 +210,10 @@ if len(cuts) == 2:
 box = Polygon([(20, -5), (80, -5), (80, 45), (20, 45)])
 for name, extra, sets in (("open", "", ["stock.min=[20, -5, -3]", "stock.max=[80, 45, 0]"]),
                           ("hole", "entry_holes = [[45, 20]]\n", [])):
-    job = os.path.join(work, name + ".toml")
-    with open(job, "w") as f:
-        f.write('[geometry]\nfile = "%s"\n[pocket]\nboundary = "RECT"\n%s' % (DXF, extra))
-        f.write("depth = %g\nmax_step_down = 2.0\nmax_engagement = %g\n[tool]\ndiameter = %g\n"
-                "teeth = 3\n[cutting]\nfeed_rate = 1200.0\nspindle_speed = 8000.0\n"
-                % (DEPTH, TARGET, 2 * R))
-    prog = os.path.join(work, name + ".ngc")
-    args = [cli, "plan", job, "-o", prog]
-    for a in sets:
-        args += ["--set", a]
-    plan = subprocess.run(args, capture_output=True, text=True)
-    check(plan.returncode == 0, "%s: planned (%s)" % (name, plan.stderr.strip()[:300]))
-    if plan.returncode != 0:
+    got = rect_program(name, extra, 2 * R, sets)
+    if got is None:
         continue
-    eng = float(re.search(r"clearing \(entries excepted\) engagement max ([0-9.]+)", plan.stdout)[1])
-    check(eng <= TARGET * 1.02, "%s: the kernel's largest clearing engagement %.3f degrees "
-          "(target %g)" % (name, eng, TARGET))
-    peer = rs274(prog)
-    check(peer.returncode == 0 and "error" not in peer.stdout,
-          "%s: LinuxCNC's rs274 reads the program (%s)" % (name, peer.stderr.strip()[:200]))
-    moves = [parse(l) for l in peer.stdout.splitlines() if l.strip()]
+    moves, cut = got
     down = next(m for m in moves if m[1][2] < 0)
     if name == "open":
         # 1e-4 mm: the program's 4 decimals.
@@ -229,9 +226,6 @@ for name, extra, sets in (("open", "", ["stock.min=[20, -5, -3]", "stock.max=[80
         check(down[0] == "G1" and abs(down[1][0] - 45) < 1e-4 and abs(down[1][1] - 20) < 1e-4,
               "hole: the first move below the top, %s to (%.4f, %.4f), down the hole at (45, 20)"
               % (down[0], down[1][0], down[1][1]))
-    floor = path_points(moves, lambda z0, z1: abs(z0 + DEPTH) < 1e-6 and abs(z1 + DEPTH) < 1e-6)
-    cut = unary_union([LineString(r).buffer(R, resolution=64) if len(r) > 1
-                       else Point(r[0]).buffer(R, resolution=64) for r in floor])
     if name == "open":
         cut, expected = cut.intersection(box), walls.intersection(box).area - 2 * CUSP
     else:
