@@ -14,7 +14,7 @@ foreach(entry IN ITEMS
     OptimizeFeed.DescentsIntoTheStockNeverSpeedUp:45 Python.sweep:45
     OptimizeFeed.AStockMeshIsTheStock:45 Cli.MemoryEstimatesMatchThePeak:40
     Ngc.CutterCompensationEqualsLinuxCncsOnRandomContours:40
-    Pockets.LinuxCncReadsThemTheAreaIsClearedAndTheTargetHolds:35
+    Pockets.LinuxCncReadsThemTheAreaIsClearedAndTheTargetHolds:40
     Cli.ForcesCalibrateAndMaterials:35 Optimize.ParetoSetIsNonDominated:30
     Planner.ToolStaysInsideAndCutsTheWholeSlot:30 Ngc.MovesEqualLinuxCncsOnTheCorpus:27
     Ngc.LinuxCncSamplesReadAsLinuxCnc:27 Ngc.ProgramsByOthersReadAsLinuxCnc:40)
