@@ -441,6 +441,43 @@ TEST(Geometry, SvgCuspIsACorner) {
   }
 }
 
+// The same cusp as a NURBS (a cubic Bezier: knots 0 0 0 0 1 1 1 1, as a DXF spline gives it):
+// no biarc turns back there (a DXF spline with it was refused); cusp_parameters finds it at
+// u = 1/2 and fit_biarcs_at_cusps fits either side with its own tangent there, ending a piece on
+// the cusp.
+TEST(Geometry, NurbsCuspIsFittedAsACorner) {
+  const NurbsCurve c(3, {0, 0, 0, 0, 1, 1, 1, 1}, {{0, 0, 0}, {10, 10, 0}, {0, 10, 0}, {10, 0, 0}},
+                     {1, 1, 1, 1});
+  const std::vector<double> cusps = cusp_parameters(c, 0, 1, 256);
+  ASSERT_EQ(cusps.size(), 1u);
+  EXPECT_NEAR(cusps[0], 0.5, 1e-9);
+  const double tol = 0.002;
+  const std::vector<FitArc> arcs = fit_biarcs_at_cusps(c, 0, 1, 4, tol);
+  bool corner = false;
+  for (std::size_t i = 0; i < arcs.size(); ++i) {
+    const FitArc& a = arcs[i];
+    corner |= (a.end - Vec3(5, 7.5, 0)).norm() < 1e-9;
+    if (i > 0) {
+      EXPECT_EQ(a.start, arcs[i - 1].end);  // a chain
+    }
+    // Each arc's middle within the tolerance of the curve (sampled every 1e-5).
+    const ContourPiece piece = to_piece(a);
+    const Vec2 mid = piece.point_at(0.5);
+    double best = 1e9;
+    for (int k = 0; k <= 100000; ++k) {
+      const Vec3 q = c.point(k * 1e-5);
+      best = std::min(best, (q.head<2>() - mid).norm());
+    }
+    EXPECT_LT(best, tol) << i;
+  }
+  EXPECT_TRUE(corner);
+  // No cusp on a smooth curve: the same arcs as fit_biarcs.
+  const NurbsCurve arch(3, {0, 0, 0, 0, 1, 1, 1, 1},
+                        {{0, 0, 0}, {0, 10, 0}, {10, 10, 0}, {10, 0, 0}}, {1, 1, 1, 1});
+  EXPECT_TRUE(cusp_parameters(arch, 0, 1, 256).empty());
+  EXPECT_EQ(fit_biarcs_at_cusps(arch, 0, 1, 4, tol).size(), fit_biarcs(arch, 0, 1, 4, tol).size());
+}
+
 TEST(Geometry, SvgTransformsAndViewportsGiveMillimetres) {
   // A viewBox of 10 x 10 in one inch: a user unit is 2.54 mm.
   const Drawing inch = read_svg(svg_file("inch.svg", R"svg(<svg xmlns="http://www.w3.org/2000/svg"

@@ -240,6 +240,18 @@ class NurbsCurve final : public PlanarCurve {
 [[nodiscard]] std::vector<FitArc> fit_biarcs(
     const PlanarCurve& curve, double u0, double u1, int pieces, double tolerance_mm,
     std::size_t max_arcs = std::numeric_limits<std::size_t>::max());
+/// The parameters in (u0, u1), increasing, where the curve turns back on itself (a cusp: two
+/// of `samples` successive chords turning more than 120 degrees), each refined to where the
+/// curve moves slowest between them.
+[[nodiscard]] std::vector<double> cusp_parameters(const PlanarCurve& curve, double u0, double u1,
+                                                  int samples);
+/// fit_biarcs of each part of [u0, u1] between the curve's cusps (cusp_parameters, 64 chords a
+/// piece), each part's tangent at a cusp taken from its own side: a curve that turns back is
+/// fitted as the corner it is, where fit_biarcs alone finds no biarc turning back there
+/// (Error). The same arcs as fit_biarcs where there is no cusp. The budget is the whole's.
+[[nodiscard]] std::vector<FitArc> fit_biarcs_at_cusps(
+    const PlanarCurve& curve, double u0, double u1, int pieces, double tolerance_mm,
+    std::size_t max_arcs = std::numeric_limits<std::size_t>::max());
 /// fit_biarcs would have taken more than `max_arcs` arcs.
 struct ArcLimit {
   std::size_t max_arcs;

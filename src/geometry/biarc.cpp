@@ -225,6 +225,90 @@ std::vector<FitArc> fit_biarcs(const PlanarCurve& curve, double u0, double u1, i
   return out;
 }
 
+namespace {
+
+// A curve whose unit tangent at the ends of [lo, hi] is the one-sided one from inside (the
+// chord over a ten-millionth of the range): at a cusp the curve's own (central) one is not.
+class OneSidedEnds final : public PlanarCurve {
+ public:
+  OneSidedEnds(const PlanarCurve& c, double lo, double hi) : c_(c), lo_(lo), hi_(hi) {}
+  [[nodiscard]] Vec3 point(double u) const override { return c_.point(u); }
+  [[nodiscard]] Vec3 unit_tangent(double u) const override {
+    const double h = 1e-7 * (hi_ - lo_);
+    Vec3 d;
+    if (u <= lo_) {
+      d = c_.point(lo_ + h) - c_.point(lo_);
+    } else if (u >= hi_) {
+      d = c_.point(hi_) - c_.point(hi_ - h);
+    } else {
+      return c_.unit_tangent(u);
+    }
+    d.z() = 0;
+    const double n = d.norm();
+    return n > 0 ? Vec3(d / n) : Vec3::Zero();
+  }
+
+ private:
+  const PlanarCurve& c_;
+  double lo_, hi_;
+};
+
+}  // namespace
+
+std::vector<double> cusp_parameters(const PlanarCurve& curve, double u0, double u1, int samples) {
+  std::vector<double> out;
+  const int m = std::max(2, samples);
+  if (!(u1 > u0)) return out;
+  const auto u = [&](int i) { return u0 + (u1 - u0) * i / m; };
+  std::vector<Vec3> p(static_cast<std::size_t>(m) + 1);
+  for (int i = 0; i <= m; ++i) p[static_cast<std::size_t>(i)] = curve.point(u(i));
+  for (int i = 0; i + 2 <= m; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    const Vec3 a = p[k + 1] - p[k], b = p[k + 2] - p[k + 1];
+    const double na = a.head<2>().norm(), nb = b.head<2>().norm();
+    if (!(na > 0 && nb > 0) || a.head<2>().dot(b.head<2>()) >= -0.5 * na * nb) continue;
+    // Where it moves slowest in [u_i, u_i+2] (the speed by chords a thousandth of a sample
+    // apart): golden-section search.
+    const double e = 1e-3 * (u(1) - u(0));
+    const auto speed = [&](double x) {
+      return (curve.point(std::min(u1, x + e)) - curve.point(std::max(u0, x - e))).head<2>().norm();
+    };
+    double lo = u(i), hi = u(i + 2);
+    constexpr double g = 0.6180339887498949;
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = speed(x1), f2 = speed(x2);
+    for (int it = 0; it < 60 && hi - lo > 1e-15 * std::max(1.0, std::abs(hi)); ++it) {
+      if (f1 <= f2) {
+        hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = speed(x1);
+      } else {
+        lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = speed(x2);
+      }
+    }
+    const double c = 0.5 * (lo + hi);
+    const double gap = 1e-6 * (u1 - u0);
+    if (c > u0 + gap && c < u1 - gap && (out.empty() || c > out.back() + gap)) out.push_back(c);
+    ++i;  // the next pair shares this chord: the same cusp
+  }
+  return out;
+}
+
+std::vector<FitArc> fit_biarcs_at_cusps(const PlanarCurve& curve, double u0, double u1, int pieces,
+                                        double tolerance_mm, std::size_t max_arcs) {
+  const int n = std::max(1, pieces);
+  const std::vector<double> cusps = cusp_parameters(curve, u0, u1, 64 * n);
+  if (cusps.empty()) return fit_biarcs(curve, u0, u1, n, tolerance_mm, max_arcs);
+  std::vector<FitArc> out;
+  double a = u0;
+  for (std::size_t i = 0; i <= cusps.size(); ++i) {
+    const double b = i < cusps.size() ? cusps[i] : u1;
+    const OneSidedEnds part(curve, a, b);
+    const int k = std::max(1, static_cast<int>(std::lround(n * (b - a) / (u1 - u0))));
+    const std::vector<FitArc> arcs = fit_biarcs(part, a, b, k, tolerance_mm, max_arcs - out.size());
+    out.insert(out.end(), arcs.begin(), arcs.end());
+    a = b;
+  }
+  return out;
+}
+
 std::vector<Vec3> fit_chords(const PlanarCurve& curve, double u0, double u1, int pieces,
                              double tolerance_mm) {
   if (!(tolerance_mm > 0)) throw InputError("arc tolerance must be > 0 mm");

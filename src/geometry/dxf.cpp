@@ -242,7 +242,7 @@ class Reader final : public DL_CreationAdapter {
   void fit(const PlanarCurve& c, double u0, double u1, int n) {
     try {
       const std::vector<FitArc> arcs =
-          fit_biarcs(c, u0, u1, n, o_.arc_tolerance_mm / unit_, kMaxDrawingArcs - fitted_);
+          fit_biarcs_at_cusps(c, u0, u1, n, o_.arc_tolerance_mm / unit_, kMaxDrawingArcs - fitted_);
       fitted_ += arcs.size();
       for (const FitArc& a : arcs) add(to_piece(a));
     } catch (const ArcLimit&) {

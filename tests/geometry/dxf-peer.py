@@ -164,6 +164,28 @@ def far_splines(m, doc):
         m.add_open_spline([(0, 0), (0, s), (s, s), (s, 0)], degree=3)
 
 
+# A spline that turns back on itself (a cusp: the cubic through (0, 0) (10, -10) (0, -10)
+# (10, 0), its cusp at (5, -7.5)), ezdxf's knots inserted at 0.3 and 0.31 so that the cusp
+# falls inside a span, closed by a line: read as the corner it is (it was refused: no biarc
+# turns back), its area that of ezdxf's own evaluation of the curve (the shoelace over 200,000
+# points: within 1e-8 of the curve's) within the length x the arc tolerance.
+cusp = os.path.join(work, "cusp.dxf")
+doc = ezdxf.new("R2010")
+doc.header["$INSUNITS"] = 4
+spline = ezdxf.math.BSpline([(0, 0), (10, -10), (0, -10), (10, 0)], order=4)
+spline = spline.insert_knot(0.3).insert_knot(0.31)
+doc.modelspace().add_spline(dxfattribs={"layer": "CUSP"}).apply_construction_tool(spline)
+doc.modelspace().add_line((10, 0), (0, 0), dxfattribs={"layer": "CUSP"})
+doc.saveas(cusp)
+rc, out, err = run("check-drawing", cusp, "--json", "-")
+check(rc == 0, f"cusp: check-drawing exit {rc}: {err}")
+if rc == 0:
+    c = json.loads(out)["contours"]
+    pts = [spline.point(i / 200000) for i in range(200001)]
+    area = 0.5 * abs(sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(pts, pts[1:] + pts[:1])))
+    check(len(c) == 1 and c[0]["closed"] and abs(c[0]["area_mm2"] - area) < c[0]["length_mm"] * 0.002,
+          f"cusp: {len(c)} contours, area {c and c[0]['area_mm2']} against ezdxf's {area}")
+
 refused("far-splines", far_splines, "the drawing's curves need more than 50000 arcs within "
         "0.002 mm (the arc tolerance)")
 refused("branch", branch, "a branch at (0, 0) mm")
