@@ -548,6 +548,12 @@ TEST(Pocket, APreDrilledHoleIsTheEntry) {
     }
   }
   EXPECT_EQ(plunged_to, (std::vector<double>{-2, -4}));
+  // The program says what it needs before anything moves (else the tool plunges into the stock).
+  const std::string program = write_gcode(job, p.path, gcode_options(job.machine).write);
+  EXPECT_TRUE(
+      has(program, "(NEEDS PRE-DRILLED HOLES at least 10 mm wide and 4 mm deep at X45 Y20)"))
+      << program.substr(0, 400);
+  EXPECT_LT(program.find("NEEDS PRE-DRILLED"), program.find("G0 "));
   // Out of a hole of the tool's width no move keeps within the target: the flat circle about
   // it opens the way, as the helix's does, and the clearing covers the pocket (it gave up
   // nothing; with the helix at the widest place 0.06 mm^2, an inside corner's last cell).

@@ -299,6 +299,13 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
                           to_string(job.path.type), job.slot.width_mm, job.slot.length_mm,
                           job.slot.depth_mm, to_string(job.path.direction)));
   }
+  if (job.pocket.defined() && !job.pocket.entry_holes_mm.empty()) {
+    // The program feeds straight down these: without them the tool plunges into the stock.
+    std::string at;
+    for (const Vec2& h : job.pocket.entry_holes_mm) at += fmt::format(" X{:g} Y{:g}", h.x(), h.y());
+    e.comment(fmt::format("NEEDS PRE-DRILLED HOLES at least {:g} mm wide and {:g} mm deep at{}",
+                          job.tool.diameter_mm, job.pocket.depth_mm, at));
+  }
   e.comment(fmt::format("job: {}", job.source));
   e.comment(fmt::format("path length {:.3f} mm, {:.3f} s at programmed feed, {} dialect",
                         path.length_mm(), path.duration_s(), to_string(opt.dialect)));
