@@ -147,16 +147,6 @@ std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces, double jo
       }
     }
   }
-  // A piece no longer than the join tolerance is a point at that tolerance (a curve's fit can
-  // end in such pieces where it turns back, at a cusp): dropped, its neighbours' ends then meet
-  // within the tolerance. A full circle stays whatever its size.
-  pieces.erase(std::remove_if(pieces.begin(), pieces.end(),
-                              [&](const DrawnPiece& d) {
-                                const ContourPiece& p = d.piece;
-                                return !(p.is_arc() && p.start == p.end) &&
-                                       p.length_mm() <= join_mm;
-                              }),
-               pieces.end());
   const std::vector<std::uint32_t> layer = layer_numbers(pieces);
   const Partners partners = partners_of(pieces, layer, join_mm);
   for (End e = 0; e < 2 * pieces.size(); ++e) {

@@ -58,8 +58,7 @@ struct DrawingOptions {
 /// only ends of the same layer. Deterministic: contours start at the first piece (in the
 /// given order) not yet used, an open chain is followed from its free end. Throws InputError
 /// naming the entities: a branch (three or more ends within join_mm), or a gap (two free ends
-/// closer than 10 join_mm: a drawing that was meant to join). Pieces no longer than join_mm
-/// (but full circles) are points at that tolerance: dropped.
+/// closer than 10 join_mm: a drawing that was meant to join).
 [[nodiscard]] std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces,
                                                      double join_mm);
 
