@@ -29,6 +29,15 @@ constexpr double kCutting = 0.5;
 constexpr double kBulge = 0.005;
 
 Vec2 dir(double a) { return {std::cos(a), std::sin(a)}; }
+
+// The box of a region's piece starts (its vertices; arcs bulge within the callers' margins).
+Box3 vertex_box(const std::vector<Contour>& region) {
+  Box3 box;
+  for (const Contour& c : region) {
+    for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
+  }
+  return box;
+}
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // Whether segments [a, b] and [c, d] cross (proper or touching).
@@ -151,10 +160,7 @@ class Coverage {
 
   Coverage(const std::vector<Contour>& reach, double cell_mm, double R)
       : h_(cell_mm), R_(R), test_(reach, std::max(cell_mm, 0.25 * R)) {
-    Box3 box;
-    for (const Contour& c : reach) {
-      for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
-    }
+    const Box3 box = vertex_box(reach);
     x0_ = box.lo.x() - h_;
     y0_ = box.lo.y() - h_;
     const double cells =
@@ -760,10 +766,7 @@ std::vector<Move2> air_moves(const std::vector<ContourPiece>& pieces, double edg
 // The centre of the part's widest place (largest distance to its contours), on a grid
 // refined twice, and that distance.
 std::pair<Vec2, double> widest_point(const std::vector<Contour>& part, const RegionGrid& inside) {
-  Box3 box;
-  for (const Contour& c : part) {
-    for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
-  }
+  const Box3 box = vertex_box(part);
   auto clearance = [&](const Vec2& p) {
     double d = std::numeric_limits<double>::infinity();
     for (const Contour& c : part) d = std::min(d, c.distance_mm(p));
@@ -819,7 +822,19 @@ std::vector<Vec2> outside_stock_discs(const Job& job, double R, double spacing, 
   };
   const auto edge = [&](const Vec2& a, const Vec2& b) {
     const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / spacing)));
-    for (int k = 0; k < n; ++k) {
+    // The steps whose points may be near (an edge is axis-parallel: one coordinate moves), so
+    // a box far larger than the pocket costs no more than its part near it.
+    int k0 = 0, k1 = n;
+    for (int d = 0; d < 2; ++d) {
+      const double step = (b[d] - a[d]) / n;
+      if (step == 0) continue;
+      const double e0 = (d == 0 ? lo.x() : lo.y()) - 2 * R, e1 = (d == 0 ? hi.x() : hi.y()) + 2 * R;
+      const double ka = (e0 - a[d]) / step, kb = (e1 - a[d]) / step;
+      const auto at_step = [n](double k) { return static_cast<int>(std::clamp(k, -1.0, n + 1.0)); };
+      k0 = std::max(k0, at_step(std::floor(std::min(ka, kb))) - 1);
+      k1 = std::min(k1, at_step(std::ceil(std::max(ka, kb))) + 1);
+    }
+    for (int k = std::max(0, k0); k < k1; ++k) {
       const Vec2 p = a + (b - a) * (static_cast<double>(k) / n);
       if (near(p)) out.push_back(p);
     }
@@ -876,10 +891,7 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out)
 PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>& part,
                    const std::vector<Vec2>& before, const std::vector<Vec2>& air,
                    const std::vector<Vec2>& holes) {
-  Box3 box;
-  for (const Contour& c : part) {
-    for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
-  }
+  const Box3 box = vertex_box(part);
   const Vec2 lo(box.lo.x() - s.R, box.lo.y() - s.R), hi(box.hi.x() + s.R, box.hi.y() + s.R);
   PartPlanner planner(s, part, lo, hi);
   PartPlan out;
@@ -1267,10 +1279,7 @@ PlannedPocket plan_pocket(const Job& job) {
   // The air beside a [stock] box the pocket runs past.
   std::vector<Vec2> air;
   {
-    Box3 box;
-    for (const Contour& c : centre_region) {
-      for (const ContourPiece& p : c.pieces) box.extend(Vec3(p.start.x(), p.start.y(), 0));
-    }
+    const Box3 box = vertex_box(centre_region);
     air = outside_stock_discs(job, R, rest_spacing_mm(job), Vec2(box.lo.x(), box.lo.y()),
                               Vec2(box.hi.x(), box.hi.y()));
   }
