@@ -122,7 +122,7 @@ std::map<int, ToolTableEntry> read_tool_table(const std::filesystem::path& file)
       if (neg) v = -v;
       i = static_cast<std::size_t>(ptr - line.data());
       if (L == 'T') {
-        if (v < 0 || v != std::floor(v) || v > 1e6) fail(at, "T must be a whole number >= 0");
+        if (v < 0 || v != std::floor(v) || v > 1e6) fail(at, "T must be a whole number 0 .. 1e6");
         tool = static_cast<int>(v);
       } else if (L == 'Z') {
         if (std::abs(v) > 1e4) fail(at, "a tool length beyond +-1e4 mm");
