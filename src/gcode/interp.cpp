@@ -309,7 +309,7 @@ void Interpreter::set_feed_speed_tool(int feed_mode) {
     // 1e6: the bound of the tool table's T and of G41/G42's D, and well inside an int.
     if (block_['t'] < 0 || block_['t'] != std::floor(block_['t']) || block_['t'] > 1e6) {
       fail_at(block_.col('t'),
-              fmt::format("tool number T{:g} must be a whole number 0 .. 1e6", block_['t']));
+              fmt::format("tool number T{:.15g} must be a whole number 0 .. 1e6", block_['t']));
     }
     tool_selected_ = block_['t'];
   }
@@ -511,7 +511,7 @@ void Interpreter::run_m_codes(bool& stop, bool& pause) {
         if (!block_.has('q')) fail_at(column, "M61 needs the tool number in Q");
         if (block_['q'] < 0 || block_['q'] != std::floor(block_['q']) || block_['q'] > 1e6) {
           fail_at(block_.col('q'),
-                  fmt::format("M61 Q{:g}: the tool number must be a whole number 0 .. 1e6",
+                  fmt::format("M61 Q{:.15g}: the tool number must be a whole number 0 .. 1e6",
                               block_['q']));
         }
         tool_loaded_ = block_['q'];
