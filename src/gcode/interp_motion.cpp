@@ -597,6 +597,7 @@ void Interpreter::spline(std::uint32_t column) {
       j = len('j');
     }
     if (!block_.has('p') || !block_.has('q')) fail_at(column, "Must specify both P and Q with G5");
+    check_range('p');  // a length here (P is not one in most codes: not in check_words)
     points.push_back(cur_pos_ + Vec3(i, j, 0));
     points.push_back(end + Vec3(len('p'), len('q'), 0));
     spline_i_ = -len('p');
