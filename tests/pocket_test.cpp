@@ -145,6 +145,9 @@ TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
   EXPECT_EQ(*job.stock_min_mm, Vec3(0, 0, -4.5));
   EXPECT_EQ(*job.stock_max_mm, Vec3(60, 40, 0));
   const PlannedPocket p = plan_pocket(job);
+  EXPECT_TRUE(p.info.proven);
+  EXPECT_EQ(p.info.replans, 0);
+  EXPECT_EQ(p.info.aim_margin_deg, 1.2);
   EXPECT_EQ(p.info.parts, 1);
   EXPECT_EQ(p.info.levels, 2);
   EXPECT_GT(p.info.passes, 0);
@@ -178,7 +181,7 @@ TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
     }
   }
   // The kernel's proof: the clearing within the target + 2 %, the finishing pass reported.
-  const PocketProof proof = prove_pocket(job, p);
+  const PocketProof proof = p.proof;
   EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
   EXPECT_GT(proof.clearing_max_engagement_deg, 40);  // it does cut near the target
   EXPECT_GT(proof.finish_max_engagement_deg, 0);
@@ -201,6 +204,26 @@ TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
   EXPECT_EQ(again.clearing_max_engagement_deg, proof.clearing_max_engagement_deg);
   EXPECT_EQ(again.finish_max_engagement_deg, proof.finish_max_engagement_deg);
   EXPECT_EQ(again.air_max_chip_mm, proof.air_max_chip_mm);
+}
+
+// The planner's margin below the target is measured, not a bound: the example plate with a
+// [stock] box from x = 20.2 mm planned at 1.2 degrees below its 53 degree target reaches 56.06
+// degrees by the kernel (a pass hooking into the frontier beside the bottom wall). The proof
+// sends that plan back; the next, 0.5 degrees lower, holds. (Should a planner change make the
+// first plan hold here, this case no longer sends one back: find another, the sweep of the
+// box's edge in docs/models.md found this one.)
+TEST(Pocket, TheProofSendsAPlanBackThatPassesTheTarget) {
+  const Job job = JobDocument::load(test::source_dir() / "examples/pockets/plate.toml")
+                      .build({parse_override("stock.min=[20.2, -10, -10]"),
+                              parse_override("stock.max=[100, 60, 0]")});
+  const PlannedPocket p = plan_pocket(job);
+  EXPECT_GT(p.info.first_proof_max_deg, 53 * (1 + kProofTolerance));
+  EXPECT_GE(p.info.replans, 1);
+  EXPECT_EQ(p.info.aim_margin_deg, 1.2 + 0.5 * p.info.replans);
+  EXPECT_TRUE(p.info.proven);
+  EXPECT_LE(p.proof.clearing_max_engagement_deg, 53 * (1 + kProofTolerance));
+  // The same proof from the program's own kernel run (not the planner's record of it).
+  EXPECT_EQ(prove_pocket(job, p).clearing_max_engagement_deg, p.proof.clearing_max_engagement_deg);
 }
 
 TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {
@@ -271,7 +294,7 @@ TEST(Pocket, RestMachiningCutsWhatTheLargerToolLeft) {
   EXPECT_GT(second.info.rest_cleared_mm2, 0.9 * 2400 - 1);
   // The kernel against the stock the first program left: the target within 2 % (the
   // issue's allowance; the same margin as every pocket), entries excepted.
-  const PocketProof proof = prove_pocket(rest, second);
+  const PocketProof proof = second.proof;
   EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
   EXPECT_GT(proof.clearing_max_engagement_deg, 30);  // it does cut: the corners
 
@@ -434,7 +457,7 @@ TEST(Pocket, RestStockCountsOnlyBelowTheEarlierCut) {
   // simulation: 0.02 %); counting the slot's region to the top, as before the earlier
   // program's levels counted above a position, gave 3.7 % too much.
   EXPECT_NEAR(removed, expected, 0.02 * expected);
-  const PocketProof proof = prove_pocket(job, p);
+  const PocketProof proof = p.proof;
   EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
 }
 
@@ -508,7 +531,7 @@ TEST(Pocket, AnOpenPocketIsEnteredFromBesideTheStock) {
     EXPECT_FALSE(g.kind() != Segment::Kind::line && g.end().z() != g.start().z())
         << g.start().transpose();
   }
-  const PocketProof proof = prove_pocket(job, p);
+  const PocketProof proof = p.proof;
   EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
   EXPECT_GT(proof.clearing_max_engagement_deg, 40);
   // The simulation removes the rectangle's part in the box, 2 mm deep, less the two corners'
@@ -516,6 +539,19 @@ TEST(Pocket, AnOpenPocketIsEnteredFromBesideTheStock) {
   const JobSimulation sim = simulate_job(job, p.path, 0, p.path.duration_s());
   const double expected = 2 * (40 * 40 - 2 * (1 - kPi / 4) * 5.002 * 5.002);
   EXPECT_NEAR(sim.result.removed_mm3, expected, 0.01 * expected);
+  // A box beside the pocket (here, the drawing's frame mistaken): nothing to cut, refused with
+  // both boxes named; the planner would have written a finishing pass through the air.
+  const std::string m = test::message_of([&] {
+    (void)plan_pocket(JobDocument::parse(pocket_job("boundary = \"RECT\"\ndepth = 2.0\n"
+                                                    "max_engagement = 50.0\n"),
+                                         "away.toml")
+                          .build({parse_override("stock.min=[100, -5, -3]"),
+                                  parse_override("stock.max=[180, 45, 0]")}));
+  });
+  EXPECT_TRUE(has(m,
+                  "[stock] min, max: the box (100, -5) .. (180, 45) mm leaves none of the "
+                  "pocket of layer 'RECT' (x 0 .. 60, y 0 .. 40 mm)"))
+      << m;
 }
 
 TEST(Pocket, APreDrilledHoleIsTheEntry) {
@@ -554,12 +590,20 @@ TEST(Pocket, APreDrilledHoleIsTheEntry) {
       has(program, "(NEEDS PRE-DRILLED HOLES at least 10 mm wide and 4 mm deep at X45 Y20)"))
       << program.substr(0, 400);
   EXPECT_LT(program.find("NEEDS PRE-DRILLED"), program.find("G0 "));
+  // A second hole in the same part is not gone down (the first listed is the part's entry):
+  // the header does not ask for it.
+  Job two = job;
+  two.pocket.entry_holes_mm.emplace_back(20, 20);
+  const std::string program2 = write_gcode(two, p.path, gcode_options(two.machine).write);
+  EXPECT_TRUE(
+      has(program2, "(NEEDS PRE-DRILLED HOLES at least 10 mm wide and 4 mm deep at X45 Y20)"))
+      << program2.substr(0, 400);
   // Out of a hole of the tool's width no move keeps within the target: the flat circle about
   // it opens the way, as the helix's does, and the clearing covers the pocket (it gave up
   // nothing; with the helix at the widest place 0.06 mm^2, an inside corner's last cell).
   EXPECT_LE(p.info.left_for_finish_mm2, 0.5);
   EXPECT_GT(p.info.passes, 100);
-  const PocketProof proof = prove_pocket(job, p);
+  const PocketProof proof = p.proof;
   EXPECT_LE(proof.clearing_max_engagement_deg, 50 * 1.02);
   // Refused: a hole where the tool centre may not go (3 mm from the wall), a malformed list.
   const auto message = [](const std::string& holes) {
@@ -571,12 +615,13 @@ TEST(Pocket, APreDrilledHoleIsTheEntry) {
     });
   };
   std::string m = message("[[45, 20], [3, 20]]");
-  EXPECT_TRUE(has(m,
-                  "[pocket] entry_holes: hole 2 at (3, 20) mm is where the tool centre may "
-                  "not go"))
+  EXPECT_TRUE(has(
+      m,
+      "[pocket] entry_holes: hole 2 (counting from 1) at (3, 20) mm is where the tool centre may "
+      "not go"))
       << m;
   m = message("[45, 20]");
-  EXPECT_TRUE(has(m, "[pocket] entry_holes: element 0 must be a point [x, y]")) << m;
+  EXPECT_TRUE(has(m, "[pocket] entry_holes: hole 1 (counting from 1) must be a point [x, y]")) << m;
   m = message("[[45, 20, 1]]");
-  EXPECT_TRUE(has(m, "element 0 must be a point [x, y]")) << m;
+  EXPECT_TRUE(has(m, "hole 1 (counting from 1) must be a point [x, y]")) << m;
 }

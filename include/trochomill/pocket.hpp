@@ -69,11 +69,14 @@ struct PocketInfo {
   /// The segments at the link feed (runs through cleared area, links that stay down), in
   /// increasing order: they must cut nothing.
   std::vector<std::size_t> air_segments;
-};
-
-struct PlannedPocket {
-  ToolPath path;
-  PocketInfo info;
+  /// The steps' aim below the target (degrees): 1.2, more where the proof sent the plan back.
+  double aim_margin_deg = 0;
+  int replans = 0;  ///< plans the proof sent back (plan_pocket)
+  /// The first plan's largest clearing engagement by the kernel and where (mm), and whether the
+  /// plan given holds the target within kProofTolerance.
+  double first_proof_max_deg = 0;
+  Vec3 first_proof_at_mm = Vec3::Zero();
+  bool proven = false;
 };
 
 /// Reads [pocket] rest_of (the earlier program, through the job's [machine] reading options)
@@ -82,10 +85,6 @@ struct PlannedPocket {
 /// diameter changed. Throws InputError naming the key for a program that cannot be read, that
 /// never cuts below the top, or whose tool is unknown, smaller than the job's or not finite.
 void attach_rest_stock(Job& job);
-
-/// Plans the job's pocket ([pocket], its contours read by the job). Throws InputError when
-/// the tool does not fit or the helix does not, Error without a pocket.
-[[nodiscard]] PlannedPocket plan_pocket(const Job& job);
 
 /// The engagement kernel's reading of a planned pocket (compute_engagement on its path, one
 /// sample per tooth), the proof of the target: the largest engagement and chip of the clearing
@@ -105,6 +104,26 @@ struct PocketProof {
   Vec3 air_max_at_mm = Vec3::Zero();
   double air_max_chip_mm = 0;
 };
+
+/// The clearing's largest engagement outside the entries that the proof accepts: the target and
+/// this share of it (2 %: the kernel samples the teeth at their own phase, the planner at its
+/// steps').
+inline constexpr double kProofTolerance = 0.02;
+
+struct PlannedPocket {
+  ToolPath path;
+  PocketInfo info;
+  PocketProof proof;  ///< the kernel's reading of `path` (prove_pocket)
+};
+
+/// Plans the job's pocket ([pocket], its contours read by the job) and proves it
+/// (prove_pocket): where the kernel finds the clearing's engagement above the target by more
+/// than kProofTolerance, plans it again with the steps' aim 0.5 degrees lower, up to three
+/// times (PocketInfo::replans), and gives the first plan that holds, else the one of least
+/// largest engagement (PocketInfo::proven false). Throws InputError when the tool does not fit
+/// or the helix does not, Error without a pocket.
+[[nodiscard]] PlannedPocket plan_pocket(const Job& job);
+
 [[nodiscard]] PocketProof prove_pocket(const Job& job, const PlannedPocket& pocket,
                                        const RunHooks& hooks = {});
 /// The same from the kernel's series of the pocket's path already computed (`analyze`'s: one

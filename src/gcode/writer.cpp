@@ -4,6 +4,7 @@
 // else chords.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -301,10 +302,21 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
   }
   if (job.pocket.defined() && !job.pocket.entry_holes_mm.empty()) {
     // The program feeds straight down these: without them the tool plunges into the stock.
+    // Only the holes it goes down (the first of a part is its entry; another in the same part
+    // is not used, and an operator drilling it would drill for nothing).
     std::string at;
-    for (const Vec2& h : job.pocket.entry_holes_mm) at += fmt::format(" X{:g} Y{:g}", h.x(), h.y());
-    e.comment(fmt::format("NEEDS PRE-DRILLED HOLES at least {:g} mm wide and {:g} mm deep at{}",
-                          job.tool.diameter_mm, job.pocket.depth_mm, at));
+    for (const Vec2& h : job.pocket.entry_holes_mm) {
+      const bool used =
+          std::any_of(path.segments().begin(), path.segments().end(), [&](const Segment& g) {
+            const Vec3 a = g.start(), b = g.end();
+            return g.motion() != Motion::rapid && b.z() < a.z() &&
+                   (a.head<2>() - h).norm() < 1e-6 && (b.head<2>() - h).norm() < 1e-6;
+          });
+      if (used) at += fmt::format(" X{:g} Y{:g}", h.x(), h.y());
+    }
+    if (!at.empty())
+      e.comment(fmt::format("NEEDS PRE-DRILLED HOLES at least {:g} mm wide and {:g} mm deep at{}",
+                            job.tool.diameter_mm, job.pocket.depth_mm, at));
   }
   e.comment(fmt::format("job: {}", job.source));
   e.comment(fmt::format("path length {:.3f} mm, {:.3f} s at programmed feed, {} dialect",

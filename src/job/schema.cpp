@@ -457,9 +457,10 @@ std::vector<Key> build_schema() {
                  const double y = ok ? xy->get(1)->value<double>().value_or(0) : 0;
                  if (!ok || !(std::abs(x) <= kMaxLengthMm && std::abs(y) <= kMaxLengthMm)) {
                    r.problem("pocket", "entry_holes",
-                             fmt::format("element {} must be a point [x, y] of finite numbers "
-                                         "within +-{:g} mm, e.g. [[20, 15], [60, 30]]",
-                                         i, kMaxLengthMm));
+                             fmt::format("hole {} (counting from 1) must be a point [x, y] "
+                                         "of finite numbers within +-{:g} mm, e.g. [[20, 15], "
+                                         "[60, 30]]",
+                                         i + 1, kMaxLengthMm));
                    return;
                  }
                  job.pocket.entry_holes_mm.emplace_back(x, y);

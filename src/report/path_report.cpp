@@ -148,6 +148,21 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
       "{}, chip max {:.5f} mm, {:.3g} % of its cutting above the target\n",
       proof.clearing_max_engagement_deg, at(proof.clearing_max_at_mm), proof.clearing_max_chip_mm,
       100 * proof.clearing_share_above_target);
+  if (info.replans > 0 && info.proven) {
+    out += fmt::format(
+        "  the kernel found {:.4g} degrees at {} on the first plan, above the target + {:g} %: "
+        "planned {} more time{}, the last with the steps' aim {:.4g} degrees below the target\n",
+        info.first_proof_max_deg, at(info.first_proof_at_mm), 100 * kProofTolerance, info.replans,
+        info.replans == 1 ? "" : "s", info.aim_margin_deg);
+  } else if (!info.proven && info.replans > 0) {
+    out += fmt::format(
+        "  warning: the kernel finds the clearing's engagement above the target + {:g} % on "
+        "every plan tried ({} more with the steps' aim up to {:.4g} degrees below the target): "
+        "{:.4g} degrees at {} in this one; lower [pocket] max_engagement by that much to hold "
+        "the target\n",
+        100 * kProofTolerance, info.replans, info.aim_margin_deg, proof.clearing_max_engagement_deg,
+        at(proof.clearing_max_at_mm));
+  }
   if (info.air_length_mm > 0 || info.links_down > 0) {
     out += fmt::format(
         "  the kernel on the program: moves at the link feed (through cleared area) chip max "
