@@ -1181,6 +1181,18 @@ TEST(GcodeFanuc, HaasLocalSubprogramCalls) {
   EXPECT_THROW((void)read_gcode("G0 X0 Y0 Z1\nM97 P100\nM2\n", "lc.ngc"), InputError);
 }
 
+// A G5 cubic with a control point 1e4 mm off: its nearly straight stretches fit arcs of radius
+// up to 2e8 mm, whose starts recomputed from the centre are 1e-8 mm off the tool (refused as
+// "an arc that starts where the tool is not" before). Its length by Simpson's rule on 2e5
+// intervals of the Bezier's speed (converged to 1e-10 mm): 12567.708495 mm; the arcs lie within
+// the spline tolerance (0.001 mm) of the curve, their length within 0.01 mm of it.
+TEST(Gcode, AFarControlPointSplineIsRead) {
+  const auto p =
+      read_gcode("G0 X0 Y0 Z2\nG1 Z-1 F600\nG5 X10 Y0 I2 J3 P-10000 Q10000\nM2\n", "g5.ngc");
+  EXPECT_NEAR(p.path.length_mm() - 3, 12567.708495, 0.01);
+  EXPECT_LT((p.path.segments().back().end() - Vec3(10, 0, -1)).norm(), 1e-9);
+}
+
 // A tool number past an int was undefined behaviour when M6 recorded the change (a fuzzer's
 // finding); T and M61's Q are now bounded like the tool table's T, with the column named.
 TEST(Gcode, ToolNumbersAreBounded) {

@@ -724,6 +724,24 @@ void Interpreter::put_curve(const std::vector<Vec3>& points, const std::vector<d
       put_line(to_out(end), false, f, column, cur_.source, cur_.line_no, true);
       continue;
     }
+    if (a.radius_mm > kMaxCoordinate) {
+      // A nearly straight stretch (far control points) fits arcs of radius 1e8 mm and more,
+      // whose start recomputed from the centre misses the tool's point by 1e-8 mm, and whose
+      // centre no program could give: chords within a tenth of the tolerance of the arc.
+      const double chord = std::sqrt(8 * a.radius_mm * 0.1 * opt_.spline_tolerance_mm);
+      const double len = std::abs(a.radius_mm * a.sweep_rad);
+      const int chords = static_cast<int>(std::min(1e5, std::ceil(len / chord)));
+      const double a0 = std::atan2(a.start.y() - a.cy, a.start.x() - a.cx);
+      for (int i = 1; i <= chords; ++i) {
+        Vec3 q = end;
+        if (i < chords) {
+          const double t = a0 + a.sweep_rad * i / chords;
+          q = Vec3(a.cx + a.radius_mm * std::cos(t), a.cy + a.radius_mm * std::sin(t), end.z());
+        }
+        put_line(to_out(q), false, f, column, cur_.source, cur_.line_no, true);
+      }
+      continue;
+    }
     ArcData d;
     d.c1 = a.cx;
     d.c2 = a.cy;
