@@ -12,6 +12,7 @@
 // falsi); an arc or a kink counts only if it lies outside every earlier position's disc
 // (nearest-point distance to the past path, coarse samples then Newton).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -74,9 +75,10 @@ struct Tables {
 };
 
 // All roots in (theta - pi, theta + pi): a sign scan (plus the minimum of every dip
-// between samples), each bracket polished by regula falsi.
-std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
-  std::vector<double> out;
+// between samples), each bracket polished by regula falsi; written to `out` (cleared first:
+// the callers reuse their buffers, the model runs thousands of times a cycle).
+void scan_roots(const Curve& cv, V2 q, double theta, std::vector<double>& out) {
+  out.clear();
   auto g = [&](double t) {
     V2 e, de;
     cv.envelope(t, e, de);
@@ -146,7 +148,6 @@ std::vector<double> scan_roots(const Curve& cv, V2 q, double theta) {
       }
     }
   }
-  return out;
 }
 
 // Distance from x to the path of all positions up to the previous tooth pass (parameter
@@ -278,18 +279,21 @@ ChipPoint ExactModel::at(double theta) const {
     cv.envelope(r.t, q, dq);
     return V2{q.x, q.y - (r.j - 1) * s_};
   };
-  auto roots_for = [&](V2 q) {
-    std::vector<std::vector<Root>> out_j(kEnvelopes);
+  using Roots = std::array<std::vector<Root>, kEnvelopes>;
+  // Buffers kept per thread: the same numbers, without a dozen allocations a point.
+  thread_local Roots tool_roots, tooth_roots;
+  thread_local std::vector<double> found, ang;
+  auto roots_for = [&](V2 q, Roots& out_j) {
     for (int j = 1; j <= kEnvelopes; ++j) {
-      for (const double t : scan_roots(cv, q + V2{0, (j - 1) * s_}, theta)) {
-        out_j[static_cast<std::size_t>(j - 1)].push_back({t, j});
-      }
+      auto& rj = out_j[static_cast<std::size_t>(j - 1)];
+      rj.clear();
+      scan_roots(cv, q + V2{0, (j - 1) * s_}, theta, found);
+      for (const double t : found) rj.push_back({t, j});
     }
-    return out_j;
   };
-  std::vector<double> ang;
+  ang.clear();
   V2 e;
-  const auto tool_roots = roots_for(c);
+  roots_for(c, tool_roots);
   for (const auto& rj : tool_roots) {
     for (const Root& r : rj) {
       e = env_at(r);
@@ -304,7 +308,8 @@ ChipPoint ExactModel::at(double theta) const {
   struct Arc {
     double a0, a1;
   };
-  std::vector<Arc> engaged;
+  thread_local std::vector<Arc> engaged;
+  engaged.clear();
   for (std::size_t k = 0; k < ang.size(); ++k) {
     const double a0 = ang[k], a1 = k + 1 < ang.size() ? ang[k + 1] : ang[0] + kTwoPi;
     if (a1 - a0 < 1e-12) continue;
@@ -338,7 +343,8 @@ ChipPoint ExactModel::at(double theta) const {
     out.h_mm = d;
     contact = ahead;
   } else {
-    for (const auto& rj : roots_for(p)) {
+    roots_for(p, tooth_roots);
+    for (const auto& rj : tooth_roots) {
       for (const Root& r : rj) {
         e = env_at(r);
         if (!on_engaged_arc(e)) continue;
