@@ -552,6 +552,25 @@ TEST(Pocket, AnOpenPocketIsEnteredFromBesideTheStock) {
                   "[stock] min, max: the box (100, -5) .. (180, 45) mm leaves none of the "
                   "pocket of layer 'RECT' (x 0 .. 60, y 0 .. 40 mm)"))
       << m;
+  // A stock whose top is above the top face z = 0 the program is planned from: the rapids
+  // come down to the clearance 1 mm above z = 0, inside it. Refused, for a pocket and a slot.
+  const std::string expect_top =
+      "[stock] max: the stock's top z = 2 mm is above the top face z = 0 the program is planned "
+      "from: its rapids come down to [path] clearance = 1 mm above z = 0, into the stock";
+  std::string t = test::message_of([&] {
+    (void)plan_pocket(JobDocument::parse(pocket_job("boundary = \"RECT\"\ndepth = 2.0\n"
+                                                    "max_engagement = 50.0\n"),
+                                         "top.toml")
+                          .build({parse_override("stock.min=[-5, -5, -3]"),
+                                  parse_override("stock.max=[80, 45, 2]")}));
+  });
+  EXPECT_TRUE(has(t, expect_top)) << t;
+  t = test::message_of([&] {
+    (void)plan_slot(test::straight_job(
+        10.0, 4,
+        {parse_override("stock.min=[-20, -5, -10]"), parse_override("stock.max=[20, 60, 2]")}));
+  });
+  EXPECT_TRUE(has(t, expect_top)) << t;
 }
 
 TEST(Pocket, APreDrilledHoleIsTheEntry) {

@@ -37,7 +37,10 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
       check_outputs({&a->json, &a->csv}, {&a->job.file, &a->gcode});
       const Job job = a->job.load();
       GcodeProgram lines;
-      const ToolPath path = job_path(job, a->gcode, a->memory_gb, &lines);
+      // A pocket's own plan (proven as `plan` proves it) is kept for its summary below.
+      std::optional<PlannedPocket> pocket;
+      if (job.pocket.defined() && a->gcode.empty()) pocket = plan_pocket(job);
+      const ToolPath path = pocket ? pocket->path : job_path(job, a->gcode, a->memory_gb, &lines);
       check_memory("analyze", estimate_analysis_memory(job, path), a->memory_gb,
                    fmt::format("{:.0f} s of program at {:g} rpm, {} samples per tooth pass: "
                                "lower [analysis] steps_per_tooth or analyse a shorter program",
@@ -53,10 +56,8 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
         fmt::print("{}", metrics_text(a->job.file, a->gcode, job, m));
         // A pocket's own plan: the target's proof from this analysis's series (the clearing
         // outside its entries, apart from the finishing pass), as `plan` prints it.
-        if (job.pocket.defined() && a->gcode.empty()) {
-          const PlannedPocket pp = plan_pocket(job);
-          fmt::print("{}", pocket_summary(pp.info, prove_pocket(pp.info, m.series)));
-        }
+        if (pocket)
+          fmt::print("{}", pocket_summary(pocket->info, prove_pocket(pocket->info, m.series)));
       }
       run.finish("interrupted: the outputs were written in full");
       exit_code = 0;

@@ -293,5 +293,9 @@ using ChipJudge = std::function<double(const Job& job, const ToolPath& path, dou
 /// through cleared area), mm/min: machine.air_feed, else max_feed, else the rapid rate (the
 /// control holds a feed move to its most). Feed moves, because a rapid need not run straight.
 [[nodiscard]] double link_feed_mm_per_min(const Machine& machine);
+/// Refuses (InputError, naming [stock] max) a [stock] box whose top lies above the top face
+/// z = 0 that `plan` plans from: its rapids come down to [path] clearance above z = 0, into
+/// such a stock. A top below z = 0 is fine (the first cuts run in the air).
+void check_stock_top(const Job& job);
 
 }  // namespace trochomill

@@ -732,7 +732,9 @@ std::vector<Key> build_schema() {
                }
              }),
       custom("stock", "max", "array of numbers", "mm", "[x, y, z], above min", "the slot region",
-             "upper corner of the stock box (read with min)", [](JobReader&, Job&) {}),
+             "upper corner of the stock box (read with min); `plan` refuses a top above z = 0, "
+             "where its rapids come down",
+             [](JobReader&, Job&) {}),
       // [analysis]
       integer("analysis", "steps_per_tooth", 1, 64, FIELD(analysis.steps_per_tooth),
               "engagement samples per tooth pass (the chip spans that many)"),

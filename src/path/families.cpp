@@ -426,6 +426,20 @@ double estimate_plan_memory(const Job& job) {
   return 30e6 + cycles * per_cycle;
 }
 
+void check_stock_top(const Job& job) {
+  if (!job.stock_max_mm) return;
+  const double top = (*job.stock_max_mm)[2];
+  // 1e-9 mm: a top written as 0 in another unit or frame and read back.
+  if (top > 1e-9) {
+    throw InputError(fmt::format(
+        "[stock] max: the stock's top z = {:g} mm is above the top face z = 0 the program is "
+        "planned from: its rapids come down to [path] clearance = {:g} mm above z = 0, into the "
+        "stock. Face the stock down to z = 0 first and give [stock] max z <= 0 (the drawing's "
+        "and the slot's depths are measured from z = 0)",
+        top, job.path.clearance_mm));
+  }
+}
+
 PlannedPath plan_path(const Job& job, const ChipJudge& judge) {
   if (job.pocket.defined()) {
     throw InputError(fmt::format(
@@ -438,6 +452,7 @@ PlannedPath plan_path(const Job& job, const ChipJudge& judge) {
         "[stock] alone is the stock of a program read from G-code",
         job.source));
   }
+  check_stock_top(job);
   const Geometry g = make_geometry(job);
   if (!(g.feed > 0)) throw InputError("[cutting]: the feed rate must be > 0 mm/min");
   // Orbit direction. A clockwise (M3) spindle's tooth enters the material on the right of the

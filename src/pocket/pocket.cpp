@@ -1214,6 +1214,7 @@ namespace {
 PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   const Pocket& pk = job.pocket;
   if (!pk.defined()) throw Error("plan_pocket: the job has no [pocket]");
+  check_stock_top(job);
   const double R = job.tool.radius_mm();
   const double feed = feed_rate_mm_per_min(job);
   if (!(feed > 0)) throw InputError("[cutting]: the feed rate must be > 0 mm/min");
