@@ -1196,8 +1196,8 @@ TEST(Gcode, AFarControlPointSplineIsRead) {
 // A tool number past an int was undefined behaviour when M6 recorded the change (a fuzzer's
 // finding); T and M61's Q are now bounded like the tool table's T, with the column named.
 TEST(Gcode, ToolNumbersAreBounded) {
-  for (const char* text :
-       {"T1000000000000 M6\nM2\n", "T99999999999 M6\nM2\n", "M61 Q-1\nM2\n", "M61 Q1.5\nM2\n"}) {
+  for (const char* text : {"T1000000000000 M6\nM2\n", "T99999999999 M6\nM2\n", "M61 Q-1\nM2\n",
+                           "M61 Q99999999999\nM2\n", "M61 Q1.5\nM2\n"}) {
     try {
       (void)read_gcode(text, "t.ngc");
       ADD_FAILURE() << "accepted " << text;
@@ -1206,6 +1206,8 @@ TEST(Gcode, ToolNumbersAreBounded) {
       EXPECT_NE(std::string(e.what()).find("t.ngc:1:"), std::string::npos) << e.what();
     }
   }
+  // M61's Q is a tool number, not a length: not scaled by G20, not bounded as one.
+  EXPECT_NO_THROW((void)read_gcode("G20\nM61 Q50000\nG0 X0 Y0 Z1\nM2\n", "q.ngc"));
   const auto ok = read_gcode("T1000000 M6\nG0 X0 Y0 Z1\nM2\n", "t.ngc");
   ASSERT_EQ(ok.info.tool_changes.size(), 1u);
   EXPECT_EQ(ok.info.tool_changes[0].first, 1000000);

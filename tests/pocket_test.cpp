@@ -550,13 +550,37 @@ TEST(Pocket, AnOpenPocketIsEnteredFromBesideTheStock) {
   });
   EXPECT_TRUE(has(m,
                   "[stock] min, max: the box (100, -5) .. (180, 45) mm leaves none of the "
-                  "pocket of layer 'RECT' (x 0 .. 60, y 0 .. 40 mm)"))
+                  "pocket of layer 'RECT' (x 0 .. 60, y 0 .. 40 mm, less its islands)"))
       << m;
+  // A box over nothing of the pocket but what the islands hold (the test pockets' rectangle
+  // has none: the islands pocket's round boss), and one below the floor: refused too.
+  const auto refused = [&](const std::string& boundary, const std::string& lo,
+                           const std::string& hi) {
+    return test::message_of([&] {
+      (void)plan_pocket(
+          JobDocument::parse(pocket_job(boundary + "depth = 2.0\n"
+                                                   "max_engagement = 50.0\n"),
+                             "box.toml")
+              .build({parse_override("stock.min=" + lo), parse_override("stock.max=" + hi)}));
+    });
+  };
+  std::string u = refused("boundary = \"ISLB\"\nislands = \"ISL\"\n", "[217, 14, -5]",
+                          "[225, 18, 0]");  // inside the 12 x 8 mm block island
+  EXPECT_TRUE(has(u,
+                  "[stock] min, max: the box (217, 14) .. (225, 18) mm leaves none of the "
+                  "pocket of layer 'ISLB'"))
+      << u;
+  u = refused("boundary = \"RECT\"\n", "[0, 0, -30]", "[60, 40, -2]");
+  EXPECT_TRUE(has(u,
+                  "[stock] max: the box's top z = -2 mm is at or below the pocket's floor "
+                  "z = -2 mm: nothing to cut"))
+      << u;
   // A stock whose top is above the top face z = 0 the program is planned from: the rapids
   // come down to the clearance 1 mm above z = 0, inside it. Refused, for a pocket and a slot.
   const std::string expect_top =
       "[stock] max: the stock's top z = 2 mm is above the top face z = 0 the program is planned "
-      "from: its rapids come down to [path] clearance = 1 mm above z = 0, into the stock";
+      "from: its depths and levels are measured from z = 0 and its rapids come down to [path] "
+      "clearance = 1 mm above z = 0";
   std::string t = test::message_of([&] {
     (void)plan_pocket(JobDocument::parse(pocket_job("boundary = \"RECT\"\ndepth = 2.0\n"
                                                     "max_engagement = 50.0\n"),
@@ -613,6 +637,7 @@ TEST(Pocket, APreDrilledHoleIsTheEntry) {
   // the header does not ask for it.
   Job two = job;
   two.pocket.entry_holes_mm.emplace_back(20, 20);
+  two.pocket.entry_holes_mm.emplace_back(45, 20);  // the same hole again: listed once
   const std::string program2 = write_gcode(two, p.path, gcode_options(two.machine).write);
   EXPECT_TRUE(
       has(program2, "(NEEDS PRE-DRILLED HOLES at least 10 mm wide and 4 mm deep at X45 Y20)"))

@@ -169,8 +169,11 @@ void Interpreter::check_range(char c) const {
 
 // The block's words before its codes run: coordinates in range (A B C in degrees).
 void Interpreter::check_words() const {
+  // M61's Q is a tool number (checked as one there), not a length.
+  const bool m61 =
+      std::any_of(block_.m.begin(), block_.m.end(), [](const auto& m) { return m.code10 == 610; });
   for (const char c : std::string_view("xyzijkrquvw")) {
-    if (block_.has(c)) check_range(c);
+    if (block_.has(c) && !(c == 'q' && m61)) check_range(c);
   }
   for (const char c : std::string_view("abc")) {
     if (block_.has(c) && !(std::abs(block_[c]) <= kMaxCoordinate)) {

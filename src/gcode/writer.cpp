@@ -305,14 +305,23 @@ std::string write_gcode(const Job& job, const ToolPath& path, const GcodeWriteOp
     // Only the holes it goes down (the first of a part is its entry; another in the same part
     // is not used, and an operator drilling it would drill for nothing).
     std::string at;
+    std::vector<Vec2> listed;
     for (const Vec2& h : job.pocket.entry_holes_mm) {
+      // (A hole given twice, or within 1e-6 mm of one listed, is the same hole.)
+      if (std::any_of(listed.begin(), listed.end(),
+                      [&](const Vec2& l) { return (l - h).norm() < 1e-6; })) {
+        continue;
+      }
       const bool used =
           std::any_of(path.segments().begin(), path.segments().end(), [&](const Segment& g) {
             const Vec3 a = g.start(), b = g.end();
             return g.motion() != Motion::rapid && b.z() < a.z() &&
                    (a.head<2>() - h).norm() < 1e-6 && (b.head<2>() - h).norm() < 1e-6;
           });
-      if (used) at += fmt::format(" X{:g} Y{:g}", h.x(), h.y());
+      if (used) {
+        listed.push_back(h);
+        at += fmt::format(" X{:.10g} Y{:.10g}", h.x(), h.y());
+      }
     }
     if (!at.empty())
       e.comment(fmt::format("NEEDS PRE-DRILLED HOLES at least {:g} mm wide and {:g} mm deep at{}",

@@ -433,9 +433,9 @@ void check_stock_top(const Job& job) {
   if (top > 1e-9) {
     throw InputError(fmt::format(
         "[stock] max: the stock's top z = {:g} mm is above the top face z = 0 the program is "
-        "planned from: its rapids come down to [path] clearance = {:g} mm above z = 0, into the "
-        "stock. Face the stock down to z = 0 first and give [stock] max z <= 0 (the drawing's "
-        "and the slot's depths are measured from z = 0)",
+        "planned from: its depths and levels are measured from z = 0 and its rapids come down "
+        "to [path] clearance = {:g} mm above z = 0. Face the stock down to z = 0 first and "
+        "give [stock] max z <= 0",
         top, job.path.clearance_mm));
   }
 }

@@ -1224,6 +1224,34 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   const double safe_z = job.machine.safe_z_mm, clearance = job.path.clearance_mm;
   const double stl = pk.stock_to_leave_mm;
   const std::vector<Contour> region = pocket_region(pk);
+  // A [stock] box that leaves nothing of the pocket to cut (in the wrong place, in another
+  // frame than the drawing's, over an island only, below the floor) is a mistake: the program
+  // would be a finishing pass through the air. (A box over only the walls' stock to leave is
+  // the finishing pass's: not refused.)
+  if (job.stock_min_mm && job.stock_max_mm) {
+    const Vec3& a = *job.stock_min_mm;
+    const Vec3& b = *job.stock_max_mm;
+    const Box3 box = vertex_box(region);
+    const std::vector<Contour> over = region_intersection(
+        region,
+        {Contour::polyline(
+            {Vec2(a.x(), a.y()), Vec2(b.x(), a.y()), Vec2(b.x(), b.y()), Vec2(a.x(), b.y())},
+            true)},
+        kClipperTol);
+    if (region_area_mm2(over) <= 1e-6) {  // mm^2: Clipper's rounding of an empty overlap
+      throw InputError(fmt::format(
+          "[stock] min, max: the box ({:g}, {:g}) .. ({:g}, {:g}) mm leaves none of the pocket of "
+          "layer '{}' (x {:.4g} .. {:.4g}, y {:.4g} .. {:.4g} mm, less its islands) to cut: give "
+          "a box over the pocket, in the drawing's frame, or no [stock]",
+          a.x(), a.y(), b.x(), b.y(), pk.boundary, box.lo.x(), box.hi.x(), box.lo.y(), box.hi.y()));
+    }
+    if (b.z() <= -pk.depth_mm) {
+      throw InputError(fmt::format(
+          "[stock] max: the box's top z = {:g} mm is at or below the pocket's floor z = {:g} mm: "
+          "nothing to cut; give the box in the drawing's frame (its top at z = 0) or no [stock]",
+          b.z(), -pk.depth_mm));
+    }
+  }
   // The tool centre's region, kept the fit's largest deviation (its tolerance, or an arc's
   // bulge towards the stock) and three times Clipper's chords (the offset, the corners'
   // rounding twice) further in, so that the fitted arcs stay R + stock from every wall and
@@ -1318,23 +1346,6 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     plans.emplace_back();
     for (std::size_t j = 0; j < parts.size(); ++j) {
       plans.back().push_back(plan_part(job, s, parts[j], before, air, holes_of[j]));
-    }
-  }
-  // A [stock] box that leaves the pocket's whole area air: nothing to cut (a box in the wrong
-  // place, or in another frame than the drawing's).
-  if (!rest && !air.empty() &&
-      std::all_of(plans.back().begin(), plans.back().end(),
-                  [](const PartPlan& pp) { return pp.nothing; })) {
-    const Vec3& a = *job.stock_min_mm;
-    const Vec3& b = *job.stock_max_mm;
-    const Box3 box = vertex_box(region);
-    // (A box over only the walls' stock to leave is the finishing pass's: no error.)
-    if (box.hi.x() <= a.x() || box.lo.x() >= b.x() || box.hi.y() <= a.y() || box.lo.y() >= b.y()) {
-      throw InputError(fmt::format(
-          "[stock] min, max: the box ({:g}, {:g}) .. ({:g}, {:g}) mm leaves none of the pocket of "
-          "layer '{}' (x {:.4g} .. {:.4g}, y {:.4g} .. {:.4g} mm) to cut: give a box over the "
-          "pocket, in the drawing's frame, or no [stock]",
-          a.x(), a.y(), b.x(), b.y(), pk.boundary, box.lo.x(), box.hi.x(), box.lo.y(), box.hi.y()));
     }
   }
   // The figures of a level: the deepest's plan (every level's without rest_of).
@@ -1644,8 +1655,16 @@ PlannedPocket plan_pocket(const Job& job) {
   constexpr double kAimMargin = 1.2, kAimMarginStep = 0.5;
   constexpr int kReplans = 3;
   const double limit = job.pocket.max_engagement_deg * (1 + kProofTolerance);
+  const double target = job.pocket.max_engagement_deg;
+  // The aim plan_pocket_at takes (its floor: half the target).
+  const auto aim = [&](int k) {
+    return std::max(0.5 * target, target - (kAimMargin + k * kAimMarginStep));
+  };
   std::optional<PlannedPocket> best;
+  int tried = 0;
   for (int k = 0; k <= kReplans; ++k) {
+    if (k > 0 && aim(k) == aim(k - 1)) break;  // at the floor: the same plan again
+    tried = k;
     const double margin = kAimMargin + k * kAimMarginStep;
     PlannedPocket p = plan_pocket_at(job, margin);
     p.proof = prove_pocket(job, p);
@@ -1664,7 +1683,7 @@ PlannedPocket plan_pocket(const Job& job) {
       best = std::move(p);
     }
   }
-  best->info.replans = kReplans;  // (the least of the plans: every one was tried)
+  best->info.replans = tried;  // (the least of the plans: every one was tried)
   return std::move(*best);
 }
 

@@ -154,14 +154,15 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         "planned {} more time{}, the last with the steps' aim {:.4g} degrees below the target\n",
         info.first_proof_max_deg, at(info.first_proof_at_mm), 100 * kProofTolerance, info.replans,
         info.replans == 1 ? "" : "s", info.aim_margin_deg);
-  } else if (!info.proven && info.replans > 0) {
+  } else if (!info.proven) {
     out += fmt::format(
         "  warning: the kernel finds the clearing's engagement above the target + {:g} % on "
-        "every plan tried ({} more with the steps' aim up to {:.4g} degrees below the target): "
-        "{:.4g} degrees at {} in this one; lower [pocket] max_engagement by that much to hold "
-        "the target\n",
-        100 * kProofTolerance, info.replans, info.aim_margin_deg, proof.clearing_max_engagement_deg,
-        at(proof.clearing_max_at_mm));
+        "every plan tried (the first and {} more, the steps' aim 0.5 degrees lower each time): "
+        "{:.4g} degrees at {} in this one, the least; lower [pocket] max_engagement by {:.2g} "
+        "degrees to hold the target\n",
+        100 * kProofTolerance, info.replans, proof.clearing_max_engagement_deg,
+        at(proof.clearing_max_at_mm),
+        proof.clearing_max_engagement_deg - info.target_engagement_deg);
   }
   if (info.air_length_mm > 0 || info.links_down > 0) {
     out += fmt::format(
