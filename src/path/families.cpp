@@ -432,11 +432,11 @@ void check_stock_top(const Job& job) {
   // 1e-9 mm: a top written as 0 in another unit or frame and read back.
   if (top > 1e-9) {
     throw InputError(fmt::format(
-        "[stock] max: the stock's top z = {:g} mm is above the top face z = 0 the program is "
+        "{}: [stock] max: the stock's top z = {:g} mm is above the top face z = 0 the program is "
         "planned from: its depths and levels are measured from z = 0 and its rapids come down "
         "to [path] clearance = {:g} mm above z = 0. Face the stock down to z = 0 first and "
         "give [stock] max z <= 0",
-        top, job.path.clearance_mm));
+        job.source, top, job.path.clearance_mm));
   }
 }
 

@@ -1240,16 +1240,19 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
         kClipperTol);
     if (region_area_mm2(over) <= 1e-6) {  // mm^2: Clipper's rounding of an empty overlap
       throw InputError(fmt::format(
-          "[stock] min, max: the box ({:g}, {:g}) .. ({:g}, {:g}) mm leaves none of the pocket of "
+          "{}: [stock] min, max: the box ({:g}, {:g}) .. ({:g}, {:g}) mm leaves none of the pocket "
+          "of "
           "layer '{}' (x {:.4g} .. {:.4g}, y {:.4g} .. {:.4g} mm, less its islands) to cut: give "
           "a box over the pocket, in the drawing's frame, or no [stock]",
-          a.x(), a.y(), b.x(), b.y(), pk.boundary, box.lo.x(), box.hi.x(), box.lo.y(), box.hi.y()));
+          job.source, a.x(), a.y(), b.x(), b.y(), pk.boundary, box.lo.x(), box.hi.x(), box.lo.y(),
+          box.hi.y()));
     }
     if (b.z() <= -pk.depth_mm) {
       throw InputError(fmt::format(
-          "[stock] max: the box's top z = {:g} mm is at or below the pocket's floor z = {:g} mm: "
+          "{}: [stock] max: the box's top z = {:g} mm is at or below the pocket's floor z = {:g} "
+          "mm: "
           "nothing to cut; give the box in the drawing's frame (its top at z = 0) or no [stock]",
-          b.z(), -pk.depth_mm));
+          job.source, b.z(), -pk.depth_mm));
     }
   }
   // The tool centre's region, kept the fit's largest deviation (its tolerance, or an arc's
@@ -1300,12 +1303,13 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     while (j < parts.size() && !region_contains(parts[j], h)) ++j;
     if (j == parts.size()) {
       throw InputError(fmt::format(
-          "[pocket] entry_holes: hole {} (counting from 1) at ({:g}, {:g}) mm is where the tool "
+          "{}: [pocket] entry_holes: hole {} (counting from 1) at ({:g}, {:g}) mm is where the "
+          "tool "
           "centre may not "
           "go: outside the boundary, in an island, within R + stock_to_leave + {:g} = "
           "{:.4g} mm of a wall (the tool would cut the wall going down it), or in a corner "
           "the clearing rounds off (by R / 4 = {:g} mm more: the finishing pass's)",
-          i + 1, h.x(), h.y(), keep - R - stl, keep, rc));
+          job.source, i + 1, h.x(), h.y(), keep - R - stl, keep, rc));
     }
     holes_of[j].push_back(h);
   }
