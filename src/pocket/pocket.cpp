@@ -1210,11 +1210,43 @@ Vec2 mean_vertex(const Contour& c) {
 
 namespace {
 
+// The [stock] box against the pocket, once before planning: its top above z = 0
+// (check_stock_top), and a box that leaves nothing of the pocket to cut (in the wrong place,
+// in another frame than the drawing's, over an island only, below the floor), for which the
+// program would be a finishing pass through the air. (A box over only the walls' stock to
+// leave is the finishing pass's: not refused.)
+void check_pocket_stock(const Job& job) {
+  check_stock_top(job);
+  if (!job.stock_min_mm || !job.stock_max_mm) return;
+  const Pocket& pk = job.pocket;
+  const Vec3& a = *job.stock_min_mm;
+  const Vec3& b = *job.stock_max_mm;
+  const std::vector<Contour> region = pocket_region(pk);
+  const Contour rect = Contour::polyline(
+      {Vec2(a.x(), a.y()), Vec2(b.x(), a.y()), Vec2(b.x(), b.y()), Vec2(a.x(), b.y())}, true);
+  // 1e-6 mm^2: Clipper's rounding of an empty overlap.
+  if (region_area_mm2(region_intersection(region, {rect}, kClipperTol)) <= 1e-6) {
+    const Box3 box = vertex_box(region);
+    throw InputError(fmt::format(
+        "{}: [stock] min, max: the box ({:g}, {:g}) .. ({:g}, {:g}) mm leaves none of the pocket "
+        "of layer '{}' (x {:.4g} .. {:.4g}, y {:.4g} .. {:.4g} mm, less its islands) to cut: "
+        "give a box over the pocket, in the drawing's frame, or no [stock]",
+        job.source, a.x(), a.y(), b.x(), b.y(), pk.boundary, box.lo.x(), box.hi.x(), box.lo.y(),
+        box.hi.y()));
+  }
+  if (b.z() <= -pk.depth_mm) {
+    throw InputError(fmt::format(
+        "{}: [stock] max: the box's top z = {:g} mm is at or below the pocket's floor z = {:g} "
+        "mm: nothing to cut; give the box in the drawing's frame (its top at z = 0) or no "
+        "[stock]",
+        job.source, b.z(), -pk.depth_mm));
+  }
+}
+
 // The pocket planned with the steps' aim `margin_deg` below the target.
 PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   const Pocket& pk = job.pocket;
   if (!pk.defined()) throw Error("plan_pocket: the job has no [pocket]");
-  check_stock_top(job);
   const double R = job.tool.radius_mm();
   const double feed = feed_rate_mm_per_min(job);
   if (!(feed > 0)) throw InputError("[cutting]: the feed rate must be > 0 mm/min");
@@ -1224,37 +1256,6 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   const double safe_z = job.machine.safe_z_mm, clearance = job.path.clearance_mm;
   const double stl = pk.stock_to_leave_mm;
   const std::vector<Contour> region = pocket_region(pk);
-  // A [stock] box that leaves nothing of the pocket to cut (in the wrong place, in another
-  // frame than the drawing's, over an island only, below the floor) is a mistake: the program
-  // would be a finishing pass through the air. (A box over only the walls' stock to leave is
-  // the finishing pass's: not refused.)
-  if (job.stock_min_mm && job.stock_max_mm) {
-    const Vec3& a = *job.stock_min_mm;
-    const Vec3& b = *job.stock_max_mm;
-    const Box3 box = vertex_box(region);
-    const std::vector<Contour> over = region_intersection(
-        region,
-        {Contour::polyline(
-            {Vec2(a.x(), a.y()), Vec2(b.x(), a.y()), Vec2(b.x(), b.y()), Vec2(a.x(), b.y())},
-            true)},
-        kClipperTol);
-    if (region_area_mm2(over) <= 1e-6) {  // mm^2: Clipper's rounding of an empty overlap
-      throw InputError(fmt::format(
-          "{}: [stock] min, max: the box ({:g}, {:g}) .. ({:g}, {:g}) mm leaves none of the pocket "
-          "of "
-          "layer '{}' (x {:.4g} .. {:.4g}, y {:.4g} .. {:.4g} mm, less its islands) to cut: give "
-          "a box over the pocket, in the drawing's frame, or no [stock]",
-          job.source, a.x(), a.y(), b.x(), b.y(), pk.boundary, box.lo.x(), box.hi.x(), box.lo.y(),
-          box.hi.y()));
-    }
-    if (b.z() <= -pk.depth_mm) {
-      throw InputError(fmt::format(
-          "{}: [stock] max: the box's top z = {:g} mm is at or below the pocket's floor z = {:g} "
-          "mm: "
-          "nothing to cut; give the box in the drawing's frame (its top at z = 0) or no [stock]",
-          job.source, b.z(), -pk.depth_mm));
-    }
-  }
   // The tool centre's region, kept the fit's largest deviation (its tolerance, or an arc's
   // bulge towards the stock) and three times Clipper's chords (the offset, the corners'
   // rounding twice) further in, so that the fitted arcs stay R + stock from every wall and
@@ -1304,11 +1305,10 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     if (j == parts.size()) {
       throw InputError(fmt::format(
           "{}: [pocket] entry_holes: hole {} (counting from 1) at ({:g}, {:g}) mm is where the "
-          "tool "
-          "centre may not "
-          "go: outside the boundary, in an island, within R + stock_to_leave + {:g} = "
-          "{:.4g} mm of a wall (the tool would cut the wall going down it), or in a corner "
-          "the clearing rounds off (by R / 4 = {:g} mm more: the finishing pass's)",
+          "tool centre may not go: outside the boundary, in an island, within R + "
+          "stock_to_leave + {:g} = {:.4g} mm of a wall (the tool would cut the wall going down "
+          "it), or in a corner the clearing rounds off (by R / 4 = {:g} mm more: the finishing "
+          "pass's)",
           job.source, i + 1, h.x(), h.y(), keep - R - stl, keep, rc));
     }
     holes_of[j].push_back(h);
@@ -1658,12 +1658,14 @@ PlannedPocket plan_pocket(const Job& job) {
   // three times (docs/models.md, "Pockets").
   constexpr double kAimMargin = 1.2, kAimMarginStep = 0.5;
   constexpr int kReplans = 3;
-  const double limit = job.pocket.max_engagement_deg * (1 + kProofTolerance);
   const double target = job.pocket.max_engagement_deg;
+  const double limit = target * (1 + kProofTolerance);
   // The aim plan_pocket_at takes (its floor: half the target).
   const auto aim = [&](int k) {
     return std::max(0.5 * target, target - (kAimMargin + k * kAimMarginStep));
   };
+  if (!job.pocket.defined()) throw Error("plan_pocket: the job has no [pocket]");
+  check_pocket_stock(job);  // (once: the plans sent back would only repeat it)
   std::optional<PlannedPocket> best;
   int tried = 0;
   for (int k = 0; k <= kReplans; ++k) {
