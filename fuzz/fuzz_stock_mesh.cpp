@@ -5,8 +5,8 @@
 // rays' centres and on each other's lines), then three per triangle (indices modulo the count,
 // at most 32 triangles): closed, open, flat, degenerate and self-crossing meshes alike. Every
 // input is an InputError or boards whose rays hold sorted, disjoint intervals within the box,
-// and an engagement whose arcs are each at most a turn from an angle on the circle and whose
-// numbers are finite.
+// an engagement whose arcs are each at most a turn from an angle on the circle and whose
+// numbers are finite, and a plan view (mesh_plan_region) of closed contours within the box.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -110,6 +110,25 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::abort();
       }
     }
+  } catch (const InputError&) {
+  }
+  try {
+    // The planner's plan view of it (mesh_plan_region) between two heights: closed polylines
+    // of finite points within the mesh's box (Clipper's 1 nm grid), no larger in area.
+    const Box3 b = mesh_bounds(m);
+    const double z0 = b.lo[2] + 0.3 * (b.hi[2] - b.lo[2]), z1 = b.lo[2] + 0.7 * (b.hi[2] - b.lo[2]);
+    const std::vector<Contour> region = mesh_plan_region(m, z0, z1);
+    for (const Contour& c : region) {
+      if (!c.closed) std::abort();
+      for (const Vec2& p : c.points(1e-3)) {
+        if (!(p.x() >= b.lo[0] - 1e-6 && p.x() <= b.hi[0] + 1e-6 && p.y() >= b.lo[1] - 1e-6 &&
+              p.y() <= b.hi[1] + 1e-6)) {
+          std::abort();
+        }
+      }
+    }
+    const double area = region_area_mm2(region);
+    if (!(area >= -1e-9 && area <= (b.hi[0] - b.lo[0]) * (b.hi[1] - b.lo[1]) + 1e-6)) std::abort();
   } catch (const InputError&) {
   }
   return 0;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -44,6 +45,41 @@ inline Mesh block_mesh(double x0, double x1, double y0, double y1, double z_bott
 }
 inline Mesh box_mesh(const Vec3& lo, const Vec3& hi) {
   return block_mesh(lo[0], hi[0], lo[1], hi[1], lo[2], {hi[2], hi[2], hi[2], hi[2]});
+}
+
+// A block |x|, |y| <= h from z = bottom to 0 with a cored cavity about the z axis: a frustum
+// of n sides (n a multiple of 8: the rays at multiples of 45 degrees meet the block's
+// corners), radius r_top at z = 0 and r_floor at its floor z = floor_z (above bottom), its
+// vertices at angles 2 pi k / n. Closed, counter-clockwise seen from outside.
+inline Mesh cored_block_mesh(double h, double bottom, double r_top, double r_floor, double floor_z,
+                             int n) {
+  Mesh m;
+  auto add = [&](double x, double y, double z) {
+    m.vertices.push_back({x, y, z});
+    return static_cast<std::uint32_t>(m.vertices.size() - 1);
+  };
+  std::vector<std::uint32_t> ot, ob, it, jf;  // outer top, outer bottom, cavity top, floor
+  for (int k = 0; k < n; ++k) {
+    const double a = 2 * M_PI * k / n, c = std::cos(a), s = std::sin(a);
+    const double to_side = h / std::max(std::abs(c), std::abs(s));
+    ot.push_back(add(to_side * c, to_side * s, 0));
+    ob.push_back(add(to_side * c, to_side * s, bottom));
+    it.push_back(add(r_top * c, r_top * s, 0));
+    jf.push_back(add(r_floor * c, r_floor * s, floor_z));
+  }
+  const std::uint32_t cb = add(0, 0, bottom), cf = add(0, 0, floor_z);
+  for (int k = 0; k < n; ++k) {
+    const auto a = static_cast<std::size_t>(k), b = static_cast<std::size_t>((k + 1) % n);
+    m.triangles.push_back({it[a], ot[a], ot[b]});  // top ring, up
+    m.triangles.push_back({it[a], ot[b], it[b]});
+    m.triangles.push_back({ob[a], ob[b], ot[b]});  // outer walls, outwards
+    m.triangles.push_back({ob[a], ot[b], ot[a]});
+    m.triangles.push_back({cb, ob[b], ob[a]});     // bottom, down
+    m.triangles.push_back({jf[a], it[a], it[b]});  // cavity wall, towards the axis
+    m.triangles.push_back({jf[a], it[b], jf[b]});
+    m.triangles.push_back({cf, jf[a], jf[b]});  // cavity floor, up
+  }
+  return m;
 }
 
 // The message of the InputError f throws ("no error" when it throws none).

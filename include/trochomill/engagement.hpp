@@ -49,7 +49,8 @@ struct EngagementOptions {
   /// The stock as a closed mesh in the path's frame (mm) instead of the job's box: at a
   /// position's height z, the plan-view region where the solid lies between z and z plus the
   /// flute length (at most its top); its top is the mesh's. Throws InputError for an open
-  /// mesh (a vertical line crossing it an odd number of times).
+  /// mesh (a vertical line crossing it an odd number of times). Null: the job's [stock] mesh
+  /// (Job::stock_mesh) where it has one, else its box.
   const Mesh* stock_mesh = nullptr;
 };
 

@@ -172,6 +172,15 @@ struct Contour {
 [[nodiscard]] std::vector<Contour> offset_curve(const Contour& contour, double distance_mm,
                                                 double tolerance_mm);
 
+/// The plan view of a closed mesh taken as a solid (its triangles counter-clockwise seen from
+/// outside) between the heights z0_mm <= z1_mm: the points whose vertical line meets the
+/// solid at some height in [z0, z1], in offset_region's form. Exact up to Clipper's 1 nm
+/// grid: the section at z0 (the winding of the projected parts of the triangles below it:
+/// each vertical line enters the solid through a face turned down and leaves through one
+/// turned up) joined with the projections of the triangles' parts between z0 and z1. Throws
+/// InputError as mesh_bounds does, and for z0 > z1 or a height that is not finite.
+[[nodiscard]] std::vector<Contour> mesh_plan_region(const Mesh& mesh, double z0_mm, double z1_mm);
+
 // ---------------------------------------------------------------------------------------------
 // Fitting curves with arcs
 

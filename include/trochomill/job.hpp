@@ -202,6 +202,13 @@ struct Job {
   TopographySettings topography;
   /// `[stock]` min / max corners (mm); absent: the slot region with a 1 mm margin (sim.hpp).
   std::optional<Vec3> stock_min_mm, stock_max_mm;
+  /// `[stock] mesh`: a pocket's stock as a closed mesh (as written in the job; `stock_mesh_path`
+  /// resolved against the job file's folder), read by the job reader into `stock_mesh`, whose
+  /// box then is stock_min_mm .. stock_max_mm. The planner, the engagement kernel and the
+  /// simulation take it as the stock. Empty (null): the box.
+  std::string stock_mesh_file;
+  std::filesystem::path stock_mesh_path;
+  std::shared_ptr<const Mesh> stock_mesh;
   // The original document, flattened `section.key = value` (TOML syntax), after overrides:
   // written into the G-code header so a program records the job that produced it.
   std::vector<std::pair<std::string, std::string>> flat_keys;

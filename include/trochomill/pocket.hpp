@@ -59,9 +59,15 @@ struct PocketInfo {
   /// ([pocket] entry_holes), or from above where nothing stands (beside a [stock] box the pocket
   /// runs past, or what rest_of's program cleared).
   int helix_entries = 0, hole_entries = 0, open_entries = 0;
-  /// The pocket runs past the [stock] box: the air beside it (mm^2 of the area the clearing
-  /// covers at the deepest level, on the planner's grid) counts as cleared.
+  /// The pocket runs past the [stock] box or a [stock] mesh leaves air: the air (mm^2 of the
+  /// area the clearing covers at the deepest level, on the planner's grid) counts as cleared.
   double open_mm2 = 0;
+  /// The same per level, from the top (mm^2): with a [stock] mesh the air differs from level
+  /// to level (a cored hole, a step); empty without one.
+  std::vector<double> open_mm2_by_level;
+  /// The levels' distinct plans (levels whose stock is the same share one): 1 unless rest_of
+  /// or a [stock] mesh makes them differ.
+  int plans = 1;
   /// The path's entries: [first, last) segment index ranges (the helices and the finishing
   /// pass's lead-in), where the target does not hold.
   std::vector<std::pair<std::size_t, std::size_t>> entries;

@@ -273,7 +273,7 @@ struct JobSimulation {
 /// Runs on `[simulation] threads` worker threads (0: all cores); the results are the same
 /// for any thread count.
 /// `stock_mesh`: the stock as a closed mesh in the path's frame (stock_from_mesh) instead of
-/// the job's box.
+/// the job's box; null: the job's [stock] mesh (Job::stock_mesh) where it has one.
 [[nodiscard]] JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s,
                                          double to_s, const SimControl& control = {},
                                          const Mesh* stock_mesh = nullptr);

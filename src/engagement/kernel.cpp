@@ -1026,10 +1026,12 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   // (its x and y range, below its top).
   const double hw = 0.5 * job.slot.width_mm;
   double sx0 = -hw, sx1 = hw, sy0 = 0, sy1 = job.slot.length_mm;
-  const double top = stock_top_mm(job, opt.stock_mesh);
+  // The stock mesh given, else the job's [stock] mesh, else the box.
+  const Mesh* stock_mesh = opt.stock_mesh ? opt.stock_mesh : job.stock_mesh.get();
+  const double top = stock_top_mm(job, stock_mesh);
   std::optional<MeshStock> mesh_stock;
-  if (opt.stock_mesh) {
-    mesh_stock.emplace(*opt.stock_mesh, R);
+  if (stock_mesh) {
+    mesh_stock.emplace(*stock_mesh, R);
   } else if (job.stock_min_mm && job.stock_max_mm) {
     sx0 = (*job.stock_min_mm)[0];
     sy0 = (*job.stock_min_mm)[1];

@@ -5,7 +5,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <polyclipping/clipper.hpp>
 #include <tuple>
 
@@ -285,6 +288,74 @@ std::vector<Contour> offset_curve(const Contour& contour, double distance_mm, do
   const cl::Paths in{to_path(contour, tol, 0)};
   return run_offset(in, contour.closed ? cl::etClosedLine : cl::etOpenRound, distance_mm,
                     tolerance_mm);
+}
+
+std::vector<Contour> mesh_plan_region(const Mesh& mesh, double z0_mm, double z1_mm) {
+  (void)mesh_bounds(mesh);  // every vertex a triangle uses: present, finite, within 1 km
+  if (!(std::isfinite(z0_mm) && std::isfinite(z1_mm) && z0_mm <= z1_mm)) {
+    throw InputError(fmt::format(
+        "the mesh's plan view between z = {} and {} mm: need finite heights, the first the "
+        "lower",
+        z0_mm, z1_mm));
+  }
+  const auto& v = mesh.vertices;
+  // The point of edge (i, j) at height h, computed from the edge's end of lower index, so that
+  // the two triangles of an edge put it on the same grid point.
+  auto edge_at = [&](std::uint32_t i, std::uint32_t j, double h) {
+    if (j < i) std::swap(i, j);
+    const Vec3& a = v[i];
+    const Vec3& b = v[j];
+    const double t = (h - a.z()) / (b.z() - a.z());
+    return cl::IntPoint(
+        static_cast<cl::cInt>(std::llround((a.x() + t * (b.x() - a.x())) * kScale)),
+        static_cast<cl::cInt>(std::llround((a.y() + t * (b.y() - a.y())) * kScale)));
+  };
+  auto grid = [&](std::uint32_t i) {
+    return cl::IntPoint(static_cast<cl::cInt>(std::llround(v[i].x() * kScale)),
+                        static_cast<cl::cInt>(std::llround(v[i].y() * kScale)));
+  };
+  // The triangle's part in lo <= z <= hi (a convex polygon, the triangle's orientation kept),
+  // projected: walking its edges, each vertex in the slab and each crossing of a plane.
+  auto clip = [&](const std::array<std::uint32_t, 3>& t, double lo, double hi, cl::Path& out) {
+    out.clear();
+    for (int q = 0; q < 3; ++q) {
+      const std::uint32_t i = t[static_cast<std::size_t>(q)];
+      const std::uint32_t j = t[static_cast<std::size_t>((q + 1) % 3)];
+      const double za = v[i].z(), zb = v[j].z();
+      if (za >= lo && za <= hi) out.push_back(grid(i));
+      // The planes the edge crosses strictly, in its direction.
+      double hs[2];
+      int n = 0;
+      for (const double h : {lo, hi}) {
+        if (std::isfinite(h) && ((za < h && zb > h) || (za > h && zb < h))) hs[n++] = h;
+      }
+      if (n == 2 && (hs[0] - za) / (zb - za) > (hs[1] - za) / (zb - za)) std::swap(hs[0], hs[1]);
+      for (int k = 0; k < n; ++k) out.push_back(edge_at(i, j, hs[k]));
+    }
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  cl::Clipper section;
+  cl::Paths band;
+  cl::Path poly;
+  for (const auto& t : mesh.triangles) {
+    clip(t, -inf, z0_mm, poly);
+    if (poly.size() >= 3 && cl::Area(poly) != 0) section.AddPath(poly, cl::ptSubject, true);
+    clip(t, z0_mm, z1_mm, poly);
+    if (poly.size() >= 3 && cl::Area(poly) != 0) {
+      if (!cl::Orientation(poly)) std::reverse(poly.begin(), poly.end());
+      band.push_back(poly);
+    }
+  }
+  // Seen from above a face turned down runs clockwise: the section is where the faces turned
+  // down below z0 outnumber those turned up (the winding negative).
+  cl::Paths inside;
+  section.Execute(cl::ctUnion, inside, cl::pftNegative, cl::pftNegative);
+  cl::Clipper all;
+  all.AddPaths(inside, cl::ptSubject, true);  // outer boundaries positive, holes negative
+  all.AddPaths(band, cl::ptSubject, true);    // each positive
+  cl::PolyTree tree;
+  all.Execute(cl::ctUnion, tree, cl::pftPositive, cl::pftPositive);
+  return to_contours(tree);
 }
 
 }  // namespace trochomill

@@ -735,6 +735,34 @@ std::vector<Key> build_schema() {
              "upper corner of the stock box (read with min); `plan` refuses a top above z = 0, "
              "where its rapids come down",
              [](JobReader&, Job&) {}),
+      custom("stock", "mesh", "string", "", "an STL, PLY or OBJ file", "none",
+             "a pocket's stock as a closed triangle mesh (mm, in the drawing's frame, relative "
+             "to the job file; instead of min and max): a casting, a cored or stepped blank. "
+             "The planner clears only where it stands (comes down beside it where it can), "
+             "and the proof, analyze and simulate take it as the stock",
+             [](JobReader& r, Job& job) {
+               if (auto f = r.string("stock", "mesh")) {
+                 if (f->empty()) {
+                   r.problem("stock", "mesh", "names a mesh file; got an empty string");
+                   return;
+                 }
+                 if (!r.has_section("pocket")) {
+                   r.problem("stock", "mesh",
+                             "is read by pocket jobs ([pocket]); a slot's stock mesh is given to "
+                             "optimize-feed --stock");
+                   return;
+                 }
+                 if (r.has("stock", "min") || r.has("stock", "max")) {
+                   r.problem("stock", "mesh",
+                             "give the stock as a box (min and max) or as a mesh, not both");
+                   return;
+                 }
+                 const std::filesystem::path fp(*f);
+                 job.stock_mesh_file = *f;
+                 job.stock_mesh_path =
+                     fp.is_absolute() ? fp : std::filesystem::path(r.source()).parent_path() / fp;
+               }
+             }),
       // [analysis]
       integer("analysis", "steps_per_tooth", 1, 64, FIELD(analysis.steps_per_tooth),
               "engagement samples per tooth pass (the chip spans that many)"),
@@ -1113,6 +1141,19 @@ void check_pocket(JobReader& r, Job& job) {
     }
   }
   if (!r.problems().empty()) return;
+  if (!job.stock_mesh_path.empty()) {
+    // The mesh read once here (a job is copied often: shared), its box the stock's extent.
+    try {
+      auto mesh = std::make_shared<const Mesh>(read_mesh(job.stock_mesh_path));
+      const Box3 box = mesh_bounds(*mesh);
+      job.stock_min_mm = box.lo;
+      job.stock_max_mm = box.hi;
+      job.stock_mesh = std::move(mesh);
+    } catch (const InputError& e) {
+      r.problem("stock", "mesh", e.what());
+      return;
+    }
+  }
   if (!job.stock_min_mm) {
     Box3 box;
     for (const Contour& w : walls) {

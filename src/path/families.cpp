@@ -431,12 +431,14 @@ void check_stock_top(const Job& job) {
   const double top = (*job.stock_max_mm)[2];
   // 1e-9 mm: a top written as 0 in another unit or frame and read back.
   if (top > 1e-9) {
+    const bool mesh = job.stock_mesh != nullptr;
     throw InputError(fmt::format(
-        "{}: [stock] max: the stock's top z = {:g} mm is above the top face z = 0 the program is "
+        "{}: [stock] {}: the stock's top z = {:g} mm is above the top face z = 0 the program is "
         "planned from: its depths and levels are measured from z = 0 and its rapids come down "
         "to [path] clearance = {:g} mm above z = 0. Face the stock down to z = 0 first and "
-        "give [stock] max z <= 0",
-        job.source, top, job.path.clearance_mm));
+        "give {}",
+        job.source, mesh ? "mesh" : "max", top, job.path.clearance_mm,
+        mesh ? "a mesh whose highest vertex is at z <= 0" : "[stock] max z <= 0"));
   }
 }
 

@@ -796,73 +796,69 @@ std::pair<Vec2, double> widest_point(const std::vector<Contour>& part, const Reg
   return {best, std::max(0.0, best_d)};
 }
 
-// The centres of discs of radius R clear of the [stock] box in plan, for a tool centre region
-// spanning lo..hi: the box grown by R (its corners rounded) is their outline, discs `spacing`
+// The centres of discs of radius R clear of the stock in plan (`stock`: the region where it
+// stands, offset_region's form: the [stock] box, or a stock mesh's plan view at a level), for
+// a tool centre region spanning lo..hi: the stock grown by R is their outline, discs `spacing`
 // apart along it (their scallops spacing^2 / 8 R deep), and beyond it a grid of 0.9 R (a point
 // of the outline's band lies within R of an outline disc; one further out within 0.64 R of a
-// grid point, itself beyond). Empty without a [stock] box or where it covers the region and
-// the tool around it.
-std::vector<Vec2> outside_stock_discs(const Job& job, double R, double spacing, const Vec2& lo,
-                                      const Vec2& hi) {
+// grid point, itself beyond). Empty where the stock covers the region and the tool around it.
+std::vector<Vec2> air_discs(const std::vector<Contour>& stock, double R, double spacing,
+                            const Vec2& lo, const Vec2& hi) {
   std::vector<Vec2> out;
-  if (!job.stock_min_mm || !job.stock_max_mm) return out;
-  // The box grown by two spacings: where the tool's circle meets the box's edge from inside,
-  // the stock between them is a sliver microns thick, yet its arc is one with the rest of
-  // the tool's arc in the stock (the engagement jumps as the circle leaves the edge). The
+  // The stock grown by two spacings more: where the tool's circle meets the stock's edge from
+  // inside, the stock between them is a sliver microns thick, yet its arc is one with the rest
+  // of the tool's arc in the stock (the engagement jumps as the circle leaves the edge). The
   // planner, checking a tooth's advance apart, must see that: it takes a band two advances
-  // wide beyond the edge as stock.
-  const double band = 2 * spacing;
-  const double x0 = (*job.stock_min_mm)[0] - band, y0 = (*job.stock_min_mm)[1] - band;
-  const double x1 = (*job.stock_max_mm)[0] + band, y1 = (*job.stock_max_mm)[1] + band;
-  if (lo.x() - R >= x0 && lo.y() - R >= y0 && hi.x() + R <= x1 && hi.y() + R <= y1) return out;
+  // wide beyond the edge as stock. And by Clipper's chords more (they lie within its tolerance
+  // inside the exact offset), so that every disc is clear of the band.
+  const std::vector<Contour> grown =
+      stock.empty() ? std::vector<Contour>{}
+                    : offset_region(stock, R + 2 * spacing + kClipperTol, kClipperTol);
   // Only discs that may meet a tool centred in lo..hi.
   const auto near = [&](const Vec2& p) {
     return p.x() > lo.x() - 2 * R && p.x() < hi.x() + 2 * R && p.y() > lo.y() - 2 * R &&
            p.y() < hi.y() + 2 * R;
   };
-  const auto edge = [&](const Vec2& a, const Vec2& b) {
-    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / spacing)));
-    // The steps whose points may be near (an edge is axis-parallel: one coordinate moves), so
-    // a box far larger than the pocket costs no more than its part near it.
-    int k0 = 0, k1 = n;
-    for (int d = 0; d < 2; ++d) {
-      const double step = (b[d] - a[d]) / n;
-      if (step == 0) continue;
-      const double e0 = (d == 0 ? lo.x() : lo.y()) - 2 * R, e1 = (d == 0 ? hi.x() : hi.y()) + 2 * R;
-      const double ka = (e0 - a[d]) / step, kb = (e1 - a[d]) / step;
-      const auto at_step = [n](double k) { return static_cast<int>(std::clamp(k, -1.0, n + 1.0)); };
-      k0 = std::max(k0, at_step(std::floor(std::min(ka, kb))) - 1);
-      k1 = std::min(k1, at_step(std::ceil(std::max(ka, kb))) + 1);
+  for (const Contour& c : grown) {
+    const std::vector<Vec2> pts = c.points(kClipperTol);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const Vec2& a = pts[i];
+      const Vec2& b = pts[(i + 1) % pts.size()];
+      // An edge wholly beside the window gives none (a stock far larger than the pocket costs
+      // no more than its part near it).
+      if (std::max(a.x(), b.x()) <= lo.x() - 2 * R || std::min(a.x(), b.x()) >= hi.x() + 2 * R ||
+          std::max(a.y(), b.y()) <= lo.y() - 2 * R || std::min(a.y(), b.y()) >= hi.y() + 2 * R) {
+        continue;
+      }
+      const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / spacing)));
+      for (int k = 0; k < n; ++k) {
+        const Vec2 p = a + (b - a) * (static_cast<double>(k) / n);
+        if (near(p)) out.push_back(p);
+      }
     }
-    for (int k = std::max(0, k0); k < k1; ++k) {
-      const Vec2 p = a + (b - a) * (static_cast<double>(k) / n);
-      if (near(p)) out.push_back(p);
-    }
-  };
-  const int nq = std::max(2, static_cast<int>(std::ceil(0.5 * kPi * R / spacing)));
-  const auto corner = [&](const Vec2& c, double a0) {
-    for (int k = 0; k < nq; ++k) {
-      const Vec2 p = c + R * dir(a0 + 0.5 * kPi * k / nq);
-      if (near(p)) out.push_back(p);
-    }
-  };
-  // Counter-clockwise: below, the lower right corner, right, ...
-  edge(Vec2(x0, y0 - R), Vec2(x1, y0 - R));
-  corner(Vec2(x1, y0), -0.5 * kPi);
-  edge(Vec2(x1 + R, y0), Vec2(x1 + R, y1));
-  corner(Vec2(x1, y1), 0);
-  edge(Vec2(x1, y1 + R), Vec2(x0, y1 + R));
-  corner(Vec2(x0, y1), 0.5 * kPi);
-  edge(Vec2(x0 - R, y1), Vec2(x0 - R, y0));
-  corner(Vec2(x0, y0), kPi);
+  }
   const double g = 0.9 * R;
   for (double y = lo.y() - 2 * R + 0.5 * g; y < hi.y() + 2 * R; y += g) {
     for (double x = lo.x() - 2 * R + 0.5 * g; x < hi.x() + 2 * R; x += g) {
-      const double dx = std::max({x0 - x, 0.0, x - x1}), dy = std::max({y0 - y, 0.0, y - y1});
-      if (dx * dx + dy * dy >= R * R) out.emplace_back(x, y);
+      if (!region_contains(grown, Vec2(x, y))) out.emplace_back(x, y);
     }
   }
   return out;
+}
+
+// Where the stock stands in plan for a tool tip at height z (mm): the [stock] mesh's plan view
+// from z up to its top (the column above the tip: the tool comes down from above where there is
+// none, so a finite flute length does not shorten it), else the [stock] box's rectangle.
+std::vector<Contour> stock_plan(const Job& job, double z) {
+  if (job.stock_mesh) {
+    const double top = (*job.stock_max_mm)[2];
+    return mesh_plan_region(*job.stock_mesh, std::min(z, top), top);
+  }
+  if (!job.stock_min_mm || !job.stock_max_mm) return {};
+  const Vec3& a = *job.stock_min_mm;
+  const Vec3& b = *job.stock_max_mm;
+  return {Contour::polyline(
+      {Vec2(a.x(), a.y()), Vec2(b.x(), a.y()), Vec2(b.x(), b.y()), Vec2(a.x(), b.y())}, true)};
 }
 
 // The clearing of one part, as planar moves (the helix's flat circle first).
@@ -881,20 +877,25 @@ struct PartPlan {
   double given_up_mm2 = 0;
   double rest_cleared_mm2 = 0;  // of the coverage, what the earlier program had removed
   double open_mm2 = 0;          // of the coverage, the air beside the [stock] box
+  // Its planner as the plan left it (the removed region: what the level's tool swept, and
+  // what was not there), which deeper levels' lifts ask where they may come down fast.
+  std::shared_ptr<const PartPlanner> planner;
 };
 
 void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out);
 
 // `before`: the discs of what an earlier program removed at the level (rest_disc_centres), or
-// empty; `air`: those of the air beside a [stock] box the pocket runs past
-// (outside_stock_discs), or empty; `holes`: [pocket] entry_holes in the part.
+// empty; `air`: those of the air beside the stock at the level (air_discs: a [stock] box the
+// pocket runs past, a stock mesh), or empty; `holes`: [pocket] entry_holes in the part.
 PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>& part,
                    const std::vector<Vec2>& before, const std::vector<Vec2>& air,
                    const std::vector<Vec2>& holes) {
   const Box3 box = vertex_box(part);
   const Vec2 lo(box.lo.x() - s.R, box.lo.y() - s.R), hi(box.hi.x() + s.R, box.hi.y() + s.R);
-  PartPlanner planner(s, part, lo, hi);
+  const auto owned = std::make_shared<PartPlanner>(s, part, lo, hi);
+  PartPlanner& planner = *owned;
   PartPlan out;
+  out.planner = owned;
   const auto [centre, room] = widest_point(part, planner.region());
   std::optional<Vec2> above;  // where to come down from above
   if (!before.empty() || !air.empty()) {
@@ -1221,25 +1222,31 @@ void check_pocket_stock(const Job& job) {
   const Pocket& pk = job.pocket;
   const Vec3& a = *job.stock_min_mm;
   const Vec3& b = *job.stock_max_mm;
-  const std::vector<Contour> region = pocket_region(pk);
-  const Contour rect = Contour::polyline(
-      {Vec2(a.x(), a.y()), Vec2(b.x(), a.y()), Vec2(b.x(), b.y()), Vec2(a.x(), b.y())}, true);
-  // 1e-6 mm^2: Clipper's rounding of an empty overlap.
-  if (region_area_mm2(region_intersection(region, {rect}, kClipperTol)) <= 1e-6) {
-    const Box3 box = vertex_box(region);
-    throw InputError(fmt::format(
-        "{}: [stock] min, max: the box ({:g}, {:g}) .. ({:g}, {:g}) mm leaves none of the pocket "
-        "of layer '{}' (x {:.4g} .. {:.4g}, y {:.4g} .. {:.4g} mm, less its islands) to cut: "
-        "give a box over the pocket, in the drawing's frame, or no [stock]",
-        job.source, a.x(), a.y(), b.x(), b.y(), pk.boundary, box.lo.x(), box.hi.x(), box.lo.y(),
-        box.hi.y()));
-  }
+  const bool mesh = job.stock_mesh != nullptr;
   if (b.z() <= -pk.depth_mm) {
     throw InputError(fmt::format(
-        "{}: [stock] max: the box's top z = {:g} mm is at or below the pocket's floor z = {:g} "
-        "mm: nothing to cut; give the box in the drawing's frame (its top at z = 0) or no "
-        "[stock]",
-        job.source, b.z(), -pk.depth_mm));
+        "{}: [stock] {}: the {}'s top z = {:g} mm is at or below the pocket's floor z = {:g} mm: "
+        "nothing to cut; give the {} in the drawing's frame (its top at z = 0) or no [stock]",
+        job.source, mesh ? "mesh" : "max", mesh ? "mesh" : "box", b.z(), -pk.depth_mm,
+        mesh ? "mesh" : "box"));
+  }
+  const std::vector<Contour> region = pocket_region(pk);
+  // Where the stock stands above the floor. 1e-6 mm^2: Clipper's rounding of an empty overlap.
+  if (region_area_mm2(region_intersection(region, stock_plan(job, -pk.depth_mm), kClipperTol)) <=
+      1e-6) {
+    const Box3 box = vertex_box(region);
+    const std::string what =
+        mesh ? fmt::format(
+                   "the mesh '{}' (x {:.4g} .. {:.4g}, y {:.4g} .. {:.4g} mm, above the "
+                   "floor z = {:g} mm)",
+                   job.stock_mesh_file, a.x(), b.x(), a.y(), b.y(), -pk.depth_mm)
+             : fmt::format("the box ({:g}, {:g}) .. ({:g}, {:g}) mm", a.x(), a.y(), b.x(), b.y());
+    throw InputError(fmt::format(
+        "{}: [stock] {}: {} leaves none of the pocket of layer '{}' (x {:.4g} .. {:.4g}, y "
+        "{:.4g} .. {:.4g} mm, less its islands) to cut: give {} over the pocket, in the "
+        "drawing's frame, or no [stock]",
+        job.source, mesh ? "mesh" : "min, max", what, pk.boundary, box.lo.x(), box.hi.x(),
+        box.lo.y(), box.hi.y(), mesh ? "a stock" : "a box"));
   }
 }
 
@@ -1313,36 +1320,43 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     }
     holes_of[j].push_back(h);
   }
-  // The air beside a [stock] box the pocket runs past.
-  std::vector<Vec2> air;
-  {
-    const Box3 box = vertex_box(centre_region);
-    air = outside_stock_discs(job, R, rest_spacing_mm(job), Vec2(box.lo.x(), box.lo.y()),
-                              Vec2(box.hi.x(), box.hi.y()));
-  }
+  // The air beside the stock: a [stock] box the pocket runs past (the same at every level), or
+  // a stock mesh's, level by level.
+  const Box3 centre_box = vertex_box(centre_region);
+  auto air_at = [&](double z) {
+    return air_discs(stock_plan(job, z), R, rest_spacing_mm(job),
+                     Vec2(centre_box.lo.x(), centre_box.lo.y()),
+                     Vec2(centre_box.hi.x(), centre_box.hi.y()));
+  };
   const double depth = pk.depth_mm;
   const int levels = pocket_levels(pk);
   // Rest machining: what the earlier program removed at each level. Levels where its removed
-  // region is the same (the same discs) share one plan; a plan per level otherwise.
+  // region and the air are the same (the same discs) share one plan; a plan per level
+  // otherwise.
   std::shared_ptr<const RestStock> rest = pk.rest;
   if (!pk.rest_of.empty() && !rest) rest = std::make_shared<const RestStock>(read_rest(job));
   std::vector<std::size_t> plan_of(static_cast<std::size_t>(levels), 0);  // per level
   std::vector<std::vector<PartPlan>> plans;
-  std::vector<Vec2> before_last;  // the last plan's
+  std::vector<Vec2> before_last, air_last;  // the last plan's
+  const auto same_discs = [](const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
+    return a.size() == b.size() &&
+           std::equal(a.begin(), a.end(), b.begin(),
+                      [](const Vec2& p, const Vec2& q) { return (p - q).norm() <= 1e-9; });
+  };
+  const bool by_level = rest || job.stock_mesh;
+  std::vector<Vec2> air = by_level ? std::vector<Vec2>{} : air_at(0.0);
   for (int k = 1; k <= levels; ++k) {
     const double z = -depth * k / levels;
     std::vector<Vec2> before;
-    if (rest) {
-      before = rest_disc_centres(*rest, z, R, rest_spacing_mm(job));
-      const bool same =
-          k > 1 && before.size() == before_last.size() &&
-          std::equal(before.begin(), before.end(), before_last.begin(),
-                     [](const Vec2& a, const Vec2& b) { return (a - b).norm() <= 1e-9; });
-      if (same) {
+    if (by_level) {
+      if (rest) before = rest_disc_centres(*rest, z, R, rest_spacing_mm(job));
+      if (job.stock_mesh) air = air_at(z);
+      if (k > 1 && same_discs(before, before_last) && same_discs(air, air_last)) {
         plan_of[static_cast<std::size_t>(k - 1)] = plans.size() - 1;
         continue;
       }
       before_last = before;
+      air_last = air;
     } else if (k > 1) {
       continue;  // one plan for every level
     }
@@ -1371,6 +1385,14 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
           std::max(info.planned_max_engagement_deg, pp.planned_max_deg);
     }
   }
+  if (job.stock_mesh) {
+    for (int k = 0; k < levels; ++k) {
+      double a = 0;
+      for (const PartPlan& pp : plans[plan_of[static_cast<std::size_t>(k)]]) a += pp.open_mm2;
+      info.open_mm2_by_level.push_back(a);
+    }
+  }
+  info.plans = static_cast<int>(plans.size());
   if (rest) info.rest_tool_diameter_mm = 2 * rest->tool_radius_mm;
   info.parts = static_cast<int>(parts.size());
 
@@ -1427,9 +1449,21 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     const double z = -depth * k / levels;
     const std::size_t plan = plan_of[static_cast<std::size_t>(k - 1)];
     // A relink point is one the tool centre passed exactly at this level; at the levels above
-    // too where they run the same plan, else only down to the level above.
-    const double relink_z = k > 1 && plan_of[static_cast<std::size_t>(k - 2)] != plan ? z_prev : z;
-    for (const PartPlan& pp : plans[plan]) {
+    // too where they run the same plan. Where they do not, the tool may come down fast to the
+    // clearance above this level only where every plan above left the tool's disc there in its
+    // removed region (cut, or nothing there: air, an earlier program's), else to the clearance
+    // above the level above.
+    const bool same_above = k == 1 || plan_of[static_cast<std::size_t>(k - 2)] == plan;
+    for (std::size_t part = 0; part < plans[plan].size(); ++part) {
+      const PartPlan& pp = plans[plan][part];
+      const auto relink_z = [&](const Vec2& p) {
+        if (same_above) return z;
+        for (int i = 0; i + 1 < k; ++i) {
+          const std::size_t q = plan_of[static_cast<std::size_t>(i)];
+          if (q != plan && !plans[q][part].planner->disc_cleared(p)) return z_prev;
+        }
+        return z;
+      };
       if (pp.nothing) continue;
       const Vec2 c = pp.helix_centre;
       const double rh = pp.helix_radius;
@@ -1482,7 +1516,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
             // A relink point is one the tool centre passed exactly at this level (and so at
             // every level above): its cylinder is cut down to z, so the rapid goes down to
             // the clearance above z.
-            travel(m.piece.end, relink_z + clearance, z);
+            travel(m.piece.end, relink_z(m.piece.end) + clearance, z);
             break;
         }
         if (m.entry) entry_end = path.segments().size();  // the helix's flat circle
@@ -1646,15 +1680,21 @@ double estimate_pocket_memory(const Job& job) {
   const double feed_mm_s = std::max(feed_rate_mm_per_min(job), 1e-3) / 60;
   const double samples =
       levels * clearing_mm / feed_mm_s * job.cutting.spindle_speed_rpm * job.tool.teeth / 60;
-  return 30e6 + cells + 200 * clearing_mm / step + 450 * samples;
+  // The planners of every distinct plan are kept till the program is written (deeper levels'
+  // lifts ask them): one a level where rest_of or a [stock] mesh makes the levels differ. A
+  // stock mesh: its plan views through Clipper, a few hundred bytes a triangle.
+  const double plans = pk.rest_of.empty() && !job.stock_mesh ? 1.0 : levels;
+  const double mesh =
+      job.stock_mesh ? 1000.0 * static_cast<double>(job.stock_mesh->triangles.size()) : 0.0;
+  return 30e6 + plans * (cells + 200 * clearing_mm / step) + mesh + 450 * samples;
 }
 
 PlannedPocket plan_pocket(const Job& job) {
   // The steps' aim below the target: 1.2 degrees held the kernel's largest within the target on
   // the test pockets and the example; where the proof finds more than the target + 2 % all
   // the same (a pass's end hooking into the frontier the last pass left beside a wall, read by
-  // the kernel at its own teeth: 56.06 degrees for a 53 target on the example with a [stock]
-  // box from x = 20.2 mm), the pocket is planned again with the aim 0.5 degrees lower, up to
+  // the kernel at its own teeth: 55.83 degrees for a 53 target on the example with a [stock]
+  // box from x = 18.2 mm), the pocket is planned again with the aim 0.5 degrees lower, up to
   // three times (docs/models.md, "Pockets").
   constexpr double kAimMargin = 1.2, kAimMarginStep = 0.5;
   constexpr int kReplans = 3;

@@ -132,10 +132,20 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         "  entries a level: {} by helix, {} straight down a pre-drilled hole, {} from above "
         "where nothing stands{}\n",
         info.helix_entries, info.hole_entries, info.open_entries,
-        info.open_mm2 > 0 ? fmt::format(" (the pocket runs past the [stock] box: {:.1f} mm^2 "
-                                        "of its area at the deepest level is air)",
+        info.open_mm2 > 0 ? fmt::format(" (beside the stock: {:.1f} mm^2 of its area at the "
+                                        "deepest level is air)",
                                         info.open_mm2)
                           : "");
+  }
+  if (!info.open_mm2_by_level.empty()) {
+    std::string areas;
+    for (const double a : info.open_mm2_by_level) {
+      areas += fmt::format("{}{:.1f}", areas.empty() ? "" : ", ", a);
+    }
+    out += fmt::format(
+        "  the [stock] mesh: air at the levels from the top {} mm^2 of the area the clearing "
+        "covers (entered from above where the tool's disc is clear); {} plan{} for {} level{}\n",
+        areas, info.plans, info.plans == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s");
   }
   out += fmt::format(
       "  engagement target {:.4g} degrees; the planner's largest at its points {:.4g} degrees\n",

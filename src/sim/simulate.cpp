@@ -1006,6 +1006,7 @@ JobSimulation& JobSimulation::operator=(JobSimulation&&) noexcept = default;
 JobSimulation simulate_job_in_arena(const Job& job, const ToolPath& path, double from_s,
                                     double to_s, const SimControl& control,
                                     const Mesh* stock_mesh) {
+  if (!stock_mesh) stock_mesh = job.stock_mesh.get();  // the job's [stock] mesh, else the box
   const SimSettings& s = job.simulation;
   if (!(from_s >= 0) || !(to_s > from_s)) {
     throw InputError(
@@ -1095,6 +1096,7 @@ JobSimulation simulate_job(const Job& job, const ToolPath& path, double from_s, 
 
 MemoryEstimate estimate_simulation_memory(const Job& job, const ToolPath& path, double from_s,
                                           double to_s, const Mesh* stock_mesh) {
+  if (!stock_mesh) stock_mesh = job.stock_mesh.get();  // as simulate_job
   const SimSettings& s = job.simulation;
   const Box3 box = stock_mesh ? mesh_box(*stock_mesh) : job_stock(job);
   const double d = s.resolution_mm;
