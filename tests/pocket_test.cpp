@@ -746,6 +746,18 @@ TEST(Pocket, AStockMeshIsClearedOnlyWhereItStands) {
   m = refused(test::box_mesh({-5, -5, -20}, {65, 45, -6}), "low.stl");
   EXPECT_TRUE(has(m, "[stock] mesh: the mesh's top z = -6 mm is at or below the pocket's floor"))
       << m;
+  // Not a closed solid: a triangle missing (a hole in the surface), or every one turned
+  // inwards. The planner's plan view and the kernel need a solid: refused when the job is read.
+  Mesh holed = core;
+  holed.triangles.pop_back();
+  m = refused(holed, "holed.stl");
+  EXPECT_TRUE(has(m, "[stock] mesh") && has(m, "holed.stl: the stock mesh is not a closed solid") &&
+              has(m, "belongs to one triangle only"))
+      << m;
+  Mesh inside_out = core;
+  for (auto& t : inside_out.triangles) std::swap(t[1], t[2]);
+  m = refused(inside_out, "inside-out.stl");
+  EXPECT_TRUE(has(m, "the stock mesh's triangles face inwards")) << m;
   m = refused(core, "core.stl", "min = [0, 0, -3]\nmax = [1, 1, 0]\n");
   EXPECT_TRUE(has(m, "[stock] mesh: give the stock as a box (min and max) or as a mesh, not both"))
       << m;

@@ -65,6 +65,13 @@ void write_mesh(const std::filesystem::path& file, const Mesh& mesh);
 /// not finite or lies beyond 1 km (1e6 mm).
 [[nodiscard]] Box3 mesh_bounds(const Mesh& mesh);
 
+/// Checks that a mesh is a closed solid: mesh_bounds's checks, every edge of a triangle (other
+/// than a degenerate one) joining it to exactly one other that runs it the other way (a
+/// closed surface, turned consistently; identical vertices are joined when read), and a
+/// positive signed volume (the triangles counter-clockwise seen from outside). Throws
+/// InputError naming the first bad edge's ends (mm).
+void check_closed_mesh(const Mesh& mesh);
+
 /// Where the line along `axis` (0 x, 1 y, 2 z) through (u, v) on the next two axes
 /// (cyclically: y z for x, z x for y, x y for z; mm) crosses the triangle (a, b, c): its
 /// coordinate along the axis (mm), or nothing when it misses or the triangle is edge-on to

@@ -4,6 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <tuple>
+#include <unordered_map>
+#include <vector>
 
 #include "mesh_plugin.hpp"
 #include "trochomill/common/plugin.hpp"
@@ -84,6 +88,78 @@ Box3 mesh_bounds(const Mesh& mesh) {
     }
   }
   return b;
+}
+
+void check_closed_mesh(const Mesh& mesh) {
+  (void)mesh_bounds(mesh);
+  // The vertices joined by position (a reader joins only vertices identical in every
+  // attribute: an STL's differ in their faces' normals).
+  std::vector<std::uint32_t> id(mesh.vertices.size());
+  {
+    std::vector<std::uint32_t> order(mesh.vertices.size());
+    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    const auto less = [&](std::uint32_t a, std::uint32_t b) {
+      const Vec3& p = mesh.vertices[a];
+      const Vec3& q = mesh.vertices[b];
+      return std::tie(p[0], p[1], p[2], a) < std::tie(q[0], q[1], q[2], b);
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      id[order[k]] = k > 0 && mesh.vertices[order[k]] == mesh.vertices[order[k - 1]]
+                         ? id[order[k - 1]]
+                         : order[k];
+    }
+  }
+  // Each directed edge (i, j) of a triangle: a closed surface turned one way has each once, and
+  // its reverse once (the neighbour across it).
+  std::unordered_map<std::uint64_t, int> edges;
+  edges.reserve(3 * mesh.triangles.size());
+  auto key = [](std::uint32_t i, std::uint32_t j) {
+    return (static_cast<std::uint64_t>(i) << 32) | static_cast<std::uint64_t>(j);
+  };
+  double volume = 0;  // six times the signed volume (divergence theorem)
+  for (const auto& tri : mesh.triangles) {
+    const std::array<std::uint32_t, 3> t{id[tri[0]], id[tri[1]], id[tri[2]]};
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;  // a point or a line: no face
+    for (int q = 0; q < 3; ++q)
+      ++edges[key(t[static_cast<std::size_t>(q)], t[static_cast<std::size_t>((q + 1) % 3)])];
+    const Vec3& a = mesh.vertices[t[0]];
+    const Vec3& b = mesh.vertices[t[1]];
+    const Vec3& c = mesh.vertices[t[2]];
+    volume += a.x() * (b.y() * c.z() - b.z() * c.y()) - a.y() * (b.x() * c.z() - b.z() * c.x()) +
+              a.z() * (b.x() * c.y() - b.y() * c.x());
+  }
+  auto at = [&](std::uint32_t i) {
+    const Vec3& p = mesh.vertices[i];
+    return fmt::format("({:.6g}, {:.6g}, {:.6g})", p.x(), p.y(), p.z());
+  };
+  // The first bad edge in the triangles' order (deterministic, whatever the map's).
+  for (const auto& tri : mesh.triangles) {
+    const std::array<std::uint32_t, 3> t{id[tri[0]], id[tri[1]], id[tri[2]]};
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    for (int q = 0; q < 3; ++q) {
+      const std::uint32_t i = t[static_cast<std::size_t>(q)],
+                          j = t[static_cast<std::size_t>((q + 1) % 3)];
+      const int here = edges[key(i, j)];
+      const auto back = edges.find(key(j, i));
+      const int there = back == edges.end() ? 0 : back->second;
+      if (here == 1 && there == 1) continue;
+      throw InputError(fmt::format(
+          "the stock mesh is not a closed solid: its edge from {} to {} mm {} (each edge must "
+          "join exactly two triangles, turned the same way: repair the mesh in the CAD tool "
+          "or a mesh editor)",
+          at(i), at(j),
+          there == 0 ? "belongs to one triangle only (a hole or a crack in the surface)"
+          : here > 1 || there > 1 ? "is shared by more than two triangles"
+                                  : "joins two triangles turned opposite ways"));
+    }
+  }
+  if (!(volume > 0)) {
+    throw InputError(fmt::format(
+        "the stock mesh's triangles face inwards (its signed volume is {:.6g} mm^3): turn them "
+        "counter-clockwise seen from outside",
+        volume / 6));
+  }
 }
 
 std::optional<double> line_crossing(const Vec3& a, const Vec3& b, const Vec3& c, int axis, double u,

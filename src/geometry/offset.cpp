@@ -299,12 +299,17 @@ std::vector<Contour> mesh_plan_region(const Mesh& mesh, double z0_mm, double z1_
         z0_mm, z1_mm));
   }
   const auto& v = mesh.vertices;
-  // The point of edge (i, j) at height h, computed from the edge's end of lower index, so that
-  // the two triangles of an edge put it on the same grid point.
+  // The point of edge (i, j) at height h, computed from the edge's lexicographically first
+  // end, so that the two triangles of an edge put it on the same grid point (whether or not
+  // the reader joined their vertices).
   auto edge_at = [&](std::uint32_t i, std::uint32_t j, double h) {
-    if (j < i) std::swap(i, j);
-    const Vec3& a = v[i];
-    const Vec3& b = v[j];
+    const Vec3* pa = &v[i];
+    const Vec3* pb = &v[j];
+    if (std::tie((*pb)[0], (*pb)[1], (*pb)[2]) < std::tie((*pa)[0], (*pa)[1], (*pa)[2])) {
+      std::swap(pa, pb);
+    }
+    const Vec3& a = *pa;
+    const Vec3& b = *pb;
     const double t = (h - a.z()) / (b.z() - a.z());
     return cl::IntPoint(
         static_cast<cl::cInt>(std::llround((a.x() + t * (b.x() - a.x())) * kScale)),

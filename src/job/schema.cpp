@@ -1145,6 +1145,11 @@ void check_pocket(JobReader& r, Job& job) {
     // The mesh read once here (a job is copied often: shared), its box the stock's extent.
     try {
       auto mesh = std::make_shared<const Mesh>(read_mesh(job.stock_mesh_path));
+      try {
+        check_closed_mesh(*mesh);
+      } catch (const InputError& e) {
+        throw InputError(fmt::format("{}: {}", job.stock_mesh_path.string(), e.what()));
+      }
       const Box3 box = mesh_bounds(*mesh);
       job.stock_min_mm = box.lo;
       job.stock_max_mm = box.hi;
