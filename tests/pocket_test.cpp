@@ -658,11 +658,26 @@ TEST(Pocket, APreDrilledHoleIsTheEntry) {
                                   "bad.toml"));
     });
   };
+  // Each message gives the reason that applies: near a wall (3 mm from it, within R + 0 +
+  // 0.008 mm of the fit and Clipper's chords), outside the boundary, in a rounded corner ((5.3,
+  // 5.3) is 5.3 mm from both walls, but 1.355 mm from the centre (6.258, 6.258) of the corner
+  // the clearing rounds by R / 4 = 1.25 mm).
   std::string m = message("[[45, 20], [3, 20]]");
   EXPECT_TRUE(has(
       m,
       "[pocket] entry_holes: hole 2 (counting from 1) at (3, 20) mm is where the tool centre may "
-      "not go"))
+      "not go: 3 mm from a wall or island, within R + stock_to_leave + 0.008 = 5.008 mm (the "
+      "tool would cut the wall going down it)"))
+      << m;
+  m = message("[[70, 20]]");
+  EXPECT_TRUE(has(m,
+                  "hole 1 (counting from 1) at (70, 20) mm is where the tool centre may not "
+                  "go: outside the boundary (layer 'RECT')"))
+      << m;
+  m = message("[[5.3, 5.3]]");
+  EXPECT_TRUE(has(m,
+                  "hole 1 (counting from 1) at (5.3, 5.3) mm is where the tool centre may not "
+                  "go: in a corner the clearing rounds off (by R / 4 = 1.25 mm"))
       << m;
   m = message("[45, 20]");
   EXPECT_TRUE(has(m, "[pocket] entry_holes: hole 1 (counting from 1) must be a point [x, y]")) << m;

@@ -1310,13 +1310,34 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     std::size_t j = 0;
     while (j < parts.size() && !region_contains(parts[j], h)) ++j;
     if (j == parts.size()) {
+      // Why, the first reason that applies.
+      std::string why;
+      double wall = std::numeric_limits<double>::infinity();
+      for (const Contour& c : region) wall = std::min(wall, c.distance_mm(h));
+      bool in_boundary = false;
+      for (const DrawnContour& b : *pk.boundary_contours) {
+        in_boundary = in_boundary || region_contains({b.contour}, h);
+      }
+      if (!in_boundary) {
+        why = fmt::format("outside the boundary (layer '{}')", pk.boundary);
+      } else if (!region_contains(region, h)) {
+        why = fmt::format("in an island (layer '{}')", pk.islands);
+      } else if (wall < keep) {
+        why = fmt::format(
+            "{:.4g} mm from a wall or island, within R + stock_to_leave + {:g} = {:.4g} mm (the "
+            "tool would cut the wall going down it)",
+            wall, keep - R - stl, keep);
+      } else {
+        why = fmt::format(
+            "in a corner the clearing rounds off (by R / 4 = {:g} mm beyond R + stock_to_leave + "
+            "{:g} = {:.4g} mm from the walls: the finishing pass's)",
+            rc, keep - R - stl, keep);
+      }
       throw InputError(fmt::format(
           "{}: [pocket] entry_holes: hole {} (counting from 1) at ({:g}, {:g}) mm is where the "
-          "tool centre may not go: outside the boundary, in an island, within R + "
-          "stock_to_leave + {:g} = {:.4g} mm of a wall (the tool would cut the wall going down "
-          "it), or in a corner the clearing rounds off (by R / 4 = {:g} mm more: the finishing "
-          "pass's)",
-          job.source, i + 1, h.x(), h.y(), keep - R - stl, keep, rc));
+          "tool centre may not go: {}; give a hole where the tool's disc clears every wall and "
+          "island by stock_to_leave",
+          job.source, i + 1, h.x(), h.y(), why));
     }
     holes_of[j].push_back(h);
   }
