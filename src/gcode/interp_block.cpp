@@ -162,8 +162,11 @@ void Interpreter::check_fanuc_write(int index, std::size_t at, double v) const {
 
 void Interpreter::check_range(char c) const {
   if (std::abs(block_[c]) * unit_ > kMaxCoordinate) {
-    fail_at(block_.col(c), fmt::format("{}{:g} is beyond +-1e6 mm, what trochomill represents",
-                                       upper(c), block_[c]));
+    // Under G20 the word is in inches: the message says so, and what it is in mm.
+    const std::string in_mm =
+        unit_ == 1.0 ? "" : fmt::format(" (inches under G20: {:g} mm)", block_[c] * unit_);
+    fail_at(block_.col(c), fmt::format("{}{:g}{} is beyond +-1e6 mm, what trochomill represents",
+                                       upper(c), block_[c], in_mm));
   }
 }
 
