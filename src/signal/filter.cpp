@@ -134,7 +134,7 @@ double SosFilter::step(double x) {
     const auto& s = sos_.sections[k];
     auto& z = z_[k];
     const double y = s[0] * x + z[0];
-    z[0] = s[1] * x - s[4] * y + z[1];
+    z[0] = s[1] * x + z[1] - s[4] * y;
     z[1] = s[2] * x - s[5] * y;
     x = y;
   }
@@ -163,7 +163,11 @@ class FlushSubnormals {
 
 // One cascade over a block, sample by sample through all sections (as step() does), so the
 // out-of-order core overlaps section k of sample i + 1 with section k + 1 of sample i: the
-// recurrences, not the arithmetic, bound the speed. Up to 12 sections (the design limit).
+// recurrences, not the arithmetic, bound the speed. Each section's first state adds the
+// input's term and the second state before it takes the output's term (b1 x + z2 - a1 y, where
+// scipy writes b1 x - a1 y + z2): the output reaches the next state through a multiply and a
+// subtraction, three dependent operations a sample with the output's addition, not four.
+// Up to 12 sections (the design limit).
 struct Cascade {
   double c[12][5];  // b0, b1, b2, a1, a2
   double z[12][2];
@@ -179,7 +183,7 @@ struct Cascade {
   double step(double x) {
     for (std::size_t k = 0; k < n; ++k) {
       const double y = c[k][0] * x + z[k][0];
-      z[k][0] = c[k][1] * x - c[k][3] * y + z[k][1];
+      z[k][0] = c[k][1] * x + z[k][1] - c[k][3] * y;
       z[k][1] = c[k][2] * x - c[k][4] * y;
       x = y;
     }
@@ -211,7 +215,7 @@ void run_pair(Cascade& a, const double* xa, double* ya, Cascade& b, const double
     v2d x = {xa[i], xb[i]};
     for (std::size_t k = 0; k < ns; ++k) {
       const v2d y = c[k][0] * x + z[k][0];
-      z[k][0] = c[k][1] * x - c[k][3] * y + z[k][1];
+      z[k][0] = c[k][1] * x + z[k][1] - c[k][3] * y;
       z[k][1] = c[k][2] * x - c[k][4] * y;
       x = y;
     }
@@ -242,7 +246,7 @@ void run_three(const std::array<Cascade, 3>& cs, const std::array<double*, 3>& x
     v4d v = {x[0][i], x[1][i], x[2][i], 0.0};
     for (std::size_t k = 0; k < ns; ++k) {
       const v4d y = c[k][0] * v + z[k][0];
-      z[k][0] = c[k][1] * v - c[k][3] * y + z[k][1];
+      z[k][0] = c[k][1] * v + z[k][1] - c[k][3] * y;
       z[k][1] = c[k][2] * v - c[k][4] * y;
       v = y;
     }
