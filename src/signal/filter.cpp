@@ -256,13 +256,26 @@ void run_three(const std::array<Cascade, 3>& cs, const std::array<double*, 3>& x
   }
 }
 
+// One cascade over a block in run_pair's loop, its twin in the other lane on the same input
+// and its output dropped: the pair's loop (its states in vector registers) runs a cascade in
+// about half the time of the scalar loop above, bit for bit the same (run_pair's lanes
+// compute what Cascade::step computes).
+void run_one(Cascade& c, const double* in, double* out, std::size_t n) {
+  Cascade twin = c;
+  constexpr std::size_t kBlock = 1024;
+  double drop[kBlock];
+  for (std::size_t at = 0; at < n; at += kBlock) {
+    const std::size_t m = std::min(kBlock, n - at);
+    run_pair(c, in + at, out + at, twin, in + at, drop, m, false);
+  }
+}
+
 }  // namespace
 
 void SosFilter::process(const double* in, double* out, std::size_t n) {
   if (sos_.sections.size() > 12) throw Error("SosFilter: more than 12 sections");
-  const FlushSubnormals flush;
   Cascade c(sos_, z_);
-  for (std::size_t i = 0; i < n; ++i) out[i] = c.step(in[i]);
+  run_one(c, in, out, n);
   c.save(z_);
 }
 
@@ -327,9 +340,8 @@ void odd_extension(const std::vector<double>& x, std::size_t pad, std::vector<do
 
 void filter_from(const Sos& sos, const std::vector<std::array<double, 2>>& zi, double scale,
                  std::vector<double>& x) {
-  const FlushSubnormals flush;
   Cascade c(sos, scaled(zi, scale));
-  for (double& v : x) v = c.step(v);
+  run_one(c, x.data(), x.data(), x.size());
 }
 
 }  // namespace
