@@ -1,5 +1,6 @@
 // The CLI's path commands: plan (with a feed schedule) writes G-code that check-gcode reads,
 // check-gcode takes the machine from a job, path's CSV, and optimize-feed with a stock mesh.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <array>
@@ -56,6 +57,43 @@ TEST_F(Cli, PlanWritesGcodeThatCheckGcodeReads) {
   EXPECT_NEAR(j["bbox_max_mm"][0].get<double>(), 5.0, 1e-4);
   EXPECT_NEAR(j["bbox_min_mm"][2].get<double>(), -6.0, 1e-12);
   EXPECT_EQ(j["spindle_max_rpm"].get<double>(), 2000.0);
+}
+
+// plan --json of a pocket: the plan's figures and the kernel's proof, the same numbers the
+// summary prints (to its 4 significant digits); with --json - only the JSON on stdout (the
+// summary on stderr); refused for a slot, and with -o - too.
+TEST_F(Cli, PlanJsonGivesAPocketsProof) {
+  const auto ex = test::example("pockets/plate.toml").string();
+  const auto out = (dir_ / "p.ngc").string(), js = (dir_ / "p.json").string();
+  const CliResult r = run_cli("plan " + ex + " -o " + out + " --json " + js);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(test::read_file(js));
+  EXPECT_EQ(j["target_engagement_deg"].get<double>(), 53.0);
+  EXPECT_EQ(j["levels"].get<int>(), 2);
+  EXPECT_EQ(j["plans"].get<int>(), 1);
+  EXPECT_TRUE(j["proven"].get<bool>());
+  const double eng = j["clearing_max_engagement_deg"].get<double>();
+  EXPECT_LE(eng, 53 * 1.02);
+  EXPECT_GT(eng, 45);
+  EXPECT_NE(
+      r.out.find(fmt::format("clearing (entries excepted) engagement max {:.4g} degrees", eng)),
+      std::string::npos)
+      << r.out;
+  EXPECT_EQ(j["clearing_max_at_mm"].size(), 3u);
+  ASSERT_EQ(j["unreachable"].size(), 1u);  // the 96 mm^2 beside the block island
+  EXPECT_NEAR(j["unreachable"][0]["area_mm2"].get<double>(), 96.11, 0.01);
+  // To stdout: the JSON alone.
+  const CliResult o = test::run_command(std::string(TROCHOMILL_CLI) + " plan " + ex + " -o " + out +
+                                        " --json - 2>/dev/null");
+  ASSERT_EQ(o.code, 0);
+  EXPECT_EQ(nlohmann::json::parse(o.out), j);
+  const CliResult both = run_cli("plan " + ex + " -o - --json -");
+  EXPECT_EQ(both.code, 2);
+  EXPECT_NE(both.out.find("-o - and --json -: both to stdout"), std::string::npos) << both.out;
+  const CliResult slot = run_cli("plan " + test::example("wagih2023/trochoidal.toml").string() +
+                                 " -o " + out + " --json " + js);
+  EXPECT_EQ(slot.code, 2);
+  EXPECT_NE(slot.out.find("--json: the plan's JSON is a pocket's"), std::string::npos) << slot.out;
 }
 
 // check-gcode --job takes the machine from the job: its G55 origin, G28 position and tool

@@ -116,7 +116,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
   {
     struct Args {
       JobArgs job;
-      std::string out;
+      std::string out, json;
       std::optional<double> memory_gb;
       bool schedule = false;
       FeedTargetArgs targets;
@@ -126,6 +126,9 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     add_job_args(cmd, a->job);
     add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("-o,--output", a->out, "output G-code file (- for stdout)")->required();
+    cmd->add_option("--json", a->json,
+                    "a pocket job: write the plan's figures and the kernel's proof as JSON (- "
+                    "for stdout)");
     add_key_alias(cmd, a->job, "--dialect", "machine.dialect",
                   "linuxcnc | fanuc | sinumerik | grbl | haas | mach3");
     add_key_alias(cmd, a->job, "--tolerance", "machine.arc_tolerance",
@@ -137,8 +140,17 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                   "target (--h-max), within --min-feed and --max-feed");
     add_feed_target_args(cmd, a->targets);
     cmd->final_callback([a, cmd, &exit_code] {
-      check_outputs({&a->out}, {&a->job.file});
+      check_outputs({&a->out, &a->json}, {&a->job.file});
+      if (a->out == "-" && a->json == "-") {
+        throw InputError("-o - and --json -: both to stdout; give one of them a file");
+      }
       const Job job = a->job.load();
+      if (!a->json.empty() && !job.pocket.defined()) {
+        throw InputError(fmt::format(
+            "--json: the plan's JSON is a pocket's ({} has no [pocket]); a slot's figures are "
+            "analyze --json's",
+            a->job.file));
+      }
       if (job.pocket.defined()) {
         check_memory(
             "plan", estimate_pocket_memory(job), a->memory_gb,
@@ -160,10 +172,12 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       }
       PlannedPath planned;
       std::optional<PocketInfo> pocket;
+      std::string pocket_doc;  // --json
       if (job.pocket.defined()) {
         PlannedPocket pp = plan_pocket(job);  // proven by the kernel
-        std::FILE* to = a->out == "-" ? stderr : stdout;
+        std::FILE* to = a->out == "-" || a->json == "-" ? stderr : stdout;
         fmt::print(to, "{}", pocket_summary(pp.info, pp.proof));
+        if (!a->json.empty()) pocket_doc = pocket_json(pp.info, pp.proof);
         planned.path = std::move(pp.path);
         planned.info.cycles = pp.info.passes;
         planned.info.levels = pp.info.levels;
@@ -181,6 +195,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       }
       const std::string code = write_gcode(job, planned.path, gcode_options(job.machine).write);
       emit(a->out, code);
+      if (!a->json.empty()) emit(a->json, pocket_doc);
       if (fs) {
         fmt::print(stderr,
                    "feed schedule: h_max {:.5f} -> {:.5f} mm (target {:g}), time {:.3f} -> "
@@ -200,14 +215,16 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                      at.y(), at.z(), m->at_s, m->feed_mm_per_min, describe(m->limit));
         }
       }
-      if (a->out != "-" && pocket) {
+      if (a->out == "-" || a->json == "-") {
+        // stdout holds the program or the JSON: nothing else goes there
+      } else if (pocket) {
         fmt::print(
             "{}: pocket, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
             "lines -> {}\n",
             a->job.file, planned.path.length_mm(), planned.path.duration_s(),
             estimate_time_s(planned.path, job.machine), std::count(code.begin(), code.end(), '\n'),
             a->out);
-      } else if (a->out != "-") {
+      } else {
         fmt::print(
             "{}: {} {} cycles, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
             "lines -> {}\n",

@@ -58,8 +58,9 @@ struct PyPath {
   std::shared_ptr<const PyJob> job;  ///< null for a program read without a job
   int cycles = 0;                    ///< trochoid cycles (planned paths)
   std::vector<std::string> warnings;
-  std::string source;  ///< "plan" or the program's name
-  GcodeProgram lines;  ///< a program's line table (segment_lines, source_files) only
+  std::string source;       ///< "plan" or the program's name
+  GcodeProgram lines;       ///< a program's line table (segment_lines, source_files) only
+  std::string pocket_json;  ///< a planned pocket's figures and proof (pocket_json), else empty
 };
 
 /// The job of an argument that may be a Job or a Path (the path's job).

@@ -14,6 +14,7 @@
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/pocket.hpp"
+#include "trochomill/report/path.hpp"
 #include "trochomill/version.hpp"
 
 namespace trochomill::python {
@@ -284,6 +285,15 @@ the job's slot frame when read with a job, else in the program's work frame.)")
           "The program as G-code text (linuxcnc, fanuc, sinumerik, grbl, haas or mach3; default "
           "the job's "
           "machine.dialect), as `trochomill plan` writes it.")
+      .def_property_readonly(
+          "pocket",
+          [](const PyPath& p) -> py::object {
+            return p.pocket_json.empty() ? py::none() : from_json(p.pocket_json);
+          },
+          "A planned pocket's figures and the engagement kernel's proof on its program, as "
+          "`trochomill plan --json` writes them (a dict: target_engagement_deg, "
+          "clearing_max_engagement_deg, clearing_max_at_mm, replans, proven, plans, "
+          "open_mm2_by_level, unreachable, ...); None for a slot or a program read.")
       .def("__repr__", [](const PyPath& p) {
         return fmt::format("<trochomill.Path {}: {} segments, {:.3f} mm, {:.3f} s>", p.source,
                            p.path.segments().size(), p.path.length_mm(), p.path.duration_s());
@@ -305,10 +315,17 @@ the job's slot frame when read with a job, else in the program's work frame.)")
                                    "shorter slot",
                                    job.job.slot.length_mm, job.job.path.step_mm));
         }
-        PlannedPath planned = plan_job(job.job);
         PyPath p;
-        p.path = std::move(planned.path);
-        p.cycles = planned.info.cycles;
+        if (job.job.pocket.defined()) {
+          PlannedPocket pp = plan_pocket(job.job);  // proven by the kernel
+          p.pocket_json = pocket_json(pp.info, pp.proof);
+          p.cycles = pp.info.passes;
+          p.path = std::move(pp.path);
+        } else {
+          PlannedPath planned = plan_job(job.job);
+          p.path = std::move(planned.path);
+          p.cycles = planned.info.cycles;
+        }
         p.source = "plan";
         p.job = std::make_shared<const PyJob>(job);
         return p;

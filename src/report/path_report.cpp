@@ -114,6 +114,49 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
   return out;
 }
 
+std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
+  const auto at = [](const Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
+  nlohmann::json unreachable = nlohmann::json::array();
+  for (const PocketLeftover& l : info.unreachable) {
+    unreachable.push_back({{"area_mm2", l.area_mm2}, {"at_mm", {l.at_mm.x(), l.at_mm.y()}}});
+  }
+  const nlohmann::json j = {
+      {"parts", info.parts},
+      {"levels", info.levels},
+      {"plans", info.plans},
+      {"passes_per_level", info.passes},
+      {"links_down_per_level", info.links_down},
+      {"lifts_per_level", info.lifts},
+      {"clearing_length_per_level_mm", info.clearing_length_mm},
+      {"air_length_per_level_mm", info.air_length_mm},
+      {"entries_per_level",
+       {{"helix", info.helix_entries}, {"hole", info.hole_entries}, {"open", info.open_entries}}},
+      {"open_mm2", info.open_mm2},
+      {"open_mm2_by_level", info.open_mm2_by_level},
+      {"rest_tool_diameter_mm", info.rest_tool_diameter_mm},
+      {"rest_cleared_mm2", info.rest_cleared_mm2},
+      {"target_engagement_deg", info.target_engagement_deg},
+      {"planned_max_engagement_deg", info.planned_max_engagement_deg},
+      {"aim_margin_deg", info.aim_margin_deg},
+      {"replans", info.replans},
+      {"first_proof_max_engagement_deg", info.first_proof_max_deg},
+      {"proven", info.proven},
+      {"clearing_max_engagement_deg", proof.clearing_max_engagement_deg},
+      {"clearing_max_at_mm", at(proof.clearing_max_at_mm)},
+      {"clearing_max_chip_mm", proof.clearing_max_chip_mm},
+      {"clearing_share_above_target", proof.clearing_share_above_target},
+      {"link_feed_max_engagement_deg", proof.air_max_engagement_deg},
+      {"link_feed_max_chip_mm", proof.air_max_chip_mm},
+      {"finish_max_engagement_deg", proof.finish_max_engagement_deg},
+      {"finish_max_at_mm", at(proof.finish_max_at_mm)},
+      {"finish_max_chip_mm", proof.finish_max_chip_mm},
+      {"unreachable", unreachable},
+      {"cusps_mm2", info.cusps_mm2},
+      {"left_for_finish_mm2", info.left_for_finish_mm2},
+  };
+  return j.dump(2) + "\n";
+}
+
 std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
   std::string out = fmt::format(
       "pocket: {} part{}, {} level{}, {} clearing passes a level ({} links staying down, {} "

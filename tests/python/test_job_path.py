@@ -202,6 +202,23 @@ def test_a_slot_along_a_curve_plans_as_the_cli_plans_it():
     assert path.gcode() == cli
 
 
+def test_a_pocket_on_a_stock_mesh_plans_and_proves_as_the_cli():
+    # The cored blank ([stock] mesh, FreeCAD's): the same program and the same proof (plan
+    # --json) as the CLI's; the first level comes down into the core (its air, the second's
+    # none); a slot's plan has no pocket figures.
+    root = pathlib.Path(__file__).resolve().parents[2]
+    ex = str(root / "examples/pockets/cored.toml")
+    path = tm.plan(tm.Job.from_toml(ex))
+    assert path.gcode() == run_cli("plan", ex, "-o", "-").stdout
+    pocket = path.pocket
+    assert pocket == cli_json("plan", ex, "-o", "/dev/null")
+    assert pocket["proven"] is True
+    assert pocket["plans"] == 2
+    assert pocket["open_mm2_by_level"][0] > 200 and pocket["open_mm2_by_level"][1] == 0
+    assert pocket["clearing_max_engagement_deg"] <= 53 * 1.02
+    assert tm.plan(tm.Job.from_toml(root / "examples/wagih2023/trochoidal.toml")).pocket is None
+
+
 def test_other_axes_read_as_check_gcode_reports_them():
     """A and W words: each axis's range (A degrees, W mm) as check-gcode --json gives it, and
     the time of the move of A alone at F degrees/min (90 degrees at 180/min: 30 s), which the

@@ -67,6 +67,9 @@ class Path:
     @property
     def warnings(self) -> list[str]: ...
     @property
+    def pocket(self) -> dict[str, Any] | None:
+        """A planned pocket's figures and the kernel's proof (`plan --json`); None otherwise."""
+    @property
     def source(self) -> str: ...
     @property
     def job(self) -> Job | None: ...

@@ -38,5 +38,8 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 /// engagement kernel's proof on the program, the leftovers beyond reach (area and where) and
 /// what the finishing pass is left.
 [[nodiscard]] std::string pocket_summary(const PocketInfo& info, const PocketProof& proof);
+/// The same as a JSON document (`plan --json`, Python's Path.pocket): the plan's figures and
+/// the proof's, units in the keys (degrees, mm, mm^2), places as [x, y, z] in mm.
+[[nodiscard]] std::string pocket_json(const PocketInfo& info, const PocketProof& proof);
 
 }  // namespace trochomill
