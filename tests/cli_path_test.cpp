@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 #include "cli_util.hpp"
@@ -94,6 +95,36 @@ TEST_F(Cli, PlanJsonGivesAPocketsProof) {
                                  " -o " + out + " --json " + js);
   EXPECT_EQ(slot.code, 2);
   EXPECT_NE(slot.out.find("--json: the plan's JSON is a pocket's"), std::string::npos) << slot.out;
+}
+
+// --stock FILE (plan, analyze, simulate, report): the job key stock.mesh, the file taken from
+// the current folder. The plate with the cored blank given so plans as cored.toml (whose
+// [stock] mesh is that file): the same moves, the core's air at the first level; a slot job
+// refuses it, naming the flag and the key.
+TEST_F(Cli, StockFlagIsTheStockMeshFromTheCurrentFolder) {
+  const auto plate = test::example("pockets/plate.toml").string();
+  const auto blank = std::filesystem::relative(test::example("pockets/cored-blank.stl")).string();
+  const auto a = (dir_ / "a.ngc").string(), b = (dir_ / "b.ngc").string();
+  const CliResult r = run_cli("plan " + plate + " --stock " + blank + " -o " + a);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("the [stock] mesh: air at the levels from the top 229.8, 0.0 mm^2"),
+            std::string::npos)
+      << r.out;
+  ASSERT_EQ(run_cli("plan " + test::example("pockets/cored.toml").string() + " -o " + b).code, 0);
+  const auto moves = [](const std::string& file) {
+    std::string out;
+    std::istringstream in(test::read_file(file));
+    for (std::string line; std::getline(in, line);) {
+      if (!line.empty() && line[0] != '(') out += line + "\n";
+    }
+    return out;
+  };
+  EXPECT_EQ(moves(a), moves(b));
+  const CliResult slot = run_cli("plan " + test::example("wagih2023/trochoidal.toml").string() +
+                                 " --stock " + blank + " -o " + a);
+  EXPECT_EQ(slot.code, 2);
+  EXPECT_NE(slot.out.find("--stock (stock.mesh): is read by pocket jobs"), std::string::npos)
+      << slot.out;
 }
 
 // check-gcode --job takes the machine from the job: its G55 origin, G28 position and tool

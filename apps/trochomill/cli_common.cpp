@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 
@@ -143,6 +144,22 @@ void add_key_alias(CLI::App* cmd, JobArgs& a, const std::string& flag, const std
         a.aliases.push_back({flag, key, v});
       },
       fmt::format("{} (the job key {}: --set {}=VALUE)", help, key, key));
+}
+
+void add_stock_mesh_alias(CLI::App* cmd, JobArgs& a) {
+  cmd->add_option_function<std::string>(
+      "--stock",
+      [&a](const std::string& v) {
+        // A TOML basic string of the absolute path: backslashes and quotes escaped.
+        std::string quoted = "\"";
+        for (const char c : std::filesystem::absolute(v).string()) {
+          if (c == '\\' || c == '"') quoted += '\\';
+          quoted += c;
+        }
+        a.aliases.push_back({"--stock", "stock.mesh", quoted + "\""});
+      },
+      "a pocket's stock as a closed mesh: STL, PLY or OBJ, mm, the drawing's frame (the job "
+      "key stock.mesh, the file relative to the current folder)");
 }
 
 void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,

@@ -55,6 +55,9 @@ void add_job_args(CLI::App* cmd, JobArgs& a);
 /// job schema alone (the message names the flag's key).
 void add_key_alias(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
                    const std::string& help);
+/// --stock FILE: a pocket's stock as a closed mesh, the job key stock.mesh with the file
+/// taken from the current folder (the key's own value is relative to the job file).
+void add_stock_mesh_alias(CLI::App* cmd, JobArgs& a);
 /// A flag without a value that sets a key to `value` (e.g. --chords: machine.arc_output=chords).
 void add_key_flag(CLI::App* cmd, JobArgs& a, const std::string& flag, const std::string& key,
                   const std::string& value, const std::string& help);

@@ -29,6 +29,7 @@ void register_analysis_commands(CLI::App& app, int& exit_code) {
     auto* cmd = app.add_subcommand(
         "analyze", "engagement, chip thickness, times, MRR, waviness of a slot program");
     add_job_args(cmd, a->job);
+    add_stock_mesh_alias(cmd, a->job);
     add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("--gcode", a->gcode, "analyse this NC program instead of the planned path");
     cmd->add_option("--json", a->json, "write the metrics as JSON (- for stdout)");

@@ -124,6 +124,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
     auto a = std::make_shared<Args>();
     auto* cmd = app.add_subcommand("plan", "write the slot program of a job as G-code");
     add_job_args(cmd, a->job);
+    add_stock_mesh_alias(cmd, a->job);
     add_memory_limit(cmd, a->memory_gb);
     cmd->add_option("-o,--output", a->out, "output G-code file (- for stdout)")->required();
     cmd->add_option("--json", a->json,

@@ -44,6 +44,7 @@ void register_report_commands(CLI::App& app, int& exit_code, int argc, char** ar
       "one self-contained HTML page with the figures: path, engagement, walls, "
       "mechanism, forces (and simulation, monitor, calibration, study on request)");
   add_job_args(cmd, a->job);
+  add_stock_mesh_alias(cmd, a->job);
   cmd->add_option("-o,--output", a->output, "the HTML file to write")->required();
   cmd->add_option("--gcode", a->gcode, "report on this NC program instead of the planned path");
   cmd->add_option("--with", a->with,

@@ -30,6 +30,7 @@ void register_simulation_commands(CLI::App& app, int& exit_code) {
     auto* cmd = app.add_subcommand(
         "simulate", "tri-dexel material removal: per-step chip thickness and removed volume");
     add_job_args(cmd, a->job);
+    add_stock_mesh_alias(cmd, a->job);
     cmd->add_option("--gcode", a->gcode, "simulate this NC program instead of the job's path");
     add_window_args(cmd, a->window, "window");
     cmd->add_option("--json", a->json, "write the summary as JSON (- for stdout)");
