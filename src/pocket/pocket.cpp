@@ -824,14 +824,29 @@ std::vector<Vec2> air_discs(const std::vector<Contour>& stock, double R, double 
     for (std::size_t i = 0; i < pts.size(); ++i) {
       const Vec2& a = pts[i];
       const Vec2& b = pts[(i + 1) % pts.size()];
-      // An edge wholly beside the window gives none (a stock far larger than the pocket costs
-      // no more than its part near it).
+      // An edge wholly beside the window gives none.
       if (std::max(a.x(), b.x()) <= lo.x() - 2 * R || std::min(a.x(), b.x()) >= hi.x() + 2 * R ||
           std::max(a.y(), b.y()) <= lo.y() - 2 * R || std::min(a.y(), b.y()) >= hi.y() + 2 * R) {
         continue;
       }
       const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / spacing)));
-      for (int k = 0; k < n; ++k) {
+      // Only the steps whose points may be near (the edge's part in the window, Liang and
+      // Barsky's clip), so that a stock far larger than the pocket costs no more than its part
+      // near it; the points are the whole edge's, k / n along it.
+      double t0 = 0, t1 = 1;
+      for (int d = 0; d < 2; ++d) {
+        const double w0 = (d == 0 ? lo.x() : lo.y()) - 2 * R,
+                     w1 = (d == 0 ? hi.x() : hi.y()) + 2 * R;
+        const double step = b[d] - a[d];
+        if (step == 0) continue;  // within the window's range on this axis (checked above)
+        const double ta = (w0 - a[d]) / step, tb = (w1 - a[d]) / step;
+        t0 = std::max(t0, std::min(ta, tb));
+        t1 = std::min(t1, std::max(ta, tb));
+      }
+      if (t0 > t1) continue;
+      const int k0 = std::max(0, static_cast<int>(std::floor(t0 * n)) - 1);
+      const int k1 = std::min(n, static_cast<int>(std::ceil(t1 * n)) + 1);
+      for (int k = k0; k < k1; ++k) {
         const Vec2 p = a + (b - a) * (static_cast<double>(k) / n);
         if (near(p)) out.push_back(p);
       }
