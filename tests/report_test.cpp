@@ -13,6 +13,7 @@
 
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
+#include "trochomill/pocket.hpp"
 
 namespace trochomill {
 namespace {
@@ -122,6 +123,43 @@ TEST(Report, DataDocumentHoldsTheAnalysisAndCannotCloseItsScript) {
 // example's part.dxf, written by ezdxf, holds a ring (centre (40, 40), radius 30) and an
 // outline (-15..95 x -15..85) besides the centreline. A drawing whose other layer cannot be
 // read (three lines meeting: a branch) keeps the report, without them and with a note.
+// A pocket's [stock] mesh in the page's data: its plan view at the first level (z = -3 mm on
+// the cored blank: the block's outline and the core's, whose radius there is 8 + 2 (4.5 - 3) /
+// 4.5 = 8.667 mm about (36, 33), FreeCAD's chords within 0.01 mm of it); none without a mesh.
+TEST(Report, APocketsStockMeshIsDrawnAtTheFirstLevel) {
+  const auto data = [](const Job& job) {
+    ReportData d;
+    d.job = job;
+    d.path = plan_pocket(d.job).path;
+    return nlohmann::json::parse(report_data_json(d))["path"];
+  };
+  const nlohmann::json p = data(load_job(test::example("pockets/cored.toml")));
+  const auto& st = p["stock"];
+  ASSERT_FALSE(st.is_null());
+  EXPECT_EQ(st["file"], "cored-blank.stl");
+  EXPECT_EQ(st["z_mm"].get<double>(), -3.0);
+  int breaks = 0, on_core = 0;
+  for (std::size_t k = 0; k < st["x_mm"].size(); ++k) {
+    if (st["x_mm"][k].is_null()) {
+      ++breaks;
+      continue;
+    }
+    const double x = st["x_mm"][k], y = st["y_mm"][k];
+    if (breaks == 0) {
+      EXPECT_TRUE(std::abs(x + 5) < 1e-9 || std::abs(x - 85) < 1e-9 || std::abs(y + 5) < 1e-9 ||
+                  std::abs(y - 55) < 1e-9)
+          << x << " " << y;
+    } else {
+      // The core's section: FreeCAD's facets (0.01 mm deflection) and the page's six digits.
+      EXPECT_NEAR(std::hypot(x - 36, y - 33), 8 + 2 * 1.5 / 4.5, 0.02) << x << " " << y;
+      ++on_core;
+    }
+  }
+  EXPECT_EQ(breaks, 1);
+  EXPECT_GT(on_core, 20);
+  EXPECT_TRUE(data(load_job(test::example("pockets/plate.toml")))["stock"].is_null());
+}
+
 TEST(Report, ACurvedSlotShowsTheDrawingsOtherLayers) {
   const auto data = [](const Job& job) {
     ReportData d;

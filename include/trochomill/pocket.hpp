@@ -146,4 +146,8 @@ struct PlannedPocket {
 /// The job's program: the pocket's (plan_pocket) with [pocket], else the slot's (plan_slot).
 [[nodiscard]] PlannedPath plan_job(const Job& job);
 
+/// The pocket's depth levels: equal, each at most [pocket] max_step_down deep (one without
+/// it); the first is at z = -depth / levels.
+[[nodiscard]] int pocket_level_count(const Pocket& pocket);
+
 }  // namespace trochomill

@@ -1769,6 +1769,8 @@ PlannedPocket plan_pocket(const Job& job) {
   return std::move(*best);
 }
 
+int pocket_level_count(const Pocket& pk) { return pocket_levels(pk); }
+
 PlannedPath plan_job(const Job& job) {
   if (!job.pocket.defined()) return plan_slot(job);
   PlannedPocket p = plan_pocket(job);

@@ -14,6 +14,7 @@
 
 #include "trochomill/error.hpp"
 #include "trochomill/geometry/drawing.hpp"
+#include "trochomill/pocket.hpp"
 #include "trochomill/report.hpp"
 #include "trochomill/version.hpp"
 #include "web_assets.hpp"
@@ -168,6 +169,26 @@ json path_part(const ReportData& d) {
   // The drawing under a curved slot: every contour of the other layers (the part's walls,
   // islands, holes), as chords within 0.01 mm, null between them. A drawing whose other layers
   // cannot be read (a gap, a branch) leaves them out with a note; the slot was read alone.
+  // A pocket's [stock] mesh: where it stands at the first level (its plan view from that level
+  // up: a cored hole, a step show as holes and edges in it).
+  json stock = nullptr;
+  if (pocket && d.job.stock_mesh && d.job.stock_max_mm) {
+    const double top = (*d.job.stock_max_mm)[2];
+    const double z1 = -d.job.pocket.depth_mm / pocket_level_count(d.job.pocket);
+    json sx = json::array(), sy = json::array();
+    for (const Contour& c : mesh_plan_region(*d.job.stock_mesh, std::min(z1, top), top)) {
+      const std::vector<Vec2> pts = c.points(0.01);
+      if (!sx.empty()) {
+        sx.push_back(nullptr);
+        sy.push_back(nullptr);
+      }
+      for (std::size_t k = 0; k <= pts.size() && !pts.empty(); ++k) {
+        sx.push_back(number(pts[k % pts.size()].x()));
+        sy.push_back(number(pts[k % pts.size()].y()));
+      }
+    }
+    stock = {{"x_mm", sx}, {"y_mm", sy}, {"z_mm", number(z1)}, {"file", d.job.stock_mesh_file}};
+  }
   json drawing_x = json::array(), drawing_y = json::array(), drawing_layers = json::array();
   json drawing_note = nullptr;
   if ((d.job.slot.curved() || pocket) && !d.job.geometry.path.empty()) {
@@ -228,6 +249,7 @@ json path_part(const ReportData& d) {
                                {"max_engagement_deg", number(d.job.pocket.max_engagement_deg)}}
                         : json(nullptr)},
       {"outline", {{"x_mm", outline_x}, {"y_mm", outline_y}}},
+      {"stock", stock},
       {"drawing",
        {{"x_mm", drawing_x},
         {"y_mm", drawing_y},

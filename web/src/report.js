@@ -551,8 +551,11 @@ function pathPart() {
   const mk = (label, stroke, extra = {}) => ({ label, stroke, facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }],
     paths: polyline, points: { show: false }, width: 1.2, ...extra });
   const hasDrawing = drawing[0].length > 0;
+  const stock = p.stock ? [p.stock.x_mm, p.stock.y_mm] : null;
   const series = [{}, mk(pk ? 'walls and islands' : 'slot', '#5b6475', { width: 2 }),
-    ...(hasDrawing ? [mk(`drawing (${p.drawing.layers.join(', ')})`, '#2da44e', { width: 1.4 })] : []), mk('feed moves', '#9aa4b5'), mk('rapids', '#bf8700', { dash: [6, 4] }),
+    ...(hasDrawing ? [mk(`drawing (${p.drawing.layers.join(', ')})`, '#2da44e', { width: 1.4 })] : []),
+    mk('feed moves', '#9aa4b5'), mk('rapids', '#bf8700', { dash: [6, 4] }),
+    ...(stock ? [mk(`stock mesh '${p.stock.file}' at the first level, z = ${fmtNum(p.stock.z_mm)} mm`, '#1b1f24', { width: 1.8, dash: [4, 4] })] : []),
     mk('entry', '#8250df', { width: 2 }), mk('steady cycle', '#1f6feb', { width: 2.2 }),
     ...(hasEngagement ? [mk(`engagement 90-100 % of ${fmtNum(pk.max_engagement_deg)}°`, '#0598bc', { width: 2 }),
       mk(`engagement above ${fmtNum(pk.max_engagement_deg)}°`, '#cf222e', { width: 3 })] : []),
@@ -561,7 +564,7 @@ function pathPart() {
     const h = p.tool_radius_mm / 6;
     return [[cx - h, cx + h, null, cx, cx], [cy, cy, null, cy - h, cy + h]];
   };
-  const dataTop = [null, outline, ...(hasDrawing ? [drawing] : []), feed, rapid, entry, cycle,
+  const dataTop = [null, outline, ...(hasDrawing ? [drawing] : []), feed, rapid, ...(stock ? [stock] : []), entry, cycle,
     ...(hasEngagement ? [near, over] : []), disc(pos0.x, pos0.y), cross(pos0.x, pos0.y)];
   const iDisc = dataTop.length - 2, iCross = dataTop.length - 1;
   const u = new uPlot({
