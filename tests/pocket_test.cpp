@@ -814,3 +814,55 @@ TEST(Pocket, TheCoredBlankExampleComesDownIntoItsCore) {
   EXPECT_LE(p.proof.clearing_max_engagement_deg, 53 * 1.02);
   EXPECT_GT(p.proof.clearing_max_engagement_deg, 45);
 }
+
+TEST(Pocket, NoRapidEntersTheStockOfAStepMesh) {
+  // The example plate's pocket in a blank with a step: its top at z = 0 for x < 46 mm and at
+  // -4 beyond (an L-shaped profile in x z, extruded along y). The levels' plans differ (the
+  // first has air beyond the step), so a descent at a level comes down fast only where every
+  // level above cleared the tool's disc (a helix start the first level left stock at once
+  // came down 2 mm into it: 0.42 mm axial chips at a G0). The engagement kernel on the program,
+  // on the same mesh: no sample of a rapid going down engages the stock.
+  const std::filesystem::path dir = test::scratch_dir("pocket-step");
+  const std::vector<std::array<double, 2>> xz = {{-5, -12}, {85, -12}, {85, -4},
+                                                 {46, -4},  {46, 0},   {-5, 0}};
+  Mesh m;
+  for (const double y : {-5.0, 55.0}) {
+    for (const auto& q : xz) m.vertices.push_back({q[0], y, q[1]});
+  }
+  const auto n = static_cast<std::uint32_t>(xz.size());
+  // The two ends fanned from the profile's first corner, the sides joining them; turned
+  // outwards (a positive volume).
+  for (std::uint32_t k = 1; k + 1 < n; ++k) {
+    m.triangles.push_back({0, k, k + 1});          // y = -5, facing -y
+    m.triangles.push_back({n, n + k + 1, n + k});  // y = 55, facing +y
+  }
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const std::uint32_t a = k, b = (k + 1) % n;
+    m.triangles.push_back({a, n + b, b});
+    m.triangles.push_back({a, n + a, n + b});
+  }
+  ASSERT_NO_THROW(check_closed_mesh(m));
+  write_mesh(dir / "step.stl", m);
+  const Job job =
+      JobDocument::load(test::source_dir() / "examples/pockets/plate.toml")
+          .build({parse_override("stock.mesh=\"" + (dir / "step.stl").string() + "\"")});
+  const PlannedPocket p = plan_pocket(job);
+  EXPECT_GE(p.info.plans, 2);
+  const EngagementSeries e = compute_engagement(p.path, job, EngagementOptions{});
+  std::size_t rapid = 0;
+  for (std::size_t i = 0; i < e.samples.size(); ++i) {
+    // A rapid going down (a rapid up from a level leaves the frontier beside the tool, which
+    // the kernel reads as an arc in the stock: not cut).
+    if (p.path.segments()[e.samples.segment[i]].motion() != Motion::rapid ||
+        !(e.samples.tz[i] < 0)) {
+      continue;
+    }
+    ++rapid;
+    EXPECT_EQ(e.engagement_angle_rad[i], 0.0)
+        << e.samples.x_mm[i] << " " << e.samples.y_mm[i] << " " << e.samples.z_mm[i] << " seg "
+        << e.samples.segment[i];
+    EXPECT_EQ(e.axial_chip_mm[i], 0.0)
+        << e.samples.x_mm[i] << " " << e.samples.y_mm[i] << " " << e.samples.z_mm[i];
+  }
+  EXPECT_GT(rapid, 50u);
+}

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
@@ -145,7 +146,22 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       if (a->out == "-" && a->json == "-") {
         throw InputError("-o - and --json -: both to stdout; give one of them a file");
       }
+      if (!a->json.empty() && a->json != "-" && a->json == a->out) {
+        throw InputError(fmt::format("-o and --json name the same file '{}': give two", a->out));
+      }
       const Job job = a->job.load();
+      // Nor may an output be the stock mesh the job reads.
+      for (const std::string* o : {&a->out, &a->json}) {
+        std::error_code ec, ec2;
+        if (!job.stock_mesh_path.empty() && !o->empty() && *o != "-" &&
+            std::filesystem::weakly_canonical(*o, ec) ==
+                std::filesystem::weakly_canonical(job.stock_mesh_path, ec2) &&
+            !ec && !ec2) {
+          throw InputError(fmt::format(
+              "{} '{}' is the job's stock mesh ([stock] mesh): writing it would overwrite it",
+              o == &a->out ? "-o" : "--json", *o));
+        }
+      }
       if (!a->json.empty() && !job.pocket.defined()) {
         throw InputError(fmt::format(
             "--json: the plan's JSON is a pocket's ({} has no [pocket]); a slot's figures are "

@@ -149,9 +149,10 @@ void check_closed_mesh(const Mesh& mesh) {
           "join exactly two triangles, turned the same way: repair the mesh in the CAD tool "
           "or a mesh editor)",
           at(i), at(j),
-          there == 0 ? "belongs to one triangle only (a hole or a crack in the surface)"
-          : here > 1 || there > 1 ? "is shared by more than two triangles"
-                                  : "joins two triangles turned opposite ways"));
+          here == 2 && there == 0 ? "is run the same way by two triangles (one of them turned "
+                                    "inside out)"
+          : there == 0 ? "belongs to one triangle only (a hole or a crack in the surface)"
+                       : "is shared by more than two triangles"));
     }
   }
   if (!(volume > 0)) {

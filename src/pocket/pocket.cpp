@@ -867,7 +867,8 @@ std::vector<Vec2> air_discs(const std::vector<Contour>& stock, double R, double 
 std::vector<Contour> stock_plan(const Job& job, double z) {
   if (job.stock_mesh) {
     const double top = (*job.stock_max_mm)[2];
-    return mesh_plan_region(*job.stock_mesh, std::min(z, top), top);
+    if (z > top) return {};  // nothing above the tip: the level is air
+    return mesh_plan_region(*job.stock_mesh, z, top);
   }
   if (!job.stock_min_mm || !job.stock_max_mm) return {};
   const Vec3& a = *job.stock_min_mm;
@@ -1484,21 +1485,22 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     const double z_prev = k == 1 ? 0.0 : -depth * (k - 1) / levels;
     const double z = -depth * k / levels;
     const std::size_t plan = plan_of[static_cast<std::size_t>(k - 1)];
-    // A relink point is one the tool centre passed exactly at this level; at the levels above
-    // too where they run the same plan. Where they do not, the tool may come down fast to the
-    // clearance above this level only where every plan above left the tool's disc there in its
-    // removed region (cut, or nothing there: air, an earlier program's), else to the clearance
-    // above the level above.
-    const bool same_above = k == 1 || plan_of[static_cast<std::size_t>(k - 2)] == plan;
     for (std::size_t part = 0; part < plans[plan].size(); ++part) {
       const PartPlan& pp = plans[plan][part];
-      const auto relink_z = [&](const Vec2& p) {
-        if (same_above) return z;
-        for (int i = 0; i + 1 < k; ++i) {
-          const std::size_t q = plan_of[static_cast<std::size_t>(i)];
-          if (q != plan && !plans[q][part].planner->disc_cleared(p)) return z_prev;
+      // How low the tool may come down fast at p before this level's move there: to `below`
+      // (this level, at a relink point the tool centre passed exactly at this level; the level
+      // above, for an entry) where every level above cleared the tool's disc at p (one running
+      // this level's plan passed p exactly too; another's plan holds the disc in its removed
+      // region: cut, or nothing there), else only to the top of the highest level that did not
+      // (its stock stands there).
+      const auto clear_down_to = [&](const Vec2& p, double below) {
+        for (int i = 1; i < k; ++i) {
+          const std::size_t q = plan_of[static_cast<std::size_t>(i - 1)];
+          if (q != plan && !plans[q][part].planner->disc_cleared(p)) {
+            return i == 1 ? 0.0 : -depth * (i - 1) / levels;
+          }
         }
-        return z;
+        return below;
       };
       if (pp.nothing) continue;
       const Vec2 c = pp.helix_centre;
@@ -1514,7 +1516,10 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
         line_to(at(c, z), Motion::feed, entry_feed);
         line_to(at(start, z), Motion::feed, entry_feed);
       } else {
-        travel(start, z_prev + clearance, z_prev + (k == 1 ? clearance : 0.0));
+        // The helix starts at the top of the stock above it: the level above's, or higher
+        // where a level above left stock there (its plan another than this one's).
+        const double top = clear_down_to(start, z_prev);
+        travel(start, top + clearance, top + (top == 0.0 ? clearance : 0.0));
       }
       // The helix down to z: whole turns at the pitch or less.
       const double drop = here().z() - z;
@@ -1552,7 +1557,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
             // A relink point is one the tool centre passed exactly at this level (and so at
             // every level above): its cylinder is cut down to z, so the rapid goes down to
             // the clearance above z.
-            travel(m.piece.end, relink_z(m.piece.end) + clearance, z);
+            travel(m.piece.end, clear_down_to(m.piece.end, z) + clearance, z);
             break;
         }
         if (m.entry) entry_end = path.segments().size();  // the helix's flat circle
