@@ -564,6 +564,58 @@ ArcSet inside_rect(double cx, double cy, double R, double x0, double x1, double 
   return s;
 }
 
+// The angles (in [0, 2 pi)) where the circle (cx, cy, R) crosses the segment from (px, py) to
+// (rx, ry), appended to `cut`.
+void circle_crossings(double px, double py, double rx, double ry, double cx, double cy, double R,
+                      std::vector<double>& cut) {
+  const double dx = rx - px, dy = ry - py;
+  const double a = dx * dx + dy * dy;
+  if (!(a > 0)) return;
+  const double fx = px - cx, fy = py - cy;
+  const double b = 2 * (fx * dx + fy * dy), c = fx * fx + fy * fy - R * R;
+  const double disc = b * b - 4 * a * c;
+  if (disc < 0) return;
+  const double sq = std::sqrt(disc);
+  for (const double t : {(-b - sq) / (2 * a), (-b + sq) / (2 * a)}) {
+    if (t < 0 || t > 1) continue;
+    cut.push_back(wrap(std::atan2(fy + t * dy, fx + t * dx)));
+  }
+}
+
+// The arcs of a circle over a region, from the angles where the circle crosses the region's
+// outline (`cut`, sorted here) and `inside_at(angle)`, whether the circle's point at an angle
+// lies in it: each piece between crossings tested at its middle, sorted and merged.
+template <class InsideAt>
+ArcSet arcs_inside(std::vector<double>& cut, InsideAt inside_at) {
+  std::sort(cut.begin(), cut.end());
+  ArcSet out;
+  if (cut.empty()) {
+    if (inside_at(0.0)) out.push_back({0.0, kTwoPi});
+    return out;
+  }
+  for (std::size_t q = 0; q < cut.size(); ++q) {
+    const double a = cut[q], b = q + 1 < cut.size() ? cut[q + 1] : cut[0] + kTwoPi;
+    if (b - a < 1e-12 || !inside_at(0.5 * (a + b))) continue;
+    if (b <= kTwoPi) {
+      out.push_back({a, b});
+    } else {
+      out.push_back({a, kTwoPi});
+      out.push_back({0.0, b - kTwoPi});
+    }
+  }
+  std::sort(out.begin(), out.end(),
+            [](const AngleArc& x, const AngleArc& y) { return x.start_rad < y.start_rad; });
+  ArcSet merged;
+  for (const AngleArc& a : out) {
+    if (!merged.empty() && a.start_rad <= merged.back().end_rad) {
+      merged.back().end_rad = std::max(merged.back().end_rad, a.end_rad);
+    } else {
+      merged.push_back(a);
+    }
+  }
+  return merged;
+}
+
 // A plan view of the stock (mesh_plan_region: the region's outline, closed polylines), its
 // edges on a grid of cells: the arcs of a circle over it are split at the circle's crossings
 // with the edges and each piece tested at its midpoint (even-odd, a ray towards +x along the
@@ -600,48 +652,12 @@ class PlanView {
           if (stamp_[k] == tick_) continue;
           stamp_[k] = tick_;
           const auto& [p, r] = edges_[k];
-          const double dx = r.x() - p.x(), dy = r.y() - p.y();
-          const double a = dx * dx + dy * dy;
-          const double fx = p.x() - cx0, fy = p.y() - cy0;
-          const double b = 2 * (fx * dx + fy * dy), c = fx * fx + fy * fy - R * R;
-          const double disc = b * b - 4 * a * c;
-          if (disc < 0) continue;
-          const double sq = std::sqrt(disc);
-          for (const double t : {(-b - sq) / (2 * a), (-b + sq) / (2 * a)}) {
-            if (t < 0 || t > 1) continue;
-            cut.push_back(wrap(std::atan2(fy + t * dy, fx + t * dx)));
-          }
+          circle_crossings(p.x(), p.y(), r.x(), r.y(), cx0, cy0, R, cut);
         }
       }
     }
-    std::sort(cut.begin(), cut.end());
-    auto at = [&](double th) { return contains(cx0 + R * std::cos(th), cy0 + R * std::sin(th)); };
-    ArcSet out;
-    if (cut.empty()) {
-      if (at(0.0)) out.push_back({0.0, kTwoPi});
-      return out;
-    }
-    for (std::size_t q = 0; q < cut.size(); ++q) {
-      const double a = cut[q], b = q + 1 < cut.size() ? cut[q + 1] : cut[0] + kTwoPi;
-      if (b - a < 1e-12 || !at(0.5 * (a + b))) continue;
-      if (b <= kTwoPi) {
-        out.push_back({a, b});
-      } else {
-        out.push_back({a, kTwoPi});
-        out.push_back({0.0, b - kTwoPi});
-      }
-    }
-    std::sort(out.begin(), out.end(),
-              [](const AngleArc& x, const AngleArc& y) { return x.start_rad < y.start_rad; });
-    ArcSet merged;
-    for (const AngleArc& a : out) {
-      if (!merged.empty() && a.start_rad <= merged.back().end_rad) {
-        merged.back().end_rad = std::max(merged.back().end_rad, a.end_rad);
-      } else {
-        merged.push_back(a);
-      }
-    }
-    return merged;
+    return arcs_inside(
+        cut, [&](double th) { return contains(cx0 + R * std::cos(th), cy0 + R * std::sin(th)); });
   }
 
  private:
@@ -768,36 +784,9 @@ class MeshStock {
         }
       }
     }
-    std::sort(cut.begin(), cut.end());
-    ArcSet out;
-    auto at = [&](double th) {
+    return arcs_inside(cut, [&](double th) {
       return covered(cx0 + R * std::cos(th), cy0 + R * std::sin(th), z0, z1);
-    };
-    if (cut.empty()) {
-      if (at(0.0)) out.push_back({0.0, kTwoPi});
-      return out;
-    }
-    for (std::size_t q = 0; q < cut.size(); ++q) {
-      const double a = cut[q], b = q + 1 < cut.size() ? cut[q + 1] : cut[0] + kTwoPi;
-      if (b - a < 1e-12 || !at(0.5 * (a + b))) continue;
-      if (b <= kTwoPi) {
-        out.push_back({a, b});
-      } else {
-        out.push_back({a, kTwoPi});
-        out.push_back({0.0, b - kTwoPi});
-      }
-    }
-    std::sort(out.begin(), out.end(),
-              [](const AngleArc& x, const AngleArc& y) { return x.start_rad < y.start_rad; });
-    ArcSet merged;
-    for (const AngleArc& a : out) {
-      if (!merged.empty() && a.start_rad <= merged.back().end_rad) {
-        merged.back().end_rad = std::max(merged.back().end_rad, a.end_rad);
-      } else {
-        merged.push_back(a);
-      }
-    }
-    return merged;
+    });
   }
 
   struct Tri {
@@ -838,18 +827,7 @@ class MeshStock {
     for (int q = 0; q < n; ++q) {
       const auto& p = poly[q];
       const auto& r = poly[(q + 1) % n];
-      const double dx = r[0] - p[0], dy = r[1] - p[1];
-      const double a = dx * dx + dy * dy;
-      if (!(a > 0)) continue;
-      const double fx = p[0] - cx0, fy = p[1] - cy0;
-      const double b = 2 * (fx * dx + fy * dy), c = fx * fx + fy * fy - R * R;
-      const double disc = b * b - 4 * a * c;
-      if (disc < 0) continue;
-      const double sq = std::sqrt(disc);
-      for (const double t : {(-b - sq) / (2 * a), (-b + sq) / (2 * a)}) {
-        if (t < 0 || t > 1) continue;
-        cut.push_back(wrap(std::atan2(fy + t * dy, fx + t * dx)));
-      }
+      circle_crossings(p[0], p[1], r[0], r[1], cx0, cy0, R, cut);
     }
   }
 
