@@ -748,3 +748,78 @@ TEST(Geometry, SvgBadInputIsRefusedWithWhatIsWrong) {
             }).find("a drawing must be a .dxf or .svg file (got '.png')"),
             std::string::npos);
 }
+
+// The medial axis against closed forms: a straight channel's is its centre line at half its
+// width; a ring's, the middle circle; a T of channels meets at one junction. Every point's
+// disc of its clearance lies in the region (16 points on its circle, 1 um inside).
+TEST(Geometry, AMedialAxisIsTheChannelsCentreLine) {
+  auto inside_discs = [](const std::vector<Contour>& region, const MedialBranch& b) {
+    for (std::size_t i = 0; i < b.points.size(); ++i) {
+      for (int k = 0; k < 16; ++k) {
+        const double a = 2 * M_PI * k / 16;
+        const Vec2 q = b.points[i] + (b.clearance_mm[i] - 1e-3) * Vec2(std::cos(a), std::sin(a));
+        EXPECT_TRUE(region_contains(region, q)) << q.transpose();
+      }
+    }
+  };
+  {
+    const std::vector<Contour> strip{
+        Contour::polyline({Vec2(0, 0), Vec2(60, 0), Vec2(60, 4), Vec2(0, 4)}, true)};
+    const auto axis = medial_axis(strip, 120, 0.5);
+    ASSERT_EQ(axis.size(), 1u);
+    const MedialBranch& b = axis[0];
+    EXPECT_FALSE(b.closed);
+    // From x = 2 to 58 (where the corners' 45 degree spokes, pruned at 90 degrees, begin).
+    const double x0 = std::min(b.points.front().x(), b.points.back().x());
+    const double x1 = std::max(b.points.front().x(), b.points.back().x());
+    EXPECT_NEAR(x0, 2, 1e-6);
+    EXPECT_NEAR(x1, 58, 1e-6);
+    for (std::size_t i = 0; i < b.points.size(); ++i) {
+      EXPECT_NEAR(b.points[i].y(), 2, 1e-6);  // the 1 nm grid's rounding, and more
+      EXPECT_NEAR(b.clearance_mm[i], 2, 1e-6);
+      if (i > 0) {
+        EXPECT_LE((b.points[i] - b.points[i - 1]).norm(), 0.5 + 1e-12);
+      }
+    }
+    inside_discs(strip, b);
+  }
+  {
+    // A ring 4 mm wide about the origin, as offset_region gives it (chords within 1 um).
+    const std::vector<Contour> ring =
+        offset_region({Contour::circle(Vec2(0, 0), 14), Contour::circle(Vec2(0, 0), 10)}, 0, 1e-3);
+    const auto axis = medial_axis(ring, 120, 0.5);
+    ASSERT_EQ(axis.size(), 1u);
+    EXPECT_TRUE(axis[0].closed);
+    double len = 0;
+    for (std::size_t i = 0; i < axis[0].points.size(); ++i) {
+      // The chords lie within 1 um of the circles, their Voronoi edges between.
+      EXPECT_NEAR(axis[0].points[i].norm(), 12, 2e-3);
+      EXPECT_NEAR(axis[0].clearance_mm[i], 2, 2e-3);
+      len += (axis[0].points[(i + 1) % axis[0].points.size()] - axis[0].points[i]).norm();
+    }
+    EXPECT_NEAR(len, 2 * M_PI * 12, 0.01);
+    inside_discs(ring, axis[0]);
+  }
+  {
+    // A T: a bar 4 wide from x = 0 to 40 at y 0..4 and a stem 4 wide down from its middle.
+    const std::vector<Contour> tee{
+        Contour::polyline({Vec2(0, 0), Vec2(18, 0), Vec2(18, -20), Vec2(22, -20), Vec2(22, 0),
+                           Vec2(40, 0), Vec2(40, 4), Vec2(0, 4)},
+                          true)};
+    const auto axis = medial_axis(tee, 120, 0.5);
+    ASSERT_EQ(axis.size(), 3u);
+    // Each branch has one end at the junction: the point of x = 20 as far from the bar's top
+    // wall as from the inside corners (18, 0) and (22, 0): 4 - y = sqrt(4 + y^2), y = 1.5.
+    int at_junction = 0;
+    for (const MedialBranch& b : axis) {
+      EXPECT_FALSE(b.closed);
+      for (const Vec2& e : {b.points.front(), b.points.back()}) {
+        if ((e - Vec2(20, 1.5)).norm() < 1e-6) ++at_junction;
+      }
+      inside_discs(tee, b);
+    }
+    EXPECT_EQ(at_junction, 3);
+  }
+  EXPECT_THROW((void)medial_axis({Contour::polyline({Vec2(0, 0), Vec2(1, 0)}, false)}, 120, 0.5),
+               InputError);
+}

@@ -179,6 +179,26 @@ struct Contour {
 [[nodiscard]] std::vector<Contour> offset_curve(const Contour& contour, double distance_mm,
                                                 double tolerance_mm);
 
+/// A branch of a region's medial axis: points along it at most the spacing asked apart, each
+/// with its clearance (mm, the distance to the region's boundary: the disc of that radius
+/// about it lies in the region). `closed`: a cycle (around an island), its first point not
+/// repeated at the end.
+struct MedialBranch {
+  std::vector<Vec2> points;
+  std::vector<double> clearance_mm;
+  bool closed = false;
+};
+/// The medial axis of a region (closed contours, offset_region's form): the centres of the
+/// largest discs inside it whose two nearest boundary points are seen from the centre at least
+/// `min_angle_deg` apart (the axis of a channel sees its walls 180 degrees apart; the spokes
+/// towards a convex corner of angle alpha, 180 - alpha; those of a chord-approximated arc, a
+/// few degrees: pruned), as branches between junctions and ends. From Boost.Polygon's Voronoi
+/// diagram of the boundary's segments on a 1 nm grid; a curved Voronoi edge (a point and a
+/// segment) is taken as its chord, whose points' clearances are exact nonetheless. In a
+/// deterministic order. Throws InputError for an open contour or a point that is not finite.
+[[nodiscard]] std::vector<MedialBranch> medial_axis(const std::vector<Contour>& region,
+                                                    double min_angle_deg, double spacing_mm);
+
 /// The plan view of a closed mesh taken as a solid (its triangles counter-clockwise seen from
 /// outside) between the heights z0_mm <= z1_mm: the points whose vertical line meets the
 /// solid at some height in [z0, z1], in offset_region's form. Exact up to Clipper's 1 nm

@@ -1,0 +1,181 @@
+// The medial axis of a planar region from Boost.Polygon's Voronoi diagram of its boundary's
+// segments (geometry.hpp, medial_axis).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <boost/polygon/point_data.hpp>
+#include <boost/polygon/segment_data.hpp>
+#include <boost/polygon/voronoi.hpp>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+
+#include "trochomill/error.hpp"
+#include "trochomill/geometry.hpp"
+#include "trochomill/units.hpp"
+
+namespace trochomill {
+
+namespace {
+
+namespace bp = boost::polygon;
+using IPoint = bp::point_data<std::int32_t>;
+using ISegment = bp::segment_data<std::int32_t>;
+using Diagram = bp::voronoi_diagram<double>;
+
+// The closest point to p of the segment [a, b].
+Vec2 foot(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 d = b - a;
+  const double L2 = d.squaredNorm();
+  if (L2 <= 0) return a;
+  return a + std::clamp((p - a).dot(d) / L2, 0.0, 1.0) * d;
+}
+
+}  // namespace
+
+std::vector<MedialBranch> medial_axis(const std::vector<Contour>& region, double min_angle_deg,
+                                      double spacing_mm) {
+  if (!(min_angle_deg > 0 && min_angle_deg < 180)) {
+    throw Error(fmt::format("medial_axis: angle {} degrees: allowed (0, 180)", min_angle_deg));
+  }
+  if (!(spacing_mm > 0) || !std::isfinite(spacing_mm)) {
+    throw Error(fmt::format("medial_axis: spacing {} mm: allowed > 0", spacing_mm));
+  }
+  // The boundary's chords, within 1 um of arcs (offset_region's regions are chords already).
+  std::vector<std::pair<Vec2, Vec2>> edges;
+  Box3 box;
+  for (const Contour& c : region) {
+    if (!c.closed) throw InputError("medial_axis: an open contour bounds no region");
+    const std::vector<Vec2> pts = c.points(1e-3);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      edges.emplace_back(pts[i], pts[(i + 1) % pts.size()]);
+      box.extend(Vec3(pts[i].x(), pts[i].y(), 0));
+    }
+  }
+  if (edges.empty()) return {};
+  // On an integer grid about the box's centre: 1 nm (Clipper's, so offset_region's vertices
+  // come back exactly and its edges, which cross nowhere, still do not) while the region fits
+  // in +-2 m, coarser beyond.
+  const double extent = std::max({box.hi.x() - box.lo.x(), box.hi.y() - box.lo.y(), 1e-3});
+  if (!std::isfinite(extent)) throw InputError("medial_axis: a point is not finite");
+  double scale = 1e6;
+  while (0.5 * extent * scale > 1.9e9) scale /= 10;
+  const Vec2 mid(std::round(0.5 * (box.lo.x() + box.hi.x()) * 1e3) / 1e3,
+                 std::round(0.5 * (box.lo.y() + box.hi.y()) * 1e3) / 1e3);
+  auto to_int = [&](const Vec2& p) {
+    return IPoint(static_cast<std::int32_t>(std::llround((p.x() - mid.x()) * scale)),
+                  static_cast<std::int32_t>(std::llround((p.y() - mid.y()) * scale)));
+  };
+  auto to_mm = [&](double x, double y) { return Vec2(x / scale + mid.x(), y / scale + mid.y()); };
+  std::vector<ISegment> segments;
+  std::vector<std::pair<Vec2, Vec2>> kept;  // each segment in mm, as rounded
+  for (const auto& [a, b] : edges) {
+    const IPoint ia = to_int(a), ib = to_int(b);
+    if (ia == ib) continue;
+    segments.emplace_back(ia, ib);
+    kept.emplace_back(to_mm(ia.x(), ia.y()), to_mm(ib.x(), ib.y()));
+  }
+  Diagram vd;
+  bp::construct_voronoi(segments.begin(), segments.end(), &vd);
+
+  // The site of a cell: a segment, or one of its ends.
+  struct Site {
+    Vec2 a, b;  // a == b for a point
+  };
+  auto site_of = [&](const Diagram::cell_type& cell) {
+    const auto& s = kept[cell.source_index()];
+    switch (cell.source_category()) {
+      case bp::SOURCE_CATEGORY_SEGMENT_START_POINT:
+        return Site{s.first, s.first};
+      case bp::SOURCE_CATEGORY_SEGMENT_END_POINT:
+        return Site{s.second, s.second};
+      default:
+        return Site{s.first, s.second};
+    }
+  };
+  auto clearance = [&](const Vec2& p) {
+    double d = std::numeric_limits<double>::infinity();
+    for (const auto& [a, b] : kept) d = std::min(d, (foot(p, a, b) - p).norm());
+    return d;
+  };
+  const double cos_min = std::cos(deg_to_rad(min_angle_deg));
+
+  // The kept edges: primary, finite, inside the region, their two sites seen from the edge's
+  // middle at least min_angle apart. Vertices numbered in the diagram's order.
+  std::map<const Diagram::vertex_type*, int> index;
+  std::vector<Vec2> nodes;
+  std::vector<std::vector<int>> adj;  // node -> edges
+  std::vector<std::pair<int, int>> links;
+  auto node = [&](const Diagram::vertex_type* v) {
+    const auto [it, fresh] = index.emplace(v, static_cast<int>(nodes.size()));
+    if (fresh) {
+      nodes.push_back(to_mm(v->x(), v->y()));
+      adj.emplace_back();
+    }
+    return it->second;
+  };
+  for (const auto& e : vd.edges()) {
+    if (!e.is_primary() || !e.is_finite()) continue;
+    if (&e > e.twin()) continue;  // each edge once
+    const Vec2 p0 = to_mm(e.vertex0()->x(), e.vertex0()->y());
+    const Vec2 p1 = to_mm(e.vertex1()->x(), e.vertex1()->y());
+    const Vec2 m = 0.5 * (p0 + p1);
+    if (!region_contains(region, p0) || !region_contains(region, p1) ||
+        !region_contains(region, m)) {
+      continue;
+    }
+    const Site sa = site_of(*e.cell()), sb = site_of(*e.twin()->cell());
+    const Vec2 fa = foot(m, sa.a, sa.b) - m, fb = foot(m, sb.a, sb.b) - m;
+    const double na = fa.norm(), nb = fb.norm();
+    if (!(na > 0 && nb > 0) || fa.dot(fb) > cos_min * na * nb) continue;
+    const int i = node(e.vertex0()), j = node(e.vertex1());
+    if (i == j) continue;
+    adj[static_cast<std::size_t>(i)].push_back(static_cast<int>(links.size()));
+    adj[static_cast<std::size_t>(j)].push_back(static_cast<int>(links.size()));
+    links.emplace_back(i, j);
+  }
+
+  // Branches: runs of links between nodes that do not have exactly two; then the cycles left.
+  std::vector<bool> used(links.size(), false);
+  std::vector<MedialBranch> out;
+  auto walk = [&](int from, int first_link) {
+    std::vector<int> path{from};
+    int at = from, l = first_link;
+    for (;;) {
+      used[static_cast<std::size_t>(l)] = true;
+      const auto [a, b] = links[static_cast<std::size_t>(l)];
+      at = a == at ? b : a;
+      path.push_back(at);
+      const auto& here = adj[static_cast<std::size_t>(at)];
+      if (here.size() != 2 || at == from) break;
+      const int next = here[0] == l ? here[1] : here[0];
+      if (used[static_cast<std::size_t>(next)]) break;
+      l = next;
+    }
+    MedialBranch br;
+    br.closed = path.size() > 2 && path.front() == path.back();
+    for (std::size_t k = 0; k + 1 < path.size(); ++k) {
+      const Vec2 a = nodes[static_cast<std::size_t>(path[k])];
+      const Vec2 b = nodes[static_cast<std::size_t>(path[k + 1])];
+      const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / spacing_mm)));
+      for (int q = 0; q < n; ++q) br.points.push_back(a + (b - a) * (static_cast<double>(q) / n));
+    }
+    br.points.push_back(nodes[static_cast<std::size_t>(path.back())]);
+    if (br.closed) br.points.pop_back();
+    for (const Vec2& p : br.points) br.clearance_mm.push_back(clearance(p));
+    out.push_back(std::move(br));
+  };
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    if (adj[n].size() == 2) continue;
+    for (const int l : adj[n]) {
+      if (!used[static_cast<std::size_t>(l)]) walk(static_cast<int>(n), l);
+    }
+  }
+  for (std::size_t l = 0; l < links.size(); ++l) {
+    if (!used[l]) walk(links[l].first, static_cast<int>(l));
+  }
+  return out;
+}
+
+}  // namespace trochomill
