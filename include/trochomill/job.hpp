@@ -96,6 +96,9 @@ struct Pocket {
   double max_chip_mm = 0;           ///< the largest chip that engagement makes, f_z sin (mm)
   bool finish_pass = true;          ///< one pass along walls and islands at full depth
   double fit_tolerance_mm = 0.002;  ///< the clearing path written as arcs within this (mm)
+  /// Parts of the pocket narrower than this (mm) are cleared by trochoidal loops along their
+  /// medial axis (channels); 0: twice the tool's diameter.
+  double channel_width_mm = 0;
   /// The contours (set by the job reader from [geometry] file). Shared: a job is copied often.
   std::shared_ptr<const std::vector<DrawnContour>> boundary_contours, island_contours;
   /// [pocket] rest_of: an earlier program (as written in the job; `rest_of_path` resolved

@@ -33,11 +33,18 @@ struct PocketInfo {
   double target_engagement_deg = 0;  ///< [pocket] max_engagement (or from max_chip)
   /// The planner's own largest engagement at its step points (degrees), entries excepted.
   double planned_max_engagement_deg = 0;
-  int parts = 0;       ///< connected regions the tool centre may reach (each entered once)
-  int levels = 0;      ///< depth levels
-  int passes = 0;      ///< clearing passes per level, all parts
-  int links_down = 0;  ///< links per level that stay down in cleared area
-  int lifts = 0;       ///< links per level that lift over stock
+  int parts = 0;   ///< connected regions the tool centre may reach (each entered once)
+  int levels = 0;  ///< depth levels
+  int passes = 0;  ///< clearing passes per level, all parts
+  /// Channels per level (parts narrower than channel_width_mm) cleared by trochoidal loops
+  /// along their medial axis, all parts.
+  int channels = 0;
+  double channel_width_mm = 0;  ///< [pocket] channel_width, or 2 D (mm)
+  /// The swept band of channels no trochoid could start into, at the deepest level's plan
+  /// (mm^2): left to the finishing pass.
+  double channels_left_mm2 = 0;
+  int links_down = 0;             ///< links per level that stay down in cleared area
+  int lifts = 0;                  ///< links per level that lift over stock
   double clearing_length_mm = 0;  ///< feed length of one level's clearing passes that cut
   /// Length of one level's passes that runs through cleared area, cutting nothing (their runs
   /// at least R long): fed at the link feed (machine.air_feed, else max_feed, else the rapid

@@ -413,6 +413,12 @@ std::vector<Key> build_schema() {
              "(the walls are kept this much further away); at most 0.005 mm: a looser fit moves "
              "the path off the points checked and the target no longer holds (0.1 mm: 63 "
              "degrees for 53)"),
+      number("pocket", "channel_width", "mm", Range{0, 1e4}, FIELD(pocket.channel_width_mm),
+             "parts of the pocket narrower than this are channels, cleared by trochoidal loops "
+             "along their medial axis (each loop as wide as the channel there, each step the "
+             "largest that holds the target); 0: twice the tool's diameter. Parts narrower "
+             "than D + 2 stock_to_leave + R / 2, where the clearing passes do not go, always "
+             "are"),
       custom("pocket", "rest_of", "string", "", "an NC program file", "none",
              "rest machining: the program an earlier tool cleared the pocket with (relative "
              "to the job file); its remaining material is the stock, and only what it left "

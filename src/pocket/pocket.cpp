@@ -156,7 +156,9 @@ class RegionGrid {
 class Coverage {
  public:
   static constexpr double kMaxCells = 4e8;  // a byte each
-  enum : std::uint8_t { kNone = 0, kRemaining = 1, kCovered = 2, kGivenUp = 3 };
+  // kHeld: remaining, but kept for a channel's trochoid (or out of reach until one is cut): the
+  // clearing passes do not head for it.
+  enum : std::uint8_t { kNone = 0, kRemaining = 1, kCovered = 2, kGivenUp = 3, kHeld = 4 };
 
   Coverage(const std::vector<Contour>& reach, double cell_mm, double R)
       : h_(cell_mm), R_(R), test_(reach, std::max(cell_mm, 0.25 * R)) {
@@ -206,11 +208,40 @@ class Coverage {
       } else if (s == kGivenUp) {
         s = kCovered;
         --given_up_;
+      } else if (s == kHeld) {
+        s = kCovered;
+        --held_;
       }
     });
     remaining_ -= n;
     return n;
   }
+  // Holds the remaining cells within `radius` of the segment [a, b] (Coverage::kHeld).
+  void hold(const Vec2& a, const Vec2& b, double radius) {
+    for_cells(a, b, radius, [&](std::uint8_t& s) {
+      if (s == kRemaining) {
+        s = kHeld;
+        --remaining_;
+        ++held_;
+      }
+    });
+  }
+  // The held cells within `radius` of [a, b] remaining again (all of them: radius < 0); or
+  // given up (`give_up`).
+  void release(const Vec2& a, const Vec2& b, double radius, bool give_up = false) {
+    auto f = [&](std::uint8_t& s) {
+      if (s != kHeld) return;
+      s = give_up ? kGivenUp : kRemaining;
+      --held_;
+      ++(give_up ? given_up_ : remaining_);
+    };
+    if (radius >= 0) {
+      for_cells(a, b, radius, f);
+    } else {
+      for (std::uint8_t& s : state_) f(s);
+    }
+  }
+  [[nodiscard]] long held() const { return held_; }
   // Gives up the remaining cells within `radius` of p.
   void give_up(const Vec2& p, double radius) {
     for_cells(p, p, radius, [&](std::uint8_t& s) {
@@ -267,7 +298,7 @@ class Coverage {
   double x0_ = 0, y0_ = 0;
   long nx_ = 0, ny_ = 0;
   std::vector<std::uint8_t> state_;
-  long remaining_ = 0, given_up_ = 0;
+  long remaining_ = 0, given_up_ = 0, held_ = 0;
 };
 
 // One planar move of the clearing sequence of a part (z added per level).
@@ -313,6 +344,59 @@ struct Settings {
   double sigma = 1;              // +1: stock on the right (climb, cw spindle); -1: mirrored
   double fit_tolerance = 0.002;  // [pocket] fit_tolerance (mm)
 };
+
+// A channel: a run of the medial axis of the tool centre's region (unrounded) where the pocket
+// is narrower than [pocket] channel_width, cleared by trochoidal loops along it: circles about
+// its points, each as wide as the region there (the point's clearance), a step apart. Its
+// points are medial_axis's samples (the loops' centres are chosen among them, so that each
+// radius is an exact clearance: the loop's disc lies in the region, the tool R + stock from
+// every wall).
+struct Channel {
+  std::vector<Vec2> c;    // the axis' points
+  std::vector<double> r;  // their clearances (mm)
+  std::vector<double> u;  // arc length from the first (mm)
+  double hold_front = 0;  // the clearing passes clear this much of it from the first point
+  double hold_back = 0;   // ... and from the last
+  bool done = false;
+  [[nodiscard]] std::size_t size() const { return c.size(); }
+  // The axis' direction at point k (mm), towards the last point.
+  [[nodiscard]] Vec2 tangent(std::size_t k) const {
+    const std::size_t a = k == 0 ? 0 : k - 1, b = std::min(size() - 1, k + 1);
+    const Vec2 d = c[b] - c[a];
+    return d.norm() > 0 ? Vec2(d / d.norm()) : Vec2(1, 0);
+  }
+  // The swept band's area (mm^2): the loops' discs grown by R, along the axis.
+  [[nodiscard]] double band_mm2(double R) const {
+    double a = 0;
+    for (std::size_t k = 1; k < size(); ++k) a += (r[k - 1] + r[k] + 2 * R) * (u[k] - u[k - 1]);
+    return a;
+  }
+};
+
+// A channel's loop circle is cut into this many arcs, each at the feed or, where it only grazes
+// (its back, and the sides along the walls between the last loops' scallops), the link feed;
+// the moves join those of one kind again.
+constexpr int kLoopPieces = 16;
+
+// The overlap of two sets of arcs of one circle (uncut_arcs' form: each within [0, 4 pi) and
+// shorter than a turn), in degrees: its total and its widest piece.
+std::pair<double, double> arcs_overlap_deg(const std::vector<AngleArc>& a,
+                                           const std::vector<AngleArc>& b) {
+  double total = 0, widest = 0;
+  for (const AngleArc& x : a) {
+    for (const AngleArc& y : b) {
+      for (const double shift : {-kTwoPi, 0.0, kTwoPi}) {
+        const double o =
+            std::min(x.end_rad, y.end_rad + shift) - std::max(x.start_rad, y.start_rad + shift);
+        if (o > 0) {
+          total += o;
+          widest = std::max(widest, o);
+        }
+      }
+    }
+  }
+  return {rad_to_deg(total), rad_to_deg(widest)};
+}
 
 // The planner of one part: its region, the removed region and the coverage.
 class PartPlanner {
@@ -657,6 +741,273 @@ class PartPlanner {
     return true;
   }
 
+  // A channel's loop: from `from` (the last loop's end) straight to the back point of the
+  // circle of radius rho about channel point k (rho behind it along the axis), then round
+  // the circle back to that point (counter-clockwise with the stock on the right). Its pieces
+  // (the line, the circle in kLoopPieces arcs: the parts that only graze, the loop's back,
+  // go at the link feed), whether each cuts (an uncut arc at one of its
+  // teeth wider than a graze) and the largest engagement at the teeth (a tooth's advance at
+  // the feed apart; each tooth against the removed region and the teeth of the loop before
+  // it). Stops early (ok = false) where a tooth's engagement passes `limit_deg`.
+  struct Loop {
+    bool ok = true;
+    double eng = 0;
+    std::vector<ContourPiece> pieces;
+    std::vector<bool> cuts;
+    Vec2 end = Vec2::Zero();
+  };
+  [[nodiscard]] Loop loop(const Channel& ch, std::size_t k, double rho, const Vec2& from,
+                          bool forward, double limit_deg) const {
+    Loop out;
+    const Vec2 t = forward ? ch.tangent(k) : Vec2(-ch.tangent(k));
+    const Vec2 c = ch.c[k];
+    const Vec2 back = c - rho * t;
+    out.end = back;
+    if ((back - from).norm() > 1e-9) out.pieces.push_back(ContourPiece::line(from, back));
+    if (rho > 1e-9) {
+      const bool ccw = s_.sigma > 0;
+      Vec2 a = back;
+      for (int q = 1; q <= kLoopPieces; ++q) {
+        // The back point turned by q sixteenths of a turn about c.
+        const double ang = (ccw ? 1.0 : -1.0) * kTwoPi * q / kLoopPieces;
+        const Vec2 d = back - c;
+        const Vec2 b = q == kLoopPieces
+                           ? back
+                           : Vec2(c + Vec2(std::cos(ang) * d.x() - std::sin(ang) * d.y(),
+                                           std::sin(ang) * d.x() + std::cos(ang) * d.y()));
+        out.pieces.push_back(ContourPiece::arc(a, b, c, ccw));
+        a = b;
+      }
+    }
+    Box3 box;
+    box.extend(Vec3(from.x(), from.y(), 0));
+    box.extend(Vec3(c.x() - rho, c.y() - rho, 0));
+    box.extend(Vec3(c.x() + rho, c.y() + rho, 0));
+    RemovedRegion local(s_.R, Vec2(box.lo.x(), box.lo.y()), Vec2(box.hi.x(), box.hi.y()));
+    local.cut(from);
+    removed_.focus(c, std::max(rho, (from - c).norm()) + 1e-6);
+    const double tooth = s_.kernel_step;
+    for (const ContourPiece& piece : out.pieces) {
+      bool cuts = false;
+      const int n = std::max(1, static_cast<int>(std::ceil(piece.length_mm() / tooth)));
+      for (int j = 1; j <= n; ++j) {
+        const Vec2 q = piece.point_at(static_cast<double>(j) / n);
+        const auto there = removed_.uncut_arcs(q);
+        if (!there.empty()) {
+          const auto [total, widest] = arcs_overlap_deg(there, local.uncut_arcs(q));
+          out.eng = std::max(out.eng, total);
+          cuts = cuts || widest >= s_.graze_deg;
+          if (out.eng > limit_deg) {
+            out.ok = false;
+            return out;
+          }
+        }
+        local.cut(q);
+      }
+      out.cuts.push_back(cuts);
+    }
+    return out;
+  }
+  // Cuts a loop's pieces into the removed region and the coverage (as cut_step: discs a
+  // tooth's advance apart, at the link feed's for a piece that only grazes).
+  void cut_loop(const Loop& l) {
+    for (std::size_t i = 0; i < l.pieces.size(); ++i) {
+      const ContourPiece& piece = l.pieces[i];
+      const double tooth = std::min(s_.step, l.cuts[i] ? s_.kernel_step : s_.air_tooth);
+      const int n = std::max(1, static_cast<int>(std::ceil(piece.length_mm() / tooth)));
+      Vec2 prev = piece.start;
+      for (int j = 1; j <= n; ++j) {
+        const Vec2 q = piece.point_at(static_cast<double>(j) / n);
+        removed_.cut(q);
+        coverage_.cut_segment(prev, q);
+        prev = q;
+      }
+    }
+    planned_max_ = std::max(planned_max_, l.eng);
+  }
+  // The loop's radius at channel point k: its clearance, a hair less.
+  static double loop_radius(const Channel& ch, std::size_t k) {
+    return std::max(0.0, ch.r[k] * (1 - 1e-9) - 1e-6);
+  }
+
+  // Where a channel's trochoid may start from its first point (forward) or its last: the tool's
+  // disc there cleared. Then the loops about its points from there on that would cut nothing
+  // are passed over (scanned R / 4 apart): the start is the last of them, with the largest
+  // radius that cuts nothing. None: the disc at the end is not cleared.
+  struct Start {
+    std::size_t k = 0;
+    double rho = 0;
+    Vec2 point = Vec2::Zero();  // the loop's back point: where the tool comes to
+  };
+  [[nodiscard]] std::optional<Start> channel_start(const Channel& ch, bool forward) const {
+    const std::size_t n = ch.size();
+    const std::size_t k0 = forward ? 0 : n - 1;
+    if (!disc_cleared(ch.c[k0])) return std::nullopt;
+    auto idle = [&](std::size_t k, double rho) {
+      const Vec2 t = forward ? ch.tangent(k) : Vec2(-ch.tangent(k));
+      const int m = std::max(8, static_cast<int>(std::ceil(kTwoPi * rho / (0.25 * s_.step))));
+      removed_.focus(ch.c[k], rho + 1e-6);
+      for (int j = 0; j < m; ++j) {
+        const Vec2 q = ch.c[k] - rho * dir(std::atan2(t.y(), t.x()) + kTwoPi * j / m);
+        if (uncut(q).widest >= s_.graze_deg) return false;
+      }
+      return true;
+    };
+    Start st{k0, 0, ch.c[k0]};
+    const double stride = 0.25 * s_.R;
+    std::size_t k = k0;
+    for (;;) {
+      if (!idle(k, loop_radius(ch, k))) break;
+      st.k = k;
+      st.rho = loop_radius(ch, k);
+      // The next point a stride on.
+      std::size_t next = k;
+      while (next != (forward ? n - 1 : 0) && std::abs(ch.u[next] - ch.u[k]) < stride) {
+        next = forward ? next + 1 : next - 1;
+      }
+      if (next == k) break;
+      k = next;
+    }
+    if (st.k == k0 && st.rho == 0) {
+      // Not even the loop at the end: the largest radius there that cuts nothing.
+      double lo = 0, hi = loop_radius(ch, k0);
+      for (int i = 0; i < 12; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (idle(k0, mid) ? lo : hi) = mid;
+      }
+      st.rho = lo;
+    }
+    const Vec2 t = forward ? ch.tangent(st.k) : Vec2(-ch.tangent(st.k));
+    st.point = ch.c[st.k] - st.rho * t;
+    return st;
+  }
+
+  // The trochoid along a channel from a start: loop after loop, each the furthest step on
+  // (bisection over the channel's points, up to R) whose teeth hold the aim; where the loop's
+  // radius is below the channel's there (a start), it first grows in place. The pieces and
+  // whether each cuts, cut into the model as they go. Stops where no loop holds (the rest is
+  // left to the clearing passes).
+  struct Trochoid {
+    std::vector<ContourPiece> pieces;
+    std::vector<bool> cuts;
+    bool complete = false;
+  };
+  Trochoid trochoid(const Channel& ch, bool forward, const Start& st) {
+    Trochoid out;
+    const std::size_t n = ch.size();
+    const std::size_t last = forward ? n - 1 : 0;
+    std::size_t k = st.k;
+    double rho = st.rho;
+    Vec2 at = st.point;
+    auto index = [&](std::size_t from, long by) {
+      const long i = static_cast<long>(from) + (forward ? by : -by);
+      return static_cast<std::size_t>(std::clamp(i, 0L, static_cast<long>(n) - 1));
+    };
+    auto emit = [&](const Loop& l) {
+      cut_loop(l);
+      for (std::size_t i = 0; i < l.pieces.size(); ++i) {
+        out.pieces.push_back(l.pieces[i]);
+        out.cuts.push_back(l.cuts[i]);
+      }
+      at = l.end;
+    };
+    long stride = 1;  // the last step, in points
+    for (int guard = 0; guard < 1000000; ++guard) {
+      const double r_here = loop_radius(ch, k);
+      if (rho < r_here - 1e-6) {
+        // Grow in place: the largest radius up to the channel's that holds.
+        Loop best = loop(ch, k, r_here, at, forward, s_.aim_deg);
+        if (!best.ok) {
+          double lo = rho, hi = r_here;
+          best = Loop{};
+          best.ok = false;
+          for (int i = 0; i < 10; ++i) {
+            const double mid = 0.5 * (lo + hi);
+            Loop l = loop(ch, k, mid, at, forward, s_.aim_deg);
+            if (l.ok) {
+              lo = mid;
+              best = std::move(l);
+            } else {
+              hi = mid;
+            }
+          }
+          if (!best.ok || lo - rho < 1e-3 * s_.R) return out;  // stuck
+          rho = lo;
+        } else {
+          rho = r_here;
+        }
+        emit(best);
+        continue;
+      }
+      if (k == last) break;
+      // Step on: the furthest point within R whose loop holds, from the last step doubled.
+      long max_by = 0;
+      while (index(k, max_by + 1) != k && std::abs(ch.u[index(k, max_by + 1)] - ch.u[k]) <= s_.R) {
+        ++max_by;
+        if (index(k, max_by) == last) break;
+      }
+      if (max_by == 0) break;
+      auto attempt = [&](long by) {
+        const std::size_t j = index(k, by);
+        return loop(ch, j, loop_radius(ch, j), at, forward, s_.aim_deg);
+      };
+      long ok_by = 0, bad_by = max_by + 1;
+      Loop ok_loop;
+      for (long by = std::min(std::max(1L, stride), max_by);;) {
+        Loop l = attempt(by);
+        if (l.ok) {
+          ok_by = by;
+          ok_loop = std::move(l);
+          if (by == max_by) break;
+          by = std::min(max_by, 2 * by);
+        } else {
+          bad_by = by;
+          break;
+        }
+      }
+      while (bad_by - ok_by > std::max(1L, ok_by / 16)) {
+        const long mid = (ok_by + bad_by) / 2;
+        if (mid <= 0) break;
+        Loop l = attempt(mid);
+        if (l.ok) {
+          ok_by = mid;
+          ok_loop = std::move(l);
+        } else {
+          bad_by = mid;
+        }
+      }
+      if (ok_by == 0) {
+        // Not even one point on at its full radius: a smaller loop there, to grow next.
+        const std::size_t j = index(k, 1);
+        double lo = 0, hi = loop_radius(ch, j);
+        Loop best;
+        best.ok = false;
+        for (int i = 0; i < 10; ++i) {
+          const double mid = 0.5 * (lo + hi);
+          Loop l = loop(ch, j, mid, at, forward, s_.aim_deg);
+          if (l.ok) {
+            lo = mid;
+            best = std::move(l);
+          } else {
+            hi = mid;
+          }
+        }
+        if (!best.ok) return out;  // stuck
+        k = j;
+        rho = lo;
+        emit(best);
+        stride = 1;
+        continue;
+      }
+      k = index(k, ok_by);
+      rho = loop_radius(ch, k);
+      stride = ok_by;
+      emit(ok_loop);
+    }
+    out.complete = k == last;
+    return out;
+  }
+
  private:
   Settings s_;
   RegionGrid inside_;
@@ -891,21 +1242,150 @@ struct PartPlan {
   double air_length = 0;       // the passes' runs through cleared area, at the link feed
   double planned_max_deg = 0;
   double given_up_mm2 = 0;
-  double rest_cleared_mm2 = 0;  // of the coverage, what the earlier program had removed
-  double open_mm2 = 0;          // of the coverage, the air beside the [stock] box
+  double rest_cleared_mm2 = 0;   // of the coverage, what the earlier program had removed
+  double open_mm2 = 0;           // of the coverage, the air beside the [stock] box
+  int channels = 0;              // channels cleared by trochoids
+  double channels_left_mm2 = 0;  // the bands of channels no trochoid could start into
   // Its planner as the plan left it (the removed region: what the level's tool swept, and
   // what was not there), which deeper levels' lifts ask where they may come down fast.
   std::shared_ptr<const PartPlanner> planner;
 };
 
-void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out);
+void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
+                 std::vector<Channel>& channels);
+
+// A channel split at its point k: the part from k to its last point and the part from k back
+// to its first, each starting at k (where the entry cleared the tool's disc).
+std::pair<Channel, Channel> split_channel(const Channel& ch, std::size_t k) {
+  Channel a, b;
+  for (std::size_t i = k; i < ch.size(); ++i) {
+    a.c.push_back(ch.c[i]);
+    a.r.push_back(ch.r[i]);
+    a.u.push_back(ch.u[i] - ch.u[k]);
+  }
+  for (std::size_t i = k + 1; i-- > 0;) {
+    b.c.push_back(ch.c[i]);
+    b.r.push_back(ch.r[i]);
+    b.u.push_back(ch.u[k] - ch.u[i]);
+  }
+  a.hold_back = ch.hold_back;
+  b.hold_back = ch.hold_front;
+  return {a, b};
+}
+
+// The channels' cells held from the clearing passes (but for hold_front and hold_back from
+// their ends, which the passes clear and the trochoids start from), after splitting the channel
+// whose loops hold the entry point `entry` there.
+void hold_channels(const Settings& s, PartPlanner& planner, const Vec2& entry,
+                   std::vector<Channel>& channels) {
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    const Channel& ch = channels[i];
+    std::size_t best = ch.size();
+    double best_d = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < ch.size(); ++k) {
+      const double d = (ch.c[k] - entry).norm();
+      if (d < ch.r[k] && d < best_d) {
+        best_d = d;
+        best = k;
+      }
+    }
+    if (best == ch.size()) continue;
+    auto [a, b] = split_channel(ch, best);
+    channels[i] = std::move(a);
+    channels.insert(channels.begin() + static_cast<long>(i) + 1, std::move(b));
+    ++i;
+  }
+  std::erase_if(channels, [](const Channel& ch) { return ch.size() < 2; });
+  for (const Channel& ch : channels) {
+    const double L = ch.u.back();
+    for (std::size_t k = 0; k + 1 < ch.size(); ++k) {
+      if (ch.u[k + 1] < ch.hold_front || ch.u[k] > L - ch.hold_back) continue;
+      planner.coverage().hold(ch.c[k], ch.c[k + 1], std::max(ch.r[k], ch.r[k + 1]) + s.R);
+    }
+  }
+}
+
+// The channels of a tool centre region `region0` (unrounded; its convex corners sharp): the
+// runs of its medial axis where the pocket is narrower than `channel_width_mm` (the region's
+// clearance at most half that less `keep`, the tool's radius and the margins) and the loops
+// would be at least R / 20 wide, as Channel. A run that ends where the pocket widens leaves
+// 2R + its half-width there to the clearing passes (the trochoid starts from what they
+// cleared); a run shorter than both of those and R is theirs whole, unless the passes' region
+// (`rounded`: region0 with its corners rounded) leaves it out.
+std::vector<Channel> trochoid_channels(const std::vector<Contour>& region0,
+                                       const std::vector<Contour>& rounded, double R,
+                                       double r_max) {
+  std::vector<Channel> out;
+  // Where the rounded region leaves the channel out (narrower than 2 rc = R / 2 across):
+  // always a channel.
+  r_max = std::max(r_max, 0.25 * R);
+  const double r_min = 0.05 * R;
+  const double spacing = std::clamp(0.01 * R, 0.005, 0.05);
+  const std::vector<MedialBranch> axis = medial_axis(region0, 120, spacing);
+  for (MedialBranch b : axis) {
+    if (b.points.size() < 2) continue;
+    if (b.closed) {
+      // Start at the widest point, so that no run wraps round; a channel all round is opened
+      // there and closed by repeating its first point.
+      const auto widest = static_cast<std::size_t>(
+          std::max_element(b.clearance_mm.begin(), b.clearance_mm.end()) - b.clearance_mm.begin());
+      std::rotate(b.points.begin(), b.points.begin() + static_cast<long>(widest), b.points.end());
+      std::rotate(b.clearance_mm.begin(), b.clearance_mm.begin() + static_cast<long>(widest),
+                  b.clearance_mm.end());
+      b.points.push_back(b.points.front());
+      b.clearance_mm.push_back(b.clearance_mm.front());
+    }
+    const std::size_t m = b.points.size();
+    std::size_t i = 0;
+    while (i < m) {
+      auto in = [&](std::size_t k) {
+        return b.clearance_mm[k] >= r_min && b.clearance_mm[k] <= r_max;
+      };
+      if (!in(i)) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      while (j < m && in(j)) ++j;
+      Channel ch;
+      double u = 0;
+      for (std::size_t k = i; k < j; ++k) {
+        if (k > i) u += (b.points[k] - b.points[k - 1]).norm();
+        ch.c.push_back(b.points[k]);
+        ch.r.push_back(b.clearance_mm[k]);
+        ch.u.push_back(u);
+      }
+      // An end where the pocket goes on: where it widens beyond the channel, or where the
+      // region goes on R / 4 past the end's disc along the axis (a junction, or where the
+      // axis was pruned as the walls open out); not a dead end against a wall.
+      auto goes_on = [&](std::size_t e, std::size_t inner) {
+        const Vec2 t = b.points[e] - b.points[inner];
+        if (!(t.norm() > 0)) return false;
+        return region_contains(region0,
+                               b.points[e] + (b.clearance_mm[e] + 0.25 * R) * t / t.norm());
+      };
+      const bool wide_front = i > 0 ? b.clearance_mm[i - 1] > r_max : goes_on(i, j - 1);
+      const bool wide_back = j < m ? b.clearance_mm[j] > r_max : goes_on(j - 1, i);
+      ch.hold_front = wide_front ? 2 * R + r_max : 0;
+      ch.hold_back = wide_back ? 2 * R + r_max : 0;
+      bool outside = false;  // a part the passes' region leaves out
+      for (const Vec2& p : ch.c) outside = outside || !region_contains(rounded, p);
+      if (ch.size() >= 2 && (outside || u > ch.hold_front + ch.hold_back + R)) {
+        out.push_back(std::move(ch));
+      }
+      i = j;
+    }
+  }
+  return out;
+}
 
 // `before`: the discs of what an earlier program removed at the level (rest_disc_centres), or
 // empty; `air`: those of the air beside the stock at the level (air_discs: a [stock] box the
 // pocket runs past, a stock mesh), or empty; `holes`: [pocket] entry_holes in the part.
+// `channels`: those of the part (trochoid_channels).
 PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>& part,
                    const std::vector<Vec2>& before, const std::vector<Vec2>& air,
-                   const std::vector<Vec2>& holes) {
+                   const std::vector<Vec2>& holes, std::vector<Channel> channels) {
   const Box3 box = vertex_box(part);
   const Vec2 lo(box.lo.x() - s.R, box.lo.y() - s.R), hi(box.hi.x() + s.R, box.hi.y() + s.R);
   const auto owned = std::make_shared<PartPlanner>(s, part, lo, hi);
@@ -929,13 +1409,15 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
     };
     out.open_mm2 = cut_all(air);
     out.rest_cleared_mm2 = cut_all(before);
-    if (planner.coverage().remaining() == 0) {
+    if (planner.coverage().remaining() == 0 && channels.empty()) {
       out.nothing = true;
       return out;
     }
-    // The stock left nearest the widest place, and the place nearest it (on a grid of R / 4)
-    // where the tool's disc lies in the removed region: the tool comes down there.
-    const Vec2 q = *planner.coverage().nearest_remaining(centre);
+    // The stock left nearest the widest place (or a channel's first point), and the place
+    // nearest it (on a grid of R / 4) where the tool's disc lies in the removed region: the
+    // tool comes down there.
+    const auto left = planner.coverage().nearest_remaining(centre);
+    const Vec2 q = left ? *left : channels.front().c.front();
     const double g = 0.25 * s.R;
     double best = std::numeric_limits<double>::infinity();
     for (double y = lo.y() + 0.5 * g; y < hi.y(); y += g) {
@@ -952,7 +1434,8 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
     out.from_above = true;
     out.helix_centre = *above;
     planner.add_exact(*above);
-    plan_passes(s, planner, *above, out);
+    hold_channels(s, planner, *above, channels);
+    plan_passes(s, planner, *above, out, channels);
     return out;
   }
   // A pre-drilled hole in the part (the first listed) is the entry instead of the helix: fed
@@ -987,18 +1470,63 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
     planner.cut(c + rh * dir(turn * kTwoPi * k / n_circle));
   }
   planner.add_exact(start);
+  hold_channels(s, planner, c, channels);
   if (rh > 0) {
     const Vec2 half = c - Vec2(rh, 0);
     out.moves.push_back({Move2::arc_or_line, ContourPiece::arc(start, half, c, turn > 0), true});
     out.moves.push_back({Move2::arc_or_line, ContourPiece::arc(half, start, c, turn > 0), true});
   }
-  plan_passes(s, planner, start, out);
+  plan_passes(s, planner, start, out, channels);
   return out;
 }
 
 // The passes of a part from p (the helix's end, heading along the circle, or a point the tool
 // came down to from above), until the coverage is done.
-void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out) {
+// Moves of a path given as pieces that each cut or not: the runs of pieces that do not cut,
+// at least kMinAirRun R long, at the link feed (air_moves), the rest at the feed.
+void add_piece_moves(const Settings& s, PartPlanner& planner,
+                     const std::vector<ContourPiece>& pieces, const std::vector<bool>& cuts,
+                     PartPlan& out) {
+  std::size_t i = 0;
+  while (i < pieces.size()) {
+    std::size_t j = i;
+    double len = 0;
+    while (j < pieces.size() && cuts[j] == cuts[i]) len += pieces[j++].length_mm();
+    // Arcs of one circle joined (a loop's pieces), up to a turn.
+    std::vector<ContourPiece> run;
+    double sweep = 0;
+    for (std::size_t k = i; k < j; ++k) {
+      const ContourPiece& q = pieces[k];
+      if (!run.empty() && run.back().is_arc() && q.is_arc() && run.back().ccw == q.ccw &&
+          (*run.back().centre - *q.centre).norm() <= 1e-12 &&
+          sweep + q.length_mm() / q.radius_mm() < kTwoPi - 1e-6) {
+        run.back() = ContourPiece::arc(run.back().start, q.end, *q.centre, q.ccw);
+        sweep += q.length_mm() / q.radius_mm();
+        continue;
+      }
+      run.push_back(q);
+      sweep = q.is_arc() ? q.length_mm() / q.radius_mm() : 0;
+    }
+    std::vector<Move2> moves;
+    if (!cuts[i] && len >= kMinAirRun * s.R) {
+      moves = air_moves(run, s.kernel_step);
+    } else {
+      for (const ContourPiece& piece : run) moves.push_back({Move2::arc_or_line, piece});
+    }
+    for (const Move2& m : moves) {
+      out.moves.push_back(m);
+      planner.add_exact(m.piece.end);
+      (m.kind == Move2::air ? out.air_length : out.clearing_length) += m.piece.length_mm();
+    }
+    i = j;
+  }
+}
+
+// The passes of a part from p (the helix's end, heading along the circle, or a point the tool
+// came down to from above), until the coverage is done; the channels' trochoids as soon as
+// one can start (the nearest first), their cells held from the passes until then.
+void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
+                 std::vector<Channel>& channels) {
   double psi = s.sigma * 0.5 * kPi;  // the helix circle's tangent at angle 0
   std::optional<Vec2> target;
   if (out.from_above) {
@@ -1010,8 +1538,79 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out)
     }
   }
   const double cell = planner.coverage().cell_mm();
+  // Goes to q at the level where the tool only grazes on the way, else over the stock.
+  auto go_to = [&](const Vec2& q) {
+    if ((q - p).norm() <= 1e-9) return;
+    const bool down = planner.link_down(p, q);
+    out.moves.push_back({down ? Move2::link_down : Move2::lift, ContourPiece::line(p, q)});
+    ++(down ? out.links_down : out.lifts);
+    p = q;
+  };
+  // Every channel that can start, the nearest start first; whether one ran.
+  auto run_channels = [&]() {
+    bool any = false;
+    for (;;) {
+      std::optional<PartPlanner::Start> best;
+      Channel* best_ch = nullptr;
+      bool best_forward = true;
+      for (Channel& ch : channels) {
+        if (ch.done) continue;
+        for (const bool forward : {true, false}) {
+          const auto st = planner.channel_start(ch, forward);
+          if (st && (!best || (st->point - p).norm() < (best->point - p).norm())) {
+            best = st;
+            best_ch = &ch;
+            best_forward = forward;
+          }
+        }
+      }
+      if (!best) return any;
+      // The start's disc is cleared: the tool may come down there.
+      planner.add_exact(best->point);
+      go_to(best->point);
+      const auto tro = planner.trochoid(*best_ch, best_forward, *best);
+      add_piece_moves(s, planner, tro.pieces, tro.cuts, out);
+      if (!tro.pieces.empty()) p = tro.pieces.back().end;
+      ++out.channels;
+      best_ch->done = true;
+      // What the loops did not take is the passes' again.
+      for (std::size_t k = 0; k + 1 < best_ch->size(); ++k) {
+        planner.coverage().release(best_ch->c[k], best_ch->c[k + 1], best_ch->r[k] + s.R);
+      }
+      target.reset();
+      any = true;
+    }
+  };
+  // Where to go on: the remaining stock nearest to here, from the cut centre nearest to it.
+  auto go_on = [&]() {
+    const auto next = planner.coverage().nearest_remaining(p);
+    if (!next) return false;
+    go_to(planner.nearest_exact(*next));
+    const Vec2 to = *next - p;
+    psi = std::atan2(to.y(), to.x());
+    target = *next;
+    return true;
+  };
+  if (run_channels() && !go_on()) target.reset();
   // (A guard: each pass gains coverage or gives some up, so the cells bound the count.)
-  for (int guard = 0; guard < 10000000 && planner.coverage().remaining() > 0; ++guard) {
+  for (int guard = 0; guard < 10000000; ++guard) {
+    if (planner.coverage().remaining() == 0) {
+      // The channels that can start now, then the passes for what they left; else the
+      // cells held for channels that never could start are given up.
+      if (run_channels() && go_on()) continue;
+      if (planner.coverage().held() > 0) {
+        // No channel can start (the passes did not clear where one would): their cells are the
+        // passes' (which may clear a channel's end, and a trochoid start there after all).
+        planner.coverage().release(Vec2::Zero(), Vec2::Zero(), -1);
+        if (go_on()) continue;
+      }
+      for (Channel& ch : channels) {
+        if (ch.done) continue;
+        ch.done = true;
+        out.channels_left_mm2 += ch.band_mm2(s.R);
+      }
+      break;
+    }
     const long before = planner.coverage().remaining();
     Pass pass = planner.run_pass(p, psi, target);
     const long gained = before - planner.coverage().remaining();
@@ -1043,9 +1642,11 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out)
       ++out.passes;
       p = pass.points.back();
     }
-    // Where to go on: the remaining stock nearest to here, from the cut centre nearest to it.
-    const auto next = planner.coverage().nearest_remaining(p);
-    if (!next) break;
+    if (run_channels()) {
+      if (!go_on()) continue;  // nothing remaining: the top of the loop decides
+      continue;
+    }
+    if (!planner.coverage().nearest_remaining(p)) continue;
     if (gained < 2 && target) {
       // The last pass made for this stock and took (almost) none: it is out of reach at the
       // target (an inside corner's last material): left to the finishing pass.
@@ -1053,16 +1654,7 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out)
       target.reset();
       continue;
     }
-    const Vec2 from = planner.nearest_exact(*next);
-    if ((from - p).norm() > 1e-9) {
-      const bool down = planner.link_down(p, from);
-      out.moves.push_back({down ? Move2::link_down : Move2::lift, ContourPiece::line(p, from)});
-      ++(down ? out.links_down : out.lifts);
-      p = from;
-    }
-    const Vec2 to = *next - p;
-    psi = std::atan2(to.y(), to.x());
-    target = *next;
+    go_on();
   }
   out.planned_max_deg = planner.planned_max_deg();
   out.given_up_mm2 = static_cast<double>(planner.coverage().given_up()) * cell * cell;
@@ -1292,7 +1884,10 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   std::vector<Contour> centre_region = offset_region(region, -(keep + rc), kClipperTol);
   if (!centre_region.empty() && rc > 0)
     centre_region = offset_region(centre_region, rc, kClipperTol);
-  if (centre_region.empty()) {
+  // Unrounded: the channels' loops reach its walls (and its parts narrower than 2 rc, which
+  // the rounding leaves out).
+  const std::vector<Contour> centre_region0 = offset_region(region, -keep, kClipperTol);
+  if (centre_region0.empty()) {
     throw InputError(fmt::format(
         "[pocket] boundary: the tool (D = {:g} mm) with stock_to_leave = {:g} mm fits nowhere in "
         "layer '{}' (the pocket is narrower than D + 2 stock everywhere)",
@@ -1318,7 +1913,32 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   PlannedPocket out;
   PocketInfo& info = out.info;
   info.target_engagement_deg = pk.max_engagement_deg;
-  const auto parts = region_parts(centre_region);
+  // The channels: narrower than [pocket] channel_width (2 D where 0).
+  const double channel_width = pk.channel_width_mm > 0 ? pk.channel_width_mm : 4 * R;
+  info.channel_width_mm = channel_width;
+  std::vector<Channel> channels =
+      trochoid_channels(centre_region0, centre_region, R, 0.5 * channel_width - keep);
+  // The parts: those of the unrounded region (a channel narrower than 2 rc joins what the
+  // rounded one parts), each cleared by the passes in the rounded region's parts inside it
+  // (in their order), or where none is, in itself (a pocket that is all narrow channel).
+  std::vector<std::vector<Contour>> parts;
+  std::vector<std::vector<Channel>> channels_of;
+  {
+    const auto rounded_parts = region_parts(centre_region);
+    for (const auto& part0 : region_parts(centre_region0)) {
+      std::vector<Contour> part;
+      for (const auto& rp : rounded_parts) {
+        if (region_contains(part0, rp.front().pieces.front().start)) {
+          part.insert(part.end(), rp.begin(), rp.end());
+        }
+      }
+      parts.push_back(part.empty() ? part0 : part);
+      channels_of.emplace_back();
+      for (const Channel& ch : channels) {
+        if (region_contains(part0, ch.c[ch.size() / 2])) channels_of.back().push_back(ch);
+      }
+    }
+  }
   // Pre-drilled holes: each where the tool centre may go, given to the part holding it.
   std::vector<std::vector<Vec2>> holes_of(parts.size());
   for (std::size_t i = 0; i < pk.entry_holes_mm.size(); ++i) {
@@ -1359,7 +1979,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   }
   // The air beside the stock: a [stock] box the pocket runs past (the same at every level), or
   // a stock mesh's, level by level.
-  const Box3 centre_box = vertex_box(centre_region);
+  const Box3 centre_box = vertex_box(centre_region.empty() ? centre_region0 : centre_region);
   auto air_at = [&](double z) {
     return air_discs(stock_plan(job, z), R, rest_spacing_mm(job),
                      Vec2(centre_box.lo.x(), centre_box.lo.y()),
@@ -1400,7 +2020,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     plan_of[static_cast<std::size_t>(k - 1)] = plans.size();
     plans.emplace_back();
     for (std::size_t j = 0; j < parts.size(); ++j) {
-      plans.back().push_back(plan_part(job, s, parts[j], before, air, holes_of[j]));
+      plans.back().push_back(plan_part(job, s, parts[j], before, air, holes_of[j], channels_of[j]));
     }
   }
   // The figures of a level: the deepest's plan (every level's without rest_of).
@@ -1413,6 +2033,8 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     info.left_for_finish_mm2 += pp.given_up_mm2;
     info.rest_cleared_mm2 += pp.rest_cleared_mm2;
     info.open_mm2 += pp.open_mm2;
+    info.channels += pp.channels;
+    info.channels_left_mm2 += pp.channels_left_mm2;
     if (pp.nothing) continue;
     ++(pp.from_hole ? info.hole_entries : pp.from_above ? info.open_entries : info.helix_entries);
   }
@@ -1573,7 +2195,8 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     const double z = -depth;
     const double margin = 2 * kClipperTol;  // the chords and the fit, inside the walls' offset
     auto finish = offset_region(region, -(R + margin), kClipperTol);
-    const RegionGrid cleared(centre_region, std::max(0.25, 0.25 * R));
+    const RegionGrid cleared(centre_region.empty() ? centre_region0 : centre_region,
+                             std::max(0.25, 0.25 * R));
     for (Contour& c : finish) {
       if (mirror) c = c.reversed();
       std::vector<Vec2> pts = c.points(kClipperTol);

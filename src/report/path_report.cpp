@@ -125,6 +125,9 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
       {"levels", info.levels},
       {"plans", info.plans},
       {"passes_per_level", info.passes},
+      {"channels_per_level", info.channels},
+      {"channel_width_mm", info.channel_width_mm},
+      {"channels_left_mm2", info.channels_left_mm2},
       {"links_down_per_level", info.links_down},
       {"lifts_per_level", info.lifts},
       {"clearing_length_per_level_mm", info.clearing_length_mm},
@@ -164,6 +167,18 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
       "level\n",
       info.parts, info.parts == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s", info.passes,
       info.links_down, info.lifts, info.clearing_length_mm, info.air_length_mm);
+  if (info.channels > 0) {
+    out += fmt::format(
+        "  {} channel{} (narrower than {:g} mm) cleared by trochoidal loops along the medial axis "
+        "a level\n",
+        info.channels, info.channels == 1 ? "" : "s", info.channel_width_mm);
+  }
+  if (info.channels_left_mm2 > 0) {
+    out += fmt::format(
+        "  warning: {:.4g} mm^2 of channels no trochoid could enter from cleared area is left to "
+        "the finishing pass\n",
+        info.channels_left_mm2);
+  }
   if (info.rest_tool_diameter_mm > 0) {
     out += fmt::format(
         "  rest machining after a {:g} mm tool: {:.1f} mm^2 of this tool's area at the deepest "
@@ -217,7 +232,11 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         at(proof.clearing_max_at_mm),
         proof.clearing_max_engagement_deg - info.target_engagement_deg);
   }
-  if (info.air_length_mm > 0 || info.links_down > 0) {
+  if ((info.air_length_mm > 0 || info.links_down > 0) && !(proof.air_max_engagement_deg > 0)) {
+    out +=
+        "  the kernel on the program: moves at the link feed (through cleared area) touch no "
+        "stock\n";
+  } else if (info.air_length_mm > 0 || info.links_down > 0) {
     out += fmt::format(
         "  the kernel on the program: moves at the link feed (through cleared area) chip max "
         "{:.5f} mm, engagement max {:.4g} degrees at {} (the feed marks such moves leave, a "

@@ -10,6 +10,11 @@ Layers (sharp corners unless said):
   ISL      a 12 x 8 mm block at (215, 12) and a 6 mm radius boss at (250, 25)
   NECK     two 30 x 30 mm rooms joined by a 14 mm wide neck, at x 300
   CIRC     a circle of radius 20 mm at (450, 20)
+  CHAN     a 60 x 14 mm channel at x 500 (narrower than 2 D for a 10 mm tool)
+  RING     a circle of radius 24 mm at (620, 30) about an island on RINGI, a circle of 10 mm:
+           a ring channel 14 mm wide
+  THIN     a 40 x 40 mm room at x 700 with a channel 11.2 mm wide and 40 mm long off its
+           side (narrower than D + 2 stock + R / 2)
   OPEN     an open polyline (a pocket's wall must be closed)
   OUT      an island outside RECT;  OVER  two islands inside RECT that overlap
 """
@@ -32,6 +37,11 @@ m.add_circle((250, 25), 6.0, dxfattribs={"layer": "ISL"})
 poly([(300, 0), (330, 0), (330, 8), (345, 8), (345, 0), (375, 0), (375, 30), (345, 30),
       (345, 22), (330, 22), (330, 30), (300, 30)], "NECK")
 m.add_circle((450, 20), 20.0, dxfattribs={"layer": "CIRC"})
+poly([(500, 0), (560, 0), (560, 14), (500, 14)], "CHAN")
+m.add_circle((620, 30), 24.0, dxfattribs={"layer": "RING"})
+m.add_circle((620, 30), 10.0, dxfattribs={"layer": "RINGI"})
+poly([(700, 0), (740, 0), (740, 14.4), (780, 14.4), (780, 25.6), (740, 25.6), (740, 40),
+      (700, 40)], "THIN")
 m.add_lwpolyline([(0, 100), (50, 100), (50, 140)], dxfattribs={"layer": "OPEN"})
 m.add_circle((80, 20), 5.0, dxfattribs={"layer": "OUT"})
 m.add_circle((20, 20), 6.0, dxfattribs={"layer": "OVER"})
