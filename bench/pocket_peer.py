@@ -106,7 +106,8 @@ def run_adaptive(area, job, boundary, islands, log_path):
     target = math.radians(job["pocket"]["max_engagement"])
     a2d.stepOverFactor = round(100 * (1 - math.cos(target)) / 2) / 100
     a2d.stockToLeave = float(job["pocket"].get("stock_to_leave", 0.0))
-    a2d.helixRampDiameter = 0.0  # FreeCAD's default HelixDiameterLimit (0: libarea's own)
+    # FreeCAD's HelixDiameterLimit: its default 0 (libarea's own), or --helix-diameter.
+    a2d.helixRampDiameter = float(job.get("_helix_diameter", 0.0))
     a2d.keepToolDownDistRatio = 3.0  # FreeCAD's default KeepToolDownRatio
     a2d.tolerance = 0.1  # FreeCAD's default Tolerance (accuracy vs speed)
     a2d.forceInsideOut = False  # FreeCAD's default
@@ -476,6 +477,9 @@ def main():
     ap.add_argument("trochomill_bin")
     ap.add_argument("work_dir")
     ap.add_argument("--job", help="pocket job (default: examples/pockets/plate.toml)")
+    ap.add_argument("--helix-diameter", type=float, default=0.0,
+                    help="FreeCAD's HelixDiameterLimit (mm; default 0, libarea's own): a narrow "
+                         "pocket may need one that fits")
     args = ap.parse_args()
 
     area = load_area()
@@ -495,6 +499,7 @@ def main():
     os.makedirs(work, exist_ok=True)
     with open(job_path, "rb") as f:
         job = tomllib.load(f)
+    job["_helix_diameter"] = args.helix_diameter
 
     # The pocket's geometry from the job's drawing.
     doc = ezdxf.readfile(os.path.join(os.path.dirname(job_path), job["geometry"]["file"]))
