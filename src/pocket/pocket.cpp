@@ -2350,7 +2350,17 @@ double estimate_pocket_memory(const Job& job) {
   const double plans = pk.rest_of.empty() && !job.stock_mesh ? 1.0 : levels;
   const double mesh =
       job.stock_mesh ? 1000.0 * static_cast<double>(job.stock_mesh->triangles.size()) : 0.0;
-  return 30e6 + plans * (cells + 200 * clearing_mm / step) + mesh + 450 * samples;
+  // The channels' medial axis: the Voronoi diagram of the region's chords (within Clipper's
+  // 1 um), a few hundred bytes each, and its samples.
+  double chords = 0;
+  for (const auto* layer : {pk.boundary_contours.get(), pk.island_contours.get()}) {
+    if (layer == nullptr) continue;
+    for (const DrawnContour& c : *layer) {
+      chords += static_cast<double>(c.contour.points(kClipperTol).size());
+    }
+  }
+  const double medial = 1000 * chords + 50 * clearing_mm / std::clamp(0.01 * R, 0.005, 0.05);
+  return 30e6 + plans * (cells + 200 * clearing_mm / step) + mesh + medial + 450 * samples;
 }
 
 PlannedPocket plan_pocket(const Job& job) {
