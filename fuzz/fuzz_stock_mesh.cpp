@@ -6,7 +6,8 @@
 // at most 32 triangles): closed, open, flat, degenerate and self-crossing meshes alike. Every
 // input is an InputError or boards whose rays hold sorted, disjoint intervals within the box,
 // an engagement whose arcs are each at most a turn from an angle on the circle and whose
-// numbers are finite, and a plan view (mesh_plan_region) of closed contours within the box.
+// numbers are finite, and a plan view (mesh_plan_region) of closed contours within the box
+// whose medial axis' discs lie inside it.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -129,6 +130,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     const double area = region_area_mm2(region);
     if (!(area >= -1e-9 && area <= (b.hi[0] - b.lo[0]) * (b.hi[1] - b.lo[1]) + 1e-6)) std::abort();
+    // Its medial axis (the pocket planner's channels): finite points with finite clearances,
+    // each point's disc of its clearance inside the region (8 points on its circle, a hair in).
+    for (const MedialBranch& br : medial_axis(region, 120, 0.05)) {
+      if (br.points.size() != br.clearance_mm.size()) std::abort();
+      for (std::size_t i = 0; i < br.points.size(); ++i) {
+        const Vec2& p = br.points[i];
+        const double r = br.clearance_mm[i];
+        if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !(r >= 0) || !std::isfinite(r)) {
+          std::abort();
+        }
+        const double in = r * (1 - 1e-6) - 1e-5;
+        if (in <= 0) continue;
+        for (int k = 0; k < 8; ++k) {
+          const double a = kTwoPi * k / 8;
+          if (!region_contains(region, p + in * Vec2(std::cos(a), std::sin(a)))) std::abort();
+        }
+      }
+    }
   } catch (const InputError&) {
   }
   return 0;

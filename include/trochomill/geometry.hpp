@@ -181,7 +181,8 @@ struct Contour {
 
 /// A branch of a region's medial axis: points along it at most the spacing asked apart, each
 /// with its clearance (mm, the distance to the region's boundary: the disc of that radius
-/// about it lies in the region). `closed`: a cycle (around an island), its first point not
+/// about it lies in the region; 0 for a point outside it, where the chord of a curved edge
+/// cuts across a corner of the boundary). `closed`: a cycle (around an island), its first point not
 /// repeated at the end.
 struct MedialBranch {
   std::vector<Vec2> points;

@@ -163,7 +163,10 @@ std::vector<MedialBranch> medial_axis(const std::vector<Contour>& region, double
     }
     br.points.push_back(nodes[static_cast<std::size_t>(path.back())]);
     if (br.closed) br.points.pop_back();
-    for (const Vec2& p : br.points) br.clearance_mm.push_back(clearance(p));
+    // A sample outside (a curved edge's chord cutting across a hole's corner): no disc.
+    for (const Vec2& p : br.points) {
+      br.clearance_mm.push_back(region_contains(region, p) ? clearance(p) : 0.0);
+    }
     out.push_back(std::move(br));
   };
   for (std::size_t n = 0; n < nodes.size(); ++n) {
