@@ -270,6 +270,19 @@ TEST(Pocket, ChannelsAreClearedByTrochoidalLoopsAlongTheirAxis) {
   EXPECT_EQ(thin.info.channels, 1);
   EXPECT_LE(thin.proof.clearing_max_engagement_deg, 50 * 1.02);
   EXPECT_LT(thin.proof.finish_max_engagement_deg, 135) << thin.proof.finish_max_engagement_deg;
+  // Two rooms joined by a bar 10.45 mm wide: its tool centre region is 0.034 mm wide, too
+  // narrow for loops (R / 20 = 0.25 mm of clearance at least). Each room is a part with its
+  // own entry; the bar is reported as the finishing pass's slot (some 30 x 10.45 mm), and the
+  // finishing pass comes down in a room, not in the bar's stock.
+  const PlannedPocket bar = plan_pocket(job_of("BAR"));
+  EXPECT_EQ(bar.info.parts, 2);
+  EXPECT_EQ(bar.info.helix_entries, 2);
+  ASSERT_EQ(bar.info.slotted.size(), 1u);
+  EXPECT_NEAR(bar.info.slotted[0].at_mm.x(), 845, 1);
+  EXPECT_GT(bar.info.slotted[0].area_mm2, 30 * 10.4);
+  EXPECT_LT(bar.info.slotted[0].area_mm2, 1.2 * 30 * 10.45);  // perimeter / 2: its ends too
+  const Vec3 down = bar.path.segments()[bar.info.finish_first_segment].end();  // over it
+  EXPECT_TRUE(down.x() < 830 || down.x() > 860) << down.transpose();
   // However small channel_width is.
   const PlannedPocket small = plan_pocket(job_of("THIN", "channel_width = 1.0\n"));
   EXPECT_EQ(small.info.channels, 1);

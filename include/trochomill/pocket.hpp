@@ -53,6 +53,10 @@ struct PocketInfo {
   /// Beyond the tool's reach: the pocket less what a tool centre in the region sweeps, less
   /// the inside corners' cusps below 1.5 (1 - pi/4) (R + stock)^2 each (mm^2).
   std::vector<PocketLeftover> unreachable;
+  /// Parts just wider than the tool with the stock (narrower than D + 2 stock + R / 10 and
+  /// more): too narrow for a channel's loops to hold the target, so the finishing pass cuts
+  /// them as a slot at full depth; their area in the pocket (mm^2, about) and a point.
+  std::vector<PocketLeftover> slotted;
   double cusps_mm2 = 0;  ///< the small leftovers not listed (inside corners' cusps)
   /// Within reach but left by the clearing because reaching it would pass the target (an
   /// inside corner's last material): the finishing pass takes it (mm^2, on the planner's grid).

@@ -352,11 +352,12 @@ struct Settings {
 // radius is an exact clearance: the loop's disc lies in the region, the tool R + stock from
 // every wall).
 struct Channel {
-  std::vector<Vec2> c;    // the axis' points
-  std::vector<double> r;  // their clearances (mm)
-  std::vector<double> u;  // arc length from the first (mm)
-  double hold_front = 0;  // the clearing passes clear this much of it from the first point
-  double hold_back = 0;   // ... and from the last
+  std::vector<Vec2> c;       // the axis' points
+  std::vector<double> r;     // their clearances (mm)
+  std::vector<double> u;     // arc length from the first (mm)
+  double hold_front = 0;     // the clearing passes clear this much of it from the first point
+  double hold_back = 0;      // ... and from the last
+  std::vector<Vec2> beyond;  // points of the region just past its open ends
   bool done = false;
   [[nodiscard]] std::size_t size() const { return c.size(); }
   // The axis' direction at point k (mm), towards the last point.
@@ -1366,6 +1367,12 @@ std::vector<Channel> trochoid_channels(const std::vector<Contour>& region0,
       };
       const bool wide_front = i > 0 ? b.clearance_mm[i - 1] > r_max : goes_on(i, j - 1);
       const bool wide_back = j < m ? b.clearance_mm[j] > r_max : goes_on(j - 1, i);
+      auto past = [&](std::size_t e, std::size_t inner) {
+        const Vec2 t = (b.points[e] - b.points[inner]).normalized();
+        return Vec2(b.points[e] + (b.clearance_mm[e] + 0.25 * R) * t);
+      };
+      if (wide_front) ch.beyond.push_back(i > 0 ? b.points[i - 1] : past(i, j - 1));
+      if (wide_back) ch.beyond.push_back(j < m ? b.points[j] : past(j - 1, i));
       ch.hold_front = wide_front ? 2 * R + r_max : 0;
       ch.hold_back = wide_back ? 2 * R + r_max : 0;
       bool outside = false;  // a part the passes' region leaves out
@@ -1918,24 +1925,86 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   info.channel_width_mm = channel_width;
   std::vector<Channel> channels =
       trochoid_channels(centre_region0, centre_region, R, 0.5 * channel_width - keep);
-  // The parts: those of the unrounded region (a channel narrower than 2 rc joins what the
-  // rounded one parts), each cleared by the passes in the rounded region's parts inside it
-  // (in their order), or where none is, in itself (a pocket that is all narrow channel).
+  // The parts: the rounded region's, those a channel joins (its loops run from one into the
+  // other) as one; a part of the unrounded region that holds none of them (a pocket that is
+  // all narrow channel) is one itself. A part the rounded region has that no channel reaches
+  // stays a part of its own (entered by its own helix), though a channel too narrow for loops
+  // may join it to another in the unrounded region.
   std::vector<std::vector<Contour>> parts;
   std::vector<std::vector<Channel>> channels_of;
   {
     const auto rounded_parts = region_parts(centre_region);
-    for (const auto& part0 : region_parts(centre_region0)) {
-      std::vector<Contour> part;
-      for (const auto& rp : rounded_parts) {
-        if (region_contains(part0, rp.front().pieces.front().start)) {
-          part.insert(part.end(), rp.begin(), rp.end());
-        }
+    const std::size_t n = rounded_parts.size();
+    std::vector<std::size_t> root(n);
+    for (std::size_t i = 0; i < n; ++i) root[i] = i;
+    const auto find = [&](std::size_t i) {
+      while (root[i] != i) i = root[i] = root[root[i]];
+      return i;
+    };
+    const auto part_of = [&](const Vec2& q) {
+      for (std::size_t i = 0; i < n; ++i) {
+        if (region_contains(rounded_parts[i], q)) return i;
       }
-      parts.push_back(part.empty() ? part0 : part);
-      channels_of.emplace_back();
-      for (const Channel& ch : channels) {
-        if (region_contains(part0, ch.c[ch.size() / 2])) channels_of.back().push_back(ch);
+      return n;
+    };
+    // Each channel's parts: those holding a point beyond its open ends or its middle.
+    std::vector<std::vector<std::size_t>> touched(channels.size());
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      std::vector<Vec2> at = channels[c].beyond;
+      at.push_back(channels[c].c[channels[c].size() / 2]);
+      for (const Vec2& q : at) {
+        const std::size_t k = part_of(q);
+        if (k < n) touched[c].push_back(k);
+      }
+      for (std::size_t k = 1; k < touched[c].size(); ++k) {
+        root[find(touched[c][k])] = find(touched[c][0]);
+      }
+    }
+    std::vector<std::size_t> group_of(n, n);  // rounded part's root -> index in parts
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t r = find(i);
+      if (group_of[r] == n) {
+        group_of[r] = parts.size();
+        parts.emplace_back();
+        channels_of.emplace_back();
+      }
+      parts[group_of[r]].insert(parts[group_of[r]].end(), rounded_parts[i].begin(),
+                                rounded_parts[i].end());
+    }
+    const auto parts0 = region_parts(centre_region0);
+    std::vector<std::size_t> thin_part(parts0.size(), 0);  // parts index + 1 of one holding none
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      if (!touched[c].empty()) {
+        channels_of[group_of[find(touched[c][0])]].push_back(channels[c]);
+        continue;
+      }
+      // In a part of the unrounded region: its rounded parts' group (the nearest by the
+      // channel's middle), else the part itself.
+      const Vec2 mid = channels[c].c[channels[c].size() / 2];
+      for (std::size_t q = 0; q < parts0.size(); ++q) {
+        if (!region_contains(parts0[q], mid)) continue;
+        std::size_t best = n;
+        double best_d = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < n; ++i) {
+          if (!region_contains(parts0[q], rounded_parts[i].front().pieces.front().start)) continue;
+          double d = std::numeric_limits<double>::infinity();
+          for (const Contour& k : rounded_parts[i]) d = std::min(d, k.distance_mm(mid));
+          if (d < best_d) {
+            best_d = d;
+            best = i;
+          }
+        }
+        if (best < n) {
+          channels_of[group_of[find(best)]].push_back(channels[c]);
+        } else {
+          if (thin_part[q] == 0) {
+            parts.push_back(parts0[q]);
+            channels_of.emplace_back();
+            thin_part[q] = parts.size();
+          }
+          channels_of[thin_part[q] - 1].push_back(channels[c]);
+        }
+        break;
       }
     }
   }
@@ -2055,6 +2124,21 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   if (rest) info.rest_tool_diameter_mm = 2 * rest->tool_radius_mm;
   info.parts = static_cast<int>(parts.size());
 
+  // The parts of the tool centre's region too narrow for a channel's loops (narrower than
+  // 2 R / 20, as trochoid_channels): what an opening by R / 20 takes off it, where longer than
+  // R / 2 (not a corner's tip). The pocket there is about that long and D + 2 stock wide.
+  {
+    const double r_min = 0.05 * R;
+    const auto opened =
+        offset_region(offset_region(centre_region0, -r_min, kClipperTol), r_min, kClipperTol);
+    for (const auto& part : region_parts(region_difference(centre_region0, opened, kClipperTol))) {
+      double perimeter = 0;
+      for (const Contour& c : part) perimeter += c.length_mm();
+      if (0.5 * perimeter > 0.5 * R) {
+        info.slotted.push_back({0.5 * perimeter * 2 * (R + stl), mean_vertex(part.front())});
+      }
+    }
+  }
   // What no tool centre in the region reaches: the pocket less the region grown back.
   {
     const auto reach = offset_region(region, -keep, kClipperTol);
@@ -2197,18 +2281,54 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     auto finish = offset_region(region, -(R + margin), kClipperTol);
     const RegionGrid cleared(centre_region.empty() ? centre_region0 : centre_region,
                              std::max(0.25, 0.25 * R));
+    // Cleared: where the passes went, or within a channel's loops (the disc of a sample's
+    // clearance).
+    const auto is_cleared = [&](const Vec2& q) {
+      if (cleared.contains(q)) return true;
+      for (const Channel& ch : channels) {
+        for (std::size_t k = 0; k < ch.size(); ++k) {
+          if ((q - ch.c[k]).squaredNorm() < ch.r[k] * ch.r[k]) return true;
+        }
+      }
+      return false;
+    };
     for (Contour& c : finish) {
       if (mirror) c = c.reversed();
       std::vector<Vec2> pts = c.points(kClipperTol);
       if (pts.size() < 3) continue;
-      // Start in the middle of the longest edge (away from corners).
-      std::size_t best = 0;
-      double best_len = -1;
-      for (std::size_t i = 0; i < pts.size(); ++i) {
-        const double l = (pts[(i + 1) % pts.size()] - pts[i]).norm();
-        if (l > best_len) {
-          best_len = l;
+      // Start in the middle of an edge (away from corners), the longest whose lead arcs (below)
+      // start and end in the cleared region; else the longest.
+      std::vector<std::size_t> order(pts.size());
+      for (std::size_t i = 0; i < pts.size(); ++i) order[i] = i;
+      const auto edge_len = [&](std::size_t i) {
+        return (pts[(i + 1) % pts.size()] - pts[i]).norm();
+      };
+      std::stable_sort(order.begin(), order.end(),
+                       [&](std::size_t x, std::size_t y) { return edge_len(x) > edge_len(y); });
+      // The cleared side: the left for a counter-clockwise (stock on the right) run.
+      const double side = mirror ? -1.0 : 1.0;
+      std::size_t best = order.front();
+      double rl = 0;
+      std::optional<Vec2> lead;
+      for (const std::size_t i : order) {
+        const Vec2 ea = pts[i], eb = pts[(i + 1) % pts.size()];
+        const Vec2 S0 = 0.5 * (ea + eb), t0 = (eb - ea).normalized();
+        const Vec2 n0 = side * Vec2(-t0.y(), t0.x());
+        // The largest lead radius (from R/2 + stock down, by 0.7) whose arcs start and end in
+        // the cleared region.
+        double r = std::max(stl + 0.5 * R, 0.25 * R);
+        for (int tries = 0; tries < 12; ++tries) {
+          const Vec2 cl = S0 + n0 * r;
+          if (is_cleared(cl - t0 * r) && is_cleared(cl + t0 * r)) {
+            lead = cl;
+            break;
+          }
+          r *= 0.7;
+        }
+        if (lead) {
           best = i;
+          rl = r;
+          break;
         }
       }
       const Vec2 a = pts[best], b = pts[(best + 1) % pts.size()];
@@ -2216,21 +2336,6 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
       std::vector<Vec2> loop{S};
       for (std::size_t k = 1; k <= pts.size(); ++k) loop.push_back(pts[(best + k) % pts.size()]);
       loop.push_back(S);
-      // The cleared side: the left for a counter-clockwise (stock on the right) run.
-      const double side = mirror ? -1.0 : 1.0;
-      const Vec2 n_in = side * Vec2(-t.y(), t.x());
-      // The largest lead radius (from R/2 + stock down, by 0.7) whose arcs start and end in
-      // the cleared region.
-      double rl = std::max(stl + 0.5 * R, 0.25 * R);
-      std::optional<Vec2> lead;
-      for (int tries = 0; tries < 12; ++tries) {
-        const Vec2 cl = S + n_in * rl;
-        if (cleared.contains(cl - t * rl) && cleared.contains(cl + t * rl)) {
-          lead = cl;
-          break;
-        }
-        rl *= 0.7;
-      }
       const std::size_t first = path.segments().size();
       if (lead) {
         const Vec2 cl = *lead;

@@ -120,6 +120,10 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
   for (const PocketLeftover& l : info.unreachable) {
     unreachable.push_back({{"area_mm2", l.area_mm2}, {"at_mm", {l.at_mm.x(), l.at_mm.y()}}});
   }
+  nlohmann::json slotted = nlohmann::json::array();
+  for (const PocketLeftover& l : info.slotted) {
+    slotted.push_back({{"area_mm2", l.area_mm2}, {"at_mm", {l.at_mm.x(), l.at_mm.y()}}});
+  }
   const nlohmann::json j = {
       {"parts", info.parts},
       {"levels", info.levels},
@@ -154,6 +158,7 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
       {"finish_max_at_mm", at(proof.finish_max_at_mm)},
       {"finish_max_chip_mm", proof.finish_max_chip_mm},
       {"unreachable", unreachable},
+      {"slotted_by_finish", slotted},
       {"cusps_mm2", info.cusps_mm2},
       {"left_for_finish_mm2", info.left_for_finish_mm2},
   };
@@ -249,6 +254,13 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         "max {:.5f} mm (where it meets what the clearing left: inside corners, parts narrower "
         "than the tool)\n",
         proof.finish_max_engagement_deg, at(proof.finish_max_at_mm), proof.finish_max_chip_mm);
+  }
+  for (const PocketLeftover& l : info.slotted) {
+    out += fmt::format(
+        "  warning: about {:.4g} mm^2 near ({:.3f}, {:.3f}) is barely wider than the tool with the "
+        "stock to leave (by less than R / 10): no loop holds the target there; the finishing pass "
+        "cuts it as a slot at full depth\n",
+        l.area_mm2, l.at_mm.x(), l.at_mm.y());
   }
   for (const PocketLeftover& l : info.unreachable) {
     out += fmt::format(

@@ -15,6 +15,8 @@ Layers (sharp corners unless said):
            a ring channel 14 mm wide
   THIN     a 40 x 40 mm room at x 700 with a channel 11.2 mm wide and 40 mm long off its
            side (narrower than D + 2 stock + R / 2)
+  BAR      two 30 x 30 mm rooms at x 800 joined by a bar 10.45 mm wide and 30 mm long (barely
+           wider than D + 2 stock for a 10 mm tool and 0.2 mm)
   OPEN     an open polyline (a pocket's wall must be closed)
   OUT      an island outside RECT;  OVER  two islands inside RECT that overlap
 """
@@ -42,6 +44,8 @@ m.add_circle((620, 30), 24.0, dxfattribs={"layer": "RING"})
 m.add_circle((620, 30), 10.0, dxfattribs={"layer": "RINGI"})
 poly([(700, 0), (740, 0), (740, 14.4), (780, 14.4), (780, 25.6), (740, 25.6), (740, 40),
       (700, 40)], "THIN")
+poly([(800, 0), (830, 0), (830, 9.775), (860, 9.775), (860, 0), (890, 0), (890, 30), (860, 30),
+      (860, 20.225), (830, 20.225), (830, 30), (800, 30)], "BAR")
 m.add_lwpolyline([(0, 100), (50, 100), (50, 140)], dxfattribs={"layer": "OPEN"})
 m.add_circle((80, 20), 5.0, dxfattribs={"layer": "OUT"})
 m.add_circle((20, 20), 6.0, dxfattribs={"layer": "OVER"})
