@@ -121,10 +121,12 @@ std::vector<MedialBranch> medial_axis(const std::vector<Contour>& region, double
     const Vec2 p0 = to_mm(e.vertex0()->x(), e.vertex0()->y());
     const Vec2 p1 = to_mm(e.vertex1()->x(), e.vertex1()->y());
     const Vec2 m = 0.5 * (p0 + p1);
-    if (!region_contains(region, p0) || !region_contains(region, p1) ||
-        !region_contains(region, m)) {
-      continue;
-    }
+    // Its ends inside or on the boundary (an axis running into a convex corner of the region,
+    // a wedge's tip, ends there), its middle inside.
+    const auto inside_or_on = [&](const Vec2& q) {
+      return region_contains(region, q) || clearance(q) <= 1e-6;
+    };
+    if (!region_contains(region, m) || !inside_or_on(p0) || !inside_or_on(p1)) continue;
     const Site sa = site_of(*e.cell()), sb = site_of(*e.twin()->cell());
     const Vec2 fa = foot(m, sa.a, sa.b) - m, fb = foot(m, sb.a, sb.b) - m;
     const double na = fa.norm(), nb = fb.norm();

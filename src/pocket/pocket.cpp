@@ -1373,8 +1373,8 @@ std::vector<Channel> trochoid_channels(const std::vector<Contour>& region0,
       };
       if (wide_front) ch.beyond.push_back(i > 0 ? b.points[i - 1] : past(i, j - 1));
       if (wide_back) ch.beyond.push_back(j < m ? b.points[j] : past(j - 1, i));
-      ch.hold_front = wide_front ? 2 * R + r_max : 0;
-      ch.hold_back = wide_back ? 2 * R + r_max : 0;
+      ch.hold_front = wide_front ? 2 * R + ch.r.front() : 0;
+      ch.hold_back = wide_back ? 2 * R + ch.r.back() : 0;
       bool outside = false;  // a part the passes' region leaves out
       for (const Vec2& p : ch.c) outside = outside || !region_contains(rounded, p);
       if (ch.size() >= 2 && (outside || u > ch.hold_front + ch.hold_back + R)) {
@@ -2129,8 +2129,10 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   // R / 2 (not a corner's tip). The pocket there is about that long and D + 2 stock wide.
   {
     const double r_min = 0.05 * R;
-    const auto opened =
-        offset_region(offset_region(centre_region0, -r_min, kClipperTol), r_min, kClipperTol);
+    // (Grown by Clipper's chords three times more: the slivers between its chords and the
+    // region's are no part.)
+    const auto opened = offset_region(offset_region(centre_region0, -r_min, kClipperTol),
+                                      r_min + 3 * kClipperTol, kClipperTol);
     for (const auto& part : region_parts(region_difference(centre_region0, opened, kClipperTol))) {
       double perimeter = 0;
       for (const Contour& c : part) perimeter += c.length_mm();
