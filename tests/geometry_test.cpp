@@ -755,6 +755,7 @@ TEST(Geometry, SvgBadInputIsRefusedWithWhatIsWrong) {
 TEST(Geometry, AMedialAxisIsTheChannelsCentreLine) {
   auto inside_discs = [](const std::vector<Contour>& region, const MedialBranch& b) {
     for (std::size_t i = 0; i < b.points.size(); ++i) {
+      if (b.clearance_mm[i] <= 1e-3) continue;  // at a wedge's tip: on the boundary
       for (int k = 0; k < 16; ++k) {
         const double a = 2 * M_PI * k / 16;
         const Vec2 q = b.points[i] + (b.clearance_mm[i] - 1e-3) * Vec2(std::cos(a), std::sin(a));
@@ -819,6 +820,25 @@ TEST(Geometry, AMedialAxisIsTheChannelsCentreLine) {
       inside_discs(tee, b);
     }
     EXPECT_EQ(at_junction, 3);
+  }
+  {
+    // A wedge with its tip at (40, 0): the axis runs along y = 0 from the incircle's centre
+    // (x = r = area / half the perimeter = 160 / (4 + sqrt(1616)) = 3.6186 mm; the spokes to
+    // the 84.3 degree corners at x = 0 pruned) into the tip itself, on the boundary, its
+    // clearance (40 - x) sin(atan(0.1)).
+    const std::vector<Contour> wedge{
+        Contour::polyline({Vec2(0, 4), Vec2(0, -4), Vec2(40, 0)}, true)};
+    const auto axis = medial_axis(wedge, 120, 0.5);
+    ASSERT_EQ(axis.size(), 1u);
+    const double r_in = 160 / (4 + std::sqrt(1616.0));
+    const MedialBranch& b = axis[0];
+    EXPECT_NEAR(std::min(b.points.front().x(), b.points.back().x()), r_in, 1e-6);
+    EXPECT_NEAR(std::max(b.points.front().x(), b.points.back().x()), 40, 1e-6);
+    for (std::size_t i = 0; i < b.points.size(); ++i) {
+      EXPECT_NEAR(b.points[i].y(), 0, 1e-6);
+      EXPECT_NEAR(b.clearance_mm[i], (40 - b.points[i].x()) * std::sin(std::atan(0.1)), 1e-6);
+    }
+    inside_discs(wedge, b);
   }
   EXPECT_THROW((void)medial_axis({Contour::polyline({Vec2(0, 0), Vec2(1, 0)}, false)}, 120, 0.5),
                InputError);
