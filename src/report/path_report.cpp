@@ -274,8 +274,8 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
   }
   if (info.left_for_finish_mm2 > 0) {
     out += fmt::format(
-        "  {:.4g} mm^2 within reach is left to the finishing pass (inside corners the clearing "
-        "cannot enter within the target)\n",
+        "  {:.4g} mm^2 within reach is left to the finishing pass (where the clearing could not "
+        "go on within the target: inside corners, the ends of narrow parts)\n",
         info.left_for_finish_mm2);
   }
   return out;
