@@ -226,14 +226,13 @@ class Coverage {
       }
     });
   }
-  // The held cells within `radius` of [a, b] remaining again (all of them: radius < 0); or
-  // given up (`give_up`).
-  void release(const Vec2& a, const Vec2& b, double radius, bool give_up = false) {
+  // The held cells within `radius` of [a, b] remaining again (all of them: radius < 0).
+  void release(const Vec2& a, const Vec2& b, double radius) {
     auto f = [&](std::uint8_t& s) {
       if (s != kHeld) return;
-      s = give_up ? kGivenUp : kRemaining;
+      s = kRemaining;
       --held_;
-      ++(give_up ? given_up_ : remaining_);
+      ++remaining_;
     };
     if (radius >= 0) {
       for_cells(a, b, radius, f);
@@ -883,6 +882,26 @@ class PartPlanner {
     return st;
   }
 
+  // The largest radius in (lo, hi) of a loop about channel point k that holds the aim, by
+  // bisection (10 halvings), and its loop; a loop with ok = false where none did.
+  [[nodiscard]] std::pair<double, Loop> largest_loop(const Channel& ch, std::size_t k, double lo,
+                                                     double hi, const Vec2& from,
+                                                     bool forward) const {
+    Loop best;
+    best.ok = false;
+    for (int i = 0; i < 10; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      Loop l = loop(ch, k, mid, from, forward, s_.aim_deg);
+      if (l.ok) {
+        lo = mid;
+        best = std::move(l);
+      } else {
+        hi = mid;
+      }
+    }
+    return {lo, std::move(best)};
+  }
+
   // The trochoid along a channel from a start: loop after loop, each the furthest step on
   // (bisection over the channel's points, up to R) whose teeth hold the aim; where the loop's
   // radius is below the channel's there (a start), it first grows in place. The pieces and
@@ -919,21 +938,10 @@ class PartPlanner {
         // Grow in place: the largest radius up to the channel's that holds.
         Loop best = loop(ch, k, r_here, at, forward, s_.aim_deg);
         if (!best.ok) {
-          double lo = rho, hi = r_here;
-          best = Loop{};
-          best.ok = false;
-          for (int i = 0; i < 10; ++i) {
-            const double mid = 0.5 * (lo + hi);
-            Loop l = loop(ch, k, mid, at, forward, s_.aim_deg);
-            if (l.ok) {
-              lo = mid;
-              best = std::move(l);
-            } else {
-              hi = mid;
-            }
-          }
-          if (!best.ok || lo - rho < 1e-3 * s_.R) return out;  // stuck
-          rho = lo;
+          auto [r, l] = largest_loop(ch, k, rho, r_here, at, forward);
+          if (!l.ok || r - rho < 1e-3 * s_.R) return out;  // stuck
+          rho = r;
+          best = std::move(l);
         } else {
           rho = r_here;
         }
@@ -980,22 +988,10 @@ class PartPlanner {
       if (ok_by == 0) {
         // Not even one point on at its full radius: a smaller loop there, to grow next.
         const std::size_t j = index(k, 1);
-        double lo = 0, hi = loop_radius(ch, j);
-        Loop best;
-        best.ok = false;
-        for (int i = 0; i < 10; ++i) {
-          const double mid = 0.5 * (lo + hi);
-          Loop l = loop(ch, j, mid, at, forward, s_.aim_deg);
-          if (l.ok) {
-            lo = mid;
-            best = std::move(l);
-          } else {
-            hi = mid;
-          }
-        }
+        auto [r, best] = largest_loop(ch, j, 0, loop_radius(ch, j), at, forward);
         if (!best.ok) return out;  // stuck
         k = j;
-        rho = lo;
+        rho = r;
         emit(best);
         stride = 1;
         continue;
@@ -1650,7 +1646,7 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
       p = pass.points.back();
     }
     if (run_channels()) {
-      if (!go_on()) continue;  // nothing remaining: the top of the loop decides
+      go_on();  // where nothing remains, the top of the loop decides
       continue;
     }
     if (!planner.coverage().nearest_remaining(p)) continue;
@@ -2307,6 +2303,9 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
       };
       std::stable_sort(order.begin(), order.end(),
                        [&](std::size_t x, std::size_t y) { return edge_len(x) > edge_len(y); });
+      // The 16 longest: a contour of many short chords (arcs) does not test them all against
+      // every channel sample.
+      order.resize(std::min<std::size_t>(order.size(), 16));
       // The cleared side: the left for a counter-clockwise (stock on the right) run.
       const double side = mirror ? -1.0 : 1.0;
       std::size_t best = order.front();

@@ -116,14 +116,13 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
 
 std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
   const auto at = [](const Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
-  nlohmann::json unreachable = nlohmann::json::array();
-  for (const PocketLeftover& l : info.unreachable) {
-    unreachable.push_back({{"area_mm2", l.area_mm2}, {"at_mm", {l.at_mm.x(), l.at_mm.y()}}});
-  }
-  nlohmann::json slotted = nlohmann::json::array();
-  for (const PocketLeftover& l : info.slotted) {
-    slotted.push_back({{"area_mm2", l.area_mm2}, {"at_mm", {l.at_mm.x(), l.at_mm.y()}}});
-  }
+  const auto leftovers = [](const std::vector<PocketLeftover>& list) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const PocketLeftover& l : list) {
+      out.push_back({{"area_mm2", l.area_mm2}, {"at_mm", {l.at_mm.x(), l.at_mm.y()}}});
+    }
+    return out;
+  };
   const nlohmann::json j = {
       {"parts", info.parts},
       {"levels", info.levels},
@@ -157,8 +156,8 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
       {"finish_max_engagement_deg", proof.finish_max_engagement_deg},
       {"finish_max_at_mm", at(proof.finish_max_at_mm)},
       {"finish_max_chip_mm", proof.finish_max_chip_mm},
-      {"unreachable", unreachable},
-      {"slotted_by_finish", slotted},
+      {"unreachable", leftovers(info.unreachable)},
+      {"slotted_by_finish", leftovers(info.slotted)},
       {"cusps_mm2", info.cusps_mm2},
       {"left_for_finish_mm2", info.left_for_finish_mm2},
   };
