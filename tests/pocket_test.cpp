@@ -289,6 +289,136 @@ TEST(Pocket, ChannelsAreClearedByTrochoidalLoopsAlongTheirAxis) {
   EXPECT_LT(small.proof.finish_max_engagement_deg, 135);
 }
 
+// [path] type in a pocket's job: the channels cleared by the straight slot's family. In the
+// straight 60 x 14 mm channel each cycle is the family's closed form (docs/models.md section 2:
+// Wagih 2023 Eq. 1 with a = the orbit's half-width, b = r_e a, the step s between the cycle's
+// starts on its wall, d the wall moves), checked on every planned piece of the steady middle,
+// and every plan holds the target by the kernel.
+TEST(Pocket, ChannelsTakeEveryFamilyOfTheStraightSlot) {
+  struct Case {
+    const char* type;
+    double aspect, d;
+  };
+  for (const Case& c : {Case{"trochoidal", 1, 0}, Case{"circular", 1, 0},
+                        Case{"elliptical", 0.6, 0}, Case{"linear-elliptical", 0.8, 0.3}}) {
+    SCOPED_TRACE(c.type);
+    std::string more = std::string("[path]\ntype = \"") + c.type + "\"\n";
+    if (c.aspect != 1) more += "aspect_ratio = " + std::to_string(c.aspect) + "\n";
+    if (c.d > 0) more += "linear_distance = " + std::to_string(c.d) + "\n";
+    const Job job = parse_job(pocket_job("boundary = \"CHAN\"\ndepth = 4.0\nmax_step_down = 2.0\n"
+                                         "stock_to_leave = 0.2\nmax_engagement = 50.0\n",
+                                         more),
+                              "CHAN.toml");
+    ASSERT_TRUE(job.pocket.channel_family.has_value());
+    const PlannedPocket p = plan_pocket(job);
+    EXPECT_TRUE(p.info.proven);
+    EXPECT_EQ(p.info.channels, 1);
+    EXPECT_EQ(p.info.channel_family, c.type);
+    EXPECT_LE(p.proof.clearing_max_engagement_deg, 50 * 1.02);
+    // The family takes the axis but for its ends (a cycle reaching past them is a circle's).
+    EXPECT_GT(p.info.channel_family_mm, 30) << p.info.channel_loops_mm;
+
+    // The first level's pieces at the feed, and where they start on the orbit's wall: the
+    // axis is y = 7; the cycles start on the wall right of their travel (climb).
+    std::vector<const Segment*> pieces;
+    for (std::size_t i = 0; i < p.info.finish_first_segment; ++i) {
+      const Segment& s = p.path.segments()[i];
+      if (s.motion() == Motion::feed && s.start().z() == -2.0 && s.end().z() == -2.0)
+        pieces.push_back(&s);
+    }
+    double a = 0;  // the orbit's half-width: the pieces' furthest from the axis
+    for (const Segment* s : pieces) {
+      if (s->start().x() > 515 && s->start().x() < 545)
+        a = std::max(a, std::abs(s->start().y() - 7));
+    }
+    // The clearance 1.792 mm less half the axis samples' spacing (0.025 mm) and 1e-4 mm.
+    EXPECT_GT(a, 1.792 - 0.03);
+    EXPECT_LT(a, 1.792 + 1e-3);
+    // The cycles' starts: on the wall right of their travel (climb), so x increases along the
+    // starts below the axis (travel +x) and decreases along those above (travel -x). The
+    // pieces starting on either wall, the distinct x in order on each (with the first piece).
+    // For linear-elliptical, a wall move's end (d after a start) is not a start.
+    struct Start {
+      double x;
+      std::size_t piece;
+      double travel;
+    };
+    std::vector<Start> starts;
+    for (const double side : {-1.0, 1.0}) {
+      std::vector<Start> wall;
+      for (std::size_t i = 0; i < pieces.size(); ++i) {
+        const Vec3 q = pieces[i]->start();
+        if (std::abs(q.y() - 7 - side * a) > 1e-7) continue;
+        if (!wall.empty() && std::abs(wall.back().x - q.x()) < 1e-9) continue;
+        wall.push_back({q.x(), i, -side});
+      }
+      for (std::size_t w = 0; w < wall.size(); ++w) {
+        if (c.d > 0 && w > 0 && std::abs(-side * (wall[w].x - wall[w - 1].x) - c.d) < 1e-6)
+          continue;
+        starts.push_back(wall[w]);
+      }
+    }
+    std::sort(starts.begin(), starts.end(),
+              [](const Start& u, const Start& v) { return u.piece < v.piece; });
+    ASSERT_GT(starts.size(), 6u);
+    const double b = c.aspect * a;
+    int cycles = 0;
+    double worst = 0;
+    for (std::size_t k = 0; k + 1 < starts.size(); ++k) {
+      const double travel = starts[k].travel, y0 = starts[k].x;
+      const double x0 = -travel * a;  // the start wall, across (y - 7)
+      // The next start on the same wall; consecutive starts of one trochoid are a step apart
+      // (at most R) in its travel (on the other wall, the same test runs backwards).
+      std::size_t k1 = k + 1;
+      while (k1 < starts.size() && starts[k1].travel != travel) ++k1;
+      if (k1 == starts.size()) continue;
+      const double s = travel * (starts[k1].x - y0);
+      if (!(s > 0) || s > 5 || y0 < 512 || y0 > 548) continue;
+      // The closed form, densely (its distance to a point within 1e-5 mm: chords of 1e-3 rad).
+      std::vector<Vec2> form;  // (across, along from the cycle's start)
+      const auto curve = [&](double yc, double t0, double t1) {
+        for (int j = 0; j <= 6000; ++j) {
+          const double t = t0 + (t1 - t0) * j / 6000;
+          form.emplace_back(x0 * std::cos(t), yc + b * std::sin(t) + s * t / (2 * kPi));
+        }
+      };
+      const auto line = [&](const Vec2& u, const Vec2& v) {
+        for (int j = 0; j <= 1000; ++j) form.push_back(u + (v - u) * (j / 1000.0));
+      };
+      const std::string type = c.type;
+      if (type == "circular") {
+        for (int j = 0; j <= 6000; ++j) {
+          const double t = 2 * kPi * j / 6000;
+          form.emplace_back(x0 * std::cos(t), a * std::sin(t));
+        }
+        line({x0, 0}, {x0, s});
+      } else if (type == "linear-elliptical") {
+        line({x0, 0}, {x0, c.d});
+        curve(c.d, 0, kPi);
+        line({-x0, c.d + s / 2}, {-x0, s / 2});
+        curve(0, kPi, 2 * kPi);
+      } else {
+        curve(0, 0, 2 * kPi);
+      }
+      for (std::size_t i = starts[k].piece; i < starts[k1].piece; ++i) {
+        for (int j = 0; j <= 8; ++j) {
+          const Segment& g = *pieces[i];
+          const Vec3 q = g.point_u(g.u0() + (g.u1() - g.u0()) * j / 8);
+          const Vec2 local(q.y() - 7, travel * (q.x() - y0));
+          double best = 1e9;
+          for (const Vec2& f : form) best = std::min(best, (f - local).norm());
+          worst = std::max(worst, best);
+        }
+      }
+      ++cycles;
+    }
+    EXPECT_GE(cycles, 5);
+    // [pocket] fit_tolerance (0.002 mm: the biarcs' within 0.8 of it at their samples) and the
+    // closed form's chords.
+    EXPECT_LT(worst, 0.002 + 1e-5) << cycles << " cycles";
+  }
+}
+
 // The planner's margin below the target is measured, not a bound: the example plate with a
 // [stock] box from x = 18.2 mm planned at 1.2 degrees below its 53 degree target reaches 55.83
 // degrees by the kernel (a pass hooking into the frontier the pass before left). The proof

@@ -78,6 +78,8 @@ struct Slot {
   [[nodiscard]] bool curved() const noexcept { return centreline != nullptr; }
 };
 
+enum class PathType { linear, trochoidal, circular, elliptical, linear_elliptical };
+
 /// `[pocket]`: a pocket cleared down to its floor, its walls the closed contours of a drawing's
 /// layer and the islands left standing those of another (lengths mm, the drawing's frame = the
 /// workpiece's; top face z = 0).
@@ -99,6 +101,10 @@ struct Pocket {
   /// Parts of the pocket narrower than this (mm) are cleared by trochoidal loops along their
   /// medial axis (channels); 0: twice the tool's diameter.
   double channel_width_mm = 0;
+  /// The channels' family: [path] type in a pocket's job (trochoidal, circular, elliptical or
+  /// linear-elliptical, shaped by [path] aspect_ratio and linear_distance), its cycles carried
+  /// along the channels' axis; none: circles about the axis' points joined along the axis.
+  std::optional<PathType> channel_family;
   /// The contours (set by the job reader from [geometry] file). Shared: a job is copied often.
   std::shared_ptr<const std::vector<DrawnContour>> boundary_contours, island_contours;
   /// [pocket] rest_of: an earlier program (as written in the job; `rest_of_path` resolved
@@ -126,7 +132,6 @@ struct GeometrySource {
   double join_tolerance_mm = 0.01;  ///< ends closer than this are one point (mm)
 };
 
-enum class PathType { linear, trochoidal, circular, elliptical, linear_elliptical };
 enum class Direction { climb, conventional };
 enum class EntryType { helix, ramp, plunge, outside };
 enum class SpindleDirection { cw, ccw };

@@ -285,6 +285,15 @@ using ChipJudge = std::function<double(const Job& job, const ToolPath& path, dou
 /// the straight slot's at [path] step (docs/models.md, "Slots along a curve").
 [[nodiscard]] PlannedPath plan_path(const Job& job, const ChipJudge& judge = {});
 
+/// One cycle of a trochoidal family (any but linear) in the straight slot's frame (x across, y
+/// along, z = 0) as plan_path places each of its cycles (docs/models.md section 2): from
+/// (-a, 0) on the left wall to (-a, step_mm), a = orbit_a_mm, b = aspect a, d =
+/// linear_distance_mm (linear-elliptical), orbiting clockwise; mirror negates x (the
+/// counter-clockwise orbit, climb with a clockwise spindle). At the feed speed_mm_per_min.
+[[nodiscard]] ToolPath family_cycle(PathType type, double orbit_a_mm, double aspect, double step_mm,
+                                    double linear_distance_mm, bool mirror,
+                                    double speed_mm_per_min);
+
 /// Effective feed rate (mm/min) and spindle speed (rpm) of the job's cutting conditions.
 [[nodiscard]] double feed_rate_mm_per_min(const Job& job);
 [[nodiscard]] double spindle_speed_rpm(const Job& job);

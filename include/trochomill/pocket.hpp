@@ -43,6 +43,13 @@ struct PocketInfo {
   /// The swept band of channels no trochoid could start into, at the deepest level's plan
   /// (mm^2): left to the finishing pass.
   double channels_left_mm2 = 0;
+  /// The channels' family ([path] type; empty: the loops, circles about the axis' points) and
+  /// the length of the channels' axis (mm, one level: the deepest's plan) stepped along by its
+  /// cycles and by loops (circles: where no cycle of the family held the target, and the
+  /// channels' ends and starts, where a family's cycle would reach past the axis).
+  std::string channel_family;
+  double channel_family_mm = 0;
+  double channel_loops_mm = 0;
   int links_down = 0;             ///< links per level that stay down in cleared area
   int lifts = 0;                  ///< links per level that lift over stock
   double clearing_length_mm = 0;  ///< feed length of one level's clearing passes that cut

@@ -1049,11 +1049,27 @@ void check_pocket(JobReader& r, Job& job) {
     r.problems().push_back(fmt::format(
         "{}: missing [pocket] max_engagement (degrees) or max_chip (mm): give one", r.source()));
   }
-  for (const char* key : {"type", "step", "aspect_ratio", "linear_distance"}) {
-    if (r.has("path", key)) {
-      r.problem("path", key,
-                "is for slots; a pocket's clearing is planned from its engagement target "
-                "([pocket] max_engagement or max_chip)");
+  if (r.has("path", "step")) {
+    r.problem("path", "step",
+              "is for slots; a pocket's steps are planned from its engagement target "
+              "([pocket] max_engagement or max_chip)");
+  }
+  // [path] type chooses the channels' family (docs/models.md, "Channels").
+  if (r.has("path", "type")) {
+    if (job.path.type == PathType::linear) {
+      r.problem("path", "type",
+                "a pocket's channels are cleared by the trochoidal families (trochoidal, "
+                "circular, elliptical or linear-elliptical); linear slots at 180 degrees");
+    } else {
+      pk.channel_family = job.path.type;
+    }
+  } else {
+    for (const char* key : {"aspect_ratio", "linear_distance"}) {
+      if (r.has("path", key)) {
+        r.problem("path", key,
+                  "shapes the family of a pocket's channels: give [path] type (elliptical or "
+                  "linear-elliptical)");
+      }
     }
   }
   if (r.has("path", "entry") && job.path.entry != EntryType::helix) {

@@ -314,6 +314,23 @@ SlotGeometry slot_geometry(const Job& job) {
   return g;
 }
 
+ToolPath family_cycle(PathType type, double orbit_a_mm, double aspect, double step_mm,
+                      double linear_distance_mm, bool mirror, double speed_mm_per_min) {
+  if (type == PathType::linear) throw Error("family_cycle: the linear family has no cycles");
+  Geometry g;
+  g.type = type;
+  g.a = orbit_a_mm;
+  g.b = (type == PathType::trochoidal ? 1.0 : aspect) * orbit_a_mm;
+  g.s = step_mm;
+  g.d = type == PathType::linear_elliptical ? linear_distance_mm : 0.0;
+  g.feed = speed_mm_per_min;
+  ToolPath out;
+  Builder bld(out, mirror);
+  bld.start_at(Vec3(-g.a, 0, 0));
+  emit_cycle(bld, g, 0.0);
+  return out;
+}
+
 Geometry path_detail::make_geometry(const Job& job) {
   Geometry g;
   g.type = job.path.type;

@@ -342,6 +342,12 @@ struct Settings {
   double graze_deg = 0;
   double sigma = 1;              // +1: stock on the right (climb, cw spindle); -1: mirrored
   double fit_tolerance = 0.002;  // [pocket] fit_tolerance (mm)
+  // The channels' family ([path] type in a pocket's job): none, the default loops (circles
+  // about the axis' points, joined along the axis); else the straight slot's family's cycles
+  // carried along the axis, as wide as the channel (docs/models.md, "Channels").
+  std::optional<PathType> family;
+  double aspect = 1;     // [path] aspect_ratio: b / a of elliptical and linear-elliptical
+  double linear_mm = 0;  // [path] linear_distance: linear-elliptical's wall moves (mm)
 };
 
 // A channel: a run of the medial axis of the tool centre's region (unrounded) where the pocket
@@ -371,6 +377,117 @@ struct Channel {
     for (std::size_t k = 1; k < size(); ++k) a += (r[k - 1] + r[k] + 2 * R) * (u[k] - u[k - 1]);
     return a;
   }
+};
+
+// A family's cycle along a channel, from axis point k in the direction of travel (towards the
+// last point when forward): the axis there modelled by the circle (or line) through the axis'
+// points at the cycle's rearmost and foremost reach and at point k, and a width linear along
+// it, so that the cycle planned in the straight slot's frame (x across, y along from the
+// cycle's start; family_cycle with half-width a) maps smoothly:
+//   (x, y) -> A(y) + x w(y) / a N(y),
+// A the model's point y along it from point k, N its right-hand normal of travel. The axis'
+// polyline itself wiggles by microns (the medial axis of Clipper's chords), which a map
+// through it would write into the cycle's arcs.
+//
+// Every point lies in the region: w(y) <= r(y) - |A(y) - C(y)| at the axis' samples (r the
+// clearance, C the axis point at that arc length), less half the samples' largest spacing d
+// between them. Between samples i and i + 1 (at the fraction t) the interpolated axis point's
+// clearance is at least the interpolated r less 2 t (1 - t) d (the clearance is 1-Lipschitz:
+// each sample's r_i - t d holds there, and so does their weighted mean), which the half spacing
+// covers; 1e-4 mm covers the model's chord sag over d.
+class CycleOnAxis final : public PlanarCurve {
+ public:
+  // Where the model fits (ylo, yhi: the cycle's reach behind and ahead of point k, mm, in the
+  // axis), the width at every reach at least half the clearance at k.
+  static std::optional<CycleOnAxis> make(const Channel& ch, std::size_t k, bool forward, double ylo,
+                                         double yhi, double a, double hair) {
+    const double sk = ch.u[k];
+    const auto sigma = [&](double y) { return forward ? sk + y : sk - y; };
+    const double s_lo = std::min(sigma(ylo), sigma(yhi)), s_hi = std::max(sigma(ylo), sigma(yhi));
+    if (s_lo < ch.u.front() || s_hi > ch.u.back()) return std::nullopt;
+    const auto at = [&](double sg) {
+      const auto it = std::upper_bound(ch.u.begin(), ch.u.end(), sg);
+      std::size_t i = it == ch.u.begin() ? 0 : static_cast<std::size_t>(it - ch.u.begin()) - 1;
+      i = std::min(i, ch.size() - 2);
+      const double du = ch.u[i + 1] - ch.u[i];
+      const double t = du > 0 ? std::clamp((sg - ch.u[i]) / du, 0.0, 1.0) : 0.0;
+      return std::pair<Vec2, double>((1 - t) * ch.c[i] + t * ch.c[i + 1],
+                                     (1 - t) * ch.r[i] + t * ch.r[i + 1]);
+    };
+    const auto [p1, r1] = at(sigma(ylo));
+    const auto [p3, r3] = at(sigma(yhi));
+    const Vec2 p2 = ch.c[k];
+    CycleOnAxis m;
+    m.c0_ = p2;
+    m.a_ = a;
+    // The signed curvature of the circle through p1, p2, p3 (positive turning left).
+    const Vec2 d12 = p2 - p1, d23 = p3 - p2, d13 = p3 - p1;
+    const double l12 = d12.norm(), l23 = d23.norm(), l13 = d13.norm();
+    if (!(l13 > 0)) return std::nullopt;
+    m.kappa_ = l12 > 0 && l23 > 0 ? 2 * cross2(d12, d23) / (l12 * l23 * l13) : 0.0;
+    if (std::abs(m.kappa_) * (yhi - ylo) < 1e-9) {
+      m.kappa_ = 0;
+      m.t0_ = d13 / l13;
+    } else {
+      // The circle's tangent at p2: normal to p2 - O, O its centre, oriented along p1 -> p3.
+      // The circumcentre O of p1, p2, p3.
+      const Vec2 b = p2 - p1, c = p3 - p1;
+      const double D = 2 * cross2(b, c);
+      const Vec2 O = p1 + Vec2(b.squaredNorm() * c.y() - c.squaredNorm() * b.y(),
+                               c.squaredNorm() * b.x() - b.squaredNorm() * c.x()) /
+                              D;
+      const Vec2 rad = p2 - O;
+      Vec2 t(-rad.y(), rad.x());
+      if (t.dot(d13) < 0) t = -t;
+      m.t0_ = t / t.norm();
+    }
+    // The width: the clearance's slope between the reaches, lowered to the bound at every sample.
+    m.g_ = (r3 - r1) / (yhi - ylo);
+    double w0 = std::numeric_limits<double>::infinity(), dmax = 0;
+    std::size_t i0 =
+        static_cast<std::size_t>(std::upper_bound(ch.u.begin(), ch.u.end(), s_lo) - ch.u.begin());
+    i0 = i0 > 0 ? i0 - 1 : 0;
+    for (std::size_t i = i0; i < ch.size() && (i == 0 || ch.u[i - 1] <= s_hi); ++i) {
+      const double y = forward ? ch.u[i] - sk : sk - ch.u[i];
+      const double delta = (m.axis(y) - ch.c[i]).norm();
+      w0 = std::min(w0, ch.r[i] - delta - m.g_ * y);
+      if (i > i0) dmax = std::max(dmax, ch.u[i] - ch.u[i - 1]);
+    }
+    m.w0_ = w0 - 0.5 * dmax - 1e-4 - hair;
+    if (!(std::min(m.width(ylo), m.width(yhi)) >= 0.5 * ch.r[k])) return std::nullopt;
+    return m;
+  }
+  void set(const Segment& seg) { seg_ = &seg; }
+  void set_half_width(double a) { a_ = a; }
+  [[nodiscard]] double width(double y) const { return w0_ + g_ * y; }
+  [[nodiscard]] Vec3 point(double u) const override {
+    const Vec3 q = seg_->point_u(u);
+    const Vec2 t = tangent(q.y());
+    const Vec2 p = axis(q.y()) + q.x() / a_ * width(q.y()) * Vec2(t.y(), -t.x());
+    return Vec3(p.x(), p.y(), 0);
+  }
+  [[nodiscard]] Vec3 unit_tangent(double u) const override {
+    const double h = 1e-6 * std::max(1.0, std::abs(seg_->u1() - seg_->u0()));
+    const Vec3 d = point(u + h) - point(u - h);
+    const double n = d.norm();
+    return n > 0 ? Vec3(d / n) : Vec3::Zero();
+  }
+
+ private:
+  CycleOnAxis() = default;
+  [[nodiscard]] Vec2 axis(double y) const {
+    const Vec2 left(-t0_.y(), t0_.x());
+    if (kappa_ == 0) return c0_ + y * t0_;
+    return c0_ + t0_ * (std::sin(kappa_ * y) / kappa_) +
+           left * ((1 - std::cos(kappa_ * y)) / kappa_);
+  }
+  [[nodiscard]] Vec2 tangent(double y) const {
+    const Vec2 left(-t0_.y(), t0_.x());
+    return t0_ * std::cos(kappa_ * y) + left * std::sin(kappa_ * y);
+  }
+  const Segment* seg_ = nullptr;
+  Vec2 c0_ = Vec2::Zero(), t0_ = Vec2(1, 0);
+  double kappa_ = 0, w0_ = 0, g_ = 0, a_ = 1;
 };
 
 // A channel's loop circle is cut into this many arcs, each at the feed or, where it only grazes
@@ -751,6 +868,7 @@ class PartPlanner {
   // it). Stops early (ok = false) where a tooth's engagement passes `limit_deg`.
   struct Loop {
     bool ok = true;
+    bool off_axis = false;  // a family's cycle that would reach past the channel's axis
     double eng = 0;
     std::vector<ContourPiece> pieces;
     std::vector<bool> cuts;
@@ -779,13 +897,141 @@ class PartPlanner {
         a = b;
       }
     }
+    judge(out, from, limit_deg);
+    return out;
+  }
+  // A family's cycle along a channel ([path] type): from `from` (a line to the cycle's start
+  // where it is not there: after a circle) the cycle from point k to point j (the step their
+  // distance along the axis), as wide as the channel. Judged as loop's, together with the next
+  // cycle at the same step where the axis has room for it: a trochoid's front advances by a
+  // quarter of its own step and three quarters of the step before, so a step that holds alone
+  // may leave the next cycle no step that does; with the look-ahead the same step holds next
+  // (the loop keeps only the first cycle's pieces). ok = false also where the fit finds no arcs
+  // (a cusp where the axis turns tighter than the cycle is wide); off_axis where the cycle would
+  // reach past the axis' ends (the loops' there).
+  [[nodiscard]] Loop family_loop(const Channel& ch, std::size_t k, std::size_t j, const Vec2& from,
+                                 bool forward, double limit_deg) const {
+    Loop out;
+    Vec2 at = from;
+    const CycleFit first = family_cycle_pieces(ch, k, j, forward, at, out.pieces);
+    if (first != CycleFit::ok) {
+      out.ok = false;
+      out.off_axis = first == CycleFit::off_axis;
+      return out;
+    }
+    out.end = at;
+    const std::size_t n1 = out.pieces.size();
+    const long by = static_cast<long>(j) - static_cast<long>(k);
+    const long j2 = std::clamp(static_cast<long>(j) + by, 0L, static_cast<long>(ch.size()) - 1);
+    if (j2 != static_cast<long>(j) &&
+        family_cycle_pieces(ch, j, static_cast<std::size_t>(j2), forward, at, out.pieces) !=
+            CycleFit::ok) {
+      out.pieces.resize(n1);
+    }
+    judge(out, from, limit_deg);
+    out.pieces.resize(std::min(n1, out.pieces.size()));
+    out.cuts.resize(std::min(n1, out.cuts.size()));
+    return out;
+  }
+  enum class CycleFit { ok, off_axis, no_fit };
+  // Appends the pieces of the family's cycle from channel point k to j to `pieces`, from `at`
+  // (moved to the cycle's end).
+  CycleFit family_cycle_pieces(const Channel& ch, std::size_t k, std::size_t j, bool forward,
+                               Vec2& at, std::vector<ContourPiece>& pieces) const {
+    const double a = loop_radius(ch, k);
+    const double step = std::abs(ch.u[j] - ch.u[k]);
+    if (!(a > 1e-6) || !(step > 0)) return CycleFit::no_fit;
+    const ToolPath cycle =
+        family_cycle(*s_.family, a, s_.aspect, step, s_.linear_mm, s_.sigma > 0, 1.0);
+    // Its reach behind and ahead of point k (sampled, 2 % of a more for the samples' gaps).
+    double back = 0, ahead = step;
+    for (const Segment& seg : cycle.segments()) {
+      for (int q = 0; q <= 64; ++q) {
+        const double y = seg.point_u(seg.u0() + (seg.u1() - seg.u0()) * q / 64).y();
+        back = std::min(back, y);
+        ahead = std::max(ahead, y);
+      }
+    }
+    // Only on the axis: a cycle reaching past its ends (its back half at a channel's end) is
+    // the loops' (a circle there); so is one the axis turns too tightly under.
+    auto map = CycleOnAxis::make(ch, k, forward, back - 0.02 * a, ahead + 0.02 * a, a, ch.r[k] - a);
+    if (!map) return CycleFit::off_axis;
+    // The cycle again with the map's width at its start as its half-width a (and b = r_e a):
+    // within the first's reach, and in a straight channel of constant width the family's own
+    // cycle (the map then a rigid motion).
+    const double a2 = map->width(0);
+    map->set_half_width(a2);
+    const std::size_t first = pieces.size();
+    const ToolPath cycle2 =
+        family_cycle(*s_.family, a2, s_.aspect, step, s_.linear_mm, s_.sigma > 0, 1.0);
+    try {
+      for (const Segment& seg : cycle2.segments()) {
+        map->set(seg);
+        const bool curve = seg.kind() == Segment::Kind::curve;
+        const double u0 = seg.u0(), u1 = seg.u1();
+        const int spans =
+            curve ? std::max(1, static_cast<int>(std::ceil(std::abs(u1 - u0) / kPi))) : 1;
+        const Vec3 p0 = map->point(u0);
+        if (const Vec2 start(p0.x(), p0.y()); (start - at).norm() > 1e-9) {
+          pieces.push_back(ContourPiece::line(at, start));
+          at = start;
+        }
+        for (const FitArc& f : fit_biarcs_at_cusps(*map, u0, u1, spans, s_.fit_tolerance, 4096)) {
+          const Vec2 e(f.end.x(), f.end.y());
+          if ((e - at).norm() <= 1e-12) continue;
+          // An arc turning less than 1e-6 rad is its chord (within L 1e-6 / 8 mm); a line
+          // on from a line of this cycle in its direction (the biarcs of a wall move) joins it.
+          if (f.is_line || std::abs(f.sweep_rad) < 1e-6) {
+            const auto joins = [&](const ContourPiece& last) {
+              const Vec2 d = last.end - last.start;
+              return !last.is_arc() && d.dot(e - at) > 0 &&
+                     std::abs(cross2(d, e - at)) <= 1e-12 * d.norm() * (e - at).norm();
+            };
+            if (pieces.size() > first && joins(pieces.back())) {
+              pieces.back().end = e;
+            } else {
+              pieces.push_back(ContourPiece::line(at, e));
+            }
+          } else {
+            pieces.push_back(ContourPiece::arc(at, e, Vec2(f.cx, f.cy), f.sweep_rad >= 0));
+          }
+          at = e;
+        }
+      }
+    } catch (const Error&) {
+      return CycleFit::no_fit;
+    } catch (const ArcLimit&) {
+      return CycleFit::no_fit;
+    }
+    return CycleFit::ok;
+  }
+  // Whether each of a loop's pieces cuts and the largest engagement of its teeth (see loop).
+  void judge(Loop& out, const Vec2& from, double limit_deg) const {
     Box3 box;
     box.extend(Vec3(from.x(), from.y(), 0));
-    box.extend(Vec3(c.x() - rho, c.y() - rho, 0));
-    box.extend(Vec3(c.x() + rho, c.y() + rho, 0));
-    RemovedRegion local(s_.R, Vec2(box.lo.x(), box.lo.y()), Vec2(box.hi.x(), box.hi.y()));
+    for (const ContourPiece& piece : out.pieces) {
+      box.extend(Vec3(piece.end.x(), piece.end.y(), 0));
+      if (piece.is_arc()) {
+        // The arc's points furthest along +-x and +-y within its sweep.
+        const Vec2 c = *piece.centre;
+        const double r = piece.radius_mm(), sweep = piece.sweep_rad();
+        const double a0 = std::atan2(piece.start.y() - c.y(), piece.start.x() - c.x());
+        for (int q = 0; q < 4; ++q) {
+          double d =
+              0.5 * kPi * q - a0;  // from the start to the axis direction, in the sweep's sense
+          d = sweep > 0 ? std::fmod(std::fmod(d, kTwoPi) + kTwoPi, kTwoPi)
+                        : -std::fmod(std::fmod(-d, kTwoPi) + kTwoPi, kTwoPi);
+          if (std::abs(d) <= std::abs(sweep)) {
+            const Vec2 e = c + r * dir(0.5 * kPi * q);
+            box.extend(Vec3(e.x(), e.y(), 0));
+          }
+        }
+      }
+    }
+    const Vec2 lo(box.lo.x(), box.lo.y()), hi(box.hi.x(), box.hi.y());
+    RemovedRegion local(s_.R, lo, hi);
     local.cut(from);
-    removed_.focus(c, std::max(rho, (from - c).norm()) + 1e-6);
+    removed_.focus(0.5 * (lo + hi), 0.5 * (hi - lo).norm() + 1e-6);
     const double tooth = s_.kernel_step;
     for (const ContourPiece& piece : out.pieces) {
       bool cuts = false;
@@ -799,14 +1045,13 @@ class PartPlanner {
           cuts = cuts || widest >= s_.graze_deg;
           if (out.eng > limit_deg) {
             out.ok = false;
-            return out;
+            return;
           }
         }
         local.cut(q);
       }
       out.cuts.push_back(cuts);
     }
-    return out;
   }
   // Cuts a loop's pieces into the removed region and the coverage (as cut_step: discs a
   // tooth's advance apart, at the link feed's for a piece that only grazes).
@@ -911,6 +1156,9 @@ class PartPlanner {
     std::vector<ContourPiece> pieces;
     std::vector<bool> cuts;
     bool complete = false;
+    // The axis' length (mm) it stepped along by the family's cycles ([path] type) and by the
+    // loops (circles: the default, or where no cycle of the family held the aim).
+    double family_mm = 0, loops_mm = 0;
   };
   Trochoid trochoid(const Channel& ch, bool forward, const Start& st) {
     Trochoid out;
@@ -931,7 +1179,8 @@ class PartPlanner {
       }
       at = l.end;
     };
-    long stride = 1;  // the last step, in points
+    long stride = 1;          // the last step, in points
+    bool circle_at_k = true;  // the last loop was a circle about point k (not a family's cycle)
     for (int guard = 0; guard < 1000000; ++guard) {
       const double r_here = loop_radius(ch, k);
       if (rho < r_here - 1e-6) {
@@ -956,50 +1205,74 @@ class PartPlanner {
         if (index(k, max_by) == last) break;
       }
       if (max_by == 0) break;
-      auto attempt = [&](long by) {
-        const std::size_t j = index(k, by);
-        return loop(ch, j, loop_radius(ch, j), at, forward, s_.aim_deg);
+      // The furthest step of the family's cycles (fam) or of the loops: doubled from the last
+      // step until one fails, then bisected. A family's cycle that would reach past the axis
+      // fails.
+      const auto search = [&](bool fam) {
+        const auto attempt = [&](long by) {
+          const std::size_t j = index(k, by);
+          return fam ? family_loop(ch, k, j, at, forward, s_.aim_deg)
+                     : loop(ch, j, loop_radius(ch, j), at, forward, s_.aim_deg);
+        };
+        long ok_by = 0, bad_by = max_by + 1;
+        Loop ok_loop;
+        for (long by = std::min(std::max(1L, stride), max_by);;) {
+          Loop l = attempt(by);
+          if (l.ok) {
+            ok_by = by;
+            ok_loop = std::move(l);
+            if (by == max_by) break;
+            by = std::min(max_by, 2 * by);
+          } else {
+            bad_by = by;
+            break;
+          }
+        }
+        while (bad_by - ok_by > std::max(1L, ok_by / 16)) {
+          const long mid = (ok_by + bad_by) / 2;
+          if (mid <= 0) break;
+          Loop l = attempt(mid);
+          if (l.ok) {
+            ok_by = mid;
+            ok_loop = std::move(l);
+          } else {
+            bad_by = mid;
+          }
+        }
+        return std::pair<long, Loop>(ok_by, std::move(ok_loop));
       };
-      long ok_by = 0, bad_by = max_by + 1;
-      Loop ok_loop;
-      for (long by = std::min(std::max(1L, stride), max_by);;) {
-        Loop l = attempt(by);
-        if (l.ok) {
-          ok_by = by;
-          ok_loop = std::move(l);
-          if (by == max_by) break;
-          by = std::min(max_by, 2 * by);
-        } else {
-          bad_by = by;
-          break;
-        }
-      }
-      while (bad_by - ok_by > std::max(1L, ok_by / 16)) {
-        const long mid = (ok_by + bad_by) / 2;
-        if (mid <= 0) break;
-        Loop l = attempt(mid);
-        if (l.ok) {
-          ok_by = mid;
-          ok_loop = std::move(l);
-        } else {
-          bad_by = mid;
-        }
+      // The family where one of its cycles holds the aim, else the loops.
+      bool ok_family = s_.family.has_value();
+      auto [ok_by, ok_loop] = search(ok_family);
+      if (ok_by == 0 && ok_family) {
+        ok_family = false;
+        std::tie(ok_by, ok_loop) = search(false);
       }
       if (ok_by == 0) {
         // Not even one point on at its full radius: a smaller loop there, to grow next.
         const std::size_t j = index(k, 1);
         auto [r, best] = largest_loop(ch, j, 0, loop_radius(ch, j), at, forward);
         if (!best.ok) return out;  // stuck
+        out.loops_mm += std::abs(ch.u[j] - ch.u[k]);
         k = j;
         rho = r;
         emit(best);
+        circle_at_k = true;
         stride = 1;
         continue;
       }
+      (ok_family ? out.family_mm : out.loops_mm) += std::abs(ch.u[index(k, ok_by)] - ch.u[k]);
       k = index(k, ok_by);
       rho = loop_radius(ch, k);
       stride = ok_by;
       emit(ok_loop);
+      circle_at_k = !ok_family;
+    }
+    if (k == last && !circle_at_k) {
+      // A family's cycles end on the wall at the last point: a circle there as wide as the
+      // channel clears the end's disc (a dead end's round end, the slot's end circle).
+      const Loop cap = loop(ch, last, loop_radius(ch, last), at, forward, s_.aim_deg);
+      if (cap.ok) emit(cap);
     }
     out.complete = k == last;
     return out;
@@ -1243,6 +1516,7 @@ struct PartPlan {
   double open_mm2 = 0;           // of the coverage, the air beside the [stock] box
   int channels = 0;              // channels cleared by trochoids
   double channels_left_mm2 = 0;  // the bands of channels no trochoid could start into
+  double channel_family_mm = 0, channel_loops_mm = 0;  // Trochoid::family_mm, loops_mm summed
   // Its planner as the plan left it (the removed region: what the level's tool swept, and
   // what was not there), which deeper levels' lifts ask where they may come down fast.
   std::shared_ptr<const PartPlanner> planner;
@@ -1573,6 +1847,8 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
       go_to(best->point);
       const auto tro = planner.trochoid(*best_ch, best_forward, *best);
       add_piece_moves(s, planner, tro.pieces, tro.cuts, out);
+      out.channel_family_mm += tro.family_mm;
+      out.channel_loops_mm += tro.loops_mm;
       if (!tro.pieces.empty()) p = tro.pieces.back().end;
       ++out.channels;
       best_ch->done = true;
@@ -1912,6 +2188,11 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
                       (job.cutting.spindle_direction == SpindleDirection::ccw);
   s.sigma = mirror ? -1.0 : 1.0;
   s.fit_tolerance = pk.fit_tolerance_mm;
+  if (pk.channel_family) {
+    s.family = *pk.channel_family;
+    s.aspect = job.path.aspect_ratio;
+    s.linear_mm = job.path.linear_distance_mm;
+  }
 
   PlannedPocket out;
   PocketInfo& info = out.info;
@@ -1919,6 +2200,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   // The channels: narrower than [pocket] channel_width (2 D where 0).
   const double channel_width = pk.channel_width_mm > 0 ? pk.channel_width_mm : 4 * R;
   info.channel_width_mm = channel_width;
+  if (pk.channel_family) info.channel_family = std::string(to_string(*pk.channel_family));
   std::vector<Channel> channels =
       trochoid_channels(centre_region0, centre_region, R, 0.5 * channel_width - keep);
   // The parts: the rounded region's, those a channel joins (its loops run from one into the
@@ -2100,6 +2382,8 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     info.open_mm2 += pp.open_mm2;
     info.channels += pp.channels;
     info.channels_left_mm2 += pp.channels_left_mm2;
+    info.channel_family_mm += pp.channel_family_mm;
+    info.channel_loops_mm += pp.channel_loops_mm;
     if (pp.nothing) continue;
     ++(pp.from_hole ? info.hole_entries : pp.from_above ? info.open_entries : info.helix_entries);
   }

@@ -131,6 +131,10 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
       {"channels_per_level", info.channels},
       {"channel_width_mm", info.channel_width_mm},
       {"channels_left_mm2", info.channels_left_mm2},
+      {"channel_family",
+       info.channel_family.empty() ? nlohmann::json(nullptr) : nlohmann::json(info.channel_family)},
+      {"channel_family_length_mm", info.channel_family_mm},
+      {"channel_loops_length_mm", info.channel_loops_mm},
       {"links_down_per_level", info.links_down},
       {"lifts_per_level", info.lifts},
       {"clearing_length_per_level_mm", info.clearing_length_mm},
@@ -171,11 +175,21 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
       "level\n",
       info.parts, info.parts == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s", info.passes,
       info.links_down, info.lifts, info.clearing_length_mm, info.air_length_mm);
-  if (info.channels > 0) {
+  if (info.channels > 0 && info.channel_family.empty()) {
     out += fmt::format(
         "  {} channel{} (narrower than {:g} mm) cleared by trochoidal loops along the medial axis "
         "a level\n",
         info.channels, info.channels == 1 ? "" : "s", info.channel_width_mm);
+  } else if (info.channels > 0) {
+    const double all = info.channel_family_mm + info.channel_loops_mm;
+    out += fmt::format(
+        "  {} channel{} (narrower than {:g} mm) cleared along the medial axis a level: {:.1f} mm "
+        "of it by {} cycles, {:.1f} mm by circular loops (the channels' ends{})\n",
+        info.channels, info.channels == 1 ? "" : "s", info.channel_width_mm, info.channel_family_mm,
+        info.channel_family, info.channel_loops_mm,
+        all > 0 && info.channel_loops_mm > 0.5 * all
+            ? fmt::format(", and where no {} cycle held the target", info.channel_family)
+            : "");
   }
   if (info.channels_left_mm2 > 0) {
     out += fmt::format(
