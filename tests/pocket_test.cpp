@@ -466,6 +466,19 @@ TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {
   EXPECT_TRUE(has(m, "[slot] and [pocket]")) << m;
   m = message(ok + "max_engagement = 50.0\n", "[path]\nstep = 1.0\n");
   EXPECT_TRUE(has(m, "[path] step: is for slots")) << m;
+  // [path] type chooses the channels' family: not the linear one; its shape keys need it.
+  m = message(ok + "max_engagement = 50.0\n", "[path]\ntype = \"linear\"\n");
+  EXPECT_TRUE(has(m, "[path] type: a pocket's channels are cleared by the trochoidal families"))
+      << m;
+  m = message(ok + "max_engagement = 50.0\n", "[path]\naspect_ratio = 0.8\n");
+  EXPECT_TRUE(
+      has(m, "[path] aspect_ratio: shapes the family of a pocket's channels: give [path] type"))
+      << m;
+  m = message(ok + "max_engagement = 50.0\n",
+              "[path]\ntype = \"trochoidal\"\naspect_ratio = 0.8\n");
+  EXPECT_TRUE(has(m, "use type = \"elliptical\"")) << m;
+  m = message(ok + "max_engagement = 50.0\n", "[path]\ntype = \"elliptic\"\n");
+  EXPECT_TRUE(has(m, "[path] type")) << m;
   m = message("depth = 4.0\nmax_engagement = 50.0\n");
   EXPECT_TRUE(has(m, "missing required key [pocket] boundary")) << m;
   m = message("boundary = \"NOPE\"\ndepth = 4.0\nmax_engagement = 50.0\n");

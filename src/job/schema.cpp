@@ -497,7 +497,9 @@ std::vector<Key> build_schema() {
              "direction the slot runs in the workpiece: its +Y turned this far from +Y, "
              "counter-clockwise seen from above (90: along -X)"),
       // [path]
-      choice("path", "type", kPathTypes, FIELD(path.type), "path family (docs/models.md section 2)",
+      choice("path", "type", kPathTypes, FIELD(path.type),
+             "path family (docs/models.md section 2); with [pocket], the family that clears its "
+             "channels (not linear; none: circular loops about the medial axis' points)",
              true),
       custom(
           "path", "step", "number", "mm", "> 0, below the tool diameter",
@@ -511,9 +513,10 @@ std::vector<Key> build_schema() {
                 r.number("path", "step", "mm", positive(), 0.0, needs_step).value_or(0.0);
           }),
       number("path", "aspect_ratio", "(b/a)", positive(), FIELD(path.aspect_ratio),
-             "r_e = b / a for elliptical and linear-elliptical (trochoidal is r_e = 1)"),
+             "r_e = b / a for elliptical and linear-elliptical (trochoidal is r_e = 1); slots and "
+             "a pocket's channels"),
       number("path", "linear_distance", "mm", non_negative(), FIELD(path.linear_distance_mm),
-             "d, the straight wall moves of linear-elliptical"),
+             "d, the straight wall moves of linear-elliptical; slots and a pocket's channels"),
       choice(
           "path", "direction", kDirections, FIELD(path.direction),
           "milling direction: climb orbits counter-clockwise with a cw spindle (G3), conventional "

@@ -87,8 +87,15 @@ CASES = {
     "thin": ("THIN", None, Polygon([(700, 0), (740, 0), (740, 14.4), (780, 14.4), (780, 25.6),
                                     (740, 25.6), (740, 40), (700, 40)]), 6),
 }
+# The channels by the straight slot's families ([path] type): the cycles carried along a
+# straight axis, a ring's and a narrow one's.
+CASES["channel-linear-elliptical"] = CASES["channel"] + (
+    '[path]\ntype = "linear-elliptical"\naspect_ratio = 0.8\nlinear_distance = 0.3\n',)
+CASES["ring-elliptical"] = CASES["ring"] + ('[path]\ntype = "elliptical"\naspect_ratio = 0.7\n',)
+CASES["thin-trochoidal"] = CASES["thin"] + ('[path]\ntype = "trochoidal"\n',)
 TARGET, STOCK, DEPTH = 50.0, 0.2, 4.0
-for name, (boundary, islands, walls, corners) in CASES.items():
+for name, case in CASES.items():
+    boundary, islands, walls, corners = case[:4]
     job = os.path.join(work, name + ".toml")
     with open(job, "w") as f:
         f.write('[geometry]\nfile = "%s"\n[pocket]\nboundary = "%s"\n' % (DXF, boundary))
@@ -96,7 +103,7 @@ for name, (boundary, islands, walls, corners) in CASES.items():
             f.write('islands = "%s"\n' % islands)
         f.write("depth = %g\nmax_step_down = 2.0\nstock_to_leave = %g\nmax_engagement = %g\n"
                 "[tool]\ndiameter = %g\nteeth = 3\n[cutting]\nfeed_rate = 1200.0\n"
-                "spindle_speed = 8000.0\n" % (DEPTH, STOCK, TARGET, 2 * R))
+                "spindle_speed = 8000.0\n%s" % (DEPTH, STOCK, TARGET, 2 * R, "".join(case[4:])))
     prog = os.path.join(work, name + ".ngc")
     plan = subprocess.run([cli, "plan", job, "-o", prog], capture_output=True, text=True)
     check(plan.returncode == 0, "%s: planned (%s)" % (name, plan.stderr.strip()[:300]))
