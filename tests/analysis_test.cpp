@@ -881,6 +881,29 @@ TEST(Analysis, ALeadInIntoAClearedLevelCutsNothing) {
   EXPECT_EQ(axial, 0.0);  // the end face descends through cleared stock
 }
 
+// A descent where the tool passed before, to the program's 4 decimals, meets slivers of the
+// kernel's own frontier (a centre 7e-5 mm off the slot's line, under 0.1 um deep): no cut by
+// the end face, no "descent into stock". The same descent 3 mm beside the line comes down on
+// the slot's wall: the end face cuts there, at the feed's descent per tooth.
+TEST(Analysis, ADescentWhereTheToolPassedCutsNothing) {
+  const Job job = test::stock_job(10.0, 4, "feed_rate = 600.0\nspindle_speed = 2000.0\n",
+                                  {0, -20, -10}, {60, 20, 0}, "descent.toml");
+  const auto run = [&](const std::string& at) {
+    return analyze_process(
+        job, read_gcode("G21 G90 G17 G94\nG0 X-10 Y0 Z1\nG1 Z-2 F600\nG1 X40\nG0 Z5\nG0 " + at +
+                            "\nG0 Z-1.5\nG1 Z-2 F600\nG1 X30\nG0 Z5\nM2\n",
+                        "descent.ngc")
+                 .path);
+  };
+  const ProcessMetrics passed = run("X20.0001 Y0.00007");
+  EXPECT_EQ(passed.descents_into_stock, 0);
+  EXPECT_EQ(passed.h_axial_max_mm, 0.0);
+  const ProcessMetrics beside = run("X20 Y3");
+  EXPECT_GE(beside.descents_into_stock, 1);
+  // F600 at 2000 rpm and 4 teeth: 0.075 mm of descent per tooth (the rapid's more, above it).
+  EXPECT_GE(beside.h_axial_max_mm, 600.0 / (2000 * 4) - 1e-12);
+}
+
 // A drilling program cuts with the end face alone: its holes' volume, the descent per tooth as
 // the axial chip, one descent per hole and per peck; a job of a [stock] without [slot] reads.
 TEST(Analysis, DrillingIsCutByTheEndFace) {
