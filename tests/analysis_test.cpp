@@ -882,9 +882,11 @@ TEST(Analysis, ALeadInIntoAClearedLevelCutsNothing) {
 }
 
 // A descent where the tool passed before, to the program's 4 decimals, meets slivers of the
-// kernel's own frontier (a centre 7e-5 mm off the slot's line, under 0.1 um deep): no cut by
-// the end face, no "descent into stock". The same descent 3 mm beside the line comes down on
-// the slot's wall: the end face cuts there, at the feed's descent per tooth.
+// kernel's own frontier (a centre 1e-4 mm off the slot's line, in an R / 20 square of the
+// plan none of the slot's samples stood in, so the end face's "deeper before" rule does not
+// apply): no cut by the end face, no "descent into stock" (before, the rapid's whole descent
+// per tooth). The same descent 3 mm beside the line comes down on the slot's wall: the end
+// face cuts there, at the feed's descent per tooth.
 TEST(Analysis, ADescentWhereTheToolPassedCutsNothing) {
   const Job job = test::stock_job(10.0, 4, "feed_rate = 600.0\nspindle_speed = 2000.0\n",
                                   {0, -20, -10}, {60, 20, 0}, "descent.toml");
@@ -895,7 +897,7 @@ TEST(Analysis, ADescentWhereTheToolPassedCutsNothing) {
                         "descent.ngc")
                  .path);
   };
-  const ProcessMetrics passed = run("X20.0001 Y0.00007");
+  const ProcessMetrics passed = run("X20.0001 Y-0.0001");
   EXPECT_EQ(passed.descents_into_stock, 0);
   EXPECT_EQ(passed.h_axial_max_mm, 0.0);
   const ProcessMetrics beside = run("X20 Y3");

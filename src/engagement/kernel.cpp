@@ -1182,6 +1182,10 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   out.removal_rate_mm3_per_s.assign(n, 0.0);
   out.axial_chip_mm.assign(n, 0.0);
   const double tooth_s = tooth_period_s(job.tool, job.cutting);
+  // The end face cuts only stock at least this deep under its edge (mm): the feed marks of a
+  // tooth's advance f are f^2 / 8R deep (4.3 um at 0.42 mm a tooth, R = 5 mm: a pocket's
+  // link feed), a machine's positioning a few microns.
+  constexpr double kFaceGrazeMm = 0.01;
   const double flute = job.tool.flute_length_mm > 0 ? job.tool.flute_length_mm
                                                     : std::numeric_limits<double>::infinity();
 
@@ -1370,9 +1374,22 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
     if (i > 0 && smp.z_mm[i] < smp.z_mm[i - 1] && smp.t_s[i] > smp.t_s[i - 1]) {
       const double done = bottoms.deepest(cx, cy);
       const double dz = std::min({smp.z_mm[i - 1], top, done}) - smp.z_mm[i];
+      const ArcSet& face = std::isnan(current_z) ? under : eng;
       double share = 0;
-      for (const auto& a : std::isnan(current_z) ? under : eng) share += a.sweep_rad();
+      for (const auto& a : face) share += a.sweep_rad();
       share = std::min(1.0, share / kTwoPi);
+      // The stock under the face's edge must be kFaceGrazeMm deep (the chip model's depth of
+      // the uncut material along the arcs' rays, against the region and each cleared level's):
+      // a descent where the tool passed before meets slivers (its samples' discs a tooth apart,
+      // the program's rounding to 1e-4 mm) as wide arcs of the circle but fractions of a
+      // micron deep, which were read as the rapid's whole descent per tooth (0.4167 mm and 4
+      // "descents into stock" on the pocket example, where it had none).
+      if (dz > 0 && share > 0 && share < 1) {
+        double depth = chip.h_max(removed, cx, cy, face).first;
+        for (const Removed* r : cleared)
+          depth = std::min(depth, chip.h_max(*r, cx, cy, face).first);
+        if (depth < kFaceGrazeMm) share = 0;
+      }
       if (dz > 0 && share > 0) {
         const double vz = dz / (smp.t_s[i] - smp.t_s[i - 1]);
         axial_rate = kPi * R * R * share * vz;
