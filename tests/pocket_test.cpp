@@ -17,6 +17,7 @@
 #include "trochomill/gcode.hpp"
 #include "trochomill/geometry.hpp"
 #include "trochomill/job.hpp"
+#include "trochomill/report/path.hpp"
 #include "trochomill/sim.hpp"
 #include "trochomill/sim/dexel.hpp"
 #include "trochomill/units.hpp"
@@ -417,6 +418,19 @@ TEST(Pocket, ChannelsTakeEveryFamilyOfTheStraightSlot) {
     // closed form's chords.
     EXPECT_LT(worst, 0.002 + 1e-5) << cycles << " cycles";
   }
+  // Wall moves of 1.2 mm in a 14 mm channel: no linear-elliptical cycle holds 50 degrees, the
+  // loops clear it and the plan says where.
+  const Job far = parse_job(pocket_job("boundary = \"CHAN\"\ndepth = 4.0\nmax_step_down = 2.0\n"
+                                       "stock_to_leave = 0.2\nmax_engagement = 50.0\n",
+                                       "[path]\ntype = \"linear-elliptical\"\n"
+                                       "linear_distance = 1.2\n"),
+                            "CHAN.toml");
+  const PlannedPocket p = plan_pocket(far);
+  EXPECT_TRUE(p.info.proven);
+  EXPECT_LT(p.info.channel_family_mm, 0.1 * p.info.channel_unheld_mm);
+  EXPECT_GT(p.info.channel_unheld_mm, 30);
+  EXPECT_TRUE(
+      has(pocket_summary(p.info, p.proof), "where no linear-elliptical cycle held the target"));
 }
 
 // The planner's margin below the target is measured, not a bound: the example plate with a
@@ -474,6 +488,7 @@ TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {
   EXPECT_TRUE(
       has(m, "[path] aspect_ratio: shapes the family of a pocket's channels: give [path] type"))
       << m;
+  EXPECT_FALSE(has(m, "type = \"trochoidal\" is the elliptical family")) << m;  // none given
   m = message(ok + "max_engagement = 50.0\n",
               "[path]\ntype = \"trochoidal\"\naspect_ratio = 0.8\n");
   EXPECT_TRUE(has(m, "use type = \"elliptical\"")) << m;
@@ -492,6 +507,16 @@ TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {
                   "the tool (D = 45 mm) with stock_to_leave = 0 mm fits nowhere in layer "
                   "'RECT'"))
       << m;
+  // A pocket whose every part is too narrow for the clearing (CHAN, 14 mm, with a 13.4 mm tool
+  // and 0.2 mm of stock: less than R / 10 wider) and no finishing pass: nothing to cut, said
+  // (it crashed on the empty program).
+  text = pocket_job(
+      "boundary = \"CHAN\"\ndepth = 4.0\nstock_to_leave = 0.2\nfinish_pass = false\n"
+      "max_engagement = 50.0\n");
+  text.replace(text.find("diameter = 10.0"), 15, "diameter = 13.4");
+  const Job narrow = parse_job(text, "narrow.toml");
+  m = test::message_of([&] { (void)plan_pocket(narrow); });
+  EXPECT_TRUE(has(m, "[pocket] finish_pass = false: nothing to cut in layer 'CHAN'")) << m;
   // A job with [pocket] is not a slot: the slot models say so.
   const Job pocket = parse_job(pocket_job(ok + "max_engagement = 50.0\n"), "p.toml");
   m = test::message_of([&] { (void)plan_slot(pocket); });

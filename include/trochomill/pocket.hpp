@@ -45,11 +45,17 @@ struct PocketInfo {
   double channels_left_mm2 = 0;
   /// The channels' family ([path] type; empty: the loops, circles about the axis' points) and
   /// the length of the channels' axis (mm, one level: the deepest's plan) stepped along by its
-  /// cycles and by loops (circles: where no cycle of the family held the target, and the
-  /// channels' ends and starts, where a family's cycle would reach past the axis).
+  /// cycles, by loops (circles: all of it without a family; with one, the channels' ends and
+  /// starts, where its cycles would reach past the axis) and by loops where no cycle of the
+  /// family held the target.
   std::string channel_family;
   double channel_family_mm = 0;
   double channel_loops_mm = 0;
+  double channel_unheld_mm = 0;
+  /// The channels' family dropped: no plan with its cycles held the target by the kernel (its
+  /// least largest clearing engagement, degrees), so the channels were cleared by loops.
+  std::string channel_family_dropped;
+  double channel_family_dropped_deg = 0;
   int links_down = 0;             ///< links per level that stay down in cleared area
   int lifts = 0;                  ///< links per level that lift over stock
   double clearing_length_mm = 0;  ///< feed length of one level's clearing passes that cut

@@ -1353,7 +1353,7 @@ void check_rules(JobReader& r, Job& job) {
                             fmt_num(path.step_mm)));
     }
   }
-  if (path.type == PathType::trochoidal && r.has("path", "aspect_ratio") &&
+  if (path.type == PathType::trochoidal && r.has("path", "type") && r.has("path", "aspect_ratio") &&
       path.aspect_ratio != 1.0) {
     r.problem("path", "aspect_ratio",
               "type = \"trochoidal\" is the elliptical family with aspect_ratio = 1; "

@@ -1156,9 +1156,10 @@ class PartPlanner {
     std::vector<ContourPiece> pieces;
     std::vector<bool> cuts;
     bool complete = false;
-    // The axis' length (mm) it stepped along by the family's cycles ([path] type) and by the
-    // loops (circles: the default, or where no cycle of the family held the aim).
-    double family_mm = 0, loops_mm = 0;
+    // The axis' length (mm) it stepped along by the family's cycles ([path] type), by the
+    // loops (circles: the default, and a family's at the channels' ends and starts) and by
+    // loops where no cycle of the family held the aim.
+    double family_mm = 0, loops_mm = 0, unheld_mm = 0;
   };
   Trochoid trochoid(const Channel& ch, bool forward, const Start& st) {
     Trochoid out;
@@ -1208,11 +1209,14 @@ class PartPlanner {
       // The furthest step of the family's cycles (fam) or of the loops: doubled from the last
       // step until one fails, then bisected. A family's cycle that would reach past the axis
       // fails.
+      bool family_failed = false;  // a cycle of the family failed the aim (not only the axis)
       const auto search = [&](bool fam) {
         const auto attempt = [&](long by) {
           const std::size_t j = index(k, by);
-          return fam ? family_loop(ch, k, j, at, forward, s_.aim_deg)
-                     : loop(ch, j, loop_radius(ch, j), at, forward, s_.aim_deg);
+          Loop l = fam ? family_loop(ch, k, j, at, forward, s_.aim_deg)
+                       : loop(ch, j, loop_radius(ch, j), at, forward, s_.aim_deg);
+          if (fam && !l.ok && !l.off_axis) family_failed = true;
+          return l;
         };
         long ok_by = 0, bad_by = max_by + 1;
         Loop ok_loop;
@@ -1243,6 +1247,7 @@ class PartPlanner {
       };
       // The family where one of its cycles holds the aim, else the loops.
       bool ok_family = s_.family.has_value();
+      family_failed = false;
       auto [ok_by, ok_loop] = search(ok_family);
       if (ok_by == 0 && ok_family) {
         ok_family = false;
@@ -1261,7 +1266,9 @@ class PartPlanner {
         stride = 1;
         continue;
       }
-      (ok_family ? out.family_mm : out.loops_mm) += std::abs(ch.u[index(k, ok_by)] - ch.u[k]);
+      (ok_family       ? out.family_mm
+       : family_failed ? out.unheld_mm
+                       : out.loops_mm) += std::abs(ch.u[index(k, ok_by)] - ch.u[k]);
       k = index(k, ok_by);
       rho = loop_radius(ch, k);
       stride = ok_by;
@@ -1516,7 +1523,8 @@ struct PartPlan {
   double open_mm2 = 0;           // of the coverage, the air beside the [stock] box
   int channels = 0;              // channels cleared by trochoids
   double channels_left_mm2 = 0;  // the bands of channels no trochoid could start into
-  double channel_family_mm = 0, channel_loops_mm = 0;  // Trochoid::family_mm, loops_mm summed
+  // Trochoid::family_mm, loops_mm, unheld_mm summed
+  double channel_family_mm = 0, channel_loops_mm = 0, channel_unheld_mm = 0;
   // Its planner as the plan left it (the removed region: what the level's tool swept, and
   // what was not there), which deeper levels' lifts ask where they may come down fast.
   std::shared_ptr<const PartPlanner> planner;
@@ -1849,6 +1857,7 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
       add_piece_moves(s, planner, tro.pieces, tro.cuts, out);
       out.channel_family_mm += tro.family_mm;
       out.channel_loops_mm += tro.loops_mm;
+      out.channel_unheld_mm += tro.unheld_mm;
       if (!tro.pieces.empty()) p = tro.pieces.back().end;
       ++out.channels;
       best_ch->done = true;
@@ -2384,6 +2393,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     info.channels_left_mm2 += pp.channels_left_mm2;
     info.channel_family_mm += pp.channel_family_mm;
     info.channel_loops_mm += pp.channel_loops_mm;
+    info.channel_unheld_mm += pp.channel_unheld_mm;
     if (pp.nothing) continue;
     ++(pp.from_hole ? info.hole_entries : pp.from_above ? info.open_entries : info.helix_entries);
   }
@@ -2641,6 +2651,13 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
       }
     }
   }
+  if (path.empty()) {
+    throw InputError(fmt::format(
+        "[pocket] finish_pass = false: nothing to cut in layer '{}': every part is too narrow "
+        "for the clearing (less than R / 10 wider than the tool with the stock: only the "
+        "finishing pass, as a slot, reaches them); give finish_pass = true or a smaller tool",
+        pk.boundary));
+  }
   const Vec3 e = here();
   line_to(Vec3(e.x(), e.y(), std::max(e.z(), safe_z)), Motion::rapid, rapid);
   return out;
@@ -2794,6 +2811,18 @@ PlannedPocket plan_pocket(const Job& job) {
     }
   }
   best->info.replans = tried;  // (the least of the plans: every one was tried)
+  if (job.pocket.channel_family) {
+    // No plan with the family's cycles held: the loops instead, where they hold.
+    Job loops = job;
+    loops.pocket.channel_family.reset();
+    PlannedPocket p = plan_pocket(loops);
+    if (p.info.proven ||
+        p.proof.clearing_max_engagement_deg < best->proof.clearing_max_engagement_deg) {
+      p.info.channel_family_dropped = std::string(to_string(*job.pocket.channel_family));
+      p.info.channel_family_dropped_deg = best->proof.clearing_max_engagement_deg;
+      return p;
+    }
+  }
   return std::move(*best);
 }
 

@@ -134,7 +134,11 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
       {"channel_family",
        info.channel_family.empty() ? nlohmann::json(nullptr) : nlohmann::json(info.channel_family)},
       {"channel_family_length_mm", info.channel_family_mm},
-      {"channel_loops_length_mm", info.channel_loops_mm},
+      {"channel_loops_length_mm", info.channel_loops_mm + info.channel_unheld_mm},
+      {"channel_unheld_length_mm", info.channel_unheld_mm},
+      {"channel_family_dropped", info.channel_family_dropped.empty()
+                                     ? nlohmann::json(nullptr)
+                                     : nlohmann::json(info.channel_family_dropped)},
       {"links_down_per_level", info.links_down},
       {"lifts_per_level", info.lifts},
       {"clearing_length_per_level_mm", info.clearing_length_mm},
@@ -181,15 +185,21 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         "a level\n",
         info.channels, info.channels == 1 ? "" : "s", info.channel_width_mm);
   } else if (info.channels > 0) {
-    const double all = info.channel_family_mm + info.channel_loops_mm;
     out += fmt::format(
         "  {} channel{} (narrower than {:g} mm) cleared along the medial axis a level: {:.1f} mm "
-        "of it by {} cycles, {:.1f} mm by circular loops (the channels' ends{})\n",
+        "of it by {} cycles, {:.1f} mm by circular loops at the channels' ends{}\n",
         info.channels, info.channels == 1 ? "" : "s", info.channel_width_mm, info.channel_family_mm,
         info.channel_family, info.channel_loops_mm,
-        all > 0 && info.channel_loops_mm > 0.5 * all
-            ? fmt::format(", and where no {} cycle held the target", info.channel_family)
+        info.channel_unheld_mm > 0
+            ? fmt::format(", {:.1f} mm by circular loops where no {} cycle held the target",
+                          info.channel_unheld_mm, info.channel_family)
             : "");
+  }
+  if (!info.channel_family_dropped.empty()) {
+    out += fmt::format(
+        "  warning: no plan with {} cycles in the channels held the target by the kernel ({:.4g} "
+        "degrees at best): the channels are cleared by circular loops instead\n",
+        info.channel_family_dropped, info.channel_family_dropped_deg);
   }
   if (info.channels_left_mm2 > 0) {
     out += fmt::format(
@@ -229,11 +239,15 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
   const auto at = [](const Vec3& p) {
     return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z());
   };
-  out += fmt::format(
-      "  the kernel on the program: clearing (entries excepted) engagement max {:.4g} degrees at "
-      "{}, chip max {:.5f} mm, {:.3g} % of its cutting above the target\n",
-      proof.clearing_max_engagement_deg, at(proof.clearing_max_at_mm), proof.clearing_max_chip_mm,
-      100 * proof.clearing_share_above_target);
+  if (info.finish_first_segment == 0) {
+    out += "  no clearing: every part is too narrow for it (the finishing pass cuts them)\n";
+  } else {
+    out += fmt::format(
+        "  the kernel on the program: clearing (entries excepted) engagement max {:.4g} degrees "
+        "at {}, chip max {:.5f} mm, {:.3g} % of its cutting above the target\n",
+        proof.clearing_max_engagement_deg, at(proof.clearing_max_at_mm), proof.clearing_max_chip_mm,
+        100 * proof.clearing_share_above_target);
+  }
   if (info.replans > 0 && info.proven) {
     out += fmt::format(
         "  the kernel found {:.4g} degrees at {} on the first plan, above the target + {:g} %: "
