@@ -232,17 +232,18 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                      at.y(), at.z(), m->at_s, m->feed_mm_per_min, describe(m->limit));
         }
       }
-      if (a->out == "-" || a->json == "-") {
-        // stdout holds the program or the JSON: nothing else goes there
-      } else if (pocket) {
-        fmt::print(
-            "{}: pocket, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
-            "lines -> {}\n",
-            a->job.file, planned.path.length_mm(), planned.path.duration_s(),
-            estimate_time_s(planned.path, job.machine), std::count(code.begin(), code.end(), '\n'),
-            a->out);
+      // stdout may hold the program or the JSON: the summary then goes to stderr.
+      std::FILE* said = a->out == "-" || a->json == "-" ? stderr : stdout;
+      if (pocket) {
+        fmt::print(said,
+                   "{}: pocket, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
+                   "lines -> {}\n",
+                   a->job.file, planned.path.length_mm(), planned.path.duration_s(),
+                   estimate_time_s(planned.path, job.machine),
+                   std::count(code.begin(), code.end(), '\n'), a->out);
       } else {
         fmt::print(
+            said,
             "{}: {} {} cycles, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
             "lines -> {}\n",
             a->job.file, to_string(job.path.type), planned.info.cycles, planned.path.length_mm(),
