@@ -10,6 +10,7 @@
 
 #include "trochomill/engagement.hpp"
 #include "trochomill/gcode.hpp"
+#include "trochomill/geometry.hpp"
 #include "trochomill/geometry/drawing.hpp"
 #include "trochomill/job.hpp"
 #include "trochomill/path.hpp"
@@ -114,6 +115,34 @@ void BM_PlanPocketPlate(benchmark::State& state) {
       [](const trochomill::PlannedPocket& p) { return p.info.passes; });
 }
 BENCHMARK(BM_PlanPocketPlate)->Unit(benchmark::kMillisecond);
+
+// The medial axis of a perforated plate: a W x 0.6 W mm rectangle less circular holes of
+// radius 4 mm at a 20 mm pitch (W = 60, 120, 240 mm: 6, 24, 84 holes), shrunk by a 10 mm
+// tool's radius and 0.2 mm of stock (offset_region: Clipper's chords within 1 um), sampled
+// 0.05 mm apart: what a pocket with many islands asks of it.
+void BM_MedialAxisPerforated(benchmark::State& state) {
+  using trochomill::Contour;
+  const double W = static_cast<double>(state.range(0)), H = 0.6 * W;
+  std::vector<Contour> region{Contour::polyline({{0, 0}, {W, 0}, {W, H}, {0, H}}, true)};
+  for (double x = 10; x < W; x += 20) {
+    for (double y = 10; y < H; y += 20) {
+      region.push_back(Contour::circle({x, y}, 4).reversed());
+    }
+  }
+  // The tool centre's region of a 10 mm tool with 0.2 mm of stock (Clipper's chords), as the
+  // pocket planner asks.
+  region = trochomill::offset_region(region, -5.2, 1e-3);
+  std::size_t samples = 0;
+  for (auto _ : state) {
+    const auto axis = trochomill::medial_axis(region, 120, 0.05);
+    samples = 0;
+    for (const auto& b : axis) samples += b.points.size();
+    benchmark::DoNotOptimize(samples);
+  }
+  state.counters["samples"] = static_cast<double>(samples);
+  state.counters["contours"] = static_cast<double>(region.size());
+}
+BENCHMARK(BM_MedialAxisPerforated)->Arg(60)->Arg(120)->Arg(240)->Unit(benchmark::kMillisecond);
 
 // Reading a 10 MB DXF: 100,000 polylines of four lines and a bulge each (R12 text, written
 // here), chained into closed contours.

@@ -32,6 +32,164 @@ Vec2 foot(const Vec2& p, const Vec2& a, const Vec2& b) {
   return a + std::clamp((p - a).dot(d) / L2, 0.0, 1.0) * d;
 }
 
+// The distance from a point to the nearest of a set of segments, through a uniform grid of
+// square cells: each segment listed in the cells it crosses (column by column), a query
+// reading rings of cells about its own until the nearest found lies within the rings read (a
+// point of ring r is more than (r - 1) cells away). The same minimum, to the bit, as over all
+// the segments (the nearest is among those read); a point outside the grid reads them all.
+class NearestSegment {
+ public:
+  explicit NearestSegment(const std::vector<std::pair<Vec2, Vec2>>& segs) : segs_(segs) {
+    if (segs.empty()) return;
+    lo_ = hi_ = segs.front().first;
+    for (const auto& [a, b] : segs) {
+      for (const Vec2& q : {a, b}) {
+        lo_ = lo_.cwiseMin(q);
+        hi_ = hi_.cwiseMax(q);
+      }
+    }
+    // About as many cells as segments, at most 2048 a side.
+    const Vec2 size = hi_ - lo_;
+    const double area = std::max(size.x(), 1e-9) * std::max(size.y(), 1e-9);
+    cell_ = std::max(
+        {std::sqrt(area / static_cast<double>(segs.size())), size.maxCoeff() / 2048, 1e-6});
+    nx_ = static_cast<int>(std::floor(size.x() / cell_)) + 1;
+    ny_ = static_cast<int>(std::floor(size.y() / cell_)) + 1;
+    std::vector<std::pair<int, int>> entries;  // (cell, segment)
+    for (std::size_t k = 0; k < segs.size(); ++k) {
+      const auto& [a, b] = segs[k];
+      const int c0 = col(std::min(a.x(), b.x())), c1 = col(std::max(a.x(), b.x()));
+      for (int c = c0; c <= c1; ++c) {
+        // The segment's y range within the column (its ends where the column holds them).
+        const double x0 = lo_.x() + c * cell_, x1 = x0 + cell_;
+        double ya = a.y(), yb = b.y();
+        if (b.x() != a.x()) {
+          const auto y_at = [&](double x) {
+            const double t = std::clamp((x - a.x()) / (b.x() - a.x()), 0.0, 1.0);
+            return a.y() + t * (b.y() - a.y());
+          };
+          ya = y_at(x0);
+          yb = y_at(x1);
+        }
+        const int r0 = row(std::min(ya, yb)), r1 = row(std::max(ya, yb));
+        for (int r = std::max(0, r0 - 1); r <= std::min(ny_ - 1, r1 + 1); ++r) {
+          entries.emplace_back(r * nx_ + c, static_cast<int>(k));
+        }
+      }
+    }
+    std::sort(entries.begin(), entries.end());
+    entries.erase(std::unique(entries.begin(), entries.end()), entries.end());
+    start_.assign(static_cast<std::size_t>(nx_) * ny_ + 1, 0);
+    for (const auto& [c, k] : entries) ++start_[static_cast<std::size_t>(c) + 1];
+    for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
+    list_.reserve(entries.size());
+    for (const auto& [c, k] : entries) list_.push_back(k);
+  }
+
+  [[nodiscard]] double distance(const Vec2& p) const {
+    double best = std::numeric_limits<double>::infinity();
+    const auto take = [&](int k) {
+      const auto& [a, b] = segs_[static_cast<std::size_t>(k)];
+      best = std::min(best, (foot(p, a, b) - p).norm());
+    };
+    if (segs_.empty()) return best;
+    if (!(p.x() >= lo_.x() && p.y() >= lo_.y() && p.x() <= hi_.x() && p.y() <= hi_.y())) {
+      for (std::size_t k = 0; k < segs_.size(); ++k) take(static_cast<int>(k));
+      return best;
+    }
+    const int cx = col(p.x()), cy = row(p.y());
+    for (int r = 0;; ++r) {
+      const int x0 = cx - r, x1 = cx + r, y0 = cy - r, y1 = cy + r;
+      if (x0 < 0 && y0 < 0 && x1 >= nx_ && y1 >= ny_) break;  // every cell read
+      for (int y = std::max(0, y0); y <= std::min(ny_ - 1, y1); ++y) {
+        const bool edge_row = y == y0 || y == y1;
+        for (int x = std::max(0, x0); x <= std::min(nx_ - 1, x1); ++x) {
+          if (!edge_row && x != x0 && x != x1) continue;  // the ring only
+          const std::size_t c = static_cast<std::size_t>(y) * nx_ + x;
+          for (int i = start_[c]; i < start_[c + 1]; ++i) take(list_[static_cast<std::size_t>(i)]);
+        }
+      }
+      if (best <= r * cell_) break;  // ring r + 1 and beyond: more than r cells away
+    }
+    return best;
+  }
+
+ private:
+  [[nodiscard]] int col(double x) const {
+    return std::clamp(static_cast<int>(std::floor((x - lo_.x()) / cell_)), 0, nx_ - 1);
+  }
+  [[nodiscard]] int row(double y) const {
+    return std::clamp(static_cast<int>(std::floor((y - lo_.y()) / cell_)), 0, ny_ - 1);
+  }
+  const std::vector<std::pair<Vec2, Vec2>>& segs_;
+  Vec2 lo_ = Vec2::Zero(), hi_ = Vec2::Zero();
+  double cell_ = 1;
+  int nx_ = 1, ny_ = 1;
+  std::vector<int> start_, list_;
+};
+
+// region_contains for a region of lines only (offset_region's): the same test on the same
+// pieces (a rightward ray from the point, a piece crossing it when one end lies above the
+// point and the other not, counted where it lies right of the point), but only on the pieces
+// listed in the point's band of y (each piece in every band its y range meets), so the same
+// answer to the bit. Not usable with arcs (region_contains then).
+class InsideLines {
+ public:
+  explicit InsideLines(const std::vector<Contour>& region) {
+    for (const Contour& c : region) {
+      for (const ContourPiece& piece : c.pieces) {
+        if (piece.is_arc()) return;
+        pieces_.emplace_back(piece.start, piece.end);
+      }
+    }
+    usable_ = true;
+    if (pieces_.empty()) return;
+    lo_ = hi_ = pieces_.front().first.y();
+    for (const auto& [a, b] : pieces_) {
+      lo_ = std::min({lo_, a.y(), b.y()});
+      hi_ = std::max({hi_, a.y(), b.y()});
+    }
+    bands_ = static_cast<int>(std::clamp<std::size_t>(pieces_.size() / 4, 1, 1 << 16));
+    h_ = std::max((hi_ - lo_) / bands_, 1e-12);
+    std::vector<std::pair<int, int>> entries;
+    for (std::size_t k = 0; k < pieces_.size(); ++k) {
+      const auto& [a, b] = pieces_[k];
+      for (int r = band(std::min(a.y(), b.y())); r <= band(std::max(a.y(), b.y())); ++r) {
+        entries.emplace_back(r, static_cast<int>(k));
+      }
+    }
+    std::sort(entries.begin(), entries.end());
+    start_.assign(static_cast<std::size_t>(bands_) + 1, 0);
+    for (const auto& [r, k] : entries) ++start_[static_cast<std::size_t>(r) + 1];
+    for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
+    for (const auto& [r, k] : entries) list_.push_back(k);
+  }
+  [[nodiscard]] bool usable() const { return usable_; }
+  [[nodiscard]] bool contains(const Vec2& p) const {
+    if (pieces_.empty() || !(p.y() >= lo_ && p.y() <= hi_)) return false;
+    const int r = band(p.y());
+    int n = 0;
+    for (int i = start_[static_cast<std::size_t>(r)]; i < start_[static_cast<std::size_t>(r) + 1];
+         ++i) {
+      const auto& [a, b] = pieces_[static_cast<std::size_t>(list_[static_cast<std::size_t>(i)])];
+      if ((a.y() > p.y()) == (b.y() > p.y())) continue;
+      const double x = a.x() + (p.y() - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
+      if (x > p.x()) ++n;
+    }
+    return n % 2 == 1;
+  }
+
+ private:
+  [[nodiscard]] int band(double y) const {
+    return std::clamp(static_cast<int>(std::floor((y - lo_) / h_)), 0, bands_ - 1);
+  }
+  std::vector<std::pair<Vec2, Vec2>> pieces_;
+  bool usable_ = false;
+  double lo_ = 0, hi_ = 0, h_ = 1;
+  int bands_ = 1;
+  std::vector<int> start_, list_;
+};
+
 }  // namespace
 
 std::vector<MedialBranch> medial_axis(const std::vector<Contour>& region, double min_angle_deg,
@@ -94,10 +252,11 @@ std::vector<MedialBranch> medial_axis(const std::vector<Contour>& region, double
         return Site{s.first, s.second};
     }
   };
-  auto clearance = [&](const Vec2& p) {
-    double d = std::numeric_limits<double>::infinity();
-    for (const auto& [a, b] : kept) d = std::min(d, (foot(p, a, b) - p).norm());
-    return d;
+  const NearestSegment nearest(kept);
+  auto clearance = [&](const Vec2& p) { return nearest.distance(p); };
+  const InsideLines lines(region);
+  auto inside = [&](const Vec2& p) {
+    return lines.usable() ? lines.contains(p) : region_contains(region, p);
   };
   const double cos_min = std::cos(deg_to_rad(min_angle_deg));
 
@@ -123,10 +282,8 @@ std::vector<MedialBranch> medial_axis(const std::vector<Contour>& region, double
     const Vec2 m = 0.5 * (p0 + p1);
     // Its ends inside or on the boundary (an axis running into a convex corner of the region,
     // a wedge's tip, ends there), its middle inside.
-    const auto inside_or_on = [&](const Vec2& q) {
-      return region_contains(region, q) || clearance(q) <= 1e-6;
-    };
-    if (!region_contains(region, m) || !inside_or_on(p0) || !inside_or_on(p1)) continue;
+    const auto inside_or_on = [&](const Vec2& q) { return inside(q) || clearance(q) <= 1e-6; };
+    if (!inside(m) || !inside_or_on(p0) || !inside_or_on(p1)) continue;
     const Site sa = site_of(*e.cell()), sb = site_of(*e.twin()->cell());
     const Vec2 fa = foot(m, sa.a, sa.b) - m, fb = foot(m, sb.a, sb.b) - m;
     const double na = fa.norm(), nb = fb.norm();
@@ -167,7 +324,7 @@ std::vector<MedialBranch> medial_axis(const std::vector<Contour>& region, double
     if (br.closed) br.points.pop_back();
     // A sample outside (a curved edge's chord cutting across a hole's corner): no disc.
     for (const Vec2& p : br.points) {
-      br.clearance_mm.push_back(region_contains(region, p) ? clearance(p) : 0.0);
+      br.clearance_mm.push_back(inside(p) ? clearance(p) : 0.0);
     }
     out.push_back(std::move(br));
   };
