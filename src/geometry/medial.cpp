@@ -57,7 +57,8 @@ class NearestSegment {
     ny_ = static_cast<int>(std::floor(size.y() / cell_)) + 1;
     std::vector<std::pair<int, int>> entries;  // (cell, segment)
     for (std::size_t k = 0; k < segs.size(); ++k) {
-      const auto& [a, b] = segs[k];
+      const Vec2& a = segs[k].first;
+      const Vec2& b = segs[k].second;
       const int c0 = col(std::min(a.x(), b.x())), c1 = col(std::max(a.x(), b.x()));
       for (int c = c0; c <= c1; ++c) {
         // The segment's y range within the column (its ends where the column holds them).
