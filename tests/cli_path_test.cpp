@@ -81,6 +81,15 @@ TEST_F(Cli, PlanJsonGivesAPocketsProof) {
       std::string::npos)
       << r.out;
   EXPECT_EQ(j["clearing_max_at_mm"].size(), 3u);
+  // The program's figures, as the summary's last line says them (3 decimals) and as written.
+  EXPECT_NE(r.out.find(fmt::format(
+                "path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} lines",
+                j["path_length_mm"].get<double>(), j["machining_time_s"].get<double>(),
+                j["machining_time_accel_s"].get<double>(), j["program_lines"].get<long>())),
+            std::string::npos)
+      << r.out;
+  const std::string program = test::read_file(out);
+  EXPECT_EQ(j["program_lines"].get<long>(), std::count(program.begin(), program.end(), '\n'));
   ASSERT_EQ(j["unreachable"].size(), 1u);  // the 96 mm^2 beside the block island
   EXPECT_NEAR(j["unreachable"][0]["area_mm2"].get<double>(), 96.11, 0.01);
   // To stdout: the JSON alone.

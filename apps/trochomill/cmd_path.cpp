@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "cli_common.hpp"
@@ -212,7 +213,15 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       }
       const std::string code = write_gcode(job, planned.path, gcode_options(job.machine).write);
       emit(a->out, code);
-      if (!a->json.empty()) emit(a->json, pocket_doc);
+      if (!a->json.empty()) {
+        // The program's figures beside the plan's (what the summary's last line says).
+        nlohmann::json doc = nlohmann::json::parse(pocket_doc);
+        doc["path_length_mm"] = planned.path.length_mm();
+        doc["machining_time_s"] = planned.path.duration_s();
+        doc["machining_time_accel_s"] = estimate_time_s(planned.path, job.machine);
+        doc["program_lines"] = std::count(code.begin(), code.end(), '\n');
+        emit(a->json, doc.dump(2) + "\n");
+      }
       if (fs) {
         fmt::print(stderr,
                    "feed schedule: h_max {:.5f} -> {:.5f} mm (target {:g}), time {:.3f} -> "
