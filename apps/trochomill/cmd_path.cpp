@@ -190,12 +190,12 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       }
       PlannedPath planned;
       std::optional<PocketInfo> pocket;
-      std::string pocket_doc;  // --json
+      std::optional<PocketProof> proof;  // --json
       if (job.pocket.defined()) {
         PlannedPocket pp = plan_pocket(job);  // proven by the kernel
         std::FILE* to = a->out == "-" || a->json == "-" ? stderr : stdout;
         fmt::print(to, "{}", pocket_summary(pp.info, pp.proof));
-        if (!a->json.empty()) pocket_doc = pocket_json(pp.info, pp.proof);
+        if (!a->json.empty()) proof = pp.proof;
         planned.path = std::move(pp.path);
         planned.info.cycles = pp.info.passes;
         planned.info.levels = pp.info.levels;
@@ -214,13 +214,9 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       const std::string code = write_gcode(job, planned.path, gcode_options(job.machine).write);
       emit(a->out, code);
       if (!a->json.empty()) {
-        // The program's figures beside the plan's (what the summary's last line says).
-        nlohmann::json doc = nlohmann::json::parse(pocket_doc);
-        doc["path_length_mm"] = planned.path.length_mm();
-        doc["machining_time_s"] = planned.path.duration_s();
-        doc["machining_time_accel_s"] = estimate_time_s(planned.path, job.machine);
-        doc["program_lines"] = std::count(code.begin(), code.end(), '\n');
-        emit(a->json, doc.dump(2) + "\n");
+        emit(a->json,
+             pocket_json(*pocket, *proof, planned.path, job.machine,
+                         static_cast<std::size_t>(std::count(code.begin(), code.end(), '\n'))));
       }
       if (fs) {
         fmt::print(stderr,

@@ -6,6 +6,7 @@
 #include <pybind11/stl/filesystem.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string_view>
 
@@ -293,7 +294,8 @@ the job's slot frame when read with a job, else in the program's work frame.)")
           "A planned pocket's figures and the engagement kernel's proof on its program, as "
           "`trochomill plan --json` writes them (a dict: target_engagement_deg, "
           "clearing_max_engagement_deg, clearing_max_at_mm, replans, proven, plans, "
-          "open_mm2_by_level, unreachable, ...); None for a slot or a program read.")
+          "open_mm2_by_level, unreachable, machining_time_s, program_lines, ...); None for a slot "
+          "or a program read.")
       .def("__repr__", [](const PyPath& p) {
         return fmt::format("<trochomill.Path {}: {} segments, {:.3f} mm, {:.3f} s>", p.source,
                            p.path.segments().size(), p.path.length_mm(), p.path.duration_s());
@@ -318,7 +320,11 @@ the job's slot frame when read with a job, else in the program's work frame.)")
         PyPath p;
         if (job.job.pocket.defined()) {
           PlannedPocket pp = plan_pocket(job.job);  // proven by the kernel
-          p.pocket_json = pocket_json(pp.info, pp.proof);
+          const std::string code =
+              write_gcode(job.job, pp.path, gcode_options(job.job.machine).write);
+          p.pocket_json =
+              pocket_json(pp.info, pp.proof, pp.path, job.job.machine,
+                          static_cast<std::size_t>(std::count(code.begin(), code.end(), '\n')));
           p.cycles = pp.info.passes;
           p.path = std::move(pp.path);
         } else {

@@ -114,7 +114,8 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
   return out;
 }
 
-std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
+std::string pocket_json(const PocketInfo& info, const PocketProof& proof, const ToolPath& program,
+                        const Machine& machine, std::size_t program_lines) {
   const auto at = [](const Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
   const auto leftovers = [](const std::vector<PocketLeftover>& list) {
     nlohmann::json out = nlohmann::json::array();
@@ -168,6 +169,10 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof) {
       {"slotted_by_finish", leftovers(info.slotted)},
       {"cusps_mm2", info.cusps_mm2},
       {"left_for_finish_mm2", info.left_for_finish_mm2},
+      {"path_length_mm", program.length_mm()},
+      {"machining_time_s", program.duration_s()},
+      {"machining_time_accel_s", estimate_time_s(program, machine)},
+      {"program_lines", program_lines},
   };
   return j.dump(2) + "\n";
 }

@@ -39,7 +39,12 @@ void write_path_samples_csv(const PathSamples& s, const ToothTracks& tr,
 /// what the finishing pass is left.
 [[nodiscard]] std::string pocket_summary(const PocketInfo& info, const PocketProof& proof);
 /// The same as a JSON document (`plan --json`, Python's Path.pocket): the plan's figures and
-/// the proof's, units in the keys (degrees, mm, mm^2), places as [x, y, z] in mm.
-[[nodiscard]] std::string pocket_json(const PocketInfo& info, const PocketProof& proof);
+/// the proof's, units in the keys (degrees, mm, mm^2), places as [x, y, z] in mm; and the
+/// written program's (`program`: its path, the job's `machine` for the time with the
+/// acceleration, the lines of its text): path_length_mm, machining_time_s,
+/// machining_time_accel_s, program_lines.
+[[nodiscard]] std::string pocket_json(const PocketInfo& info, const PocketProof& proof,
+                                      const ToolPath& program, const Machine& machine,
+                                      std::size_t program_lines);
 
 }  // namespace trochomill
