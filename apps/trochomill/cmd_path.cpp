@@ -12,7 +12,6 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <string>
 
 #include "cli_common.hpp"
@@ -212,12 +211,10 @@ void register_path_commands(CLI::App& app, int& exit_code) {
         planned.path = fs->path;
       }
       const std::string code = write_gcode(job, planned.path, gcode_options(job.machine).write);
+      const auto lines = static_cast<std::size_t>(std::count(code.begin(), code.end(), '\n'));
       emit(a->out, code);
-      if (!a->json.empty()) {
-        emit(a->json,
-             pocket_json(*pocket, *proof, planned.path, job.machine,
-                         static_cast<std::size_t>(std::count(code.begin(), code.end(), '\n'))));
-      }
+      if (!a->json.empty())
+        emit(a->json, pocket_json(*pocket, *proof, planned.path, job.machine, lines));
       if (fs) {
         fmt::print(stderr,
                    "feed schedule: h_max {:.5f} -> {:.5f} mm (target {:g}), time {:.3f} -> "
@@ -244,16 +241,14 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                    "{}: pocket, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
                    "lines -> {}\n",
                    a->job.file, planned.path.length_mm(), planned.path.duration_s(),
-                   estimate_time_s(planned.path, job.machine),
-                   std::count(code.begin(), code.end(), '\n'), a->out);
+                   estimate_time_s(planned.path, job.machine), lines, a->out);
       } else {
         fmt::print(
             said,
             "{}: {} {} cycles, path {:.3f} mm, time {:.3f} s ({:.3f} s with acceleration), {} "
             "lines -> {}\n",
             a->job.file, to_string(job.path.type), planned.info.cycles, planned.path.length_mm(),
-            planned.path.duration_s(), estimate_time_s(planned.path, job.machine),
-            std::count(code.begin(), code.end(), '\n'), a->out);
+            planned.path.duration_s(), estimate_time_s(planned.path, job.machine), lines, a->out);
       }
       exit_code = 0;
     });

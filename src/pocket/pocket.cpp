@@ -929,7 +929,7 @@ class PartPlanner {
       out.pieces.resize(n1);
     }
     judge(out, from, limit_deg);
-    out.pieces.resize(std::min(n1, out.pieces.size()));
+    out.pieces.resize(n1);  // the look-ahead's judged, not kept
     out.cuts.resize(std::min(n1, out.cuts.size()));
     return out;
   }
@@ -1247,7 +1247,6 @@ class PartPlanner {
       };
       // The family where one of its cycles holds the aim, else the loops.
       bool ok_family = s_.family.has_value();
-      family_failed = false;
       auto [ok_by, ok_loop] = search(ok_family);
       if (ok_by == 0 && ok_family) {
         ok_family = false;

@@ -117,6 +117,9 @@ std::string gcode_check_text(const std::string& file, const GcodeProgram& prog,
 std::string pocket_json(const PocketInfo& info, const PocketProof& proof, const ToolPath& program,
                         const Machine& machine, std::size_t program_lines) {
   const auto at = [](const Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
+  const auto name_or_null = [](const std::string& name) {
+    return name.empty() ? nlohmann::json(nullptr) : nlohmann::json(name);
+  };
   const auto leftovers = [](const std::vector<PocketLeftover>& list) {
     nlohmann::json out = nlohmann::json::array();
     for (const PocketLeftover& l : list) {
@@ -132,14 +135,11 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof, const 
       {"channels_per_level", info.channels},
       {"channel_width_mm", info.channel_width_mm},
       {"channels_left_mm2", info.channels_left_mm2},
-      {"channel_family",
-       info.channel_family.empty() ? nlohmann::json(nullptr) : nlohmann::json(info.channel_family)},
+      {"channel_family", name_or_null(info.channel_family)},
       {"channel_family_length_mm", info.channel_family_mm},
       {"channel_loops_length_mm", info.channel_loops_mm + info.channel_unheld_mm},
       {"channel_unheld_length_mm", info.channel_unheld_mm},
-      {"channel_family_dropped", info.channel_family_dropped.empty()
-                                     ? nlohmann::json(nullptr)
-                                     : nlohmann::json(info.channel_family_dropped)},
+      {"channel_family_dropped", name_or_null(info.channel_family_dropped)},
       {"links_down_per_level", info.links_down},
       {"lifts_per_level", info.lifts},
       {"clearing_length_per_level_mm", info.clearing_length_mm},
