@@ -14,6 +14,7 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <sstream>
 
 #include "test_util.hpp"
 #include "trochomill/error.hpp"
@@ -183,6 +184,46 @@ TEST(Gcode, RoundTripEveryDialectAndFamily) {
         }
       }
     }
+  }
+}
+
+// A pocket's pass can end in an arc shorter than the written precision. Its two ends then
+// print as one point, and every control reads G2/G3 with its end at its start as a full
+// circle: here one of radius 2.8 mm, sweeping 17.6 mm through the stock (a 1 mm tool's
+// pocket once did so through its island). Such an arc is written as a line, a move that
+// changes nothing at the precision is not written, and read back the program is as long as
+// the path.
+TEST(Gcode, AnArcShorterThanThePrecisionIsNeverAFullCircle) {
+  const Job job = test::wagih_job("trochoidal", {});
+  ToolPath path;
+  const double F = 1200;
+  path.append(Segment::line(Vec3(0, 0, -1), Vec3(5, 0, -1), Motion::feed, F));
+  // Centre 2.8 mm off, a sweep of 1e-5 rad: a chord of 2.8e-5 mm, under the 1e-4 mm of
+  // 4 decimals (both ends print as X5 Y0).
+  path.append(Segment::arc_xy(5, 2.8, 2.8, -0.5 * kPi, 1e-5, -1, -1, Motion::feed, F));
+  const Vec3 e = path.segments().back().end();
+  path.append(Segment::line(e, e, Motion::feed, F));  // a line that goes nowhere
+  path.append(Segment::line(e, Vec3(5, 3, -1), Motion::feed, F));
+  for (const Dialect d : {Dialect::linuxcnc, Dialect::fanuc, Dialect::sinumerik, Dialect::grbl,
+                          Dialect::haas, Dialect::mach3}) {
+    GcodeWriteOptions wo;
+    wo.dialect = d;
+    const std::string code = write_gcode(job, path, wo);
+    std::istringstream lines(code);
+    for (std::string l; std::getline(lines, l);) {
+      EXPECT_FALSE(l.rfind("G2 ", 0) == 0 || l.rfind("G3 ", 0) == 0) << to_string(d) << ": " << l;
+      EXPECT_FALSE(l == "G1" || l == "G0") << to_string(d) << ": a move of nothing";
+    }
+    GcodeReadOptions ro;
+    if (d == Dialect::haas || d == Dialect::mach3) ro.dialect = d;
+    const GcodeProgram prog = read_gcode(code, "tiny-arc.ngc", ro);
+    // The feed moves: 5 mm, the arc's 2.8e-5 mm, 3 mm (within the rounding of 4 decimals).
+    double feed_mm = 0;
+    for (const Segment& s : prog.path.segments()) {
+      if (s.motion() == Motion::feed && s.start().z() < 0 && s.end().z() < 0)
+        feed_mm += s.length_mm();
+    }
+    EXPECT_NEAR(feed_mm, 8.0, 2e-4) << to_string(d);
   }
 }
 

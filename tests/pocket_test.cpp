@@ -211,6 +211,25 @@ TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
 // trochoidal loops about points of their medial axis, each loop as wide as the channel there
 // (the peers' checks of these pockets, the cut area and LinuxCNC's reading, are in
 // tests/pockets/peer.py).
+// The plate's pocket at a tenth (10 x 6 mm about a 1 mm boss), a 1 mm tool at the 10 mm
+// tool's f_z / R (0.005 mm): the engagement is a matter of angles, so the plan holds the target
+// as at full size. With the fitted arcs' bulge off the steps' chords a fixed 0.005 mm (a share
+// of R ten times the 10 mm tool's), the kernel found 57.1 degrees for 53 on every replan.
+TEST(Pocket, ASmallToolHoldsTheTargetAsALargeOne) {
+  std::string text = pocket_job(
+      "boundary = \"SMALL\"\nislands = \"SMALLI\"\ndepth = 1.0\nmax_step_down = 1.0\n"
+      "stock_to_leave = 0.02\nmax_engagement = 53.0\n");
+  text.replace(text.find("diameter = 10.0"), 15, "diameter = 1.0");
+  text.replace(text.find("feed_rate = 1200.0"), 18, "feed_rate = 120.0");
+  const Job job = parse_job(text, "small.toml");
+  ASSERT_NEAR(job.cutting.feed_per_tooth_mm, 0.005, 1e-15);
+  const PlannedPocket p = plan_pocket(job);
+  EXPECT_TRUE(p.info.proven);
+  // The target + 2 %: the kernel's teeth fall at their own phases (as every pocket's test).
+  EXPECT_LE(p.proof.clearing_max_engagement_deg, 53 * 1.02);
+  EXPECT_GT(p.proof.clearing_max_engagement_deg, 45);  // it cuts at the target, not far below
+}
+
 TEST(Pocket, ChannelsAreClearedByTrochoidalLoopsAlongTheirAxis) {
   const auto job_of = [](const std::string& layer, const std::string& more = "") {
     return parse_job(pocket_job("boundary = \"" + layer +

@@ -103,9 +103,19 @@ class Emitter {
         slot_ij != nullptr ? placement_.turn(Vec3(slot_ij[0], slot_ij[1], 0)) : Vec3::Zero();
     const double ij_w[2] = {ij_work.x(), ij_work.y()};
     const double* ij = slot_ij != nullptr ? ij_w : nullptr;
+    const Vec3 q = rounded(p);
+    const bool same_xy = have_pos_ && q.x() == pos_.x() && q.y() == pos_.y();
+    if (same_xy && q.z() == pos_.z()) return;  // nothing moves at the written precision
+    if (g >= 2 && same_xy) {
+      // An arc piece (always under 180 degrees) whose ends round to one point: a control
+      // reads G2/G3 with its end at its start as a full circle (a tiny arc of a pass would
+      // sweep the whole circle through the stock and the islands). A line instead: it lies
+      // within the rounding of the arc's chord.
+      g = 1;
+      ij = nullptr;
+    }
     out_ += 'G';
     out_ += static_cast<char>('0' + g);
-    const Vec3 q = rounded(p);
     if (first || q.x() != pos_.x() || g >= 2) num('X', p.x());
     if (first || q.y() != pos_.y() || g >= 2) num('Y', p.y());
     if (q.z() != pos_.z()) num('Z', p.z());

@@ -22,11 +22,15 @@ constexpr double kClipperTol = 1e-3;  // mm: offset_region's chords (vertices on
 // Degrees: a step whose engagement stays below this cuts nothing (a sliver under 0.2 um deep
 // at R = 5 mm): it does not keep a pass's target steering going.
 constexpr double kCutting = 0.5;
-// mm: how far a cutting pass's fitted arcs may bulge off the steps' chords towards the stock
-// (an arc turning away from the stock bulges towards it): arcs through the passes' turns down
-// to a radius of 6 mm at 0.5 mm steps instead of a line a step. (0.01 mm gave a program 15 %
-// smaller still, but the kernel then found 50.17 degrees on a test pocket for a 50 target.)
-constexpr double kBulge = 0.005;
+// How far a cutting pass's fitted arcs may bulge off the steps' chords towards the stock, as a
+// share of the tool's radius (an arc turning away from the stock bulges towards it): arcs
+// through the passes' turns down to a radius of 6 mm at 0.5 mm steps (R = 5 mm) instead of a
+// line a step. A share of R, not a length: the engagement a bulge b adds is about
+// b / (R sin phi), the same at every tool size (a fixed 0.005 mm gave a 1 mm tool 57.1 degrees
+// for a 53 target where 0.0005 mm gives 52.6). (0.01 mm at R = 5 mm gave a program 15 % smaller
+// still, but the kernel then found 50.17 degrees on a test pocket for a 50 target.)
+constexpr double kBulgeShare = 0.001;
+double bulge_mm(double R) { return kBulgeShare * R; }
 
 Vec2 dir(double a) { return {std::cos(a), std::sin(a)}; }
 
@@ -1909,11 +1913,12 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
       for (const Run& run : pass_runs(pass, kMinAirRun * s.R)) {
         const std::vector<Vec2> pts(pass.points.begin() + static_cast<long>(run.first),
                                     pass.points.begin() + static_cast<long>(run.last) + 1);
-        // A cutting run's arcs may bulge off the chords towards the stock by kBulge: they cut
+        // A cutting run's arcs may bulge off the chords towards the stock by bulge_mm: they cut
         // that much more than the model has (later steps find less stock than they expect),
-        // and engage at most 0.07 degrees more near a 50 degree target (kBulge / R sin 50).
+        // and engage at most 0.07 degrees more near a 50 degree target (bulge_mm / R sin 50).
         // A run at the link feed keeps to the chords: it must only graze.
-        const auto pieces = fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : kBulge, s.sigma > 0);
+        const auto pieces =
+            fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : bulge_mm(s.R), s.sigma > 0);
         std::vector<Move2> moves;
         if (run.air) {
           moves = air_moves(pieces, s.kernel_step);
@@ -2162,7 +2167,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   // bulge towards the stock) and three times Clipper's chords (the offset, the corners'
   // rounding twice) further in, so that the fitted arcs stay R + stock from every wall and
   // island.
-  const double keep = R + stl + std::max(pk.fit_tolerance_mm, kBulge) + 3 * kClipperTol;
+  const double keep = R + stl + std::max(pk.fit_tolerance_mm, bulge_mm(R)) + 3 * kClipperTol;
   // Its convex corners rounded (the region shrunk by rc more, then grown back by rc): the
   // clearing stays out of the sharp corners, where no path holds the target (the last tool
   // position in a corner of angle alpha touches both walls: its arc in the stock is

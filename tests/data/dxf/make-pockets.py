@@ -17,6 +17,8 @@ Layers (sharp corners unless said):
            side (narrower than D + 2 stock + R / 2)
   BAR      two 30 x 30 mm rooms at x 800 joined by a bar 10.45 mm wide and 30 mm long (barely
            wider than D + 2 stock for a 10 mm tool and 0.2 mm)
+  SMALL    a 10 x 6 mm pocket at x 1000 whose island is on SMALLI, a circle of 1 mm at
+           (1006, 3): the plate's pocket at a tenth, for a 1 mm tool
   OPEN     an open polyline (a pocket's wall must be closed)
   OUT      an island outside RECT;  OVER  two islands inside RECT that overlap
 """
@@ -46,6 +48,8 @@ poly([(700, 0), (740, 0), (740, 14.4), (780, 14.4), (780, 25.6), (740, 25.6), (7
       (700, 40)], "THIN")
 poly([(800, 0), (830, 0), (830, 9.775), (860, 9.775), (860, 0), (890, 0), (890, 30), (860, 30),
       (860, 20.225), (830, 20.225), (830, 30), (800, 30)], "BAR")
+poly([(1000, 0), (1010, 0), (1010, 6), (1000, 6)], "SMALL")
+m.add_circle((1006, 3), 1.0, dxfattribs={"layer": "SMALLI"})
 m.add_lwpolyline([(0, 100), (50, 100), (50, 140)], dxfattribs={"layer": "OPEN"})
 m.add_circle((80, 20), 5.0, dxfattribs={"layer": "OUT"})
 m.add_circle((20, 20), 6.0, dxfattribs={"layer": "OVER"})
