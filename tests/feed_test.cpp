@@ -366,6 +366,16 @@ TEST(OptimizeFeed, RefusesWhatItCannotKeepSafe) {
   bad = o;
   bad.targets.mrr_mm3_per_min = 0;
   EXPECT_THROW((void)optimize_feed(job, text, "s.ngc", bad), InputError);
+  // Pieces shorter than 0.01 mm: a split arc's piece could end where it starts at 4 written
+  // decimals, which a control reads as a full circle.
+  bad = o;
+  bad.targets.piece_mm = 0.005;
+  try {
+    (void)optimize_feed(job, text, "s.ngc", bad);
+    FAIL() << "a piece of 0.005 mm was taken";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 0.01 mm"), std::string::npos) << e.what();
+  }
 }
 
 // A removal-rate cap holds along the program (re-analysed: the swept rate times the depth),

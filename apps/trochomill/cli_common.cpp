@@ -204,9 +204,9 @@ void add_feed_target_args(CLI::App* cmd, FeedTargetArgs& a) {
                   "neighbouring pieces within this percent share the slower feed")
       ->capture_default_str()
       ->check(finite_in(0, 100));
-  cmd->add_option("--piece", a.piece_mm, "the longest piece fed alone, mm")
+  cmd->add_option("--piece", a.piece_mm, "the longest piece fed alone, mm (at least 0.01)")
       ->capture_default_str()
-      ->check(finite_above(0, 1e3));
+      ->check(finite_in(0.01, 1e3));
 }
 
 ToolPath job_path(const Job& job, const std::string& gcode_file, std::optional<double> memory_gb,

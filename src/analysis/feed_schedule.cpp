@@ -166,8 +166,11 @@ FeedSchedule schedule_feed(const Job& job, const ToolPath& path, const FeedTarge
         fmt::format("feed schedule: the removal rate cap must be > 0 mm^3/min, got {}", *mrr_cap));
   }
   const double air = targets.air_feed_mm_per_min > 0 ? targets.air_feed_mm_per_min : hi;
-  if (!(targets.piece_mm > 0) || !std::isfinite(targets.piece_mm)) {
-    throw InputError("feed schedule: the piece length must be > 0 mm");
+  // Pieces are at least half this long: at 0.01 mm their ends stay apart in every dialect's
+  // written places (an arc's piece whose ends print as one point reads as a full circle).
+  if (!(targets.piece_mm >= 0.01) || !std::isfinite(targets.piece_mm)) {
+    throw InputError(fmt::format("feed schedule: the piece length must be at least 0.01 mm, got {}",
+                                 targets.piece_mm));
   }
   if (!(targets.feed_step_percent >= 0) || !(targets.feed_step_percent <= 100)) {
     throw InputError("feed schedule: the feed step must be 0 .. 100 %");
