@@ -147,12 +147,13 @@ TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
   EXPECT_EQ(*job.stock_max_mm, Vec3(60, 40, 0));
   const PlannedPocket p = plan_pocket(job);
   EXPECT_TRUE(p.info.proven);
-  EXPECT_EQ(p.info.replans, 0);
-  EXPECT_EQ(p.info.aim_margin_deg, 1.2);
+  // Planned once more, 0.5 degrees lower (Pocket.TheProofSendsAPlanBackThatPassesTheTarget).
+  EXPECT_EQ(p.info.replans, 1);
+  EXPECT_EQ(p.info.aim_margin_deg, 1.7);
   EXPECT_EQ(p.info.parts, 1);
   EXPECT_EQ(p.info.levels, 2);
   EXPECT_GT(p.info.passes, 0);
-  EXPECT_LE(p.info.planned_max_engagement_deg, 48.8 + 1e-9);  // the aim: 1.2 degrees below
+  EXPECT_LE(p.info.planned_max_engagement_deg, 48.3 + 1e-9);  // the aim: 1.7 degrees below
   EXPECT_TRUE(p.info.unreachable.empty());
   // The four corners' cusps: (1 - pi/4) (R + stock + max(fit, 0.005 mm of the arcs bulge) +
   // 3e-3)^2 each, to Clipper's chords.
@@ -263,15 +264,22 @@ TEST(Pocket, ChannelsAreClearedByTrochoidalLoopsAlongTheirAxis) {
     }
   }
   EXPECT_GT(loops, 40);
-  // The same channel by the clearing passes alone (no part narrower than 1 mm): the loops
-  // take less than 90 % of their time (measured: 103.8 s against 127.3 s, 82 %; the program
-  // 1701 lines against 4822).
+  // The same channel by the clearing passes alone (no part narrower than 1 mm). Since a pass's
+  // tail through cleared area is written only where the next pass goes on from it, the passes
+  // take as long as the loops here (measured: loops 103.75 s, passes 104.00 s; 127.3 s with
+  // every tail), but their program has more than twice the moves (1701 lines against 4094): a
+  // pass a step-over wide at a time, each with its link. The time within 5 % either way (the
+  // two plans' difference is 0.24 %).
   const Job passes = job_of("CHAN", "channel_width = 1.0\n");
   const PlannedPocket q = plan_pocket(passes);
   EXPECT_EQ(q.info.channels, 0);
   EXPECT_LE(q.proof.clearing_max_engagement_deg, 50 * 1.02);
-  EXPECT_LT(p.path.duration_s(), 0.9 * q.path.duration_s())
+  EXPECT_LT(p.path.duration_s(), 1.05 * q.path.duration_s())
       << p.path.duration_s() << " s against " << q.path.duration_s() << " s";
+  EXPECT_GT(p.path.duration_s(), 0.95 * q.path.duration_s())
+      << p.path.duration_s() << " s against " << q.path.duration_s() << " s";
+  EXPECT_LT(2 * p.path.segments().size(), q.path.segments().size())
+      << p.path.segments().size() << " segments against " << q.path.segments().size();
 
   // A ring all round an island: one closed channel, opened where the helix comes down and
   // cleared both ways from there.
@@ -452,22 +460,23 @@ TEST(Pocket, ChannelsTakeEveryFamilyOfTheStraightSlot) {
       has(pocket_summary(p.info, p.proof), "where no linear-elliptical cycle held the target"));
 }
 
-// The planner's margin below the target is measured, not a bound: the example plate with a
-// [stock] box from x = 18.2 mm planned at 1.2 degrees below its 53 degree target reaches 55.83
-// degrees by the kernel (a pass hooking into the frontier the pass before left). The proof
-// sends that plan back; the next, 0.5 degrees lower, holds. (Should a planner change make the
-// first plan hold here, this case no longer sends one back: find another, the sweep of the
-// box's edge in docs/models.md found this one.)
+// The planner's margin below the target is measured, not a bound: the rectangle of the test
+// above planned at 1.2 degrees below its 50 degree target reaches 51.32 degrees by the kernel
+// (where a pass meets the feed marks a pass's unwritten tail left: the planner's model has
+// that tail's grazes cut). The proof sends that plan back; the next, 0.5 degrees lower,
+// holds. (Should a planner change make the first plan hold here, this case no longer sends
+// one back: find another; the sweep of a [stock] box's edge over the example, as in
+// docs/models.md, found the one before.)
 TEST(Pocket, TheProofSendsAPlanBackThatPassesTheTarget) {
-  const Job job = JobDocument::load(test::source_dir() / "examples/pockets/plate.toml")
-                      .build({parse_override("stock.min=[18.2, -10, -10]"),
-                              parse_override("stock.max=[100, 60, 0]")});
+  const Job job = parse_job(pocket_job("boundary = \"RECT\"\ndepth = 4.0\nmax_step_down = 2.0\n"
+                                       "stock_to_leave = 0.2\nmax_engagement = 50.0\n"),
+                            "rect.toml");
   const PlannedPocket p = plan_pocket(job);
-  EXPECT_GT(p.info.first_proof_max_deg, 53 * (1 + kProofTolerance));
+  EXPECT_GT(p.info.first_proof_max_deg, 50 * (1 + kProofTolerance));
   EXPECT_GE(p.info.replans, 1);
   EXPECT_EQ(p.info.aim_margin_deg, 1.2 + 0.5 * p.info.replans);
   EXPECT_TRUE(p.info.proven);
-  EXPECT_LE(p.proof.clearing_max_engagement_deg, 53 * (1 + kProofTolerance));
+  EXPECT_LE(p.proof.clearing_max_engagement_deg, 50 * (1 + kProofTolerance));
   // The same proof from the program's own kernel run (not the planner's record of it).
   EXPECT_EQ(prove_pocket(job, p).clearing_max_engagement_deg, p.proof.clearing_max_engagement_deg);
 }

@@ -61,6 +61,7 @@ struct PyPath {
   std::string source;       ///< "plan" or the program's name
   GcodeProgram lines;       ///< a program's line table (segment_lines, source_files) only
   std::string pocket_json;  ///< a planned pocket's figures and proof (pocket_json), else empty
+  std::string gcode;        ///< a planned pocket's program in the job's dialect, else empty
 };
 
 /// The job of an argument that may be a Job or a Path (the path's job).

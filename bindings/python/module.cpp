@@ -278,6 +278,8 @@ the job's slot frame when read with a job, else in the program's work frame.)")
                   "gcode: this program was read without a job; a job gives the "
                   "tool, machine and placement the program needs");
             }
+            // A planned pocket's program was written once already (for its line count).
+            if (!dialect && !p.gcode.empty()) return p.gcode;
             const Job job =
                 dialect ? p.job->with({Override{"machine.dialect", *dialect, ""}}) : p.job->job;
             return write_gcode(job, p.path, gcode_options(job.machine).write);
@@ -327,6 +329,7 @@ the job's slot frame when read with a job, else in the program's work frame.)")
                           static_cast<std::size_t>(std::count(code.begin(), code.end(), '\n')));
           p.cycles = pp.info.passes;
           p.path = std::move(pp.path);
+          p.gcode = code;
         } else {
           PlannedPath planned = plan_job(job.job);
           p.path = std::move(planned.path);

@@ -1826,11 +1826,50 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
     }
   }
   const double cell = planner.coverage().cell_mm();
+  // A pass runs on through cleared area for up to 2R after its last cut, in case it meets
+  // stock again (run_pass). Where it did not, that tail is written only if the next pass goes
+  // on from its end; a link or a channel elsewhere leaves from the last cut instead (on the
+  // example that is 4.3 m of path at the link feed a level, and its lifts' rapids).
+  Pass tail;  // the last pass's tail not yet written: from the tool's point to p
+  // Arcs and lines through a pass's points within the fit tolerance of them and of the chords
+  // between (the planner checked the chords: an arc bulging off them would not be), fitted
+  // run by run: the runs through cleared area at least kMinAirRun long go at the link feed,
+  // the rest at the feed.
+  auto write_pass = [&](const Pass& pass) {
+    for (const Run& run : pass_runs(pass, kMinAirRun * s.R)) {
+      const std::vector<Vec2> pts(pass.points.begin() + static_cast<long>(run.first),
+                                  pass.points.begin() + static_cast<long>(run.last) + 1);
+      // A cutting run's arcs may bulge off the chords towards the stock by bulge_mm: they cut
+      // that much more than the model has (later steps find less stock than they expect),
+      // and engage at most 0.07 degrees more near a 50 degree target (bulge_mm / R sin 50).
+      // A run at the link feed keeps to the chords: it must only graze.
+      const auto pieces =
+          fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : bulge_mm(s.R), s.sigma > 0);
+      std::vector<Move2> moves;
+      if (run.air) {
+        moves = air_moves(pieces, s.kernel_step);
+      } else {
+        for (const ContourPiece& piece : pieces) moves.push_back({Move2::arc_or_line, piece});
+      }
+      for (const Move2& m : moves) {
+        out.moves.push_back(m);
+        planner.add_exact(m.piece.end);
+        (m.kind == Move2::air ? out.air_length : out.clearing_length) += m.piece.length_mm();
+      }
+    }
+  };
+  // The tool's point: p, or the start of the tail not written.
+  auto tool = [&]() { return tail.points.empty() ? p : tail.points.front(); };
   // Goes to q at the level where the tool only grazes on the way, else over the stock.
   auto go_to = [&](const Vec2& q) {
-    if ((q - p).norm() <= 1e-9) return;
-    const bool down = planner.link_down(p, q);
-    out.moves.push_back({down ? Move2::link_down : Move2::lift, ContourPiece::line(p, q)});
+    const Vec2 from = tool();
+    tail = Pass{};
+    if ((q - from).norm() <= 1e-9) {
+      p = q;
+      return;
+    }
+    const bool down = planner.link_down(from, q);
+    out.moves.push_back({down ? Move2::link_down : Move2::lift, ContourPiece::line(from, q)});
     ++(down ? out.links_down : out.lifts);
     p = q;
   };
@@ -1903,36 +1942,26 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
       break;
     }
     const long before = planner.coverage().remaining();
+    if (tail.points.size() >= 2) write_pass(tail);  // this pass goes on from the tail's end
+    tail = Pass{};
     Pass pass = planner.run_pass(p, psi, target);
     const long gained = before - planner.coverage().remaining();
     if (pass.points.size() >= 2) {
-      // Arcs and lines through the step points within the fit tolerance of them and of the
-      // chords between (the planner checked the chords: an arc bulging off them would not be),
-      // fitted run by run: the runs through cleared area at least kMinAirRun long go at the
-      // link feed, the rest at the feed.
-      for (const Run& run : pass_runs(pass, kMinAirRun * s.R)) {
-        const std::vector<Vec2> pts(pass.points.begin() + static_cast<long>(run.first),
-                                    pass.points.begin() + static_cast<long>(run.last) + 1);
-        // A cutting run's arcs may bulge off the chords towards the stock by bulge_mm: they cut
-        // that much more than the model has (later steps find less stock than they expect),
-        // and engage at most 0.07 degrees more near a 50 degree target (bulge_mm / R sin 50).
-        // A run at the link feed keeps to the chords: it must only graze.
-        const auto pieces =
-            fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : bulge_mm(s.R), s.sigma > 0);
-        std::vector<Move2> moves;
-        if (run.air) {
-          moves = air_moves(pieces, s.kernel_step);
-        } else {
-          for (const ContourPiece& piece : pieces) moves.push_back({Move2::arc_or_line, piece});
-        }
-        for (const Move2& m : moves) {
-          out.moves.push_back(m);
-          planner.add_exact(m.piece.end);
-          (m.kind == Move2::air ? out.air_length : out.clearing_length) += m.piece.length_mm();
-        }
+      // Up to the last cutting step now; the steps after it wait as the tail.
+      std::size_t last = 0;
+      for (std::size_t i = 0; i < pass.points.size(); ++i) {
+        if (pass.cuts[i]) last = i;
       }
+      if (last + 1 < pass.points.size()) {
+        tail.points.assign(pass.points.begin() + static_cast<long>(last), pass.points.end());
+        tail.cuts.assign(pass.cuts.begin() + static_cast<long>(last), pass.cuts.end());
+        tail.cuts.front() = false;
+        pass.points.resize(last + 1);
+        pass.cuts.resize(last + 1);
+      }
+      if (pass.points.size() >= 2) write_pass(pass);
       ++out.passes;
-      p = pass.points.back();
+      p = tail.points.empty() ? pass.points.back() : tail.points.back();
     }
     if (run_channels()) {
       go_on();  // where nothing remains, the top of the loop decides
