@@ -3,6 +3,7 @@
 // refusals. The peers (LinuxCNC's reading, shapely's cut area) are tests/pockets/peer.py.
 #include "trochomill/pocket.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -154,6 +155,8 @@ TEST(Pocket, PlanHoldsTheTargetAndKeepsOffTheWalls) {
   EXPECT_EQ(p.info.levels, 2);
   EXPECT_GT(p.info.passes, 0);
   EXPECT_LE(p.info.planned_max_engagement_deg, 48.3 + 1e-9);  // the aim: 1.7 degrees below
+  // One plan for both levels: the same passes at each.
+  EXPECT_EQ(p.info.passes_by_level, std::vector<int>(2, p.info.passes));
   EXPECT_TRUE(p.info.unreachable.empty());
   // The four corners' cusps: (1 - pi/4) (R + stock + max(fit, 0.005 mm of the arcs bulge) +
   // 3e-3)^2 each, to Clipper's chords.
@@ -1091,6 +1094,18 @@ TEST(Pocket, TheCoredBlankExampleComesDownIntoItsCore) {
   const double air = kPi * std::pow(r3 - 0.1, 2);
   EXPECT_NEAR(p.info.open_mm2_by_level[0], air, 0.03 * air);
   EXPECT_EQ(p.info.open_mm2_by_level[1], 0);
+  // Each level's own passes: the first sets out from the core, the second is the block's plan.
+  // The figures of a level are the deepest's; the summary gives the passes level by level.
+  ASSERT_EQ(p.info.passes_by_level.size(), 2u);
+  ASSERT_EQ(p.info.clearing_length_by_level_mm.size(), 2u);
+  EXPECT_EQ(p.info.passes_by_level[1], p.info.passes);
+  EXPECT_EQ(p.info.clearing_length_by_level_mm[1], p.info.clearing_length_mm);
+  EXPECT_NE(p.info.passes_by_level[0], p.info.passes_by_level[1]);
+  // The core is air at the first level: its clearing is shorter.
+  EXPECT_LT(p.info.clearing_length_by_level_mm[0], p.info.clearing_length_by_level_mm[1]);
+  EXPECT_TRUE(has(pocket_summary(p.info, p.proof),
+                  fmt::format("by level from the top {}, {} clearing passes",
+                              p.info.passes_by_level[0], p.info.passes_by_level[1])));
   // The proof on the blank itself (the kernel's plan view of FreeCAD's triangles).
   EXPECT_LE(p.proof.clearing_max_engagement_deg, 53 * 1.02);
   EXPECT_GT(p.proof.clearing_max_engagement_deg, 45);

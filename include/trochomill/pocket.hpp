@@ -92,6 +92,10 @@ struct PocketInfo {
   /// The levels' distinct plans (levels whose stock is the same share one): 1 unless rest_of
   /// or a [stock] mesh makes them differ.
   int plans = 1;
+  /// Each level's clearing passes and their cutting length (mm), from the top: the figures
+  /// above are the deepest level's; these differ from level to level where the plans do.
+  std::vector<int> passes_by_level;
+  std::vector<double> clearing_length_by_level_mm;
   /// The path's entries: [first, last) segment index ranges (the helices and the finishing
   /// pass's lead-in), where the target does not hold.
   std::vector<std::pair<std::size_t, std::size_t>> entries;

@@ -2444,6 +2444,16 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     }
   }
   info.plans = static_cast<int>(plans.size());
+  for (const std::size_t k : plan_of) {
+    int passes = 0;
+    double clearing = 0;
+    for (const PartPlan& pp : plans[k]) {
+      passes += pp.passes;
+      clearing += pp.clearing_length;
+    }
+    info.passes_by_level.push_back(passes);
+    info.clearing_length_by_level_mm.push_back(clearing);
+  }
   if (rest) info.rest_tool_diameter_mm = 2 * rest->tool_radius_mm;
   info.parts = static_cast<int>(parts.size());
 

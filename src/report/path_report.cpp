@@ -131,6 +131,8 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof, const 
       {"parts", info.parts},
       {"levels", info.levels},
       {"plans", info.plans},
+      {"passes_by_level", info.passes_by_level},
+      {"clearing_length_by_level_mm", info.clearing_length_by_level_mm},
       {"passes_per_level", info.passes},
       {"channels_per_level", info.channels},
       {"channel_width_mm", info.channel_width_mm},
@@ -178,12 +180,29 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof, const 
 }
 
 std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
-  std::string out = fmt::format(
-      "pocket: {} part{}, {} level{}, {} clearing passes a level ({} links staying down, {} "
-      "lifts), {:.1f} mm of clearing and {:.1f} mm through cleared area at the link feed a "
-      "level\n",
-      info.parts, info.parts == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s", info.passes,
-      info.links_down, info.lifts, info.clearing_length_mm, info.air_length_mm);
+  std::string out;
+  if (info.plans > 1 && info.passes_by_level.size() == static_cast<std::size_t>(info.levels)) {
+    // The levels' plans differ (rest_of, a [stock] mesh): each level's passes, the rest the
+    // deepest's.
+    std::string passes, clearing;
+    for (std::size_t k = 0; k < info.passes_by_level.size(); ++k) {
+      passes += fmt::format("{}{}", k > 0 ? ", " : "", info.passes_by_level[k]);
+      clearing += fmt::format("{}{:.1f}", k > 0 ? ", " : "", info.clearing_length_by_level_mm[k]);
+    }
+    out = fmt::format(
+        "pocket: {} part{}, {} levels, by level from the top {} clearing passes and {} mm of "
+        "clearing; the deepest level {} links staying down, {} lifts, {:.1f} mm through cleared "
+        "area at the link feed\n",
+        info.parts, info.parts == 1 ? "" : "s", info.levels, passes, clearing, info.links_down,
+        info.lifts, info.air_length_mm);
+  } else {
+    out = fmt::format(
+        "pocket: {} part{}, {} level{}, {} clearing passes a level ({} links staying down, {} "
+        "lifts), {:.1f} mm of clearing and {:.1f} mm through cleared area at the link feed a "
+        "level\n",
+        info.parts, info.parts == 1 ? "" : "s", info.levels, info.levels == 1 ? "" : "s",
+        info.passes, info.links_down, info.lifts, info.clearing_length_mm, info.air_length_mm);
+  }
   if (info.channels > 0 && info.channel_family.empty()) {
     out += fmt::format(
         "  {} channel{} (narrower than {:g} mm) cleared by trochoidal loops along the medial axis "
