@@ -839,8 +839,8 @@ class PartPlanner {
 
   // Whether the tool can go from a to b at the level cutting nothing: every point of the line
   // in the region (checked a step apart), the tool at each tooth's point (a tooth at the feed
-  // apart) only grazing the stock (Settings::graze_deg). When it can, the line is cut.
-  bool link_down(const Vec2& a, const Vec2& b) {
+  // apart) only grazing the stock (Settings::graze_deg).
+  [[nodiscard]] bool link_ok(const Vec2& a, const Vec2& b) const {
     const double L = (b - a).norm();
     const int n = std::max(1, static_cast<int>(std::ceil(L / s_.step)));
     Vec2 prev = a;
@@ -858,8 +858,47 @@ class PartPlanner {
       const Vec2 q = a + (b - a) * (static_cast<double>(k) / m);
       if (engagement(q, q - s_.air_tooth * t).widest >= s_.graze_deg) return false;
     }
+    return true;
+  }
+  // The same, and where it can the line is cut.
+  bool link_down(const Vec2& a, const Vec2& b) {
+    if (!link_ok(a, b)) return false;
     cut_step(a, b, true);
     return true;
+  }
+  // Where the line from a to b leaves the region (round an island, past a wall's corner) or
+  // meets stock: a point the tool passed exactly at the level through which two lines do not,
+  // the one of shortest way at most `longest` mm, the two lines cut. None: no such point
+  // (the tool lifts over).
+  std::optional<Vec2> link_via(const Vec2& a, const Vec2& b, double longest) {
+    std::vector<std::pair<double, std::size_t>> by_way;
+    for (std::size_t i = 0; i < exact_.size(); ++i) {
+      const double way = (exact_[i] - a).norm() + (b - exact_[i]).norm();
+      if (way <= longest) by_way.emplace_back(way, i);
+    }
+    std::sort(by_way.begin(), by_way.end());
+    // The shortest first; the lines' region test is cheap, their stock test is not: at most
+    // kTries points whose lines stay in the region are tested for stock.
+    constexpr int kTries = 8;
+    int tried = 0;
+    for (const auto& [way, i] : by_way) {
+      const Vec2 v = exact_[i];
+      auto in = [&](const Vec2& p, const Vec2& q) {
+        const int n = std::max(1, static_cast<int>(std::ceil((q - p).norm() / s_.step)));
+        for (int k = 0; k <= 2 * n; ++k) {
+          if (!in_region(p + (q - p) * (0.5 * k / n))) return false;
+        }
+        return true;
+      };
+      if (!in(a, v) || !in(v, b)) continue;
+      if (++tried > kTries) break;
+      if (link_ok(a, v) && link_ok(v, b)) {
+        cut_step(a, v, true);
+        cut_step(v, b, true);
+        return v;
+      }
+    }
+    return std::nullopt;
   }
 
   // A channel's loop: from `from` (the last loop's end) straight to the back point of the
@@ -1869,6 +1908,17 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
       return;
     }
     const bool down = planner.link_down(from, q);
+    if (!down) {
+      // Round what the line meets, through a point the tool passed, where that is shorter than
+      // a lift's climb and descent (about 4R at the link feed).
+      if (const auto v = planner.link_via(from, q, (q - from).norm() + 4 * s.R)) {
+        out.moves.push_back({Move2::link_down, ContourPiece::line(from, *v)});
+        out.moves.push_back({Move2::link_down, ContourPiece::line(*v, q)});
+        ++out.links_down;
+        p = q;
+        return;
+      }
+    }
     out.moves.push_back({down ? Move2::link_down : Move2::lift, ContourPiece::line(from, q)});
     ++(down ? out.links_down : out.lifts);
     p = q;
