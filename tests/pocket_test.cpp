@@ -482,6 +482,44 @@ TEST(Pocket, TheProofSendsAPlanBackThatPassesTheTarget) {
   EXPECT_EQ(prove_pocket(job, p).clearing_max_engagement_deg, p.proof.clearing_max_engagement_deg);
 }
 
+// A pocket no clearing can enter (40 x 10.5 mm for a 10 mm tool and 0.2 mm of stock: 0.1 mm of
+// room) is cut by the finishing pass alone. Nothing cleared reaches its contour, so the pass
+// must not feed straight down into the stock (it once went down 4 mm at the entry feed, then
+// slotted at full depth): it goes level by level (max_step_down), down along the contour no
+// steeper than the helix entry.
+TEST(Pocket, AContourNothingClearedReachesIsRampedDownLevelByLevel) {
+  const Job job = parse_job(pocket_job("boundary = \"SLIT\"\ndepth = 4.0\nmax_step_down = 2.0\n"
+                                       "stock_to_leave = 0.2\nmax_engagement = 50.0\n"),
+                            "slit.toml");
+  const PlannedPocket p = plan_pocket(job);
+  EXPECT_EQ(p.info.passes, 0);
+  const double R = job.tool.radius_mm();
+  const double slope = job.path.entry_pitch_mm / (kPi * R);  // the helix's, at radius R / 2
+  int ramps = 0;
+  std::vector<double> flat_levels;
+  for (const Segment& g : p.path.segments()) {
+    if (g.motion() != Motion::feed) continue;
+    const double dz = g.start().z() - g.end().z();
+    const double xy = (g.end() - g.start()).head<2>().norm();
+    if (dz > 1e-9 && g.end().z() < 0) {
+      // Below the top, every descent runs along the contour: at most the helix's slope
+      // (1e-9: the descent is spread over the loop's length, in rounding).
+      ASSERT_GT(xy, 0) << g.start().transpose() << " -> " << g.end().transpose();
+      EXPECT_LE(dz / g.length_mm(), slope + 1e-9);
+      ++ramps;
+    } else if (std::abs(dz) <= 1e-12 && xy > 1 && g.start().z() < 0 &&
+               (flat_levels.empty() || flat_levels.back() != g.start().z())) {
+      flat_levels.push_back(g.start().z());
+    }
+  }
+  EXPECT_GT(ramps, 0);
+  // Once round at each level, from the top: -2, then -4 mm.
+  EXPECT_EQ(flat_levels, (std::vector<double>{-2.0, -4.0}));
+  // The round at each level cuts what the ramp's slope left above the level (the ramps are
+  // entries; measured 80.3 degrees at most).
+  EXPECT_GT(p.proof.finish_max_engagement_deg, 45);
+}
+
 TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {
   const auto message = [](const std::string& keys, const std::string& extra = "") {
     return test::message_of([&] { (void)parse_job(pocket_job(keys, extra), "bad.toml"); });
@@ -729,6 +767,13 @@ TEST(Pocket, RestStockCountsOnlyBelowTheEarlierCut) {
                            "G21 G90\nG0 X445 Y20 Z5\nG1 Z-1 F100\nG1 X455 F500\nG0 Z5\nM2\n");
   const PlannedPocket p = plan_pocket(job);
   EXPECT_EQ(p.info.rest_cleared_mm2, 0.0);  // the deepest level's
+  // Level by level: the slot's region at the first (the coverage cells within the earlier
+  // tool's sweep, 10 x 20 mm and its round ends, 200 + 100 pi mm^2, to the cells' 2 %), none
+  // below.
+  ASSERT_EQ(p.info.rest_cleared_by_level_mm2.size(), 2u);
+  EXPECT_NEAR(p.info.rest_cleared_by_level_mm2[0], 200 + 100 * kPi, 0.02 * (200 + 100 * kPi));
+  EXPECT_EQ(p.info.rest_cleared_by_level_mm2[1], 0.0);
+  EXPECT_TRUE(has(pocket_summary(p.info, p.proof), "at the levels from the top"));
   const EngagementSeries e = compute_engagement(p.path, job);
   double removed = 0;
   for (std::size_t i = 1; i < e.samples.size(); ++i) {

@@ -96,6 +96,8 @@ struct PocketInfo {
   /// above are the deepest level's; these differ from level to level where the plans do.
   std::vector<int> passes_by_level;
   std::vector<double> clearing_length_by_level_mm;
+  /// With rest_of: each level's area the earlier program had cleared (mm^2), from the top.
+  std::vector<double> rest_cleared_by_level_mm2;
   /// The path's entries: [first, last) segment index ranges (the helices and the finishing
   /// pass's lead-in), where the target does not hold.
   std::vector<std::pair<std::size_t, std::size_t>> entries;

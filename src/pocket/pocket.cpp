@@ -2496,13 +2496,15 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   info.plans = static_cast<int>(plans.size());
   for (const std::size_t k : plan_of) {
     int passes = 0;
-    double clearing = 0;
+    double clearing = 0, rest_cleared = 0;
     for (const PartPlan& pp : plans[k]) {
       passes += pp.passes;
       clearing += pp.clearing_length;
+      rest_cleared += pp.rest_cleared_mm2;
     }
     info.passes_by_level.push_back(passes);
     info.clearing_length_by_level_mm.push_back(clearing);
+    if (rest) info.rest_cleared_by_level_mm2.push_back(rest_cleared);
   }
   if (rest) info.rest_tool_diameter_mm = 2 * rest->tool_radius_mm;
   info.parts = static_cast<int>(parts.size());
@@ -2664,10 +2666,10 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
     const double z = -depth;
     const double margin = 2 * kClipperTol;  // the chords and the fit, inside the walls' offset
     auto finish = offset_region(region, -(R + margin), kClipperTol);
-    const RegionGrid cleared(centre_region.empty() ? centre_region0 : centre_region,
-                             std::max(0.25, 0.25 * R));
-    // Cleared: where the passes went, or within a channel's loops (the disc of a sample's
-    // clearance).
+    // Cleared: where the passes went (the rounded centre region: where it is empty, no pass
+    // went anywhere, and a part only the unrounded region holds was never cleared), or within
+    // a channel's loops (the disc of a sample's clearance).
+    const RegionGrid cleared(centre_region, std::max(0.25, 0.25 * R));
     const auto is_cleared = [&](const Vec2& q) {
       if (cleared.contains(q)) return true;
       for (const Channel& ch : channels) {
@@ -2735,11 +2737,39 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
           piece_at(p, z, z, Motion::feed, feed);
         }
         piece_at(ContourPiece::arc(S, p1, cl, side > 0), z, z, Motion::feed, feed);
-      } else {
+      } else if (is_cleared(S)) {
         travel(S, clearance, z);
         info.entries.emplace_back(first, path.segments().size());
         for (const ContourPiece& p : fit_polyline(loop, kClipperTol)) {
           piece_at(p, z, z, Motion::feed, feed);
+        }
+      } else {
+        // Nothing cleared reaches this contour (a part the clearing could not enter): no
+        // straight plunge into the stock. Level by level (max_step_down), down along the loop
+        // itself no steeper than the helix entry (entry_pitch a turn of a circle of radius
+        // R / 2), as many times round as that takes, then once round at the level.
+        const std::vector<ContourPiece> pieces = fit_polyline(loop, kClipperTol);
+        double L = 0;
+        for (const ContourPiece& p : pieces) L += p.length_mm();
+        const double slope = pitch / (kPi * R);
+        travel(S, clearance, 0.0);
+        double z_top = 0.0;
+        for (int k = 1; k <= levels; ++k) {
+          const double z_k = -depth * k / levels;
+          const std::size_t ramp = path.segments().size();
+          const int turns = std::max(1, static_cast<int>(std::ceil((z_top - z_k) / (slope * L))));
+          double done = 0;  // the length ramped so far
+          for (int j = 0; j < turns; ++j) {
+            for (const ContourPiece& p : pieces) {
+              const double z0 = z_top - (z_top - z_k) * done / (turns * L);
+              done += p.length_mm();
+              const double z1 = z_top - (z_top - z_k) * done / (turns * L);
+              piece_at(p, z0, z1, Motion::feed, entry_feed);
+            }
+          }
+          info.entries.emplace_back(k == 1 ? first : ramp, path.segments().size());
+          for (const ContourPiece& p : pieces) piece_at(p, z_k, z_k, Motion::feed, feed);
+          z_top = z_k;
         }
       }
     }

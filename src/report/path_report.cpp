@@ -133,6 +133,7 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof, const 
       {"plans", info.plans},
       {"passes_by_level", info.passes_by_level},
       {"clearing_length_by_level_mm", info.clearing_length_by_level_mm},
+      {"rest_cleared_by_level_mm2", info.rest_cleared_by_level_mm2},
       {"passes_per_level", info.passes},
       {"channels_per_level", info.channels},
       {"channel_width_mm", info.channel_width_mm},
@@ -232,10 +233,19 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         info.channels_left_mm2);
   }
   if (info.rest_tool_diameter_mm > 0) {
-    out += fmt::format(
-        "  rest machining after a {:g} mm tool: {:.1f} mm^2 of this tool's area at the deepest "
-        "level it had cleared; the passes cut what it left\n",
-        info.rest_tool_diameter_mm, info.rest_cleared_mm2);
+    std::string by_level;
+    for (std::size_t k = 0; k < info.rest_cleared_by_level_mm2.size(); ++k) {
+      by_level += fmt::format("{}{:.1f}", k > 0 ? ", " : "", info.rest_cleared_by_level_mm2[k]);
+    }
+    out += info.rest_cleared_by_level_mm2.size() > 1
+               ? fmt::format(
+                     "  rest machining after a {:g} mm tool: at the levels from the top {} mm^2 "
+                     "of this tool's area it had cleared; the passes cut what it left\n",
+                     info.rest_tool_diameter_mm, by_level)
+               : fmt::format(
+                     "  rest machining after a {:g} mm tool: {:.1f} mm^2 of this tool's area it "
+                     "had cleared; the passes cut what it left\n",
+                     info.rest_tool_diameter_mm, info.rest_cleared_mm2);
   }
   if (info.hole_entries > 0 || info.open_mm2 > 0) {
     out += fmt::format(
@@ -310,7 +320,8 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
     out += fmt::format(
         "  warning: about {:.4g} mm^2 near ({:.3f}, {:.3f}) is barely wider than the tool with the "
         "stock to leave (by less than R / 10): no loop holds the target there; the finishing pass "
-        "cuts it as a slot at full depth\n",
+        "cuts it as a slot (at full depth from the cleared area, else level by level, ramped "
+        "down along its contour)\n",
         l.area_mm2, l.at_mm.x(), l.at_mm.y());
   }
   for (const PocketLeftover& l : info.unreachable) {

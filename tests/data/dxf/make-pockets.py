@@ -19,6 +19,8 @@ Layers (sharp corners unless said):
            wider than D + 2 stock for a 10 mm tool and 0.2 mm)
   SMALL    a 10 x 6 mm pocket at x 1000 whose island is on SMALLI, a circle of 1 mm at
            (1006, 3): the plate's pocket at a tenth, for a 1 mm tool
+  SLIT     a 40 x 10.5 mm pocket at x 1100: too narrow for any clearing with a 10 mm tool and
+           0.2 mm of stock (10.4 mm), only the finishing pass reaches it
   OPEN     an open polyline (a pocket's wall must be closed)
   OUT      an island outside RECT;  OVER  two islands inside RECT that overlap
 """
@@ -50,6 +52,7 @@ poly([(800, 0), (830, 0), (830, 9.775), (860, 9.775), (860, 0), (890, 0), (890, 
       (860, 20.225), (830, 20.225), (830, 30), (800, 30)], "BAR")
 poly([(1000, 0), (1010, 0), (1010, 6), (1000, 6)], "SMALL")
 m.add_circle((1006, 3), 1.0, dxfattribs={"layer": "SMALLI"})
+poly([(1100, 0), (1140, 0), (1140, 10.5), (1100, 10.5)], "SLIT")
 m.add_lwpolyline([(0, 100), (50, 100), (50, 140)], dxfattribs={"layer": "OPEN"})
 m.add_circle((80, 20), 5.0, dxfattribs={"layer": "OUT"})
 m.add_circle((20, 20), 6.0, dxfattribs={"layer": "OVER"})
