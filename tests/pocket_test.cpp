@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <string>
 
 #include "test_util.hpp"
@@ -313,6 +314,17 @@ TEST(Pocket, ChannelsAreClearedByTrochoidalLoopsAlongTheirAxis) {
   EXPECT_LT(bar.info.slotted[0].area_mm2, 1.2 * 30 * 10.45);  // perimeter / 2: its ends too
   const Vec3 down = bar.path.segments()[bar.info.finish_first_segment].end();  // over it
   EXPECT_TRUE(down.x() < 830 || down.x() > 860) << down.transpose();
+  // The finishing pass slots the bar level by level (max_step_down 2 of the 4 mm), not at full
+  // depth alone: its feed moves through the bar (830 < x < 860) at both levels, -2 and -4 mm.
+  std::set<double> bar_levels;
+  for (std::size_t i = bar.info.finish_first_segment; i < bar.path.segments().size(); ++i) {
+    const Segment& g = bar.path.segments()[i];
+    if (g.motion() == Motion::feed && g.start().z() == g.end().z() && g.start().z() < 0 &&
+        std::min(g.start().x(), g.end().x()) < 845 && std::max(g.start().x(), g.end().x()) > 845) {
+      bar_levels.insert(g.start().z());
+    }
+  }
+  EXPECT_EQ(bar_levels, (std::set<double>{-4.0, -2.0}));
   // However small channel_width is.
   const PlannedPocket small = plan_pocket(job_of("THIN", "channel_width = 1.0\n"));
   EXPECT_EQ(small.info.channels, 1);

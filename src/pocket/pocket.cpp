@@ -2512,6 +2512,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   // The parts of the tool centre's region too narrow for a channel's loops (narrower than
   // 2 R / 20, as trochoid_channels): what an opening by R / 20 takes off it, where longer than
   // R / 2 (not a corner's tip). The pocket there is about that long and D + 2 stock wide.
+  std::vector<Vec2> slot_points;  // the outlines of those parts (the finishing pass slots there)
   {
     const double r_min = 0.05 * R;
     // (Grown by Clipper's chords three times more: the slivers between its chords and the
@@ -2523,6 +2524,9 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
       for (const Contour& c : part) perimeter += c.length_mm();
       if (0.5 * perimeter > 0.5 * R) {
         info.slotted.push_back({0.5 * perimeter * 2 * (R + stl), mean_vertex(part.front())});
+        for (const Contour& c : part) {
+          for (const Vec2& v : c.points(kClipperTol)) slot_points.push_back(v);
+        }
       }
     }
   }
@@ -2727,16 +2731,32 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
       for (std::size_t k = 1; k <= pts.size(); ++k) loop.push_back(pts[(best + k) % pts.size()]);
       loop.push_back(S);
       const std::size_t first = path.segments().size();
+      // A contour through a part barely wider than the tool slots it: there, at every level
+      // (max_step_down), not at full depth alone.
+      bool slots = false;
+      for (std::size_t i = 0; i < pts.size() && !slots; ++i) {
+        for (const Vec2& v : slot_points) {
+          if ((pts[i] - v).squaredNorm() <= std::pow(stl + 0.1 * R, 2)) {
+            slots = true;
+            break;
+          }
+        }
+      }
       if (lead) {
         const Vec2 cl = *lead;
         const Vec2 p0 = cl - t * rl, p1 = cl + t * rl;
-        travel(p0, clearance, z);
-        piece_at(ContourPiece::arc(p0, S, cl, side > 0), z, z, Motion::feed, feed);
-        info.entries.emplace_back(first, path.segments().size());
-        for (const ContourPiece& p : fit_polyline(loop, kClipperTol)) {
-          piece_at(p, z, z, Motion::feed, feed);
+        for (int k = slots ? 1 : levels; k <= levels; ++k) {
+          const double z_k = -depth * k / levels;
+          const std::size_t start = path.segments().size();
+          travel(p0, clearance, z_k);
+          piece_at(ContourPiece::arc(p0, S, cl, side > 0), z_k, z_k, Motion::feed, feed);
+          info.entries.emplace_back(k == (slots ? 1 : levels) ? first : start,
+                                    path.segments().size());
+          for (const ContourPiece& p : fit_polyline(loop, kClipperTol)) {
+            piece_at(p, z_k, z_k, Motion::feed, feed);
+          }
+          piece_at(ContourPiece::arc(S, p1, cl, side > 0), z_k, z_k, Motion::feed, feed);
         }
-        piece_at(ContourPiece::arc(S, p1, cl, side > 0), z, z, Motion::feed, feed);
       } else if (is_cleared(S)) {
         travel(S, clearance, z);
         info.entries.emplace_back(first, path.segments().size());

@@ -320,8 +320,8 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
     out += fmt::format(
         "  warning: about {:.4g} mm^2 near ({:.3f}, {:.3f}) is barely wider than the tool with the "
         "stock to leave (by less than R / 10): no loop holds the target there; the finishing pass "
-        "cuts it as a slot (at full depth from the cleared area, else level by level, ramped "
-        "down along its contour)\n",
+        "cuts it as a slot, level by level (from the cleared area, else ramped down along its "
+        "contour)\n",
         l.area_mm2, l.at_mm.x(), l.at_mm.y());
   }
   for (const PocketLeftover& l : info.unreachable) {
