@@ -92,6 +92,17 @@ TEST_F(Cli, PlanJsonGivesAPocketsProof) {
   EXPECT_EQ(j["program_lines"].get<long>(), std::count(program.begin(), program.end(), '\n'));
   ASSERT_EQ(j["unreachable"].size(), 1u);  // the 96 mm^2 beside the block island
   EXPECT_NEAR(j["unreachable"][0]["area_mm2"].get<double>(), 96.11, 0.01);
+  // analyze --json of the program names a pocket as one: no slot, no step, no slot family.
+  const CliResult a = test::run_command(std::string(TROCHOMILL_CLI) + " analyze " + ex +
+                                        " --gcode " + out + " --json - 2>/dev/null");
+  ASSERT_EQ(a.code, 0) << a.out;
+  const auto aj = nlohmann::json::parse(a.out)["job"];
+  EXPECT_EQ(aj["path_type"], "pocket");
+  EXPECT_EQ(aj["pocket_boundary"], "POCKET");
+  EXPECT_EQ(aj["pocket_depth_mm"].get<double>(), 6.0);
+  EXPECT_TRUE(aj["channel_family"].is_null());
+  EXPECT_FALSE(aj.contains("slot_width_mm"));
+  EXPECT_FALSE(aj.contains("step_mm"));
   // To stdout: the JSON alone.
   const CliResult o = test::run_command(std::string(TROCHOMILL_CLI) + " plan " + ex + " -o " + out +
                                         " --json - 2>/dev/null");

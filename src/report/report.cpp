@@ -222,6 +222,21 @@ std::string metrics_json(const Job& job, const ProcessMetrics& m) {
               {"feed_rate_mm_per_min", feed_rate_mm_per_min(job)},
               {"spindle_speed_rpm", spindle_speed_rpm(job)}};
   if (job.slot.curved()) j["job"]["slot_along"] = job.slot.along;
+  if (job.pocket.defined()) {
+    // A pocket has no slot and no step: its layer, depth and the channels' family instead (a
+    // pocket job's [path] type is its channels', not the program's).
+    nlohmann::json& jj = j["job"];
+    for (const char* k : {"step_mm", "slot_width_mm", "slot_length_mm", "slot_depth_mm"}) {
+      jj.erase(k);
+    }
+    jj["path_type"] = "pocket";
+    jj["pocket_boundary"] = job.pocket.boundary;
+    jj["pocket_depth_mm"] = job.pocket.depth_mm;
+    // (null: the circular loops, as `plan --json` has it)
+    jj["channel_family"] = job.pocket.channel_family
+                               ? nlohmann::json(std::string(to_string(*job.pocket.channel_family)))
+                               : nlohmann::json(nullptr);
+  }
   // Where the largest chip is (the tool centre, mm), and the largest after the entry.
   const auto point = [](const Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
   j["h_max_at_mm"] = point(m.h_max_slot_at_mm);
