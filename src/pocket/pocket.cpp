@@ -840,15 +840,17 @@ class PartPlanner {
   // Whether the tool can go from a to b at the level cutting nothing: every point of the line
   // in the region (checked a step apart), the tool at each tooth's point (a tooth at the feed
   // apart) only grazing the stock (Settings::graze_deg).
+  // Whether the line from a to b lies in the region (checked half a step apart).
+  [[nodiscard]] bool line_in_region(const Vec2& a, const Vec2& b) const {
+    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / s_.step)));
+    for (int k = 1; k <= 2 * n; ++k) {
+      if (!in_region(a + (b - a) * (0.5 * k / n))) return false;
+    }
+    return true;
+  }
   [[nodiscard]] bool link_ok(const Vec2& a, const Vec2& b) const {
     const double L = (b - a).norm();
-    const int n = std::max(1, static_cast<int>(std::ceil(L / s_.step)));
-    Vec2 prev = a;
-    for (int k = 1; k <= n; ++k) {
-      const Vec2 p = a + (b - a) * (static_cast<double>(k) / n);
-      if (!in_region(p) || !in_region(0.5 * (p + prev))) return false;
-      prev = p;
-    }
+    if (!line_in_region(a, b)) return false;
     if (L <= 0) return true;
     const Vec2 t = (b - a) / L;
     const int m = std::max(1, static_cast<int>(std::ceil(L / s_.kernel_step)));
@@ -883,14 +885,7 @@ class PartPlanner {
     int tried = 0;
     for (const auto& [way, i] : by_way) {
       const Vec2 v = exact_[i];
-      auto in = [&](const Vec2& p, const Vec2& q) {
-        const int n = std::max(1, static_cast<int>(std::ceil((q - p).norm() / s_.step)));
-        for (int k = 0; k <= 2 * n; ++k) {
-          if (!in_region(p + (q - p) * (0.5 * k / n))) return false;
-        }
-        return true;
-      };
-      if (!in(a, v) || !in(v, b)) continue;
+      if (!line_in_region(a, v) || !line_in_region(v, b)) continue;
       if (++tried > kTries) break;
       if (link_ok(a, v) && link_ok(v, b)) {
         cut_step(a, v, true);
@@ -1807,8 +1802,23 @@ PartPlan plan_part(const Job& job, const Settings& s, const std::vector<Contour>
   return out;
 }
 
-// The passes of a part from p (the helix's end, heading along the circle, or a point the tool
-// came down to from above), until the coverage is done.
+// One run's pieces as moves: at the link feed (air_moves: all but a tooth's advance at each
+// end) where `air`, else at the feed; each piece's end recorded as a point the tool passes.
+void add_run_moves(const Settings& s, PartPlanner& planner, const std::vector<ContourPiece>& run,
+                   bool air, PartPlan& out) {
+  std::vector<Move2> moves;
+  if (air) {
+    moves = air_moves(run, s.kernel_step);
+  } else {
+    for (const ContourPiece& piece : run) moves.push_back({Move2::arc_or_line, piece});
+  }
+  for (const Move2& m : moves) {
+    out.moves.push_back(m);
+    planner.add_exact(m.piece.end);
+    (m.kind == Move2::air ? out.air_length : out.clearing_length) += m.piece.length_mm();
+  }
+}
+
 // Moves of a path given as pieces that each cut or not: the runs of pieces that do not cut,
 // at least kMinAirRun R long, at the link feed (air_moves), the rest at the feed.
 void add_piece_moves(const Settings& s, PartPlanner& planner,
@@ -1834,17 +1844,7 @@ void add_piece_moves(const Settings& s, PartPlanner& planner,
       run.push_back(q);
       sweep = q.is_arc() ? q.length_mm() / q.radius_mm() : 0;
     }
-    std::vector<Move2> moves;
-    if (!cuts[i] && len >= kMinAirRun * s.R) {
-      moves = air_moves(run, s.kernel_step);
-    } else {
-      for (const ContourPiece& piece : run) moves.push_back({Move2::arc_or_line, piece});
-    }
-    for (const Move2& m : moves) {
-      out.moves.push_back(m);
-      planner.add_exact(m.piece.end);
-      (m.kind == Move2::air ? out.air_length : out.clearing_length) += m.piece.length_mm();
-    }
+    add_run_moves(s, planner, run, !cuts[i] && len >= kMinAirRun * s.R, out);
     i = j;
   }
 }
@@ -1868,7 +1868,7 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
   // A pass runs on through cleared area for up to 2R after its last cut, in case it meets
   // stock again (run_pass). Where it did not, that tail is written only if the next pass goes
   // on from its end; a link or a channel elsewhere leaves from the last cut instead (on the
-  // example that is 4.3 m of path at the link feed a level, and its lifts' rapids).
+  // example that is 6.3 m of path at the link feed in all, and its lifts' rapids).
   Pass tail;  // the last pass's tail not yet written: from the tool's point to p
   // Arcs and lines through a pass's points within the fit tolerance of them and of the chords
   // between (the planner checked the chords: an arc bulging off them would not be), fitted
@@ -1882,19 +1882,9 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
       // that much more than the model has (later steps find less stock than they expect),
       // and engage at most 0.07 degrees more near a 50 degree target (bulge_mm / R sin 50).
       // A run at the link feed keeps to the chords: it must only graze.
-      const auto pieces =
-          fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : bulge_mm(s.R), s.sigma > 0);
-      std::vector<Move2> moves;
-      if (run.air) {
-        moves = air_moves(pieces, s.kernel_step);
-      } else {
-        for (const ContourPiece& piece : pieces) moves.push_back({Move2::arc_or_line, piece});
-      }
-      for (const Move2& m : moves) {
-        out.moves.push_back(m);
-        planner.add_exact(m.piece.end);
-        (m.kind == Move2::air ? out.air_length : out.clearing_length) += m.piece.length_mm();
-      }
+      add_run_moves(s, planner,
+                    fit_polyline(pts, s.fit_tolerance, run.air ? 0.0 : bulge_mm(s.R), s.sigma > 0),
+                    run.air, out);
     }
   };
   // The tool's point: p, or the start of the tail not written.
