@@ -532,6 +532,33 @@ TEST(Pocket, AContourNothingClearedReachesIsRampedDownLevelByLevel) {
   EXPECT_GT(p.proof.finish_max_engagement_deg, 45);
 }
 
+TEST(Pocket, AHelixInANarrowPartIsNoSteeperThanOneOfHalfTheToolsRadius) {
+  // The 60 x 14 mm channel leaves the helix a radius of 1.61 mm for a 10 mm tool (0.9 of the
+  // room): at entry_pitch a turn it descended at 0.099, where a helix of radius R / 2 (and
+  // the finishing pass's ramps) descend at pitch / (pi R) = 0.064.
+  const Job job = parse_job(pocket_job("boundary = \"CHAN\"\ndepth = 4.0\nmax_step_down = 2.0\n"
+                                       "stock_to_leave = 0.2\nmax_engagement = 50.0\n"),
+                            "chan.toml");
+  const PlannedPocket p = plan_pocket(job);
+  const double R = job.tool.radius_mm();
+  const double slope = job.path.entry_pitch_mm / (kPi * R);
+  int descents = 0;
+  double smallest_radius = R;
+  for (const Segment& g : p.path.segments()) {
+    const double dz = g.start().z() - g.end().z();
+    const double xy = (g.end() - g.start()).head<2>().norm();
+    if (g.motion() != Motion::feed || !(dz > 1e-9)) continue;
+    const bool arc = g.kind() == Segment::Kind::curve;
+    if (arc) smallest_radius = std::min(smallest_radius, g.axis_a().head<2>().norm());
+    if (xy <= 1e-9 && !arc) continue;  // straight down into what a level above cleared
+    // (1e-9: the drop is spread over whole turns, in rounding.)
+    EXPECT_LE(dz / g.length_mm(), slope + 1e-9) << g.start().transpose();
+    ++descents;
+  }
+  EXPECT_GT(descents, 0);
+  EXPECT_LT(smallest_radius, 0.5 * R);  // the case itself: a helix narrower than R / 2
+}
+
 TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {
   const auto message = [](const std::string& keys, const std::string& extra = "") {
     return test::message_of([&] { (void)parse_job(pocket_job(keys, extra), "bad.toml"); });

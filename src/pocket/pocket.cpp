@@ -2665,10 +2665,13 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
         const double top = clear_down_to(start, z_prev);
         travel(start, top + clearance, top + (top == 0.0 ? clearance : 0.0));
       }
-      // The helix down to z: whole turns at the pitch or less.
+      // The helix down to z: whole turns at the pitch or less, and on a circle narrower than
+      // R / 2 (a part with little room) at a drop a turn that keeps it no steeper than a
+      // helix of radius R / 2 at the pitch, the descent the finishing pass's ramps keep too.
       const double drop = here().z() - z;
       if (!pp.from_above && !pp.from_hole && rh > 0) {
-        const int turns = std::max(1, static_cast<int>(std::ceil(drop / pitch - 1e-9)));
+        const double per_turn = pitch * std::min(1.0, 2 * rh / R);
+        const int turns = std::max(1, static_cast<int>(std::ceil(drop / per_turn - 1e-9)));
         for (int t = 0; t < turns; ++t) {
           const double za = here().z(), zb = za - drop / turns;
           path.append(Segment::arc_xy(c.x(), c.y(), rh, 0.0, s.sigma * kTwoPi, za, zb, Motion::feed,
