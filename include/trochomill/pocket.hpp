@@ -139,6 +139,9 @@ struct PocketProof {
   double air_max_engagement_deg = 0;
   Vec3 air_max_at_mm = Vec3::Zero();
   double air_max_chip_mm = 0;
+  /// What the moves at the link feed remove in all (mm^3, the kernel's removal rate over
+  /// their samples): the feed marks and slivers their chip comes from, in proportion.
+  double air_removed_mm3 = 0;
 };
 
 /// The clearing's largest engagement outside the entries that the proof accepts: the target and

@@ -2909,6 +2909,10 @@ PocketProof prove_pocket(const PocketInfo& info, const EngagementSeries& e) {
         out.air_max_at_mm = at;
       }
       out.air_max_chip_mm = std::max(out.air_max_chip_mm, chip);
+      if (i > 0) {
+        out.air_removed_mm3 +=
+            e.removal_rate_mm3_per_s[i] * (e.samples.t_s[i] - e.samples.t_s[i - 1]);
+      }
     }
     if (eng > 0.5) ++cutting;
     if (eng > info.target_engagement_deg) ++above;

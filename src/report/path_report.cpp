@@ -165,6 +165,7 @@ std::string pocket_json(const PocketInfo& info, const PocketProof& proof, const 
       {"clearing_share_above_target", proof.clearing_share_above_target},
       {"link_feed_max_engagement_deg", proof.air_max_engagement_deg},
       {"link_feed_max_chip_mm", proof.air_max_chip_mm},
+      {"link_feed_removed_mm3", proof.air_removed_mm3},
       {"finish_max_engagement_deg", proof.finish_max_engagement_deg},
       {"finish_max_at_mm", at(proof.finish_max_at_mm)},
       {"finish_max_chip_mm", proof.finish_max_chip_mm},
@@ -304,10 +305,12 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         "stock\n";
   } else if (info.air_length_mm > 0 || info.links_down > 0) {
     out += fmt::format(
-        "  the kernel on the program: moves at the link feed (through cleared area) chip max "
-        "{:.5f} mm, engagement max {:.4g} degrees at {} (the feed marks such moves leave, a "
-        "tooth's advance at that feed apart)\n",
-        proof.air_max_chip_mm, proof.air_max_engagement_deg, at(proof.air_max_at_mm));
+        "  the kernel on the program: moves at the link feed (through cleared area) remove "
+        "{:.3g} mm^3 in all: chip max {:.5f} mm, engagement max {:.4g} degrees at {} (the feed "
+        "marks such moves leave, a tooth's advance at that feed apart, and the tips of cusps "
+        "narrower than a graze)\n",
+        proof.air_removed_mm3, proof.air_max_chip_mm, proof.air_max_engagement_deg,
+        at(proof.air_max_at_mm));
   }
   if (proof.finish_max_engagement_deg > 0) {
     out += fmt::format(
