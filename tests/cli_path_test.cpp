@@ -117,6 +117,42 @@ TEST_F(Cli, PlanJsonGivesAPocketsProof) {
   EXPECT_NE(slot.out.find("--json: the plan's JSON is a pocket's"), std::string::npos) << slot.out;
 }
 
+// plan --strict: a pocket whose proof fails on every plan is not written (exit 1); the
+// warning without it says why: the plate's pocket at a tenth with a 1 mm tool at 0.025 mm a
+// tooth (f_z / R = 0.05) reaches 55.1 degrees for 53 (docs/models.md: up to 0.02 R the plans
+// hold, 53.7 degrees at 0.01 and 0.02 R). A proven pocket writes as before; a slot refuses it.
+TEST_F(Cli, PlanStrictWritesNoPocketItsProofFails) {
+  const auto job = (dir_ / "small.toml").string(), out = (dir_ / "small.ngc").string();
+  {
+    std::ofstream f(job);
+    f << "[geometry]\nfile = \"" << (test::source_dir() / "tests/data/dxf/pockets.dxf").string()
+      << "\"\n[pocket]\nboundary = \"SMALL\"\nislands = \"SMALLI\"\ndepth = 1.0\n"
+         "max_step_down = 1.0\nstock_to_leave = 0.02\nmax_engagement = 53.0\n[tool]\n"
+         "diameter = 1.0\nteeth = 3\n[cutting]\nfeed_rate = 600.0\nspindle_speed = 8000.0\n";
+  }
+  const CliResult loose = run_cli("plan " + job + " -o " + out);
+  ASSERT_EQ(loose.code, 0) << loose.out;
+  EXPECT_NE(loose.out.find("the feed per tooth is 0.05 of the tool's radius, where the planner's "
+                           "model holds the target up to about 0.02: a feed rate 0.4 times"),
+            std::string::npos)
+      << loose.out;
+  std::filesystem::remove(out);
+  const CliResult strict = run_cli("plan " + job + " --strict -o " + out);
+  EXPECT_EQ(strict.code, 1) << strict.out;
+  EXPECT_NE(strict.out.find("plan --strict: the kernel finds"), std::string::npos) << strict.out;
+  EXPECT_NE(strict.out.find("nothing was written"), std::string::npos) << strict.out;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // At 0.005 mm a tooth (0.01 R) it holds, and --strict writes it.
+  const CliResult slow = run_cli("plan " + job + " --strict --set cutting.feed_rate=120 -o " + out);
+  EXPECT_EQ(slow.code, 0) << slow.out;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  const CliResult slot = run_cli("plan " + test::example("wagih2023/trochoidal.toml").string() +
+                                 " --strict -o " + out);
+  EXPECT_EQ(slot.code, 2);
+  EXPECT_NE(slot.out.find("--strict: the proof it asks for is a pocket's"), std::string::npos)
+      << slot.out;
+}
+
 // --stock FILE (plan, analyze, simulate, report): the job key stock.mesh, the file taken from
 // the current folder. The plate with the cored blank given so plans as cored.toml (whose
 // [stock] mesh is that file): the same moves, the core's air at the first level; a slot job

@@ -120,6 +120,7 @@ void register_path_commands(CLI::App& app, int& exit_code) {
       std::string out, json;
       std::optional<double> memory_gb;
       bool schedule = false;
+      bool strict = false;
       FeedTargetArgs targets;
     };
     auto a = std::make_shared<Args>();
@@ -141,6 +142,9 @@ void register_path_commands(CLI::App& app, int& exit_code) {
                   "variable feed: each piece of the path fed so that its largest chip is the "
                   "target (--h-max), within --min-feed and --max-feed");
     add_feed_target_args(cmd, a->targets);
+    cmd->add_flag("--strict", a->strict,
+                  "a pocket job: write nothing and exit 1 where the kernel's proof finds the "
+                  "clearing's engagement above the target + 2 % on every plan tried");
     cmd->final_callback([a, cmd, &exit_code] {
       check_outputs({&a->out, &a->json}, {&a->job.file});
       if (a->out == "-" && a->json == "-") {
@@ -166,6 +170,12 @@ void register_path_commands(CLI::App& app, int& exit_code) {
         throw InputError(fmt::format(
             "--json: the plan's JSON is a pocket's ({} has no [pocket]); a slot's figures are "
             "analyze --json's",
+            a->job.file));
+      }
+      if (a->strict && !job.pocket.defined()) {
+        throw InputError(fmt::format(
+            "--strict: the proof it asks for is a pocket's ({} has no [pocket]); a slot's "
+            "program is planned to its cycle, not proven",
             a->job.file));
       }
       if (job.pocket.defined()) {
@@ -194,6 +204,13 @@ void register_path_commands(CLI::App& app, int& exit_code) {
         PlannedPocket pp = plan_pocket(job);  // proven by the kernel
         std::FILE* to = a->out == "-" || a->json == "-" ? stderr : stdout;
         fmt::print(to, "{}", pocket_summary(pp.info, pp.proof));
+        if (a->strict && !pp.info.proven) {
+          throw Error(fmt::format(
+              "plan --strict: the kernel finds {:.4g} degrees in the clearing for a target of "
+              "{:g} (above it + {:g} %) on every plan tried: nothing was written",
+              pp.proof.clearing_max_engagement_deg, pp.info.target_engagement_deg,
+              100 * kProofTolerance));
+        }
         if (!a->json.empty()) proof = pp.proof;
         planned.path = std::move(pp.path);
         planned.info.cycles = pp.info.passes;

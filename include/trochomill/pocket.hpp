@@ -31,6 +31,9 @@ struct PocketLeftover {
 
 struct PocketInfo {
   double target_engagement_deg = 0;  ///< [pocket] max_engagement (or from max_chip)
+  /// The feed per tooth over the tool radius, f_z / R: above about 0.02 the planner's discs
+  /// a tooth apart no longer hold the target (docs/models.md, "Pockets").
+  double tooth_advance_share = 0;
   /// The planner's own largest engagement at its step points (degrees), entries excepted.
   double planned_max_engagement_deg = 0;
   int parts = 0;   ///< connected regions the tool centre may reach (each entered once)
@@ -130,7 +133,7 @@ void attach_rest_stock(Job& job);
 struct PocketProof {
   double clearing_max_engagement_deg = 0;
   Vec3 clearing_max_at_mm = Vec3::Zero();
-  double clearing_max_chip_mm = 0;
+  double clearing_max_chip_mm = 0;         ///< at the feed: the link feed's own below
   double clearing_share_above_target = 0;  ///< 0 .. 1
   double finish_max_engagement_deg = 0;
   Vec3 finish_max_at_mm = Vec3::Zero();
@@ -148,6 +151,10 @@ struct PocketProof {
 /// this share of it (2 %: the kernel samples the teeth at their own phase, the planner at its
 /// steps').
 inline constexpr double kProofTolerance = 0.02;
+
+/// The feed per tooth over the tool radius up to which the planner holds the target (the
+/// plate's pocket holds at 0.01 and 0.02, not at 0.05 or 0.1: docs/models.md, "Pockets").
+inline constexpr double kPocketToothShare = 0.02;
 
 struct PlannedPocket {
   ToolPath path;

@@ -2336,6 +2336,7 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
   PlannedPocket out;
   PocketInfo& info = out.info;
   info.target_engagement_deg = pk.max_engagement_deg;
+  info.tooth_advance_share = job.cutting.feed_per_tooth_mm / R;
   // The channels: narrower than [pocket] channel_width (2 D where 0).
   const double channel_width = pk.channel_width_mm > 0 ? pk.channel_width_mm : 4 * R;
   info.channel_width_mm = channel_width;
@@ -2903,7 +2904,8 @@ PocketProof prove_pocket(const PocketInfo& info, const EngagementSeries& e) {
       out.finish_max_chip_mm = std::max(out.finish_max_chip_mm, chip);
       continue;
     }
-    if (std::binary_search(info.air_segments.begin(), info.air_segments.end(), seg)) {
+    const bool air = std::binary_search(info.air_segments.begin(), info.air_segments.end(), seg);
+    if (air) {
       if (eng > out.air_max_engagement_deg) {
         out.air_max_engagement_deg = eng;
         out.air_max_at_mm = at;
@@ -2920,7 +2922,9 @@ PocketProof prove_pocket(const PocketInfo& info, const EngagementSeries& e) {
       out.clearing_max_engagement_deg = eng;
       out.clearing_max_at_mm = at;
     }
-    out.clearing_max_chip_mm = std::max(out.clearing_max_chip_mm, chip);
+    // The chip at the feed: at the link feed a tooth advances 8 times as far, and the tips
+    // of cusps it meets read as chips up to that (the link feed's own figure above).
+    if (!air) out.clearing_max_chip_mm = std::max(out.clearing_max_chip_mm, chip);
   }
   out.clearing_share_above_target =
       cutting > 0 ? static_cast<double>(above) / static_cast<double>(cutting) : 0.0;

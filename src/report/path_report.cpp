@@ -290,14 +290,25 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
         info.first_proof_max_deg, at(info.first_proof_at_mm), 100 * kProofTolerance, info.replans,
         info.replans == 1 ? "" : "s", info.aim_margin_deg);
   } else if (!info.proven) {
+    // Above f_z = 0.02 R the planner's discs a tooth apart, not the margin, are what fails
+    // (docs/models.md, "Pockets": where no replan holds).
+    const std::string why =
+        info.tooth_advance_share > kPocketToothShare
+            ? fmt::format(
+                  "; the feed per tooth is {:.2g} of the tool's radius, where the planner's "
+                  "model holds the target up to about {:g}: a feed rate {:.2g} times the "
+                  "[cutting] one holds it too",
+                  info.tooth_advance_share, kPocketToothShare,
+                  kPocketToothShare / info.tooth_advance_share)
+            : std::string();
     out += fmt::format(
         "  warning: the kernel finds the clearing's engagement above the target + {:g} % on "
         "every plan tried (the first and {} more, the steps' aim 0.5 degrees lower each time): "
         "{:.4g} degrees at {} in this one, the least; lower [pocket] max_engagement by {:.2g} "
-        "degrees to hold the target\n",
+        "degrees to hold the target{} (plan --strict writes no such program)\n",
         100 * kProofTolerance, info.replans, proof.clearing_max_engagement_deg,
         at(proof.clearing_max_at_mm),
-        proof.clearing_max_engagement_deg - info.target_engagement_deg);
+        proof.clearing_max_engagement_deg - info.target_engagement_deg, why);
   }
   if ((info.air_length_mm > 0 || info.links_down > 0) && !(proof.air_max_engagement_deg > 0)) {
     out +=
