@@ -668,6 +668,96 @@ TEST(Geometry, SvgLayersAndIdsChooseWhatIsRead) {
   }
 }
 
+// DXF groups libdxflib does not pass on, read as other writers write them: a spline-fit
+// POLYLINE's frame (vertex flag 16) is not its curve; heights of -5e-14 are the plane z = 0;
+// an LWPOLYLINE is named so; a file without handles names an entity by its line; an ellipse
+// whose ratio is above 1 is the same ellipse with its axes named the other way round (its
+// area pi a b in closed form); a file of points and text, or cut short, says so.
+TEST(Geometry, DxfAsOtherWritersWriteIt) {
+  const auto dir = std::filesystem::temp_directory_path() / "trochomill-dxf-test";
+  std::filesystem::create_directories(dir);
+  const auto read = [&](const std::string& entities, bool end = true) {
+    std::ofstream(dir / "d.dxf") << "0\nSECTION\n2\nENTITIES\n"
+                                 << entities << (end ? "0\nENDSEC\n0\nEOF\n" : "");
+    return read_drawing(dir / "d.dxf", DrawingOptions{});
+  };
+  const auto vertex = [](double x, double y, int flags, const std::string& z = "0") {
+    return fmt::format("0\nVERTEX\n8\nS\n10\n{}\n20\n{}\n30\n{}\n70\n{}\n", x, y, z, flags);
+  };
+  // Spline-fit (70 = 1 closed + 4): its frame, a 100 mm square, then its fitted vertices, a
+  // 20 mm square (lines here: the test is which vertices are read).
+  std::string poly = "0\nPOLYLINE\n8\nS\n66\n1\n70\n5\n";
+  for (const auto& [x, y] :
+       std::vector<std::pair<double, double>>{{0, 0}, {100, 0}, {100, 100}, {0, 100}})
+    poly += vertex(x, y, 16);
+  for (const auto& [x, y] :
+       std::vector<std::pair<double, double>>{{40, 40}, {60, 40}, {60, 60}, {40, 60}})
+    poly += vertex(x, y, 8);
+  Drawing d = read(poly + "0\nSEQEND\n8\nS\n");
+  ASSERT_EQ(d.contours.size(), 1u);
+  EXPECT_DOUBLE_EQ(d.contours[0].contour.length_mm(), 80.0);  // the fitted square, not 400
+  EXPECT_DOUBLE_EQ(std::abs(d.contours[0].contour.signed_area_mm2()), 400.0);
+  // Heights of rounding: one plane (the same square at z 0 and -5e-14).
+  poly = "0\nPOLYLINE\n8\nS\n66\n1\n70\n1\n" + vertex(40, 40, 0, "-5e-14") + vertex(60, 40, 0) +
+         vertex(60, 60, 0, "-5e-14") + vertex(40, 60, 0) + "0\nSEQEND\n8\nS\n";
+  d = read(poly);
+  ASSERT_EQ(d.contours.size(), 1u);
+  EXPECT_DOUBLE_EQ(d.contours[0].contour.length_mm(), 80.0);
+  // A height that is one (a millimetre) is refused, with both heights.
+  std::string m = test::message_of([&] {
+    (void)read("0\nPOLYLINE\n8\nS\n66\n1\n70\n1\n" + vertex(40, 40, 0, "1") + vertex(60, 40, 0) +
+               vertex(60, 60, 0) + "0\nSEQEND\n8\nS\n");
+  });
+  EXPECT_NE(m.find("a polyline out of the XY plane (its vertex 2 at z 0, its first at 1)"),
+            std::string::npos)
+      << m;
+  // Three lines from one point, no handles: each named by the line its type is on.
+  const std::string line = "0\nLINE\n8\nL\n10\n0\n20\n0\n11\n{}\n21\n{}\n";
+  m = test::message_of([&] {
+    (void)read(fmt::format(fmt::runtime(line), 10, 0) + fmt::format(fmt::runtime(line), 0, 10) +
+               fmt::format(fmt::runtime(line), -10, 0));
+  });
+  // (Lines 6, 18 and 30: after the section's 4, a LINE's six groups take 12 lines.)
+  EXPECT_NE(m.find("LINE at line 6, LINE at line 18, LINE at line 30 meet there"),
+            std::string::npos)
+      << m;
+  // An LWPOLYLINE (handle A1) meeting two lines at its end: named as the file names it.
+  m = test::message_of([&] {
+    (void)read("0\nLWPOLYLINE\n5\nA1\n8\nL\n90\n2\n70\n0\n10\n0\n20\n0\n10\n0\n20\n-10\n" +
+               fmt::format(fmt::runtime(line), 10, 0) + fmt::format(fmt::runtime(line), 0, 10));
+  });
+  EXPECT_NE(m.find("LWPOLYLINE #A1"), std::string::npos) << m;
+  // Ellipses: semi-axes 10 and 20 given as ratio 2 about a 10 mm major axis, and as ratio 0.5
+  // about the 20 mm one: the same curve (the fit within its 0.002 mm tolerance: areas within
+  // 2 pi r t = 0.2 mm^2 of the closed form, lengths within 0.01 mm of each other).
+  const std::string ellipse =
+      "0\nELLIPSE\n8\nE\n10\n0\n20\n0\n30\n0\n11\n{}\n21\n{}\n31\n0\n"
+      "40\n{}\n41\n0\n42\n6.283185307179586\n";
+  const Drawing wide = read(fmt::format(fmt::runtime(ellipse), 10, 0, 2.0));
+  const Drawing tall = read(fmt::format(fmt::runtime(ellipse), 0, 20, 0.5));
+  ASSERT_EQ(wide.contours.size(), 1u);
+  ASSERT_EQ(tall.contours.size(), 1u);
+  EXPECT_NEAR(std::abs(wide.contours[0].contour.signed_area_mm2()), kPi * 10 * 20, 0.2);
+  EXPECT_NEAR(wide.contours[0].contour.length_mm(), tall.contours[0].contour.length_mm(), 0.01);
+  m = test::message_of([&] { (void)read(fmt::format(fmt::runtime(ellipse), 10, 0, 0.0)); });
+  EXPECT_NE(m.find("an ellipse of axis ratio 0 (the minor axis over the major: need > 0)"),
+            std::string::npos)
+      << m;
+  // Points and text bound nothing: the message lists what the file holds.
+  m = test::message_of([&] {
+    (void)read("0\nPOINT\n8\nP\n10\n0\n20\n0\n0\nTEXT\n8\nT\n10\n0\n20\n0\n40\n1\n1\nA\n");
+  });
+  EXPECT_NE(m.find("no line, arc or curve in it: its entities are 1 POINT, 1 TEXT"),
+            std::string::npos)
+      << m;
+  // Cut short inside its ENTITIES section.
+  m = test::message_of([&] { (void)read(fmt::format(fmt::runtime(line), 10, 0), false); });
+  EXPECT_NE(m.find("its ENTITIES section has no end (0 ENDSEC): the file is cut short"),
+            std::string::npos)
+      << m;
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Geometry, SvgBadInputIsRefusedWithWhatIsWrong) {
   const struct {
     const char* name;

@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -58,9 +60,74 @@ std::optional<std::pair<double, const char*>> insunits(int code) {
   }
 }
 
+// What libdxflib's reader does not pass on, read from the file's groups beforehand (its
+// stream reader hands no group to processCodeValuePair): where each entity stands (the line
+// of its type, for a file without handles), which polylines are LWPOLYLINEs (libdxflib hands
+// both over as POLYLINE), each VERTEX's flags (a spline-fit POLYLINE holds its spline's
+// frame, flag 16, beside the fitted vertices), what the ENTITIES section holds and whether it
+// ends. Entities of a type come to the reader in the file's order, so the k-th of a type is
+// the k-th listed here.
+struct Scanned {
+  std::map<std::string, std::vector<std::size_t>> lines;  // by type (POLYLINE: both kinds)
+  std::vector<std::string> poly_types;                    // POLYLINE or LWPOLYLINE
+  std::vector<std::vector<int>> vertex_flags;             // a POLYLINE's VERTEX flags
+  std::map<std::string, std::size_t> types;               // in the ENTITIES section
+  bool opened = false, closed = false;
+  bool eof = false;  // its last group: 0 EOF
+};
+
+Scanned scan_groups(const std::string& text) {
+  Scanned out;
+  std::istringstream in(text);
+  std::string code, value, section, entity;
+  bool want_name = false;
+  std::size_t line = 0;
+  const auto trim = [](std::string& t) {
+    const auto b = t.find_first_not_of(" \t\r");
+    const auto e = t.find_last_not_of(" \t\r");
+    t = b == std::string::npos ? std::string() : t.substr(b, e - b + 1);
+  };
+  while (std::getline(in, code) && std::getline(in, value)) {
+    line += 2;
+    trim(code);
+    trim(value);
+    if (code == "0") {
+      entity = value;
+      out.eof = value == "EOF";
+      if (value == "SECTION") {
+        want_name = true;
+      } else if (value == "ENDSEC") {
+        if (section == "ENTITIES") out.closed = true;
+        section.clear();
+      } else if (section == "ENTITIES" || section == "BLOCKS") {
+        if (section == "ENTITIES") ++out.types[value];
+        const bool poly = value == "POLYLINE" || value == "LWPOLYLINE";
+        if (value != "VERTEX" && value != "SEQEND") {
+          out.lines[poly ? "POLYLINE" : value].push_back(line);
+        }
+        if (poly) {
+          out.poly_types.push_back(value);
+          out.vertex_flags.emplace_back();
+        } else if (value == "VERTEX" && !out.vertex_flags.empty()) {
+          out.vertex_flags.back().push_back(0);
+        }
+      }
+    } else if (code == "2" && want_name) {
+      section = value;
+      want_name = false;
+      if (value == "ENTITIES") out.opened = true;
+    } else if (code == "70" && entity == "VERTEX" && !out.vertex_flags.empty() &&
+               !out.vertex_flags.back().empty()) {
+      out.vertex_flags.back().back() = std::atoi(value.c_str());
+    }
+  }
+  return out;
+}
+
 class Reader final : public DL_CreationAdapter {
  public:
-  Reader(std::string source, const DrawingOptions& o) : src_(std::move(source)), o_(o) {}
+  Reader(std::string source, const DrawingOptions& o, const Scanned& scan)
+      : src_(std::move(source)), o_(o), scan_(scan) {}
 
   std::vector<DrawnPiece> pieces;
   std::vector<std::string> problems;
@@ -106,7 +173,7 @@ class Reader final : public DL_CreationAdapter {
 
   void addLine(const DL_LineData& d) override {
     if (!begin("LINE")) return;
-    if (d.z1 != d.z2)
+    if (!flat(d.z1, d.z2))
       return problem("a line out of the XY plane (its ends at z {} and {})", d.z1, d.z2);
     add(ContourPiece::line(xy(d.x1, d.y1), xy(d.x2, d.y2)));
   }
@@ -128,6 +195,8 @@ class Reader final : public DL_CreationAdapter {
     add(ContourPiece::arc(b, a, c, true));
   }
   void addPolyline(const DL_PolylineData& d) override {
+    poly_at_ = count_["POLYLINE"];  // (begin counts it: the k-th POLYLINE or LWPOLYLINE)
+    vertex_at_ = 0;
     if (!begin("POLYLINE")) return;
     if (d.flags & (16 | 64)) return problem("a polygon mesh or polyface (not a 2D polyline)");
     poly_ = Poly{};
@@ -135,6 +204,13 @@ class Reader final : public DL_CreationAdapter {
   }
   void addVertex(const DL_VertexData& d) override {
     if (!poly_) return;
+    // A spline-fit POLYLINE holds its spline's frame (vertex flag 16, the control points)
+    // beside the fitted vertices (flag 8): the curve is the fitted ones.
+    const std::size_t j = vertex_at_++;
+    if (poly_at_ < scan_.vertex_flags.size() && j < scan_.vertex_flags[poly_at_].size() &&
+        (scan_.vertex_flags[poly_at_][j] & 16) != 0) {
+      return;
+    }
     poly_->v.push_back({xy(d.x, d.y), d.bulge, d.z});
   }
   void addSpline(const DL_SplineData& d) override {
@@ -154,7 +230,12 @@ class Reader final : public DL_CreationAdapter {
   }
   void addEllipse(const DL_EllipseData& d) override {
     if (!begin("ELLIPSE")) return;
-    if (!(d.ratio > 0 && d.ratio <= 1)) return problem("an ellipse of axis ratio {}", d.ratio);
+    // (A ratio above 1, which some writers give, is the same ellipse with its axes named the
+    // other way round: the curve below takes either.)
+    if (!(d.ratio > 0) || !std::isfinite(d.ratio)) {
+      return problem("an ellipse of axis ratio {} (the minor axis over the major: need > 0)",
+                     d.ratio);
+    }
     const Vec2 c = xy(d.cx, d.cy), m = xy(d.mx, d.my);
     if (!(m.norm() > 0)) return problem("an ellipse with no major axis");
     // The minor axis: the major turned a quarter counter-clockwise, scaled by the ratio.
@@ -203,9 +284,20 @@ class Reader final : public DL_CreationAdapter {
   bool begin(const char* kind) {
     flush();
     ++entities_;
+    const std::size_t k = count_[kind]++;  // the k-th of its kind in the file (Scanned)
     if (in_block_ || units_error || limit_error) return false;
     const DL_Attributes& at = getAttributes();
-    entity_ = fmt::format("{} #{:X}", kind, at.getHandle() < 0 ? 0 : at.getHandle());
+    // Its type as the file names it (libdxflib hands an LWPOLYLINE over as a POLYLINE), and,
+    // in a file without handles (R12 may omit them), its line instead.
+    const std::string name = std::string(kind) == "POLYLINE" && k < scan_.poly_types.size()
+                                 ? scan_.poly_types[k]
+                                 : std::string(kind);
+    const auto lines = scan_.lines.find(kind);
+    const std::size_t line =
+        lines != scan_.lines.end() && k < lines->second.size() ? lines->second[k] : 0;
+    entity_ = at.getHandle() >= 0 ? fmt::format("{} #{:X}", name, at.getHandle())
+              : line > 0          ? fmt::format("{} at line {}", name, line)
+                                  : name;
     layer_ = at.getLayer();
     seen_layers.push_back(layer_);
     const double* z = getExtrusion()->getDirection();
@@ -257,7 +349,10 @@ class Reader final : public DL_CreationAdapter {
     Poly p = std::move(*poly_);
     poly_.reset();
     for (std::size_t i = 1; i < p.v.size(); ++i) {
-      if (p.v[i].z != p.v[0].z) return problem("a polyline out of the XY plane");
+      if (!flat(p.v[i].z, p.v[0].z)) {
+        return problem("a polyline out of the XY plane (its vertex {} at z {}, its first at {})",
+                       i + 1, p.v[i].z, p.v[0].z);
+      }
     }
     const std::size_t n = p.v.size();
     const std::size_t segs = p.closed ? n : (n == 0 ? 0 : n - 1);
@@ -298,7 +393,11 @@ class Reader final : public DL_CreationAdapter {
       if (!(s.w[i] > 0) || !std::isfinite(s.w[i])) {
         return problem("control point {} has the weight {} (need > 0)", i + 1, s.w[i]);
       }
-      if (s.ctrl[i].z() != s.ctrl[0].z()) return problem("a spline out of the XY plane");
+      if (!flat(s.ctrl[i].z(), s.ctrl[0].z())) {
+        return problem(
+            "a spline out of the XY plane (its control point {} at z {}, its first at {})", i + 1,
+            s.ctrl[i].z(), s.ctrl[0].z());
+      }
     }
     for (std::size_t i = 1; i < s.knots.size(); ++i) {
       if (!(s.knots[i] >= s.knots[i - 1])) return problem("its knots decrease at knot {}", i + 1);
@@ -308,8 +407,15 @@ class Reader final : public DL_CreationAdapter {
     fit(curve, curve.u0(), curve.u1(), static_cast<int>(std::max<std::size_t>(4, nc)));
   }
 
+  // Heights equal to 1e-6 mm are one plane: CAD tools write -5e-14 for 0.
+  [[nodiscard]] bool flat(double z0, double z1) const { return std::abs(z0 - z1) * unit_ <= 1e-6; }
+
+ private:
   std::string src_;
   const DrawingOptions& o_;
+  const Scanned& scan_;
+  std::map<std::string, std::size_t> count_;  // entities handed over so far, by kind
+  std::size_t poly_at_ = 0, vertex_at_ = 0;   // the polyline being read, its next vertex
   bool in_block_ = false, mirrored_ = false;
   std::string entity_, layer_;
   std::optional<Poly> poly_;
@@ -326,11 +432,18 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   const std::string text = read_drawing_text(file, "DXF", options);
   Drawing d;
   d.file = file;
-  Reader r(source, options);
+  const Scanned scan = scan_groups(text);
+  Reader r(source, options, scan);
   std::istringstream in(text);
   DL_Dxf dxf;
   dxf.in(in, &r);
   r.flush();
+  if (scan.opened && !scan.closed) {
+    throw InputError(fmt::format(
+        "{}: its ENTITIES section has no end (0 ENDSEC): the file is cut short (saved or copied "
+        "only in part?)",
+        source));
+  }
   if (r.units_error) throw InputError(*r.units_error);
   if (r.limit_error) throw InputError(*r.limit_error);
   d.mm_per_unit = r.unit();
@@ -340,7 +453,16 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   std::sort(seen.begin(), seen.end());
   seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
   if (r.pieces.empty() && options.layers.empty()) {
-    throw InputError(fmt::format("{}: no line, arc or curve in it (is it a DXF file?)", source));
+    std::vector<std::string> held;
+    for (const auto& [type, n] : scan.types) held.push_back(fmt::format("{} {}", n, type));
+    throw InputError(
+        held.empty()
+            ? fmt::format("{}: no line, arc or curve in it (no ENTITIES section{})", source,
+                          scan.eof ? ": is it a DXF file?"
+                                   : ", and it ends before its EOF: the file is cut short")
+            : fmt::format("{}: no line, arc or curve in it: its entities are {} (contours are "
+                          "drawn with LINE, ARC, CIRCLE, LWPOLYLINE, POLYLINE, SPLINE, ELLIPSE)",
+                          source, fmt::join(held, ", ")));
   }
   for (const DrawnPiece& p : r.pieces) d.layers.push_back(p.layer);
   std::sort(d.layers.begin(), d.layers.end());
