@@ -153,6 +153,39 @@ TEST_F(Cli, PlanStrictWritesNoPocketItsProofFails) {
       << slot.out;
 }
 
+// A drawing without a unit ($INSUNITS absent: tests/data/dxf/r12-parts.dxf, an R12 file) is
+// read as mm with a warning naming the key that says otherwise; [geometry] units = "in"
+// reads it in inches: the corner its SLOT layer has at (30, 10) is then at (762, 254) mm.
+TEST_F(Cli, AUnitlessDrawingIsReadAsMmWithAWarning) {
+  const std::string drawing = (test::source_dir() / "tests/data/dxf/r12-parts.dxf").string();
+  const auto pocket = (dir_ / "r12.toml").string(), slot = (dir_ / "r12-slot.toml").string();
+  const auto out = (dir_ / "r12.ngc").string();
+  const std::string tool =
+      "[tool]\ndiameter = 6.0\nteeth = 3\n[cutting]\nfeed_rate = 600.0\nspindle_speed = "
+      "6000.0\n";
+  std::ofstream(pocket) << "[geometry]\nfile = \"" << drawing
+                        << "\"\n[pocket]\nboundary = \"ISLAND\"\ndepth = 1.0\n"
+                           "max_engagement = 50.0\n"
+                        << tool;
+  std::ofstream(slot) << "[geometry]\nfile = \"" << drawing
+                      << "\"\n[slot]\nalong = \"SLOT\"\nwidth = 8.0\ndepth = 1.0\n[path]\n"
+                         "type = \"trochoidal\"\nstep = 0.5\n"
+                      << tool;
+  const CliResult mm = run_cli("plan " + pocket + " -o " + out);
+  ASSERT_EQ(mm.code, 0) << mm.out;
+  EXPECT_NE(mm.out.find("r12-parts.dxf gives no unit (no $INSUNITS, or 0): its numbers are read "
+                        "as mm; if it was drawn in another, say which with [geometry] units"),
+            std::string::npos)
+      << mm.out;
+  const CliResult in_mm = run_cli("plan " + slot + " -o " + out);
+  EXPECT_EQ(in_mm.code, 2);
+  EXPECT_NE(in_mm.out.find("has a corner at (30.0000, 10.0000)"), std::string::npos) << in_mm.out;
+  const CliResult in_in = run_cli("plan " + slot + " --set geometry.units='\"in\"' -o " + out);
+  EXPECT_EQ(in_in.code, 2);
+  EXPECT_NE(in_in.out.find("has a corner at (762.0000, 254.0000)"), std::string::npos) << in_in.out;
+  EXPECT_EQ(in_in.out.find("gives no unit"), std::string::npos) << in_in.out;
+}
+
 // --stock FILE (plan, analyze, simulate, report): the job key stock.mesh, the file taken from
 // the current folder. The plate with the cored blank given so plans as cored.toml (whose
 // [stock] mesh is that file): the same moves, the core's air at the first level; a slot job

@@ -425,6 +425,27 @@ TEST(CurvedSlot, CentrelinesASlotCannotFollowAreRefused) {
   EXPECT_TRUE(has(m, "$INSUNITS 3 is a unit trochomill does not read")) << m;
   m = test::message_of([&] { (void)read_drawing(dxf("1", "after"), DrawingOptions{}); });
   EXPECT_TRUE(has(m, "$INSUNITS comes after 1 entities")) << m;
+  // A unitless drawing ($INSUNITS 0) is read as mm, or in the unit [geometry] units gives
+  // (the 1 unit line: 25.4 mm in inches); one that gives its unit refuses a second one, and
+  // so does an SVG.
+  DrawingOptions in_inches;
+  in_inches.unitless_mm_per_unit = 25.4;
+  in_inches.unitless_name = "in";
+  const Drawing none = read_drawing(dxf("0", ""), DrawingOptions{});
+  EXPECT_DOUBLE_EQ(none.contours[0].contour.length_mm(), 1.0);
+  EXPECT_EQ(none.units, "unitless (read as mm)");
+  const Drawing said = read_drawing(dxf("0", ""), in_inches);
+  EXPECT_DOUBLE_EQ(said.contours[0].contour.length_mm(), 25.4);
+  EXPECT_EQ(said.units, "unitless (read as in: [geometry] units)");
+  m = test::message_of([&] { (void)read_drawing(dxf("4", ""), in_inches); });
+  EXPECT_TRUE(has(m,
+                  "its $INSUNITS gives its unit (mm): [geometry] units = \"in\" is for a "
+                  "drawing that gives none"))
+      << m;
+  std::ofstream(dir / "one.svg") << "<svg xmlns=\"http://www.w3.org/2000/svg\"><line x1=\"0\" "
+                                    "y1=\"0\" x2=\"1\" y2=\"0\"/></svg>";
+  m = test::message_of([&] { (void)read_drawing(dir / "one.svg", in_inches); });
+  EXPECT_TRUE(has(m, "[geometry] units = \"in\" is for a DXF drawing that gives no unit")) << m;
   std::filesystem::remove_all(dir);
   // A straight slot still needs its length.
   text = base.substr(base.find("[tool]"));

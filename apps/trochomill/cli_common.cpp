@@ -126,6 +126,12 @@ std::vector<Override> JobArgs::overrides() const {
 Job JobArgs::load() const {
   Job job = load_job(file, overrides());
   attach_rest_stock(job);  // [pocket] rest_of: the earlier program's stock, read once
+  if (job.geometry.units.rfind("unitless (read as mm)", 0) == 0) {
+    fmt::print(stderr,
+               "warning: {} gives no unit (no $INSUNITS, or 0): its numbers are read as mm; if "
+               "it was drawn in another, say which with [geometry] units (mm, cm, m, in or ft)\n",
+               job.geometry.file);
+  }
   return job;
 }
 

@@ -127,7 +127,13 @@ Scanned scan_groups(const std::string& text) {
 class Reader final : public DL_CreationAdapter {
  public:
   Reader(std::string source, const DrawingOptions& o, const Scanned& scan)
-      : src_(std::move(source)), o_(o), scan_(scan) {}
+      : src_(std::move(source)), o_(o), scan_(scan) {
+    if (o.unitless_mm_per_unit > 0) {
+      unit_ = o.unitless_mm_per_unit;
+      units_given_ = fmt::format("unitless (read as {}: [geometry] units)", o.unitless_name);
+      units = units_given_.c_str();
+    }
+  }
 
   std::vector<DrawnPiece> pieces;
   std::vector<std::string> problems;
@@ -140,6 +146,14 @@ class Reader final : public DL_CreationAdapter {
   // The unit, from the header (before any entity: the pieces are scaled as they come).
   void setVariableInt(const std::string& key, int value, int) override {
     if (key != "$INSUNITS") return;
+    if (value != 0 && o_.unitless_mm_per_unit > 0 && insunits(value)) {
+      units_error = fmt::format(
+          "{}: its $INSUNITS gives its unit ({}): [geometry] units = \"{}\" is for a drawing "
+          "that gives none; remove it",
+          src_, insunits(value)->second, o_.unitless_name);
+      return;
+    }
+    if (value == 0) return;  // unitless: as the reader began (mm, or [geometry] units)
     const auto unit = insunits(value);
     if (!unit) {
       units_error = fmt::format(
@@ -414,6 +428,7 @@ class Reader final : public DL_CreationAdapter {
   std::string src_;
   const DrawingOptions& o_;
   const Scanned& scan_;
+  std::string units_given_;  // `units` of a unitless drawing read in [geometry] units
   std::map<std::string, std::size_t> count_;  // entities handed over so far, by kind
   std::size_t poly_at_ = 0, vertex_at_ = 0;   // the polyline being read, its next vertex
   bool in_block_ = false, mirrored_ = false;
@@ -517,7 +532,15 @@ Drawing read_drawing(const std::filesystem::path& file, const DrawingOptions& op
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".dxf") return read_dxf(file, options);
-  if (ext == ".svg") return read_svg(file, options);
+  if (ext == ".svg") {
+    if (options.unitless_mm_per_unit > 0) {
+      throw InputError(fmt::format(
+          "{}: [geometry] units = \"{}\" is for a DXF drawing that gives no unit; an SVG's "
+          "unit is its own (px, 96 to the inch, or its viewBox in mm): remove it",
+          file.string(), options.unitless_name));
+    }
+    return read_svg(file, options);
+  }
   throw InputError(fmt::format("{}: a drawing must be a .dxf or .svg file (got '{}')",
                                file.string(), ext.empty() ? std::string("no extension") : ext));
 }

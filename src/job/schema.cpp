@@ -324,6 +324,26 @@ std::vector<Key> build_schema() {
       number("geometry", "join_tolerance", "mm", Range{1e-6, 100},
              FIELD(geometry.join_tolerance_mm),
              "ends of the drawing's lines, arcs and curves closer than this are one point"),
+      custom("geometry", "units", "string", "", "mm, cm, m, in or ft", "none",
+             "the unit of a DXF drawing that gives none (no $INSUNITS, or 0); without it such "
+             "a drawing is read as mm, with a warning",
+             [](JobReader& r, Job& job) {
+               if (auto v = r.string("geometry", "units")) {
+                 static const std::pair<const char*, double> kUnits[] = {
+                     {"mm", 1.0}, {"cm", 10.0}, {"m", 1000.0}, {"in", 25.4}, {"ft", 304.8}};
+                 for (const auto& [name, mm] : kUnits) {
+                   if (*v == name) {
+                     job.geometry.units_mm = mm;
+                     job.geometry.units_name = name;
+                   }
+                 }
+                 if (job.geometry.units_mm == 0) {
+                   r.problem(
+                       "geometry", "units",
+                       fmt::format("'{}' is no unit trochomill reads: mm, cm, m, in or ft", *v));
+                 }
+               }
+             }),
       // [slot]
       number("slot", "width", "mm", positive(), FIELD(slot.width_mm),
              "slot width W along X, >= D (> D for the trochoidal families)", true),
@@ -938,8 +958,12 @@ std::optional<Drawing> read_job_drawing(JobReader& r, Job& job, std::vector<std:
   options.join_tolerance_mm = job.geometry.join_tolerance_mm;
   options.arc_tolerance_mm = job.machine.arc_tolerance_mm;
   options.layers = std::move(layers);
+  options.unitless_mm_per_unit = job.geometry.units_mm;
+  options.unitless_name = job.geometry.units_name;
   try {
-    return read_drawing(job.geometry.path, options);
+    Drawing d = read_drawing(job.geometry.path, options);
+    job.geometry.units = d.units;
+    return d;
   } catch (const InputError& e) {
     r.problem("geometry", "file", e.what());
     return std::nullopt;

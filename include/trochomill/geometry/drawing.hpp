@@ -51,6 +51,11 @@ struct DrawingOptions {
   double arc_tolerance_mm = 0.002;
   /// Only these layers (empty: all). A named layer that holds nothing is an error.
   std::vector<std::string> layers;
+  /// The unit of a DXF drawing that gives none ($INSUNITS absent or 0), mm per unit, and its
+  /// name; 0: such a drawing is read as mm. A DXF that gives its unit, or an SVG, with this
+  /// set is refused (the unit would be said twice).
+  double unitless_mm_per_unit = 0;
+  std::string unitless_name;
 };
 
 /// Chains pieces into contours: a piece continues the contour whose end lies within `join_mm`
