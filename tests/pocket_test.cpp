@@ -569,6 +569,36 @@ TEST(Pocket, AHelixInANarrowPartIsNoSteeperThanOneOfHalfTheToolsRadius) {
   EXPECT_LT(smallest_radius, 0.5 * R);  // the case itself: a helix narrower than R / 2
 }
 
+TEST(Pocket, AnOutlineAndItsHolesOnOneLayerAreAPocketAndItsIslands) {
+  // Shops draw a part's outline and its holes on one layer: the pocket is what lies inside an
+  // odd number of the boundary layer's contours, so NEST (a rectangle and a circle in it) plans
+  // as NESTO with the island NESTI: the same program, move for move.
+  const auto plan = [](const std::string& keys) {
+    return plan_pocket(
+        parse_job(pocket_job(keys + "depth = 2.0\nstock_to_leave = 0.2\nmax_engagement = 50.0\n"),
+                  "nest.toml"));
+  };
+  const PlannedPocket one = plan("boundary = \"NEST\"\n");
+  const PlannedPocket two = plan("boundary = \"NESTO\"\nislands = \"NESTI\"\n");
+  ASSERT_EQ(one.path.segments().size(), two.path.segments().size());
+  EXPECT_EQ(one.path.length_mm(), two.path.length_mm());
+  EXPECT_EQ(one.info.passes, two.info.passes);
+  // No tool centre at the floor nearer the hole's wall than R + stock (1e-6 mm).
+  const Contour hole = Contour::circle({1215, 15}, 6);
+  for (const Segment& g : one.path.segments()) {
+    if (g.motion() != Motion::feed || g.end().z() > -2 + 1e-9) continue;
+    EXPECT_GE(hole.distance_mm(g.end().head<2>()), 5.0 - 1e-6) << g.end().transpose();
+    EXPECT_FALSE(region_contains({hole}, g.end().head<2>())) << g.end().transpose();
+  }
+  // Walls that cross are refused, and an island inside a hole of the boundary layer stands in
+  // the stock, not in the pocket.
+  std::string m = test::message_of([&] { (void)plan("boundary = \"CROSS\"\n"); });
+  EXPECT_TRUE(has(m, "on layer 'CROSS' cross (300 mm^2 of the smaller lies outside the other)"))
+      << m;
+  m = test::message_of([&] { (void)plan("boundary = \"NEST\"\nislands = \"NESTX\"\n"); });
+  EXPECT_TRUE(has(m, "is not inside a boundary")) << m;
+}
+
 TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {
   const auto message = [](const std::string& keys, const std::string& extra = "") {
     return test::message_of([&] { (void)parse_job(pocket_job(keys, extra), "bad.toml"); });

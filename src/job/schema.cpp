@@ -388,8 +388,9 @@ std::vector<Key> build_schema() {
       // [pocket]
       custom("pocket", "boundary", "string", "", "a layer (or SVG id) of [geometry] file",
              "required (a pocket)",
-             "the pocket's walls: the closed contours on this layer of the drawing (several: "
-             "several pockets); a job gives [slot] or [pocket]",
+             "the pocket's walls: the closed contours on this layer of the drawing (several "
+             "apart: several pockets; nested: the pocket is inside an odd number of them, an "
+             "outline's holes are islands); a job gives [slot] or [pocket]",
              [](JobReader& r, Job& job) {
                if (!r.has_section("pocket")) return;
                read_layer(r, "pocket", "boundary", job.pocket.boundary,
@@ -1158,15 +1159,23 @@ void check_pocket(JobReader& r, Job& job) {
     return area > 1e-6 * std::min(std::abs(a.signed_area_mm2()), std::abs(b.signed_area_mm2()));
   };
   auto name = [](const DrawnContour& c) { return c.entities.front(); };
+  // Contours of the boundary layer may nest (a part's outline and its holes drawn on one
+  // layer, as shops draw them): the pocket is what lies inside an odd number of them. They
+  // may not cross.
   for (std::size_t i = 0; i < boundaries->size(); ++i) {
     for (std::size_t j = i + 1; j < boundaries->size(); ++j) {
-      if (overlap((*boundaries)[i].contour, (*boundaries)[j].contour)) {
-        r.problem("pocket", "boundary",
-                  fmt::format("the contours of {} and {} on layer '{}' overlap or nest: each "
-                              "pocket's walls are one closed contour (an island goes on the "
-                              "islands layer)",
-                              name((*boundaries)[i]), name((*boundaries)[j]), pk.boundary));
-      }
+      const Contour &a = (*boundaries)[i].contour, &b = (*boundaries)[j].contour;
+      if (!overlap(a, b)) continue;
+      const bool a_smaller = std::abs(a.signed_area_mm2()) < std::abs(b.signed_area_mm2());
+      const Contour& in = a_smaller ? a : b;
+      const double out =
+          std::abs(region_area_mm2(region_difference({in}, {a_smaller ? b : a}, kTol)));
+      if (out <= 1e-6 * std::abs(in.signed_area_mm2())) continue;  // nested
+      r.problem("pocket", "boundary",
+                fmt::format("the contours of {} and {} on layer '{}' cross ({:.4g} mm^2 of the "
+                            "smaller lies outside the other): the walls are closed contours "
+                            "that nest or stand apart",
+                            name((*boundaries)[i]), name((*boundaries)[j]), pk.boundary, out));
     }
   }
   std::vector<Contour> walls;
@@ -1177,7 +1186,7 @@ void check_pocket(JobReader& r, Job& job) {
     if (outside > 1e-6 * std::abs(c.signed_area_mm2())) {
       r.problem("pocket", "islands",
                 fmt::format("the island {} on layer '{}' is not inside a boundary ({:.4g} mm^2 "
-                            "of it lies outside layer '{}')",
+                            "of it lies outside layer '{}' or in a contour nested in it)",
                             name((*islands)[i]), pk.islands, outside, pk.boundary));
     }
     for (std::size_t j = i + 1; j < islands->size(); ++j) {

@@ -2437,11 +2437,9 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
       std::string why;
       double wall = std::numeric_limits<double>::infinity();
       for (const Contour& c : region) wall = std::min(wall, c.distance_mm(h));
-      bool in_boundary = false;
-      for (const DrawnContour& b : *pk.boundary_contours) {
-        in_boundary = in_boundary || region_contains({b.contour}, h);
-      }
-      if (!in_boundary) {
+      std::vector<Contour> walls;
+      for (const DrawnContour& b : *pk.boundary_contours) walls.push_back(b.contour);
+      if (!region_contains(walls, h)) {
         why = fmt::format("outside the boundary (layer '{}')", pk.boundary);
       } else if (!region_contains(region, h)) {
         why = fmt::format("in an island (layer '{}')", pk.islands);

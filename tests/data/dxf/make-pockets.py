@@ -21,6 +21,11 @@ Layers (sharp corners unless said):
            (1006, 3): the plate's pocket at a tenth, for a 1 mm tool
   SLIT     a 40 x 10.5 mm pocket at x 1100: too narrow for any clearing with a 10 mm tool and
            0.2 mm of stock (10.4 mm), only the finishing pass reaches it
+  NEST     a 40 x 30 mm pocket at x 1200 and a circle of 6 mm about (1215, 15) on the same
+           layer, as shops draw a part's outline and holes: the circle is an island
+  NESTO, NESTI  the same rectangle and circle on two layers (boundary and islands)
+  NESTX    a 4 mm circle at (1215, 15), inside NEST's hole (an island there stands in stock)
+  CROSS    two 20 x 20 mm squares at x 1300 that overlap by a quarter (walls that cross)
   OPEN     an open polyline (a pocket's wall must be closed)
   OUT      an island outside RECT;  OVER  two islands inside RECT that overlap
 """
@@ -57,4 +62,11 @@ m.add_lwpolyline([(0, 100), (50, 100), (50, 140)], dxfattribs={"layer": "OPEN"})
 m.add_circle((80, 20), 5.0, dxfattribs={"layer": "OUT"})
 m.add_circle((20, 20), 6.0, dxfattribs={"layer": "OVER"})
 m.add_circle((28, 20), 6.0, dxfattribs={"layer": "OVER"})
+for layer in ("NEST", "NESTO"):
+    poly([(1200, 0), (1240, 0), (1240, 30), (1200, 30)], layer)
+for layer in ("NEST", "NESTI"):
+    m.add_circle((1215, 15), 6.0, dxfattribs={"layer": layer})
+m.add_circle((1215, 15), 4.0, dxfattribs={"layer": "NESTX"})
+poly([(1300, 0), (1320, 0), (1320, 20), (1300, 20)], "CROSS")
+poly([(1310, 10), (1330, 10), (1330, 30), (1310, 30)], "CROSS")
 doc.saveas("pockets.dxf")
