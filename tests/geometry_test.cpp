@@ -750,6 +750,12 @@ TEST(Geometry, DxfAsOtherWritersWriteIt) {
   EXPECT_NE(m.find("no line, arc or curve in it: its entities are 1 POINT, 1 TEXT"),
             std::string::npos)
       << m;
+  // A block's INSERT on one layer: the message says which layers read without a problem.
+  m = test::message_of([&] {
+    (void)read(fmt::format(fmt::runtime(line), 10, 0) + "0\nINSERT\n8\nB\n2\nBOLT\n10\n0\n20\n0\n");
+  });
+  EXPECT_NE(m.find("an INSERT of block 'BOLT'"), std::string::npos) << m;
+  EXPECT_NE(m.find("these read without a problem: L"), std::string::npos) << m;
   // Cut short inside its ENTITIES section.
   m = test::message_of([&] { (void)read(fmt::format(fmt::runtime(line), 10, 0), false); });
   EXPECT_NE(m.find("its ENTITIES section has no end (0 ENDSEC): the file is cut short"),

@@ -141,7 +141,8 @@ class Reader final : public DL_CreationAdapter {
   std::optional<std::string> limit_error;  ///< the drawing's arcs beyond kMaxDrawingArcs
   const char* units = insunits(0)->second;
   [[nodiscard]] double unit() const { return unit_; }
-  std::vector<std::string> seen_layers;  ///< of every entity, chosen or not
+  std::vector<std::string> seen_layers;     ///< of every entity, chosen or not
+  std::vector<std::string> problem_layers;  ///< the layer of each problem
 
   // The unit, from the header (before any entity: the pieces are scaled as they come).
   void setVariableInt(const std::string& key, int value, int) override {
@@ -290,6 +291,7 @@ class Reader final : public DL_CreationAdapter {
 
   template <typename... A>
   void problem(fmt::format_string<A...> f, A&&... a) {
+    problem_layers.push_back(layer_);
     problems.push_back(fmt::format("{}: {} on layer '{}': {}", src_, entity_, layer_,
                                    fmt::format(f, std::forward<A>(a)...)));
   }
@@ -463,7 +465,28 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   if (r.limit_error) throw InputError(*r.limit_error);
   d.mm_per_unit = r.unit();
   d.units = r.units;
-  if (!r.problems.empty()) throw InputError(r.problems);
+  if (!r.problems.empty()) {
+    // Read whole (no layer chosen): which layers read without a problem, since a job, or
+    // check-drawing --layer, reads only the layers it names.
+    std::vector<std::string>& bad = r.problem_layers;
+    std::sort(bad.begin(), bad.end());
+    bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+    std::vector<std::string> good = r.seen_layers;
+    std::sort(good.begin(), good.end());
+    good.erase(std::unique(good.begin(), good.end()), good.end());
+    good.erase(std::remove_if(good.begin(), good.end(),
+                              [&](const std::string& l) {
+                                return std::binary_search(bad.begin(), bad.end(), l);
+                              }),
+               good.end());
+    if (options.layers.empty() && !good.empty()) {
+      r.problems.push_back(fmt::format(
+          "{}: the layers above hold what cannot be read; a job reads only the layers it names, "
+          "and check-drawing --layer L one of them: these read without a problem: {}",
+          source, fmt::join(good, ", ")));
+    }
+    throw InputError(r.problems);
+  }
   std::vector<std::string>& seen = r.seen_layers;
   std::sort(seen.begin(), seen.end());
   seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
