@@ -132,8 +132,9 @@ TEST_F(Cli, PlanStrictWritesNoPocketItsProofFails) {
   }
   const CliResult loose = run_cli("plan " + job + " -o " + out);
   ASSERT_EQ(loose.code, 0) << loose.out;
-  EXPECT_NE(loose.out.find("the feed per tooth is 0.05 of the tool's radius, where the planner's "
-                           "model holds the target up to about 0.02: a feed rate 0.4 times"),
+  EXPECT_NE(loose.out.find("the feed per tooth is 0.05 of the tool's radius, above the 0.02 up "
+                           "to which the planner's model of the teeth held a 53 degree target on "
+                           "the test pockets: a lower feed rate (0.4 times the [cutting] one"),
             std::string::npos)
       << loose.out;
   std::filesystem::remove(out);
@@ -142,6 +143,13 @@ TEST_F(Cli, PlanStrictWritesNoPocketItsProofFails) {
   EXPECT_NE(strict.out.find("plan --strict: the kernel finds"), std::string::npos) << strict.out;
   EXPECT_NE(strict.out.find("nothing was written"), std::string::npos) << strict.out;
   EXPECT_FALSE(std::filesystem::exists(out));
+  // A program already at -o is left, and said to be no program of this job.
+  std::ofstream(out) << "(an earlier program)\n";
+  const CliResult stale = run_cli("plan " + job + " --strict -o " + out);
+  EXPECT_EQ(stale.code, 1);
+  EXPECT_NE(stale.out.find("is an earlier program, not this job's"), std::string::npos)
+      << stale.out;
+  std::filesystem::remove(out);
   // At 0.005 mm a tooth (0.01 R) it holds, and --strict writes it.
   const CliResult slow = run_cli("plan " + job + " --strict --set cutting.feed_rate=120 -o " + out);
   EXPECT_EQ(slow.code, 0) << slow.out;
@@ -184,6 +192,15 @@ TEST_F(Cli, AUnitlessDrawingIsReadAsMmWithAWarning) {
   EXPECT_EQ(in_in.code, 2);
   EXPECT_NE(in_in.out.find("has a corner at (762.0000, 254.0000)"), std::string::npos) << in_in.out;
   EXPECT_EQ(in_in.out.find("gives no unit"), std::string::npos) << in_in.out;
+  // check-drawing --units: the same for a drawing alone (the island's circle: 50.27 mm^2 as
+  // mm, 25.4^2 times that in inches).
+  const CliResult drawn = run_cli("check-drawing " + drawing + " --units in");
+  EXPECT_EQ(drawn.code, 0) << drawn.out;
+  EXPECT_NE(drawn.out.find("units: unitless (read as in: [geometry] units)"), std::string::npos)
+      << drawn.out;
+  // pi (4 x 25.4)^2 = 32429.2787 mm^2 (the circle of radius 4 units).
+  EXPECT_NE(drawn.out.find("32429.2787"), std::string::npos) << drawn.out;
+  EXPECT_EQ(run_cli("check-drawing " + drawing + " --units yd").code, 2);
 }
 
 // --stock FILE (plan, analyze, simulate, report): the job key stock.mesh, the file taken from

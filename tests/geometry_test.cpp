@@ -750,6 +750,18 @@ TEST(Geometry, DxfAsOtherWritersWriteIt) {
   EXPECT_NE(m.find("no line, arc or curve in it: its entities are 1 POINT, 1 TEXT"),
             std::string::npos)
       << m;
+  // A rectangle drawn twice (a copy pasted in place): said so, not "a branch".
+  std::string twice;
+  for (int k = 0; k < 2; ++k) {
+    twice += fmt::format(fmt::runtime(line), 10, 0);
+    twice += "0\nLINE\n8\nL\n10\n10\n20\n0\n11\n10\n21\n10\n";
+    twice += "0\nLINE\n8\nL\n10\n10\n20\n10\n11\n0\n21\n10\n";
+    twice += "0\nLINE\n8\nL\n10\n0\n20\n10\n11\n0\n21\n0\n";
+  }
+  m = test::message_of([&] { (void)read(twice); });
+  EXPECT_NE(m.find("LINE at line 6 and LINE at line 54 are the same line drawn twice"),
+            std::string::npos)
+      << m;
   // A block's INSERT on one layer: the message says which layers read without a problem.
   m = test::message_of([&] {
     (void)read(fmt::format(fmt::runtime(line), 10, 0) + "0\nINSERT\n8\nB\n2\nBOLT\n10\n0\n20\n0\n");

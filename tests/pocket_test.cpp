@@ -597,6 +597,11 @@ TEST(Pocket, AnOutlineAndItsHolesOnOneLayerAreAPocketAndItsIslands) {
       << m;
   m = test::message_of([&] { (void)plan("boundary = \"NEST\"\nislands = \"NESTX\"\n"); });
   EXPECT_TRUE(has(m, "is not inside a boundary")) << m;
+  // A pre-drilled hole in the outline's hole is in an island, not outside the boundary.
+  m = test::message_of(
+      [&] { (void)plan("boundary = \"NEST\"\nentry_holes = [[1215.0, 15.0]]\n"); });
+  EXPECT_TRUE(has(m, "in a hole of the boundary (a contour of layer 'NEST' nested in another"))
+      << m;
 }
 
 TEST(Pocket, BadPocketsAreRefusedWithTheirReason) {

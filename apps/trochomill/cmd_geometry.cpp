@@ -11,7 +11,7 @@ namespace trochomill::cli {
 
 void register_geometry_commands(CLI::App& app, int& exit_code) {
   struct Args {
-    std::string file, json;
+    std::string file, json, units;
     std::vector<std::string> layers;
     DrawingOptions options;
   };
@@ -31,10 +31,22 @@ void register_geometry_commands(CLI::App& app, int& exit_code) {
                   "splines, ellipses and Bezier curves become arcs within this, mm")
       ->capture_default_str()
       ->check(finite_above(0, 100));
+  cmd->add_option("--units", a->units,
+                  "the unit of a DXF that gives none (no $INSUNITS): mm, cm, m, in or ft (a "
+                  "job's [geometry] units)");
   cmd->add_option("--json", a->json, "write the report as JSON (- for stdout)");
   cmd->final_callback([a, &exit_code] {
     check_outputs({&a->json}, {&a->file});
     a->options.layers = a->layers;
+    if (!a->units.empty()) {
+      const auto mm = drawing_unit_mm(a->units);
+      if (!mm) {
+        throw InputError(
+            fmt::format("--units '{}': a unit trochomill reads is mm, cm, m, in or ft", a->units));
+      }
+      a->options.unitless_mm_per_unit = *mm;
+      a->options.unitless_name = a->units;
+    }
     const Drawing d = read_drawing(a->file, a->options);
     if (!a->json.empty()) emit(a->json, drawing_json(d));
     if (summary_to_stdout({&a->json})) fmt::print("{}", drawing_text(d));

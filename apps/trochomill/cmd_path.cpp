@@ -205,11 +205,15 @@ void register_path_commands(CLI::App& app, int& exit_code) {
         std::FILE* to = a->out == "-" || a->json == "-" ? stderr : stdout;
         fmt::print(to, "{}", pocket_summary(pp.info, pp.proof));
         if (a->strict && !pp.info.proven) {
+          std::error_code ec;
+          const bool stale = a->out != "-" && std::filesystem::exists(a->out, ec);
           throw Error(fmt::format(
               "plan --strict: the kernel finds {:.4g} degrees in the clearing for a target of "
-              "{:g} (above it + {:g} %) on every plan tried: nothing was written",
+              "{:g} (above it + {:g} %) on every plan tried: nothing was written{}",
               pp.proof.clearing_max_engagement_deg, pp.info.target_engagement_deg,
-              100 * kProofTolerance));
+              100 * kProofTolerance,
+              stale ? fmt::format(" ('{}' is an earlier program, not this job's)", a->out)
+                    : std::string()));
         }
         if (!a->json.empty()) proof = pp.proof;
         planned.path = std::move(pp.path);

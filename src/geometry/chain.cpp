@@ -151,6 +151,25 @@ std::vector<DrawnContour> chain_pieces(std::vector<DrawnPiece> pieces, double jo
   const Partners partners = partners_of(pieces, layer, join_mm);
   for (End e = 0; e < 2 * pieces.size(); ++e) {
     if (partners.count(e) >= 2) {
+      // A piece drawn twice (the same line or arc, either way round, within join_mm: a copy
+      // pasted in place) meets its copy at both ends: say so, not "a branch".
+      const ContourPiece& p = pieces[e / 2].piece;
+      for (std::size_t k = partners.first[e]; k < partners.first[e + 1]; ++k) {
+        const ContourPiece& q = pieces[partners.list[k] / 2].piece;
+        const bool ends =
+            ((p.start - q.start).norm() <= join_mm && (p.end - q.end).norm() <= join_mm) ||
+            ((p.start - q.end).norm() <= join_mm && (p.end - q.start).norm() <= join_mm);
+        const bool shape = p.is_arc() == q.is_arc() &&
+                           (!p.is_arc() || ((*p.centre - *q.centre).norm() <= join_mm &&
+                                            (p.point_at(0.5) - q.point_at(0.5)).norm() <= join_mm));
+        if (ends && shape) {
+          throw InputError(fmt::format(
+              "layer '{}': {} and {} are the same {} drawn twice, from {} to {} (a copy in "
+              "place: delete one)",
+              pieces[e / 2].layer, pieces[e / 2].entity, pieces[partners.list[k] / 2].entity,
+              p.is_arc() ? "arc" : "line", at(p.start), at(p.end)));
+        }
+      }
       std::string names = pieces[e / 2].entity;
       for (std::size_t k = partners.first[e]; k < partners.first[e + 1]; ++k) {
         names += ", " + pieces[partners.list[k] / 2].entity;

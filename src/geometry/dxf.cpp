@@ -550,6 +550,15 @@ std::string read_drawing_text(const std::filesystem::path& file, std::string_vie
   }
 }
 
+std::optional<double> drawing_unit_mm(const std::string& name) {
+  static const std::pair<const char*, double> kUnits[] = {
+      {"mm", 1.0}, {"cm", 10.0}, {"m", 1000.0}, {"in", 25.4}, {"ft", 304.8}};
+  for (const auto& [n, mm] : kUnits) {
+    if (name == n) return mm;
+  }
+  return std::nullopt;
+}
+
 Drawing read_drawing(const std::filesystem::path& file, const DrawingOptions& options) {
   std::string ext = file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),

@@ -329,15 +329,10 @@ std::vector<Key> build_schema() {
              "a drawing is read as mm, with a warning",
              [](JobReader& r, Job& job) {
                if (auto v = r.string("geometry", "units")) {
-                 static const std::pair<const char*, double> kUnits[] = {
-                     {"mm", 1.0}, {"cm", 10.0}, {"m", 1000.0}, {"in", 25.4}, {"ft", 304.8}};
-                 for (const auto& [name, mm] : kUnits) {
-                   if (*v == name) {
-                     job.geometry.units_mm = mm;
-                     job.geometry.units_name = name;
-                   }
-                 }
-                 if (job.geometry.units_mm == 0) {
+                 if (const auto mm = drawing_unit_mm(*v)) {
+                   job.geometry.units_mm = *mm;
+                   job.geometry.units_name = *v;
+                 } else {
                    r.problem(
                        "geometry", "units",
                        fmt::format("'{}' is no unit trochomill reads: mm, cm, m, in or ft", *v));

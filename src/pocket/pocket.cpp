@@ -2439,8 +2439,15 @@ PlannedPocket plan_pocket_at(const Job& job, double margin_deg) {
       for (const Contour& c : region) wall = std::min(wall, c.distance_mm(h));
       std::vector<Contour> walls;
       for (const DrawnContour& b : *pk.boundary_contours) walls.push_back(b.contour);
-      if (!region_contains(walls, h)) {
+      bool in_some = false;  // inside one of the boundary's contours (a nested one's hole)
+      for (const Contour& w : walls) in_some = in_some || region_contains({w}, h);
+      if (!in_some) {
         why = fmt::format("outside the boundary (layer '{}')", pk.boundary);
+      } else if (!region_contains(walls, h)) {
+        why = fmt::format(
+            "in a hole of the boundary (a contour of layer '{}' nested in another: "
+            "an island)",
+            pk.boundary);
       } else if (!region_contains(region, h)) {
         why = fmt::format("in an island (layer '{}')", pk.islands);
       } else if (wall < keep) {

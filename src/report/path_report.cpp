@@ -295,17 +295,19 @@ std::string pocket_summary(const PocketInfo& info, const PocketProof& proof) {
     const std::string why =
         info.tooth_advance_share > kPocketToothShare
             ? fmt::format(
-                  "; the feed per tooth is {:.2g} of the tool's radius, where the planner's "
-                  "model holds the target up to about {:g}: a feed rate {:.2g} times the "
-                  "[cutting] one holds it too",
+                  "; the feed per tooth is {:.2g} of the tool's radius, above the {:g} up to "
+                  "which the planner's model of the teeth held a 53 degree target on the test "
+                  "pockets: a lower feed rate ({:.2g} times the [cutting] one there) may hold "
+                  "it where a lower target does not",
                   info.tooth_advance_share, kPocketToothShare,
                   kPocketToothShare / info.tooth_advance_share)
             : std::string();
     out += fmt::format(
         "  warning: the kernel finds the clearing's engagement above the target + {:g} % on "
         "every plan tried (the first and {} more, the steps' aim 0.5 degrees lower each time): "
-        "{:.4g} degrees at {} in this one, the least; lower [pocket] max_engagement by {:.2g} "
-        "degrees to hold the target{} (plan --strict writes no such program)\n",
+        "{:.4g} degrees at {} in this one, the least; a target {:.2g} degrees lower may hold "
+        "(the proof then holds the program to that target){} (plan --strict writes no such "
+        "program)\n",
         100 * kProofTolerance, info.replans, proof.clearing_max_engagement_deg,
         at(proof.clearing_max_at_mm),
         proof.clearing_max_engagement_deg - info.target_engagement_deg, why);

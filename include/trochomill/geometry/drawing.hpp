@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -57,6 +58,10 @@ struct DrawingOptions {
   double unitless_mm_per_unit = 0;
   std::string unitless_name;
 };
+
+/// The units a unitless drawing may be given in (DrawingOptions::unitless_name): mm, cm, m,
+/// in, ft, as mm per unit; none for another name.
+[[nodiscard]] std::optional<double> drawing_unit_mm(const std::string& name);
 
 /// Chains pieces into contours: a piece continues the contour whose end lies within `join_mm`
 /// of one of its ends (turned round when it is its end that meets). Ends of one layer join
