@@ -739,6 +739,16 @@ TEST(Geometry, DxfAsOtherWritersWriteIt) {
   ASSERT_EQ(tall.contours.size(), 1u);
   EXPECT_NEAR(std::abs(wide.contours[0].contour.signed_area_mm2()), kPi * 10 * 20, 0.2);
   EXPECT_NEAR(wide.contours[0].contour.length_mm(), tall.contours[0].contour.length_mm(), 0.01);
+  // Parameters many turns long (the fuzzer's 4e185: an int overflow, and a loop that could
+  // not end for a huge start): taken within a turn; not finite: refused.
+  const std::string arc =
+      "0\nELLIPSE\n8\nE\n10\n0\n20\n0\n30\n0\n11\n10\n21\n0\n31\n0\n"
+      "40\n0.5\n41\n{}\n42\n{}\n";
+  EXPECT_EQ(read(fmt::format(fmt::runtime(arc), "1e300", "4e185")).contours.size(), 1u);
+  EXPECT_EQ(read(fmt::format(fmt::runtime(arc), "0", "1e308")).contours.size(), 1u);
+  m = test::message_of([&] { (void)read(fmt::format(fmt::runtime(arc), "-1e308", "1e308")); });
+  EXPECT_NE(m.find("an ellipse whose parameters run from -1e+308 to 1e+308"), std::string::npos)
+      << m;
   m = test::message_of([&] { (void)read(fmt::format(fmt::runtime(ellipse), 10, 0, 0.0)); });
   EXPECT_NE(m.find("an ellipse of axis ratio 0 (the minor axis over the major: need > 0)"),
             std::string::npos)

@@ -255,8 +255,14 @@ class Reader final : public DL_CreationAdapter {
     if (!(m.norm() > 0)) return problem("an ellipse with no major axis");
     // The minor axis: the major turned a quarter counter-clockwise, scaled by the ratio.
     const Vec2 minor = d.ratio * Vec2(-m.y(), m.x());
-    const double t0 = d.angle1;
-    double t1 = d.angle2;
+    if (!std::isfinite(d.angle2 - d.angle1)) {
+      return problem("an ellipse whose parameters run from {} to {} (need finite angles, radians)",
+                     d.angle1, d.angle2);
+    }
+    // Taken within a turn (a writer may give any multiple of 2 pi): at most one turn long,
+    // and no huge angle left for the loop below or the arcs' count.
+    const double t0 = std::fmod(d.angle1, kTwoPi);
+    double t1 = t0 + std::fmod(d.angle2 - d.angle1, kTwoPi);
     while (t1 <= t0) t1 += kTwoPi;
     const EllipseCurve curve(Vec3(c.x(), c.y(), 0), Vec3(m.x(), m.y(), 0),
                              Vec3(minor.x(), minor.y(), 0));
