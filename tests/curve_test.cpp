@@ -429,8 +429,7 @@ TEST(CurvedSlot, CentrelinesASlotCannotFollowAreRefused) {
   // (the 1 unit line: 25.4 mm in inches); one that gives its unit refuses a second one, and
   // so does an SVG.
   DrawingOptions in_inches;
-  in_inches.unitless_mm_per_unit = 25.4;
-  in_inches.unitless_name = "in";
+  in_inches.unitless_unit = "in";
   const Drawing none = read_drawing(dxf("0", ""), DrawingOptions{});
   EXPECT_DOUBLE_EQ(none.contours[0].contour.length_mm(), 1.0);
   EXPECT_EQ(none.units, "unitless (read as mm)");

@@ -39,13 +39,11 @@ void register_geometry_commands(CLI::App& app, int& exit_code) {
     check_outputs({&a->json}, {&a->file});
     a->options.layers = a->layers;
     if (!a->units.empty()) {
-      const auto mm = drawing_unit_mm(a->units);
-      if (!mm) {
+      if (!drawing_unit_mm(a->units)) {
         throw InputError(
             fmt::format("--units '{}': a unit trochomill reads is mm, cm, m, in or ft", a->units));
       }
-      a->options.unitless_mm_per_unit = *mm;
-      a->options.unitless_name = a->units;
+      a->options.unitless_unit = a->units;
     }
     const Drawing d = read_drawing(a->file, a->options);
     if (!a->json.empty()) emit(a->json, drawing_json(d));

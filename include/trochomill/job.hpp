@@ -130,8 +130,7 @@ struct GeometrySource {
   std::string file;                 ///< as written in the job (relative to the job file)
   std::filesystem::path path;       ///< resolved against the job file's folder
   double join_tolerance_mm = 0.01;  ///< ends closer than this are one point (mm)
-  /// [geometry] units: a unitless DXF's unit (mm per unit, its name); 0: read as mm.
-  double units_mm = 0;
+  /// [geometry] units: a unitless DXF's unit (drawing_unit_mm's names); empty: read as mm.
   std::string units_name;
   /// The drawing's unit as read (Drawing::units): "mm", "in", ..., "unitless (read as mm)".
   std::string units;

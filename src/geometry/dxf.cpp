@@ -128,9 +128,14 @@ class Reader final : public DL_CreationAdapter {
  public:
   Reader(std::string source, const DrawingOptions& o, const Scanned& scan)
       : src_(std::move(source)), o_(o), scan_(scan) {
-    if (o.unitless_mm_per_unit > 0) {
-      unit_ = o.unitless_mm_per_unit;
-      units_given_ = fmt::format("unitless (read as {}: [geometry] units)", o.unitless_name);
+    if (!o.unitless_unit.empty()) {
+      const auto mm = drawing_unit_mm(o.unitless_unit);
+      if (!mm) {
+        throw InputError(fmt::format("{}: '{}' is no unit trochomill reads: mm, cm, m, in or ft",
+                                     src_, o.unitless_unit));
+      }
+      unit_ = *mm;
+      units_given_ = fmt::format("unitless (read as {}: [geometry] units)", o.unitless_unit);
       units = units_given_.c_str();
     }
   }
@@ -147,11 +152,11 @@ class Reader final : public DL_CreationAdapter {
   // The unit, from the header (before any entity: the pieces are scaled as they come).
   void setVariableInt(const std::string& key, int value, int) override {
     if (key != "$INSUNITS") return;
-    if (value != 0 && o_.unitless_mm_per_unit > 0 && insunits(value)) {
+    if (value != 0 && !o_.unitless_unit.empty() && insunits(value)) {
       units_error = fmt::format(
           "{}: its $INSUNITS gives its unit ({}): [geometry] units = \"{}\" is for a drawing "
           "that gives none; remove it",
-          src_, insunits(value)->second, o_.unitless_name);
+          src_, insunits(value)->second, o_.unitless_unit);
       return;
     }
     if (value == 0) return;  // unitless: as the reader began (mm, or [geometry] units)
@@ -471,15 +476,16 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
   if (r.limit_error) throw InputError(*r.limit_error);
   d.mm_per_unit = r.unit();
   d.units = r.units;
+  std::vector<std::string>& seen = r.seen_layers;
+  std::sort(seen.begin(), seen.end());
+  seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
   if (!r.problems.empty()) {
     // Read whole (no layer chosen): which layers read without a problem, since a job, or
     // check-drawing --layer, reads only the layers it names.
     std::vector<std::string>& bad = r.problem_layers;
     std::sort(bad.begin(), bad.end());
     bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
-    std::vector<std::string> good = r.seen_layers;
-    std::sort(good.begin(), good.end());
-    good.erase(std::unique(good.begin(), good.end()), good.end());
+    std::vector<std::string> good = seen;
     good.erase(std::remove_if(good.begin(), good.end(),
                               [&](const std::string& l) {
                                 return std::binary_search(bad.begin(), bad.end(), l);
@@ -493,9 +499,6 @@ Drawing read_dxf(const std::filesystem::path& file, const DrawingOptions& option
     }
     throw InputError(r.problems);
   }
-  std::vector<std::string>& seen = r.seen_layers;
-  std::sort(seen.begin(), seen.end());
-  seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
   if (r.pieces.empty() && options.layers.empty()) {
     std::vector<std::string> held;
     for (const auto& [type, n] : scan.types) held.push_back(fmt::format("{} {}", n, type));
@@ -571,11 +574,11 @@ Drawing read_drawing(const std::filesystem::path& file, const DrawingOptions& op
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".dxf") return read_dxf(file, options);
   if (ext == ".svg") {
-    if (options.unitless_mm_per_unit > 0) {
+    if (!options.unitless_unit.empty()) {
       throw InputError(fmt::format(
           "{}: [geometry] units = \"{}\" is for a DXF drawing that gives no unit; an SVG's "
           "unit is its own (px, 96 to the inch, or its viewBox in mm): remove it",
-          file.string(), options.unitless_name));
+          file.string(), options.unitless_unit));
     }
     return read_svg(file, options);
   }

@@ -329,8 +329,7 @@ std::vector<Key> build_schema() {
              "a drawing is read as mm, with a warning",
              [](JobReader& r, Job& job) {
                if (auto v = r.string("geometry", "units")) {
-                 if (const auto mm = drawing_unit_mm(*v)) {
-                   job.geometry.units_mm = *mm;
+                 if (drawing_unit_mm(*v)) {
                    job.geometry.units_name = *v;
                  } else {
                    r.problem(
@@ -954,8 +953,7 @@ std::optional<Drawing> read_job_drawing(JobReader& r, Job& job, std::vector<std:
   options.join_tolerance_mm = job.geometry.join_tolerance_mm;
   options.arc_tolerance_mm = job.machine.arc_tolerance_mm;
   options.layers = std::move(layers);
-  options.unitless_mm_per_unit = job.geometry.units_mm;
-  options.unitless_name = job.geometry.units_name;
+  options.unitless_unit = job.geometry.units_name;
   try {
     Drawing d = read_drawing(job.geometry.path, options);
     job.geometry.units = d.units;

@@ -837,9 +837,6 @@ class PartPlanner {
     return out;
   }
 
-  // Whether the tool can go from a to b at the level cutting nothing: every point of the line
-  // in the region (checked a step apart), the tool at each tooth's point (a tooth at the feed
-  // apart) only grazing the stock (Settings::graze_deg).
   // Whether the line from a to b lies in the region (checked half a step apart).
   [[nodiscard]] bool line_in_region(const Vec2& a, const Vec2& b) const {
     const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / s_.step)));
@@ -848,6 +845,9 @@ class PartPlanner {
     }
     return true;
   }
+  // Whether the tool can go from a to b at the level cutting nothing: the line in the region,
+  // the tool at each tooth's point (a tooth at the feed apart) only grazing the stock
+  // (Settings::graze_deg).
   [[nodiscard]] bool link_ok(const Vec2& a, const Vec2& b) const {
     const double L = (b - a).norm();
     if (!line_in_region(a, b)) return false;
@@ -1919,7 +1919,8 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
     const double edge = s.kernel_step;
     std::vector<char> head_taken(runs.size(), 0), tail_taken(runs.size(), 0);
     for (std::size_t r = 0; r < runs.size(); ++r) {
-      if (!runs[r].air || polyline_length(polys[r]) <= 3 * edge) continue;
+      const double length = polyline_length(polys[r]);
+      if (!runs[r].air || length <= 3 * edge) continue;
       if (r > 0) {
         auto [fed, rest] = split_polyline(polys[r], edge);
         polys[r - 1].push_back(fed.back());
@@ -1927,7 +1928,8 @@ void plan_passes(const Settings& s, PartPlanner& planner, Vec2 p, PartPlan& out,
         head_taken[r] = 1;
       }
       if (r + 1 < runs.size()) {
-        auto [rest, fed] = split_polyline(polys[r], polyline_length(polys[r]) - edge);
+        // (The head given, the run is edge shorter.)
+        auto [rest, fed] = split_polyline(polys[r], length - (head_taken[r] ? 2 : 1) * edge);
         polys[r + 1].insert(polys[r + 1].begin(), fed.front());
         polys[r] = std::move(rest);
         tail_taken[r] = 1;
@@ -2959,10 +2961,15 @@ double estimate_pocket_memory(const Job& job) {
   // of other authors from 100 to 300 mm): the path is 1.3 to 1.9 times area / step-over, the
   // more the more wall a pocket has for its area (5 area / step-over before: 2.1 to 3.7 times
   // the peak, and a 1 x 1.8 m panel was refused at 47 GB).
-  double walls_mm = 0;
+  // The walls' length, and the channels' medial axis: the Voronoi diagram of the region's
+  // chords (within Clipper's 1 um), a few hundred bytes each, and its samples.
+  double walls_mm = 0, chords = 0;
   for (const auto* layer : {pk.boundary_contours.get(), pk.island_contours.get()}) {
     if (layer == nullptr) continue;
-    for (const DrawnContour& c : *layer) walls_mm += c.contour.length_mm();
+    for (const DrawnContour& c : *layer) {
+      walls_mm += c.contour.length_mm();
+      chords += static_cast<double>(c.contour.points(kClipperTol).size());
+    }
   }
   const double clearing_mm = 2 * area / std::max(side, 1e-3) + 6 * walls_mm;  // a level
   const double feed_mm_s = std::max(feed_rate_mm_per_min(job), 1e-3) / 60;
@@ -2974,15 +2981,6 @@ double estimate_pocket_memory(const Job& job) {
   const double plans = pk.rest_of.empty() && !job.stock_mesh ? 1.0 : levels;
   const double mesh =
       job.stock_mesh ? 1000.0 * static_cast<double>(job.stock_mesh->triangles.size()) : 0.0;
-  // The channels' medial axis: the Voronoi diagram of the region's chords (within Clipper's
-  // 1 um), a few hundred bytes each, and its samples.
-  double chords = 0;
-  for (const auto* layer : {pk.boundary_contours.get(), pk.island_contours.get()}) {
-    if (layer == nullptr) continue;
-    for (const DrawnContour& c : *layer) {
-      chords += static_cast<double>(c.contour.points(kClipperTol).size());
-    }
-  }
   const double medial = 1000 * chords + 50 * clearing_mm / std::clamp(0.01 * R, 0.005, 0.05);
   return 30e6 + plans * (cells + 200 * clearing_mm / step) + mesh + medial + 450 * samples;
 }

@@ -52,14 +52,13 @@ struct DrawingOptions {
   double arc_tolerance_mm = 0.002;
   /// Only these layers (empty: all). A named layer that holds nothing is an error.
   std::vector<std::string> layers;
-  /// The unit of a DXF drawing that gives none ($INSUNITS absent or 0), mm per unit, and its
-  /// name; 0: such a drawing is read as mm. A DXF that gives its unit, or an SVG, with this
-  /// set is refused (the unit would be said twice).
-  double unitless_mm_per_unit = 0;
-  std::string unitless_name;
+  /// The unit of a DXF drawing that gives none ($INSUNITS absent or 0), one of
+  /// drawing_unit_mm's names; empty: such a drawing is read as mm. A DXF that gives its unit,
+  /// or an SVG, with this set is refused (the unit would be said twice).
+  std::string unitless_unit;
 };
 
-/// The units a unitless drawing may be given in (DrawingOptions::unitless_name): mm, cm, m,
+/// The units a unitless drawing may be given in (DrawingOptions::unitless_unit): mm, cm, m,
 /// in, ft, as mm per unit; none for another name.
 [[nodiscard]] std::optional<double> drawing_unit_mm(const std::string& name);
 
