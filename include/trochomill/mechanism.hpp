@@ -70,6 +70,9 @@ class Pivkin2025 {
   /// positive where the feed drives the edge into the material.
   [[nodiscard]] double kappa(double theta, double beta2) const;
   [[nodiscard]] Point at(double theta) const;
+  /// at() through the helpers above, one equation at a time (at() shares their sines and
+  /// norms; the two agree to rounding).
+  [[nodiscard]] Point at_reference(double theta) const;
 
  private:
   struct Phase {
@@ -83,7 +86,7 @@ class Pivkin2025 {
   [[nodiscard]] double psi_of(double h_e_mm) const;
   double dt_, ae_, d_, fz_;
   int z_;
-  double n_, theta_tooth_;
+  double n_, theta_tooth_, cos_tooth_ = 1, sin_tooth_ = 0;
 };
 
 /// The settings (MechanismSettings, settings/mechanism.hpp) are the job's `[mechanism]`

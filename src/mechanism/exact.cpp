@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "common/roots.hpp"
+#include "common/sincos.hpp"
 #include "mechanism/internal.hpp"
 #include "trochomill/units.hpp"
 
@@ -34,25 +35,52 @@ double norm(V2 a) { return std::sqrt(a.x * a.x + a.y * a.y); }
 
 struct Tables;
 
+// sin and cos of the model's angles: tens of pairs a point, so from the table (within an ulp
+// of libm's, several times faster).
+detail::SinCos sincos(double t) { return detail::sincos_table()(t); }
+
 struct Curve {
   double a, b, s, R;
   const Tables* tab = nullptr;
   [[nodiscard]] V2 c(double t) const {
-    return {-a * std::cos(t), b * std::sin(t) + s * t / kTwoPi};
+    const detail::SinCos q = sincos(t);
+    return {-a * q.c, b * q.s + s * t / kTwoPi};
   }
-  [[nodiscard]] V2 d1(double t) const { return {a * std::sin(t), b * std::cos(t) + s / kTwoPi}; }
+  [[nodiscard]] V2 d1(double t) const {
+    const detail::SinCos q = sincos(t);
+    return {a * q.s, b * q.c + s / kTwoPi};
+  }
   // Envelope of the previous cycle and its derivative in theta'.
   void envelope(double t, V2& e, V2& de) const {
-    const double sn = std::sin(t), cs = std::cos(t);
+    const detail::SinCos q = sincos(t);
+    const double sn = q.s, cs = q.c;
     const V2 T{a * sn, b * cs + s / kTwoPi}, T2{a * cs, -b * sn};
-    const double L = norm(T);
-    const V2 n{-T.y / L, T.x / L};  // left of the motion: outward for the clockwise orbit
+    const double iL = 1 / norm(T);    // one division, then products
+    const V2 n{-T.y * iL, T.x * iL};  // left of the motion: outward for the clockwise orbit
     // d/dt (T / L) = (T2 - (T.T2 / L^2) T) / L, rotated like n.
-    const double k = dot(T, T2) / (L * L);
-    const V2 dT{(T2.x - k * T.x) / L, (T2.y - k * T.y) / L};
+    const double k = dot(T, T2) * (iL * iL);
+    const V2 dT{(T2.x - k * T.x) * iL, (T2.y - k * T.y) * iL};
     const V2 dn{-dT.y, dT.x};
     e = {-a * cs + R * n.x, b * sn + s * t / kTwoPi - s + R * n.y};
     de = {T.x + R * dn.x, T.y + R * dn.y};
+  }
+  // The same and the second derivative: with T^ = T / L and k = T.T2 / L^2,
+  // T^'' = (T3 - k' T - 2 k T2 + k^2 T) / L, k' = (|T2|^2 + T.T3) / L^2 - 2 k^2, and
+  // E'' = T2 + R (T^'' rotated like n).
+  void envelope2(double t, V2& e, V2& de, V2& dde) const {
+    const detail::SinCos q = sincos(t);
+    const double sn = q.s, cs = q.c;
+    const V2 T{a * sn, b * cs + s / kTwoPi}, T2{a * cs, -b * sn}, T3{-a * sn, -b * cs};
+    const double iL = 1 / norm(T), iL2 = iL * iL;
+    const V2 n{-T.y * iL, T.x * iL};
+    const double k = dot(T, T2) * iL2;
+    const V2 dT{(T2.x - k * T.x) * iL, (T2.y - k * T.y) * iL};
+    const double kd = (dot(T2, T2) + dot(T, T3)) * iL2 - 2 * k * k;
+    const V2 ddT{(T3.x - kd * T.x - 2 * k * T2.x + k * k * T.x) * iL,
+                 (T3.y - kd * T.y - 2 * k * T2.y + k * k * T.y) * iL};
+    e = {-a * cs + R * n.x, b * sn + s * t / kTwoPi - s + R * n.y};
+    de = {T.x - R * dT.y, T.y + R * dT.x};
+    dde = {T2.x - R * ddT.y, T2.y + R * ddT.x};
   }
 };
 
@@ -74,77 +102,171 @@ struct Tables {
   }
 };
 
-// All roots in (theta - pi, theta + pi): a sign scan (plus the minimum of every dip
-// between samples), each bracket polished by regula falsi; written to `out` (cleared first:
-// the callers reuse their buffers, the model runs thousands of times a cycle).
-void scan_roots(const Curve& cv, V2 q, double theta, std::vector<double>& out) {
-  out.clear();
-  auto g = [&](double t) {
-    V2 e, de;
-    cv.envelope(t, e, de);
-    const V2 r = e - q;
-    return dot(r, r) - cv.R * cv.R;
-  };
-  // Newton from the secant point with g' = 2 (E - q) . E' (the envelope gives E'), kept in
-  // the bracket; regula falsi if a step leaves it or it has not converged in 8 steps.
-  auto solve = [&](double lo, double hi, double glo, double ghi) {
-    double t = (glo * hi - ghi * lo) / (glo - ghi);
-    for (int it = 0; it < 8; ++it) {
-      V2 e, de;
-      cv.envelope(t, e, de);
-      const V2 r = e - q;
-      const double gt = dot(r, r) - cv.R * cv.R, dg = 2 * dot(r, de);
-      if (gt == 0) return t;
-      if ((gt < 0) == (glo < 0)) {
-        lo = t;
-        glo = gt;
-      } else {
-        hi = t;
-        ghi = gt;
-      }
-      const double step = dg != 0 ? gt / dg : 0.0;
-      const double tn = t - step;
-      if (!(tn > lo && tn < hi)) break;
-      t = tn;
-      if (std::abs(step) < 1e-10) return t;  // ~1e-9 mm along the envelope
-    }
-    return detail::regula_falsi(g, lo, hi, glo, ghi, 1e-12);
-  };
+// Envelopes of the last kEnvelopes cycles (a wall cusp is bounded by two of them): the j-th
+// (j = 1, 2, ...) is the first shifted by (j - 1) s back, so its roots are the first's for the
+// query point shifted forward.
+constexpr int kEnvelopes = 3;
+// A root and its point on the (unshifted) envelope.
+struct EnvRoot {
+  double t;
+  V2 e;
+};
+using RootSets = std::array<std::vector<EnvRoot>, kEnvelopes>;
+
+// All roots in (theta - pi, theta + pi) of |E(t) - q_j|^2 = R^2, q_j = q + (0, (j - 1) s),
+// for every envelope j: one sign scan of the table for all of them (plus the minimum of every
+// dip between samples), each bracket polished by Newton or regula falsi; written to out[j - 1]
+// (cleared first: the callers reuse their buffers, the model runs thousands of times a cycle).
+void scan_roots(const Curve& cv, V2 q, double theta, RootSets& out) {
   // Samples on the table's grid within theta +- pi.
   const Tables& tb = *cv.tab;
   const int m_lo = static_cast<int>(std::ceil((theta - kPi) / tb.env_dt));
   const int m_hi = static_cast<int>(std::floor((theta + kPi) / tb.env_dt));
   const auto nk = static_cast<std::size_t>(m_hi - m_lo + 1);
-  thread_local std::vector<double> ts, gs;
-  ts.resize(nk);
-  gs.resize(nk);
-  for (std::size_t k = 0; k < nk; ++k) {
-    const int m = m_lo + static_cast<int>(k);
-    ts[k] = m * tb.env_dt;
-    const V2 r = tb.env_at(m) - q;
-    gs[k] = dot(r, r) - cv.R * cv.R;
+  thread_local std::vector<double> gbuf;
+  gbuf.resize(kEnvelopes * nk);
+  {
+    // One pass for the three envelopes (they share x, and y up to the shift): a loop the
+    // compiler vectorises.
+    const double* ex = &tb.ex[static_cast<std::size_t>(m_lo - tb.env_m0)];
+    const double* ey = &tb.ey[static_cast<std::size_t>(m_lo - tb.env_m0)];
+    const double R2 = cv.R * cv.R, s1 = cv.s, s2 = 2 * cv.s;
+    double* g1 = gbuf.data();
+    double* g2 = g1 + nk;
+    double* g3 = g2 + nk;
+    static_assert(kEnvelopes == 3);
+    for (std::size_t k = 0; k < nk; ++k) {
+      const double dx = ex[k] - q.x, dy = ey[k] - q.y;
+      const double base = dx * dx - R2, dy2 = dy - s1, dy3 = dy - s2;
+      g1[k] = base + dy * dy;
+      g2[k] = base + dy2 * dy2;
+      g3[k] = base + dy3 * dy3;
+    }
   }
-  for (std::size_t k = 1; k < nk; ++k) {
-    if ((gs[k - 1] < 0) != (gs[k] < 0)) {
-      out.push_back(solve(ts[k - 1], ts[k], gs[k - 1], gs[k]));
-    } else if (k + 1 < nk && gs[k] >= 0 && gs[k] < gs[k - 1] && gs[k] <= gs[k + 1] &&
-               gs[k] < 0.5 * std::abs(gs[k + 1] - 2 * gs[k] + gs[k - 1])) {
-      // A dip between samples that may cross zero (the envelope grazing the circle, e.g. a
-      // wall cusp; a parabola through the samples dips at most an eighth of the second
-      // difference below them, so a value above half of it cannot hide a crossing): find
-      // its minimum; if negative, it holds two roots.
-      // The minimum is a root of g' = 2 (E - q) . E' (regula falsi when g' changes sign over
-      // the two intervals, as it does for a single valley; golden section otherwise).
-      const double lo = ts[k - 1], hi = ts[k + 1];
-      auto dg = [&](double t) {
+  for (int j = 1; j <= kEnvelopes; ++j) {
+    std::vector<EnvRoot>& res = out[static_cast<std::size_t>(j - 1)];
+    res.clear();
+    const double* gs = gbuf.data() + static_cast<std::size_t>(j - 1) * nk;
+    const V2 qj = q + V2{0, (j - 1) * cv.s};
+    auto g = [&](double t) {
+      V2 e, de;
+      cv.envelope(t, e, de);
+      const V2 r = e - qj;
+      return dot(r, r) - cv.R * cv.R;
+    };
+    // Newton from the secant point with g' = 2 (E - q) . E' (the envelope gives E'), kept in
+    // the bracket; regula falsi if a step leaves it or it has not converged in 8 steps.
+    // Newton's next error is about |g''| / (2 |g'|) times the square of this step; `curv`
+    // bounds |g''| (from the samples' second differences, doubled), so the iteration stops
+    // as soon as that is below 1e-11 rad (~1e-10 mm along the envelope), and the root's point
+    // is the last evaluation's, moved along E' by the step (its error is of the same order).
+    auto solve = [&](double lo, double hi, double glo, double ghi, double curv,
+                     double t) -> EnvRoot {
+      for (int it = 0; it < 8; ++it) {
         V2 e, de;
         cv.envelope(t, e, de);
-        return dot(e - q, de);
-      };
-      const double tm = detail::bracketed_minimum(g, dg, lo, hi, 1e-10), gm = g(tm);
-      if (gm < 0) {
-        out.push_back(solve(ts[k - 1], tm, gs[k - 1], gm));
-        out.push_back(solve(tm, ts[k + 1], gm, gs[k + 1]));
+        const V2 r = e - qj;
+        const double gt = dot(r, r) - cv.R * cv.R, dg = 2 * dot(r, de);
+        if (gt == 0) return {t, e};
+        if ((gt < 0) == (glo < 0)) {
+          lo = t;
+          glo = gt;
+        } else {
+          hi = t;
+          ghi = gt;
+        }
+        const double step = dg != 0 ? gt / dg : 0.0;
+        const double tn = t - step;
+        if (!(tn > lo && tn < hi)) break;
+        if (std::abs(step) < 1e-10 || curv * step * step < 2e-11 * std::abs(dg)) {
+          return {tn, e - step * de};
+        }
+        t = tn;
+      }
+      const double tr = detail::regula_falsi(g, lo, hi, glo, ghi, 1e-12);
+      V2 e, de;
+      cv.envelope(tr, e, de);
+      return {tr, e};
+    };
+    auto ts = [&](std::size_t k) { return (m_lo + static_cast<int>(k)) * tb.env_dt; };
+    // w[k] >= 0 clears sample k of both tests below: g[k - 1] and g[k] both negative (no sign
+    // change; a dip needs g[k] >= 0), or g[k - 1] >= 0 and g[k] at least half the second
+    // difference (no sign change, no dip). A loop without branches (vectorised), so the tests
+    // run only where the envelope crosses or grazes the circle.
+    thread_local std::vector<double> wbuf;
+    wbuf.resize(nk);
+    double* w = wbuf.data();  // a local pointer: the loops below need not reload it
+    for (std::size_t k = 1; k + 1 < nk; ++k) {
+      const double a = gs[k - 1], b = gs[k], c = gs[k + 1];
+      const double slack = b - 0.5 * std::abs(c - 2 * b + a);
+      const double lo = a < slack ? a : slack, hi = a > b ? a : b;
+      w[k] = hi < 0 ? 1.0 : lo;
+    }
+    if (nk >= 2) w[nk - 1] = (gs[nk - 2] < 0) != (gs[nk - 1] < 0) ? -1.0 : 1.0;
+    // Bound on |g''| near samples k - 1, k: twice the largest second difference there, over
+    // dt^2 (at least that of a circle's chord, 2 |E'|^2 ~ 2 R^2, so a flat stretch still
+    // bounds it).
+    const double idt2 = 1 / (tb.env_dt * tb.env_dt);
+    auto curv_at = [&](std::size_t k) {
+      double c2 = 2 * cv.R * cv.R;
+      for (std::size_t i = k > 1 ? k - 1 : 1; i <= k && i + 1 < nk; ++i) {
+        c2 = std::max(c2, std::abs(gs[i + 1] - 2 * gs[i] + gs[i - 1]) * idt2);
+      }
+      return 2 * c2;
+    };
+    // Newton's start for a sign change between samples k - 1 and k: the root of the cubic
+    // through the samples k - 2 .. k + 1 (a few Newton steps on the polynomial from the
+    // secant point, kept in the interval), within ~1e-6 rad where g is smooth, so one or two
+    // evaluations of the envelope finish it; the secant point where there are no neighbours.
+    auto start = [&](std::size_t k) {
+      const double g0 = gs[k - 1], g1 = gs[k];
+      double u = g0 / (g0 - g1);
+      if (k >= 2 && k + 1 < nk) {
+        // p(u) = g0 + u (d1 + (u - 1) (d2 / 2 + (u + 1) d3 / 6)), Newton form on nodes 0, 1, -1, 2.
+        const double gm = gs[k - 2], g2 = gs[k + 1];
+        const double d1 = g1 - g0, d2 = g1 - 2 * g0 + gm;
+        const double d3 = (g2 - 3 * g1 + 3 * g0 - gm);
+        for (int it = 0; it < 3; ++it) {
+          const double c2 = 0.5 * d2, c3 = d3 / 6;
+          const double pu = g0 + u * (d1 + (u - 1) * (c2 + (u + 1) * c3));
+          const double dp = d1 + (2 * u - 1) * c2 + (3 * u * u - 1) * c3;
+          if (dp == 0) break;
+          u = std::clamp(u - pu / dp, 0.0, 1.0);
+        }
+      }
+      return ts(k - 1) + u * tb.env_dt;
+    };
+    for (std::size_t k = 1;; ++k) {
+      // To the next sample to look at: four at a time, then one by one.
+      while (k + 4 <= nk && std::min(std::min(w[k], w[k + 1]), std::min(w[k + 2], w[k + 3])) >= 0) {
+        k += 4;
+      }
+      while (k < nk && w[k] >= 0) ++k;
+      if (k >= nk) break;
+      if ((gs[k - 1] < 0) != (gs[k] < 0)) {
+        res.push_back(solve(ts(k - 1), ts(k), gs[k - 1], gs[k], curv_at(k), start(k)));
+      } else if (k + 1 < nk && ((gs[k] >= 0) & (gs[k] < gs[k - 1]) & (gs[k] <= gs[k + 1]) &
+                                (gs[k] < 0.5 * std::abs(gs[k + 1] - 2 * gs[k] + gs[k - 1])))) {
+        // A dip between samples that may cross zero (the envelope grazing the circle, e.g. a
+        // wall cusp; a parabola through the samples dips at most an eighth of the second
+        // difference below them, so a value above half of it cannot hide a crossing): find
+        // its minimum; if negative, it holds two roots. (The tests are joined without
+        // short-circuits: one branch, rarely taken, instead of several hard to predict.)
+        // The minimum is a root of g' = 2 (E - q) . E' (regula falsi when g' changes sign over
+        // the two intervals, as it does for a single valley; golden section otherwise).
+        const double lo = ts(k - 1), hi = ts(k + 1);
+        auto dg = [&](double t) {
+          V2 e, de;
+          cv.envelope(t, e, de);
+          return dot(e - qj, de);
+        };
+        const double tm = detail::bracketed_minimum(g, dg, lo, hi, 1e-10), gm = g(tm);
+        if (gm < 0) {
+          res.push_back(solve(ts(k - 1), tm, gs[k - 1], gm, curv_at(k),
+                              (gs[k - 1] * tm - gm * ts(k - 1)) / (gs[k - 1] - gm)));
+          res.push_back(solve(tm, ts(k + 1), gm, gs[k + 1], curv_at(k),
+                              (gm * ts(k + 1) - gs[k + 1] * tm) / (gm - gs[k + 1])));
+        }
       }
     }
   }
@@ -163,10 +285,12 @@ double dist_to_past(const Curve& cv, V2 x, double theta, double recent, double b
   const double lo = theta - kTwoPi, inv_s = 1.0 / cv.s;
   const int m_lo = static_cast<int>(std::ceil(lo / tb.path_dt));
   const int m_hi = static_cast<int>(std::ceil(theta / tb.path_dt)) - 1;
-  thread_local std::vector<double> dds, js;
+  thread_local std::vector<double> dds_buf, js_buf;
   const auto nk = static_cast<std::size_t>(std::max(0, m_hi - m_lo + 1));
-  dds.resize(nk);
-  js.resize(nk);
+  dds_buf.resize(nk);
+  js_buf.resize(nk);
+  double* dds = dds_buf.data();  // local pointers: the loop need not reload them
+  double* js = js_buf.data();
   double best = 1e300;
   for (std::size_t k = 0; k < nk; ++k) {
     const int m = m_lo + static_cast<int>(k);
@@ -197,7 +321,8 @@ double dist_to_past(const Curve& cv, V2 x, double theta, double recent, double b
     const double bj = js[k];
     double t = (m_lo + static_cast<int>(k)) * tb.path_dt;
     for (int it = 0; it < 8; ++it) {  // minimise |c(t) - (0, j s) - x|^2: f = (q - x).c'
-      const double sn = std::sin(t), cs = std::cos(t);
+      const detail::SinCos sc = sincos(t);
+      const double sn = sc.s, cs = sc.c;
       const V2 q{-cv.a * cs - x.x, cv.b * sn + cv.s * t / kTwoPi - bj * cv.s - x.y};
       const V2 d1{cv.a * sn, cv.b * cs + cv.s / kTwoPi}, d2{cv.a * cs, -cv.b * sn};
       const double f = dot(q, d1), df = dot(d1, d1) + dot(q, d2);
@@ -266,29 +391,29 @@ ChipPoint ExactModel::at(double theta) const {
   // Split the tool circle at its crossings with the previous cycle's envelope and with the
   // previous tooth's circle; an arc is engaged when its midpoint lies outside both the
   // previous tooth's disc and every earlier position's disc.
-  // Envelopes of the last kEnvelopes cycles (a wall cusp is bounded by two of them): the
-  // j-th is the first shifted by (j - 1) s back, so its roots are the first's for the query
-  // point shifted forward.
-  constexpr int kEnvelopes = 3;
   struct Root {
     double t;
     int j;
+    V2 e;  // its point on the j-th envelope
   };
-  auto env_at = [&](const Root& r) {
+  auto env_at = [&](double t, int j) {
     V2 q, dq;
-    cv.envelope(r.t, q, dq);
-    return V2{q.x, q.y - (r.j - 1) * s_};
+    cv.envelope(t, q, dq);
+    return V2{q.x, q.y - (j - 1) * s_};
   };
   using Roots = std::array<std::vector<Root>, kEnvelopes>;
   // Buffers kept per thread: the same numbers, without a dozen allocations a point.
   thread_local Roots tool_roots, tooth_roots;
-  thread_local std::vector<double> found, ang;
+  thread_local RootSets found;
+  thread_local std::vector<double> ang;
   auto roots_for = [&](V2 q, Roots& out_j) {
+    scan_roots(cv, q, theta, found);
     for (int j = 1; j <= kEnvelopes; ++j) {
       auto& rj = out_j[static_cast<std::size_t>(j - 1)];
       rj.clear();
-      scan_roots(cv, q + V2{0, (j - 1) * s_}, theta, found);
-      for (const double t : found) rj.push_back({t, j});
+      for (const EnvRoot& r : found[static_cast<std::size_t>(j - 1)]) {
+        rj.push_back({r.t, j, V2{r.e.x, r.e.y - (j - 1) * s_}});
+      }
     }
   };
   ang.clear();
@@ -296,7 +421,7 @@ ChipPoint ExactModel::at(double theta) const {
   roots_for(c, tool_roots);
   for (const auto& rj : tool_roots) {
     for (const Root& r : rj) {
-      e = env_at(r);
+      e = r.e;
       ang.push_back(std::atan2(e.y - c.y, e.x - c.x));
     }
   }
@@ -314,7 +439,8 @@ ChipPoint ExactModel::at(double theta) const {
     const double a0 = ang[k], a1 = k + 1 < ang.size() ? ang[k + 1] : ang[0] + kTwoPi;
     if (a1 - a0 < 1e-12) continue;
     const double mid = 0.5 * (a0 + a1);
-    const V2 m = c + R_ * V2{std::cos(mid), std::sin(mid)};
+    const detail::SinCos sc = sincos(mid);
+    const V2 m = c + R_ * V2{sc.c, sc.s};
     if (norm(m - p) < R_ || dist_to_past(cv, m, theta, th_p, R_) < R_) continue;
     out.psi_rad += a1 - a0;
     engaged.push_back({a0, a1});
@@ -346,7 +472,7 @@ ChipPoint ExactModel::at(double theta) const {
     roots_for(p, tooth_roots);
     for (const auto& rj : tooth_roots) {
       for (const Root& r : rj) {
-        e = env_at(r);
+        e = r.e;
         if (!on_engaged_arc(e)) continue;
         if (dist_to_past(cv, e, theta, th_p, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) continue;  // buried
         const double h = R_ - norm(e - c);
@@ -379,9 +505,44 @@ ChipPoint ExactModel::at(double theta) const {
         cv.envelope(t, q, dq);
         return dot(q - shift - c, dq);
       };
-      auto dist_c = [&](double t) { return norm(env_at({t, j}) - c); };
-      const double tm = detail::bracketed_minimum(dist_c, slope, lo, hi, 1e-10);
-      e = env_at({tm, j});
+      auto dist_c = [&](double t) { return norm(env_at(t, j) - c); };
+      // Newton on the slope (its derivative |E'|^2 + (E - c) . E'') from the table's sample
+      // nearest c between the crossings, kept in the bracket; the bracketed search where a
+      // step leaves it, the slope's derivative is not positive, or 8 steps do not converge.
+      // (The distance is stationary there: 1e-9 rad in t moves it by ~1e-17 mm.)
+      const V2 cq = c + shift;  // c against the unshifted envelope
+      double tm = 0.5 * (lo + hi);
+      {
+        const int m0 = static_cast<int>(std::ceil(lo / env_dt_)),
+                  m1 = static_cast<int>(std::floor(hi / env_dt_));
+        double best = 1e300;
+        for (int m = m0; m <= m1; ++m) {
+          const V2 r = tb.env_at(m) - cq;
+          const double dd = dot(r, r);
+          if (dd < best) {
+            best = dd;
+            tm = m * env_dt_;
+          }
+        }
+      }
+      bool newton = false;
+      for (int it = 0; it < 8; ++it) {
+        V2 q, dq, ddq;
+        cv.envelope2(tm, q, dq, ddq);
+        const V2 r = q - cq;
+        const double f = dot(r, dq), df = dot(dq, dq) + dot(r, ddq);
+        if (!(df > 0)) break;
+        const double tn = tm - f / df;
+        if (!(tn > lo && tn < hi)) break;
+        const double step = tn - tm;
+        tm = tn;
+        if (std::abs(step) < 1e-9) {
+          newton = true;
+          break;
+        }
+      }
+      if (!newton) tm = detail::bracketed_minimum(dist_c, slope, lo, hi, 1e-10);
+      e = env_at(tm, j);
       const double rho = norm(e - c);
       if (rho >= R_ || !on_engaged_arc(e) ||
           dist_to_past(cv, e, theta, th_p, R_ - 1e-7 * R_) < R_ - 1e-7 * R_) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/sincos.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/mechanism.hpp"
 #include "trochomill/units.hpp"
@@ -41,6 +42,8 @@ Pivkin2025::Pivkin2025(double orbit_diameter_mm, double step_mm, double tool_dia
   // cycle length L_c taken as the paper's sqrt(pi^2 D_t^2 + a_e^2) (the unrolled helix).
   n_ = std::sqrt(kPi * kPi * dt_ * dt_ + ae_ * ae_) / (fz_ * z_);
   theta_tooth_ = kTwoPi / (n_ * z_);  // Eq. 11
+  cos_tooth_ = std::cos(theta_tooth_);
+  sin_tooth_ = std::sin(theta_tooth_);
 }
 
 Xy Pivkin2025::centre(double th) const {
@@ -152,6 +155,58 @@ double Pivkin2025::psi_of(double h_e_mm) const {  // Eq. 18
 double Pivkin2025::psi(double th) const { return psi_of(h_e(th)); }
 
 Pivkin2025::Point Pivkin2025::at(double th) const {
+  // The equations of the helpers above, written once more with what they share computed once:
+  // one sine and cosine of theta (from the table, within an ulp of libm's) and of theta +
+  // Theta (the same turned by Theta), cos psi from Eq. 18's argument and sin psi from it,
+  // square roots for the norms. The helpers are the reference (test
+  // Pivkin2025.EquationsAgainstHandValues); this agrees with them to rounding, some ten times
+  // faster, for the thousands of points a cycle takes.
+  Point p;
+  const detail::SinCos q = detail::sincos_table()(th);
+  const double sn = q.s, cs = q.c, hr = 0.5 * dt_;
+  const Xy v{hr * sn + ae_ / kTwoPi, hr * cs};  // centre_velocity(th)
+  const double vv = dot(v, v), lv = std::sqrt(vv);
+  const Xy vh{v.x_mm / lv, v.y_mm / lv};
+  const Xy n{-vh.y_mm, vh.x_mm};  // outward normal (left of the clockwise orbit's motion)
+  {                               // h_e(th), Eqs. 16-17
+    const Xy acc{hr * cs, -hr * sn};
+    const double dalpha = cross(v, acc) / vv;
+    Xy de{v.x_mm - 0.5 * d_ * vh.x_mm * dalpha, v.y_mm - 0.5 * d_ * vh.y_mm * dalpha};
+    double lde = std::sqrt(dot(de, de));
+    if (lde < 1e-12 * lv) {  // a cusp of the envelope: the tangent is C''s
+      de = v;
+      lde = lv;
+    }
+    p.h_e_mm = std::abs(cross(de, Xy{ae_, 0})) / lde;
+  }
+  const double r = 0.5 * d_;
+  const double cp = std::clamp((r - p.h_e_mm) / r, -1.0, 1.0);  // cos psi, Eq. 18
+  p.psi_rad = std::acos(cp);
+  const double sp = std::sqrt(std::max(0.0, 1 - cp * cp));
+  // Cutting while the contact faces the feed: the front half of the orbit, wall to wall.
+  p.cutting = n.x_mm > 0 && p.h_e_mm > 0;
+  // Tooth 2 on the engaged arc's far edge (see the comments of the reference below).
+  const Xy u{cp * n.x_mm + sp * vh.x_mm, cp * n.y_mm + sp * vh.y_mm};
+  const Phase ph{u.x_mm, -u.y_mm};
+  p.beta2_rad = std::atan2(ph.s, ph.c) - n_ * th;
+  {  // h_t_at(th, ph), Eq. 12: tooth 1 at theta + Theta minus tooth 2 at theta is the
+     // centres' difference (same phase); tooth 2's velocity is the centre's plus the edge's.
+    const double sn1 = sn * cos_tooth_ + cs * sin_tooth_, cs1 = cs * cos_tooth_ - sn * sin_tooth_;
+    const Xy dc{-hr * (cs1 - cs) + ae_ * theta_tooth_ / kTwoPi, hr * (sn1 - sn)};
+    const Xy v2{v.x_mm - 0.5 * d_ * n_ * ph.s, v.y_mm - 0.5 * d_ * n_ * ph.c};
+    p.h_sigma_mm = std::abs(cross(v2, dc)) / std::sqrt(dot(v2, v2));
+  }
+  {  // kappa_at(th, ph), Eqs. 21-23
+    const Xy ur{ph.c, -ph.s}, t{-ph.s, -ph.c};
+    p.kappa_rad = std::atan2(dot(v, ur), 0.5 * d_ * n_ + dot(v, t));
+  }
+  if (p.cutting) p.h_mm = std::max(0.0, std::min(p.h_sigma_mm, p.h_e_mm));
+  if (p.h_mm <= 0) p.cutting = false;
+  return p;
+}
+
+/// The reference of at(): each equation through its helper (kept for the tests).
+Pivkin2025::Point Pivkin2025::at_reference(double th) const {
   Point p;
   const Xy v = centre_velocity(th);
   const double lv = norm(v);
