@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/sincos.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/surface.hpp"
 #include "trochomill/units.hpp"
@@ -79,6 +80,14 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
   std::vector<Turn> tooth_turn;
   for (const EndEdge& ed : edges)
     tooth_turn.push_back({std::cos(ed.angle_rad), std::sin(ed.angle_rad)});
+  // The spindle's angles grow with the program's time (thousands of radians): their sines
+  // and cosines from the table (within an ulp of libm's up to 1e6 rad, several times faster;
+  // they were a third of the floor's time).
+  const detail::SinCosTable& sc = detail::sincos_table();
+  const auto dir = [&](double th) {
+    const detail::SinCos q = sc(th);
+    return V2{q.c, q.s};
+  };
   // One sweep over the path: the passes of the edges' parts at least `inner` from the axis,
   // over the points `todo` marks (all when empty).
   auto sweep = [&](double inner, const std::vector<char>& todo) {
@@ -89,7 +98,8 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
     const auto spindle = [&](double ph) {
       if (ph != last_p) {
         last_p = ph;
-        last_u = V2{std::cos(ph), std::sin(ph)};
+        const detail::SinCos q = sc(ph);
+        last_u = V2{q.c, q.s};
       }
       return last_u;
     };
@@ -117,7 +127,8 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
         // teeth's and the runout's turned from it by their fixed angles.
         const V2 sa = spindle(pa), sb = spindle(pb);
         const double pm = 0.5 * (pa + pb);
-        const V2 sm{std::cos(pm), std::sin(pm)};
+        const detail::SinCos qm = sc(pm);
+        const V2 sm{qm.c, qm.s};
         auto turned = [](V2 u, const Turn& t) {
           return V2{u.x * t.c - u.y * t.s, u.x * t.s + u.y * t.c};
         };
@@ -126,30 +137,32 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
         const V2 aa{ca.x + e * ra.x, ca.y + e * ra.y};
         const V2 ab{cb.x + e * rb.x, cb.y + e * rb.y};
         const double half = 0.5 * std::abs(pb - pa);
+        const double cos_half = std::cos(half);  // the same for every edge
         for (std::size_t k = 0; k < edges.size(); ++k) {
           const EndEdge& ed = edges[k];
-          const double tha = pa + ed.angle_rad;
           const V2 ua = turned(sa, tooth_turn[k]), ub = turned(sb, tooth_turn[k]);
           const V2 um = turned(sm, tooth_turn[k]);
-          const double turn2 = 2 * (1 - dot(ua, ub));  // 2 (1 - cos) of the step's turn
           // The region the edge sweeps lies in the hull of its ends and the tangents' meeting
           // points (reach / cos(half the turn) along the middle direction); runout's axis arc
           // bulges by at most e (1 - cos half), padded.
-          const double far = ed.reach_mm / std::cos(half);
-          const std::array<V2, 6> hull = {V2{aa.x + inner * ua.x, aa.y + inner * ua.y},
-                                          V2{ab.x + inner * ub.x, ab.y + inner * ub.y},
-                                          V2{aa.x + ed.reach_mm * ua.x, aa.y + ed.reach_mm * ua.y},
-                                          V2{ab.x + ed.reach_mm * ub.x, ab.y + ed.reach_mm * ub.y},
-                                          V2{aa.x + far * um.x, aa.y + far * um.y},
-                                          V2{ab.x + far * um.x, ab.y + far * um.y}};
+          const double far = ed.reach_mm / cos_half;
           // Most edges point away from the line: none of the hull's points on either side of
-          // it (then no pair below straddles it).
+          // it (then no pair below straddles it). The points' x first: most steps end here.
+          const std::array<double, 6> hx = {aa.x + inner * ua.x,       ab.x + inner * ub.x,
+                                            aa.x + ed.reach_mm * ua.x, ab.x + ed.reach_mm * ub.x,
+                                            aa.x + far * um.x,         ab.x + far * um.x};
           bool left = false, right = false;
-          for (const V2& h : hull) {
-            left = left || h.x <= x0;
-            right = right || h.x >= x0;
+          for (const double x : hx) {
+            left = left || x <= x0;
+            right = right || x >= x0;
           }
           if (!(left && right)) continue;
+          const std::array<V2, 6> hull = {
+              V2{hx[0], aa.y + inner * ua.y},       V2{hx[1], ab.y + inner * ub.y},
+              V2{hx[2], aa.y + ed.reach_mm * ua.y}, V2{hx[3], ab.y + ed.reach_mm * ub.y},
+              V2{hx[4], aa.y + far * um.y},         V2{hx[5], ab.y + far * um.y}};
+          const double tha = pa + ed.angle_rad;
+          const double turn2 = 2 * (1 - dot(ua, ub));  // 2 (1 - cos) of the step's turn
           double lo = std::numeric_limits<double>::infinity(), hi = -lo;
           for (std::size_t p = 0; p < hull.size(); ++p) {
             for (std::size_t q = p; q < hull.size(); ++q) {
@@ -186,8 +199,8 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
             // turning with the spindle, the direction turning evenly.
             auto edge_at = [&](double u, V2& a, double& th) {
               const double ph = pa + u * (pb - pa);
-              a = V2{ca.x + u * (cb.x - ca.x) + e * std::cos(ph + lambda),
-                     ca.y + u * (cb.y - ca.y) + e * std::sin(ph + lambda)};
+              const detail::SinCos r = sc(ph + lambda);
+              a = V2{ca.x + u * (cb.x - ca.x) + e * r.c, ca.y + u * (cb.y - ca.y) + e * r.s};
               th = ph + ed.angle_rad;
             };
             double u = 0, lo_u = 0, hi_u = 1, g_lo = ga, g_hi = gb;
@@ -222,7 +235,7 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
               for (int it = 0; it < 3; ++it) {
                 u = lo_u + (hi_u - lo_u) * g_lo / (g_lo - g_hi);
                 edge_at(u, a, th);
-                const double g = cross(V2{std::cos(th), std::sin(th)}, V2{p.x - a.x, p.y - a.y});
+                const double g = cross(dir(th), V2{p.x - a.x, p.y - a.y});
                 if (g == 0) break;
                 if ((g < 0) == (g_lo < 0)) {
                   lo_u = u;
@@ -233,7 +246,7 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
                 }
               }
             }
-            const double r = dot(V2{std::cos(th), std::sin(th)}, V2{p.x - a.x, p.y - a.y});
+            const double r = dot(dir(th), V2{p.x - a.x, p.y - a.y});
             if (r < 0 || r > ed.reach_mm) continue;  // behind the axis or beyond the corner
             const double z = za + u * (zb - za) + ed.tip_dz_mm + rise(ed.reach_mm, r);
             f.z_mm[q] = std::min(f.z_mm[q], z);

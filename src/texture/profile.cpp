@@ -74,6 +74,39 @@ double gaussian_transmission(double lambda_mm, double cutoff_mm) {
   return std::exp(-std::numbers::pi * r * r);
 }
 
+namespace {
+
+// out[i] = sum over k of w[k] z[i + k], i < count, each sum in the order of k (the bits of a
+// plain loop): four outputs at a time, so four chains of additions run side by side instead
+// of each waiting on the last (the mean lines' filters were a seventh of `analyze`).
+void correlate(const std::vector<double>& w, const double* z, double* out, std::size_t count) {
+  const std::size_t nw = w.size();
+  const double* wp = w.data();
+  std::size_t i = 0;
+  for (; i + 4 <= count; i += 4) {
+    double m0 = 0, m1 = 0, m2 = 0, m3 = 0;
+    const double* zi = z + i;
+    for (std::size_t k = 0; k < nw; ++k) {
+      const double wk = wp[k];
+      m0 += wk * zi[k];
+      m1 += wk * zi[k + 1];
+      m2 += wk * zi[k + 2];
+      m3 += wk * zi[k + 3];
+    }
+    out[i] = m0;
+    out[i + 1] = m1;
+    out[i + 2] = m2;
+    out[i + 3] = m3;
+  }
+  for (; i < count; ++i) {
+    double m = 0;
+    for (std::size_t k = 0; k < nw; ++k) m += wp[k] * z[i + k];
+    out[i] = m;
+  }
+}
+
+}  // namespace
+
 FilteredProfile gaussian_filter(const std::vector<double>& z_mm, double dx_mm, double cutoff_mm,
                                 FilterEnds ends) {
   check_profile(z_mm, dx_mm, "Gaussian filter");
@@ -101,11 +134,7 @@ FilteredProfile gaussian_filter(const std::vector<double>& z_mm, double dx_mm, d
   if (ends == FilterEnds::discard) {
     out.first = half;
     out.mean_mm.resize(n - 2 * half);
-    for (std::size_t i = half; i + half < n; ++i) {
-      double m = 0;
-      for (std::size_t k = 0; k < w.size(); ++k) m += w[k] * z_mm[i - half + k];
-      out.mean_mm[i - half] = m;
-    }
+    correlate(w, z_mm.data(), out.mean_mm.data(), n - 2 * half);
   } else {
     out.mean_mm.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -440,11 +469,7 @@ ProfileTexture periodic_profile_texture(const std::vector<double>& period_z_mm, 
     std::vector<double> zz(n + 2 * half);
     for (std::size_t i = 0; i < zz.size(); ++i) zz[i] = z[(i + shift) % n];
     std::vector<double> mean(n);
-    for (std::size_t j = 0; j < n; ++j) {
-      double m = 0;
-      for (std::size_t k = 0; k < w.size(); ++k) m += w[k] * zz[j + k];
-      mean[j] = m;
-    }
+    correlate(w, zz.data(), mean.data(), n);
     std::vector<double> r(5 * per), wl(5 * per);
     for (std::size_t i = 0; i < r.size(); ++i) {
       const std::size_t j = (half + i) % n;
