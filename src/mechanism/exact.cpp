@@ -35,8 +35,8 @@ double norm(V2 a) { return std::sqrt(a.x * a.x + a.y * a.y); }
 
 struct Tables;
 
-// sin and cos of the model's angles: tens of pairs a point, so from the table (within an ulp
-// of libm's, several times faster).
+// sin and cos of the model's angles: tens of pairs a point, so from the table (within
+// 2.2e-16 of libm's, several times faster).
 detail::SinCos sincos(double t) { return detail::sincos_table()(t); }
 
 struct Curve {
@@ -154,17 +154,17 @@ void scan_roots(const Curve& cv, V2 q, double theta, RootSets& out) {
       const V2 r = e - qj;
       return dot(r, r) - cv.R * cv.R;
     };
-    // Newton from the secant point with g' = 2 (E - q) . E' (the envelope gives E'), kept in
-    // the bracket; regula falsi if a step leaves it or it has not converged in 8 steps.
-    // Newton's next error is about |g''| / (2 |g'|) times the square of this step; `curv`
-    // bounds |g''| (from the samples' second differences, doubled), so the iteration stops
-    // as soon as that is below 1e-11 rad (~1e-10 mm along the envelope), and the root's point
-    // is the last evaluation's, moved along E' by the step (its error is of the same order).
-    auto solve = [&](double lo, double hi, double glo, double ghi, double curv,
-                     double t) -> EnvRoot {
+    // Newton from `t` (the cubic's root below) with g' = 2 (E - q) . E' and g'' = 2 (|E'|^2 +
+    // (E - q) . E'') (the envelope gives E' and E''), kept in the bracket; regula falsi if a
+    // step leaves it or it has not converged in 8 steps. Once the Newton step s is small, the
+    // root is t - s - c2 s^2 (c2 = g'' / 2 g', the series of the inverse; Chebyshev's step)
+    // with an error of about 2 c2^2 s^3: taken when four times that is under 1e-12 rad, with
+    // the root's point from E's series to the second order (its error ~ s^3 |E^(3)| / 6, some
+    // 1e-13 mm). From the cubic's start (within ~1e-6 rad) that is one evaluation a root.
+    auto solve = [&](double lo, double hi, double glo, double ghi, double t) -> EnvRoot {
       for (int it = 0; it < 8; ++it) {
-        V2 e, de;
-        cv.envelope(t, e, de);
+        V2 e, de, dde;
+        cv.envelope2(t, e, de, dde);
         const V2 r = e - qj;
         const double gt = dot(r, r) - cv.R * cv.R, dg = 2 * dot(r, de);
         if (gt == 0) return {t, e};
@@ -178,8 +178,13 @@ void scan_roots(const Curve& cv, V2 q, double theta, RootSets& out) {
         const double step = dg != 0 ? gt / dg : 0.0;
         const double tn = t - step;
         if (!(tn > lo && tn < hi)) break;
-        if (std::abs(step) < 1e-10 || curv * step * step < 2e-11 * std::abs(dg)) {
-          return {tn, e - step * de};
+        if (std::abs(step) < 1e-10) return {tn, e - step * de};  // ~1e-9 mm along the envelope
+        const double c2 = (dot(de, de) + dot(r, dde)) / dg;      // g'' / 2 g'
+        const double corr = step + c2 * step * step;
+        const double tc = t - corr;
+        if (std::abs(step) < 1e-5 && 8 * c2 * c2 * std::abs(step * step * step) < 1e-12 &&
+            tc > lo && tc < hi) {
+          return {tc, e - corr * de + 0.5 * corr * corr * dde};
         }
         t = tn;
       }
@@ -203,17 +208,6 @@ void scan_roots(const Curve& cv, V2 q, double theta, RootSets& out) {
       w[k] = hi < 0 ? 1.0 : lo;
     }
     if (nk >= 2) w[nk - 1] = (gs[nk - 2] < 0) != (gs[nk - 1] < 0) ? -1.0 : 1.0;
-    // Bound on |g''| near samples k - 1, k: twice the largest second difference there, over
-    // dt^2 (at least that of a circle's chord, 2 |E'|^2 ~ 2 R^2, so a flat stretch still
-    // bounds it).
-    const double idt2 = 1 / (tb.env_dt * tb.env_dt);
-    auto curv_at = [&](std::size_t k) {
-      double c2 = 2 * cv.R * cv.R;
-      for (std::size_t i = k > 1 ? k - 1 : 1; i <= k && i + 1 < nk; ++i) {
-        c2 = std::max(c2, std::abs(gs[i + 1] - 2 * gs[i] + gs[i - 1]) * idt2);
-      }
-      return 2 * c2;
-    };
     // Newton's start for a sign change between samples k - 1 and k: the root of the cubic
     // through the samples k - 2 .. k + 1 (a few Newton steps on the polynomial from the
     // secant point, kept in the interval), within ~1e-6 rad where g is smooth, so one or two
@@ -244,7 +238,7 @@ void scan_roots(const Curve& cv, V2 q, double theta, RootSets& out) {
       while (k < nk && w[k] >= 0) ++k;
       if (k >= nk) break;
       if ((gs[k - 1] < 0) != (gs[k] < 0)) {
-        res.push_back(solve(ts(k - 1), ts(k), gs[k - 1], gs[k], curv_at(k), start(k)));
+        res.push_back(solve(ts(k - 1), ts(k), gs[k - 1], gs[k], start(k)));
       } else if (k + 1 < nk && ((gs[k] >= 0) & (gs[k] < gs[k - 1]) & (gs[k] <= gs[k + 1]) &
                                 (gs[k] < 0.5 * std::abs(gs[k + 1] - 2 * gs[k] + gs[k - 1])))) {
         // A dip between samples that may cross zero (the envelope grazing the circle, e.g. a
@@ -262,9 +256,9 @@ void scan_roots(const Curve& cv, V2 q, double theta, RootSets& out) {
         };
         const double tm = detail::bracketed_minimum(g, dg, lo, hi, 1e-10), gm = g(tm);
         if (gm < 0) {
-          res.push_back(solve(ts(k - 1), tm, gs[k - 1], gm, curv_at(k),
+          res.push_back(solve(ts(k - 1), tm, gs[k - 1], gm,
                               (gs[k - 1] * tm - gm * ts(k - 1)) / (gs[k - 1] - gm)));
-          res.push_back(solve(tm, ts(k + 1), gm, gs[k + 1], curv_at(k),
+          res.push_back(solve(tm, ts(k + 1), gm, gs[k + 1],
                               (gm * ts(k + 1) - gs[k + 1] * tm) / (gm - gs[k + 1])));
         }
       }

@@ -68,7 +68,7 @@ CycleSetup setup(const Job& job, const MechanismSettings& st) {
 }
 
 double path_speed(const CycleSetup& g, double th) {     // |c'(theta)| (mm/rad)
-  const detail::SinCos q = detail::sincos_table()(th);  // within an ulp of libm's, faster
+  const detail::SinCos q = detail::sincos_table()(th);  // within 2.2e-16 of libm's, faster
   const double x = g.a * q.s, y = g.b * q.c + g.s / kTwoPi;
   return std::sqrt(x * x + y * y);
 }

@@ -156,7 +156,7 @@ double Pivkin2025::psi(double th) const { return psi_of(h_e(th)); }
 
 Pivkin2025::Point Pivkin2025::at(double th) const {
   // The equations of the helpers above, written once more with what they share computed once:
-  // one sine and cosine of theta (from the table, within an ulp of libm's) and of theta +
+  // one sine and cosine of theta (from the table, within 2.2e-16 of libm's) and of theta +
   // Theta (the same turned by Theta), cos psi from Eq. 18's argument and sin psi from it,
   // square roots for the norms. The helpers are the reference (test
   // Pivkin2025.EquationsAgainstHandValues); this agrees with them to rounding, some ten times

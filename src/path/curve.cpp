@@ -132,9 +132,9 @@ double Segment::u_at_length(double s_mm) const {
   const double ua = u0_ + h * i;
   const double target = s_mm - cum_length_[i];
   const double span_len = cum_length_[i + 1] - cum_length_[i];
-  // |p'(u)| with the sine and cosine from the table (within an ulp of libm's): this Newton
+  // |p'(u)| with the sine and cosine from the table (within 2.2e-16 of libm's): this Newton
   // takes some twenty of them a sample, and sampling a program's elliptical orbits was a tenth
-  // of `analyze`. (The length's tolerance below, 1e-13 of the segment, is far above an ulp.)
+  // of `analyze`. (The length's tolerance below, 1e-13 of the segment, is far above that.)
   const detail::SinCosTable& table = detail::sincos_table();
   auto speed_at = [&](double u) {
     const detail::SinCos q = table(u);
