@@ -8,9 +8,11 @@
 // largest either straight ahead of p (h = |c - p|, where the previous tooth bounds it) or at
 // a kink where the previous tooth's circle meets the envelope (h = R - |Q - c|). The kinks
 // and the engaged arc's ends (tool circle against the envelope) are roots of
-// |E(theta') - centre|^2 = R^2 (a sign scan over theta' in theta +- pi, polished by regula
-// falsi); an arc or a kink counts only if it lies outside every earlier position's disc
-// (nearest-point distance to the past path, coarse samples then Newton).
+// |E(theta') - centre|^2 = R^2 (a sign scan over theta' in theta +- pi, the last three
+// cycles' envelopes in one pass, each crossing polished by Newton from the cubic through its
+// samples and a Chebyshev step; regula falsi where that fails); an arc or a kink counts only
+// if it lies outside every earlier position's disc (nearest-point distance to the past path,
+// coarse samples then Newton).
 #include <algorithm>
 #include <array>
 #include <cmath>
