@@ -52,29 +52,16 @@ struct Curve {
     const detail::SinCos q = sincos(t);
     return {a * q.s, b * q.c + s / kTwoPi};
   }
-  // Envelope of the previous cycle and its derivative in theta'.
-  void envelope(double t, V2& e, V2& de) const {
-    const detail::SinCos q = sincos(t);
-    const double sn = q.s, cs = q.c;
-    const V2 T{a * sn, b * cs + s / kTwoPi}, T2{a * cs, -b * sn};
-    const double iL = 1 / norm(T);    // one division, then products
-    const V2 n{-T.y * iL, T.x * iL};  // left of the motion: outward for the clockwise orbit
-    // d/dt (T / L) = (T2 - (T.T2 / L^2) T) / L, rotated like n.
-    const double k = dot(T, T2) * (iL * iL);
-    const V2 dT{(T2.x - k * T.x) * iL, (T2.y - k * T.y) * iL};
-    const V2 dn{-dT.y, dT.x};
-    e = {-a * cs + R * n.x, b * sn + s * t / kTwoPi - s + R * n.y};
-    de = {T.x + R * dn.x, T.y + R * dn.y};
-  }
-  // The same and the second derivative: with T^ = T / L and k = T.T2 / L^2,
-  // T^'' = (T3 - k' T - 2 k T2 + k^2 T) / L, k' = (|T2|^2 + T.T3) / L^2 - 2 k^2, and
-  // E'' = T2 + R (T^'' rotated like n).
+  // Envelope of the previous cycle and its first and second derivatives in theta': with
+  // T = c', T^ = T / L and k = T.T2 / L^2, T^' = (T2 - k T) / L and
+  // T^'' = (T3 - k' T - 2 k T2 + k^2 T) / L, k' = (|T2|^2 + T.T3) / L^2 - 2 k^2; E' and E''
+  // are T and T2 plus R times those rotated like n.
   void envelope2(double t, V2& e, V2& de, V2& dde) const {
     const detail::SinCos q = sincos(t);
     const double sn = q.s, cs = q.c;
     const V2 T{a * sn, b * cs + s / kTwoPi}, T2{a * cs, -b * sn}, T3{-a * sn, -b * cs};
-    const double iL = 1 / norm(T), iL2 = iL * iL;
-    const V2 n{-T.y * iL, T.x * iL};
+    const double iL = 1 / norm(T), iL2 = iL * iL;  // one division, then products
+    const V2 n{-T.y * iL, T.x * iL};  // left of the motion: outward for the clockwise orbit
     const double k = dot(T, T2) * iL2;
     const V2 dT{(T2.x - k * T.x) * iL, (T2.y - k * T.y) * iL};
     const double kd = (dot(T2, T2) + dot(T, T3)) * iL2 - 2 * k * k;
@@ -83,6 +70,11 @@ struct Curve {
     e = {-a * cs + R * n.x, b * sn + s * t / kTwoPi - s + R * n.y};
     de = {T.x - R * dT.y, T.y + R * dT.x};
     dde = {T2.x - R * ddT.y, T2.y + R * ddT.x};
+  }
+  // Without the second derivative (inlined, its arithmetic drops out).
+  void envelope(double t, V2& e, V2& de) const {
+    V2 dde;
+    envelope2(t, e, de, dde);
   }
 };
 
@@ -221,9 +213,8 @@ void scan_roots(const Curve& cv, V2 q, double theta, RootSets& out) {
         // p(u) = g0 + u (d1 + (u - 1) (d2 / 2 + (u + 1) d3 / 6)), Newton form on nodes 0, 1, -1, 2.
         const double gm = gs[k - 2], g2 = gs[k + 1];
         const double d1 = g1 - g0, d2 = g1 - 2 * g0 + gm;
-        const double d3 = (g2 - 3 * g1 + 3 * g0 - gm);
+        const double c2 = 0.5 * d2, c3 = (g2 - 3 * g1 + 3 * g0 - gm) / 6;
         for (int it = 0; it < 3; ++it) {
-          const double c2 = 0.5 * d2, c3 = d3 / 6;
           const double pu = g0 + u * (d1 + (u - 1) * (c2 + (u + 1) * c3));
           const double dp = d1 + (2 * u - 1) * c2 + (3 * u * u - 1) * c3;
           if (dp == 0) break;

@@ -84,16 +84,6 @@ double time_to(const CycleSetup& g, double theta, int n) {
   return sum * (theta / n) / 3 / g.feed;
 }
 
-// The exact model on the uniform grid theta_i = 2 pi i / n of a whole cycle, adaptively:
-// direct evaluations on every `stride`-th point (about every 9 degrees), then each interval is
-// bisected on the grid until the midpoint's direct value agrees with the interpolation from the
-// interval's ends (h within 2e-3 f_z, psi within 3e-3 rad, kappa within 1e-4 rad) and all three
-// points agree on cutting or not; the points between are then filled by the quadratic through the
-// three. The start and end of cutting are thus resolved to the grid (a cycle of a closed orbit
-// cuts on one arc: an engagement shorter than ~4.5 degrees between two non-cutting samples could
-// be missed), and the curve agrees with direct evaluation at every point within about those
-// tolerances (test Mechanism.AdaptiveCycleMatchesDirect; measured: h within 3.3e-4 f_z, psi
-// within 2e-3 rad over 18 cases).
 // The chip columns of a curve, written in place (no array of points in between: a cycle's
 // columns are a few hundred kB, and fresh pages cost as much as the model's arithmetic).
 struct ChipColumns {
@@ -108,7 +98,16 @@ struct ChipColumns {
   }
 };
 
-// The columns start at zero.
+// The exact model on the uniform grid theta_i = 2 pi i / n of a whole cycle, adaptively:
+// direct evaluations on every `stride`-th point (about every 9 degrees), then each interval is
+// bisected on the grid until the midpoint's direct value agrees with the interpolation from the
+// interval's ends (h within 2e-3 f_z, psi within 3e-3 rad, kappa within 1e-4 rad) and all three
+// points agree on cutting or not; the points between are then filled by the quadratic through the
+// three. The start and end of cutting are thus resolved to the grid (a cycle of a closed orbit
+// cuts on one arc: an engagement shorter than ~4.5 degrees between two non-cutting samples could
+// be missed), and the curve agrees with direct evaluation at every point within about those
+// tolerances (test Mechanism.AdaptiveCycleMatchesDirect; measured: h within 3.3e-4 f_z, psi
+// within 2e-3 rad over 18 cases). The columns start at zero.
 void exact_cycle(const mech::ExactModel& model, std::size_t n, double fz, const ChipColumns& pts) {
   if (n == 0) return;
   auto theta = [n](std::size_t i) {
@@ -221,9 +220,9 @@ MechanismCurve evaluate(const Job& job, const MechanismSettings& st, const Cycle
   chip_points(job, st, g, c.theta_rad, uniform_cycle,
               ChipColumns{c.h_mm.data(), c.psi_rad.data(), c.kappa_rad.data()});
   const double re = job.tool.edge_radius_mm, vb = job.tool.flank_wear_mm;
-  // Point by point, in blocks on TBB's threads (each point its own slots: the same numbers
-  // whatever the thread count; serially this loop and the path's speed below were a quarter of
-  // a 3600-point cycle on two cores).
+  // Point by point, with the path's speed for a whole cycle, in blocks on TBB's threads (each
+  // point its own slots: the same numbers whatever the thread count; run serially, these were
+  // a quarter of a 3600-point cycle on two cores).
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {

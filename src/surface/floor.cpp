@@ -98,8 +98,7 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
     const auto spindle = [&](double ph) {
       if (ph != last_p) {
         last_p = ph;
-        const detail::SinCos q = sc(ph);
-        last_u = V2{q.c, q.s};
+        last_u = dir(ph);
       }
       return last_u;
     };
@@ -127,8 +126,7 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
         // teeth's and the runout's turned from it by their fixed angles.
         const V2 sa = spindle(pa), sb = spindle(pb);
         const double pm = 0.5 * (pa + pb);
-        const detail::SinCos qm = sc(pm);
-        const V2 sm{qm.c, qm.s};
+        const V2 sm = dir(pm);
         auto turned = [](V2 u, const Turn& t) {
           return V2{u.x * t.c - u.y * t.s, u.x * t.s + u.y * t.c};
         };
