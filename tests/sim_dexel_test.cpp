@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -206,6 +207,108 @@ TEST(Sim, BoardSummaryNeverHidesMaterial) {
     if (!may) ++empty;
   }
   EXPECT_GT(empty, 100);  // the summary does find empty stretches
+}
+
+// The summary kept cut by cut is the one made from the rays (its counts exact, not only
+// conservative): a board of one tile with four rays (so that bins do empty), cut at random
+// by short cuts (ends on the bins' edges give or take ulps, cuts across the gaps between a
+// ray's intervals taking several pieces at once) and long ones, is asked bin by bin after
+// every cut, beside a twin whose summary is rebuilt from its rays each time.
+TEST(Sim, BoardSummaryKeptCutByCutIsTheRebuiltOne) {
+  const Box3 box{{0, 0, 0}, {10, 0.2, 0.05}};
+  DexelBoard board(0, box, 0.05), twin(0, box, 0.05);  // rays along x: 4 (y) by 1 (z)
+  ASSERT_EQ(board.count_u() * board.count_v(), 4);
+  board.enable_summary(), twin.enable_summary();
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> ray(0, 3), edge(0, DexelBoard::kBins), ulps(-2, 2), kind(0, 9);
+  std::uniform_real_distribution<double> x(-0.5, 10.5), len(0, 0.3), wide(0, 4);
+  auto near_edge = [&] {
+    double v = 10.0 * edge(rng) / DexelBoard::kBins;
+    const int n = ulps(rng);
+    for (int q = 0; q < std::abs(n); ++q) v = std::nextafter(v, n > 0 ? 11.0 : -1.0);
+    return v;
+  };
+  std::vector<Interval> removed;
+  int differ = 0, empty_bins = 0, several = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const int i = ray(rng);
+    double a = x(rng), b = a + (kind(rng) == 0 ? wide(rng) : len(rng));
+    if (kind(rng) < 5) a = near_edge(), b = a + 10.0 * len(rng) / DexelBoard::kBins;
+    removed.clear();
+    (void)board.subtract(i, 0, a, b, removed);
+    several += removed.size() > 1;
+    (void)twin.subtract(i, 0, a, b, removed);
+    twin.pause_summary(), twin.resume_summary();  // rebuilt from the rays
+    for (int q = 0; q < DexelBoard::kBins; ++q) {
+      const double c = 10.0 * (q + 0.5) / DexelBoard::kBins;
+      const bool m = board.may_hold(0, 3, 0, 0, c - 1e-9, c + 1e-9);
+      differ += m != twin.may_hold(0, 3, 0, 0, c - 1e-9, c + 1e-9);
+      empty_bins += !m;
+    }
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(empty_bins, 100000);  // the bins did empty (the test asks real questions)
+  EXPECT_GT(several, 50);         // cuts taking several pieces at once were made
+}
+
+// The boards' tiles' bounds on their material's highest end (may_hold_above, tighten_top):
+// on the Z board after random cuts (and packing), a tile with a ray holding material above a
+// height is never passed by; once made exact the bound is the highest end itself; a tile cut
+// flat to a floor (the floor behind the tool) holds nothing above it.
+TEST(Sim, TileTopsBoundTheMaterial) {
+  const Box3 box{{0, 0, 0}, {7, 3.75, 3}};  // 140 x 75 rays: inner and edge tiles
+  DexelBoard board(2, box, 0.05);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> ri(0, board.count_u() - 1), rj(0, board.count_v() - 1);
+  std::uniform_real_distribution<double> z(-0.2, 3.2), len(0, 1.5);
+  std::vector<Interval> removed;
+  // The highest end in ray (i, j)'s tile, ray by ray.
+  auto top = [&](int i, int j) {
+    double t = -std::numeric_limits<double>::infinity();
+    const int ti = i / DexelBoard::kTile, tj = j / DexelBoard::kTile;
+    for (int a = ti * DexelBoard::kTile;
+         a < std::min(board.count_u(), (ti + 1) * DexelBoard::kTile); ++a) {
+      for (int b = tj * DexelBoard::kTile;
+           b < std::min(board.count_v(), (tj + 1) * DexelBoard::kTile); ++b) {
+        const auto iv = board.intervals(a, b);
+        if (!iv.empty()) t = std::max(t, iv.back().hi);
+      }
+    }
+    return t;
+  };
+  int passed = 0;
+  for (int round = 0; round < 6; ++round) {
+    for (int k = 0; k < 3000; ++k) {
+      const double a = z(rng);
+      (void)board.subtract(ri(rng), rj(rng), a, a + len(rng), removed);
+    }
+    // The first tile (64 x 64 rays) cut flat at 1 mm in round 2: nothing above the floor.
+    if (round == 2) {
+      for (int i = 0; i < DexelBoard::kTile; ++i) {
+        for (int j = 0; j < DexelBoard::kTile; ++j) (void)board.subtract(i, j, 1.0, 3.0, removed);
+      }
+    }
+    if (round % 2 == 1) (void)board.pack_settled();
+    for (int q = 0; q < 400; ++q) {
+      const int i = ri(rng), j = rj(rng);
+      const double lo = z(rng), t = top(i, j);
+      if (t > lo) {
+        ASSERT_TRUE(board.may_hold_above(i, j, lo)) << i << " " << j << " " << lo;
+      }
+      if (q % 4 == 0) {
+        board.tighten_top(i, j);
+        EXPECT_EQ(board.may_hold_above(i, j, lo), t > lo) << i << " " << j << " " << lo;
+        EXPECT_FALSE(board.may_hold_above(i, j, t));  // exact: nothing above the highest end
+        passed += !board.may_hold_above(i, j, lo);
+      }
+    }
+    if (round >= 2) {
+      board.tighten_top(0, 0);
+      EXPECT_FALSE(board.may_hold_above(5, 7, 1.0));
+      EXPECT_TRUE(board.may_hold_above(5, 7, std::nextafter(1.0, 0.0)));
+    }
+  }
+  EXPECT_GT(passed, 20);  // tiles were passed by
 }
 
 // Packed tiles (DexelBoard::pack_settled) hold what their rays held. Two boards take the same

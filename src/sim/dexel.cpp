@@ -148,6 +148,8 @@ DexelBoard::DexelBoard(int axis, const Box3& box, double spacing_mm) : axis_(axi
   fill_n_.assign(n_tiles, 1);
   packed_.assign(n_tiles, 0);
   cut_period_.assign(n_tiles, 0);
+  top_.assign(n_tiles, full_.hi);  // untouched: the whole stock
+  top_stale_.assign(n_tiles, 0);
 }
 
 int DexelBoard::rays_in_tile(std::size_t t) const noexcept {
@@ -255,23 +257,34 @@ double DexelBoard::subtract_in(Tiles& tiles, int i, int j, double a, double b,
   auto& d = tiles[t][in_tile(i, j)];
   const std::size_t first = removed.size();
   const double cut = d.subtract(a, b, removed);
-  if (cut > 0) cut_period_[t] = period_;
+  if (cut > 0) cut_period_[t] = period_, top_stale_[t] = 1;
   if (!summarised_ || paused_) return cut;
   if (cut > 0) {
     // The ray's bins before the cut are its bins after it and the removed pieces' (an
     // interval's bins are those of its pieces, which meet end to end, and bin_of is
-    // monotone): the pieces' bins the ray no longer holds lost it.
-    const auto cut_bins = bins_of(std::span<const Interval>(removed).subspan(first));
-    const auto after = bins_of(d.intervals());
-    Summary& sm = *summaries_[tile_index(i, j)];
-    for (std::size_t w = 0; w < cut_bins.size(); ++w) {
-      std::uint64_t gone = cut_bins[w] & ~after[w];
-      while (gone != 0) {
-        const int bit = __builtin_ctzll(gone);
-        gone &= gone - 1;
-        const std::size_t bin = w * 64 + static_cast<std::size_t>(bit);
-        if (--sm.count[bin] == 0) sm.mask[w] &= ~(std::uint64_t{1} << bit);
+    // monotone): the pieces' bins the ray no longer holds lost it. What the ray keeps lies
+    // below a or above b, and bin_of is monotone: of its bins only those of the nearest end
+    // below a and the nearest start above b can be a piece's (every piece lies in [a, b]).
+    int keep_lo = -1, keep_hi = kBins;  // bins at or below keep_lo and at or above keep_hi kept
+    for (const Interval& v : d.intervals()) {
+      if (v.hi <= a) {
+        keep_lo = bin_of(v.hi);
+      } else {
+        keep_hi = bin_of(v.lo);
+        break;
       }
+    }
+    Summary& sm = *summaries_[t];
+    int last = -1;  // the pieces are sorted: a bin two of them share is counted once
+    for (std::size_t q = first; q < removed.size(); ++q) {
+      const int b0 = std::max({bin_of(removed[q].lo), keep_lo + 1, last + 1});
+      const int b1 = std::min(bin_of(removed[q].hi), keep_hi - 1);
+      for (int bin = b0; bin <= b1; ++bin) {
+        if (--sm.count[static_cast<std::size_t>(bin)] == 0) {
+          sm.mask[static_cast<std::size_t>(bin / 64)] &= ~(std::uint64_t{1} << (bin % 64));
+        }
+      }
+      last = std::max(last, b1);
     }
   }
   return cut;
@@ -303,6 +316,31 @@ bool DexelBoard::may_hold(int i0, int i1, int j0, int j1, double lo, double hi) 
     }
   }
   return false;
+}
+
+void DexelBoard::tighten_top(int i, int j) {
+  const std::size_t t = tile_index(i, j);
+  if (!top_stale_[t]) return;
+  top_stale_[t] = 0;
+  on_tiles(*this, [&](const auto& tiles) {
+    const auto& tile = tiles[t];
+    if (!tile) {  // packed (a cut made the tile stale, so it was touched): its one interval
+      top_[t] = fill_n_[t] ? fill_[t].hi : -std::numeric_limits<double>::infinity();
+      return;
+    }
+    // Every ray's last interval's end (the rays that exist: those past the board's edge hold
+    // the full interval).
+    const int ti = static_cast<int>(t / static_cast<std::size_t>(tv_));
+    const int tj = static_cast<int>(t % static_cast<std::size_t>(tv_));
+    double top = -std::numeric_limits<double>::infinity();
+    for (int a = 0; a < kTile && ti * kTile + a < nu_; ++a) {
+      for (int b = 0; b < kTile && tj * kTile + b < nv_; ++b) {
+        const auto iv = tile[in_tile(ti * kTile + a, tj * kTile + b)].intervals();
+        if (!iv.empty()) top = std::max(top, iv.back().hi);
+      }
+    }
+    top_[t] = top;
+  });
 }
 
 std::size_t DexelBoard::pack_settled() {
@@ -385,9 +423,9 @@ double DexelBoard::volume_mm3() const {
 
 std::size_t DexelBoard::memory_bytes() const {
   const std::size_t table = static_cast<std::size_t>(tu_) * static_cast<std::size_t>(tv_);
-  std::size_t b =
-      table * (sizeof(tiles1_[0]) + (summarised_ ? sizeof(summaries_[0]) : 0) + sizeof(fill_[0]) +
-               sizeof(fill_n_[0]) + sizeof(packed_[0]) + sizeof(cut_period_[0]));
+  std::size_t b = table * (sizeof(tiles1_[0]) + (summarised_ ? sizeof(summaries_[0]) : 0) +
+                           sizeof(fill_[0]) + sizeof(fill_n_[0]) + sizeof(packed_[0]) +
+                           sizeof(cut_period_[0]) + sizeof(top_[0]) + sizeof(top_stale_[0]));
   for (const auto& sm : summaries_) b += sm ? sizeof(Summary) : 0;
   on_tiles(*this, [&](const auto& tiles) {
     for (const auto& tile : tiles) {

@@ -83,6 +83,37 @@ bool has_material(std::span<const Interval> ray, double lo, double hi) {
   return false;
 }
 
+// Whether a point at angle th (rad) lies in a sector [a0, a1] narrower than pi,
+// contains_angle(a0, a1, th), without the point's arc tangent where it lies clearly on one
+// side of an edge: rho sin(th - a0) and rho sin(a1 - th) are its cross products with the
+// edges' directions, both positive inside and one negative outside. Within `margin` of an
+// edge (rad: far beyond the rounding of the products and of contains_angle's reduction of
+// angles that large) the arc tangent decides, so the answer is contains_angle's to the bit.
+class SectorSides {
+ public:
+  SectorSides(double a0, double a1, bool use)
+      : use_(use && a1 - a0 < 0.5 * kPi),
+        c0_(std::cos(a0)),
+        s0_(std::sin(a0)),
+        c1_(std::cos(a1)),
+        s1_(std::sin(a1)),
+        margin_(1e-9 + 1e-13 * std::max(std::abs(a0), std::abs(a1))) {}
+  // (dx, dy) from the centre (mm), rho its length; exact() is contains_angle's answer.
+  template <class Exact>
+  bool inside(double dx, double dy, double rho, Exact&& exact) const {
+    if (use_) {
+      const double e0 = c0_ * dy - s0_ * dx, e1 = s1_ * dx - c1_ * dy, m = margin_ * rho;
+      if (e0 > m && e1 > m) return true;
+      if (e0 < -m || e1 < -m) return false;
+    }
+    return exact();
+  }
+
+ private:
+  bool use_;
+  double c0_, s0_, c1_, s1_, margin_;
+};
+
 // One tooth's wedge at one step, about one centre.
 struct Wedge {
   double cx, cy, tip_z, a0, a1;  // a0 < a1: the wedge at height 0
@@ -194,6 +225,20 @@ class Stepper {
   // then each ray exactly.
   void z_board(std::size_t k, const Wedge& w, BoardAcc& A) {
     DexelBoard& board = work_.boards[2];
+    // The tiles the wedge searches, and whether any of their rays held material above its tip
+    // (the first kSearched of them; a wedge spans a few).
+    int n_searched = 0;
+    SearchedTile spare;
+    auto searched = [&](int i, int j) -> SearchedTile& {
+      const int ti = i / DexelBoard::kTile, tj = j / DexelBoard::kTile;
+      for (int q = 0; q < n_searched; ++q) {
+        SearchedTile& st = searched_[static_cast<std::size_t>(q)];
+        if (st.i / DexelBoard::kTile == ti && st.j / DexelBoard::kTile == tj) return st;
+      }
+      if (n_searched == kSearched) return spare;
+      searched_[static_cast<std::size_t>(n_searched)] = {i, j, false};
+      return searched_[static_cast<std::size_t>(n_searched++)];
+    };
     const double rmax = tool_.radius_mm + std::max(0.0, w.r_off);
     // The contour's smallest radius over the cutting height (it is unimodal: at an end).
     const double flat = narrowest(w.H) + w.r_off;
@@ -229,6 +274,8 @@ class Stepper {
     const auto [i0, i1] = board.index_range(true, w.cx + bx[0], w.cx + bx[1]);
     std::array<Interval, 2> parts{};
     const SectorSlicer slicer(span_lo - 0.5 * kPi, span_hi - 0.5 * kPi);
+    // Without a helix or a strip every ray's angles are [a0, a1]: decided by its sides.
+    const SectorSides sides(w.a0, w.a1, kappa_ == 0 && !strip);
     for (int i = i0; i <= i1; ++i) {
       const double dx = board.u_of(i) - w.cx;
       Interval chord{-kInf, kInf};
@@ -245,62 +292,83 @@ class Stepper {
       for (int q = 0; q < np; ++q) {
         const auto [j0, j1] = board.index_range(false, w.cy + parts[static_cast<std::size_t>(q)].lo,
                                                 w.cy + parts[static_cast<std::size_t>(q)].hi);
-        for (int j = j0; j <= j1; ++j) {
-          // Most rays the wedge crosses were emptied long ago: skip them first.
-          if (!has_material(board.intervals(i, j), w.tip_z, w.tip_z + w.H)) continue;
-          const double dy = board.v_of(j) - w.cy, rho = std::sqrt(dx * dx + dy * dy);
-          if (rho > rmax) continue;
-          // The contour reaches rho only between these heights (the corner from below, a
-          // lead angle from above).
-          const auto reach = contour_.heights_reaching(rho - w.r_off);
-          if (!reach) continue;
-          const double hmin = reach->lo, hmax = reach->hi;
-          const double th = std::atan2(dy, dx);
-          const auto [ra0, ra1] = strip ? closing_angles(w, rho) : std::pair{w.a0, w.a1};
-          A.removed.clear();
-          auto cut_h = [&](double h_lo, double h_hi) {
-            h_lo = std::max(h_lo, hmin);
-            h_hi = std::min({h_hi, w.H, hmax});
-            if (!(h_hi > h_lo)) return;
-            if (board.subtract(i, j, w.tip_z + h_lo, w.tip_z + h_hi, A.removed) > 0) {
-              ++A.updates;
+        for (int jt = j0; jt <= j1;) {
+          // A tile's rays at a time: none of them searched where the tile holds nothing above
+          // the tip (most of those the wedge crosses: the floor behind the tool).
+          const int jt1 = std::min(j1, (jt / DexelBoard::kTile + 1) * DexelBoard::kTile - 1);
+          const int j_first = jt;
+          jt = jt1 + 1;
+          if (!board.may_hold_above(i, j_first, w.tip_z)) continue;
+          SearchedTile& st = searched(i, j_first);
+          for (int j = j_first; j <= jt1; ++j) {
+            // Most rays the wedge crosses were emptied long ago: skip them first.
+            if (!has_material(board.intervals(i, j), w.tip_z, w.tip_z + w.H)) continue;
+            st.found = true;
+            const double dy = board.v_of(j) - w.cy, rho = std::sqrt(dx * dx + dy * dy);
+            if (rho > rmax) continue;
+            // The contour reaches rho only between these heights (the corner from below, a
+            // lead angle from above).
+            const auto reach = contour_.heights_reaching(rho - w.r_off);
+            if (!reach) continue;
+            const double hmin = reach->lo, hmax = reach->hi;
+            const auto [ra0, ra1] = strip ? closing_angles(w, rho) : std::pair{w.a0, w.a1};
+            A.removed.clear();
+            auto cut_h = [&](double h_lo, double h_hi) {
+              h_lo = std::max(h_lo, hmin);
+              h_hi = std::min({h_hi, w.H, hmax});
+              if (!(h_hi > h_lo)) return;
+              if (board.subtract(i, j, w.tip_z + h_lo, w.tip_z + h_hi, A.removed) > 0) {
+                ++A.updates;
+              }
+            };
+            if (kappa_ == 0) {
+              if (sides.inside(dx, dy, rho,
+                               [&] { return contains_angle(ra0, ra1, std::atan2(dy, dx)); })) {
+                cut_h(0, w.H);
+              }
+            } else {
+              const double th = std::atan2(dy, dx);
+              // th + 2 pi m in [a0 + h kappa, a1 + h kappa]: h in [th' - a1, th' - a0] / kappa.
+              const double m0 = std::ceil(((kappa_ >= 0 ? ra0 : ra0 + w.H * kappa_) - th) / kTwoPi);
+              const double m1 =
+                  std::floor(((kappa_ >= 0 ? ra1 + w.H * kappa_ : ra1) - th) / kTwoPi);
+              for (double m = m0; m <= m1; m += 1) {
+                const double tt = th + kTwoPi * m;
+                const double ha = (tt - ra1) / kappa_, hb = (tt - ra0) / kappa_;
+                cut_h(std::min(ha, hb), std::max(ha, hb));
+              }
             }
-          };
-          if (kappa_ == 0) {
-            if (contains_angle(ra0, ra1, th)) cut_h(0, w.H);
-          } else {
-            // th + 2 pi m in [a0 + h kappa, a1 + h kappa]: h in [th' - a1, th' - a0] / kappa.
-            const double m0 = std::ceil(((kappa_ >= 0 ? ra0 : ra0 + w.H * kappa_) - th) / kTwoPi);
-            const double m1 = std::floor(((kappa_ >= 0 ? ra1 + w.H * kappa_ : ra1) - th) / kTwoPi);
-            for (double m = m0; m <= m1; m += 1) {
-              const double tt = th + kTwoPi * m;
-              const double ha = (tt - ra1) / kappa_, hb = (tt - ra0) / kappa_;
-              cut_h(std::min(ha, hb), std::max(ha, hb));
-            }
-          }
-          for (const Interval& p : A.removed) {
-            A.removed_tooth[k] += (p.hi - p.lo) * d_ * d_;
-            A.removed_board += (p.hi - p.lo) * d_ * d_;
-            // The radial depth on a vertical ray is the contour radius less rho, largest where
-            // the contour is widest: each segment the piece spans takes it there (exact: no
-            // sampling needed), times the edge's sine for the thickness normal to the edge.
-            const double h_lo = p.lo - w.tip_z, h_hi = p.hi - w.tip_z;
-            for (int sg = seg_of(h_lo), sg1 = seg_of(h_hi); sg <= sg1; ++sg) {
-              const double a = std::max(h_lo, seg_bottom(sg));
-              const double h = tool_.widest_height(a, std::min(h_hi, seg_top(sg)));
-              const double b = std::min(h_hi, seg_top(sg));
-              if (!(b > a)) continue;  // the piece only touches this segment
-              A.seg_v[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg)] +=
-                  (b - a) * d_ * d_;
-              if (note(A, k, a,
-                       (contour_.profile_radius(h) + w.r_off - rho) * contour_.edge_sine(h))) {
-                // The engaged width: the pieces' extent along the segment.
-                extend(A, k, a, b);
+            for (const Interval& p : A.removed) {
+              A.removed_tooth[k] += (p.hi - p.lo) * d_ * d_;
+              A.removed_board += (p.hi - p.lo) * d_ * d_;
+              // The radial depth on a vertical ray is the contour radius less rho, largest where
+              // the contour is widest: each segment the piece spans takes it there (exact: no
+              // sampling needed), times the edge's sine for the thickness normal to the edge.
+              const double h_lo = p.lo - w.tip_z, h_hi = p.hi - w.tip_z;
+              for (int sg = seg_of(h_lo), sg1 = seg_of(h_hi); sg <= sg1; ++sg) {
+                const double a = std::max(h_lo, seg_bottom(sg));
+                const double h = tool_.widest_height(a, std::min(h_hi, seg_top(sg)));
+                const double b = std::min(h_hi, seg_top(sg));
+                if (!(b > a)) continue;  // the piece only touches this segment
+                A.seg_v[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg)] +=
+                    (b - a) * d_ * d_;
+                if (note(A, k, a,
+                         (contour_.profile_radius(h) + w.r_off - rho) * contour_.edge_sine(h))) {
+                  // The engaged width: the pieces' extent along the segment.
+                  extend(A, k, a, b);
+                }
               }
             }
           }
         }
       }
+    }
+    // The tiles searched in vain: their bounds made exact (a cut since may have left them
+    // nothing above the tip, and the next wedges then pass them by). A tile is read again only
+    // after a cut in it.
+    for (int q = 0; q < n_searched; ++q) {
+      const SearchedTile& st = searched_[static_cast<std::size_t>(q)];
+      if (!st.found) board.tighten_top(st.i, st.j);
     }
   }
 
@@ -490,6 +558,13 @@ class Stepper {
   }
 
   static constexpr int kBundle = 16;
+  // The Z board's tiles one wedge searched (z_board).
+  struct SearchedTile {
+    int i = 0, j = 0;    // a ray of the tile
+    bool found = false;  // a ray of it held material within the wedge's heights
+  };
+  static constexpr int kSearched = 16;
+  std::array<SearchedTile, kSearched> searched_{};
   static_assert(DexelBoard::kTile % kBundle == 0);
 
   // Whether the layers [l0, l1] of board b (0 or 1) may hold material in wedge w's sectors

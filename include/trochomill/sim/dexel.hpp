@@ -190,6 +190,17 @@ class DexelBoard {
   /// False only when no ray (i, j), i in [i0, i1], j in [j0, j1], holds material in [lo, hi]
   /// (by the summary: exact to a bin); always true without one.
   [[nodiscard]] bool may_hold(int i0, int i1, int j0, int j1, double lo, double hi) const;
+  /// False only when no ray of ray (i, j)'s tile holds material above `lo` (mm along the
+  /// rays). Every board keeps, per tile, a bound on the highest end of its rays' material: a
+  /// cut leaves it a bound (cuts only remove material), and `tighten_top` makes it exact again.
+  /// (The Z board's search: behind the tool the floor's tiles hold nothing above the tip.)
+  [[nodiscard]] bool may_hold_above(int i, int j, double lo) const noexcept {
+    return top_[tile_index(i, j)] > lo;
+  }
+  /// Makes the bound of ray (i, j)'s tile exact, reading its rays, if a cut removed material
+  /// from the tile since the bound was last made exact (else it is exact already). Not with
+  /// other threads cutting the tile.
+  void tighten_top(int i, int j);
 
  private:
   struct Summary {
@@ -243,6 +254,10 @@ class DexelBoard {
   std::vector<Interval> fill_;
   std::vector<std::uint8_t> fill_n_, packed_;
   std::vector<std::uint32_t> cut_period_;
+  // Per tile: a bound on its rays' material's highest end (mm; -inf: none), and whether a cut
+  // removed material since it was last made exact (may_hold_above, tighten_top).
+  std::vector<double> top_;
+  std::vector<std::uint8_t> top_stale_;
   std::uint32_t period_ = 1;
   bool summarised_ = false, paused_ = false;
   double bins_per_mm_ = 1;                           // kBins over the stock's extent along the rays
