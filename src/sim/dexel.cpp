@@ -253,7 +253,7 @@ double DexelBoard::subtract_in(Tiles& tiles, int i, int j, double a, double b,
     // A packed tile comes back only for a cut that removes something (the dexel's own test).
     if (!(b > a) || fill_n_[t] == 0 || b <= fill_[t].lo || a >= fill_[t].hi) return 0.0;
   }
-  touch(i, j);
+  if (!tiles[t]) touch(i, j);
   auto& d = tiles[t][in_tile(i, j)];
   const std::size_t first = removed.size();
   const double cut = d.subtract(a, b, removed);

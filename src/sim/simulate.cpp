@@ -402,7 +402,7 @@ class Stepper {
       if (!s_.exhaustive && (zl == z0 || zl % kBundle == 0)) {
         // Bundles aligned to kBundle layers: never across a tile (kTile is a multiple).
         const int end = std::min(z1, (zl / kBundle + 1) * kBundle - 1);
-        if (!bundle_may_hold(b, board, w, zl, end)) {
+        if (!bundle_may_hold(b, board, w, zl, end, flat_span ? &*flat_span : nullptr)) {
           zl = end;
           continue;
         }
@@ -569,7 +569,9 @@ class Stepper {
 
   // Whether the layers [l0, l1] of board b (0 or 1) may hold material in wedge w's sectors
   // (false only when the summaries are sure they do not).
-  bool bundle_may_hold(int b, const DexelBoard& board, const Wedge& w, int l0, int l1) const {
+  // `flat`: the wedge's angles' span when they are the same on every layer (no helix).
+  bool bundle_may_hold(int b, const DexelBoard& board, const Wedge& w, int l0, int l1,
+                       const AngleSpan* flat) const {
     const bool z_first = b == 1;
     const double h0 = (z_first ? board.u_of(l0) : board.v_of(l0)) - w.tip_z;
     const double h1 = (z_first ? board.u_of(l1) : board.v_of(l1)) - w.tip_z;
@@ -589,6 +591,7 @@ class Stepper {
     const double span_hi = kappa_ >= 0 ? w.a1 + hi * kappa_ : w.a1 + lo * kappa_;
     const double r_out = widest + d_;
     const auto bx = span_hi - span_lo >= kPi ? std::array<double, 4>{-r_out, r_out, -r_out, r_out}
+                    : flat                   ? flat->box(r_in, r_out)
                                              : annular_box(span_lo, span_hi, r_in, r_out);
     const double grow = d_ + (strip ? w.move : 0.0);
     const double x_lo = w.cx + bx[0] - grow, x_hi = w.cx + bx[1] + grow;
@@ -625,6 +628,7 @@ class Stepper {
   // the same side of it by length too, far beyond the length's rounding; nearer, the length
   // decides (an arc cosine on the corner).
   int seg_of(double h) const {
+    if (h <= 0) return 0;  // the tip (a flat bottom's cut): the first segment, without the arc
     const auto inner0 = bounds_.begin() + 1, inner1 = bounds_.end() - 1;
     const auto sg = static_cast<int>(std::upper_bound(inner0, inner1, h) - inner0);
     if ((sg == 0 || h - seg_bottom(sg) > kBoundSlack) &&
