@@ -168,6 +168,23 @@ struct BoardAcc {
   double removed_board = 0;
   std::uint64_t updates = 0;
   std::vector<Interval> removed;
+  // The entries of the segments' arrays written since they were last reset, [q_lo, q_hi)
+  // (empty when q_lo >= q_hi): the rest hold their defaults (a step engages a few of them).
+  std::size_t q_lo = std::numeric_limits<std::size_t>::max(), q_hi = 0;
+  void wrote(std::size_t q) { q_lo = std::min(q_lo, q), q_hi = std::max(q_hi, q + 1); }
+  // The segments' arrays at their defaults for n entries (only the written ones reset).
+  void reset_segments(std::size_t n) {
+    if (seg_h.size() != n) {
+      seg_h.assign(n, 0.0), seg_lo.assign(n, kInf), seg_hi.assign(n, -kInf), seg_v.assign(n, 0.0);
+    } else if (q_lo < q_hi) {
+      const auto a = static_cast<std::ptrdiff_t>(q_lo), b = static_cast<std::ptrdiff_t>(q_hi);
+      std::fill(seg_h.begin() + a, seg_h.begin() + b, 0.0);
+      std::fill(seg_lo.begin() + a, seg_lo.begin() + b, kInf);
+      std::fill(seg_hi.begin() + a, seg_hi.begin() + b, -kInf);
+      std::fill(seg_v.begin() + a, seg_v.begin() + b, 0.0);
+    }
+    q_lo = std::numeric_limits<std::size_t>::max(), q_hi = 0;
+  }
 };
 
 // One step on its way through the pipeline (simulate): its wedges (per tooth, and centre),
@@ -217,6 +234,15 @@ class Stepper {
         inv_sin_(1 / std::sin(tool.lead_rad)) {
     for (int sg = 0; sg <= segs_; ++sg) {
       bounds_.push_back(tool.height_at_length(sg * tool.segment_mm));
+    }
+    // below_[c]: the inner bounds at or below the height c q (seg_of's start for heights in
+    // cell c; the cells up to the top bound).
+    cell_ = std::max(bounds_.back(), 1e-9) / kCells;
+    below_.resize(kCells + 1);
+    for (int c = 0; c <= kCells; ++c) {
+      below_[static_cast<std::size_t>(c)] =
+          static_cast<int>(std::upper_bound(bounds_.begin() + 1, bounds_.end() - 1, c * cell_) -
+                           (bounds_.begin() + 1));
     }
   }
 
@@ -350,6 +376,7 @@ class Stepper {
                 const double h = tool_.widest_height(a, std::min(h_hi, seg_top(sg)));
                 const double b = std::min(h_hi, seg_top(sg));
                 if (!(b > a)) continue;  // the piece only touches this segment
+                A.wrote(k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg));
                 A.seg_v[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg)] +=
                     (b - a) * d_ * d_;
                 if (note(A, k, a,
@@ -629,8 +656,21 @@ class Stepper {
   // decides (an arc cosine on the corner).
   int seg_of(double h) const {
     if (h <= 0) return 0;  // the tip (a flat bottom's cut): the first segment, without the arc
-    const auto inner0 = bounds_.begin() + 1, inner1 = bounds_.end() - 1;
-    const auto sg = static_cast<int>(std::upper_bound(inner0, inner1, h) - inner0);
+    // The inner bounds at or below h (as std::upper_bound counts them): from those at or
+    // below its cell's start on, one at a time (a cell holds a few bounds at most).
+    int sg = segs_ - 1;
+    if (h < kCells * cell_) {
+      const auto c = static_cast<std::size_t>(h / cell_);
+      sg = below_[std::min(c, below_.size() - 1)];
+      // (h / cell_ may round up across a cell's start: then step back.)
+      while (sg > 0 && bounds_[static_cast<std::size_t>(sg)] > h) --sg;
+      while (sg < segs_ - 1 && bounds_[static_cast<std::size_t>(sg) + 1] <= h) ++sg;
+    } else if (!(h >= kCells * cell_)) {  // NaN: as std::upper_bound takes it
+      const auto inner0 = bounds_.begin() + 1, inner1 = bounds_.end() - 1;
+      sg = static_cast<int>(std::upper_bound(inner0, inner1, h) - inner0);
+    } else {
+      while (sg > 0 && bounds_[static_cast<std::size_t>(sg)] > h) --sg;
+    }
     if ((sg == 0 || h - seg_bottom(sg) > kBoundSlack) &&
         (sg == segs_ - 1 || seg_top(sg) - h > kBoundSlack)) {
       return sg;
@@ -649,6 +689,7 @@ class Stepper {
   // The same in segment sg (seg_of(h)).
   bool note_at(BoardAcc& A, std::size_t k, int sg, double chip) const {
     if (chip < s_.chip_sampling_mm) return false;
+    A.wrote(k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg));
     double& v = A.seg_h[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg)];
     v = std::max(v, chip);
     return true;
@@ -661,6 +702,7 @@ class Stepper {
   // The same in segment sg (seg_of of the middle).
   void extend_at(BoardAcc& A, std::size_t k, int sg, double h0, double h1) const {
     const std::size_t q = k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg);
+    A.wrote(q);
     A.seg_lo[q] = std::min(A.seg_lo[q], std::max(h0, seg_bottom(sg)));
     A.seg_hi[q] = std::max(A.seg_hi[q], std::min(h1, seg_top(sg)));
   }
@@ -673,6 +715,10 @@ class Stepper {
   int segs_;
   double rc_, ht_, st_, inv_sin_;
   std::vector<double> bounds_;  // segment boundaries' heights
+  // seg_of's table: the heights up to the top bound in kCells cells of cell_ mm.
+  static constexpr int kCells = 4096;
+  double cell_ = 1;
+  std::vector<int> below_;
   // Per X/Y board (its stage runs one step at a time): a layer's rows.
   std::array<RowChords, 2> rows_;
   static_assert(sizeof(Dexel) == 4 * sizeof(double) && std::is_standard_layout_v<Dexel>,
@@ -930,11 +976,15 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     const std::array<BoardAcc, 3>& bacc = sw.acc;
     const double tb = sw.tb;
     const std::array<double, 3>& c = sw.c;
-    seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
-    seg_lo.assign(seg_h.size(), kInf);
-    seg_hi.assign(seg_h.size(), -kInf);
+    // Merged where a board wrote (elsewhere every board's entries hold their defaults: no
+    // chip).
+    const std::size_t n_seg = nz * static_cast<std::size_t>(segs);
+    std::size_t u_lo = n_seg, u_hi = 0;
+    for (const BoardAcc& A : bacc) u_lo = std::min(u_lo, A.q_lo), u_hi = std::max(u_hi, A.q_hi);
+    seg_h.resize(n_seg), seg_lo.resize(n_seg), seg_hi.resize(n_seg);
+    for (std::size_t q = u_lo; q < u_hi; ++q) seg_h[q] = 0.0, seg_lo[q] = kInf, seg_hi[q] = -kInf;
     for (std::size_t b = 0; b < 3; ++b) {
-      for (std::size_t q = 0; q < seg_h.size(); ++q) {
+      for (std::size_t q = u_lo; q < u_hi; ++q) {
         seg_h[q] = std::max(seg_h[q], bacc[b].seg_h[q]);
         seg_lo[q] = std::min(seg_lo[q], bacc[b].seg_lo[q]);
         seg_hi[q] = std::max(seg_hi[q], bacc[b].seg_hi[q]);
@@ -948,7 +998,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
     st.removed_mm3 = bacc[2].removed_tooth;
     double sum = 0;
     step_chips.clear();
-    for (std::size_t q = 0; q < seg_h.size(); ++q) {
+    for (std::size_t q = u_lo; q < u_hi; ++q) {
       const double h = seg_h[q];
       if (h > 0) {
         st.h_max_mm = std::max(st.h_max_mm, h);
@@ -977,10 +1027,7 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   // Board b's cuts of a step: its wedges in order, into the board's own accumulators.
   auto cut_board = [&](int b, StepWork& sw) {
     BoardAcc& A = sw.acc[static_cast<std::size_t>(b)];
-    A.seg_h.assign(nz * static_cast<std::size_t>(segs), 0.0);
-    A.seg_lo.assign(nz * static_cast<std::size_t>(segs), kInf);
-    A.seg_v.assign(nz * static_cast<std::size_t>(segs), 0.0);
-    A.seg_hi.assign(nz * static_cast<std::size_t>(segs), -kInf);
+    A.reset_segments(nz * static_cast<std::size_t>(segs));
     A.removed_tooth.assign(nz, 0.0);
     A.removed_board = 0;
     A.updates = 0;
