@@ -244,6 +244,8 @@ class Stepper {
           static_cast<int>(std::upper_bound(bounds_.begin() + 1, bounds_.end() - 1, c * cell_) -
                            (bounds_.begin() + 1));
     }
+    for (int sg = 0; sg < segs_; ++sg) seg_of_bottom_.push_back(seg_of(seg_bottom(sg)));
+    for (const double b : bounds_) bound_length_.push_back(edge_length(b));
   }
 
   // The Z board for one wedge: columns over the x-extent of the wedge swept over all heights
@@ -379,8 +381,12 @@ class Stepper {
                 A.wrote(k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg));
                 A.seg_v[k * static_cast<std::size_t>(segs_) + static_cast<std::size_t>(sg)] +=
                     (b - a) * d_ * d_;
-                if (note(A, k, a,
-                         (contour_.profile_radius(h) + w.r_off - rho) * contour_.edge_sine(h))) {
+                // (A piece's part that starts at the segment's bottom: seg_of of that bound,
+                // taken once for the tool.)
+                if (note_at(A, k,
+                            a == seg_bottom(sg) ? seg_of_bottom_[static_cast<std::size_t>(sg)]
+                                                : seg_of(a),
+                            (contour_.profile_radius(h) + w.r_off - rho) * contour_.edge_sine(h))) {
                   // The engaged width: the pieces' extent along the segment.
                   extend(A, k, a, b);
                 }
@@ -637,6 +643,14 @@ class Stepper {
     if (h <= ht_ && rc_ > 0) return rc_ * std::acos(std::clamp(1 - h / rc_, -1.0, 1.0));
     return st_ + (h - ht_) * inv_sin_;
   }
+  // edge_length(h) for a height h within segment sg, its bounds' taken once for the tool
+  // (an engaged part of a segment often ends on one).
+  [[nodiscard]] double edge_length_in(int sg, double h) const {
+    const auto u = static_cast<std::size_t>(sg);
+    if (h == bounds_[u]) return bound_length_[u];
+    if (h == bounds_[u + 1]) return bound_length_[u + 1];
+    return edge_length(h);
+  }
   [[nodiscard]] int segs() const noexcept { return segs_; }
   // The contour's smallest radius over heights [0, H] (mm; unimodal: at an end).
   [[nodiscard]] double narrowest(double H) const {
@@ -719,6 +733,8 @@ class Stepper {
   static constexpr int kCells = 4096;
   double cell_ = 1;
   std::vector<int> below_;
+  std::vector<int> seg_of_bottom_;    // seg_of(seg_bottom(sg)) for each segment
+  std::vector<double> bound_length_;  // edge_length of each bound
   // Per X/Y board (its stage runs one step at a time): a layer's rows.
   std::array<RowChords, 2> rows_;
   static_assert(sizeof(Dexel) == 4 * sizeof(double) && std::is_standard_layout_v<Dexel>,
@@ -972,6 +988,9 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
   // The records of a step whose boards are cut, in step order (one stage at a time: the
   // merged segments' buffers are reused).
   std::vector<double> seg_h, seg_lo, seg_hi;
+  auto sg_of_q = [&](std::size_t q) {
+    return static_cast<int>(q % static_cast<std::size_t>(segs));
+  };
   auto finish_step = [&](StepWork& sw) {
     const std::array<BoardAcc, 3>& bacc = sw.acc;
     const double tb = sw.tb;
@@ -1007,9 +1026,10 @@ SimResult simulate(const ToolPath& path, const SimTool& tool, const SimSettings&
         step_chips.push_back(
             {static_cast<std::uint32_t>(res.step_count), static_cast<std::uint32_t>(q),
              static_cast<float>(h),
-             static_cast<float>(seg_hi[q] > seg_lo[q] ? stepper.edge_length(seg_hi[q]) -
-                                                            stepper.edge_length(seg_lo[q])
-                                                      : 0.0),
+             static_cast<float>(seg_hi[q] > seg_lo[q]
+                                    ? stepper.edge_length_in(sg_of_q(q), seg_hi[q]) -
+                                          stepper.edge_length_in(sg_of_q(q), seg_lo[q])
+                                    : 0.0),
              static_cast<float>(bacc[2].seg_v[q])});
       }
     }
