@@ -345,6 +345,9 @@ class Stepper {
               h_lo = std::max(h_lo, hmin);
               h_hi = std::min({h_hi, w.H, hmax});
               if (!(h_hi > h_lo)) return;
+              // The ray's material all below the contour at its distance (half the rays that
+              // reach this far): the subtraction would find nothing, so it is not called.
+              if (!has_material(board.intervals(i, j), w.tip_z + h_lo, w.tip_z + h_hi)) return;
               if (board.subtract(i, j, w.tip_z + h_lo, w.tip_z + h_hi, A.removed) > 0) {
                 ++A.updates;
               }
