@@ -251,42 +251,104 @@ TEST(Sim, BoardSummaryKeptCutByCutIsTheRebuiltOne) {
   EXPECT_GT(several, 50);         // cuts taking several pieces at once were made
 }
 
-// The boards' tiles' bounds on their material's highest end (may_hold_above, tighten_top):
-// on the Z board after random cuts (and packing), a tile with a ray holding material above a
-// height is never passed by; once made exact the bound is the highest end itself; a tile cut
-// flat to a floor (the floor behind the tool) holds nothing above it.
+// The boards' tiles' bounds on their material's highest end (may_hold_above, tighten_top), on
+// the Z board (140 x 75 rays: tiles of 64, 64 and 12 rays by 64 and 11, so edge tiles hold
+// rays past the board's edge that do not exist):
+// - every ray cut to a height of its own below the stock's top, one ray a tile split in two
+//   with its upper interval the tile's highest end (so that a ray's first interval is not
+//   its top): once made exact, each tile's bound is that end, no more and no less;
+// - tiles cut flat to a floor or emptied, then packed, their bound made exact from the packed
+//   interval (or none); a cut that brings one back, its bound still a bound and exact again;
+// - random cuts after all that: a tile with a ray holding material above a height is never
+//   passed by.
 TEST(Sim, TileTopsBoundTheMaterial) {
-  const Box3 box{{0, 0, 0}, {7, 3.75, 3}};  // 140 x 75 rays: inner and edge tiles
+  const Box3 box{{0, 0, 0}, {7, 3.75, 3}};
   DexelBoard board(2, box, 0.05);
+  ASSERT_EQ(board.count_u(), 140);
+  ASSERT_EQ(board.count_v(), 75);
+  constexpr int T = DexelBoard::kTile;
   std::mt19937 rng(5);
-  std::uniform_int_distribution<int> ri(0, board.count_u() - 1), rj(0, board.count_v() - 1);
-  std::uniform_real_distribution<double> z(-0.2, 3.2), len(0, 1.5);
   std::vector<Interval> removed;
-  // The highest end in ray (i, j)'s tile, ray by ray.
+  // The highest end in ray (i, j)'s tile, ray by ray (the rays that exist).
   auto top = [&](int i, int j) {
     double t = -std::numeric_limits<double>::infinity();
-    const int ti = i / DexelBoard::kTile, tj = j / DexelBoard::kTile;
-    for (int a = ti * DexelBoard::kTile;
-         a < std::min(board.count_u(), (ti + 1) * DexelBoard::kTile); ++a) {
-      for (int b = tj * DexelBoard::kTile;
-           b < std::min(board.count_v(), (tj + 1) * DexelBoard::kTile); ++b) {
+    const int ti = i / T, tj = j / T;
+    for (int a = ti * T; a < std::min(board.count_u(), (ti + 1) * T); ++a) {
+      for (int b = tj * T; b < std::min(board.count_v(), (tj + 1) * T); ++b) {
         const auto iv = board.intervals(a, b);
         if (!iv.empty()) t = std::max(t, iv.back().hi);
       }
     }
     return t;
   };
+  // The bound is exact once made exact: nothing above the highest end, something just below.
+  auto exact = [&](int i, int j) {
+    const double t = top(i, j);
+    board.tighten_top(i, j);
+    EXPECT_FALSE(board.may_hold_above(i, j, t)) << i << " " << j << " " << t;
+    if (std::isfinite(t)) {
+      EXPECT_TRUE(board.may_hold_above(i, j, std::nextafter(t, -1.0))) << i << " " << j << " " << t;
+    } else {
+      EXPECT_FALSE(board.may_hold_above(i, j, -1e300)) << i << " " << j;
+    }
+  };
+  // 1. Every ray to its own height in [0.5, 2.5], but one ray a tile (somewhere among the
+  //    rays that exist) split: [0, 0.4] and [0.45, top], top in [2.6, 2.95].
+  std::uniform_real_distribution<double> own(0.5, 2.5), high(2.6, 2.95);
+  auto split_ray = [&](int ti, int tj) {
+    return std::pair{ti * T + std::min(5 + ti, board.count_u() - ti * T - 1),
+                     tj * T + std::min(3 + tj, board.count_v() - tj * T - 1)};
+  };
+  for (int i = 0; i < board.count_u(); ++i) {
+    for (int j = 0; j < board.count_v(); ++j) {
+      if (split_ray(i / T, j / T) == std::pair{i, j}) {
+        (void)board.subtract(i, j, 0.4, 0.45, removed);
+        (void)board.subtract(i, j, high(rng), 3.5, removed);
+        ASSERT_EQ(board.intervals(i, j).size(), 2U);
+      } else {
+        (void)board.subtract(i, j, own(rng), 3.5, removed);
+      }
+    }
+  }
+  for (int ti = 0; ti < 3; ++ti) {
+    for (int tj = 0; tj < 2; ++tj) {
+      const auto [i, j] = split_ray(ti, tj);
+      EXPECT_TRUE(board.may_hold_above(i, j, 2.0));  // a bound still (the stock's top)
+      exact(i, j);
+      EXPECT_EQ(top(i, j), board.intervals(i, j).back().hi);  // that ray sets the tile's top
+      EXPECT_LT(top(i, j), 2.96);  // not the stock's top: no ray past the board's edge read
+    }
+  }
+  // 2. Tile (1, 0) cut flat to 0.3 mm, tile (2, 1) (an edge tile) emptied; packed (a tile is
+  //    packed at the second call after its last cut), their bounds left stale until then.
+  for (int i = T; i < 2 * T; ++i) {
+    for (int j = 0; j < T; ++j) (void)board.subtract(i, j, 0.3, 3.5, removed);
+  }
+  for (int i = 2 * T; i < board.count_u(); ++i) {
+    for (int j = T; j < board.count_v(); ++j) (void)board.subtract(i, j, -1.0, 3.5, removed);
+  }
+  const std::size_t packed0 = board.packed_tiles();
+  (void)board.pack_settled();
+  (void)board.pack_settled();
+  EXPECT_EQ(board.packed_tiles(), packed0 + 2);
+  EXPECT_TRUE(board.may_hold_above(T + 3, 7, 2.0));  // stale: a bound, not yet exact
+  exact(T + 3, 7);                                   // from the packed interval: 0.3 mm
+  EXPECT_FALSE(board.may_hold_above(T + 3, 7, 0.3));
+  exact(2 * T + 1, T + 1);  // nothing at all
+  // A cut that removes something brings the flat tile back: its bound still a bound, then
+  // exact again.
+  (void)board.subtract(T + 10, 20, 0.1, 2.0, removed);
+  EXPECT_EQ(board.packed_tiles(), packed0 + 1);
+  EXPECT_TRUE(board.may_hold_above(T + 10, 20, std::nextafter(0.3, 0.0)));
+  exact(T + 10, 20);
+  // 3. Random cuts: a tile with material above a height is never passed by.
+  std::uniform_int_distribution<int> ri(0, board.count_u() - 1), rj(0, board.count_v() - 1);
+  std::uniform_real_distribution<double> z(-0.2, 3.2), len(0, 1.5);
   int passed = 0;
-  for (int round = 0; round < 6; ++round) {
+  for (int round = 0; round < 4; ++round) {
     for (int k = 0; k < 3000; ++k) {
       const double a = z(rng);
       (void)board.subtract(ri(rng), rj(rng), a, a + len(rng), removed);
-    }
-    // The first tile (64 x 64 rays) cut flat at 1 mm in round 2: nothing above the floor.
-    if (round == 2) {
-      for (int i = 0; i < DexelBoard::kTile; ++i) {
-        for (int j = 0; j < DexelBoard::kTile; ++j) (void)board.subtract(i, j, 1.0, 3.0, removed);
-      }
     }
     if (round % 2 == 1) (void)board.pack_settled();
     for (int q = 0; q < 400; ++q) {
@@ -296,16 +358,9 @@ TEST(Sim, TileTopsBoundTheMaterial) {
         ASSERT_TRUE(board.may_hold_above(i, j, lo)) << i << " " << j << " " << lo;
       }
       if (q % 4 == 0) {
-        board.tighten_top(i, j);
-        EXPECT_EQ(board.may_hold_above(i, j, lo), t > lo) << i << " " << j << " " << lo;
-        EXPECT_FALSE(board.may_hold_above(i, j, t));  // exact: nothing above the highest end
+        exact(i, j);
         passed += !board.may_hold_above(i, j, lo);
       }
-    }
-    if (round >= 2) {
-      board.tighten_top(0, 0);
-      EXPECT_FALSE(board.may_hold_above(5, 7, 1.0));
-      EXPECT_TRUE(board.may_hold_above(5, 7, std::nextafter(1.0, 0.0)));
     }
   }
   EXPECT_GT(passed, 20);  // tiles were passed by
