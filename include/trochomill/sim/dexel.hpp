@@ -141,7 +141,8 @@ class DexelBoard {
   /// The material of ray (i, j): its intervals (mm along the axis), the full interval when
   /// untouched, the tile's one interval (or none) when packed. Valid until the ray is next
   /// cut or its tile packed.
-  [[nodiscard]] std::span<const Interval> intervals(int i, int j) const noexcept {
+  [[nodiscard, gnu::always_inline]] std::span<const Interval> intervals(int i,
+                                                                        int j) const noexcept {
     const std::size_t t = tile_index(i, j);
     if (axis_ == 2) return tiles1_[t] ? tiles1_[t][in_tile(i, j)].intervals() : fill_span(t);
     return tiles2_[t] ? tiles2_[t][in_tile(i, j)].intervals() : fill_span(t);
