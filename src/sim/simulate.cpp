@@ -339,7 +339,9 @@ class Stepper {
             const auto reach = contour_.heights_reaching(rho - w.r_off);
             if (!reach) continue;
             const double hmin = reach->lo, hmax = reach->hi;
-            const auto [ra0, ra1] = strip ? closing_angles(w, rho) : std::pair{w.a0, w.a1};
+            // (Plain variables, not a structured binding: the lambda below captures them.)
+            const auto angles = strip ? closing_angles(w, rho) : std::pair{w.a0, w.a1};
+            const double ra0 = angles.first, ra1 = angles.second;
             A.removed.clear();
             auto cut_h = [&](double h_lo, double h_hi) {
               h_lo = std::max(h_lo, hmin);
