@@ -33,6 +33,7 @@ using sim_detail::kInf;
 using sim_detail::rays_maybe;
 using sim_detail::row_chords;
 using sim_detail::RowChords;
+using sim_detail::SectorSides;
 using sim_detail::SectorSlicer;
 
 // Steps whose path samples are taken at a time (simulate; 5.8 MB of samples).
@@ -82,37 +83,6 @@ bool has_material(std::span<const Interval> ray, double lo, double hi) {
   }
   return false;
 }
-
-// Whether a point at angle th (rad) lies in a sector [a0, a1] narrower than pi,
-// contains_angle(a0, a1, th), without the point's arc tangent where it lies clearly on one
-// side of an edge: rho sin(th - a0) and rho sin(a1 - th) are its cross products with the
-// edges' directions, both positive inside and one negative outside. Within `margin` of an
-// edge (rad: far beyond the rounding of the products and of contains_angle's reduction of
-// angles that large) the arc tangent decides, so the answer is contains_angle's to the bit.
-class SectorSides {
- public:
-  SectorSides(double a0, double a1, bool use)
-      : use_(use && a1 - a0 < 0.5 * kPi),
-        c0_(std::cos(a0)),
-        s0_(std::sin(a0)),
-        c1_(std::cos(a1)),
-        s1_(std::sin(a1)),
-        margin_(1e-9 + 1e-13 * std::max(std::abs(a0), std::abs(a1))) {}
-  // (dx, dy) from the centre (mm), rho its length; exact() is contains_angle's answer.
-  template <class Exact>
-  bool inside(double dx, double dy, double rho, Exact&& exact) const {
-    if (use_) {
-      const double e0 = c0_ * dy - s0_ * dx, e1 = s1_ * dx - c1_ * dy, m = margin_ * rho;
-      if (e0 > m && e1 > m) return true;
-      if (e0 < -m || e1 < -m) return false;
-    }
-    return exact();
-  }
-
- private:
-  bool use_;
-  double c0_, s0_, c1_, s1_, margin_;
-};
 
 // One tooth's wedge at one step, about one centre.
 struct Wedge {
@@ -687,9 +657,7 @@ class Stepper {
     } else if (!(h >= kCells * cell_)) {  // NaN: as std::upper_bound takes it
       const auto inner0 = bounds_.begin() + 1, inner1 = bounds_.end() - 1;
       sg = static_cast<int>(std::upper_bound(inner0, inner1, h) - inner0);
-    } else {
-      while (sg > 0 && bounds_[static_cast<std::size_t>(sg)] > h) --sg;
-    }
+    }  // (at or above the top bound every inner bound lies below: the last segment)
     if ((sg == 0 || h - seg_bottom(sg) > kBoundSlack) &&
         (sg == segs_ - 1 || seg_top(sg) - h > kBoundSlack)) {
       return sg;
