@@ -1,10 +1,14 @@
 // Process metrics of a slot program: see include/trochomill/analysis.hpp.
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -288,7 +292,11 @@ ToothChip tooth_chip(const DenseCentre& c, const Tool& tool, double omega, doubl
 // program's samples, and its texture: over a run-in, five cut-offs and a run-out in the middle
 // of the cut stretch (ISO 21920-3's traverse), 0.8 mm ones first and longer ones where the Ra
 // found asks for them and the slot holds them.
-void predict_floor(const Job& job, const PathSamples& s, double omega, ProcessMetrics& m) {
+struct FloorFigures {
+  std::array<FloorProfile, 3> floor;
+  std::array<std::optional<ProfileTexture>, 3> texture_floor;
+};
+void predict_floor(const Job& job, const PathSamples& s, double omega, FloorFigures& m) {
   const double R = job.tool.radius_mm(), W = job.slot.width_mm, depth = job.slot.depth_mm;
   double ylo = std::numeric_limits<double>::infinity(), yhi = -ylo;
   for (std::size_t i = 0; i < s.size(); ++i) {
@@ -356,6 +364,72 @@ void predict_floor(const Job& job, const PathSamples& s, double omega, ProcessMe
   });
 }
 
+// What needs only the path and its samples, not the engagement (the time with the machine's
+// acceleration, the predicted floor) runs on TBB's threads while this one runs the kernel, and
+// is taken where the figures need it: a failure is rethrown there, as if it had been computed
+// there; figures that end before it drop it. The acceleration time is taken early: whichever
+// thread claims it first computes it (this one when no other has started it), so this one never
+// waits on the group there, where it could pick up a line of the floor.
+class Ahead {
+ public:
+  Ahead(const ToolPath& path, const Job& job, const PathSamples& s, bool floor)
+      : path_(path), job_(job), floor_(floor) {
+    group_.run([this, &s] {
+      accel();
+      if (!floor_) return;
+      try {
+        const double omega = rpm_to_rad_per_s(job_.cutting.spindle_speed_rpm) *
+                             (job_.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
+        predict_floor(job_, s, omega, figures_);
+      } catch (...) {
+        floor_error_ = std::current_exception();
+      }
+    });
+  }
+  Ahead(const Ahead&) = delete;
+  Ahead& operator=(const Ahead&) = delete;
+  ~Ahead() {
+    group_.cancel();
+    group_.wait();
+  }
+  [[nodiscard]] bool has_floor() const { return floor_; }
+  double accel_time_s() {
+    accel();
+    accel_state_.wait(kClaimed);  // returns at once unless another thread is computing it
+    if (accel_error_) std::rethrow_exception(accel_error_);
+    return accel_time_s_;
+  }
+  FloorFigures take_floor() {
+    group_.wait();
+    if (floor_error_) std::rethrow_exception(floor_error_);
+    return std::move(figures_);
+  }
+
+ private:
+  static constexpr int kFree = 0, kClaimed = 1, kDone = 2;
+  void accel() {
+    int free = kFree;
+    if (!accel_state_.compare_exchange_strong(free, kClaimed)) return;
+    try {
+      accel_time_s_ = estimate_time_s(path_, job_.machine);
+    } catch (...) {
+      accel_error_ = std::current_exception();
+    }
+    accel_state_.store(kDone);
+    accel_state_.notify_all();
+  }
+
+  const ToolPath& path_;
+  const Job& job_;
+  bool floor_;
+  std::atomic<int> accel_state_{kFree};
+  double accel_time_s_ = 0;
+  std::exception_ptr accel_error_;
+  FloorFigures figures_;
+  std::exception_ptr floor_error_;
+  tbb::task_group group_;  // last: destroyed first, after the destructor's wait
+};
+
 }  // namespace
 
 double estimate_analysis_memory(const Job& job, const ToolPath& path) {
@@ -374,7 +448,17 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   opt.steps_per_tooth = job.analysis.steps_per_tooth;
   opt.hooks = hooks;
   hooks.begin("engagement");
-  m.series = compute_engagement(path, job, opt);
+  if (opt.steps_per_tooth < 1) {
+    throw InputError(fmt::format("steps per tooth must be >= 1, got {}", opt.steps_per_tooth));
+  }
+  const PathSamples samples =
+      sample_by_time(path, tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth);
+  // The acceleration time and (in a straight slot, where the figures reach it) the floor are
+  // computed beside the kernel.
+  Ahead ahead(
+      path, job, samples,
+      parts.floor && !(job.slot.curved() || job.pocket.defined() || !(job.slot.width_mm > 0)));
+  m.series = compute_engagement(samples, job, opt);
   const EngagementSeries& e = m.series;
   const PathSamples& s = e.samples;
   const std::size_t n = s.size();
@@ -407,7 +491,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   m.path_length_mm = path.length_mm();
   m.feed_length_mm = path.feed_length_mm();
   m.machining_time_s = path.duration_s();
-  m.machining_time_accel_s = estimate_time_s(path, job.machine);
+  m.machining_time_accel_s = ahead.accel_time_s();
   m.slot_volume_mm3 = W * job.slot.length_mm * depth;
   // What the program removes: the plan-view area the tool sweeps into stock times the stock's
   // height over it, sample by sample (a program need not clear the slot, may cut it twice or
@@ -719,9 +803,33 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
         }
       }
     };
+    // The two walls at once (each its own period window; the left one's failure first, as when
+    // they were taken in turn).
+    const auto both_path_walls = [&] {
+      WallProfile l, r;
+      std::exception_ptr fl, fr;
+      tbb::parallel_invoke(
+          [&] {
+            try {
+              l = path_wall(true, yl);
+            } catch (...) {
+              fl = std::current_exception();
+            }
+          },
+          [&] {
+            try {
+              r = path_wall(false, yr);
+            } catch (...) {
+              fr = std::current_exception();
+            }
+          });
+      if (fl) std::rethrow_exception(fl);
+      m.walls_path.left = std::move(l);
+      if (fr) std::rethrow_exception(fr);
+      m.walls_path.right = std::move(r);
+    };
     try {
-      m.walls_path.left = path_wall(true, yl);
-      m.walls_path.right = path_wall(false, yr);
+      both_path_walls();
     } catch (const InputError&) {
       // A program without a steady cycle whose window has no slot walls (a spiral, a pocket:
       // nothing cuts along the walls' y there): the walls, their texture and the floor's
@@ -733,8 +841,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
     if (std::max(m.walls_path.left.waviness_mm, m.walls_path.right.waviness_mm) >
         0.5 * wall_reach) {
       dense = dense_samples(true);
-      m.walls_path.left = path_wall(true, yl);
-      m.walls_path.right = path_wall(false, yr);
+      both_path_walls();
     }
 
     // Tooth level: tooth tips every 0.1 degree of spindle rotation while the centre is near a
@@ -826,7 +933,9 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
         }
         return walls_from_tips(tr, -1e-9, yc - period / 2, yc + period / 2, kWallPoints, band);
       };
-      for (const bool left : {true, false}) {
+      // Each wall at tooth level and its texture, the two at once (the left one's failure
+      // first, as when they were taken in turn).
+      const auto tooth_wall = [&](const bool left) {
         const double wp = left ? m.walls_path.left.waviness_mm : m.walls_path.right.waviness_mm;
         double& yc = left ? yl : yr;
         for (double band = 1.5 * wp + base;; band *= 2) {
@@ -860,14 +969,30 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
             break;
           }
         }
-      }
-      // The walls' texture along y: one period of the tooth-level profile.
-      for (const bool left : {true, false}) {
+        // The wall's texture along y: one period of the tooth-level profile.
         const WallProfile& wall = left ? m.walls_tooth.left : m.walls_tooth.right;
         if (wall.x_mm.size() >= 3) {
           (left ? m.texture_left : m.texture_right) = wall_texture(wall, left);
         }
-      }
+      };
+      std::exception_ptr fl, fr;
+      tbb::parallel_invoke(
+          [&] {
+            try {
+              tooth_wall(true);
+            } catch (...) {
+              fl = std::current_exception();
+            }
+          },
+          [&] {
+            try {
+              tooth_wall(false);
+            } catch (...) {
+              fr = std::current_exception();
+            }
+          });
+      if (fl) std::rethrow_exception(fl);
+      if (fr) std::rethrow_exception(fr);
     }
 
     // Bottom imprints: one circle per tooth pass at the floor in the window.
@@ -884,7 +1009,12 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
       }
     }
 
-    if (parts.floor) predict_floor(job, s, omega, m);
+    if (parts.floor) {
+      FloorFigures f = ahead.has_floor() ? ahead.take_floor() : FloorFigures{};
+      if (!ahead.has_floor()) predict_floor(job, s, omega, f);
+      m.floor = std::move(f.floor);
+      m.texture_floor = std::move(f.texture_floor);
+    }
 
     // Exact chip between adjacent teeth's tip trajectories, at the angle of each sample's
     // h_max where the previous tooth's circle bounds it (elsewhere the older surface does and

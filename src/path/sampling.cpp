@@ -1,6 +1,8 @@
 // Path sampling by time, by length and by spindle angle (one function evaluates every
 // sample: sample_at), and tooth-tip trajectories with radial and axial runout.
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,29 +17,44 @@ namespace {
 
 constexpr double kMaxSamples = 2e8;  // ~20 GB of samples: refuse rather than exhaust memory
 
-void reserve(PathSamples& out, std::size_t n) {
+// Where a sample lies: its segment and the length along it (mm).
+struct Place {
+  std::size_t seg;
+  double s_in_seg;
+};
+
+// The samples at the places, evaluated on TBB's threads (each sample on its own: the same
+// values whatever the thread count).
+PathSamples samples_at(const ToolPath& path, const std::vector<Place>& at) {
+  const std::size_t n = at.size();
+  PathSamples out;
   for (auto* v : {&out.t_s, &out.s_mm, &out.x_mm, &out.y_mm, &out.z_mm, &out.tx, &out.ty, &out.tz,
                   &out.curvature_per_mm}) {
-    v->reserve(n);
+    v->resize(n);
   }
-  out.segment.reserve(n);
-}
-
-void push_sample(const ToolPath& path, std::size_t seg, double s_in_seg, PathSamples& out) {
-  const Segment& g = path.segments()[seg];
-  const Segment::Frame f = g.frame_at(s_in_seg);
-  const Vec3& p = f.point;
-  const Vec3& t = f.tangent;
-  out.t_s.push_back(path.segment_start_time_s(seg) + s_in_seg / (g.speed_mm_per_min() / 60.0));
-  out.s_mm.push_back(path.segment_start_length_mm(seg) + s_in_seg);
-  out.x_mm.push_back(p.x());
-  out.y_mm.push_back(p.y());
-  out.z_mm.push_back(p.z());
-  out.tx.push_back(t.x());
-  out.ty.push_back(t.y());
-  out.tz.push_back(t.z());
-  out.curvature_per_mm.push_back(f.curvature_per_mm);
-  out.segment.push_back(seg);
+  out.segment.resize(n);
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const std::size_t seg = at[i].seg;
+          const double s_in_seg = at[i].s_in_seg;
+          const Segment& g = path.segments()[seg];
+          const Segment::Frame f = g.frame_at(s_in_seg);
+          const Vec3& p = f.point;
+          const Vec3& t = f.tangent;
+          out.t_s[i] = path.segment_start_time_s(seg) + s_in_seg / (g.speed_mm_per_min() / 60.0);
+          out.s_mm[i] = path.segment_start_length_mm(seg) + s_in_seg;
+          out.x_mm[i] = p.x();
+          out.y_mm[i] = p.y();
+          out.z_mm[i] = p.z();
+          out.tx[i] = t.x();
+          out.ty[i] = t.y();
+          out.tz[i] = t.z();
+          out.curvature_per_mm[i] = f.curvature_per_mm;
+          out.segment[i] = seg;
+        }
+      });
+  return out;
 }
 
 std::size_t sample_count(double total, double step, const char* what) {
@@ -64,20 +81,20 @@ PathSamples sample_uniform(const ToolPath& path, double step, double total, cons
   if (path.empty())
     throw InputError("the path is empty (a program without motion?): nothing to sample");
   const std::size_t n = sample_count(total, step, what);
-  PathSamples out;
-  reserve(out, n + 2);
+  std::vector<Place> at;
+  at.reserve(n + 2);
   std::size_t seg = 0;
   const std::size_t nseg = path.segments().size();
   double last = -1;
   auto emit = [&](double v) {
     while (seg + 1 < nseg && start(seg + 1) <= v) ++seg;
     const double local = (v - start(seg)) * rate(seg);
-    push_sample(path, seg, std::min(local, path.segments()[seg].length_mm()), out);
+    at.push_back({seg, std::min(local, path.segments()[seg].length_mm())});
     last = v;
   };
   for (std::size_t i = 0; i <= n; ++i) emit(static_cast<double>(i) * step);
   if (total - last > 1e-12 * std::max(1.0, total)) emit(total);
-  return out;
+  return samples_at(path, at);
 }
 
 }  // namespace
@@ -99,8 +116,8 @@ PathSamples sample_by_length(const ToolPath& path, double ds_mm) {
 PathSamples sample_at_times(const ToolPath& path, const std::vector<double>& times_s) {
   if (path.empty())
     throw InputError("the path is empty (a program without motion?): nothing to sample");
-  PathSamples out;
-  reserve(out, times_s.size());
+  std::vector<Place> at;
+  at.reserve(times_s.size());
   std::size_t seg = 0;
   const std::size_t nseg = path.segments().size();
   double prev = -std::numeric_limits<double>::infinity();
@@ -109,10 +126,13 @@ PathSamples sample_at_times(const ToolPath& path, const std::vector<double>& tim
     prev = t;
     while (seg + 1 < nseg && path.segment_start_time_s(seg + 1) <= t) ++seg;
     const Segment& g = path.segments()[seg];
-    const double local = std::clamp(
-        (t - path.segment_start_time_s(seg)) * (g.speed_mm_per_min() / 60.0), 0.0, g.length_mm());
-    push_sample(path, seg, local, out);
-    out.t_s.back() = std::clamp(t, 0.0, path.duration_s());
+    at.push_back(
+        {seg, std::clamp((t - path.segment_start_time_s(seg)) * (g.speed_mm_per_min() / 60.0), 0.0,
+                         g.length_mm())});
+  }
+  PathSamples out = samples_at(path, at);
+  for (std::size_t i = 0; i < times_s.size(); ++i) {
+    out.t_s[i] = std::clamp(times_s[i], 0.0, path.duration_s());
   }
   return out;
 }
