@@ -4,6 +4,7 @@
 #include "trochomill/analysis.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <iostream>
@@ -13,6 +14,7 @@
 #include "trochomill/gcode.hpp"
 #include "trochomill/io.hpp"
 #include "trochomill/mechanism.hpp"
+#include "trochomill/report/analysis.hpp"
 #include "trochomill/units.hpp"
 
 namespace trochomill {
@@ -276,6 +278,60 @@ TEST(Analysis, GcodeEqualsJob) {
   EXPECT_NEAR(a.walls_path.left.waviness_mm, b.walls_path.left.waviness_mm, 2e-4);
   EXPECT_NEAR(a.walls_path.right.waviness_mm, b.walls_path.right.waviness_mm, 2e-4);
   EXPECT_NEAR(a.engagement_angle_max_deg, b.engagement_angle_max_deg, 0.2);
+}
+
+// `analyze` runs parts beside the kernel (the floor, the acceleration time, the steady cycle's
+// run once its window can be told from the flags known so far, the two walls): the figures do
+// not depend on the thread count, nor on whether that early steady run is taken. The program
+// with a long run back and forth through the cut slot after the cut (x = 0, where the slot is
+// clear) keeps the tool below the top long after the last cut, so the window told early (the last
+// sample below the top taken for the last cut) is not the one found after the kernel: the run is
+// dropped and the steady cycle run again; with a single thread everything runs in turn. Every
+// figure of the JSON must be the same to the last digit.
+TEST(Analysis, TheFiguresDoNotDependOnTheThreadCountOrTheEarlyRun) {
+  const Job job = load_job(test::example("wagih2023/trochoidal.toml"));
+  const PlannedPath pp = plan_path(job);
+  GcodeWriteOptions wo;
+  wo.dialect = Dialect::linuxcnc;
+  std::string text = write_gcode(job, pp.path, wo);
+  const std::size_t end = text.rfind("G0 Z");
+  ASSERT_NE(end, std::string::npos);
+  std::string back_and_forth = "G1 X0 Y18\n";
+  for (int k = 0; k < 10; ++k) back_and_forth += "G1 X0 Y2\nG1 X0 Y18\n";
+  text.insert(end, back_and_forth);
+  const GcodeProgram back = read_gcode(text, "back.ngc");
+  for (const ToolPath* path : {&pp.path, &back.path}) {
+    const std::string all = metrics_json(job, analyze_process(job, *path));
+    std::string one;
+    {
+      const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+      one = metrics_json(job, analyze_process(job, *path));
+    }
+    EXPECT_EQ(all, one);
+    EXPECT_NE(all.find("\"cycle_time_s\""), std::string::npos);
+  }
+  // The program's steady cycle is the planned path's (the same cycle of the endless slot, the
+  // program's coordinates rounded to 1e-4 mm).
+  const ProcessMetrics a = analyze_process(job, pp.path), b = analyze_process(job, back.path);
+  EXPECT_TRUE(b.periodic);
+  EXPECT_NEAR(a.cycle_time_s, b.cycle_time_s, 1e-4);
+  EXPECT_NEAR(a.h_max_mm, b.h_max_mm, 2e-4);
+  // Its cycle starts where the window is looked for: from the middle of the cutting time (the
+  // first to the last sample that cuts), within a cycle and a half (the steady run's cycle may
+  // start half a cycle before the window, the window up to a cycle after the middle). The
+  // early run's window, from the middle up to the last sample below the top, lies about 16 s
+  // later (the 320 mm back and forth at 10 mm/s, halved: five cycles of 3.14 s).
+  const EngagementSeries& e = b.series;
+  std::size_t c0 = e.samples.size(), c1 = 0;
+  for (std::size_t i = 0; i < e.samples.size(); ++i) {
+    if (e.swept_rate_mm2_per_s[i] > 1e-6 * 2 * job.tool.radius_mm() * 10.0) {
+      c0 = std::min(c0, i);
+      c1 = i;
+    }
+  }
+  ASSERT_LT(c0, c1);
+  const double t_mid = 0.5 * (e.samples.t_s[c0] + e.samples.t_s[c1]);
+  EXPECT_NEAR(b.cycle_start_s, t_mid, 1.5 * b.cycle_time_s);
 }
 
 // Two independent models of the steady cycle agree: analyze's kernel run (endless slot)

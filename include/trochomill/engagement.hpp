@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -40,6 +41,8 @@ struct AngleArc {
   [[nodiscard]] double sweep_rad() const noexcept { return end_rad - start_rad; }
 };
 
+struct EngagementSeries;
+
 struct EngagementOptions {
   int steps_per_tooth = 1;  ///< samples per tooth pass (>= 1); the chip spans this many
   /// Stock unbounded along +Y (the slot end ignored): a steady-state cycle as in an endless
@@ -52,6 +55,10 @@ struct EngagementOptions {
   /// mesh (a vertical line crossing it an odd number of times). Null: the job's [stock] mesh
   /// (Job::stock_mesh) where it has one, else its box.
   const Mesh* stock_mesh = nullptr;
+  /// Called on the kernel's thread after every 256th sample with the series so far: its
+  /// entries before `done` are final, the rest not computed yet (`analyze` starts the steady
+  /// cycle's run from it once the window can be told).
+  std::function<void(const EngagementSeries& so_far, std::size_t done)> on_samples;
 };
 
 /// Engagement along a path, structure of arrays (one entry per sample).

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
 #include <algorithm>
@@ -123,6 +124,79 @@ bool repeats_with_period(const PathSamples& s, std::size_t c0, std::size_t c1, s
   return checked > 0 && 2 * checked >= total;  // most of the stretch checked
 }
 
+// The first sample of the middle of the cutting time [c0, c1] (at this share of it), and the
+// start of cutting at or after it among the first `known` samples' flags (where they show
+// none: the middle sample itself when all are known, else nullopt: not known yet).
+std::optional<std::size_t> cycle_start(const PathSamples& s, const std::vector<char>& cutting,
+                                       std::size_t c0, std::size_t c1, double at,
+                                       std::size_t known) {
+  const double t_mid = s.t_s[c0] + at * (s.t_s[c1] - s.t_s[c0]);
+  std::size_t mid = c0;
+  while (mid < c1 && s.t_s[mid] < t_mid) ++mid;
+  // Start of cutting at or after the middle (else the middle sample itself).
+  for (std::size_t i = std::max<std::size_t>(mid, 1); i <= c1; ++i) {
+    if (i >= known) return std::nullopt;
+    if (cutting[i] && !cutting[i - 1]) return i;
+  }
+  if (c1 >= known) return std::nullopt;
+  return mid;
+}
+
+// The cycle from sample i0 on, if the cutting part [c0, c1] of the path repeats itself with the
+// step there.
+std::optional<Window> cycle_from(const PathSamples& s, std::size_t c0, std::size_t c1,
+                                 std::size_t i0, double step_mm) {
+  const std::size_t n = s.size();
+  // The same point one step further along +Y, passed in the same direction: every
+  // approach to it is a candidate period, the shortest one the path repeats itself over
+  // is the cycle (docs/models.md section 8, the steady cycle). A nearer approach after a
+  // short stretch of path is no cycle: where the path runs along +Y (a loop's side, a
+  // circular family's advance) the shifted point comes by one step later on the same pass.
+  const double tx = s.x_mm[i0], ty = s.y_mm[i0] + step_mm;
+  double spacing = 0;
+  for (std::size_t i = i0 + 1; i < std::min(n, i0 + 64); ++i) {
+    spacing = std::max(spacing, std::hypot(s.x_mm[i] - s.x_mm[i - 1], s.y_mm[i] - s.y_mm[i - 1]));
+  }
+  std::size_t best = n;
+  double best_d = std::numeric_limits<double>::infinity();
+  const std::optional<double> turn_s = full_turn_s(s, i0, c1);  // once per start
+  const auto try_candidate = [&](std::size_t j) -> std::optional<Window> {
+    if (s.z_mm[j] >= 0) return std::nullopt;
+    // Refine along the tangent: the point is reached at t + (target - p).t / v.
+    const double v = (s.s_mm[j] - s.s_mm[j - 1]) / (s.t_s[j] - s.t_s[j - 1]);
+    const double ds = (tx - s.x_mm[j]) * s.tx[j] + (ty - s.y_mm[j]) * s.ty[j];
+    const double period = s.t_s[j] + ds / v - s.t_s[i0];
+    if (!(period > 0) || !turn_s || !repeats_with_period(s, c0, c1, i0, *turn_s, period, step_mm)) {
+      return std::nullopt;
+    }
+    Window w;
+    w.first = i0;
+    w.last = j;
+    w.t0_s = s.t_s[i0];
+    w.duration_s = period;
+    w.length_mm = s.s_mm[j] + ds - s.s_mm[i0];
+    w.periodic = true;
+    return w;
+  };
+  for (std::size_t i = i0 + 1; i < n; ++i) {
+    const double d = std::hypot(s.x_mm[i] - tx, s.y_mm[i] - ty);
+    const double dir = s.tx[i] * s.tx[i0] + s.ty[i] * s.ty[i0];
+    if (d <= spacing + 1e-9 && dir > 0.9 && d < best_d) {
+      best = i;
+      best_d = d;
+    } else if (best < n && d > 2 * spacing + 1e-9) {
+      // Past the nearest approach: a candidate.
+      if (auto w = try_candidate(best)) return *w;
+      best = n;
+      best_d = std::numeric_limits<double>::infinity();
+    }
+  }
+  if (best < n) {
+    if (auto w = try_candidate(best)) return *w;
+  }
+  return std::nullopt;
+}
+
 Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, double step_mm,
                    bool trochoidal) {
   const PathSamples& s = e.samples;
@@ -137,65 +211,8 @@ Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, 
   // a ramp down a deep slot, may take the first half).
   for (const double at : {0.5, 0.7, 0.85}) {
     if (!trochoidal || !(step_mm > 0)) break;  // no period to look for
-    const double t_mid = s.t_s[c0] + at * (s.t_s[c1] - s.t_s[c0]);
-    std::size_t mid = c0;
-    while (mid < c1 && s.t_s[mid] < t_mid) ++mid;
-    // Start of cutting at or after the middle (else the middle sample itself).
-    std::size_t i0 = mid;
-    for (std::size_t i = std::max<std::size_t>(mid, 1); i <= c1; ++i) {
-      if (cutting[i] && !cutting[i - 1]) {
-        i0 = i;
-        break;
-      }
-    }
-    // The same point one step further along +Y, passed in the same direction: every
-    // approach to it is a candidate period, the shortest one the path repeats itself over
-    // is the cycle (docs/models.md section 8, the steady cycle). A nearer approach after a
-    // short stretch of path is no cycle: where the path runs along +Y (a loop's side, a
-    // circular family's advance) the shifted point comes by one step later on the same pass.
-    const double tx = s.x_mm[i0], ty = s.y_mm[i0] + step_mm;
-    double spacing = 0;
-    for (std::size_t i = i0 + 1; i < std::min(n, i0 + 64); ++i) {
-      spacing = std::max(spacing, std::hypot(s.x_mm[i] - s.x_mm[i - 1], s.y_mm[i] - s.y_mm[i - 1]));
-    }
-    std::size_t best = n;
-    double best_d = std::numeric_limits<double>::infinity();
-    const std::optional<double> turn_s = full_turn_s(s, i0, c1);  // once per start
-    const auto try_candidate = [&](std::size_t j) -> std::optional<Window> {
-      if (s.z_mm[j] >= 0) return std::nullopt;
-      // Refine along the tangent: the point is reached at t + (target - p).t / v.
-      const double v = (s.s_mm[j] - s.s_mm[j - 1]) / (s.t_s[j] - s.t_s[j - 1]);
-      const double ds = (tx - s.x_mm[j]) * s.tx[j] + (ty - s.y_mm[j]) * s.ty[j];
-      const double period = s.t_s[j] + ds / v - s.t_s[i0];
-      if (!(period > 0) || !turn_s ||
-          !repeats_with_period(s, c0, c1, i0, *turn_s, period, step_mm)) {
-        return std::nullopt;
-      }
-      Window w;
-      w.first = i0;
-      w.last = j;
-      w.t0_s = s.t_s[i0];
-      w.duration_s = period;
-      w.length_mm = s.s_mm[j] + ds - s.s_mm[i0];
-      w.periodic = true;
-      return w;
-    };
-    for (std::size_t i = i0 + 1; i < n; ++i) {
-      const double d = std::hypot(s.x_mm[i] - tx, s.y_mm[i] - ty);
-      const double dir = s.tx[i] * s.tx[i0] + s.ty[i] * s.ty[i0];
-      if (d <= spacing + 1e-9 && dir > 0.9 && d < best_d) {
-        best = i;
-        best_d = d;
-      } else if (best < n && d > 2 * spacing + 1e-9) {
-        // Past the nearest approach: a candidate.
-        if (auto w = try_candidate(best)) return *w;
-        best = n;
-        best_d = std::numeric_limits<double>::infinity();
-      }
-    }
-    if (best < n) {
-      if (auto w = try_candidate(best)) return *w;
-    }
+    const std::optional<std::size_t> i0 = cycle_start(s, cutting, c0, c1, at, n);
+    if (auto w = cycle_from(s, c0, c1, *i0, step_mm)) return *w;
   }
   // The middle third of the cutting time.
   Window w;
@@ -364,26 +381,58 @@ void predict_floor(const Job& job, const PathSamples& s, double omega, FloorFigu
   });
 }
 
+// A computation a TBB task may start early: whoever claims it first runs it (the caller of
+// `get` when no task has started it), and `get` waits only for a run already under way, never
+// on a task group (where this thread could pick up unrelated work, a line of the floor).
+template <class T>
+class Claim {
+ public:
+  explicit Claim(std::function<T()> f) : f_(std::move(f)) {}
+  void run() {
+    int free = kFree;
+    if (!state_.compare_exchange_strong(free, kClaimed)) return;
+    try {
+      value_.emplace(f_());
+    } catch (...) {
+      error_ = std::current_exception();
+    }
+    state_.store(kDone);
+    state_.notify_all();
+  }
+  T& get() {
+    run();
+    state_.wait(kClaimed);  // returns at once unless another thread is running it
+    if (error_) std::rethrow_exception(error_);
+    return *value_;
+  }
+
+ private:
+  static constexpr int kFree = 0, kClaimed = 1, kDone = 2;
+  std::function<T()> f_;
+  std::atomic<int> state_{kFree};
+  std::optional<T> value_;
+  std::exception_ptr error_;
+};
+
 // What needs only the path and its samples, not the engagement (the time with the machine's
 // acceleration, the predicted floor) runs on TBB's threads while this one runs the kernel, and
 // is taken where the figures need it: a failure is rethrown there, as if it had been computed
-// there; figures that end before it drop it. The acceleration time is taken early: whichever
-// thread claims it first computes it (this one when no other has started it), so this one never
-// waits on the group there, where it could pick up a line of the floor.
+// there; figures that end before it drop it.
 class Ahead {
  public:
   Ahead(const ToolPath& path, const Job& job, const PathSamples& s, bool floor)
-      : path_(path), job_(job), floor_(floor) {
-    group_.run([this, &s] {
-      accel();
-      if (!floor_) return;
-      try {
-        const double omega = rpm_to_rad_per_s(job_.cutting.spindle_speed_rpm) *
-                             (job_.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
-        predict_floor(job_, s, omega, figures_);
-      } catch (...) {
-        floor_error_ = std::current_exception();
-      }
+      : accel_([&path, &job] { return estimate_time_s(path, job.machine); }),
+        floor_([&job, &s] {
+          FloorFigures f;
+          const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
+                               (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
+          predict_floor(job, s, omega, f);
+          return f;
+        }),
+        has_floor_(floor) {
+    group_.run([this] {
+      accel_.run();
+      if (has_floor_) floor_.run();
     });
   }
   Ahead(const Ahead&) = delete;
@@ -392,42 +441,143 @@ class Ahead {
     group_.cancel();
     group_.wait();
   }
-  [[nodiscard]] bool has_floor() const { return floor_; }
-  double accel_time_s() {
-    accel();
-    accel_state_.wait(kClaimed);  // returns at once unless another thread is computing it
-    if (accel_error_) std::rethrow_exception(accel_error_);
-    return accel_time_s_;
+  [[nodiscard]] bool has_floor() const { return has_floor_; }
+  double accel_time_s() { return accel_.get(); }
+  FloorFigures take_floor() { return std::move(floor_.get()); }
+
+ private:
+  Claim<double> accel_;
+  Claim<FloorFigures> floor_;
+  bool has_floor_;
+  tbb::task_group group_;
+};
+
+// The steady cycle of a periodic window: the path from 2.5 cycles (or more, see below) before
+// the window to 1.55 after, with the stock open ahead, so the engagement is the endless slot's
+// (a real slot as long as the tool's reach, like the paper's 20 mm examples, never gets
+// there), and in it the cycle [first, last) that starts cutting first from half a cycle before
+// the window on.
+struct Steady {
+  EngagementSeries e;
+  std::vector<char> cut;
+  std::size_t first = 0, last = 0;
+};
+Steady steady_cycle(const Job& job, const ToolPath& path, const EngagementOptions& opt,
+                    const Window& w, double dt_sample, double thr) {
+  const double R = job.tool.radius_mm();
+  const double T = w.duration_s;
+  // History: 2.5 cycles rebuild the region a cycle's own orbit covers; when the orbit is
+  // wider than the tool (a > R) it leaves an island at its centre that only the cycles
+  // whose orbit passes over it remove, about (b + R) / s cycles back.
+  const SlotGeometry sg = slot_geometry(job);
+  const double a = sg.orbit_a_mm, b = sg.orbit_b_mm;
+  const double history =
+      2.5 + (a > R && job.path.step_mm > 0 ? std::ceil((b + R) / job.path.step_mm) : 0.0);
+  const double from = std::max(0.0, w.t0_s - history * T);
+  const double to = std::min(path.duration_s(), w.t0_s + 1.55 * T);
+  std::vector<double> times;
+  for (double t = from; t <= to; t += dt_sample) times.push_back(t);
+  EngagementOptions so = opt;
+  so.open_ahead = true;
+  so.on_samples = nullptr;
+  Steady st;
+  st.e = compute_engagement(sample_at_times(path, times), job, so);
+  const EngagementSeries& steady = st.e;
+  std::vector<char>& steady_cut = st.cut;
+  steady_cut.assign(steady.samples.size(), 0);
+  for (std::size_t i = 0; i < steady_cut.size(); ++i) {
+    steady_cut[i] = steady.swept_rate_mm2_per_s[i] > thr ? 1 : 0;
   }
-  FloorFigures take_floor() {
+  std::size_t j0 = 0;
+  for (std::size_t i = 1; i < steady_cut.size(); ++i) {
+    if (steady.samples.t_s[i] >= w.t0_s - 0.5 * T && steady_cut[i] && !steady_cut[i - 1]) {
+      j0 = i;
+      break;
+    }
+  }
+  if (j0 == 0) {  // no cooling in the cycle: start where the window does
+    while (j0 + 1 < steady_cut.size() && steady.samples.t_s[j0] < w.t0_s - 0.5 * T) ++j0;
+  }
+  std::size_t j1 = j0;
+  while (j1 < steady_cut.size() && steady.samples.t_s[j1] < steady.samples.t_s[j0] + T - 1e-9) {
+    ++j1;
+  }
+  st.first = j0;
+  st.last = j1;
+  return st;
+}
+
+// The steady cycle's run, started on TBB's threads while the kernel still runs over the whole
+// program: from the window that the cutting flags known so far give with the last sample below
+// the stock's top standing for the last cutting one (the window is looked for from the middle
+// of the cutting time on, so it is known long before the kernel ends). Taken only where the
+// window found afterwards is the same one (then the run is the same, and so are its figures);
+// otherwise dropped.
+class SteadyAhead {
+ public:
+  SteadyAhead(const Job& job, const ToolPath& path, const EngagementOptions& opt, double dt_sample,
+              double thr, const PathSamples& s)
+      : job_(job), path_(path), opt_(opt), dt_sample_(dt_sample), thr_(thr) {
+    opt_.hooks.progress = nullptr;  // its progress is not the phase's: only Ctrl-C reaches it
+    opt_.hooks.phase = nullptr;
+    opt_.on_samples = nullptr;
+    const double top = stock_top_mm(job, job.stock_mesh.get());
+    for (std::size_t i = s.size(); i-- > 0;) {
+      if (s.z_mm[i] < top) {
+        c1_ = i;
+        break;
+      }
+    }
+    cutting_.assign(s.size(), 0);
+  }
+  SteadyAhead(const SteadyAhead&) = delete;
+  SteadyAhead& operator=(const SteadyAhead&) = delete;
+  ~SteadyAhead() {
+    group_.cancel();
     group_.wait();
-    if (floor_error_) std::rethrow_exception(floor_error_);
-    return std::move(figures_);
+  }
+  // The kernel's progress: the series' first `done` samples are final.
+  void on_samples(const EngagementSeries& e, std::size_t done) {
+    if (settled_) return;
+    for (; known_ < done; ++known_) {
+      cutting_[known_] = e.swept_rate_mm2_per_s[known_] > thr_ || e.axial_chip_mm[known_] > 0;
+      if (cutting_[known_] && c0_ == npos) c0_ = known_;
+    }
+    if (c0_ == npos) return;
+    if (c1_ == npos || c1_ < c0_) {
+      settled_ = true;
+      return;
+    }
+    const std::optional<std::size_t> i0 = cycle_start(e.samples, cutting_, c0_, c1_, 0.5, known_);
+    if (!i0) return;  // not known yet
+    settled_ = true;
+    window_ = cycle_from(e.samples, c0_, c1_, *i0, job_.path.step_mm);
+    if (!window_) return;
+    run_.emplace([this] { return steady_cycle(job_, path_, opt_, *window_, dt_sample_, thr_); });
+    group_.run([this] { run_->run(); });
+  }
+  // The run, if it was started for this window.
+  std::optional<Steady> take(const Window& w) {
+    if (!run_ || !(w.first == window_->first && w.last == window_->last &&
+                   w.t0_s == window_->t0_s && w.duration_s == window_->duration_s &&
+                   w.length_mm == window_->length_mm && w.periodic == window_->periodic)) {
+      return std::nullopt;
+    }
+    return std::move(run_->get());
   }
 
  private:
-  static constexpr int kFree = 0, kClaimed = 1, kDone = 2;
-  void accel() {
-    int free = kFree;
-    if (!accel_state_.compare_exchange_strong(free, kClaimed)) return;
-    try {
-      accel_time_s_ = estimate_time_s(path_, job_.machine);
-    } catch (...) {
-      accel_error_ = std::current_exception();
-    }
-    accel_state_.store(kDone);
-    accel_state_.notify_all();
-  }
-
-  const ToolPath& path_;
+  static constexpr std::size_t npos = std::numeric_limits<std::size_t>::max();
   const Job& job_;
-  bool floor_;
-  std::atomic<int> accel_state_{kFree};
-  double accel_time_s_ = 0;
-  std::exception_ptr accel_error_;
-  FloorFigures figures_;
-  std::exception_ptr floor_error_;
-  tbb::task_group group_;  // last: destroyed first, after the destructor's wait
+  const ToolPath& path_;
+  EngagementOptions opt_;
+  double dt_sample_, thr_;
+  std::vector<char> cutting_;
+  std::size_t known_ = 0, c0_ = npos, c1_ = npos;
+  bool settled_ = false;
+  std::optional<Window> window_;
+  std::optional<Claim<Steady>> run_;
+  tbb::task_group group_;
 };
 
 }  // namespace
@@ -455,9 +605,24 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
       sample_by_time(path, tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth);
   // The acceleration time and (in a straight slot, where the figures reach it) the floor are
   // computed beside the kernel.
-  Ahead ahead(
-      path, job, samples,
-      parts.floor && !(job.slot.curved() || job.pocket.defined() || !(job.slot.width_mm > 0)));
+  const bool straight_slot =
+      !(job.slot.curved() || job.pocket.defined() || !(job.slot.width_mm > 0));
+  Ahead ahead(path, job, samples, parts.floor && straight_slot);
+  // The steady cycle's run is started from the kernel's progress where a periodic window will
+  // be looked for (below: the same threshold and sample spacing).
+  const double thr = 1e-6 * 2 * job.tool.radius_mm() * (feed_rate_mm_per_min(job) / 60.0);
+  const double dt_sample =
+      samples.size() > 1 ? tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth : 0;
+  // (Where the floor is computed too and there are only two threads, the other one is busy with
+  // the floor's lines until about when the kernel ends: the early run would only wait behind them.)
+  std::optional<SteadyAhead> steady_ahead;
+  if (straight_slot && job.path.type != PathType::linear && job.path.step_mm > 0 &&
+      samples.size() > 1 && (!ahead.has_floor() || tbb::this_task_arena::max_concurrency() > 2)) {
+    steady_ahead.emplace(job, path, opt, dt_sample, thr, samples);
+    opt.on_samples = [&steady_ahead](const EngagementSeries& so_far, std::size_t done) {
+      steady_ahead->on_samples(so_far, done);
+    };
+  }
   m.series = compute_engagement(samples, job, opt);
   const EngagementSeries& e = m.series;
   const PathSamples& s = e.samples;
@@ -467,8 +632,6 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
 
   // Cutting: the circle advances into stock (slivers on the trailing side do not count).
   std::vector<char> cutting(n, 0);
-  const double thr = 1e-6 * 2 * R * feed;
-  double dt_sample = n > 1 ? tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth : 0;
   for (std::size_t i = 0; i < n; ++i) {
     // The flutes advance into stock, or the end face descends into it (a plunge, a drill).
     cutting[i] = e.swept_rate_mm2_per_s[i] > thr || e.axial_chip_mm[i] > 0 ? 1 : 0;
@@ -628,55 +791,22 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
     m.periodic = w.periodic;
     m.cycle_time_s = w.duration_s;
     m.path_length_per_cycle_mm = w.length_mm;
-    // The cycle's series: for a periodic path, the steady state of an endless slot (a real
-    // slot as long as the tool's reach, like the paper's 20 mm examples, never gets there):
-    // the path from 2.5 cycles (or more, see below) before the window to 1.5 after, with the
-    // stock open ahead, so the engagement is the endless slot's.
-    EngagementSeries steady;
-    std::vector<char> steady_cut;
+    // The cycle's series: for a periodic path, the steady state of an endless slot
+    // (steady_cycle), taken from the run started during the kernel's where its window is this
+    // one.
+    Steady steady;
     const EngagementSeries* cs = &e;
     const std::vector<char>* ccut = &cutting;
     std::size_t cf = w.first, cl = w.last;
     double t0 = w.t0_s;
     if (w.periodic) {
-      const double T = w.duration_s;
-      // History: 2.5 cycles rebuild the region a cycle's own orbit covers; when the orbit is
-      // wider than the tool (a > R) it leaves an island at its centre that only the cycles
-      // whose orbit passes over it remove, about (b + R) / s cycles back.
-      const SlotGeometry sg = slot_geometry(job);
-      const double a = sg.orbit_a_mm, b = sg.orbit_b_mm;
-      const double history =
-          2.5 + (a > R && job.path.step_mm > 0 ? std::ceil((b + R) / job.path.step_mm) : 0.0);
-      const double from = std::max(0.0, w.t0_s - history * T);
-      const double to = std::min(path.duration_s(), w.t0_s + 1.55 * T);
-      std::vector<double> times;
-      for (double t = from; t <= to; t += dt_sample) times.push_back(t);
-      EngagementOptions so = opt;
-      so.open_ahead = true;
-      steady = compute_engagement(sample_at_times(path, times), job, so);
-      steady_cut.assign(steady.samples.size(), 0);
-      for (std::size_t i = 0; i < steady_cut.size(); ++i) {
-        steady_cut[i] = steady.swept_rate_mm2_per_s[i] > thr ? 1 : 0;
-      }
-      std::size_t j0 = 0;
-      for (std::size_t i = 1; i < steady_cut.size(); ++i) {
-        if (steady.samples.t_s[i] >= w.t0_s - 0.5 * T && steady_cut[i] && !steady_cut[i - 1]) {
-          j0 = i;
-          break;
-        }
-      }
-      if (j0 == 0) {  // no cooling in the cycle: start where the window does
-        while (j0 + 1 < steady_cut.size() && steady.samples.t_s[j0] < w.t0_s - 0.5 * T) ++j0;
-      }
-      std::size_t j1 = j0;
-      while (j1 < steady_cut.size() && steady.samples.t_s[j1] < steady.samples.t_s[j0] + T - 1e-9) {
-        ++j1;
-      }
-      cs = &steady;
-      ccut = &steady_cut;
-      cf = j0;
-      cl = j1;
-      t0 = steady.samples.t_s[j0];
+      std::optional<Steady> early = steady_ahead ? steady_ahead->take(w) : std::nullopt;
+      steady = early ? std::move(*early) : steady_cycle(job, path, opt, w, dt_sample, thr);
+      cs = &steady.e;
+      ccut = &steady.cut;
+      cf = steady.first;
+      cl = steady.last;
+      t0 = steady.e.samples.t_s[cf];
     }
     m.cycle_start_s = t0;
     double swept = 0, ap_sum = 0;

@@ -1309,6 +1309,7 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
 
   for (std::size_t i = 0; i < n; ++i) {
     opt.hooks.step(i, n);
+    if (opt.on_samples && i > 0 && i % 256 == 0) opt.on_samples(out, i);  // [0, i) final
     if (cutting(i)) {
       home[i] = region_of(i);
       // A ramp or lift above its level queries the level (whose discs removed that material
