@@ -4,7 +4,7 @@
 #include "trochomill/analysis.hpp"
 
 #include <gtest/gtest.h>
-#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <iostream>
@@ -282,12 +282,14 @@ TEST(Analysis, GcodeEqualsJob) {
 
 // `analyze` runs parts beside the kernel (the floor, the acceleration time, the steady cycle's
 // run once its window can be told from the flags known so far, the two walls): the figures do
-// not depend on the thread count, nor on whether that early steady run is taken. The program
-// with a long run back and forth through the cut slot after the cut (x = 0, where the slot is
-// clear) keeps the tool below the top long after the last cut, so the window told early (the last
-// sample below the top taken for the last cut) is not the one found after the kernel: the run is
-// dropped and the steady cycle run again; with a single thread everything runs in turn. Every
-// figure of the JSON must be the same to the last digit.
+// not depend on the thread count, nor on whether that early steady run is taken. In an arena of
+// one thread everything runs in turn (no early run: it needs a second thread); in an arena of
+// four the early run is started (without the floor: with it, it needs a third), and taken for
+// the planned path. The program with a long run back and forth through the cut slot after the
+// cut (x = 0, where the slot is clear) keeps the tool below the top long after the last cut, so
+// the window told early (the last sample below the top taken for the last cut) is not the one
+// found after the kernel: the early run is dropped and the steady cycle run again. Every figure
+// of the JSON must be the same to the last digit, with the floor and without.
 TEST(Analysis, TheFiguresDoNotDependOnTheThreadCountOrTheEarlyRun) {
   const Job job = load_job(test::example("wagih2023/trochoidal.toml"));
   const PlannedPath pp = plan_path(job);
@@ -300,19 +302,30 @@ TEST(Analysis, TheFiguresDoNotDependOnTheThreadCountOrTheEarlyRun) {
   for (int k = 0; k < 10; ++k) back_and_forth += "G1 X0 Y2\nG1 X0 Y18\n";
   text.insert(end, back_and_forth);
   const GcodeProgram back = read_gcode(text, "back.ngc");
+  AnalysisParts no_floor;
+  no_floor.floor = false;
   for (const ToolPath* path : {&pp.path, &back.path}) {
-    const std::string all = metrics_json(job, analyze_process(job, *path));
-    std::string one;
-    {
-      const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
-      one = metrics_json(job, analyze_process(job, *path));
+    for (const AnalysisParts& parts : {AnalysisParts{}, no_floor}) {
+      const auto in_arena = [&](int threads) {
+        tbb::task_arena arena(threads);
+        std::string json;
+        arena.execute([&] { json = metrics_json(job, analyze_process(job, *path, {}, parts)); });
+        return json;
+      };
+      const std::string one = in_arena(1), four = in_arena(4);
+      EXPECT_EQ(one, four) << (path == &pp.path ? "planned" : "back and forth")
+                           << (parts.floor ? "" : ", no floor");
+      EXPECT_NE(one.find("\"cycle_time_s\""), std::string::npos);
     }
-    EXPECT_EQ(all, one);
-    EXPECT_NE(all.find("\"cycle_time_s\""), std::string::npos);
   }
   // The program's steady cycle is the planned path's (the same cycle of the endless slot, the
   // program's coordinates rounded to 1e-4 mm).
-  const ProcessMetrics a = analyze_process(job, pp.path), b = analyze_process(job, back.path);
+  tbb::task_arena four(4);
+  ProcessMetrics a, b;
+  four.execute([&] {
+    a = analyze_process(job, pp.path, {}, no_floor);
+    b = analyze_process(job, back.path, {}, no_floor);
+  });
   EXPECT_TRUE(b.periodic);
   EXPECT_NEAR(a.cycle_time_s, b.cycle_time_s, 1e-4);
   EXPECT_NEAR(a.h_max_mm, b.h_max_mm, 2e-4);

@@ -383,7 +383,9 @@ void predict_floor(const Job& job, const PathSamples& s, double omega, FloorFigu
 
 // A computation a TBB task may start early: whoever claims it first runs it (the caller of
 // `get` when no task has started it), and `get` waits only for a run already under way, never
-// on a task group (where this thread could pick up unrelated work, a line of the floor).
+// on a task group (where this thread could pick up unrelated work, a line of the floor). The run
+// is isolated: a thread in it never takes outside work (another point of a sweep) while its
+// nested loops wait. `drop` keeps a run not yet started from starting.
 template <class T>
 class Claim {
  public:
@@ -392,12 +394,16 @@ class Claim {
     int free = kFree;
     if (!state_.compare_exchange_strong(free, kClaimed)) return;
     try {
-      value_.emplace(f_());
+      tbb::this_task_arena::isolate([this] { value_.emplace(f_()); });
     } catch (...) {
       error_ = std::current_exception();
     }
     state_.store(kDone);
     state_.notify_all();
+  }
+  void drop() {
+    int free = kFree;
+    state_.compare_exchange_strong(free, kDone);
   }
   T& get() {
     run();
@@ -518,8 +524,14 @@ class SteadyAhead {
   SteadyAhead(const Job& job, const ToolPath& path, const EngagementOptions& opt, double dt_sample,
               double thr, const PathSamples& s)
       : job_(job), path_(path), opt_(opt), dt_sample_(dt_sample), thr_(thr) {
-    opt_.hooks.progress = nullptr;  // its progress is not the phase's: only Ctrl-C reaches it
+    // Its progress is not the phase's, so it reports none; it stops (Interrupted) on its own
+    // flag, which Ctrl-C sets through the progress hook (200 times a run) and which is set when
+    // the run is dropped or the analysis ends without it.
+    opt_.hooks.progress = [this, user = opt.hooks.cancel](std::size_t, std::size_t) {
+      if (user != nullptr && user->load(std::memory_order_relaxed)) stop_.store(true);
+    };
     opt_.hooks.phase = nullptr;
+    opt_.hooks.cancel = &stop_;
     opt_.on_samples = nullptr;
     const double top = stock_top_mm(job, job.stock_mesh.get());
     for (std::size_t i = s.size(); i-- > 0;) {
@@ -533,6 +545,8 @@ class SteadyAhead {
   SteadyAhead(const SteadyAhead&) = delete;
   SteadyAhead& operator=(const SteadyAhead&) = delete;
   ~SteadyAhead() {
+    stop_.store(true);
+    if (run_) run_->drop();
     group_.cancel();
     group_.wait();
   }
@@ -558,9 +572,12 @@ class SteadyAhead {
   }
   // The run, if it was started for this window.
   std::optional<Steady> take(const Window& w) {
-    if (!run_ || !(w.first == window_->first && w.last == window_->last &&
-                   w.t0_s == window_->t0_s && w.duration_s == window_->duration_s &&
-                   w.length_mm == window_->length_mm && w.periodic == window_->periodic)) {
+    if (!run_) return std::nullopt;
+    if (!(w.first == window_->first && w.last == window_->last && w.t0_s == window_->t0_s &&
+          w.duration_s == window_->duration_s && w.length_mm == window_->length_mm &&
+          w.periodic == window_->periodic)) {
+      stop_.store(true);  // another window: the run stops where it is, or never starts
+      run_->drop();
       return std::nullopt;
     }
     return std::move(run_->get());
@@ -576,6 +593,7 @@ class SteadyAhead {
   std::size_t known_ = 0, c0_ = npos, c1_ = npos;
   bool settled_ = false;
   std::optional<Window> window_;
+  std::atomic<bool> stop_{false};
   std::optional<Claim<Steady>> run_;
   tbb::task_group group_;
 };
@@ -613,11 +631,12 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   const double thr = 1e-6 * 2 * job.tool.radius_mm() * (feed_rate_mm_per_min(job) / 60.0);
   const double dt_sample =
       samples.size() > 1 ? tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth : 0;
-  // (Where the floor is computed too and there are only two threads, the other one is busy with
-  // the floor's lines until about when the kernel ends: the early run would only wait behind them.)
+  // (With one thread it would only run after the kernel anyway; where the floor is computed too
+  // and there are only two threads, the other one is busy with the floor's lines until about
+  // when the kernel ends: the early run would only wait behind them.)
   std::optional<SteadyAhead> steady_ahead;
   if (straight_slot && job.path.type != PathType::linear && job.path.step_mm > 0 &&
-      samples.size() > 1 && (!ahead.has_floor() || tbb::this_task_arena::max_concurrency() > 2)) {
+      samples.size() > 1 && tbb::this_task_arena::max_concurrency() > (ahead.has_floor() ? 2 : 1)) {
     steady_ahead.emplace(job, path, opt, dt_sample, thr, samples);
     opt.on_samples = [&steady_ahead](const EngagementSeries& so_far, std::size_t done) {
       steady_ahead->on_samples(so_far, done);
@@ -1063,8 +1082,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
         }
         return walls_from_tips(tr, -1e-9, yc - period / 2, yc + period / 2, kWallPoints, band);
       };
-      // Each wall at tooth level and its texture, the two at once (the left one's failure
-      // first, as when they were taken in turn).
+      // A wall at tooth level.
       const auto tooth_wall = [&](const bool left) {
         const double wp = left ? m.walls_path.left.waviness_mm : m.walls_path.right.waviness_mm;
         double& yc = left ? yl : yr;
@@ -1099,30 +1117,32 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
             break;
           }
         }
-        // The wall's texture along y: one period of the tooth-level profile.
-        const WallProfile& wall = left ? m.walls_tooth.left : m.walls_tooth.right;
-        if (wall.x_mm.size() >= 3) {
-          (left ? m.texture_left : m.texture_right) = wall_texture(wall, left);
+      };
+      // Each side's wall, then its texture along y (one period of the tooth-level profile), the
+      // two sides at once; a failure is raised in the order of the code that took them in turn:
+      // the left wall's, the right wall's, then the left texture's, the right texture's.
+      std::array<std::exception_ptr, 4> failed;
+      const auto side = [&](const bool left) {
+        const std::size_t k = left ? 0 : 1;
+        try {
+          tooth_wall(left);
+        } catch (...) {
+          failed[k] = std::current_exception();
+          return;
+        }
+        try {
+          const WallProfile& wall = left ? m.walls_tooth.left : m.walls_tooth.right;
+          if (wall.x_mm.size() >= 3) {
+            (left ? m.texture_left : m.texture_right) = wall_texture(wall, left);
+          }
+        } catch (...) {
+          failed[k + 2] = std::current_exception();
         }
       };
-      std::exception_ptr fl, fr;
-      tbb::parallel_invoke(
-          [&] {
-            try {
-              tooth_wall(true);
-            } catch (...) {
-              fl = std::current_exception();
-            }
-          },
-          [&] {
-            try {
-              tooth_wall(false);
-            } catch (...) {
-              fr = std::current_exception();
-            }
-          });
-      if (fl) std::rethrow_exception(fl);
-      if (fr) std::rethrow_exception(fr);
+      tbb::parallel_invoke([&] { side(true); }, [&] { side(false); });
+      for (const std::exception_ptr& f : failed) {
+        if (f) std::rethrow_exception(f);
+      }
     }
 
     // Bottom imprints: one circle per tooth pass at the floor in the window.
