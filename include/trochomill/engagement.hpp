@@ -160,8 +160,13 @@ inline constexpr double kLevelTolMm = 1e-4;
 /// InputError for a mesh without triangles or with a coordinate that is not finite.
 [[nodiscard]] double stock_top_mm(const Job& job, const Mesh* stock_mesh);
 
-/// Engagement at every sample of `path`, sampled every tooth pass / steps_per_tooth
-/// (time step 60 / (n Z steps_per_tooth) s). Throws InputError for bad options.
+/// The samples the engagement of `path` is computed at: every tooth pass / steps_per_tooth
+/// (time step 60 / (n Z steps_per_tooth) s). Throws InputError for steps_per_tooth < 1.
+[[nodiscard]] PathSamples engagement_samples(const ToolPath& path, const Job& job,
+                                             int steps_per_tooth);
+
+/// Engagement at every sample of `path` (engagement_samples). Throws InputError for bad
+/// options.
 [[nodiscard]] EngagementSeries compute_engagement(const ToolPath& path, const Job& job,
                                                   const EngagementOptions& options = {});
 

@@ -28,6 +28,7 @@ struct Window {
   std::size_t first = 0, last = 0;
   double t0_s = 0, duration_s = 0, length_mm = 0;
   bool periodic = false;
+  bool operator==(const Window&) const = default;
 };
 
 // Cubic Hermite interpolation between samples i and i + 1 of a path at fraction f: positions
@@ -124,19 +125,22 @@ bool repeats_with_period(const PathSamples& s, std::size_t c0, std::size_t c1, s
   return checked > 0 && 2 * checked >= total;  // most of the stretch checked
 }
 
-// The first sample of the middle of the cutting time [c0, c1] (at this share of it), and the
-// start of cutting at or after it among the first `known` samples' flags (where they show
-// none: the middle sample itself when all are known, else nullopt: not known yet).
-std::optional<std::size_t> cycle_start(const PathSamples& s, const std::vector<char>& cutting,
-                                       std::size_t c0, std::size_t c1, double at,
-                                       std::size_t known) {
+// The first sample at this share of the cutting time [c0, c1].
+std::size_t cutting_middle(const PathSamples& s, std::size_t c0, std::size_t c1, double at) {
   const double t_mid = s.t_s[c0] + at * (s.t_s[c1] - s.t_s[c0]);
   std::size_t mid = c0;
   while (mid < c1 && s.t_s[mid] < t_mid) ++mid;
-  // Start of cutting at or after the middle (else the middle sample itself).
-  for (std::size_t i = std::max<std::size_t>(mid, 1); i <= c1; ++i) {
-    if (i >= known) return std::nullopt;
-    if (cutting[i] && !cutting[i - 1]) return i;
+  return mid;
+}
+
+// The start of cutting at or after sample `mid` (else `mid` itself) among the first `known`
+// samples' flags, nullopt while they cannot tell yet. `next` (start it at max(mid, 1)) is where
+// the search goes on: a caller whose flags grow scans each sample once.
+std::optional<std::size_t> cutting_start(const std::vector<char>& cutting, std::size_t mid,
+                                         std::size_t c1, std::size_t known, std::size_t& next) {
+  for (; next <= c1; ++next) {
+    if (next >= known) return std::nullopt;
+    if (cutting[next] && !cutting[next - 1]) return next;
   }
   if (c1 >= known) return std::nullopt;
   return mid;
@@ -211,7 +215,9 @@ Window find_window(const EngagementSeries& e, const std::vector<char>& cutting, 
   // a ramp down a deep slot, may take the first half).
   for (const double at : {0.5, 0.7, 0.85}) {
     if (!trochoidal || !(step_mm > 0)) break;  // no period to look for
-    const std::optional<std::size_t> i0 = cycle_start(s, cutting, c0, c1, at, n);
+    const std::size_t mid = cutting_middle(s, c0, c1, at);
+    std::size_t next = std::max<std::size_t>(mid, 1);
+    const std::optional<std::size_t> i0 = cutting_start(cutting, mid, c1, n, next);
     if (auto w = cycle_from(s, c0, c1, *i0, step_mm)) return *w;
   }
   // The middle third of the cutting time.
@@ -381,6 +387,22 @@ void predict_floor(const Job& job, const PathSamples& s, double omega, FloorFigu
   });
 }
 
+// Runs `left` and `right` at once (a slot's two walls); their failures, the left one's first
+// (null: none), for the caller to raise in the order of the code that took them in turn.
+template <class Left, class Right>
+std::array<std::exception_ptr, 2> both_sides(Left&& left, Right&& right) {
+  std::array<std::exception_ptr, 2> failed;
+  const auto guarded = [&failed](std::size_t k, auto& f) {
+    try {
+      f();
+    } catch (...) {
+      failed[k] = std::current_exception();
+    }
+  };
+  tbb::parallel_invoke([&] { guarded(0, left); }, [&] { guarded(1, right); });
+  return failed;
+}
+
 // A computation a TBB task may start early: whoever claims it first runs it (the caller of
 // `get` when no task has started it), and `get` waits only for a run already under way, never
 // on a task group (where this thread could pick up unrelated work, a line of the floor). The run
@@ -426,12 +448,10 @@ class Claim {
 // there; figures that end before it drop it.
 class Ahead {
  public:
-  Ahead(const ToolPath& path, const Job& job, const PathSamples& s, bool floor)
+  Ahead(const ToolPath& path, const Job& job, const PathSamples& s, double omega, bool floor)
       : accel_([&path, &job] { return estimate_time_s(path, job.machine); }),
-        floor_([&job, &s] {
+        floor_([&job, &s, omega] {
           FloorFigures f;
-          const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
-                               (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
           predict_floor(job, s, omega, f);
           return f;
         }),
@@ -562,7 +582,11 @@ class SteadyAhead {
       settled_ = true;
       return;
     }
-    const std::optional<std::size_t> i0 = cycle_start(e.samples, cutting_, c0_, c1_, 0.5, known_);
+    if (mid_ == npos) {
+      mid_ = cutting_middle(e.samples, c0_, c1_, 0.5);
+      next_ = std::max<std::size_t>(mid_, 1);
+    }
+    const std::optional<std::size_t> i0 = cutting_start(cutting_, mid_, c1_, known_, next_);
     if (!i0) return;  // not known yet
     settled_ = true;
     window_ = cycle_from(e.samples, c0_, c1_, *i0, job_.path.step_mm);
@@ -573,9 +597,7 @@ class SteadyAhead {
   // The run, if it was started for this window.
   std::optional<Steady> take(const Window& w) {
     if (!run_) return std::nullopt;
-    if (!(w.first == window_->first && w.last == window_->last && w.t0_s == window_->t0_s &&
-          w.duration_s == window_->duration_s && w.length_mm == window_->length_mm &&
-          w.periodic == window_->periodic)) {
+    if (w != *window_) {
       stop_.store(true);  // another window: the run stops where it is, or never starts
       run_->drop();
       return std::nullopt;
@@ -590,7 +612,7 @@ class SteadyAhead {
   EngagementOptions opt_;
   double dt_sample_, thr_;
   std::vector<char> cutting_;
-  std::size_t known_ = 0, c0_ = npos, c1_ = npos;
+  std::size_t known_ = 0, c0_ = npos, c1_ = npos, mid_ = npos, next_ = 0;
   bool settled_ = false;
   std::optional<Window> window_;
   std::atomic<bool> stop_{false};
@@ -616,16 +638,14 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   opt.steps_per_tooth = job.analysis.steps_per_tooth;
   opt.hooks = hooks;
   hooks.begin("engagement");
-  if (opt.steps_per_tooth < 1) {
-    throw InputError(fmt::format("steps per tooth must be >= 1, got {}", opt.steps_per_tooth));
-  }
-  const PathSamples samples =
-      sample_by_time(path, tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth);
+  const PathSamples samples = engagement_samples(path, job, opt.steps_per_tooth);
+  const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
+                       (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
   // The acceleration time and (in a straight slot, where the figures reach it) the floor are
   // computed beside the kernel.
   const bool straight_slot =
       !(job.slot.curved() || job.pocket.defined() || !(job.slot.width_mm > 0));
-  Ahead ahead(path, job, samples, parts.floor && straight_slot);
+  Ahead ahead(path, job, samples, omega, parts.floor && straight_slot);
   // The steady cycle's run is started from the kernel's progress where a periodic window will
   // be looked for (below: the same threshold and sample spacing).
   const double thr = 1e-6 * 2 * job.tool.radius_mm() * (feed_rate_mm_per_min(job) / 60.0);
@@ -956,25 +976,11 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
     // they were taken in turn).
     const auto both_path_walls = [&] {
       WallProfile l, r;
-      std::exception_ptr fl, fr;
-      tbb::parallel_invoke(
-          [&] {
-            try {
-              l = path_wall(true, yl);
-            } catch (...) {
-              fl = std::current_exception();
-            }
-          },
-          [&] {
-            try {
-              r = path_wall(false, yr);
-            } catch (...) {
-              fr = std::current_exception();
-            }
-          });
-      if (fl) std::rethrow_exception(fl);
+      const auto failed =
+          both_sides([&] { l = path_wall(true, yl); }, [&] { r = path_wall(false, yr); });
+      if (failed[0]) std::rethrow_exception(failed[0]);
       m.walls_path.left = std::move(l);
-      if (fr) std::rethrow_exception(fr);
+      if (failed[1]) std::rethrow_exception(failed[1]);
       m.walls_path.right = std::move(r);
     };
     try {
@@ -995,8 +1001,6 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
 
     // Tooth level: tooth tips every 0.1 degree of spindle rotation while the centre is near a
     // wall (within the path-level waviness + runout + 2 f_z of its extreme) in the windows.
-    const double omega = rpm_to_rad_per_s(job.cutting.spindle_speed_rpm) *
-                         (job.cutting.spindle_direction == SpindleDirection::cw ? -1.0 : 1.0);
     const double dt_tip = deg_to_rad(0.1) / std::abs(omega);
     {
       double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -1121,27 +1125,23 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
       // Each side's wall, then its texture along y (one period of the tooth-level profile), the
       // two sides at once; a failure is raised in the order of the code that took them in turn:
       // the left wall's, the right wall's, then the left texture's, the right texture's.
-      std::array<std::exception_ptr, 4> failed;
+      std::array<std::exception_ptr, 2> texture_failed;
       const auto side = [&](const bool left) {
-        const std::size_t k = left ? 0 : 1;
-        try {
-          tooth_wall(left);
-        } catch (...) {
-          failed[k] = std::current_exception();
-          return;
-        }
+        tooth_wall(left);
         try {
           const WallProfile& wall = left ? m.walls_tooth.left : m.walls_tooth.right;
           if (wall.x_mm.size() >= 3) {
             (left ? m.texture_left : m.texture_right) = wall_texture(wall, left);
           }
         } catch (...) {
-          failed[k + 2] = std::current_exception();
+          texture_failed[left ? 0 : 1] = std::current_exception();
         }
       };
-      tbb::parallel_invoke([&] { side(true); }, [&] { side(false); });
-      for (const std::exception_ptr& f : failed) {
-        if (f) std::rethrow_exception(f);
+      const auto wall_failed = both_sides([&] { side(true); }, [&] { side(false); });
+      for (const auto& failed : {wall_failed, texture_failed}) {
+        for (const std::exception_ptr& f : failed) {
+          if (f) std::rethrow_exception(f);
+        }
       }
     }
 
@@ -1160,8 +1160,7 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
     }
 
     if (parts.floor) {
-      FloorFigures f = ahead.has_floor() ? ahead.take_floor() : FloorFigures{};
-      if (!ahead.has_floor()) predict_floor(job, s, omega, f);
+      FloorFigures f = ahead.take_floor();  // a straight slot's, so computed ahead
       m.floor = std::move(f.floor);
       m.texture_floor = std::move(f.texture_floor);
     }

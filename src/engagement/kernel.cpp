@@ -1479,14 +1479,16 @@ EngagementSeries compute_engagement(const PathSamples& smp, const Job& job,
   return out;
 }
 
+PathSamples engagement_samples(const ToolPath& path, const Job& job, int steps_per_tooth) {
+  if (steps_per_tooth < 1) {
+    throw InputError(fmt::format("steps per tooth must be >= 1, got {}", steps_per_tooth));
+  }
+  return sample_by_time(path, tooth_period_s(job.tool, job.cutting) / steps_per_tooth);
+}
+
 EngagementSeries compute_engagement(const ToolPath& path, const Job& job,
                                     const EngagementOptions& options) {
-  if (options.steps_per_tooth < 1) {
-    throw InputError(fmt::format("steps per tooth must be >= 1, got {}", options.steps_per_tooth));
-  }
-  const double per_tooth_s = tooth_period_s(job.tool, job.cutting);
-  return compute_engagement(sample_by_time(path, per_tooth_s / options.steps_per_tooth), job,
-                            options);
+  return compute_engagement(engagement_samples(path, job, options.steps_per_tooth), job, options);
 }
 
 std::vector<Vec2> rest_disc_centres(const RestStock& rest, double z_mm, double radius_mm,
