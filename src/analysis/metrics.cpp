@@ -651,12 +651,12 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   const double thr = 1e-6 * 2 * job.tool.radius_mm() * (feed_rate_mm_per_min(job) / 60.0);
   const double dt_sample =
       samples.size() > 1 ? tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth : 0;
-  // (With one thread it would only run after the kernel anyway; where the floor is computed too
-  // and there are only two threads, the other one is busy with the floor's lines until about
-  // when the kernel ends: the early run would only wait behind them.)
+  // (With one thread it would only run after the kernel anyway. Where the floor is computed too,
+  // the early run waits behind the floor's lines, which end well before the kernel since their
+  // first look runs four points a vector.)
   std::optional<SteadyAhead> steady_ahead;
   if (straight_slot && job.path.type != PathType::linear && job.path.step_mm > 0 &&
-      samples.size() > 1 && tbb::this_task_arena::max_concurrency() > (ahead.has_floor() ? 2 : 1)) {
+      samples.size() > 1 && tbb::this_task_arena::max_concurrency() > 1) {
     steady_ahead.emplace(job, path, opt, dt_sample, thr, samples);
     opt.on_samples = [&steady_ahead](const EngagementSeries& so_far, std::size_t done) {
       steady_ahead->on_samples(so_far, done);

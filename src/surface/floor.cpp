@@ -5,9 +5,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "common/sincos.hpp"
+#include "surface/floor_look.hpp"
 #include "trochomill/error.hpp"
 #include "trochomill/surface.hpp"
 #include "trochomill/units.hpp"
@@ -26,7 +29,85 @@ struct EndEdge {
   double angle_rad, reach_mm, tip_dz_mm;
 };
 
+// One edge over one step of the spindle, as the points' first look sees it (floor_profile's
+// secant estimate): the edge's direction and axis at the step's ends, its heights and reach.
+struct EdgeStep {
+  double x0, y_from, dy;      // the line and its points
+  double uax, uay, ubx, uby;  // the edge's direction at the step's start and end
+  double aax, aay, abx, aby;  // the axis at both
+  double za, zb, tip, reach, rc, tan_dish, turn2, slack;
+};
+
+// The points q in [j0, j0 + n) the first look cannot pass over, marked nonzero in keep[q - j0]:
+// those the edge's line passes exactly at the step's start (ga = 0), and those it passes
+// through whose secant estimate lies within the reach and not above the floor found so far
+// by more than the slack. floor_profile's loop passes over every other point at once, and
+// looks again at these (so a point marked here in excess changes nothing). Four points an AVX
+// register (GCC's and Clang's vector types), on processors with AVX2 (with SSE2 alone the
+// vectors in pairs of registers took longer than the loop's own look, 25.6 ms against 21.4 ms
+// for BM_FloorProfileWagih), by the loop's operations in its order (so the same doubles) but
+// for the corner's rise: its lower bound m^2 / 2 rc (rc - sqrt(rc^2 - m^2) = m^2 / (rc +
+// sqrt(rc^2 - m^2))), which spares a square root a point, with a margin of 1e-9 mm for its
+// rounding (the heights' is below 1e-12 mm up to 10 m).
+using V4 = double __attribute__((vector_size(32)));
+using M4 = long long __attribute__((vector_size(32)));  // a comparison's lanes: -1 or 0
+
+#if defined(__x86_64__)
+#define TROCHOMILL_FIRST_LOOK 1
+__attribute__((target("avx2"))) void first_look(const EdgeStep& e, const double* z, std::size_t j0,
+                                                std::size_t n, long long* keep) {
+  const double flat = e.reach - e.rc;
+  const V4 x0 = V4{} + e.x0, uax = V4{} + e.uax, uay = V4{} + e.uay, ubx = V4{} + e.ubx,
+           uby = V4{} + e.uby, aax = V4{} + e.aax, aay = V4{} + e.aay, abx = V4{} + e.abx,
+           aby = V4{} + e.aby, rc = V4{} + e.rc, vflat = V4{} + flat, slack = V4{} + e.slack,
+           zero = V4{}, lanes = {0, 1, 2, 3};
+  const double inv_2rc = 0.5 / e.rc;  // inf for a sharp corner: its lanes marked (NaN)
+  for (std::size_t k = 0; k < n; k += 4) {
+    V4 zq;
+    if (k + 4 <= n) {
+      std::memcpy(&zq, z + j0 + k, sizeof zq);
+    } else {
+      // The last vector's lanes past n repeat its last point (their marks are not read).
+      for (std::size_t l = 0; l < 4; ++l) zq[l] = z[j0 + std::min(k + l, n - 1)];
+    }
+    // The points' y: whole numbers as doubles, exact.
+    const V4 py = e.y_from + e.dy * (static_cast<double>(j0 + k) + lanes);
+    const V4 ga = uax * (py - aay) - uay * (x0 - aax);
+    const V4 gb = ubx * (py - aby) - uby * (x0 - abx);
+    const M4 through = ((ga < zero) & (gb > zero)) | ((ga > zero) & (gb < zero));
+    const V4 u = ga / (ga - gb);
+    const V4 a0x = aax + u * (abx - aax), a0y = aay + u * (aby - aay);
+    const V4 u0x = uax + u * (ubx - uax), u0y = uay + u * (uby - uay);
+    const V4 x = u * (1 - u) * e.turn2;
+    const V4 r0 = (u0x * (x0 - a0x) + u0y * (py - a0y)) * (1 + x * (0.5 + 0.375 * x));
+    const M4 within = ~((r0 < -slack) | (r0 > e.reach + slack));
+    // rise(reach, r0): (flat - r0) tan(dish) up to the flat's end, the corner arc beyond.
+    const V4 over = r0 - vflat;
+    const M4 capped = rc < over;
+    const V4 m = (V4)((capped & (M4)rc) | (~capped & (M4)over));
+    const V4 corner = m * m * inv_2rc;
+    const V4 dished = (vflat - r0) * e.tan_dish;
+    const M4 on_flat = r0 <= vflat;
+    const V4 rise = (V4)((on_flat & (M4)dished) | (~on_flat & (M4)corner));
+    const V4 h0 = e.za + u * (e.zb - e.za) + e.tip + rise;
+    const M4 low = ~(h0 > zq + slack + 1e-9);
+    // (Copied, not stored as a vector: the buffer need not be aligned for one.)
+    const M4 mark = (ga == zero) | (through & within & low);
+    std::memcpy(keep + k, &mark, sizeof mark);
+  }
+}
+#endif
+
 }  // namespace
+
+std::atomic<bool>& detail::floor_vector_look() {
+#ifdef TROCHOMILL_FIRST_LOOK
+  static std::atomic<bool> on{__builtin_cpu_supports("avx2") != 0};
+#else
+  static std::atomic<bool> on{false};
+#endif
+  return on;
+}
 
 FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega, double x0,
                            double y_from, double dy, std::size_t points) {
@@ -90,6 +171,8 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
   };
   // One sweep over the path: the passes of the edges' parts at least `inner` from the axis,
   // over the points `todo` marks (all when empty).
+  const bool vector_look = detail::floor_vector_look().load(std::memory_order_relaxed);
+  std::vector<long long> keep;  // first_look's marks of a range
   auto sweep = [&](double inner, const std::vector<char>& todo) {
     // The last spindle angle whose cosine and sine were taken: a step's end is the next
     // one's start (the same double), so each is taken once.
@@ -184,7 +267,21 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
           const auto j0 = static_cast<std::size_t>(std::max(0.0, std::ceil((lo - y_from) / dy)));
           const auto j1 = static_cast<std::size_t>(
               std::min(static_cast<double>(points - 1), std::floor((hi - y_from) / dy)));
-          for (std::size_t q = j0; q <= j1 && q < points; ++q) {
+          if (j0 > j1 || j0 >= points) continue;
+          const std::size_t count = std::min(j1, points - 1) - j0 + 1;
+          // The first look at every point of the range at once (first_look) where the
+          // processor has AVX2; the rest of the look where it could not pass over the point.
+#ifdef TROCHOMILL_FIRST_LOOK
+          if (vector_look) {
+            if (keep.size() < count + 3) keep.resize(count + 3);  // whole vectors
+            first_look(
+                EdgeStep{x0, y_from, dy, ua.x, ua.y, ub.x, ub.y, aa.x, aa.y, ab.x, ab.y, za, zb,
+                         ed.tip_dz_mm, ed.reach_mm, rc, tan_dish, turn2, e * half * half + 1e-6},
+                f.z_mm.data(), j0, count, keep.data());
+          }
+#endif
+          for (std::size_t q = j0; q < j0 + count; ++q) {
+            if (vector_look && keep[q - j0] == 0) continue;
             if (!todo.empty() && !todo[q]) continue;
             const V2 p{x0, y_from + dy * static_cast<double>(q)};
             const double ga = cross(ua, V2{p.x - aa.x, p.y - aa.y});
