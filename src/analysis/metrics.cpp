@@ -652,8 +652,8 @@ ProcessMetrics analyze_process(const Job& job, const ToolPath& path, const RunHo
   const double dt_sample =
       samples.size() > 1 ? tooth_period_s(job.tool, job.cutting) / opt.steps_per_tooth : 0;
   // (With one thread it would only run after the kernel anyway. Where the floor is computed too,
-  // the early run waits behind the floor's lines, which end well before the kernel since their
-  // first look runs four points a vector.)
+  // the early run waits behind the floor's lines, which end before the kernel does on the
+  // examples since their first look runs four points a vector: docs/PERFORMANCE.md.)
   std::optional<SteadyAhead> steady_ahead;
   if (straight_slot && job.path.type != PathType::linear && job.path.step_mm > 0 &&
       samples.size() > 1 && tbb::this_task_arena::max_concurrency() > 1) {
