@@ -171,7 +171,13 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
   };
   // One sweep over the path: the passes of the edges' parts at least `inner` from the axis,
   // over the points `todo` marks (all when empty).
-  const bool vector_look = detail::floor_vector_look().load(std::memory_order_relaxed);
+  // (The switch alone never turns it on: only with the processor's AVX2.)
+#ifdef TROCHOMILL_FIRST_LOOK
+  static const bool avx2 = __builtin_cpu_supports("avx2") != 0;
+  const bool vector_look = avx2 && detail::floor_vector_look().load(std::memory_order_relaxed);
+#else
+  constexpr bool vector_look = false;
+#endif
   std::vector<long long> keep;  // first_look's marks of a range
   auto sweep = [&](double inner, const std::vector<char>& todo) {
     // The last spindle angle whose cosine and sine were taken: a step's end is the next
