@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdint>
 #include <cstring>
 #include <limits>
 
@@ -54,6 +53,12 @@ using M4 = long long __attribute__((vector_size(32)));  // a comparison's lanes:
 
 #if defined(__x86_64__)
 #define TROCHOMILL_FIRST_LOOK 1
+// Whether the processor has AVX2 (asked once).
+bool has_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2") != 0;
+  return yes;
+}
+
 __attribute__((target("avx2"))) void first_look(const EdgeStep& e, const double* z, std::size_t j0,
                                                 std::size_t n, long long* keep) {
   const double flat = e.reach - e.rc;
@@ -102,7 +107,7 @@ __attribute__((target("avx2"))) void first_look(const EdgeStep& e, const double*
 
 std::atomic<bool>& detail::floor_vector_look() {
 #ifdef TROCHOMILL_FIRST_LOOK
-  static std::atomic<bool> on{__builtin_cpu_supports("avx2") != 0};
+  static std::atomic<bool> on{has_avx2()};
 #else
   static std::atomic<bool> on{false};
 #endif
@@ -169,16 +174,17 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
     const detail::SinCos q = sc(th);
     return V2{q.c, q.s};
   };
-  // One sweep over the path: the passes of the edges' parts at least `inner` from the axis,
-  // over the points `todo` marks (all when empty).
-  // (The switch alone never turns it on: only with the processor's AVX2.)
+  // The first look four points a vector where the processor has AVX2 (the switch alone never
+  // turns it on).
 #ifdef TROCHOMILL_FIRST_LOOK
-  static const bool avx2 = __builtin_cpu_supports("avx2") != 0;
-  const bool vector_look = avx2 && detail::floor_vector_look().load(std::memory_order_relaxed);
+  const bool vector_look =
+      has_avx2() && detail::floor_vector_look().load(std::memory_order_relaxed);
 #else
   constexpr bool vector_look = false;
 #endif
   std::vector<long long> keep;  // first_look's marks of a range
+  // One sweep over the path: the passes of the edges' parts at least `inner` from the axis,
+  // over the points `todo` marks (all when empty).
   auto sweep = [&](double inner, const std::vector<char>& todo) {
     // The last spindle angle whose cosine and sine were taken: a step's end is the next
     // one's start (the same double), so each is taken once.
@@ -275,15 +281,16 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
               std::min(static_cast<double>(points - 1), std::floor((hi - y_from) / dy)));
           if (j0 > j1 || j0 >= points) continue;
           const std::size_t count = std::min(j1, points - 1) - j0 + 1;
+          // The secant estimate's error bound (below).
+          const double slack = e * half * half + 1e-6;
           // The first look at every point of the range at once (first_look) where the
           // processor has AVX2; the rest of the look where it could not pass over the point.
 #ifdef TROCHOMILL_FIRST_LOOK
           if (vector_look) {
             if (keep.size() < count + 3) keep.resize(count + 3);  // whole vectors
-            first_look(
-                EdgeStep{x0, y_from, dy, ua.x, ua.y, ub.x, ub.y, aa.x, aa.y, ab.x, ab.y, za, zb,
-                         ed.tip_dz_mm, ed.reach_mm, rc, tan_dish, turn2, e * half * half + 1e-6},
-                f.z_mm.data(), j0, count, keep.data());
+            first_look(EdgeStep{x0, y_from, dy, ua.x, ua.y, ub.x, ub.y, aa.x, aa.y, ab.x, ab.y, za,
+                                zb, ed.tip_dz_mm, ed.reach_mm, rc, tan_dish, turn2, slack},
+                       f.z_mm.data(), j0, count, keep.data());
           }
 #endif
           for (std::size_t q = j0; q < j0 + count; ++q) {
@@ -323,7 +330,6 @@ FloorProfile floor_profile(const PathSamples& s, const Tool& tool, double omega,
               // 2e-9 of r0: far inside `slack`, whose tests it only feeds).
               const double x = u * (1 - u) * turn2;
               const double r0 = dot(u0, V2{p.x - a0.x, p.y - a0.y}) * (1 + x * (0.5 + 0.375 * x));
-              const double slack = e * half * half + 1e-6;
               if (r0 < -slack || r0 > ed.reach_mm + slack) continue;
               const double h0 = za + u * (zb - za) + ed.tip_dz_mm + rise(ed.reach_mm, r0);
               if (h0 > f.z_mm[q] + slack) continue;
